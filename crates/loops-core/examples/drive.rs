@@ -1,0 +1,23 @@
+//! Times `find_loops` on the 2.1 h urban drive: `cargo run --release --example drive -- [hours] [gamma]`.
+use loops_core::{Euclidean, UrbanDrive, find_loops};
+
+fn main() -> Result<(), loops_core::Error> {
+    let mut args = std::env::args().skip(1);
+    let hours: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(2.1);
+    let gamma: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(40.0);
+    let drive = UrbanDrive { duration_s: hours * 3600.0, ..UrbanDrive::default() }.generate()?;
+    let start = std::time::Instant::now();
+    let loops = find_loops(&drive.trajectory, &Euclidean, gamma)?;
+    let elapsed = start.elapsed();
+    let nontrivial = loops.components().iter().filter(|c| !c.trivial).count();
+    println!(
+        "{} poses, gamma {gamma} m: {} runs, {} pairs, {} components ({} non-trivial) in {:.3} s",
+        drive.trajectory.len(),
+        loops.sublevel_set().runs().len(),
+        loops.pairs(),
+        loops.components().len(),
+        nontrivial,
+        elapsed.as_secs_f64()
+    );
+    Ok(())
+}

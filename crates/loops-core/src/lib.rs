@@ -1,0 +1,74 @@
+//! # loops-core
+//!
+//! Exact *inexact loops* of sampled trajectories, after E. Nelson, "Inexact Loops in Robotics
+//! Problems": the places where a trajectory ξ comes back within a distance γ of itself.
+//!
+//! - The sublevel set S_γ = {(t, t′) : δ(ξ(t), ξ(t′)) ≤ γ} on the sample lattice, exactly (every
+//!   pair, nothing subsampled), stored as runs and never as a list of pairs: [`SublevelSet`].
+//! - Loop components (4-connected components of S_γ), trivial ones (holding the diagonal, whose
+//!   pairs are simple loops), areas in s², holes, closest pairs: [`find_loops`], [`LoopComponent`].
+//! - Loop duration τ, loop area α and loop density ρ over S_γ or any set of components:
+//!   [`Loops::loop_duration`], [`Loops::loop_area`], [`Loops::loop_density`].
+//! - Any [`Metric`] satisfying the triangle inequality; [`Euclidean`] on Rⁿ.
+//! - A seeded synthetic urban drive for demos and benchmarks: [`UrbanDrive`].
+//!
+//! What it does not do: read files (that is `loops-io`), talk to Python or a terminal.
+//!
+//! ## Quickstart
+//! ```
+//! use loops_core::{Euclidean, Scale, Selection, Side, UrbanDrive, find_loops};
+//!
+//! let drive = UrbanDrive { duration_s: 600.0, seed: 7, ..UrbanDrive::default() }.generate()?;
+//! let loops = find_loops(&drive.trajectory, &Euclidean, 40.0)?;
+//! for c in loops.components().iter().filter(|c| !c.trivial).take(3) {
+//!     println!("component {}: {:.0} s², {} holes, closest {:.1} m", c.id, c.area_s2, c.holes, c.closest_distance);
+//! }
+//! let tau = loops.loop_duration(Selection::All, Side::Both, Scale::Seconds)?;
+//! let alpha = loops.loop_area(0.0, loops.span_s(), Selection::All, Side::Both, Scale::Seconds)?;
+//! let areas: f64 = loops.components().iter().map(|c| if c.trivial { c.area_s2 } else { 2.0 * c.area_s2 }).sum();
+//! assert!((alpha - areas).abs() <= 1e-9 * alpha);
+//! assert_eq!(tau.len(), drive.trajectory.len());
+//! # Ok::<(), loops_core::Error>(())
+//! ```
+#![warn(missing_docs)]
+
+mod component;
+mod error;
+mod loops;
+mod measure;
+mod metric;
+mod sublevel;
+mod synth;
+mod trajectory;
+
+pub use component::LoopComponent;
+pub use error::{Error, Result};
+pub use loops::{Loops, Warning, find_loops};
+pub use measure::{Scale, Selection, Side};
+pub use metric::{Euclidean, Metric};
+pub use sublevel::{Run, SublevelSet};
+pub use synth::{SyntheticDrive, UrbanDrive};
+pub use trajectory::{MAX_POSES, Trajectory};
+
+/// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).
+///
+/// Results of this crate do not depend on the thread count.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] when `threads` is 0 or the pool cannot be built.
+pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> Result<R> {
+    match threads {
+        None => Ok(f()),
+        Some(count) => {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(count).build();
+            match (count, pool) {
+                (1.., Ok(pool)) => Ok(pool.install(f)),
+                _ => Err(Error::InvalidParameter {
+                    name: "threads",
+                    value: count as f64,
+                    expected: "a positive number of threads the system can start",
+                }),
+            }
+        }
+    }
+}

@@ -1,0 +1,249 @@
+//! [`find_loops`]: the sublevel set, its loop components and the measures over them.
+
+use std::fmt;
+
+use crate::component::{LoopComponent, label_components};
+use crate::error::{Error, Result};
+use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
+use crate::metric::Metric;
+use crate::sublevel::{Run, SublevelSet};
+use crate::trajectory::{Trajectory, cell_of};
+
+/// Something worth telling the user about a result that is still correct.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Warning {
+    /// Consecutive poses farther apart than γ: the diagonal of S_γ breaks, and there is more than
+    /// one trivial component (usually a data gap, or γ below the step length).
+    DiagonalBroken {
+        /// Number of consecutive pairs (i, i + 1) with δ > γ.
+        gaps: usize,
+        /// The first such i.
+        first_gap: usize,
+        /// The largest such δ.
+        largest_step: f64,
+        /// Number of trivial components.
+        trivial_components: usize,
+    },
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::DiagonalBroken { gaps, first_gap, largest_step, trivial_components } => write!(
+                f,
+                "{gaps} consecutive pose pair(s) are farther apart than gamma (first at index {first_gap}, \
+                 largest step {largest_step:.6}): the diagonal breaks into {trivial_components} trivial components"
+            ),
+        }
+    }
+}
+
+/// Inexact loops of a trajectory at one γ: S_γ as runs, its loop components, and the measures.
+///
+/// Memory is proportional to the number of runs, never to the number of pairs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Loops {
+    gamma: f64,
+    metric: String,
+    timestamps_s: Vec<f64>,
+    cell_widths_s: Vec<f64>,
+    set: SublevelSet,
+    labels: Vec<u32>,
+    components: Vec<LoopComponent>,
+    warnings: Vec<Warning>,
+}
+
+/// Finds every inexact loop of `traj` under `metric` at threshold `gamma` (the metric's unit),
+/// exactly, and partitions them into loop components.
+///
+/// Runs on the current rayon pool (wrap in `ThreadPool::install` to choose the thread count);
+/// the result does not depend on the number of threads. Time is about the number of times the
+/// path passes near itself, times a logarithm, plus the number of runs; memory O(runs).
+///
+/// # Errors
+/// [`Error::InvalidGamma`] unless `gamma` is positive and finite; the metric's dimension error.
+///
+/// # Examples
+/// A 95% circle of radius 10 m: its ends come within 3.1 m of each other.
+/// ```
+/// use loops_core::{Euclidean, Trajectory, find_loops};
+/// let n = 200;
+/// let angle = |i: usize| 0.95 * std::f64::consts::TAU * i as f64 / (n - 1) as f64;
+/// let points: Vec<[f64; 2]> = (0..n).map(|i| [10.0 * angle(i).cos(), 10.0 * angle(i).sin()]).collect();
+/// let traj = Trajectory::from_points((0..n).map(|i| i as f64 * 0.1).collect(), &points)?;
+/// let loops = find_loops(&traj, &Euclidean, 4.0)?;
+/// assert_eq!(loops.components().len(), 2); // the trivial one and the loop at (0, 1)
+/// assert!(loops.components()[0].trivial && !loops.components()[1].trivial);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn find_loops<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Loops> {
+    let set = SublevelSet::compute(traj, metric, gamma)?;
+    Ok(Loops::from_set(traj, metric, set))
+}
+
+impl Loops {
+    /// Labels and measures an already computed sublevel set of `traj` under `metric`.
+    ///
+    /// # Panics
+    /// If `set` has a different number of rows than `traj` has poses.
+    pub fn from_set<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: SublevelSet) -> Self {
+        assert_eq!(set.rows(), traj.len(), "sublevel set and trajectory differ in length");
+        let labelling = label_components(traj, metric, &set);
+        let n = traj.len();
+        let gaps: Vec<usize> = (0..n - 1).filter(|&i| set.row(i)[0].end as usize == i).collect();
+        let mut warnings = Vec::new();
+        if let Some(&first_gap) = gaps.first() {
+            let largest_step =
+                gaps.iter().map(|&i| metric.distance(traj.point(i), traj.point(i + 1))).fold(0.0, f64::max);
+            let trivial_components = labelling.components.iter().filter(|c| c.trivial).count();
+            warnings.push(Warning::DiagonalBroken { gaps: gaps.len(), first_gap, largest_step, trivial_components });
+        }
+        Self {
+            gamma: set.gamma(),
+            metric: metric.name(),
+            timestamps_s: traj.timestamps_s().to_vec(),
+            cell_widths_s: traj.cell_widths_s().to_vec(),
+            labels: labelling.labels,
+            components: labelling.components,
+            set,
+            warnings,
+        }
+    }
+
+    /// The threshold γ.
+    pub fn gamma(&self) -> f64 {
+        self.gamma
+    }
+
+    /// The metric's name.
+    pub fn metric(&self) -> &str {
+        &self.metric
+    }
+
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.timestamps_s.len()
+    }
+
+    /// Never: a trajectory has at least two poses.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Timestamps of the trajectory, seconds.
+    pub fn timestamps_s(&self) -> &[f64] {
+        &self.timestamps_s
+    }
+
+    /// `t_{n−1} − t_0`, seconds.
+    pub fn span_s(&self) -> f64 {
+        self.timestamps_s[self.len() - 1] - self.timestamps_s[0]
+    }
+
+    /// The loop components, by id.
+    pub fn components(&self) -> &[LoopComponent] {
+        &self.components
+    }
+
+    /// The sublevel set as runs.
+    pub fn sublevel_set(&self) -> &SublevelSet {
+        &self.set
+    }
+
+    /// Warnings about the result (e.g. a broken diagonal).
+    pub fn warnings(&self) -> &[Warning] {
+        &self.warnings
+    }
+
+    /// The component id of each run of [`sublevel_set`](Self::sublevel_set).
+    pub fn run_components(&self) -> &[u32] {
+        &self.labels
+    }
+
+    /// Every run as `(row, run, component id)`, row after row.
+    pub fn runs(&self) -> impl Iterator<Item = (usize, Run, usize)> + '_ {
+        (0..self.len()).flat_map(move |i| {
+            let offset = self.set.row_offset(i);
+            self.set.row(i).iter().enumerate().map(move |(k, run)| (i, *run, self.labels[offset + k] as usize))
+        })
+    }
+
+    /// The component holding the pair (i, j) (either order), or `None` when δ(x_i, x_j) > γ.
+    pub fn component_of(&self, i: usize, j: usize) -> Option<usize> {
+        self.set.run_index(i, j).map(|r| self.labels[r] as usize)
+    }
+
+    /// Whether (i, j) is a *simple loop*: a pair in a trivial component.
+    pub fn is_simple(&self, i: usize, j: usize) -> bool {
+        self.component_of(i, j).is_some_and(|c| self.components[c].trivial)
+    }
+
+    /// Number of lattice cells of S_γ in the full (t, t′) plane, both halves.
+    pub fn pairs(&self) -> u64 {
+        2 * self.set.upper_pairs() - self.len() as u64
+    }
+
+    /// Loop duration τ_X(t_i) for every sample (paper, Eq. 6): how long the trajectory stays
+    /// within γ of ξ(t_i), restricted to X and to one `side`. Seconds, or fractions of the span
+    /// with [`Scale::Normalized`]. O(runs + n).
+    ///
+    /// # Errors
+    /// [`Error::UnknownComponent`] for an id that does not exist.
+    pub fn loop_duration(&self, selection: Selection<'_>, side: Side, scale: Scale) -> Result<Vec<f64>> {
+        let keep = self.selection_mask(selection)?;
+        let rows = (0..self.len()).map(|i| (i, self.set.row(i)));
+        let mut tau = loop_duration_s(&self.cell_widths_s, rows, |r| keep(self.labels[r] as usize), side);
+        if scale == Scale::Normalized {
+            let span = self.span_s();
+            tau.iter_mut().for_each(|t| *t /= span);
+        }
+        Ok(tau)
+    }
+
+    /// Loop area α_X(a, b) = ∫_a^b τ_X(t) dt (paper, Eq. 7): the area of X over t ∈ [a, b] in the
+    /// (t, t′) plane. `a`, `b` and the result in seconds and s², or in the normalized units.
+    ///
+    /// # Errors
+    /// [`Error::InvalidInterval`] unless `a < b`, both finite; [`Error::UnknownComponent`].
+    pub fn loop_area(&self, a: f64, b: f64, selection: Selection<'_>, side: Side, scale: Scale) -> Result<f64> {
+        if !(a.is_finite() && b.is_finite() && a < b) {
+            return Err(Error::InvalidInterval { a, b });
+        }
+        let tau = self.loop_duration(selection, side, Scale::Seconds)?;
+        let (t0, span) = (self.timestamps_s[0], self.span_s());
+        let (a_s, b_s) = match scale {
+            Scale::Seconds => (a, b),
+            Scale::Normalized => (t0 + a * span, t0 + b * span),
+        };
+        let area_s2 = integrate_s(&tau, |i| cell_of(&self.timestamps_s, i), a_s, b_s);
+        Ok(match scale {
+            Scale::Seconds => area_s2,
+            Scale::Normalized => area_s2 / (span * span),
+        })
+    }
+
+    /// Loop density ρ_X(a, b) = α_X(a, b) / (b − a) (paper, Eq. 8): the mean loop duration over
+    /// [a, b]. Seconds, or normalized.
+    ///
+    /// # Errors
+    /// As [`loop_area`](Self::loop_area).
+    pub fn loop_density(&self, a: f64, b: f64, selection: Selection<'_>, side: Side, scale: Scale) -> Result<f64> {
+        Ok(self.loop_area(a, b, selection, side, scale)? / (b - a))
+    }
+
+    fn selection_mask(&self, selection: Selection<'_>) -> Result<impl Fn(usize) -> bool + use<>> {
+        let count = self.components.len();
+        let mask = match selection {
+            Selection::All => vec![true; count],
+            Selection::Components(ids) => {
+                let mut mask = vec![false; count];
+                for &id in ids {
+                    *mask.get_mut(id).ok_or(Error::UnknownComponent { id, count })? = true;
+                }
+                mask
+            }
+        };
+        Ok(move |c: usize| mask[c])
+    }
+}

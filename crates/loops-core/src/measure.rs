@@ -1,0 +1,129 @@
+//! Loop duration τ, loop area α and loop density ρ (paper, Sec. 4, Eqs. 6–8), from runs.
+
+use std::str::FromStr;
+
+use crate::error::Error;
+
+/// Which partners t′ of a time t count towards τ(t) (paper, after Eq. 6).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum Side {
+    /// Every t′: τ over the full symmetric set.
+    #[default]
+    Both,
+    /// Only t′ > t: loops that begin at t.
+    Begin,
+    /// Only t′ < t: loops that end at t.
+    End,
+}
+
+impl Side {
+    /// The accepted names.
+    pub const NAMES: &'static str = "both, begin, end";
+}
+
+impl FromStr for Side {
+    type Err = Error;
+
+    fn from_str(name: &str) -> Result<Self, Error> {
+        match name {
+            "both" => Ok(Self::Both),
+            "begin" => Ok(Self::Begin),
+            "end" => Ok(Self::End),
+            _ => Err(Error::UnknownName { kind: "side", name: name.to_owned(), expected: Self::NAMES }),
+        }
+    }
+}
+
+/// The unit of times and measures.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub enum Scale {
+    /// Seconds; τ and ρ in s, α in s².
+    #[default]
+    Seconds,
+    /// The paper's units: time rescaled so the trajectory spans [0, 1]; τ, α, ρ in [0, 1].
+    Normalized,
+}
+
+/// Which part X of S_γ a measure is taken over.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Selection<'a> {
+    /// All of S_γ.
+    #[default]
+    All,
+    /// The union of these components (ids from [`Loops::components`](crate::Loops::components));
+    /// a non-trivial component brings its mirror.
+    Components(&'a [usize]),
+}
+
+/// τ_X(t_i) for every sample i, seconds, from the runs of X (DESIGN §4.3). O(runs + n).
+///
+/// Each upper-half run (row r, columns a..=b) adds its time width to τ(r), and by symmetry adds
+/// w_r to τ(j) for every column j > r. The diagonal cell (r, r) counts half to `Begin` and half to
+/// `End`, so `Begin + End = Both`.
+pub(crate) fn loop_duration_s<'r>(
+    cell_widths_s: &[f64],
+    rows: impl Iterator<Item = (usize, &'r [crate::sublevel::Run])>,
+    keep: impl Fn(usize) -> bool,
+    side: Side,
+) -> Vec<f64> {
+    let n = cell_widths_s.len();
+    let mut prefix = Vec::with_capacity(n + 1);
+    prefix.push(0.0);
+    let mut acc = 0.0;
+    for w in cell_widths_s {
+        acc += w;
+        prefix.push(acc);
+    }
+    let width = |a: usize, b: usize| if a > b { 0.0 } else { prefix[b + 1] - prefix[a] };
+    let mut tau = vec![0.0; n];
+    // Column contributions as a difference array over j.
+    let mut column_diff = vec![0.0; n + 1];
+    let mut run_index = 0;
+    for (r, runs) in rows {
+        let w_r = cell_widths_s[r];
+        for run in runs {
+            let selected = keep(run_index);
+            run_index += 1;
+            if !selected {
+                continue;
+            }
+            let (a, b) = (run.start as usize, run.end as usize);
+            let diagonal = a == r;
+            let off_start = if diagonal { r + 1 } else { a };
+            tau[r] += match side {
+                Side::Both => width(a, b),
+                Side::Begin => width(off_start, b) + if diagonal { 0.5 * w_r } else { 0.0 },
+                Side::End => {
+                    if diagonal {
+                        0.5 * w_r
+                    } else {
+                        0.0
+                    }
+                }
+            };
+            if side != Side::Begin && off_start <= b {
+                column_diff[off_start] += w_r;
+                column_diff[b + 1] -= w_r;
+            }
+        }
+    }
+    let mut running = 0.0;
+    for (t, diff) in tau.iter_mut().zip(&column_diff) {
+        running += diff;
+        *t += running;
+    }
+    tau
+}
+
+/// α_X(a, b) = ∫_a^b τ_X: Σ_i |cell_i ∩ [a, b]| τ(i), seconds in, s² out.
+pub(crate) fn integrate_s(tau_s: &[f64], cell_s: impl Fn(usize) -> (f64, f64), a_s: f64, b_s: f64) -> f64 {
+    tau_s
+        .iter()
+        .enumerate()
+        .map(|(i, tau)| {
+            let (start, end) = cell_s(i);
+            let overlap = end.min(b_s) - start.max(a_s);
+            if overlap > 0.0 { overlap * tau } else { 0.0 }
+        })
+        .sum()
+}

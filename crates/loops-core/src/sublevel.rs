@@ -1,0 +1,377 @@
+//! The sublevel set S_γ = {(t, t′) : δ(ξ(t), ξ(t′)) ≤ γ} (paper, Eq. 3) on the sample lattice,
+//! stored as runs.
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::metric::Metric;
+use crate::trajectory::Trajectory;
+
+/// A maximal interval of columns `start..=end` of one row `i` of S_γ, with `i ≤ start`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Run {
+    /// First column (pose index j), inclusive.
+    pub start: u32,
+    /// Last column, inclusive.
+    pub end: u32,
+}
+
+impl Run {
+    /// Number of cells.
+    pub fn len(self) -> usize {
+        (self.end - self.start) as usize + 1
+    }
+
+    /// Never: a run has at least one cell.
+    pub fn is_empty(self) -> bool {
+        false
+    }
+
+    /// Whether the two runs share a column (4-adjacency between consecutive rows).
+    pub fn overlaps(self, other: Run) -> bool {
+        self.start.max(other.start) <= self.end.min(other.end)
+    }
+}
+
+/// The upper half (j ≥ i, diagonal included) of S_γ on the sample lattice: every pair `(i, j)`
+/// with `δ(x_i, x_j) ≤ γ`, exactly, as runs per row. Never a list of pairs.
+///
+/// Memory is 12 bytes a run plus 8 bytes a row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SublevelSet {
+    gamma: f64,
+    row_offsets: Vec<usize>,
+    runs: Vec<Run>,
+    closest: Vec<u32>,
+}
+
+/// Rows handed to one rayon task at a time.
+const ROWS_PER_TASK: usize = 64;
+
+impl SublevelSet {
+    /// Computes S_γ by arc-length skipping (DESIGN §4.1), rows in parallel on the current rayon
+    /// pool.
+    ///
+    /// With s_k the cumulative path length under δ, the triangle inequality gives
+    /// `|δ(x_i, x_k) − δ(x_i, x_j)| ≤ s_k − s_j` for k ≥ j. Scanning row i, a column j with
+    /// `d = δ(x_i, x_j) > γ` lets the scan jump to the first k with `s_k − s_j ≥ d − γ`; a column
+    /// with `d ≤ γ` puts every k with `s_k − s_j ≤ γ − d` inside without measuring it. The cost of
+    /// a row is about the number of times the path passes the γ-ball around `x_i` plus the number
+    /// of far-field jumps, times a logarithm; not the number of pairs. The path length is summed
+    /// rounding up, and both bounds keep a margin for rounding, so the result equals the brute
+    /// force's `δ ≤ γ` test on every pair.
+    ///
+    /// Each run also records its closest column (the argmin of δ over the run), measured over
+    /// every cell of runs off the diagonal.
+    ///
+    /// # Errors
+    /// [`Error::InvalidGamma`] when γ is not positive and finite; the metric's dimension error.
+    pub fn compute<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
+        if !(gamma.is_finite() && gamma > 0.0) {
+            return Err(Error::InvalidGamma(gamma));
+        }
+        metric.check_dim(traj.dim())?;
+        let n = traj.len();
+        let arc = ArcLength::new(traj, metric);
+        let scanner = RowScanner { traj, metric, arc: &arc, gamma };
+        let blocks: Vec<Block> = (0..n.div_ceil(ROWS_PER_TASK))
+            .into_par_iter()
+            .map(|b| {
+                let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
+                let mut block = Block::default();
+                for i in rows {
+                    scanner.scan_row(i, &mut block);
+                    block.row_lengths.push(block.runs.len());
+                }
+                block
+            })
+            .collect();
+        let total: usize = blocks.iter().map(|b| b.runs.len()).sum();
+        let mut set = Self {
+            gamma,
+            row_offsets: Vec::with_capacity(n + 1),
+            runs: Vec::with_capacity(total),
+            closest: Vec::with_capacity(total),
+        };
+        set.row_offsets.push(0);
+        for block in blocks {
+            let base = set.runs.len();
+            set.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
+            set.runs.extend_from_slice(&block.runs);
+            set.closest.extend_from_slice(&block.closest);
+        }
+        Ok(set)
+    }
+
+    /// Builds the set by measuring every pair: O(n²) time, for tests and tiny inputs.
+    ///
+    /// # Errors
+    /// As [`SublevelSet::compute`].
+    pub fn brute_force<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
+        if !(gamma.is_finite() && gamma > 0.0) {
+            return Err(Error::InvalidGamma(gamma));
+        }
+        metric.check_dim(traj.dim())?;
+        let n = traj.len();
+        let mut set = Self { gamma, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };
+        for i in 0..n {
+            let mut open: Option<(usize, usize)> = None;
+            for j in i..=n {
+                let inside = j < n && metric.distance(traj.point(i), traj.point(j)) <= gamma;
+                match (inside, open) {
+                    (true, None) => open = Some((j, j)),
+                    (true, Some((a, _))) => open = Some((a, j)),
+                    (false, Some((a, b))) => {
+                        let run = Run { start: a as u32, end: b as u32 };
+                        let closest = (a..=b)
+                            .min_by(|&x, &y| {
+                                let dx = metric.distance(traj.point(i), traj.point(x));
+                                let dy = metric.distance(traj.point(i), traj.point(y));
+                                dx.total_cmp(&dy)
+                            })
+                            .unwrap_or(a);
+                        set.runs.push(run);
+                        set.closest.push(closest as u32);
+                        open = None;
+                    }
+                    (false, None) => {}
+                }
+            }
+            set.row_offsets.push(set.runs.len());
+        }
+        Ok(set)
+    }
+
+    /// The threshold γ.
+    pub fn gamma(&self) -> f64 {
+        self.gamma
+    }
+
+    /// Number of rows (poses).
+    pub fn rows(&self) -> usize {
+        self.row_offsets.len() - 1
+    }
+
+    /// The runs of row `i`, in increasing column order; the first starts at column `i`.
+    ///
+    /// # Panics
+    /// If `i >= rows()`.
+    pub fn row(&self, i: usize) -> &[Run] {
+        &self.runs[self.row_offsets[i]..self.row_offsets[i + 1]]
+    }
+
+    /// Index of the first run of row `i` in [`runs`](Self::runs).
+    pub(crate) fn row_offset(&self, i: usize) -> usize {
+        self.row_offsets[i]
+    }
+
+    /// All runs, row after row.
+    pub fn runs(&self) -> &[Run] {
+        &self.runs
+    }
+
+    /// The closest column of each run (argmin of δ over the run; ties to the earliest column).
+    pub fn closest_columns(&self) -> &[u32] {
+        &self.closest
+    }
+
+    /// Number of lattice cells (i, j) with j ≥ i in the set.
+    pub fn upper_pairs(&self) -> u64 {
+        self.runs.iter().map(|r| r.len() as u64).sum()
+    }
+
+    /// Whether `(i, j)` (either order) is in S_γ: O(log runs in the row).
+    pub fn contains(&self, i: usize, j: usize) -> bool {
+        self.run_index(i, j).is_some()
+    }
+
+    /// Index in [`runs`](Self::runs) of the run holding `(min(i, j), max(i, j))`, if any.
+    pub fn run_index(&self, i: usize, j: usize) -> Option<usize> {
+        let (i, j) = (i.min(j), i.max(j));
+        if j >= self.rows() {
+            return None;
+        }
+        let row = self.row(i);
+        let k = row.partition_point(|r| (r.end as usize) < j);
+        (k < row.len() && row[k].start as usize <= j).then(|| self.row_offsets[i] + k)
+    }
+}
+
+#[derive(Default)]
+struct Block {
+    runs: Vec<Run>,
+    closest: Vec<u32>,
+    row_lengths: Vec<usize>,
+}
+
+/// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
+struct ArcLength {
+    s: Vec<f64>,
+    margin: f64,
+}
+
+impl ArcLength {
+    fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Self {
+        let n = traj.len();
+        let mut s = Vec::with_capacity(n);
+        let mut total = 0.0_f64;
+        let mut largest_step = 0.0_f64;
+        let largest_coord = traj.coords().iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+        s.push(0.0);
+        for k in 1..n {
+            let step = metric.distance(traj.point(k - 1), traj.point(k));
+            largest_step = largest_step.max(step);
+            // Rounding up keeps s_k − s_j ≥ Σ δ over the stretch, so bounds never over-reach.
+            total = (total + step).next_up();
+            s.push(total);
+        }
+        // Rounding of δ (relative to the coordinates' size) and of differences of s: 64 ulps of
+        // the largest magnitude in play.
+        let margin = 64.0 * f64::EPSILON * (total + largest_step + largest_coord + 1.0);
+        Self { s, margin }
+    }
+
+    /// Largest k ≥ j with s_k ≤ s_j + budget (k = j when the budget is below zero).
+    #[inline]
+    fn last_within(&self, j: usize, budget: f64) -> usize {
+        let limit = self.s[j] + budget;
+        let s = &self.s;
+        let n = s.len();
+        if budget < 0.0 || j + 1 >= n || s[j + 1] > limit {
+            return j;
+        }
+        // Gallop: s[j + lo] ≤ limit is known.
+        let (mut lo, mut hi) = (1, 2);
+        while j + hi < n && s[j + hi] <= limit {
+            lo = hi;
+            hi *= 2;
+        }
+        let hi = hi.min(n - j);
+        // Invariant: s[j + lo] ≤ limit, and s[j + hi] > limit or j + hi == n.
+        j + lo + s[j + lo + 1..j + hi].partition_point(|&x| x <= limit)
+    }
+
+    /// Smallest k > j with s_k ≥ s_j + distance, or n when there is none.
+    #[inline]
+    fn first_beyond(&self, j: usize, distance: f64) -> usize {
+        let target = self.s[j] + distance;
+        let s = &self.s;
+        let n = s.len();
+        if j + 1 >= n || s[j + 1] >= target {
+            return j + 1;
+        }
+        let (mut lo, mut hi) = (1, 2);
+        while j + hi < n && s[j + hi] < target {
+            lo = hi;
+            hi *= 2;
+        }
+        let hi = hi.min(n - j);
+        j + lo + 1 + s[j + lo + 1..j + hi].partition_point(|&x| x < target)
+    }
+}
+
+struct RowScanner<'a, M: ?Sized> {
+    traj: &'a Trajectory,
+    metric: &'a M,
+    arc: &'a ArcLength,
+    gamma: f64,
+}
+
+impl<M: Metric + ?Sized> RowScanner<'_, M> {
+    fn scan_row(&self, i: usize, out: &mut Block) {
+        let n = self.traj.len();
+        let x_i = self.traj.point(i);
+        let margin = self.arc.margin;
+        let mut open: Option<(usize, usize)> = None;
+        let mut j = i;
+        while j < n {
+            let d = self.metric.distance(x_i, self.traj.point(j));
+            if d <= self.gamma {
+                // Every k up to here has δ(x_i, x_k) ≤ d + (s_k − s_j) ≤ γ − margin.
+                let k = self.arc.last_within(j, self.gamma - d - margin);
+                open = match open {
+                    Some((a, b)) if b + 1 == j => Some((a, k)),
+                    _ => {
+                        if let Some((a, b)) = open {
+                            self.close_run(i, a, b, out);
+                        }
+                        Some((j, k))
+                    }
+                };
+                j = k + 1;
+            } else {
+                if let Some((a, b)) = open.take() {
+                    self.close_run(i, a, b, out);
+                }
+                // Every k before the jump has δ(x_i, x_k) ≥ d − (s_k − s_j) > γ + margin.
+                j = self.arc.first_beyond(j, d - self.gamma - margin);
+            }
+        }
+        if let Some((a, b)) = open {
+            self.close_run(i, a, b, out);
+        }
+    }
+
+    fn close_run(&self, i: usize, a: usize, b: usize, out: &mut Block) {
+        let closest = if a == i {
+            i
+        } else {
+            let x_i = self.traj.point(i);
+            let mut best = (f64::INFINITY, a);
+            for j in a..=b {
+                let rank = self.metric.distance_rank(x_i, self.traj.point(j));
+                if rank < best.0 {
+                    best = (rank, j);
+                }
+            }
+            best.1
+        };
+        out.runs.push(Run { start: a as u32, end: b as u32 });
+        out.closest.push(closest as u32);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::Euclidean;
+
+    fn line(xs: &[f64]) -> Trajectory {
+        Trajectory::new((0..xs.len()).map(|i| i as f64).collect(), xs.to_vec(), 1).unwrap()
+    }
+
+    #[test]
+    fn out_and_back_on_a_line() {
+        let traj = line(&[0.0, 1.0, 2.0, 3.0, 2.0, 1.0, 0.0]);
+        let set = SublevelSet::compute(&traj, &Euclidean, 1.0).unwrap();
+        assert_eq!(set, SublevelSet::brute_force(&traj, &Euclidean, 1.0).unwrap());
+        assert_eq!(set.row(0), &[Run { start: 0, end: 1 }, Run { start: 5, end: 6 }]);
+        assert!(set.contains(6, 0) && !set.contains(0, 4));
+        assert_eq!(set.closest_columns()[1], 6);
+    }
+
+    #[test]
+    fn gallop_bounds() {
+        let traj = line(&[0.0, 0.0, 0.0, 1.0, 1.0, 5.0, 9.0]);
+        let arc = ArcLength::new(&traj, &Euclidean);
+        // s = [0, 0, 0, 1, 1, 5, 9], each rounded up by at most a few ulps.
+        assert_eq!(arc.last_within(0, 0.5), 2);
+        assert_eq!(arc.last_within(0, 1.5), 4);
+        assert_eq!(arc.last_within(0, 100.0), 6);
+        assert_eq!(arc.last_within(3, -1.0), 3);
+        assert_eq!(arc.last_within(5, 3.9), 5);
+        assert_eq!(arc.first_beyond(0, 0.5), 3);
+        assert_eq!(arc.first_beyond(0, 1.5), 5);
+        assert_eq!(arc.first_beyond(0, 100.0), 7);
+        assert_eq!(arc.first_beyond(6, 1.0), 7);
+        assert_eq!(arc.first_beyond(1, -1.0), 2);
+    }
+
+    #[test]
+    fn bad_gamma() {
+        let traj = line(&[0.0, 1.0]);
+        for gamma in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(matches!(SublevelSet::compute(&traj, &Euclidean, gamma), Err(Error::InvalidGamma(_))));
+        }
+    }
+}

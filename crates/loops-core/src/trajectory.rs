@@ -1,0 +1,197 @@
+//! Trajectories: strictly increasing timestamps and one point per timestamp.
+
+use crate::error::{Error, Result};
+
+/// A sampled trajectory ξ: timestamps in seconds, strictly increasing, and one point of a fixed
+/// dimension per timestamp, stored row-major in one flat buffer.
+///
+/// The points are coordinates in whatever chart the [`Metric`](crate::Metric) expects (Rⁿ
+/// positions for [`Euclidean`](crate::Euclidean)). Sample `i` stands for its *time cell*
+/// `[m_{i-1}, m_i]` with `m_i = (t_i + t_{i+1}) / 2` (clipped to `[t_0, t_{n-1}]` at the ends),
+/// of width `w_i = (t_{i+1} − t_{i−1}) / 2` (half cells at the ends). The cells tile the time
+/// span exactly, so durations and areas computed from them are in seconds and s², and stay right
+/// when sampling is uneven.
+///
+/// # Examples
+/// ```
+/// use loops_core::Trajectory;
+/// let traj = Trajectory::from_points(vec![0.0, 1.0, 3.0], &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])?;
+/// assert_eq!(traj.len(), 3);
+/// assert_eq!(traj.cell_widths_s(), &[0.5, 1.5, 1.0]);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trajectory {
+    timestamps_s: Vec<f64>,
+    coords: Vec<f64>,
+    dim: usize,
+    cell_widths_s: Vec<f64>,
+}
+
+/// The largest number of poses the engine indexes (it stores columns as `u32`).
+pub const MAX_POSES: usize = u32::MAX as usize - 1;
+
+impl Trajectory {
+    /// A trajectory from timestamps (seconds) and a flat row-major buffer of `dim` coordinates
+    /// per pose.
+    ///
+    /// # Errors
+    /// [`Error::ZeroDimension`], [`Error::RaggedCoordinates`], [`Error::LengthMismatch`],
+    /// [`Error::TooFewPoses`] (fewer than 2), [`Error::TooManyPoses`],
+    /// [`Error::NonFiniteTimestamp`], [`Error::TimestampsNotIncreasing`] (unsorted or
+    /// duplicate) and [`Error::NonFiniteCoordinate`], each naming the first offending index.
+    pub fn new(timestamps_s: Vec<f64>, coords: Vec<f64>, dim: usize) -> Result<Self> {
+        if dim == 0 {
+            return Err(Error::ZeroDimension);
+        }
+        if coords.len() % dim != 0 {
+            return Err(Error::RaggedCoordinates { len: coords.len(), dim });
+        }
+        let poses = coords.len() / dim;
+        if timestamps_s.len() != poses {
+            return Err(Error::LengthMismatch { timestamps: timestamps_s.len(), poses });
+        }
+        if poses < 2 {
+            return Err(Error::TooFewPoses { count: poses });
+        }
+        if poses > MAX_POSES {
+            return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
+        }
+        validate_timestamps(&timestamps_s)?;
+        if let Some(k) = coords.iter().position(|c| !c.is_finite()) {
+            return Err(Error::NonFiniteCoordinate { index: k / dim, axis: k % dim, value: coords[k] });
+        }
+        let cell_widths_s = cell_widths(&timestamps_s);
+        Ok(Self { timestamps_s, coords, dim, cell_widths_s })
+    }
+
+    /// A trajectory from timestamps and fixed-size points (`[x, y]`, `[x, y, z]`, ...).
+    ///
+    /// # Errors
+    /// As [`Trajectory::new`].
+    pub fn from_points<const D: usize>(timestamps_s: Vec<f64>, points: &[[f64; D]]) -> Result<Self> {
+        Self::new(timestamps_s, points.iter().flatten().copied().collect(), D)
+    }
+
+    /// Number of poses `n` (at least 2).
+    #[allow(clippy::len_without_is_empty)] // a trajectory is never empty
+    pub fn len(&self) -> usize {
+        self.timestamps_s.len()
+    }
+
+    /// Coordinates per point.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Timestamps, seconds, strictly increasing.
+    pub fn timestamps_s(&self) -> &[f64] {
+        &self.timestamps_s
+    }
+
+    /// All coordinates, row-major, `len() * dim()` values.
+    pub fn coords(&self) -> &[f64] {
+        &self.coords
+    }
+
+    /// The coordinates of point `i`.
+    ///
+    /// # Panics
+    /// If `i >= len()`.
+    pub fn point(&self, i: usize) -> &[f64] {
+        &self.coords[i * self.dim..(i + 1) * self.dim]
+    }
+
+    /// Time-cell widths `w_i`, seconds; they sum to [`span_s`](Self::span_s).
+    pub fn cell_widths_s(&self) -> &[f64] {
+        &self.cell_widths_s
+    }
+
+    /// The time cell `[start, end]` of sample `i`, seconds.
+    ///
+    /// # Panics
+    /// If `i >= len()`.
+    pub fn cell_s(&self, i: usize) -> (f64, f64) {
+        cell_of(&self.timestamps_s, i)
+    }
+
+    /// `t_{n−1} − t_0`, seconds (positive).
+    pub fn span_s(&self) -> f64 {
+        self.timestamps_s[self.len() - 1] - self.timestamps_s[0]
+    }
+
+    /// A copy whose points are `f(point)`: same timestamps, new dimension.
+    ///
+    /// # Errors
+    /// As [`Trajectory::new`], for the new points (e.g. a NaN produced by `f`).
+    pub fn map_points(&self, dim: usize, mut f: impl FnMut(&[f64], &mut Vec<f64>)) -> Result<Self> {
+        let mut coords = Vec::with_capacity(self.len() * dim);
+        for i in 0..self.len() {
+            f(self.point(i), &mut coords);
+        }
+        Self::new(self.timestamps_s.clone(), coords, dim)
+    }
+}
+
+fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {
+    if let Some(index) = timestamps_s.iter().position(|t| !t.is_finite()) {
+        return Err(Error::NonFiniteTimestamp { index, value: timestamps_s[index] });
+    }
+    if let Some(k) = timestamps_s.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(Error::TimestampsNotIncreasing {
+            index: k + 1,
+            previous_s: timestamps_s[k],
+            value_s: timestamps_s[k + 1],
+        });
+    }
+    Ok(())
+}
+
+/// The one time-weight rule: cell `i` is `[m_{i−1}, m_i]`, midpoints between samples, clipped to
+/// the span at the ends.
+pub(crate) fn cell_of(timestamps_s: &[f64], i: usize) -> (f64, f64) {
+    let n = timestamps_s.len();
+    let start = if i == 0 { timestamps_s[0] } else { 0.5 * (timestamps_s[i - 1] + timestamps_s[i]) };
+    let end = if i + 1 == n { timestamps_s[n - 1] } else { 0.5 * (timestamps_s[i] + timestamps_s[i + 1]) };
+    (start, end)
+}
+
+fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
+    (0..timestamps_s.len())
+        .map(|i| {
+            let (start, end) = cell_of(timestamps_s, i);
+            end - start
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_tile_the_span() {
+        let t = vec![0.0, 0.1, 0.5, 0.6, 2.0];
+        let traj = Trajectory::new(t, vec![0.0; 5], 1).unwrap();
+        let total: f64 = traj.cell_widths_s().iter().sum();
+        assert!((total - traj.span_s()).abs() < 1e-12);
+        assert_eq!(traj.cell_s(0), (0.0, 0.05));
+        assert_eq!(traj.cell_s(4), (1.3, 2.0));
+    }
+
+    #[test]
+    fn bad_input_names_the_index() {
+        let err = Trajectory::new(vec![0.0, 1.0, 1.0], vec![0.0; 3], 1).unwrap_err();
+        assert_eq!(err, Error::TimestampsNotIncreasing { index: 2, previous_s: 1.0, value_s: 1.0 });
+        assert!(err.to_string().contains("index 2"), "{err}");
+        let err = Trajectory::new(vec![0.0, 1.0], vec![0.0, 0.0, f64::NAN, 1.0], 2).unwrap_err();
+        assert_eq!(err.to_string(), "coordinate 0 of pose 1 is not finite (NaN)");
+        let err = Trajectory::new(vec![0.0, f64::INFINITY], vec![0.0; 2], 1).unwrap_err();
+        assert!(matches!(err, Error::NonFiniteTimestamp { index: 1, .. }));
+        assert_eq!(Trajectory::new(vec![], vec![], 3).unwrap_err(), Error::TooFewPoses { count: 0 });
+        assert_eq!(Trajectory::new(vec![1.0], vec![0.0; 3], 3).unwrap_err(), Error::TooFewPoses { count: 1 });
+        assert_eq!(Trajectory::new(vec![0.0, 1.0], vec![0.0; 5], 2).unwrap_err(), Error::RaggedCoordinates { len: 5, dim: 2 });
+        assert_eq!(Trajectory::new(vec![0.0, 1.0], vec![0.0; 6], 2).unwrap_err(), Error::LengthMismatch { timestamps: 2, poses: 3 });
+        assert_eq!(Trajectory::new(vec![0.0, 1.0], vec![], 0).unwrap_err(), Error::ZeroDimension);
+    }
+}
