@@ -1,1 +1,165 @@
-fn main(){}
+//! `loops`: inexact-loop components of trajectories, on the command line.
+//!
+//! `main` parses, calls [`run`], prints errors as one line on stderr and exits 2 on error,
+//! 0 on success or a closed pipe. Everything else lives in `loops-core` and `loops-io`.
+
+mod output;
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::{Args, Parser, Subcommand};
+use loops_core::{Loops, MetricSpec, Trajectory, UrbanDrive};
+
+/// Find, measure and sample inexact loops (loop closures) in robot trajectories.
+#[derive(Debug, Parser)]
+#[command(name = "loops", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// List the loop components of a trajectory file (TUM or CSV).
+    #[command(after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
+        loops components kitti00.txt --format tum --axes 0,2 --gamma 6 --json kitti00.json\n  \
+        loops components log.csv --gamma 5 --limit 0    # every component")]
+    Components(ComponentsArgs),
+    /// Run on a built-in synthetic urban drive (2.1 h, 10 Hz, 1 km² city) and print a summary.
+    #[command(after_help = "Examples:\n  loops demo\n  loops demo --duration-s 600 --seed 3 --json demo.json")]
+    Demo(DemoArgs),
+}
+
+#[derive(Debug, Args)]
+struct EngineArgs {
+    /// The distance threshold γ, in the metric's unit (metres for positions).
+    #[arg(long, value_name = "GAMMA_M")]
+    gamma: f64,
+    /// The metric: euclidean.
+    #[arg(long, default_value_t = MetricSpec::default().name())]
+    metric: String,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+#[derive(Debug, Args)]
+struct OutputArgs {
+    /// Also write the result as JSON to this file (written atomically).
+    #[arg(long, value_name = "PATH")]
+    json: Option<PathBuf>,
+    /// Replace the JSON file if it exists.
+    #[arg(long)]
+    force: bool,
+    /// Show at most this many components, largest area first (0: all).
+    #[arg(long, default_value_t = 20)]
+    limit: usize,
+}
+
+#[derive(Debug, Args)]
+struct ComponentsArgs {
+    /// The trajectory file.
+    file: PathBuf,
+    /// File format: tum or csv (default: from the extension; .csv is CSV, anything else TUM).
+    #[arg(long)]
+    format: Option<String>,
+    /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).
+    #[arg(long, value_delimiter = ',', num_args = 2, value_name = "A,B")]
+    axes: Option<Vec<usize>>,
+    #[command(flatten)]
+    engine: EngineArgs,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+#[derive(Debug, Args)]
+struct DemoArgs {
+    /// Length of the drive, seconds.
+    #[arg(long, default_value_t = UrbanDrive::default().duration_s)]
+    duration_s: f64,
+    /// Seed of the drive.
+    #[arg(long, default_value_t = UrbanDrive::default().seed)]
+    seed: u64,
+    /// The distance threshold γ, metres.
+    #[arg(long, value_name = "GAMMA_M", default_value_t = 40.0)]
+    gamma: f64,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("loops: error: {error:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn is_broken_pipe(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Components(args) => components(args),
+        Command::Demo(args) => demo(args),
+    }
+}
+
+fn components(args: ComponentsArgs) -> Result<()> {
+    let source = args.file.display().to_string();
+    let format = args.format.as_deref().map(str::parse::<loops_io::Format>).transpose()?;
+    let table = loops_io::read_trajectory(&args.file, format)?;
+    let traj = match args.axes.as_deref() {
+        None => table.to_trajectory()?,
+        Some(&[a, b]) => table.to_trajectory_plane([a, b])?,
+        Some(other) => anyhow::bail!("--axes takes two axis indices, got {other:?}"),
+    };
+    let spec: MetricSpec = args.engine.metric.parse()?;
+    let (loops, seconds) = timed(args.engine.threads, || spec.find_loops(&traj, args.engine.gamma))
+        .with_context(|| format!("finding loops in {source}"))?;
+    report(&source, &traj, &loops, seconds, &args.output)
+}
+
+fn demo(args: DemoArgs) -> Result<()> {
+    let spec = UrbanDrive { duration_s: args.duration_s, seed: args.seed, ..UrbanDrive::default() };
+    let drive = spec.generate().context("generating the urban drive")?;
+    let source = format!("urban drive (seed {}, {:.0} s at {} Hz)", spec.seed, spec.duration_s, spec.rate_hz);
+    let (loops, seconds) = timed(args.threads, || MetricSpec::Euclidean.find_loops(&drive.trajectory, args.gamma))?;
+    report(&source, &drive.trajectory, &loops, seconds, &args.output)
+}
+
+fn timed(threads: Option<usize>, f: impl FnOnce() -> loops_core::Result<Loops> + Send) -> Result<(Loops, f64)> {
+    let start = Instant::now();
+    let loops = loops_core::with_threads(threads, f)??;
+    Ok((loops, start.elapsed().as_secs_f64()))
+}
+
+fn report(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64, out: &OutputArgs) -> Result<()> {
+    for warning in loops.warnings() {
+        eprintln!("loops: warning: {warning}");
+    }
+    let mut stdout = std::io::stdout().lock();
+    output::write_table(&mut stdout, source, traj, loops, seconds, out.limit)?;
+    stdout.flush()?;
+    if let Some(path) = &out.json {
+        let json = output::json_report(source, traj, loops)?;
+        output::write_atomically(path, json.as_bytes(), out.force)
+            .with_context(|| format!("writing {}", path.display()))?;
+        writeln!(stdout, "wrote {}", path.display())?;
+    }
+    Ok(())
+}

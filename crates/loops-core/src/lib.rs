@@ -32,6 +32,7 @@
 //! ```
 #![warn(missing_docs)]
 
+mod ball_tree;
 mod component;
 mod error;
 mod loops;
@@ -45,7 +46,7 @@ pub use component::LoopComponent;
 pub use error::{Error, Result};
 pub use loops::{Loops, Warning, find_loops};
 pub use measure::{Scale, Selection, Side};
-pub use metric::{Euclidean, Metric};
+pub use metric::{Euclidean, Metric, MetricSpec};
 pub use sublevel::{Run, SublevelSet};
 pub use synth::{SyntheticDrive, UrbanDrive};
 pub use trajectory::{MAX_POSES, Trajectory};

@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+use crate::ball_tree::BallTree;
 use crate::error::{Error, Result};
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
@@ -48,9 +49,12 @@ pub struct SublevelSet {
 /// Rows handed to one rayon task at a time.
 const ROWS_PER_TASK: usize = 64;
 
+/// Poses per leaf of the far-field ball hierarchy.
+const LEAF_SIZE: usize = 64;
+
 impl SublevelSet {
-    /// Computes S_γ by arc-length skipping (DESIGN §4.1), rows in parallel on the current rayon
-    /// pool.
+    /// Computes S_γ by arc-length skipping (DESIGN §4.1) within the stretches of the path that a
+    /// hierarchy of bounding balls cannot rule out, rows in parallel on the current rayon pool.
     ///
     /// With s_k the cumulative path length under δ, the triangle inequality gives
     /// `|δ(x_i, x_k) − δ(x_i, x_j)| ≤ s_k − s_j` for k ≥ j. Scanning row i, a column j with
@@ -60,6 +64,11 @@ impl SublevelSet {
     /// of far-field jumps, times a logarithm; not the number of pairs. The path length is summed
     /// rounding up, and both bounds keep a margin for rounding, so the result equals the brute
     /// force's `δ ≤ γ` test on every pair.
+    ///
+    /// Far-field pruning: the path is cut into stretches of 32 consecutive poses, each in a ball
+    /// around its middle pose, and the balls into a binary hierarchy. A row visits only the
+    /// stretches whose ball comes within γ of `x_i`, so the cost of a row no longer grows with
+    /// the length of path far away.
     ///
     /// Each run also records its closest column (the argmin of δ over the run), measured over
     /// every cell of runs off the diagonal.
@@ -73,7 +82,8 @@ impl SublevelSet {
         metric.check_dim(traj.dim())?;
         let n = traj.len();
         let arc = ArcLength::new(traj, metric);
-        let scanner = RowScanner { traj, metric, arc: &arc, gamma };
+        let balls = BallTree::new(traj, metric, LEAF_SIZE);
+        let scanner = RowScanner { traj, metric, arc: &arc, balls: &balls, gamma };
         let blocks: Vec<Block> = (0..n.div_ceil(ROWS_PER_TASK))
             .into_par_iter()
             .map(|b| {
@@ -274,39 +284,49 @@ struct RowScanner<'a, M: ?Sized> {
     traj: &'a Trajectory,
     metric: &'a M,
     arc: &'a ArcLength,
+    balls: &'a BallTree,
     gamma: f64,
 }
 
 impl<M: Metric + ?Sized> RowScanner<'_, M> {
     fn scan_row(&self, i: usize, out: &mut Block) {
-        let n = self.traj.len();
         let x_i = self.traj.point(i);
         let margin = self.arc.margin;
         let mut open: Option<(usize, usize)> = None;
+        // Next column to examine; columns before it are decided.
         let mut j = i;
-        while j < n {
-            let d = self.metric.distance(x_i, self.traj.point(j));
-            if d <= self.gamma {
-                // Every k up to here has δ(x_i, x_k) ≤ d + (s_k − s_j) ≤ γ − margin.
-                let k = self.arc.last_within(j, self.gamma - d - margin);
-                open = match open {
-                    Some((a, b)) if b + 1 == j => Some((a, k)),
-                    _ => {
-                        if let Some((a, b)) = open {
-                            self.close_run(i, a, b, out);
-                        }
-                        Some((j, k))
-                    }
-                };
-                j = k + 1;
-            } else {
+        self.balls.for_each_near_leaf(self.traj, self.metric, x_i, i, self.gamma + margin, |lo, hi| {
+            if j < lo {
+                // Columns j..lo lie in pruned stretches: all outside, so a run open at j − 1 ends.
                 if let Some((a, b)) = open.take() {
                     self.close_run(i, a, b, out);
                 }
-                // Every k before the jump has δ(x_i, x_k) ≥ d − (s_k − s_j) > γ + margin.
-                j = self.arc.first_beyond(j, d - self.gamma - margin);
+                j = lo;
             }
-        }
+            while j < hi {
+                let d = self.metric.distance(x_i, self.traj.point(j));
+                if d <= self.gamma {
+                    // Every k up to here has δ(x_i, x_k) ≤ d + (s_k − s_j) ≤ γ − margin.
+                    let k = self.arc.last_within(j, self.gamma - d - margin);
+                    open = match open {
+                        Some((a, b)) if b + 1 == j => Some((a, k)),
+                        _ => {
+                            if let Some((a, b)) = open {
+                                self.close_run(i, a, b, out);
+                            }
+                            Some((j, k))
+                        }
+                    };
+                    j = k + 1;
+                } else {
+                    if let Some((a, b)) = open.take() {
+                        self.close_run(i, a, b, out);
+                    }
+                    // Every k before the jump has δ(x_i, x_k) ≥ d − (s_k − s_j) > γ + margin.
+                    j = self.arc.first_beyond(j, d - self.gamma - margin);
+                }
+            }
+        });
         if let Some((a, b)) = open {
             self.close_run(i, a, b, out);
         }
@@ -316,15 +336,9 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         let closest = if a == i {
             i
         } else {
-            let x_i = self.traj.point(i);
-            let mut best = (f64::INFINITY, a);
-            for j in a..=b {
-                let rank = self.metric.distance_rank(x_i, self.traj.point(j));
-                if rank < best.0 {
-                    best = (rank, j);
-                }
-            }
-            best.1
+            let dim = self.traj.dim();
+            let block = &self.traj.coords()[a * dim..(b + 1) * dim];
+            a + self.metric.closest_in(self.traj.point(i), block)
         };
         out.runs.push(Run { start: a as u32, end: b as u32 });
         out.closest.push(closest as u32);

@@ -1,1 +1,41 @@
-pub fn x(){}
+//! Python bindings of inexact-loops: the module `inexact_loops._core`.
+//!
+//! Thin adapters only: convert numpy arrays, release the GIL, call `loops-core` / `loops-io`,
+//! map errors. No algorithm, validation rule or default of their own.
+
+mod convert;
+mod error;
+mod py_loops;
+mod py_trajectory;
+
+use pyo3::prelude::*;
+
+/// Runs `f` without the GIL and turns its error, or a panic, into a Python exception: the one
+/// way bindings call into Rust.
+pub(crate) fn detached<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> Result<T, error::Failure> + Send,
+) -> PyResult<T> {
+    py.detach(|| {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|payload| {
+            let message = payload
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic without a message".to_owned());
+            Err(error::Failure::Panic(message))
+        })
+    })
+    .map_err(PyErr::from)
+}
+
+#[pymodule]
+fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    module.add_class::<py_trajectory::Trajectory>()?;
+    module.add_class::<py_loops::Loops>()?;
+    module.add_function(wrap_pyfunction!(py_loops::find_loops, module)?)?;
+    module.add_function(wrap_pyfunction!(py_trajectory::urban_drive, module)?)?;
+    module.add_function(wrap_pyfunction!(py_trajectory::read_trajectory, module)?)?;
+    Ok(())
+}

@@ -1,0 +1,41 @@
+# One entry point for developers and CI.
+PYTHON ?= python3
+PIP := $(PYTHON) -m pip
+
+.PHONY: demo test test-rust test-python python lint bench compare fmt
+
+## Build the CLI and run it on the built-in 2.1 h urban drive.
+demo:
+	cargo run --release --quiet -p loops-cli -- demo
+
+## Every test: Rust (unit, property, doc) and Python (pytest, doctests).
+test: test-rust test-python
+
+test-rust:
+	cargo test --workspace --all-targets
+	cargo test --workspace --doc
+
+## Build and install the Python package (release build) with its test dependencies.
+python:
+	$(PIP) install --quiet --upgrade 'maturin>=1.9,<2'
+	$(PIP) install --quiet '.[test]'
+
+test-python: python
+	$(PYTHON) -m pytest -q tests/python python/inexact_loops
+
+lint:
+	cargo fmt --all -- --check
+	cargo clippy --workspace --all-targets -- -D warnings
+	$(PYTHON) -m ruff check python tests benches
+
+fmt:
+	cargo fmt --all
+	$(PYTHON) -m ruff format python tests benches
+
+## Criterion benchmarks (Rust).
+bench:
+	cargo bench -p loops-benches
+
+## Side-by-side comparison with scipy; writes BENCHMARKS.md.
+compare: python
+	$(PYTHON) benches/compare.py

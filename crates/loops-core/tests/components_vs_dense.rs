@@ -1,0 +1,105 @@
+//! Loop components, holes, closest pairs, τ, α, ρ and the broken-diagonal warning against a
+//! dense reference: the full symmetric boolean matrix of S_γ, labelled by breadth-first flood
+//! fill, with holes counted twice (pixel Euler number, and bounded 8-connected background
+//! regions) and measures summed over matrix rows.
+
+mod support;
+
+use loops_core::{Euclidean, Trajectory, Warning, find_loops};
+use proptest::prelude::*;
+use proptest::test_runner::TestCaseError;
+use support::{Case, any_case, check_against_dense, config, lattice_case};
+
+/// A sub-interval of time as fractions of the span, reaching a little outside it.
+fn interval() -> impl Strategy<Value = (f64, f64)> {
+    (-0.1..1.1f64, -0.1..1.1f64)
+        .prop_filter("a non-empty interval", |(a, b)| (a - b).abs() > 1e-3)
+        .prop_map(|(a, b)| (a.min(b), a.max(b)))
+}
+
+fn check(case: &Case, interval: (f64, f64)) -> Result<(), TestCaseError> {
+    check_against_dense(&case.traj, case.gamma, interval).map_err(TestCaseError::fail)
+}
+
+proptest! {
+    #![proptest_config(config(256, 0x5EED_0002))]
+
+    #[test]
+    fn components_and_measures_equal_the_dense_reference(
+        case in any_case(250),
+        interval in interval(),
+    ) {
+        check(&case, interval)?;
+    }
+
+    /// Exact ties at γ make ragged boundaries, holes and broken diagonals.
+    #[test]
+    fn lattice_components_equal_the_dense_reference(
+        case in lattice_case(250),
+        interval in interval(),
+    ) {
+        check(&case, interval)?;
+    }
+}
+
+fn line(xs: &[f64]) -> Trajectory {
+    Trajectory::new((0..xs.len()).map(|i| i as f64).collect(), xs.to_vec(), 1).unwrap()
+}
+
+/// Out, back and out again along a line: the three passes enclose the pairs (end of the first
+/// pass, start of the third), far apart, in a ring of S_γ attached to the diagonal. One hole in
+/// each half of the plane.
+#[test]
+fn three_passes_make_two_holes() {
+    let mut xs: Vec<f64> = (0..=10).map(f64::from).collect();
+    xs.extend((0..10).rev().map(f64::from));
+    xs.extend((1..=10).map(f64::from));
+    let traj = line(&xs);
+    check_against_dense(&traj, 1.0, (0.2, 0.7)).unwrap();
+    let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+    assert_eq!(loops.components().len(), 1);
+    assert!(loops.components()[0].trivial);
+    assert_eq!(loops.components()[0].holes, 2);
+}
+
+/// Two gaps break the diagonal into three pieces, {0, 1}, {2, 3} and {4, 5}. x_3 lies within γ
+/// of x_0, x_1 and x_2, so column 3 joins the first two pieces off the diagonal
+/// ((0, 1) → (0, 2) → (0, 3) → (1, 3) → (2, 3)); the third stays apart.
+#[test]
+fn broken_diagonal_reconnected_off_the_diagonal() {
+    let traj = line(&[0.0, 0.9, -0.9, 0.0, 5.0, 5.5]);
+    check_against_dense(&traj, 1.0, (0.0, 1.0)).unwrap();
+    let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+    let [Warning::DiagonalBroken { gaps, first_gap, trivial_components, .. }] = loops.warnings() else {
+        panic!("expected one warning, got {:?}", loops.warnings());
+    };
+    assert_eq!((*gaps, *first_gap, *trivial_components), (2, 1, 2));
+    let trivial: Vec<_> = loops.components().iter().filter(|c| c.trivial).collect();
+    assert_eq!(trivial.len(), 2);
+    assert_eq!(loops.component_of(0, 0), loops.component_of(2, 2));
+    assert_ne!(loops.component_of(0, 0), loops.component_of(4, 4));
+}
+
+/// Every consecutive pair farther than γ: each diagonal cell is its own trivial component (its
+/// four neighbours are consecutive pairs), and revisits make isolated non-trivial cells.
+#[test]
+fn fully_broken_diagonal() {
+    let traj = line(&[0.0, 2.0, 4.0, 2.5, 0.5, 6.0, 8.0, 0.0]);
+    check_against_dense(&traj, 1.0, (0.0, 1.0)).unwrap();
+    let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+    let [Warning::DiagonalBroken { gaps, trivial_components, .. }] = loops.warnings() else {
+        panic!("expected one warning, got {:?}", loops.warnings());
+    };
+    assert_eq!((*gaps, *trivial_components), (7, 8));
+    // (0, 4), (0, 7), (1, 3) and (4, 7): δ = 0.5, 0, 0.5, 0.5.
+    assert_eq!(loops.components().len(), 12);
+}
+
+/// No gap, no warning, and one trivial component.
+#[test]
+fn unbroken_diagonal_has_no_warning() {
+    let traj = line(&[0.0, 1.0, 2.0, 1.0, 0.0]);
+    check_against_dense(&traj, 1.0, (0.1, 0.9)).unwrap();
+    let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+    assert!(loops.warnings().is_empty());
+}

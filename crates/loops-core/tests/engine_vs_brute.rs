@@ -1,0 +1,139 @@
+//! `SublevelSet::compute` (arc-length skipping) against a dense matrix of every pair, on inputs
+//! built to be nasty for the skipping bounds: steps beyond γ, points exactly γ apart, repeated
+//! points, stationary stretches with 1e-9 jitter, back and forth, far-off coordinates.
+
+mod support;
+
+use loops_core::{Euclidean, Metric, Run, SublevelSet, Trajectory, find_loops, with_threads};
+use proptest::prelude::*;
+use proptest::test_runner::TestCaseError;
+use support::{Case, DenseSet, any_case, config, float_case, lattice_case};
+
+/// The engine's set equals the dense matrix cell by cell, and equals `brute_force`.
+fn check_set(case: &Case) -> Result<(), TestCaseError> {
+    let Case { traj, gamma, .. } = case;
+    let n = traj.len();
+    let set = SublevelSet::compute(traj, &Euclidean, *gamma)?;
+    let dense = DenseSet::new(traj, *gamma);
+    prop_assert_eq!(set.rows(), n);
+    prop_assert_eq!(set.gamma(), *gamma);
+    let mut run_index = 0;
+    for i in 0..n {
+        let expected = dense.upper_runs(i);
+        prop_assert_eq!(set.row(i), expected.as_slice(), "row {}", i);
+        prop_assert_eq!(set.row(i)[0].start as usize, i, "row {} starts off the diagonal", i);
+        for j in 0..n {
+            prop_assert_eq!(set.contains(i, j), dense.at(i, j), "contains({}, {})", i, j);
+        }
+        // Closest column of each run: the argmin of δ over the run, ties to the earliest.
+        for run in set.row(i) {
+            let cells = run.start as usize..=run.end as usize;
+            let best = cells
+                .clone()
+                .map(|j| dense.delta(i, j))
+                .fold(f64::INFINITY, f64::min);
+            let first = cells.clone().find(|&j| dense.delta(i, j) == best);
+            let closest = set.closest_columns()[run_index] as usize;
+            prop_assert_eq!(
+                Some(closest),
+                first,
+                "closest column of row {} run {:?}",
+                i,
+                run
+            );
+            run_index += 1;
+        }
+    }
+    prop_assert_eq!(run_index, set.runs().len());
+    prop_assert_eq!(
+        set.upper_pairs(),
+        (0..n)
+            .map(|i| (i..n).filter(|&j| dense.at(i, j)).count() as u64)
+            .sum::<u64>()
+    );
+    let brute = SublevelSet::brute_force(traj, &Euclidean, *gamma)?;
+    prop_assert_eq!(&set, &brute);
+    Ok(())
+}
+
+/// One thread and two threads give the same set and the same loops.
+fn check_threads(case: &Case) -> Result<(), TestCaseError> {
+    let Case { traj, gamma, .. } = case;
+    let one = with_threads(Some(1), || SublevelSet::compute(traj, &Euclidean, *gamma))??;
+    let two = with_threads(Some(2), || SublevelSet::compute(traj, &Euclidean, *gamma))??;
+    prop_assert_eq!(&one, &two);
+    let one = with_threads(Some(1), || find_loops(traj, &Euclidean, *gamma))??;
+    let two = with_threads(Some(2), || find_loops(traj, &Euclidean, *gamma))??;
+    prop_assert_eq!(one, two);
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(config(256, 0x5EED_0001))]
+
+    #[test]
+    fn float_walks_equal_the_dense_matrix(case in float_case(400)) {
+        check_set(&case)?;
+    }
+
+    #[test]
+    fn lattice_walks_equal_the_dense_matrix(case in lattice_case(400)) {
+        check_set(&case)?;
+    }
+
+    #[test]
+    fn one_and_two_threads_agree(case in any_case(400)) {
+        check_threads(&case)?;
+    }
+}
+
+fn line(xs: &[f64]) -> Trajectory {
+    Trajectory::new((0..xs.len()).map(|i| i as f64).collect(), xs.to_vec(), 1).unwrap()
+}
+
+/// Rows longer than one rayon task (64 rows) with thousands of exact revisits and ties at γ.
+#[test]
+fn long_lattice_back_and_forth_across_tasks() {
+    let xs: Vec<f64> = (0..700).map(|k| f64::from((k % 7) - 3)).collect();
+    let traj = line(&xs);
+    for gamma in [1.0, 2.0, 3.0] {
+        let dense = DenseSet::new(&traj, gamma);
+        let set = with_threads(Some(2), || SublevelSet::compute(&traj, &Euclidean, gamma))
+            .unwrap()
+            .unwrap();
+        for i in 0..traj.len() {
+            assert_eq!(set.row(i), dense.upper_runs(i).as_slice(), "γ {gamma}, row {i}");
+        }
+    }
+}
+
+/// A step whose squared length overflows makes δ = ∞ (the Euclidean distance squares without
+/// scaling). The brute force then keeps (0, 2), two identical points; the scan must as well.
+#[test]
+fn overflowing_step_does_not_skip_a_revisit() {
+    let traj = line(&[0.0, 1e155, 0.0]);
+    let brute = SublevelSet::brute_force(&traj, &Euclidean, 1.0).unwrap();
+    assert_eq!(brute.row(0), &[Run { start: 0, end: 0 }, Run { start: 2, end: 2 }]);
+    let set = SublevelSet::compute(&traj, &Euclidean, 1.0).unwrap();
+    assert_eq!(set.row(0), brute.row(0), "(0, 2) is at distance 0");
+}
+
+/// Two cells of one run whose squared distances differ by one ulp but whose δ (after the square
+/// root) are equal: the documented tie rule (earliest column at equal δ) and the brute force pick
+/// the first; the scan must too.
+#[test]
+fn closest_column_ties_in_delta_go_to_the_earliest() {
+    // δ²(0, 2) = 25 + 1 ulp, δ²(0, 3) = 25; both δ round to 5.
+    let y = 6e-8;
+    let points = [[0.0, 0.0], [10.0, 0.0], [5.0, y], [3.0, 4.0]];
+    let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &points).unwrap();
+    let (near, exact) = (traj.point(2), traj.point(3));
+    assert_eq!(Euclidean.distance(traj.point(0), near), 5.0);
+    assert_eq!(Euclidean.distance(traj.point(0), exact), 5.0);
+    assert!(Euclidean.distance_rank(traj.point(0), near) > 25.0);
+    let brute = SublevelSet::brute_force(&traj, &Euclidean, 5.5).unwrap();
+    let set = SublevelSet::compute(&traj, &Euclidean, 5.5).unwrap();
+    assert_eq!(set.row(0), &[Run { start: 0, end: 0 }, Run { start: 2, end: 3 }]);
+    assert_eq!(brute.closest_columns()[1], 2);
+    assert_eq!(set.closest_columns()[1], 2, "earliest column at equal δ");
+}

@@ -1,0 +1,225 @@
+//! Pose tables: what a reader returns, and the trajectory made from one.
+
+use std::path::PathBuf;
+
+use loops_core::{Error, Trajectory};
+
+use crate::error::{IoError, Result};
+
+/// The poses of one file, as read: one row per data line, in file order, not validated as a
+/// trajectory yet (see [`to_trajectory`](Self::to_trajectory)).
+///
+/// All vectors have one entry per pose. Positions are in the file's units (metres for TUM).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseTable {
+    /// The file read.
+    pub path: PathBuf,
+    /// Timestamps, seconds, as read (not checked for order).
+    pub timestamps_s: Vec<f64>,
+    /// Positions `[x, y, z]`; `z = 0` for 2-D files.
+    pub positions: Vec<[f64; 3]>,
+    /// Orientations as unit quaternions `[qx, qy, qz, qw]`, stored as read (not normalised),
+    /// when the format has them (TUM does, CSV does not).
+    pub orientations_xyzw: Option<Vec<[f64; 4]>>,
+    /// Coordinates the file gives per position: 2 (`x, y`) or 3 (`x, y, z`).
+    pub dim: usize,
+    /// The 1-based line number in the file of each pose.
+    pub source_lines: Vec<usize>,
+}
+
+impl PoseTable {
+    /// The positions as a trajectory: `[x, y]` or `[x, y, z]`, as many coordinates as the file
+    /// gives ([`dim`](Self::dim)).
+    ///
+    /// # Errors
+    /// [`IoError::Trajectory`] when the core rejects the poses, located at the line of the pose
+    /// the core names: timestamps not strictly increasing (unsorted or duplicate) name the
+    /// line and the line before; fewer than 2 poses names no line. Also when `dim` is not 2 or
+    /// 3 (possible only in a table built by hand).
+    ///
+    /// # Examples
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-dup.tum", std::process::id()));
+    /// std::fs::write(&path, "# t tx ty tz qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 1 0 0 0 0 0 1\n0.1 2 0 0 0 0 0 1\n")?;
+    /// let table = loops_io::read_tum(&path)?;
+    /// let error = table.to_trajectory().unwrap_err();
+    /// assert_eq!(error.line(), Some(4));
+    /// assert!(error.to_string().ends_with("line 4: timestamps must strictly increase: 0.1 s is not after 0.1 s (line 3)"));
+    /// # std::fs::remove_file(&path)?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn to_trajectory(&self) -> Result<Trajectory> {
+        self.trajectory_of_axes(self.axes_given()?)
+    }
+
+    /// The positions projected on a plane of two position axes (0 = x, 1 = y, 2 = z), as a 2-D
+    /// trajectory: `[0, 1]` for x-y, `[0, 2]` for KITTI's x-z ground plane.
+    ///
+    /// # Errors
+    /// As [`to_trajectory`](Self::to_trajectory); also [`IoError::Trajectory`] holding
+    /// [`loops_core::Error::InvalidParameter`] when an axis is not one the file gives (2 for a
+    /// 2-D file, or 3 and more) or both axes are the same.
+    pub fn to_trajectory_plane(&self, axes: [usize; 2]) -> Result<Trajectory> {
+        let given = self.axes_given()?;
+        if let Some(&axis) = axes.iter().find(|axis| !given.contains(axis)) {
+            let expected = match given.len() {
+                2 => "a position axis of a 2-D file: 0 (x) or 1 (y)",
+                _ => "a position axis: 0 (x), 1 (y) or 2 (z)",
+            };
+            return Err(self.locate(Error::InvalidParameter {
+                name: "plane axis",
+                value: axis as f64,
+                expected,
+            }));
+        }
+        if axes[0] == axes[1] {
+            return Err(self.locate(Error::InvalidParameter {
+                name: "plane axes",
+                value: axes[1] as f64,
+                expected: "two different axes",
+            }));
+        }
+        self.trajectory_of_axes(&axes)
+    }
+
+    /// The position axes the file gives: `[0, 1]` or `[0, 1, 2]`.
+    fn axes_given(&self) -> Result<&'static [usize]> {
+        match self.dim {
+            2 => Ok(&[0, 1]),
+            3 => Ok(&[0, 1, 2]),
+            dim => Err(self.locate(Error::InvalidParameter {
+                name: "dim",
+                value: dim as f64,
+                expected: "2 or 3 coordinates per position",
+            })),
+        }
+    }
+
+    fn trajectory_of_axes(&self, axes: &[usize]) -> Result<Trajectory> {
+        let coords = self
+            .positions
+            .iter()
+            .flat_map(|position| axes.iter().map(|&axis| position[axis]))
+            .collect();
+        Trajectory::new(self.timestamps_s.clone(), coords, axes.len())
+            .map_err(|error| self.locate(error))
+    }
+
+    /// A core error placed in the file: the pose index it names becomes a line.
+    fn locate(&self, error: Error) -> IoError {
+        let line_of = |index: usize| self.source_lines.get(index).copied();
+        let (line, previous_line) = match error {
+            Error::TimestampsNotIncreasing { index, .. } => {
+                (line_of(index), index.checked_sub(1).and_then(line_of))
+            }
+            Error::NonFiniteTimestamp { index, .. } | Error::NonFiniteCoordinate { index, .. } => {
+                (line_of(index), None)
+            }
+            _ => (None, None),
+        };
+        IoError::Trajectory {
+            path: self.path.clone(),
+            line,
+            previous_line,
+            error,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table(timestamps_s: Vec<f64>, dim: usize) -> PoseTable {
+        let count = timestamps_s.len();
+        PoseTable {
+            path: PathBuf::from("drive.csv"),
+            positions: (0..count)
+                .map(|i| [i as f64, 10.0 * i as f64, 100.0 * i as f64])
+                .collect(),
+            timestamps_s,
+            orientations_xyzw: None,
+            dim,
+            source_lines: (0..count).map(|i| 2 * i + 3).collect(),
+        }
+    }
+
+    #[test]
+    fn trajectory_has_the_dimension_read() {
+        let traj = table(vec![0.0, 1.0], 2).to_trajectory().unwrap();
+        assert_eq!(traj.coords(), &[0.0, 0.0, 1.0, 10.0]);
+        let traj = table(vec![0.0, 1.0], 3).to_trajectory().unwrap();
+        assert_eq!(traj.point(1), &[1.0, 10.0, 100.0]);
+    }
+
+    #[test]
+    fn plane_picks_the_axes_in_order() {
+        let traj = table(vec![0.0, 1.0], 3)
+            .to_trajectory_plane([2, 0])
+            .unwrap();
+        assert_eq!(traj.point(1), &[100.0, 1.0]);
+    }
+
+    #[test]
+    fn bad_axes_are_errors_not_panics() {
+        for (dim, axes) in [(3, [0, 3]), (2, [0, 2]), (3, [1, 1]), (3, [usize::MAX, 0])] {
+            let error = table(vec![0.0, 1.0], dim)
+                .to_trajectory_plane(axes)
+                .unwrap_err();
+            assert!(
+                matches!(
+                    error,
+                    IoError::Trajectory {
+                        line: None,
+                        error: Error::InvalidParameter { .. },
+                        ..
+                    }
+                ),
+                "{error:?}"
+            );
+        }
+        let expected = "drive.csv: dim = 4 is invalid: 2 or 3 coordinates per position";
+        let error = table(vec![0.0, 1.0], 4).to_trajectory().unwrap_err();
+        assert_eq!(error.to_string(), expected);
+        let error = table(vec![0.0, 1.0], 4)
+            .to_trajectory_plane([0, 1])
+            .unwrap_err();
+        assert_eq!(error.to_string(), expected);
+    }
+
+    #[test]
+    fn core_errors_name_lines() {
+        let error = table(vec![0.0, 2.0, 1.0], 2).to_trajectory().unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "drive.csv line 7: timestamps must strictly increase: 1 s is not after 2 s (line 5)"
+        );
+        let mut bad = table(vec![0.0, 1.0, 2.0], 3);
+        bad.positions[2][1] = f64::NAN;
+        let error = bad.to_trajectory().unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "drive.csv line 7: coordinate 1 of the position is not finite (NaN)"
+        );
+        let error = table(vec![0.0], 2).to_trajectory().unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "drive.csv: a trajectory needs at least 2 poses, got 1"
+        );
+    }
+
+    #[test]
+    fn missing_source_lines_fall_back_to_the_core_message() {
+        let mut bad = table(vec![0.0, 1.0, 1.0], 2);
+        bad.source_lines.clear();
+        let error = bad.to_trajectory().unwrap_err();
+        assert!(
+            error
+                .to_string()
+                .starts_with("drive.csv: timestamps must strictly increase: index 2"),
+            "{error}"
+        );
+    }
+}

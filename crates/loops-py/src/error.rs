@@ -1,0 +1,68 @@
+//! The Python exception hierarchy and the one place core errors become Python exceptions.
+
+use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::{PyErr, import_exception};
+
+// The hierarchy lives in Python (`inexact_loops/errors.py`) so that classes can also be
+// `ValueError` or `OSError`; Rust raises those classes.
+import_exception!(inexact_loops.errors, InvalidTrajectoryError);
+import_exception!(inexact_loops.errors, InvalidParameterError);
+import_exception!(inexact_loops.errors, LoopsIOError);
+import_exception!(inexact_loops.errors, InternalError);
+
+/// Any error of the Rust layers, on its way to Python.
+pub(crate) enum Failure {
+    Core(loops_core::Error),
+    Io(loops_io::IoError),
+    Panic(String),
+}
+
+impl From<loops_core::Error> for Failure {
+    fn from(error: loops_core::Error) -> Self {
+        Self::Core(error)
+    }
+}
+
+impl From<loops_io::IoError> for Failure {
+    fn from(error: loops_io::IoError) -> Self {
+        Self::Io(error)
+    }
+}
+
+impl From<Failure> for PyErr {
+    fn from(failure: Failure) -> Self {
+        use loops_core::Error as E;
+        match failure {
+            Failure::Core(error) => {
+                let message = error.to_string();
+                match error {
+                    E::TooFewPoses { .. }
+                    | E::LengthMismatch { .. }
+                    | E::ZeroDimension
+                    | E::RaggedCoordinates { .. }
+                    | E::NonFiniteTimestamp { .. }
+                    | E::NonFiniteCoordinate { .. }
+                    | E::TimestampsNotIncreasing { .. }
+                    | E::TooManyPoses { .. } => InvalidTrajectoryError::new_err(message),
+                    _ => InvalidParameterError::new_err(message),
+                }
+            }
+            Failure::Io(error) => {
+                let message = error.to_string();
+                match error {
+                    loops_io::IoError::Open { error, .. } => PyOSError::new_err((error.raw_os_error(), message)),
+                    loops_io::IoError::Trajectory { .. } => InvalidTrajectoryError::new_err(message),
+                    _ => LoopsIOError::new_err(message),
+                }
+            }
+            Failure::Panic(message) => {
+                InternalError::new_err(format!("internal error (please report): {message}"))
+            }
+        }
+    }
+}
+
+/// A `ValueError` about an argument's shape or value that Python itself should have caught.
+pub(crate) fn value_error(message: String) -> PyErr {
+    PyValueError::new_err(message)
+}

@@ -1,0 +1,251 @@
+//! `find_loops` and the `Loops` result.
+
+use std::sync::Arc;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::to_numpy;
+use crate::detached;
+use crate::error::Failure;
+use crate::py_trajectory::Trajectory;
+use loops_core::{MetricSpec, Scale, Selection, Side};
+
+/// Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
+/// (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
+///
+/// Args:
+///     trajectory: a :class:`Trajectory`.
+///     gamma: the distance threshold γ > 0, in the metric's unit (metres for positions).
+///     metric: the metric's name; ``None`` is ``"euclidean"``.
+///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+///
+/// Returns:
+///     :class:`Loops`.
+///
+/// Raises:
+///     InvalidParameterError: gamma not positive and finite, unknown metric, threads = 0.
+///
+/// Example:
+///     >>> import numpy as np, inexact_loops as il
+///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+///     >>> loops = il.find_loops(traj, gamma=4.0)
+///     >>> loops.components["trivial"].tolist()
+///     [True, False]
+#[pyfunction]
+#[pyo3(signature = (trajectory, *, gamma, metric=None, threads=None))]
+pub(crate) fn find_loops(
+    py: Python<'_>,
+    trajectory: &Trajectory,
+    gamma: f64,
+    metric: Option<String>,
+    threads: Option<usize>,
+) -> PyResult<Loops> {
+    let traj = Arc::clone(&trajectory.inner);
+    let inner = detached(py, move || {
+        let spec: MetricSpec = metric.map(|name| name.parse()).transpose()?.unwrap_or_default();
+        Ok(loops_core::with_threads(threads, || spec.find_loops(&traj, gamma))??)
+    })?;
+    Ok(Loops { inner: Arc::new(inner) })
+}
+
+/// The inexact loops of a trajectory at one γ: the sublevel set S_γ as runs, its loop
+/// components, and the loop duration, area and density over them. Returned by
+/// :func:`find_loops`.
+#[pyclass(frozen, module = "inexact_loops._core")]
+#[derive(Debug)]
+pub(crate) struct Loops {
+    inner: Arc<loops_core::Loops>,
+}
+
+fn options(side: &str, normalized: bool) -> Result<(Side, Scale), Failure> {
+    let scale = if normalized { Scale::Normalized } else { Scale::Seconds };
+    Ok((side.parse()?, scale))
+}
+
+fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
+    components.as_deref().map_or(Selection::All, Selection::Components)
+}
+
+#[pymethods]
+impl Loops {
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn __repr__(&self) -> String {
+        let nontrivial = self.inner.components().iter().filter(|c| !c.trivial).count();
+        format!(
+            "Loops(gamma={}, metric={}, {} poses, {} components ({} non-trivial), {} pairs)",
+            self.inner.gamma(),
+            self.inner.metric(),
+            self.inner.len(),
+            self.inner.components().len(),
+            nontrivial,
+            self.inner.pairs()
+        )
+    }
+
+    /// The threshold γ.
+    #[getter]
+    fn gamma(&self) -> f64 {
+        self.inner.gamma()
+    }
+
+    /// The metric's name.
+    #[getter]
+    fn metric(&self) -> String {
+        self.inner.metric().to_owned()
+    }
+
+    /// Last minus first timestamp, seconds.
+    #[getter]
+    fn span_s(&self) -> f64 {
+        self.inner.span_s()
+    }
+
+    /// Number of lattice cells (i, j) of S_γ in the full plane, both halves and the diagonal.
+    #[getter]
+    fn pairs(&self) -> u64 {
+        self.inner.pairs()
+    }
+
+    /// Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner.warnings().iter().map(ToString::to_string).collect()
+    }
+
+    /// The loop components as columns (numpy arrays of equal length, one row a component):
+    /// ``id``, ``trivial``, ``area_s2`` (the half t ≤ t′ for a non-trivial component, the whole
+    /// set for a trivial one), ``pairs`` (cells, same rule), ``runs``, ``holes``, ``t_min_s``,
+    /// ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s``, ``i_min``, ``i_max``, ``j_min``,
+    /// ``j_max`` (index extents), ``closest_i``, ``closest_j``, ``closest_distance``.
+    #[getter]
+    fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let cs = self.inner.components();
+        let t = self.inner.timestamps_s();
+        let table = PyDict::new(py);
+        let ints = |f: &dyn Fn(&loops_core::LoopComponent) -> usize| cs.iter().map(|c| f(c) as i64).collect::<Vec<_>>();
+        let floats = |f: &dyn Fn(&loops_core::LoopComponent) -> f64| cs.iter().map(f).collect::<Vec<_>>();
+        table.set_item("id", to_numpy(py, ints(&|c| c.id)))?;
+        table.set_item("trivial", to_numpy(py, cs.iter().map(|c| c.trivial).collect::<Vec<_>>()))?;
+        table.set_item("area_s2", to_numpy(py, floats(&|c| c.area_s2)))?;
+        table.set_item("pairs", to_numpy(py, ints(&|c| c.pairs as usize)))?;
+        table.set_item("runs", to_numpy(py, ints(&|c| c.runs)))?;
+        table.set_item("holes", to_numpy(py, ints(&|c| c.holes as usize)))?;
+        table.set_item("t_min_s", to_numpy(py, floats(&|c| t[c.rows[0]])))?;
+        table.set_item("t_max_s", to_numpy(py, floats(&|c| t[c.rows[1]])))?;
+        table.set_item("t_prime_min_s", to_numpy(py, floats(&|c| t[c.columns[0]])))?;
+        table.set_item("t_prime_max_s", to_numpy(py, floats(&|c| t[c.columns[1]])))?;
+        table.set_item("i_min", to_numpy(py, ints(&|c| c.rows[0])))?;
+        table.set_item("i_max", to_numpy(py, ints(&|c| c.rows[1])))?;
+        table.set_item("j_min", to_numpy(py, ints(&|c| c.columns[0])))?;
+        table.set_item("j_max", to_numpy(py, ints(&|c| c.columns[1])))?;
+        table.set_item("closest_i", to_numpy(py, ints(&|c| c.closest_pair[0])))?;
+        table.set_item("closest_j", to_numpy(py, ints(&|c| c.closest_pair[1])))?;
+        table.set_item("closest_distance", to_numpy(py, floats(&|c| c.closest_distance)))?;
+        Ok(table)
+    }
+
+    /// The runs of S_γ's upper half (j ≥ i): for each, ``row`` i, columns ``start``..=``end``
+    /// (inclusive) and ``component`` id; numpy int64 arrays, row by row. For plotting.
+    fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let count = self.inner.sublevel_set().runs().len();
+        let (mut row, mut start, mut end, mut component) =
+            (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
+        for (i, run, c) in self.inner.runs() {
+            row.push(i as i64);
+            start.push(i64::from(run.start));
+            end.push(i64::from(run.end));
+            component.push(c as i64);
+        }
+        let table = PyDict::new(py);
+        table.set_item("row", to_numpy(py, row))?;
+        table.set_item("start", to_numpy(py, start))?;
+        table.set_item("end", to_numpy(py, end))?;
+        table.set_item("component", to_numpy(py, component))?;
+        Ok(table)
+    }
+
+    /// The component id of the pair (i, j) (either order), or ``None`` when δ > γ.
+    fn component_of(&self, i: usize, j: usize) -> Option<usize> {
+        self.inner.component_of(i, j)
+    }
+
+    /// Whether (i, j) is a simple loop: a pair in a trivial component.
+    fn is_simple(&self, i: usize, j: usize) -> bool {
+        self.inner.is_simple(i, j)
+    }
+
+    /// Loop duration τ(t_i) for every sample: how long the trajectory stays within γ of
+    /// ξ(t_i) (paper, Eq. 6).
+    ///
+    /// Args:
+    ///     components: component ids to restrict to; ``None`` is all of S_γ.
+    ///     side: ``"both"`` (every t′), ``"begin"`` (t′ > t) or ``"end"`` (t′ < t).
+    ///     normalized: fractions of the span instead of seconds.
+    ///
+    /// Returns:
+    ///     numpy array, shape ``(n,)``.
+    #[pyo3(signature = (*, components=None, side="both", normalized=false))]
+    fn loop_duration<'py>(
+        &self,
+        py: Python<'py>,
+        components: Option<Vec<usize>>,
+        side: &str,
+        normalized: bool,
+    ) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+        let side = side.to_owned();
+        let inner = Arc::clone(&self.inner);
+        let tau = detached(py, move || {
+            let (side, scale) = options(&side, normalized)?;
+            Ok(inner.loop_duration(selection(&components), side, scale)?)
+        })?;
+        Ok(to_numpy(py, tau))
+    }
+
+    /// Loop area α(a, b) = ∫_a^b τ(t) dt (paper, Eq. 7), s² (or normalized units, where a and
+    /// b are fractions of the span).
+    ///
+    /// Args: as :meth:`loop_duration`, plus the interval ``a < b`` (seconds, same clock as the
+    /// timestamps).
+    #[pyo3(signature = (a, b, *, components=None, side="both", normalized=false))]
+    fn loop_area(
+        &self,
+        py: Python<'_>,
+        a: f64,
+        b: f64,
+        components: Option<Vec<usize>>,
+        side: &str,
+        normalized: bool,
+    ) -> PyResult<f64> {
+        let side = side.to_owned();
+        let inner = Arc::clone(&self.inner);
+        detached(py, move || {
+            let (side, scale) = options(&side, normalized)?;
+            Ok(inner.loop_area(a, b, selection(&components), side, scale)?)
+        })
+    }
+
+    /// Loop density ρ(a, b) = α(a, b) / (b − a) (paper, Eq. 8): the mean loop duration over
+    /// [a, b], seconds (or normalized).
+    #[pyo3(signature = (a, b, *, components=None, side="both", normalized=false))]
+    fn loop_density(
+        &self,
+        py: Python<'_>,
+        a: f64,
+        b: f64,
+        components: Option<Vec<usize>>,
+        side: &str,
+        normalized: bool,
+    ) -> PyResult<f64> {
+        let side = side.to_owned();
+        let inner = Arc::clone(&self.inner);
+        detached(py, move || {
+            let (side, scale) = options(&side, normalized)?;
+            Ok(inner.loop_density(a, b, selection(&components), side, scale)?)
+        })
+    }
+}
