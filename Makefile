@@ -21,7 +21,7 @@ python:
 	$(PIP) install --quiet '.[test]'
 
 test-python: python
-	$(PYTHON) -m pytest -q tests/python python/inexact_loops
+	$(PYTHON) -m pytest -q tests python/inexact_loops
 
 lint:
 	cargo fmt --all -- --check

@@ -25,12 +25,12 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// List the loop components of a trajectory file (TUM or CSV).
-    #[command(after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
+    #[command(allow_negative_numbers = true, after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
         loops components kitti00.txt --format tum --axes 0,2 --gamma 6 --json kitti00.json\n  \
         loops components log.csv --gamma 5 --limit 0    # every component")]
     Components(ComponentsArgs),
     /// Run on a built-in synthetic urban drive (2.1 h, 10 Hz, 1 km² city) and print a summary.
-    #[command(after_help = "Examples:\n  loops demo\n  loops demo --duration-s 600 --seed 3 --json demo.json")]
+    #[command(allow_negative_numbers = true, after_help = "Examples:\n  loops demo\n  loops demo --duration-s 600 --seed 3 --json demo.json")]
     Demo(DemoArgs),
 }
 
@@ -68,7 +68,7 @@ struct ComponentsArgs {
     #[arg(long)]
     format: Option<String>,
     /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).
-    #[arg(long, value_delimiter = ',', num_args = 2, value_name = "A,B")]
+    #[arg(long, value_delimiter = ',', value_name = "A,B")]
     axes: Option<Vec<usize>>,
     #[command(flatten)]
     engine: EngineArgs,

@@ -106,7 +106,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
         };
         count as usize
     ];
-    for i in 0..n {
+    for (i, &w_i) in widths.iter().enumerate() {
         let offset = set.row_offset(i);
         for (k, run) in set.row(i).iter().enumerate() {
             let r = offset + k;
@@ -114,13 +114,13 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
             let (a, b) = (run.start as usize, run.end as usize);
             tally.runs += 1;
             tally.pairs += run.len() as u64;
-            tally.area_s2 += widths[i] * (prefix[b + 1] - prefix[a]);
+            tally.area_s2 += w_i * (prefix[b + 1] - prefix[a]);
             tally.rows = [tally.rows[0].min(i), tally.rows[1].max(i)];
             tally.columns = [tally.columns[0].min(a), tally.columns[1].max(b)];
             if a == i {
                 tally.trivial = true;
                 tally.diagonal_cells += 1;
-                tally.diagonal_area_s2 += widths[i] * widths[i];
+                tally.diagonal_area_s2 += w_i * w_i;
                 if b > i {
                     tally.diagonal_links += 1;
                 }

@@ -44,7 +44,7 @@ impl Trajectory {
         if dim == 0 {
             return Err(Error::ZeroDimension);
         }
-        if coords.len() % dim != 0 {
+        if !coords.len().is_multiple_of(dim) {
             return Err(Error::RaggedCoordinates { len: coords.len(), dim });
         }
         let poses = coords.len() / dim;

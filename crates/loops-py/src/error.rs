@@ -31,27 +31,13 @@ impl From<loops_io::IoError> for Failure {
 
 impl From<Failure> for PyErr {
     fn from(failure: Failure) -> Self {
-        use loops_core::Error as E;
         match failure {
-            Failure::Core(error) => {
-                let message = error.to_string();
-                match error {
-                    E::TooFewPoses { .. }
-                    | E::LengthMismatch { .. }
-                    | E::ZeroDimension
-                    | E::RaggedCoordinates { .. }
-                    | E::NonFiniteTimestamp { .. }
-                    | E::NonFiniteCoordinate { .. }
-                    | E::TimestampsNotIncreasing { .. }
-                    | E::TooManyPoses { .. } => InvalidTrajectoryError::new_err(message),
-                    _ => InvalidParameterError::new_err(message),
-                }
-            }
+            Failure::Core(error) => core_error(&error, error.to_string()),
             Failure::Io(error) => {
                 let message = error.to_string();
                 match error {
                     loops_io::IoError::Open { error, .. } => PyOSError::new_err((error.raw_os_error(), message)),
-                    loops_io::IoError::Trajectory { .. } => InvalidTrajectoryError::new_err(message),
+                    loops_io::IoError::Trajectory { error, .. } => core_error(&error, message),
                     _ => LoopsIOError::new_err(message),
                 }
             }
@@ -59,6 +45,22 @@ impl From<Failure> for PyErr {
                 InternalError::new_err(format!("internal error (please report): {message}"))
             }
         }
+    }
+}
+
+/// The Python class of a core error: bad trajectories apart from bad parameters.
+fn core_error(error: &loops_core::Error, message: String) -> PyErr {
+    use loops_core::Error as E;
+    match error {
+        E::TooFewPoses { .. }
+        | E::LengthMismatch { .. }
+        | E::ZeroDimension
+        | E::RaggedCoordinates { .. }
+        | E::NonFiniteTimestamp { .. }
+        | E::NonFiniteCoordinate { .. }
+        | E::TimestampsNotIncreasing { .. }
+        | E::TooManyPoses { .. } => InvalidTrajectoryError::new_err(message),
+        _ => InvalidParameterError::new_err(message),
     }
 }
 

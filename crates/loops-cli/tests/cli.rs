@@ -1,0 +1,127 @@
+//! The `loops` binary end to end: output, exit codes, one-line errors, atomic JSON.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn loops(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("loops-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// A TUM file of an out-and-back drive along x (0 → 20 m → 0) at 1 m/s.
+fn out_and_back(dir: &Path) -> PathBuf {
+    let path = dir.join("drive.tum");
+    let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
+    for i in 0..=40 {
+        let x = if i <= 20 { i } else { 40 - i };
+        text += &format!("{i}.0 {x}.0 0.0 0.0 0 0 0 1\n");
+    }
+    std::fs::write(&path, text).expect("write");
+    path
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn assert_one_line_error(output: &Output, needle: &str) {
+    assert_eq!(output.status.code(), Some(2), "stderr: {}", stderr(output));
+    let err = stderr(output);
+    assert_eq!(err.trim_end().lines().count(), 1, "one line expected: {err}");
+    assert!(err.starts_with("loops: error: "), "{err}");
+    assert!(err.contains(needle), "{err:?} should mention {needle:?}");
+}
+
+#[test]
+fn components_table_and_json() {
+    let dir = temp_dir("json");
+    let file = out_and_back(&dir);
+    let json = dir.join("out.json");
+    let output = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--json", json.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("41 poses"), "{stdout}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // Going out and back along one line folds the path onto itself: every pair within γ of the
+    // turn is connected to the diagonal through the turning point, so it is all one trivial
+    // component, shaped like an X in the (t, t') plane.
+    let components = report["components"].as_array().unwrap();
+    assert_eq!(components.len(), 1, "{report}");
+    assert_eq!(components[0]["trivial"], true);
+    assert_eq!(report["poses"], 41);
+
+    // The JSON is not replaced without --force, and is with it.
+    let again = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--json", json.to_str().unwrap()]);
+    assert_one_line_error(&again, "--force");
+    let forced =
+        loops(&["components", file.to_str().unwrap(), "--gamma", "2.5", "--json", json.to_str().unwrap(), "--force"]);
+    assert!(forced.status.success(), "{}", stderr(&forced));
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["gamma"], 2.5);
+    let leftovers: Vec<_> = std::fs::read_dir(&dir).unwrap().filter_map(Result::ok).map(|e| e.file_name()).collect();
+    assert_eq!(leftovers.len(), 2, "no temporary files left behind: {leftovers:?}");
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_2() {
+    let dir = temp_dir("bad");
+    let file = out_and_back(&dir);
+    let file = file.to_str().unwrap();
+    assert_one_line_error(&loops(&["components", file, "--gamma", "0"]), "gamma must be a positive");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "-3"]), "gamma must be a positive");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "NaN"]), "gamma must be a positive");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--metric", "manhattan"]), "unknown metric");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--format", "kitti"]), "unknown file format");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--threads", "0"]), "threads");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--axes", "0,7"]), "axis");
+
+    let missing = dir.join("missing.tum");
+    assert_one_line_error(&loops(&["components", missing.to_str().unwrap(), "--gamma", "1"]), "missing.tum");
+
+    let malformed = dir.join("malformed.tum");
+    std::fs::write(&malformed, "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n2 2 0 abc 0 0 0 1\n").unwrap();
+    assert_one_line_error(&loops(&["components", malformed.to_str().unwrap(), "--gamma", "1"]), "line 3");
+
+    let nan = dir.join("nan.tum");
+    std::fs::write(&nan, "0 0 0 0 0 0 0 1\n1 nan 0 0 0 0 0 1\n").unwrap();
+    assert_one_line_error(&loops(&["components", nan.to_str().unwrap(), "--gamma", "1"]), "line 2");
+
+    let unsorted = dir.join("unsorted.tum");
+    std::fs::write(&unsorted, "0 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n1 2 0 0 0 0 0 1\n").unwrap();
+    assert_one_line_error(&loops(&["components", unsorted.to_str().unwrap(), "--gamma", "1"]), "line 3");
+
+    let single = dir.join("single.csv");
+    std::fs::write(&single, "t,x,y\n0,1,2\n").unwrap();
+    assert_one_line_error(&loops(&["components", single.to_str().unwrap(), "--gamma", "1"]), "at least 2 poses");
+
+    let empty = dir.join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    assert_one_line_error(&loops(&["components", empty.to_str().unwrap(), "--gamma", "1"]), "no poses");
+}
+
+#[test]
+fn demo_summarises_a_short_drive() {
+    let output = loops(&["demo", "--duration-s", "600", "--seed", "3", "--limit", "3"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("6000 poses"), "{stdout}");
+    assert!(stdout.contains("(seed 3"), "{stdout}");
+    let rows = stdout.lines().skip_while(|l| !l.trim_start().starts_with("id")).skip(1).filter(|l| !l.contains("more")).count();
+    assert!(rows <= 3, "--limit 3 shows at most 3 rows:\n{stdout}");
+    assert_one_line_error(&loops(&["demo", "--duration-s", "-1"]), "duration_s");
+}
+
+#[test]
+fn help_has_examples() {
+    for command in ["components", "demo"] {
+        let output = loops(&[command, "--help"]);
+        assert!(output.status.success());
+        assert!(String::from_utf8_lossy(&output.stdout).contains("Examples:"), "{command}");
+    }
+}
