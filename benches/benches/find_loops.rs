@@ -2,7 +2,7 @@
 //! loop duration τ, on one thread and on every core.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use loops_core::{Euclidean, Scale, Selection, Side, find_loops, with_threads};
+use loops_core::{Euclidean, RotationDistance, Scale, Se3, Selection, Side, UrbanDrive, find_loops, with_threads};
 use std::hint::black_box;
 
 fn bench_find_loops(c: &mut Criterion) {
@@ -23,6 +23,22 @@ fn bench_find_loops(c: &mut Criterion) {
             });
         }
     }
+    group.finish();
+
+    // SE(3) against Euclidean on the same 2.1 h drive (headings from the drive), one thread.
+    let mut group = c.benchmark_group("metric");
+    group.sample_size(10);
+    let drive = UrbanDrive { duration_s: 2.1 * 3600.0, ..UrbanDrive::default() }.generate().expect("drive");
+    let se3_traj = drive.se3_trajectory().expect("unit quaternions");
+    let se3 = Se3 { rotation_weight_m_per_rad: 10.0, rotation: RotationDistance::Geodesic };
+    group.bench_function("urban_2.1h_euclidean_threads1", |b| {
+        b.iter(|| {
+            with_threads(Some(1), || find_loops(&drive.trajectory, &Euclidean, 40.0).map(|l| l.components().len()))
+        })
+    });
+    group.bench_function("urban_2.1h_se3_10m_per_rad_threads1", |b| {
+        b.iter(|| with_threads(Some(1), || find_loops(&se3_traj, &se3, 40.0).map(|l| l.components().len())))
+    });
     group.finish();
 }
 

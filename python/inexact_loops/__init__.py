@@ -25,6 +25,7 @@ from ._core import (
     read_trajectory,
     urban_drive,
 )
+from . import metrics
 from .errors import (
     InternalError,
     InvalidParameterError,
@@ -43,6 +44,7 @@ __all__ = [
     "Trajectory",
     "__version__",
     "find_loops",
+    "metrics",
     "read_trajectory",
     "urban_drive",
 ]

@@ -1,7 +1,8 @@
 """Type stubs of the compiled module ``inexact_loops._core``."""
 
 from os import PathLike
-from typing import Literal, final
+from collections.abc import Callable
+from typing import Literal, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -11,6 +12,10 @@ __all__ = ["Loops", "Trajectory", "__version__", "find_loops", "read_trajectory"
 __version__: str
 
 _Side = Literal["both", "begin", "end"]
+
+class _MetricLike(Protocol):
+    @property
+    def spec(self) -> str: ...
 
 @final
 class Trajectory:
@@ -33,6 +38,51 @@ class Trajectory:
     @property
     def span_s(self) -> float:
         """Last minus first timestamp, seconds."""
+    @staticmethod
+    def se3(
+        timestamps: npt.ArrayLike,
+        positions: npt.ArrayLike,
+        quaternions_xyzw: npt.ArrayLike,
+        *,
+        quaternion_tolerance: float | None = None,
+    ) -> Trajectory:
+        """SE(3) poses: positions (n, 3) and quaternions (n, 4) in x, y, z, w order."""
+    @staticmethod
+    def so3(
+        timestamps: npt.ArrayLike,
+        quaternions_xyzw: npt.ArrayLike,
+        *,
+        quaternion_tolerance: float | None = None,
+    ) -> Trajectory:
+        """Rotations: quaternions (n, 4) in x, y, z, w order."""
+    @staticmethod
+    def so3_from_rotation_vectors(
+        timestamps: npt.ArrayLike, rotation_vectors: npt.ArrayLike
+    ) -> Trajectory:
+        """Rotations from rotation vectors (n, 3), radians."""
+    @staticmethod
+    def se2(timestamps: npt.ArrayLike, poses_xy_theta: npt.ArrayLike) -> Trajectory:
+        """Planar poses (n, 3): x, y, heading (radians)."""
+    @staticmethod
+    def torus(timestamps: npt.ArrayLike, angles_rad: npt.ArrayLike) -> Trajectory:
+        """Points on a torus: angles (n, k), radians."""
+    @staticmethod
+    def sphere(timestamps: npt.ArrayLike, vectors: npt.ArrayLike) -> Trajectory:
+        """Points on the sphere: non-zero vectors (n, 3), normalised."""
+    @staticmethod
+    def sphere_from_lat_lon(timestamps: npt.ArrayLike, lat_lon_deg: npt.ArrayLike) -> Trajectory:
+        """Points on the sphere from latitude and longitude (n, 2), degrees."""
+    @staticmethod
+    def gnss(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
+        """GNSS fixes (n, 3): latitude, longitude (degrees), height (metres)."""
+    @staticmethod
+    def gnss_ecef(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
+        """GNSS fixes as ECEF positions relative to the first fix, metres."""
+    @staticmethod
+    def descriptors(
+        timestamps: npt.ArrayLike, descriptors: npt.ArrayLike, *, normalize: bool = True
+    ) -> Trajectory:
+        """Descriptor vectors (n, d), normalised for the angular metric."""
 
 @final
 class Loops:
@@ -96,7 +146,7 @@ def find_loops(
     trajectory: Trajectory,
     *,
     gamma: float,
-    metric: str | None = None,
+    metric: str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None = None,
     threads: int | None = None,
 ) -> Loops:
     """Every inexact loop of ``trajectory`` at threshold ``gamma``, exactly, in components."""
@@ -115,6 +165,7 @@ def urban_drive(
     lane_offset_m: float | None = None,
     lateral_noise_m: float | None = None,
     seed: int | None = None,
+    se3: bool = False,
 ) -> Trajectory:
     """A seeded synthetic drive on a Manhattan grid (x, y, z metres)."""
 
@@ -123,5 +174,6 @@ def read_trajectory(
     *,
     format: Literal["tum", "csv"] | str | None = None,
     axes: tuple[int, int] | None = None,
+    metric: str | _MetricLike | None = None,
 ) -> Trajectory:
     """Reads a TUM or CSV trajectory file."""

@@ -25,12 +25,19 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     /// List the loop components of a trajectory file (TUM or CSV).
-    #[command(allow_negative_numbers = true, after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
         loops components kitti00.txt --format tum --axes 0,2 --gamma 6 --json kitti00.json\n  \
-        loops components log.csv --gamma 5 --limit 0    # every component")]
+        loops components log.csv --gamma 5 --limit 0    # every component\n  \
+        loops components fr2_desk.tum --gamma 0.3 --metric 'se3(rotation_weight_m_per_rad=0.5)'"
+    )]
     Components(ComponentsArgs),
     /// Run on a built-in synthetic urban drive (2.1 h, 10 Hz, 1 km² city) and print a summary.
-    #[command(allow_negative_numbers = true, after_help = "Examples:\n  loops demo\n  loops demo --duration-s 600 --seed 3 --json demo.json")]
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Examples:\n  loops demo\n  loops demo --duration-s 600 --seed 3 --json demo.json"
+    )]
     Demo(DemoArgs),
 }
 
@@ -39,7 +46,9 @@ struct EngineArgs {
     /// The distance threshold γ, in the metric's unit (metres for positions).
     #[arg(long, value_name = "GAMMA_M")]
     gamma: f64,
-    /// The metric: euclidean.
+    /// The metric: euclidean, se3(rotation_weight_m_per_rad=W[, rotation=geodesic|chordal]),
+    /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W). SE(3), SO(3) and SE(2) use the file's
+    /// orientations.
     #[arg(long, default_value_t = MetricSpec::default().name())]
     metric: String,
     /// Worker threads (default: one per core). Results do not depend on it.
@@ -123,12 +132,13 @@ fn components(args: ComponentsArgs) -> Result<()> {
     let source = args.file.display().to_string();
     let format = args.format.as_deref().map(str::parse::<loops_io::Format>).transpose()?;
     let table = loops_io::read_trajectory(&args.file, format)?;
-    let traj = match args.axes.as_deref() {
-        None => table.to_trajectory()?,
-        Some(&[a, b]) => table.to_trajectory_plane([a, b])?,
+    let axes = match args.axes.as_deref() {
+        None => None,
+        Some(&[a, b]) => Some([a, b]),
         Some(other) => anyhow::bail!("--axes takes two axis indices, got {other:?}"),
     };
     let spec: MetricSpec = args.engine.metric.parse()?;
+    let traj = table.to_trajectory_for(&spec, axes)?;
     let (loops, seconds) = timed(args.engine.threads, || spec.find_loops(&traj, args.engine.gamma))
         .with_context(|| format!("finding loops in {source}"))?;
     report(&source, &traj, &loops, seconds, &args.output)

@@ -26,6 +26,7 @@ pub(crate) fn write_table(
         Scale::Seconds,
     )?;
     writeln!(out, "{source}")?;
+    let t0 = traj.timestamps_s()[0];
     writeln!(
         out,
         "  {} poses over {:.1} s; gamma {} ({}): {} components ({} non-trivial), {} pairs, \
@@ -43,12 +44,13 @@ pub(crate) fn write_table(
     let mut order: Vec<&LoopComponent> = components.iter().collect();
     order.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2).then(a.id.cmp(&b.id)));
     let shown = if limit == 0 { order.len() } else { limit.min(order.len()) };
+    writeln!(out, "  times in seconds from the first pose (t0 = {t0})")?;
     writeln!(
         out,
         "{:>6} {:>7} {:>12} {:>10} {:>5}  {:>21}  {:>21}  {:>10}",
         "id", "trivial", "area_s2", "pairs", "holes", "t range (s)", "t' range (s)", "closest"
     )?;
-    let t = traj.timestamps_s();
+    let t: Vec<f64> = traj.timestamps_s().iter().map(|t| t - t0).collect();
     for c in &order[..shown] {
         writeln!(
             out,

@@ -112,7 +112,12 @@ fn demo_summarises_a_short_drive() {
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("6000 poses"), "{stdout}");
     assert!(stdout.contains("(seed 3"), "{stdout}");
-    let rows = stdout.lines().skip_while(|l| !l.trim_start().starts_with("id")).skip(1).filter(|l| !l.contains("more")).count();
+    let rows = stdout
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with("id"))
+        .skip(1)
+        .filter(|l| !l.contains("more"))
+        .count();
     assert!(rows <= 3, "--limit 3 shows at most 3 rows:\n{stdout}");
     assert_one_line_error(&loops(&["demo", "--duration-s", "-1"]), "duration_s");
 }

@@ -19,5 +19,15 @@ fn main() -> Result<(), loops_core::Error> {
         nontrivial,
         elapsed.as_secs_f64()
     );
+    let se3_traj = drive.se3_trajectory()?;
+    let se3 = loops_core::Se3 { rotation_weight_m_per_rad: 10.0, rotation: loops_core::RotationDistance::Geodesic };
+    let start = std::time::Instant::now();
+    let loops = find_loops(&se3_traj, &se3, gamma)?;
+    println!(
+        "se3(10 m/rad): {} runs, {} components in {:.3} s",
+        loops.sublevel_set().runs().len(),
+        loops.components().len(),
+        start.elapsed().as_secs_f64()
+    );
     Ok(())
 }

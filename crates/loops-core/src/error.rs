@@ -111,6 +111,39 @@ pub enum Error {
         /// What is allowed.
         expected: &'static str,
     },
+    /// A quaternion whose norm is not 1 (within 1e-6 for constructors, 1e-9 for metrics).
+    #[error("quaternion of pose {index} has norm {norm}, not 1 (zero or far from unit length)")]
+    NonUnitQuaternion {
+        /// Pose index.
+        index: usize,
+        /// Its norm.
+        norm: f64,
+    },
+    /// A vector that should be of unit length (sphere points, normalised descriptors), or a zero
+    /// vector that cannot be normalised.
+    #[error("vector of pose {index} has norm {norm}, not 1 (zero or not normalised)")]
+    NonUnitVector {
+        /// Pose index.
+        index: usize,
+        /// Its norm.
+        norm: f64,
+    },
+    /// A latitude outside [−90°, 90°].
+    #[error("latitude of pose {index} is {value_deg}°, outside [-90°, 90°]")]
+    LatitudeOutOfRange {
+        /// Pose index.
+        index: usize,
+        /// The latitude, degrees.
+        value_deg: f64,
+    },
+    /// A metric given as text that does not parse.
+    #[error("invalid metric {spec:?}: {reason}")]
+    InvalidMetricSpec {
+        /// The text given.
+        spec: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A name (of a side, a metric, ...) that is not one of the known ones.
     #[error("unknown {kind} {name:?}: expected one of {expected}")]
     UnknownName {
@@ -120,5 +153,64 @@ pub enum Error {
         name: String,
         /// The names allowed, comma separated.
         expected: &'static str,
+    },
+    /// An empty set of detections: clustering and sampling need at least one pair.
+    #[error("no detections: at least one pair (t, t') is needed")]
+    NoDetections,
+    /// Two columns of one table (t and t′, indices i and j, scores) of different lengths.
+    #[error("{column} has {len} values, but {expected} are needed (one per detection)")]
+    ColumnLengthMismatch {
+        /// The column that is off.
+        column: &'static str,
+        /// Its length.
+        len: usize,
+        /// The number of detections.
+        expected: usize,
+    },
+    /// A detection time or score that is NaN or infinite.
+    #[error("{column} of detection {index} is not finite ({value})")]
+    NonFiniteDetection {
+        /// The column (`t_s`, `t_prime_s`, `score`).
+        column: &'static str,
+        /// Detection index.
+        index: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A detection time outside the time span of the trajectory it is placed on.
+    #[error("detection {index} at {time_s} s lies outside the trajectory's time span [{start_s}, {end_s}] s")]
+    DetectionOutsideSpan {
+        /// Detection index.
+        index: usize,
+        /// The offending time, seconds.
+        time_s: f64,
+        /// First timestamp of the trajectory, seconds.
+        start_s: f64,
+        /// Last timestamp of the trajectory, seconds.
+        end_s: f64,
+    },
+    /// A pose index past the end of the trajectory.
+    #[error("detection {index} refers to pose {pose}, but the trajectory has {poses} poses")]
+    PoseIndexOutOfRange {
+        /// Detection index.
+        index: usize,
+        /// The offending pose index.
+        pose: usize,
+        /// Number of poses.
+        poses: usize,
+    },
+    /// Inputs that must come from one trajectory come from two (pose counts or timestamps differ).
+    #[error(
+        "the {what} and the loops come from different trajectories ({poses} and {loops_poses} poses; first difference at pose {index})"
+    )]
+    TrajectoryMismatch {
+        /// What does not match the loops (`trajectory`, `samples`, ...).
+        what: &'static str,
+        /// First pose index at which they differ.
+        index: usize,
+        /// Poses of that input's trajectory.
+        poses: usize,
+        /// Poses of the loops' trajectory.
+        loops_poses: usize,
     },
 }

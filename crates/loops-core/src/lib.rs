@@ -9,7 +9,9 @@
 //!   pairs are simple loops), areas in s², holes, closest pairs: [`find_loops`], [`LoopComponent`].
 //! - Loop duration τ, loop area α and loop density ρ over S_γ or any set of components:
 //!   [`Loops::loop_duration`], [`Loops::loop_area`], [`Loops::loop_density`].
-//! - Any [`Metric`] satisfying the triangle inequality; [`Euclidean`] on Rⁿ.
+//! - Any [`Metric`] satisfying the triangle inequality: [`Euclidean`] on Rⁿ, [`So3`], [`Se3`],
+//!   [`Se2`], [`Torus`], [`Sphere`], [`Haversine`] (GNSS) and [`Angular`] (descriptors); by name
+//!   with [`MetricSpec`]. Validated pose constructors: [`Trajectory::se3`] and friends.
 //! - A seeded synthetic urban drive for demos and benchmarks: [`UrbanDrive`].
 //!
 //! What it does not do: read files (that is `loops-io`), talk to Python or a terminal.
@@ -36,8 +38,10 @@ mod ball_tree;
 mod component;
 mod error;
 mod loops;
+mod manifold;
 mod measure;
 mod metric;
+mod pose;
 mod sublevel;
 mod synth;
 mod trajectory;
@@ -45,8 +49,13 @@ mod trajectory;
 pub use component::LoopComponent;
 pub use error::{Error, Result};
 pub use loops::{Loops, Warning, find_loops};
+pub use manifold::{
+    Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
+    angle_difference,
+};
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric, MetricSpec};
+pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
 pub use sublevel::{Run, SublevelSet};
 pub use synth::{SyntheticDrive, UrbanDrive};
 pub use trajectory::{MAX_POSES, Trajectory};

@@ -91,7 +91,10 @@ impl Loops {
         assert_eq!(set.rows(), traj.len(), "sublevel set and trajectory differ in length");
         let labelling = label_components(traj, metric, &set);
         let n = traj.len();
-        let gaps: Vec<usize> = (0..n - 1).filter(|&i| set.row(i)[0].end as usize == i).collect();
+        // A row whose first run does not reach column i + 1 breaks the diagonal (a metric that
+        // breaks δ(x, x) = 0 may even leave the diagonal cell out).
+        let gaps: Vec<usize> =
+            (0..n - 1).filter(|&i| set.row(i).first().is_none_or(|r| (r.end as usize) <= i)).collect();
         let mut warnings = Vec::new();
         if let Some(&first_gap) = gaps.first() {
             let largest_step =
@@ -181,7 +184,9 @@ impl Loops {
 
     /// Number of lattice cells of S_γ in the full (t, t′) plane, both halves.
     pub fn pairs(&self) -> u64 {
-        2 * self.set.upper_pairs() - self.len() as u64
+        let diagonal =
+            (0..self.len()).filter(|&i| self.set.row(i).first().is_some_and(|r| r.start as usize == i)).count();
+        2 * self.set.upper_pairs() - diagonal as u64
     }
 
     /// Loop duration τ_X(t_i) for every sample (paper, Eq. 6): how long the trajectory stays

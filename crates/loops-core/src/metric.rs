@@ -1,6 +1,7 @@
 //! Distances between points: the [`Metric`] trait and the Euclidean metric.
 
 use crate::error::{Error, Result};
+use crate::manifold::RotationDistance;
 use crate::trajectory::Trajectory;
 
 /// A distance δ between points of a trajectory (rows of its coordinate buffer).
@@ -18,6 +19,15 @@ pub trait Metric: Sync {
     /// # Errors
     /// [`Error::DimensionMismatch`] when they cannot.
     fn check_dim(&self, dim: usize) -> Result<()>;
+
+    /// Checks the whole trajectory: its dimension, and whatever else the metric needs (unit
+    /// quaternions, latitudes within ±90°, non-negative weights). The engine calls it once.
+    ///
+    /// # Errors
+    /// The first problem found, naming the pose index.
+    fn validate(&self, traj: &Trajectory) -> Result<()> {
+        self.check_dim(traj.dim())
+    }
 
     /// δ(a, b), in the metric's unit (metres for positions). `a` and `b` have the checked dimension.
     fn distance(&self, a: &[f64], b: &[f64]) -> f64;
@@ -59,7 +69,7 @@ impl Metric for Euclidean {
 
     fn check_dim(&self, dim: usize) -> Result<()> {
         if dim == 0 {
-            return Err(Error::DimensionMismatch { metric: self.name(), expected: "at least 1".into(), found: dim });
+            return Err(dim_error(self, "at least 1", dim));
         }
         Ok(())
     }
@@ -77,9 +87,9 @@ impl Metric for Euclidean {
     fn closest_in(&self, x: &[f64], points: &[f64]) -> usize {
         match *x {
             [x0, x1] => closest_fixed(points, |p: &[f64; 2]| (p[0] - x0).powi(2) + (p[1] - x1).powi(2)),
-            [x0, x1, x2] => closest_fixed(points, |p: &[f64; 3]| {
-                (p[0] - x0).powi(2) + (p[1] - x1).powi(2) + (p[2] - x2).powi(2)
-            }),
+            [x0, x1, x2] => {
+                closest_fixed(points, |p: &[f64; 3]| (p[0] - x0).powi(2) + (p[1] - x1).powi(2) + (p[2] - x2).powi(2))
+            }
             _ => {
                 let mut best = (f64::INFINITY, 0);
                 for (k, p) in points.chunks_exact(x.len()).enumerate() {
@@ -103,6 +113,11 @@ fn closest_fixed<const D: usize>(points: &[f64], rank: impl Fn(&[f64; D]) -> f64
     blocks.iter().position(|p| rank(p) == least).unwrap_or(0)
 }
 
+/// The error for points of the wrong dimension.
+pub(crate) fn dim_error<M: Metric + ?Sized>(metric: &M, expected: &str, found: usize) -> Error {
+    Error::DimensionMismatch { metric: metric.name(), expected: expected.to_owned(), found }
+}
+
 #[inline]
 fn squared_l2(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());
@@ -110,6 +125,220 @@ fn squared_l2(a: &[f64], b: &[f64]) -> f64 {
         ([ax, ay], [bx, by]) => (ax - bx).powi(2) + (ay - by).powi(2),
         ([ax, ay, az], [bx, by, bz]) => (ax - bx).powi(2) + (ay - by).powi(2) + (az - bz).powi(2),
         _ => a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum(),
+    }
+}
+
+/// A metric chosen by name at run time (from Python or the command line), dispatched once to
+/// the statically typed engine, so the hot loops stay monomorphic.
+///
+/// The text form is `name` or `name(key=value, ...)`; [`FromStr`](std::str::FromStr) parses it
+/// and [`Display`](std::fmt::Display) writes it back:
+///
+/// | name | parameters | points |
+/// |---|---|---|
+/// | `euclidean` | | Rⁿ |
+/// | `so3` | `rotation=geodesic\|chordal` (default geodesic) | `[qx, qy, qz, qw]` |
+/// | `se3` | `rotation_weight_m_per_rad=W` (required), `rotation=...` | `[x, y, z, qx, qy, qz, qw]` |
+/// | `se3_rotation` | `rotation=...` | as `se3` |
+/// | `se2` | `rotation_weight_m_per_rad=W` (required) | `[x, y, θ]` |
+/// | `torus` | | angles |
+/// | `sphere` | `radius=R` (default 1) | unit vectors `[x, y, z]` |
+/// | `haversine` | `radius_m=R` (default the mean Earth radius) | `[lat_rad, lon_rad, height_m]` |
+/// | `angular` | | unit vectors |
+///
+/// # Examples
+/// ```
+/// use loops_core::MetricSpec;
+/// let spec: MetricSpec = "se3(rotation_weight_m_per_rad=10)".parse()?;
+/// assert_eq!(spec.to_string(), "se3(rotation_weight_m_per_rad=10, rotation=geodesic)");
+/// assert!("se3".parse::<MetricSpec>().is_err()); // the weight has no universal default
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[non_exhaustive]
+pub enum MetricSpec {
+    /// [`Euclidean`].
+    #[default]
+    Euclidean,
+    /// [`So3`](crate::So3).
+    So3(crate::So3),
+    /// [`Se3`](crate::Se3).
+    Se3(crate::Se3),
+    /// [`Se3Rotation`](crate::Se3Rotation).
+    Se3Rotation(crate::Se3Rotation),
+    /// [`Se2`](crate::Se2).
+    Se2(crate::Se2),
+    /// [`Torus`](crate::Torus).
+    Torus,
+    /// [`Sphere`](crate::Sphere).
+    Sphere(crate::Sphere),
+    /// [`Haversine`](crate::Haversine).
+    Haversine(crate::Haversine),
+    /// [`Angular`](crate::Angular).
+    Angular,
+}
+
+/// Calls `$body` with `$m` bound to the concrete metric of a [`MetricSpec`].
+macro_rules! with_metric {
+    ($spec:expr, $m:ident => $body:expr) => {
+        match $spec {
+            MetricSpec::Euclidean => {
+                let $m = &Euclidean;
+                $body
+            }
+            MetricSpec::So3(metric) => {
+                let $m = metric;
+                $body
+            }
+            MetricSpec::Se3(metric) => {
+                let $m = metric;
+                $body
+            }
+            MetricSpec::Se3Rotation(metric) => {
+                let $m = metric;
+                $body
+            }
+            MetricSpec::Se2(metric) => {
+                let $m = metric;
+                $body
+            }
+            MetricSpec::Torus => {
+                let $m = &crate::Torus;
+                $body
+            }
+            MetricSpec::Sphere(metric) => {
+                let $m = metric;
+                $body
+            }
+            MetricSpec::Haversine(metric) => {
+                let $m = metric;
+                $body
+            }
+            MetricSpec::Angular => {
+                let $m = &crate::Angular;
+                $body
+            }
+        }
+    };
+}
+
+impl MetricSpec {
+    /// The accepted names.
+    pub const NAMES: &'static str = "euclidean, so3, se3, se3_rotation, se2, torus, sphere, haversine, angular";
+
+    /// The canonical text form, as [`FromStr`](std::str::FromStr) accepts it.
+    pub fn name(&self) -> String {
+        with_metric!(self, m => m.name())
+    }
+
+    /// [`find_loops`](crate::find_loops) under this metric.
+    ///
+    /// # Errors
+    /// As [`find_loops`](crate::find_loops).
+    pub fn find_loops(&self, traj: &Trajectory, gamma: f64) -> Result<crate::Loops> {
+        with_metric!(self, m => crate::find_loops(traj, m, gamma))
+    }
+
+    /// δ between two points under this metric (dispatched per call: for tests and small jobs).
+    pub fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        with_metric!(self, m => m.distance(a, b))
+    }
+
+    /// Validates `traj` for this metric (see [`Metric::validate`]).
+    ///
+    /// # Errors
+    /// As the metric's `validate`.
+    pub fn validate(&self, traj: &Trajectory) -> Result<()> {
+        with_metric!(self, m => m.validate(traj))
+    }
+}
+
+impl std::fmt::Display for MetricSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+impl std::str::FromStr for MetricSpec {
+    type Err = Error;
+
+    fn from_str(spec: &str) -> Result<Self> {
+        let invalid = |reason: String| Error::InvalidMetricSpec { spec: spec.to_owned(), reason };
+        let text = spec.trim();
+        let (name, args) = match text.split_once('(') {
+            None => (text, ""),
+            Some((name, rest)) => {
+                let args = rest.strip_suffix(')').ok_or_else(|| invalid("missing the closing ')'".into()))?;
+                (name.trim(), args)
+            }
+        };
+        let mut params: Vec<(String, String)> = Vec::new();
+        for item in args.split(',').map(str::trim).filter(|item| !item.is_empty()) {
+            let (key, value) = item.split_once('=').ok_or_else(|| invalid(format!("{item:?} is not key=value")))?;
+            params.push((key.trim().to_owned(), value.trim().to_owned()));
+        }
+        let mut take = |key: &str| -> Option<String> {
+            let at = params.iter().position(|(k, _)| k == key)?;
+            Some(params.remove(at).1)
+        };
+        let number = |key: &str, value: Option<String>| -> Result<Option<f64>> {
+            value.map(|v| v.parse::<f64>().map_err(|_| invalid(format!("{key}={v} is not a number")))).transpose()
+        };
+        let rotation = |value: Option<String>| -> Result<RotationDistance> {
+            value.map_or(Ok(RotationDistance::default()), |v| v.parse())
+        };
+        let required = |key: &'static str, value: Option<f64>| {
+            value.ok_or_else(|| invalid(format!("{key} is required, e.g. {name}({key}=10)")))
+        };
+        let parsed = match name.to_ascii_lowercase().as_str() {
+            "euclidean" | "l2" => Self::Euclidean,
+            "so3" => Self::So3(crate::So3 { rotation: rotation(take("rotation"))? }),
+            "se3" => {
+                let weight = number("rotation_weight_m_per_rad", take("rotation_weight_m_per_rad"))?;
+                let rotation = rotation(take("rotation"))?;
+                Self::Se3(crate::Se3 {
+                    rotation_weight_m_per_rad: required("rotation_weight_m_per_rad", weight)?,
+                    rotation,
+                })
+            }
+            "se3_rotation" => Self::Se3Rotation(crate::Se3Rotation { rotation: rotation(take("rotation"))? }),
+            "se2" => {
+                let weight = number("rotation_weight_m_per_rad", take("rotation_weight_m_per_rad"))?;
+                Self::Se2(crate::Se2 { rotation_weight_m_per_rad: required("rotation_weight_m_per_rad", weight)? })
+            }
+            "torus" => Self::Torus,
+            "sphere" => Self::Sphere(crate::Sphere { radius: number("radius", take("radius"))?.unwrap_or(1.0) }),
+            "haversine" => Self::Haversine(crate::Haversine {
+                radius_m: number("radius_m", take("radius_m"))?.unwrap_or(crate::EARTH_RADIUS_M),
+            }),
+            "angular" => Self::Angular,
+            _ => return Err(Error::UnknownName { kind: "metric", name: name.to_owned(), expected: Self::NAMES }),
+        };
+        if let Some((key, _)) = params.first() {
+            return Err(invalid(format!("{name} takes no parameter {key:?}")));
+        }
+        // Weights and radii are checked here too, so a bad spec fails before any data is read.
+        match parsed {
+            MetricSpec::Se3(m) if !(m.rotation_weight_m_per_rad.is_finite() && m.rotation_weight_m_per_rad >= 0.0) => {
+                Err(invalid(format!(
+                    "rotation_weight_m_per_rad must be finite and ≥ 0, got {}",
+                    m.rotation_weight_m_per_rad
+                )))
+            }
+            MetricSpec::Se2(m) if !(m.rotation_weight_m_per_rad.is_finite() && m.rotation_weight_m_per_rad >= 0.0) => {
+                Err(invalid(format!(
+                    "rotation_weight_m_per_rad must be finite and ≥ 0, got {}",
+                    m.rotation_weight_m_per_rad
+                )))
+            }
+            MetricSpec::Sphere(m) if !(m.radius.is_finite() && m.radius > 0.0) => {
+                Err(invalid(format!("radius must be positive and finite, got {}", m.radius)))
+            }
+            MetricSpec::Haversine(m) if !(m.radius_m.is_finite() && m.radius_m > 0.0) => {
+                Err(invalid(format!("radius_m must be positive and finite, got {}", m.radius_m)))
+            }
+            _ => Ok(parsed),
+        }
     }
 }
 
@@ -125,47 +354,37 @@ mod tests {
         assert_eq!(Euclidean.distance_rank(&[0.0, 0.0], &[3.0, 4.0]), 25.0);
         assert!(Euclidean.check_dim(0).is_err());
     }
-}
 
-/// A metric chosen by name at run time (from Python or the command line), dispatched once to
-/// the statically typed engine, so the hot loops stay monomorphic.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-#[non_exhaustive]
-pub enum MetricSpec {
-    /// [`Euclidean`].
-    #[default]
-    Euclidean,
-}
-
-impl MetricSpec {
-    /// The accepted names.
-    pub const NAMES: &'static str = "euclidean";
-
-    /// The name, as [`FromStr`](std::str::FromStr) accepts it.
-    pub fn name(&self) -> String {
-        match self {
-            Self::Euclidean => Euclidean.name(),
+    #[test]
+    fn metric_specs_round_trip_and_reject_bad_text() {
+        for text in [
+            "euclidean",
+            "so3(rotation=chordal)",
+            "se3(rotation_weight_m_per_rad=2.5, rotation=geodesic)",
+            "se3_rotation(rotation=geodesic)",
+            "se2(rotation_weight_m_per_rad=4)",
+            "torus",
+            "sphere(radius=2)",
+            "haversine(radius_m=6371008.8)",
+            "angular",
+        ] {
+            let spec: MetricSpec = text.parse().unwrap();
+            assert_eq!(spec.to_string(), text);
+            assert_eq!(spec.to_string().parse::<MetricSpec>().unwrap(), spec);
         }
-    }
-
-    /// [`find_loops`](crate::find_loops) under this metric.
-    ///
-    /// # Errors
-    /// As [`find_loops`](crate::find_loops).
-    pub fn find_loops(&self, traj: &Trajectory, gamma: f64) -> Result<crate::Loops> {
-        match self {
-            Self::Euclidean => crate::find_loops(traj, &Euclidean, gamma),
-        }
-    }
-}
-
-impl std::str::FromStr for MetricSpec {
-    type Err = Error;
-
-    fn from_str(name: &str) -> Result<Self> {
-        match name.to_ascii_lowercase().as_str() {
-            "euclidean" | "l2" => Ok(Self::Euclidean),
-            _ => Err(Error::UnknownName { kind: "metric", name: name.to_owned(), expected: Self::NAMES }),
+        assert_eq!("L2".parse::<MetricSpec>().unwrap(), MetricSpec::Euclidean);
+        for bad in [
+            "manhattan",
+            "se3",
+            "se3(rotation_weight_m_per_rad=-1)",
+            "se3(rotation_weight_m_per_rad=x)",
+            "se3(rotation_weight_m_per_rad=1",
+            "se2(weight=1)",
+            "so3(rotation=euler)",
+            "sphere(radius=0)",
+            "torus(radius=1)",
+        ] {
+            assert!(bad.parse::<MetricSpec>().is_err(), "{bad}");
         }
     }
 }

@@ -79,7 +79,7 @@ impl SublevelSet {
         if !(gamma.is_finite() && gamma > 0.0) {
             return Err(Error::InvalidGamma(gamma));
         }
-        metric.check_dim(traj.dim())?;
+        metric.validate(traj)?;
         let n = traj.len();
         let arc = ArcLength::new(traj, metric);
         let balls = BallTree::new(traj, metric, LEAF_SIZE);
@@ -121,7 +121,7 @@ impl SublevelSet {
         if !(gamma.is_finite() && gamma > 0.0) {
             return Err(Error::InvalidGamma(gamma));
         }
-        metric.check_dim(traj.dim())?;
+        metric.validate(traj)?;
         let n = traj.len();
         let mut set = Self { gamma, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };
         for i in 0..n {

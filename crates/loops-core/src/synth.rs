@@ -76,6 +76,20 @@ pub struct SyntheticDrive {
     pub yaw_rad: Vec<f64>,
 }
 
+impl SyntheticDrive {
+    /// The drive as SE(3) poses (position and the heading as a yaw quaternion), for
+    /// [`Se3`](crate::Se3) and friends.
+    ///
+    /// # Errors
+    /// None in practice (the drive is valid); as [`Trajectory::se3`].
+    pub fn se3_trajectory(&self) -> Result<Trajectory> {
+        let positions: Vec<[f64; 3]> = self.trajectory.coords().as_chunks::<3>().0.to_vec();
+        let quaternions: Vec<[f64; 4]> =
+            self.yaw_rad.iter().map(|yaw| [0.0, 0.0, (0.5 * yaw).sin(), (0.5 * yaw).cos()]).collect();
+        Trajectory::se3(self.trajectory.timestamps_s().to_vec(), &positions, &quaternions)
+    }
+}
+
 impl UrbanDrive {
     /// Generates the drive. Deterministic in the parameters (ChaCha8 seeded by `seed`).
     ///

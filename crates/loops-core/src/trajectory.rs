@@ -190,8 +190,14 @@ mod tests {
         assert!(matches!(err, Error::NonFiniteTimestamp { index: 1, .. }));
         assert_eq!(Trajectory::new(vec![], vec![], 3).unwrap_err(), Error::TooFewPoses { count: 0 });
         assert_eq!(Trajectory::new(vec![1.0], vec![0.0; 3], 3).unwrap_err(), Error::TooFewPoses { count: 1 });
-        assert_eq!(Trajectory::new(vec![0.0, 1.0], vec![0.0; 5], 2).unwrap_err(), Error::RaggedCoordinates { len: 5, dim: 2 });
-        assert_eq!(Trajectory::new(vec![0.0, 1.0], vec![0.0; 6], 2).unwrap_err(), Error::LengthMismatch { timestamps: 2, poses: 3 });
+        assert_eq!(
+            Trajectory::new(vec![0.0, 1.0], vec![0.0; 5], 2).unwrap_err(),
+            Error::RaggedCoordinates { len: 5, dim: 2 }
+        );
+        assert_eq!(
+            Trajectory::new(vec![0.0, 1.0], vec![0.0; 6], 2).unwrap_err(),
+            Error::LengthMismatch { timestamps: 2, poses: 3 }
+        );
         assert_eq!(Trajectory::new(vec![0.0, 1.0], vec![], 0).unwrap_err(), Error::ZeroDimension);
     }
 }

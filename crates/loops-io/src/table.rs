@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use loops_core::{Error, Trajectory};
+use loops_core::{Error, FILE_QUATERNION_TOLERANCE, Trajectory};
 
 use crate::error::{IoError, Result};
 
@@ -68,11 +68,7 @@ impl PoseTable {
                 2 => "a position axis of a 2-D file: 0 (x) or 1 (y)",
                 _ => "a position axis: 0 (x), 1 (y) or 2 (z)",
             };
-            return Err(self.locate(Error::InvalidParameter {
-                name: "plane axis",
-                value: axis as f64,
-                expected,
-            }));
+            return Err(self.locate(Error::InvalidParameter { name: "plane axis", value: axis as f64, expected }));
         }
         if axes[0] == axes[1] {
             return Err(self.locate(Error::InvalidParameter {
@@ -82,6 +78,62 @@ impl PoseTable {
             }));
         }
         self.trajectory_of_axes(&axes)
+    }
+
+    /// The trajectory a metric needs from this table: positions for `euclidean` (all axes, or
+    /// the plane `axes`), positions and orientations for `se3` / `se3_rotation`, orientations
+    /// for `so3`, and x, y with the heading (yaw of the orientation) for `se2`.
+    ///
+    /// # Errors
+    /// As [`to_trajectory`](Self::to_trajectory); also [`IoError::Trajectory`] holding
+    /// [`Error::InvalidParameter`] when the metric needs orientations the file does not have, or
+    /// when the metric's points cannot come from a pose file (torus, sphere, haversine, angular)
+    /// or do not take `axes`; quaternions farther than [`FILE_QUATERNION_TOLERANCE`] from unit
+    /// length name their line (closer ones are normalised: files often print 4 decimals).
+    pub fn to_trajectory_for(&self, metric: &loops_core::MetricSpec, axes: Option<[usize; 2]>) -> Result<Trajectory> {
+        use loops_core::MetricSpec as M;
+        let unsupported = |expected: &'static str| {
+            self.locate(Error::InvalidParameter { name: "metric for a pose file", value: f64::NAN, expected })
+        };
+        match (metric, axes) {
+            (M::Euclidean, None) => self.to_trajectory(),
+            (M::Euclidean, Some(axes)) => self.to_trajectory_plane(axes),
+            (_, Some(_)) => Err(unsupported("axes go with the euclidean metric only")),
+            (M::Se3(_) | M::Se3Rotation(_), None) => {
+                let orientations = self.orientations("se3")?;
+                Trajectory::se3_with_tolerance(
+                    self.timestamps_s.clone(),
+                    &self.positions,
+                    orientations,
+                    FILE_QUATERNION_TOLERANCE,
+                )
+                .map_err(|error| self.locate(error))
+            }
+            (M::So3(_), None) => {
+                let orientations = self.orientations("so3")?;
+                Trajectory::so3_with_tolerance(self.timestamps_s.clone(), orientations, FILE_QUATERNION_TOLERANCE)
+                    .map_err(|error| self.locate(error))
+            }
+            (M::Se2(_), None) => {
+                let orientations = self.orientations("se2")?;
+                let poses: Vec<[f64; 3]> = self
+                    .positions
+                    .iter()
+                    .zip(orientations)
+                    .map(|(p, [x, y, z, w])| [p[0], p[1], (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))])
+                    .collect();
+                Trajectory::se2(self.timestamps_s.clone(), &poses).map_err(|error| self.locate(error))
+            }
+            _ => Err(unsupported("a metric for poses: euclidean, se3, se3_rotation, so3 or se2")),
+        }
+    }
+
+    fn orientations(&self, metric: &str) -> Result<&[[f64; 4]]> {
+        self.orientations_xyzw.as_deref().ok_or_else(|| IoError::Parse {
+            path: self.path.clone(),
+            line: self.source_lines.first().copied().unwrap_or(1),
+            message: format!("the {metric} metric needs orientations, and this file has positions only"),
+        })
     }
 
     /// The position axes the file gives: `[0, 1]` or `[0, 1, 2]`.
@@ -98,33 +150,21 @@ impl PoseTable {
     }
 
     fn trajectory_of_axes(&self, axes: &[usize]) -> Result<Trajectory> {
-        let coords = self
-            .positions
-            .iter()
-            .flat_map(|position| axes.iter().map(|&axis| position[axis]))
-            .collect();
-        Trajectory::new(self.timestamps_s.clone(), coords, axes.len())
-            .map_err(|error| self.locate(error))
+        let coords = self.positions.iter().flat_map(|position| axes.iter().map(|&axis| position[axis])).collect();
+        Trajectory::new(self.timestamps_s.clone(), coords, axes.len()).map_err(|error| self.locate(error))
     }
 
     /// A core error placed in the file: the pose index it names becomes a line.
     fn locate(&self, error: Error) -> IoError {
         let line_of = |index: usize| self.source_lines.get(index).copied();
         let (line, previous_line) = match error {
-            Error::TimestampsNotIncreasing { index, .. } => {
-                (line_of(index), index.checked_sub(1).and_then(line_of))
-            }
-            Error::NonFiniteTimestamp { index, .. } | Error::NonFiniteCoordinate { index, .. } => {
-                (line_of(index), None)
-            }
+            Error::TimestampsNotIncreasing { index, .. } => (line_of(index), index.checked_sub(1).and_then(line_of)),
+            Error::NonFiniteTimestamp { index, .. }
+            | Error::NonFiniteCoordinate { index, .. }
+            | Error::NonUnitQuaternion { index, .. } => (line_of(index), None),
             _ => (None, None),
         };
-        IoError::Trajectory {
-            path: self.path.clone(),
-            line,
-            previous_line,
-            error,
-        }
+        IoError::Trajectory { path: self.path.clone(), line, previous_line, error }
     }
 }
 
@@ -136,9 +176,7 @@ mod tests {
         let count = timestamps_s.len();
         PoseTable {
             path: PathBuf::from("drive.csv"),
-            positions: (0..count)
-                .map(|i| [i as f64, 10.0 * i as f64, 100.0 * i as f64])
-                .collect(),
+            positions: (0..count).map(|i| [i as f64, 10.0 * i as f64, 100.0 * i as f64]).collect(),
             timestamps_s,
             orientations_xyzw: None,
             dim,
@@ -156,36 +194,23 @@ mod tests {
 
     #[test]
     fn plane_picks_the_axes_in_order() {
-        let traj = table(vec![0.0, 1.0], 3)
-            .to_trajectory_plane([2, 0])
-            .unwrap();
+        let traj = table(vec![0.0, 1.0], 3).to_trajectory_plane([2, 0]).unwrap();
         assert_eq!(traj.point(1), &[100.0, 1.0]);
     }
 
     #[test]
     fn bad_axes_are_errors_not_panics() {
         for (dim, axes) in [(3, [0, 3]), (2, [0, 2]), (3, [1, 1]), (3, [usize::MAX, 0])] {
-            let error = table(vec![0.0, 1.0], dim)
-                .to_trajectory_plane(axes)
-                .unwrap_err();
+            let error = table(vec![0.0, 1.0], dim).to_trajectory_plane(axes).unwrap_err();
             assert!(
-                matches!(
-                    error,
-                    IoError::Trajectory {
-                        line: None,
-                        error: Error::InvalidParameter { .. },
-                        ..
-                    }
-                ),
+                matches!(error, IoError::Trajectory { line: None, error: Error::InvalidParameter { .. }, .. }),
                 "{error:?}"
             );
         }
         let expected = "drive.csv: dim = 4 is invalid: 2 or 3 coordinates per position";
         let error = table(vec![0.0, 1.0], 4).to_trajectory().unwrap_err();
         assert_eq!(error.to_string(), expected);
-        let error = table(vec![0.0, 1.0], 4)
-            .to_trajectory_plane([0, 1])
-            .unwrap_err();
+        let error = table(vec![0.0, 1.0], 4).to_trajectory_plane([0, 1]).unwrap_err();
         assert_eq!(error.to_string(), expected);
     }
 
@@ -199,15 +224,9 @@ mod tests {
         let mut bad = table(vec![0.0, 1.0, 2.0], 3);
         bad.positions[2][1] = f64::NAN;
         let error = bad.to_trajectory().unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            "drive.csv line 7: coordinate 1 of the position is not finite (NaN)"
-        );
+        assert_eq!(error.to_string(), "drive.csv line 7: coordinate 1 of the position is not finite (NaN)");
         let error = table(vec![0.0], 2).to_trajectory().unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            "drive.csv: a trajectory needs at least 2 poses, got 1"
-        );
+        assert_eq!(error.to_string(), "drive.csv: a trajectory needs at least 2 poses, got 1");
     }
 
     #[test]
@@ -215,11 +234,6 @@ mod tests {
         let mut bad = table(vec![0.0, 1.0, 1.0], 2);
         bad.source_lines.clear();
         let error = bad.to_trajectory().unwrap_err();
-        assert!(
-            error
-                .to_string()
-                .starts_with("drive.csv: timestamps must strictly increase: index 2"),
-            "{error}"
-        );
+        assert!(error.to_string().starts_with("drive.csv: timestamps must strictly increase: index 2"), "{error}");
     }
 }

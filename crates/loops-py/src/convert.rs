@@ -64,12 +64,50 @@ pub(crate) fn timestamps_and_points(
         }
     };
     if p.shape[0] != t.shape[0] {
-        return Err(value_error(format!(
-            "timestamps has {} rows but {points_name} has {}",
-            t.shape[0], p.shape[0]
-        )));
+        return Err(value_error(format!("timestamps has {} rows but {points_name} has {}", t.shape[0], p.shape[0])));
     }
     Ok((t.values, p.values, dim))
+}
+
+/// Timestamps and points of exactly `D` coordinates each, as fixed-size rows.
+///
+/// # Errors
+/// As [`timestamps_and_points`]; `ValueError` when rows do not have `D` columns.
+pub(crate) fn timestamps_and_rows<const D: usize>(
+    py: Python<'_>,
+    timestamps: &Bound<'_, PyAny>,
+    points: &Bound<'_, PyAny>,
+    points_name: &str,
+) -> PyResult<(Vec<f64>, Vec<[f64; D]>)> {
+    let (t, values, dim) = timestamps_and_points(py, timestamps, points, points_name)?;
+    if dim != D {
+        return Err(value_error(format!("{points_name} must have shape (n, {D}), got {dim} columns")));
+    }
+    let (rows, _) = values.as_chunks::<D>();
+    Ok((t, rows.to_vec()))
+}
+
+/// For a Python list (not an array) of rows: `ValueError` naming the first row whose length
+/// differs from the first row's, before numpy reports a shapeless "inhomogeneous" error.
+pub(crate) fn check_rows_equal_length(rows: &Bound<'_, PyAny>, name: &str) -> PyResult<()> {
+    if rows.cast::<PyUntypedArray>().is_ok() {
+        return Ok(());
+    }
+    let Ok(iter) = rows.try_iter() else { return Ok(()) };
+    let mut first: Option<usize> = None;
+    for (index, row) in iter.enumerate() {
+        let Ok(len) = row?.len() else { return Ok(()) };
+        match first {
+            None => first = Some(len),
+            Some(expected) if expected != len => {
+                return Err(value_error(format!(
+                    "{name} row {index} has {len} values but row 0 has {expected}: rows must be of equal length"
+                )));
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(())
 }
 
 /// A new 1-D numpy array.

@@ -41,9 +41,7 @@ impl From<Failure> for PyErr {
                     _ => LoopsIOError::new_err(message),
                 }
             }
-            Failure::Panic(message) => {
-                InternalError::new_err(format!("internal error (please report): {message}"))
-            }
+            Failure::Panic(message) => InternalError::new_err(format!("internal error (please report): {message}")),
         }
     }
 }
@@ -59,7 +57,10 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
         | E::NonFiniteTimestamp { .. }
         | E::NonFiniteCoordinate { .. }
         | E::TimestampsNotIncreasing { .. }
-        | E::TooManyPoses { .. } => InvalidTrajectoryError::new_err(message),
+        | E::TooManyPoses { .. }
+        | E::NonUnitQuaternion { .. }
+        | E::NonUnitVector { .. }
+        | E::LatitudeOutOfRange { .. } => InvalidTrajectoryError::new_err(message),
         _ => InvalidParameterError::new_err(message),
     }
 }

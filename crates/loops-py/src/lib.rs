@@ -6,16 +6,14 @@
 mod convert;
 mod error;
 mod py_loops;
+mod py_metric;
 mod py_trajectory;
 
 use pyo3::prelude::*;
 
 /// Runs `f` without the GIL and turns its error, or a panic, into a Python exception: the one
 /// way bindings call into Rust.
-pub(crate) fn detached<T: Send>(
-    py: Python<'_>,
-    f: impl FnOnce() -> Result<T, error::Failure> + Send,
-) -> PyResult<T> {
+pub(crate) fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, error::Failure> + Send) -> PyResult<T> {
     py.detach(|| {
         std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|payload| {
             let message = payload

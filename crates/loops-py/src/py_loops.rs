@@ -9,15 +9,21 @@ use crate::convert::to_numpy;
 use crate::detached;
 use crate::error::Failure;
 use crate::py_trajectory::Trajectory;
-use loops_core::{MetricSpec, Scale, Selection, Side};
+use loops_core::{Scale, Selection, Side};
+
+use crate::py_metric::MetricArg;
 
 /// Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
 /// (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
 ///
 /// Args:
-///     trajectory: a :class:`Trajectory`.
+///     trajectory: a :class:`Trajectory` (for a manifold, built by the matching constructor,
+///         e.g. :meth:`Trajectory.se3`).
 ///     gamma: the distance threshold γ > 0, in the metric's unit (metres for positions).
-///     metric: the metric's name; ``None`` is ``"euclidean"``.
+///     metric: ``None`` (Euclidean), a name such as ``"se3(rotation_weight_m_per_rad=10)"``, an
+///         :mod:`inexact_loops.metrics` object such as ``il.metrics.SE3(rotation_weight_m_per_rad=10)``,
+///         or — a slow path, one Python call per distance on one thread — any callable
+///         ``f(a, b) -> float`` on two points (numpy arrays) satisfying the triangle inequality.
 ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
 ///
 /// Returns:
@@ -39,14 +45,24 @@ pub(crate) fn find_loops(
     py: Python<'_>,
     trajectory: &Trajectory,
     gamma: f64,
-    metric: Option<String>,
+    metric: Option<&Bound<'_, PyAny>>,
     threads: Option<usize>,
 ) -> PyResult<Loops> {
     let traj = Arc::clone(&trajectory.inner);
-    let inner = detached(py, move || {
-        let spec: MetricSpec = metric.map(|name| name.parse()).transpose()?.unwrap_or_default();
-        Ok(loops_core::with_threads(threads, || spec.find_loops(&traj, gamma))??)
-    })?;
+    let inner = match MetricArg::from_py(metric)? {
+        MetricArg::Spec(spec) => {
+            detached(py, move || Ok(loops_core::with_threads(threads, || spec.find_loops(&traj, gamma))??))?
+        }
+        MetricArg::Callable(callable) => {
+            let result = detached(py, || {
+                Ok(loops_core::with_threads(Some(1), || loops_core::find_loops(&traj, &callable, gamma))??)
+            });
+            if let Some(error) = callable.take_error() {
+                return Err(error);
+            }
+            result?
+        }
+    };
     Ok(Loops { inner: Arc::new(inner) })
 }
 
@@ -153,8 +169,12 @@ impl Loops {
     /// (inclusive) and ``component`` id; numpy int64 arrays, row by row. For plotting.
     fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let count = self.inner.sublevel_set().runs().len();
-        let (mut row, mut start, mut end, mut component) =
-            (Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count), Vec::with_capacity(count));
+        let (mut row, mut start, mut end, mut component) = (
+            Vec::with_capacity(count),
+            Vec::with_capacity(count),
+            Vec::with_capacity(count),
+            Vec::with_capacity(count),
+        );
         for (i, run, c) in self.inner.runs() {
             row.push(i as i64);
             start.push(i64::from(run.start));

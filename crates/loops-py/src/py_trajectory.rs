@@ -6,7 +6,7 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use crate::convert::{timestamps_and_points, to_numpy};
+use crate::convert::{check_rows_equal_length, timestamps_and_points, timestamps_and_rows, to_numpy};
 use crate::detached;
 
 /// A sampled trajectory: strictly increasing timestamps (seconds) and one point per timestamp.
@@ -39,8 +39,7 @@ impl Trajectory {
     #[new]
     fn new(py: Python<'_>, timestamps: &Bound<'_, PyAny>, positions: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, coords, dim) = timestamps_and_points(py, timestamps, positions, "positions")?;
-        let inner = detached(py, || Ok(loops_core::Trajectory::new(t, coords, dim)?))?;
-        Ok(Self { inner: Arc::new(inner) })
+        wrap(py, move || loops_core::Trajectory::new(t, coords, dim))
     }
 
     fn __len__(&self) -> usize {
@@ -87,12 +86,142 @@ impl Trajectory {
     fn span_s(&self) -> f64 {
         self.inner.span_s()
     }
+
+    /// SE(3) poses, for the ``se3`` / ``se3_rotation`` metrics: positions ``(n, 3)`` and
+    /// orientations as quaternions ``(n, 4)`` in **x, y, z, w** order (the ROS and
+    /// ``scipy.spatial.transform.Rotation.as_quat()`` order). Quaternions within
+    /// ``quaternion_tolerance`` (default 1e-6) of unit length are normalised; others (zero
+    /// included) raise, naming the pose. Files that print few decimals need a looser tolerance
+    /// (:func:`read_trajectory` uses 1e-3).
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> q = np.array([[0, 0, 0, 1.0], [0, 0, 1.0, 0]])
+    ///     >>> traj = il.Trajectory.se3(np.array([0.0, 1.0]), np.zeros((2, 3)), q)
+    ///     >>> traj.positions.shape
+    ///     (2, 7)
+    #[staticmethod]
+    #[pyo3(signature = (timestamps, positions, quaternions_xyzw, *, quaternion_tolerance=None))]
+    fn se3(
+        py: Python<'_>,
+        timestamps: &Bound<'_, PyAny>,
+        positions: &Bound<'_, PyAny>,
+        quaternions_xyzw: &Bound<'_, PyAny>,
+        quaternion_tolerance: Option<f64>,
+    ) -> PyResult<Self> {
+        let (t, p) = timestamps_and_rows::<3>(py, timestamps, positions, "positions")?;
+        let (_, q) = timestamps_and_rows::<4>(py, timestamps, quaternions_xyzw, "quaternions_xyzw")?;
+        let tolerance = quaternion_tolerance.unwrap_or(loops_core::QUATERNION_TOLERANCE);
+        wrap(py, move || loops_core::Trajectory::se3_with_tolerance(t, &p, &q, tolerance))
+    }
+
+    /// Rotations, for the ``so3`` metric: quaternions ``(n, 4)`` in x, y, z, w order, normalised
+    /// as in :meth:`se3`.
+    #[staticmethod]
+    #[pyo3(signature = (timestamps, quaternions_xyzw, *, quaternion_tolerance=None))]
+    fn so3(
+        py: Python<'_>,
+        timestamps: &Bound<'_, PyAny>,
+        quaternions_xyzw: &Bound<'_, PyAny>,
+        quaternion_tolerance: Option<f64>,
+    ) -> PyResult<Self> {
+        let (t, q) = timestamps_and_rows::<4>(py, timestamps, quaternions_xyzw, "quaternions_xyzw")?;
+        let tolerance = quaternion_tolerance.unwrap_or(loops_core::QUATERNION_TOLERANCE);
+        wrap(py, move || loops_core::Trajectory::so3_with_tolerance(t, &q, tolerance))
+    }
+
+    /// Rotations, for the ``so3`` metric, from rotation vectors ``(n, 3)`` (axis × angle,
+    /// radians; ``Rotation.as_rotvec()``).
+    #[staticmethod]
+    fn so3_from_rotation_vectors(
+        py: Python<'_>,
+        timestamps: &Bound<'_, PyAny>,
+        rotation_vectors: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        let (t, v) = timestamps_and_rows::<3>(py, timestamps, rotation_vectors, "rotation_vectors")?;
+        wrap(py, move || loops_core::Trajectory::so3_from_rotation_vectors(t, &v))
+    }
+
+    /// Planar poses, for the ``se2`` metric: ``(n, 3)`` rows of x, y (metres) and heading θ
+    /// (radians, wrapped to (−π, π]).
+    #[staticmethod]
+    fn se2(py: Python<'_>, timestamps: &Bound<'_, PyAny>, poses_xy_theta: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (t, p) = timestamps_and_rows::<3>(py, timestamps, poses_xy_theta, "poses_xy_theta")?;
+        wrap(py, move || loops_core::Trajectory::se2(t, &p))
+    }
+
+    /// Points on a torus S¹ × … × S¹, for the ``torus`` metric: angles ``(n, k)`` in radians
+    /// (wrapped to (−π, π]).
+    #[staticmethod]
+    fn torus(py: Python<'_>, timestamps: &Bound<'_, PyAny>, angles_rad: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (t, angles, dim) = timestamps_and_points(py, timestamps, angles_rad, "angles_rad")?;
+        wrap(py, move || loops_core::Trajectory::torus(t, &angles, dim))
+    }
+
+    /// Points on the sphere S², for the ``sphere`` metric: non-zero vectors ``(n, 3)``,
+    /// normalised.
+    #[staticmethod]
+    fn sphere(py: Python<'_>, timestamps: &Bound<'_, PyAny>, vectors: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (t, v) = timestamps_and_rows::<3>(py, timestamps, vectors, "vectors")?;
+        wrap(py, move || loops_core::Trajectory::sphere(t, &v))
+    }
+
+    /// Points on the sphere S², for the ``sphere`` metric, from ``(n, 2)`` latitude and
+    /// longitude in degrees.
+    #[staticmethod]
+    fn sphere_from_lat_lon(
+        py: Python<'_>,
+        timestamps: &Bound<'_, PyAny>,
+        lat_lon_deg: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
+        let (t, p) = timestamps_and_rows::<2>(py, timestamps, lat_lon_deg, "lat_lon_deg")?;
+        wrap(py, move || loops_core::Trajectory::sphere_from_lat_lon(t, &p))
+    }
+
+    /// GNSS fixes, for the ``haversine`` metric: ``(n, 3)`` latitude (degrees, within ±90),
+    /// longitude (degrees) and height (metres).
+    #[staticmethod]
+    fn gnss(py: Python<'_>, timestamps: &Bound<'_, PyAny>, lat_lon_height: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (t, p) = timestamps_and_rows::<3>(py, timestamps, lat_lon_height, "lat_lon_height")?;
+        wrap(py, move || loops_core::Trajectory::gnss(t, &p))
+    }
+
+    /// GNSS fixes as WGS 84 Earth-centred positions relative to the first fix (metres), for the
+    /// ``euclidean`` metric; input as in :meth:`gnss`.
+    #[staticmethod]
+    fn gnss_ecef(py: Python<'_>, timestamps: &Bound<'_, PyAny>, lat_lon_height: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (t, p) = timestamps_and_rows::<3>(py, timestamps, lat_lon_height, "lat_lon_height")?;
+        wrap(py, move || loops_core::Trajectory::gnss_ecef(t, &p))
+    }
+
+    /// Descriptor vectors (place recognition) ``(n, d)``: normalised to unit length for the
+    /// ``angular`` metric when ``normalize``, kept as given (for ``euclidean``) otherwise. A
+    /// list of rows of unequal length raises ``ValueError`` naming the row.
+    #[staticmethod]
+    #[pyo3(signature = (timestamps, descriptors, *, normalize=true))]
+    fn descriptors(
+        py: Python<'_>,
+        timestamps: &Bound<'_, PyAny>,
+        descriptors: &Bound<'_, PyAny>,
+        normalize: bool,
+    ) -> PyResult<Self> {
+        check_rows_equal_length(descriptors, "descriptors")?;
+        let (t, values, dim) = timestamps_and_points(py, timestamps, descriptors, "descriptors")?;
+        wrap(py, move || loops_core::Trajectory::descriptors(t, &values, dim, normalize))
+    }
+}
+
+fn wrap(py: Python<'_>, f: impl FnOnce() -> loops_core::Result<loops_core::Trajectory> + Send) -> PyResult<Trajectory> {
+    let inner = detached(py, || Ok(f()?))?;
+    Ok(Trajectory { inner: Arc::new(inner) })
 }
 
 /// A seeded synthetic drive on a Manhattan grid (x, y, z in metres, 10 Hz by default).
 ///
 /// Every argument left as ``None`` takes the library default: a 1 km² city of 100 m blocks,
 /// 2.1 h at 10 Hz (75,600 poses), 5–12 m/s, stops of 5 s – 4 min at some intersections.
+/// With ``se3=True`` the poses carry the heading of travel as an orientation (for the ``se3``
+/// metrics); otherwise they are positions (x, y, z).
 ///
 /// Example:
 ///     >>> import inexact_loops as il
@@ -102,7 +231,7 @@ impl Trajectory {
 #[pyfunction]
 #[pyo3(signature = (*, duration_s=None, rate_hz=None, city_size_m=None, block_m=None, min_speed_mps=None,
     max_speed_mps=None, stop_probability=None, min_stop_s=None, max_stop_s=None, lane_offset_m=None,
-    lateral_noise_m=None, seed=None))]
+    lateral_noise_m=None, seed=None, se3=false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn urban_drive(
     py: Python<'_>,
@@ -118,6 +247,7 @@ pub(crate) fn urban_drive(
     lane_offset_m: Option<f64>,
     lateral_noise_m: Option<f64>,
     seed: Option<u64>,
+    se3: bool,
 ) -> PyResult<Trajectory> {
     let d = loops_core::UrbanDrive::default();
     let spec = loops_core::UrbanDrive {
@@ -134,8 +264,10 @@ pub(crate) fn urban_drive(
         lateral_noise_m: lateral_noise_m.unwrap_or(d.lateral_noise_m),
         seed: seed.unwrap_or(d.seed),
     };
-    let drive = detached(py, || Ok(spec.generate()?))?;
-    Ok(Trajectory { inner: Arc::new(drive.trajectory) })
+    wrap(py, move || {
+        let drive = spec.generate()?;
+        if se3 { drive.se3_trajectory() } else { Ok(drive.trajectory) }
+    })
 }
 
 /// Reads a trajectory file: TUM (``t x y z qx qy qz qw``) or CSV (``t,x,y[,z]``, header
@@ -147,25 +279,35 @@ pub(crate) fn urban_drive(
 ///     format: ``"tum"``, ``"csv"`` or ``None`` to guess.
 ///     axes: keep only these position axes, e.g. ``(0, 2)`` for KITTI's ground plane; ``None``
 ///         keeps all.
+///     metric: the metric the trajectory is for (as in :func:`find_loops`): positions for
+///         Euclidean (the default); positions and orientations for ``se3``; orientations for
+///         ``so3``; x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are
+///         normalised (files often print 4 decimals).
 ///
 /// Raises:
 ///     OSError: the file cannot be opened. LoopsIOError: a malformed line (the message names
 ///     file, line and column). InvalidTrajectoryError: e.g. unsorted timestamps (names the line).
 #[pyfunction]
-#[pyo3(signature = (path, *, format=None, axes=None))]
+#[pyo3(signature = (path, *, format=None, axes=None, metric=None))]
 pub(crate) fn read_trajectory(
     py: Python<'_>,
     path: PathBuf,
     format: Option<String>,
     axes: Option<(usize, usize)>,
+    metric: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Trajectory> {
-    let inner = detached(py, || {
+    let spec = match crate::py_metric::MetricArg::from_py(metric)? {
+        crate::py_metric::MetricArg::Spec(spec) => spec,
+        crate::py_metric::MetricArg::Callable(_) => {
+            return Err(crate::error::value_error(
+                "read_trajectory takes a metric name or object, not a callable".into(),
+            ));
+        }
+    };
+    let inner = detached(py, move || {
         let format = format.map(|name| name.parse::<loops_io::Format>()).transpose()?;
         let table = loops_io::read_trajectory(&path, format)?;
-        Ok(match axes {
-            None => table.to_trajectory()?,
-            Some((a, b)) => table.to_trajectory_plane([a, b])?,
-        })
+        Ok(table.to_trajectory_for(&spec, axes.map(|(a, b)| [a, b]))?)
     })?;
     Ok(Trajectory { inner: Arc::new(inner) })
 }

@@ -1,0 +1,513 @@
+//! Detections D ⊂ S_γ (paper, Sec. 5.3): pairs of times (t, t′) at which the trajectory is
+//! believed to come back to itself, given by the user (place recognition) or drawn uniformly from
+//! the exact S_γ.
+
+use rand::{Rng, RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::error::{Error, Result};
+use crate::loops::Loops;
+use crate::sample::SampleSize;
+use crate::sublevel::Run;
+use crate::trajectory::Trajectory;
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for crate::trajectory::Trajectory {}
+    impl Sealed for crate::loops::Loops {}
+}
+
+/// Something that carries the timestamps of a trajectory's poses: a [`Trajectory`], or the
+/// [`Loops`] found on one. Detections given by times are placed on its poses, detections given
+/// by pose indices take their times from it.
+///
+/// Sealed: the timestamps are known to be finite, strictly increasing and at least two.
+pub trait Timeline: sealed::Sealed {
+    /// Timestamps of the poses, seconds, strictly increasing.
+    fn pose_times_s(&self) -> &[f64];
+}
+
+impl Timeline for Trajectory {
+    fn pose_times_s(&self) -> &[f64] {
+        self.timestamps_s()
+    }
+}
+
+impl Timeline for Loops {
+    fn pose_times_s(&self) -> &[f64] {
+        self.timestamps_s()
+    }
+}
+
+/// One detection, as [`Detections::get`] returns it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Detection {
+    /// The earlier time of the pair, seconds.
+    pub t_s: f64,
+    /// The later time of the pair (t′ ≥ t), seconds.
+    pub t_prime_s: f64,
+    /// The poses (i, j), i ≤ j, when the detections are placed on a trajectory.
+    pub pair: Option<[usize; 2]>,
+    /// The detection's score (higher is more confident, e.g. a place-recognition similarity).
+    pub score: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct Located {
+    pairs: Vec<[u32; 2]>,
+    poses: usize,
+}
+
+/// A set of detections D: unordered pairs of times (t, t′), seconds, with optional scores and,
+/// when placed on a trajectory, the pose indices (i, j) of the pair.
+///
+/// Pairs are unordered: a pair given as (t′, t) with t′ > t is stored as (t, t′), the same loop
+/// (loop components are reported once per mirror pair, on the half t ≤ t′). Rows keep the order
+/// they were given in; duplicates are allowed. A detection set is never empty.
+///
+/// Memory: 16 bytes a detection, plus 8 when placed on a trajectory and 8 with scores.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Detections, Trajectory};
+/// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]])?;
+/// // Given by times, in any order, placed on the nearest poses.
+/// let det = Detections::new(vec![3.0, 0.9], vec![0.1, 2.2])?.locate(&traj)?;
+/// assert_eq!(det.get(0).t_s, 0.1); // stored as (t, t') with t <= t'
+/// assert_eq!(det.get(0).pair, Some([0, 3]));
+/// assert_eq!(det.get(1).pair, Some([1, 2]));
+/// // Given by pose indices.
+/// let det = Detections::from_indices(&traj, &[3], &[0])?;
+/// assert_eq!((det.get(0).t_s, det.get(0).t_prime_s), (0.0, 3.0));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Detections {
+    t_s: Vec<f64>,
+    t_prime_s: Vec<f64>,
+    located: Option<Located>,
+    scores: Option<Vec<f64>>,
+}
+
+impl Detections {
+    /// Detections from times alone (seconds; either order within a pair). O(n).
+    ///
+    /// # Errors
+    /// [`Error::NoDetections`] when empty, [`Error::ColumnLengthMismatch`] when the columns
+    /// differ in length, [`Error::NonFiniteDetection`] for a NaN or infinite time.
+    pub fn new(t_s: Vec<f64>, t_prime_s: Vec<f64>) -> Result<Self> {
+        if t_s.is_empty() && t_prime_s.is_empty() {
+            return Err(Error::NoDetections);
+        }
+        if t_prime_s.len() != t_s.len() {
+            return Err(Error::ColumnLengthMismatch { column: "t_prime_s", len: t_prime_s.len(), expected: t_s.len() });
+        }
+        for (column, values) in [("t_s", &t_s), ("t_prime_s", &t_prime_s)] {
+            if let Some(index) = values.iter().position(|t| !t.is_finite()) {
+                return Err(Error::NonFiniteDetection { column, index, value: values[index] });
+            }
+        }
+        let (mut t_s, mut t_prime_s) = (t_s, t_prime_s);
+        for (a, b) in t_s.iter_mut().zip(t_prime_s.iter_mut()) {
+            if *a > *b {
+                std::mem::swap(a, b);
+            }
+        }
+        Ok(Self { t_s, t_prime_s, located: None, scores: None })
+    }
+
+    /// The same detections with a score each (higher is more confident). The dispersed σ_ρ
+    /// prefers the best-scored detection of a row.
+    ///
+    /// # Errors
+    /// [`Error::ColumnLengthMismatch`], [`Error::NonFiniteDetection`] (column `score`).
+    pub fn with_scores(self, scores: Vec<f64>) -> Result<Self> {
+        if scores.len() != self.len() {
+            return Err(Error::ColumnLengthMismatch { column: "score", len: scores.len(), expected: self.len() });
+        }
+        if let Some(index) = scores.iter().position(|s| !s.is_finite()) {
+            return Err(Error::NonFiniteDetection { column: "score", index, value: scores[index] });
+        }
+        Ok(Self { scores: Some(scores), ..self })
+    }
+
+    /// Detections from pose indices (i, j) of a trajectory (either order); the times are the
+    /// poses' timestamps. O(n).
+    ///
+    /// # Errors
+    /// [`Error::NoDetections`], [`Error::ColumnLengthMismatch`], and
+    /// [`Error::PoseIndexOutOfRange`] for an index past the last pose.
+    pub fn from_indices<T: Timeline + ?Sized>(timeline: &T, i: &[usize], j: &[usize]) -> Result<Self> {
+        let times = timeline.pose_times_s();
+        if i.is_empty() && j.is_empty() {
+            return Err(Error::NoDetections);
+        }
+        if j.len() != i.len() {
+            return Err(Error::ColumnLengthMismatch { column: "j", len: j.len(), expected: i.len() });
+        }
+        let poses = times.len();
+        let mut pairs = Vec::with_capacity(i.len());
+        for (index, (&a, &b)) in i.iter().zip(j).enumerate() {
+            if let Some(&pose) = [a, b].iter().find(|&&p| p >= poses) {
+                return Err(Error::PoseIndexOutOfRange { index, pose, poses });
+            }
+            pairs.push([a.min(b) as u32, a.max(b) as u32]);
+        }
+        Ok(Self::from_pairs(times, pairs))
+    }
+
+    /// Detections at pose pairs known to be valid (i ≤ j < times.len()).
+    pub(crate) fn from_pairs(times: &[f64], pairs: Vec<[u32; 2]>) -> Self {
+        let t_s = pairs.iter().map(|p| times[p[0] as usize]).collect();
+        let t_prime_s = pairs.iter().map(|p| times[p[1] as usize]).collect();
+        Self { t_s, t_prime_s, located: Some(Located { pairs, poses: times.len() }), scores: None }
+    }
+
+    /// Places every detection on the trajectory: each time goes to the nearest pose (the pose
+    /// whose time cell holds it; ties to the earlier). The detection times are kept as given.
+    /// O(n log poses).
+    ///
+    /// # Errors
+    /// [`Error::DetectionOutsideSpan`] for a time before the first or after the last timestamp.
+    pub fn locate<T: Timeline + ?Sized>(self, timeline: &T) -> Result<Self> {
+        let times = timeline.pose_times_s();
+        let mut pairs = Vec::with_capacity(self.len());
+        for (index, (&a, &b)) in self.t_s.iter().zip(&self.t_prime_s).enumerate() {
+            pairs.push([nearest_pose(times, a, index)? as u32, nearest_pose(times, b, index)? as u32]);
+        }
+        Ok(Self { located: Some(Located { pairs, poses: times.len() }), ..self })
+    }
+
+    /// Detections drawn uniformly from the exact S_γ of `loops`, without materialising it: the
+    /// off-diagonal pairs (i, j), i < j, of its runs (each unordered loop once; the diagonal
+    /// (i, i) is no detection).
+    ///
+    /// - [`SampleSize::Rate`]`(p)`, 0 < p ≤ 1: every pair independently with probability p
+    ///   (geometric skips over the runs: O(runs + drawn)).
+    /// - [`SampleSize::Budget`]`(k)`: exactly k distinct pairs, uniformly (k indices into the
+    ///   pairs, then each mapped to its run by binary search, i.e. runs weighted by length, then
+    ///   a column: O(runs + k log runs)).
+    ///
+    /// Seeded (ChaCha8): the same seed gives the same detections on every machine and thread
+    /// count. Rows are in row-major order of (i, j). Memory O(runs + drawn).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a rate outside (0, 1], a budget of 0 or more than the
+    /// pairs available; [`Error::NoDetections`] when the draw comes out empty.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Detections, Euclidean, SampleSize, UrbanDrive, find_loops};
+    /// let drive = UrbanDrive { duration_s: 600.0, ..UrbanDrive::default() }.generate()?;
+    /// let loops = find_loops(&drive.trajectory, &Euclidean, 40.0)?;
+    /// let det = Detections::draw(&loops, SampleSize::Budget(1000), 7)?;
+    /// assert_eq!(det.len(), 1000);
+    /// assert!(det.iter().all(|d| { let [i, j] = d.pair.unwrap(); i < j && loops.component_of(i, j).is_some() }));
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn draw(loops: &Loops, size: SampleSize, seed: u64) -> Result<Self> {
+        let space = PairSpace::of_loops(loops, 0.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let indices = match size {
+            SampleSize::Rate(rate) => {
+                if !(rate > 0.0 && rate <= 1.0) {
+                    return Err(Error::InvalidParameter {
+                        name: "rate",
+                        value: rate,
+                        expected: "a probability in (0, 1]",
+                    });
+                }
+                space.bernoulli(rate, &mut rng)
+            }
+            SampleSize::Budget(count) => {
+                if count == 0 || count as u64 > space.len() {
+                    return Err(Error::InvalidParameter {
+                        name: "budget",
+                        value: count as f64,
+                        expected: "at least 1 and at most the off-diagonal pairs of S_gamma",
+                    });
+                }
+                space.choose(count as u64, &mut rng)
+            }
+        };
+        if indices.is_empty() {
+            return Err(Error::NoDetections);
+        }
+        Ok(Self::from_pairs(loops.timestamps_s(), space.pairs_at(&indices)))
+    }
+
+    /// Number of detections (at least 1).
+    pub fn len(&self) -> usize {
+        self.t_s.len()
+    }
+
+    /// Never: a detection set holds at least one detection.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The earlier time t of each pair, seconds.
+    pub fn t_s(&self) -> &[f64] {
+        &self.t_s
+    }
+
+    /// The later time t′ ≥ t of each pair, seconds.
+    pub fn t_prime_s(&self) -> &[f64] {
+        &self.t_prime_s
+    }
+
+    /// Pose indices (i, j), i ≤ j, of each pair, when placed on a trajectory.
+    pub fn pairs(&self) -> Option<&[[u32; 2]]> {
+        self.located.as_ref().map(|l| l.pairs.as_slice())
+    }
+
+    /// Number of poses of the trajectory the detections are placed on.
+    pub fn poses(&self) -> Option<usize> {
+        self.located.as_ref().map(|l| l.poses)
+    }
+
+    /// Scores, when given.
+    pub fn scores(&self) -> Option<&[f64]> {
+        self.scores.as_deref()
+    }
+
+    /// Detection `k`.
+    ///
+    /// # Panics
+    /// If `k >= len()`.
+    pub fn get(&self, k: usize) -> Detection {
+        Detection {
+            t_s: self.t_s[k],
+            t_prime_s: self.t_prime_s[k],
+            pair: self.located.as_ref().map(|l| [l.pairs[k][0] as usize, l.pairs[k][1] as usize]),
+            score: self.scores.as_ref().map(|s| s[k]),
+        }
+    }
+
+    /// Every detection, in order.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = Detection> + '_ {
+        (0..self.len()).map(|k| self.get(k))
+    }
+}
+
+/// The pose whose time cell holds `t` (the nearest timestamp, ties to the earlier one).
+pub(crate) fn nearest_pose(times: &[f64], t: f64, index: usize) -> Result<usize> {
+    let (start_s, end_s) = (times[0], times[times.len() - 1]);
+    if !(t >= start_s && t <= end_s) {
+        return Err(Error::DetectionOutsideSpan { index, time_s: t, start_s, end_s });
+    }
+    let k = times.partition_point(|&x| x < t);
+    Ok(if k == 0 || t - times[k - 1] > times[k] - t { k } else { k - 1 })
+}
+
+/// A stretch `start..=end` of columns of one row: pairs (row, j).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Segment {
+    pub row: u32,
+    pub start: u32,
+    pub end: u32,
+}
+
+/// A set of lattice pairs given as segments of rows, numbered 0..len in segment order: uniform
+/// draws pick a number, then its segment (runs weighted by length) and a column. Never a list of
+/// pairs.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PairSpace {
+    segments: Vec<Segment>,
+    /// `ends[s]`: number of pairs in segments 0..=s.
+    ends: Vec<u64>,
+}
+
+impl PairSpace {
+    /// The off-diagonal pairs (i < j) of S_γ with `t_j − t_i ≥ min_gap_s`, row-major.
+    pub(crate) fn of_loops(loops: &Loops, min_gap_s: f64) -> Self {
+        let mut space = Self::default();
+        let mut first = FirstColumn::new(loops.timestamps_s(), min_gap_s);
+        for (i, run, _) in loops.runs() {
+            space.push(i, run, first.of_row(i));
+        }
+        space
+    }
+
+    /// Adds the part of `run` (of row `i`) at columns ≥ `first_column`.
+    pub(crate) fn push(&mut self, i: usize, run: Run, first_column: usize) {
+        let start = (run.start as usize).max(first_column);
+        if start <= run.end as usize {
+            let total = self.len() + (run.end as usize - start + 1) as u64;
+            self.segments.push(Segment { row: i as u32, start: start as u32, end: run.end });
+            self.ends.push(total);
+        }
+    }
+
+    /// Number of pairs.
+    pub(crate) fn len(&self) -> u64 {
+        self.ends.last().copied().unwrap_or(0)
+    }
+
+    /// The segments, in order.
+    pub(crate) fn segments(&self) -> &[Segment] {
+        &self.segments
+    }
+
+    /// Pair number `k < len()`. O(log segments).
+    pub(crate) fn pair(&self, k: u64) -> [u32; 2] {
+        let s = self.ends.partition_point(|&end| end <= k);
+        let before = if s == 0 { 0 } else { self.ends[s - 1] };
+        let segment = self.segments[s];
+        [segment.row, segment.start + (k - before) as u32]
+    }
+
+    /// The pairs at increasing numbers, by one walk over the segments. O(segments + k).
+    pub(crate) fn pairs_at(&self, sorted: &[u64]) -> Vec<[u32; 2]> {
+        let mut out = Vec::with_capacity(sorted.len());
+        let mut s = 0;
+        for &k in sorted {
+            while self.ends[s] <= k {
+                s += 1;
+            }
+            let before = if s == 0 { 0 } else { self.ends[s - 1] };
+            out.push([self.segments[s].row, self.segments[s].start + (k - before) as u32]);
+        }
+        out
+    }
+
+    /// Every number independently with probability `rate` in (0, 1], increasing: geometric
+    /// skips, O(drawn).
+    pub(crate) fn bernoulli<R: Rng + ?Sized>(&self, rate: f64, rng: &mut R) -> Vec<u64> {
+        bernoulli_indices(self.len(), rate, rng)
+    }
+
+    /// `count ≤ len()` distinct numbers, uniformly, increasing. O(count) expected.
+    pub(crate) fn choose<R: Rng + ?Sized>(&self, count: u64, rng: &mut R) -> Vec<u64> {
+        choose_indices(self.len(), count, rng)
+    }
+}
+
+/// Numbers in 0..len, each independently with probability `rate` ∈ (0, 1], increasing.
+pub(crate) fn bernoulli_indices<R: Rng + ?Sized>(len: u64, rate: f64, rng: &mut R) -> Vec<u64> {
+    if rate >= 1.0 {
+        return (0..len).collect();
+    }
+    let log_keep = (-rate).ln_1p(); // ln(1 − p) < 0
+    let mut skip = || {
+        let u: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+        let gap = (u.ln() / log_keep).floor();
+        if gap < 1e18 { gap as u64 } else { u64::MAX / 2 }
+    };
+    let mut out = Vec::with_capacity((len as f64 * rate * 1.1) as usize + 16);
+    let mut k = skip();
+    while k < len {
+        out.push(k);
+        k = k.saturating_add(1 + skip());
+    }
+    out
+}
+
+/// `count ≤ len` distinct numbers in 0..len, uniformly, increasing.
+pub(crate) fn choose_indices<R: Rng + ?Sized>(len: u64, count: u64, rng: &mut R) -> Vec<u64> {
+    debug_assert!(count <= len);
+    if count == len {
+        return (0..len).collect();
+    }
+    let mut out: Vec<u64> =
+        rand::seq::index::sample(rng, len as usize, count as usize).into_iter().map(|k| k as u64).collect();
+    out.sort_unstable();
+    out
+}
+
+/// The first column j > i with `t_j − t_i ≥ gap` of each row.
+pub(crate) struct FirstColumn<'a> {
+    times: &'a [f64],
+    gap_s: f64,
+}
+
+impl<'a> FirstColumn<'a> {
+    pub(crate) fn new(times: &'a [f64], gap_s: f64) -> Self {
+        Self { times, gap_s }
+    }
+
+    pub(crate) fn of_row(&mut self, i: usize) -> usize {
+        if self.gap_s <= 0.0 {
+            return i + 1;
+        }
+        let t_i = self.times[i];
+        let gap = self.gap_s;
+        i + 1 + self.times[i + 1..].partition_point(|&t| t - t_i < gap)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Euclidean, find_loops};
+
+    fn line() -> Trajectory {
+        Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0, 4.0], &[[0.0], [1.0], [2.0], [1.0], [0.0]]).unwrap()
+    }
+
+    #[test]
+    fn times_are_validated_and_ordered() {
+        assert_eq!(Detections::new(vec![], vec![]).unwrap_err(), Error::NoDetections);
+        assert!(matches!(
+            Detections::new(vec![1.0], vec![]).unwrap_err(),
+            Error::ColumnLengthMismatch { column: "t_prime_s", len: 0, expected: 1 }
+        ));
+        let err = Detections::new(vec![1.0, 2.0], vec![f64::NAN, 3.0]).unwrap_err();
+        assert_eq!(err.to_string(), "t_prime_s of detection 0 is not finite (NaN)");
+        let det = Detections::new(vec![3.0, 1.0], vec![1.0, 1.0]).unwrap();
+        assert_eq!(det.t_s(), &[1.0, 1.0]);
+        assert_eq!(det.t_prime_s(), &[3.0, 1.0]);
+        assert!(det.clone().with_scores(vec![1.0]).is_err());
+        assert!(det.clone().with_scores(vec![1.0, f64::INFINITY]).is_err());
+        assert_eq!(det.with_scores(vec![0.5, 1.0]).unwrap().get(1).score, Some(1.0));
+    }
+
+    #[test]
+    fn locate_and_indices() {
+        let traj = line();
+        let det = Detections::new(vec![0.5, 4.0, 1.49], vec![2.51, 0.0, 1.51]).unwrap().locate(&traj).unwrap();
+        assert_eq!(det.pairs().unwrap(), &[[0, 3], [0, 4], [1, 2]]);
+        assert_eq!(det.poses(), Some(5));
+        let err = Detections::new(vec![0.0], vec![4.5]).unwrap().locate(&traj).unwrap_err();
+        assert_eq!(err, Error::DetectionOutsideSpan { index: 0, time_s: 4.5, start_s: 0.0, end_s: 4.0 });
+        let err = Detections::from_indices(&traj, &[0, 1], &[5, 1]).unwrap_err();
+        assert_eq!(err, Error::PoseIndexOutOfRange { index: 0, pose: 5, poses: 5 });
+        let det = Detections::from_indices(&traj, &[4, 1], &[0, 1]).unwrap();
+        assert_eq!(det.get(0), Detection { t_s: 0.0, t_prime_s: 4.0, pair: Some([0, 4]), score: None });
+    }
+
+    #[test]
+    fn pair_space_numbers_every_pair_once() {
+        let traj = line();
+        let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+        let space = PairSpace::of_loops(&loops, 0.0);
+        let all: Vec<[u32; 2]> = (0..space.len()).map(|k| space.pair(k)).collect();
+        let mut brute = Vec::new();
+        for i in 0..5 {
+            for j in i + 1..5 {
+                if loops.component_of(i, j).is_some() {
+                    brute.push([i as u32, j as u32]);
+                }
+            }
+        }
+        assert_eq!(all, brute);
+        let indices: Vec<u64> = (0..space.len()).collect();
+        assert_eq!(space.pairs_at(&indices), brute);
+        // With a gap of 2 s only pairs at least two poses apart remain.
+        let gapped = PairSpace::of_loops(&loops, 2.0);
+        let kept: Vec<[u32; 2]> = (0..gapped.len()).map(|k| gapped.pair(k)).collect();
+        assert_eq!(kept, brute.iter().copied().filter(|p| p[1] - p[0] >= 2).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn bernoulli_rate_is_about_right() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let drawn = bernoulli_indices(1_000_000, 0.01, &mut rng);
+        assert!((9_500..10_500).contains(&drawn.len()), "{}", drawn.len());
+        assert!(drawn.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(bernoulli_indices(10, 1.0, &mut rng), (0..10).collect::<Vec<_>>());
+        let chosen = choose_indices(100, 30, &mut rng);
+        assert_eq!(chosen.len(), 30);
+        assert!(chosen.windows(2).all(|w| w[0] < w[1]) && chosen[29] < 100);
+    }
+}

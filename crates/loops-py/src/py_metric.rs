@@ -1,0 +1,99 @@
+//! Metrics from Python: a spec (text or an `inexact_loops.metrics` object) or, as a slow path,
+//! any callable `f(a, b) -> float`.
+
+use std::sync::Mutex;
+
+use numpy::PyArray1;
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+
+use crate::error::Failure;
+
+/// What `find_loops(metric=...)` was given.
+pub(crate) enum MetricArg {
+    Spec(loops_core::MetricSpec),
+    Callable(PyCallableMetric),
+}
+
+impl MetricArg {
+    /// `None` → the default; a `str` or an object with a `spec` string → parsed by the core; any
+    /// other callable → the slow path.
+    pub(crate) fn from_py(metric: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let Some(metric) = metric else { return Ok(Self::Spec(loops_core::MetricSpec::default())) };
+        let text: Option<String> = if let Ok(text) = metric.cast::<PyString>() {
+            Some(text.to_str()?.to_owned())
+        } else if let Ok(spec) = metric.getattr("spec") {
+            Some(spec.extract()?)
+        } else {
+            None
+        };
+        match text {
+            Some(text) => Ok(Self::Spec(text.parse::<loops_core::MetricSpec>().map_err(Failure::from)?)),
+            None if metric.is_callable() => {
+                Ok(Self::Callable(PyCallableMetric { function: metric.clone().unbind(), error: Mutex::new(None) }))
+            }
+            None => Err(PyTypeError::new_err(format!(
+                "metric must be a name, an inexact_loops.metrics object or a callable f(a, b) -> float, got {}",
+                metric.get_type().name()?
+            ))),
+        }
+    }
+}
+
+/// A Python function as a metric: called with the GIL for every distance (one thread), so it
+/// is slow — a documented escape hatch for metrics the library does not have. It must satisfy
+/// the triangle inequality, or pairs may be missed.
+pub(crate) struct PyCallableMetric {
+    function: Py<PyAny>,
+    /// The first exception the function raised; later calls return +∞ at once.
+    error: Mutex<Option<PyErr>>,
+}
+
+impl PyCallableMetric {
+    /// The exception the function raised during a run, if any.
+    pub(crate) fn take_error(&self) -> Option<PyErr> {
+        self.error.lock().ok().and_then(|mut slot| slot.take())
+    }
+
+    fn fail(&self, error: PyErr) -> f64 {
+        if let Ok(mut slot) = self.error.lock() {
+            slot.get_or_insert(error);
+        }
+        f64::INFINITY
+    }
+}
+
+impl loops_core::Metric for PyCallableMetric {
+    fn name(&self) -> String {
+        Python::attach(|py| {
+            self.function
+                .bind(py)
+                .getattr("__name__")
+                .and_then(|name| name.extract::<String>())
+                .unwrap_or_else(|_| "python callable".to_owned())
+        })
+    }
+
+    fn check_dim(&self, _dim: usize) -> loops_core::Result<()> {
+        Ok(())
+    }
+
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        if self.error.lock().map(|slot| slot.is_some()).unwrap_or(true) {
+            return f64::INFINITY;
+        }
+        Python::attach(|py| {
+            let args = (PyArray1::from_slice(py, a), PyArray1::from_slice(py, b));
+            match self.function.bind(py).call1(args).and_then(|value| value.extract::<f64>()) {
+                Ok(d) if d.is_finite() && d >= 0.0 => d,
+                Ok(d) => self.fail(loops_core_error(d)),
+                Err(error) => self.fail(error),
+            }
+        })
+    }
+}
+
+fn loops_core_error(d: f64) -> PyErr {
+    crate::error::value_error(format!("the metric callable returned {d}: distances must be finite and ≥ 0"))
+}
