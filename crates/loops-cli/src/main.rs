@@ -73,7 +73,7 @@ struct OutputArgs {
 struct ComponentsArgs {
     /// The trajectory file.
     file: PathBuf,
-    /// File format: tum or csv (default: from the extension; .csv is CSV, anything else TUM).
+    /// File format: tum or csv (default: from the extension: .tum and .txt are TUM, .csv is CSV).
     #[arg(long)]
     format: Option<String>,
     /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).

@@ -19,6 +19,9 @@ fn main() -> Result<(), loops_core::Error> {
         nontrivial,
         elapsed.as_secs_f64()
     );
+    if std::env::var_os("EUCLIDEAN_ONLY").is_some() {
+        return Ok(());
+    }
     let se3_traj = drive.se3_trajectory()?;
     let se3 = loops_core::Se3 { rotation_weight_m_per_rad: 10.0, rotation: loops_core::RotationDistance::Geodesic };
     let start = std::time::Instant::now();

@@ -25,6 +25,15 @@ struct Node {
     left: u32,
 }
 
+/// A leaf of the hierarchy: poses `lo..hi` within `radius` of pose `centre`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Leaf {
+    pub lo: u32,
+    pub hi: u32,
+    pub centre: u32,
+    pub radius: f64,
+}
+
 /// The ball hierarchy over a trajectory's poses; leaves hold `leaf_size` consecutive poses.
 #[derive(Debug, Clone)]
 pub(crate) struct BallTree {
@@ -71,6 +80,24 @@ impl BallTree {
         self.nodes[slot] = Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32 };
     }
 
+    /// The leaves, in increasing order, that end after `from` and whose ball reaches within
+    /// `reach` of `x` (appended to `out`, cleared first). Poses in other leaves are all farther
+    /// than `reach` from `x`.
+    pub(crate) fn near_leaves<M: Metric + ?Sized>(
+        &self,
+        traj: &Trajectory,
+        metric: &M,
+        x: &[f64],
+        from: usize,
+        reach: f64,
+        out: &mut Vec<Leaf>,
+    ) {
+        out.clear();
+        self.for_each_near_node(traj, metric, x, from, reach, |node| {
+            out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius });
+        });
+    }
+
     /// Calls `visit(lo, hi)` for every leaf stretch, in increasing order, that ends after
     /// `from` and whose ball reaches within `reach` of `x`; `lo` is clipped to `from`. Poses in
     /// the stretches not visited are all farther than `reach` from `x`.
@@ -83,6 +110,20 @@ impl BallTree {
         reach: f64,
         mut visit: impl FnMut(usize, usize),
     ) {
+        self.for_each_near_node(traj, metric, x, from, reach, |node| {
+            visit((node.lo as usize).max(from), node.hi as usize);
+        });
+    }
+
+    fn for_each_near_node<M: Metric + ?Sized>(
+        &self,
+        traj: &Trajectory,
+        metric: &M,
+        x: &[f64],
+        from: usize,
+        reach: f64,
+        mut visit: impl FnMut(&Node),
+    ) {
         let mut stack: Vec<u32> = Vec::with_capacity(64);
         stack.push(0);
         while let Some(index) = stack.pop() {
@@ -94,7 +135,7 @@ impl BallTree {
                 continue;
             }
             if node.left == LEAF {
-                visit((node.lo as usize).max(from), node.hi as usize);
+                visit(&node);
             } else {
                 stack.push(node.left + 1);
                 stack.push(node.left);

@@ -158,59 +158,43 @@ pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<Det
     }
     let epsilon2 = epsilon_s * epsilon_s;
 
-    // Cell keys, sorted: (cx, cy, detection). Unique, so the order is deterministic.
-    let mut keys: Vec<(i64, i64, u32)> = (0..n)
-        .into_par_iter()
-        .map(|k| (((xs[k] - x_min) / side).floor() as i64, ((ys[k] - y_min) / side).floor() as i64, k as u32))
-        .collect();
-    keys.par_sort_unstable();
+    let keys = sorted_cell_keys(xs, ys, [x_min, y_min], side);
     let points: Vec<Point> = keys.par_iter().map(|&(_, _, k)| [xs[k as usize], ys[k as usize]]).collect();
 
-    let grid = Grid::new(&keys, &points, epsilon2);
-    let mut union_find = UnionFind::<u32>::new(grid.nodes.len());
-    let mut scratch = Scratch::default();
-    grid.link_within_cells(&points, epsilon2, &mut union_find);
-    grid.link_neighbours(&points, epsilon2, &mut union_find, &mut scratch);
+    let (grid, node_roots) = link(&keys, &points, epsilon2);
 
-    // Roots → clusters, numbered by their smallest point (then smallest detection index).
-    let node_roots: Vec<u32> = (0..grid.nodes.len() as u32).map(|v| union_find.find_mut(v)).collect();
-    drop(union_find);
-    let mut anchor = vec![u32::MAX; grid.nodes.len()];
-    let before = |a: u32, b: u32| {
-        let (a, b) = (a as usize, b as usize);
-        (xs[a], ys[a], a) < (xs[b], ys[b], b)
-    };
+    // Roots → clusters, numbered by their smallest point (then smallest detection index), so
+    // that ids do not depend on the input order. Points are read in cell order.
+    let mut anchor: Vec<Option<(f64, f64, u32)>> = vec![None; grid.nodes.len()];
     for (v, node) in grid.nodes.iter().enumerate() {
-        let root = node_roots[v] as usize;
-        for p in node.start..node.end {
-            let k = keys[p as usize].2;
-            if anchor[root] == u32::MAX || before(k, anchor[root]) {
-                anchor[root] = k;
+        let slot = &mut anchor[node_roots[v] as usize];
+        for p in node.start as usize..node.end as usize {
+            let candidate = (points[p][0], points[p][1], keys[p].2);
+            if slot.is_none_or(|a| candidate < a) {
+                *slot = Some(candidate);
             }
         }
     }
-    let mut roots: Vec<u32> = (0..grid.nodes.len() as u32).filter(|&v| anchor[v as usize] != u32::MAX).collect();
-    roots.sort_unstable_by(|&a, &b| {
-        let (a, b) = (anchor[a as usize] as usize, anchor[b as usize] as usize);
-        (xs[a], ys[a]).partial_cmp(&(xs[b], ys[b])).unwrap_or(std::cmp::Ordering::Equal).then(a.cmp(&b))
-    });
+    let mut roots: Vec<(f64, f64, u32, u32)> =
+        anchor.iter().enumerate().filter_map(|(v, a)| a.map(|(x, y, k)| (x, y, k, v as u32))).collect();
+    roots.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
     let mut id_of_root = vec![u32::MAX; grid.nodes.len()];
-    for (id, &root) in roots.iter().enumerate() {
-        id_of_root[root as usize] = id as u32;
+    for (id, root) in roots.iter().enumerate() {
+        id_of_root[root.3 as usize] = id as u32;
     }
 
     let mut labels = vec![0u32; n];
     let mut clusters: Vec<DetectionCluster> = roots
         .iter()
         .enumerate()
-        .map(|(id, &root)| DetectionCluster {
+        .map(|(id, root)| DetectionCluster {
             id,
             size: 0,
             t_s: [f64::INFINITY, f64::NEG_INFINITY],
             t_prime_s: [f64::INFINITY, f64::NEG_INFINITY],
             cells: 0,
             area_proxy_s2: 0.0,
-            anchor: anchor[root as usize] as usize,
+            anchor: root.2 as usize,
         })
         .collect();
     let mut seen_in_cell: Vec<u32> = Vec::new();
@@ -218,18 +202,19 @@ pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<Det
         seen_in_cell.clear();
         for v in cell.nodes.0..cell.nodes.1 {
             let id = id_of_root[node_roots[v as usize] as usize];
-            if !seen_in_cell.contains(&id) {
+            if cell.nodes.1 - cell.nodes.0 == 1 {
+                clusters[id as usize].cells += 1;
+            } else if !seen_in_cell.contains(&id) {
                 seen_in_cell.push(id);
                 clusters[id as usize].cells += 1;
             }
             let node = &grid.nodes[v as usize];
             let cluster = &mut clusters[id as usize];
-            for p in node.start..node.end {
-                let k = keys[p as usize].2 as usize;
-                labels[k] = id;
-                cluster.size += 1;
-                cluster.t_s = [cluster.t_s[0].min(xs[k]), cluster.t_s[1].max(xs[k])];
-                cluster.t_prime_s = [cluster.t_prime_s[0].min(ys[k]), cluster.t_prime_s[1].max(ys[k])];
+            cluster.size += (node.end - node.start) as usize;
+            cluster.t_s = [cluster.t_s[0].min(node.bbox.x[0]), cluster.t_s[1].max(node.bbox.x[1])];
+            cluster.t_prime_s = [cluster.t_prime_s[0].min(node.bbox.y[0]), cluster.t_prime_s[1].max(node.bbox.y[1])];
+            for key in &keys[node.start as usize..node.end as usize] {
+                labels[key.2 as usize] = id;
             }
         }
     }
@@ -237,6 +222,56 @@ pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<Det
         cluster.area_proxy_s2 = cluster.cells as f64 * side * side;
     }
     Ok(DetectionClusters { epsilon_s, cell_side_s: side, detections: detections.clone(), labels, clusters })
+}
+
+/// The grid over points sorted by cell key, and the union-find root of each of its nodes.
+fn link(keys: &[(i64, i64, u32)], points: &[Point], epsilon2: f64) -> (Grid, Vec<u32>) {
+    let grid = Grid::new(keys, points, epsilon2);
+    let mut union_find = UnionFind::<u32>::new(grid.nodes.len());
+    let mut scratch = Scratch::default();
+    grid.link_within_cells(points, epsilon2, &mut union_find);
+    grid.link_neighbours(points, epsilon2, &mut union_find, &mut scratch);
+    let node_roots = (0..grid.nodes.len() as u32).map(|v| union_find.find_mut(v)).collect();
+    (grid, node_roots)
+}
+
+/// Cell keys `(cx, cy, detection)` of every point, sorted (unique, so the order is
+/// deterministic). A counting sort by column, then the columns sorted in parallel; a plain
+/// parallel sort when the columns far outnumber the points.
+fn sorted_cell_keys(xs: &[f64], ys: &[f64], origin: [f64; 2], side: f64) -> Vec<(i64, i64, u32)> {
+    let n = xs.len();
+    let cell = |v: f64, lo: f64| ((v - lo) / side).floor() as i64;
+    let columns: Vec<i64> = xs.par_iter().map(|&x| cell(x, origin[0])).collect();
+    let width = columns.par_iter().copied().max().unwrap_or(0) as u64 + 1;
+    if width > 4 * n as u64 + 1024 {
+        let mut keys: Vec<(i64, i64, u32)> =
+            (0..n).into_par_iter().map(|k| (columns[k], cell(ys[k], origin[1]), k as u32)).collect();
+        keys.par_sort_unstable();
+        return keys;
+    }
+    let width = width as usize;
+    let mut starts = vec![0usize; width + 1];
+    for &c in &columns {
+        starts[c as usize + 1] += 1;
+    }
+    for c in 0..width {
+        starts[c + 1] += starts[c];
+    }
+    let mut keys = vec![(0i64, 0i64, 0u32); n];
+    let mut next = starts.clone();
+    for (k, &c) in columns.iter().enumerate() {
+        keys[next[c as usize]] = (c, cell(ys[k], origin[1]), k as u32);
+        next[c as usize] += 1;
+    }
+    let mut slices = Vec::with_capacity(width);
+    let mut rest = keys.as_mut_slice();
+    for c in 0..width {
+        let (column, tail) = rest.split_at_mut(starts[c + 1] - starts[c]);
+        slices.push(column);
+        rest = tail;
+    }
+    slices.into_par_iter().for_each(|column| column.sort_unstable());
+    keys
 }
 
 /// An axis-aligned bounding box of points, with corners that are point coordinates.
@@ -329,6 +364,17 @@ struct Grid {
 const FORWARD: [(i64, i64); 12] =
     [(0, 1), (1, 0), (1, 1), (1, -1), (0, 2), (2, 0), (1, 2), (1, -2), (2, 1), (2, -1), (2, 2), (2, -2)];
 
+/// `RANK[dx][dy + 2]`: the position of (dx, dy) in [`FORWARD`] (12 for offsets not in it).
+const RANK: [[u8; 5]; 3] = {
+    let mut rank = [[12u8; 5]; 3];
+    let mut k = 0;
+    while k < FORWARD.len() {
+        rank[FORWARD[k].0 as usize][(FORWARD[k].1 + 2) as usize] = k as u8;
+        k += 1;
+    }
+    rank
+};
+
 impl Grid {
     fn new(keys: &[(i64, i64, u32)], points: &[Point], epsilon2: f64) -> Self {
         let mut ranges = Vec::new();
@@ -379,7 +425,7 @@ impl Grid {
         let key = |c: &Cell| (c.cx, c.cy);
         // pointer[dx]: first cell with key ≥ (cx + dx, cy − 2); it only moves forward.
         let mut pointer = [0usize; 3];
-        let mut neighbours: Vec<(usize, usize)> = Vec::with_capacity(12);
+        let mut neighbours: Vec<(u8, usize)> = Vec::with_capacity(12);
         for (ci, cell) in cells.iter().enumerate() {
             neighbours.clear();
             for (dx, slot) in pointer.iter_mut().enumerate() {
@@ -394,13 +440,14 @@ impl Grid {
                 }
                 let mut d = *slot;
                 while d < cells.len() && key(&cells[d]) <= hi {
-                    let offset = (cells[d].cx - cell.cx, cells[d].cy - cell.cy);
-                    let rank = FORWARD.iter().position(|&o| o == offset).unwrap_or(FORWARD.len());
-                    neighbours.push((rank, d));
+                    let dy = cells[d].cy - cell.cy;
+                    neighbours.push((RANK[dx as usize][(dy + 2) as usize], d));
                     d += 1;
                 }
             }
-            neighbours.sort_unstable();
+            if neighbours.len() > 1 {
+                neighbours.sort_unstable();
+            }
             for &(_, d) in &neighbours {
                 self.link_cells(cell, &cells[d], points, epsilon2, union_find, scratch);
             }
@@ -541,7 +588,7 @@ mod tests {
         // Points exactly ε apart on a line are joined; ε(1 + 1e-12) apart are not.
         let eps = 30.0;
         let xs = vec![0.0, 30.0, 60.0, 90.0 + 30.0 * 1e-12 + 60.0 * 1e-12, 200.0];
-        let ys = vec![0.0; 5];
+        let ys = [0.0; 5];
         let det = Detections::new(xs.clone(), ys.iter().map(|y| y + 1000.0).collect()).unwrap();
         let clusters = cluster_detections(&det, eps).unwrap();
         assert_eq!(clusters.labels(), &[0, 0, 0, 1, 2]);
@@ -569,6 +616,25 @@ mod tests {
         let det = Detections::new(xs, ys).unwrap();
         let clusters = cluster_detections(&det, 10.0).unwrap();
         assert!(same_partition(clusters.labels(), &brute_labels(det.t_s(), det.t_prime_s(), 10.0)));
+    }
+
+    #[test]
+    fn cells_failing_the_diameter_check_fall_back_to_points() {
+        // Keys as rounding could make them: points up to 4ε apart share cell (0, 0). The cell
+        // becomes one node per point, joined pairwise; its neighbour (1, 0) is checked per node.
+        let eps = 1.0;
+        let points: Vec<Point> = vec![[0.0, 0.0], [0.9, 0.0], [1.8, 0.0], [4.0, 0.0], [4.9, 0.0], [5.85, 0.0]];
+        let keys: Vec<(i64, i64, u32)> = vec![(0, 0, 0), (0, 0, 1), (0, 0, 2), (0, 0, 3), (1, 0, 4), (1, 0, 5)];
+        let (grid, roots) = link(&keys, &points, eps * eps);
+        assert_eq!(grid.nodes.len(), 5); // a node per point of (0, 0); (1, 0) is 0.95ε wide
+        let node_of =
+            |p: usize| grid.nodes.iter().position(|n| (n.start as usize..n.end as usize).contains(&p)).unwrap();
+        let same = |a: usize, b: usize| roots[node_of(a)] == roots[node_of(b)];
+        assert!(same(0, 1) && same(1, 2) && !same(2, 3));
+        assert!(same(3, 4) && same(4, 5));
+        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+        let expected = brute_labels(&xs, &ys, eps);
+        assert!((0..6).all(|a| (0..6).all(|b| same(a, b) == (expected[a] == expected[b]))));
     }
 
     #[test]

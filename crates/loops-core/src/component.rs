@@ -31,7 +31,9 @@ pub struct LoopComponent {
     pub rows: [usize; 2],
     /// First and last column index j (time t′) of the reported half.
     pub columns: [usize; 2],
-    /// The pair (i, j), i ≤ j, with the smallest distance (earliest in row order on ties).
+    /// The pair (i, j), i ≤ j, with the smallest distance: the argmin of the metric's
+    /// [`distance_rank`](crate::Metric::distance_rank) (δ² for the Euclidean metric, which
+    /// orders as δ does up to rounding), earliest in row order on ties.
     pub closest_pair: [usize; 2],
     /// δ at the closest pair (0 for a trivial component).
     pub closest_distance: f64,
@@ -126,9 +128,9 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
                 }
             }
             let j = set.closest_columns()[r] as usize;
-            let d = metric.distance(traj.point(i), traj.point(j));
-            if d < tally.closest.0 {
-                tally.closest = (d, [i, j]);
+            let rank = metric.distance_rank(traj.point(i), traj.point(j));
+            if rank < tally.closest.0 {
+                tally.closest = (rank, [i, j]);
             }
         }
     }
@@ -158,7 +160,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
                 rows,
                 columns,
                 closest_pair: t.closest.1,
-                closest_distance: t.closest.0,
+                closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
             }
         })
         .collect();

@@ -322,7 +322,7 @@ impl PairSpace {
     /// The off-diagonal pairs (i < j) of S_γ with `t_j − t_i ≥ min_gap_s`, row-major.
     pub(crate) fn of_loops(loops: &Loops, min_gap_s: f64) -> Self {
         let mut space = Self::default();
-        let mut first = FirstColumn::new(loops.timestamps_s(), min_gap_s);
+        let first = FirstColumn::new(loops.timestamps_s(), min_gap_s);
         for (i, run, _) in loops.runs() {
             space.push(i, run, first.of_row(i));
         }
@@ -350,6 +350,7 @@ impl PairSpace {
     }
 
     /// Pair number `k < len()`. O(log segments).
+    #[cfg(test)]
     pub(crate) fn pair(&self, k: u64) -> [u32; 2] {
         let s = self.ends.partition_point(|&end| end <= k);
         let before = if s == 0 { 0 } else { self.ends[s - 1] };
@@ -426,7 +427,7 @@ impl<'a> FirstColumn<'a> {
         Self { times, gap_s }
     }
 
-    pub(crate) fn of_row(&mut self, i: usize) -> usize {
+    pub(crate) fn of_row(&self, i: usize) -> usize {
         if self.gap_s <= 0.0 {
             return i + 1;
         }

@@ -93,6 +93,14 @@ pub enum Error {
         /// End of the interval.
         b: f64,
     },
+    /// A pose index past the end of the trajectory.
+    #[error("pose index {index} is out of range: the trajectory has {len} poses")]
+    IndexOutOfRange {
+        /// The index given.
+        index: usize,
+        /// The number of poses.
+        len: usize,
+    },
     /// A component id that does not exist.
     #[error("no loop component with id {id}: there are {count}")]
     UnknownComponent {

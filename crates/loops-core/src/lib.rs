@@ -35,18 +35,26 @@
 #![warn(missing_docs)]
 
 mod ball_tree;
+mod baseline;
+mod cluster;
 mod component;
+mod detection;
 mod error;
 mod loops;
 mod manifold;
 mod measure;
 mod metric;
 mod pose;
+mod quality;
+mod sample;
 mod sublevel;
 mod synth;
 mod trajectory;
 
+pub use baseline::BaselineParams;
+pub use cluster::{DetectionCluster, DetectionClusters, cluster_detections};
 pub use component::LoopComponent;
+pub use detection::{Detection, Detections, Timeline};
 pub use error::{Error, Result};
 pub use loops::{Loops, Warning, find_loops};
 pub use manifold::{
@@ -56,6 +64,8 @@ pub use manifold::{
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric, MetricSpec};
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
+pub use quality::{MissedComponent, SampleQuality, sample_quality};
+pub use sample::{Sample, SampleSize, SampleWarning, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
 pub use sublevel::{Run, SublevelSet};
 pub use synth::{SyntheticDrive, UrbanDrive};
 pub use trajectory::{MAX_POSES, Trajectory};

@@ -33,7 +33,8 @@ impl fmt::Display for Warning {
             Self::DiagonalBroken { gaps, first_gap, largest_step, trivial_components } => write!(
                 f,
                 "{gaps} consecutive pose pair(s) are farther apart than gamma (first at index {first_gap}, \
-                 largest step {largest_step:.6}): the diagonal breaks into {trivial_components} trivial components"
+                 largest step {largest_step:.6}): the diagonal of S_gamma is broken there, and S_gamma has \
+                 {trivial_components} trivial component(s)"
             ),
         }
     }
@@ -172,12 +173,29 @@ impl Loops {
         })
     }
 
+    /// Checks that `index` is a pose index.
+    ///
+    /// # Errors
+    /// [`Error::IndexOutOfRange`] when it is not.
+    pub fn check_index(&self, index: usize) -> Result<()> {
+        if index < self.len() { Ok(()) } else { Err(Error::IndexOutOfRange { index, len: self.len() }) }
+    }
+
     /// The component holding the pair (i, j) (either order), or `None` when δ(x_i, x_j) > γ.
+    /// O(log runs in the row).
+    ///
+    /// # Panics
+    /// When `i` or `j` is not a pose index (see [`check_index`](Self::check_index)), as slice
+    /// indexing does: `None` always means "not in S_γ".
     pub fn component_of(&self, i: usize, j: usize) -> Option<usize> {
+        assert!(i < self.len() && j < self.len(), "pose index ({i}, {j}) out of range for {} poses", self.len());
         self.set.run_index(i, j).map(|r| self.labels[r] as usize)
     }
 
     /// Whether (i, j) is a *simple loop*: a pair in a trivial component.
+    ///
+    /// # Panics
+    /// As [`component_of`](Self::component_of).
     pub fn is_simple(&self, i: usize, j: usize) -> bool {
         self.component_of(i, j).is_some_and(|c| self.components[c].trivial)
     }
@@ -216,12 +234,14 @@ impl Loops {
             return Err(Error::InvalidInterval { a, b });
         }
         let tau = self.loop_duration(selection, side, Scale::Seconds)?;
+        // Integrate on the clock of the first pose: exact differences, no epoch rounding.
         let (t0, span) = (self.timestamps_s[0], self.span_s());
-        let (a_s, b_s) = match scale {
-            Scale::Seconds => (a, b),
-            Scale::Normalized => (t0 + a * span, t0 + b * span),
+        let relative: Vec<f64> = self.timestamps_s.iter().map(|t| t - t0).collect();
+        let (a_rel, b_rel) = match scale {
+            Scale::Seconds => (a - t0, b - t0),
+            Scale::Normalized => (a * span, b * span),
         };
-        let area_s2 = integrate_s(&tau, |i| cell_of(&self.timestamps_s, i), a_s, b_s);
+        let area_s2 = integrate_s(&tau, |i| cell_of(&relative, i), a_rel, b_rel);
         Ok(match scale {
             Scale::Seconds => area_s2,
             Scale::Normalized => area_s2 / (span * span),

@@ -29,7 +29,7 @@ pub const FILE_QUATERNION_TOLERANCE: f64 = 1e-3;
 fn unit_quaternion(index: usize, q: &[f64; 4], tolerance: f64) -> Result<[f64; 4]> {
     finite_row(index, q)?;
     let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    if !((norm - 1.0).abs() <= tolerance) || norm == 0.0 {
+    if (norm - 1.0).abs() > tolerance || norm == 0.0 {
         return Err(Error::NonUnitQuaternion { index, norm });
     }
     Ok(q.map(|v| v / norm))

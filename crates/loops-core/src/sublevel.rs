@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::ball_tree::BallTree;
+use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
@@ -47,10 +47,10 @@ pub struct SublevelSet {
 }
 
 /// Rows handed to one rayon task at a time.
-const ROWS_PER_TASK: usize = 64;
+const ROWS_PER_TASK: usize = 32;
 
 /// Poses per leaf of the far-field ball hierarchy.
-const LEAF_SIZE: usize = 64;
+const LEAF_SIZE: usize = 16;
 
 impl SublevelSet {
     /// Computes S_γ by arc-length skipping (DESIGN §4.1) within the stretches of the path that a
@@ -89,6 +89,7 @@ impl SublevelSet {
             .map(|b| {
                 let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
                 let mut block = Block::default();
+                scanner.candidates_for(rows.clone(), &mut block.candidates);
                 for i in rows {
                     scanner.scan_row(i, &mut block);
                     block.row_lengths.push(block.runs.len());
@@ -135,8 +136,8 @@ impl SublevelSet {
                         let run = Run { start: a as u32, end: b as u32 };
                         let closest = (a..=b)
                             .min_by(|&x, &y| {
-                                let dx = metric.distance(traj.point(i), traj.point(x));
-                                let dy = metric.distance(traj.point(i), traj.point(y));
+                                let dx = metric.distance_rank(traj.point(i), traj.point(x));
+                                let dy = metric.distance_rank(traj.point(i), traj.point(y));
                                 dx.total_cmp(&dy)
                             })
                             .unwrap_or(a);
@@ -180,7 +181,9 @@ impl SublevelSet {
         &self.runs
     }
 
-    /// The closest column of each run (argmin of δ over the run; ties to the earliest column).
+    /// The closest column of each run: the argmin over the run of the metric's
+    /// [`distance_rank`](Metric::distance_rank) (δ² for the Euclidean metric, which orders pairs
+    /// as δ does up to rounding), ties to the earliest column.
     pub fn closest_columns(&self) -> &[u32] {
         &self.closest
     }
@@ -212,6 +215,8 @@ struct Block {
     runs: Vec<Run>,
     closest: Vec<u32>,
     row_lengths: Vec<usize>,
+    /// Leaves of the ball hierarchy that may hold a pose within γ of some row of the block.
+    candidates: Vec<Leaf>,
 }
 
 /// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
@@ -247,7 +252,8 @@ impl ArcLength {
         let limit = self.s[j] + budget;
         let s = &self.s;
         let n = s.len();
-        if budget < 0.0 || j + 1 >= n || s[j + 1] > limit {
+        // `!(x >= 0)` also catches NaN (an infinite path length): then nothing is skipped.
+        if !(budget >= 0.0 && limit.is_finite()) || j + 1 >= n || s[j + 1] > limit {
             return j;
         }
         // Gallop: s[j + lo] ≤ limit is known.
@@ -267,7 +273,8 @@ impl ArcLength {
         let target = self.s[j] + distance;
         let s = &self.s;
         let n = s.len();
-        if j + 1 >= n || s[j + 1] >= target {
+        // NaN (an infinite path length) jumps no further than the next column.
+        if !(target.is_finite()) || j + 1 >= n || s[j + 1] >= target {
             return j + 1;
         }
         let (mut lo, mut hi) = (1, 2);
@@ -289,17 +296,35 @@ struct RowScanner<'a, M: ?Sized> {
 }
 
 impl<M: Metric + ?Sized> RowScanner<'_, M> {
+    /// The leaves that may hold a pose within γ of any row in `rows`: one walk of the hierarchy
+    /// per block with the block's own bounding ball, instead of one per row.
+    fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) {
+        let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
+        let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
+        let reach = self.gamma + radius + 2.0 * self.arc.margin;
+        self.balls.near_leaves(self.traj, self.metric, centre, rows.start, reach, out);
+    }
+
     fn scan_row(&self, i: usize, out: &mut Block) {
         let x_i = self.traj.point(i);
         let margin = self.arc.margin;
+        let reach = self.gamma + margin;
         let mut open: Option<(usize, usize)> = None;
         // Next column to examine; columns before it are decided.
         let mut j = i;
-        self.balls.for_each_near_leaf(self.traj, self.metric, x_i, i, self.gamma + margin, |lo, hi| {
+        for leaf in &out.candidates {
+            let (lo, hi) = ((leaf.lo as usize).max(i), leaf.hi as usize);
+            if hi <= j {
+                continue;
+            }
+            // Poses of a leaf whose ball stays farther than γ from x_i are all outside.
+            if self.metric.distance(x_i, self.traj.point(leaf.centre as usize)) - leaf.radius > reach {
+                continue;
+            }
             if j < lo {
-                // Columns j..lo lie in pruned stretches: all outside, so a run open at j − 1 ends.
+                // Columns j..lo lie in pruned leaves: all outside, so a run open at j − 1 ends.
                 if let Some((a, b)) = open.take() {
-                    self.close_run(i, a, b, out);
+                    close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
                 }
                 j = lo;
             }
@@ -312,7 +337,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                         Some((a, b)) if b + 1 == j => Some((a, k)),
                         _ => {
                             if let Some((a, b)) = open {
-                                self.close_run(i, a, b, out);
+                                close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
                             }
                             Some((j, k))
                         }
@@ -320,29 +345,37 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                     j = k + 1;
                 } else {
                     if let Some((a, b)) = open.take() {
-                        self.close_run(i, a, b, out);
+                        close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
                     }
                     // Every k before the jump has δ(x_i, x_k) ≥ d − (s_k − s_j) > γ + margin.
                     j = self.arc.first_beyond(j, d - self.gamma - margin);
                 }
             }
-        });
+        }
         if let Some((a, b)) = open {
-            self.close_run(i, a, b, out);
+            close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
         }
     }
+}
 
-    fn close_run(&self, i: usize, a: usize, b: usize, out: &mut Block) {
-        let closest = if a == i {
-            i
-        } else {
-            let dim = self.traj.dim();
-            let block = &self.traj.coords()[a * dim..(b + 1) * dim];
-            a + self.metric.closest_in(self.traj.point(i), block)
-        };
-        out.runs.push(Run { start: a as u32, end: b as u32 });
-        out.closest.push(closest as u32);
-    }
+/// Records the run `a..=b` of row `i` with its closest column.
+fn close_run<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    metric: &M,
+    i: usize,
+    a: usize,
+    b: usize,
+    runs: &mut Vec<Run>,
+    closest: &mut Vec<u32>,
+) {
+    let column = if a == i {
+        i
+    } else {
+        let dim = traj.dim();
+        a + metric.closest_in(traj.point(i), &traj.coords()[a * dim..(b + 1) * dim])
+    };
+    runs.push(Run { start: a as u32, end: b as u32 });
+    closest.push(column as u32);
 }
 
 #[cfg(test)]

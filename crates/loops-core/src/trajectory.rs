@@ -156,11 +156,15 @@ pub(crate) fn cell_of(timestamps_s: &[f64], i: usize) -> (f64, f64) {
     (start, end)
 }
 
+/// Widths `(t_{i+1} − t_{i−1}) / 2` (half cells at the ends), from differences of neighbouring
+/// timestamps, which are exact even on an epoch clock (differences of midpoints are not).
 fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
-    (0..timestamps_s.len())
+    let n = timestamps_s.len();
+    (0..n)
         .map(|i| {
-            let (start, end) = cell_of(timestamps_s, i);
-            end - start
+            let before = if i == 0 { 0.0 } else { timestamps_s[i] - timestamps_s[i - 1] };
+            let after = if i + 1 == n { 0.0 } else { timestamps_s[i + 1] - timestamps_s[i] };
+            0.5 * (before + after)
         })
         .collect()
 }

@@ -28,32 +28,17 @@ fn check_set(case: &Case) -> Result<(), TestCaseError> {
         // Closest column of each run: the argmin of δ over the run, ties to the earliest.
         for run in set.row(i) {
             let cells = run.start as usize..=run.end as usize;
-            let best = cells
-                .clone()
-                .map(|j| dense.delta(i, j))
-                .fold(f64::INFINITY, f64::min);
+            let best = cells.clone().map(|j| dense.delta(i, j)).fold(f64::INFINITY, f64::min);
             let first = cells.clone().find(|&j| dense.delta(i, j) == best);
             let closest = set.closest_columns()[run_index] as usize;
-            let _ = first;
-            prop_assert_eq!(
-                dense.delta(i, closest),
-                best,
-                "closest column of row {} run {:?}",
-                i,
-                run
-            );
+            prop_assert_eq!(Some(closest), first, "closest column of row {} run {:?}", i, run);
             run_index += 1;
         }
     }
     prop_assert_eq!(run_index, set.runs().len());
-    prop_assert_eq!(
-        set.upper_pairs(),
-        (0..n)
-            .map(|i| (i..n).filter(|&j| dense.at(i, j)).count() as u64)
-            .sum::<u64>()
-    );
+    prop_assert_eq!(set.upper_pairs(), (0..n).map(|i| (i..n).filter(|&j| dense.at(i, j)).count() as u64).sum::<u64>());
     let brute = SublevelSet::brute_force(traj, &Euclidean, *gamma)?;
-    prop_assert_eq!(set.runs(), brute.runs());
+    prop_assert_eq!(&set, &brute);
     Ok(())
 }
 
@@ -88,6 +73,22 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(config(12, 0x5EED_0003))]
+
+    /// Paths long enough for many far-field stretches and many rayon tasks.
+    #[test]
+    fn long_walks_equal_the_brute_force(case in any_case(2500)) {
+        let Case { traj, gamma, .. } = &case;
+        let set = with_threads(Some(2), || SublevelSet::compute(traj, &Euclidean, *gamma))??;
+        let brute = SublevelSet::brute_force(traj, &Euclidean, *gamma)?;
+        for i in 0..traj.len() {
+            prop_assert_eq!(set.row(i), brute.row(i), "row {}", i);
+        }
+        prop_assert_eq!(&set, &brute);
+    }
+}
+
 fn line(xs: &[f64]) -> Trajectory {
     Trajectory::new((0..xs.len()).map(|i| i as f64).collect(), xs.to_vec(), 1).unwrap()
 }
@@ -99,9 +100,7 @@ fn long_lattice_back_and_forth_across_tasks() {
     let traj = line(&xs);
     for gamma in [1.0, 2.0, 3.0] {
         let dense = DenseSet::new(&traj, gamma);
-        let set = with_threads(Some(2), || SublevelSet::compute(&traj, &Euclidean, gamma))
-            .unwrap()
-            .unwrap();
+        let set = with_threads(Some(2), || SublevelSet::compute(&traj, &Euclidean, gamma)).unwrap().unwrap();
         for i in 0..traj.len() {
             assert_eq!(set.row(i), dense.upper_runs(i).as_slice(), "γ {gamma}, row {i}");
         }
@@ -120,10 +119,10 @@ fn overflowing_step_does_not_skip_a_revisit() {
 }
 
 /// Two cells of one run whose squared distances differ by one ulp but whose δ (after the square
-/// root) are equal: the documented tie rule (earliest column at equal δ) and the brute force pick
-/// the first; the scan must too.
+/// root) are equal: the closest column is the argmin of the metric's rank (δ² here), so the one
+/// exactly at 5 wins, in the brute force and the scan alike.
 #[test]
-fn closest_column_ties_in_delta_go_to_the_earliest() {
+fn closest_column_follows_the_metric_rank() {
     // δ²(0, 2) = 25 + 1 ulp, δ²(0, 3) = 25; both δ round to 5.
     let y = 6e-8;
     let points = [[0.0, 0.0], [10.0, 0.0], [5.0, y], [3.0, 4.0]];
@@ -135,6 +134,12 @@ fn closest_column_ties_in_delta_go_to_the_earliest() {
     let brute = SublevelSet::brute_force(&traj, &Euclidean, 5.5).unwrap();
     let set = SublevelSet::compute(&traj, &Euclidean, 5.5).unwrap();
     assert_eq!(set.row(0), &[Run { start: 0, end: 0 }, Run { start: 2, end: 3 }]);
-    assert_eq!(brute.closest_columns()[1], 2);
-    assert_eq!(set.closest_columns()[1], 2, "earliest column at equal δ");
+    assert_eq!(brute.closest_columns()[1], 3);
+    assert_eq!(set.closest_columns()[1], 3, "the smaller δ², though δ is equal");
+    let loops = loops_core::find_loops(&traj, &Euclidean, 5.5).unwrap();
+    let component = &loops.components()[loops.component_of(0, 3).unwrap()];
+    assert_eq!(
+        component.closest_distance,
+        0.0_f64.max(Euclidean.distance(traj.point(component.closest_pair[0]), traj.point(component.closest_pair[1])))
+    );
 }

@@ -1,6 +1,6 @@
 //! The Python exception hierarchy and the one place core errors become Python exceptions.
 
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyIndexError, PyOSError, PyValueError};
 use pyo3::{PyErr, import_exception};
 
 // The hierarchy lives in Python (`inexact_loops/errors.py`) so that classes can also be
@@ -61,6 +61,7 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
         | E::NonUnitQuaternion { .. }
         | E::NonUnitVector { .. }
         | E::LatitudeOutOfRange { .. } => InvalidTrajectoryError::new_err(message),
+        E::IndexOutOfRange { .. } => PyIndexError::new_err(message),
         _ => InvalidParameterError::new_err(message),
     }
 }

@@ -75,6 +75,15 @@ pub(crate) struct Loops {
     inner: Arc<loops_core::Loops>,
 }
 
+impl Loops {
+    fn check_indices(&self, i: usize, j: usize) -> PyResult<()> {
+        for index in [i, j] {
+            self.inner.check_index(index).map_err(Failure::from)?;
+        }
+        Ok(())
+    }
+}
+
 fn options(side: &str, normalized: bool) -> Result<(Side, Scale), Failure> {
     let scale = if normalized { Scale::Normalized } else { Scale::Seconds };
     Ok((side.parse()?, scale))
@@ -190,13 +199,21 @@ impl Loops {
     }
 
     /// The component id of the pair (i, j) (either order), or ``None`` when δ > γ.
-    fn component_of(&self, i: usize, j: usize) -> Option<usize> {
-        self.inner.component_of(i, j)
+    ///
+    /// Raises:
+    ///     IndexError: ``i`` or ``j`` is not a pose index.
+    fn component_of(&self, i: usize, j: usize) -> PyResult<Option<usize>> {
+        self.check_indices(i, j)?;
+        Ok(self.inner.component_of(i, j))
     }
 
     /// Whether (i, j) is a simple loop: a pair in a trivial component.
-    fn is_simple(&self, i: usize, j: usize) -> bool {
-        self.inner.is_simple(i, j)
+    ///
+    /// Raises:
+    ///     IndexError: ``i`` or ``j`` is not a pose index.
+    fn is_simple(&self, i: usize, j: usize) -> PyResult<bool> {
+        self.check_indices(i, j)?;
+        Ok(self.inner.is_simple(i, j))
     }
 
     /// Loop duration τ(t_i) for every sample: how long the trajectory stays within γ of

@@ -271,8 +271,9 @@ pub(crate) fn urban_drive(
 }
 
 /// Reads a trajectory file: TUM (``t x y z qx qy qz qw``) or CSV (``t,x,y[,z]``, header
-/// optional), chosen by ``format`` or guessed from the extension (``.csv`` is CSV, anything
-/// else TUM).
+/// optional), chosen by ``format`` or guessed from the extension (``.tum`` and ``.txt`` are
+/// TUM, ``.csv`` is CSV — or TUM when its lines are 8 space-separated numbers; another
+/// extension needs ``format``).
 ///
 /// Args:
 ///     path: the file.
