@@ -110,9 +110,7 @@ def test_paris_london() -> None:
 def test_descriptors_angular_and_euclidean_match_numpy() -> None:
     d = RNG.normal(size=(2, 16))
     cos = d[0] @ d[1] / np.linalg.norm(d[0]) / np.linalg.norm(d[1])
-    angular = engine_distance(
-        d, lambda t, x: il.Trajectory.descriptors(t, x), il.metrics.Angular()
-    )
+    angular = engine_distance(d, lambda t, x: il.Trajectory.descriptors(t, x), il.metrics.Angular())
     assert angular == pytest.approx(np.arccos(cos), rel=1e-9)
     euclidean = engine_distance(
         d, lambda t, x: il.Trajectory.descriptors(t, x, normalize=False), il.metrics.Euclidean()
@@ -200,12 +198,16 @@ def test_fig5_opposite_direction_revisits_separate_under_se3() -> None:
     se3 = il.find_loops(traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=weight))
     table = l2.components
     revisits = np.flatnonzero(~table["trivial"])
-    print(f"KITTI 08, gamma {gamma} m: L2 {len(table['id'])} components, SE(3) {len(se3.components['id'])}")
+    print(
+        f"KITTI 08, gamma {gamma} m: L2 {len(table['id'])} components, SE(3) {len(se3.components['id'])}"
+    )
     assert len(revisits) >= 1
     for c in revisits:
         i, j = table["closest_i"][c], table["closest_j"][c]
         turn = heading_difference(traj, i, j)
-        print(f"  component {c}: closest pair ({i}, {j}) heading difference {np.degrees(turn):.0f} deg")
+        print(
+            f"  component {c}: closest pair ({i}, {j}) heading difference {np.degrees(turn):.0f} deg"
+        )
         assert turn > gamma / weight  # so w * angle > γ for that pair
         assert se3.component_of(i, j) is None
     assert not np.any(~se3.components["trivial"])
@@ -217,6 +219,11 @@ def test_fig5_holes_under_l2_not_under_se3() -> None:
     traj = kitti_se3("05")
     l2 = il.find_loops(traj, gamma=80.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=0.0))
     se3 = il.find_loops(traj, gamma=80.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=10.0))
-    print("KITTI 05 holes: L2", l2.components["holes"].tolist(), "SE(3)", se3.components["holes"].tolist())
+    print(
+        "KITTI 05 holes: L2",
+        l2.components["holes"].tolist(),
+        "SE(3)",
+        se3.components["holes"].tolist(),
+    )
     assert l2.components["holes"].sum() > 0
     assert se3.components["holes"].sum() == 0

@@ -17,6 +17,7 @@ Example:
     True
 """
 
+from . import metrics
 from ._core import (
     Loops,
     Trajectory,
@@ -25,7 +26,6 @@ from ._core import (
     read_trajectory,
     urban_drive,
 )
-from . import metrics
 from .errors import (
     InternalError,
     InvalidParameterError,

@@ -1,7 +1,7 @@
 """Type stubs of the compiled module ``inexact_loops._core``."""
 
-from os import PathLike
 from collections.abc import Callable
+from os import PathLike
 from typing import Literal, Protocol, final
 
 import numpy as np
@@ -146,7 +146,10 @@ def find_loops(
     trajectory: Trajectory,
     *,
     gamma: float,
-    metric: str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None = None,
+    metric: str
+    | _MetricLike
+    | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float]
+    | None = None,
     threads: int | None = None,
 ) -> Loops:
     """Every inexact loop of ``trajectory`` at threshold ``gamma``, exactly, in components."""

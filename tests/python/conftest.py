@@ -182,7 +182,9 @@ def check_against_dense(loops, timestamps, positions, gamma: float) -> DenseRefe
         # orders as the distance does up to rounding), earliest in row order on ties.
         diff = ref.P[:, None, :] - ref.P[None, :, :]
         sq = (diff * diff).sum(axis=-1)[box]
-        assert sq[ci - rows.start, cj - cols.start] == sq[mask].min(), f"{what}: smallest squared distance"
+        assert sq[ci - rows.start, cj - cols.start] == sq[mask].min(), (
+            f"{what}: smallest squared distance"
+        )
         tie = mask & (sq == sq[ci - rows.start, cj - cols.start]) & upper_in_box
         ti, tj = np.unravel_index(np.argmax(tie), tie.shape)
         assert (ci, cj) == (rows.start + ti, cols.start + tj), f"{what}: earliest closest pair"

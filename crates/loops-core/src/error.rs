@@ -22,6 +22,18 @@ pub enum Error {
         /// Number of poses.
         poses: usize,
     },
+    /// Two inputs that must have one row per pose have different numbers of rows.
+    #[error("{first_rows} {first} but {second_rows} {second}: one of each per pose")]
+    RowCountMismatch {
+        /// The first input.
+        first: &'static str,
+        /// Its rows.
+        first_rows: usize,
+        /// The second input.
+        second: &'static str,
+        /// Its rows.
+        second_rows: usize,
+    },
     /// Points of dimension zero.
     #[error("points must have at least one coordinate, got dimension 0")]
     ZeroDimension,

@@ -166,6 +166,11 @@ impl Metric for Se3 {
         check_unit(traj, 3, 4, non_unit_quaternion)
     }
 
+    fn rounding_scale(&self, traj: &Trajectory) -> f64 {
+        let position = (0..traj.len()).flat_map(|i| traj.point(i)[..3].to_vec()).fold(0.0_f64, |m, c| m.max(c.abs()));
+        position + self.rotation_weight_m_per_rad * PI
+    }
+
     #[inline]
     fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         let translation = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
@@ -226,6 +231,11 @@ impl Metric for Se2 {
         self.check_dim(traj.dim())
     }
 
+    fn rounding_scale(&self, traj: &Trajectory) -> f64 {
+        let position = (0..traj.len()).flat_map(|i| traj.point(i)[..2].to_vec()).fold(0.0_f64, |m, c| m.max(c.abs()));
+        position + self.rotation_weight_m_per_rad * 2.0 * PI
+    }
+
     #[inline]
     fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
@@ -276,6 +286,10 @@ impl Metric for Sphere {
         check_unit(traj, 0, 3, non_unit_vector)
     }
 
+    fn rounding_scale(&self, _traj: &Trajectory) -> f64 {
+        self.radius * PI
+    }
+
     #[inline]
     fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         self.radius * unit_angle(a, b)
@@ -296,9 +310,13 @@ fn unit_angle(a: &[f64], b: &[f64]) -> f64 {
 /// Mean Earth radius (IUGG), metres.
 pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 
-/// GNSS fixes: the haversine great-circle distance on a sphere of `radius_m`, combined in L2
-/// with the height difference, metres. Points: `[latitude, longitude, height]` in radians,
-/// radians, metres (see [`Trajectory::gnss`](crate::Trajectory::gnss)).
+/// GNSS fixes: the great-circle (haversine) distance on a sphere of `radius_m`, combined in L2
+/// with the height difference, metres. Points: `[ux, uy, uz, height_m]`, the fix's direction
+/// from the Earth's centre as a unit vector and its height (see
+/// [`Trajectory::gnss`](crate::Trajectory::gnss)). The angle is computed as
+/// 2 atan2(‖a − b‖, ‖a + b‖) on the unit vectors: the same distance as the haversine formula,
+/// but stable at every range (antipodes included) and free of longitude differences, so the
+/// date line is nothing special.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Haversine {
     /// Sphere radius, metres.
@@ -317,29 +335,24 @@ impl Metric for Haversine {
     }
 
     fn check_dim(&self, dim: usize) -> Result<()> {
-        if dim == 3 { Ok(()) } else { Err(dim_error(self, "3 ([latitude_rad, longitude_rad, height_m])", dim)) }
+        if dim == 4 { Ok(()) } else { Err(dim_error(self, "4 ([ux, uy, uz, height_m])", dim)) }
     }
 
     fn validate(&self, traj: &Trajectory) -> Result<()> {
         check_radius("radius_m", self.radius_m)?;
         self.check_dim(traj.dim())?;
-        for i in 0..traj.len() {
-            let latitude = traj.point(i)[0];
-            if latitude.abs() > PI / 2.0 {
-                return Err(Error::LatitudeOutOfRange { index: i, value_deg: latitude.to_degrees() });
-            }
-        }
-        Ok(())
+        check_unit(traj, 0, 3, non_unit_vector)
+    }
+
+    fn rounding_scale(&self, traj: &Trajectory) -> f64 {
+        let height = (0..traj.len()).map(|i| traj.point(i)[3].abs()).fold(0.0, f64::max);
+        self.radius_m + height
     }
 
     #[inline]
     fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
-        let half_dlat = 0.5 * (b[0] - a[0]);
-        let half_dlon = 0.5 * (b[1] - a[1]);
-        let h = half_dlat.sin().powi(2) + a[0].cos() * b[0].cos() * half_dlon.sin().powi(2);
-        let h = h.clamp(0.0, 1.0);
-        let surface = 2.0 * self.radius_m * h.sqrt().atan2((1.0 - h).sqrt());
-        (surface * surface + (a[2] - b[2]).powi(2)).sqrt()
+        let surface = self.radius_m * unit_angle(&a[..3], &b[..3]);
+        surface.hypot(a[3] - b[3])
     }
 }
 

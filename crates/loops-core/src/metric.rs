@@ -32,6 +32,14 @@ pub trait Metric: Sync {
     /// δ(a, b), in the metric's unit (metres for positions). `a` and `b` have the checked dimension.
     fn distance(&self, a: &[f64], b: &[f64]) -> f64;
 
+    /// The size of δ's absolute rounding error, in ulps of this value, on `traj`'s points: the
+    /// engine widens its triangle-inequality margin by 64 ulps of it. Defaults to the largest
+    /// absolute coordinate (right for metrics computed from coordinate differences); metrics
+    /// that scale angles (spheres, rotation weights) return the scale they multiply by.
+    fn rounding_scale(&self, traj: &Trajectory) -> f64 {
+        traj.coords().iter().fold(0.0_f64, |m, c| m.max(c.abs()))
+    }
+
     /// Any strictly increasing function of δ(a, b), for comparisons only (the Euclidean metric
     /// skips the square root). Defaults to δ itself.
     fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
@@ -143,7 +151,7 @@ fn squared_l2(a: &[f64], b: &[f64]) -> f64 {
 /// | `se2` | `rotation_weight_m_per_rad=W` (required) | `[x, y, θ]` |
 /// | `torus` | | angles |
 /// | `sphere` | `radius=R` (default 1) | unit vectors `[x, y, z]` |
-/// | `haversine` | `radius_m=R` (default the mean Earth radius) | `[lat_rad, lon_rad, height_m]` |
+/// | `haversine` | `radius_m=R` (default the mean Earth radius) | `[ux, uy, uz, height_m]` |
 /// | `angular` | | unit vectors |
 ///
 /// # Examples

@@ -10,8 +10,17 @@ use crate::trajectory::Trajectory;
 /// rather than normalised.
 pub const QUATERNION_TOLERANCE: f64 = 1e-6;
 
-fn same_length(timestamps: usize, poses: usize) -> Result<()> {
-    if timestamps == poses { Ok(()) } else { Err(Error::LengthMismatch { timestamps, poses }) }
+fn same_length(positions: usize, quaternions: usize) -> Result<()> {
+    if positions == quaternions {
+        Ok(())
+    } else {
+        Err(Error::RowCountMismatch {
+            first: "positions",
+            first_rows: positions,
+            second: "quaternions",
+            second_rows: quaternions,
+        })
+    }
 }
 
 fn finite_row(index: usize, row: &[f64]) -> Result<()> {
@@ -35,14 +44,16 @@ fn unit_quaternion(index: usize, q: &[f64; 4], tolerance: f64) -> Result<[f64; 4
     Ok(q.map(|v| v / norm))
 }
 
-/// `v / ‖v‖` for any non-zero finite vector.
+/// `v / ‖v‖` for any non-zero finite vector (scaled first, so huge and tiny vectors work).
 fn normalised(index: usize, v: &[f64]) -> Result<Vec<f64>> {
     finite_row(index, v)?;
-    let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if !(norm > 0.0 && norm.is_finite()) {
-        return Err(Error::NonUnitVector { index, norm });
+    let largest = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if largest == 0.0 {
+        return Err(Error::NonUnitVector { index, norm: 0.0 });
     }
-    Ok(v.iter().map(|x| x / norm).collect())
+    let scaled: Vec<f64> = v.iter().map(|x| x / largest).collect();
+    let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
+    Ok(scaled.iter().map(|x| x / norm).collect())
 }
 
 /// An angle wrapped to (−π, π].
@@ -197,17 +208,19 @@ impl Trajectory {
     }
 
     /// GNSS fixes for [`Haversine`](crate::Haversine): latitude and longitude in degrees, height
-    /// in metres. Points are `[latitude_rad, longitude_rad, height_m]`.
+    /// in metres. Points are `[ux, uy, uz, height_m]`: the direction of the fix from the
+    /// Earth's centre (a unit vector) and its height.
     ///
     /// # Errors
     /// [`Error::LatitudeOutOfRange`]; as [`Trajectory::new`].
     pub fn gnss(timestamps_s: Vec<f64>, lat_lon_height: &[[f64; 3]]) -> Result<Self> {
-        let mut coords = Vec::with_capacity(3 * lat_lon_height.len());
+        let mut coords = Vec::with_capacity(4 * lat_lon_height.len());
         for (index, p) in lat_lon_height.iter().enumerate() {
             finite_row(index, p)?;
-            coords.extend_from_slice(&[latitude_checked(index, p[0])?.to_radians(), p[1].to_radians(), p[2]]);
+            let (lat, lon) = (latitude_checked(index, p[0])?.to_radians(), p[1].to_radians());
+            coords.extend_from_slice(&[lat.cos() * lon.cos(), lat.cos() * lon.sin(), lat.sin(), p[2]]);
         }
-        Self::new(timestamps_s, coords, 3)
+        Self::new(timestamps_s, coords, 4)
     }
 
     /// GNSS fixes as Earth-centred, Earth-fixed positions (WGS 84) relative to the first fix,

@@ -231,7 +231,7 @@ impl ArcLength {
         let mut s = Vec::with_capacity(n);
         let mut total = 0.0_f64;
         let mut largest_step = 0.0_f64;
-        let largest_coord = traj.coords().iter().fold(0.0_f64, |m, c| m.max(c.abs()));
+        let scale = metric.rounding_scale(traj);
         s.push(0.0);
         for k in 1..n {
             let step = metric.distance(traj.point(k - 1), traj.point(k));
@@ -240,9 +240,9 @@ impl ArcLength {
             total = (total + step).next_up();
             s.push(total);
         }
-        // Rounding of δ (relative to the coordinates' size) and of differences of s: 64 ulps of
-        // the largest magnitude in play.
-        let margin = 64.0 * f64::EPSILON * (total + largest_step + largest_coord + 1.0);
+        // Rounding of δ (relative to the metric's scale: coordinates, or the radius an angle is
+        // multiplied by) and of differences of s: 64 ulps of the largest magnitude in play.
+        let margin = 64.0 * f64::EPSILON * (total + largest_step + scale + 1.0);
         Self { s, margin }
     }
 

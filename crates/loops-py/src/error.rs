@@ -52,6 +52,7 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
     match error {
         E::TooFewPoses { .. }
         | E::LengthMismatch { .. }
+        | E::RowCountMismatch { .. }
         | E::ZeroDimension
         | E::RaggedCoordinates { .. }
         | E::NonFiniteTimestamp { .. }
