@@ -199,14 +199,16 @@ def test_fig5_opposite_direction_revisits_separate_under_se3() -> None:
     table = l2.components
     revisits = np.flatnonzero(~table["trivial"])
     print(
-        f"KITTI 08, gamma {gamma} m: L2 {len(table['id'])} components, SE(3) {len(se3.components['id'])}"
+        f"KITTI 08, gamma {gamma} m: L2 {len(table['id'])} components, "
+        f"SE(3) {len(se3.components['id'])}"
     )
     assert len(revisits) >= 1
     for c in revisits:
         i, j = table["closest_i"][c], table["closest_j"][c]
         turn = heading_difference(traj, i, j)
         print(
-            f"  component {c}: closest pair ({i}, {j}) heading difference {np.degrees(turn):.0f} deg"
+            f"  component {c}: closest pair ({i}, {j}), "
+            f"heading difference {np.degrees(turn):.0f} deg"
         )
         assert turn > gamma / weight  # so w * angle > γ for that pair
         assert se3.component_of(i, j) is None

@@ -61,7 +61,7 @@ fn main() -> Result<(), loops_core::Error> {
     );
     println!();
     println!(
-        "| route | sampler | samples | P1 all | P1 non-trivial | P1 small half | largest missed (s²) | P2 redundant | P2 spacing (s) | P2 spacing non-trivial (s) | P3 slope | trivial | big10 | mean distance (m) | time (s) |"
+        "| route | sampler | samples | P1 all | P1 non-trivial | P1 small half | largest missed non-trivial (s²) | P2 redundant | P2 spacing (s) | P2 spacing non-trivial (s) | P3 slope | trivial | big10 | mean distance (m) | time (s) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let kinds = [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha];
@@ -117,7 +117,7 @@ fn row(route: &str, samples: &Samples, loops: &Loops, big: &[usize], elapsed_s: 
         quality.nontrivial_components,
         small.0,
         small.1,
-        quality.missed.first().map_or("-".to_owned(), |m| format!("{:.0}", m.area_s2)),
+        quality.missed.iter().find(|m| !m.trivial).map_or("-".to_owned(), |m| format!("{:.0}", m.area_s2)),
         100.0 * quality.redundancy(),
         quality.median_spacing_s.map_or("-".to_owned(), |s| format!("{s:.1}")),
         median.map_or("-".to_owned(), |s| format!("{s:.1}")),
