@@ -5,7 +5,8 @@ fn main() -> Result<(), loops_core::Error> {
     let mut args = std::env::args().skip(1);
     let hours: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(2.1);
     let gamma: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(40.0);
-    let drive = UrbanDrive { duration_s: hours * 3600.0, ..UrbanDrive::default() }.generate()?;
+    let city_size_m: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(1000.0);
+    let drive = UrbanDrive { duration_s: hours * 3600.0, city_size_m, ..UrbanDrive::default() }.generate()?;
     let start = std::time::Instant::now();
     let loops = find_loops(&drive.trajectory, &Euclidean, gamma)?;
     let elapsed = start.elapsed();

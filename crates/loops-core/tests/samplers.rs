@@ -1,0 +1,367 @@
+//! Samplers σ_1, σ_ρ (random and dispersed), σ_α and the baselines, from detection clusters and
+//! from the exact components: exact budgets, P1, reproducibility across runs and thread counts,
+//! and `sample_quality` on hand-made cases whose answer is known.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use loops_core::{
+    DetectionClusters, Detections, Error, Euclidean, Loops, Metric, SampleSize, SampleWarning, Sampler, SamplerKind,
+    Samples, Trajectory, UrbanDrive, cluster_detections, find_loops, sample_clusters, sample_loops, sample_quality,
+    with_threads,
+};
+
+const SIGMAS: [SamplerKind; 4] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha];
+const BASELINES: [SamplerKind; 4] =
+    [SamplerKind::LioSam, SamplerKind::HdlGraphSlam, SamplerKind::Cartographer, SamplerKind::TimeGap];
+
+struct Setup {
+    traj: Trajectory,
+    loops: Loops,
+    clusters: DetectionClusters,
+}
+
+fn setup() -> Setup {
+    let drive = UrbanDrive { duration_s: 1800.0, seed: 5, ..UrbanDrive::default() }.generate().unwrap();
+    let loops = find_loops(&drive.trajectory, &Euclidean, 40.0).unwrap();
+    let detections = Detections::draw(&loops, SampleSize::Rate(0.01), 2).unwrap();
+    let clusters = cluster_detections(&detections, 10.0).unwrap();
+    Setup { traj: drive.trajectory, loops, clusters }
+}
+
+/// Components with at least one pair i < j: the groups of the exact route.
+fn samplable(loops: &Loops) -> BTreeSet<usize> {
+    loops.runs().filter(|(i, run, _)| run.end as usize > *i).map(|(_, _, c)| c).collect()
+}
+
+#[test]
+fn budget_is_exact_and_p1_holds_on_clusters() {
+    let s = setup();
+    let groups = s.clusters.len();
+    assert!(groups > 10, "{groups} clusters");
+    for kind in SIGMAS {
+        for budget in [groups, groups + 1, 3 * groups + 7, 2000] {
+            let samples = sample_clusters(&s.clusters, &Sampler::new(kind, SampleSize::Budget(budget), 9)).unwrap();
+            assert_eq!(samples.len(), budget, "{kind} budget {budget}");
+            assert!(samples.warnings().is_empty(), "{kind}: {:?}", samples.warnings());
+            let detections: BTreeSet<usize> = samples.rows().iter().map(|r| r.detection.unwrap()).collect();
+            assert_eq!(detections.len(), budget, "{kind}: a detection sampled twice");
+            for row in samples.rows() {
+                let k = row.detection.unwrap();
+                assert_eq!(row.cluster, Some(s.clusters.labels()[k] as usize));
+                assert_eq!(
+                    (row.t_s, row.t_prime_s),
+                    (s.clusters.detections().t_s()[k], s.clusters.detections().t_prime_s()[k])
+                );
+                assert_eq!(row.sampler, kind);
+            }
+            if kind != SamplerKind::Alpha {
+                let covered: BTreeSet<usize> = samples.rows().iter().map(|r| r.cluster.unwrap()).collect();
+                assert_eq!(covered.len(), groups, "{kind} budget {budget}: P1 fails");
+            }
+        }
+    }
+}
+
+#[test]
+fn budget_is_exact_and_p1_holds_on_exact_components() {
+    let s = setup();
+    let groups = samplable(&s.loops);
+    for kind in SIGMAS {
+        for budget in [groups.len(), groups.len() + 3, 1500] {
+            let sampler = Sampler::new(kind, SampleSize::Budget(budget), 4);
+            let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+            assert_eq!(samples.len(), budget, "{kind} budget {budget}");
+            let mut seen = BTreeSet::new();
+            for row in samples.rows() {
+                let [i, j] = row.pair.unwrap();
+                assert!(i < j && seen.insert((i, j)), "{kind}: pair ({i}, {j}) diagonal or repeated");
+                assert_eq!(row.component, s.loops.component_of(i, j));
+                assert!(row.component.is_some());
+                let d = Euclidean.distance(s.traj.point(i), s.traj.point(j));
+                assert_eq!(row.distance, Some(d));
+                assert!(d <= 40.0);
+                assert_eq!((row.t_s, row.t_prime_s), (s.traj.timestamps_s()[i], s.traj.timestamps_s()[j]));
+            }
+            let quality = sample_quality(&samples, &s.loops, 30.0).unwrap();
+            assert_eq!(quality.components, groups.len());
+            assert_eq!(quality.outside, 0);
+            if kind != SamplerKind::Alpha {
+                assert_eq!(samples.groups(), groups.len());
+                assert_eq!(quality.covered, groups.len(), "{kind} budget {budget}: P1 fails: {:?}", quality.missed);
+                assert!(quality.missed.is_empty());
+            }
+        }
+    }
+}
+
+#[test]
+fn budget_below_groups_warns() {
+    let s = setup();
+    let groups = s.clusters.len();
+    let budget = groups / 2;
+    let samples = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::One, SampleSize::Budget(budget), 0)).unwrap();
+    assert_eq!(samples.len(), budget);
+    assert_eq!(samples.warnings(), &[SampleWarning::BudgetBelowGroups { budget, groups }]);
+    assert!(samples.warnings()[0].to_string().contains("P1 cannot hold"));
+    // σ_1 spreads the budget over distinct groups.
+    let covered: BTreeSet<usize> = samples.rows().iter().map(|r| r.cluster.unwrap()).collect();
+    assert_eq!(covered.len(), budget);
+    // More than there is: everything, with a warning.
+    let all = s.clusters.detections().len();
+    let samples =
+        sample_clusters(&s.clusters, &Sampler::new(SamplerKind::Rho, SampleSize::Budget(all + 5), 0)).unwrap();
+    assert_eq!(samples.len(), all);
+    assert!(matches!(samples.warnings(), [SampleWarning::BudgetAboveAvailable { .. }]));
+}
+
+#[test]
+fn rate_mode() {
+    let s = setup();
+    let sizes: Vec<usize> = s.clusters.clusters().iter().map(|c| c.size).collect();
+    // σ_1 with c = 2: exactly min(2, size) per cluster.
+    let samples = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::One, SampleSize::Rate(2.0), 1)).unwrap();
+    let mut per_cluster = vec![0usize; sizes.len()];
+    samples.rows().iter().for_each(|r| per_cluster[r.cluster.unwrap()] += 1);
+    assert!(per_cluster.iter().zip(&sizes).all(|(&k, &size)| k == size.min(2)), "{per_cluster:?}");
+    // σ_ρ with a tiny r still keeps one per cluster.
+    let samples = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::Rho, SampleSize::Rate(1e-6), 1)).unwrap();
+    assert_eq!(samples.len(), sizes.len());
+    // σ_α keeps each detection with probability p.
+    let n = s.clusters.detections().len() as f64;
+    let samples = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::Alpha, SampleSize::Rate(0.1), 1)).unwrap();
+    assert!((samples.len() as f64 - 0.1 * n).abs() < 5.0 * (0.1 * n).sqrt(), "{} of {n}", samples.len());
+}
+
+#[test]
+fn dispersed_rho_spreads_over_rows_and_takes_closest_pairs() {
+    let s = setup();
+    let sampler = Sampler::new(SamplerKind::RhoDispersed, SampleSize::Budget(800), 3);
+    let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+    let set = s.loops.sublevel_set();
+    let mut rows_per_component: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for row in samples.rows() {
+        let [i, j] = row.pair.unwrap();
+        let c = row.component.unwrap();
+        rows_per_component.entry(c).or_default().push(i);
+        // The closest pair of row i among the component's runs off the diagonal.
+        let off_diagonal: Vec<usize> = set
+            .row(i)
+            .iter()
+            .filter(|run| run.start as usize > i && s.loops.component_of(i, run.start as usize) == Some(c))
+            .flat_map(|run| run.start as usize..=run.end as usize)
+            .collect();
+        if !set
+            .row(i)
+            .iter()
+            .any(|run| run.start as usize <= i && run.end as usize > i && s.loops.component_of(i, i + 1) == Some(c))
+        {
+            let best = off_diagonal
+                .iter()
+                .map(|&k| Euclidean.distance(s.traj.point(i), s.traj.point(k)))
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(row.distance, Some(best), "({i}, {j}) is not the closest pair of its row");
+        }
+    }
+    // The budget is below the rows of every component here: one sample per row at most, and
+    // evenly spaced rows.
+    for (c, rows) in &rows_per_component {
+        let distinct: BTreeSet<usize> = rows.iter().copied().collect();
+        assert_eq!(distinct.len(), rows.len(), "component {c}: two samples in one row");
+    }
+}
+
+#[test]
+fn same_seed_same_samples_on_any_thread_count() {
+    let s = setup();
+    for kind in SIGMAS.into_iter().chain(BASELINES) {
+        let sampler = Sampler::new(kind, SampleSize::Budget(700), 17);
+        let run = |threads| {
+            with_threads(Some(threads), || {
+                let exact = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+                let clusters = (!kind.is_baseline()).then(|| sample_clusters(&s.clusters, &sampler).unwrap());
+                (exact, clusters)
+            })
+            .unwrap()
+        };
+        let one = run(1);
+        assert_eq!(one, run(2), "{kind}: differs between 1 and 2 threads");
+        assert_eq!(one, run(2), "{kind}: differs between runs");
+        if kind != SamplerKind::LioSam && kind != SamplerKind::HdlGraphSlam {
+            let other = sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler { seed: 18, ..sampler.clone() }).unwrap();
+            assert_ne!(one.0, other, "{kind}: the seed changes nothing");
+        }
+    }
+}
+
+#[test]
+fn baselines_under_the_budget() {
+    let s = setup();
+    for kind in BASELINES {
+        let sampler = Sampler::new(kind, SampleSize::Budget(300), 2);
+        let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+        assert!(samples.len() <= 300);
+        assert!(samples.available() >= samples.len() as u64);
+        if samples.len() < 300 {
+            assert!(matches!(samples.warnings(), [SampleWarning::BudgetAboveAvailable { budget: 300, .. }]));
+        }
+        let times = s.traj.timestamps_s();
+        for row in samples.rows() {
+            let [i, j] = row.pair.unwrap();
+            assert!(i < j && row.distance.unwrap() <= 40.0 && row.component.is_some(), "{kind}: ({i}, {j})");
+            let gap = times[j] - times[i];
+            match kind {
+                SamplerKind::LioSam => assert!(gap > 30.0),
+                SamplerKind::TimeGap => assert!(gap >= 30.0),
+                SamplerKind::Cartographer => assert!(gap >= 10.0),
+                _ => {}
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_input() {
+    let s = setup();
+    let err = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::One, SampleSize::Budget(0), 0)).unwrap_err();
+    assert!(matches!(err, Error::InvalidParameter { name: "budget", .. }), "{err}");
+    let err = sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler::new(SamplerKind::Rho, SampleSize::Budget(0), 0))
+        .unwrap_err();
+    assert!(matches!(err, Error::InvalidParameter { name: "budget", .. }), "{err}");
+    for (kind, rate) in [(SamplerKind::Alpha, 1.5), (SamplerKind::One, 0.0), (SamplerKind::Rho, f64::NAN)] {
+        let err = sample_clusters(&s.clusters, &Sampler::new(kind, SampleSize::Rate(rate), 0)).unwrap_err();
+        assert!(matches!(err, Error::InvalidParameter { name: "rate", .. }), "{err}");
+    }
+    let err = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::LioSam, SampleSize::Budget(10), 0)).unwrap_err();
+    assert!(err.to_string().contains("one, rho, rho-dispersed, alpha"), "{err}");
+    let err = "sigma-1".parse::<SamplerKind>().unwrap_err();
+    assert!(matches!(err, Error::UnknownName { kind: "sampler", .. }));
+    let other = UrbanDrive { duration_s: 300.0, ..UrbanDrive::default() }.generate().unwrap().trajectory;
+    let err = sample_loops(&other, &Euclidean, &s.loops, &Sampler::new(SamplerKind::One, SampleSize::Budget(10), 0))
+        .unwrap_err();
+    assert!(matches!(err, Error::TrajectoryMismatch { what: "trajectory", .. }), "{err}");
+    let samples = sample_clusters(&s.clusters, &Sampler::new(SamplerKind::One, SampleSize::Budget(50), 0)).unwrap();
+    let other_loops = find_loops(&other, &Euclidean, 40.0).unwrap();
+    let err = sample_quality(&samples, &other_loops, 30.0).unwrap_err();
+    assert!(matches!(err, Error::TrajectoryMismatch { what: "samples", .. }), "{err}");
+    let err = sample_quality(&samples, &s.loops, 0.0).unwrap_err();
+    assert!(matches!(err, Error::InvalidParameter { name: "epsilon_s", .. }), "{err}");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Quality on a hand-made case
+// ---------------------------------------------------------------------------------------------
+
+/// Three circular petals of radii 20, 14 and 27 m through the origin, one pose a second at
+/// about 1 m/s: the origin is visited four times, so there are several non-trivial components of
+/// different areas near it.
+fn clover() -> (Trajectory, Loops) {
+    let mut points = Vec::new();
+    for (petal, radius) in [20.0f64, 14.0, 27.0].into_iter().enumerate() {
+        let theta = petal as f64 * std::f64::consts::TAU / 3.0;
+        let centre = [radius * theta.cos(), radius * theta.sin()];
+        let steps = (std::f64::consts::TAU * radius).round() as usize;
+        for k in 0..steps {
+            let a = theta + std::f64::consts::PI + std::f64::consts::TAU * k as f64 / steps as f64;
+            points.push([centre[0] + radius * a.cos(), centre[1] + radius * a.sin()]);
+        }
+    }
+    points.push([0.0, 0.0]);
+    let traj = Trajectory::from_points((0..points.len()).map(|k| k as f64).collect(), &points).unwrap();
+    let loops = find_loops(&traj, &Euclidean, 3.0).unwrap();
+    (traj, loops)
+}
+
+/// Every sample given as a detection, sampled with σ_α at rate 1: the samples are exactly them.
+fn samples_of(detections: Detections) -> Samples {
+    let clusters = cluster_detections(&detections, 1.0).unwrap();
+    sample_clusters(&clusters, &Sampler::new(SamplerKind::Alpha, SampleSize::Rate(1.0), 0)).unwrap()
+}
+
+#[test]
+fn quality_of_a_known_sample() {
+    let (traj, loops) = clover();
+    let nontrivial: Vec<usize> = loops.components().iter().filter(|c| !c.trivial).map(|c| c.id).collect();
+    assert!(nontrivial.len() >= 3, "{:?}", loops.components());
+    // The two largest non-trivial components: three samples in the larger (a little L of
+    // neighbouring cells), one in the other; one pair outside S_γ; nothing elsewhere.
+    let mut by_area = nontrivial.clone();
+    by_area.sort_by(|&a, &b| loops.components()[b].area_s2.total_cmp(&loops.components()[a].area_s2));
+    let (big, small) = (by_area[0], by_area[1]);
+    let [i, j] = loops.components()[big].closest_pair;
+    let l_shape = [[i, j], [i + 1, j], [i, j + 1]];
+    assert!(l_shape.iter().all(|p| loops.component_of(p[0], p[1]) == Some(big)), "pick another shape");
+    let lone = loops.components()[small].closest_pair;
+    let far = (1..traj.len()).find(|&k| loops.component_of(0, k).is_none()).unwrap();
+    let pairs: Vec<[usize; 2]> = l_shape.iter().copied().chain([lone, [0, far]]).collect();
+    let (is, js): (Vec<usize>, Vec<usize>) = pairs.iter().map(|p| (p[0], p[1])).unzip();
+
+    let by_indices = samples_of(Detections::from_indices(&traj, &is, &js).unwrap());
+    // The same detections given as times only: placed on the nearest poses by the quality.
+    let times = traj.timestamps_s();
+    let by_times = samples_of(
+        Detections::new(is.iter().map(|&k| times[k] + 0.2).collect(), js.iter().map(|&k| times[k] - 0.3).collect())
+            .unwrap(),
+    );
+    for samples in [&by_indices, &by_times] {
+        let q = sample_quality(samples, &loops, 1.5).unwrap();
+        assert_eq!(q.samples, 5);
+        assert_eq!(q.outside, 1);
+        let components = samplable(&loops).len();
+        assert_eq!(q.components, components);
+        assert_eq!(q.covered, 2);
+        assert_eq!(q.nontrivial_components, nontrivial.len());
+        assert_eq!(q.nontrivial_covered, 2);
+        // Missed: every other component, largest first, with its area.
+        let mut expected: Vec<(usize, f64)> = samplable(&loops)
+            .into_iter()
+            .filter(|&c| c != big && c != small)
+            .map(|c| (c, loops.components()[c].area_s2))
+            .collect();
+        expected.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let missed: Vec<(usize, f64)> = q.missed.iter().map(|m| (m.id, m.area_s2)).collect();
+        assert_eq!(missed, expected);
+        assert_eq!(q.missed.iter().filter(|m| m.trivial).count(), 1);
+        // P2: the three of the L are 1 s from a neighbour (≤ ε = 1.5 s), the lone one is not.
+        assert_eq!(q.redundant, 3);
+        assert!((q.redundancy() - 0.6).abs() < 1e-12);
+        // P3: ln 3 over the log ratio of the two areas.
+        let (a_big, a_small) = (loops.components()[big].area_s2, loops.components()[small].area_s2);
+        let slope = 3f64.ln() / (a_big.ln() - a_small.ln());
+        assert_eq!(q.p3_components, 2);
+        assert!((q.p3_slope.unwrap() - slope).abs() < 1e-9, "{:?} vs {slope}", q.p3_slope);
+        assert_eq!(q.per_component[big], 3);
+        assert_eq!(q.per_component[small], 1);
+        assert!((q.coverage() - 2.0 / components as f64).abs() < 1e-12);
+    }
+    // Spacing: 1 s to the nearest for each of the L (exact with pose times); none for the lone
+    // sample and the one outside S_γ. Per-sample values follow the order of the rows.
+    let q = sample_quality(&by_indices, &loops, 1.5).unwrap();
+    assert_eq!(q.median_spacing_s, Some(1.0));
+    for (k, row) in by_indices.rows().iter().enumerate() {
+        let pair = row.pair.unwrap();
+        let expected = if l_shape.contains(&pair) { Some(1.0) } else { None };
+        assert_eq!(q.nearest_spacing_s[k], expected, "{pair:?}");
+        assert_eq!(q.sample_components[k], loops.component_of(pair[0], pair[1]));
+    }
+    // With a smaller ε nothing is redundant.
+    assert_eq!(sample_quality(&by_indices, &loops, 0.5).unwrap().redundant, 0);
+}
+
+#[test]
+fn quality_separates_the_samplers_on_a_drive() {
+    // The paper's finding at a small scale: σ_1 and σ_ρ cover every component, σ_α's growth with
+    // area is the steepest and σ_1's the flattest.
+    let s = setup();
+    let budget = 4 * samplable(&s.loops).len();
+    let slope = |kind| {
+        let samples =
+            sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler::new(kind, SampleSize::Budget(budget), 1)).unwrap();
+        let q = sample_quality(&samples, &s.loops, 30.0).unwrap();
+        if kind != SamplerKind::Alpha {
+            assert_eq!(q.covered, q.components, "{kind}");
+        }
+        q.p3_slope.unwrap()
+    };
+    let (one, rho, alpha) = (slope(SamplerKind::One), slope(SamplerKind::Rho), slope(SamplerKind::Alpha));
+    assert!(one < rho && rho < alpha, "slopes: one {one}, rho {rho}, alpha {alpha}");
+}
