@@ -130,3 +130,45 @@ fn help_has_examples() {
         assert!(String::from_utf8_lossy(&output.stdout).contains("Examples:"), "{command}");
     }
 }
+
+#[test]
+fn se3_metric_uses_the_file_orientations() {
+    let dir = temp_dir("se3");
+    // Out along x facing +x, back facing −x (yaw π: quaternion [0, 0, 1, 0]).
+    let path = dir.join("turn.tum");
+    let mut text = String::new();
+    for i in 0..=40 {
+        let (x, q) = if i <= 20 { (i, "0 0 0 1") } else { (40 - i, "0 0 1 0") };
+        text += &format!("{i}.0 {x}.0 0.0 0.0 {q}\n");
+    }
+    std::fs::write(&path, text).unwrap();
+    let pairs = |metric: &str| {
+        let json = dir.join(format!("{}.json", metric.len()));
+        let output = loops(&[
+            "components",
+            path.to_str().unwrap(),
+            "--gamma",
+            "1.5",
+            "--metric",
+            metric,
+            "--json",
+            json.to_str().unwrap(),
+        ]);
+        assert!(output.status.success(), "{metric}: {}", stderr(&output));
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        report["pairs"].as_u64().unwrap()
+    };
+    let euclidean = pairs("euclidean");
+    let se3 = pairs("se3(rotation_weight_m_per_rad=10)");
+    // Under SE(3) a half turn costs 10π m > γ: only pairs on the same leg (and the turn) stay.
+    assert!(se3 < euclidean, "se3 {se3} vs euclidean {euclidean}");
+    let same_leg: u64 = 2 * (21 * 3 - 2) - 21; // each leg: |i − j| ≤ 1 within it, full plane
+    assert!(se3 >= same_leg, "{se3}");
+    // A file without orientations cannot feed an SE(3) metric.
+    let csv = dir.join("plain.csv");
+    std::fs::write(&csv, "t,x,y\n0,0,0\n1,1,0\n").unwrap();
+    assert_one_line_error(
+        &loops(&["components", csv.to_str().unwrap(), "--gamma", "1", "--metric", "se3(rotation_weight_m_per_rad=1)"]),
+        "orientations",
+    );
+}
