@@ -70,25 +70,32 @@ struct Tally {
 pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: &SublevelSet) -> Labelling {
     let runs = set.runs();
     let n = set.rows();
+    debug_assert!(runs.len() < 1 << 31, "run ids must leave the top bit free for numbering");
     let mut union_find = UnionFind::<u32>::new(runs.len());
     for_each_overlap(set, |a, b| {
         union_find.union(a as u32, b as u32);
     });
 
-    // Number components by first appearance (row-major): deterministic ids.
-    let mut id_of_root = vec![u32::MAX; runs.len()];
-    let mut labels = Vec::with_capacity(runs.len());
+    // Number components by first appearance (row-major): deterministic ids. The labelling
+    // array (each run's root) is turned into ids in place: a root's slot holds its component's
+    // id, flagged, once the component is seen, so no second run-sized table is needed.
+    const SEEN: u32 = 1 << 31;
+    let mut labels = union_find.into_labeling();
     let mut count = 0u32;
-    for r in 0..runs.len() {
-        let root = union_find.find_mut(r as u32) as usize;
-        if id_of_root[root] == u32::MAX {
-            id_of_root[root] = count;
+    for r in 0..labels.len() {
+        let root = labels[r];
+        let id = if root & SEEN != 0 {
+            root & !SEEN // r is a root already numbered through an earlier member
+        } else if labels[root as usize] & SEEN != 0 {
+            labels[root as usize] & !SEEN
+        } else {
             count += 1;
-        }
-        labels.push(id_of_root[root]);
+            labels[root as usize] = (count - 1) | SEEN;
+            count - 1
+        };
+        labels[r] = id | SEEN;
     }
-    drop(id_of_root);
-    drop(union_find);
+    labels.iter_mut().for_each(|label| *label &= !SEEN);
 
     let widths = traj.cell_widths_s();
     let mut prefix = Vec::with_capacity(n + 1);

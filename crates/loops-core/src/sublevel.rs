@@ -49,6 +49,9 @@ pub struct SublevelSet {
 /// Rows handed to one rayon task at a time.
 const ROWS_PER_TASK: usize = 32;
 
+/// Blocks scanned in parallel before their runs are moved into the result.
+const BLOCKS_PER_BATCH: usize = 1024;
+
 /// Poses per leaf of the far-field ball hierarchy.
 const LEAF_SIZE: usize = 16;
 
@@ -84,33 +87,34 @@ impl SublevelSet {
         let arc = ArcLength::new(traj, metric);
         let balls = BallTree::new(traj, metric, LEAF_SIZE);
         let scanner = RowScanner { traj, metric, arc: &arc, balls: &balls, gamma };
-        let blocks: Vec<Block> = (0..n.div_ceil(ROWS_PER_TASK))
-            .into_par_iter()
-            .map(|b| {
-                let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
-                let mut block = Block::default();
-                scanner.candidates_for(rows.clone(), &mut block.candidates);
-                for i in rows {
-                    scanner.scan_row(i, &mut block);
-                    block.row_lengths.push(block.runs.len());
-                }
-                block
-            })
-            .collect();
-        let total: usize = blocks.iter().map(|b| b.runs.len()).sum();
-        let mut set = Self {
-            gamma,
-            row_offsets: Vec::with_capacity(n + 1),
-            runs: Vec::with_capacity(total),
-            closest: Vec::with_capacity(total),
-        };
+        let mut set = Self { gamma, row_offsets: Vec::with_capacity(n + 1), runs: Vec::new(), closest: Vec::new() };
         set.row_offsets.push(0);
-        for block in blocks {
-            let base = set.runs.len();
-            set.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
-            set.runs.extend_from_slice(&block.runs);
-            set.closest.extend_from_slice(&block.closest);
+        // Blocks are scanned in parallel a batch at a time and moved into the result as each
+        // batch ends, so the per-block buffers never hold more than a batch of runs.
+        let blocks = n.div_ceil(ROWS_PER_TASK);
+        for batch in (0..blocks).step_by(BLOCKS_PER_BATCH) {
+            let scanned: Vec<Block> = (batch..(batch + BLOCKS_PER_BATCH).min(blocks))
+                .into_par_iter()
+                .map(|b| {
+                    let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
+                    let mut block = Block::default();
+                    scanner.candidates_for(rows.clone(), &mut block.candidates);
+                    for i in rows {
+                        scanner.scan_row(i, &mut block);
+                        block.row_lengths.push(block.runs.len());
+                    }
+                    block
+                })
+                .collect();
+            for block in scanned {
+                let base = set.runs.len();
+                set.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
+                set.runs.extend_from_slice(&block.runs);
+                set.closest.extend_from_slice(&block.closest);
+            }
         }
+        set.runs.shrink_to_fit();
+        set.closest.shrink_to_fit();
         Ok(set)
     }
 
