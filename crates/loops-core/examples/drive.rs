@@ -1,4 +1,7 @@
-//! Times `find_loops` on the 2.1 h urban drive: `cargo run --release --example drive -- [hours] [gamma]`.
+//! Times `find_loops` on the urban drive:
+//! `cargo run --release --example drive -- [hours] [gamma_m] [city_size_m]`.
+//! `EUCLIDEAN_ONLY=1` skips the SE(3) run; `GENERATE_ONLY=1` stops after generating the drive
+//! (the baseline that `benches/callgrind/count.sh` subtracts).
 use loops_core::{Euclidean, UrbanDrive, find_loops};
 
 fn main() -> Result<(), loops_core::Error> {
@@ -7,6 +10,9 @@ fn main() -> Result<(), loops_core::Error> {
     let gamma: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(40.0);
     let city_size_m: f64 = args.next().and_then(|a| a.parse().ok()).unwrap_or(1000.0);
     let drive = UrbanDrive { duration_s: hours * 3600.0, city_size_m, ..UrbanDrive::default() }.generate()?;
+    if std::env::var_os("GENERATE_ONLY").is_some() {
+        return Ok(()); // the baseline of instruction counts (see benches/callgrind)
+    }
     let start = std::time::Instant::now();
     let loops = find_loops(&drive.trajectory, &Euclidean, gamma)?;
     let elapsed = start.elapsed();
