@@ -4,7 +4,7 @@ use petgraph::unionfind::UnionFind;
 
 use crate::metric::Metric;
 use crate::sublevel::{Run, SublevelSet};
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Trajectory, prefix_sums};
 
 /// One loop component Ω.
 ///
@@ -69,7 +69,6 @@ struct Tally {
 /// component adds its mirror, χ_full = 2χ − #diagonal cells + #diagonal links (i, i+1).
 pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: &SublevelSet) -> Labelling {
     let runs = set.runs();
-    let n = set.rows();
     debug_assert!(runs.len() < 1 << 31, "run ids must leave the top bit free for numbering");
     let mut union_find = UnionFind::<u32>::new(runs.len());
     for_each_overlap(set, |a, b| {
@@ -98,13 +97,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
     labels.iter_mut().for_each(|label| *label &= !SEEN);
 
     let widths = traj.cell_widths_s();
-    let mut prefix = Vec::with_capacity(n + 1);
-    prefix.push(0.0);
-    let mut acc = 0.0;
-    for w in widths {
-        acc += w;
-        prefix.push(acc);
-    }
+    let prefix = prefix_sums(widths);
 
     let mut tallies = vec![
         Tally {

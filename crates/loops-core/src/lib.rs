@@ -64,7 +64,7 @@ pub use manifold::{
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric, MetricSpec};
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
-pub use quality::{MissedComponent, SampleQuality, sample_quality};
+pub use quality::{DEFAULT_EPSILON_S, MissedComponent, SampleQuality, sample_quality};
 pub use sample::{Sample, SampleSize, SampleWarning, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
 pub use sublevel::{Run, SublevelSet};
 pub use synth::{SyntheticDrive, UrbanDrive};

@@ -67,13 +67,7 @@ pub(crate) fn loop_duration_s<'r>(
     side: Side,
 ) -> Vec<f64> {
     let n = cell_widths_s.len();
-    let mut prefix = Vec::with_capacity(n + 1);
-    prefix.push(0.0);
-    let mut acc = 0.0;
-    for w in cell_widths_s {
-        acc += w;
-        prefix.push(acc);
-    }
+    let prefix = crate::trajectory::prefix_sums(cell_widths_s);
     let width = |a: usize, b: usize| if a > b { 0.0 } else { prefix[b + 1] - prefix[a] };
     let mut tau = vec![0.0; n];
     // Column contributions as a difference array over j.

@@ -247,6 +247,19 @@ impl MetricSpec {
         with_metric!(self, m => crate::find_loops(traj, m, gamma))
     }
 
+    /// [`sample_loops`](crate::sample_loops) under this metric.
+    ///
+    /// # Errors
+    /// As [`sample_loops`](crate::sample_loops).
+    pub fn sample_loops(
+        &self,
+        traj: &Trajectory,
+        loops: &crate::Loops,
+        sampler: &crate::Sampler,
+    ) -> Result<crate::Samples> {
+        with_metric!(self, m => crate::sample_loops(traj, m, loops, sampler))
+    }
+
     /// δ between two points under this metric (dispatched per call: for tests and small jobs).
     pub fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         with_metric!(self, m => m.distance(a, b))

@@ -18,6 +18,9 @@ pub struct MissedComponent {
     pub pairs: u64,
 }
 
+/// The ε of the paper's experiment, seconds: the default detection-graph radius and P2 radius.
+pub const DEFAULT_EPSILON_S: f64 = 30.0;
+
 /// P1, P2 and P3 of a sample (paper, Sec. 5.2).
 ///
 /// Components count when they hold at least one pair (i, j) with i < j (a component made of a

@@ -156,6 +156,19 @@ pub(crate) fn cell_of(timestamps_s: &[f64], i: usize) -> (f64, f64) {
     (start, end)
 }
 
+/// Running sums `[0, w_0, w_0 + w_1, …]` of cell widths: the time width of cells `a..=b` is
+/// `prefix[b + 1] − prefix[a]`.
+pub(crate) fn prefix_sums(cell_widths_s: &[f64]) -> Vec<f64> {
+    let mut prefix = Vec::with_capacity(cell_widths_s.len() + 1);
+    prefix.push(0.0);
+    let mut acc = 0.0;
+    for w in cell_widths_s {
+        acc += w;
+        prefix.push(acc);
+    }
+    prefix
+}
+
 /// Widths `(t_{i+1} − t_{i−1}) / 2` (half cells at the ends), from differences of neighbouring
 /// timestamps, which are exact even on an epoch clock (differences of midpoints are not).
 fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
