@@ -61,20 +61,8 @@ impl Layout {
     /// Columns taken in order: `t, x, y` or `t, x, y, z`.
     fn in_order(width: usize) -> Option<Self> {
         match width {
-            3 => Some(Self {
-                t: 0,
-                x: 1,
-                y: 2,
-                z: None,
-                width,
-            }),
-            4 => Some(Self {
-                t: 0,
-                x: 1,
-                y: 2,
-                z: Some(3),
-                width,
-            }),
+            3 => Some(Self { t: 0, x: 1, y: 2, z: None, width }),
+            4 => Some(Self { t: 0, x: 1, y: 2, z: Some(3), width }),
             _ => None,
         }
     }
@@ -84,9 +72,7 @@ impl Layout {
 pub(crate) fn parse_csv(path: &Path, text: &str) -> Result<PoseTable> {
     let mut lines = text::data_lines(text).peekable();
     let Some(&(first_line, first)) = lines.peek() else {
-        return Err(IoError::Empty {
-            path: path.to_path_buf(),
-        });
+        return Err(IoError::Empty { path: path.to_path_buf() });
     };
     let delimiter = delimiter_of(first);
     let mut fields: Vec<&str> = delimiter.split(first).collect();
@@ -98,51 +84,31 @@ pub(crate) fn parse_csv(path: &Path, text: &str) -> Result<PoseTable> {
     }
     .map_err(|message| IoError::parse(path, first_line, message))?;
 
-    let mut table = PoseTable {
-        path: path.to_path_buf(),
-        timestamps_s: Vec::new(),
-        positions: Vec::new(),
-        orientations_xyzw: None,
-        dim: if layout.z.is_some() { 3 } else { 2 },
-        source_lines: Vec::new(),
-    };
+    let mut table = PoseTable::empty(path, if layout.z.is_some() { 3 } else { 2 });
     for (line, content) in lines {
         fields.clear();
         fields.extend(delimiter.split(content));
-        let (t, position) = parse_row(&layout, &fields, first_line)
-            .map_err(|message| IoError::parse(path, line, message))?;
+        let (t, position) =
+            parse_row(&layout, &fields, first_line).map_err(|message| IoError::parse(path, line, message))?;
         table.timestamps_s.push(t);
         table.positions.push(position);
         table.source_lines.push(line);
     }
     if table.timestamps_s.is_empty() {
-        return Err(IoError::Empty {
-            path: path.to_path_buf(),
-        });
+        return Err(IoError::Empty { path: path.to_path_buf() });
     }
     Ok(table)
 }
 
 /// The first of `,` `;` tab in `line`; runs of spaces when it has none.
 fn delimiter_of(line: &str) -> Delimiter {
-    [',', ';', '\t']
-        .into_iter()
-        .find(|&c| line.contains(c))
-        .map_or(Delimiter::Whitespace, Delimiter::Char)
+    [',', ';', '\t'].into_iter().find(|&c| line.contains(c)).map_or(Delimiter::Whitespace, Delimiter::Char)
 }
 
 /// The time and position of a data row, or what is wrong with it.
-fn parse_row(
-    layout: &Layout,
-    fields: &[&str],
-    first_line: usize,
-) -> Result<(f64, [f64; 3]), String> {
+fn parse_row(layout: &Layout, fields: &[&str], first_line: usize) -> Result<(f64, [f64; 3]), String> {
     if fields.len() != layout.width {
-        return Err(format!(
-            "expected {} columns as on line {first_line}, found {}",
-            layout.width,
-            fields.len()
-        ));
+        return Err(format!("expected {} columns as on line {first_line}, found {}", layout.width, fields.len()));
     }
     let number = |column: usize| text::parse_finite(fields[column], column + 1);
     let t = number(layout.t)?;
@@ -156,22 +122,14 @@ fn parse_row(
 }
 
 /// The names a header may give each column, lower case.
-const NAMES: [(&str, &[&str]); 4] = [
-    ("t", &["t", "time", "timestamp"]),
-    ("x", &["x"]),
-    ("y", &["y"]),
-    ("z", &["z"]),
-];
+const NAMES: [(&str, &[&str]); 4] = [("t", &["t", "time", "timestamp"]), ("x", &["x"]), ("y", &["y"]), ("z", &["z"])];
 
 /// The layout a header row gives, or what is wrong with it.
 fn layout_of_header(names: &[&str]) -> Result<Layout, String> {
     let mut found: [Option<usize>; 4] = [None; 4];
     for (column, name) in names.iter().enumerate() {
         let name = name.to_lowercase();
-        let Some(role) = NAMES
-            .iter()
-            .position(|(_, aliases)| aliases.contains(&name.as_str()))
-        else {
+        let Some(role) = NAMES.iter().position(|(_, aliases)| aliases.contains(&name.as_str())) else {
             continue;
         };
         if let Some(earlier) = found[role] {
@@ -188,14 +146,12 @@ fn layout_of_header(names: &[&str]) -> Result<Layout, String> {
     }
     match found {
         [Some(t), Some(x), Some(y), z] => Ok(Layout { t, x, y, z, width: names.len() }),
-        [None, None, None, None] => {
-            Layout::in_order(names.len()).ok_or_else(|| {
-                format!(
-                    "the header names no column t, x, y or z, and {} columns are not t, x, y[, z] in order",
-                    names.len()
-                )
-            })
-        }
+        [None, None, None, None] => Layout::in_order(names.len()).ok_or_else(|| {
+            format!(
+                "the header names no column t, x, y or z, and {} columns are not t, x, y[, z] in order",
+                names.len()
+            )
+        }),
         _ => {
             let missing: Vec<&str> = NAMES[..3]
                 .iter()
@@ -203,10 +159,7 @@ fn layout_of_header(names: &[&str]) -> Result<Layout, String> {
                 .filter(|(_, column)| column.is_none())
                 .map(|((role, _), _)| *role)
                 .collect();
-            Err(format!(
-                "the header names no column {} (t may be called time or timestamp)",
-                missing.join(", ")
-            ))
+            Err(format!("the header names no column {} (t may be called time or timestamp)", missing.join(", ")))
         }
     }
 }
@@ -219,9 +172,7 @@ fn unexplained_columns(count: usize, delimiter: Delimiter) -> String {
         }
         _ => "",
     };
-    format!(
-        "expected 3 columns (t, x, y) or 4 (t, x, y, z), or a header row naming them; found {count}{hint}"
-    )
+    format!("expected 3 columns (t, x, y) or 4 (t, x, y, z), or a header row naming them; found {count}{hint}")
 }
 
 #[cfg(test)]
@@ -243,16 +194,7 @@ mod tests {
     #[test]
     fn header_maps_names_in_any_case_and_order() {
         let layout = layout_of_header(&["Z", "speed", "TimeStamp", "y", "X"]).unwrap();
-        assert_eq!(
-            layout,
-            Layout {
-                t: 2,
-                x: 4,
-                y: 3,
-                z: Some(0),
-                width: 5
-            }
-        );
+        assert_eq!(layout, Layout { t: 2, x: 4, y: 3, z: Some(0), width: 5 });
         let layout = layout_of_header(&["stamp", "east", "north"]).unwrap();
         assert_eq!(layout, Layout::in_order(3).unwrap());
     }
@@ -260,15 +202,9 @@ mod tests {
     #[test]
     fn header_errors() {
         let error = layout_of_header(&["time", "lat", "lon"]).unwrap_err();
-        assert_eq!(
-            error,
-            "the header names no column x, y (t may be called time or timestamp)"
-        );
+        assert_eq!(error, "the header names no column x, y (t may be called time or timestamp)");
         let error = layout_of_header(&["t", "time", "x", "y"]).unwrap_err();
-        assert_eq!(
-            error,
-            r#"header names column t twice: columns 1 ("t") and 2 ("time")"#
-        );
+        assert_eq!(error, r#"header names column t twice: columns 1 ("t") and 2 ("time")"#);
         let error = layout_of_header(&["a", "b", "c", "d", "e"]).unwrap_err();
         assert!(error.contains("5 columns"), "{error}");
     }
@@ -276,10 +212,7 @@ mod tests {
     #[test]
     fn rows_must_match_the_first() {
         let error = parse("0,1,2\n1,1,2,3\n").unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            "drive.csv line 2: expected 3 columns as on line 1, found 4"
-        );
+        assert_eq!(error.to_string(), "drive.csv line 2: expected 3 columns as on line 1, found 4");
         let table = parse("0 1 2\n1 3 4\n").unwrap();
         assert_eq!(table.positions, [[1.0, 2.0, 0.0], [3.0, 4.0, 0.0]]);
     }

@@ -1,15 +1,21 @@
-//! The one error type of the readers: every error names the file, and the line where there is one.
+//! The one error type of the readers and writers: every error names the file, and the line, or
+//! the topic and byte offset, where there is one.
 
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 use crate::format::Format;
+use crate::mcap::{FramePairInfo, TopicInfo};
+use crate::samples::WriteError;
 
 /// `Result` with [`IoError`] as the default error type.
 pub type Result<T, E = IoError> = std::result::Result<T, E>;
 
-/// Everything that can go wrong reading a pose file. The message always starts with the file's
-/// path, then `line N` where a line is to blame: `drive.tum line 12: column 3 ("abc") is not a
-/// number`.
+/// Everything that can go wrong reading or writing a pose file. The message always starts with
+/// the file's path, then where in it: `line N` for text files (`drive.tum line 12: column 3
+/// ("abc") is not a number`), the byte offset for the structure of an MCAP file (`drive.mcap
+/// offset 1234: ...`), the topic and the message's offset for an MCAP message (`drive.mcap
+/// topic /odom, message at offset 1234: ...`).
 ///
 /// Each message is complete on its own, so the wrapped errors (`error` fields) are public fields
 /// to match on and are not repeated as [`source`](std::error::Error::source): a report that
@@ -43,20 +49,35 @@ pub enum IoError {
         path: PathBuf,
     },
     /// Poses that the core rejects as a trajectory (duplicate timestamps, too few poses, ...),
-    /// located in the file.
-    #[error("{}", trajectory_message(.path, *.line, *.previous_line, .error))]
+    /// located in the file: at a line for text files, at a message for MCAP files.
+    #[error("{}", trajectory_message(.path, *.line, *.previous_line, .messages.as_deref(), .error))]
     Trajectory {
-        /// The file.
-        path: PathBuf,
-        /// The line of the pose the core names, when it names one.
+        /// The file (for a pose from an MCAP file, the file holding its message); boxed, as
+        /// `messages`, so that errors stay small.
+        path: Box<Path>,
+        /// The line of the pose the core names, when it names one (text files).
         line: Option<usize>,
         /// For timestamps out of order: the line of the pose before (comments and blank lines
         /// may lie between the two).
         previous_line: Option<usize>,
+        /// The message of the pose the core names, when it names one (MCAP files), and the one
+        /// before for timestamps out of order (boxed: errors stay small).
+        messages: Option<Box<TrajectoryMessages>>,
         /// What the core said, with pose indices rather than lines.
         error: loops_core::Error,
     },
-    /// No format was given and the file's extension does not tell it.
+    /// Detections that the core rejects (outside the trajectory's time span, ...), located in
+    /// the file.
+    #[error("{}{}: {error}", .path.display(), .line.map(|l| format!(" line {l}")).unwrap_or_default())]
+    Detections {
+        /// The file.
+        path: PathBuf,
+        /// The line of the detection the core names, when it names one.
+        line: Option<usize>,
+        /// What the core said, with detection indices rather than lines.
+        error: loops_core::Error,
+    },
+    /// No format was given and neither the file's extension nor its first line tells it.
     #[error("{}: {}", .path.display(), unknown_format_message(.extension.as_deref()))]
     UnknownFormat {
         /// The file.
@@ -64,6 +85,91 @@ pub enum IoError {
         /// The file's extension, if it has one.
         extension: Option<String>,
     },
+    /// An MCAP file whose structure is broken at a byte offset: not an MCAP file (bad magic), cut
+    /// short, a chunk whose CRC or compression fails, a record that does not parse.
+    #[error("{} offset {offset}: {message}", .path.display())]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// Byte offset in the file of the record at fault (0 for the magic at the start).
+        offset: u64,
+        /// What is wrong.
+        message: String,
+    },
+    /// An MCAP message that does not decode as its schema says: too short for its type, a bad
+    /// CDR encapsulation, invalid protobuf or JSON.
+    #[error("{location}: {message}")]
+    Message {
+        /// The message: file, topic and offset.
+        location: MessageLocation,
+        /// What is wrong, naming the field where there is one.
+        message: String,
+    },
+    /// The topic asked for is not in the file(s).
+    #[error("{}: no topic {topic:?}; the topics are: {}", .path.display(), list(.topics))]
+    TopicNotFound {
+        /// The (first) file.
+        path: PathBuf,
+        /// The topic asked for.
+        topic: String,
+        /// Every topic of the file(s).
+        topics: Vec<TopicInfo>,
+    },
+    /// No topic was asked for and none holds poses of a type this crate reads.
+    #[error("{}: no topic holds poses of a type this crate reads ({}); the topics are: {}",
+        .path.display(), crate::mcap::SUPPORTED_TYPES, list(.topics))]
+    NoPoseTopic {
+        /// The (first) file.
+        path: PathBuf,
+        /// Every topic of the file(s).
+        topics: Vec<TopicInfo>,
+    },
+    /// No topic was asked for and several hold poses: name one.
+    #[error("{}: {} topics hold poses, name one: {}", .path.display(), .candidates.len(), list(.candidates))]
+    AmbiguousTopic {
+        /// The (first) file.
+        path: PathBuf,
+        /// The topics that hold poses.
+        candidates: Vec<TopicInfo>,
+    },
+    /// The topic asked for has a type this crate cannot read poses from (an unknown schema, or a
+    /// known schema in an unknown encoding).
+    #[error("{}: topic {} has type {:?} in encoding {:?}, which this crate does not read poses from; it reads {}",
+        .path.display(), .topic.topic, .topic.schema_name, .topic.message_encoding, crate::mcap::SUPPORTED_TYPES)]
+    UnsupportedTopic {
+        /// The (first) file.
+        path: PathBuf,
+        /// The topic (boxed: errors stay small).
+        topic: Box<TopicInfo>,
+    },
+    /// The topic has a channel but no message, or messages without poses.
+    #[error("{} topic {}: no poses ({} message{}; its channel is in the record at offset {channel_offset})",
+        .path.display(), .topic.topic, .topic.message_count, if .topic.message_count == 1 { "" } else { "s" })]
+    EmptyTopic {
+        /// The file of the topic's first channel record.
+        path: PathBuf,
+        /// The topic (boxed: errors stay small).
+        topic: Box<TopicInfo>,
+        /// Byte offset in `path` of the topic's first channel record, or of the chunk holding it.
+        channel_offset: u64,
+    },
+    /// A transform topic (TF, `FrameTransform`) whose frame pair is ambiguous or missing: no
+    /// pair was asked for and the topic has several, or the pair asked for is not on it.
+    #[error("{} topic {topic}: {}", .path.display(), frames_message(.wanted.as_ref(), .pairs))]
+    FramePair {
+        /// The (first) file.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The pair `(parent, child)` asked for, if any.
+        wanted: Option<(String, String)>,
+        /// The pairs on the topic, with their transform counts.
+        pairs: Vec<FramePairInfo>,
+    },
+    /// A file could not be written: it exists and overwriting was not asked for, or the system
+    /// refused.
+    #[error(transparent)]
+    Write(WriteError),
 }
 
 impl IoError {
@@ -73,8 +179,18 @@ impl IoError {
             Self::Open { path, .. }
             | Self::Parse { path, .. }
             | Self::Empty { path }
-            | Self::Trajectory { path, .. }
-            | Self::UnknownFormat { path, .. } => path,
+            | Self::Detections { path, .. }
+            | Self::UnknownFormat { path, .. }
+            | Self::Mcap { path, .. }
+            | Self::TopicNotFound { path, .. }
+            | Self::NoPoseTopic { path, .. }
+            | Self::AmbiguousTopic { path, .. }
+            | Self::UnsupportedTopic { path, .. }
+            | Self::EmptyTopic { path, .. }
+            | Self::FramePair { path, .. } => path,
+            Self::Trajectory { path, .. } => path,
+            Self::Message { location, .. } => &location.path,
+            Self::Write(WriteError::Exists { path } | WriteError::Write { path, .. }) => path,
         }
     }
 
@@ -82,53 +198,142 @@ impl IoError {
     pub fn line(&self) -> Option<usize> {
         match self {
             Self::Parse { line, .. } => Some(*line),
-            Self::Trajectory { line, .. } => *line,
-            Self::Open { .. } | Self::Empty { .. } | Self::UnknownFormat { .. } => None,
+            Self::Trajectory { line, .. } | Self::Detections { line, .. } => *line,
+            _ => None,
+        }
+    }
+
+    /// The byte offset in an MCAP file the error is about, when there is one: of the record at
+    /// fault, of the message (of its chunk, for a message in a chunk), or of an empty topic's
+    /// channel record.
+    pub fn offset(&self) -> Option<u64> {
+        match self {
+            Self::Mcap { offset, .. } => Some(*offset),
+            Self::Message { location, .. } => Some(location.offset),
+            Self::Trajectory { messages: Some(messages), .. } => Some(messages.message.offset),
+            Self::EmptyTopic { channel_offset, .. } => Some(*channel_offset),
+            _ => None,
+        }
+    }
+
+    /// The MCAP topic the error is about, when there is one.
+    pub fn topic(&self) -> Option<&str> {
+        match self {
+            Self::Message { location, .. } => Some(&location.topic),
+            Self::Trajectory { messages: Some(messages), .. } => Some(&messages.message.topic),
+            Self::TopicNotFound { topic, .. } | Self::FramePair { topic, .. } => Some(topic),
+            Self::UnsupportedTopic { topic, .. } | Self::EmptyTopic { topic, .. } => Some(&topic.topic),
+            _ => None,
         }
     }
 
     pub(crate) fn parse(path: &Path, line: usize, message: impl Into<String>) -> Self {
-        Self::Parse {
-            path: path.to_path_buf(),
-            line,
-            message: message.into(),
+        Self::Parse { path: path.to_path_buf(), line, message: message.into() }
+    }
+
+    pub(crate) fn mcap(path: &Path, offset: u64, message: impl Into<String>) -> Self {
+        Self::Mcap { path: path.to_path_buf(), offset, message: message.into() }
+    }
+
+    /// An invalid option (a rate, an axis) reported as the core's `InvalidParameter`.
+    pub(crate) fn invalid(path: &Path, name: &'static str, value: f64, expected: &'static str) -> Self {
+        Self::Trajectory {
+            path: path.into(),
+            line: None,
+            previous_line: None,
+            messages: None,
+            error: loops_core::Error::InvalidParameter { name, value, expected },
         }
     }
 }
 
-/// The core's message in terms of the file: lines instead of pose indices.
+/// The messages an [`IoError::Trajectory`] names in MCAP files.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct TrajectoryMessages {
+    /// The message of the pose the core names.
+    pub message: MessageLocation,
+    /// For timestamps out of order: the message of the pose before.
+    pub previous: Option<MessageLocation>,
+}
+
+/// Where a message lies in an MCAP file: the file, its topic, and its byte offset.
+///
+/// Displays as `drive.mcap topic /odom, message at offset 1234`, or for a message inside a
+/// compressed or uncompressed chunk `drive.mcap topic /odom, message at byte 56 of the chunk at
+/// offset 1234` (the byte counts from the start of the chunk's decompressed records).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct MessageLocation {
+    /// The file.
+    pub path: PathBuf,
+    /// The message's topic.
+    pub topic: String,
+    /// Byte offset in the file of the message record, or of the chunk record holding it.
+    pub offset: u64,
+    /// For a message in a chunk: its byte offset in the chunk's decompressed records.
+    pub offset_in_chunk: Option<u64>,
+}
+
+impl fmt::Display for MessageLocation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} topic {}, message at ", self.path.display(), self.topic)?;
+        match self.offset_in_chunk {
+            Some(inner) => write!(f, "byte {inner} of the chunk at offset {}", self.offset),
+            None => write!(f, "offset {}", self.offset),
+        }
+    }
+}
+
+fn list<T: fmt::Display>(items: &[T]) -> String {
+    if items.is_empty() {
+        return "none".to_owned();
+    }
+    items.iter().map(ToString::to_string).collect::<Vec<_>>().join(", ")
+}
+
+fn frames_message(wanted: Option<&(String, String)>, pairs: &[FramePairInfo]) -> String {
+    match wanted {
+        Some((parent, child)) => {
+            format!("no transform from {parent:?} to {child:?}; the frame pairs (parent -> child) are: {}", list(pairs))
+        }
+        None => format!("{} frame pairs (parent -> child), name one: {}", pairs.len(), list(pairs)),
+    }
+}
+
+/// The core's message in terms of the file: lines or messages instead of pose indices.
 fn trajectory_message(
     path: &Path,
     line: Option<usize>,
     previous_line: Option<usize>,
+    messages: Option<&TrajectoryMessages>,
     error: &loops_core::Error,
 ) -> String {
     use loops_core::Error;
 
-    let location = match line {
-        Some(line) => format!("{} line {line}", path.display()),
-        None => path.display().to_string(),
+    let message = messages.map(|m| &m.message);
+    let previous_message = messages.and_then(|m| m.previous.as_ref());
+    let location = match (message, line) {
+        (Some(message), _) => message.to_string(),
+        (None, Some(line)) => format!("{} line {line}", path.display()),
+        (None, None) => path.display().to_string(),
     };
-    let what = match (line, error) {
-        (
-            Some(_),
-            Error::TimestampsNotIncreasing {
-                previous_s,
-                value_s,
-                ..
-            },
-        ) => {
-            let previous = previous_line
-                .map(|p| format!(" (line {p})"))
-                .unwrap_or_default();
-            format!(
-                "timestamps must strictly increase: {value_s} s is not after {previous_s} s{previous}"
-            )
+    let located = line.is_some() || message.is_some();
+    let what = match (located, error) {
+        (true, Error::TimestampsNotIncreasing { previous_s, value_s, .. }) => {
+            let previous = match (previous_message, previous_line) {
+                (Some(previous), _) if previous.path == message.map_or(path, |m| &m.path) => {
+                    match previous.offset_in_chunk {
+                        Some(inner) => format!(" (message at byte {inner} of the chunk at offset {})", previous.offset),
+                        None => format!(" (message at offset {})", previous.offset),
+                    }
+                }
+                (Some(previous), _) => format!(" ({previous})"),
+                (None, Some(p)) => format!(" (line {p})"),
+                (None, None) => String::new(),
+            };
+            format!("timestamps must strictly increase: {value_s} s is not after {previous_s} s{previous}")
         }
-        (Some(_), Error::NonFiniteTimestamp { value, .. }) => {
-            format!("the timestamp is not finite ({value})")
-        }
-        (Some(_), Error::NonFiniteCoordinate { axis, value, .. }) => {
+        (true, Error::NonFiniteTimestamp { value, .. }) => format!("the timestamp is not finite ({value})"),
+        (true, Error::NonFiniteCoordinate { axis, value, .. }) => {
             format!("coordinate {axis} of the position is not finite ({value})")
         }
         _ => error.to_string(),
@@ -139,12 +344,9 @@ fn trajectory_message(
 fn unknown_format_message(extension: Option<&str>) -> String {
     let known: Vec<String> = Format::ALL
         .iter()
+        .filter(|format| !format.extensions().is_empty())
         .map(|format| {
-            let extensions: Vec<String> = format
-                .extensions()
-                .iter()
-                .map(|e| format!(".{e}"))
-                .collect();
+            let extensions: Vec<String> = format.extensions().iter().map(|e| format!(".{e}")).collect();
             format!("{} for {}", extensions.join(" or "), format.name())
         })
         .collect();

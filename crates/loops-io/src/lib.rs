@@ -1,22 +1,36 @@
 //! # loops-io
 //!
-//! Pose files in, for [`loops_core`]: a reader returns a [`PoseTable`] (timestamps, positions,
-//! orientations when the format has them, and the line each pose came from), and
-//! [`PoseTable::to_trajectory`] turns it into a [`loops_core::Trajectory`], reporting the
-//! core's complaints (duplicate timestamps, ...) at their line in the file.
+//! Pose logs in, for [`loops_core`], and results out: a reader returns a [`PoseTable`]
+//! (timestamps, positions, orientations when the format has them, and the line or the MCAP
+//! message each pose came from), and [`PoseTable::to_trajectory`] (or
+//! [`to_trajectory_for`](PoseTable::to_trajectory_for) a metric) turns it into a
+//! [`loops_core::Trajectory`], reporting the core's complaints (duplicate timestamps, ...) at
+//! their line or message in the file.
 //!
-//! | format | reader | lines | extensions |
+//! | format | reader | content | extensions |
 //! |---|---|---|---|
+//! | MCAP (ROS 2, Foxglove) | [`read_mcap`], [`read_mcap_files`], [`list_topics`] | one topic of [`PoseType`]: ROS 2 CDR `PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`, `Odometry`, `TFMessage`; Foxglove `PoseInFrame`, `PosesInFrame`, `FrameTransform(s)`, `Odometry` in protobuf or JSON | `.mcap` |
 //! | TUM RGB-D | [`read_tum`] | `timestamp tx ty tz qx qy qz qw` | `.tum`, `.txt` |
 //! | CSV | [`read_csv`] | `t,x,y` or `t,x,y,z`, optional header | `.csv` |
+//! | KITTI | [`read_kitti`] | `[t] r00 r01 r02 tx ... r22 tz`, times from a rate or file if none | (`.txt`) |
+//! | EuRoC | [`read_euroc`] | `timestamp [ns], p_xyz, q_wxyz, ...` | (`.csv`) |
+//! | g2o / TORO | [`read_pose_graph`] | `VERTEX_SE2`, `VERTEX2`, `VERTEX_SE3:QUAT`, `VERTEX3` and their edges | `.g2o`, `.graph` |
+//! | libRSF (TUC) | [`read_tuc`] | `point2 t x y ...`, `point3 t X Y Z ...` (ECEF → local ENU), `angle t yaw` | (`.txt`) |
 //!
-//! [`read_trajectory`] picks the reader by [`Format`] or by extension. Every error is an
-//! [`IoError`] whose message starts with the file and line: `drive.tum line 12: column 3
-//! ("abc") is not a number`.
+//! [`read_trajectory`] and [`read_trajectory_with`] pick the reader by [`Format`], or by
+//! extension and first line. Writers: [`write_tum`] for trajectories, [`write_g2o_edges`] for
+//! candidate loop-closure edges with relative-pose guesses; both atomic, and never replacing a
+//! file unless asked ([`WriteError::Exists`]).
 //!
-//! What it does not do (yet): write files; read KITTI poses, EuRoC CSV (nanosecond
-//! timestamps), g2o/TORO graphs or bags; normalise quaternions; drop duplicate timestamps
-//! (they are reported, not fixed).
+//! Every error is an [`IoError`] whose message starts with the file and the line, or the topic
+//! and byte offset: `drive.tum line 12: column 3 ("abc") is not a number`, `drive.mcap topic
+//! /odom, message at byte 96 of the chunk at offset 4242: the CDR message ends at byte 60, but
+//! nav_msgs/msg/Odometry needs ...`. No input makes a reader panic.
+//!
+//! What it does not do (yet): ROS 1 bags and ROS 1 messages in MCAP; compose TF trees (one
+//! parent-child pair is read as is); read the times of a `PosesInFrame` path pose by pose (all
+//! poses of a message get its stamp); normalise quaternions in a table (the trajectory
+//! constructors do); drop duplicate timestamps (they are reported, not fixed).
 //!
 //! ## Quickstart
 //! ```
@@ -41,17 +55,44 @@
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! An MCAP log reads the same way: `read_mcap("drive.mcap", &McapOptions::default())` picks the
+//! one topic with poses, or names the candidates; [`McapOptions`] names a topic, a time source
+//! and a frame pair.
 #![warn(missing_docs)]
 
+mod cdr;
 mod csv;
+mod detections;
 mod error;
+mod euroc;
 mod format;
+mod foxglove;
+mod graph;
+mod kitti;
+mod mcap;
+mod message;
+mod rotation;
+mod samples;
 mod table;
 mod text;
+mod timing;
+mod tuc;
 mod tum;
+mod write;
 
+pub use crate::mcap::{FramePairInfo, McapOptions, TimeSource, TopicInfo, list_topics, read_mcap, read_mcap_files};
 pub use csv::read_csv;
-pub use error::{IoError, Result};
-pub use format::{Format, read_trajectory};
-pub use table::PoseTable;
+pub use detections::{DetectionTable, read_detections};
+pub use error::{IoError, MessageLocation, Result, TrajectoryMessages};
+pub use euroc::read_euroc;
+pub use format::{Format, ReadOptions, read_trajectory, read_trajectory_with};
+pub use graph::{GraphEdge, PoseGraph, read_pose_graph};
+pub use kitti::read_kitti;
+pub use message::{DecodeError, DecodedPose, MessageEncoding, PoseType, decode_poses};
+pub use samples::{CSV_HEADER, SamplesFormat, WriteError, samples_to_csv, samples_to_json, write_samples};
+pub use table::{MessageRef, MessageSources, PoseTable, seconds_of_ns};
+pub use timing::Timing;
+pub use tuc::read_tuc;
 pub use tum::read_tum;
+pub use write::{EdgeKind, G2oOptions, write_g2o_edges, write_tum};

@@ -1,21 +1,27 @@
 //! Pose tables: what a reader returns, and the trajectory made from one.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use loops_core::{Error, FILE_QUATERNION_TOLERANCE, Trajectory};
 
-use crate::error::{IoError, Result};
+use crate::error::{IoError, MessageLocation, Result, TrajectoryMessages};
 
 /// The poses of one file, as read: one row per data line, in file order, not validated as a
 /// trajectory yet (see [`to_trajectory`](Self::to_trajectory)).
 ///
 /// All vectors have one entry per pose. Positions are in the file's units (metres for TUM).
+/// Poses come from lines of a text file ([`source_lines`](Self::source_lines)) or from messages
+/// of MCAP files ([`messages`](Self::messages)).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseTable {
-    /// The file read.
+    /// The file read (the first one, for several MCAP files).
     pub path: PathBuf,
     /// Timestamps, seconds, as read (not checked for order).
     pub timestamps_s: Vec<f64>,
+    /// The same timestamps as integer nanoseconds, exactly as the file gives them, when it gives
+    /// integers (MCAP stamps and log times, EuRoC); `timestamps_s` is then
+    /// [`seconds_of_ns`](crate::seconds_of_ns) of each.
+    pub timestamps_ns: Option<Vec<i64>>,
     /// Positions `[x, y, z]`; `z = 0` for 2-D files.
     pub positions: Vec<[f64; 3]>,
     /// Orientations as unit quaternions `[qx, qy, qz, qw]`, stored as read (not normalised),
@@ -23,11 +29,91 @@ pub struct PoseTable {
     pub orientations_xyzw: Option<Vec<[f64; 4]>>,
     /// Coordinates the file gives per position: 2 (`x, y`) or 3 (`x, y, z`).
     pub dim: usize,
-    /// The 1-based line number in the file of each pose.
+    /// The 1-based line number in the file of each pose; empty for poses from MCAP messages.
     pub source_lines: Vec<usize>,
+    /// For poses from MCAP files: the topic, and the message each pose came from.
+    pub messages: Option<MessageSources>,
+}
+
+/// Seconds from integer nanoseconds, as close as an `f64` gets: whole seconds plus the
+/// nanoseconds divided by 10⁹ (two roundings at most, where `ns as f64 / 1e9` has two as well but
+/// loses the nanoseconds of an epoch stamp first).
+///
+/// # Examples
+/// ```
+/// assert_eq!(loops_io::seconds_of_ns(1_700_000_000_250_000_000), 1_700_000_000.25);
+/// assert_eq!(loops_io::seconds_of_ns(-1), -1e-9);
+/// ```
+pub fn seconds_of_ns(ns: i64) -> f64 {
+    const NS_PER_S: i64 = 1_000_000_000;
+    (ns / NS_PER_S) as f64 + (ns % NS_PER_S) as f64 / 1e9
+}
+
+/// Where the poses of a [`PoseTable`] read from MCAP files came from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MessageSources {
+    /// The files read, in the order given.
+    pub files: Vec<PathBuf>,
+    /// The topic read.
+    pub topic: String,
+    /// The topic's schema name: `geometry_msgs/msg/PoseStamped`, `foxglove.PoseInFrame`, ...
+    pub schema_name: String,
+    /// For transform topics: the `(parent, child)` frame pair read.
+    pub frames: Option<(String, String)>,
+    /// The message of each pose, one per pose (a message holding several poses appears once for
+    /// each).
+    pub messages: Vec<MessageRef>,
+}
+
+/// One message in one of the files of [`MessageSources`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MessageRef {
+    /// Index into [`MessageSources::files`].
+    pub file: usize,
+    /// Byte offset in the file of the message record, or of the chunk record holding it.
+    pub offset: u64,
+    /// For a message in a chunk: its byte offset in the chunk's decompressed records.
+    pub offset_in_chunk: Option<u64>,
+}
+
+impl MessageSources {
+    /// Where the message of pose `index` lies, or `None` for an index out of range.
+    pub fn location(&self, index: usize) -> Option<MessageLocation> {
+        let message = self.messages.get(index)?;
+        Some(MessageLocation {
+            path: self.files.get(message.file)?.clone(),
+            topic: self.topic.clone(),
+            offset: message.offset,
+            offset_in_chunk: message.offset_in_chunk,
+        })
+    }
 }
 
 impl PoseTable {
+    /// A table with no poses yet, for the readers to fill.
+    pub(crate) fn empty(path: &Path, dim: usize) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            timestamps_s: Vec::new(),
+            timestamps_ns: None,
+            positions: Vec::new(),
+            orientations_xyzw: None,
+            dim,
+            source_lines: Vec::new(),
+            messages: None,
+        }
+    }
+
+    /// The number of poses.
+    pub fn len(&self) -> usize {
+        self.timestamps_s.len()
+    }
+
+    /// Whether the table has no pose.
+    pub fn is_empty(&self) -> bool {
+        self.timestamps_s.is_empty()
+    }
+
     /// The positions as a trajectory: `[x, y]` or `[x, y, z]`, as many coordinates as the file
     /// gives ([`dim`](Self::dim)).
     ///
@@ -154,17 +240,26 @@ impl PoseTable {
         Trajectory::new(self.timestamps_s.clone(), coords, axes.len()).map_err(|error| self.locate(error))
     }
 
-    /// A core error placed in the file: the pose index it names becomes a line.
-    fn locate(&self, error: Error) -> IoError {
-        let line_of = |index: usize| self.source_lines.get(index).copied();
-        let (line, previous_line) = match error {
-            Error::TimestampsNotIncreasing { index, .. } => (line_of(index), index.checked_sub(1).and_then(line_of)),
+    /// A core error placed in the file: the pose index it names becomes a line, or a message.
+    pub(crate) fn locate(&self, error: Error) -> IoError {
+        let (index, previous) = match error {
+            Error::TimestampsNotIncreasing { index, .. } => (Some(index), index.checked_sub(1)),
             Error::NonFiniteTimestamp { index, .. }
             | Error::NonFiniteCoordinate { index, .. }
-            | Error::NonUnitQuaternion { index, .. } => (line_of(index), None),
+            | Error::NonUnitQuaternion { index, .. } => (Some(index), None),
             _ => (None, None),
         };
-        IoError::Trajectory { path: self.path.clone(), line, previous_line, error }
+        let line_of = |index: Option<usize>| index.and_then(|index| self.source_lines.get(index).copied());
+        let message_of = |index: Option<usize>| Some(self.messages.as_ref()?.location(index?)).flatten();
+        let messages =
+            message_of(index).map(|message| Box::new(TrajectoryMessages { message, previous: message_of(previous) }));
+        IoError::Trajectory {
+            path: messages.as_ref().map_or_else(|| self.path.as_path(), |m| m.message.path.as_path()).into(),
+            line: line_of(index),
+            previous_line: line_of(previous),
+            messages,
+            error,
+        }
     }
 }
 
@@ -178,9 +273,11 @@ mod tests {
             path: PathBuf::from("drive.csv"),
             positions: (0..count).map(|i| [i as f64, 10.0 * i as f64, 100.0 * i as f64]).collect(),
             timestamps_s,
+            timestamps_ns: None,
             orientations_xyzw: None,
             dim,
             source_lines: (0..count).map(|i| 2 * i + 3).collect(),
+            messages: None,
         }
     }
 

@@ -11,12 +11,9 @@ use crate::error::{IoError, Result};
 /// do no harm, and in a data line they fail that line's number parsing with its line number.
 /// A leading byte-order mark is dropped.
 pub(crate) fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|error| IoError::Open {
-        path: path.to_path_buf(),
-        error,
-    })?;
-    let mut text = String::from_utf8(bytes)
-        .unwrap_or_else(|error| String::from_utf8_lossy(error.as_bytes()).into_owned());
+    let bytes = std::fs::read(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
+    let mut text =
+        String::from_utf8(bytes).unwrap_or_else(|error| String::from_utf8_lossy(error.as_bytes()).into_owned());
     if text.starts_with('\u{feff}') {
         text.drain(..'\u{feff}'.len_utf8());
     }
@@ -72,10 +69,7 @@ impl<'a> Iterator for Fields<'a> {
 /// A delimited field without surrounding whitespace and one pair of double quotes.
 fn unquote(field: &str) -> &str {
     let field = field.trim();
-    field
-        .strip_prefix('"')
-        .and_then(|inner| inner.strip_suffix('"'))
-        .unwrap_or(field)
+    field.strip_prefix('"').and_then(|inner| inner.strip_suffix('"')).unwrap_or(field)
 }
 
 /// Whether `field` reads as a number (finite or not): tells data rows from header rows.
@@ -95,10 +89,7 @@ pub(crate) fn parse_finite(field: &str, column: usize) -> Result<f64, String> {
         Ok(value) if value.is_finite() => Ok(value),
         Ok(_) => Err(format!("column {column} ({}) is not finite", quoted(field))),
         Err(_) if field.is_empty() => Err(format!("column {column} is empty")),
-        Err(_) => Err(format!(
-            "column {column} ({}) is not a number",
-            quoted(field)
-        )),
+        Err(_) => Err(format!("column {column} ({}) is not a number", quoted(field))),
     }
 }
 
@@ -133,18 +124,9 @@ mod tests {
     #[test]
     fn numbers_must_be_finite_and_errors_name_the_column() {
         assert_eq!(parse_finite("-1.5e3", 1), Ok(-1500.0));
-        assert_eq!(
-            parse_finite("abc", 3).unwrap_err(),
-            r#"column 3 ("abc") is not a number"#
-        );
-        assert_eq!(
-            parse_finite("NaN", 2).unwrap_err(),
-            r#"column 2 ("NaN") is not finite"#
-        );
-        assert_eq!(
-            parse_finite("-inf", 2).unwrap_err(),
-            r#"column 2 ("-inf") is not finite"#
-        );
+        assert_eq!(parse_finite("abc", 3).unwrap_err(), r#"column 3 ("abc") is not a number"#);
+        assert_eq!(parse_finite("NaN", 2).unwrap_err(), r#"column 2 ("NaN") is not finite"#);
+        assert_eq!(parse_finite("-inf", 2).unwrap_err(), r#"column 2 ("-inf") is not finite"#);
         assert_eq!(parse_finite("", 4).unwrap_err(), "column 4 is empty");
         let long = "é".repeat(100);
         let expected = format!("column 1 (\"{}\"…) is not a number", "é".repeat(40));

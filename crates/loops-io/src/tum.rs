@@ -44,31 +44,22 @@ pub fn read_tum(path: impl AsRef<Path>) -> Result<PoseTable> {
 
 /// The TUM poses in `text`, the contents of `path`.
 pub(crate) fn parse_tum(path: &Path, text: &str) -> Result<PoseTable> {
-    let mut table = PoseTable {
-        path: path.to_path_buf(),
-        timestamps_s: Vec::new(),
-        positions: Vec::new(),
-        orientations_xyzw: None,
-        dim: 3,
-        source_lines: Vec::new(),
-    };
+    let mut table = PoseTable::empty(path, 3);
     let mut orientations_xyzw = Vec::new();
     for (index, (line, content)) in text::data_lines(text).enumerate() {
         let delimiter = delimiter_of(content);
         if index == 0 && text::is_header(delimiter.split(content)) {
             continue;
         }
-        let [t, x, y, z, qx, qy, qz, qw] = parse_pose(delimiter, content)
-            .map_err(|message| IoError::parse(path, line, message))?;
+        let [t, x, y, z, qx, qy, qz, qw] =
+            parse_pose(delimiter, content).map_err(|message| IoError::parse(path, line, message))?;
         table.timestamps_s.push(t);
         table.positions.push([x, y, z]);
         orientations_xyzw.push([qx, qy, qz, qw]);
         table.source_lines.push(line);
     }
     if table.timestamps_s.is_empty() {
-        return Err(IoError::Empty {
-            path: path.to_path_buf(),
-        });
+        return Err(IoError::Empty { path: path.to_path_buf() });
     }
     table.orientations_xyzw = Some(orientations_xyzw);
     Ok(table)
@@ -76,11 +67,7 @@ pub(crate) fn parse_tum(path: &Path, text: &str) -> Result<PoseTable> {
 
 /// Commas when the line has one, else spaces and tabs.
 fn delimiter_of(line: &str) -> Delimiter {
-    if line.contains(',') {
-        Delimiter::Char(',')
-    } else {
-        Delimiter::Whitespace
-    }
+    if line.contains(',') { Delimiter::Char(',') } else { Delimiter::Whitespace }
 }
 
 /// The 8 numbers of a data line, or what is wrong with it.
@@ -94,9 +81,7 @@ fn parse_pose(delimiter: Delimiter, line: &str) -> Result<[f64; COLUMNS], String
         count += 1;
     }
     if count != COLUMNS {
-        return Err(format!(
-            "expected {COLUMNS} columns (timestamp tx ty tz qx qy qz qw), found {count}"
-        ));
+        return Err(format!("expected {COLUMNS} columns (timestamp tx ty tz qx qy qz qw), found {count}"));
     }
     Ok(values)
 }
@@ -114,10 +99,7 @@ mod tests {
         let table = parse("# c\n1 2 3 4 0 0 0 1\n\n2,5,6,7,0.1,0.2,0.3,0.9\r\n").unwrap();
         assert_eq!(table.timestamps_s, [1.0, 2.0]);
         assert_eq!(table.positions, [[2.0, 3.0, 4.0], [5.0, 6.0, 7.0]]);
-        assert_eq!(
-            table.orientations_xyzw,
-            Some(vec![[0.0, 0.0, 0.0, 1.0], [0.1, 0.2, 0.3, 0.9]])
-        );
+        assert_eq!(table.orientations_xyzw, Some(vec![[0.0, 0.0, 0.0, 1.0], [0.1, 0.2, 0.3, 0.9]]));
         assert_eq!(table.source_lines, [2, 4]);
         assert_eq!(table.dim, 3);
     }
@@ -125,21 +107,12 @@ mod tests {
     #[test]
     fn errors_name_line_and_column() {
         let error = parse("1 2 3 4 0 0 0 1\n2 2 3\n").unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            "drive.tum line 2: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 3"
-        );
+        assert_eq!(error.to_string(), "drive.tum line 2: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 3");
         let error = parse("1 2 x 4 0 0 0 1\n").unwrap_err();
-        assert_eq!(
-            error.to_string(),
-            r#"drive.tum line 1: column 3 ("x") is not a number"#
-        );
+        assert_eq!(error.to_string(), r#"drive.tum line 1: column 3 ("x") is not a number"#);
         let error = parse("1 2 3 4 0 0 0 1\n2 2 3 4 0 0 0 1 9\n").unwrap_err();
         assert!(error.to_string().ends_with("found 9"), "{error}");
-        assert!(matches!(
-            parse("# only\n\n").unwrap_err(),
-            IoError::Empty { .. }
-        ));
+        assert!(matches!(parse("# only\n\n").unwrap_err(), IoError::Empty { .. }));
     }
 
     #[test]

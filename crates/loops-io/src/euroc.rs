@@ -1,0 +1,99 @@
+//! EuRoC MAV ground truth: `timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z, ...`.
+
+use std::path::Path;
+
+use crate::error::{IoError, Result};
+use crate::table::{PoseTable, seconds_of_ns};
+use crate::text::{self, Delimiter};
+
+/// The columns a EuRoC line needs: time, position, quaternion.
+const COLUMNS: usize = 8;
+
+/// Reads a EuRoC ground-truth CSV: `timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z` and any
+/// further columns (velocities, biases), ignored.
+///
+/// The timestamp is integer nanoseconds, kept exactly in [`PoseTable::timestamps_ns`]; the
+/// quaternion is `w` first in the file and stored `[x, y, z, w]` as everywhere else. The header
+/// starts with `#` (a header without `#`, with no number in it, is skipped too). Fields are
+/// separated by commas, optionally padded with spaces.
+///
+/// Time O(file size).
+///
+/// # Errors
+/// - [`IoError::Open`] when the file cannot be read;
+/// - [`IoError::Parse`] for a line with fewer than 8 columns, a timestamp that is not an integer,
+///   or a field that is not a finite number, naming line and column;
+/// - [`IoError::Empty`] without data lines.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-euroc.csv", std::process::id()));
+/// std::fs::write(&path, "#timestamp, p_x, p_y, p_z, q_w, q_x, q_y, q_z\n1403715524912143104,1,2,3,1,0,0,0,0.5\n")?;
+/// let table = loops_io::read_euroc(&path)?;
+/// assert_eq!(table.timestamps_ns, Some(vec![1403715524912143104]));
+/// assert_eq!(table.orientations_xyzw, Some(vec![[0.0, 0.0, 0.0, 1.0]]));
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_euroc(path: impl AsRef<Path>) -> Result<PoseTable> {
+    let path = path.as_ref();
+    parse_euroc(path, &text::read_text(path)?)
+}
+
+/// The EuRoC poses in `text`, the contents of `path`.
+pub(crate) fn parse_euroc(path: &Path, text: &str) -> Result<PoseTable> {
+    let mut table = PoseTable::empty(path, 3);
+    let mut stamps_ns = Vec::new();
+    let mut orientations = Vec::new();
+    let delimiter = Delimiter::Char(',');
+    for (index, (line, content)) in text::data_lines(text).enumerate() {
+        if index == 0 && text::is_header(delimiter.split(content)) {
+            continue;
+        }
+        let parse_error = |message: String| IoError::parse(path, line, message);
+        let mut fields = delimiter.split(content);
+        let Some(stamp) = fields.next() else { unreachable!("a data line has a field") };
+        let stamp_ns: i64 = stamp
+            .parse()
+            .map_err(|_| parse_error(format!("column 1 ({stamp:?}) is not an integer timestamp in nanoseconds")))?;
+        let mut values = [0.0; COLUMNS - 1];
+        let mut count = 1;
+        for (value, field) in values.iter_mut().zip(&mut fields) {
+            count += 1;
+            *value = text::parse_finite(field, count).map_err(parse_error)?;
+        }
+        if count < COLUMNS {
+            return Err(parse_error(format!(
+                "expected at least {COLUMNS} columns (timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z), found {count}"
+            )));
+        }
+        let [x, y, z, qw, qx, qy, qz] = values;
+        stamps_ns.push(stamp_ns);
+        table.timestamps_s.push(seconds_of_ns(stamp_ns));
+        table.positions.push([x, y, z]);
+        orientations.push([qx, qy, qz, qw]);
+        table.source_lines.push(line);
+    }
+    if table.is_empty() {
+        return Err(IoError::Empty { path: path.to_path_buf() });
+    }
+    table.timestamps_ns = Some(stamps_ns);
+    table.orientations_xyzw = Some(orientations);
+    Ok(table)
+}
+
+/// Whether `text` looks like EuRoC: a first data line of at least 8 comma-separated numbers, the
+/// first an integer of 16 digits or more (nanoseconds since 1970).
+pub(crate) fn looks_like_euroc(text: &str) -> bool {
+    text::data_lines(text).find(|(_, line)| !text::is_header(Delimiter::Char(',').split(line))).is_some_and(
+        |(_, line)| {
+            let fields: Vec<&str> = Delimiter::Char(',').split(line).collect();
+            fields.len() >= COLUMNS
+                && fields[0].len() >= 16
+                && fields[0].bytes().all(|b| b.is_ascii_digit())
+                && fields.iter().all(|field| text::is_number(field))
+        },
+    )
+}

@@ -1,0 +1,247 @@
+//! Pose graphs in g2o and TORO text: vertices (the poses) and edges (the constraints between
+//! them, among which the loop closures).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::error::{IoError, Result};
+use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw};
+use crate::table::PoseTable;
+use crate::text;
+use crate::timing::Timing;
+
+/// A pose graph: its pose vertices as a table, and its edges between them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseGraph {
+    /// The pose vertices, sorted by id: positions, orientations, the line of each, and times
+    /// from the ids (see [`read_pose_graph`]).
+    pub vertices: PoseTable,
+    /// The id of each vertex, one per row of `vertices`, increasing.
+    pub vertex_ids: Vec<u64>,
+    /// The edges between pose vertices, in file order.
+    pub edges: Vec<GraphEdge>,
+}
+
+/// An edge of a [`PoseGraph`]: a measured relative pose from vertex `from` to vertex `to`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct GraphEdge {
+    /// The id of the first vertex.
+    pub from: u64,
+    /// The id of the second vertex.
+    pub to: u64,
+    /// The 1-based line of the edge in the file.
+    pub line: usize,
+}
+
+impl GraphEdge {
+    /// Whether the edge joins vertices more than one id apart: a loop closure in graphs whose
+    /// odometry edges join consecutive ids (all the classic data sets).
+    pub fn is_loop_closure(&self) -> bool {
+        self.from.abs_diff(self.to) > 1
+    }
+}
+
+impl PoseGraph {
+    /// The edges joining vertices more than one id apart ([`GraphEdge::is_loop_closure`]).
+    pub fn loop_closures(&self) -> impl Iterator<Item = &GraphEdge> {
+        self.edges.iter().filter(|edge| edge.is_loop_closure())
+    }
+
+    /// The row of `vertices` holding vertex `id`, if there is one. Time O(log n).
+    pub fn vertex_index(&self, id: u64) -> Option<usize> {
+        self.vertex_ids.binary_search(&id).ok()
+    }
+}
+
+/// What a line tag is: its dimension, and the numbers after the ids it needs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Tag {
+    /// `VERTEX_SE2 id x y θ`, `VERTEX2 id x y θ`.
+    Vertex2,
+    /// `VERTEX_SE3:QUAT id x y z qx qy qz qw`.
+    Vertex3Quat,
+    /// `VERTEX3 id x y z roll pitch yaw` (TORO 3-D).
+    Vertex3Euler,
+    /// `EDGE_SE2 i j dx dy dθ ...`, `EDGE2 i j dx dy dθ ...`.
+    Edge2,
+    /// `EDGE_SE3:QUAT i j x y z qx qy qz qw ...`.
+    Edge3Quat,
+    /// `EDGE3 i j x y z roll pitch yaw ...`.
+    Edge3Euler,
+}
+
+impl Tag {
+    fn of(word: &str) -> Option<Self> {
+        match word {
+            "VERTEX_SE2" | "VERTEX2" => Some(Self::Vertex2),
+            "VERTEX_SE3:QUAT" => Some(Self::Vertex3Quat),
+            "VERTEX3" => Some(Self::Vertex3Euler),
+            "EDGE_SE2" | "EDGE2" => Some(Self::Edge2),
+            "EDGE_SE3:QUAT" => Some(Self::Edge3Quat),
+            "EDGE3" => Some(Self::Edge3Euler),
+            _ => None,
+        }
+    }
+
+    /// (ids, numbers after them, dimension, what a line looks like).
+    fn layout(self) -> (usize, usize, usize, &'static str) {
+        match self {
+            Self::Vertex2 => (1, 3, 2, "id x y theta"),
+            Self::Vertex3Quat => (1, 7, 3, "id x y z qx qy qz qw"),
+            Self::Vertex3Euler => (1, 6, 3, "id x y z roll pitch yaw"),
+            Self::Edge2 => (2, 3, 2, "i j dx dy dtheta"),
+            Self::Edge3Quat => (2, 7, 3, "i j x y z qx qy qz qw"),
+            Self::Edge3Euler => (2, 6, 3, "i j x y z roll pitch yaw"),
+        }
+    }
+}
+
+/// Reads a pose graph in g2o or TORO text: `VERTEX_SE2 id x y θ` / `VERTEX2`,
+/// `VERTEX_SE3:QUAT id x y z qx qy qz qw`, `VERTEX3 id x y z roll pitch yaw`, and the edges
+/// `EDGE_SE2 i j ...` / `EDGE2`, `EDGE_SE3:QUAT i j ...`, `EDGE3 i j ...` (the measurement must
+/// be there; the information matrix after it is not read).
+///
+/// Vertices are sorted by id; each vertex's time is its id in seconds, or `id / rate` or a times
+/// file by `timing` ([`Timing`]; a times file gives one time per vertex in id order). 2-D
+/// graphs give a 2-D table with headings as rotations about z; 3-D ones a 3-D table. Lines of
+/// other types (landmarks `VERTEX_XY`, `EDGE_SE2_XY`, `FIX`, parameters) are skipped, as are
+/// blank lines and `#` comments. The vertex values of the classic data sets are odometry
+/// guesses, not ground truth; their edges with `|i − j| > 1` are the loop closures
+/// ([`PoseGraph::loop_closures`]).
+///
+/// Time O(file size + n log n).
+///
+/// # Errors
+/// - [`IoError::Open`] when a file cannot be read;
+/// - [`IoError::Parse`] for a vertex or edge line with too few columns, an id that is not a
+///   non-negative integer, a field that is not a finite number, 2-D and 3-D poses in one
+///   file, an id given twice, or an edge to a vertex the file does not have, naming the line;
+/// - [`IoError::Empty`] without pose vertices;
+/// - as [`Timing`] for a bad rate or times file.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}.g2o", std::process::id()));
+/// let text = "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 1 1 1.57\n\
+///             EDGE_SE2 0 1 1 0 0 1 0 0 1 0 1\nEDGE_SE2 1 2 0 1 1.57 1 0 0 1 0 1\nEDGE_SE2 2 0 -1 1 -1.57 1 0 0 1 0 1\n";
+/// std::fs::write(&path, text)?;
+/// let graph = loops_io::read_pose_graph(&path, &loops_io::Timing::RateHz(2.0))?;
+/// assert_eq!(graph.vertices.timestamps_s, [0.0, 0.5, 1.0]);
+/// assert_eq!(graph.loop_closures().map(|e| (e.from, e.to)).collect::<Vec<_>>(), [(2, 0)]);
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_pose_graph(path: impl AsRef<Path>, timing: &Timing) -> Result<PoseGraph> {
+    let path = path.as_ref();
+    parse_pose_graph(path, &text::read_text(path)?, timing)
+}
+
+/// One vertex as read.
+#[derive(Debug, Clone, Copy)]
+struct Vertex {
+    id: u64,
+    position: [f64; 3],
+    orientation: [f64; 4],
+    line: usize,
+}
+
+/// The pose graph in `text`, the contents of `path`.
+pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing) -> Result<PoseGraph> {
+    let mut vertices = Vec::new();
+    let mut edges = Vec::new();
+    let mut dim: Option<(usize, usize)> = None;
+    for (line, content) in text::data_lines(text) {
+        let mut fields = content.split_ascii_whitespace();
+        let Some(tag) = fields.next().and_then(Tag::of) else { continue };
+        let parse_error = |message: String| IoError::parse(path, line, message);
+        let (id_count, value_count, tag_dim, layout) = tag.layout();
+        let mut ids = [0u64; 2];
+        let mut values = [0.0; 7];
+        let mut count = 1;
+        for field in fields.by_ref().take(id_count) {
+            count += 1;
+            ids[count - 2] = field.parse().map_err(|_| {
+                parse_error(format!("column {count} ({field:?}) is not a vertex id (a non-negative integer)"))
+            })?;
+        }
+        for (value, field) in values.iter_mut().zip(fields).take(value_count) {
+            count += 1;
+            *value = text::parse_finite(field, count).map_err(parse_error)?;
+        }
+        let needed = 1 + id_count + value_count;
+        if count < needed {
+            let word = content.split_ascii_whitespace().next().unwrap_or_default();
+            return Err(parse_error(format!("expected at least {needed} columns ({word} {layout}), found {count}")));
+        }
+        match dim {
+            Some((first, first_line)) if first != tag_dim => {
+                return Err(parse_error(format!(
+                    "a {tag_dim}-D pose in a file of {first}-D poses (line {first_line}): one graph has one dimension"
+                )));
+            }
+            Some(_) => {}
+            None => dim = Some((tag_dim, line)),
+        }
+        match tag {
+            Tag::Edge2 | Tag::Edge3Quat | Tag::Edge3Euler => edges.push(GraphEdge { from: ids[0], to: ids[1], line }),
+            Tag::Vertex2 => vertices.push(Vertex {
+                id: ids[0],
+                position: [values[0], values[1], 0.0],
+                orientation: quaternion_from_yaw(values[2]),
+                line,
+            }),
+            Tag::Vertex3Quat => vertices.push(Vertex {
+                id: ids[0],
+                position: [values[0], values[1], values[2]],
+                orientation: [values[3], values[4], values[5], values[6]],
+                line,
+            }),
+            Tag::Vertex3Euler => vertices.push(Vertex {
+                id: ids[0],
+                position: [values[0], values[1], values[2]],
+                orientation: quaternion_from_roll_pitch_yaw(values[3], values[4], values[5]),
+                line,
+            }),
+        }
+    }
+    if vertices.is_empty() {
+        return Err(IoError::Empty { path: path.to_path_buf() });
+    }
+    vertices.sort_by_key(|vertex| vertex.id);
+    if let Some(pair) = vertices.windows(2).find(|pair| pair[0].id == pair[1].id) {
+        let (first, second) = if pair[0].line < pair[1].line { (pair[0], pair[1]) } else { (pair[1], pair[0]) };
+        return Err(IoError::parse(
+            path,
+            second.line,
+            format!("vertex {} is given twice (first on line {})", first.id, first.line),
+        ));
+    }
+    let lines: HashMap<u64, usize> = vertices.iter().map(|vertex| (vertex.id, vertex.line)).collect();
+    if let Some((edge, id)) = edges
+        .iter()
+        .find_map(|edge| [edge.from, edge.to].into_iter().find(|id| !lines.contains_key(id)).map(|id| (edge, id)))
+    {
+        return Err(IoError::parse(
+            path,
+            edge.line,
+            format!("the edge joins vertex {id}, which the file does not have"),
+        ));
+    }
+    let mut table = PoseTable::empty(path, dim.map_or(3, |(dim, _)| dim));
+    let ids: Vec<f64> = vertices.iter().map(|vertex| vertex.id as f64).collect();
+    table.timestamps_s = timing.times(path, &ids)?.unwrap_or_else(|| ids.clone());
+    table.positions = vertices.iter().map(|vertex| vertex.position).collect();
+    table.orientations_xyzw = Some(vertices.iter().map(|vertex| vertex.orientation).collect());
+    table.source_lines = vertices.iter().map(|vertex| vertex.line).collect();
+    Ok(PoseGraph { vertices: table, vertex_ids: vertices.iter().map(|vertex| vertex.id).collect(), edges })
+}
+
+/// Whether the first data line is a g2o or TORO vertex or edge.
+pub(crate) fn looks_like_graph(text: &str) -> bool {
+    text::data_lines(text).next().is_some_and(|(_, line)| {
+        let word = line.split_ascii_whitespace().next().unwrap_or_default();
+        word.starts_with("VERTEX") || word.starts_with("EDGE")
+    })
+}

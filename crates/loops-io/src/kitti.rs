@@ -1,0 +1,109 @@
+//! KITTI odometry poses: a row-major 3×4 `[R|t]` a line, with or without a leading time.
+
+use std::path::Path;
+
+use crate::error::{IoError, Result};
+use crate::rotation::quaternion_from_matrix;
+use crate::table::PoseTable;
+use crate::text;
+use crate::timing::Timing;
+
+/// Reads KITTI poses: each line the 12 numbers of a row-major 3×4 matrix `[R|t]` (the pose of
+/// the camera in the first camera's frame), after a time in seconds when the line has 13.
+///
+/// - 13 numbers a line: the first is the time (the ground truth shipped with this project's
+///   data); 12 numbers (KITTI's `poses/XX.txt`, MulRan): the times come from `timing`, a rate
+///   or a times file, and [`Timing::FromFile`] is an error. A given rate or times file also
+///   replaces a time column.
+/// - Orientations are the unit quaternions of the rotations (normalised: printed matrices are
+///   not quite orthonormal). The table is 3-D; KITTI's camera frame has y down and the ground
+///   in the x-z plane, so plane axes `[0, 2]` give the map.
+/// - Blank lines and `#` comments are skipped; numbers are separated by spaces or tabs; every
+///   line has the count of the first.
+///
+/// Time O(file size).
+///
+/// # Errors
+/// - [`IoError::Open`] when a file cannot be read;
+/// - [`IoError::Parse`] for a line with other than 12 or 13 numbers, or another count than the
+///   first line, or a field that is not a finite number, naming line and column; for 12
+///   numbers without a rate or times file;
+/// - [`IoError::Empty`] without data lines;
+/// - [`IoError::Trajectory`] holding [`loops_core::Error::InvalidParameter`] for a rate that is
+///   not positive and finite, or [`loops_core::Error::LengthMismatch`] for a times file with
+///   another count of times.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_io::{Timing, read_kitti};
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-kitti.txt", std::process::id()));
+/// std::fs::write(&path, "1 0 0 5 0 1 0 6 0 0 1 7\n0 -1 0 8 1 0 0 9 0 0 1 10\n")?;
+/// let table = read_kitti(&path, &Timing::RateHz(10.0))?;
+/// assert_eq!(table.timestamps_s, [0.0, 0.1]);
+/// assert_eq!(table.positions[1], [8.0, 9.0, 10.0]);
+/// let [_, _, z, w] = table.orientations_xyzw.as_ref().unwrap()[1];
+/// assert!((z - 0.5f64.sqrt()).abs() < 1e-15 && (w - 0.5f64.sqrt()).abs() < 1e-15); // 90° about z
+/// assert!(read_kitti(&path, &Timing::FromFile).is_err()); // 12 numbers: no time
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_kitti(path: impl AsRef<Path>, timing: &Timing) -> Result<PoseTable> {
+    let path = path.as_ref();
+    parse_kitti(path, &text::read_text(path)?, timing)
+}
+
+/// The KITTI poses in `text`, the contents of `path`.
+pub(crate) fn parse_kitti(path: &Path, text: &str, timing: &Timing) -> Result<PoseTable> {
+    let mut table = PoseTable::empty(path, 3);
+    let mut orientations = Vec::new();
+    let mut width = None;
+    let mut values = [0.0; 13];
+    for (line, content) in text::data_lines(text) {
+        let parse_error = |message: String| IoError::parse(path, line, message);
+        let mut count = 0;
+        for field in content.split_ascii_whitespace() {
+            if let Some(value) = values.get_mut(count) {
+                *value = text::parse_finite(field, count + 1).map_err(parse_error)?;
+            }
+            count += 1;
+        }
+        let first_line = *width.get_or_insert((count, line));
+        if count != first_line.0 {
+            return Err(parse_error(format!(
+                "expected {} numbers as on line {}, found {count}",
+                first_line.0, first_line.1
+            )));
+        }
+        let (time, matrix) = match count {
+            13 => (values[0], &values[1..13]),
+            12 if timing.is_given() => (f64::NAN, &values[..12]),
+            12 => {
+                return Err(parse_error(
+                    "12 numbers (a 3×4 pose) and no time: give a rate or a times file for the poses' times".to_owned(),
+                ));
+            }
+            _ => {
+                return Err(parse_error(format!(
+                    "expected 12 numbers (a row-major 3×4 pose [R|t]) or 13 (a time, then the pose), found {count}"
+                )));
+            }
+        };
+        let m = |row: usize, column: usize| matrix[4 * row + column];
+        let rotation = [[m(0, 0), m(0, 1), m(0, 2)], [m(1, 0), m(1, 1), m(1, 2)], [m(2, 0), m(2, 1), m(2, 2)]];
+        table.timestamps_s.push(time);
+        table.positions.push([m(0, 3), m(1, 3), m(2, 3)]);
+        orientations.push(quaternion_from_matrix(rotation));
+        table.source_lines.push(line);
+    }
+    if table.is_empty() {
+        return Err(IoError::Empty { path: path.to_path_buf() });
+    }
+    let indices: Vec<f64> = (0..table.len()).map(|i| i as f64).collect();
+    if let Some(times) = timing.times(path, &indices)? {
+        table.timestamps_s = times;
+    }
+    table.orientations_xyzw = Some(orientations);
+    Ok(table)
+}

@@ -1,0 +1,338 @@
+//! Candidate pairs out: the samples a sampler chose ([`loops_core::Samples`]), as CSV or JSON
+//! for a SLAM back end, with timestamps, pose indices, component, distance and sampler.
+
+use std::fmt;
+use std::fs;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use loops_core::{Sample, Samples};
+
+/// Why a result file could not be written. The message starts with the file's path.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriteError {
+    /// The file exists and replacing it was not asked for.
+    #[error("{}: the file exists; refusing to overwrite it", .path.display())]
+    Exists {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The operating system refused: a missing directory, no permission, a full disk.
+    #[error("{}: cannot write the file: {error}", .path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        error: io::Error,
+    },
+}
+
+/// A file format for samples.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum SamplesFormat {
+    /// One header line, then one line a sample: see [`samples_to_csv`].
+    Csv,
+    /// One object with the sampler's facts and a list of samples: see [`samples_to_json`].
+    Json,
+}
+
+impl SamplesFormat {
+    /// The accepted names.
+    pub const NAMES: &'static str = "csv, json";
+
+    /// The format's name: `csv`, `json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Csv => "csv",
+            Self::Json => "json",
+        }
+    }
+}
+
+impl fmt::Display for SamplesFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SamplesFormat {
+    type Err = loops_core::Error;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        match name.to_ascii_lowercase().as_str() {
+            "csv" => Ok(Self::Csv),
+            "json" => Ok(Self::Json),
+            _ => Err(loops_core::Error::UnknownName {
+                kind: "samples format",
+                name: name.to_owned(),
+                expected: Self::NAMES,
+            }),
+        }
+    }
+}
+
+/// The CSV header: times in seconds, pose indices, the exact loop component, the detection
+/// cluster and detection index (samples drawn from detections), δ(x_i, x_j) in the metric's
+/// unit, the detection's score and the sampler's name.
+pub const CSV_HEADER: &str = "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler";
+
+/// Writes `samples` as CSV: [`CSV_HEADER`], then one line a sample in the samples' order
+/// ((t, t′) order). Unknown values (no pose pair, no component, no score, ...) are empty fields;
+/// numbers are printed so that they read back to the same `f64`. O(samples).
+///
+/// # Errors
+/// What `out` returns.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Detections, SampleSize, Sampler, SamplerKind, cluster_detections, sample_clusters};
+/// let det = Detections::new(vec![0.0, 500.0], vec![100.0, 900.0])?;
+/// let clusters = cluster_detections(&det, 30.0)?;
+/// let samples = sample_clusters(&clusters, &Sampler::new(SamplerKind::One, SampleSize::Budget(2), 0))?;
+/// let mut text = Vec::new();
+/// loops_io::samples_to_csv(&samples, &mut text).unwrap();
+/// let text = String::from_utf8(text).unwrap();
+/// assert_eq!(text.lines().nth(1), Some("0,100,,,,0,0,,,one"));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn samples_to_csv<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
+    let mut out = BufWriter::new(out);
+    writeln!(out, "{CSV_HEADER}")?;
+    let text = |value: Option<String>| value.unwrap_or_default();
+    for row in samples.rows() {
+        writeln!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{}",
+            row.t_s,
+            row.t_prime_s,
+            text(row.pair.map(|p| p[0].to_string())),
+            text(row.pair.map(|p| p[1].to_string())),
+            text(row.component.map(|c| c.to_string())),
+            text(row.cluster.map(|c| c.to_string())),
+            text(row.detection.map(|d| d.to_string())),
+            text(row.distance.map(|d| d.to_string())),
+            text(row.score.map(|s| s.to_string())),
+            row.sampler
+        )?;
+    }
+    out.flush()
+}
+
+/// One sample in JSON: `null` for unknown values.
+#[derive(serde::Serialize)]
+struct JsonSample {
+    t_s: f64,
+    t_prime_s: f64,
+    i: Option<usize>,
+    j: Option<usize>,
+    component: Option<usize>,
+    cluster: Option<usize>,
+    detection: Option<usize>,
+    distance: Option<f64>,
+    score: Option<f64>,
+    sampler: &'static str,
+}
+
+impl From<&Sample> for JsonSample {
+    fn from(row: &Sample) -> Self {
+        Self {
+            t_s: row.t_s,
+            t_prime_s: row.t_prime_s,
+            i: row.pair.map(|p| p[0]),
+            j: row.pair.map(|p| p[1]),
+            component: row.component,
+            cluster: row.cluster,
+            detection: row.detection,
+            distance: row.distance,
+            score: row.score,
+            sampler: row.sampler.name(),
+        }
+    }
+}
+
+/// The whole file in JSON.
+#[derive(serde::Serialize)]
+struct JsonSamples {
+    sampler: &'static str,
+    count: usize,
+    groups: usize,
+    available: u64,
+    poses: Option<usize>,
+    warnings: Vec<String>,
+    samples: Vec<JsonSample>,
+}
+
+/// Writes `samples` as one JSON object: `sampler` (its name), `count`, `groups` (clusters or
+/// components sampled from), `available` (candidates chosen from), `poses` (of the trajectory
+/// the pairs index, or `null`), `warnings` (sentences) and `samples`, a list of objects with the
+/// columns of [`CSV_HEADER`] (`null` for unknown values). O(samples).
+///
+/// # Errors
+/// What `out` returns.
+pub fn samples_to_json<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
+    let document = JsonSamples {
+        sampler: samples.sampler().name(),
+        count: samples.len(),
+        groups: samples.groups(),
+        available: samples.available(),
+        poses: samples.poses(),
+        warnings: samples.warnings().iter().map(ToString::to_string).collect(),
+        samples: samples.rows().iter().map(JsonSample::from).collect(),
+    };
+    let mut out = BufWriter::new(out);
+    serde_json::to_writer_pretty(&mut out, &document).map_err(io::Error::other)?;
+    writeln!(out)?;
+    out.flush()
+}
+
+/// Writes `samples` to the file `path` in `format`, atomically: into a temporary file in the
+/// same directory, then renamed into place, so that a reader never sees half a file. Without
+/// `overwrite`, an existing file is left alone (checked first, and again without a race when
+/// the file is linked into place).
+///
+/// # Errors
+/// [`WriteError::Exists`] when the file exists and `overwrite` is false;
+/// [`WriteError::Write`] when the directory is missing, not writable, or the disk is full.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_core::{Detections, SampleSize, Sampler, SamplerKind, cluster_detections, sample_clusters};
+/// use loops_io::{SamplesFormat, WriteError, write_samples};
+/// let det = Detections::new(vec![0.0, 500.0], vec![100.0, 900.0])?;
+/// let samples = sample_clusters(&cluster_detections(&det, 30.0)?, &Sampler::new(SamplerKind::Alpha, SampleSize::Rate(1.0), 0))?;
+/// let path = std::env::temp_dir().join(format!("loops-io-samples-{}.json", std::process::id()));
+/// write_samples(&path, &samples, SamplesFormat::Json, true)?;
+/// assert!(matches!(write_samples(&path, &samples, SamplesFormat::Json, false), Err(WriteError::Exists { .. })));
+/// let text = std::fs::read_to_string(&path)?;
+/// assert!(text.contains("\"count\": 2"));
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn write_samples(path: &Path, samples: &Samples, format: SamplesFormat, overwrite: bool) -> Result<(), WriteError> {
+    write_atomically(path, overwrite, |out| match format {
+        SamplesFormat::Csv => samples_to_csv(samples, out),
+        SamplesFormat::Json => samples_to_json(samples, out),
+    })
+}
+
+/// Writes through `fill` into a temporary file beside `path`, then moves it into place.
+pub(crate) fn write_atomically(
+    path: &Path,
+    overwrite: bool,
+    fill: impl FnOnce(&mut fs::File) -> io::Result<()>,
+) -> Result<(), WriteError> {
+    let exists = || WriteError::Exists { path: path.to_path_buf() };
+    let failed = |error: io::Error| WriteError::Write { path: path.to_path_buf(), error };
+    if !overwrite && fs::symlink_metadata(path).is_ok() {
+        return Err(exists());
+    }
+    let temporary = temporary_path(path).ok_or_else(|| failed(io::Error::other("the path names no file")))?;
+    let written = fs::OpenOptions::new().write(true).create_new(true).open(&temporary).and_then(|mut file| {
+        fill(&mut file)?;
+        file.sync_all()
+    });
+    let placed = written.and_then(|()| {
+        if overwrite {
+            return fs::rename(&temporary, path).map(|()| true);
+        }
+        // A hard link fails if the file appeared meanwhile: no race with another writer.
+        match fs::hard_link(&temporary, path) {
+            Ok(()) => Ok(true),
+            Err(error) if error.kind() == io::ErrorKind::AlreadyExists => Ok(false),
+            // No hard links on this file system: the check above has to do.
+            Err(_) if fs::symlink_metadata(path).is_err() => fs::rename(&temporary, path).map(|()| true),
+            Err(_) => Ok(false),
+        }
+    });
+    // Left behind after a failure, or as the second name of a hard link.
+    let _ = fs::remove_file(&temporary);
+    match placed {
+        Ok(true) => Ok(()),
+        Ok(false) => Err(exists()),
+        Err(error) => Err(failed(error)),
+    }
+}
+
+/// `.{name}.{pid}.{count}.tmp` in the directory of `path`; `None` when `path` names no file.
+fn temporary_path(path: &Path) -> Option<PathBuf> {
+    static COUNT: AtomicU64 = AtomicU64::new(0);
+    let name = path.file_name()?.to_string_lossy();
+    let count = COUNT.fetch_add(1, Ordering::Relaxed);
+    Some(path.with_file_name(format!(".{name}.{}.{count}.tmp", std::process::id())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loops_core::{
+        Detections, Euclidean, SampleSize, Sampler, SamplerKind, Trajectory, cluster_detections, find_loops,
+        sample_clusters, sample_loops,
+    };
+
+    fn samples() -> Samples {
+        let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]]).unwrap();
+        let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
+        sample_loops(&traj, &Euclidean, &loops, &Sampler::new(SamplerKind::Alpha, SampleSize::Rate(1.0), 0)).unwrap()
+    }
+
+    #[test]
+    fn csv_has_every_column() {
+        let mut text = Vec::new();
+        samples_to_csv(&samples(), &mut text).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], CSV_HEADER);
+        assert_eq!(lines[1..], ["0,3,0,3,1,,,0,,alpha", "1,2,1,2,2,,,0,,alpha"]);
+    }
+
+    #[test]
+    fn json_round_trips_numbers() {
+        let det =
+            Detections::new(vec![0.1, 1.0 / 3.0], vec![2.0, 7.0]).unwrap().with_scores(vec![0.25, 1e-300]).unwrap();
+        let samples = sample_clusters(
+            &cluster_detections(&det, 1.0).unwrap(),
+            &Sampler::new(SamplerKind::Alpha, SampleSize::Budget(5), 0),
+        )
+        .unwrap();
+        let mut text = Vec::new();
+        samples_to_json(&samples, &mut text).unwrap();
+        let value: serde_json::Value = serde_json::from_slice(&text).unwrap();
+        assert_eq!(value["count"], 2);
+        assert_eq!(value["poses"], serde_json::Value::Null);
+        assert_eq!(value["warnings"][0], "budget 5 is more than the 2 candidates: all of them were returned");
+        assert_eq!(value["samples"][1]["t_s"].as_f64(), Some(1.0 / 3.0));
+        assert_eq!(value["samples"][1]["score"].as_f64(), Some(1e-300));
+        assert_eq!(value["samples"][1]["i"], serde_json::Value::Null);
+        assert_eq!(value["samples"][0]["sampler"], "alpha");
+    }
+
+    #[test]
+    fn files_are_not_overwritten_unless_asked() {
+        let dir = std::env::temp_dir().join(format!("loops-io-samples-test-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("samples.csv");
+        let _ = fs::remove_file(&path);
+        write_samples(&path, &samples(), SamplesFormat::Csv, false).unwrap();
+        let first = fs::read_to_string(&path).unwrap();
+        fs::write(&path, "keep me").unwrap();
+        let err = write_samples(&path, &samples(), SamplesFormat::Csv, false).unwrap_err();
+        assert!(matches!(err, WriteError::Exists { .. }));
+        assert!(err.to_string().ends_with("samples.csv: the file exists; refusing to overwrite it"));
+        assert_eq!(fs::read_to_string(&path).unwrap(), "keep me");
+        write_samples(&path, &samples(), SamplesFormat::Csv, true).unwrap();
+        assert_eq!(fs::read_to_string(&path).unwrap(), first);
+        let err = write_samples(&dir.join("missing/samples.csv"), &samples(), SamplesFormat::Csv, false).unwrap_err();
+        assert!(matches!(err, WriteError::Write { .. }));
+        // No temporary file is left behind.
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        fs::remove_dir_all(&dir).unwrap();
+        assert_eq!("JSON".parse::<SamplesFormat>().unwrap(), SamplesFormat::Json);
+        assert!("xml".parse::<SamplesFormat>().is_err());
+    }
+}

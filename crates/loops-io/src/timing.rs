@@ -1,0 +1,70 @@
+//! Times for files that do not carry them: a rate, or a times file.
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{IoError, Result};
+use crate::text;
+
+/// Where the times of poses come from, for formats whose lines may have none (KITTI poses
+/// without a time column, MulRan, pose graphs).
+#[derive(Debug, Clone, PartialEq, Default)]
+#[non_exhaustive]
+pub enum Timing {
+    /// From the file: its time column (KITTI with 13 numbers a line). Pose graphs have no time
+    /// and take the vertex id as seconds (one pose a second). KITTI lines of 12 numbers are an
+    /// error: they need one of the other two.
+    #[default]
+    FromFile,
+    /// Pose `i` (vertex id `i` in a graph) at `i / rate_hz` seconds; a time column in the file
+    /// is ignored.
+    RateHz(f64),
+    /// One time a line, in seconds, in a separate file (KITTI's `times.txt`), one per pose in
+    /// order; a time column in the pose file is ignored.
+    TimesFile(PathBuf),
+}
+
+impl Timing {
+    /// Whether the times come from elsewhere than the pose file.
+    pub(crate) fn is_given(&self) -> bool {
+        !matches!(self, Self::FromFile)
+    }
+
+    /// The times of `count` poses at the indices `indices` (`0..count` unless a graph's ids),
+    /// or `None` for [`Timing::FromFile`].
+    ///
+    /// # Errors
+    /// An invalid rate; a times file that cannot be read, has a line that is not one number, or
+    /// has another count of times than of poses.
+    pub(crate) fn times(&self, pose_file: &Path, indices: &[f64]) -> Result<Option<Vec<f64>>> {
+        match self {
+            Self::FromFile => Ok(None),
+            Self::RateHz(rate_hz) => {
+                if !(rate_hz.is_finite() && *rate_hz > 0.0) {
+                    return Err(IoError::invalid(pose_file, "rate_hz", *rate_hz, "a positive finite rate in Hz"));
+                }
+                Ok(Some(indices.iter().map(|i| i / rate_hz).collect()))
+            }
+            Self::TimesFile(path) => {
+                let contents = text::read_text(path)?;
+                let mut times = Vec::new();
+                for (line, content) in text::data_lines(&contents) {
+                    let mut fields = content.split_ascii_whitespace();
+                    let (Some(field), None) = (fields.next(), fields.next()) else {
+                        return Err(IoError::parse(path, line, "expected one time in seconds a line"));
+                    };
+                    times.push(text::parse_finite(field, 1).map_err(|message| IoError::parse(path, line, message))?);
+                }
+                if times.len() != indices.len() {
+                    return Err(IoError::Trajectory {
+                        path: path.as_path().into(),
+                        line: None,
+                        previous_line: None,
+                        messages: None,
+                        error: loops_core::Error::LengthMismatch { timestamps: times.len(), poses: indices.len() },
+                    });
+                }
+                Ok(Some(times))
+            }
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! The TU Chemnitz (libRSF) ground-truth files: `point2 t x y ...`, `point3 t X Y Z ...` (ECEF),
+//! `angle t yaw ...` lines.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::error::{IoError, Result};
+use crate::rotation::{ecef_to_enu, quaternion_from_yaw};
+use crate::table::PoseTable;
+use crate::text;
+
+/// Reads a libRSF ground-truth file (the TUC SLAM, Chemnitz City and smartLoc data sets): lines
+/// tagged by their first word.
+///
+/// - `point2 t x y ...`: a 2-D position in metres at time `t` (seconds); further columns (a
+///   covariance) are ignored. `angle t yaw ...` lines at the same times give the heading
+///   (radians): when every `point2` has one, the table has orientations (rotations about z).
+/// - `point3 t X Y Z ...`: an ECEF position (metres, ≈ 4·10⁶ from the centre of the Earth). The
+///   table holds it in the east-north-up frame at the first fix: the first position is
+///   `[0, 0, 0]`, x points east, y north, z up. That is a rotation of ECEF minus the first fix,
+///   so every distance is kept, and the plane axes `[0, 1]` are the horizontal.
+/// - Other tags (`odom2`, `loop`, ...) are skipped; a file has `point2` or `point3` lines, not
+///   both.
+///
+/// Time O(file size).
+///
+/// # Errors
+/// - [`IoError::Open`] when the file cannot be read;
+/// - [`IoError::Parse`] for a `point2`, `point3` or `angle` line with too few columns, a field
+///   that is not a finite number, or `point2` and `point3` in one file;
+/// - [`IoError::Empty`] without `point2` or `point3` lines.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-tuc.txt", std::process::id()));
+/// std::fs::write(&path, "point2 0 1 2 0 0 0 0\nangle 0 1.5 0\npoint2 0.2 3 4 0 0 0 0\nangle 0.2 1.6 0\n")?;
+/// let table = loops_io::read_tuc(&path)?;
+/// assert_eq!((table.dim, table.positions[1]), (2, [3.0, 4.0, 0.0]));
+/// assert!(table.orientations_xyzw.is_some());
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_tuc(path: impl AsRef<Path>) -> Result<PoseTable> {
+    let path = path.as_ref();
+    parse_tuc(path, &text::read_text(path)?)
+}
+
+/// The columns each tag needs, with their names for messages.
+fn columns_of(tag: &str) -> Option<(usize, &'static str)> {
+    match tag {
+        "point2" => Some((4, "point2 t x y")),
+        "point3" => Some((5, "point3 t X Y Z")),
+        "angle" => Some((3, "angle t yaw")),
+        _ => None,
+    }
+}
+
+/// The TUC poses in `text`, the contents of `path`.
+pub(crate) fn parse_tuc(path: &Path, text: &str) -> Result<PoseTable> {
+    let mut table = PoseTable::empty(path, 2);
+    let mut kind: Option<(&str, usize)> = None;
+    // Heading by the bits of its time: point2 and angle lines of one instant share the text.
+    let mut yaw_at: HashMap<u64, f64> = HashMap::new();
+    for (line, content) in text::data_lines(text) {
+        let mut fields = content.split_ascii_whitespace();
+        let Some(tag) = fields.next() else { continue };
+        let Some((needed, layout)) = columns_of(tag) else { continue };
+        let parse_error = |message: String| IoError::parse(path, line, message);
+        let mut values = [0.0; 4];
+        let mut count = 1;
+        for (value, field) in values.iter_mut().zip(fields).take(needed - 1) {
+            count += 1;
+            *value = text::parse_finite(field, count).map_err(parse_error)?;
+        }
+        if count < needed {
+            return Err(parse_error(format!("expected at least {needed} columns ({layout}), found {count}")));
+        }
+        if tag == "angle" {
+            yaw_at.insert(values[0].to_bits(), values[1]);
+            continue;
+        }
+        match kind {
+            Some((first, first_line)) if first != tag => {
+                return Err(parse_error(format!("a {tag} line in a file of {first} lines (line {first_line})")));
+            }
+            _ => kind = Some((tag, line)),
+        }
+        table.timestamps_s.push(values[0]);
+        table.positions.push(match tag {
+            "point2" => [values[1], values[2], 0.0],
+            _ => [values[1], values[2], values[3]],
+        });
+        table.source_lines.push(line);
+    }
+    match kind {
+        None => Err(IoError::Empty { path: path.to_path_buf() }),
+        Some(("point3", _)) => {
+            table.dim = 3;
+            let origin = table.positions[0];
+            let rotation = ecef_to_enu(origin);
+            for (position, line) in table.positions.iter_mut().zip(&table.source_lines) {
+                let delta = [position[0] - origin[0], position[1] - origin[1], position[2] - origin[2]];
+                *position = rotation.map(|row| row[0] * delta[0] + row[1] * delta[1] + row[2] * delta[2]);
+                if !position.iter().all(|v| v.is_finite()) {
+                    let message = "the ECEF position is too far from the first one to subtract it (overflow)";
+                    return Err(IoError::parse(path, *line, message));
+                }
+            }
+            Ok(table)
+        }
+        Some(_) => {
+            let headings: Option<Vec<[f64; 4]>> = table
+                .timestamps_s
+                .iter()
+                .map(|t| yaw_at.get(&t.to_bits()).map(|&yaw| quaternion_from_yaw(yaw)))
+                .collect();
+            table.orientations_xyzw = headings;
+            Ok(table)
+        }
+    }
+}
+
+/// Whether the first data line starts with a libRSF tag this reader knows.
+pub(crate) fn looks_like_tuc(text: &str) -> bool {
+    text::data_lines(text)
+        .next()
+        .is_some_and(|(_, line)| line.split_ascii_whitespace().next().is_some_and(|tag| columns_of(tag).is_some()))
+}
