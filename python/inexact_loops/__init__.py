@@ -19,11 +19,19 @@ Example:
 
 from . import metrics
 from ._core import (
+    DetectionClusters,
+    Detections,
     Loops,
+    SampleQuality,
+    Samples,
     Trajectory,
     __version__,
+    cluster_detections,
+    draw_detections,
     find_loops,
     read_trajectory,
+    sample,
+    sample_quality,
     urban_drive,
 )
 from .errors import (
@@ -35,16 +43,38 @@ from .errors import (
 )
 
 __all__ = [
+    "DetectionClusters",
+    "Detections",
     "InternalError",
     "InvalidParameterError",
     "InvalidTrajectoryError",
     "Loops",
     "LoopsError",
     "LoopsIOError",
+    "SampleQuality",
+    "Samples",
     "Trajectory",
     "__version__",
+    "cluster_detections",
+    "draw_detections",
     "find_loops",
     "metrics",
     "read_trajectory",
+    "sample",
+    "sample_quality",
     "urban_drive",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """``inexact_loops.plot`` on first use: matplotlib is imported only when plots are drawn
+    (it is the optional extra ``inexact-loops[plot]``)."""
+    if name == "plot":
+        import importlib
+
+        return importlib.import_module(f"{__name__}.plot")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), "plot"])

@@ -7,15 +7,44 @@ from typing import Literal, Protocol, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Loops", "Trajectory", "__version__", "find_loops", "read_trajectory", "urban_drive"]
+__all__ = [
+    "DetectionClusters",
+    "Detections",
+    "Loops",
+    "SampleQuality",
+    "Samples",
+    "Trajectory",
+    "__version__",
+    "cluster_detections",
+    "draw_detections",
+    "find_loops",
+    "read_trajectory",
+    "sample",
+    "sample_quality",
+    "urban_drive",
+]
 
 __version__: str
 
 _Side = Literal["both", "begin", "end"]
+_SamplerName = Literal[
+    "one",
+    "rho",
+    "rho-dispersed",
+    "alpha",
+    "lio-sam",
+    "hdl-graph-slam",
+    "cartographer",
+    "time-gap",
+]
 
 class _MetricLike(Protocol):
     @property
     def spec(self) -> str: ...
+
+_MetricArg = (
+    str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None
+)
 
 @final
 class Trajectory:
@@ -180,3 +209,209 @@ def read_trajectory(
     metric: str | _MetricLike | None = None,
 ) -> Trajectory:
     """Reads a TUM or CSV trajectory file."""
+
+@final
+class Detections:
+    """Detections: unordered pairs of times (t, t'), seconds, with optional scores."""
+
+    def __new__(
+        cls, t: npt.ArrayLike, t_prime: npt.ArrayLike, scores: npt.ArrayLike | None = None
+    ) -> Detections: ...
+    @staticmethod
+    def from_indices(
+        trajectory_or_loops: Trajectory | Loops,
+        i: npt.ArrayLike,
+        j: npt.ArrayLike,
+        scores: npt.ArrayLike | None = None,
+    ) -> Detections:
+        """Detections from pose indices (i, j); the times are the poses' timestamps."""
+    def locate(self, trajectory_or_loops: Trajectory | Loops) -> Detections:
+        """The same detections placed on the nearest poses of a trajectory."""
+    def __len__(self) -> int: ...
+    @property
+    def t(self) -> npt.NDArray[np.float64]:
+        """The earlier time t of each pair, seconds."""
+    @property
+    def t_prime(self) -> npt.NDArray[np.float64]:
+        """The later time t' >= t of each pair, seconds."""
+    @property
+    def i(self) -> npt.NDArray[np.int64] | None:
+        """Pose index i of each pair, or ``None`` when not placed on a trajectory."""
+    @property
+    def j(self) -> npt.NDArray[np.int64] | None:
+        """Pose index j >= i of each pair, or ``None`` when not placed on a trajectory."""
+    @property
+    def score(self) -> npt.NDArray[np.float64] | None:
+        """The score of each pair, or ``None`` without scores."""
+    @property
+    def poses(self) -> int | None:
+        """Poses of the trajectory the detections are placed on, or ``None``."""
+
+@final
+class DetectionClusters:
+    """The connected components of the epsilon graph of detections."""
+
+    def __len__(self) -> int: ...
+    @property
+    def epsilon_s(self) -> float:
+        """The threshold epsilon, seconds."""
+    @property
+    def cell_side_s(self) -> float:
+        """Side of the grid cells, seconds."""
+    @property
+    def detections(self) -> Detections:
+        """The detections that were clustered."""
+    @property
+    def labels(self) -> npt.NDArray[np.int64]:
+        """The cluster id of each detection."""
+    @property
+    def clusters(self) -> dict[str, npt.NDArray[np.generic]]:
+        """The clusters as numpy columns, one row a cluster."""
+
+@final
+class Samples:
+    """The samples a sampler chose, in order of (t, t'), as numpy columns."""
+
+    def __len__(self) -> int: ...
+    @property
+    def sampler(self) -> str:
+        """The sampler's name."""
+    @property
+    def groups(self) -> int:
+        """Number of groups (clusters or components) sampled from."""
+    @property
+    def available(self) -> int:
+        """Number of candidates the sampler chose from."""
+    @property
+    def poses(self) -> int | None:
+        """Poses of the trajectory the pairs index, or ``None``."""
+    @property
+    def warnings(self) -> list[str]:
+        """Warnings, as sentences."""
+    @property
+    def t(self) -> npt.NDArray[np.float64]:
+        """The earlier time of each sample, seconds."""
+    @property
+    def t_prime(self) -> npt.NDArray[np.float64]:
+        """The later time of each sample, seconds."""
+    @property
+    def i(self) -> npt.NDArray[np.int64] | None:
+        """Pose index i of each sample, or ``None`` when not placed on a trajectory."""
+    @property
+    def j(self) -> npt.NDArray[np.int64] | None:
+        """Pose index j of each sample, or ``None`` when not placed on a trajectory."""
+    @property
+    def component(self) -> npt.NDArray[np.int64]:
+        """The exact loop component of each sample; -1 when unknown or outside S_gamma."""
+    @property
+    def cluster(self) -> npt.NDArray[np.int64]:
+        """The detection cluster of each sample; -1 for samples of Loops."""
+    @property
+    def detection(self) -> npt.NDArray[np.int64]:
+        """The detection index of each sample; -1 for samples of Loops."""
+    @property
+    def distance(self) -> npt.NDArray[np.float64]:
+        """delta(x_i, x_j) of each sample; NaN where not measured."""
+    @property
+    def score(self) -> npt.NDArray[np.float64] | None:
+        """The detection's score of each sample, or ``None``."""
+    def locate(self, loops: Loops) -> Samples:
+        """The same samples placed on the loops' poses, with their exact components."""
+    def measure(self, trajectory: Trajectory, *, metric: _MetricArg = None) -> Samples:
+        """The same samples placed on ``trajectory``, with their distances."""
+    def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
+        """Writes the samples as CSV, atomically."""
+    def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
+        """Writes the samples as JSON, atomically."""
+
+@final
+class SampleQuality:
+    """P1, P2 and P3 of a sample, against the exact loop components."""
+
+    @property
+    def samples(self) -> int:
+        """Number of samples."""
+    @property
+    def outside(self) -> int:
+        """Samples outside S_gamma."""
+    @property
+    def components(self) -> int:
+        """Loop components that can be sampled."""
+    @property
+    def covered(self) -> int:
+        """P1: components with at least one sample."""
+    @property
+    def nontrivial_components(self) -> int:
+        """Non-trivial components that can be sampled."""
+    @property
+    def nontrivial_covered(self) -> int:
+        """P1 over the non-trivial components."""
+    @property
+    def coverage(self) -> float:
+        """P1 as a fraction."""
+    @property
+    def missed(self) -> dict[str, npt.NDArray[np.generic]]:
+        """P1: the components without a sample, largest first: id, trivial, area_s2, pairs."""
+    @property
+    def epsilon_s(self) -> float:
+        """The epsilon of P2, seconds."""
+    @property
+    def redundant(self) -> int:
+        """P2: samples with another sample of their component within epsilon."""
+    @property
+    def redundancy(self) -> float:
+        """P2 as a fraction."""
+    @property
+    def median_spacing_s(self) -> float | None:
+        """P2: median distance to the nearest other sample of the same component, seconds."""
+    @property
+    def p3_slope(self) -> float | None:
+        """P3: slope of ln(samples) on ln(area) across the covered components."""
+    @property
+    def p3_components(self) -> int:
+        """Number of components in the P3 fit."""
+    @property
+    def per_component(self) -> npt.NDArray[np.int64]:
+        """Samples per component, by component id."""
+    @property
+    def sample_components(self) -> npt.NDArray[np.int64]:
+        """The exact component of each sample; -1 outside S_gamma."""
+    @property
+    def nearest_spacing_s(self) -> npt.NDArray[np.float64]:
+        """Each sample's distance to the nearest other sample of its component, seconds."""
+
+def draw_detections(
+    loops: Loops, *, rate: float | None = None, budget: int | None = None, seed: int
+) -> Detections:
+    """Detections drawn uniformly from the exact S_gamma of ``loops``."""
+
+def cluster_detections(
+    detections: Detections, *, epsilon_s: float | None = None, threads: int | None = None
+) -> DetectionClusters:
+    """The exact connected components of the epsilon graph of the detections."""
+
+def sample(
+    source: DetectionClusters | Loops,
+    sampler: _SamplerName | str,
+    *,
+    rate: float | None = None,
+    budget: int | None = None,
+    seed: int,
+    trajectory: Trajectory | None = None,
+    metric: _MetricArg = None,
+    threads: int | None = None,
+    lio_sam_keyframe_step: float | None = None,
+    lio_sam_period_s: float | None = None,
+    lio_sam_min_age_s: float | None = None,
+    hdl_keyframe_step: float | None = None,
+    hdl_min_travel: float | None = None,
+    hdl_edge_spacing: float | None = None,
+    cartographer_min_gap_s: float | None = None,
+    time_gap_s: float | None = None,
+) -> Samples:
+    """Samples inexact loops from detection clusters or exact loop components."""
+
+def sample_quality(
+    samples: Samples, loops: Loops, *, epsilon_s: float | None = None
+) -> SampleQuality:
+    """P1, P2 and P3 of ``samples`` against the exact loop components of ``loops``."""

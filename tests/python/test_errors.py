@@ -364,8 +364,8 @@ def test_bad_axes_for_a_2d_csv(tmp_path):
 def test_unknown_format(tmp_path):
     path = tmp_path / "drive.txt"
     path.write_text(TUM_OK)
-    with pytest.raises(il.InvalidParameterError, match=r'"kitti".*tum.*csv'):
-        il.read_trajectory(path, format="kitti")
+    with pytest.raises(il.InvalidParameterError, match=r'"rosbag".*tum.*csv'):
+        il.read_trajectory(path, format="rosbag")
     other = tmp_path / "drive.bag"
     other.write_text(TUM_OK)
     with pytest.raises(il.LoopsIOError, match=r'"\.bag"'):

@@ -1,6 +1,6 @@
 //! The Python exception hierarchy and the one place core errors become Python exceptions.
 
-use pyo3::exceptions::{PyIndexError, PyOSError, PyValueError};
+use pyo3::exceptions::{PyFileExistsError, PyIndexError, PyOSError, PyValueError};
 use pyo3::{PyErr, import_exception};
 
 // The hierarchy lives in Python (`inexact_loops/errors.py`) so that classes can also be
@@ -10,10 +10,12 @@ import_exception!(inexact_loops.errors, InvalidParameterError);
 import_exception!(inexact_loops.errors, LoopsIOError);
 import_exception!(inexact_loops.errors, InternalError);
 
-/// Any error of the Rust layers, on its way to Python.
+/// Any error of the Rust layers, on its way to Python. Reader errors are boxed: they carry a
+/// path, a line and the core's error, and errors travel through every `Result` of the bindings.
 pub(crate) enum Failure {
     Core(loops_core::Error),
-    Io(loops_io::IoError),
+    Io(Box<loops_io::IoError>),
+    Write(loops_io::WriteError),
     Panic(String),
 }
 
@@ -25,7 +27,13 @@ impl From<loops_core::Error> for Failure {
 
 impl From<loops_io::IoError> for Failure {
     fn from(error: loops_io::IoError) -> Self {
-        Self::Io(error)
+        Self::Io(Box::new(error))
+    }
+}
+
+impl From<loops_io::WriteError> for Failure {
+    fn from(error: loops_io::WriteError) -> Self {
+        Self::Write(error)
     }
 }
 
@@ -35,9 +43,17 @@ impl From<Failure> for PyErr {
             Failure::Core(error) => core_error(&error, error.to_string()),
             Failure::Io(error) => {
                 let message = error.to_string();
-                match error {
+                match *error {
                     loops_io::IoError::Open { error, .. } => PyOSError::new_err((error.raw_os_error(), message)),
                     loops_io::IoError::Trajectory { error, .. } => core_error(&error, message),
+                    _ => LoopsIOError::new_err(message),
+                }
+            }
+            Failure::Write(error) => {
+                let message = error.to_string();
+                match error {
+                    loops_io::WriteError::Exists { .. } => PyFileExistsError::new_err(message),
+                    loops_io::WriteError::Write { error, .. } => PyOSError::new_err((error.raw_os_error(), message)),
                     _ => LoopsIOError::new_err(message),
                 }
             }
@@ -62,9 +78,14 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
         | E::NonUnitQuaternion { .. }
         | E::NonUnitVector { .. }
         | E::LatitudeOutOfRange { .. } => InvalidTrajectoryError::new_err(message),
-        E::IndexOutOfRange { .. } => PyIndexError::new_err(message),
+        E::IndexOutOfRange { .. } | E::PoseIndexOutOfRange { .. } => PyIndexError::new_err(message),
         _ => InvalidParameterError::new_err(message),
     }
+}
+
+/// An `InvalidParameterError` about how arguments combine (a check no single core call makes).
+pub(crate) fn invalid_parameter(message: String) -> PyErr {
+    InvalidParameterError::new_err(message)
 }
 
 /// A `ValueError` about an argument's shape or value that Python itself should have caught.

@@ -7,6 +7,7 @@ mod convert;
 mod error;
 mod py_loops;
 mod py_metric;
+mod py_sample;
 mod py_trajectory;
 
 use pyo3::prelude::*;
@@ -35,5 +36,13 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_loops::find_loops, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::urban_drive, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::read_trajectory, module)?)?;
+    module.add_class::<py_sample::Detections>()?;
+    module.add_class::<py_sample::DetectionClusters>()?;
+    module.add_class::<py_sample::Samples>()?;
+    module.add_class::<py_sample::SampleQuality>()?;
+    module.add_function(wrap_pyfunction!(py_sample::draw_detections, module)?)?;
+    module.add_function(wrap_pyfunction!(py_sample::cluster_detections, module)?)?;
+    module.add_function(wrap_pyfunction!(py_sample::sample, module)?)?;
+    module.add_function(wrap_pyfunction!(py_sample::sample_quality, module)?)?;
     Ok(())
 }

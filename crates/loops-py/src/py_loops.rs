@@ -72,10 +72,26 @@ pub(crate) fn find_loops(
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct Loops {
-    inner: Arc<loops_core::Loops>,
+    pub(crate) inner: Arc<loops_core::Loops>,
 }
 
 impl Loops {
+    /// Runs one measure of the core without the GIL, with `side` and `normalized` parsed.
+    fn measure<T: Send>(
+        &self,
+        py: Python<'_>,
+        side: &str,
+        normalized: bool,
+        f: impl FnOnce(&loops_core::Loops, Side, Scale) -> loops_core::Result<T> + Send,
+    ) -> PyResult<T> {
+        let side = side.to_owned();
+        let inner = Arc::clone(&self.inner);
+        detached(py, move || {
+            let (side, scale) = options(&side, normalized)?;
+            Ok(f(&inner, side, scale)?)
+        })
+    }
+
     fn check_indices(&self, i: usize, j: usize) -> PyResult<()> {
         for index in [i, j] {
             self.inner.check_index(index).map_err(Failure::from)?;
@@ -234,11 +250,8 @@ impl Loops {
         side: &str,
         normalized: bool,
     ) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
-        let side = side.to_owned();
-        let inner = Arc::clone(&self.inner);
-        let tau = detached(py, move || {
-            let (side, scale) = options(&side, normalized)?;
-            Ok(inner.loop_duration(selection(&components), side, scale)?)
+        let tau = self.measure(py, side, normalized, move |loops, side, scale| {
+            loops.loop_duration(selection(&components), side, scale)
         })?;
         Ok(to_numpy(py, tau))
     }
@@ -258,11 +271,8 @@ impl Loops {
         side: &str,
         normalized: bool,
     ) -> PyResult<f64> {
-        let side = side.to_owned();
-        let inner = Arc::clone(&self.inner);
-        detached(py, move || {
-            let (side, scale) = options(&side, normalized)?;
-            Ok(inner.loop_area(a, b, selection(&components), side, scale)?)
+        self.measure(py, side, normalized, move |loops, side, scale| {
+            loops.loop_area(a, b, selection(&components), side, scale)
         })
     }
 
@@ -278,11 +288,8 @@ impl Loops {
         side: &str,
         normalized: bool,
     ) -> PyResult<f64> {
-        let side = side.to_owned();
-        let inner = Arc::clone(&self.inner);
-        detached(py, move || {
-            let (side, scale) = options(&side, normalized)?;
-            Ok(inner.loop_density(a, b, selection(&components), side, scale)?)
+        self.measure(py, side, normalized, move |loops, side, scale| {
+            loops.loop_density(a, b, selection(&components), side, scale)
         })
     }
 }

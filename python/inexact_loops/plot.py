@@ -1,0 +1,916 @@
+"""Plots of inexact loops with matplotlib: the paper's figures for your own trajectories.
+
+Needs matplotlib (``pip install 'inexact-loops[plot]'``); ``import inexact_loops`` does not
+import it, ``inexact_loops.plot`` (or ``import inexact_loops.plot``) does.
+
+- :func:`distance_image`: the pairwise distance function pi(t, t') as an image, with gamma
+  isocontours, loop component outlines and samples (paper, Figs. 2, 4, 5, 7).
+- :func:`trajectory_by_duration`: the trajectory coloured by loop duration tau (Fig. 6d).
+- :func:`sample_pairs`: sampled loops drawn as lines between trajectory points (Fig. 6a-c).
+- :func:`samples_per_component`: samples per loop component, components sorted by area,
+  as a percentage and cumulatively (Fig. 8).
+
+Every function draws into ``ax`` (a new figure when ``None``) and returns the Axes. Times are
+seconds from the trajectory's first timestamp.
+
+*Samples* are given as an ``(m, 2)`` integer array of pose index pairs (i, j); a mapping with
+``i`` and ``j`` index columns (or ``t`` and ``t_prime`` times in seconds, mapped to the
+nearest poses) and optionally ``component``; or an object with such attributes, e.g.
+:class:`~inexact_loops.Samples` (from :func:`~inexact_loops.sample`) or
+:class:`~inexact_loops.Detections`. Several samplers are passed as a dict
+``{name: samples}``; the paper's names ``"alpha"``, ``"rho"`` and ``"one"`` get the paper's
+colours and labels, and a :class:`~inexact_loops.Samples` is named by its ``sampler``.
+
+Example:
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np, inexact_loops as il
+    >>> from inexact_loops import plot
+    >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+    >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+    >>> loops = il.find_loops(traj, gamma=4.0)
+    >>> ax = plot.distance_image(traj, loops, gamma=[1.0, 4.0])
+    >>> ax.get_xlabel()
+    't (s)'
+    >>> import matplotlib.pyplot as plt; plt.close("all")
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+import numpy.typing as npt
+
+try:
+    import matplotlib  # noqa: F401  (fail here, with the extra's name, not deep in a call)
+except ImportError as err:  # pragma: no cover - exercised only without matplotlib
+    raise ImportError(
+        "inexact_loops.plot needs matplotlib: install it with "
+        "pip install 'inexact-loops[plot]' (or pip install matplotlib)"
+    ) from err
+
+from . import metrics as _metrics
+from ._core import Loops, Trajectory
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+__all__ = [
+    "PAPER_SAMPLERS",
+    "distance_image",
+    "sample_pairs",
+    "samples_per_component",
+    "trajectory_by_duration",
+]
+
+#: Colour and legend label of the paper's samplers (Figs. 6-8), by sampler name.
+PAPER_SAMPLERS: dict[str, tuple[str, str]] = {
+    "alpha": ("magenta", "σ_α ∈ O(α)"),
+    "rho": ("forestgreen", "σ_ρ ∈ O(ρ)"),
+    "one": ("deepskyblue", "σ_1 ∈ O(1)"),
+    "rho-dispersed": ("darkorange", "σ_ρ dispersed"),
+}
+
+#: Colours of successive gamma isocontours.
+_GAMMA_COLORS = ("#ff7f0e", "white", "#e377c2", "#17becf")
+
+#: A pairwise distance: ``f(A, B)`` -> ``(len(A), len(B))`` distances between point arrays.
+PairwiseMetric = Callable[[np.ndarray, np.ndarray], npt.ArrayLike]
+#: One sampler's samples; see the module docstring.
+SamplesLike = npt.ArrayLike | Mapping[str, npt.ArrayLike] | object
+_Side = Literal["both", "begin", "end"]
+
+
+# --------------------------------------------------------------------------------------------
+# Public functions
+# --------------------------------------------------------------------------------------------
+
+
+def distance_image(
+    traj: Trajectory,
+    loops: Loops | None = None,
+    *,
+    gamma: float | Sequence[float] | None = None,
+    ax: Axes | None = None,
+    max_pixels: int = 1000,
+    metric: str | _metrics.Metric | PairwiseMetric | None = None,
+    samples: SamplesLike | Mapping[str, SamplesLike] | None = None,
+    outlines: bool | None = None,
+    cmap: str = "viridis",
+    colorbar: bool = True,
+    distance_unit: str = "m",
+    legend: bool = True,
+    outline_color: str = "white",
+    sample_size: float = 4.0,
+    window_s: tuple[tuple[float, float], tuple[float, float]] | None = None,
+) -> Axes:
+    """The pairwise distance function pi(t, t') = delta(xi(t), xi(t')) as an image.
+
+    The image is computed with numpy on a grid of at most ``max_pixels`` poses per side (every
+    pose when there are fewer; otherwise evenly spaced poses), so it costs O(max_pixels²)
+    whatever the trajectory's length. Drawn on it: the gamma isocontours, the outlines of the
+    loop components of ``loops`` (its runs rasterised on the same grid and mirrored: the
+    staircase is the lattice of the exact components at the image's resolution), and samples
+    as points at (t_i, t_j).
+
+    Args:
+        traj: the trajectory.
+        loops: the result of :func:`~inexact_loops.find_loops` on ``traj``; gives the
+            component outlines and the default ``gamma``.
+        gamma: one or more thresholds whose isocontours are drawn; default ``loops.gamma``
+            when the outlines are not drawn (they are its isocontour, on the lattice), none
+            without ``loops``.
+        ax: the Axes to draw into; a new figure when ``None``.
+        max_pixels: largest image side, pixels (>= 2).
+        metric: ``None`` or ``"euclidean"`` (L2 on ``traj.positions``), or a callable
+            ``f(A, B)`` returning the ``(len(A), len(B))`` distances between two arrays of
+            points (rows of ``traj.positions``), e.g. ``scipy.spatial.distance.cdist``. The
+            image is computed here, in numpy, only for the Euclidean metric: for any other
+            metric (``loops.metric`` not Euclidean) pass the callable.
+        samples: samples to overlay (see the module docstring), or ``{name: samples}``.
+        outlines: draw component outlines; default: when ``loops`` is given.
+        cmap: the image's colormap.
+        colorbar: add a colorbar labelled with ``distance_unit``.
+        distance_unit: the metric's unit, for the colorbar and the legend (``"m"``, ``"rad"``;
+            ``""`` for none).
+        legend: add a legend (gamma, outlines, samplers).
+        outline_color: colour of the component outlines.
+        sample_size: marker size of the samples, points².
+        window_s: ``((t_min, t_max), (t_prime_min, t_prime_max))``, seconds from the first
+            timestamp: draw only this window (a zoom, with up to ``max_pixels`` per side of
+            it); default the whole plane.
+
+    Returns:
+        The Axes: x is t, y is t', seconds from the first timestamp.
+
+    Raises:
+        TypeError: ``traj`` or ``loops`` of the wrong type, ``metric`` neither a name nor a
+            callable, ``max_pixels`` not an integer, ``window_s`` not two intervals, samples
+            that are not index pairs.
+        ValueError: ``loops`` of another trajectory, ``outlines=True`` without ``loops``, a
+            non-Euclidean ``loops.metric`` (or ``metric`` name) without a callable, a callable
+            returning the wrong shape, gamma not positive, ``max_pixels < 2``, an empty or
+            reversed window, sample indices out of range.
+
+    Example:
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import numpy as np, inexact_loops as il
+        >>> from inexact_loops.plot import distance_image
+        >>> s = np.linspace(0, 4 * np.pi, 300)  # a circle driven twice
+        >>> traj = il.Trajectory(s, 1.05 * np.c_[np.cos(s), np.sin(s)])
+        >>> loops = il.find_loops(traj, gamma=1.0)
+        >>> ax = distance_image(traj, loops, gamma=[1.0, 3.0], samples=np.array([[0, 150]]))
+        >>> len(ax.images), len(ax.collections) >= 3  # image; contours, outlines, samples
+        (1, True)
+        >>> import matplotlib.pyplot as plt; plt.close("all")
+    """
+    _check_trajectory(traj)
+    if loops is not None:
+        _check_loops(loops, traj)
+    if outlines is None:
+        outlines = loops is not None
+    elif outlines and loops is None:
+        raise ValueError("outlines=True needs loops (the result of find_loops on traj)")
+    gammas = _gammas(gamma, None if outlines else loops)
+    if not isinstance(max_pixels, numbers.Integral) or isinstance(max_pixels, bool):
+        raise TypeError(f"max_pixels must be an integer, got {type(max_pixels).__name__}")
+    if max_pixels < 2:
+        raise ValueError(f"max_pixels must be at least 2, got {max_pixels}")
+    distance = _pairwise_metric(metric, loops)
+    sample_sets = _named_samples(samples)
+
+    timestamps = traj.timestamps
+    relative = timestamps - timestamps[0]
+    x_window, y_window = _window(window_s, float(relative[-1]))
+    ix = _grid(relative, x_window, int(max_pixels), "t")
+    iy = ix if y_window == x_window else _grid(relative, y_window, int(max_pixels), "t′")
+    positions = traj.positions
+    image = np.asarray(distance(positions[iy], positions[ix]), dtype=float)
+    if image.shape != (len(iy), len(ix)):
+        raise ValueError(
+            f"metric returned shape {image.shape}, expected {(len(iy), len(ix))}: "
+            "it must give the pairwise distances between two arrays of points"
+        )
+    x, y = relative[ix], relative[iy]
+    x_edges, y_edges = _cell_edges(x), _cell_edges(y)
+
+    import matplotlib.pyplot as plt
+    from matplotlib import patheffects
+    from matplotlib.collections import LineCollection
+    from matplotlib.image import NonUniformImage
+    from matplotlib.lines import Line2D
+
+    ax = _axes(ax)
+    extent = (x_edges[0], x_edges[-1], y_edges[0], y_edges[-1])
+    picture = NonUniformImage(ax, interpolation="nearest", cmap=cmap, extent=extent)
+    picture.set_data(x, y, image)
+    ax.add_image(picture)
+    ax.set_xlim(x_edges[0], x_edges[-1])
+    ax.set_ylim(y_edges[0], y_edges[-1])
+    ax.set_aspect("equal")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("t′ (s)")
+    unit = f" {distance_unit}" if distance_unit else ""
+    if colorbar:
+        label = f"π(t, t′) ({distance_unit})" if distance_unit else "π(t, t′)"
+        plt.colorbar(picture, ax=ax, label=label, shrink=0.85)
+
+    handles: list[Any] = []
+    # A thin dark edge keeps light lines visible on light pixels and in the legend.
+    edge = [patheffects.Stroke(linewidth=2.2, foreground="0.1"), patheffects.Normal()]
+    if gammas:
+        colors = [_GAMMA_COLORS[k % len(_GAMMA_COLORS)] for k in range(len(gammas))]
+        drawn = sorted(set(gammas))
+        if min(image.shape) >= 2 and image.min() < drawn[-1] and image.max() > drawn[0]:
+            contours = ax.contour(
+                x,
+                y,
+                image,
+                levels=drawn,
+                linewidths=1.2,
+                colors=[colors[gammas.index(g)] for g in drawn],
+            )
+            contours.set(path_effects=edge)
+        for k, g in enumerate(gammas):
+            handles.append(
+                Line2D([], [], color=colors[k], lw=1.2, path_effects=edge, label=f"γ = {g:g}{unit}")
+            )
+    if outlines:
+        assert loops is not None
+        labels = _label_image(loops, ix, iy)
+        segments = _outline_segments(labels, x_edges, y_edges)
+        ax.add_collection(
+            LineCollection(segments, colors=outline_color, linewidths=0.8, path_effects=edge)
+        )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=outline_color,
+                lw=0.8,
+                path_effects=edge,
+                label=f"components (γ = {loops.gamma:g}{unit})",
+            )
+        )
+    for k, (name, value) in enumerate(sample_sets):
+        i, j = _sample_pairs(value, len(traj), timestamps)
+        color, label = _sampler_style(name, k)
+        t0 = timestamps[0]
+        ax.scatter(
+            timestamps[i] - t0,
+            timestamps[j] - t0,
+            s=sample_size,
+            color=color,
+            label=label,
+            linewidths=0,
+            zorder=3,
+        )
+        handles.append(Line2D([], [], color=color, marker="o", ls="none", label=label))
+    if legend and handles:
+        ax.legend(
+            handles=handles,
+            loc="lower left",
+            bbox_to_anchor=(0.0, 1.01),
+            ncol=2,
+            fontsize="small",
+            frameon=False,
+            borderaxespad=0.0,
+        )
+    return ax
+
+
+def trajectory_by_duration(
+    traj: Trajectory,
+    loops: Loops,
+    *,
+    ax: Axes | None = None,
+    side: _Side = "both",
+    components: list[int] | None = None,
+    normalized: bool = False,
+    axes: tuple[int, int] = (0, 1),
+    cmap: str = "viridis",
+    linewidth: float = 1.5,
+    colorbar: bool = True,
+    position_unit: str = "m",
+) -> Axes:
+    """The trajectory's path coloured by loop duration tau(t) (paper, Eq. 6 and Fig. 6d).
+
+    Each segment between consecutive poses takes the mean tau of its two ends; segments are
+    drawn in increasing tau, so where the path passes several times the longest loop duration
+    shows.
+
+    Args:
+        traj: the trajectory; two coordinates of ``traj.positions`` are drawn.
+        loops: the result of :func:`~inexact_loops.find_loops` on ``traj``.
+        ax: the Axes to draw into; a new figure when ``None``.
+        side, components, normalized: as :meth:`Loops.loop_duration`.
+        axes: the two coordinates drawn as x and y (e.g. ``(0, 2)`` for KITTI's x-z ground plane).
+        cmap: the colormap of tau.
+        linewidth: line width, points.
+        colorbar: add a colorbar of tau.
+        position_unit: unit of the coordinates, for the axis labels.
+
+    Returns:
+        The Axes, equal aspect, with one LineCollection.
+
+    Raises:
+        TypeError: ``traj`` or ``loops`` of the wrong type.
+        ValueError: ``loops`` of another trajectory, ``axes`` not two coordinates of ``traj``.
+        InvalidParameterError: a bad ``side`` or component id (from :meth:`Loops.loop_duration`).
+
+    Example:
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import inexact_loops as il
+        >>> from inexact_loops.plot import trajectory_by_duration
+        >>> traj = il.urban_drive(duration_s=300.0, seed=1)
+        >>> loops = il.find_loops(traj, gamma=40.0)
+        >>> ax = trajectory_by_duration(traj, loops, side="begin")
+        >>> len(ax.collections)
+        1
+        >>> import matplotlib.pyplot as plt; plt.close("all")
+    """
+    _check_trajectory(traj)
+    _check_loops(loops, traj)
+    xy = _plane(traj, axes)
+    tau = loops.loop_duration(side=side, components=components, normalized=normalized)
+
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    ax = _axes(ax)
+    segment_tau = (tau[:-1] + tau[1:]) / 2
+    order = np.argsort(segment_tau, kind="stable")
+    segments = np.stack([xy[:-1], xy[1:]], axis=1)[order]
+    lines = LineCollection(segments, cmap=cmap, linewidths=linewidth, capstyle="round")
+    lines.set_array(segment_tau[order])
+    lines.set_clim(0.0, max(float(tau.max()), np.finfo(float).tiny))
+    ax.add_collection(lines)
+    _frame(ax, xy, axes, position_unit)
+    if colorbar:
+        unit = "fraction of the span" if normalized else "s"
+        what = {"both": "τ", "begin": "τ (loops that begin)", "end": "τ (loops that end)"}
+        label = f"loop duration {what.get(side, 'τ')} ({unit})"
+        plt.colorbar(lines, ax=ax, label=label, shrink=0.85)
+    return ax
+
+
+def sample_pairs(
+    traj: Trajectory,
+    samples: SamplesLike | Mapping[str, SamplesLike],
+    *,
+    ax: Axes | None = None,
+    axes: tuple[int, int] = (0, 1),
+    color: str | None = None,
+    trajectory_color: str = "0.65",
+    linewidth: float = 0.6,
+    alpha: float = 0.6,
+    legend: bool = True,
+    position_unit: str = "m",
+) -> Axes:
+    """Sampled loops drawn as straight lines between their two trajectory points (Fig. 6).
+
+    Args:
+        traj: the trajectory, drawn underneath in ``trajectory_color``.
+        samples: the samples (see the module docstring), or ``{name: samples}`` for several
+            samplers, each in its colour.
+        ax: the Axes to draw into; a new figure when ``None``.
+        axes: the two coordinates drawn as x and y.
+        color: colour of the sample lines for a single sampler (default from its name).
+        trajectory_color: colour of the path.
+        linewidth: width of the sample lines, points.
+        alpha: opacity of the sample lines.
+        legend: add a legend naming the samplers.
+        position_unit: unit of the coordinates, for the axis labels.
+
+    Returns:
+        The Axes: the path (one line) and one LineCollection of samples per sampler.
+
+    Raises:
+        TypeError: ``traj`` not a Trajectory; samples that are not index pairs.
+        ValueError: sample indices out of range; ``axes`` not two coordinates of ``traj``.
+
+    Example:
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import numpy as np, inexact_loops as il
+        >>> from inexact_loops.plot import sample_pairs
+        >>> s = np.linspace(0, 2 * np.pi, 100)
+        >>> traj = il.Trajectory(s, np.c_[np.cos(s), np.sin(s)])
+        >>> ax = sample_pairs(traj, {"rho": np.array([[0, 99], [1, 98]]), "one": [[2, 97]]})
+        >>> len(ax.lines), len(ax.collections)
+        (1, 2)
+        >>> import matplotlib.pyplot as plt; plt.close("all")
+    """
+    _check_trajectory(traj)
+    xy = _plane(traj, axes)
+    sample_sets = _named_samples(samples)
+    if not sample_sets:
+        raise ValueError("no samples given")
+
+    from matplotlib.collections import LineCollection
+
+    ax = _axes(ax)
+    ax.plot(xy[:, 0], xy[:, 1], color=trajectory_color, lw=0.8, zorder=1, label="trajectory")
+    for k, (name, value) in enumerate(sample_sets):
+        i, j = _sample_pairs(value, len(traj), traj.timestamps)
+        default_color, label = _sampler_style(name, k)
+        line_color = color if (color is not None and len(sample_sets) == 1) else default_color
+        segments = np.stack([xy[i], xy[j]], axis=1)
+        ax.add_collection(
+            LineCollection(
+                segments,
+                colors=line_color,
+                linewidths=linewidth,
+                alpha=alpha,
+                zorder=2,
+                label=f"{label} ({len(i)})",
+            )
+        )
+    _frame(ax, xy, axes, position_unit)
+    if legend:
+        ax.legend(
+            loc="lower left",
+            bbox_to_anchor=(0.0, 1.01),
+            ncol=2,
+            fontsize="small",
+            frameon=False,
+            borderaxespad=0.0,
+        )
+    return ax
+
+
+def samples_per_component(
+    loops: Loops,
+    samples_by_sampler: Mapping[str, SamplesLike],
+    *,
+    axes: tuple[Axes, Axes] | None = None,
+    available: npt.ArrayLike | None = None,
+    include_trivial: bool = False,
+    log_scale: bool = True,
+) -> tuple[Axes, Axes]:
+    """Samples per loop component by sampler, components sorted by area (paper, Fig. 8).
+
+    Top: the percentage of each component's available pairs that a sampler kept; components it
+    missed (P1) are ticks along the foot of the axes. Bottom: the cumulative number of
+    samples, summed over the components from the smallest up: a sampler that oversamples
+    large components climbs steeply on the right.
+
+    Args:
+        loops: the result of :func:`~inexact_loops.find_loops`; its components are the x axis.
+        samples_by_sampler: ``{name: samples}`` (see the module docstring). A sample's
+            component is the ``component`` column of a mapping when given, otherwise the
+            component of its pair (i, j) in ``loops``; samples outside S_gamma are not counted.
+        axes: two Axes (top, bottom); a new figure with two rows when ``None``.
+        available: what the samplers chose from, per component: the detections they were
+            drawn from (any samples-like value, e.g. :class:`~inexact_loops.Detections`, as in
+            the paper), or a count per component id; default ``loops.components["pairs"]``,
+            the pairs of S_gamma (the half t <= t' of a non-trivial component).
+        include_trivial: count the trivial components (simple loops) too.
+        log_scale: a logarithmic percentage axis (the percentages span orders of magnitude).
+
+    Returns:
+        The two Axes (top, bottom).
+
+    Raises:
+        TypeError: ``loops`` not a Loops, samples that are not index pairs.
+        ValueError: no samplers, ``available`` of the wrong length, ``axes`` not two Axes,
+            component ids out of range, no component to show.
+
+    Example:
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import numpy as np, inexact_loops as il
+        >>> from inexact_loops.plot import samples_per_component
+        >>> s = np.linspace(0, 4 * np.pi, 300)
+        >>> traj = il.Trajectory(s, 1.05 * np.c_[np.cos(s), np.sin(s)])
+        >>> loops = il.find_loops(traj, gamma=1.0)
+        >>> top, bottom = samples_per_component(loops, {"one": [[0, 150], [0, 299]]})
+        >>> len(top.lines), len(bottom.lines)
+        (1, 1)
+        >>> import matplotlib.pyplot as plt; plt.close("all")
+    """
+    if not isinstance(loops, Loops):
+        raise TypeError(f"loops must be an inexact_loops.Loops, got {type(loops).__name__}")
+    sample_sets = _named_samples(samples_by_sampler)
+    if not sample_sets:
+        raise ValueError("samples_by_sampler is empty")
+    table = loops.components
+    k = len(table["id"])
+    if available is None:
+        pool = np.asarray(table["pairs"], dtype=float)
+    elif isinstance(available, (np.ndarray, list, tuple)) and np.ndim(available) == 1:
+        pool = np.asarray(available, dtype=float)
+        if pool.shape != (k,):
+            raise ValueError(
+                f"available must have one value per component ({k}), got shape {pool.shape}"
+            )
+    else:
+        pool = _counts_per_component(available, loops, k)
+    shown = np.ones(k, dtype=bool) if include_trivial else ~np.asarray(table["trivial"])
+    shown &= pool > 0
+    if not shown.any():
+        raise ValueError("no loop component to show (all trivial or without available pairs)")
+    order = np.flatnonzero(shown)[np.argsort(table["area_s2"][shown], kind="stable")]
+    rank = np.arange(1, len(order) + 1)
+
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, pair = plt.subplots(2, 1, sharex=True, figsize=(8.0, 6.4), constrained_layout=True)
+        top, bottom = pair[0], pair[1]
+    else:
+        if len(axes) != 2:
+            raise ValueError(f"axes must be two Axes (top, bottom), got {len(axes)}")
+        top, bottom = axes
+
+    missed = []
+    for index, (name, value) in enumerate(sample_sets):
+        counts = _counts_per_component(value, loops, k)
+        color, label = _sampler_style(name, index)
+        kept = counts[order]
+        percent = 100.0 * kept / pool[order]
+        total = int(kept.sum())
+        covered = int((kept > 0).sum())
+        top.plot(
+            rank,
+            np.where(percent > 0, percent, np.nan),
+            ".",
+            ms=3,
+            color=color,
+            label=f"{label}: {total} samples in {covered}/{len(order)} components",
+        )
+        bottom.step(rank, np.cumsum(kept), where="post", color=color, lw=1.4, label=label)
+        missed.append((rank[kept == 0], color))
+    # Components a sampler missed (P1), as ticks along the bottom of the top axes.
+    blend = top.get_xaxis_transform()
+    for index, (where, color) in enumerate(missed):
+        if len(where):
+            top.plot(
+                where,
+                np.full(len(where), 0.03 + 0.04 * index),
+                "|",
+                ms=6,
+                mew=1.2,
+                color=color,
+                transform=blend,
+                clip_on=False,
+            )
+    handles, _ = top.get_legend_handles_labels()
+    if any(len(where) for where, _ in missed):
+        from matplotlib.lines import Line2D
+
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="0.3",
+                marker="|",
+                ls="none",
+                ms=6,
+                mew=1.2,
+                label="ticks: components without a sample",
+            )
+        )
+    if log_scale:
+        top.set_yscale("log")
+    bottom.set_ylim(bottom=0)
+    what = "detections" if available is not None else "pairs"
+    top.set_ylabel(f"samples / {what} (%)")
+    bottom.set_ylabel("cumulative samples")
+    bottom.set_xlabel("loop components, sorted by area (smallest → largest)")
+    top.legend(handles=handles, loc="upper right", fontsize="small", framealpha=0.8)
+    for a in (top, bottom):
+        a.grid(True, which="major", alpha=0.3)
+        a.set_xlim(0.5, len(order) + 0.5)
+    return top, bottom
+
+
+# --------------------------------------------------------------------------------------------
+# Helpers
+# --------------------------------------------------------------------------------------------
+
+
+def _check_trajectory(traj: object) -> None:
+    if not isinstance(traj, Trajectory):
+        raise TypeError(f"traj must be an inexact_loops.Trajectory, got {type(traj).__name__}")
+
+
+def _check_loops(loops: object, traj: Trajectory) -> None:
+    if not isinstance(loops, Loops):
+        raise TypeError(f"loops must be an inexact_loops.Loops, got {type(loops).__name__}")
+    if len(loops) != len(traj):
+        raise ValueError(
+            f"loops has {len(loops)} poses but the trajectory {len(traj)}: "
+            "pass the result of find_loops on this trajectory"
+        )
+
+
+def _axes(ax: Axes | None) -> Axes:
+    if ax is not None:
+        return ax
+    import matplotlib.pyplot as plt
+
+    _, new = plt.subplots(constrained_layout=True)
+    return new
+
+
+def _gammas(gamma: float | Sequence[float] | None, loops: Loops | None) -> list[float]:
+    if gamma is None:
+        return [loops.gamma] if loops is not None else []
+    values = [gamma] if isinstance(gamma, numbers.Real) else list(gamma)
+    out = []
+    for g in values:
+        if not isinstance(g, numbers.Real) or isinstance(g, bool):
+            raise TypeError(f"gamma must be a number or a sequence of numbers, got {g!r}")
+        if not (np.isfinite(g) and g > 0):
+            raise ValueError(f"gamma must be positive and finite, got {g}")
+        out.append(float(g))
+    return out
+
+
+def _is_euclidean(metric: object) -> bool:
+    if isinstance(metric, _metrics.Euclidean):
+        return True
+    return isinstance(metric, str) and metric.strip().lower() in ("euclidean", "l2")
+
+
+def _euclidean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    diff = a[:, None, :] - b[None, :, :]
+    return np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
+
+
+def _pairwise_metric(metric: object, loops: Loops | None) -> PairwiseMetric:
+    if metric is None:
+        if loops is not None and not _is_euclidean(loops.metric):
+            raise ValueError(
+                f"distance_image computes the image only for the Euclidean metric, and these "
+                f"loops use {loops.metric}: pass metric=f(A, B) returning the pairwise "
+                "distances between two arrays of points"
+            )
+        return _euclidean
+    if _is_euclidean(metric):
+        return _euclidean
+    if isinstance(metric, (str, _metrics.Metric)):
+        raise ValueError(
+            f"distance_image computes the image only for the Euclidean metric, not {metric}: "
+            "pass metric=f(A, B) returning the pairwise distances between two arrays of points"
+        )
+    if callable(metric):
+        return metric  # type: ignore[return-value]
+    raise TypeError(
+        f"metric must be None, 'euclidean' or a callable f(A, B), got {type(metric).__name__}"
+    )
+
+
+def _window(
+    window_s: tuple[tuple[float, float], tuple[float, float]] | None, span_s: float
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """((t_lo, t_hi), (t'_lo, t'_hi)) in seconds from the first timestamp."""
+    if window_s is None:
+        return (0.0, span_s), (0.0, span_s)
+    try:
+        (a, b), (c, d) = window_s
+        box = (float(a), float(b)), (float(c), float(d))
+    except (TypeError, ValueError) as err:
+        raise TypeError(
+            f"window_s must be ((t_min, t_max), (t_prime_min, t_prime_max)), got {window_s!r}"
+        ) from err
+    for lo, hi in box:
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+            raise ValueError(f"window_s: each interval must be finite with min < max, got {box}")
+    return box
+
+
+def _grid(
+    relative_s: np.ndarray, window: tuple[float, float], max_pixels: int, axis: str
+) -> np.ndarray:
+    """Pose indices of one image axis: every pose in the window, or ``max_pixels`` evenly
+    spaced ones (the first and last included)."""
+    lo, hi = (
+        np.searchsorted(relative_s, window[0], "left"),
+        np.searchsorted(relative_s, window[1], "right"),
+    )
+    if hi - lo < 1:
+        raise ValueError(f"window_s: no pose with {axis} in [{window[0]:g}, {window[1]:g}] s")
+    if hi - lo <= max_pixels:
+        return np.arange(lo, hi)
+    return np.unique(np.round(np.linspace(lo, hi - 1, max_pixels)).astype(np.int64))
+
+
+def _cell_edges(centres: np.ndarray) -> np.ndarray:
+    """Pixel boundaries: midpoints between centres, half a step beyond both ends."""
+    if len(centres) == 1:
+        return np.array([centres[0] - 0.5, centres[0] + 0.5])
+    mids = (centres[:-1] + centres[1:]) / 2
+    first = centres[0] - (mids[0] - centres[0])
+    last = centres[-1] + (centres[-1] - mids[-1])
+    return np.concatenate(([first], mids, [last]))
+
+
+def _label_image(loops: Loops, ix: np.ndarray, iy: np.ndarray) -> np.ndarray:
+    """Component id of every grid cell (t = ix[q], t' = iy[p]) as ``labels[p, q]``, -1 outside
+    S_gamma. Only the runs of the grid's rows are read: a cell with t' >= t lies in row t's
+    runs, one with t' <= t in row t''s (the mirror)."""
+    runs = loops.runs()
+    row, start, end, comp = (np.asarray(runs[key]) for key in ("row", "start", "end", "component"))
+    labels = np.full((len(iy), len(ix)), -1, dtype=np.int64)
+    for rows, cols, transpose in ((ix, iy, True), (iy, ix, False)):
+        pixel = np.full(len(loops), -1, dtype=np.int64)
+        pixel[rows] = np.arange(len(rows))
+        keep = pixel[row] >= 0
+        first = np.searchsorted(cols, start[keep], side="left")
+        length = np.searchsorted(cols, end[keep], side="right") - first
+        total = int(length.sum())
+        if not total:
+            continue
+        offsets = np.arange(total) - np.repeat(np.cumsum(length) - length, length)
+        r = np.repeat(pixel[row[keep]], length)
+        c = np.repeat(first, length) + offsets
+        ids = np.repeat(comp[keep], length)
+        if transpose:
+            labels[c, r] = ids
+        else:
+            labels[r, c] = ids
+    return labels
+
+
+def _outline_segments(labels: np.ndarray, x_edges: np.ndarray, y_edges: np.ndarray) -> np.ndarray:
+    """Segments (k, 2, 2) along every pixel edge where the component id changes; the image's
+    border continues the outermost pixels (a component cut by the window stays open)."""
+    padded = np.pad(labels, 1, mode="edge")
+    # Vertical edges: between horizontal neighbours (columns q-1 and q, at x = x_edges[q]).
+    p, q = np.nonzero(padded[1:-1, :-1] != padded[1:-1, 1:])
+    vertical = np.stack([np.c_[x_edges[q], y_edges[p]], np.c_[x_edges[q], y_edges[p + 1]]], 1)
+    # Horizontal edges: between vertical neighbours (rows p-1 and p, at y = y_edges[p]).
+    p, q = np.nonzero(padded[:-1, 1:-1] != padded[1:, 1:-1])
+    horizontal = np.stack([np.c_[x_edges[q], y_edges[p]], np.c_[x_edges[q + 1], y_edges[p]]], 1)
+    return np.concatenate([vertical, horizontal]).reshape(-1, 2, 2)
+
+
+def _plane(traj: Trajectory, axes: tuple[int, int]) -> np.ndarray:
+    try:
+        a, b = (int(k) for k in axes)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f"axes must be two coordinate indices, got {axes!r}") from err
+    if not (0 <= a < traj.dim and 0 <= b < traj.dim) or a == b:
+        raise ValueError(
+            f"axes must be two different coordinates of the {traj.dim}-dimensional "
+            f"positions, got {axes!r}"
+        )
+    return traj.positions[:, [a, b]]
+
+
+def _frame(ax: Axes, xy: np.ndarray, axes: tuple[int, int], unit: str) -> None:
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    pad = 0.03 * max(float((hi - lo).max()), 1e-9)
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
+    ax.set_aspect("equal")
+    names = "xyz"
+    label = [names[k] if k < 3 else f"x{k}" for k in axes]
+    ax.set_xlabel(f"{label[0]} ({unit})")
+    ax.set_ylabel(f"{label[1]} ({unit})")
+
+
+def _sampler_style(name: str | None, index: int) -> tuple[str, str]:
+    if name is not None and name in PAPER_SAMPLERS:
+        return PAPER_SAMPLERS[name]
+    color = f"C{index % 10}"
+    return color, name if name is not None else "samples"
+
+
+_INDEX_KEYS = ("i", "j")
+_TIME_KEYS = (("t", "t_prime"), ("t_s", "t_prime_s"))
+
+
+def _looks_like_samples(value: Mapping[Any, Any]) -> bool:
+    """Whether a mapping is one sampler's columns rather than ``{name: samples}``."""
+    keys = [_INDEX_KEYS, *_TIME_KEYS]
+    return any(all(key in value for key in pair) for pair in keys)
+
+
+def _named_samples(samples: object) -> list[tuple[str | None, object]]:
+    """``[(name, samples), ...]`` from one sampler's samples or a dict of them."""
+    if samples is None:
+        return []
+    if isinstance(samples, Mapping) and not _looks_like_samples(samples):
+        for key in samples:
+            if not isinstance(key, str):
+                raise TypeError(f"sampler names must be strings, got {key!r}")
+        return list(samples.items())
+    name = getattr(samples, "sampler", None)
+    return [(name if isinstance(name, str) else None, samples)]
+
+
+def _field(samples: object, key: str) -> Any:
+    """A column of a mapping or an attribute of a samples object (``None`` when absent)."""
+    if isinstance(samples, Mapping):
+        return samples.get(key)
+    if isinstance(samples, (np.ndarray, list, tuple)):
+        return None
+    return getattr(samples, key, None)
+
+
+def _sample_pairs(
+    samples: object, n: int, timestamps: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Pose indices (i, j) of one sampler's samples, checked against ``n`` poses.
+
+    From ``i`` and ``j`` columns (or attributes), else from ``t`` and ``t_prime`` times mapped
+    to the nearest poses (needs ``timestamps``), else from an (m, 2) integer array."""
+    i, j = _field(samples, "i"), _field(samples, "j")
+    if i is not None and j is not None:
+        i, j = _indices(i, "i"), _indices(j, "j")
+    else:
+        times = next(
+            (
+                (_field(samples, a), _field(samples, b))
+                for a, b in _TIME_KEYS
+                if _field(samples, a) is not None and _field(samples, b) is not None
+            ),
+            None,
+        )
+        if times is not None:
+            if timestamps is None:
+                raise ValueError(
+                    "samples have times but no pose indices: place them on the trajectory "
+                    "first (e.g. samples.locate(loops))"
+                )
+            i, j = _nearest(timestamps, times[0]), _nearest(timestamps, times[1])
+        elif isinstance(samples, Mapping) or not isinstance(samples, (np.ndarray, list, tuple)):
+            raise TypeError(
+                "samples must be an (m, 2) array of pose index pairs, or have 'i' and 'j' (pose "
+                "indices) or 't' and 't_prime' (seconds) columns; got "
+                f"{type(samples).__name__}"
+            )
+        else:
+            pairs = np.asarray(samples)
+            if pairs.size == 0:
+                pairs = pairs.reshape(0, 2)
+            if pairs.ndim != 2 or pairs.shape[1] != 2:
+                raise TypeError(
+                    f"samples must be an (m, 2) array of pose index pairs, got shape {pairs.shape}"
+                )
+            i, j = _indices(pairs[:, 0], "i"), _indices(pairs[:, 1], "j")
+    if len(i) != len(j):
+        raise ValueError(f"samples: {len(i)} values of i but {len(j)} of j")
+    for name, values in (("i", i), ("j", j)):
+        if len(values) and (values.min() < 0 or values.max() >= n):
+            raise ValueError(f"samples: {name} out of range for a trajectory of {n} poses")
+    return i, j
+
+
+def _indices(values: object, name: str) -> np.ndarray:
+    array = np.asarray(values)
+    if array.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if array.dtype.kind not in "iu":
+        raise TypeError(f"samples: {name} must be integer pose indices, got dtype {array.dtype}")
+    return array.astype(np.int64).ravel()
+
+
+def _nearest(timestamps: np.ndarray, times: object) -> np.ndarray:
+    t = np.asarray(times, dtype=float).ravel()
+    right = np.clip(np.searchsorted(timestamps, t), 1, len(timestamps) - 1)
+    left = right - 1
+    closer_left = (t - timestamps[left]) <= (timestamps[right] - t)
+    return np.where(closer_left, left, right).astype(np.int64)
+
+
+def _components_of(loops: Loops, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """The component id of each pair (i, j) (either order), -1 outside S_gamma: the run of
+    row min(i, j) that covers column max(i, j), found by binary search over the runs."""
+    runs = loops.runs()
+    row, start, end, comp = (np.asarray(runs[key]) for key in ("row", "start", "end", "component"))
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
+    stride = np.int64(len(loops) + 1)
+    keys = row * stride + start  # sorted: runs come row by row, in order
+    at = np.searchsorted(keys, lo * stride + hi, side="right") - 1
+    safe = np.clip(at, 0, None)
+    inside = (at >= 0) & (row[safe] == lo) & (end[safe] >= hi)
+    return np.where(inside, comp[safe], -1).astype(np.int64)
+
+
+def _counts_per_component(samples: object, loops: Loops, k: int) -> np.ndarray:
+    """Number of samples in each component id (samples outside S_gamma are not counted).
+
+    A mapping's ``component`` column is used as given; otherwise the components are looked
+    up from the pairs (i, j)."""
+    given = samples.get("component") if isinstance(samples, Mapping) else None
+    if given is not None:
+        component = np.asarray(given)
+        if component.size and component.dtype.kind not in "iu":
+            raise TypeError(f"samples: component ids must be integers, got {component.dtype}")
+        component = component.astype(np.int64).ravel()
+    else:
+        i, j = _sample_pairs(samples, len(loops), None)
+        component = _components_of(loops, i, j)
+    inside = component[component >= 0]
+    if len(inside) and inside.max() >= k:
+        raise ValueError(f"samples: component id {inside.max()} out of range ({k} components)")
+    return np.bincount(inside, minlength=k).astype(float)
