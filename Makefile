@@ -8,8 +8,9 @@ PIP := $(PYTHON) -m pip
 demo:
 	cargo run --release --quiet -p loops-cli -- demo
 
-## Every test: Rust (unit, property, doc) and Python (pytest, doctests).
-test: test-rust test-python
+## Every test: Rust (unit, property, doc) and Python (pytest, doctests, stubs). The Python
+## packages go in first: the Rust MCAP tests write their fixtures with the official Python writers.
+test: python test-rust test-python
 
 test-rust:
 	cargo test --workspace --all-targets
@@ -21,12 +22,14 @@ python:
 	$(PIP) install --quiet '.[test]'
 
 test-python: python
-	$(PYTHON) -m pytest -q tests python/inexact_loops
+	$(PYTHON) -m mypy.stubtest inexact_loops._core
+	$(PYTHON) -m pytest -q tests
+	$(PYTHON) -m pytest -q --doctest-modules --pyargs inexact_loops
 
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
-	$(PYTHON) -m ruff check python tests benches
+	$(PYTHON) -m ruff check python tests benches examples
 
 fmt:
 	cargo fmt --all

@@ -4,6 +4,7 @@
 //! 0 on success or a closed pipe. Everything else lives in `loops-core` and `loops-io`.
 
 mod output;
+mod sample;
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -33,6 +34,15 @@ enum Command {
         loops components fr2_desk.tum --gamma 0.3 --metric 'se3(rotation_weight_m_per_rad=0.5)'"
     )]
     Components(ComponentsArgs),
+    /// Candidate loop-closure pairs for a scan matcher, from the exact loop components or from
+    /// clustered detections, with coverage (P1), redundancy (P2) and growth (P3).
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Examples:\n  \
+        loops sample drive.tum --gamma 40 --sampler rho --budget 10000 --out pairs.csv\n  \
+        loops sample Corridor_GT.tum --gamma 1 --sampler rho --budget 500 --detections Corridor_Input.txt --epsilon-s 5"
+    )]
+    Sample(sample::SampleArgs),
     /// Run on a built-in synthetic urban drive (2.1 h, 10 Hz, 1 km² city) and print a summary.
     #[command(
         allow_negative_numbers = true,
@@ -42,18 +52,18 @@ enum Command {
 }
 
 #[derive(Debug, Args)]
-struct EngineArgs {
+pub(crate) struct EngineArgs {
     /// The distance threshold γ, in the metric's unit (metres for positions).
     #[arg(long, value_name = "GAMMA_M")]
-    gamma: f64,
+    pub(crate) gamma: f64,
     /// The metric: euclidean, se3(rotation_weight_m_per_rad=W[, rotation=geodesic|chordal]),
     /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W). SE(3), SO(3) and SE(2) use the file's
     /// orientations.
     #[arg(long, default_value_t = MetricSpec::default().name())]
-    metric: String,
+    pub(crate) metric: String,
     /// Worker threads (default: one per core). Results do not depend on it.
     #[arg(long)]
-    threads: Option<usize>,
+    pub(crate) threads: Option<usize>,
 }
 
 #[derive(Debug, Args)]
@@ -125,6 +135,7 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Components(args) => components(args),
         Command::Demo(args) => demo(args),
+        Command::Sample(args) => sample::sample(args),
     }
 }
 

@@ -77,7 +77,7 @@ fn bad_input_is_one_line_and_exit_2() {
     assert_one_line_error(&loops(&["components", file, "--gamma", "-3"]), "gamma must be a positive");
     assert_one_line_error(&loops(&["components", file, "--gamma", "NaN"]), "gamma must be a positive");
     assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--metric", "manhattan"]), "unknown metric");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--format", "kitti"]), "unknown file format");
+    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--format", "rosbag"]), "unknown file format");
     assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--threads", "0"]), "threads");
     assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--axes", "0,7"]), "axis");
 
@@ -170,5 +170,94 @@ fn se3_metric_uses_the_file_orientations() {
     assert_one_line_error(
         &loops(&["components", csv.to_str().unwrap(), "--gamma", "1", "--metric", "se3(rotation_weight_m_per_rad=1)"]),
         "orientations",
+    );
+}
+
+/// Three laps of a 40 m square at 1 m/s: revisits one and two laps apart.
+fn laps(dir: &Path) -> PathBuf {
+    let path = dir.join("laps.csv");
+    let mut text = String::from("t,x,y\n");
+    for k in 0..480 {
+        let s = f64::from(k % 160) * 0.25; // position along the lap, 0..40 m of each side
+        let (x, y) = match k % 160 / 40 {
+            0 => (s, 0.0),
+            1 => (10.0, s - 10.0),
+            2 => (30.0 - s, 10.0),
+            _ => (0.0, 40.0 - s),
+        };
+        text += &format!("{k},{x},{y}\n");
+    }
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn sample_writes_exactly_the_budget_and_reports_quality() {
+    let dir = temp_dir("sample");
+    let file = laps(&dir);
+    let out = dir.join("pairs.csv");
+    let args = ["sample", file.to_str().unwrap(), "--gamma", "2", "--sampler", "rho", "--budget", "50"];
+    let output = loops(&[&args[..], &["--out", out.to_str().unwrap()]].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("P1 coverage"), "{stdout}");
+    let csv = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(csv.lines().count(), 51, "header and 50 pairs");
+    assert!(csv.lines().next().unwrap().contains("sampler"));
+    // Kept without --force; the same seed writes the same file.
+    assert_one_line_error(&loops(&[&args[..], &["--out", out.to_str().unwrap()]].concat()), "exists");
+    let again = loops(&[&args[..], &["--out", out.to_str().unwrap(), "--force"]].concat());
+    assert!(again.status.success());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), csv);
+}
+
+#[test]
+fn sample_from_detections_and_bad_input() {
+    let dir = temp_dir("sample-det");
+    let file = laps(&dir);
+    let detections = dir.join("det.txt");
+    std::fs::write(&detections, "odom2 0 0 0\nloop 5 165 1\nloop 6 166 0.5\nloop 50 370 0.9\n").unwrap();
+    let output = loops(&[
+        "sample",
+        file.to_str().unwrap(),
+        "--gamma",
+        "2",
+        "--sampler",
+        "one",
+        "--budget",
+        "2",
+        "--detections",
+        detections.to_str().unwrap(),
+        "--epsilon-s",
+        "5",
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(String::from_utf8_lossy(&output.stdout).contains("2 samples from 2 groups"));
+    let f = file.to_str().unwrap();
+    assert_one_line_error(
+        &loops(&["sample", f, "--gamma", "2", "--sampler", "sigma", "--budget", "5"]),
+        "unknown sampler",
+    );
+    assert_one_line_error(&loops(&["sample", f, "--gamma", "2", "--sampler", "rho", "--budget", "0"]), "budget");
+    let outside = dir.join("outside.txt");
+    std::fs::write(&outside, "t,t_prime\n5,165\n5,9999\n").unwrap();
+    assert_one_line_error(
+        &loops(&[
+            "sample",
+            f,
+            "--gamma",
+            "2",
+            "--sampler",
+            "one",
+            "--budget",
+            "2",
+            "--detections",
+            outside.to_str().unwrap(),
+        ]),
+        "line 3",
+    );
+    assert_one_line_error(
+        &loops(&["sample", f, "--gamma", "2", "--sampler", "rho", "--budget", "5", "--out", "x.txt"]),
+        ".csv or .json",
     );
 }

@@ -1,0 +1,145 @@
+//! `loops sample`: candidate loop-closure pairs for a scan matcher, from the exact loop
+//! components or from clustered detections, with their quality (P1–P3).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use loops_core::{
+    DEFAULT_EPSILON_S, Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Samples, Trajectory,
+    cluster_detections, sample_clusters, sample_quality,
+};
+
+use crate::EngineArgs;
+
+#[derive(Debug, Args)]
+pub(crate) struct SampleArgs {
+    /// The trajectory file (TUM or CSV).
+    file: PathBuf,
+    /// File format: tum or csv (default: from the extension).
+    #[arg(long)]
+    format: Option<String>,
+    #[command(flatten)]
+    engine: EngineArgs,
+    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
+    /// lio-sam, hdl-graph-slam, cartographer, time-gap.
+    #[arg(long)]
+    sampler: String,
+    /// Exactly this many samples (at least one per component when it allows).
+    #[arg(long, conflicts_with = "rate", required_unless_present = "rate")]
+    budget: Option<usize>,
+    /// The sampler's rate instead of a budget (per component, per row, or per candidate).
+    #[arg(long)]
+    rate: Option<f64>,
+    /// Seed of the random choices.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Sample from these detections (`t,t_prime[,score]` rows, or TUC `loop t1 t2 score`
+    /// lines), clustered in the (t, t') plane with --epsilon-s; without it, sample from the
+    /// exact loop components of S_gamma.
+    #[arg(long, value_name = "PATH")]
+    detections: Option<PathBuf>,
+    /// Radius of the detection graph and of the P2 redundancy measure, seconds.
+    #[arg(long, value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
+    epsilon_s: f64,
+    /// Write the candidate pairs here: .csv or .json (atomically; kept unless --force).
+    #[arg(long, value_name = "PATH")]
+    out: Option<PathBuf>,
+    /// Replace --out if it exists.
+    #[arg(long)]
+    force: bool,
+}
+
+pub(crate) fn sample(args: SampleArgs) -> Result<()> {
+    let format = args.format.as_deref().map(str::parse::<loops_io::Format>).transpose()?;
+    let spec: MetricSpec = args.engine.metric.parse()?;
+    let kind: SamplerKind = args.sampler.parse()?;
+    let size = match (args.budget, args.rate) {
+        (Some(budget), None) => SampleSize::Budget(budget),
+        (None, Some(rate)) => SampleSize::Rate(rate),
+        _ => bail!("give exactly one of --budget and --rate"),
+    };
+    let output_format = args.out.as_deref().map(samples_format).transpose()?;
+    let traj = loops_io::read_trajectory(&args.file, format)?.to_trajectory_for(&spec, None)?;
+    let gamma = args.engine.gamma;
+    let sampler = Sampler::new(kind, size, args.seed);
+    let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
+        let loops = spec.find_loops(&traj, gamma)?;
+        let samples = match &args.detections {
+            None => spec.sample_loops(&traj, &loops, &sampler)?,
+            Some(path) => {
+                let detections = loops_io::read_detections(path)?.to_detections(&traj)?;
+                let clusters = cluster_detections(&detections, args.epsilon_s)?;
+                let mut samples = sample_clusters(&clusters, &sampler)?;
+                samples.locate(&loops)?;
+                samples
+            }
+        };
+        Ok((loops, samples))
+    })??;
+    let quality = sample_quality(&samples, &loops, args.epsilon_s)?;
+    let mut stdout = std::io::stdout().lock();
+    write_summary(&mut stdout, &args.file, &traj, &loops, &samples, &quality)?;
+    if let (Some(path), Some(format)) = (&args.out, output_format) {
+        loops_io::write_samples(path, &samples, format, args.force)?;
+        writeln!(stdout, "wrote {} samples to {}", samples.len(), path.display())?;
+    }
+    Ok(())
+}
+
+fn samples_format(path: &Path) -> Result<loops_io::SamplesFormat> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("csv") => Ok(loops_io::SamplesFormat::Csv),
+        Some("json") => Ok(loops_io::SamplesFormat::Json),
+        _ => bail!("--out {}: the extension must be .csv or .json", path.display()),
+    }
+}
+
+fn write_summary(
+    out: &mut impl Write,
+    file: &Path,
+    traj: &Trajectory,
+    loops: &Loops,
+    samples: &Samples,
+    quality: &SampleQuality,
+) -> Result<()> {
+    for warning in samples.warnings() {
+        eprintln!("loops: warning: {warning}");
+    }
+    let nontrivial = loops.components().iter().filter(|c| !c.trivial).count();
+    writeln!(out, "{}", file.display())?;
+    writeln!(
+        out,
+        "  {} poses; gamma {} ({}): {} components ({} non-trivial)",
+        traj.len(),
+        loops.gamma(),
+        loops.metric(),
+        loops.components().len(),
+        nontrivial
+    )
+    .context("writing the summary")?;
+    writeln!(out, "  sampler {}: {} samples from {} groups", samples.sampler(), samples.len(), samples.groups())?;
+    writeln!(
+        out,
+        "  P1 coverage: {}/{} non-trivial components ({} of all {})",
+        quality.nontrivial_covered, quality.nontrivial_components, quality.covered, quality.components
+    )?;
+    let mut missed: Vec<_> = quality.missed.iter().filter(|m| !m.trivial).collect();
+    missed.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2));
+    for m in missed.iter().take(5) {
+        writeln!(out, "    missed component {}: {:.1} s², {} pairs", m.id, m.area_s2, m.pairs)?;
+    }
+    if missed.len() > 5 {
+        writeln!(out, "    ... {} more missed", missed.len() - 5)?;
+    }
+    let spacing = quality.median_spacing_s.map_or("-".to_owned(), |s| format!("{s:.1} s"));
+    writeln!(
+        out,
+        "  P2 redundancy: {} samples have another of their component within {} s; median spacing {spacing}",
+        quality.redundant, quality.epsilon_s
+    )?;
+    let slope = quality.p3_slope.map_or("-".to_owned(), |s| format!("{s:.2}"));
+    writeln!(out, "  P3 growth: slope of log samples against log area {slope} (0: σ_1-like, 1: σ_α-like)")?;
+    Ok(())
+}
