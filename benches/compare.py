@@ -26,33 +26,37 @@ repetitions add up to ``--budget-s`` seconds, or at its first failure.
 The lattice worker checks, after its measurements, that its components are ours: the same
 cells, the same number of components, and a bijection between our component ids and its
 labels. The harness exits with status 1 and does not write the report if anything differs.
+
+It owns the text of ``BENCHMARKS.md`` before the first marker line ``<!-- name -->`` and keeps
+the sections from there on (other scripts' sections, e.g. ``benches/scale.py``'s); see
+``benches/harness.py``.
 """
 
 from __future__ import annotations
 
 import argparse
-import datetime as dt
-import gc
-import hashlib
 import json
 import os
-import platform
-import resource
-import subprocess
 import sys
-import tempfile
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from harness import (
+    build_stamp,
+    cap_address_space,
+    load_average,
+    machine_facts,
+    measure,
+    run_process,
+    table_digest,
+    write_head,
+)
 
 REPO = Path(__file__).resolve().parent.parent
 GAMMA_M = 40.0
 FULL_DURATION_S = None  # the generator's default: 2.1 h
 SMALL_DURATION_S = 1800.0
 WARM_UP_DURATION_S = 60.0
-
-# Exit codes of a worker that could not finish.
-EXIT_OUT_OF_MEMORY = 3
 
 REFERENCE = "inexact-loops"
 CONTENDERS = {
@@ -72,27 +76,6 @@ COMPUTES = {
 # --------------------------------------------------------------------------------------------
 # Worker side: runs one contender in this process and prints one JSON line.
 # --------------------------------------------------------------------------------------------
-
-
-def proc_status_kib() -> dict[str, int]:
-    """VmRSS and VmHWM of this process, KiB."""
-    status: dict[str, int] = {}
-    with open("/proc/self/status") as lines:
-        for line in lines:
-            key, _, value = line.partition(":")
-            if key in ("VmRSS", "VmHWM"):
-                status[key] = int(value.split()[0])
-    return status
-
-
-def reset_peak_rss() -> bool:
-    """Resets VmHWM to the current RSS (Linux ≥ 4.0); False where not permitted."""
-    try:
-        with open("/proc/self/clear_refs", "w") as clear_refs:
-            clear_refs.write("5")
-    except OSError:
-        return False
-    return True
 
 
 def make_drive(duration_s: float | None):
@@ -206,17 +189,11 @@ def check_lattice(traj, gamma_m: float, keys, labels, count: int, pair_count: in
 
 def digest(loops, components) -> str:
     """A fingerprint of the runs and the component table (compares thread counts)."""
-    hasher = hashlib.sha256()
-    for table in (loops.runs(), components):
-        for key in sorted(table):
-            hasher.update(key.encode())
-            hasher.update(table[key].tobytes())
-    return hasher.hexdigest()
+    return table_digest(loops.runs(), components)
 
 
 def worker(args: argparse.Namespace) -> None:
-    limit = int(args.mem_limit_gb * 2**30)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+    cap_address_space(args.mem_limit_gb)
     import numpy as np  # noqa: F401  (imported before the baseline, like the contenders' own)
     import scipy.sparse.csgraph  # noqa: F401
     import scipy.spatial  # noqa: F401
@@ -249,25 +226,10 @@ def worker(args: argparse.Namespace) -> None:
     # One call on a 1 min drive first, so that one-time costs (lazy imports, first use of the
     # numpy C API, thread pools) count in no contender's time or memory.
     run(warm_up)
-    gc.collect()
-    baseline = proc_status_kib()["VmRSS"]
-    peak_reset = reset_peak_rss()
-    try:
-        start = time.perf_counter()
-        result = run(traj)
-        elapsed_s = time.perf_counter() - start
-    except MemoryError:
-        print(json.dumps({"status": "out of memory"}), flush=True)
-        sys.exit(EXIT_OUT_OF_MEMORY)
-    peak = proc_status_kib()["VmHWM"]
-    report: dict = {
-        "status": "ok",
-        "poses": len(traj),
-        "time_s": elapsed_s,
-        "peak_above_baseline_mb": (peak - baseline) / 1024,
-        "baseline_mb": baseline / 1024,
-        "peak_reset": peak_reset,
-    }
+    result, measured = measure(lambda: run(traj))
+    report: dict = {"status": "ok", "poses": len(traj)}
+    report.update((key, measured[key]) for key in ("time_s", "peak_above_baseline_mb"))
+    report.update((key, measured[key]) for key in ("baseline_mb", "peak_reset"))
     if args.worker.startswith("ours"):
         loops, components, _ = result
         report.update(
@@ -326,30 +288,15 @@ def run_worker(
         *([] if first else ["--skip-check"]),
     ]
     print(f"  {CONTENDERS[contender]} ...", end=" ", flush=True, file=sys.stderr)
-    try:
-        done = subprocess.run(
-            command, capture_output=True, text=True, timeout=args.timeout_s, check=False, cwd=REPO
-        )
-    except subprocess.TimeoutExpired:
-        print(f"timeout (> {args.timeout_s:.0f} s)", file=sys.stderr)
-        return Outcome(contender, f"timeout (> {args.timeout_s:.0f} s)")
-    lines = done.stdout.strip().splitlines()
-    report = json.loads(lines[-1]) if lines and lines[-1].startswith("{") else None
-    if done.returncode in (EXIT_OUT_OF_MEMORY, -9):
-        status = (
-            f"out of memory (> {args.mem_limit_gb:g} GB address space)"
-            if done.returncode == EXIT_OUT_OF_MEMORY
-            else "killed (SIGKILL: out of memory?)"
-        )
-        print(status, file=sys.stderr)
+    status, report, stderr = run_process(
+        command, timeout_s=args.timeout_s, mem_limit_gb=args.mem_limit_gb
+    )
+    if status != "ok":
+        if status.startswith("failed"):
+            sys.stderr.write("failed\n" + stderr)
+        else:
+            print(status, file=sys.stderr)
         return Outcome(contender, status)
-    if done.returncode != 0 or report is None:
-        tail = done.stderr.strip().splitlines()[-5:]
-        if any("MemoryError" in line or "bad_alloc" in line for line in tail):
-            print("out of memory", file=sys.stderr)
-            return Outcome(contender, f"out of memory (> {args.mem_limit_gb:g} GB address space)")
-        sys.stderr.write("failed\n" + done.stderr)
-        return Outcome(contender, f"failed (exit status {done.returncode})")
     outcome = Outcome(contender, "ok", [report["time_s"]], report["peak_above_baseline_mb"], report)
     print(f"{report['time_s']:.3f} s, {outcome.peak_mb:.0f} MB", file=sys.stderr)
     return outcome
@@ -500,54 +447,6 @@ def targets_section(scenario: Scenario) -> list[str]:
     ]
 
 
-def machine_facts() -> list[str]:
-    import numpy
-    import scipy
-
-    import inexact_loops
-    import inexact_loops._core
-
-    cpu = "unknown"
-    with open("/proc/cpuinfo") as lines:
-        for line in lines:
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    with open("/proc/meminfo") as lines:
-        memory_kib = next(int(line.split()[1]) for line in lines if line.startswith("MemTotal"))
-    nproc = subprocess.run(["nproc"], capture_output=True, text=True, check=True).stdout.strip()
-    now = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    module = Path(inexact_loops._core.__file__)
-    built = dt.datetime.fromtimestamp(module.stat().st_mtime, dt.timezone.utc)
-    commit = subprocess.run(
-        ["git", "describe", "--always", "--dirty"], capture_output=True, text=True, cwd=REPO
-    ).stdout.strip()
-    return [
-        f"- Date: {now}",
-        f"- `nproc`: {nproc}; CPU: {cpu}; memory: {memory_kib / 2**20:.1f} GiB",
-        f"- Linux {platform.release()}, Python {platform.python_version()}",
-        f"- inexact_loops {inexact_loops.__version__} (`{module.name}` built "
-        f"{built:%Y-%m-%d %H:%M} UTC; working tree at git `{commit or 'unknown'}`), "
-        f"numpy {numpy.__version__}, "
-        f"scipy {scipy.__version__}",
-    ]
-
-
-def build_stamp() -> tuple[str, float]:
-    """The compiled module's path and modification time, to notice a rebuild during a run."""
-    import importlib.util
-
-    spec = importlib.util.find_spec("inexact_loops._core")
-    path = Path(spec.origin) if spec and spec.origin else None
-    return (str(path), path.stat().st_mtime) if path else ("", 0.0)
-
-
-def load_average() -> str:
-    """The 1 min load average."""
-    with open("/proc/loadavg") as loadavg:
-        return loadavg.read().split()[0]
-
-
 def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str, str]) -> str:
     lines = [
         "# Benchmarks",
@@ -604,17 +503,6 @@ def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str
     if reference is not None:
         lines += targets_section(reference)
     return "\n".join(lines).rstrip() + "\n"
-
-
-def write_atomically(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.NamedTemporaryFile(
-        "w", dir=path.parent, prefix=f".{path.name}.", suffix=".tmp", delete=False, encoding="utf-8"
-    ) as temporary:
-        temporary.write(text)
-        temporary.flush()
-        os.fsync(temporary.fileno())
-    os.replace(temporary.name, path)
 
 
 def parse_args() -> argparse.Namespace:
@@ -699,8 +587,8 @@ def main() -> int:
         for problem in problems:
             print("  " + problem, file=sys.stderr)
         return 1
-    write_atomically(args.output, text)
-    print(f"wrote {args.output}", file=sys.stderr)
+    write_head(args.output, text)
+    print(f"wrote {args.output} (the text before its first <!-- ... --> marker)", file=sys.stderr)
     return 0
 
 
