@@ -77,3 +77,34 @@ def test_cli_error_is_one_line(tmp_path: Path, loops_binary: Path) -> None:
     assert "line 3" in result.stderr
     with pytest.raises(il.InvalidTrajectoryError, match="line 3"):
         il.read_trajectory(bad)
+
+
+MCAP_FIXTURES = ROOT / "crates" / "loops-io" / "tests" / "make_mcap_fixtures.py"
+
+
+def test_mcap_through_python_and_cli(tmp_path: Path, loops_binary: Path) -> None:
+    """An MCAP written by the official writers: topics listed alike by Python and `loops info`,
+    poses read by topic, and an ambiguous read names the topics."""
+    pytest.importorskip("mcap_ros2")
+    out = tmp_path / "fixtures"
+    subprocess.run(["python3", MCAP_FIXTURES, out], check=True, capture_output=True)
+    path = out / "ros2_chunked.mcap"
+    topics = il.list_topics(path)
+    readable = [t["topic"] for t in topics if t["pose_type"] is not None]
+    assert len(readable) >= 2
+    info = subprocess.run([loops_binary, "info", path], check=True, capture_output=True, text=True)
+    for topic in readable:
+        assert topic in info.stdout
+    with pytest.raises(il.LoopsIOError, match=readable[0]):
+        il.read_trajectory(path)
+    read = 0
+    for topic in readable:
+        try:
+            traj = il.read_trajectory(path, topic=topic, time="log")
+        except il.LoopsIOError as error:  # a TF topic with several frame pairs names them
+            assert "frame pairs" in str(error)
+            traj = il.read_trajectory(path, topic=topic, frames=("odom", "base_link"))
+        assert len(traj) >= 2
+        assert np.all(np.diff(traj.timestamps) > 0)
+        read += 1
+    assert read == len(readable)

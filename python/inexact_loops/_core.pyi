@@ -8,6 +8,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "list_topics",
     "DetectionClusters",
     "Detections",
     "Loops",
@@ -202,13 +203,20 @@ def urban_drive(
     """A seeded synthetic drive on a Manhattan grid (x, y, z metres)."""
 
 def read_trajectory(
-    path: str | PathLike[str],
+    path: str | PathLike[str] | list[str | PathLike[str]],
     *,
-    format: Literal["tum", "csv"] | str | None = None,
+    format: str | None = None,
     axes: tuple[int, int] | None = None,
     metric: str | _MetricLike | None = None,
+    topic: str | None = None,
+    time: Literal["header", "log", "publish"] | str | None = None,
+    frames: tuple[str, str] | None = None,
+    rate_hz: float | None = None,
 ) -> Trajectory:
-    """Reads a TUM or CSV trajectory file."""
+    """Reads a trajectory file (TUM, CSV, KITTI, EuRoC, TUC, g2o, MCAP)."""
+
+def list_topics(path: str | PathLike[str]) -> list[dict[str, object]]:
+    """The topics of an MCAP file, one dict per channel."""
 
 @final
 class Detections:

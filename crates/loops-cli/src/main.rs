@@ -3,6 +3,7 @@
 //! `main` parses, calls [`run`], prints errors as one line on stderr and exits 2 on error,
 //! 0 on success or a closed pipe. Everything else lives in `loops-core` and `loops-io`.
 
+mod input;
 mod output;
 mod sample;
 
@@ -43,6 +44,10 @@ enum Command {
         loops sample Corridor_GT.tum --gamma 1 --sampler rho --budget 500 --detections Corridor_Input.txt --epsilon-s 5"
     )]
     Sample(sample::SampleArgs),
+    /// What a pose file holds: for MCAP, its topics (type, encoding, messages, time span, and
+    /// whether poses can be read from it); for text formats, the format, poses and time span.
+    #[command(after_help = "Examples:\n  loops info drive.mcap\n  loops info 00.txt --format kitti")]
+    Info(InfoArgs),
     /// Run on a built-in synthetic urban drive (2.1 h, 10 Hz, 1 km² city) and print a summary.
     #[command(
         allow_negative_numbers = true,
@@ -83,16 +88,59 @@ struct OutputArgs {
 struct ComponentsArgs {
     /// The trajectory file.
     file: PathBuf,
-    /// File format: tum or csv (default: from the extension: .tum and .txt are TUM, .csv is CSV).
-    #[arg(long)]
-    format: Option<String>,
-    /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).
-    #[arg(long, value_delimiter = ',', value_name = "A,B")]
-    axes: Option<Vec<usize>>,
+    #[command(flatten)]
+    input: input::InputArgs,
     #[command(flatten)]
     engine: EngineArgs,
     #[command(flatten)]
     output: OutputArgs,
+}
+
+#[derive(Debug, Args)]
+struct InfoArgs {
+    /// The file.
+    file: PathBuf,
+    #[command(flatten)]
+    input: input::InputArgs,
+}
+
+fn info(args: InfoArgs) -> Result<()> {
+    let mut stdout = std::io::stdout().lock();
+    let options = args.input.options()?;
+    let is_mcap = options.format == Some(loops_io::Format::Mcap)
+        || (options.format.is_none() && loops_io::Format::from_path(&args.file) == Some(loops_io::Format::Mcap));
+    writeln!(stdout, "{}", args.file.display())?;
+    if is_mcap {
+        let topics = loops_io::list_topics(&args.file)?;
+        writeln!(
+            stdout,
+            "{:<28} {:<36} {:<9} {:>9}  {:>10}  poses",
+            "topic", "type", "encoding", "messages", "span (s)"
+        )?;
+        for topic in &topics {
+            let span = topic.log_time_span_ns.map_or("-".to_owned(), |(a, b)| format!("{:.1}", (b - a) as f64 * 1e-9));
+            let poses = if topic.pose_type.is_some() { "yes" } else { "no" };
+            writeln!(
+                stdout,
+                "{:<28} {:<36} {:<9} {:>9}  {:>10}  {poses}",
+                topic.topic, topic.schema_name, topic.message_encoding, topic.message_count, span
+            )?;
+        }
+    } else {
+        let table = loops_io::read_trajectory_with(&args.file, &options)?;
+        let t = &table.timestamps_s;
+        let span =
+            t.iter().copied().fold(f64::NEG_INFINITY, f64::max) - t.iter().copied().fold(f64::INFINITY, f64::min);
+        writeln!(
+            stdout,
+            "  {} poses, {} coordinates each, {} orientations, over {:.3} s",
+            table.timestamps_s.len(),
+            table.dim,
+            if table.orientations_xyzw.is_some() { "with" } else { "without" },
+            span
+        )?;
+    }
+    Ok(())
 }
 
 #[derive(Debug, Args)]
@@ -136,20 +184,14 @@ fn run(cli: Cli) -> Result<()> {
         Command::Components(args) => components(args),
         Command::Demo(args) => demo(args),
         Command::Sample(args) => sample::sample(args),
+        Command::Info(args) => info(args),
     }
 }
 
 fn components(args: ComponentsArgs) -> Result<()> {
     let source = args.file.display().to_string();
-    let format = args.format.as_deref().map(str::parse::<loops_io::Format>).transpose()?;
-    let table = loops_io::read_trajectory(&args.file, format)?;
-    let axes = match args.axes.as_deref() {
-        None => None,
-        Some(&[a, b]) => Some([a, b]),
-        Some(other) => anyhow::bail!("--axes takes two axis indices, got {other:?}"),
-    };
     let spec: MetricSpec = args.engine.metric.parse()?;
-    let traj = table.to_trajectory_for(&spec, axes)?;
+    let traj = args.input.read(&args.file, &spec)?;
     let (loops, seconds) = timed(args.engine.threads, || spec.find_loops(&traj, args.engine.gamma))
         .with_context(|| format!("finding loops in {source}"))?;
     report(&source, &traj, &loops, seconds, &args.output)

@@ -15,11 +15,10 @@ use crate::EngineArgs;
 
 #[derive(Debug, Args)]
 pub(crate) struct SampleArgs {
-    /// The trajectory file (TUM or CSV).
+    /// The trajectory file.
     file: PathBuf,
-    /// File format: tum or csv (default: from the extension).
-    #[arg(long)]
-    format: Option<String>,
+    #[command(flatten)]
+    input: crate::input::InputArgs,
     #[command(flatten)]
     engine: EngineArgs,
     /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
@@ -52,7 +51,6 @@ pub(crate) struct SampleArgs {
 }
 
 pub(crate) fn sample(args: SampleArgs) -> Result<()> {
-    let format = args.format.as_deref().map(str::parse::<loops_io::Format>).transpose()?;
     let spec: MetricSpec = args.engine.metric.parse()?;
     let kind: SamplerKind = args.sampler.parse()?;
     let size = match (args.budget, args.rate) {
@@ -61,7 +59,7 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         _ => bail!("give exactly one of --budget and --rate"),
     };
     let output_format = args.out.as_deref().map(samples_format).transpose()?;
-    let traj = loops_io::read_trajectory(&args.file, format)?.to_trajectory_for(&spec, None)?;
+    let traj = args.input.read(&args.file, &spec)?;
     let gamma = args.engine.gamma;
     let sampler = Sampler::new(kind, size, args.seed);
     let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {

@@ -261,3 +261,15 @@ fn sample_from_detections_and_bad_input() {
         ".csv or .json",
     );
 }
+
+#[test]
+fn info_describes_a_text_file() {
+    let dir = temp_dir("info");
+    let file = out_and_back(&dir);
+    let output = loops(&["info", file.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(stdout.contains("41 poses, 3 coordinates each, with orientations, over 40.000 s"), "{stdout}");
+    assert_one_line_error(&loops(&["info", file.to_str().unwrap(), "--time", "wall"]), "time source");
+    assert_one_line_error(&loops(&["info", dir.join("nope.mcap").to_str().unwrap()]), "nope.mcap");
+}

@@ -39,6 +39,28 @@ pub enum TimeSource {
     Publish,
 }
 
+impl TimeSource {
+    /// The accepted names.
+    pub const NAMES: &'static str = "header, log, publish";
+}
+
+impl std::str::FromStr for TimeSource {
+    type Err = loops_core::Error;
+
+    fn from_str(name: &str) -> std::result::Result<Self, Self::Err> {
+        match name {
+            "header" => Ok(Self::Header),
+            "log" => Ok(Self::Log),
+            "publish" => Ok(Self::Publish),
+            _ => Err(loops_core::Error::UnknownName {
+                kind: "time source",
+                name: name.to_owned(),
+                expected: Self::NAMES,
+            }),
+        }
+    }
+}
+
 /// What [`read_mcap`] reads: which topic, which time, which frame pair.
 ///
 /// # Examples

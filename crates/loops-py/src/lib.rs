@@ -36,6 +36,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_loops::find_loops, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::urban_drive, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::read_trajectory, module)?)?;
+    module.add_function(wrap_pyfunction!(py_trajectory::list_topics, module)?)?;
     module.add_class::<py_sample::Detections>()?;
     module.add_class::<py_sample::DetectionClusters>()?;
     module.add_class::<py_sample::Samples>()?;

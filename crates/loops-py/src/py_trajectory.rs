@@ -270,33 +270,48 @@ pub(crate) fn urban_drive(
     })
 }
 
-/// Reads a trajectory file: TUM (``t x y z qx qy qz qw``) or CSV (``t,x,y[,z]``, header
-/// optional), chosen by ``format`` or guessed from the extension (``.tum`` and ``.txt`` are
-/// TUM, ``.csv`` is CSV — or TUM when its lines are 8 space-separated numbers; another
-/// extension needs ``format``).
+/// Reads a trajectory file: TUM, CSV, KITTI, EuRoC, TUC, g2o/TORO pose graphs, or MCAP logs
+/// (ROS 2 and Foxglove pose, odometry and transform messages) — by ``format``, or told from the
+/// extension and first line.
 ///
 /// Args:
-///     path: the file.
-///     format: ``"tum"``, ``"csv"`` or ``None`` to guess.
-///     axes: keep only these position axes, e.g. ``(0, 2)`` for KITTI's ground plane; ``None``
-///         keeps all.
+///     path: the file, or a list of MCAP files read as one trajectory in time order.
+///     format: ``"tum"``, ``"csv"``, ``"kitti"``, ``"euroc"``, ``"tuc"``, ``"g2o"``,
+///         ``"mcap"``, or ``None`` to tell.
+///     axes: keep only these position axes, e.g. ``(0, 2)`` for KITTI's ground plane.
 ///     metric: the metric the trajectory is for (as in :func:`find_loops`): positions for
 ///         Euclidean (the default); positions and orientations for ``se3``; orientations for
 ///         ``so3``; x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are
 ///         normalised (files often print 4 decimals).
+///     topic: the MCAP topic; ``None`` picks the one topic with poses (several: an error
+///         listing them, see :func:`list_topics`).
+///     time: MCAP times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
+///     frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
+///         topic's only pair.
+///     rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
 ///
 /// Raises:
-///     OSError: the file cannot be opened. LoopsIOError: a malformed line (the message names
-///     file, line and column). InvalidTrajectoryError: e.g. unsorted timestamps (names the line).
+///     OSError: the file cannot be opened. LoopsIOError: a malformed line or message (the
+///     message names file, line or byte offset, topic). InvalidTrajectoryError: e.g. unsorted
+///     timestamps (names the line or message).
 #[pyfunction]
-#[pyo3(signature = (path, *, format=None, axes=None, metric=None))]
+#[pyo3(signature = (path, *, format=None, axes=None, metric=None, topic=None, time=None, frames=None, rate_hz=None))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn read_trajectory(
     py: Python<'_>,
-    path: PathBuf,
+    path: &Bound<'_, PyAny>,
     format: Option<String>,
     axes: Option<(usize, usize)>,
     metric: Option<&Bound<'_, PyAny>>,
+    topic: Option<String>,
+    time: Option<String>,
+    frames: Option<(String, String)>,
+    rate_hz: Option<f64>,
 ) -> PyResult<Trajectory> {
+    let paths: Vec<PathBuf> = match path.extract::<PathBuf>() {
+        Ok(one) => vec![one],
+        Err(_) => path.extract()?,
+    };
     let spec = match crate::py_metric::MetricArg::from_py(metric)? {
         crate::py_metric::MetricArg::Spec(spec) => spec,
         crate::py_metric::MetricArg::Callable(_) => {
@@ -306,9 +321,55 @@ pub(crate) fn read_trajectory(
         }
     };
     let inner = detached(py, move || {
+        let mut mcap = loops_io::McapOptions::default();
+        if let Some(topic) = topic {
+            mcap = mcap.topic(topic);
+        }
+        if let Some(time) = time {
+            mcap = mcap.time(time.parse()?);
+        }
+        if let Some((parent, child)) = frames {
+            mcap = mcap.frames(parent, child);
+        }
         let format = format.map(|name| name.parse::<loops_io::Format>()).transpose()?;
-        let table = loops_io::read_trajectory(&path, format)?;
+        let table = if paths.len() == 1 {
+            let mut options = loops_io::ReadOptions::default();
+            options.format = format;
+            options.mcap = mcap;
+            if let Some(rate) = rate_hz {
+                options.timing = loops_io::Timing::RateHz(rate);
+            }
+            loops_io::read_trajectory_with(&paths[0], &options)?
+        } else {
+            loops_io::read_mcap_files(&paths, &mcap)?
+        };
         Ok(table.to_trajectory_for(&spec, axes.map(|(a, b)| [a, b]))?)
     })?;
     Ok(Trajectory { inner: Arc::new(inner) })
+}
+
+/// The topics of an MCAP file: one dict per channel with ``topic``, ``schema``,
+/// ``encoding``, ``messages``, ``start_ns`` and ``end_ns`` (log time, ``None`` when empty) and
+/// ``pose_type`` (the pose message type the library reads from it, or ``None``).
+///
+/// Raises:
+///     OSError: the file cannot be opened. LoopsIOError: not a valid MCAP file (names the
+///     offset).
+#[pyfunction]
+pub(crate) fn list_topics<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Vec<Bound<'py, pyo3::types::PyDict>>> {
+    let topics = detached(py, move || Ok(loops_io::list_topics(&path)?))?;
+    topics
+        .into_iter()
+        .map(|info| {
+            let row = pyo3::types::PyDict::new(py);
+            row.set_item("topic", info.topic)?;
+            row.set_item("schema", info.schema_name)?;
+            row.set_item("encoding", info.message_encoding)?;
+            row.set_item("messages", info.message_count)?;
+            row.set_item("start_ns", info.log_time_span_ns.map(|span| span.0))?;
+            row.set_item("end_ns", info.log_time_span_ns.map(|span| span.1))?;
+            row.set_item("pose_type", info.pose_type.map(|t| t.schema_name()))?;
+            Ok(row)
+        })
+        .collect()
 }

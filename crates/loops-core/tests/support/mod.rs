@@ -533,7 +533,8 @@ fn holes_by_fill(n: usize, label: &[u32], l: u32, rows: [usize; 2], columns: [us
 
 macro_rules! ensure {
     ($cond:expr, $($fmt:tt)+) => {
-        if !$cond {
+        let holds: bool = $cond;
+        if !holds {
             return Err(format!($($fmt)+));
         }
     };
