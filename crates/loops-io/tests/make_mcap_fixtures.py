@@ -620,7 +620,7 @@ def main(argv: list[str]) -> None:
     if len(argv) == 2 and argv[0] == "--read":
         read_python(Path(argv[1]))
         return
-    if len(argv) != 1:
+    if len(argv) != 1 or argv[0].startswith("-"):
         sys.exit(__doc__)
     out = Path(argv[0])
     out.mkdir(parents=True, exist_ok=True)
