@@ -56,12 +56,19 @@ impl InputArgs {
 
     /// Reads `file` as the trajectory `spec` needs.
     pub(crate) fn read(&self, file: &Path, spec: &MetricSpec) -> Result<Trajectory> {
+        Ok(self.read_table(file, spec)?.1)
+    }
+
+    /// Reads `file`: the poses as read (orientations included) and the trajectory `spec` needs.
+    pub(crate) fn read_table(&self, file: &Path, spec: &MetricSpec) -> Result<(loops_io::PoseTable, Trajectory)> {
         let axes = match self.axes.as_deref() {
             None => None,
             Some(&[a, b]) => Some([a, b]),
             Some(other) => bail!("--axes takes two axis indices, got {other:?}"),
         };
         let options = self.options()?;
-        Ok(loops_io::read_trajectory_with(file, &options)?.to_trajectory_for(spec, axes)?)
+        let table = loops_io::read_trajectory_with(file, &options)?;
+        let traj = table.to_trajectory_for(spec, axes)?;
+        Ok((table, traj))
     }
 }

@@ -45,7 +45,11 @@ pub(crate) struct SampleArgs {
     /// Write the candidate pairs here: .csv or .json (atomically; kept unless --force).
     #[arg(long, value_name = "PATH")]
     out: Option<PathBuf>,
-    /// Replace --out if it exists.
+    /// Also write the candidate pairs as g2o edges (EDGE_SE2 or EDGE_SE3:QUAT) whose relative
+    /// pose comes from the file's poses: initial guesses for a scan matcher.
+    #[arg(long, value_name = "PATH")]
+    g2o: Option<PathBuf>,
+    /// Replace --out and --g2o if they exist.
     #[arg(long)]
     force: bool,
 }
@@ -59,7 +63,7 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         _ => bail!("give exactly one of --budget and --rate"),
     };
     let output_format = args.out.as_deref().map(samples_format).transpose()?;
-    let traj = args.input.read(&args.file, &spec)?;
+    let (table, traj) = args.input.read_table(&args.file, &spec)?;
     let gamma = args.engine.gamma;
     let sampler = Sampler::new(kind, size, args.seed);
     let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
@@ -82,6 +86,12 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     if let (Some(path), Some(format)) = (&args.out, output_format) {
         loops_io::write_samples(path, &samples, format, args.force)?;
         writeln!(stdout, "wrote {} samples to {}", samples.len(), path.display())?;
+    }
+    if let Some(path) = &args.g2o {
+        let pairs: Vec<(usize, usize)> = samples.rows().iter().filter_map(|s| s.pair).map(|[i, j]| (i, j)).collect();
+        let options = loops_io::G2oOptions::default().overwrite(args.force);
+        loops_io::write_g2o_edges(path, &table, &pairs, &options)?;
+        writeln!(stdout, "wrote {} g2o edges to {}", pairs.len(), path.display())?;
     }
     Ok(())
 }

@@ -204,6 +204,12 @@ fn sample_writes_exactly_the_budget_and_reports_quality() {
     let csv = std::fs::read_to_string(&out).unwrap();
     assert_eq!(csv.lines().count(), 51, "header and 50 pairs");
     assert!(csv.lines().next().unwrap().contains("sampler"));
+    // Candidate edges for a back end, with relative poses from the file (2-D here: EDGE_SE2).
+    let g2o = dir.join("edges.g2o");
+    let with_edges = loops(&[&args[..], &["--g2o", g2o.to_str().unwrap()]].concat());
+    assert!(with_edges.status.success(), "{}", stderr(&with_edges));
+    let edges = std::fs::read_to_string(&g2o).unwrap();
+    assert_eq!(edges.lines().filter(|l| l.starts_with("EDGE_SE2 ")).count(), 50, "{edges}");
     // Kept without --force; the same seed writes the same file.
     assert_one_line_error(&loops(&[&args[..], &["--out", out.to_str().unwrap()]].concat()), "exists");
     let again = loops(&[&args[..], &["--out", out.to_str().unwrap(), "--force"]].concat());
