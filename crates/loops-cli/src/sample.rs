@@ -57,11 +57,7 @@ pub(crate) struct SampleArgs {
 pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let spec: MetricSpec = args.engine.metric.parse()?;
     let kind: SamplerKind = args.sampler.parse()?;
-    let size = match (args.budget, args.rate) {
-        (Some(budget), None) => SampleSize::Budget(budget),
-        (None, Some(rate)) => SampleSize::Rate(rate),
-        _ => bail!("give exactly one of --budget and --rate"),
-    };
+    let size = SampleSize::from_rate_or_budget(args.rate, args.budget)?;
     let output_format = args.out.as_deref().map(samples_format).transpose()?;
     let (table, traj) = args.input.read_table(&args.file, &spec)?;
     let gamma = args.engine.gamma;

@@ -164,6 +164,17 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A sample size given as both a rate and a budget, or as neither.
+    #[error("{}", match (rate, budget) {
+        (Some(rate), Some(budget)) => format!("give rate or budget, not both (got rate={rate}, budget={budget})"),
+        _ => "give rate or budget: how many to draw".to_owned(),
+    })]
+    SampleSizeChoice {
+        /// The rate given, if any.
+        rate: Option<f64>,
+        /// The budget given, if any.
+        budget: Option<usize>,
+    },
     /// A name (of a side, a metric, ...) that is not one of the known ones.
     #[error("unknown {kind} {name:?}: expected one of {expected}")]
     UnknownName {

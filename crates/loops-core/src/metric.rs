@@ -247,6 +247,12 @@ impl MetricSpec {
         with_metric!(self, m => crate::find_loops(traj, m, gamma))
     }
 
+    /// The metric as a trait object, for code that takes `&dyn Metric` (dispatched per call;
+    /// [`find_loops`](Self::find_loops) keeps the engine's loops monomorphic instead).
+    pub fn as_metric(&self) -> &dyn Metric {
+        with_metric!(self, m => m as &dyn Metric)
+    }
+
     /// [`sample_loops`](crate::sample_loops) under this metric.
     ///
     /// # Errors

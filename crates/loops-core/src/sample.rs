@@ -131,6 +131,19 @@ pub enum SampleSize {
 }
 
 impl SampleSize {
+    /// The size from a rate or a budget, given as options (as a command line or keyword
+    /// arguments have them): exactly one must be given.
+    ///
+    /// # Errors
+    /// [`Error::SampleSizeChoice`] for both or neither.
+    pub fn from_rate_or_budget(rate: Option<f64>, budget: Option<usize>) -> Result<Self> {
+        match (rate, budget) {
+            (Some(rate), None) => Ok(Self::Rate(rate)),
+            (None, Some(budget)) => Ok(Self::Budget(budget)),
+            _ => Err(Error::SampleSizeChoice { rate, budget }),
+        }
+    }
+
     fn validate(self, kind: SamplerKind) -> Result<()> {
         match self {
             Self::Budget(0) => {

@@ -119,32 +119,9 @@ impl TimelineArg {
     }
 }
 
-/// Rate or budget, exactly one of them.
+/// Rate or budget, exactly one of them (the core's rule).
 fn sample_size(rate: Option<f64>, budget: Option<usize>) -> PyResult<SampleSize> {
-    match (rate, budget) {
-        (Some(rate), None) => Ok(SampleSize::Rate(rate)),
-        (None, Some(budget)) => Ok(SampleSize::Budget(budget)),
-        (Some(rate), Some(budget)) => {
-            Err(invalid_parameter(format!("give rate or budget, not both (got rate={rate}, budget={budget})")))
-        }
-        (None, None) => Err(invalid_parameter("give rate or budget: how many to draw".to_owned())),
-    }
-}
-
-/// The concrete metric of a spec, for the generic sampling calls.
-fn metric_of(spec: MetricSpec) -> Result<Box<dyn Metric>, Failure> {
-    Ok(match spec {
-        MetricSpec::Euclidean => Box::new(loops_core::Euclidean),
-        MetricSpec::So3(metric) => Box::new(metric),
-        MetricSpec::Se3(metric) => Box::new(metric),
-        MetricSpec::Se3Rotation(metric) => Box::new(metric),
-        MetricSpec::Se2(metric) => Box::new(metric),
-        MetricSpec::Torus => Box::new(loops_core::Torus),
-        MetricSpec::Sphere(metric) => Box::new(metric),
-        MetricSpec::Haversine(metric) => Box::new(metric),
-        MetricSpec::Angular => Box::new(loops_core::Angular),
-        _ => return Err(Failure::Panic(format!("metric {spec} is not wired into the sampling bindings"))),
-    })
+    Ok(SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?)
 }
 
 /// Runs `f` with the metric `metric` stands for, without the GIL: a spec on `threads` threads,
@@ -156,10 +133,7 @@ fn with_metric<T: Send>(
     f: impl FnOnce(&dyn Metric) -> loops_core::Result<T> + Send,
 ) -> PyResult<T> {
     match metric {
-        MetricArg::Spec(spec) => detached(py, move || {
-            let metric = metric_of(spec)?;
-            Ok(loops_core::with_threads(threads, || f(metric.as_ref()))??)
-        }),
+        MetricArg::Spec(spec) => detached(py, move || Ok(loops_core::with_threads(threads, || f(spec.as_metric()))??)),
         MetricArg::Callable(callable) => {
             let result = detached(py, || Ok(loops_core::with_threads(Some(1), || f(&callable))??));
             if let Some(error) = callable.take_error() {
