@@ -42,6 +42,7 @@ from .errors import (
     LoopsError,
     LoopsIOError,
 )
+from .table import Table
 
 __all__ = [
     "DetectionClusters",
@@ -54,6 +55,7 @@ __all__ = [
     "LoopsIOError",
     "SampleQuality",
     "Samples",
+    "Table",
     "Trajectory",
     "__version__",
     "cluster_detections",

@@ -6,6 +6,9 @@ from typing import Literal, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
+import pandas  # type: ignore[import-untyped, import-not-found, unused-ignore]
+
+from .table import Table
 
 __all__ = [
     "list_topics",
@@ -42,6 +45,16 @@ _SamplerName = Literal[
 class _MetricLike(Protocol):
     @property
     def spec(self) -> str: ...
+
+class _EvoTrajectory(Protocol):
+    """What :meth:`Trajectory.from_evo` reads: evo's ``PoseTrajectory3D`` attributes."""
+
+    @property
+    def timestamps(self) -> npt.ArrayLike: ...
+    @property
+    def positions_xyz(self) -> npt.ArrayLike: ...
+    @property
+    def orientations_quat_wxyz(self) -> npt.ArrayLike: ...
 
 _MetricArg = (
     str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None
@@ -113,6 +126,14 @@ class Trajectory:
         timestamps: npt.ArrayLike, descriptors: npt.ArrayLike, *, normalize: bool = True
     ) -> Trajectory:
         """Descriptor vectors (n, d), normalised for the angular metric."""
+    @staticmethod
+    def from_evo(
+        trajectory: _EvoTrajectory,
+        *,
+        metric: str | _MetricLike | None = None,
+        axes: tuple[int, int] | None = None,
+    ) -> Trajectory:
+        """A trajectory from an evo ``PoseTrajectory3D`` (quaternions w first), for ``metric``."""
 
 @final
 class Loops:
@@ -135,10 +156,10 @@ class Loops:
     def warnings(self) -> list[str]:
         """Warnings about the result, as sentences."""
     @property
-    def components(self) -> dict[str, npt.NDArray[np.generic]]:
-        """The loop components as numpy columns, one row a component."""
-    def runs(self) -> dict[str, npt.NDArray[np.int64]]:
-        """The runs of S_gamma's upper half: ``row``, ``start``, ``end``, ``component``."""
+    def components(self) -> Table:
+        """The loop components as a Table of numpy columns, one row a component."""
+    def runs(self) -> Table:
+        """The runs of S_gamma's upper half (int64): ``row``, ``start``, ``end``, ``component``."""
     def component_of(self, i: int, j: int) -> int | None:
         """The component id of the pair (i, j), or ``None`` when it is not in S_gamma."""
     def is_simple(self, i: int, j: int) -> bool:
@@ -254,6 +275,8 @@ class Detections:
     @property
     def poses(self) -> int | None:
         """Poses of the trajectory the detections are placed on, or ``None``."""
+    def to_pandas(self) -> pandas.DataFrame:
+        """The detections as a DataFrame (needs pandas): t, t_prime[, i, j][, score]."""
 
 @final
 class DetectionClusters:
@@ -273,8 +296,8 @@ class DetectionClusters:
     def labels(self) -> npt.NDArray[np.int64]:
         """The cluster id of each detection."""
     @property
-    def clusters(self) -> dict[str, npt.NDArray[np.generic]]:
-        """The clusters as numpy columns, one row a cluster."""
+    def clusters(self) -> Table:
+        """The clusters as a Table of numpy columns, one row a cluster."""
 
 @final
 class Samples:
@@ -327,6 +350,8 @@ class Samples:
         """The same samples placed on the loops' poses, with their exact components."""
     def measure(self, trajectory: Trajectory, *, metric: _MetricArg = None) -> Samples:
         """The same samples placed on ``trajectory``, with their distances."""
+    def to_pandas(self) -> pandas.DataFrame:
+        """The samples as a DataFrame (needs pandas), one row a sample."""
     def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as CSV, atomically."""
     def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
@@ -358,7 +383,7 @@ class SampleQuality:
     def coverage(self) -> float:
         """P1 as a fraction."""
     @property
-    def missed(self) -> dict[str, npt.NDArray[np.generic]]:
+    def missed(self) -> Table:
         """P1: the components without a sample, largest first: id, trivial, area_s2, pairs."""
     @property
     def epsilon_s(self) -> float:
@@ -380,7 +405,7 @@ class SampleQuality:
         """Number of components in the P3 fit."""
     @property
     def per_component(self) -> npt.NDArray[np.int64]:
-        """Samples per component, by component id."""
+        """Samples per component, int64, by component id (one per row of Loops.components)."""
     @property
     def sample_components(self) -> npt.NDArray[np.int64]:
         """The exact component of each sample; -1 outside S_gamma."""

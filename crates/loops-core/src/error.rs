@@ -175,6 +175,15 @@ pub enum Error {
         /// The budget given, if any.
         budget: Option<usize>,
     },
+    /// A metric that cannot be used the way it was asked for, e.g. on the points of a pose
+    /// file (a torus or sphere metric) or with position axes (anything but Euclidean).
+    #[error("metric {metric:?} does not fit here: {expected}")]
+    MetricMismatch {
+        /// The metric, as its text spec.
+        metric: String,
+        /// What would fit.
+        expected: &'static str,
+    },
     /// A name (of a side, a metric, ...) that is not one of the known ones.
     #[error("unknown {kind} {name:?}: expected one of {expected}")]
     UnknownName {

@@ -34,8 +34,22 @@ fn finite_row(index: usize, row: &[f64]) -> Result<()> {
 /// 4 decimals (TUM ground truth), which leaves norms up to ~1e-4 from 1.
 pub const FILE_QUATERNION_TOLERANCE: f64 = 1e-3;
 
+/// A quaternion tolerance must be a number ≥ 0 (infinity: normalise any non-zero quaternion).
+fn check_tolerance(tolerance: f64) -> Result<()> {
+    if tolerance >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter {
+            name: "quaternion_tolerance",
+            value: tolerance,
+            expected: "a number ≥ 0: how far a quaternion's norm may be from 1",
+        })
+    }
+}
+
 /// `q / ‖q‖` when ‖q‖ is within `tolerance` of 1.
 fn unit_quaternion(index: usize, q: &[f64; 4], tolerance: f64) -> Result<[f64; 4]> {
+    check_tolerance(tolerance)?;
     finite_row(index, q)?;
     let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
     if (norm - 1.0).abs() > tolerance || norm == 0.0 {
@@ -100,7 +114,7 @@ impl Trajectory {
     /// [`FILE_QUATERNION_TOLERANCE`] for quaternions printed with few decimals).
     ///
     /// # Errors
-    /// As [`Trajectory::se3`].
+    /// As [`Trajectory::se3`], and [`Error::InvalidParameter`] for a negative or NaN tolerance.
     pub fn se3_with_tolerance(
         timestamps_s: Vec<f64>,
         positions: &[[f64; 3]],
@@ -128,7 +142,7 @@ impl Trajectory {
     /// As [`Trajectory::so3`], normalising quaternions within `tolerance` of unit length.
     ///
     /// # Errors
-    /// As [`Trajectory::se3`].
+    /// As [`Trajectory::se3`], and [`Error::InvalidParameter`] for a negative or NaN tolerance.
     pub fn so3_with_tolerance(timestamps_s: Vec<f64>, quaternions_xyzw: &[[f64; 4]], tolerance: f64) -> Result<Self> {
         let mut coords = Vec::with_capacity(4 * quaternions_xyzw.len());
         for (index, q) in quaternions_xyzw.iter().enumerate() {
@@ -261,5 +275,21 @@ impl Trajectory {
             coords.extend(normalised(index, row)?);
         }
         Self::new(timestamps_s, coords, dim)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_bad_quaternion_tolerance_is_named() {
+        let q = [[0.0, 0.0, 0.0, 2.0], [0.0, 0.0, 0.0, 1.0]];
+        for tolerance in [f64::NAN, -1.0, f64::NEG_INFINITY] {
+            let error = Trajectory::so3_with_tolerance(vec![0.0, 1.0], &q, tolerance).unwrap_err();
+            assert!(matches!(error, Error::InvalidParameter { name: "quaternion_tolerance", .. }), "{error}");
+            let error = Trajectory::se3_with_tolerance(vec![0.0, 1.0], &[[0.0; 3]; 2], &q, tolerance).unwrap_err();
+            assert!(matches!(error, Error::InvalidParameter { name: "quaternion_tolerance", .. }), "{error}");
+        }
     }
 }

@@ -96,12 +96,22 @@ impl UrbanDrive {
     /// # Errors
     /// [`Error::InvalidParameter`] for a non-positive duration, rate, block or speed, a city
     /// smaller than one block, speeds or stops out of order, a probability outside [0, 1], or a
-    /// drive shorter than two poses.
+    /// drive shorter than two poses or longer than [`MAX_POSES`](crate::MAX_POSES) (checked before
+    /// anything is allocated).
     pub fn generate(&self) -> Result<SyntheticDrive> {
         self.validate()?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let blocks = (self.city_size_m / self.block_m).floor() as i64;
-        let poses = (self.duration_s * self.rate_hz).round() as usize;
+        let count = (self.duration_s * self.rate_hz).round();
+        if count > crate::MAX_POSES as f64 {
+            // Checked before allocating: a huge duration is an error, not an out-of-memory abort.
+            return Err(Error::InvalidParameter {
+                name: "duration_s * rate_hz",
+                value: count,
+                expected: "at most MAX_POSES = 2³² − 2 poses (the engine's limit)",
+            });
+        }
+        let poses = count as usize;
         if poses < 2 {
             return Err(Error::InvalidParameter {
                 name: "duration_s * rate_hz",
@@ -111,7 +121,7 @@ impl UrbanDrive {
         }
         let mut node = [rng.random_range(0..=blocks), rng.random_range(0..=blocks)];
         let mut heading = DIRECTIONS[rng.random_range(0..4)];
-        let mut out = Emitter::new(self, poses);
+        let mut out = Emitter::new(self, poses)?;
         let mut t = 0.0_f64;
         while !out.done() {
             let options: Vec<[i64; 2]> = DIRECTIONS
@@ -227,22 +237,24 @@ struct Emitter<'a> {
 }
 
 impl<'a> Emitter<'a> {
-    fn new(spec: &'a UrbanDrive, poses: usize) -> Self {
+    /// # Errors
+    /// [`Error::InvalidParameter`] when the drive does not fit in memory.
+    fn new(spec: &'a UrbanDrive, poses: usize) -> Result<Self> {
+        let (mut timestamps, mut coords, mut yaw_rad) = (Vec::new(), Vec::new(), Vec::new());
+        timestamps
+            .try_reserve_exact(poses)
+            .and_then(|()| coords.try_reserve_exact(3 * poses))
+            .and_then(|()| yaw_rad.try_reserve_exact(poses))
+            .map_err(|_| Error::InvalidParameter {
+                name: "duration_s * rate_hz",
+                value: poses as f64,
+                expected: "a number of poses whose drive fits in memory (40 bytes a pose)",
+            })?;
         let dt = 1.0 / spec.rate_hz;
         // Lateral offset: an AR(1) process with a ~10 s correlation time and the given deviation.
         let keep = (-dt / 10.0_f64).exp();
         let kick = spec.lateral_noise_m * (1.0 - keep * keep).sqrt();
-        Self {
-            spec,
-            poses,
-            dt,
-            keep,
-            kick,
-            lateral: 0.0,
-            timestamps: Vec::with_capacity(poses),
-            coords: Vec::with_capacity(3 * poses),
-            yaw_rad: Vec::with_capacity(poses),
-        }
+        Ok(Self { spec, poses, dt, keep, kick, lateral: 0.0, timestamps, coords, yaw_rad })
     }
 
     fn done(&self) -> bool {
@@ -284,6 +296,13 @@ fn standard_normal(rng: &mut impl Rng) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_drive_beyond_the_pose_limit_is_an_error_before_any_allocation() {
+        let error = UrbanDrive { duration_s: 1e12, ..UrbanDrive::default() }.generate().unwrap_err();
+        assert!(matches!(error, Error::InvalidParameter { name: "duration_s * rate_hz", .. }), "{error}");
+        assert!(error.to_string().contains("MAX_POSES"), "{error}");
+    }
 
     #[test]
     fn same_seed_same_drive_and_bounded() {

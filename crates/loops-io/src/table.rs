@@ -172,14 +172,14 @@ impl PoseTable {
     ///
     /// # Errors
     /// As [`to_trajectory`](Self::to_trajectory); also [`IoError::Trajectory`] holding
-    /// [`Error::InvalidParameter`] when the metric needs orientations the file does not have, or
-    /// when the metric's points cannot come from a pose file (torus, sphere, haversine, angular)
-    /// or do not take `axes`; quaternions farther than [`FILE_QUATERNION_TOLERANCE`] from unit
+    /// [`IoError::Parse`] when the metric needs orientations the file does not have;
+    /// [`Error::MetricMismatch`] when the metric's points cannot come from a pose file (torus,
+    /// sphere, haversine, angular) or do not take `axes`; quaternions farther than [`FILE_QUATERNION_TOLERANCE`] from unit
     /// length name their line (closer ones are normalised: files often print 4 decimals).
     pub fn to_trajectory_for(&self, metric: &loops_core::MetricSpec, axes: Option<[usize; 2]>) -> Result<Trajectory> {
         use loops_core::MetricSpec as M;
         let unsupported = |expected: &'static str| {
-            self.locate(Error::InvalidParameter { name: "metric for a pose file", value: f64::NAN, expected })
+            self.locate(Error::MetricMismatch { metric: metric.to_string(), expected })
         };
         match (metric, axes) {
             (M::Euclidean, None) => self.to_trajectory(),

@@ -1,8 +1,10 @@
 //! numpy arrays in and out.
 
 use numpy::{PyArray1, PyArrayDescrMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods};
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{IntoPyDict, PyType};
 
 use crate::error::value_error;
 
@@ -110,9 +112,32 @@ pub(crate) fn check_rows_equal_length(rows: &Bound<'_, PyAny>, name: &str) -> Py
     Ok(())
 }
 
+/// A Python int as a pose index, before it is checked against a trajectory.
+///
+/// # Errors
+/// `IndexError` naming `name` and the value when it is negative.
+pub(crate) fn pose_index(value: i64, name: &str) -> PyResult<usize> {
+    usize::try_from(value)
+        .map_err(|_| PyIndexError::new_err(format!("{name} = {value} is not a pose index (negative)")))
+}
+
 /// A new 1-D numpy array.
 pub(crate) fn to_numpy<'py, T: numpy::Element>(py: Python<'py>, values: Vec<T>) -> Bound<'py, PyArray1<T>> {
     PyArray1::from_vec(py, values)
 }
 
-use pyo3::types::IntoPyDict;
+/// The Python class of tabular results (`inexact_loops/table.py`: a `dict` of numpy columns with
+/// `to_pandas()`), imported once.
+static TABLE: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// A `Table` holding `columns` in the order given.
+pub(crate) fn table<'py>(
+    py: Python<'py>,
+    columns: impl IntoIterator<Item = (&'static str, Bound<'py, PyAny>)>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let table = TABLE.import(py, "inexact_loops.table", "Table")?.call0()?;
+    for (name, column) in columns {
+        table.set_item(name, column)?;
+    }
+    Ok(table)
+}

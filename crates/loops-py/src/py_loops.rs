@@ -3,9 +3,8 @@
 use std::sync::Arc;
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
-use crate::convert::to_numpy;
+use crate::convert::{pose_index, table, to_numpy};
 use crate::detached;
 use crate::error::Failure;
 use crate::py_trajectory::Trajectory;
@@ -92,11 +91,13 @@ impl Loops {
         })
     }
 
-    fn check_indices(&self, i: usize, j: usize) -> PyResult<()> {
+    /// The pose indices `i` and `j`, checked against the trajectory.
+    fn pose_pair(&self, i: i64, j: i64) -> PyResult<(usize, usize)> {
+        let (i, j) = (pose_index(i, "i")?, pose_index(j, "j")?);
         for index in [i, j] {
             self.inner.check_index(index).map_err(Failure::from)?;
         }
-        Ok(())
+        Ok((i, j))
     }
 }
 
@@ -158,41 +159,65 @@ impl Loops {
         self.inner.warnings().iter().map(ToString::to_string).collect()
     }
 
-    /// The loop components as columns (numpy arrays of equal length, one row a component):
-    /// ``id``, ``trivial``, ``area_s2`` (the half t ≤ t′ for a non-trivial component, the whole
-    /// set for a trivial one), ``pairs`` (cells, same rule), ``runs``, ``holes``, ``t_min_s``,
-    /// ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s``, ``i_min``, ``i_max``, ``j_min``,
-    /// ``j_max`` (index extents), ``closest_i``, ``closest_j``, ``closest_distance``.
+    /// The loop components as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row
+    /// a component, by id; ``.to_pandas()`` for a DataFrame): ``id`` (int64), ``trivial``
+    /// (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
+    /// set for a trivial one), ``pairs`` (int64, cells, same rule), ``runs``, ``holes`` (int64),
+    /// ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
+    /// ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
+    /// ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+    ///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+    ///     >>> table = il.find_loops(traj, gamma=4.0).components
+    ///     >>> table["id"].dtype, table["trivial"].tolist(), table["i_max"].tolist()
+    ///     (dtype('int64'), [True, False], [199, 7])
     #[getter]
-    fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let cs = self.inner.components();
         let t = self.inner.timestamps_s();
-        let table = PyDict::new(py);
-        let ints = |f: &dyn Fn(&loops_core::LoopComponent) -> usize| cs.iter().map(|c| f(c) as i64).collect::<Vec<_>>();
-        let floats = |f: &dyn Fn(&loops_core::LoopComponent) -> f64| cs.iter().map(f).collect::<Vec<_>>();
-        table.set_item("id", to_numpy(py, ints(&|c| c.id)))?;
-        table.set_item("trivial", to_numpy(py, cs.iter().map(|c| c.trivial).collect::<Vec<_>>()))?;
-        table.set_item("area_s2", to_numpy(py, floats(&|c| c.area_s2)))?;
-        table.set_item("pairs", to_numpy(py, ints(&|c| c.pairs as usize)))?;
-        table.set_item("runs", to_numpy(py, ints(&|c| c.runs)))?;
-        table.set_item("holes", to_numpy(py, ints(&|c| c.holes as usize)))?;
-        table.set_item("t_min_s", to_numpy(py, floats(&|c| t[c.rows[0]])))?;
-        table.set_item("t_max_s", to_numpy(py, floats(&|c| t[c.rows[1]])))?;
-        table.set_item("t_prime_min_s", to_numpy(py, floats(&|c| t[c.columns[0]])))?;
-        table.set_item("t_prime_max_s", to_numpy(py, floats(&|c| t[c.columns[1]])))?;
-        table.set_item("i_min", to_numpy(py, ints(&|c| c.rows[0])))?;
-        table.set_item("i_max", to_numpy(py, ints(&|c| c.rows[1])))?;
-        table.set_item("j_min", to_numpy(py, ints(&|c| c.columns[0])))?;
-        table.set_item("j_max", to_numpy(py, ints(&|c| c.columns[1])))?;
-        table.set_item("closest_i", to_numpy(py, ints(&|c| c.closest_pair[0])))?;
-        table.set_item("closest_j", to_numpy(py, ints(&|c| c.closest_pair[1])))?;
-        table.set_item("closest_distance", to_numpy(py, floats(&|c| c.closest_distance)))?;
-        Ok(table)
+        let ints = |f: &dyn Fn(&loops_core::LoopComponent) -> usize| {
+            to_numpy(py, cs.iter().map(|c| f(c) as i64).collect()).into_any()
+        };
+        let floats =
+            |f: &dyn Fn(&loops_core::LoopComponent) -> f64| to_numpy(py, cs.iter().map(f).collect()).into_any();
+        table(
+            py,
+            [
+                ("id", ints(&|c| c.id)),
+                ("trivial", to_numpy(py, cs.iter().map(|c| c.trivial).collect()).into_any()),
+                ("area_s2", floats(&|c| c.area_s2)),
+                ("pairs", ints(&|c| c.pairs as usize)),
+                ("runs", ints(&|c| c.runs)),
+                ("holes", ints(&|c| c.holes as usize)),
+                ("t_min_s", floats(&|c| t[c.rows[0]])),
+                ("t_max_s", floats(&|c| t[c.rows[1]])),
+                ("t_prime_min_s", floats(&|c| t[c.columns[0]])),
+                ("t_prime_max_s", floats(&|c| t[c.columns[1]])),
+                ("i_min", ints(&|c| c.rows[0])),
+                ("i_max", ints(&|c| c.rows[1])),
+                ("j_min", ints(&|c| c.columns[0])),
+                ("j_max", ints(&|c| c.columns[1])),
+                ("closest_i", ints(&|c| c.closest_pair[0])),
+                ("closest_j", ints(&|c| c.closest_pair[1])),
+                ("closest_distance", floats(&|c| c.closest_distance)),
+            ],
+        )
     }
 
-    /// The runs of S_γ's upper half (j ≥ i): for each, ``row`` i, columns ``start``..=``end``
-    /// (inclusive) and ``component`` id; numpy int64 arrays, row by row. For plotting.
-    fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    /// The runs of S_γ's upper half (j ≥ i), row by row, as a :class:`~inexact_loops.Table` of
+    /// int64 columns: ``row`` i, columns ``start``..=``end`` (inclusive) and ``component`` id.
+    /// For plotting.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+    ///     >>> runs = il.find_loops(traj, gamma=0.5).runs()
+    ///     >>> {name: column.tolist() for name, column in runs.items()}
+    ///     {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
+    fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let count = self.inner.sublevel_set().runs().len();
         let (mut row, mut start, mut end, mut component) = (
             Vec::with_capacity(count),
@@ -206,29 +231,46 @@ impl Loops {
             end.push(i64::from(run.end));
             component.push(c as i64);
         }
-        let table = PyDict::new(py);
-        table.set_item("row", to_numpy(py, row))?;
-        table.set_item("start", to_numpy(py, start))?;
-        table.set_item("end", to_numpy(py, end))?;
-        table.set_item("component", to_numpy(py, component))?;
-        Ok(table)
+        table(
+            py,
+            [
+                ("row", to_numpy(py, row).into_any()),
+                ("start", to_numpy(py, start).into_any()),
+                ("end", to_numpy(py, end).into_any()),
+                ("component", to_numpy(py, component).into_any()),
+            ],
+        )
     }
 
     /// The component id of the pair (i, j) (either order), or ``None`` when δ > γ.
     ///
     /// Raises:
-    ///     IndexError: ``i`` or ``j`` is not a pose index.
-    fn component_of(&self, i: usize, j: usize) -> PyResult<Option<usize>> {
-        self.check_indices(i, j)?;
+    ///     IndexError: ``i`` or ``j`` is not a pose index (negative, or past the last pose).
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops.component_of(3, 0), loops.component_of(0, 1)
+    ///     (1, None)
+    fn component_of(&self, i: i64, j: i64) -> PyResult<Option<usize>> {
+        let (i, j) = self.pose_pair(i, j)?;
         Ok(self.inner.component_of(i, j))
     }
 
     /// Whether (i, j) is a simple loop: a pair in a trivial component.
     ///
     /// Raises:
-    ///     IndexError: ``i`` or ``j`` is not a pose index.
-    fn is_simple(&self, i: usize, j: usize) -> PyResult<bool> {
-        self.check_indices(i, j)?;
+    ///     IndexError: ``i`` or ``j`` is not a pose index (negative, or past the last pose).
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops.is_simple(1, 2), loops.is_simple(0, 3)
+    ///     (True, False)
+    fn is_simple(&self, i: i64, j: i64) -> PyResult<bool> {
+        let (i, j) = self.pose_pair(i, j)?;
         Ok(self.inner.is_simple(i, j))
     }
 

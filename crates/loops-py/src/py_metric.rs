@@ -39,6 +39,17 @@ impl MetricArg {
             ))),
         }
     }
+
+    /// A metric name or object for `function`, which builds points for it (and so cannot take
+    /// a callable).
+    pub(crate) fn spec_from_py(metric: Option<&Bound<'_, PyAny>>, function: &str) -> PyResult<loops_core::MetricSpec> {
+        match Self::from_py(metric)? {
+            Self::Spec(spec) => Ok(spec),
+            Self::Callable(_) => {
+                Err(crate::error::value_error(format!("{function} takes a metric name or object, not a callable")))
+            }
+        }
+    }
 }
 
 /// A Python function as a metric: called with the GIL for every distance (one thread), so it
@@ -85,10 +96,17 @@ impl loops_core::Metric for PyCallableMetric {
         }
         Python::attach(|py| {
             let args = (PyArray1::from_slice(py, a), PyArray1::from_slice(py, b));
-            match self.function.bind(py).call1(args).and_then(|value| value.extract::<f64>()) {
+            let value = match self.function.bind(py).call1(args) {
+                Ok(value) => value,
+                Err(error) => return self.fail(error),
+            };
+            match value.extract::<f64>() {
                 Ok(d) if d.is_finite() && d >= 0.0 => d,
                 Ok(d) => self.fail(loops_core_error(d)),
-                Err(error) => self.fail(error),
+                Err(_) => {
+                    let type_name = value.get_type().name().map_or_else(|_| "?".to_owned(), |name| name.to_string());
+                    self.fail(PyTypeError::new_err(format!("the metric callable must return a float, got {type_name}")))
+                }
             }
         })
     }

@@ -7,9 +7,9 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyArrayDescrMethods, PyReadonlyArray1, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{IntoPyDict, PyDict};
+use pyo3::types::IntoPyDict;
 
-use crate::convert::{real_array, to_numpy};
+use crate::convert::{real_array, table, to_numpy};
 use crate::detached;
 use crate::error::{Failure, invalid_parameter, value_error};
 use crate::py_loops::Loops;
@@ -326,6 +326,30 @@ impl Detections {
     fn poses(&self) -> Option<usize> {
         self.inner.poses()
     }
+
+    /// The detections as a ``pandas.DataFrame``, one row a detection in the order given:
+    /// columns ``t``, ``t_prime`` (float64, seconds), then ``i``, ``j`` (int64) once placed on
+    /// a trajectory and ``score`` (float64) when there are scores.
+    ///
+    /// Raises:
+    ///     ImportError: pandas is not installed (it is not a dependency of the library).
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> traj = il.Trajectory([0.0, 1.0, 2.0], [0.0, 5.0, 0.0])
+    ///     >>> frame = il.Detections([2.0], [0.1], scores=[0.5]).locate(traj).to_pandas()
+    ///     >>> list(frame.columns), frame.loc[0, "j"]
+    ///     (['t', 't_prime', 'i', 'j', 'score'], np.int64(2))
+    fn to_pandas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let columns = [
+            Some(("t", self.t(py).into_any())),
+            Some(("t_prime", self.t_prime(py).into_any())),
+            self.i(py).map(|column| ("i", column.into_any())),
+            self.j(py).map(|column| ("j", column.into_any())),
+            self.score(py).map(|column| ("score", column.into_any())),
+        ];
+        table(py, columns.into_iter().flatten())?.call_method0("to_pandas")
+    }
 }
 
 /// Detections drawn uniformly from the exact S_γ of ``loops``, without materialising it: the
@@ -459,28 +483,34 @@ impl DetectionClusters {
         to_numpy(py, self.inner.labels().iter().map(|&l| i64::from(l)).collect())
     }
 
-    /// The clusters as columns (numpy arrays, one row a cluster, by id): ``id``, ``size``
-    /// (detections), ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s``
-    /// (extents, seconds), ``cells`` (grid cells holding its detections), ``area_proxy_s2``
-    /// (cells × side², s²), ``anchor`` (index of its smallest detection in (t, t′) order).
+    /// The clusters as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row a
+    /// cluster, by id; ``.to_pandas()`` for a DataFrame): ``id``, ``size`` (detections; int64),
+    /// ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (extents, seconds;
+    /// float64), ``cells`` (grid cells holding its detections; int64), ``area_proxy_s2``
+    /// (cells × side², s²; float64), ``anchor`` (index of its smallest detection in (t, t′)
+    /// order; int64).
     #[getter]
-    fn clusters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn clusters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let cs = self.inner.clusters();
         let ints = |f: &dyn Fn(&loops_core::DetectionCluster) -> usize| {
-            to_numpy(py, cs.iter().map(|c| f(c) as i64).collect::<Vec<_>>())
+            to_numpy(py, cs.iter().map(|c| f(c) as i64).collect::<Vec<_>>()).into_any()
         };
-        let floats = |f: &dyn Fn(&loops_core::DetectionCluster) -> f64| to_numpy(py, cs.iter().map(f).collect());
-        let table = PyDict::new(py);
-        table.set_item("id", ints(&|c| c.id))?;
-        table.set_item("size", ints(&|c| c.size))?;
-        table.set_item("t_min_s", floats(&|c| c.t_s[0]))?;
-        table.set_item("t_max_s", floats(&|c| c.t_s[1]))?;
-        table.set_item("t_prime_min_s", floats(&|c| c.t_prime_s[0]))?;
-        table.set_item("t_prime_max_s", floats(&|c| c.t_prime_s[1]))?;
-        table.set_item("cells", ints(&|c| c.cells))?;
-        table.set_item("area_proxy_s2", floats(&|c| c.area_proxy_s2))?;
-        table.set_item("anchor", ints(&|c| c.anchor))?;
-        Ok(table)
+        let floats =
+            |f: &dyn Fn(&loops_core::DetectionCluster) -> f64| to_numpy(py, cs.iter().map(f).collect()).into_any();
+        table(
+            py,
+            [
+                ("id", ints(&|c| c.id)),
+                ("size", ints(&|c| c.size)),
+                ("t_min_s", floats(&|c| c.t_s[0])),
+                ("t_max_s", floats(&|c| c.t_s[1])),
+                ("t_prime_min_s", floats(&|c| c.t_prime_s[0])),
+                ("t_prime_max_s", floats(&|c| c.t_prime_s[1])),
+                ("cells", ints(&|c| c.cells)),
+                ("area_proxy_s2", floats(&|c| c.area_proxy_s2)),
+                ("anchor", ints(&|c| c.anchor)),
+            ],
+        )
     }
 }
 
@@ -785,6 +815,36 @@ impl Samples {
         Ok(Self { inner: Arc::new(measured(py, samples, trajectory, metric)?) })
     }
 
+    /// The samples as a ``pandas.DataFrame``, one row a sample in order of (t, t′): columns
+    /// ``t``, ``t_prime`` (float64, seconds), ``i``, ``j`` (int64; only when placed on a
+    /// trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
+    /// ``distance`` (float64, NaN where not measured) and ``score`` (float64; only when the
+    /// detections had scores) — the getters of the same names.
+    ///
+    /// Raises:
+    ///     ImportError: pandas is not installed (it is not a dependency of the library).
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> clusters = il.cluster_detections(il.Detections([0.0, 500.0], [3.0, 900.0]), epsilon_s=1.0)
+    ///     >>> frame = il.sample(clusters, "one", budget=2, seed=0).to_pandas()
+    ///     >>> list(frame.columns), frame["cluster"].tolist()
+    ///     (['t', 't_prime', 'component', 'cluster', 'detection', 'distance'], [0, 1])
+    fn to_pandas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let columns = [
+            Some(("t", self.t(py).into_any())),
+            Some(("t_prime", self.t_prime(py).into_any())),
+            self.i(py).map(|column| ("i", column.into_any())),
+            self.j(py).map(|column| ("j", column.into_any())),
+            Some(("component", self.component(py).into_any())),
+            Some(("cluster", self.cluster(py).into_any())),
+            Some(("detection", self.detection(py).into_any())),
+            Some(("distance", self.distance(py).into_any())),
+            self.score(py).map(|column| ("score", column.into_any())),
+        ];
+        table(py, columns.into_iter().flatten())?.call_method0("to_pandas")
+    }
+
     /// Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
     /// distance,score,sampler``, then one line a sample; unknown values are empty fields.
     /// Atomic (a temporary file renamed into place).
@@ -959,17 +1019,21 @@ impl SampleQuality {
         self.inner.coverage()
     }
 
-    /// P1: the components without a sample, largest area first, as columns: ``id``,
-    /// ``trivial``, ``area_s2``, ``pairs``.
+    /// P1: the components without a sample, largest area first, as a
+    /// :class:`~inexact_loops.Table`: ``id`` (int64), ``trivial`` (bool), ``area_s2``
+    /// (float64, s²), ``pairs`` (int64).
     #[getter]
-    fn missed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn missed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let missed = &self.inner.missed;
-        let table = PyDict::new(py);
-        table.set_item("id", to_numpy(py, missed.iter().map(|m| m.id as i64).collect()))?;
-        table.set_item("trivial", to_numpy(py, missed.iter().map(|m| m.trivial).collect()))?;
-        table.set_item("area_s2", to_numpy(py, missed.iter().map(|m| m.area_s2).collect()))?;
-        table.set_item("pairs", to_numpy(py, missed.iter().map(|m| m.pairs as i64).collect()))?;
-        Ok(table)
+        table(
+            py,
+            [
+                ("id", to_numpy(py, missed.iter().map(|m| m.id as i64).collect()).into_any()),
+                ("trivial", to_numpy(py, missed.iter().map(|m| m.trivial).collect()).into_any()),
+                ("area_s2", to_numpy(py, missed.iter().map(|m| m.area_s2).collect()).into_any()),
+                ("pairs", to_numpy(py, missed.iter().map(|m| m.pairs as i64).collect()).into_any()),
+            ],
+        )
     }
 
     /// The ε of P2, seconds.
@@ -1010,7 +1074,19 @@ impl SampleQuality {
         self.inner.p3_components
     }
 
-    /// Samples per component, int64, by component id.
+    /// Samples per component, int64, by component id: one entry per row of
+    /// :attr:`Loops.components`, so it can be added to that table as a column.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+    ///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+    ///     >>> loops = il.find_loops(traj, gamma=4.0)
+    ///     >>> samples = il.sample(loops, "alpha", budget=5, seed=0, trajectory=traj)
+    ///     >>> table = loops.components
+    ///     >>> table["samples"] = il.sample_quality(samples, loops).per_component
+    ///     >>> int(table["samples"].sum()), table.num_rows
+    ///     (5, 2)
     #[getter]
     fn per_component<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
         to_numpy(py, self.inner.per_component.iter().map(|&k| k as i64).collect())

@@ -4,10 +4,14 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::{PyList, PyTuple};
 
 use crate::convert::{check_rows_equal_length, timestamps_and_points, timestamps_and_rows, to_numpy};
 use crate::detached;
+use crate::error::Failure;
+use crate::py_metric::MetricArg;
 
 /// A sampled trajectory: strictly increasing timestamps (seconds) and one point per timestamp.
 ///
@@ -209,11 +213,112 @@ impl Trajectory {
         let (t, values, dim) = timestamps_and_points(py, timestamps, descriptors, "descriptors")?;
         wrap(py, move || loops_core::Trajectory::descriptors(t, &values, dim, normalize))
     }
+
+    /// A trajectory from an `evo <https://github.com/MichaelGrupp/evo>`_ ``PoseTrajectory3D``
+    /// (or any object with its attributes ``timestamps`` ``(n,)`` seconds, ``positions_xyz``
+    /// ``(n, 3)`` and ``orientations_quat_wxyz`` ``(n, 4)``, quaternions **w first**, as evo
+    /// stores them). evo itself is not imported.
+    ///
+    /// What is built follows ``metric`` exactly as in :func:`read_trajectory`: positions
+    /// (x, y, z) for Euclidean (the default), or the plane ``axes`` of them; positions and
+    /// orientations for ``se3`` / ``se3_rotation`` (as :meth:`se3`); orientations for ``so3``;
+    /// x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are normalised.
+    ///
+    /// Args:
+    ///     trajectory: an ``evo.core.trajectory.PoseTrajectory3D``.
+    ///     metric: the metric the trajectory is for, a name or :mod:`inexact_loops.metrics`
+    ///         object (as in :func:`find_loops`); ``None`` is Euclidean.
+    ///     axes: with the Euclidean metric, keep only these position axes, e.g. ``(0, 1)``.
+    ///
+    /// Raises:
+    ///     TypeError: ``trajectory`` lacks one of the attributes (the message names them all,
+    ///         e.g. ``timestamps`` for an evo ``PosePath3D``), or holds non-numeric values.
+    ///     ValueError: arrays of the wrong shape (named by attribute).
+    ///     InvalidTrajectoryError: NaN, unsorted timestamps, a quaternion far from unit length,
+    ///         naming the pose.
+    ///     InvalidParameterError: an unknown metric, or one whose points are not poses.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> from types import SimpleNamespace  # stands in for evo's PoseTrajectory3D here
+    ///     >>> evo_traj = SimpleNamespace(
+    ///     ...     timestamps=np.array([0.0, 0.1, 0.2]),
+    ///     ...     positions_xyz=np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]]),
+    ///     ...     orientations_quat_wxyz=np.tile([1.0, 0, 0, 0], (3, 1)),
+    ///     ... )
+    ///     >>> il.Trajectory.from_evo(evo_traj).positions[-1]
+    ///     array([2., 0., 0.])
+    ///     >>> il.Trajectory.from_evo(evo_traj, metric="se3(rotation_weight_m_per_rad=1)").dim
+    ///     7
+    #[staticmethod]
+    #[pyo3(signature = (trajectory, *, metric=None, axes=None))]
+    fn from_evo(
+        py: Python<'_>,
+        trajectory: &Bound<'_, PyAny>,
+        metric: Option<&Bound<'_, PyAny>>,
+        axes: Option<(usize, usize)>,
+    ) -> PyResult<Self> {
+        const ATTRIBUTES: [&str; 3] = ["timestamps", "positions_xyz", "orientations_quat_wxyz"];
+        let mut missing = Vec::new();
+        for name in ATTRIBUTES {
+            if !trajectory.hasattr(name)? {
+                missing.push(name);
+            }
+        }
+        if !missing.is_empty() {
+            return Err(PyTypeError::new_err(format!(
+                "Trajectory.from_evo takes an evo PoseTrajectory3D (an object with {}), got {} without {}",
+                ATTRIBUTES.join(", "),
+                trajectory.get_type().name()?,
+                missing.join(" or ")
+            )));
+        }
+        let [timestamps, positions, orientations] = ATTRIBUTES.map(|name| trajectory.getattr(name));
+        let timestamps = timestamps?;
+        let (t, positions) = timestamps_and_rows::<3>(py, &timestamps, &positions?, "positions_xyz")?;
+        let (_, quaternions_wxyz) =
+            timestamps_and_rows::<4>(py, &timestamps, &orientations?, "orientations_quat_wxyz")?;
+        let spec = MetricArg::spec_from_py(metric, "Trajectory.from_evo")?;
+        let table = loops_io::PoseTable {
+            path: PathBuf::from("evo PoseTrajectory3D"),
+            timestamps_s: t,
+            timestamps_ns: None,
+            positions,
+            orientations_xyzw: Some(quaternions_wxyz.iter().map(|&[w, x, y, z]| [x, y, z, w]).collect()),
+            dim: 3,
+            source_lines: Vec::new(),
+            messages: None,
+        };
+        // The table's own conversion picks what the metric needs, as for a file.
+        let inner = detached(py, move || trajectory_for(&table, &spec, axes, Source::Memory))?;
+        Ok(Self { inner: Arc::new(inner) })
+    }
 }
 
 fn wrap(py: Python<'_>, f: impl FnOnce() -> loops_core::Result<loops_core::Trajectory> + Send) -> PyResult<Trajectory> {
     let inner = detached(py, || Ok(f()?))?;
     Ok(Trajectory { inner: Arc::new(inner) })
+}
+
+/// Where a pose table came from: errors name the file, or only poses.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Source {
+    File,
+    Memory,
+}
+
+/// The trajectory `spec` needs from `table` ([`loops_io::PoseTable::to_trajectory_for`]); errors
+/// name the file when there is one.
+fn trajectory_for(
+    table: &loops_io::PoseTable,
+    spec: &loops_core::MetricSpec,
+    axes: Option<(usize, usize)>,
+    source: Source,
+) -> Result<loops_core::Trajectory, Failure> {
+    table.to_trajectory_for(spec, axes.map(|(a, b)| [a, b])).map_err(|error| match error {
+        loops_io::IoError::Trajectory { error, .. } if source == Source::Memory => Failure::Core(error),
+        other => Failure::from(other),
+    })
 }
 
 /// A seeded synthetic drive on a Manhattan grid (x, y, z in metres, 10 Hz by default).
@@ -293,7 +398,9 @@ pub(crate) fn urban_drive(
 /// Raises:
 ///     OSError: the file cannot be opened. LoopsIOError: a malformed line or message (the
 ///     message names file, line or byte offset, topic). InvalidTrajectoryError: e.g. unsorted
-///     timestamps (names the line or message).
+///     timestamps (names the line or message). InvalidParameterError: an unknown format or
+///     time source, a metric whose points are not poses (named), bad axes, an empty list.
+///     TypeError: ``path`` is not a str, an ``os.PathLike`` or a list of them.
 #[pyfunction]
 #[pyo3(signature = (path, *, format=None, axes=None, metric=None, topic=None, time=None, frames=None, rate_hz=None))]
 #[allow(clippy::too_many_arguments)]
@@ -308,18 +415,8 @@ pub(crate) fn read_trajectory(
     frames: Option<(String, String)>,
     rate_hz: Option<f64>,
 ) -> PyResult<Trajectory> {
-    let paths: Vec<PathBuf> = match path.extract::<PathBuf>() {
-        Ok(one) => vec![one],
-        Err(_) => path.extract()?,
-    };
-    let spec = match crate::py_metric::MetricArg::from_py(metric)? {
-        crate::py_metric::MetricArg::Spec(spec) => spec,
-        crate::py_metric::MetricArg::Callable(_) => {
-            return Err(crate::error::value_error(
-                "read_trajectory takes a metric name or object, not a callable".into(),
-            ));
-        }
-    };
+    let paths = paths_of(path)?;
+    let spec = MetricArg::spec_from_py(metric, "read_trajectory")?;
     let inner = detached(py, move || {
         let mut mcap = loops_io::McapOptions::default();
         if let Some(topic) = topic {
@@ -332,20 +429,47 @@ pub(crate) fn read_trajectory(
             mcap = mcap.frames(parent, child);
         }
         let format = format.map(|name| name.parse::<loops_io::Format>()).transpose()?;
-        let table = if paths.len() == 1 {
+        let table = if let [path] = paths.as_slice() {
             let mut options = loops_io::ReadOptions::default();
             options.format = format;
             options.mcap = mcap;
             if let Some(rate) = rate_hz {
                 options.timing = loops_io::Timing::RateHz(rate);
             }
-            loops_io::read_trajectory_with(&paths[0], &options)?
+            loops_io::read_trajectory_with(path, &options)?
         } else {
             loops_io::read_mcap_files(&paths, &mcap)?
         };
-        Ok(table.to_trajectory_for(&spec, axes.map(|(a, b)| [a, b]))?)
+        trajectory_for(&table, &spec, axes, Source::File)
     })?;
     Ok(Trajectory { inner: Arc::new(inner) })
+}
+
+/// `read_trajectory`'s `path`: one path, or a non-empty list of them.
+fn paths_of(path: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
+    if let Ok(one) = path.extract::<PathBuf>() {
+        return Ok(vec![one]);
+    }
+    let not_a_path = |what: String, obj: &Bound<'_, PyAny>| -> PyResult<PyErr> {
+        Ok(PyTypeError::new_err(format!("{what}, got {}", obj.get_type().name()?)))
+    };
+    if !(path.is_instance_of::<PyList>() || path.is_instance_of::<PyTuple>()) {
+        return Err(not_a_path("path must be a str or an os.PathLike, or a list of them (MCAP files)".into(), path)?);
+    }
+    let mut paths = Vec::new();
+    for (index, item) in path.try_iter()?.enumerate() {
+        let item = item?;
+        match item.extract::<PathBuf>() {
+            Ok(one) => paths.push(one),
+            Err(_) => return Err(not_a_path(format!("path[{index}] must be a str or an os.PathLike"), &item)?),
+        }
+    }
+    if paths.is_empty() {
+        return Err(crate::error::invalid_parameter(
+            "path is an empty list: give a file, or a list of MCAP files".into(),
+        ));
+    }
+    Ok(paths)
 }
 
 /// The topics of an MCAP file: one dict per channel with ``topic``, ``schema``,

@@ -1,0 +1,925 @@
+"""Every public name of ``inexact_loops`` is exercised, with its error cases.
+
+Each test says which public names it covers (``@covers``); :func:`test_every_public_name_is_covered`
+fails when a name of ``inexact_loops.__all__``, a public method or property of a public class, or
+a metric class has no test, here or in the file named in :data:`ELSEWHERE`. Errors are checked
+for their class and for naming the offending value, index or argument. Values are checked
+against independent formulas (numpy, scipy, scikit-learn) where there is one.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import json
+import re
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.distance import cdist
+from scipy.spatial.transform import Rotation
+from sklearn.cluster import DBSCAN
+
+import inexact_loops as il
+from inexact_loops import metrics
+
+TESTS = Path(__file__).parent
+
+#: Public name -> the tests of this file that exercise it.
+COVERED: dict[str, list[str]] = {}
+
+#: Public names tested in other files: name -> (file, test function).
+ELSEWHERE = {
+    "Trajectory.from_evo": (
+        "python/test_interop.py",
+        "test_from_evo_se3_reorders_w_first_quaternions",
+    ),
+    "Detections.to_pandas": ("python/test_interop.py", "test_detections_to_pandas"),
+    "Samples.to_pandas": ("python/test_interop.py", "test_samples_to_pandas_equals_the_csv"),
+    "Table.to_pandas": ("python/test_interop.py", "test_tables_to_pandas"),
+}
+
+
+def covers(*names: str) -> Callable[[Callable[..., None]], Callable[..., None]]:
+    def register(test: Callable[..., None]) -> Callable[..., None]:
+        for name in names:
+            COVERED.setdefault(name, []).append(test.__name__)
+        return test
+
+    return register
+
+
+def public_names() -> set[str]:
+    """``__all__``, the public attributes of its classes (not those of ``dict`` or ``object``),
+    and the metric classes."""
+    names = set()
+    inherited = set(dir(dict)) | set(dir(object))
+    for name in il.__all__:
+        names.add(name)
+        obj = getattr(il, name)
+        if isinstance(obj, type) and not issubclass(obj, BaseException):
+            names.update(
+                f"{name}.{attr}"
+                for attr in dir(obj)
+                if not attr.startswith("_") and attr not in inherited
+            )
+    names.update(f"metrics.{name}" for name in metrics.__all__)
+    names.add("metrics.Metric.spec")
+    return names
+
+
+def raises(error: type[BaseException], *named: str):
+    """``pytest.raises(error)`` whose message must contain each of ``named`` literally."""
+    return pytest.raises(error, match="".join(f"(?=.*{re.escape(text)})" for text in named))
+
+
+N = 40
+
+
+def ring(n: int = N) -> tuple[np.ndarray, np.ndarray]:
+    """A 95% circle of radius 10 m, 10 Hz: one trivial and one non-trivial component at 4 m."""
+    angle = np.linspace(0.0, 0.95 * 2 * np.pi, n)
+    return np.arange(n) * 0.1, 10.0 * np.c_[np.cos(angle), np.sin(angle)]
+
+
+@pytest.fixture(scope="module")
+def traj() -> il.Trajectory:
+    return il.Trajectory(*ring())
+
+
+@pytest.fixture(scope="module")
+def loops(traj) -> il.Loops:
+    return il.find_loops(traj, gamma=4.0)
+
+
+@pytest.fixture(scope="module")
+def clusters() -> il.DetectionClusters:
+    det = il.Detections([0.0, 1.0, 3.0], [3.5, 3.6, 3.9], scores=[0.1, 0.2, 0.3])
+    return il.cluster_detections(det, epsilon_s=1.0)
+
+
+# --- the package ----------------------------------------------------------------------------------
+
+
+@covers("__version__")
+def test_version_is_the_distribution_version():
+    assert il.__version__ == importlib.metadata.version("inexact-loops")
+    assert re.fullmatch(r"\d+\.\d+\.\d+.*", il.__version__)
+
+
+@covers(
+    "LoopsError",
+    "InvalidTrajectoryError",
+    "InvalidParameterError",
+    "LoopsIOError",
+    "InternalError",
+)
+def test_each_error_class_is_what_its_cases_raise(tmp_path):
+    with raises(il.InvalidTrajectoryError, "pose 1"):
+        il.Trajectory([0.0, 1.0], [0.0, np.nan])
+    with raises(il.InvalidParameterError, "gamma", "-1"):
+        il.find_loops(il.Trajectory(*ring()), gamma=-1.0)
+    bad = tmp_path / "bad.tum"
+    bad.write_text("0 0 0 0 0 0 0 1\n1 x 0 0 0 0 0 1\n")
+    with raises(il.LoopsIOError, "bad.tum line 2", '"x"'):
+        il.read_trajectory(bad)
+    for cls in (il.InvalidTrajectoryError, il.InvalidParameterError, il.LoopsIOError):
+        assert issubclass(cls, il.LoopsError)
+    # InternalError is a caught Rust panic: no input should raise it. Its place in the hierarchy:
+    assert issubclass(il.InternalError, il.LoopsError) and issubclass(
+        il.InternalError, RuntimeError
+    )
+
+
+# --- Table ----------------------------------------------------------------------------------------
+
+
+@covers("Table", "Table.num_rows")
+def test_table_is_a_dict_of_columns(loops):
+    table = loops.components
+    assert isinstance(table, il.Table) and isinstance(table, dict)
+    assert table.num_rows == len(table["id"]) == 2
+    assert il.Table().num_rows == 0
+    built = il.Table(a=np.arange(3), b=np.zeros(3))
+    assert built.num_rows == 3 and list(built) == ["a", "b"]
+
+
+# --- Trajectory -----------------------------------------------------------------------------------
+
+
+@covers(
+    "Trajectory",
+    "Trajectory.dim",
+    "Trajectory.timestamps",
+    "Trajectory.positions",
+    "Trajectory.cell_widths",
+    "Trajectory.span_s",
+)
+def test_trajectory_and_its_arrays():
+    t, p = ring()
+    traj = il.Trajectory(t, p)
+    assert len(traj) == N and traj.dim == 2
+    np.testing.assert_array_equal(traj.timestamps, t)
+    np.testing.assert_array_equal(traj.positions, p)
+    steps = np.diff(t)
+    np.testing.assert_allclose(
+        traj.cell_widths, np.r_[steps[0], steps[:-1] + steps[1:], steps[-1]] / 2
+    )
+    assert traj.span_s == pytest.approx(t[-1] - t[0]) == pytest.approx(traj.cell_widths.sum())
+    with raises(il.InvalidTrajectoryError, "pose 7", "coordinate 1", "inf"):
+        il.Trajectory(t, np.where(np.arange(N)[:, None] == 7, [0.0, np.inf], p))
+    with raises(ValueError, "positions", "[40, 2, 1]"):
+        il.Trajectory(t, p[:, :, None])
+    with raises(TypeError, "timestamps", "object"):
+        il.Trajectory(None, p)
+
+
+QUATERNIONS = Rotation.from_rotvec(np.linspace(0, 2, N)[:, None] * [0.3, -0.5, 0.8])
+
+
+@covers("Trajectory.se3")
+def test_se3():
+    t, p = ring()
+    positions = np.c_[p, np.zeros(N)]
+    q = QUATERNIONS.as_quat()
+    traj = il.Trajectory.se3(t, positions, 3 * q, quaternion_tolerance=2.5)
+    assert traj.dim == 7
+    np.testing.assert_allclose(traj.positions, np.c_[positions, q], atol=1e-15)
+    q_zero = q.copy()
+    q_zero[9] = 0.0
+    with raises(il.InvalidTrajectoryError, "quaternion of pose 9", "norm 0"):
+        il.Trajectory.se3(t, positions, q_zero)
+    with raises(il.InvalidTrajectoryError, "quaternion of pose 0", "norm 3"):
+        il.Trajectory.se3(t, positions, 3 * q)
+    with raises(ValueError, "positions", "(n, 3)", "2 columns"):
+        il.Trajectory.se3(t, p, q)
+    with raises(ValueError, "quaternions_xyzw", "(n, 4)", "3 columns"):
+        il.Trajectory.se3(t, positions, q[:, :3])
+
+
+@covers("Trajectory.so3")
+def test_so3():
+    t, _ = ring()
+    q = QUATERNIONS.as_quat()
+    np.testing.assert_allclose(il.Trajectory.so3(t, q).positions, q, atol=1e-15)
+    with raises(il.InvalidTrajectoryError, "quaternion of pose 0", "norm 2"):
+        il.Trajectory.so3(t, 2 * q)
+    with raises(ValueError, "timestamps has 40 rows", "quaternions_xyzw has 5"):
+        il.Trajectory.so3(t, q[:5])
+
+
+@covers("Trajectory.se3", "Trajectory.so3")
+def test_bad_quaternion_tolerance_is_named():
+    t, _ = ring()
+    q = QUATERNIONS.as_quat()
+    for tolerance in (np.nan, -1.0):
+        with raises(il.InvalidParameterError, "quaternion_tolerance"):
+            il.Trajectory.so3(t, 5 * q, quaternion_tolerance=tolerance)
+
+
+@covers("Trajectory.so3_from_rotation_vectors")
+def test_so3_from_rotation_vectors_equals_scipy():
+    t, _ = ring()
+    traj = il.Trajectory.so3_from_rotation_vectors(t, QUATERNIONS.as_rotvec())
+    agree = np.abs(np.sum(traj.positions * QUATERNIONS.as_quat(), axis=1))
+    np.testing.assert_allclose(agree, 1.0, atol=1e-12)
+    bad = QUATERNIONS.as_rotvec()
+    bad[12, 2] = np.nan
+    with raises(il.InvalidTrajectoryError, "pose 12", "coordinate 2", "NaN"):
+        il.Trajectory.so3_from_rotation_vectors(t, bad)
+    with raises(ValueError, "rotation_vectors", "(n, 3)"):
+        il.Trajectory.so3_from_rotation_vectors(t, QUATERNIONS.as_quat())
+
+
+@covers("Trajectory.se2")
+def test_se2_wraps_the_heading():
+    t = np.arange(3.0)
+    traj = il.Trajectory.se2(t, [[0, 0, np.pi], [0, 0, -np.pi], [1, 2, 4.0]])
+    np.testing.assert_allclose(traj.positions[:, 2], [np.pi, np.pi, 4.0 - 2 * np.pi])
+    with raises(ValueError, "poses_xy_theta", "(n, 3)", "2 columns"):
+        il.Trajectory.se2(t, np.zeros((3, 2)))
+    with raises(il.InvalidTrajectoryError, "pose 1", "NaN"):
+        il.Trajectory.se2(t, [[0, 0, 0], [0, 0, np.nan], [0, 0, 0]])
+
+
+@covers("Trajectory.torus")
+def test_torus_wraps_the_angles():
+    angles = np.array([[np.pi, -np.pi], [1.5 * np.pi, 0.0], [7.0, -7.0]])
+    traj = il.Trajectory.torus(np.arange(3.0), angles)
+    expected = np.where(
+        np.isclose(np.angle(np.exp(1j * angles)), -np.pi), np.pi, np.angle(np.exp(1j * angles))
+    )
+    np.testing.assert_allclose(traj.positions, expected, atol=1e-12)
+    with raises(il.InvalidTrajectoryError, "pose 2", "inf"):
+        il.Trajectory.torus(np.arange(3.0), [[0.0], [0.0], [np.inf]])
+    with raises(ValueError, "angles_rad", "[3, 1, 1]"):
+        il.Trajectory.torus(np.arange(3.0), np.zeros((3, 1, 1)))
+
+
+@covers("Trajectory.sphere", "Trajectory.sphere_from_lat_lon")
+def test_sphere_points():
+    t = np.arange(3.0)
+    vectors = np.array([[2.0, 0, 0], [0, 0, -3], [1, 1, 0]])
+    np.testing.assert_allclose(
+        il.Trajectory.sphere(t, vectors).positions,
+        vectors / np.linalg.norm(vectors, axis=1, keepdims=True),
+    )
+    with raises(il.InvalidTrajectoryError, "vector of pose 1", "norm 0"):
+        il.Trajectory.sphere(t, [[1.0, 0, 0], [0, 0, 0], [0, 1, 0]])
+    with raises(ValueError, "vectors", "(n, 3)"):
+        il.Trajectory.sphere(t, np.ones((3, 2)))
+    lat, lon = np.radians([10.0, -45.0, 89.0]), np.radians([20.0, 170.0, -30.0])
+    traj = il.Trajectory.sphere_from_lat_lon(t, np.degrees(np.c_[lat, lon]))
+    unit = np.c_[np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)]
+    np.testing.assert_allclose(traj.positions, unit, atol=1e-15)
+    with raises(il.InvalidTrajectoryError, "latitude of pose 2", "91"):
+        il.Trajectory.sphere_from_lat_lon(t, [[0.0, 0], [0, 0], [91, 0]])
+
+
+def wgs84_ecef(lat_lon_height: np.ndarray) -> np.ndarray:
+    """Earth-centred, Earth-fixed WGS 84 coordinates (metres), the textbook formula."""
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    lat, lon = np.radians(lat_lon_height[:, 0]), np.radians(lat_lon_height[:, 1])
+    h = lat_lon_height[:, 2]
+    n = a / np.sqrt(1 - e2 * np.sin(lat) ** 2)
+    return np.c_[
+        (n + h) * np.cos(lat) * np.cos(lon),
+        (n + h) * np.cos(lat) * np.sin(lon),
+        (n * (1 - e2) + h) * np.sin(lat),
+    ]
+
+
+@covers("Trajectory.gnss", "Trajectory.gnss_ecef")
+def test_gnss():
+    t = np.arange(3.0)
+    fixes = np.array([[48.1, 11.5, 520.0], [48.1005, 11.5003, 525.0], [48.2, 11.6, 500.0]])
+    ecef = il.Trajectory.gnss_ecef(t, fixes)
+    expected = wgs84_ecef(fixes)
+    np.testing.assert_allclose(ecef.positions, expected - expected[0], atol=1e-6)
+    gnss = il.Trajectory.gnss(t, fixes)
+    assert gnss.dim == 4
+    np.testing.assert_array_equal(gnss.positions[:, 3], fixes[:, 2])
+    for build in (il.Trajectory.gnss, il.Trajectory.gnss_ecef):
+        with raises(il.InvalidTrajectoryError, "latitude of pose 1", "-95"):
+            build(t, [[0.0, 0, 0], [-95, 0, 0], [0, 0, 0]])
+        with raises(ValueError, "lat_lon_height", "(n, 3)"):
+            build(t, fixes[:, :2])
+
+
+@covers("Trajectory.descriptors")
+def test_descriptors():
+    t = np.arange(3.0)
+    rows = [[3.0, 4.0], [0.0, 2.0], [1.0, 0.0]]
+    np.testing.assert_allclose(
+        il.Trajectory.descriptors(t, rows).positions, [[0.6, 0.8], [0, 1], [1, 0]]
+    )
+    np.testing.assert_array_equal(
+        il.Trajectory.descriptors(t, rows, normalize=False).positions, rows
+    )
+    with raises(ValueError, "descriptors row 2 has 1 values", "row 0 has 2"):
+        il.Trajectory.descriptors(t, [[1, 2], [3, 4], [5]])
+    with raises(il.InvalidTrajectoryError, "vector of pose 1", "norm 0"):
+        il.Trajectory.descriptors(t, [[1.0, 0], [0, 0], [0, 1]])
+
+
+# --- find_loops and Loops -------------------------------------------------------------------------
+
+
+@covers("find_loops", "Loops", "Loops.gamma", "Loops.metric", "Loops.span_s", "Loops.pairs")
+def test_find_loops_counts_the_dense_pairs(traj, loops):
+    distances = cdist(traj.positions, traj.positions)
+    assert loops.pairs == np.count_nonzero(distances <= 4.0)
+    assert loops.gamma == 4.0 and loops.metric == "euclidean" and loops.span_s == traj.span_s
+    assert len(loops) == N
+    by_callable = il.find_loops(traj, gamma=4.0, metric=lambda a, b: float(np.linalg.norm(a - b)))
+    assert by_callable.pairs == loops.pairs
+
+
+@covers("find_loops")
+def test_find_loops_errors(traj):
+    with raises(il.InvalidParameterError, "gamma", "0"):
+        il.find_loops(traj, gamma=0.0)
+    with raises(il.InvalidParameterError, "gamma", "NaN"):
+        il.find_loops(traj, gamma=np.nan)
+    with raises(il.InvalidParameterError, '"taxicab"', "euclidean"):
+        il.find_loops(traj, gamma=1.0, metric="taxicab")
+    with raises(il.InvalidParameterError, "se3(", "dimension 7", "dimension 2"):
+        il.find_loops(traj, gamma=1.0, metric=metrics.SE3(rotation_weight_m_per_rad=1.0))
+    with raises(il.InvalidParameterError, "threads = 0"):
+        il.find_loops(traj, gamma=1.0, threads=0)
+    with pytest.raises(OverflowError) as negative:
+        il.find_loops(traj, gamma=1.0, threads=-1)
+    assert "while processing 'threads'" in negative.value.__notes__
+    with raises(TypeError, "metric must be a name", "got int"):
+        il.find_loops(traj, gamma=1.0, metric=3)
+    with raises(TypeError, "Trajectory"):
+        il.find_loops(traj.positions, gamma=1.0)
+    with raises(TypeError, "the metric callable must return a float, got str"):
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: "far")
+    with raises(ValueError, "the metric callable returned NaN"):
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: float("nan"))
+    with raises(ValueError, "the metric callable returned -1"):
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: -1.0)
+    with pytest.raises(ZeroDivisionError):  # the callable's own exception, unchanged
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: 1 / 0)
+
+
+@covers("Loops.warnings")
+def test_warnings_name_the_broken_diagonal():
+    loops = il.find_loops(il.Trajectory([0.0, 1, 2, 3], [0.0, 0, 100, 100]), gamma=1.0)
+    assert len(loops.warnings) == 1
+    assert (
+        "first at index 1" in loops.warnings[0] and "farther apart than gamma" in loops.warnings[0]
+    )
+    assert il.find_loops(il.Trajectory(*ring()), gamma=4.0).warnings == []
+
+
+@covers("Loops.components", "Loops.runs")
+def test_components_and_runs_agree(loops):
+    table, runs = loops.components, loops.runs()
+    assert table["trivial"].tolist() == [True, False]
+    pairs_upper = ((runs["end"] - runs["start"] + 1) * 1).sum()
+    assert pairs_upper == (loops.pairs + len(loops)) // 2
+    for c in table["id"]:
+        rows = runs["row"][runs["component"] == c]
+        assert rows.min() == table["i_min"][c] and rows.max() == table["i_max"][c]
+    d = table["closest_distance"][1]
+    assert d == pytest.approx(
+        np.linalg.norm(np.subtract(*ring()[1][[table["closest_i"][1], table["closest_j"][1]]]))
+    )
+
+
+@covers("Loops.component_of", "Loops.is_simple")
+def test_pair_lookups_and_their_index_errors(loops):
+    assert loops.component_of(0, N - 1) == 1 and loops.component_of(N - 1, 0) == 1
+    assert loops.component_of(0, N // 2) is None
+    assert (
+        loops.is_simple(3, 4) and not loops.is_simple(0, N - 1) and not loops.is_simple(0, N // 2)
+    )
+    for lookup in (loops.component_of, loops.is_simple):
+        with raises(IndexError, f"pose index {N}", f"{N} poses"):
+            lookup(0, N)
+        with raises(IndexError, "i = -1", "negative"):
+            lookup(-1, 0)
+        with raises(IndexError, "j = -3", "negative"):
+            lookup(0, -3)
+        with pytest.raises(TypeError):
+            lookup(0.5, 1)
+
+
+@covers("Loops.loop_duration", "Loops.loop_area", "Loops.loop_density")
+def test_measures_and_their_errors(traj, loops):
+    distances = cdist(traj.positions, traj.positions)
+    tau = (distances <= 4.0) @ traj.cell_widths
+    np.testing.assert_allclose(loops.loop_duration(), tau)
+    np.testing.assert_allclose(loops.loop_duration(normalized=True), tau / traj.span_s)
+    a, b = traj.timestamps[0], traj.timestamps[-1]
+    assert loops.loop_area(a, b) == pytest.approx(tau @ traj.cell_widths)
+    assert loops.loop_density(a, b) == pytest.approx(loops.loop_area(a, b) / (b - a))
+    assert loops.loop_density(0.0, 1.0, normalized=True) == pytest.approx(
+        loops.loop_area(a, b) / traj.span_s**2
+    )
+    total = sum(loops.loop_duration(components=[c]) for c in (0, 1))
+    np.testing.assert_allclose(total, tau)
+    with raises(il.InvalidParameterError, '"sideways"', "both", "begin", "end"):
+        loops.loop_duration(side="sideways")
+    with raises(il.InvalidParameterError, "id 5", "2"):
+        loops.loop_area(a, b, components=[5])
+    with raises(il.InvalidParameterError, "[2, 1]", "a < b"):
+        loops.loop_density(2.0, 1.0)
+    with raises(il.InvalidParameterError, "NaN", "a < b"):
+        loops.loop_area(np.nan, 1.0)
+
+
+# --- urban_drive ----------------------------------------------------------------------------------
+
+
+@covers("urban_drive")
+def test_urban_drive_and_its_parameter_errors():
+    traj = il.urban_drive(duration_s=30.0, rate_hz=5.0, seed=2)
+    assert len(traj) == 150 and traj.dim == 3
+    np.testing.assert_allclose(np.diff(traj.timestamps), 0.2)
+    np.testing.assert_array_equal(
+        il.urban_drive(duration_s=30.0, rate_hz=5.0, seed=2).positions, traj.positions
+    )
+    se3 = il.urban_drive(duration_s=30.0, rate_hz=5.0, seed=2, se3=True)
+    assert se3.dim == 7
+    np.testing.assert_allclose(np.linalg.norm(se3.positions[:, 3:], axis=1), 1.0)
+    bad = {
+        "duration_s": 0.0, "rate_hz": -1.0, "block_m": np.nan, "city_size_m": 10.0,
+        "stop_probability": 1.5, "lane_offset_m": -2.0, "lateral_noise_m": np.inf,
+    }  # fmt: skip
+    for name, value in bad.items():
+        with raises(il.InvalidParameterError, f"{name} = "):
+            il.urban_drive(**{"duration_s": 30.0, name: value})
+    with raises(il.InvalidParameterError, "max_speed_mps = 3", "min_speed_mps"):
+        il.urban_drive(duration_s=30.0, min_speed_mps=5.0, max_speed_mps=3.0)
+    with raises(il.InvalidParameterError, "max_stop_s = 1", "min_stop_s"):
+        il.urban_drive(duration_s=30.0, min_stop_s=10.0, max_stop_s=1.0)
+    with raises(il.InvalidParameterError, "at least 2 poses"):
+        il.urban_drive(duration_s=0.1, rate_hz=1.0)
+    with pytest.raises(OverflowError) as negative:
+        il.urban_drive(duration_s=30.0, seed=-1)
+    assert "while processing 'seed'" in negative.value.__notes__
+
+
+@covers("urban_drive")
+def test_urban_drive_too_many_poses_is_an_error_not_an_abort():
+    code = (
+        "import inexact_loops as il\n"
+        "try:\n"
+        "    il.urban_drive(duration_s=1e12)\n"
+        "except il.InvalidParameterError as error:\n"
+        "    print(error)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr[-300:]
+    assert "poses" in result.stdout
+
+
+# --- files ----------------------------------------------------------------------------------------
+
+
+def write_mcap(path: Path) -> None:
+    """A JSON-encoded MCAP file: /pose (foxglove.PoseInFrame, 5 poses along x) and /chatter."""
+    from mcap.writer import Writer
+
+    with open(path, "wb") as stream:
+        writer = Writer(stream)
+        writer.start()
+        schema = writer.register_schema(
+            name="foxglove.PoseInFrame", encoding="jsonschema", data=b'{"type": "object"}'
+        )
+        pose = writer.register_channel(topic="/pose", message_encoding="json", schema_id=schema)
+        chatter = writer.register_channel(topic="/chatter", message_encoding="json", schema_id=0)
+        for k in range(5):
+            stamp_ns = (k + 1) * 10**8
+            message = {
+                "timestamp": {"sec": 0, "nsec": stamp_ns},
+                "frame_id": "map",
+                "pose": {
+                    "position": {"x": float(k), "y": 0.0, "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            }
+            data = json.dumps(message).encode()
+            writer.add_message(pose, log_time=stamp_ns, publish_time=stamp_ns, data=data)
+        writer.add_message(chatter, log_time=1, publish_time=1, data=b"{}")
+        writer.finish()
+
+
+@covers("list_topics")
+def test_list_topics_and_its_errors(tmp_path):
+    path = tmp_path / "drive.mcap"
+    write_mcap(path)
+    topics = {row["topic"]: row for row in il.list_topics(path)}
+    assert topics["/pose"] == {
+        "topic": "/pose", "schema": "foxglove.PoseInFrame", "encoding": "json", "messages": 5,
+        "start_ns": 10**8, "end_ns": 5 * 10**8, "pose_type": "foxglove.PoseInFrame",
+    }  # fmt: skip
+    assert topics["/chatter"]["pose_type"] is None
+    with raises(FileNotFoundError, "missing.mcap"):
+        il.list_topics(tmp_path / "missing.mcap")
+    text = tmp_path / "drive.txt"
+    text.write_text("0 0 0 0 0 0 0 1\n")
+    with raises(il.LoopsIOError, "drive.txt offset 0", "not an MCAP file"):
+        il.list_topics(text)
+
+
+TUM = "".join(f"{k * 0.1:.1f} {k} 0 0 0 0 0 1\n" for k in range(6))
+
+
+@covers("read_trajectory")
+def test_read_trajectory_and_its_errors(tmp_path):
+    path = tmp_path / "drive.tum"
+    path.write_text(TUM)
+    np.testing.assert_array_equal(il.read_trajectory(path).positions[:, 0], np.arange(6.0))
+    assert il.read_trajectory(str(path), metric="so3").dim == 4
+    mcap = tmp_path / "drive.mcap"
+    write_mcap(mcap)
+    np.testing.assert_allclose(il.read_trajectory(mcap).timestamps, np.arange(1, 6) * 0.1)
+    assert len(il.read_trajectory([mcap], topic="/pose", time="log")) == 5
+    with raises(FileNotFoundError, "nope.tum"):
+        il.read_trajectory(tmp_path / "nope.tum")
+    with raises(TypeError, "path must be a str or an os.PathLike", "got int"):
+        il.read_trajectory(5)
+    with raises(TypeError, "path[1] must be a str or an os.PathLike", "got float"):
+        il.read_trajectory([mcap, 1.5])
+    with raises(il.InvalidParameterError, "empty list"):
+        il.read_trajectory([])
+    with raises(il.InvalidParameterError, '"bag"', "tum"):
+        il.read_trajectory(path, format="bag")
+    with raises(il.InvalidParameterError, "drive.tum", 'metric "torus" does not fit here', "se3"):
+        il.read_trajectory(path, metric="torus")
+    with raises(ValueError, "read_trajectory takes a metric name or object, not a callable"):
+        il.read_trajectory(path, metric=lambda a, b: 0.0)
+    with raises(il.InvalidParameterError, '"wall"', "header"):
+        il.read_trajectory(mcap, time="wall")
+    with raises(il.LoopsIOError, 'no topic "/nope"', "/pose"):
+        il.read_trajectory(mcap, topic="/nope")
+    with raises(il.LoopsIOError, "/chatter", "does not read poses"):
+        il.read_trajectory(mcap, topic="/chatter")
+    kitti = tmp_path / "poses.txt"
+    kitti.write_text("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n")
+    assert il.read_trajectory(kitti, format="kitti", rate_hz=10.0).span_s == pytest.approx(0.1)
+    with raises(il.InvalidParameterError, "poses.txt", "rate_hz = 0"):
+        il.read_trajectory(kitti, format="kitti", rate_hz=0.0)
+
+
+# --- detections and clusters ----------------------------------------------------------------------
+
+
+@covers(
+    "Detections",
+    "Detections.t",
+    "Detections.t_prime",
+    "Detections.score",
+    "Detections.i",
+    "Detections.j",
+    "Detections.poses",
+)
+def test_detections_and_their_errors():
+    det = il.Detections([5.0, 1.0], [2.0, 3.0], scores=[0.5, 0.25])
+    assert det.t.tolist() == [2.0, 1.0] and det.t_prime.tolist() == [5.0, 3.0]
+    assert det.score.tolist() == [0.5, 0.25]
+    assert det.i is None and det.j is None and det.poses is None and len(det) == 2
+    assert il.Detections([1.0], [2.0]).score is None
+    with raises(il.InvalidParameterError, "no detections"):
+        il.Detections([], [])
+    with raises(il.InvalidParameterError, "t_prime", "1 values", "2 are needed"):
+        il.Detections([1.0, 2.0], [3.0])
+    with raises(il.InvalidParameterError, "detection 1", "NaN"):
+        il.Detections([1.0, np.nan], [3.0, 4.0])
+    with raises(il.InvalidParameterError, "score of detection 0", "inf"):
+        il.Detections([1.0], [3.0], scores=[np.inf])
+    with raises(ValueError, "t must be 1-dimensional", "[2, 2]"):
+        il.Detections(np.zeros((2, 2)), [3.0, 4.0])
+    with raises(TypeError, "t_prime", "<U1"):
+        il.Detections([1.0], ["a"])
+
+
+@covers("Detections.from_indices", "Detections.locate")
+def test_detections_on_a_trajectory_and_their_errors(traj, loops):
+    det = il.Detections.from_indices(loops, [5, 30], [1, 2], scores=[1.0, 2.0])
+    assert det.i.tolist() == [1, 2] and det.j.tolist() == [5, 30] and det.poses == N
+    np.testing.assert_array_equal(det.t_prime, traj.timestamps[[5, 30]])
+    located = il.Detections([0.04, 1.01], [0.26, 2.0]).locate(traj)
+    assert located.i.tolist() == [0, 10] and located.j.tolist() == [3, 20]
+    with raises(IndexError, "detection 1", "pose 50", "40 poses"):
+        il.Detections.from_indices(traj, [0, 50], [1, 2])
+    with raises(IndexError, "j[0] = -1", "negative"):
+        il.Detections.from_indices(traj, [0], [-1])
+    with raises(TypeError, "i must hold pose indices", "float64"):
+        il.Detections.from_indices(traj, [0.5], [1])
+    with raises(TypeError, "trajectory_or_loops", "got ndarray"):
+        il.Detections.from_indices(traj.positions, [0], [1])
+    with raises(il.InvalidParameterError, "detection 0 at 100 s", "outside"):
+        il.Detections([0.0], [100.0]).locate(traj)
+    with raises(TypeError, "trajectory_or_loops", "got int"):
+        il.Detections([0.0], [1.0]).locate(5)
+
+
+@covers("draw_detections")
+def test_draw_detections_and_its_errors(loops):
+    det = il.draw_detections(loops, budget=20, seed=3)
+    assert len(det) == 20 and len(set(zip(det.i.tolist(), det.j.tolist(), strict=True))) == 20
+    assert all(
+        loops.component_of(i, j) is not None and i < j for i, j in zip(det.i, det.j, strict=True)
+    )
+    assert len(il.draw_detections(loops, rate=1.0, seed=0)) == (loops.pairs - N) // 2
+    with raises(il.InvalidParameterError, "rate or budget"):
+        il.draw_detections(loops, seed=0)
+    with raises(il.InvalidParameterError, "not both", "rate=0.5", "budget=3"):
+        il.draw_detections(loops, rate=0.5, budget=3, seed=0)
+    with raises(il.InvalidParameterError, "rate = 1.5", "(0, 1]"):
+        il.draw_detections(loops, rate=1.5, seed=0)
+    with raises(il.InvalidParameterError, "budget = 100000", "pairs"):
+        il.draw_detections(loops, budget=100_000, seed=0)
+    with pytest.raises(OverflowError) as negative:
+        il.draw_detections(loops, budget=-1, seed=0)
+    assert "while processing 'budget'" in negative.value.__notes__
+
+
+@covers(
+    "cluster_detections",
+    "DetectionClusters",
+    "DetectionClusters.epsilon_s",
+    "DetectionClusters.cell_side_s",
+    "DetectionClusters.detections",
+    "DetectionClusters.labels",
+    "DetectionClusters.clusters",
+)
+def test_clusters_equal_dbscan_and_their_errors(loops):
+    det = il.draw_detections(loops, rate=0.3, seed=5)
+    clusters = il.cluster_detections(det, epsilon_s=0.35)
+    points = np.c_[det.t, det.t_prime]
+    theirs = DBSCAN(eps=0.35, min_samples=1).fit_predict(points)
+    ours = clusters.labels
+    assert (
+        len(set(zip(ours.tolist(), theirs.tolist(), strict=True)))
+        == len(set(ours.tolist()))
+        == len(set(theirs.tolist()))
+    )
+    assert clusters.epsilon_s == 0.35 and 0 < clusters.cell_side_s < 0.35 / np.sqrt(2)
+    np.testing.assert_array_equal(clusters.detections.t, det.t)
+    table = clusters.clusters
+    assert table.num_rows == len(clusters) and table["size"].sum() == len(det)
+    with raises(il.InvalidParameterError, "epsilon_s = 0"):
+        il.cluster_detections(det, epsilon_s=0.0)
+    with raises(il.InvalidParameterError, "epsilon_s = NaN"):
+        il.cluster_detections(det, epsilon_s=np.nan)
+    with raises(il.InvalidParameterError, "threads = 0"):
+        il.cluster_detections(det, threads=0)
+    with raises(TypeError, "Detections"):
+        il.cluster_detections([1.0, 2.0])
+
+
+# --- sampling -------------------------------------------------------------------------------------
+
+
+@covers("sample")
+def test_sample_errors(traj, loops, clusters):
+    with raises(il.InvalidParameterError, '"best"', "one", "rho", "alpha", "lio-sam"):
+        il.sample(clusters, "best", budget=1, seed=0)
+    with raises(il.InvalidParameterError, '"lio-sam"', "one, rho, rho-dispersed, alpha"):
+        il.sample(clusters, "lio-sam", budget=1, seed=0)
+    with raises(il.InvalidParameterError, "rate or budget"):
+        il.sample(clusters, "one", seed=0)
+    with raises(il.InvalidParameterError, "budget = 0"):
+        il.sample(clusters, "one", budget=0, seed=0)
+    with raises(il.InvalidParameterError, "rate = 2", "(0, 1]"):
+        il.sample(clusters, "alpha", rate=2.0, seed=0)
+    with raises(TypeError, "needs trajectory="):
+        il.sample(loops, "one", budget=1, seed=0)
+    with raises(TypeError, "metric= needs trajectory="):
+        il.sample(clusters, "one", budget=1, seed=0, metric="euclidean")
+    with raises(TypeError, "source must be DetectionClusters", "got Detections"):
+        il.sample(clusters.detections, "one", budget=1, seed=0)
+    other = il.Trajectory([0.0, 1.0], [0.0, 1.0])
+    with raises(il.InvalidParameterError, "different trajectories", "2 and 40 poses"):
+        il.sample(loops, "one", budget=1, seed=0, trajectory=other)
+    with raises(il.InvalidParameterError, "detection 0 at 3", "outside"):
+        il.sample(clusters, "one", budget=1, seed=0, trajectory=other)
+    with raises(il.InvalidParameterError, "threads = 0"):
+        il.sample(loops, "one", budget=1, seed=0, trajectory=traj, threads=0)
+    baselines = {
+        "lio-sam": {"lio_sam_period_s": -1.0, "lio_sam_min_age_s": np.nan},
+        "hdl-graph-slam": {
+            "hdl_keyframe_step": -1.0,
+            "hdl_min_travel": np.nan,
+            "hdl_edge_spacing": -1.0,
+        },
+        "cartographer": {"cartographer_min_gap_s": -5.0},
+        "time-gap": {"time_gap_s": np.nan},
+    }
+    for sampler, parameters in baselines.items():
+        for name, value in parameters.items():
+            with raises(il.InvalidParameterError, f"{name} = "):
+                il.sample(loops, sampler, budget=1, seed=0, trajectory=traj, **{name: value})
+
+
+@covers(
+    "Samples",
+    "Samples.sampler",
+    "Samples.groups",
+    "Samples.available",
+    "Samples.poses",
+    "Samples.warnings",
+    "Samples.t",
+    "Samples.t_prime",
+    "Samples.i",
+    "Samples.j",
+    "Samples.component",
+    "Samples.cluster",
+    "Samples.detection",
+    "Samples.distance",
+    "Samples.score",
+)
+def test_samples_columns(traj, loops, clusters):
+    samples = il.sample(loops, "one", budget=2, seed=0, trajectory=traj)
+    assert samples.sampler == "one" and samples.groups == 2 and len(samples) == 2
+    assert samples.available == (loops.pairs - N) // 2 and samples.poses == N
+    assert samples.warnings == []
+    assert sorted(samples.component.tolist()) == [0, 1]
+    for k in range(2):
+        i, j = samples.i[k], samples.j[k]
+        assert samples.t[k] == traj.timestamps[i] and samples.t_prime[k] == traj.timestamps[j]
+        assert samples.distance[k] == pytest.approx(
+            np.linalg.norm(traj.positions[i] - traj.positions[j])
+        )
+    assert (
+        (samples.cluster == -1).all() and (samples.detection == -1).all() and samples.score is None
+    )
+    of_clusters = il.sample(clusters, "alpha", rate=1.0, seed=0)
+    assert of_clusters.detection.tolist() == [0, 1, 2] and of_clusters.score.tolist() == [
+        0.1,
+        0.2,
+        0.3,
+    ]
+    assert (
+        of_clusters.i is None and np.isnan(of_clusters.distance).all() and of_clusters.poses is None
+    )
+    over = il.sample(loops, "one", budget=1, seed=0, trajectory=traj)
+    assert len(over.warnings) == 1 and "budget" in over.warnings[0]
+
+
+@covers("Samples.locate", "Samples.measure")
+def test_samples_locate_measure_and_their_errors(traj, loops, clusters):
+    samples = il.sample(clusters, "alpha", rate=1.0, seed=0)
+    located = samples.locate(loops)
+    assert located.poses == N and (located.component >= -1).all()
+    assert located.i.tolist() == [0, 10, 30]
+    measured = samples.measure(traj)
+    np.testing.assert_allclose(
+        measured.distance,
+        np.linalg.norm(traj.positions[measured.i] - traj.positions[measured.j], axis=1),
+    )
+    by_callable = samples.measure(traj, metric=lambda a, b: float(np.abs(a - b).sum()))
+    np.testing.assert_allclose(
+        by_callable.distance,
+        np.abs(traj.positions[measured.i] - traj.positions[measured.j]).sum(axis=1),
+    )
+    short = il.Trajectory([0.0, 1.0], [0.0, 1.0])
+    with raises(il.InvalidParameterError, "detection 0 at 3.5 s", "outside", "[0, 1]"):
+        samples.measure(short)
+    with raises(il.InvalidParameterError, "detection 0 at 3.5 s", "outside"):
+        samples.locate(il.find_loops(short, gamma=1.0))
+    with raises(il.InvalidParameterError, "so3", "dimension 4", "dimension 2"):
+        samples.measure(traj, metric="so3")
+    with raises(TypeError, "Loops"):
+        samples.locate(traj)
+    with pytest.raises(ZeroDivisionError):
+        samples.measure(traj, metric=lambda a, b: 1 / 0)
+
+
+@covers("Samples.to_csv", "Samples.to_json")
+def test_samples_files_and_their_errors(tmp_path, clusters):
+    samples = il.sample(clusters, "alpha", rate=1.0, seed=0)
+    csv, js = tmp_path / "s.csv", tmp_path / "s.json"
+    samples.to_csv(csv)
+    samples.to_json(js)
+    lines = csv.read_text().splitlines()
+    assert lines[0] == "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler"
+    assert len(lines) == 4
+    document = json.loads(js.read_text())
+    assert document["count"] == 3 and [s["score"] for s in document["samples"]] == [0.1, 0.2, 0.3]
+    for write, path in ((samples.to_csv, csv), (samples.to_json, js)):
+        with raises(FileExistsError, path.name, "refusing to overwrite"):
+            write(path)
+        write(path, overwrite=True)
+        with raises(FileNotFoundError, "missing"):
+            write(tmp_path / "missing" / path.name)
+
+
+@covers(
+    "sample_quality",
+    "SampleQuality",
+    "SampleQuality.samples",
+    "SampleQuality.outside",
+    "SampleQuality.components",
+    "SampleQuality.covered",
+    "SampleQuality.nontrivial_components",
+    "SampleQuality.nontrivial_covered",
+    "SampleQuality.coverage",
+    "SampleQuality.missed",
+    "SampleQuality.epsilon_s",
+    "SampleQuality.redundant",
+    "SampleQuality.redundancy",
+    "SampleQuality.median_spacing_s",
+    "SampleQuality.p3_slope",
+    "SampleQuality.p3_components",
+    "SampleQuality.per_component",
+    "SampleQuality.sample_components",
+    "SampleQuality.nearest_spacing_s",
+)
+def test_sample_quality_and_its_errors(traj, loops):
+    i, j = np.array([3, 4, 0, 1]), np.array([4, 5, N - 1, N // 2])  # two in the diagonal, one far
+    samples = il.sample(
+        il.cluster_detections(il.Detections.from_indices(traj, i, j), epsilon_s=1.0),
+        "alpha", rate=1.0, seed=0, trajectory=traj,
+    )  # fmt: skip
+    q = il.sample_quality(samples, loops, epsilon_s=0.5)
+    components = [loops.component_of(a, b) for a, b in zip(samples.i, samples.j, strict=True)]
+    assert q.samples == 4 and q.outside == components.count(None) == 1
+    assert q.components == 2 and q.covered == 2 and q.coverage == 1.0
+    assert q.nontrivial_components == 1 and q.nontrivial_covered == 1
+    assert q.missed.num_rows == 0
+    assert q.sample_components.tolist() == [-1 if c is None else c for c in components]
+    assert q.per_component.tolist() == [2, 1]
+    spacing = np.hypot(0.1, 0.1)  # the two diagonal samples, (0.3, 0.4) and (0.4, 0.5)
+    assert q.epsilon_s == 0.5 and q.redundant == 2 and q.redundancy == 0.5
+    assert q.median_spacing_s == pytest.approx(spacing)
+    np.testing.assert_allclose(q.nearest_spacing_s[[2, 3]], spacing)  # in (t, t') order
+    assert np.isnan(q.nearest_spacing_s[:2]).all()  # alone in its component; outside S_gamma
+    assert q.p3_components == 2 and q.p3_slope is not None
+    assert il.sample_quality(samples, loops).epsilon_s == 30.0
+    with raises(il.InvalidParameterError, "epsilon_s = 0"):
+        il.sample_quality(samples, loops, epsilon_s=0.0)
+    with raises(il.InvalidParameterError, "epsilon_s = -inf"):
+        il.sample_quality(samples, loops, epsilon_s=-np.inf)
+    other = il.find_loops(il.urban_drive(duration_s=60.0), gamma=10.0)
+    with raises(il.InvalidParameterError, "different trajectories"):
+        il.sample_quality(samples, other)
+    with raises(TypeError, "Samples"):
+        il.sample_quality(loops, loops)
+
+
+# --- metrics --------------------------------------------------------------------------------------
+
+
+@covers(*(f"metrics.{name}" for name in metrics.__all__), "metrics", "metrics.Metric.spec")
+def test_metric_objects_and_their_errors():
+    specs = {
+        metrics.Euclidean(): "euclidean",
+        metrics.SO3(rotation="chordal"): "so3(rotation=chordal)",
+        metrics.SE3(rotation_weight_m_per_rad=2.5): "se3(rotation_weight_m_per_rad=2.5)",
+        metrics.SE3Rotation(): "se3_rotation",
+        metrics.SE2(rotation_weight_m_per_rad=1.0): "se2(rotation_weight_m_per_rad=1.0)",
+        metrics.Torus(): "torus",
+        metrics.Sphere(radius=2.0): "sphere(radius=2.0)",
+        metrics.Haversine(): "haversine",
+        metrics.Angular(): "angular",
+    }
+    assert {type(m).__name__ for m in specs} | {"Metric"} == set(metrics.__all__)
+    for metric, spec in specs.items():
+        assert metric.spec == str(metric) == spec
+        assert isinstance(metric, metrics.Metric)
+    t = np.arange(N) * 0.1
+    points = {
+        "so3": il.Trajectory.so3(t, QUATERNIONS.as_quat()),
+        "se3": il.Trajectory.se3(t, np.zeros((N, 3)), QUATERNIONS.as_quat()),
+        "se2": il.Trajectory.se2(t, np.c_[np.zeros((N, 2)), np.linspace(0, 3, N)]),
+        "torus": il.Trajectory.torus(t, np.linspace(0, 3, N)),
+        "sphere": il.Trajectory.sphere_from_lat_lon(t, np.c_[np.linspace(0, 30, N), np.zeros(N)]),
+        "haversine": il.Trajectory.gnss(t, np.c_[np.linspace(0, 0.01, N), np.zeros((N, 2))]),
+        "angular": il.Trajectory.descriptors(t, np.c_[np.ones(N), np.linspace(0, 1, N)]),
+        "euclidean": il.Trajectory(*ring()),
+    }
+    for metric in specs:
+        traj = points[metric.spec.split("(")[0].removesuffix("_rotation")]
+        assert il.find_loops(traj, gamma=0.5, metric=metric).metric.startswith(
+            metric.spec.split("(")[0]
+        )
+    with pytest.raises(TypeError, match="rotation_weight_m_per_rad"):
+        metrics.SE3()  # type: ignore[call-arg]
+    with raises(il.InvalidParameterError, '"nope"', "geodesic", "chordal"):
+        il.find_loops(points["so3"], gamma=0.5, metric=metrics.SO3(rotation="nope"))  # type: ignore[arg-type]
+    with raises(il.InvalidParameterError, "sphere(radius=-1.0)", "radius"):
+        il.find_loops(points["sphere"], gamma=0.5, metric=metrics.Sphere(radius=-1.0))
+
+
+# --- the list -------------------------------------------------------------------------------------
+
+
+def test_every_public_name_is_covered():
+    public = public_names()
+    missing = sorted(public - set(COVERED) - set(ELSEWHERE))
+    assert not missing, f"public names without a test: {missing}"
+    stale = sorted((set(COVERED) | set(ELSEWHERE)) - public)
+    assert not stale, f"tests for names that are not public: {stale}"
+    for name, (file, test) in ELSEWHERE.items():
+        assert f"def {test}(" in (TESTS.parent / file).read_text(), (name, file, test)
