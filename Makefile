@@ -4,9 +4,15 @@ PIP := $(PYTHON) -m pip
 
 .PHONY: demo test test-rust test-python python lint bench compare fmt
 
-## Build the CLI and run it on the built-in 2.1 h urban drive.
+## Build the CLI and run it on the built-in 2.1 h urban drive; then a batch over three
+## synthetic MCAP logs, with reports in demo/results/index.html.
+LOOPS := cargo run --release --quiet -p loops-cli --
 demo:
-	cargo run --release --quiet -p loops-cli -- demo
+	$(LOOPS) demo
+	$(LOOPS) synth demo/logs --count 3 --duration-s 3600 --force
+	$(LOOPS) run demo/logs/urban-drive-0.mcap demo/logs/urban-drive-1.mcap demo/logs/urban-drive-2.mcap \
+		--gamma 40 --budget 2000 --out demo/results --force
+	@echo "open demo/results/index.html"
 
 ## Every test: Rust (unit, property, doc) and Python (pytest, doctests, stubs). The Python
 ## packages go in first: the Rust MCAP tests write their fixtures with the official Python writers.

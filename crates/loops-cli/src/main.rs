@@ -3,9 +3,15 @@
 //! `main` parses, calls [`run`], prints errors as one line on stderr and exits 2 on error,
 //! 0 on success or a closed pipe. Everything else lives in `loops-core` and `loops-io`.
 
+mod guard;
+mod html;
 mod input;
 mod output;
+mod progress;
+mod report;
+mod run;
 mod sample;
+mod synth;
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -54,6 +60,30 @@ enum Command {
         after_help = "Examples:\n  loops demo\n  loops demo --duration-s 600 --seed 3 --json demo.json"
     )]
     Demo(DemoArgs),
+    /// Process many pose logs: per log its components, samples, loop durations, a summary and
+    /// an HTML report, in a folder of its own; for the batch an index page and a summary.
+    /// Logs run in parallel; one that fails is reported and the others go on (exit code 1).
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Examples:\n  \
+        loops run logs/*.mcap --gamma 40 --out results\n  \
+        loops run logs/*.mcap --gamma 40 --sampler rho --budget 2000 --out results --force\n  \
+        loops run a.mcap b.tum --gamma 0.5 --metric 'se3(rotation_weight_m_per_rad=1)' --out results --json\n  \
+        loops run night/*.mcap --topic /odom --gamma 10 --out night-results --quiet\n\n\
+        Per log (results/<log>/): components.csv, samples.csv, loop_duration.csv, summary.json,\n\
+        report.html. For the batch: results/index.html and results/summary.json. Ctrl-C keeps the\n\
+        logs already finished and removes the rest; nothing half-written is left."
+    )]
+    Run(run::RunArgs),
+    /// Write seeded synthetic urban drives (a vehicle on a Manhattan grid) as MCAP or TUM logs.
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Examples:\n  loops synth drive.mcap\n  \
+        loops synth drive.tum --duration-s 600 --seed 7\n  \
+        loops synth logs --count 20 --duration-s 900    # logs/urban-drive-0.mcap ... urban-drive-19.mcap\n  \
+        loops synth big.mcap --duration-s 100800 --city-size-m 10000"
+    )]
+    Synth(synth::SynthArgs),
 }
 
 #[derive(Debug, Args)]
@@ -163,8 +193,12 @@ struct DemoArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(error) = guard::install() {
+        eprintln!("loops: error: {error:#}");
+        return ExitCode::from(2);
+    }
     match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
         Err(error) => {
             eprintln!("loops: error: {error:#}");
@@ -179,13 +213,16 @@ fn is_broken_pipe(error: &anyhow::Error) -> bool {
     })
 }
 
-fn run(cli: Cli) -> Result<()> {
+fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Components(args) => components(args),
         Command::Demo(args) => demo(args),
         Command::Sample(args) => sample::sample(args),
         Command::Info(args) => info(args),
+        Command::Run(args) => return run::run(args),
+        Command::Synth(args) => synth::synth(args),
     }
+    .map(|()| ExitCode::SUCCESS)
 }
 
 fn components(args: ComponentsArgs) -> Result<()> {
@@ -220,7 +257,7 @@ fn report(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64, out: &Ou
     stdout.flush()?;
     if let Some(path) = &out.json {
         let json = output::json_report(source, traj, loops)?;
-        output::write_atomically(path, json.as_bytes(), out.force)
+        guard::write_atomically(path, json.as_bytes(), out.force)
             .with_context(|| format!("writing {}", path.display()))?;
         writeln!(stdout, "wrote {}", path.display())?;
     }

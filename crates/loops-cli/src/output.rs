@@ -1,9 +1,8 @@
 //! What `loops` prints and writes: the terminal table, the JSON report, atomic file writes.
 
 use std::io::Write;
-use std::path::Path;
 
-use anyhow::{Context, Result, bail};
+use anyhow::Result;
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
 use serde::Serialize;
 
@@ -134,20 +133,4 @@ pub(crate) fn json_report(source: &str, traj: &Trajectory, loops: &Loops) -> Res
             .collect(),
     };
     Ok(serde_json::to_string_pretty(&report)? + "\n")
-}
-
-/// Writes `bytes` to a temporary file beside `path`, then renames it over `path`: readers never
-/// see a partial file. An existing `path` is replaced only with `force`.
-pub(crate) fn write_atomically(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
-    if path.exists() && !force {
-        bail!("{} exists; pass --force to replace it", path.display());
-    }
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().context("the output path has no file name")?;
-    let temp = dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
-    let result = std::fs::write(&temp, bytes).and_then(|()| std::fs::rename(&temp, path));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&temp);
-    }
-    Ok(result?)
 }

@@ -21,27 +21,13 @@ pub(crate) struct SampleArgs {
     input: crate::input::InputArgs,
     #[command(flatten)]
     engine: EngineArgs,
-    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
-    /// lio-sam, hdl-graph-slam, cartographer, time-gap.
-    #[arg(long)]
-    sampler: String,
-    /// Exactly this many samples (at least one per component when it allows).
-    #[arg(long, conflicts_with = "rate", required_unless_present = "rate")]
-    budget: Option<usize>,
-    /// The sampler's rate instead of a budget (per component, per row, or per candidate).
-    #[arg(long)]
-    rate: Option<f64>,
-    /// Seed of the random choices.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    #[command(flatten)]
+    sampling: SamplingArgs,
     /// Sample from these detections (`t,t_prime[,score]` rows, or TUC `loop t1 t2 score`
     /// lines), clustered in the (t, t') plane with --epsilon-s; without it, sample from the
     /// exact loop components of S_gamma.
     #[arg(long, value_name = "PATH")]
     detections: Option<PathBuf>,
-    /// Radius of the detection graph and of the P2 redundancy measure, seconds.
-    #[arg(long, value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
-    epsilon_s: f64,
     /// Write the candidate pairs here: .csv or .json (atomically; kept unless --force).
     #[arg(long, value_name = "PATH")]
     out: Option<PathBuf>,
@@ -54,21 +40,51 @@ pub(crate) struct SampleArgs {
     force: bool,
 }
 
+/// How to sample: the flags `loops sample` and `loops run` share, with the core's defaults.
+#[derive(Debug, Args)]
+pub(crate) struct SamplingArgs {
+    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
+    /// lio-sam, hdl-graph-slam, cartographer, time-gap.
+    #[arg(long, default_value_t = SamplerKind::default().name().to_owned())]
+    pub(crate) sampler: String,
+    /// Exactly this many samples (at least one per component when it allows) [default: 1000
+    /// without --rate].
+    #[arg(long, conflicts_with = "rate")]
+    pub(crate) budget: Option<usize>,
+    /// The sampler's rate instead of a budget (per component, per row, or per candidate).
+    #[arg(long)]
+    pub(crate) rate: Option<f64>,
+    /// Seed of the random choices.
+    #[arg(long, default_value_t = Sampler::DEFAULT_SEED)]
+    pub(crate) seed: u64,
+    /// Radius of the detection graph and of the P2 redundancy measure, seconds.
+    #[arg(long = "epsilon-s", visible_alias = "epsilon", value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
+    pub(crate) epsilon_s: f64,
+}
+
+impl SamplingArgs {
+    /// The sampler these flags ask for.
+    pub(crate) fn sampler(&self) -> Result<Sampler> {
+        let kind: SamplerKind = self.sampler.parse()?;
+        let size = SampleSize::or_default(self.rate, self.budget)?;
+        Ok(Sampler::new(kind, size, self.seed))
+    }
+}
+
 pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let spec: MetricSpec = args.engine.metric.parse()?;
-    let kind: SamplerKind = args.sampler.parse()?;
-    let size = SampleSize::from_rate_or_budget(args.rate, args.budget)?;
+    let sampler = args.sampling.sampler()?;
+    let epsilon_s = args.sampling.epsilon_s;
     let output_format = args.out.as_deref().map(samples_format).transpose()?;
     let (table, traj) = args.input.read_table(&args.file, &spec)?;
     let gamma = args.engine.gamma;
-    let sampler = Sampler::new(kind, size, args.seed);
     let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
         let loops = spec.find_loops(&traj, gamma)?;
         let samples = match &args.detections {
             None => spec.sample_loops(&traj, &loops, &sampler)?,
             Some(path) => {
                 let detections = loops_io::read_detections(path)?.to_detections(&traj)?;
-                let clusters = cluster_detections(&detections, args.epsilon_s)?;
+                let clusters = cluster_detections(&detections, epsilon_s)?;
                 let mut samples = sample_clusters(&clusters, &sampler)?;
                 samples.locate(&loops)?;
                 samples
@@ -76,17 +92,19 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         };
         Ok((loops, samples))
     })??;
-    let quality = sample_quality(&samples, &loops, args.epsilon_s)?;
+    let quality = sample_quality(&samples, &loops, epsilon_s)?;
     let mut stdout = std::io::stdout().lock();
     write_summary(&mut stdout, &args.file, &traj, &loops, &samples, &quality)?;
     if let (Some(path), Some(format)) = (&args.out, output_format) {
-        loops_io::write_samples(path, &samples, format, args.force)?;
+        crate::guard::with_writes(|_| loops_io::write_samples(path, &samples, format, args.force))?;
         writeln!(stdout, "wrote {} samples to {}", samples.len(), path.display())?;
     }
     if let Some(path) = &args.g2o {
         let pairs: Vec<(usize, usize)> = samples.rows().iter().filter_map(|s| s.pair).map(|[i, j]| (i, j)).collect();
         let options = loops_io::G2oOptions::default().overwrite(args.force);
-        loops_io::write_g2o_edges(path, &table, &pairs, &options)?;
+        crate::guard::with_writes(|_| {
+            loops_io::write_g2o_edges(path, &table, &pairs, &options).map_err(anyhow::Error::from)
+        })?;
         writeln!(stdout, "wrote {} g2o edges to {}", pairs.len(), path.display())?;
     }
     Ok(())

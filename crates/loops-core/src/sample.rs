@@ -41,11 +41,13 @@ use crate::trajectory::Trajectory;
 /// assert!(err.to_string().contains("one, rho, rho-dispersed, alpha"));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum SamplerKind {
     /// σ_1: a constant number per group.
     One,
-    /// σ_ρ: a constant number per group per trajectory point.
+    /// σ_ρ: a constant number per group per trajectory point. The default: it covers every
+    /// component (P1) and samples large ones more (P3) without oversampling them (P2).
+    #[default]
     Rho,
     /// σ_ρ spread along each group, preferring each row's closest pair.
     RhoDispersed,
@@ -131,6 +133,31 @@ pub enum SampleSize {
 }
 
 impl SampleSize {
+    /// The budget used when neither a rate nor a budget is given (command-line defaults): enough
+    /// for at least one sample per component of a few hours of driving.
+    pub const DEFAULT_BUDGET: usize = 1_000;
+
+    /// The size from an optional rate or budget: at most one of them, and
+    /// [`Budget`](Self::Budget)`(`[`DEFAULT_BUDGET`](Self::DEFAULT_BUDGET)`)` without either.
+    ///
+    /// # Errors
+    /// [`Error::SampleSizeChoice`] for both.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::SampleSize;
+    /// assert_eq!(SampleSize::or_default(None, None)?, SampleSize::Budget(SampleSize::DEFAULT_BUDGET));
+    /// assert_eq!(SampleSize::or_default(Some(0.5), None)?, SampleSize::Rate(0.5));
+    /// assert!(SampleSize::or_default(Some(0.5), Some(10)).is_err());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn or_default(rate: Option<f64>, budget: Option<usize>) -> Result<Self> {
+        match (rate, budget) {
+            (None, None) => Ok(Self::Budget(Self::DEFAULT_BUDGET)),
+            _ => Self::from_rate_or_budget(rate, budget),
+        }
+    }
+
     /// The size from a rate or a budget, given as options (as a command line or keyword
     /// arguments have them): exactly one must be given.
     ///
@@ -185,6 +212,9 @@ pub struct Sampler {
 }
 
 impl Sampler {
+    /// The seed used when none is given (command-line defaults).
+    pub const DEFAULT_SEED: u64 = 0;
+
     /// A sampler with the default baseline parameters.
     pub fn new(kind: SamplerKind, size: SampleSize, seed: u64) -> Self {
         Self { kind, size, seed, baseline: BaselineParams::default() }

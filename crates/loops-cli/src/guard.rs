@@ -1,0 +1,143 @@
+//! Output files that are whole or absent, even when the user presses Ctrl-C.
+//!
+//! Every write of `loops` goes through [`with_writes`], which holds one process-wide lock while a
+//! file is written to a temporary name and renamed into place, and while a log's staging folder
+//! is renamed to its final name. The SIGINT/SIGTERM handler takes the same lock, so it runs
+//! between writes: it removes the staging folders of logs still in progress (and folders
+//! `loops` created that stayed empty), says so, and exits with 130. What is left is what was
+//! finished: whole files and whole per-log folders.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+use anyhow::{Context, Result, bail};
+
+/// Exit code after an interrupt (128 + SIGINT), as shells report it.
+pub(crate) const INTERRUPTED: u8 = 130;
+
+/// What the interrupt handler must clean up.
+#[derive(Debug, Default)]
+pub(crate) struct Writes {
+    /// Staging folders of logs in progress, removed on interrupt.
+    staged: Vec<PathBuf>,
+    /// Folders `loops` created, removed on interrupt if still empty (innermost first).
+    created: Vec<PathBuf>,
+}
+
+static WRITES: Mutex<Writes> = Mutex::new(Writes { staged: Vec::new(), created: Vec::new() });
+
+fn lock() -> MutexGuard<'static, Writes> {
+    // A panic while writing leaves the list as it was: still right to clean up.
+    WRITES.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// Runs `f` while no interrupt can clean up: for one file write or one rename.
+pub(crate) fn with_writes<R>(f: impl FnOnce(&mut Writes) -> R) -> R {
+    f(&mut lock())
+}
+
+/// Installs the SIGINT/SIGTERM handler (once per process).
+pub(crate) fn install() -> Result<()> {
+    ctrlc::set_handler(|| {
+        let writes = lock();
+        let mut removed = 0;
+        for dir in &writes.staged {
+            if std::fs::remove_dir_all(dir).is_ok() {
+                removed += 1;
+            }
+        }
+        for dir in writes.created.iter().rev() {
+            let _ = std::fs::remove_dir(dir);
+        }
+        if removed == 0 {
+            eprintln!("loops: interrupted");
+        } else {
+            eprintln!("loops: interrupted; removed {removed} unfinished log folder(s), kept the finished ones");
+        }
+        std::process::exit(i32::from(INTERRUPTED));
+    })
+    .context("installing the Ctrl-C handler")
+}
+
+impl Writes {
+    /// Creates `dir` (and its missing parents), remembering the ones it created.
+    pub(crate) fn create_dir(&mut self, dir: &Path) -> Result<()> {
+        let mut missing = Vec::new();
+        let mut cursor = Some(dir);
+        while let Some(path) = cursor.filter(|p| !p.as_os_str().is_empty() && !p.exists()) {
+            missing.push(path.to_path_buf());
+            cursor = path.parent();
+        }
+        for path in missing.into_iter().rev() {
+            std::fs::create_dir(&path).with_context(|| format!("creating {}", path.display()))?;
+            self.created.push(path);
+        }
+        Ok(())
+    }
+
+    /// Creates a staging folder, removed on interrupt until [`commit`](Self::commit)ted.
+    pub(crate) fn stage(&mut self, dir: &Path) -> Result<()> {
+        if dir.exists() {
+            std::fs::remove_dir_all(dir).with_context(|| format!("removing the stale {}", dir.display()))?;
+        }
+        std::fs::create_dir(dir).with_context(|| format!("creating {}", dir.display()))?;
+        self.staged.push(dir.to_path_buf());
+        Ok(())
+    }
+
+    /// Removes a staging folder (after a failure).
+    pub(crate) fn discard(&mut self, dir: &Path) {
+        let _ = std::fs::remove_dir_all(dir);
+        self.staged.retain(|d| d != dir);
+    }
+
+    /// Renames the staging folder `staged` to `dir`. An existing `dir` is replaced only with
+    /// `force`, and only when it is a folder `loops run` wrote (it holds `marker`): never a file
+    /// or folder of the user's.
+    pub(crate) fn commit(&mut self, staged: &Path, dir: &Path, force: bool, marker: &str) -> Result<()> {
+        if dir.exists() || dir.is_symlink() {
+            if !force {
+                bail!("{} exists; pass --force to replace it", dir.display());
+            }
+            if !dir.is_dir() || dir.is_symlink() || !dir.join(marker).is_file() {
+                bail!("{} exists and is not an output of `loops run` (no {marker}); not replacing it", dir.display());
+            }
+            let old = dir.with_file_name(format!(
+                ".{}.old-{}",
+                dir.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
+                std::process::id()
+            ));
+            std::fs::rename(dir, &old).with_context(|| format!("moving the old {} aside", dir.display()))?;
+            let renamed = std::fs::rename(staged, dir);
+            if let Err(error) = renamed {
+                let _ = std::fs::rename(&old, dir);
+                return Err(error).with_context(|| format!("renaming {} to {}", staged.display(), dir.display()));
+            }
+            let _ = std::fs::remove_dir_all(&old);
+        } else {
+            std::fs::rename(staged, dir)
+                .with_context(|| format!("renaming {} to {}", staged.display(), dir.display()))?;
+        }
+        self.staged.retain(|d| d != staged);
+        Ok(())
+    }
+}
+
+/// Writes `bytes` to a temporary file beside `path`, then renames it over `path`: readers never
+/// see a partial file, and an interrupt leaves either the old file or the new one. An existing
+/// `path` is replaced only with `force`.
+pub(crate) fn write_atomically(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
+    with_writes(|_| {
+        if (path.exists() || path.is_symlink()) && !force {
+            bail!("{} exists; pass --force to replace it", path.display());
+        }
+        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let name = path.file_name().context("the output path has no file name")?;
+        let temp = dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
+        let result = std::fs::write(&temp, bytes).and_then(|()| std::fs::rename(&temp, path));
+        if result.is_err() {
+            let _ = std::fs::remove_file(&temp);
+        }
+        result.with_context(|| format!("writing {}", path.display()))
+    })
+}

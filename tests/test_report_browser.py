@@ -1,0 +1,171 @@
+"""The per-log report of `loops run`, rendered by headless Chromium: every figure is laid out
+and drawn, the components table matches components.csv, and nothing is fetched from the network.
+A screenshot of the rendered page is kept as a test artifact.
+
+Chromium is Debian's `chromium` package (`.ci/run` installs it); where it is missing the test
+is skipped with a message saying so.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import json
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+ARTIFACTS = Path(os.environ.get("LOOPS_TEST_ARTIFACTS", ROOT / "target" / "test-artifacts"))
+FIGURES = {"loop-duration", "pairwise-distance", "sampled-pairs", "samples-per-component"}
+
+# Loads the report in a same-folder iframe and writes what the browser laid out and decoded
+# into the page, for --dump-dom to print.
+CHECK_PAGE = """<!DOCTYPE html><html><body>
+<iframe id="report" src="REPORT" style="width:1400px;height:4000px"></iframe>
+<script>
+document.getElementById("report").addEventListener("load", () => {
+  const doc = document.getElementById("report").contentDocument;
+  const size = (e) => { const r = e.getBoundingClientRect(); return [r.width, r.height]; };
+  const figures = [...doc.querySelectorAll(".figure")].map((f) => ({
+    name: f.dataset.figure,
+    size: size(f),
+    images: [...f.querySelectorAll("img")].map((i) => ({
+      complete: i.complete, natural: [i.naturalWidth, i.naturalHeight], size: size(i) })),
+    svgs: [...f.querySelectorAll("svg")].map((s) => ({
+      size: size(s),
+      marks: s.querySelectorAll("path, line, polyline, polygon, circle, rect").length })),
+  }));
+  const table = doc.getElementById("components");
+  const text = (c) => c.textContent.trim();
+  const header = table ? [...table.querySelectorAll("thead th")].map(text) : [];
+  const rows = table ? [...table.querySelectorAll("tbody tr")].map(
+    (r) => [...r.cells].map(text)) : [];
+  const out = document.createElement("pre");
+  out.id = "result";
+  out.textContent = JSON.stringify({ title: doc.title, figures, header, rows });
+  document.body.appendChild(out);
+});
+</script></body></html>
+"""
+
+
+def chromium() -> str:
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        path = shutil.which(name)
+        if path:
+            return path
+    pytest.skip(
+        "headless Chromium is not installed (Debian: apt-get install chromium; .ci/run does it): "
+        "the rendered report is not checked"
+    )
+
+
+def browse(browser: str, *args: str) -> subprocess.CompletedProcess[str]:
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--mute-audio"]
+    flags += ["--no-first-run", "--disable-extensions", "--allow-file-access-from-files"]
+    return subprocess.run(
+        [browser, *flags, *args], capture_output=True, text=True, timeout=180, check=True
+    )
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> Path:
+    """A 20 min drive through `loops run`: its output folder."""
+    root = tmp_path_factory.mktemp("report")
+    log = root / "drive <&> 20min.mcap"  # a name that needs escaping
+    run = [loops_cli, "synth", log, "--duration-s", "1200", "--seed", "3"]
+    subprocess.run(run, check=True, capture_output=True)
+    out = root / "results"
+    args = [loops_cli, "run", log, "--gamma", "40", "--budget", "400", "--out", out]
+    subprocess.run(args, check=True, capture_output=True)
+    return out / log.stem
+
+
+def test_report_is_self_contained(report: Path) -> None:
+    page = (report / "report.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    fetched = re.findall(r"""(?:src|href)\s*=\s*["']?\s*(?:https?:)?//""", page)
+    assert not fetched, "the report must not load anything from the network"
+    assert "@import" not in page and "<link" not in page
+    assert "drive &lt;&amp;&gt; 20min" in page and "drive <&> 20min" not in page
+
+
+def test_report_renders_in_chromium(report: Path) -> None:
+    browser = chromium()
+    check = report / "check.html"
+    check.write_text(CHECK_PAGE.replace("REPORT", "report.html"))
+    dumped = browse(
+        browser,
+        "--virtual-time-budget=15000",
+        "--window-size=1440,4200",
+        "--dump-dom",
+        check.as_uri(),
+    ).stdout
+    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
+    assert found, f"the check script did not run: {dumped[:2000]}"
+    page = json.loads(html.unescape(found.group(1)))
+    assert "drive <&> 20min" in page["title"]
+
+    figures = {f["name"]: f for f in page["figures"]}
+    assert set(figures) == FIGURES, figures.keys()
+    for name, figure in figures.items():
+        width, height = figure["size"]
+        assert width > 200 and height > 150, (name, figure["size"])
+        assert figure["svgs"] or figure["images"], f"{name} draws nothing"
+        for image in figure["images"]:
+            assert image["complete"] and min(image["natural"]) > 0, (name, image)
+            assert min(image["size"]) > 50, (name, image)
+        drawn = [min(svg["size"]) for svg in figure["svgs"]] + [
+            min(i["size"]) for i in figure["images"]
+        ]
+        assert max(drawn) > 150, (name, figure)  # the plot itself (legend swatches are small)
+        assert sum(svg["marks"] for svg in figure["svgs"]) + len(figure["images"]) > 5, name
+
+    # The table: a row per component, the same numbers as components.csv.
+    with (report / "components.csv").open(newline="") as f:
+        expected = list(csv.DictReader(f))
+    assert len(page["rows"]) == len(expected) > 1
+    header = page["header"]
+    column = {name: header.index(name) for name in ("id", "trivial", "area_s2", "pairs", "holes")}
+    t0 = json.loads((report / "summary.json").read_text())["t0_s"]
+    for row, want in zip(page["rows"], expected, strict=True):
+        assert int(row[column["id"]]) == int(want["id"])
+        assert row[column["trivial"]] in ("yes", "no", "true", "false")
+        assert (row[column["trivial"]] in ("yes", "true")) == (want["trivial"] == "true")
+        assert int(row[column["pairs"]].replace(",", "")) == int(want["pairs"])
+        assert int(row[column["holes"]]) == int(want["holes"])
+        shown = float(row[column["area_s2"]].replace(",", ""))
+        assert shown == pytest.approx(float(want["area_s2"]), rel=1e-3, abs=0.06)
+        if "samples" in header:
+            assert int(row[header.index("samples")]) == int(want["samples"])
+        if "t_min_s" in header:
+            start = float(row[header.index("t_min_s")])
+            assert start == pytest.approx(float(want["t_min_s"]) - t0, abs=0.06)
+
+
+def test_report_screenshot_is_kept_and_not_blank(report: Path) -> None:
+    browser = chromium()
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    shot = ARTIFACTS / "report.png"
+    shot.unlink(missing_ok=True)
+    browse(
+        browser,
+        "--virtual-time-budget=15000",
+        "--window-size=1440,3600",
+        f"--screenshot={shot}",
+        (report / "report.html").as_uri(),
+    )
+    assert shot.exists(), "Chromium wrote no screenshot"
+    image = pytest.importorskip("matplotlib.image").imread(shot)
+    pixels = np.asarray(image)[..., :3]
+    ink = (pixels.max(axis=2) - pixels.min(axis=2) > 0.1) | (pixels.mean(axis=2) < 0.6)
+    assert ink.mean() > 0.02, "the rendered page is nearly blank"
+    # Colour in the figures (viridis-coloured path, distance image), not only black text.
+    colourful = pixels.max(axis=2) - pixels.min(axis=2) > 0.25
+    assert colourful.mean() > 0.005
