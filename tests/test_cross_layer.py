@@ -1,7 +1,6 @@
 """The same input through the CLI, the Python API and the file reader gives the same answer."""
 
 import json
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -14,13 +13,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def loops_binary() -> Path:
-    """The debug `loops` binary, built if needed (cargo knows whether it is up to date)."""
-    cargo = shutil.which("cargo")
-    if cargo is None:
-        pytest.skip("cargo is not installed: the CLI cannot be built")
-    subprocess.run([cargo, "build", "--quiet", "-p", "loops-cli"], cwd=ROOT, check=True)
-    return ROOT / "target" / "debug" / "loops"
+def loops_binary(loops_cli: Path) -> Path:
+    """The debug `loops` binary (the shared ``loops_cli`` fixture of conftest.py)."""
+    return loops_cli
 
 
 def write_tum(path: Path, traj: il.Trajectory) -> None:
