@@ -155,12 +155,9 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     let start = Instant::now();
     let spec: MetricSpec = args.engine.metric.parse()?;
     let sampler = args.sampling.sampler()?;
-    if !(args.engine.gamma > 0.0 && args.engine.gamma.is_finite()) {
-        bail!("--gamma must be a positive distance, got {}", args.engine.gamma);
-    }
-    if !(args.sampling.epsilon_s > 0.0 && args.sampling.epsilon_s.is_finite()) {
-        bail!("--epsilon-s must be a positive number of seconds, got {}", args.sampling.epsilon_s);
-    }
+    // Refused once, before any log is read, rather than once per log.
+    loops_core::check_gamma(args.engine.gamma)?;
+    loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
     check_out(&args.out, args.force)?;
     let jobs = jobs(&args.logs, &args.out)?;
     guard::with_writes(|writes| writes.create_dir(&args.out))?;

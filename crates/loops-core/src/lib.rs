@@ -56,7 +56,7 @@ pub use cluster::{DetectionCluster, DetectionClusters, cluster_detections};
 pub use component::LoopComponent;
 pub use detection::{Detection, Detections, Timeline};
 pub use error::{Error, Result};
-pub use loops::{Loops, Warning, find_loops};
+pub use loops::{Loops, Warning, check_gamma, find_loops};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
     angle_difference,
@@ -64,7 +64,7 @@ pub use manifold::{
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric, MetricSpec};
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
-pub use quality::{DEFAULT_EPSILON_S, MissedComponent, SampleQuality, sample_quality};
+pub use quality::{DEFAULT_EPSILON_S, MissedComponent, SampleQuality, check_epsilon_s, sample_quality};
 pub use sample::{Sample, SampleSize, SampleWarning, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
 pub use sublevel::{Run, SublevelSet};
 pub use synth::{SyntheticDrive, UrbanDrive};

@@ -55,6 +55,21 @@ pub struct Loops {
     warnings: Vec<Warning>,
 }
 
+/// Checks a distance threshold γ: positive and finite. Front ends call it to refuse a bad γ
+/// before any work; the engine calls it too.
+///
+/// # Errors
+/// [`Error::InvalidGamma`] otherwise.
+///
+/// # Examples
+/// ```
+/// assert!(loops_core::check_gamma(40.0).is_ok());
+/// assert!(loops_core::check_gamma(-1.0).is_err());
+/// ```
+pub fn check_gamma(gamma: f64) -> Result<()> {
+    if gamma.is_finite() && gamma > 0.0 { Ok(()) } else { Err(Error::InvalidGamma(gamma)) }
+}
+
 /// Finds every inexact loop of `traj` under `metric` at threshold `gamma` (the metric's unit),
 /// exactly, and partitions them into loop components.
 ///

@@ -21,6 +21,23 @@ pub struct MissedComponent {
 /// The ε of the paper's experiment, seconds: the default detection-graph radius and P2 radius.
 pub const DEFAULT_EPSILON_S: f64 = 30.0;
 
+/// Checks an ε in seconds (detection-graph radius, P2 radius): positive and finite. Front ends
+/// call it to refuse a bad ε before any work.
+///
+/// # Errors
+/// [`Error::InvalidParameter`] otherwise.
+pub fn check_epsilon_s(epsilon_s: f64) -> Result<()> {
+    if epsilon_s.is_finite() && epsilon_s > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter {
+            name: "epsilon_s",
+            value: epsilon_s,
+            expected: "a positive finite duration, seconds",
+        })
+    }
+}
+
 /// P1, P2 and P3 of a sample (paper, Sec. 5.2).
 ///
 /// Components count when they hold at least one pair (i, j) with i < j (a component made of a
@@ -98,13 +115,7 @@ impl SampleQuality {
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn sample_quality(samples: &Samples, loops: &Loops, epsilon_s: f64) -> Result<SampleQuality> {
-    if !(epsilon_s.is_finite() && epsilon_s > 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "epsilon_s",
-            value: epsilon_s,
-            expected: "a positive finite duration, seconds",
-        });
-    }
+    check_epsilon_s(epsilon_s)?;
     let pairs = samples.pairs_on(loops.timestamps_s())?;
     let components = loops.components();
     let mut samplable = vec![false; components.len()];

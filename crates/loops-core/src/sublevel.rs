@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use crate::ball_tree::{BallTree, Leaf};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
 
@@ -77,11 +77,9 @@ impl SublevelSet {
     /// every cell of runs off the diagonal.
     ///
     /// # Errors
-    /// [`Error::InvalidGamma`] when γ is not positive and finite; the metric's dimension error.
+    /// [`Error::InvalidGamma`](crate::Error::InvalidGamma) when γ is not positive and finite; the metric's dimension error.
     pub fn compute<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
-        if !(gamma.is_finite() && gamma > 0.0) {
-            return Err(Error::InvalidGamma(gamma));
-        }
+        crate::loops::check_gamma(gamma)?;
         metric.validate(traj)?;
         let n = traj.len();
         let arc = ArcLength::new(traj, metric);
@@ -123,9 +121,7 @@ impl SublevelSet {
     /// # Errors
     /// As [`SublevelSet::compute`].
     pub fn brute_force<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
-        if !(gamma.is_finite() && gamma > 0.0) {
-            return Err(Error::InvalidGamma(gamma));
-        }
+        crate::loops::check_gamma(gamma)?;
         metric.validate(traj)?;
         let n = traj.len();
         let mut set = Self { gamma, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };
@@ -385,6 +381,7 @@ fn close_run<M: Metric + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::Error;
     use crate::metric::Euclidean;
 
     fn line(xs: &[f64]) -> Trajectory {

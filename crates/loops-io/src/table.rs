@@ -178,9 +178,8 @@ impl PoseTable {
     /// length name their line (closer ones are normalised: files often print 4 decimals).
     pub fn to_trajectory_for(&self, metric: &loops_core::MetricSpec, axes: Option<[usize; 2]>) -> Result<Trajectory> {
         use loops_core::MetricSpec as M;
-        let unsupported = |expected: &'static str| {
-            self.locate(Error::MetricMismatch { metric: metric.to_string(), expected })
-        };
+        let unsupported =
+            |expected: &'static str| self.locate(Error::MetricMismatch { metric: metric.to_string(), expected });
         match (metric, axes) {
             (M::Euclidean, None) => self.to_trajectory(),
             (M::Euclidean, Some(axes)) => self.to_trajectory_plane(axes),

@@ -16,8 +16,6 @@ pub(crate) enum Failure {
     Core(loops_core::Error),
     Io(Box<loops_io::IoError>),
     Write(loops_io::WriteError),
-    /// A parameter that does not fit, reworded by the bindings to name it.
-    InvalidParameter(String),
     Panic(String),
 }
 
@@ -59,7 +57,6 @@ impl From<Failure> for PyErr {
                     _ => LoopsIOError::new_err(message),
                 }
             }
-            Failure::InvalidParameter(message) => InvalidParameterError::new_err(message),
             Failure::Panic(message) => InternalError::new_err(format!("internal error (please report): {message}")),
         }
     }
