@@ -7,9 +7,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --quiet --example drive -p loops-core
+drive="${CARGO_TARGET_DIR:-target}/release/examples/drive"
 count() {
   RAYON_NUM_THREADS=1 EUCLIDEAN_ONLY=1 "$@" valgrind --tool=callgrind --callgrind-out-file=/dev/null \
-    ./target/release/examples/drive 2.1 40 1000 2>&1 | sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
+    "$drive" 2.1 40 1000 2>&1 | sed -n 's/.*Collected : \([0-9]*\).*/\1/p'
 }
 base=$(count env GENERATE_ONLY=1)
 full=$(count env)

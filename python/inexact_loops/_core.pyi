@@ -219,6 +219,8 @@ def urban_drive(
     lane_offset_m: float | None = None,
     lateral_noise_m: float | None = None,
     seed: int | None = None,
+    district_m: float | None = None,
+    district_dwell_s: float | None = None,
     se3: bool = False,
 ) -> Trajectory:
     """A seeded synthetic drive on a Manhattan grid (x, y, z metres)."""

@@ -462,6 +462,23 @@ def test_urban_drive_and_its_parameter_errors():
         il.urban_drive(duration_s=30.0, min_stop_s=10.0, max_stop_s=1.0)
     with raises(il.InvalidParameterError, "at least 2 poses"):
         il.urban_drive(duration_s=0.1, rate_hz=1.0)
+    # Districts: the first dwell stays in the first district; bad sides and dwells are errors.
+    city = il.urban_drive(
+        duration_s=1200.0, city_size_m=5000.0, district_m=500.0, district_dwell_s=600.0
+    )
+    first, second = city.positions[:6000, :2], city.positions[6000:, :2]
+    assert first.min() > -5.0 and first.max() < 505.0
+    assert second[:, 0].max() > 505.0, "moves on to the next district"
+    for name, value, field in [
+        ("district_m", 0.0, "side_m"),
+        ("district_dwell_s", -1.0, "dwell_s"),
+    ]:
+        with raises(il.InvalidParameterError, f"districts.{field} = "):
+            il.urban_drive(duration_s=30.0, **{"district_m": 100.0, name: value})
+    with raises(il.InvalidParameterError, "districts.side_m = 2000", "city_size_m"):
+        il.urban_drive(duration_s=30.0, district_m=2000.0)
+    with raises(il.InvalidParameterError, "district_dwell_s = 5", "district_m"):
+        il.urban_drive(duration_s=30.0, district_dwell_s=5.0)
     with pytest.raises(OverflowError) as negative:
         il.urban_drive(duration_s=30.0, seed=-1)
     assert "while processing 'seed'" in negative.value.__notes__

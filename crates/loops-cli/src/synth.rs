@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use loops_core::{SyntheticDrive, UrbanDrive};
+use loops_core::{Districts, SyntheticDrive, UrbanDrive};
 use rayon::prelude::*;
 
 use crate::guard;
@@ -24,6 +24,13 @@ pub(crate) struct SynthArgs {
     /// Side of the square city, metres.
     #[arg(long, default_value_t = UrbanDrive::default().city_size_m)]
     city_size_m: f64,
+    /// Work the city one square district of this side (metres) at a time, in snake order, so
+    /// that revisits stay bounded however long the drive (default: roam the whole city).
+    #[arg(long)]
+    district_m: Option<f64>,
+    /// Time in each district, seconds (with --district-m).
+    #[arg(long, requires = "district_m", default_value_t = Districts::DEFAULT_DWELL_S)]
+    district_dwell_s: f64,
     /// Seed of the (first) drive.
     #[arg(long, default_value_t = UrbanDrive::default().seed)]
     seed: u64,
@@ -99,6 +106,7 @@ pub(crate) fn synth(args: SynthArgs) -> Result<()> {
                 rate_hz: args.rate_hz,
                 city_size_m: args.city_size_m,
                 seed: *seed,
+                districts: args.district_m.map(|side_m| Districts { side_m, dwell_s: args.district_dwell_s }),
                 ..UrbanDrive::default()
             };
             let drive = spec.generate().context("generating the urban drive")?;

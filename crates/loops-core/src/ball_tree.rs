@@ -38,15 +38,26 @@ pub(crate) struct Leaf {
 #[derive(Debug, Clone)]
 pub(crate) struct BallTree {
     nodes: Vec<Node>,
+    /// The coordinates of each node's centre pose, in node order: a walk reads them next to the
+    /// nodes (siblings are adjacent) instead of at random places of the trajectory, which
+    /// matters once the trajectory outgrows the caches.
+    centres: Vec<f64>,
+    dim: usize,
 }
 
 impl BallTree {
     /// Builds the hierarchy: exact radii at the leaves (one δ per pose), bounds above them
-    /// (`δ(centre, child centre) + child radius`). O(n) metric evaluations.
+    /// (`δ(centre, child centre) + child radius`). O(n) metric evaluations; memory about
+    /// `(48 + 16 · dim) / leaf_size` bytes a pose.
     pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, leaf_size: usize) -> Self {
-        let mut tree = Self { nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size)) };
+        let mut tree = Self {
+            nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size)),
+            centres: Vec::new(),
+            dim: traj.dim(),
+        };
         tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF });
         tree.build(0, 0, traj.len(), traj, metric, leaf_size.max(1));
+        tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
         tree
     }
 
@@ -85,7 +96,6 @@ impl BallTree {
     /// than `reach` from `x`.
     pub(crate) fn near_leaves<M: Metric + ?Sized>(
         &self,
-        traj: &Trajectory,
         metric: &M,
         x: &[f64],
         from: usize,
@@ -93,7 +103,7 @@ impl BallTree {
         out: &mut Vec<Leaf>,
     ) {
         out.clear();
-        self.for_each_near_node(traj, metric, x, from, reach, |node| {
+        self.for_each_near_node(metric, x, from, reach, |node| {
             out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius });
         });
     }
@@ -103,21 +113,19 @@ impl BallTree {
     /// the stretches not visited are all farther than `reach` from `x`.
     pub(crate) fn for_each_near_leaf<M: Metric + ?Sized>(
         &self,
-        traj: &Trajectory,
         metric: &M,
         x: &[f64],
         from: usize,
         reach: f64,
         mut visit: impl FnMut(usize, usize),
     ) {
-        self.for_each_near_node(traj, metric, x, from, reach, |node| {
+        self.for_each_near_node(metric, x, from, reach, |node| {
             visit((node.lo as usize).max(from), node.hi as usize);
         });
     }
 
     fn for_each_near_node<M: Metric + ?Sized>(
         &self,
-        traj: &Trajectory,
         metric: &M,
         x: &[f64],
         from: usize,
@@ -131,7 +139,8 @@ impl BallTree {
             if (node.hi as usize) <= from {
                 continue;
             }
-            if metric.distance(x, traj.point(node.centre as usize)) - node.radius > reach {
+            let centre = &self.centres[index as usize * self.dim..(index as usize + 1) * self.dim];
+            if metric.distance(x, centre) - node.radius > reach {
                 continue;
             }
             if node.left == LEAF {

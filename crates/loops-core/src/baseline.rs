@@ -185,7 +185,7 @@ impl<'a, M: Metric + ?Sized> NearestKeyframe<'a, M> {
     fn find(&self, query: usize, limit: usize) -> Option<usize> {
         let x = self.traj.point(query);
         let mut best: Option<(f64, usize)> = None;
-        self.tree.for_each_near_leaf(self.traj, self.metric, x, 0, self.reach, |lo, hi| {
+        self.tree.for_each_near_leaf(self.metric, x, 0, self.reach, |lo, hi| {
             for j in lo..hi.min(limit) {
                 if self.is_keyframe[j] {
                     let d = self.metric.distance(x, self.traj.point(j));

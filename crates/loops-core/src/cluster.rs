@@ -3,11 +3,12 @@
 
 use std::f64::consts::SQRT_2;
 
-use petgraph::unionfind::UnionFind;
 use rayon::prelude::*;
 
 use crate::detection::Detections;
 use crate::error::{Error, Result};
+use crate::quality::check_epsilon_s;
+use crate::union_find::MinRootForest;
 
 /// One connected component of the ε graph of detections: an approximation of a loop component.
 #[derive(Debug, Clone, PartialEq)]
@@ -88,14 +89,20 @@ type Point = [f64; 2];
 /// in f64 (the same test as scikit-learn's `DBSCAN(eps, min_samples=1)` with a tree index).
 #[inline]
 fn within(a: Point, b: Point, epsilon2: f64) -> bool {
+    distance2(a, b) <= epsilon2
+}
+
+/// The squared distance, as [`within`] evaluates it.
+#[inline]
+fn distance2(a: Point, b: Point) -> f64 {
     let (dx, dy) = (a[0] - b[0], a[1] - b[1]);
-    dx * dx + dy * dy <= epsilon2
+    dx * dx + dy * dy
 }
 
 /// Pairs of points compared one by one below this many.
 const BRUTE_PAIRS: usize = 64;
 /// Pairs tried before the recursive search when linking two groups.
-const PROBE: usize = 8;
+const PROBE: u32 = 8;
 /// Cells along a side of the grid up to which the cell index is exact enough (≤ 0.25 cell).
 const MAX_CELLS_PER_SIDE: f64 = (1u64 << 49) as f64;
 
@@ -105,20 +112,28 @@ const MAX_CELLS_PER_SIDE: f64 = (1u64 << 49) as f64;
 /// all pairs within ε.
 ///
 /// The ε-pairs are never enumerated (there can be 1e8 and more). The plane is cut into square
-/// cells of side ε/√2 (a little less), keyed by `(⌊t/side⌋, ⌊t′/side⌋)` and sorted. Two points
-/// of one cell are within ε, so a cell is one node, checked from its bounding box (a cell that
-/// fails the check in a floating-point corner case becomes one node per point). Two neighbouring
-/// cells (offsets up to 2 in each direction, the only ones whose closest points can be within ε)
-/// are joined when any cross pair is within ε, unless union-find already joins them. That test
-/// stops at the first pair found: bounding boxes first (all pairs apart, or all within), a few
-/// probe pairs, then a recursive search that drops the points farther than ε from the other
-/// side's box and halves the larger side. Union-find is `petgraph`'s.
+/// cells of side ε/√2 (a little less), keyed by `(⌊t/side⌋, ⌊t′/side⌋)`, and the points are
+/// sorted by cell: a counting sort when the grid over the detections has at most about 2n cells
+/// (detections that fill their time range), otherwise a radix sort of 64-bit cell keys. Two
+/// points of one cell are within ε, so a cell is one node, checked from its bounding box (a cell
+/// that fails the check in a floating-point corner case becomes one node per point). Two
+/// neighbouring cells (offsets up to 2 in each direction, the only ones whose closest points can
+/// be within ε) are joined when any cross pair is within ε, unless union-find already joins
+/// them; touching cells are linked first, over the whole grid, so that most farther pairs are
+/// joined already. That test stops at the first pair found: bounding boxes first (all pairs
+/// apart, or all within), a few probe pairs, each side's point nearest to the other side's box
+/// and the other side's point nearest to it, then a recursive search that drops the points
+/// farther than ε from the other side's box and halves the larger side. Union-find is the
+/// crate's one (smallest-id roots).
 ///
-/// Time: a parallel sort of the n points, then O(cells) neighbour look-ups, each a box test or a
-/// search that stops at the first pair within ε (worst case quadratic in the points of the two
-/// cells only when they face each other at just over ε). Memory O(n). The result does not
-/// depend on the order of the detections (ids follow the smallest point of each cluster) nor on
-/// the number of threads.
+/// Time: O(n) to sort the points by cell (O(n log n) by comparison when the grid has over 2³²
+/// cells), then O(cells) neighbour look-ups, each a box test, a few linear passes, or a search
+/// that stops at the first pair within ε (worst case quadratic in the points of the two cells
+/// only when they face each other at just over ε). Memory: the copy of the detections that the
+/// result holds, the labels, and 4 bytes per detection while clustering (20 when the
+/// detections are far from time order and the grid is sparse). The result does not depend on
+/// the order of the detections (ids follow the smallest point of each cluster) nor on the
+/// number of threads.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] unless `epsilon_s` is positive and finite, or when ε is below the
@@ -137,15 +152,8 @@ const MAX_CELLS_PER_SIDE: f64 = (1u64 << 49) as f64;
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<DetectionClusters> {
-    if !(epsilon_s.is_finite() && epsilon_s > 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "epsilon_s",
-            value: epsilon_s,
-            expected: "a positive finite duration, seconds",
-        });
-    }
+    check_epsilon_s(epsilon_s)?;
     let (xs, ys) = (detections.t_s(), detections.t_prime_s());
-    let n = xs.len();
     let min_max = |v: &[f64]| v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| (lo.min(x), hi.max(x)));
     let ((x_min, x_max), (y_min, y_max)) = (min_max(xs), min_max(ys));
     let side = epsilon_s / SQRT_2 * (1.0 - f64::powi(2.0, -18));
@@ -158,32 +166,57 @@ pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<Det
     }
     let epsilon2 = epsilon_s * epsilon_s;
 
-    let keys = sorted_cell_keys(xs, ys, [x_min, y_min], side);
-    let points: Vec<Point> = keys.par_iter().map(|&(_, _, k)| [xs[k as usize], ys[k as usize]]).collect();
+    let components = || {
+        let sorted = SortedPoints::new(xs, ys, [x_min, y_min], [x_max, y_max], side);
+        let (grid, node_roots) = link(&sorted, epsilon2);
+        number_clusters(&sorted, &grid, &node_roots, side)
+    };
+    // The copy of the detections that the result owns is made while the clusters are computed.
+    let (detections, (labels, clusters)) = if xs.len() <= SMALL {
+        (detections.clone(), components())
+    } else {
+        rayon::join(|| detections.clone(), components)
+    };
+    Ok(DetectionClusters { epsilon_s, cell_side_s: side, detections, labels, clusters })
+}
 
-    let (grid, node_roots) = link(&keys, &points, epsilon2);
-
-    // Roots → clusters, numbered by their smallest point (then smallest detection index), so
-    // that ids do not depend on the input order. Points are read in cell order.
-    let mut anchor: Vec<Option<(f64, f64, u32)>> = vec![None; grid.nodes.len()];
-    for (v, node) in grid.nodes.iter().enumerate() {
-        let slot = &mut anchor[node_roots[v] as usize];
-        for p in node.start as usize..node.end as usize {
-            let candidate = (points[p][0], points[p][1], keys[p].2);
-            if slot.is_none_or(|a| candidate < a) {
-                *slot = Some(candidate);
-            }
+/// The label of each detection and the clusters, numbered by their smallest point (then
+/// smallest detection index), so that ids do not depend on the input order.
+fn number_clusters(
+    sorted: &SortedPoints,
+    grid: &Grid,
+    node_roots: &[u32],
+    side: f64,
+) -> (Vec<u32>, Vec<DetectionCluster>) {
+    let order = &sorted.order;
+    let candidate = |p: u32| {
+        let point = sorted.point(p);
+        (point[0], point[1], order[p as usize])
+    };
+    // The smallest point of each root's cluster, as a position in the sorted points.
+    let mut anchor = vec![u32::MAX; grid.nodes.len()];
+    for (node, &root) in grid.nodes.iter().zip(node_roots) {
+        let slot = &mut anchor[root as usize];
+        if *slot == u32::MAX || candidate(node.anchor) < candidate(*slot) {
+            *slot = node.anchor;
         }
     }
-    let mut roots: Vec<(f64, f64, u32, u32)> =
-        anchor.iter().enumerate().filter_map(|(v, a)| a.map(|(x, y, k)| (x, y, k, v as u32))).collect();
+    let mut roots: Vec<(f64, f64, u32, u32)> = anchor
+        .iter()
+        .enumerate()
+        .filter(|&(_, &a)| a != u32::MAX)
+        .map(|(v, &a)| {
+            let (x, y, k) = candidate(a);
+            (x, y, k, v as u32)
+        })
+        .collect();
     roots.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
-    let mut id_of_root = vec![u32::MAX; grid.nodes.len()];
+    let mut id_of_root = anchor; // reused: every slot read below is overwritten first
     for (id, root) in roots.iter().enumerate() {
         id_of_root[root.3 as usize] = id as u32;
     }
 
-    let mut labels = vec![0u32; n];
+    let mut labels = vec![0u32; order.len()];
     let mut clusters: Vec<DetectionCluster> = roots
         .iter()
         .enumerate()
@@ -213,65 +246,297 @@ pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<Det
             cluster.size += (node.end - node.start) as usize;
             cluster.t_s = [cluster.t_s[0].min(node.bbox.x[0]), cluster.t_s[1].max(node.bbox.x[1])];
             cluster.t_prime_s = [cluster.t_prime_s[0].min(node.bbox.y[0]), cluster.t_prime_s[1].max(node.bbox.y[1])];
-            for key in &keys[node.start as usize..node.end as usize] {
-                labels[key.2 as usize] = id;
+            for &k in &order[node.start as usize..node.end as usize] {
+                labels[k as usize] = id;
             }
         }
     }
     for cluster in &mut clusters {
         cluster.area_proxy_s2 = cluster.cells as f64 * side * side;
     }
-    Ok(DetectionClusters { epsilon_s, cell_side_s: side, detections: detections.clone(), labels, clusters })
+    (labels, clusters)
 }
 
-/// The grid over points sorted by cell key, and the union-find root of each of its nodes.
-fn link(keys: &[(i64, i64, u32)], points: &[Point], epsilon2: f64) -> (Grid, Vec<u32>) {
-    let grid = Grid::new(keys, points, epsilon2);
-    let mut union_find = UnionFind::<u32>::new(grid.nodes.len());
+/// The grid over the sorted points, and the union-find root of each of its nodes.
+fn link(sorted: &SortedPoints, epsilon2: f64) -> (Grid, Vec<u32>) {
+    let grid = Grid::new(sorted, epsilon2);
+    let mut parent: Vec<u32> = (0..grid.nodes.len() as u32).collect();
+    let mut union_find = MinRootForest::new(&mut parent, 0);
     let mut scratch = Scratch::default();
-    grid.link_within_cells(points, epsilon2, &mut union_find);
-    grid.link_neighbours(points, epsilon2, &mut union_find, &mut scratch);
-    let node_roots = (0..grid.nodes.len() as u32).map(|v| union_find.find_mut(v)).collect();
+    grid.link_within_cells(sorted, epsilon2, &mut union_find);
+    grid.link_neighbours(sorted, epsilon2, &mut union_find, &mut scratch);
+    let node_roots = (0..grid.nodes.len()).map(|v| union_find.find(v) as u32).collect();
     (grid, node_roots)
 }
 
-/// Cell keys `(cx, cy, detection)` of every point, sorted (unique, so the order is
-/// deterministic). A counting sort by column, then the columns sorted in parallel; a plain
-/// parallel sort when the columns far outnumber the points.
-fn sorted_cell_keys(xs: &[f64], ys: &[f64], origin: [f64; 2], side: f64) -> Vec<(i64, i64, u32)> {
+/// Up to this many points, all work is done on the calling thread, and cell keys that do not
+/// go to the counting sort are sorted by comparison.
+const SMALL: usize = 1 << 12;
+/// Points are sorted by a counting sort over the whole grid when it has at most this many cells
+/// per point (plus [`COUNTING_SORT_MIN_CELLS`]).
+const COUNTING_SORT_CELLS_PER_POINT: u64 = 2;
+/// Grids of up to this many cells always go to the counting sort.
+const COUNTING_SORT_MIN_CELLS: u64 = 1024;
+/// Largest digit of the radix sort of cell keys, bits (8192 buckets: two passes up to 2²⁶ cells).
+const DIGIT_BITS: u32 = 13;
+/// Points sorted by keys are copied in sorted order when the detection indices in a cell span
+/// more than this on average (their coordinates, 16 bytes each, then stop fitting in a core's
+/// cache).
+const COPY_MEAN_SPAN: u64 = 1 << 15;
+
+/// The points sorted by grid cell, and the cells.
+///
+/// The points are read through `order`: a copy in sorted order would be 16 bytes per point of
+/// memory touched for the first time, which costs more than the reads when the detection
+/// indices in a cell are close together (detections in time order, the usual case) or when the
+/// points are read only at the borders of clusters (the counting sort summarises the cells in
+/// input order). Points sorted otherwise, with scattered indices, are copied.
+#[derive(Debug)]
+struct SortedPoints<'a> {
+    xs: &'a [f64],
+    ys: &'a [f64],
+    /// The detection index of each sorted point, ascending within a cell.
+    order: Vec<u32>,
+    /// The non-empty cells in key order `(cx, cy)`.
+    cells: Vec<CellRange>,
+    /// The points in sorted order, when copied.
+    copy: Option<Vec<Point>>,
+}
+
+/// A non-empty cell: its column and row, its range in [`SortedPoints`] and its points' summary.
+#[derive(Debug, Clone, Copy)]
+struct CellRange {
+    cx: i64,
+    cy: i64,
+    start: u32,
+    end: u32,
+    summary: Summary,
+}
+
+impl CellRange {
+    fn new(cx: u64, cy: u64, start: usize, end: usize) -> Self {
+        Self { cx: cx as i64, cy: cy as i64, start: start as u32, end: end as u32, summary: Summary::EMPTY }
+    }
+}
+
+impl<'a> SortedPoints<'a> {
+    /// Sorts the points by cell `(⌊(t − t_min)/side⌋, ⌊(t′ − t′_min)/side⌋)`, then by detection
+    /// index, with cells numbered `cx · rows + cy` over the grid of the points' bounding box:
+    /// - a counting sort by cell when the grid has few cells for the points (the usual case:
+    ///   the detections of a drive fill their time range);
+    /// - otherwise, up to 2³² cells, a stable LSD radix sort of the keys `cell << 32 | detection`
+    ///   on the bits of the cell (a comparison sort up to [`SMALL`] points);
+    /// - beyond, a parallel comparison sort of `(cx, cy, detection)`.
+    fn new(xs: &'a [f64], ys: &'a [f64], origin: [f64; 2], corner: [f64; 2], side: f64) -> Self {
+        let n = xs.len();
+        // Offsets from the minimum are ≥ 0 (and below 2⁴⁹ cells), so truncation is the floor.
+        // (A multiplication by 1/side, checked against cell borders, measured slower.)
+        let cell = |v: f64, lo: f64| ((v - lo) / side) as i64 as u64;
+        let (columns, rows) = (cell(corner[0], origin[0]) + 1, cell(corner[1], origin[1]) + 1);
+        let cell_of = |k: usize| cell(xs[k], origin[0]) * rows + cell(ys[k], origin[1]);
+        let counting_sort_cells = COUNTING_SORT_CELLS_PER_POINT * n as u64 + COUNTING_SORT_MIN_CELLS;
+        let (order, cells) = match columns.checked_mul(rows).filter(|&cells| cells <= 1 << 32) {
+            Some(cells) if cells <= counting_sort_cells => {
+                // The summaries are made in input order: the points are only read again at the
+                // borders of clusters, too few reads to pay for a copy.
+                let (order, cells) = counting_sort(xs, ys, cells as usize, rows, cell_of);
+                return Self { xs, ys, order, cells, copy: None };
+            }
+            Some(cells) => {
+                let key = |k: usize| cell_of(k) << 32 | k as u64;
+                let mut keys: Vec<u64> =
+                    if n <= SMALL { (0..n).map(key).collect() } else { (0..n).into_par_iter().map(key).collect() };
+                if n <= SMALL {
+                    keys.sort_unstable();
+                } else {
+                    keys = radix_sort_high(keys, u64::BITS - (cells - 1).leading_zeros());
+                }
+                let mut ranges = Vec::new();
+                let mut start = 0;
+                for p in 1..=n {
+                    if p == n || keys[p] >> 32 != keys[start] >> 32 {
+                        let id = keys[start] >> 32;
+                        ranges.push(CellRange::new(id / rows, id % rows, start, p));
+                        start = p;
+                    }
+                }
+                (keys.iter().map(|&key| key as u32).collect::<Vec<u32>>(), ranges)
+            }
+            None => {
+                let key = |k: usize| (cell(xs[k], origin[0]), cell(ys[k], origin[1]), k as u32);
+                let mut keys: Vec<(u64, u64, u32)>;
+                if n <= SMALL {
+                    keys = (0..n).map(key).collect();
+                    keys.sort_unstable();
+                } else {
+                    keys = (0..n).into_par_iter().map(key).collect();
+                    keys.par_sort_unstable();
+                }
+                let mut ranges = Vec::new();
+                let mut start = 0;
+                for p in 1..=n {
+                    if p == n || keys[p].0 != keys[start].0 || keys[p].1 != keys[start].1 {
+                        ranges.push(CellRange::new(keys[start].0, keys[start].1, start, p));
+                        start = p;
+                    }
+                }
+                (keys.iter().map(|key| key.2).collect(), ranges)
+            }
+        };
+        let mut sorted = Self { xs, ys, order, cells, copy: None }.with_copy_if_scattered();
+        let mut cells = std::mem::take(&mut sorted.cells);
+        let summarise = |range: &mut CellRange| {
+            for p in range.start..range.end {
+                range.summary.add(sorted.point(p), p);
+            }
+        };
+        if n <= SMALL {
+            cells.iter_mut().for_each(summarise);
+        } else {
+            cells.par_iter_mut().for_each(summarise);
+        }
+        Self { cells, ..sorted }
+    }
+
+    /// Copies the points in sorted order if the detection indices in a cell span more than
+    /// [`COPY_MEAN_SPAN`] on average.
+    fn with_copy_if_scattered(mut self) -> Self {
+        let span: u64 =
+            self.cells.iter().map(|c| u64::from(self.order[c.end as usize - 1] - self.order[c.start as usize])).sum();
+        if span > COPY_MEAN_SPAN * self.cells.len() as u64 {
+            let point = |&k: &u32| [self.xs[k as usize], self.ys[k as usize]];
+            self.copy = Some(if self.order.len() <= SMALL {
+                self.order.iter().map(point).collect()
+            } else {
+                self.order.par_iter().map(point).collect()
+            });
+        }
+        self
+    }
+
+    /// The point at sorted position `p`.
+    #[inline]
+    fn point(&self, p: u32) -> Point {
+        match &self.copy {
+            Some(copy) => copy[p as usize],
+            None => {
+                let k = self.order[p as usize] as usize;
+                [self.xs[k], self.ys[k]]
+            }
+        }
+    }
+
+    /// Replaces the contents of `points` with the points at sorted positions `range`.
+    fn points_into(&self, range: std::ops::Range<u32>, points: &mut Vec<Point>) {
+        let range = range.start as usize..range.end as usize;
+        points.clear();
+        match &self.copy {
+            Some(copy) => points.extend_from_slice(&copy[range]),
+            None => points.extend(self.order[range].iter().map(|&k| [self.xs[k as usize], self.ys[k as usize]])),
+        }
+    }
+}
+
+/// A stable counting sort of the points by cell over a grid of `grid_cells` cells: the
+/// detection index at each sorted position, and the non-empty cells with their summaries.
+///
+/// One thread: the two passes are bound by memory, and splitting them between threads (each
+/// reading all points, writing the cells of its own range) measured no faster. Cells are
+/// computed again in the second pass rather than stored: memory touched for the first time
+/// costs more than the arithmetic.
+fn counting_sort(
+    xs: &[f64],
+    ys: &[f64],
+    grid_cells: usize,
+    rows: u64,
+    cell_of: impl Fn(usize) -> u64,
+) -> (Vec<u32>, Vec<CellRange>) {
     let n = xs.len();
-    let cell = |v: f64, lo: f64| ((v - lo) / side).floor() as i64;
-    let columns: Vec<i64> = xs.par_iter().map(|&x| cell(x, origin[0])).collect();
-    let width = columns.par_iter().copied().max().unwrap_or(0) as u64 + 1;
-    if width > 4 * n as u64 + 1024 {
-        let mut keys: Vec<(i64, i64, u32)> =
-            (0..n).into_par_iter().map(|k| (columns[k], cell(ys[k], origin[1]), k as u32)).collect();
-        keys.par_sort_unstable();
+    // Per grid cell: the number of points, then the next free position and the index of the
+    // cell among the non-empty ones.
+    let mut table = vec![[0u32; 2]; grid_cells];
+    for k in 0..n {
+        table[cell_of(k) as usize][0] += 1;
+    }
+    let mut ranges = Vec::new();
+    let mut start = 0;
+    for (id, entry) in table.iter_mut().enumerate() {
+        let count = entry[0] as usize;
+        if count > 0 {
+            *entry = [start as u32, ranges.len() as u32];
+            ranges.push(CellRange::new(id as u64 / rows, id as u64 % rows, start, start + count));
+            start += count;
+        }
+    }
+    let mut order = vec![0u32; n];
+    for k in 0..n {
+        let entry = &mut table[cell_of(k) as usize];
+        let slot = entry[0];
+        entry[0] += 1;
+        order[slot as usize] = k as u32;
+        ranges[entry[1] as usize].summary.add([xs[k], ys[k]], slot);
+    }
+    (order, ranges)
+}
+
+/// Sorts `keys` stably by their bits 32 to 32 + `bits` (the bits above are zero): an LSD radix
+/// sort with digits of at most [`DIGIT_BITS`] bits, skipping digits that all keys share.
+fn radix_sort_high(keys: Vec<u64>, bits: u32) -> Vec<u64> {
+    let n = keys.len();
+    if bits == 0 {
         return keys;
     }
-    let width = width as usize;
-    let mut starts = vec![0usize; width + 1];
-    for &c in &columns {
-        starts[c as usize + 1] += 1;
+    let passes = bits.div_ceil(DIGIT_BITS);
+    let digit_bits = bits.div_ceil(passes);
+    let buckets = 1usize << digit_bits;
+    let mask = buckets as u64 - 1;
+    let digit = |key: u64, pass: u32| ((key >> (32 + digit_bits * pass)) & mask) as usize;
+    let histogram = |keys: &[u64], pass: u32| {
+        let mut counts = vec![0usize; buckets];
+        for &key in keys {
+            counts[digit(key, pass)] += 1;
+        }
+        counts
+    };
+    let mut counts = keys
+        .par_chunks(1 << 16)
+        .map(|chunk| histogram(chunk, 0))
+        .reduce_with(|mut a, b| {
+            a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+            a
+        })
+        .unwrap_or_default();
+    let (mut src, mut dst) = (keys, Vec::new());
+    for pass in 0..passes {
+        let last = pass + 1 == passes;
+        if counts.contains(&n) {
+            // One digit for all: already in order.
+            if !last {
+                counts = histogram(&src, pass + 1);
+            }
+            continue;
+        }
+        let mut next = Vec::with_capacity(buckets);
+        let mut sum = 0;
+        for &count in &counts {
+            next.push(sum);
+            sum += count;
+        }
+        if dst.is_empty() {
+            dst = vec![0; n];
+        }
+        counts.fill(0);
+        for &key in &src {
+            let slot = &mut next[digit(key, pass)];
+            dst[*slot] = key;
+            *slot += 1;
+            if !last {
+                counts[digit(key, pass + 1)] += 1;
+            }
+        }
+        std::mem::swap(&mut src, &mut dst);
     }
-    for c in 0..width {
-        starts[c + 1] += starts[c];
-    }
-    let mut keys = vec![(0i64, 0i64, 0u32); n];
-    let mut next = starts.clone();
-    for (k, &c) in columns.iter().enumerate() {
-        keys[next[c as usize]] = (c, cell(ys[k], origin[1]), k as u32);
-        next[c as usize] += 1;
-    }
-    let mut slices = Vec::with_capacity(width);
-    let mut rest = keys.as_mut_slice();
-    for c in 0..width {
-        let (column, tail) = rest.split_at_mut(starts[c + 1] - starts[c]);
-        slices.push(column);
-        rest = tail;
-    }
-    slices.into_par_iter().for_each(|column| column.sort_unstable());
-    keys
+    src
 }
 
 /// An axis-aligned bounding box of points, with corners that are point coordinates.
@@ -344,6 +609,36 @@ struct Node {
     start: u32,
     end: u32,
     bbox: Bbox,
+    /// Position of its smallest point in (t, t′) order (the first in the range on ties).
+    anchor: u32,
+}
+
+/// The bounding box of the points of a cell and the position of its smallest point in
+/// (t, t′) order (the first one on ties), built point by point in sorted order.
+#[derive(Debug, Clone, Copy)]
+struct Summary {
+    bbox: Bbox,
+    smallest: Point,
+    /// Position of `smallest` in the sorted points.
+    anchor: u32,
+}
+
+impl Summary {
+    const EMPTY: Self = Self {
+        bbox: Bbox { x: [f64::INFINITY, f64::NEG_INFINITY], y: [f64::INFINITY, f64::NEG_INFINITY] },
+        smallest: [f64::INFINITY, f64::INFINITY],
+        anchor: u32::MAX,
+    };
+
+    /// Adds the point at `position`, after those before it in its cell.
+    #[inline]
+    fn add(&mut self, p: Point, position: u32) {
+        self.bbox.x = [self.bbox.x[0].min(p[0]), self.bbox.x[1].max(p[0])];
+        self.bbox.y = [self.bbox.y[0].min(p[1]), self.bbox.y[1].max(p[1])];
+        if (p[0], p[1]) < (self.smallest[0], self.smallest[1]) {
+            (self.smallest, self.anchor) = (p, position);
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -364,6 +659,9 @@ struct Grid {
 const FORWARD: [(i64, i64); 12] =
     [(0, 1), (1, 0), (1, 1), (1, -1), (0, 2), (2, 0), (1, 2), (1, -2), (2, 1), (2, -1), (2, 2), (2, -2)];
 
+/// The first this many offsets of [`FORWARD`] are the cells that touch (0, 0).
+const TOUCHING: u8 = 4;
+
 /// `RANK[dx][dy + 2]`: the position of (dx, dy) in [`FORWARD`] (12 for offsets not in it).
 const RANK: [[u8; 5]; 3] = {
     let mut rank = [[12u8; 5]; 3];
@@ -376,43 +674,37 @@ const RANK: [[u8; 5]; 3] = {
 };
 
 impl Grid {
-    fn new(keys: &[(i64, i64, u32)], points: &[Point], epsilon2: f64) -> Self {
-        let mut ranges = Vec::new();
-        let mut start = 0;
-        for p in 1..=keys.len() {
-            if p == keys.len() || (keys[p].0, keys[p].1) != (keys[start].0, keys[start].1) {
-                ranges.push((start, p));
-                start = p;
-            }
-        }
-        let boxes: Vec<Bbox> = ranges.par_iter().map(|&(a, b)| Bbox::of(&points[a..b])).collect();
-        let mut cells = Vec::with_capacity(ranges.len());
-        let mut nodes = Vec::with_capacity(ranges.len());
-        for (&(a, b), bbox) in ranges.iter().zip(boxes) {
+    fn new(sorted: &SortedPoints, epsilon2: f64) -> Self {
+        let mut cells = Vec::with_capacity(sorted.cells.len());
+        let mut nodes = Vec::with_capacity(sorted.cells.len());
+        for range in &sorted.cells {
             let first = nodes.len() as u32;
-            if bbox.diagonal2() <= epsilon2 {
-                nodes.push(Node { start: a as u32, end: b as u32, bbox });
+            let (a, b, summary) = (range.start, range.end, range.summary);
+            if summary.bbox.diagonal2() <= epsilon2 {
+                nodes.push(Node { start: a, end: b, bbox: summary.bbox, anchor: summary.anchor });
             } else {
                 // Rounding put points more than ε apart into one cell: one node per point.
                 nodes.extend((a..b).map(|p| Node {
-                    start: p as u32,
-                    end: p as u32 + 1,
-                    bbox: Bbox::of(&points[p..=p]),
+                    start: p,
+                    end: p + 1,
+                    bbox: Bbox::of(&[sorted.point(p)]),
+                    anchor: p,
                 }));
             }
-            cells.push(Cell { cx: keys[a].0, cy: keys[a].1, nodes: (first, nodes.len() as u32) });
+            cells.push(Cell { cx: range.cx, cy: range.cy, nodes: (first, nodes.len() as u32) });
         }
         Self { cells, nodes }
     }
 
     /// Joins the single-point nodes of cells that failed the diameter check.
-    fn link_within_cells(&self, points: &[Point], epsilon2: f64, union_find: &mut UnionFind<u32>) {
+    fn link_within_cells(&self, sorted: &SortedPoints, epsilon2: f64, union_find: &mut MinRootForest) {
         for cell in self.cells.iter().filter(|c| c.nodes.1 - c.nodes.0 > 1) {
             for a in cell.nodes.0..cell.nodes.1 {
                 for b in a + 1..cell.nodes.1 {
                     let (pa, pb) = (self.nodes[a as usize].start, self.nodes[b as usize].start);
-                    if !union_find.equiv(a, b) && within(points[pa as usize], points[pb as usize], epsilon2) {
-                        union_find.union(a, b);
+                    if !union_find.equiv(a as usize, b as usize) && within(sorted.point(pa), sorted.point(pb), epsilon2)
+                    {
+                        union_find.union(a as usize, b as usize);
                     }
                 }
             }
@@ -420,7 +712,23 @@ impl Grid {
     }
 
     /// Joins nodes of neighbouring cells that have a pair within ε.
-    fn link_neighbours(&self, points: &[Point], epsilon2: f64, union_find: &mut UnionFind<u32>, scratch: &mut Scratch) {
+    fn link_neighbours(
+        &self,
+        sorted: &SortedPoints,
+        epsilon2: f64,
+        union_find: &mut MinRootForest,
+        scratch: &mut Scratch,
+    ) {
+        // Touching cells first, over the whole grid: most of the farther pairs are then joined
+        // already, through touching ones, and need no test.
+        for ranks in [0..TOUCHING, TOUCHING..FORWARD.len() as u8] {
+            self.for_each_neighbour(ranks, |a, b| self.link_cells(a, b, sorted, epsilon2, union_find, scratch));
+        }
+    }
+
+    /// Calls `f(cell, neighbour)` for every cell and each of its forward neighbours whose rank in
+    /// [`FORWARD`] is in `ranks`, nearest first.
+    fn for_each_neighbour(&self, ranks: std::ops::Range<u8>, mut f: impl FnMut(&Cell, &Cell)) {
         let cells = &self.cells;
         let key = |c: &Cell| (c.cx, c.cy);
         // pointer[dx]: first cell with key ≥ (cx + dx, cy − 2); it only moves forward.
@@ -440,8 +748,10 @@ impl Grid {
                 }
                 let mut d = *slot;
                 while d < cells.len() && key(&cells[d]) <= hi {
-                    let dy = cells[d].cy - cell.cy;
-                    neighbours.push((RANK[dx as usize][(dy + 2) as usize], d));
+                    let rank = RANK[dx as usize][(cells[d].cy - cell.cy + 2) as usize];
+                    if ranks.contains(&rank) {
+                        neighbours.push((rank, d));
+                    }
                     d += 1;
                 }
             }
@@ -449,7 +759,7 @@ impl Grid {
                 neighbours.sort_unstable();
             }
             for &(_, d) in &neighbours {
-                self.link_cells(cell, &cells[d], points, epsilon2, union_find, scratch);
+                f(cell, &cells[d]);
             }
         }
     }
@@ -458,55 +768,74 @@ impl Grid {
         &self,
         a: &Cell,
         b: &Cell,
-        points: &[Point],
+        sorted: &SortedPoints,
         epsilon2: f64,
-        union_find: &mut UnionFind<u32>,
+        union_find: &mut MinRootForest,
         scratch: &mut Scratch,
     ) {
         for u in a.nodes.0..a.nodes.1 {
             for v in b.nodes.0..b.nodes.1 {
-                if union_find.equiv(u, v) {
-                    continue;
-                }
-                let (nu, nv) = (&self.nodes[u as usize], &self.nodes[v as usize]);
-                let pu = &points[nu.start as usize..nu.end as usize];
-                let pv = &points[nv.start as usize..nv.end as usize];
-                if any_within(pu, &nu.bbox, pv, &nv.bbox, epsilon2, scratch) {
-                    union_find.union(u, v);
+                if !union_find.equiv(u as usize, v as usize)
+                    && any_within(sorted, &self.nodes[u as usize], &self.nodes[v as usize], epsilon2, scratch)
+                {
+                    union_find.union(u as usize, v as usize);
                 }
             }
         }
     }
 }
 
+/// Buffers for the points of the two nodes being compared.
 #[derive(Default)]
 struct Scratch {
     a: Vec<Point>,
     b: Vec<Point>,
 }
 
-/// Whether some pair across `a` and `b` is within ε; stops at the first one found.
-fn any_within(a: &[Point], box_a: &Bbox, b: &[Point], box_b: &Bbox, epsilon2: f64, scratch: &mut Scratch) -> bool {
+/// Whether some pair across nodes `a` and `b` is within ε; stops at the first one found.
+fn any_within(sorted: &SortedPoints, a: &Node, b: &Node, epsilon2: f64, scratch: &mut Scratch) -> bool {
+    let (box_a, box_b) = (&a.bbox, &b.bbox);
     if box_a.min_gap2(box_b) > epsilon2 {
         return false;
     }
     if box_a.max_gap2(box_b) <= epsilon2 {
         return true;
     }
-    if (0..a.len().min(b.len()).min(PROBE)).any(|k| within(a[k], b[k], epsilon2)) {
+    let probes = (a.end - a.start).min(b.end - b.start).min(PROBE);
+    if (0..probes).any(|k| within(sorted.point(a.start + k), sorted.point(b.start + k), epsilon2)) {
         return true;
+    }
+    sorted.points_into(a.start..a.end, &mut scratch.a);
+    sorted.points_into(b.start..b.end, &mut scratch.b);
+    let (a, b) = (scratch.a.as_mut_slice(), scratch.b.as_mut_slice());
+    // Each side's point nearest to the other side's box, and the other side's point nearest to
+    // it: a pair found at the cost of two passes when the sides overlap at all, and a proof that
+    // there is none when one side has no point within ε of the other's box.
+    for (near, box_far, far) in [(&*a, box_b, &*b), (&*b, box_a, &*a)] {
+        let (gap2, p) = nearest(near, |p| box_far.point_gap2(p));
+        if gap2 > epsilon2 {
+            return false;
+        }
+        if nearest(far, |q| distance2(p, q)).0 <= epsilon2 {
+            return true;
+        }
     }
     if a.len() * b.len() <= BRUTE_PAIRS {
         return brute(a, b, epsilon2);
     }
-    let (mut sa, mut sb) = (std::mem::take(&mut scratch.a), std::mem::take(&mut scratch.b));
-    sa.clear();
-    sa.extend_from_slice(a);
-    sb.clear();
-    sb.extend_from_slice(b);
-    let found = search(&mut sa, &mut sb, epsilon2);
-    (scratch.a, scratch.b) = (sa, sb);
-    found
+    search(a, b, epsilon2)
+}
+
+/// The smallest `cost` over `points` (not empty) and the point that has it (the first on ties).
+fn nearest(points: &[Point], cost: impl Fn(Point) -> f64) -> (f64, Point) {
+    let mut best = (cost(points[0]), points[0]);
+    for &p in &points[1..] {
+        let c = cost(p);
+        if c < best.0 {
+            best = (c, p);
+        }
+    }
+    best
 }
 
 fn brute(a: &[Point], b: &[Point], epsilon2: f64) -> bool {
@@ -565,7 +894,9 @@ fn search(a: &mut [Point], b: &mut [Point], epsilon2: f64) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use petgraph::unionfind::UnionFind;
 
+    /// Labels by petgraph's union-find over every pair within ε: independent of ours.
     fn brute_labels(xs: &[f64], ys: &[f64], epsilon: f64) -> Vec<usize> {
         let n = xs.len();
         let mut union_find = UnionFind::<usize>::new(n);
@@ -624,15 +955,19 @@ mod tests {
         // becomes one node per point, joined pairwise; its neighbour (1, 0) is checked per node.
         let eps = 1.0;
         let points: Vec<Point> = vec![[0.0, 0.0], [0.9, 0.0], [1.8, 0.0], [4.0, 0.0], [4.9, 0.0], [5.85, 0.0]];
-        let keys: Vec<(i64, i64, u32)> = vec![(0, 0, 0), (0, 0, 1), (0, 0, 2), (0, 0, 3), (1, 0, 4), (1, 0, 5)];
-        let (grid, roots) = link(&keys, &points, eps * eps);
+        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
+        let mut cells = vec![CellRange::new(0, 0, 0, 4), CellRange::new(1, 0, 4, 6)];
+        for cell in &mut cells {
+            (cell.start..cell.end).for_each(|p| cell.summary.add(points[p as usize], p));
+        }
+        let sorted = SortedPoints { xs: &xs, ys: &ys, order: (0..6).collect(), cells, copy: None };
+        let (grid, roots) = link(&sorted, eps * eps);
         assert_eq!(grid.nodes.len(), 5); // a node per point of (0, 0); (1, 0) is 0.95ε wide
         let node_of =
             |p: usize| grid.nodes.iter().position(|n| (n.start as usize..n.end as usize).contains(&p)).unwrap();
         let same = |a: usize, b: usize| roots[node_of(a)] == roots[node_of(b)];
         assert!(same(0, 1) && same(1, 2) && !same(2, 3));
         assert!(same(3, 4) && same(4, 5));
-        let (xs, ys): (Vec<f64>, Vec<f64>) = points.iter().map(|p| (p[0], p[1])).unzip();
         let expected = brute_labels(&xs, &ys, eps);
         assert!((0..6).all(|a| (0..6).all(|b| same(a, b) == (expected[a] == expected[b]))));
     }

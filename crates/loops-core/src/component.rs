@@ -1,10 +1,13 @@
 //! Loop components: the 4-connected components of S_γ on the sample lattice (paper, Def. 3).
 
-use petgraph::unionfind::UnionFind;
+use std::ops::Range;
+
+use rayon::prelude::*;
 
 use crate::metric::Metric;
 use crate::sublevel::{Run, SublevelSet};
 use crate::trajectory::{Trajectory, prefix_sums};
+use crate::union_find::{MinRootForest, number_sets};
 
 /// One loop component Ω.
 ///
@@ -62,40 +65,15 @@ struct Tally {
 }
 
 /// Labels the runs of `set` by union-find over 4-adjacent runs of consecutive rows (a
-/// two-pointer sweep per row pair; DESIGN §4.2) and measures every component from its runs.
+/// two-pointer sweep per row pair; DESIGN §4.2; stretches of rows in parallel, see
+/// [`label_runs`]) and measures every component from its runs, row by row (one pass, in row
+/// order, so that sums are the same on any number of threads).
 ///
-/// Time O(runs · α(runs)) plus one δ per run, memory O(runs). Holes come from the Euler number:
+/// Time near-linear in runs plus one δ per run, memory O(runs). Holes come from the Euler number:
 /// for the upper half, χ = #runs − #(overlapping run pairs in consecutive rows); a trivial
 /// component adds its mirror, χ_full = 2χ − #diagonal cells + #diagonal links (i, i+1).
 pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: &SublevelSet) -> Labelling {
-    let runs = set.runs();
-    debug_assert!(runs.len() < 1 << 31, "run ids must leave the top bit free for numbering");
-    let mut union_find = UnionFind::<u32>::new(runs.len());
-    for_each_overlap(set, |a, b| {
-        union_find.union(a as u32, b as u32);
-    });
-
-    // Number components by first appearance (row-major): deterministic ids. The labelling
-    // array (each run's root) is turned into ids in place: a root's slot holds its component's
-    // id, flagged, once the component is seen, so no second run-sized table is needed.
-    const SEEN: u32 = 1 << 31;
-    let mut labels = union_find.into_labeling();
-    let mut count = 0u32;
-    for r in 0..labels.len() {
-        let root = labels[r];
-        let id = if root & SEEN != 0 {
-            root & !SEEN // r is a root already numbered through an earlier member
-        } else if labels[root as usize] & SEEN != 0 {
-            labels[root as usize] & !SEEN
-        } else {
-            count += 1;
-            labels[root as usize] = (count - 1) | SEEN;
-            count - 1
-        };
-        labels[r] = id | SEEN;
-    }
-    labels.iter_mut().for_each(|label| *label &= !SEEN);
-
+    let (labels, count) = label_runs(set, ROWS_PER_LABEL_TASK);
     let widths = traj.cell_widths_s();
     let prefix = prefix_sums(widths);
 
@@ -109,6 +87,9 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
         count as usize
     ];
     for (i, &w_i) in widths.iter().enumerate() {
+        if i + 1 < widths.len() {
+            for_each_overlap(set, i..i + 1, |a, _| tallies[labels[a] as usize].overlaps += 1);
+        }
         let offset = set.row_offset(i);
         for (k, run) in set.row(i).iter().enumerate() {
             let r = offset + k;
@@ -134,7 +115,6 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
             }
         }
     }
-    for_each_overlap(set, |a, _| tallies[labels[a] as usize].overlaps += 1);
 
     let components = tallies
         .into_iter()
@@ -167,9 +147,49 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
     Labelling { labels, components }
 }
 
-/// Calls `f(a, b)` for every pair of runs `a` (row i) and `b` (row i + 1) that share a column.
-fn for_each_overlap(set: &SublevelSet, mut f: impl FnMut(usize, usize)) {
-    for i in 0..set.rows().saturating_sub(1) {
+/// Rows whose runs are joined by one rayon task before the joins across tasks.
+const ROWS_PER_LABEL_TASK: usize = 1 << 14;
+
+/// The component id of every run, ids numbered by first appearance (row-major), and the number
+/// of components.
+///
+/// Union-find over run ids in which a set's root is always its smallest id: joins point from
+/// later runs to earlier ones, so one forward pass turns parents into ids (a run's parent is
+/// numbered before it). The runs of consecutive stretches of rows are joined in parallel (each
+/// stretch only touches its own slice of the parent array), then the pairs of rows across
+/// stretches. The result does not depend on the stretches or the thread count. O(runs · log)
+/// worst case, near-linear in practice; 4 bytes a run.
+fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, u32) {
+    let run_count = set.runs().len();
+    debug_assert!(run_count <= u32::MAX as usize, "run ids are u32");
+    let mut parent: Vec<u32> = (0..run_count as u32).into_par_iter().collect();
+    let rows = set.rows();
+    let starts: Vec<usize> = (0..rows).step_by(rows_per_task.max(1)).collect();
+    // Each stretch of rows with its own slice of the parent array.
+    let mut stretches = Vec::with_capacity(starts.len());
+    let mut rest = parent.as_mut_slice();
+    for &start in &starts {
+        let end = (start + rows_per_task.max(1)).min(rows);
+        let (slice, tail) = rest.split_at_mut(set.row_offset(end) - set.row_offset(start));
+        stretches.push((start..end, slice));
+        rest = tail;
+    }
+    stretches.into_par_iter().for_each(|(stretch, slice)| {
+        let mut forest = MinRootForest::new(slice, set.row_offset(stretch.start));
+        for_each_overlap(set, stretch.start..stretch.end - 1, |a, b| forest.union(a, b));
+    });
+    let mut forest = MinRootForest::new(&mut parent, 0);
+    for &start in starts.iter().skip(1) {
+        for_each_overlap(set, start - 1..start, |a, b| forest.union(a, b));
+    }
+    let count = number_sets(&mut parent);
+    (parent, count)
+}
+
+/// Calls `f(a, b)` for every pair of runs `a` (row i) and `b` (row i + 1) that share a column,
+/// for the rows i in `upper_rows`, in order.
+fn for_each_overlap(set: &SublevelSet, upper_rows: Range<usize>, mut f: impl FnMut(usize, usize)) {
+    for i in upper_rows {
         let (upper, lower) = (set.row(i), set.row(i + 1));
         let (base_upper, base_lower) = (set.row_offset(i), set.row_offset(i + 1));
         let (mut p, mut q) = (0, 0);
@@ -185,6 +205,69 @@ fn for_each_overlap(set: &SublevelSet, mut f: impl FnMut(usize, usize)) {
             if b.end <= a.end {
                 q += 1;
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::Euclidean;
+
+    /// Components by breadth-first search over 4-adjacent runs, numbered by their first run.
+    fn reference_labels(set: &SublevelSet) -> Vec<u32> {
+        let count = set.runs().len();
+        let mut neighbours = vec![Vec::new(); count];
+        for_each_overlap(set, 0..set.rows() - 1, |a, b| {
+            neighbours[a].push(b);
+            neighbours[b].push(a);
+        });
+        let mut labels = vec![u32::MAX; count];
+        let mut next = 0;
+        for first in 0..count {
+            if labels[first] != u32::MAX {
+                continue;
+            }
+            let mut queue = std::collections::VecDeque::from([first]);
+            labels[first] = next;
+            while let Some(r) = queue.pop_front() {
+                for &other in &neighbours[r] {
+                    if labels[other] == u32::MAX {
+                        labels[other] = next;
+                        queue.push_back(other);
+                    }
+                }
+            }
+            next += 1;
+        }
+        labels
+    }
+
+    #[test]
+    fn labels_do_not_depend_on_the_stretches() {
+        // A lattice walk in a small box: it comes back often, so rows hold several runs and
+        // components cross every stretch boundary.
+        let mut state = 0x2545_F491_4F6C_DD1D_u64;
+        let mut position = [0_i64, 0];
+        let points: Vec<[f64; 2]> = (0..700)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let axis = (state % 2) as usize;
+                let step = if (state / 2).is_multiple_of(2) { 1 } else { -1 };
+                position[axis] = (position[axis] + step).clamp(0, 7);
+                [position[0] as f64, position[1] as f64]
+            })
+            .collect();
+        let traj = Trajectory::from_points((0..points.len()).map(|i| i as f64).collect(), &points).unwrap();
+        let set = SublevelSet::compute(&traj, &Euclidean, 1.5).unwrap();
+        let expected = reference_labels(&set);
+        assert!(expected.iter().max().is_some_and(|&m| m > 3), "the walk should make several components");
+        for rows_per_task in [1, 2, 3, 7, 64, 699, 700, 10_000] {
+            let (labels, count) = label_runs(&set, rows_per_task);
+            assert_eq!(labels, expected, "{rows_per_task} rows a task");
+            assert_eq!(Some(count), expected.iter().max().map(|m| m + 1));
         }
     }
 }

@@ -50,6 +50,7 @@ mod sample;
 mod sublevel;
 mod synth;
 mod trajectory;
+mod union_find;
 
 pub use baseline::BaselineParams;
 pub use cluster::{DetectionCluster, DetectionClusters, cluster_detections};
@@ -67,7 +68,7 @@ pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
 pub use quality::{DEFAULT_EPSILON_S, MissedComponent, SampleQuality, check_epsilon_s, sample_quality};
 pub use sample::{Sample, SampleSize, SampleWarning, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
 pub use sublevel::{Run, SublevelSet};
-pub use synth::{SyntheticDrive, UrbanDrive};
+pub use synth::{Districts, SyntheticDrive, UrbanDrive};
 pub use trajectory::{MAX_POSES, Trajectory};
 
 /// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).

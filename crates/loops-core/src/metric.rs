@@ -112,13 +112,42 @@ impl Metric for Euclidean {
     }
 }
 
-/// Argmin of `rank` over fixed-size points: a first pass finds the minimum (branch free, so the
-/// compiler vectorizes it), a second its earliest position.
+/// Argmin of `rank` over fixed-size points, the earliest on ties, in one pass: four lanes (points
+/// k ≡ l mod 4) each keep their earliest least rank, with no dependence between lanes so the
+/// compiler can keep them in vector registers; the lanes are then merged by (rank, position).
 #[inline]
 fn closest_fixed<const D: usize>(points: &[f64], rank: impl Fn(&[f64; D]) -> f64) -> usize {
+    const LANES: usize = 4;
     let (blocks, _) = points.as_chunks::<D>();
-    let least = blocks.iter().map(&rank).fold(f64::INFINITY, f64::min);
-    blocks.iter().position(|p| rank(p) == least).unwrap_or(0)
+    let (groups, rest) = blocks.as_chunks::<LANES>();
+    let mut least = [f64::INFINITY; LANES];
+    let mut group_of = [0usize; LANES];
+    for (g, group) in groups.iter().enumerate() {
+        for lane in 0..LANES {
+            let r = rank(&group[lane]);
+            let better = r < least[lane];
+            least[lane] = if better { r } else { least[lane] };
+            group_of[lane] = if better { g } else { group_of[lane] };
+        }
+    }
+    let mut best = (f64::INFINITY, 0);
+    if !groups.is_empty() {
+        best = (least[0], group_of[0] * LANES);
+        for lane in 1..LANES {
+            let k = group_of[lane] * LANES + lane;
+            if least[lane] < best.0 || (least[lane] == best.0 && k < best.1) {
+                best = (least[lane], k);
+            }
+        }
+    }
+    // The remaining points come after every lane's: only a smaller rank wins.
+    for (offset, p) in rest.iter().enumerate() {
+        let r = rank(p);
+        if r < best.0 {
+            best = (r, groups.len() * LANES + offset);
+        }
+    }
+    best.1
 }
 
 /// The error for points of the wrong dimension.
@@ -380,6 +409,30 @@ mod tests {
         assert_eq!(Euclidean.distance(&[1.0, 1.0, 1.0, 1.0], &[0.0, 0.0, 0.0, 0.0]), 2.0);
         assert_eq!(Euclidean.distance_rank(&[0.0, 0.0], &[3.0, 4.0]), 25.0);
         assert!(Euclidean.check_dim(0).is_err());
+    }
+
+    #[test]
+    fn closest_is_the_earliest_argmin() {
+        // Coordinates on a small grid: many exact ties, at every position modulo the lanes.
+        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % 4) as f64
+        };
+        for dim in [2, 3, 4] {
+            for len in (1..40).chain([97, 250]) {
+                for _ in 0..8 {
+                    let points: Vec<f64> = (0..len * dim).map(|_| next()).collect();
+                    let x: Vec<f64> = (0..dim).map(|_| next()).collect();
+                    let ranks: Vec<f64> = points.chunks(dim).map(|p| Euclidean.distance_rank(&x, p)).collect();
+                    let least = ranks.iter().copied().fold(f64::INFINITY, f64::min);
+                    let expected = ranks.iter().position(|&r| r == least);
+                    assert_eq!(Some(Euclidean.closest_in(&x, &points)), expected, "dim {dim}, {len} points");
+                }
+            }
+        }
     }
 
     #[test]

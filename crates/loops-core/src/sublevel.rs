@@ -68,7 +68,7 @@ impl SublevelSet {
     /// rounding up, and both bounds keep a margin for rounding, so the result equals the brute
     /// force's `δ ≤ γ` test on every pair.
     ///
-    /// Far-field pruning: the path is cut into stretches of 32 consecutive poses, each in a ball
+    /// Far-field pruning: the path is cut into stretches of 16 consecutive poses, each in a ball
     /// around its middle pose, and the balls into a binary hierarchy. A row visits only the
     /// stretches whose ball comes within γ of `x_i`, so the cost of a row no longer grows with
     /// the length of path far away.
@@ -82,16 +82,10 @@ impl SublevelSet {
         crate::loops::check_gamma(gamma)?;
         metric.validate(traj)?;
         let n = traj.len();
-        let arc = ArcLength::new(traj, metric);
-        let balls = BallTree::new(traj, metric, LEAF_SIZE);
+        let (arc, balls) = rayon::join(|| ArcLength::new(traj, metric), || BallTree::new(traj, metric, LEAF_SIZE));
         let scanner = RowScanner { traj, metric, arc: &arc, balls: &balls, gamma };
-        let mut set = Self { gamma, row_offsets: Vec::with_capacity(n + 1), runs: Vec::new(), closest: Vec::new() };
-        set.row_offsets.push(0);
-        // Blocks are scanned in parallel a batch at a time and moved into the result as each
-        // batch ends, so the per-block buffers never hold more than a batch of runs.
-        let blocks = n.div_ceil(ROWS_PER_TASK);
-        for batch in (0..blocks).step_by(BLOCKS_PER_BATCH) {
-            let scanned: Vec<Block> = (batch..(batch + BLOCKS_PER_BATCH).min(blocks))
+        let scan_batch = |blocks: std::ops::Range<usize>| -> Vec<Block> {
+            blocks
                 .into_par_iter()
                 .map(|b| {
                     let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
@@ -103,17 +97,37 @@ impl SublevelSet {
                     }
                     block
                 })
-                .collect();
-            for block in scanned {
-                let base = set.runs.len();
-                set.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
-                set.runs.extend_from_slice(&block.runs);
-                set.closest.extend_from_slice(&block.closest);
-            }
+                .collect()
+        };
+        let mut set = Self { gamma, row_offsets: Vec::with_capacity(n + 1), runs: Vec::new(), closest: Vec::new() };
+        set.row_offsets.push(0);
+        // Blocks are scanned in parallel a batch at a time, and each batch is moved into the
+        // result while the next one is scanned (the copy, and the page faults of a result that
+        // grows to hundreds of MB, would otherwise leave every other thread idle), so the
+        // per-block buffers never hold more than two batches of runs.
+        let blocks = n.div_ceil(ROWS_PER_TASK);
+        let mut scanned = Vec::new();
+        for batch in (0..blocks).step_by(BLOCKS_PER_BATCH) {
+            let previous = std::mem::take(&mut scanned);
+            // The copy first: on one thread the order of work and allocation is that of a
+            // plain loop; on more, the others start on the scan meanwhile.
+            scanned =
+                rayon::join(|| set.append(previous), || scan_batch(batch..(batch + BLOCKS_PER_BATCH).min(blocks))).1;
         }
+        set.append(scanned);
         set.runs.shrink_to_fit();
         set.closest.shrink_to_fit();
         Ok(set)
+    }
+
+    /// Appends the rows of scanned blocks, in order.
+    fn append(&mut self, blocks: Vec<Block>) {
+        for block in blocks {
+            let base = self.runs.len();
+            self.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
+            self.runs.extend_from_slice(&block.runs);
+            self.closest.extend_from_slice(&block.closest);
+        }
     }
 
     /// Builds the set by measuring every pair: O(n²) time, for tests and tiny inputs.
@@ -302,7 +316,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
         let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
         let reach = self.gamma + radius + 2.0 * self.arc.margin;
-        self.balls.near_leaves(self.traj, self.metric, centre, rows.start, reach, out);
+        self.balls.near_leaves(self.metric, centre, rows.start, reach, out);
     }
 
     fn scan_row(&self, i: usize, out: &mut Block) {

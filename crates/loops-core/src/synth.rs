@@ -46,6 +46,58 @@ pub struct UrbanDrive {
     pub lateral_noise_m: f64,
     /// Seed of the random choices: the same seed gives the same drive on every machine.
     pub seed: u64,
+    /// Work the city one district at a time instead of roaming all of it: `None` (the default)
+    /// is a random walk over the whole city.
+    pub districts: Option<Districts>,
+}
+
+/// A drive that works one square district at a time, like a delivery or mapping vehicle: it
+/// roams a district for `dwell_s`, then drives to the next one, in snake order (row by row,
+/// alternating direction, back to the first after the last). The revisits of a place are then
+/// bounded by the time spent in its district, however long the drive: the answer (runs and
+/// loop components of S_γ) grows in proportion to the number of poses. A random walk over a
+/// whole city of fixed size instead comes back to every street more often the longer it drives.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Districts, UrbanDrive};
+/// let spec = UrbanDrive {
+///     duration_s: 1200.0,
+///     city_size_m: 10_000.0,
+///     districts: Some(Districts { side_m: 1000.0, dwell_s: 600.0 }),
+///     ..UrbanDrive::default()
+/// };
+/// let drive = spec.generate()?;
+/// // The first 10 minutes stay in the first district (plus the lane offset).
+/// assert!(drive.trajectory.coords().chunks(3).take(6000).all(|p| p[0] < 1005.0 && p[1] < 1005.0));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Districts {
+    /// Side of a district, metres: a whole number of blocks (rounded to the nearest, at least
+    /// one), at most the city.
+    pub side_m: f64,
+    /// Time spent in each district, seconds.
+    pub dwell_s: f64,
+}
+
+impl Districts {
+    /// A default time in each district: 10,000 s (2.8 h, 10⁵ poses at 10 Hz).
+    pub const DEFAULT_DWELL_S: f64 = 10_000.0;
+
+    /// The nodes (inclusive ranges along x and y) of the district the drive works at time
+    /// `t_s`, in a city of `blocks` blocks a side.
+    fn area(&self, t_s: f64, blocks: i64, block_m: f64) -> [[i64; 2]; 2] {
+        let side = ((self.side_m / block_m).round() as i64).clamp(1, blocks.max(1));
+        let per_row = (blocks + side - 1) / side;
+        let index = ((t_s / self.dwell_s).floor() as i64).rem_euclid(per_row * per_row);
+        let (row, mut col) = (index / per_row, index % per_row);
+        if row % 2 == 1 {
+            col = per_row - 1 - col;
+        }
+        let (x, y) = (col * side, row * side);
+        [[x, (x + side).min(blocks)], [y, (y + side).min(blocks)]]
+    }
 }
 
 impl Default for UrbanDrive {
@@ -63,6 +115,7 @@ impl Default for UrbanDrive {
             lane_offset_m: 2.0,
             lateral_noise_m: 0.1,
             seed: 0,
+            districts: None,
         }
     }
 }
@@ -119,17 +172,37 @@ impl UrbanDrive {
                 expected: "at least 2 poses",
             });
         }
-        let mut node = [rng.random_range(0..=blocks), rng.random_range(0..=blocks)];
+        // The box of nodes the walk keeps to at a time: the whole city, or the current district.
+        let area = |t: f64| -> [[i64; 2]; 2] {
+            self.districts.map_or([[0, blocks], [0, blocks]], |d| d.area(t, blocks, self.block_m))
+        };
+        let start = area(0.0);
+        let mut node = [rng.random_range(start[0][0]..=start[0][1]), rng.random_range(start[1][0]..=start[1][1])];
         let mut heading = DIRECTIONS[rng.random_range(0..4)];
         let mut out = Emitter::new(self, poses)?;
         let mut t = 0.0_f64;
         while !out.done() {
-            let options: Vec<[i64; 2]> = DIRECTIONS
-                .iter()
-                .copied()
-                .filter(|d| *d != [-heading[0], -heading[1]])
-                .filter(|d| (0..=blocks).contains(&(node[0] + d[0])) && (0..=blocks).contains(&(node[1] + d[1])))
-                .collect();
+            let [xs, ys] = area(t);
+            let inside = |p: [i64; 2]| (xs[0]..=xs[1]).contains(&p[0]) && (ys[0]..=ys[1]).contains(&p[1]);
+            let options: Vec<[i64; 2]> = if inside(node) {
+                DIRECTIONS
+                    .iter()
+                    .copied()
+                    .filter(|d| *d != [-heading[0], -heading[1]])
+                    .filter(|d| inside([node[0] + d[0], node[1] + d[1]]))
+                    .collect()
+            } else {
+                // On the way to the next district: any turn that brings the car closer to it.
+                let gap =
+                    |p: [i64; 2]| (xs[0] - p[0]).max(p[0] - xs[1]).max(0) + (ys[0] - p[1]).max(p[1] - ys[1]).max(0);
+                let closer: Vec<[i64; 2]> = DIRECTIONS
+                    .iter()
+                    .copied()
+                    .filter(|d| *d != [-heading[0], -heading[1]])
+                    .filter(|d| gap([node[0] + d[0], node[1] + d[1]]) < gap(node))
+                    .collect();
+                if closer.is_empty() { vec![[-heading[0], -heading[1]]] } else { closer }
+            };
             // A corner reached head-on still has two options; an empty list means a 1-block city.
             heading = if options.is_empty() {
                 [-heading[0], -heading[1]]
@@ -211,6 +284,22 @@ impl UrbanDrive {
                 value: self.max_stop_s,
                 expected: "at least min_stop_s",
             });
+        }
+        if let Some(districts) = &self.districts {
+            if !(districts.side_m.is_finite() && districts.side_m > 0.0 && districts.side_m <= self.city_size_m) {
+                return Err(Error::InvalidParameter {
+                    name: "districts.side_m",
+                    value: districts.side_m,
+                    expected: "a positive side no larger than city_size_m",
+                });
+            }
+            if !(districts.dwell_s.is_finite() && districts.dwell_s > 0.0) {
+                return Err(Error::InvalidParameter {
+                    name: "districts.dwell_s",
+                    value: districts.dwell_s,
+                    expected: "a positive finite time, seconds",
+                });
+            }
         }
         if !(0.0..=1.0).contains(&self.stop_probability) {
             return Err(Error::InvalidParameter {
@@ -322,12 +411,55 @@ mod tests {
         assert!(steps < 6.0, "a 10 Hz step of {steps} m");
     }
 
+    /// The district worked at each time, from the positions: the drive keeps to it except on
+    /// the way between two districts, visits them in snake order, and its revisits stay bounded.
+    #[test]
+    fn districts_are_worked_in_turn() {
+        let districts = Districts { side_m: 300.0, dwell_s: 900.0 };
+        let spec = UrbanDrive {
+            duration_s: 9.0 * 900.0,
+            city_size_m: 900.0,
+            districts: Some(districts),
+            ..UrbanDrive::default()
+        };
+        let drive = spec.generate().unwrap();
+        let blocks = 9;
+        let mut outside = 0;
+        for (i, p) in drive.trajectory.coords().chunks(3).enumerate() {
+            let t = i as f64 / spec.rate_hz;
+            let [xs, ys] = districts.area(t, blocks, spec.block_m);
+            let within = |v: f64, r: [i64; 2]| v > r[0] as f64 * 100.0 - 5.0 && v < r[1] as f64 * 100.0 + 5.0;
+            if !(within(p[0], xs) && within(p[1], ys)) {
+                outside += 1;
+                // Only just after a change of district (a few blocks of driving).
+                assert!(t % 900.0 < 240.0, "pose {i} at t = {t} s is outside {xs:?} × {ys:?}: {p:?}");
+            }
+        }
+        // 8 changes of district, each a few blocks and maybe a stop: under a minute on average.
+        assert!(outside < 8 * 600, "{outside} poses in transit");
+        // Snake order over the 3 × 3 districts.
+        let corners: Vec<[i64; 2]> = (0..9)
+            .map(|k| {
+                let [xs, ys] = districts.area(k as f64 * 900.0 + 1.0, blocks, spec.block_m);
+                [xs[0], ys[0]]
+            })
+            .collect();
+        assert_eq!(corners, [[0, 0], [3, 0], [6, 0], [6, 3], [3, 3], [0, 3], [0, 6], [3, 6], [6, 6]]);
+        assert_eq!(districts.area(9.0 * 900.0 + 1.0, blocks, spec.block_m), [[0, 3], [0, 3]], "wraps around");
+    }
+
     #[test]
     fn rejects_bad_parameters() {
         let bad = UrbanDrive { rate_hz: 0.0, ..UrbanDrive::default() };
         assert!(matches!(bad.generate(), Err(Error::InvalidParameter { name: "rate_hz", .. })));
         let bad = UrbanDrive { stop_probability: 2.0, ..UrbanDrive::default() };
         assert!(bad.generate().is_err());
+        for (side_m, dwell_s, name) in
+            [(0.0, 1.0, "districts.side_m"), (2000.0, 1.0, "districts.side_m"), (100.0, f64::NAN, "districts.dwell_s")]
+        {
+            let bad = UrbanDrive { districts: Some(Districts { side_m, dwell_s }), ..UrbanDrive::default() };
+            assert!(matches!(bad.generate(), Err(Error::InvalidParameter { name: n, .. }) if n == name), "{name}");
+        }
         let bad = UrbanDrive { duration_s: 0.1, ..UrbanDrive::default() };
         assert!(bad.generate().is_err());
     }

@@ -328,15 +328,23 @@ fn trajectory_for(
 /// With ``se3=True`` the poses carry the heading of travel as an orientation (for the ``se3``
 /// metrics); otherwise they are positions (x, y, z).
 ///
+/// With ``district_m`` the drive works the city one square district of that side at a time,
+/// ``district_dwell_s`` seconds each (default 10,000 s), in snake order: the revisits of a place
+/// stay bounded however long the drive, as for a delivery or mapping vehicle. Without it the
+/// drive roams the whole city.
+///
 /// Example:
 ///     >>> import inexact_loops as il
 ///     >>> traj = il.urban_drive(duration_s=60.0, seed=3)
 ///     >>> len(traj), traj.dim
 ///     (600, 3)
+///     >>> big = il.urban_drive(duration_s=600.0, city_size_m=10_000.0, district_m=1000.0)
+///     >>> bool(big.positions[:, :2].max() < 1005.0)
+///     True
 #[pyfunction]
 #[pyo3(signature = (*, duration_s=None, rate_hz=None, city_size_m=None, block_m=None, min_speed_mps=None,
     max_speed_mps=None, stop_probability=None, min_stop_s=None, max_stop_s=None, lane_offset_m=None,
-    lateral_noise_m=None, seed=None, se3=false))]
+    lateral_noise_m=None, seed=None, district_m=None, district_dwell_s=None, se3=false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn urban_drive(
     py: Python<'_>,
@@ -352,9 +360,25 @@ pub(crate) fn urban_drive(
     lane_offset_m: Option<f64>,
     lateral_noise_m: Option<f64>,
     seed: Option<u64>,
+    district_m: Option<f64>,
+    district_dwell_s: Option<f64>,
     se3: bool,
 ) -> PyResult<Trajectory> {
     let d = loops_core::UrbanDrive::default();
+    let districts = match (district_m, district_dwell_s) {
+        (Some(side_m), dwell_s) => {
+            Some(loops_core::Districts { side_m, dwell_s: dwell_s.unwrap_or(loops_core::Districts::DEFAULT_DWELL_S) })
+        }
+        (None, Some(value)) => {
+            let error = loops_core::Error::InvalidParameter {
+                name: "district_dwell_s",
+                value,
+                expected: "to come with district_m (the side of the districts)",
+            };
+            return Err(Failure::Core(error).into());
+        }
+        (None, None) => None,
+    };
     let spec = loops_core::UrbanDrive {
         duration_s: duration_s.unwrap_or(d.duration_s),
         rate_hz: rate_hz.unwrap_or(d.rate_hz),
@@ -368,6 +392,7 @@ pub(crate) fn urban_drive(
         lane_offset_m: lane_offset_m.unwrap_or(d.lane_offset_m),
         lateral_noise_m: lateral_noise_m.unwrap_or(d.lateral_noise_m),
         seed: seed.unwrap_or(d.seed),
+        districts,
     };
     wrap(py, move || {
         let drive = spec.generate()?;
