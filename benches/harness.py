@@ -25,6 +25,7 @@ import os
 import platform
 import re
 import resource
+import signal
 import subprocess
 import sys
 import tempfile
@@ -132,8 +133,8 @@ def run_process(
     """Runs one worker; returns (status, its JSON report or None, its stderr).
 
     The status is ``ok``, ``out of memory (> N GB address space)``, ``killed (SIGKILL: out of
-    memory?)``, ``timeout (> N s)`` or ``failed (exit status N)``. The worker prints its report
-    as the last line of its stdout.
+    memory?)``, ``timeout (> N s)``, ``crashed (SIGNAME)`` or ``failed (exit status N)``. The
+    worker prints its report as the last line of its stdout.
     """
     try:
         done = subprocess.run(
@@ -152,6 +153,12 @@ def run_process(
         tail = done.stderr.strip().splitlines()[-5:]
         if any(sign in line for line in tail for sign in OUT_OF_MEMORY_SIGNS):
             return out_of_memory, None, done.stderr
+        if done.returncode < 0:
+            try:
+                name = signal.Signals(-done.returncode).name
+            except ValueError:
+                name = f"signal {-done.returncode}"
+            return f"crashed ({name})", None, done.stderr
         return f"failed (exit status {done.returncode})", None, done.stderr
     return "ok", report, done.stderr
 

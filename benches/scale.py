@@ -646,18 +646,25 @@ def skip_reason(name: str, size: Size, reference: dict, history: History, args) 
     if name == "dense" and size.poses > DENSE_MAX_POSES:
         return f"skipped: n > {DENSE_MAX_POSES:,}"
     # Its memory per unit of work at its largest finished size, well past the cap here.
+    expected = expected_peak(name, size, reference, history)
+    if expected is not None and expected[0] > EXTRAPOLATION_MARGIN * cap:
+        return f"skipped: ≈ {expected[0] / 2**30:.0f} GB expected ({expected[1]})"
+    return None
+
+
+def expected_peak(
+    name: str, size: Size, reference: dict, history: History
+) -> tuple[float, str] | None:
+    """A peer's peak memory here, bytes, extrapolated from its peak per unit of work (cells,
+    pairs, detections) at its largest finished size; and that rate as text."""
     amount = work(name, size, reference)
     before = history.largest.get(name)
-    if amount and before is not None:
-        at, done, peak_mb = before
-        expected = peak_mb * 2**20 * amount / done
-        if expected > EXTRAPOLATION_MARGIN * cap:
-            unit = WORK_UNITS[name][1] if name in WORK_UNITS else "cell"
-            return (
-                f"skipped: ≈ {expected / 2**30:.0f} GB expected "
-                f"({peak_mb * 2**20 / done:.0f} B a {unit} at n = {at.poses:,})"
-            )
-    return None
+    if not amount or before is None:
+        return None
+    at, done, peak_mb = before
+    unit = WORK_UNITS[name][1] if name in WORK_UNITS else "cell"
+    rate = peak_mb * 2**20 / done
+    return rate * amount, f"{rate:.0f} B a {unit} at n = {at.poses:,}"
 
 
 def run_size(size: Size, args: argparse.Namespace, history: History) -> Result:
@@ -680,6 +687,14 @@ def run_size(size: Size, args: argparse.Namespace, history: History) -> Result:
             elif not done.ok or sum(done.times_s) >= args.budget_s:
                 continue
             new = run_worker(name, size, args, first=done is None)
+            if new.status.startswith("crashed"):
+                # A crash says nothing of why; what its memory would have been is a fact.
+                expected = expected_peak(name, size, result.reference, history)
+                if expected is not None:
+                    new.status += (
+                        f"; ≈ {expected[0] / 2**30:.0f} GB expected ({expected[1]}), "
+                        f"cap {args.mem_limit_gb:g} GB"
+                    )
             if done is None or not new.ok:
                 outcomes[name] = new
             else:

@@ -435,6 +435,7 @@ def sample(
     trajectory: Trajectory | None = None,
     metric: _MetricArg = None,
     threads: int | None = None,
+    skip_trivial: bool = False,
     lio_sam_keyframe_step: float | None = None,
     lio_sam_period_s: float | None = None,
     lio_sam_min_age_s: float | None = None,

@@ -737,6 +737,29 @@ def test_sample_errors(traj, loops, clusters):
         for name, value in parameters.items():
             with raises(il.InvalidParameterError, f"{name} = "):
                 il.sample(loops, sampler, budget=1, seed=0, trajectory=traj, **{name: value})
+    with raises(il.InvalidParameterError, "skip_trivial does not apply to detection clusters"):
+        il.sample(clusters, "rho", budget=1, seed=0, skip_trivial=True)
+    with raises(il.InvalidParameterError, "skip_trivial does not apply to the lio-sam baseline"):
+        il.sample(loops, "lio-sam", budget=1, seed=0, trajectory=traj, skip_trivial=True)
+
+
+def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
+    drive = il.urban_drive(duration_s=1200.0, seed=4)
+    found = il.find_loops(drive, gamma=40.0)
+    table = found.components
+    trivial = set(table["id"][table["trivial"]].tolist())
+    nontrivial = set(table["id"][~table["trivial"]].tolist())
+    assert trivial and len(nontrivial) > 5
+    for sampler in ["one", "rho", "rho-dispersed", "alpha"]:
+        plain = il.sample(found, sampler, budget=300, seed=3, trajectory=drive)
+        only = il.sample(found, sampler, budget=300, seed=3, trajectory=drive, skip_trivial=True)
+        assert set(plain.component.tolist()) & trivial, sampler
+        assert len(only) == 300 and not set(only.component.tolist()) & trivial, sampler
+        if sampler != "alpha":
+            assert set(only.component.tolist()) == nontrivial, sampler
+        # Every pair is in S_γ, in the component it names (checked by the loops, independently).
+        for i, j, c in zip(only.i.tolist(), only.j.tolist(), only.component.tolist(), strict=True):
+            assert i < j and found.component_of(i, j) == c
 
 
 @covers(

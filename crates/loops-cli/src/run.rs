@@ -85,6 +85,7 @@ struct LogSummary {
     sampler: String,
     sample_size: String,
     seed: u64,
+    skip_trivial: bool,
     epsilon_s: f64,
     samples: usize,
     quality: QualitySummary,
@@ -135,6 +136,7 @@ struct BatchSummary<'a> {
     sampler: &'a str,
     sample_size: String,
     seed: u64,
+    skip_trivial: bool,
     epsilon_s: f64,
     logs: usize,
     succeeded: usize,
@@ -202,6 +204,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
         sampler: settings.sampler.kind.name(),
         sample_size: size_text(settings.sampler.size),
         seed: settings.sampler.seed,
+        skip_trivial: settings.sampler.skip_trivial,
         epsilon_s: args.sampling.epsilon_s,
         logs: outcomes.len(),
         succeeded: outcomes.len() - failed,
@@ -312,6 +315,7 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         sampler: samples.sampler().name().to_owned(),
         sample_size: size_text(settings.sampler.size),
         seed: settings.sampler.seed,
+        skip_trivial: settings.sampler.skip_trivial,
         epsilon_s,
         samples: samples.len(),
         quality: quality_summary(samples.sampler(), &quality),
@@ -565,7 +569,7 @@ fn index_page(batch: &BatchSummary<'_>) -> String {
          td:nth-child(-n+2),th:nth-child(-n+2){{text-align:left}}th{{background:#f4f4f4}}\
          .ok{{color:#1a7f37}}.bad{{color:#c62828;font-weight:bold}}tr.failed td{{color:#c62828;text-align:left}}\
          </style></head><body>\n<h1>Inexact loops: {logs} logs</h1>\n\
-         <p>γ = {gamma} ({metric}); sampler {sampler} ({size}, seed {seed}); ε = {epsilon} s. \
+         <p>γ = {gamma} ({metric}); sampler {sampler} ({size}, seed {seed}{skip}); ε = {epsilon} s. \
          {ok} done, {failed} failed, in {seconds:.1} s.</p>\n\
          <table id=\"logs\"><thead><tr><th>log</th><th>source</th><th>poses</th><th>span (s)</th>\
          <th>components</th><th>non-trivial</th><th>pairs</th><th>loop density (s)</th><th>samples</th>\
@@ -577,6 +581,7 @@ fn index_page(batch: &BatchSummary<'_>) -> String {
         sampler = e(batch.sampler),
         size = e(&batch.sample_size),
         seed = batch.seed,
+        skip = if batch.skip_trivial { ", trivial components skipped" } else { "" },
         epsilon = batch.epsilon_s,
         ok = batch.succeeded,
         failed = batch.failed,

@@ -60,6 +60,10 @@ pub(crate) struct SamplingArgs {
     /// Radius of the detection graph and of the P2 redundancy measure, seconds.
     #[arg(long = "epsilon-s", visible_alias = "epsilon", value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
     pub(crate) epsilon_s: f64,
+    /// Leave out the trivial loop components (simple loops: the next poses, stops), which
+    /// odometry already ties together (one, rho, rho-dispersed, alpha; not with --detections).
+    #[arg(long)]
+    pub(crate) skip_trivial: bool,
 }
 
 impl SamplingArgs {
@@ -67,7 +71,10 @@ impl SamplingArgs {
     pub(crate) fn sampler(&self) -> Result<Sampler> {
         let kind: SamplerKind = self.sampler.parse()?;
         let size = SampleSize::or_default(self.rate, self.budget)?;
-        Ok(Sampler::new(kind, size, self.seed))
+        if self.skip_trivial && kind.is_baseline() {
+            bail!("--skip-trivial does not apply to the {kind} baseline, which keeps its own candidate rule");
+        }
+        Ok(Sampler { skip_trivial: self.skip_trivial, ..Sampler::new(kind, size, self.seed) })
     }
 }
 

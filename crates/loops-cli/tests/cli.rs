@@ -217,6 +217,44 @@ fn sample_writes_exactly_the_budget_and_reports_quality() {
     assert_eq!(std::fs::read_to_string(&out).unwrap(), csv);
 }
 
+/// The lags j − i of the pairs in a samples CSV.
+fn lags(csv: &str) -> Vec<i64> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (i, j) = (column("i"), column("j"));
+    lines
+        .map(|line| {
+            let fields: Vec<&str> = line.split(',').collect();
+            fields[j].parse::<i64>().unwrap() - fields[i].parse::<i64>().unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn sample_skip_trivial_keeps_only_revisits() {
+    let dir = temp_dir("sample-skip");
+    let file = laps(&dir);
+    let f = file.to_str().unwrap();
+    let run = |extra: &[&str], out: &Path| {
+        let args = ["sample", f, "--gamma", "2", "--sampler", "rho", "--budget", "60", "--out", out.to_str().unwrap()];
+        let output = loops(&[&args[..], extra].concat());
+        assert!(output.status.success(), "{}", stderr(&output));
+        lags(&std::fs::read_to_string(out).unwrap())
+    };
+    // The laps are 160 poses long: a revisit is about a lap apart; the trivial component holds
+    // the pairs a few poses apart.
+    let plain = run(&[], &dir.join("plain.csv"));
+    assert!(plain.iter().any(|&lag| lag < 20), "{plain:?}");
+    let skipping = run(&["--skip-trivial"], &dir.join("skip.csv"));
+    assert_eq!(skipping.len(), 60);
+    assert!(skipping.iter().all(|&lag| lag > 100), "{skipping:?}");
+    assert_one_line_error(
+        &loops(&["sample", f, "--gamma", "2", "--sampler", "lio-sam", "--budget", "5", "--skip-trivial"]),
+        "--skip-trivial does not apply to the lio-sam baseline",
+    );
+}
+
 #[test]
 fn sample_from_detections_and_bad_input() {
     let dir = temp_dir("sample-det");

@@ -194,6 +194,17 @@ pub enum Error {
         /// The names allowed, comma separated.
         expected: &'static str,
     },
+    /// An option that does not apply where it was given, e.g. skipping the trivial components
+    /// when sampling detection clusters, which do not know them.
+    #[error("{option} does not apply to {to}: {reason}")]
+    NotApplicable {
+        /// The option.
+        option: &'static str,
+        /// What it was given to.
+        to: String,
+        /// Why not, and what would do.
+        reason: &'static str,
+    },
     /// An empty set of detections: clustering and sampling need at least one pair.
     #[error("no detections: at least one pair (t, t') is needed")]
     NoDetections,

@@ -209,6 +209,14 @@ pub struct Sampler {
     pub seed: u64,
     /// Parameters of the baselines (ignored by σ_1, σ_ρ, σ_α).
     pub baseline: BaselineParams,
+    /// Leave out the trivial loop components ([`sample_loops`] with σ_1, σ_ρ and σ_α). A
+    /// trivial component holds the diagonal: its pairs are simple loops (the trajectory stayed
+    /// within γ between t and t′, e.g. the next poses, or a stop), which odometry already ties
+    /// together. σ_ρ on S_γ gives it a weight equal to all the rows of the drive, so it would
+    /// otherwise take a large share of the budget (about a third on the default drive) for
+    /// pairs a scan matcher does not need. Off by default: the paper's samplers cover all of
+    /// S_γ.
+    pub skip_trivial: bool,
 }
 
 impl Sampler {
@@ -217,7 +225,7 @@ impl Sampler {
 
     /// A sampler with the default baseline parameters.
     pub fn new(kind: SamplerKind, size: SampleSize, seed: u64) -> Self {
-        Self { kind, size, seed, baseline: BaselineParams::default() }
+        Self { kind, size, seed, baseline: BaselineParams::default(), skip_trivial: false }
     }
 }
 
@@ -407,7 +415,9 @@ impl Samples {
 ///
 /// # Errors
 /// [`Error::UnknownName`] for a baseline (they need the trajectory: [`sample_loops`]);
-/// [`Error::InvalidParameter`] for a budget of 0 or a rate out of range.
+/// [`Error::InvalidParameter`] for a budget of 0 or a rate out of range;
+/// [`Error::NotApplicable`] for [`Sampler::skip_trivial`] (clusters do not know the trivial
+/// components).
 ///
 /// # Examples
 /// ```
@@ -426,6 +436,14 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
             kind: "sampler of detection clusters",
             name: kind.name().to_owned(),
             expected: SamplerKind::CLUSTER_NAMES,
+        });
+    }
+    if sampler.skip_trivial {
+        return Err(Error::NotApplicable {
+            option: "skip_trivial",
+            to: "detection clusters".to_owned(),
+            reason: "clusters do not know which loop components are trivial; sample the exact components, \
+                     or leave out detections near t′ = t before clustering",
         });
     }
     sampler.size.validate(kind)?;
@@ -510,12 +528,14 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
 /// closest pair of each (from the runs' closest columns; in a run on the diagonal, whose closest
 /// pair is the pose itself, the closest column after the run's farthest point: a return along
 /// the same way, or the run's last column). σ_α and the gap rules draw over the runs of all of
-/// S_γ. Never a list of all pairs: memory O(runs + samples); time O(runs + samples · log runs),
+/// S_γ. With [`Sampler::skip_trivial`], σ_1, σ_ρ and σ_α leave out the trivial components.
+/// Never a list of all pairs: memory O(runs + samples); time O(runs + samples · log runs),
 /// plus the baselines' neighbour searches.
 ///
 /// # Errors
 /// [`Error::TrajectoryMismatch`] unless `loops` was found on `traj`; [`Error::InvalidParameter`]
-/// for a budget of 0, a rate out of range or a bad baseline parameter.
+/// for a budget of 0, a rate out of range or a bad baseline parameter; [`Error::NotApplicable`]
+/// for `skip_trivial` with a baseline.
 ///
 /// # Examples
 /// ```
@@ -542,15 +562,29 @@ pub fn sample_loops<M: Metric + ?Sized>(
     sampler.size.validate(kind)?;
     let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
     let mut warnings = Vec::new();
+    if sampler.skip_trivial && kind.is_baseline() {
+        return Err(Error::NotApplicable {
+            option: "skip_trivial",
+            to: format!("the {kind} baseline"),
+            reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
+                     rho-dispersed or alpha",
+        });
+    }
+    let components = loops.components();
+    let wanted = |c: usize| !(sampler.skip_trivial && components[c].trivial);
     let (pairs, groups, available): (Vec<Picked>, usize, u64) = match kind {
         SamplerKind::Alpha => {
-            let space = PairSpace::of_loops(loops, 0.0);
+            // The off-diagonal pairs (j > i) of the wanted components.
+            let mut space = PairSpace::default();
+            for (i, run, _) in loops.runs().filter(|&(_, _, c)| wanted(c)) {
+                space.push(i, run, i + 1);
+            }
             let numbers = draw_numbers(space.len(), sampler.size, &mut rng, &mut warnings);
             (space.pairs_at(&numbers).into_iter().map(|p| (p, None)).collect(), 0, space.len())
         }
         SamplerKind::One | SamplerKind::Rho | SamplerKind::RhoDispersed => {
             let mut spaces = vec![PairSpace::default(); loops.components().len()];
-            for (i, run, c) in loops.runs() {
+            for (i, run, c) in loops.runs().filter(|&(_, _, c)| wanted(c)) {
                 spaces[c].push(i, run, i + 1);
             }
             let ids: Vec<usize> = (0..spaces.len()).filter(|&c| spaces[c].len() > 0).collect();

@@ -365,3 +365,62 @@ fn quality_separates_the_samplers_on_a_drive() {
     let (one, rho, alpha) = (slope(SamplerKind::One), slope(SamplerKind::Rho), slope(SamplerKind::Alpha));
     assert!(one < rho && rho < alpha, "slopes: one {one}, rho {rho}, alpha {alpha}");
 }
+
+/// `skip_trivial`: σ_1, σ_ρ and σ_α draw only from the non-trivial components, keep the exact
+/// budget and P1 over them, and do not change the components they cover otherwise; the budget
+/// the trivial component took goes to the others. Clusters and baselines refuse it.
+#[test]
+fn skip_trivial_leaves_out_the_trivial_components() {
+    let s = setup();
+    let components = s.loops.components();
+    let nontrivial: BTreeSet<usize> = samplable(&s.loops).into_iter().filter(|&c| !components[c].trivial).collect();
+    assert!(nontrivial.len() > 10 && nontrivial.len() < samplable(&s.loops).len(), "{nontrivial:?}");
+    for kind in SIGMAS {
+        let budget = 4 * nontrivial.len() + 3;
+        let plain = Sampler::new(kind, SampleSize::Budget(budget), 4);
+        let skipping = Sampler { skip_trivial: true, ..plain.clone() };
+        let all = sample_loops(&s.traj, &Euclidean, &s.loops, &plain).unwrap();
+        let only = sample_loops(&s.traj, &Euclidean, &s.loops, &skipping).unwrap();
+        assert_eq!(only.len(), budget, "{kind}");
+        let trivial_picks =
+            |samples: &Samples| samples.rows().iter().filter(|r| components[r.component.unwrap()].trivial).count();
+        assert!(trivial_picks(&all) > 0, "{kind}: the plain sampler should reach the trivial component");
+        assert_eq!(trivial_picks(&only), 0, "{kind}");
+        if kind != SamplerKind::Alpha {
+            let covered: BTreeSet<usize> = only.rows().iter().map(|r| r.component.unwrap()).collect();
+            assert_eq!(covered, nontrivial, "{kind}: P1 over the non-trivial components");
+            assert_eq!(only.groups(), nontrivial.len());
+        }
+        for row in only.rows() {
+            let [i, j] = row.pair.unwrap();
+            assert!(i < j && s.loops.component_of(i, j) == row.component, "{kind}: {row:?}");
+        }
+    }
+    // A rate keeps its meaning: σ_1 at one per group gives exactly the non-trivial groups.
+    let one = Sampler { skip_trivial: true, ..Sampler::new(SamplerKind::One, SampleSize::Rate(1.0), 0) };
+    assert_eq!(sample_loops(&s.traj, &Euclidean, &s.loops, &one).unwrap().len(), nontrivial.len());
+
+    let on_clusters = Sampler { skip_trivial: true, ..Sampler::new(SamplerKind::Rho, SampleSize::Budget(10), 0) };
+    let error = sample_clusters(&s.clusters, &on_clusters).unwrap_err();
+    assert!(matches!(error, Error::NotApplicable { option: "skip_trivial", .. }), "{error}");
+    assert!(error.to_string().contains("detection clusters"), "{error}");
+    for kind in BASELINES {
+        let baseline = Sampler { skip_trivial: true, ..Sampler::new(kind, SampleSize::Budget(10), 0) };
+        let error = sample_loops(&s.traj, &Euclidean, &s.loops, &baseline).unwrap_err();
+        assert!(error.to_string().contains(&format!("the {kind} baseline")), "{error}");
+    }
+}
+
+/// On a drive with only a trivial component, skipping it leaves nothing: no samples and a
+/// warning, not an error.
+#[test]
+fn skip_trivial_with_nothing_else_gives_no_samples() {
+    let line: Vec<f64> = (0..100).map(|k| k as f64).collect();
+    let traj = Trajectory::new((0..100).map(f64::from).collect(), line, 1).unwrap();
+    let loops = find_loops(&traj, &Euclidean, 2.5).unwrap();
+    assert!(loops.components().iter().all(|c| c.trivial));
+    let sampler = Sampler { skip_trivial: true, ..Sampler::new(SamplerKind::Rho, SampleSize::Budget(5), 0) };
+    let samples = sample_loops(&traj, &Euclidean, &loops, &sampler).unwrap();
+    assert!(samples.is_empty());
+    assert_eq!(samples.warnings(), [SampleWarning::BudgetAboveAvailable { budget: 5, available: 0 }]);
+}

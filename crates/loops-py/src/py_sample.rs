@@ -572,6 +572,9 @@ fn measured(
 ///     metric: as in :func:`find_loops`; ``None`` takes the loops' own metric (for clusters,
 ///         the default metric).
 ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+///     skip_trivial: leave out the trivial loop components (``Loops`` with σ_1, σ_ρ or σ_α):
+///         their pairs are simple loops (the next poses, a stop) that odometry already ties
+///         together, and σ_ρ would otherwise spend a large share of the budget on them.
 ///     lio_sam_keyframe_step, lio_sam_period_s, lio_sam_min_age_s, hdl_keyframe_step,
 ///     hdl_min_travel, hdl_edge_spacing, cartographer_min_gap_s, time_gap_s: parameters of
 ///         the baselines (metric units and seconds); ``None`` takes the library default.
@@ -582,7 +585,7 @@ fn measured(
 /// Raises:
 ///     InvalidParameterError: an unknown sampler (the message lists the names), a baseline on
 ///         clusters, rate and budget both or neither, a budget of 0, a rate out of range, a
-///         trajectory that is not the loops'.
+///         trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline.
 ///     TypeError: ``Loops`` without ``trajectory``.
 ///
 /// Example:
@@ -599,7 +602,7 @@ fn measured(
 ///     True
 #[pyfunction]
 #[pyo3(signature = (source, sampler, *, rate=None, budget=None, seed, trajectory=None, metric=None, threads=None,
-    lio_sam_keyframe_step=None, lio_sam_period_s=None, lio_sam_min_age_s=None, hdl_keyframe_step=None,
+    skip_trivial=false, lio_sam_keyframe_step=None, lio_sam_period_s=None, lio_sam_min_age_s=None, hdl_keyframe_step=None,
     hdl_min_travel=None, hdl_edge_spacing=None, cartographer_min_gap_s=None, time_gap_s=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sample(
@@ -612,6 +615,7 @@ pub(crate) fn sample(
     trajectory: Option<&Trajectory>,
     metric: Option<&Bound<'_, PyAny>>,
     threads: Option<usize>,
+    skip_trivial: bool,
     lio_sam_keyframe_step: Option<f64>,
     lio_sam_period_s: Option<f64>,
     lio_sam_min_age_s: Option<f64>,
@@ -634,7 +638,7 @@ pub(crate) fn sample(
         cartographer_min_gap_s: cartographer_min_gap_s.unwrap_or(d.cartographer_min_gap_s),
         time_gap_s: time_gap_s.unwrap_or(d.time_gap_s),
     };
-    let spec = Sampler { kind, size, seed, baseline };
+    let spec = Sampler { kind, size, seed, baseline, skip_trivial };
     if let Ok(clusters) = source.cast::<DetectionClusters>() {
         let clusters = Arc::clone(&clusters.get().inner);
         let samples =
