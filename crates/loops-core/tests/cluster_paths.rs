@@ -10,55 +10,9 @@
 
 use loops_core::{DetectionClusters, Detections, cluster_detections};
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
 
-/// `cases` cases from a fixed seed, no regression files; `PROPTEST_CASES` and `PROPTEST_RNG_SEED`
-/// override, for longer hunts.
-fn config(cases: u32, seed: u64) -> Config {
-    let defaults = Config::default();
-    let overridden = |name| std::env::var_os(name).is_some();
-    Config {
-        cases: if overridden("PROPTEST_CASES") { defaults.cases } else { cases },
-        rng_seed: if overridden("PROPTEST_RNG_SEED") { defaults.rng_seed } else { RngSeed::Fixed(seed) },
-        failure_persistence: None,
-        ..defaults
-    }
-}
-
-/// Labels of the connected components of "within ε" over all pairs, by first appearance.
-fn brute_force(t: &[f64], t_prime: &[f64], epsilon: f64) -> Vec<usize> {
-    let n = t.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut a: usize) -> usize {
-        while parent[a] != a {
-            parent[a] = parent[parent[a]];
-            a = parent[a];
-        }
-        a
-    }
-    for a in 0..n {
-        for b in a + 1..n {
-            let (dx, dy) = (t[a] - t[b], t_prime[a] - t_prime[b]);
-            if dx * dx + dy * dy <= epsilon * epsilon {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                parent[ra.max(rb)] = ra.min(rb);
-            }
-        }
-    }
-    canonical(&(0..n).map(|a| root(&mut parent, a)).collect::<Vec<_>>())
-}
-
-/// Relabels a partition by order of first appearance.
-fn canonical<T: Copy + Eq + std::hash::Hash>(labels: &[T]) -> Vec<usize> {
-    let mut seen = std::collections::HashMap::new();
-    labels
-        .iter()
-        .map(|l| {
-            let next = seen.len();
-            *seen.entry(*l).or_insert(next)
-        })
-        .collect()
-}
+mod support;
+use support::{brute_force_clusters, canonical, config};
 
 /// Grid cells per side when the extent is `extent_s` (the cell side is ε/√2, a little less).
 fn cells_per_side(extent_s: f64, epsilon: f64) -> f64 {
@@ -133,7 +87,7 @@ proptest! {
         let (t, t_prime): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
         let det = Detections::new(t, t_prime)?; // puts each pair in order, t ≤ t′
         let base = cluster_detections(&det, eps)?;
-        prop_assert_eq!(canonical(base.labels()), brute_force(det.t_s(), det.t_prime_s(), eps));
+        prop_assert_eq!(canonical(base.labels()), brute_force_clusters(det.t_s(), det.t_prime_s(), eps));
         // 3√n + 64 cells per side: over 4n + 1024 cells, so keys are sorted by comparison.
         same_with_far_point(&points, eps, eps * (3.0 * n.sqrt() + 64.0))?;
         // 2¹⁷ cells per side: over 2³² cells, so (cx, cy, detection) is sorted by comparison.
@@ -213,7 +167,7 @@ proptest! {
         let (t, t_prime): (Vec<f64>, Vec<f64>) = points.iter().copied().unzip();
         let det = Detections::new(t, t_prime)?;
         let clusters = cluster_detections(&det, eps)?;
-        prop_assert_eq!(canonical(clusters.labels()), brute_force(det.t_s(), det.t_prime_s(), eps));
+        prop_assert_eq!(canonical(clusters.labels()), brute_force_clusters(det.t_s(), det.t_prime_s(), eps));
     }
 }
 

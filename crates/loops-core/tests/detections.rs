@@ -7,64 +7,15 @@ use loops_core::{
     with_threads,
 };
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
 
-/// `cases` cases from a fixed seed, no regression files; `PROPTEST_CASES` and `PROPTEST_RNG_SEED`
-/// override, for longer hunts.
-fn config(cases: u32, seed: u64) -> Config {
-    let defaults = Config::default();
-    let overridden = |name| std::env::var_os(name).is_some();
-    Config {
-        cases: if overridden("PROPTEST_CASES") { defaults.cases } else { cases },
-        rng_seed: if overridden("PROPTEST_RNG_SEED") { defaults.rng_seed } else { RngSeed::Fixed(seed) },
-        failure_persistence: None,
-        ..defaults
-    }
-}
-
-/// Labels of the connected components of "within ε" over all pairs, by first appearance.
-fn brute_force(t: &[f64], t_prime: &[f64], epsilon: f64) -> Vec<usize> {
-    let n = t.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut a: usize) -> usize {
-        while parent[a] != a {
-            parent[a] = parent[parent[a]];
-            a = parent[a];
-        }
-        a
-    }
-    for a in 0..n {
-        for b in a + 1..n {
-            let (dx, dy) = (t[a] - t[b], t_prime[a] - t_prime[b]);
-            if dx * dx + dy * dy <= epsilon * epsilon {
-                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
-                parent[ra.max(rb)] = ra.min(rb);
-            }
-        }
-    }
-    canonical(&(0..n).map(|a| root(&mut parent, a)).collect::<Vec<_>>())
-}
-
-/// Relabels a partition by order of first appearance.
-fn canonical<T: Copy + PartialEq>(labels: &[T]) -> Vec<usize> {
-    let mut seen: Vec<T> = Vec::new();
-    labels
-        .iter()
-        .map(|l| match seen.iter().position(|s| s == l) {
-            Some(k) => k,
-            None => {
-                seen.push(*l);
-                seen.len() - 1
-            }
-        })
-        .collect()
-}
+mod support;
+use support::{brute_force_clusters, canonical, config};
 
 /// Clusters (t, t′) points (already ordered t ≤ t′ or not) and checks everything checkable.
 fn check(t: Vec<f64>, t_prime: Vec<f64>, epsilon: f64) -> Result<(), TestCaseError> {
     let det = Detections::new(t, t_prime)?;
     let clusters = cluster_detections(&det, epsilon)?;
-    let expected = brute_force(det.t_s(), det.t_prime_s(), epsilon);
+    let expected = brute_force_clusters(det.t_s(), det.t_prime_s(), epsilon);
     prop_assert_eq!(canonical(clusters.labels()), expected, "partition differs from brute force");
     // Cluster statistics agree with the labels.
     for c in clusters.clusters() {
@@ -132,7 +83,7 @@ proptest! {
     #![proptest_config(config(256, 0x5EED_0401))]
 
     #[test]
-    fn partition_equals_brute_force((points, eps) in point_sets()) {
+    fn partition_equals_brute_force_clusters((points, eps) in point_sets()) {
         let (t, t_prime): (Vec<f64>, Vec<f64>) = points.into_iter().unzip();
         check(t, t_prime, eps)?;
     }
@@ -169,7 +120,7 @@ fn grid_exactly_epsilon_apart() {
         }
         let det = Detections::new(t.clone(), t_prime.clone()).unwrap();
         let clusters = cluster_detections(&det, eps).unwrap();
-        assert_eq!(canonical(clusters.labels()), brute_force(det.t_s(), det.t_prime_s(), eps), "eps {eps}");
+        assert_eq!(canonical(clusters.labels()), brute_force_clusters(det.t_s(), det.t_prime_s(), eps), "eps {eps}");
         // Whether the grid is one cluster depends only on the f64 test (a · ε − b · ε vs ε).
         check(t, t_prime, eps).unwrap();
     }
@@ -190,7 +141,7 @@ fn points_a_hair_from_epsilon() {
             for (t, t_prime) in lines {
                 let det = Detections::new(t.clone(), t_prime.clone()).unwrap();
                 let clusters = cluster_detections(&det, eps).unwrap();
-                assert_eq!(canonical(clusters.labels()), brute_force(&t, &t_prime, eps));
+                assert_eq!(canonical(clusters.labels()), brute_force_clusters(&t, &t_prime, eps));
                 if factor != 1.0 {
                     assert_eq!(clusters.len() == 1, joined, "factor {factor} eps {eps}: {} clusters", clusters.len());
                 }
@@ -219,7 +170,7 @@ fn duplicates_and_one_huge_cluster() {
     t_prime.push(3000.0);
     let det = Detections::new(t.clone(), t_prime.clone()).unwrap();
     let clusters = cluster_detections(&det, eps).unwrap();
-    assert_eq!(canonical(clusters.labels()), brute_force(&t, &t_prime, eps));
+    assert_eq!(canonical(clusters.labels()), brute_force_clusters(&t, &t_prime, eps));
     assert_eq!(clusters.clusters()[0].size, 3000);
     assert_eq!(clusters.clusters()[0].cells, 1);
 }

@@ -1,9 +1,11 @@
-//! Shared by the integration tests: trajectory generators built to be nasty, and a dense
-//! reference for S_γ, its 4-connected components, their holes and the measures τ and α.
+//! Shared by the integration tests: trajectory generators built to be nasty, a dense reference
+//! for S_γ, its 4-connected components, their holes and the measures τ and α, and an all-pairs
+//! partition of detections for the ε graph.
 //!
 //! The reference is written from the definitions only (a full n × n boolean matrix, breadth-first
 //! flood fill, pixel counting, sums over matrix rows) and shares no algorithm with the engine:
-//! no runs, no union-find, no arc-length bounds, no prefix sums.
+//! no runs, no union-find, no arc-length bounds, no prefix sums. The ε-graph reference joins
+//! every pair within ε (a plain union-find over all n² pairs; the engine never looks at pairs).
 #![allow(dead_code)] // each test crate uses a different part
 
 use std::cmp::Ordering;
@@ -26,6 +28,46 @@ pub fn config(cases: u32, seed: u64) -> Config {
         failure_persistence: None,
         ..defaults
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Partitions of detections
+// ---------------------------------------------------------------------------------------------
+
+/// Labels of the connected components of "within ε" over all pairs of detections (t, t′), by
+/// first appearance: a union-find over every pair, O(n²), written from the definition.
+pub fn brute_force_clusters(t: &[f64], t_prime: &[f64], epsilon: f64) -> Vec<usize> {
+    let n = t.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut a: usize) -> usize {
+        while parent[a] != a {
+            parent[a] = parent[parent[a]];
+            a = parent[a];
+        }
+        a
+    }
+    for a in 0..n {
+        for b in a + 1..n {
+            let (dx, dy) = (t[a] - t[b], t_prime[a] - t_prime[b]);
+            if dx * dx + dy * dy <= epsilon * epsilon {
+                let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    canonical(&(0..n).map(|a| root(&mut parent, a)).collect::<Vec<_>>())
+}
+
+/// Relabels a partition by order of first appearance.
+pub fn canonical<T: Copy + Eq + std::hash::Hash>(labels: &[T]) -> Vec<usize> {
+    let mut seen = std::collections::HashMap::new();
+    labels
+        .iter()
+        .map(|l| {
+            let next = seen.len();
+            *seen.entry(*l).or_insert(next)
+        })
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------------
