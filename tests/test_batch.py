@@ -139,6 +139,35 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     assert summary["loop_density_s"] == pytest.approx(loops.loop_density(t[0], t[-1]), rel=1e-12)
 
 
+def test_skip_trivial_run_equals_the_python_api(tmp_path: Path, batch, loops_cli: Path) -> None:
+    log = batch["logs"][2]
+    out = tmp_path / "skip"
+    args = ["--gamma", "40", "--budget", "300", "--seed", "5", "--out", out, "--quiet"]
+    done = subprocess.run(
+        [loops_cli, "run", log, *args, "--skip-trivial"], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    folder = out / log.stem
+    traj = il.read_trajectory(log)
+    found = il.find_loops(traj, gamma=40.0)
+    samples = il.sample(found, "rho", budget=300, seed=5, trajectory=traj, skip_trivial=True)
+    rows = read_csv(folder / "samples.csv")
+    np.testing.assert_array_equal(np.array(rows["i"], dtype=np.int64), samples.i)
+    np.testing.assert_array_equal(np.array(rows["j"], dtype=np.int64), samples.j)
+    trivial = found.components["trivial"]
+    assert not trivial[np.array(rows["component"], dtype=np.int64)].any()
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["skip_trivial"] is True and summary["samples"] == 300
+    assert json.loads((out / "summary.json").read_text())["skip_trivial"] is True
+    assert "(trivial components skipped)" in (folder / "report.html").read_text()
+    refused = subprocess.run(
+        [loops_cli, "run", log, *args, "--skip-trivial", "--sampler", "lio-sam"],
+        capture_output=True,
+        text=True,
+    )
+    assert refused.returncode == 2 and "--skip-trivial does not apply" in refused.stderr
+
+
 def test_existing_results_are_kept_without_force(batch, loops_cli: Path) -> None:
     out = batch["out"]
     before = (out / "summary.json").read_bytes()

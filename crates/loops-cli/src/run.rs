@@ -341,6 +341,7 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         quality: &quality,
         comparison: &comparison,
         epsilon_s,
+        skip_trivial: settings.sampler.skip_trivial,
         seconds: seconds.find_loops,
     });
     let files: [(&str, Vec<u8>); 4] = [

@@ -60,6 +60,8 @@ pub(crate) struct ReportInput<'a> {
     pub comparison: &'a [(SamplerKind, SampleQuality)],
     /// ε of P2, seconds.
     pub epsilon_s: f64,
+    /// Whether the sampler left out the trivial components.
+    pub skip_trivial: bool,
     /// Seconds spent finding the loops.
     pub seconds: f64,
 }
@@ -270,7 +272,7 @@ fn summary(input: &ReportInput<'_>) -> String {
     let _ = write!(
         out,
         "<div class=\"card\"><h2>Samples</h2><dl>\
-         <dt>sampler</dt><dd>{sampler}: <b>{count}</b> samples of {available} candidates</dd>\
+         <dt>sampler</dt><dd>{sampler}: <b>{count}</b> samples of {available} candidates{skipped}</dd>\
          <dt>P1 coverage</dt><dd><b>{covered} / {total}</b> components ({coverage}); non-trivial {nt_covered} / {nt_total}</dd>\
          {missed}\
          <dt>P2 redundant</dt><dd><b>{redundant}</b> of {count} ({redundancy}) within ε = {epsilon} s{spacing}</dd>\
@@ -280,6 +282,7 @@ fn summary(input: &ReportInput<'_>) -> String {
         sampler = sampler_name(samples.sampler()),
         count = thousands(samples.len() as u64),
         available = thousands(samples.available()),
+        skipped = if input.skip_trivial { " (trivial components skipped)" } else { "" },
         covered = quality.covered,
         total = quality.components,
         coverage = percent(quality.covered, quality.components),
@@ -451,6 +454,7 @@ mod tests {
                 quality: &self.quality,
                 comparison: &self.comparison,
                 epsilon_s: DEFAULT_EPSILON_S,
+                skip_trivial: false,
                 seconds: 0.25,
             }
         }
