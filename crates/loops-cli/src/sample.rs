@@ -71,10 +71,15 @@ impl SamplingArgs {
     pub(crate) fn sampler(&self) -> Result<Sampler> {
         let kind: SamplerKind = self.sampler.parse()?;
         let size = SampleSize::or_default(self.rate, self.budget)?;
-        if self.skip_trivial && kind.is_baseline() {
-            bail!("--skip-trivial does not apply to the {kind} baseline, which keeps its own candidate rule");
-        }
-        Ok(Sampler { skip_trivial: self.skip_trivial, ..Sampler::new(kind, size, self.seed) })
+        let sampler = Sampler { skip_trivial: self.skip_trivial, ..Sampler::new(kind, size, self.seed) };
+        // Core names the option as in Rust; here it is a flag.
+        sampler.check_applicable().map_err(|error| match error {
+            loops_core::Error::NotApplicable { option, to, reason } => {
+                anyhow::anyhow!("--{} does not apply to {to}: {reason}", option.replace('_', "-"))
+            }
+            other => other.into(),
+        })?;
+        Ok(sampler)
     }
 }
 

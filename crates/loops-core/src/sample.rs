@@ -227,6 +227,33 @@ impl Sampler {
     pub fn new(kind: SamplerKind, size: SampleSize, seed: u64) -> Self {
         Self { kind, size, seed, baseline: BaselineParams::default(), skip_trivial: false }
     }
+
+    /// Checks that its options apply to its kind, before any input is seen: front ends call it
+    /// to refuse a bad combination up front; [`sample_loops`] calls it too.
+    ///
+    /// # Errors
+    /// [`Error::NotApplicable`] for [`Sampler::skip_trivial`] with a baseline, which keeps its
+    /// own candidate rule.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{SampleSize, Sampler, SamplerKind};
+    /// let rho = Sampler { skip_trivial: true, ..Sampler::new(SamplerKind::Rho, SampleSize::Budget(10), 0) };
+    /// assert!(rho.check_applicable().is_ok());
+    /// let lio_sam = Sampler { kind: SamplerKind::LioSam, ..rho };
+    /// assert!(lio_sam.check_applicable().is_err());
+    /// ```
+    pub fn check_applicable(&self) -> Result<()> {
+        if self.skip_trivial && self.kind.is_baseline() {
+            return Err(Error::NotApplicable {
+                option: "skip_trivial",
+                to: format!("the {} baseline", self.kind),
+                reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
+                         rho-dispersed or alpha",
+            });
+        }
+        Ok(())
+    }
 }
 
 /// One sampled loop: a candidate pair for the scan matcher.
@@ -562,14 +589,7 @@ pub fn sample_loops<M: Metric + ?Sized>(
     sampler.size.validate(kind)?;
     let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
     let mut warnings = Vec::new();
-    if sampler.skip_trivial && kind.is_baseline() {
-        return Err(Error::NotApplicable {
-            option: "skip_trivial",
-            to: format!("the {kind} baseline"),
-            reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
-                     rho-dispersed or alpha",
-        });
-    }
+    sampler.check_applicable()?;
     let components = loops.components();
     let wanted = |c: usize| !(sampler.skip_trivial && components[c].trivial);
     let (pairs, groups, available): (Vec<Picked>, usize, u64) = match kind {
