@@ -51,7 +51,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from harness import (
-    REPO,
+    add_contender_options,
     build_stamp,
     cap_address_space,
     load_average,
@@ -237,17 +237,16 @@ def format_time(seconds: float) -> str:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--repeat", type=int, default=3, metavar="N", help="rounds (default 3)")
     parser.add_argument(
         "--sklearn-full",
         action="store_true",
         help="run scikit-learn at every n, also where it is estimated to need many GB",
     )
-    parser.add_argument("--timeout-s", type=float, default=600.0, metavar="SECONDS")
-    parser.add_argument(
-        "--mem-limit-gb", type=float, default=16.0, metavar="GB", help="address-space cap"
+    add_contender_options(
+        parser,
+        repeat_help="rounds (default 3)",
+        output_help="the report whose <!-- cluster_compare --> section to write",
     )
-    parser.add_argument("--output", type=Path, default=REPO / "BENCHMARKS.md", metavar="PATH")
     parser.add_argument("--no-write", action="store_true", help="print the report only")
     parser.add_argument("--worker", choices=sorted(CONTENDERS), help=argparse.SUPPRESS)
     parser.add_argument("--workload", choices=sorted(WORKLOAD_BY_KEY), help=argparse.SUPPRESS)

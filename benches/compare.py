@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness import (
+    add_contender_options,
     build_stamp,
     cap_address_space,
     load_average,
@@ -510,53 +511,22 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument(
         "--quick", action="store_true", help="only the 30 min drive, one repetition (a smoke test)"
     )
-    parser.add_argument(
-        "--repeat",
-        type=int,
-        default=3,
-        metavar="N",
-        help="repetitions per contender; the best counts (default 3)",
+    add_contender_options(
+        parser,
+        repeat_help="repetitions per contender; the best counts (default 3)",
+        output_help="where to write the report (default: BENCHMARKS.md at the repo root)",
+        budget_s=120.0,
     )
     parser.add_argument(
         "--skip-lattice",
         action="store_true",
         help="leave out the scipy lattice pipeline (slow, several GB)",
     )
-    parser.add_argument(
-        "--output",
-        type=Path,
-        default=REPO / "BENCHMARKS.md",
-        metavar="PATH",
-        help="where to write the report (default: BENCHMARKS.md at the repo root)",
-    )
-    parser.add_argument(
-        "--budget-s",
-        type=float,
-        default=120.0,
-        metavar="SECONDS",
-        help="stop repeating a contender after this much time (default 120)",
-    )
-    parser.add_argument(
-        "--timeout-s",
-        type=float,
-        default=600.0,
-        metavar="SECONDS",
-        help="kill a contender after this long and record a timeout (default 600)",
-    )
-    parser.add_argument(
-        "--mem-limit-gb",
-        type=float,
-        default=16.0,
-        metavar="GB",
-        help="address-space cap per contender (default 16)",
-    )
     parser.add_argument("--gamma-m", type=float, default=GAMMA_M, help=argparse.SUPPRESS)
     parser.add_argument("--worker", choices=sorted(CONTENDERS), help=argparse.SUPPRESS)
     parser.add_argument("--duration-s", type=float, default=-1.0, help=argparse.SUPPRESS)
     parser.add_argument("--skip-check", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.repeat < 1:
-        parser.error("--repeat must be at least 1")
     if args.quick and "--repeat" not in sys.argv:
         args.repeat = 1
     return args

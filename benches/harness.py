@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import datetime as dt
 import fcntl
@@ -125,6 +126,50 @@ def table_digest(*tables: dict) -> str:
 # --------------------------------------------------------------------------------------------
 # Driver side.
 # --------------------------------------------------------------------------------------------
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def add_contender_options(
+    parser: argparse.ArgumentParser,
+    *,
+    repeat_help: str,
+    output_help: str,
+    budget_s: float | None = None,
+) -> None:
+    """The options every comparison driver takes: ``--repeat``, ``--timeout-s``,
+    ``--mem-limit-gb``, ``--output`` and, with a default ``budget_s``, ``--budget-s``."""
+    parser.add_argument("--repeat", type=_positive_int, default=3, metavar="N", help=repeat_help)
+    if budget_s is not None:
+        parser.add_argument(
+            "--budget-s",
+            type=float,
+            default=budget_s,
+            metavar="SECONDS",
+            help=f"stop repeating a contender after this much time (default {budget_s:g})",
+        )
+    parser.add_argument(
+        "--timeout-s",
+        type=float,
+        default=600.0,
+        metavar="SECONDS",
+        help="kill a contender after this long and record a timeout (default 600)",
+    )
+    parser.add_argument(
+        "--mem-limit-gb",
+        type=float,
+        default=16.0,
+        metavar="GB",
+        help="address-space cap per contender (default 16)",
+    )
+    parser.add_argument(
+        "--output", type=Path, default=REPO / "BENCHMARKS.md", metavar="PATH", help=output_help
+    )
 
 
 def run_process(

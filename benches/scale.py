@@ -57,7 +57,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from harness import (
-    REPO,
+    add_contender_options,
     build_stamp,
     cap_address_space,
     load_average,
@@ -1118,34 +1118,11 @@ def parse_args() -> argparse.Namespace:
         metavar="KEY,...",
         help="only these sizes: " + ", ".join(SIZE_BY_KEY),
     )
-    parser.add_argument("--repeat", type=int, default=3, metavar="N", help="default 3")
-    parser.add_argument(
-        "--budget-s",
-        type=float,
-        default=60.0,
-        metavar="SECONDS",
-        help="stop repeating a contender at a size after this much time (default 60)",
-    )
-    parser.add_argument(
-        "--timeout-s",
-        type=float,
-        default=600.0,
-        metavar="SECONDS",
-        help="kill a contender after this long and record a timeout (default 600)",
-    )
-    parser.add_argument(
-        "--mem-limit-gb",
-        type=float,
-        default=16.0,
-        metavar="GB",
-        help="address-space cap per contender (default 16)",
-    )
-    parser.add_argument(
-        "--output",
-        type=Path,
-        default=REPO / "BENCHMARKS.md",
-        metavar="PATH",
-        help="the report whose <!-- scale --> section to write (default BENCHMARKS.md)",
+    add_contender_options(
+        parser,
+        repeat_help="default 3",
+        output_help="the report whose <!-- scale --> section to write (default BENCHMARKS.md)",
+        budget_s=60.0,
     )
     parser.add_argument("--gamma-m", type=float, default=GAMMA_M, help=argparse.SUPPRESS)
     parser.add_argument("--worker", choices=sorted(CONTENDERS), help=argparse.SUPPRESS)
@@ -1153,8 +1130,6 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument("--workdir", help=argparse.SUPPRESS)
     parser.add_argument("--skip-check", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
-    if args.repeat < 1:
-        parser.error("--repeat must be at least 1")
     if args.sizes:
         unknown = [key for key in args.sizes.split(",") if key not in SIZE_BY_KEY]
         if unknown:
