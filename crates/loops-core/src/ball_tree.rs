@@ -25,13 +25,16 @@ struct Node {
     left: u32,
 }
 
-/// A leaf of the hierarchy: poses `lo..hi` within `radius` of pose `centre`.
+/// A stretch of the path that a query could not rule out: poses `lo..hi` within `radius` of pose
+/// `centre`. Either a leaf of the hierarchy, or (`inside`) a whole subtree that lies within the
+/// query's inner reach, taken without visiting its leaves.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Leaf {
     pub lo: u32,
     pub hi: u32,
     pub centre: u32,
     pub radius: f64,
+    pub inside: bool,
 }
 
 /// The ball hierarchy over a trajectory's poses; leaves hold `leaf_size` consecutive poses.
@@ -91,21 +94,92 @@ impl BallTree {
         self.nodes[slot] = Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32 };
     }
 
-    /// The leaves, in increasing order, that end after `from` and whose ball reaches within
-    /// `reach` of `x` (appended to `out`, cleared first). Poses in other leaves are all farther
-    /// than `reach` from `x`.
-    pub(crate) fn near_leaves<M: Metric + ?Sized>(
+    /// The stretches, in increasing order, that end after `from` and whose ball reaches within
+    /// `reach` of `x` (appended to `out`, cleared first): leaves, and whole subtrees whose ball
+    /// lies within `inside_reach` of `x` (`δ(x, centre) + radius ≤ inside_reach`), marked
+    /// `inside` and not descended into. Poses outside every stretch are all farther than `reach`
+    /// from `x`. Adjacent inside stretches are merged, so a parked robot's whole past is one
+    /// stretch: the walk costs O(stretches · log n), not O(leaves).
+    pub(crate) fn near_spans<M: Metric + ?Sized>(
         &self,
         metric: &M,
         x: &[f64],
         from: usize,
-        reach: f64,
+        (reach, inside_reach): (f64, f64),
         out: &mut Vec<Leaf>,
     ) {
         out.clear();
-        self.for_each_near_node(metric, x, from, reach, |node| {
-            out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius });
-        });
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        while let Some(index) = stack.pop() {
+            let node = self.nodes[index as usize];
+            if (node.hi as usize) <= from {
+                continue;
+            }
+            let d = metric.distance(x, self.centre(index));
+            if d - node.radius > reach {
+                continue;
+            }
+            let inside = d + node.radius <= inside_reach;
+            if inside || node.left == LEAF {
+                match out.last_mut() {
+                    Some(last) if inside && last.inside && last.hi == node.lo => last.hi = node.hi,
+                    _ => out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside }),
+                }
+            } else {
+                stack.push(node.left + 1);
+                stack.push(node.left);
+            }
+        }
+    }
+
+    /// The pose of `lo..=hi` closest to `x` under the metric's
+    /// [`distance_rank`](Metric::distance_rank), the earliest on ties: the same answer as
+    /// [`Metric::closest_in`] over the stretch. Branch and bound over the hierarchy, in index
+    /// order: a ball whose nearest possible pose is farther than the best so far by more than
+    /// `margin` (the rounding allowance of δ) is skipped, and a rank of 0 ends the search. A
+    /// parked robot's run of a million identical poses costs O(log n), not a million ranks.
+    pub(crate) fn closest_in_range<M: Metric + ?Sized>(
+        &self,
+        metric: &M,
+        traj: &Trajectory,
+        x: &[f64],
+        (lo, hi): (usize, usize),
+        margin: f64,
+    ) -> usize {
+        let dim = traj.dim();
+        // (rank, distance, pose) of the best so far.
+        let mut best = (f64::INFINITY, f64::INFINITY, lo);
+        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        stack.push(0);
+        while let Some(index) = stack.pop() {
+            let node = self.nodes[index as usize];
+            let (a, b) = ((node.lo as usize).max(lo), (node.hi as usize).min(hi + 1));
+            if a >= b {
+                continue;
+            }
+            if metric.distance(x, self.centre(index)) - node.radius > best.1 + margin {
+                continue;
+            }
+            if node.left != LEAF {
+                stack.push(node.left + 1);
+                stack.push(node.left);
+                continue;
+            }
+            let k = a + metric.closest_in(x, &traj.coords()[a * dim..b * dim]);
+            let rank = metric.distance_rank(x, traj.point(k));
+            if rank < best.0 {
+                best = (rank, metric.distance(x, traj.point(k)), k);
+                if rank <= 0.0 {
+                    break;
+                }
+            }
+        }
+        best.2
+    }
+
+    fn centre(&self, index: u32) -> &[f64] {
+        &self.centres[index as usize * self.dim..(index as usize + 1) * self.dim]
     }
 
     /// Calls `visit(lo, hi)` for every leaf stretch, in increasing order, that ends after
@@ -139,8 +213,7 @@ impl BallTree {
             if (node.hi as usize) <= from {
                 continue;
             }
-            let centre = &self.centres[index as usize * self.dim..(index as usize + 1) * self.dim];
-            if metric.distance(x, centre) - node.radius > reach {
+            if metric.distance(x, self.centre(index)) - node.radius > reach {
                 continue;
             }
             if node.left == LEAF {
@@ -149,6 +222,63 @@ impl BallTree {
                 stack.push(node.left + 1);
                 stack.push(node.left);
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::Euclidean;
+
+    /// Poses on a 3 × 3 lattice (many identical, many ties) and on a line, at random.
+    fn tied_trajectory(n: usize, seed: u64) -> Trajectory {
+        let mut state = seed;
+        let mut next = move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 33) as usize
+        };
+        let points: Vec<[f64; 2]> = (0..n)
+            .map(|k| if k % 97 < 60 { [(next() % 3) as f64, (next() % 3) as f64] } else { [k as f64 * 0.01, 0.0] })
+            .collect();
+        Trajectory::from_points((0..n).map(|i| i as f64).collect(), &points).unwrap()
+    }
+
+    #[test]
+    fn closest_in_range_is_the_linear_scan_ties_included() {
+        for seed in 0..20 {
+            let traj = tied_trajectory(1500, seed);
+            let tree = BallTree::new(&traj, &Euclidean, 16);
+            for (k, lo) in (0..traj.len()).step_by(37).enumerate() {
+                let hi = (lo + 40 + 97 * k).min(traj.len() - 1);
+                for x in [traj.point((lo * 7 + 3) % traj.len()), &[0.5, 0.5][..], &[1.0, 1.0][..]] {
+                    let expected = lo + Euclidean.closest_in(x, &traj.coords()[2 * lo..2 * (hi + 1)]);
+                    let found = tree.closest_in_range(&Euclidean, &traj, x, (lo, hi), 1e-12);
+                    assert_eq!(found, expected, "seed {seed}, range {lo}..={hi}, x {x:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn inside_spans_are_within_reach_and_pruned_poses_beyond() {
+        let traj = tied_trajectory(3000, 7);
+        let tree = BallTree::new(&traj, &Euclidean, 16);
+        let mut spans = Vec::new();
+        for (q, from) in [(0, 0), (100, 50), (2000, 1990)] {
+            let x = traj.point(q);
+            tree.near_spans(&Euclidean, x, from, (1.0, 0.5), &mut spans);
+            let span_of = |k: usize| spans.iter().find(|s| (s.lo as usize..s.hi as usize).contains(&k));
+            for k in from..traj.len() {
+                match span_of(k) {
+                    Some(span) if span.inside => {
+                        assert!(Euclidean.distance(x, traj.point(k)) <= 0.5, "pose {k} of an inside span");
+                    }
+                    Some(_) => {}
+                    None => assert!(Euclidean.distance(x, traj.point(k)) > 1.0, "pose {k} pruned but near"),
+                }
+            }
+            assert!(spans.windows(2).all(|w| w[0].hi <= w[1].lo), "spans in order, disjoint");
         }
     }
 }

@@ -90,9 +90,10 @@ impl SublevelSet {
                 .map(|b| {
                     let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
                     let mut block = Block::default();
-                    scanner.candidates_for(rows.clone(), &mut block.candidates);
+                    let mut candidates = Vec::new();
+                    scanner.candidates_for(rows.clone(), &mut candidates);
                     for i in rows {
-                        scanner.scan_row(i, &mut block);
+                        scanner.scan_row(i, &candidates, &mut block);
                         block.row_lengths.push(block.runs.len());
                     }
                     block
@@ -229,9 +230,11 @@ struct Block {
     runs: Vec<Run>,
     closest: Vec<u32>,
     row_lengths: Vec<usize>,
-    /// Leaves of the ball hierarchy that may hold a pose within γ of some row of the block.
-    candidates: Vec<Leaf>,
 }
+
+/// Runs at least this long find their closest column through the ball hierarchy; shorter ones
+/// by one vectorised pass over their cells.
+const TREE_CLOSEST_LEN: usize = 256;
 
 /// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
 struct ArcLength {
@@ -310,37 +313,60 @@ struct RowScanner<'a, M: ?Sized> {
 }
 
 impl<M: Metric + ?Sized> RowScanner<'_, M> {
-    /// The leaves that may hold a pose within γ of any row in `rows`: one walk of the hierarchy
-    /// per block with the block's own bounding ball, instead of one per row.
+    /// The stretches of the path that may hold a pose within γ of any row in `rows`: one walk of
+    /// the hierarchy per block with the block's own bounding ball, instead of one per row.
+    /// Stretches that lie within γ of every row of the block come whole, marked `inside`.
     fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) {
         let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
         let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
-        let reach = self.gamma + radius + 2.0 * self.arc.margin;
-        self.balls.near_leaves(self.metric, centre, rows.start, reach, out);
+        let margin = self.arc.margin;
+        // A pose within `inside_reach` of the centre is within γ of every row, with room for the
+        // rounding of the three distances of the triangle inequality.
+        let reach = (self.gamma + radius + 2.0 * margin, self.gamma - radius - 3.0 * margin);
+        self.balls.near_spans(self.metric, centre, rows.start, reach, out);
     }
 
-    fn scan_row(&self, i: usize, out: &mut Block) {
+    fn scan_row(&self, i: usize, candidates: &[Leaf], out: &mut Block) {
         let x_i = self.traj.point(i);
         let margin = self.arc.margin;
         let reach = self.gamma + margin;
         let mut open: Option<(usize, usize)> = None;
         // Next column to examine; columns before it are decided.
         let mut j = i;
-        for leaf in &out.candidates {
-            let (lo, hi) = ((leaf.lo as usize).max(i), leaf.hi as usize);
-            if hi <= j {
+        let mut next = 0;
+        while next < candidates.len() {
+            // Stretches that end before the scan: skipped in O(log) after a long run or jump.
+            if candidates[next].hi as usize <= j {
+                next += candidates[next..].partition_point(|leaf| leaf.hi as usize <= j);
                 continue;
             }
-            // Poses of a leaf whose ball stays farther than γ from x_i are all outside.
-            if self.metric.distance(x_i, self.traj.point(leaf.centre as usize)) - leaf.radius > reach {
+            let leaf = candidates[next];
+            next += 1;
+            let (lo, hi) = ((leaf.lo as usize).max(i), leaf.hi as usize);
+            if !leaf.inside && self.metric.distance(x_i, self.traj.point(leaf.centre as usize)) - leaf.radius > reach {
+                // Poses of a stretch whose ball stays farther than γ from x_i are all outside.
                 continue;
             }
             if j < lo {
-                // Columns j..lo lie in pruned leaves: all outside, so a run open at j − 1 ends.
+                // Columns j..lo lie in pruned stretches: all outside, so a run open at j − 1 ends.
                 if let Some((a, b)) = open.take() {
-                    close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
+                    self.close_run(i, a, b, &mut out.runs, &mut out.closest);
                 }
                 j = lo;
+            }
+            if leaf.inside {
+                // Every pose of the stretch is within γ of x_i: one run, no distance measured.
+                open = match open {
+                    Some((a, b)) if b + 1 == j => Some((a, hi - 1)),
+                    other => {
+                        if let Some((a, b)) = other {
+                            self.close_run(i, a, b, &mut out.runs, &mut out.closest);
+                        }
+                        Some((j, hi - 1))
+                    }
+                };
+                j = hi;
+                continue;
             }
             while j < hi {
                 let d = self.metric.distance(x_i, self.traj.point(j));
@@ -351,7 +377,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                         Some((a, b)) if b + 1 == j => Some((a, k)),
                         _ => {
                             if let Some((a, b)) = open {
-                                close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
+                                self.close_run(i, a, b, &mut out.runs, &mut out.closest);
                             }
                             Some((j, k))
                         }
@@ -359,7 +385,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                     j = k + 1;
                 } else {
                     if let Some((a, b)) = open.take() {
-                        close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
+                        self.close_run(i, a, b, &mut out.runs, &mut out.closest);
                     }
                     // Every k before the jump has δ(x_i, x_k) ≥ d − (s_k − s_j) > γ + margin.
                     j = self.arc.first_beyond(j, d - self.gamma - margin);
@@ -367,29 +393,24 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             }
         }
         if let Some((a, b)) = open {
-            close_run(self.traj, self.metric, i, a, b, &mut out.runs, &mut out.closest);
+            self.close_run(i, a, b, &mut out.runs, &mut out.closest);
         }
     }
-}
 
-/// Records the run `a..=b` of row `i` with its closest column.
-fn close_run<M: Metric + ?Sized>(
-    traj: &Trajectory,
-    metric: &M,
-    i: usize,
-    a: usize,
-    b: usize,
-    runs: &mut Vec<Run>,
-    closest: &mut Vec<u32>,
-) {
-    let column = if a == i {
-        i
-    } else {
-        let dim = traj.dim();
-        a + metric.closest_in(traj.point(i), &traj.coords()[a * dim..(b + 1) * dim])
-    };
-    runs.push(Run { start: a as u32, end: b as u32 });
-    closest.push(column as u32);
+    /// Records the run `a..=b` of row `i` with its closest column (row i's own cell when the run
+    /// starts on the diagonal).
+    fn close_run(&self, i: usize, a: usize, b: usize, runs: &mut Vec<Run>, closest: &mut Vec<u32>) {
+        let column = if a == i {
+            i
+        } else if b - a + 1 >= TREE_CLOSEST_LEN {
+            self.balls.closest_in_range(self.metric, self.traj, self.traj.point(i), (a, b), 2.0 * self.arc.margin)
+        } else {
+            let dim = self.traj.dim();
+            a + self.metric.closest_in(self.traj.point(i), &self.traj.coords()[a * dim..(b + 1) * dim])
+        };
+        runs.push(Run { start: a as u32, end: b as u32 });
+        closest.push(column as u32);
+    }
 }
 
 #[cfg(test)]

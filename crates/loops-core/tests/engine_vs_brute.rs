@@ -143,3 +143,64 @@ fn closest_column_follows_the_metric_rank() {
         0.0_f64.max(Euclidean.distance(traj.point(component.closest_pair[0]), traj.point(component.closest_pair[1])))
     );
 }
+
+/// A robot that parks: stretches of hundreds of poses at one place (exactly, with 1e-9 jitter,
+/// or scattered within a fraction of γ), joined by drives. Long runs take the hierarchy's whole
+/// stretches and its closest-column search; both must give the brute force's set, closest
+/// columns included.
+fn parked_case() -> impl Strategy<Value = (Trajectory, f64)> {
+    let stop = (0usize..4, 150usize..700, 0usize..3, any::<u64>());
+    (proptest::collection::vec(stop, 1..5), 0.5f64..4.0).prop_map(|(stops, gamma)| {
+        let (mut xs, mut state) = (Vec::new(), 0x9E37_79B9_u64);
+        for (place, len, noise, seed) in stops {
+            state ^= seed;
+            let centre = [place as f64 * 3.0, (place % 2) as f64 * 1.5];
+            let spread = [0.0, 1e-9, 0.3 * gamma][noise];
+            // Drive there straight, in steps of γ/37: stretches of the hierarchy then end at every
+            // distance from a stop, some just beyond γ.
+            let from = xs.last().copied().unwrap_or(centre);
+            let steps = (((centre[0] - from[0]).hypot(centre[1] - from[1])) / (gamma / 37.0)).ceil() as usize;
+            for k in 1..=steps {
+                let f = k as f64 / steps as f64;
+                xs.push([from[0] + f * (centre[0] - from[0]), from[1] + f * (centre[1] - from[1])]);
+            }
+            for _ in 0..len {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let (u, v) = ((state >> 11) as f64 / (1u64 << 53) as f64, (state >> 3 & 0xffff) as f64 / 65536.0);
+                xs.push([centre[0] + spread * (u - 0.5), centre[1] + spread * (v - 0.5)]);
+            }
+        }
+        let times = (0..xs.len()).map(|i| i as f64 * 0.1).collect();
+        (Trajectory::from_points(times, &xs).unwrap(), gamma)
+    })
+}
+
+proptest! {
+    #![proptest_config(config(24, 0x5EED_0004))]
+
+    #[test]
+    fn parked_robots_equal_the_brute_force((traj, gamma) in parked_case()) {
+        let set = with_threads(Some(2), || SublevelSet::compute(&traj, &Euclidean, gamma))??;
+        let brute = SublevelSet::brute_force(&traj, &Euclidean, gamma)?;
+        for i in 0..traj.len() {
+            prop_assert_eq!(set.row(i), brute.row(i), "row {}", i);
+        }
+        prop_assert_eq!(set.closest_columns(), brute.closest_columns());
+        prop_assert_eq!(&set, &brute);
+    }
+}
+
+/// A million identical poses: one component in n runs (row i: columns i..n), found without
+/// measuring every pair.
+#[test]
+fn a_parked_robot_is_one_component() {
+    let n = 1_000_000;
+    let traj = Trajectory::from_points((0..n).map(|i| i as f64 * 0.1).collect(), &vec![[1.0, 2.0]; n]).unwrap();
+    let set = SublevelSet::compute(&traj, &Euclidean, 1.0).unwrap();
+    assert_eq!(set.runs().len(), n);
+    assert!((0..n).all(|i| set.row(i) == [Run { start: i as u32, end: (n - 1) as u32 }]));
+    assert!(set.closest_columns().iter().enumerate().all(|(i, &c)| c as usize == i));
+    let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+    assert_eq!(loops.components().len(), 1);
+    assert_eq!(loops.components()[0].closest_distance, 0.0);
+}
