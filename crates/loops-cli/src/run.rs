@@ -21,6 +21,7 @@ use loops_core::{
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::args::{EngineArgs, InputArgs, SamplingArgs};
 use crate::guard;
 use crate::progress::{self, Batch};
 use crate::report::{self, ReportInput};
@@ -32,17 +33,31 @@ const MARKER: &str = "summary.json";
 /// The samplers of the samples-per-component figure (the run's own is added when not among them).
 const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::Alpha];
 
+/// Process many pose logs: per log its components, samples, loop durations, a summary and
+/// an HTML report, in a folder of its own; for the batch an index page and a summary.
+/// Logs run in parallel; one that fails is reported and the others go on (exit code 1).
 #[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
+    loops run logs/*.mcap --gamma 40 --out results\n  \
+    loops run logs/*.mcap --gamma 40 --sampler rho --budget 2000 --out results --force\n  \
+    loops run a.mcap b.tum --gamma 0.5 --metric 'se3(rotation_weight_m_per_rad=1)' --out results --json\n  \
+    loops run night/*.mcap --topic /odom --gamma 10 --out night-results --quiet\n\n\
+    Per log (results/<log>/): components.csv, samples.csv, loop_duration.csv, summary.json,\n\
+    report.html. For the batch: results/index.html and results/summary.json. Ctrl-C keeps the\n\
+    logs already finished and removes the rest; nothing half-written is left."
+)]
 pub(crate) struct RunArgs {
     /// The pose logs: MCAP, or any format `loops info` reads (TUM, CSV, KITTI, EuRoC, TUC, g2o).
     #[arg(required = true, value_name = "LOG")]
     logs: Vec<PathBuf>,
     #[command(flatten)]
-    input: crate::input::InputArgs,
+    input: InputArgs,
     #[command(flatten)]
-    engine: crate::EngineArgs,
+    engine: EngineArgs,
     #[command(flatten)]
-    sampling: crate::sample::SamplingArgs,
+    sampling: SamplingArgs,
     /// The folder for the results: a folder per log (components.csv, samples.csv,
     /// loop_duration.csv, summary.json, report.html), index.html and summary.json.
     #[arg(long, value_name = "DIR")]
@@ -155,7 +170,7 @@ struct Settings<'a> {
 
 pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     let start = Instant::now();
-    let spec: MetricSpec = args.engine.metric.parse()?;
+    let spec = args.engine.spec()?;
     let sampler = args.sampling.sampler()?;
     // Refused once, before any log is read, rather than once per log.
     loops_core::check_gamma(args.engine.gamma)?;

@@ -6,19 +6,24 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use loops_core::{
-    DEFAULT_EPSILON_S, Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Samples, Trajectory,
-    cluster_detections, sample_clusters, sample_quality,
-};
+use loops_core::{Loops, SampleQuality, Samples, Trajectory, cluster_detections, sample_clusters, sample_quality};
 
-use crate::EngineArgs;
+use crate::args::{EngineArgs, InputArgs, SamplingArgs};
 
+/// Candidate loop-closure pairs for a scan matcher, from the exact loop components or from
+/// clustered detections, with coverage (P1), redundancy (P2) and growth (P3).
 #[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
+    loops sample drive.tum --gamma 40 --sampler rho --budget 10000 --out pairs.csv\n  \
+    loops sample Corridor_GT.tum --gamma 1 --sampler rho --budget 500 --detections Corridor_Input.txt --epsilon-s 5"
+)]
 pub(crate) struct SampleArgs {
     /// The trajectory file.
     file: PathBuf,
     #[command(flatten)]
-    input: crate::input::InputArgs,
+    input: InputArgs,
     #[command(flatten)]
     engine: EngineArgs,
     #[command(flatten)]
@@ -40,51 +45,8 @@ pub(crate) struct SampleArgs {
     force: bool,
 }
 
-/// How to sample: the flags `loops sample` and `loops run` share, with the core's defaults.
-#[derive(Debug, Args)]
-pub(crate) struct SamplingArgs {
-    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
-    /// lio-sam, hdl-graph-slam, cartographer, time-gap.
-    #[arg(long, default_value_t = SamplerKind::default().name().to_owned())]
-    pub(crate) sampler: String,
-    /// Exactly this many samples (at least one per component when it allows) [default: 1000
-    /// without --rate].
-    #[arg(long, conflicts_with = "rate")]
-    pub(crate) budget: Option<usize>,
-    /// The sampler's rate instead of a budget (per component, per row, or per candidate).
-    #[arg(long)]
-    pub(crate) rate: Option<f64>,
-    /// Seed of the random choices.
-    #[arg(long, default_value_t = Sampler::DEFAULT_SEED)]
-    pub(crate) seed: u64,
-    /// Radius of the detection graph and of the P2 redundancy measure, seconds.
-    #[arg(long = "epsilon-s", visible_alias = "epsilon", value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
-    pub(crate) epsilon_s: f64,
-    /// Leave out the trivial loop components (simple loops: the next poses, stops), which
-    /// odometry already ties together (one, rho, rho-dispersed, alpha; not with --detections).
-    #[arg(long)]
-    pub(crate) skip_trivial: bool,
-}
-
-impl SamplingArgs {
-    /// The sampler these flags ask for.
-    pub(crate) fn sampler(&self) -> Result<Sampler> {
-        let kind: SamplerKind = self.sampler.parse()?;
-        let size = SampleSize::or_default(self.rate, self.budget)?;
-        let sampler = Sampler { skip_trivial: self.skip_trivial, ..Sampler::new(kind, size, self.seed) };
-        // Core names the option as in Rust; here it is a flag.
-        sampler.check_applicable().map_err(|error| match error {
-            loops_core::Error::NotApplicable { option, to, reason } => {
-                anyhow::anyhow!("--{} does not apply to {to}: {reason}", option.replace('_', "-"))
-            }
-            other => other.into(),
-        })?;
-        Ok(sampler)
-    }
-}
-
 pub(crate) fn sample(args: SampleArgs) -> Result<()> {
-    let spec: MetricSpec = args.engine.metric.parse()?;
+    let spec = args.engine.spec()?;
     let sampler = args.sampling.sampler()?;
     let epsilon_s = args.sampling.epsilon_s;
     let output_format = args.out.as_deref().map(samples_format).transpose()?;

@@ -1,13 +1,76 @@
-//! What `loops` prints and writes: the terminal table, the JSON report, atomic file writes.
+//! `loops components`: the loop components of a pose file, as a table on stdout and, on request,
+//! a JSON report. `loops demo` prints the same for its synthetic drive.
 
 use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
+use clap::Args;
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
 use serde::Serialize;
 
+use crate::args::{EngineArgs, InputArgs, OutputArgs};
+use crate::guard;
+
+/// List the loop components of a trajectory file (TUM or CSV).
+#[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
+    loops components kitti00.txt --format tum --axes 0,2 --gamma 6 --json kitti00.json\n  \
+    loops components log.csv --gamma 5 --limit 0    # every component\n  \
+    loops components fr2_desk.tum --gamma 0.3 --metric 'se3(rotation_weight_m_per_rad=0.5)'"
+)]
+pub(crate) struct ComponentsArgs {
+    /// The trajectory file.
+    file: PathBuf,
+    #[command(flatten)]
+    input: InputArgs,
+    #[command(flatten)]
+    engine: EngineArgs,
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+pub(crate) fn components(args: ComponentsArgs) -> Result<()> {
+    let source = args.file.display().to_string();
+    let spec = args.engine.spec()?;
+    let traj = args.input.read(&args.file, &spec)?;
+    let (loops, seconds) = timed(args.engine.threads, || spec.find_loops(&traj, args.engine.gamma))
+        .with_context(|| format!("finding loops in {source}"))?;
+    print(&source, &traj, &loops, seconds, &args.output)
+}
+
+/// Runs `find` on `threads` threads: its loops and the seconds it took.
+pub(crate) fn timed(
+    threads: Option<usize>,
+    find: impl FnOnce() -> loops_core::Result<Loops> + Send,
+) -> Result<(Loops, f64)> {
+    let start = Instant::now();
+    let loops = loops_core::with_threads(threads, find)??;
+    Ok((loops, start.elapsed().as_secs_f64()))
+}
+
+/// Prints the warnings (stderr) and the table (stdout), and writes the JSON report if asked.
+pub(crate) fn print(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64, out: &OutputArgs) -> Result<()> {
+    for warning in loops.warnings() {
+        eprintln!("loops: warning: {warning}");
+    }
+    let mut stdout = std::io::stdout().lock();
+    write_table(&mut stdout, source, traj, loops, seconds, out.limit)?;
+    stdout.flush()?;
+    if let Some(path) = &out.json {
+        let json = json_report(source, traj, loops)?;
+        guard::write_atomically(path, json.as_bytes(), out.force)
+            .with_context(|| format!("writing {}", path.display()))?;
+        writeln!(stdout, "wrote {}", path.display())?;
+    }
+    Ok(())
+}
+
 /// The summary line and the components table, largest area first, at most `limit` rows (0: all).
-pub(crate) fn write_table(
+fn write_table(
     out: &mut impl Write,
     source: &str,
     traj: &Trajectory,
@@ -102,7 +165,7 @@ struct JsonComponent {
 }
 
 /// The result as a JSON document (every component, by id).
-pub(crate) fn json_report(source: &str, traj: &Trajectory, loops: &Loops) -> Result<String> {
+fn json_report(source: &str, traj: &Trajectory, loops: &Loops) -> Result<String> {
     let t = traj.timestamps_s();
     let report = JsonReport {
         source,

@@ -1,0 +1,160 @@
+//! The argument groups several commands share: how to read a pose file ([`InputArgs`]), the
+//! engine ([`EngineArgs`]), how to sample ([`SamplingArgs`]) and what to print or write
+//! ([`OutputArgs`]).
+//!
+//! Each group converts its flags into the type of `loops-core` or `loops-io` that says the same
+//! thing, once; defaults come from those types (`default_value_t = ...::default()`), and values
+//! are validated where the concept lives, not here.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Result, bail};
+use clap::Args;
+use loops_core::{DEFAULT_EPSILON_S, MetricSpec, SampleSize, Sampler, SamplerKind, Trajectory};
+
+/// The flags that say how to read a pose file, shared by every command that reads one.
+#[derive(Debug, Args)]
+pub(crate) struct InputArgs {
+    /// File format: tum, csv, kitti, euroc, tuc, g2o, mcap (default: from the extension and
+    /// first line).
+    #[arg(long)]
+    format: Option<String>,
+    /// MCAP topic to read (default: the one topic with poses; `loops info` lists them).
+    #[arg(long)]
+    topic: Option<String>,
+    /// MCAP time of each pose: header (the message stamp), log or publish.
+    #[arg(long)]
+    time: Option<String>,
+    /// Parent and child frame of a transform topic (TF), e.g. odom,base_link.
+    #[arg(long, value_delimiter = ',', value_name = "PARENT,CHILD")]
+    frames: Option<Vec<String>>,
+    /// For files without times (KITTI poses, pose graphs): pose i at i / RATE_HZ seconds.
+    #[arg(long, value_name = "RATE_HZ")]
+    rate_hz: Option<f64>,
+    /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).
+    #[arg(long, value_delimiter = ',', value_name = "A,B")]
+    axes: Option<Vec<usize>>,
+}
+
+impl InputArgs {
+    /// The options of `loops_io` these flags ask for: the one place the CLI builds them.
+    pub(crate) fn options(&self) -> Result<loops_io::ReadOptions> {
+        let mut mcap = loops_io::McapOptions::default();
+        if let Some(topic) = &self.topic {
+            mcap = mcap.topic(topic.clone());
+        }
+        if let Some(time) = &self.time {
+            mcap = mcap.time(time.parse()?);
+        }
+        match self.frames.as_deref() {
+            None => {}
+            Some([parent, child]) => mcap = mcap.frames(parent.clone(), child.clone()),
+            Some(other) => bail!("--frames takes a parent and a child frame, got {other:?}"),
+        }
+        let mut options = loops_io::ReadOptions::default().mcap(mcap);
+        if let Some(format) = &self.format {
+            options = options.format(format.parse()?);
+        }
+        if let Some(rate) = self.rate_hz {
+            options = options.timing(loops_io::Timing::RateHz(rate));
+        }
+        Ok(options)
+    }
+
+    /// Reads `file` as the trajectory `spec` needs.
+    pub(crate) fn read(&self, file: &Path, spec: &MetricSpec) -> Result<Trajectory> {
+        Ok(self.read_table(file, spec)?.1)
+    }
+
+    /// Reads `file`: the poses as read (orientations included) and the trajectory `spec` needs.
+    pub(crate) fn read_table(&self, file: &Path, spec: &MetricSpec) -> Result<(loops_io::PoseTable, Trajectory)> {
+        let axes = match self.axes.as_deref() {
+            None => None,
+            Some(&[a, b]) => Some([a, b]),
+            Some(other) => bail!("--axes takes two axis indices, got {other:?}"),
+        };
+        let table = loops_io::read_trajectory_with(file, &self.options()?)?;
+        let traj = table.to_trajectory_for(spec, axes)?;
+        Ok((table, traj))
+    }
+}
+
+/// The engine: γ, the metric and the thread pool.
+#[derive(Debug, Args)]
+pub(crate) struct EngineArgs {
+    /// The distance threshold γ, in the metric's unit (metres for positions).
+    #[arg(long, value_name = "GAMMA_M")]
+    pub(crate) gamma: f64,
+    /// The metric: euclidean, se3(rotation_weight_m_per_rad=W[, rotation=geodesic|chordal]),
+    /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W). SE(3), SO(3) and SE(2) use the file's
+    /// orientations.
+    #[arg(long, default_value_t = MetricSpec::default().name())]
+    pub(crate) metric: String,
+    /// Worker threads (default: one per core). Results do not depend on it.
+    #[arg(long)]
+    pub(crate) threads: Option<usize>,
+}
+
+impl EngineArgs {
+    /// The metric `--metric` names.
+    pub(crate) fn spec(&self) -> Result<MetricSpec> {
+        Ok(self.metric.parse()?)
+    }
+}
+
+/// How to sample: the flags `loops sample` and `loops run` share, with the core's defaults.
+#[derive(Debug, Args)]
+pub(crate) struct SamplingArgs {
+    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
+    /// lio-sam, hdl-graph-slam, cartographer, time-gap.
+    #[arg(long, default_value_t = SamplerKind::default().name().to_owned())]
+    pub(crate) sampler: String,
+    /// Exactly this many samples (at least one per component when it allows) [default: 1000
+    /// without --rate].
+    #[arg(long, conflicts_with = "rate")]
+    pub(crate) budget: Option<usize>,
+    /// The sampler's rate instead of a budget (per component, per row, or per candidate).
+    #[arg(long)]
+    pub(crate) rate: Option<f64>,
+    /// Seed of the random choices.
+    #[arg(long, default_value_t = Sampler::DEFAULT_SEED)]
+    pub(crate) seed: u64,
+    /// Radius of the detection graph and of the P2 redundancy measure, seconds.
+    #[arg(long = "epsilon-s", visible_alias = "epsilon", value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
+    pub(crate) epsilon_s: f64,
+    /// Leave out the trivial loop components (simple loops: the next poses, stops), which
+    /// odometry already ties together (one, rho, rho-dispersed, alpha; not with --detections).
+    #[arg(long)]
+    pub(crate) skip_trivial: bool,
+}
+
+impl SamplingArgs {
+    /// The sampler these flags ask for, refused by the core when an option does not apply.
+    pub(crate) fn sampler(&self) -> Result<Sampler> {
+        let kind: SamplerKind = self.sampler.parse()?;
+        let size = SampleSize::or_default(self.rate, self.budget)?;
+        let sampler = Sampler { skip_trivial: self.skip_trivial, ..Sampler::new(kind, size, self.seed) };
+        // Core names the option as in Rust; here it is a flag.
+        sampler.check_applicable().map_err(|error| match error {
+            loops_core::Error::NotApplicable { option, to, reason } => {
+                anyhow::anyhow!("--{} does not apply to {to}: {reason}", option.replace('_', "-"))
+            }
+            other => other.into(),
+        })?;
+        Ok(sampler)
+    }
+}
+
+/// What `loops components` and `loops demo` print and write.
+#[derive(Debug, Args)]
+pub(crate) struct OutputArgs {
+    /// Also write the result as JSON to this file (written atomically).
+    #[arg(long, value_name = "PATH")]
+    pub(crate) json: Option<PathBuf>,
+    /// Replace the JSON file if it exists.
+    #[arg(long)]
+    pub(crate) force: bool,
+    /// Show at most this many components, largest area first (0: all).
+    #[arg(long, default_value_t = 20)]
+    pub(crate) limit: usize,
+}
