@@ -9,7 +9,6 @@ mod args;
 mod components;
 mod demo;
 mod guard;
-mod html;
 mod info;
 mod progress;
 mod report;

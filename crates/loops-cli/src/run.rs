@@ -83,81 +83,81 @@ struct Job {
 
 /// What `loops run` knows after one log: summary.json of its folder.
 #[derive(Debug, Serialize)]
-struct LogSummary {
-    name: String,
-    source: String,
-    poses: usize,
-    t0_s: f64,
-    span_s: f64,
-    metric: String,
-    gamma: f64,
-    components: usize,
-    nontrivial_components: usize,
-    holes: u64,
-    pairs: u64,
-    loop_area_s2: f64,
-    loop_density_s: f64,
-    sampler: String,
-    sample_size: String,
-    seed: u64,
-    skip_trivial: bool,
-    epsilon_s: f64,
-    samples: usize,
-    quality: QualitySummary,
-    comparison: Vec<QualitySummary>,
-    seconds: Seconds,
-    warnings: Vec<String>,
-    files: [&'static str; 5],
+pub(crate) struct LogSummary {
+    pub(crate) name: String,
+    pub(crate) source: String,
+    pub(crate) poses: usize,
+    pub(crate) t0_s: f64,
+    pub(crate) span_s: f64,
+    pub(crate) metric: String,
+    pub(crate) gamma: f64,
+    pub(crate) components: usize,
+    pub(crate) nontrivial_components: usize,
+    pub(crate) holes: u64,
+    pub(crate) pairs: u64,
+    pub(crate) loop_area_s2: f64,
+    pub(crate) loop_density_s: f64,
+    pub(crate) sampler: String,
+    pub(crate) sample_size: String,
+    pub(crate) seed: u64,
+    pub(crate) skip_trivial: bool,
+    pub(crate) epsilon_s: f64,
+    pub(crate) samples: usize,
+    pub(crate) quality: QualitySummary,
+    pub(crate) comparison: Vec<QualitySummary>,
+    pub(crate) seconds: Seconds,
+    pub(crate) warnings: Vec<String>,
+    pub(crate) files: [&'static str; 5],
 }
 
 #[derive(Debug, Serialize)]
-struct QualitySummary {
-    sampler: String,
-    samples: usize,
-    outside: usize,
-    components: usize,
-    covered: usize,
-    nontrivial_components: usize,
-    nontrivial_covered: usize,
-    redundant: usize,
-    median_spacing_s: Option<f64>,
-    p3_slope: Option<f64>,
+pub(crate) struct QualitySummary {
+    pub(crate) sampler: String,
+    pub(crate) samples: usize,
+    pub(crate) outside: usize,
+    pub(crate) components: usize,
+    pub(crate) covered: usize,
+    pub(crate) nontrivial_components: usize,
+    pub(crate) nontrivial_covered: usize,
+    pub(crate) redundant: usize,
+    pub(crate) median_spacing_s: Option<f64>,
+    pub(crate) p3_slope: Option<f64>,
 }
 
 #[derive(Debug, Default, Serialize)]
-struct Seconds {
-    read: f64,
-    find_loops: f64,
-    sample: f64,
-    write: f64,
-    total: f64,
+pub(crate) struct Seconds {
+    pub(crate) read: f64,
+    pub(crate) find_loops: f64,
+    pub(crate) sample: f64,
+    pub(crate) write: f64,
+    pub(crate) total: f64,
 }
 
 /// One line of the batch summary.
 #[derive(Debug, Serialize)]
-struct LogOutcome {
-    name: String,
-    source: String,
-    ok: bool,
-    error: Option<String>,
-    summary: Option<LogSummary>,
+pub(crate) struct LogOutcome {
+    pub(crate) name: String,
+    pub(crate) source: String,
+    pub(crate) ok: bool,
+    pub(crate) error: Option<String>,
+    pub(crate) summary: Option<LogSummary>,
 }
 
 #[derive(Debug, Serialize)]
-struct BatchSummary<'a> {
-    out: String,
-    gamma: f64,
-    metric: String,
-    sampler: &'a str,
-    sample_size: String,
-    seed: u64,
-    skip_trivial: bool,
-    epsilon_s: f64,
-    logs: usize,
-    succeeded: usize,
-    failed: usize,
-    seconds: f64,
-    results: &'a [LogOutcome],
+pub(crate) struct BatchSummary<'a> {
+    pub(crate) out: String,
+    pub(crate) gamma: f64,
+    pub(crate) metric: String,
+    pub(crate) sampler: &'a str,
+    pub(crate) sample_size: String,
+    pub(crate) seed: u64,
+    pub(crate) skip_trivial: bool,
+    pub(crate) epsilon_s: f64,
+    pub(crate) logs: usize,
+    pub(crate) succeeded: usize,
+    pub(crate) failed: usize,
+    pub(crate) seconds: f64,
+    pub(crate) results: &'a [LogOutcome],
 }
 
 /// The settings every log of the batch shares.
@@ -229,7 +229,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     };
     let json = serde_json::to_string_pretty(&summary)? + "\n";
     guard::write_atomically(&args.out.join("summary.json"), json.as_bytes(), true)?;
-    guard::write_atomically(&args.out.join("index.html"), index_page(&summary).as_bytes(), true)?;
+    guard::write_atomically(&args.out.join("index.html"), report::index::render(&summary).as_bytes(), true)?;
 
     let mut stdout = std::io::stdout().lock();
     if args.json {
@@ -536,84 +536,4 @@ fn write_table(out: &mut impl Write, batch: &BatchSummary<'_>) -> Result<()> {
     }
     writeln!(out, "wrote {}", Path::new(&batch.out).join("index.html").display())?;
     Ok(())
-}
-
-/// index.html: the batch at a glance, a row per log linking to its report.
-fn index_page(batch: &BatchSummary<'_>) -> String {
-    let e = crate::html::escape;
-    let mut rows = String::new();
-    for r in batch.results {
-        match &r.summary {
-            Some(s) => {
-                let _ = writeln!(
-                    rows,
-                    "<tr><td><a href=\"{href}/report.html\">{name}</a></td><td>{source}</td><td>{poses}</td>\
-                     <td>{span:.1}</td><td>{components}</td><td>{nontrivial}</td><td>{pairs}</td><td>{density:.2}</td>\
-                     <td>{samples}</td><td>{covered}/{of}</td><td>{time:.2}</td><td class=\"ok\">ok</td></tr>",
-                    href = e(&percent_encode(&r.name)),
-                    name = e(&r.name),
-                    source = e(&r.source),
-                    poses = s.poses,
-                    span = s.span_s,
-                    components = s.components,
-                    nontrivial = s.nontrivial_components,
-                    pairs = s.pairs,
-                    density = s.loop_density_s,
-                    samples = s.samples,
-                    covered = s.quality.nontrivial_covered,
-                    of = s.quality.nontrivial_components,
-                    time = s.seconds.total,
-                );
-            }
-            None => {
-                let _ = writeln!(
-                    rows,
-                    "<tr class=\"failed\"><td>{name}</td><td>{source}</td><td colspan=\"9\">{error}</td>\
-                     <td class=\"bad\">failed</td></tr>",
-                    name = e(&r.name),
-                    source = e(&r.source),
-                    error = e(r.error.as_deref().unwrap_or("unknown error")),
-                );
-            }
-        }
-    }
-    format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
-         <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><title>loops run: {logs} logs</title>\
-         <style>body{{font:14px/1.45 system-ui,sans-serif;margin:2em;color:#222}}\
-         table{{border-collapse:collapse}}td,th{{padding:.3em .7em;border-bottom:1px solid #ddd;text-align:right}}\
-         td:nth-child(-n+2),th:nth-child(-n+2){{text-align:left}}th{{background:#f4f4f4}}\
-         .ok{{color:#1a7f37}}.bad{{color:#c62828;font-weight:bold}}tr.failed td{{color:#c62828;text-align:left}}\
-         </style></head><body>\n<h1>Inexact loops: {logs} logs</h1>\n\
-         <p>γ = {gamma} ({metric}); sampler {sampler} ({size}, seed {seed}{skip}); ε = {epsilon} s. \
-         {ok} done, {failed} failed, in {seconds:.1} s.</p>\n\
-         <table id=\"logs\"><thead><tr><th>log</th><th>source</th><th>poses</th><th>span (s)</th>\
-         <th>components</th><th>non-trivial</th><th>pairs</th><th>loop density (s)</th><th>samples</th>\
-         <th>P1 (non-trivial)</th><th>time (s)</th><th>status</th></tr></thead><tbody>\n{rows}</tbody></table>\n\
-         </body></html>\n",
-        logs = batch.logs,
-        gamma = batch.gamma,
-        metric = e(&batch.metric),
-        sampler = e(batch.sampler),
-        size = e(&batch.sample_size),
-        seed = batch.seed,
-        skip = if batch.skip_trivial { ", trivial components skipped" } else { "" },
-        epsilon = batch.epsilon_s,
-        ok = batch.succeeded,
-        failed = batch.failed,
-        seconds = batch.seconds,
-    )
-}
-
-/// A folder name as a relative URL path segment.
-fn percent_encode(name: &str) -> String {
-    let mut encoded = String::with_capacity(name.len());
-    for byte in name.bytes() {
-        if byte.is_ascii_alphanumeric() || b"-._~".contains(&byte) {
-            encoded.push(char::from(byte));
-        } else {
-            let _ = write!(encoded, "%{byte:02X}");
-        }
-    }
-    encoded
 }

@@ -12,6 +12,8 @@ use std::fmt::Write as _;
 
 use super::png::PaletteImage;
 use super::svg::{self, ICE, Plot, Rect, Rgb, Scale, px};
+use maud::{Markup, PreEscaped};
+
 use super::{ReportInput, component_colour, figure};
 
 /// The most pixels along each side of the image.
@@ -252,7 +254,7 @@ fn lattice_path(lines: &[Vec<(u32, u32)>]) -> String {
 }
 
 /// Figure: the pairwise distance with the γ isocontour, component outlines and samples.
-pub(super) fn distance_figure(input: &ReportInput<'_>) -> String {
+pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     let (traj, loops) = (input.traj, input.loops);
     let t0 = traj.timestamps_s()[0];
     let relative_s: Vec<f64> = traj.timestamps_s().iter().map(|t| t - t0).collect();
@@ -436,7 +438,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> String {
             format!("the {} samples", rows.len())
         },
     );
-    figure("pairwise-distance", &svg, &caption)
+    figure("pairwise-distance", &svg, PreEscaped(caption))
 }
 
 /// `value` to about three significant digits (`18.9`, `0.125`, `2500`).

@@ -5,9 +5,10 @@ use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use loops_core::{SampleQuality, SamplerKind};
+use maud::{Markup, PreEscaped, html};
 
 use super::svg::{self, PathData, Plot, Rect, Scale};
-use super::{ReportInput, escape, figure, sampler_colour, sampler_marker, sampler_name};
+use super::{ReportInput, figure, sampler_colour, sampler_marker, sampler_name};
 
 /// The most markers drawn per sampler (after merging markers that share a pixel).
 pub(super) const MAX_MARKERS: usize = 3000;
@@ -20,7 +21,7 @@ struct Series<'a> {
 }
 
 /// Figure: samples per component against component area, one series per sampler.
-pub(super) fn per_component_figure(input: &ReportInput<'_>) -> String {
+pub(super) fn per_component_figure(input: &ReportInput<'_>) -> Markup {
     let compared: Vec<(SamplerKind, &SampleQuality)> = if input.comparison.is_empty() {
         vec![(input.samples.sampler(), input.quality)]
     } else {
@@ -107,38 +108,38 @@ pub(super) fn per_component_figure(input: &ReportInput<'_>) -> String {
     let svg = plot.finish("Samples per loop component against component area, per sampler");
 
     // The legend, as a table: what each series is, and what the log axes cannot show.
-    let mut legend = String::from(
-        "<table class=\"legend\"><thead><tr><th></th><th>sampler</th><th>samples</th><th>components covered</th>\
-         <th>missed (not drawn)</th><th>P3 slope</th></tr></thead><tbody>",
-    );
-    for s in &series {
-        let q = s.quality;
-        let _ = write!(
-            legend,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{} / {}</td><td>{}</td><td>{}</td></tr>",
-            sampler_marker(s.kind).swatch(sampler_colour(s.kind)),
-            sampler_name(s.kind),
-            q.samples,
-            q.covered,
-            q.components,
-            q.missed.len(),
-            q.p3_slope.map_or("—".to_owned(), |v| format!("{v:.2}"))
-        );
-    }
-    legend.push_str("</tbody></table>");
-    let caption = format!(
-        "<b>Samples per component against component area.</b> Each marker is one loop component holding at least one \
-         sample; dashed lines are the least-squares fits whose slopes are P3 (≈ 0 for σ<sub>1</sub>, ≈ 1 for \
-         σ<sub>α</sub>, in between for σ<sub>ρ</sub>). Components without a sample cannot sit on the log axis: their \
-         count is the “missed” column.{thinned}{legend}",
-        thinned = if thinned.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " For {}, markers are thinned to {MAX_MARKERS}.",
-                escape(&thinned.iter().map(|k| k.name()).collect::<Vec<_>>().join(", "))
-            )
-        },
-    );
-    figure("samples-per-component", &svg, &caption)
+    let legend = html! {
+        table.legend {
+            thead {
+                tr {
+                    th {} th { "sampler" } th { "samples" } th { "components covered" } th { "missed (not drawn)" }
+                    th { "P3 slope" }
+                }
+            }
+            tbody {
+                @for s in &series {
+                    tr {
+                        td { (PreEscaped(sampler_marker(s.kind).swatch(sampler_colour(s.kind)))) }
+                        td { (sampler_name(s.kind)) }
+                        td { (s.quality.samples) }
+                        td { (s.quality.covered) " / " (s.quality.components) }
+                        td { (s.quality.missed.len()) }
+                        td { (s.quality.p3_slope.map_or("—".to_owned(), |v| format!("{v:.2}"))) }
+                    }
+                }
+            }
+        }
+    };
+    let caption = html! {
+        b { "Samples per component against component area." }
+        " Each marker is one loop component holding at least one sample; dashed lines are the least-squares \
+        fits whose slopes are P3 (≈ 0 for σ" sub { "1" } ", ≈ 1 for σ" sub { "α" } ", in between for σ" sub { "ρ" }
+        "). Components without a sample cannot sit on the log axis: their count is the “missed” column."
+        @if !thinned.is_empty() {
+            " For " (thinned.iter().map(|k| k.name()).collect::<Vec<_>>().join(", "))
+            ", markers are thinned to " (MAX_MARKERS) "."
+        }
+        (legend)
+    };
+    figure("samples-per-component", &svg, caption)
 }

@@ -3,10 +3,17 @@
 //!
 //! Coordinates are SVG pixels, y down. Numbers are written with one decimal: a figure of a few
 //! hundred pixels needs no more, and it keeps the page small.
+//!
+//! The elements are written with `write!` rather than with the page's template (maud): path
+//! data of thousands of points is formatted number by number into one string, which a template
+//! would only pass through. Text in them (labels, titles) is escaped by maud all the same.
 
 use std::fmt::Write as _;
 
-use super::escape;
+/// `text` escaped for SVG content and attributes, by the page's template engine.
+fn escape(text: &str) -> String {
+    maud::html! { (text) }.into_string()
+}
 
 /// An RGB colour.
 pub(crate) type Rgb = [u8; 3];

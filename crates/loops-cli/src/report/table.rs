@@ -1,8 +1,8 @@
 //! The components table: one row per loop component, the columns of `components.csv`.
 
-use std::fmt::Write as _;
+use maud::{Markup, html};
 
-use super::{ReportInput, escape, swatch_class};
+use super::{ReportInput, swatch_class};
 
 /// The most rows shown; beyond it, the largest components by area.
 pub(super) const MAX_ROWS: usize = 5000;
@@ -27,7 +27,7 @@ const COLUMNS: [(&str, &str); 14] = [
 
 /// The section with the table, largest [`MAX_ROWS`] components by area when there are more,
 /// shown in id order.
-pub(super) fn components_section(input: &ReportInput<'_>) -> String {
+pub(super) fn components_section(input: &ReportInput<'_>) -> Markup {
     let components = input.loops.components();
     let timestamps = input.traj.timestamps_s();
     let t0 = timestamps[0];
@@ -38,54 +38,45 @@ pub(super) fn components_section(input: &ReportInput<'_>) -> String {
         shown.truncate(MAX_ROWS);
         shown.sort_unstable();
     }
-    let mut out = String::from("<section class=\"components\"><h2>Loop components</h2><p class=\"note\">");
     let nontrivial = components.iter().filter(|c| !c.trivial).count();
-    let _ = write!(
-        out,
-        "{} component{} ({nontrivial} non-trivial), in id order; times in seconds from the first pose \
-         (t<sub>0</sub> = {t0} s). ",
-        components.len(),
-        if components.len() == 1 { "" } else { "s" },
-    );
-    if shown.len() < components.len() {
-        let _ = write!(
-            out,
-            "<b>Only the {MAX_ROWS} largest by area are listed</b> ({} smaller ones are left out; components.csv has \
-             every one).",
-            components.len() - shown.len()
-        );
+    html! {
+        section.components {
+            h2 { "Loop components" }
+            p.note {
+                (components.len()) " component" @if components.len() != 1 { "s" } " (" (nontrivial)
+                " non-trivial), in id order; times in seconds from the first pose (t" sub { "0" } " = " (t0) " s). "
+                @if shown.len() < components.len() {
+                    b { "Only the " (MAX_ROWS) " largest by area are listed" }
+                    " (" (components.len() - shown.len())
+                    " smaller ones are left out; components.csv has every one)."
+                }
+            }
+            div.table-wrap {
+                table #components {
+                    thead { tr { @for (name, title) in COLUMNS { th title=(title) { (name) } } } }
+                    tbody {
+                        @for &id in &shown {
+                            @let c = &components[id];
+                            tr class=[c.trivial.then_some("trivial")] {
+                                td { i.swatch.(swatch_class(c)) {} (c.id) }
+                                td { @if c.trivial { "yes" } @else { "no" } }
+                                td { (format!("{:.1}", c.area_s2)) }
+                                td { (c.pairs) }
+                                td { (c.runs) }
+                                td { (c.holes) }
+                                td { (format!("{:.2}", time(c.rows[0]))) }
+                                td { (format!("{:.2}", time(c.rows[1]))) }
+                                td { (format!("{:.2}", time(c.columns[0]))) }
+                                td { (format!("{:.2}", time(c.columns[1]))) }
+                                td { (c.closest_pair[0]) }
+                                td { (c.closest_pair[1]) }
+                                td { (format!("{:.3}", c.closest_distance)) }
+                                td { (input.quality.per_component.get(id).copied().unwrap_or(0)) }
+                            }
+                        }
+                    }
+                }
+            }
+        }
     }
-    out.push_str("</p><div class=\"table-wrap\"><table id=\"components\"><thead><tr>");
-    for (name, title) in COLUMNS {
-        let _ = write!(out, "<th title=\"{}\">{name}</th>", escape(title));
-    }
-    out.push_str("</tr></thead><tbody>");
-    for &id in &shown {
-        let c = &components[id];
-        let samples = input.quality.per_component.get(id).copied().unwrap_or(0);
-        let _ = write!(
-            out,
-            "<tr{class}><td><i class=\"swatch {swatch}\"></i>{id}</td><td>{trivial}</td>\
-             <td>{area:.1}</td><td>{pairs}</td><td>{runs}</td><td>{holes}</td><td>{t_start:.2}</td><td>{t_end:.2}</td>\
-             <td>{tp_start:.2}</td><td>{tp_end:.2}</td><td>{ci}</td><td>{cj}</td><td>{distance:.3}</td>\
-             <td>{samples}</td></tr>",
-            class = if c.trivial { " class=\"trivial\"" } else { "" },
-            swatch = swatch_class(c),
-            id = c.id,
-            trivial = if c.trivial { "yes" } else { "no" },
-            area = c.area_s2,
-            pairs = c.pairs,
-            runs = c.runs,
-            holes = c.holes,
-            t_start = time(c.rows[0]),
-            t_end = time(c.rows[1]),
-            tp_start = time(c.columns[0]),
-            tp_end = time(c.columns[1]),
-            ci = c.closest_pair[0],
-            cj = c.closest_pair[1],
-            distance = c.closest_distance,
-        );
-    }
-    out.push_str("</tbody></table></div></section>");
-    out
 }

@@ -7,6 +7,8 @@
 use std::fmt::Write as _;
 
 use super::svg::{self, PathData, Plot, Rect, Scale, ScaleKind, VIRIDIS};
+use maud::{Markup, PreEscaped};
+
 use super::{ReportInput, figure, plural, sampler_colour, sampler_name};
 
 /// The most path segments a figure draws.
@@ -222,7 +224,7 @@ fn start_and_end(plot: &mut Plot, pixels: &[(f64, f64)]) {
 }
 
 /// Figure: the trajectory coloured by loop duration.
-pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> String {
+pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
     let positions = &input.table.positions;
     let n = positions.len().min(input.loop_duration_s.len());
     let MapPlot { mut plot, pixels } = map_plot("fig-tau", &positions[..n], 120.0);
@@ -260,11 +262,11 @@ pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> String {
             ""
         },
     );
-    figure("loop-duration", &svg, &caption)
+    figure("loop-duration", &svg, PreEscaped(caption))
 }
 
 /// Figure: the sampled pairs, each a line between its two poses, over the trajectory in grey.
-pub(super) fn sampled_pairs_figure(input: &ReportInput<'_>) -> String {
+pub(super) fn sampled_pairs_figure(input: &ReportInput<'_>) -> Markup {
     let positions = &input.table.positions;
     let MapPlot { mut plot, pixels } = map_plot("fig-pairs", positions, 24.0);
     plot.background("#ffffff");
@@ -299,7 +301,7 @@ pub(super) fn sampled_pairs_figure(input: &ReportInput<'_>) -> String {
     start_and_end(&mut plot, &pixels);
     plot.axes("x (m)", "y (m)", 6, 6);
     let svg = plot.finish("Sampled loop-closure pairs over the trajectory");
-    let sampler = sampler_name(input.samples.sampler());
+    let sampler = sampler_name(input.samples.sampler()).into_string();
     let mut caption = if drawn.is_empty() {
         format!("<b>Sampled pairs.</b> The {sampler} sampler drew no pair of poses to show.")
     } else {
@@ -317,7 +319,7 @@ pub(super) fn sampled_pairs_figure(input: &ReportInput<'_>) -> String {
     if unplaced > 0 {
         caption += &format!(" {} without pose indices not drawn.", plural(unplaced, "sample", "samples"));
     }
-    figure("sampled-pairs", &svg, &caption)
+    figure("sampled-pairs", &svg, PreEscaped(caption))
 }
 
 #[cfg(test)]
