@@ -210,7 +210,7 @@ def test_force_replaces_only_results(tmp_path: Path, batch, loops_cli: Path) -> 
 def test_json_summary_on_stdout(tmp_path: Path, batch, loops_cli: Path) -> None:
     out = tmp_path / "results"
     done = subprocess.run(
-        [loops_cli, "run", *batch["logs"][:2], "--gamma", "40", "--out", out, "--json"],
+        [loops_cli, "run", *batch["logs"][:2], "--gamma", "40", "--out", out, "--json", "-"],
         capture_output=True,
         text=True,
     )

@@ -6,6 +6,7 @@
 //! thing, once; defaults come from those types (`default_value_t = ...::default()`), and values
 //! are validated where the concept lives, not here.
 
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
@@ -82,12 +83,14 @@ impl InputArgs {
 /// The engine: γ, the metric and the thread pool.
 #[derive(Debug, Args)]
 pub(crate) struct EngineArgs {
-    /// The distance threshold γ, in the metric's unit (metres for positions).
-    #[arg(long, value_name = "GAMMA_M")]
+    /// The distance threshold γ, in the metric's unit: metres for euclidean, se3 and se2 (their
+    /// rotation weighted in m/rad) and haversine; radians under so3, se3_rotation, torus and
+    /// angular; the radius's unit under sphere.
+    #[arg(long, value_name = "GAMMA")]
     pub(crate) gamma: f64,
     /// The metric: euclidean, se3(rotation_weight_m_per_rad=W[, rotation=geodesic|chordal]),
-    /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W). SE(3), SO(3) and SE(2) use the file's
-    /// orientations.
+    /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W), torus, sphere(radius=R),
+    /// haversine(radius_m=R), angular. SE(3), SO(3) and SE(2) use the file's orientations.
     #[arg(long, default_value_t = MetricSpec::default().name())]
     pub(crate) metric: String,
     /// Worker threads (default: one per core). Results do not depend on it.
@@ -145,12 +148,29 @@ impl SamplingArgs {
     }
 }
 
+/// Where a `--json FILE` flag sends its JSON: to FILE (written atomically), or to stdout for
+/// `-`, instead of the table. Every command spells "JSON on stdout" this way.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum JsonTo {
+    /// `-`: stdout, and nothing else there.
+    Stdout,
+    /// A file.
+    File(PathBuf),
+}
+
+impl From<&OsStr> for JsonTo {
+    fn from(value: &OsStr) -> Self {
+        if value == "-" { Self::Stdout } else { Self::File(PathBuf::from(value)) }
+    }
+}
+
 /// What `loops components` and `loops demo` print and write.
 #[derive(Debug, Args)]
 pub(crate) struct OutputArgs {
-    /// Also write the result as JSON to this file (written atomically).
-    #[arg(long, value_name = "PATH")]
-    pub(crate) json: Option<PathBuf>,
+    /// Also write the result as JSON to FILE (atomically); `-` prints it on stdout instead of
+    /// the table.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) json: Option<JsonTo>,
     /// Replace the JSON file if it exists.
     #[arg(long)]
     pub(crate) force: bool,

@@ -10,20 +10,21 @@ use clap::Args;
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
 use serde::Serialize;
 
-use crate::args::{EngineArgs, InputArgs, OutputArgs};
+use crate::args::{EngineArgs, InputArgs, JsonTo, OutputArgs};
 use crate::guard;
 
-/// List the loop components of a trajectory file (TUM or CSV).
+/// List the loop components of a pose file (MCAP, TUM, CSV, KITTI, EuRoC, TUC or g2o).
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
     after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
     loops components kitti00.txt --format tum --axes 0,2 --gamma 6 --json kitti00.json\n  \
     loops components log.csv --gamma 5 --limit 0    # every component\n  \
+    loops components drive.mcap --gamma 40 --json - | jq '.components | length'\n  \
     loops components fr2_desk.tum --gamma 0.3 --metric 'se3(rotation_weight_m_per_rad=0.5)'"
 )]
 pub(crate) struct ComponentsArgs {
-    /// The trajectory file.
+    /// The pose file.
     file: PathBuf,
     #[command(flatten)]
     input: InputArgs,
@@ -52,15 +53,20 @@ pub(crate) fn timed(
     Ok((loops, start.elapsed().as_secs_f64()))
 }
 
-/// Prints the warnings (stderr) and the table (stdout), and writes the JSON report if asked.
+/// Prints the warnings (stderr) and the table (stdout), and writes the JSON report if asked;
+/// with `--json -` the report is all stdout holds.
 pub(crate) fn print(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64, out: &OutputArgs) -> Result<()> {
     for warning in loops.warnings() {
         eprintln!("loops: warning: {warning}");
     }
     let mut stdout = std::io::stdout().lock();
+    if out.json == Some(JsonTo::Stdout) {
+        stdout.write_all(json_report(source, traj, loops)?.as_bytes())?;
+        return Ok(stdout.flush()?);
+    }
     write_table(&mut stdout, source, traj, loops, seconds, out.limit)?;
     stdout.flush()?;
-    if let Some(path) = &out.json {
+    if let Some(JsonTo::File(path)) = &out.json {
         let json = json_report(source, traj, loops)?;
         guard::write_atomically(path, json.as_bytes(), out.force)
             .with_context(|| format!("writing {}", path.display()))?;

@@ -21,7 +21,7 @@ use loops_core::{
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::args::{EngineArgs, InputArgs, SamplingArgs};
+use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
 use crate::guard;
 use crate::progress::{self, Batch};
 use crate::report::{self, ReportInput};
@@ -42,7 +42,7 @@ const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerK
     after_help = "Examples:\n  \
     loops run logs/*.mcap --gamma 40 --out results\n  \
     loops run logs/*.mcap --gamma 40 --sampler rho --budget 2000 --out results --force\n  \
-    loops run a.mcap b.tum --gamma 0.5 --metric 'se3(rotation_weight_m_per_rad=1)' --out results --json\n  \
+    loops run a.mcap b.tum --gamma 0.5 --metric 'se3(rotation_weight_m_per_rad=1)' --out results --json -\n  \
     loops run night/*.mcap --topic /odom --gamma 10 --out night-results --quiet\n\n\
     Per log (results/<log>/): components.csv, samples.csv, loop_duration.csv, summary.json,\n\
     report.html. For the batch: results/index.html and results/summary.json. Ctrl-C keeps the\n\
@@ -68,9 +68,10 @@ pub(crate) struct RunArgs {
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
-    /// Print the batch summary as JSON on stdout instead of the table.
-    #[arg(long)]
-    json: bool,
+    /// Also write the batch summary (summary.json of --out) to FILE; `-` prints it on stdout
+    /// instead of the table.
+    #[arg(long, value_name = "FILE")]
+    json: Option<JsonTo>,
 }
 
 /// One log of the batch and the folder its results go to.
@@ -176,6 +177,12 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     loops_core::check_gamma(args.engine.gamma)?;
     loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
     check_out(&args.out, args.force)?;
+    if let Some(JsonTo::File(path)) = &args.json
+        && path.exists()
+        && !args.force
+    {
+        bail!("--json {} exists; pass --force to replace it", path.display());
+    }
     let jobs = jobs(&args.logs, &args.out)?;
     guard::with_writes(|writes| writes.create_dir(&args.out))?;
 
@@ -231,8 +238,11 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     guard::write_atomically(&args.out.join("summary.json"), json.as_bytes(), true)?;
     guard::write_atomically(&args.out.join("index.html"), report::index::render(&summary).as_bytes(), true)?;
 
+    if let Some(JsonTo::File(path)) = &args.json {
+        guard::write_atomically(path, json.as_bytes(), args.force)?;
+    }
     let mut stdout = std::io::stdout().lock();
-    if args.json {
+    if args.json == Some(JsonTo::Stdout) {
         stdout.write_all(json.as_bytes())?;
     } else if !args.quiet {
         write_table(&mut stdout, &summary)?;

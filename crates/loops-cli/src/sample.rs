@@ -4,11 +4,11 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 use loops_core::{Loops, SampleQuality, Samples, Trajectory, cluster_detections, sample_clusters, sample_quality};
 
-use crate::args::{EngineArgs, InputArgs, SamplingArgs};
+use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
 
 /// Candidate loop-closure pairs for a scan matcher, from the exact loop components or from
 /// clustered detections, with coverage (P1), redundancy (P2) and growth (P3).
@@ -16,11 +16,11 @@ use crate::args::{EngineArgs, InputArgs, SamplingArgs};
 #[command(
     allow_negative_numbers = true,
     after_help = "Examples:\n  \
-    loops sample drive.tum --gamma 40 --sampler rho --budget 10000 --out pairs.csv\n  \
+    loops sample drive.tum --gamma 40 --sampler rho --budget 10000 --csv pairs.csv --g2o pairs.g2o\n  \
     loops sample Corridor_GT.tum --gamma 1 --sampler rho --budget 500 --detections Corridor_Input.txt --epsilon-s 5"
 )]
 pub(crate) struct SampleArgs {
-    /// The trajectory file.
+    /// The pose file.
     file: PathBuf,
     #[command(flatten)]
     input: InputArgs,
@@ -33,14 +33,18 @@ pub(crate) struct SampleArgs {
     /// exact loop components of S_gamma.
     #[arg(long, value_name = "PATH")]
     detections: Option<PathBuf>,
-    /// Write the candidate pairs here: .csv or .json (atomically; kept unless --force).
-    #[arg(long, value_name = "PATH")]
-    out: Option<PathBuf>,
-    /// Also write the candidate pairs as g2o edges (EDGE_SE2 or EDGE_SE3:QUAT) whose relative
-    /// pose comes from the file's poses: initial guesses for a scan matcher.
-    #[arg(long, value_name = "PATH")]
+    /// Write the candidate pairs as CSV to FILE (atomically; kept unless --force).
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Write the candidate pairs as JSON to FILE (atomically; kept unless --force); `-` prints
+    /// them on stdout instead of the summary.
+    #[arg(long, value_name = "FILE")]
+    json: Option<JsonTo>,
+    /// Write the candidate pairs as g2o edges (EDGE_SE2 or EDGE_SE3:QUAT) to FILE, their
+    /// relative pose from the file's poses: initial guesses for a scan matcher.
+    #[arg(long, value_name = "FILE")]
     g2o: Option<PathBuf>,
-    /// Replace --out and --g2o if they exist.
+    /// Replace the --csv, --json and --g2o files if they exist.
     #[arg(long)]
     force: bool,
 }
@@ -49,7 +53,6 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let spec = args.engine.spec()?;
     let sampler = args.sampling.sampler()?;
     let epsilon_s = args.sampling.epsilon_s;
-    let output_format = args.out.as_deref().map(samples_format).transpose()?;
     let (table, traj) = args.input.read_table(&args.file, &spec)?;
     let gamma = args.engine.gamma;
     let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
@@ -67,11 +70,29 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         Ok((loops, samples))
     })??;
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
+    for warning in samples.warnings() {
+        eprintln!("loops: warning: {warning}");
+    }
     let mut stdout = std::io::stdout().lock();
-    write_summary(&mut stdout, &args.file, &traj, &loops, &samples, &quality)?;
-    if let (Some(path), Some(format)) = (&args.out, output_format) {
-        crate::guard::with_writes(|_| loops_io::write_samples(path, &samples, format, args.force))?;
-        writeln!(stdout, "wrote {} samples to {}", samples.len(), path.display())?;
+    if args.json == Some(JsonTo::Stdout) {
+        loops_io::samples_to_json(&samples, &mut stdout).context("writing the samples to stdout")?;
+    } else {
+        write_summary(&mut stdout, &args.file, &traj, &loops, &samples, &quality)?;
+    }
+    // With `--json -`, stdout holds the JSON only: the lines saying what was written are left out.
+    let mut wrote = |line: String| -> Result<()> {
+        if args.json != Some(JsonTo::Stdout) {
+            writeln!(stdout, "{line}")?;
+        }
+        Ok(())
+    };
+    let files =
+        [(args.csv.as_ref(), loops_io::SamplesFormat::Csv), (json_file(&args.json), loops_io::SamplesFormat::Json)];
+    for (path, format) in files {
+        if let Some(path) = path {
+            crate::guard::with_writes(|_| loops_io::write_samples(path, &samples, format, args.force))?;
+            wrote(format!("wrote {} samples to {}", samples.len(), path.display()))?;
+        }
     }
     if let Some(path) = &args.g2o {
         let pairs: Vec<(usize, usize)> = samples.rows().iter().filter_map(|s| s.pair).map(|[i, j]| (i, j)).collect();
@@ -79,16 +100,16 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         crate::guard::with_writes(|_| {
             loops_io::write_g2o_edges(path, &table, &pairs, &options).map_err(anyhow::Error::from)
         })?;
-        writeln!(stdout, "wrote {} g2o edges to {}", pairs.len(), path.display())?;
+        wrote(format!("wrote {} g2o edges to {}", pairs.len(), path.display()))?;
     }
     Ok(())
 }
 
-fn samples_format(path: &Path) -> Result<loops_io::SamplesFormat> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("csv") => Ok(loops_io::SamplesFormat::Csv),
-        Some("json") => Ok(loops_io::SamplesFormat::Json),
-        _ => bail!("--out {}: the extension must be .csv or .json", path.display()),
+/// The file of `--json FILE` (none for `-`).
+fn json_file(json: &Option<JsonTo>) -> Option<&PathBuf> {
+    match json {
+        Some(JsonTo::File(path)) => Some(path),
+        _ => None,
     }
 }
 
@@ -100,9 +121,6 @@ fn write_summary(
     samples: &Samples,
     quality: &SampleQuality,
 ) -> Result<()> {
-    for warning in samples.warnings() {
-        eprintln!("loops: warning: {warning}");
-    }
     let nontrivial = loops.components().iter().filter(|c| !c.trivial).count();
     writeln!(out, "{}", file.display())?;
     writeln!(

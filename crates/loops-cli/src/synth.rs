@@ -22,6 +22,7 @@ use crate::guard;
 )]
 pub(crate) struct SynthArgs {
     /// Where to write: a file (.mcap or .tum), or with --count a folder to create.
+    #[arg(value_name = "PATH")]
     out: PathBuf,
     /// Length of each drive, seconds.
     #[arg(long, default_value_t = UrbanDrive::default().duration_s)]
@@ -44,11 +45,11 @@ pub(crate) struct SynthArgs {
     /// Seed of the (first) drive.
     #[arg(long, default_value_t = UrbanDrive::default().seed)]
     seed: u64,
-    /// Write this many drives (seeds SEED, SEED+1, ...) into the folder OUT, named
+    /// Write this many drives (seeds SEED, SEED+1, ...) into the folder PATH, named
     /// urban-drive-<seed>.<format>.
     #[arg(long)]
     count: Option<usize>,
-    /// File format: mcap (geometry_msgs/msg/PoseStamped, ROS 2 CDR) or tum (default: from OUT's
+    /// File format: mcap (geometry_msgs/msg/PoseStamped, ROS 2 CDR) or tum (default: from PATH's
     /// extension; mcap for a folder).
     #[arg(long)]
     format: Option<String>,
