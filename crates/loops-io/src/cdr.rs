@@ -10,7 +10,7 @@
 //! Only what a pose needs is kept; the rest (covariances, twists) is checked to be there (a
 //! message shorter than its type is an error) and skipped.
 
-use crate::message::{PoseType, Sample};
+use crate::pose_type::{PoseType, Sample};
 
 /// A reader over one CDR message.
 #[derive(Debug)]

@@ -1,12 +1,14 @@
-//! The one error type of the readers and writers: every error names the file, and the line, or
-//! the topic and byte offset, where there is one.
+//! The error types of the readers and writers: every error names the file, and the line, or
+//! the topic and byte offset, where there is one. [`IoError`] for reading (and the writers that
+//! check their input), [`WriteError`] for writing a file.
 
 use std::fmt;
+use std::io;
 use std::path::{Path, PathBuf};
 
 use crate::format::Format;
-use crate::mcap::{FramePairInfo, TopicInfo};
-use crate::samples::WriteError;
+use crate::pose_type::SUPPORTED_TYPES;
+use crate::topic::{FramePairInfo, TopicInfo};
 
 /// `Result` with [`IoError`] as the default error type.
 pub type Result<T, E = IoError> = std::result::Result<T, E>;
@@ -117,7 +119,7 @@ pub enum IoError {
     },
     /// No topic was asked for and none holds poses of a type this crate reads.
     #[error("{}: no topic holds poses of a type this crate reads ({}); the topics are: {}",
-        .path.display(), crate::mcap::SUPPORTED_TYPES, list(.topics))]
+        .path.display(), SUPPORTED_TYPES, list(.topics))]
     NoPoseTopic {
         /// The (first) file.
         path: PathBuf,
@@ -135,7 +137,7 @@ pub enum IoError {
     /// The topic asked for has a type this crate cannot read poses from (an unknown schema, or a
     /// known schema in an unknown encoding).
     #[error("{}: topic {} has type {:?} in encoding {:?}, which this crate does not read poses from; it reads {}",
-        .path.display(), .topic.topic, .topic.schema_name, .topic.message_encoding, crate::mcap::SUPPORTED_TYPES)]
+        .path.display(), .topic.topic, .topic.schema_name, .topic.message_encoding, SUPPORTED_TYPES)]
     UnsupportedTopic {
         /// The (first) file.
         path: PathBuf,
@@ -245,6 +247,26 @@ impl IoError {
             error: loops_core::Error::InvalidParameter { name, value, expected },
         }
     }
+}
+
+/// Why a result file could not be written. The message starts with the file's path.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriteError {
+    /// The file exists and replacing it was not asked for.
+    #[error("{}: the file exists; refusing to overwrite it", .path.display())]
+    Exists {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The operating system refused: a missing directory, no permission, a full disk.
+    #[error("{}: cannot write the file: {error}", .path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        error: io::Error,
+    },
 }
 
 /// The messages an [`IoError::Trajectory`] names in MCAP files.

@@ -11,7 +11,7 @@
 use prost::Message as _;
 use serde::Deserialize;
 
-use crate::message::{PoseType, Sample};
+use crate::pose_type::{PoseType, Sample};
 
 /// `google.protobuf.Timestamp`.
 #[derive(Clone, Copy, PartialEq, prost::Message)]

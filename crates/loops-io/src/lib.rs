@@ -61,7 +61,16 @@
 //! and a frame pair.
 #![warn(missing_docs)]
 
+// The modules in layers; each uses only modules of the layers above it (no cycles):
+// 1. vocabulary and errors: `format`, `pose_type`, `topic`, `error`; the atomic writer `atomic`;
+// 2. plumbing: `text` (lines and numbers), `timing`, `table` (`PoseTable`), `rotation`;
+// 3. messages: `cdr`, `foxglove`, `message` (decoding), `cdr_write`;
+// 4. MCAP: `mcap_records` (the record walker), `mcap` (topics and poses), `mcap_write`;
+// 5. readers: `csv`, `euroc`, `graph`, `kitti`, `tuc`, `tum`, `detections`; `read` picks one;
+// 6. writers: `samples`, `write`.
+mod atomic;
 mod cdr;
+mod cdr_write;
 mod csv;
 mod detections;
 mod error;
@@ -71,30 +80,37 @@ mod foxglove;
 mod graph;
 mod kitti;
 mod mcap;
+mod mcap_records;
 mod mcap_write;
 mod message;
+mod pose_type;
+mod read;
 mod rotation;
 mod samples;
 mod table;
 mod text;
 mod timing;
+mod topic;
 mod tuc;
 mod tum;
 mod write;
 
-pub use crate::mcap::{FramePairInfo, McapOptions, TimeSource, TopicInfo, list_topics, read_mcap, read_mcap_files};
-pub use csv::read_csv;
+pub use crate::csv::read_csv;
+pub use crate::mcap::{McapOptions, TimeSource, list_topics, read_mcap, read_mcap_files};
 pub use detections::{DetectionTable, read_detections};
-pub use error::{IoError, MessageLocation, Result, TrajectoryMessages};
+pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};
 pub use euroc::read_euroc;
-pub use format::{Format, ReadOptions, read_trajectory, read_trajectory_with};
+pub use format::Format;
 pub use graph::{GraphEdge, PoseGraph, read_pose_graph};
 pub use kitti::read_kitti;
 pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_mcap};
-pub use message::{DecodeError, DecodedPose, MessageEncoding, PoseType, decode_poses};
-pub use samples::{CSV_HEADER, SamplesFormat, WriteError, samples_to_csv, samples_to_json, write_samples};
+pub use message::{DecodeError, DecodedPose, decode_poses};
+pub use pose_type::{MessageEncoding, PoseType};
+pub use read::{ReadOptions, read_trajectory, read_trajectory_with};
+pub use samples::{CSV_HEADER, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, seconds_of_ns};
 pub use timing::Timing;
+pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::read_tuc;
 pub use tum::read_tum;
 pub use write::{EdgeKind, G2oOptions, write_g2o_edges, write_tum};

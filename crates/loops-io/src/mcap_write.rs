@@ -13,9 +13,11 @@ use std::path::Path;
 
 use mcap::records::MessageHeader;
 
-use crate::message::PoseType;
-use crate::samples::{WriteError, write_atomically};
-use crate::table::PoseTable;
+use crate::atomic::write_atomically;
+use crate::cdr_write::{IDENTITY_XYZW, RosTime, encode_message};
+use crate::error::WriteError;
+use crate::pose_type::PoseType;
+use crate::table::{PoseTable, exact_seconds};
 
 /// The message type [`write_mcap`] writes, in ROS 2 CDR with its `ros2msg` schema.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Default)]
@@ -238,54 +240,6 @@ pub fn write_mcap(
     })
 }
 
-/// The orientation of a table without orientations.
-const IDENTITY_XYZW: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
-
-const NS_PER_S: i64 = 1_000_000_000;
-
-/// A ROS 2 `builtin_interfaces/Time` that is also an MCAP time: `sec` is not negative.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct RosTime {
-    sec: i32,
-    nanosec: u32,
-}
-
-impl RosTime {
-    /// The time of `stamp_ns` nanoseconds since the epoch, if it is in `[0, 2³¹)` seconds.
-    fn of_ns(stamp_ns: i64) -> Option<Self> {
-        let sec = i32::try_from(stamp_ns.div_euclid(NS_PER_S)).ok().filter(|&sec| sec >= 0)?;
-        let nanosec = u32::try_from(stamp_ns.rem_euclid(NS_PER_S)).expect("below 10⁹");
-        Some(Self { sec, nanosec })
-    }
-
-    /// The time of `stamp_s` seconds, if it is in `[0, 2³¹)` seconds: the shortest decimal that
-    /// reads back as `stamp_s` when it has at most 9 decimals (what a text file printed:
-    /// `1700000000.1`, whose `f64` is 1700000000.0999999046...), else the `f64` itself, to the
-    /// nearest nanosecond.
-    fn of_seconds(stamp_s: f64) -> Option<Self> {
-        if !(0.0..2_147_483_648.0).contains(&stamp_s) {
-            return None; // also NaN
-        }
-        // `Display` prints the shortest round-trip decimal, never with an exponent.
-        let text = stamp_s.to_string();
-        let (whole, decimals) = text.split_once('.').unwrap_or((&text, ""));
-        if decimals.len() <= 9 {
-            let whole_s: i64 = whole.parse().ok()?;
-            let nanos: i64 = format!("{decimals:0<9}").parse().ok()?;
-            return Self::of_ns(whole_s * NS_PER_S + nanos);
-        }
-        let whole_s = stamp_s.floor();
-        // `stamp_s - whole_s` is exact: one rounding, of the nanoseconds.
-        let nanos = ((stamp_s - whole_s) * 1e9).round() as i64;
-        Self::of_ns(whole_s as i64 * NS_PER_S + nanos)
-    }
-
-    /// Nanoseconds since the epoch: the record's log and publish time.
-    fn ns(self) -> u64 {
-        u64::from(self.sec.unsigned_abs()) * NS_PER_S as u64 + u64::from(self.nanosec)
-    }
-}
-
 /// Why `table` cannot be written with `options`, before anything is written.
 fn check_table(table: &PoseTable, options: &McapWriteOptions) -> Result<(), String> {
     let len = table.positions.len();
@@ -339,13 +293,6 @@ fn ros_stamps(table: &PoseTable) -> Result<Vec<RosTime>, String> {
     }
 }
 
-/// Nanoseconds as exact decimal seconds, for messages.
-fn exact_seconds(ns: i64) -> String {
-    let sign = if ns < 0 { "-" } else { "" };
-    let abs = ns.unsigned_abs();
-    format!("{sign}{}.{:09}", abs / NS_PER_S as u64, abs % NS_PER_S as u64)
-}
-
 /// Writes the whole MCAP file into `file`.
 fn write_messages(
     file: &mut File,
@@ -367,7 +314,11 @@ fn write_messages(
     let mut data = Vec::new();
     for (index, (&stamp, &position)) in stamps.iter().zip(&table.positions).enumerate() {
         let orientation = table.orientations_xyzw.as_ref().map_or(IDENTITY_XYZW, |q| q[index]);
-        encode_message(&mut data, message, stamp, &options.frame_id, position, orientation);
+        let child_frame_id = match message {
+            McapPoseMessage::PoseStamped => None,
+            McapPoseMessage::Odometry { child_frame_id } => Some(child_frame_id.as_str()),
+        };
+        encode_message(&mut data, stamp, &options.frame_id, child_frame_id, position, orientation);
         let header = MessageHeader {
             channel_id,
             // A u32 counter wraps.
@@ -382,138 +333,9 @@ fn write_messages(
     Ok(())
 }
 
-/// Encodes one message into `data` (cleared first).
-fn encode_message(
-    data: &mut Vec<u8>,
-    message: &McapPoseMessage,
-    stamp: RosTime,
-    frame_id: &str,
-    position: [f64; 3],
-    orientation_xyzw: [f64; 4],
-) {
-    let mut cdr = CdrWriter::new(data);
-    cdr.i32(stamp.sec);
-    cdr.u32(stamp.nanosec);
-    cdr.string(frame_id);
-    if let McapPoseMessage::Odometry { child_frame_id } = message {
-        cdr.string(child_frame_id);
-    }
-    cdr.f64s(&position);
-    cdr.f64s(&orientation_xyzw);
-    if let McapPoseMessage::Odometry { .. } = message {
-        cdr.f64s(&[0.0; 36]); // pose.covariance
-        cdr.f64s(&[0.0; 6]); // twist.twist
-        cdr.f64s(&[0.0; 36]); // twist.covariance
-    }
-}
-
-/// A little-endian ROS 2 CDR message being written: the encapsulation header `00 01 00 00`,
-/// then each primitive aligned to its size relative to the start of the body (what `cdr.rs`
-/// reads).
-#[derive(Debug)]
-struct CdrWriter<'a> {
-    data: &'a mut Vec<u8>,
-}
-
-/// The encapsulation header: plain CDR, little endian, no options.
-const ENCAPSULATION: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
-
-impl<'a> CdrWriter<'a> {
-    fn new(data: &'a mut Vec<u8>) -> Self {
-        data.clear();
-        data.extend_from_slice(&ENCAPSULATION);
-        Self { data }
-    }
-
-    /// Pads with zeros to a multiple of `align` bytes from the start of the body.
-    fn align(&mut self, align: usize) {
-        let body_len = self.data.len() - ENCAPSULATION.len();
-        let padding = (align - body_len % align) % align;
-        self.data.resize(self.data.len() + padding, 0);
-    }
-
-    fn i32(&mut self, value: i32) {
-        self.align(4);
-        self.data.extend_from_slice(&value.to_le_bytes());
-    }
-
-    fn u32(&mut self, value: u32) {
-        self.align(4);
-        self.data.extend_from_slice(&value.to_le_bytes());
-    }
-
-    fn f64s(&mut self, values: &[f64]) {
-        self.align(8);
-        for value in values {
-            self.data.extend_from_slice(&value.to_le_bytes());
-        }
-    }
-
-    /// A string: `u32` length counting the terminating NUL, the bytes, the NUL. Checked to fit
-    /// by [`check_table`].
-    fn string(&mut self, text: &str) {
-        debug_assert!(text.len() < u32::MAX as usize && !text.contains('\0'));
-        self.u32(text.len() as u32 + 1);
-        self.data.extend_from_slice(text.as_bytes());
-        self.data.push(0);
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::message::{MessageEncoding, decode_poses};
-
-    #[test]
-    fn pose_stamped_has_the_ros2_layout() {
-        let mut data = Vec::new();
-        let stamp = RosTime { sec: 7, nanosec: 9 };
-        encode_message(&mut data, &McapPoseMessage::PoseStamped, stamp, "map", [1.0, 2.0, 3.0], [0.0, 0.0, 0.6, 0.8]);
-        // Encapsulation 4, then sec, nanosec, length, "map\0": the doubles start at body byte 16, aligned.
-        assert_eq!(data[..20], [0, 1, 0, 0, 7, 0, 0, 0, 9, 0, 0, 0, 4, 0, 0, 0, b'm', b'a', b'p', 0]);
-        assert_eq!(data.len(), 20 + 7 * 8);
-        assert_eq!(data[20..28], 1.0f64.to_le_bytes());
-        // "base\0" ends at byte 21 (17 of the body): 7 bytes of padding to the doubles at body byte 24.
-        encode_message(&mut data, &McapPoseMessage::PoseStamped, stamp, "base", [1.0, 2.0, 3.0], IDENTITY_XYZW);
-        assert_eq!(data[16..28], [b'b', b'a', b's', b'e', 0, 0, 0, 0, 0, 0, 0, 0]);
-        assert_eq!(data.len(), 28 + 7 * 8);
-        let poses = decode_poses(PoseType::PoseStamped, MessageEncoding::Cdr, &data).unwrap();
-        assert_eq!((poses[0].stamp_ns, poses[0].frame_id.as_str()), (7_000_000_009, "base"));
-    }
-
-    #[test]
-    fn odometry_decodes_with_its_child_frame() {
-        let mut data = Vec::new();
-        let message = McapPoseMessage::Odometry { child_frame_id: "base_link".into() };
-        let stamp = RosTime { sec: 1, nanosec: 2 };
-        encode_message(&mut data, &message, stamp, "odom", [1.0, 2.0, 3.0], [0.0, 0.0, 0.6, 0.8]);
-        let poses = decode_poses(PoseType::Odometry, MessageEncoding::Cdr, &data).unwrap();
-        assert_eq!(poses.len(), 1);
-        assert_eq!((poses[0].frame_id.as_str(), poses[0].child_frame_id.as_str()), ("odom", "base_link"));
-        assert_eq!((poses[0].position, poses[0].orientation_xyzw), ([1.0, 2.0, 3.0], [0.0, 0.0, 0.6, 0.8]));
-    }
-
-    #[test]
-    fn times_are_checked_and_rounded_to_nanoseconds() {
-        assert_eq!(RosTime::of_ns(0), Some(RosTime { sec: 0, nanosec: 0 }));
-        assert_eq!(RosTime::of_ns(-1), None);
-        let last = i64::from(i32::MAX) * NS_PER_S + 999_999_999;
-        assert_eq!(RosTime::of_ns(last), Some(RosTime { sec: i32::MAX, nanosec: 999_999_999 }));
-        assert_eq!(RosTime::of_ns(last + 1), None);
-        assert_eq!(RosTime::of_ns(last).unwrap().ns(), last as u64);
-        assert_eq!(RosTime::of_seconds(0.1), Some(RosTime { sec: 0, nanosec: 100_000_000 }));
-        assert_eq!(RosTime::of_seconds(1_700_000_000.25), Some(RosTime { sec: 1_700_000_000, nanosec: 250_000_000 }));
-        // As printed, not as the f64 (1700000000.2999999523...).
-        assert_eq!(RosTime::of_seconds(1_700_000_000.3), Some(RosTime { sec: 1_700_000_000, nanosec: 300_000_000 }));
-        assert_eq!(RosTime::of_seconds(1.0 / 3.0), Some(RosTime { sec: 0, nanosec: 333_333_333 }));
-        assert_eq!(RosTime::of_seconds(-0.0), Some(RosTime { sec: 0, nanosec: 0 }));
-        assert_eq!(RosTime::of_seconds(2_147_483_647.5), Some(RosTime { sec: i32::MAX, nanosec: 500_000_000 }));
-        // Rounds up into the next second.
-        assert_eq!(RosTime::of_seconds(1.0 - 1e-12), Some(RosTime { sec: 1, nanosec: 0 }));
-        for bad in [-1e-9, f64::NAN, f64::INFINITY, 2_147_483_648.0] {
-            assert_eq!(RosTime::of_seconds(bad), None, "{bad}");
-        }
-    }
 
     #[test]
     fn schemas_are_the_concatenated_definitions() {

@@ -49,6 +49,14 @@ pub fn seconds_of_ns(ns: i64) -> f64 {
     (ns / NS_PER_S) as f64 + (ns % NS_PER_S) as f64 / 1e9
 }
 
+/// Nanoseconds as exact decimal seconds, as the writers print them: `1.000000002`,
+/// `-0.000000001`.
+pub(crate) fn exact_seconds(ns: i64) -> String {
+    let sign = if ns < 0 { "-" } else { "" };
+    let abs = ns.unsigned_abs();
+    format!("{sign}{}.{:09}", abs / 1_000_000_000, abs % 1_000_000_000)
+}
+
 /// Where the poses of a [`PoseTable`] read from MCAP files came from.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MessageSources {
@@ -331,5 +339,13 @@ mod tests {
         bad.source_lines.clear();
         let error = bad.to_trajectory().unwrap_err();
         assert!(error.to_string().starts_with("drive.csv: timestamps must strictly increase: index 2"), "{error}");
+    }
+
+    #[test]
+    fn exact_seconds_are_exact() {
+        assert_eq!(exact_seconds(1_403_715_524_912_143_104), "1403715524.912143104");
+        assert_eq!(exact_seconds(5), "0.000000005");
+        assert_eq!(exact_seconds(-1_500_000_000), "-1.500000000");
+        assert_eq!(exact_seconds(i64::MIN), "-9223372036.854775808");
     }
 }

@@ -8,10 +8,10 @@ use std::path::Path;
 
 use loops_core::Error;
 
-use crate::error::{IoError, Result};
+use crate::atomic::write_atomically;
+use crate::error::{IoError, Result, WriteError};
 use crate::rotation::{normalized, relative_pose, yaw_of};
-use crate::samples::{WriteError, write_atomically};
-use crate::table::PoseTable;
+use crate::table::{PoseTable, exact_seconds};
 
 /// Writes `table` as a TUM trajectory: a `# timestamp tx ty tz qx qy qz qw` header, then one
 /// pose a line.
@@ -60,13 +60,6 @@ pub fn write_tum(path: impl AsRef<Path>, table: &PoseTable, overwrite: bool) -> 
         }
         out.flush()
     })
-}
-
-/// Nanoseconds as exact decimal seconds: `-1.5e-9 s` is `-0.000000001`... `1.000000002`.
-fn exact_seconds(ns: i64) -> String {
-    let sign = if ns < 0 { "-" } else { "" };
-    let abs = ns.unsigned_abs();
-    format!("{sign}{}.{:09}", abs / 1_000_000_000, abs % 1_000_000_000)
 }
 
 /// Which g2o edge type [`write_g2o_edges`] writes.
@@ -206,17 +199,4 @@ pub fn write_g2o_edges(
         };
     }
     write_atomically(path.as_ref(), options.overwrite, |file| file.write_all(lines.as_bytes())).map_err(IoError::Write)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exact_seconds_are_exact() {
-        assert_eq!(exact_seconds(1_403_715_524_912_143_104), "1403715524.912143104");
-        assert_eq!(exact_seconds(5), "0.000000005");
-        assert_eq!(exact_seconds(-1_500_000_000), "-1.500000000");
-        assert_eq!(exact_seconds(i64::MIN), "-9223372036.854775808");
-    }
 }

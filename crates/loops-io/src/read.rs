@@ -1,0 +1,165 @@
+//! Reading a pose file in the format it names, or that its extension and first line suggest.
+
+use std::path::Path;
+
+use crate::csv::parse_csv;
+use crate::error::{IoError, Result};
+use crate::euroc::{looks_like_euroc, parse_euroc};
+use crate::format::Format;
+use crate::graph::{looks_like_graph, parse_pose_graph};
+use crate::kitti::parse_kitti;
+use crate::mcap::{McapOptions, read_mcap};
+use crate::table::PoseTable;
+use crate::text::{self, Delimiter};
+use crate::timing::Timing;
+use crate::tuc::{looks_like_tuc, parse_tuc};
+use crate::tum::parse_tum;
+
+/// How [`read_trajectory_with`] reads a file: the format, and what the formats that need more
+/// than the file take.
+///
+/// # Examples
+/// ```
+/// use loops_io::{Format, McapOptions, ReadOptions, Timing};
+/// let mulran = ReadOptions::default().format(Format::Kitti).timing(Timing::RateHz(10.0));
+/// let odometry = ReadOptions::default().mcap(McapOptions::default().topic("/odom"));
+/// # let _ = (mulran, odometry);
+/// ```
+#[derive(Debug, Clone, PartialEq, Default)]
+#[non_exhaustive]
+pub struct ReadOptions {
+    /// The format; `None` tells it from the extension and the first line (see
+    /// [`read_trajectory`]).
+    pub format: Option<Format>,
+    /// For MCAP: topic, time source, frame pair.
+    pub mcap: McapOptions,
+    /// For KITTI and pose graphs: a rate or a times file instead of the file's times.
+    pub timing: Timing,
+}
+
+impl ReadOptions {
+    /// Reads `format`.
+    pub fn format(mut self, format: Format) -> Self {
+        self.format = Some(format);
+        self
+    }
+
+    /// Reads MCAP files with `mcap`.
+    pub fn mcap(mut self, mcap: McapOptions) -> Self {
+        self.mcap = mcap;
+        self
+    }
+
+    /// Times poses by `timing`.
+    pub fn timing(mut self, timing: Timing) -> Self {
+        self.timing = timing;
+        self
+    }
+}
+
+/// Reads a pose file in `format`, or when `None` in the format its extension and first line
+/// suggest; the other options at their defaults. See [`read_trajectory_with`].
+///
+/// # Errors
+/// As [`read_trajectory_with`].
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_io::{Format, read_trajectory};
+///
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}.log", std::process::id()));
+/// std::fs::write(&path, "t,x,y\n0,0,0\n1,1,0\n")?;
+/// assert!(read_trajectory(&path, None).is_err()); // .log: no format known
+/// let traj = read_trajectory(&path, Some("csv".parse()?))?.to_trajectory()?;
+/// assert_eq!((traj.len(), traj.dim()), (2, 2));
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_trajectory(path: impl AsRef<Path>, format: Option<Format>) -> Result<PoseTable> {
+    read_trajectory_with(path, &ReadOptions { format, ..ReadOptions::default() })
+}
+
+/// Reads a pose file as `options` say: in `options.format`, or when `None` in the format its
+/// extension ([`Format::from_path`]) and its first data line suggest.
+///
+/// The first line overrides the extension where the extension is shared: a `.txt` file whose
+/// first data line is 12 or 13 numbers is KITTI, `point2` / `point3` / `angle` is libRSF (TUC),
+/// `VERTEX...` / `EDGE...` is a pose graph; a `.csv` file whose first data line is 8
+/// space-separated numbers is TUM (the UrbanNav ground truth `gt_slam_*.csv`), and at least 8
+/// comma-separated numbers starting with a nanosecond integer is EuRoC. A pose graph gives its
+/// vertices ([`read_pose_graph`](crate::read_pose_graph) gives the edges too).
+///
+/// # Errors
+/// [`IoError::UnknownFormat`] when `format` is `None` and the extension does not tell it;
+/// otherwise as the format's reader.
+pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<PoseTable> {
+    let path = path.as_ref();
+    let format = match options.format {
+        Some(format) => format,
+        None => Format::from_path(path).ok_or_else(|| IoError::UnknownFormat {
+            path: path.to_path_buf(),
+            extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
+        })?,
+    };
+    if format == Format::Mcap {
+        return read_mcap(path, &options.mcap);
+    }
+    let text = text::read_text(path)?;
+    let sniffed = match (options.format, format) {
+        (Some(_), _) => format,
+        (None, Format::Tum) if looks_like_kitti(&text) => Format::Kitti,
+        (None, Format::Tum) if looks_like_tuc(&text) => Format::Tuc,
+        (None, Format::Tum) if looks_like_graph(&text) => Format::G2o,
+        (None, Format::Csv) if looks_like_tum(&text) => Format::Tum,
+        (None, Format::Csv) if looks_like_euroc(&text) => Format::Euroc,
+        (None, format) => format,
+    };
+    match sniffed {
+        Format::Tum => parse_tum(path, &text),
+        Format::Csv => parse_csv(path, &text),
+        Format::Kitti => parse_kitti(path, &text, &options.timing),
+        Format::Euroc => parse_euroc(path, &text),
+        Format::G2o => parse_pose_graph(path, &text, &options.timing).map(|graph| graph.vertices),
+        Format::Tuc => parse_tuc(path, &text),
+        Format::Mcap => unreachable!("MCAP is read above"),
+    }
+}
+
+/// Whether the first data line is 8 space-separated numbers with no CSV delimiter.
+fn looks_like_tum(text: &str) -> bool {
+    text::data_lines(text).next().is_some_and(|(_, line)| {
+        !line.contains([',', ';', '\t'])
+            && Delimiter::Whitespace.split(line).count() == 8
+            && Delimiter::Whitespace.split(line).all(text::is_number)
+    })
+}
+
+/// Whether the first data line is 12 or 13 space-separated numbers.
+fn looks_like_kitti(text: &str) -> bool {
+    text::data_lines(text).next().is_some_and(|(_, line)| {
+        let fields = || line.split_ascii_whitespace();
+        matches!(fields().count(), 12 | 13) && fields().all(text::is_number)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kitti_is_recognised() {
+        assert!(looks_like_kitti("# c\n0 1 0 0 0 0 1 0 0 0 0 1 0\n"));
+        assert!(looks_like_kitti("1 0 0 0 0 1 0 0 0 0 1 0\n"));
+        assert!(!looks_like_kitti("1 0 0 0 0 0 0 1\n"));
+    }
+
+    #[test]
+    fn tum_in_a_csv_is_recognised() {
+        assert!(looks_like_tum("# c\n1 0 0 0 0 0 -0 1\n"));
+        assert!(!looks_like_tum("1,0,0,0,0,0,0,1\n"));
+        assert!(!looks_like_tum("1 0 0\n"));
+        assert!(!looks_like_tum("t x y z qx qy qz qw\n1 0 0 0 0 0 0 1\n"));
+    }
+}
