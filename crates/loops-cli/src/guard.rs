@@ -7,10 +7,12 @@
 //! `loops` created that stayed empty), says so, and exits with 130. What is left is what was
 //! finished: whole files and whole per-log folders.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use anyhow::{Context, Result, bail};
+use loops_io::WriteError;
 
 /// Exit code after an interrupt (128 + SIGINT), as shells report it.
 pub(crate) const INTERRUPTED: u8 = 130;
@@ -123,21 +125,15 @@ impl Writes {
     }
 }
 
-/// Writes `bytes` to a temporary file beside `path`, then renames it over `path`: readers never
-/// see a partial file, and an interrupt leaves either the old file or the new one. An existing
-/// `path` is replaced only with `force`.
+/// Writes `bytes` to `path` with [`loops_io::write_atomically`] (a temporary file beside it,
+/// synced, then renamed), under the write lock: readers never see a partial file, and an
+/// interrupt leaves either the old file or the new one. An existing `path` is replaced only with
+/// `force`.
 pub(crate) fn write_atomically(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
-    with_writes(|_| {
-        if (path.exists() || path.is_symlink()) && !force {
-            bail!("{} exists; pass --force to replace it", path.display());
-        }
-        let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        let name = path.file_name().context("the output path has no file name")?;
-        let temp = dir.join(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
-        let result = std::fs::write(&temp, bytes).and_then(|()| std::fs::rename(&temp, path));
-        if result.is_err() {
-            let _ = std::fs::remove_file(&temp);
-        }
-        result.with_context(|| format!("writing {}", path.display()))
+    with_writes(|_| match loops_io::write_atomically(path, force, |file| file.write_all(bytes)) {
+        Ok(()) => Ok(()),
+        Err(WriteError::Exists { .. }) => bail!("{} exists; pass --force to replace it", path.display()),
+        Err(WriteError::Write { error, .. }) => Err(error).with_context(|| format!("writing {}", path.display())),
+        Err(error) => Err(error.into()),
     })
 }

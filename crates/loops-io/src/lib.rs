@@ -20,7 +20,8 @@
 //! [`read_trajectory`] and [`read_trajectory_with`] pick the reader by [`Format`], or by
 //! extension and first line. Writers: [`write_tum`] for trajectories, [`write_g2o_edges`] for
 //! candidate loop-closure edges with relative-pose guesses; both atomic, and never replacing a
-//! file unless asked ([`WriteError::Exists`]).
+//! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
+//! the workspace: the CLI writes its files through it too.
 //!
 //! Every error is an [`IoError`] whose message starts with the file and the line, or the topic
 //! and byte offset: `drive.tum line 12: column 3 ("abc") is not a number`, `drive.mcap topic
@@ -97,6 +98,7 @@ mod write;
 
 pub use crate::csv::read_csv;
 pub use crate::mcap::{McapOptions, TimeSource, list_topics, read_mcap, read_mcap_files};
+pub use atomic::write_atomically;
 pub use detections::{DetectionTable, read_detections};
 pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};
 pub use euroc::read_euroc;

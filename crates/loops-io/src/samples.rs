@@ -170,10 +170,10 @@ pub fn samples_to_json<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
     out.flush()
 }
 
-/// Writes `samples` to the file `path` in `format`, atomically: into a temporary file in the
-/// same directory, then renamed into place, so that a reader never sees half a file. Without
-/// `overwrite`, an existing file is left alone (checked first, and again without a race when
-/// the file is linked into place).
+/// Writes `samples` to the file `path` in `format`, atomically ([`write_atomically`]): into a
+/// temporary file in the same directory, then renamed into place, so that a reader never sees
+/// half a file. Without `overwrite`, an existing file is left alone (checked first, and again
+/// without a race when the file is moved into place).
 ///
 /// # Errors
 /// [`WriteError::Exists`] when the file exists and `overwrite` is false;

@@ -1,7 +1,6 @@
 //! Writers: trajectories as TUM, and candidate loop-closure edges as g2o. Every write is atomic
-//! (a temporary file beside the target, then a rename or link: the one helper
-//! [`write_atomically`] that the samples writer uses too) and does not replace an existing file
-//! unless asked.
+//! ([`write_atomically`]: a temporary file beside the target, then a rename) and does not
+//! replace an existing file unless asked.
 
 use std::io::{BufWriter, Write};
 use std::path::Path;
