@@ -68,11 +68,14 @@
 // 3. messages: `cdr`, `foxglove`, `message` (decoding), `cdr_write`;
 // 4. MCAP: `mcap_records` (the record walker), `mcap` (topics and poses), `mcap_write`;
 // 5. readers: `csv`, `euroc`, `graph`, `kitti`, `tuc`, `tum`, `detections`; `read` picks one;
-// 6. writers: `samples`, `write`.
+// 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
+//    `loop_duration`, `report`, `quality`, `samples`; and `write` (TUM, g2o).
 mod atomic;
 mod cdr;
 mod cdr_write;
+mod components;
 mod csv;
+mod csv_rows;
 mod detections;
 mod error;
 mod euroc;
@@ -80,12 +83,15 @@ mod format;
 mod foxglove;
 mod graph;
 mod kitti;
+mod loop_duration;
 mod mcap;
 mod mcap_records;
 mod mcap_write;
 mod message;
 mod pose_type;
+mod quality;
 mod read;
+mod report;
 mod rotation;
 mod samples;
 mod table;
@@ -99,17 +105,23 @@ mod write;
 pub use crate::csv::read_csv;
 pub use crate::mcap::{McapOptions, TimeSource, list_topics, read_mcap, read_mcap_files};
 pub use atomic::write_atomically;
+pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
 pub use detections::{DetectionTable, read_detections};
 pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};
 pub use euroc::read_euroc;
 pub use format::Format;
 pub use graph::{GraphEdge, PoseGraph, read_pose_graph};
 pub use kitti::read_kitti;
+pub use loop_duration::{
+    LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, write_loop_duration,
+};
 pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_mcap};
 pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
+pub use quality::QualitySummary;
 pub use read::{ReadOptions, read_trajectory, read_trajectory_with};
-pub use samples::{CSV_HEADER, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
+pub use report::{ComponentReport, LoopsReport, loops_report_to_json, write_loops_report};
+pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, seconds_of_ns};
 pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};

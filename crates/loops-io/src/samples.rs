@@ -9,6 +9,7 @@ use std::str::FromStr;
 use loops_core::{Sample, Samples};
 
 use crate::atomic::write_atomically;
+use crate::csv_rows::write_csv;
 use crate::error::WriteError;
 
 /// A file format for samples.
@@ -81,44 +82,42 @@ pub const CSV_HEADER: &str = "t_s,t_prime_s,i,j,component,cluster,detection,dist
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn samples_to_csv<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
-    let mut out = BufWriter::new(out);
-    writeln!(out, "{CSV_HEADER}")?;
-    let text = |value: Option<String>| value.unwrap_or_default();
-    for row in samples.rows() {
-        writeln!(
-            out,
-            "{},{},{},{},{},{},{},{},{},{}",
-            row.t_s,
-            row.t_prime_s,
-            text(row.pair.map(|p| p[0].to_string())),
-            text(row.pair.map(|p| p[1].to_string())),
-            text(row.component.map(|c| c.to_string())),
-            text(row.cluster.map(|c| c.to_string())),
-            text(row.detection.map(|d| d.to_string())),
-            text(row.distance.map(|d| d.to_string())),
-            text(row.score.map(|s| s.to_string())),
-            row.sampler
-        )?;
-    }
-    out.flush()
+    write_csv(out, &SAMPLE_COLUMNS, samples.rows().iter().map(SampleRow::from))
 }
 
-/// One sample in JSON: `null` for unknown values.
-#[derive(serde::Serialize)]
-struct JsonSample {
-    t_s: f64,
-    t_prime_s: f64,
-    i: Option<usize>,
-    j: Option<usize>,
-    component: Option<usize>,
-    cluster: Option<usize>,
-    detection: Option<usize>,
-    distance: Option<f64>,
-    score: Option<f64>,
-    sampler: &'static str,
+/// One row of a samples file ([`CSV_HEADER`]; one object of the JSON `samples` list): a
+/// [`Sample`] with its pose pair split into `i` and `j`. `None` is unknown: an empty CSV field,
+/// `null` in JSON.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct SampleRow {
+    /// Time of the earlier pose, seconds.
+    pub t_s: f64,
+    /// Time of the later pose, seconds.
+    pub t_prime_s: f64,
+    /// Index of the earlier pose, when the sample is a pose pair.
+    pub i: Option<usize>,
+    /// Index of the later pose, when the sample is a pose pair.
+    pub j: Option<usize>,
+    /// The exact loop component of the pair, when known.
+    pub component: Option<usize>,
+    /// The detection cluster, for samples drawn from detections.
+    pub cluster: Option<usize>,
+    /// The detection's index, for samples drawn from detections.
+    pub detection: Option<usize>,
+    /// δ(x_i, x_j), in the metric's unit, when known.
+    pub distance: Option<f64>,
+    /// The detection's score, when it has one.
+    pub score: Option<f64>,
+    /// The sampler's name.
+    pub sampler: &'static str,
 }
 
-impl From<&Sample> for JsonSample {
+/// The columns of [`SampleRow`], as the CSV header names them.
+const SAMPLE_COLUMNS: [&str; 10] =
+    ["t_s", "t_prime_s", "i", "j", "component", "cluster", "detection", "distance", "score", "sampler"];
+
+impl From<&Sample> for SampleRow {
     fn from(row: &Sample) -> Self {
         Self {
             t_s: row.t_s,
@@ -144,7 +143,7 @@ struct JsonSamples {
     available: u64,
     poses: Option<usize>,
     warnings: Vec<String>,
-    samples: Vec<JsonSample>,
+    samples: Vec<SampleRow>,
 }
 
 /// Writes `samples` as one JSON object: `sampler` (its name), `count`, `groups` (clusters or
@@ -162,7 +161,7 @@ pub fn samples_to_json<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
         available: samples.available(),
         poses: samples.poses(),
         warnings: samples.warnings().iter().map(ToString::to_string).collect(),
-        samples: samples.rows().iter().map(JsonSample::from).collect(),
+        samples: samples.rows().iter().map(SampleRow::from).collect(),
     };
     let mut out = BufWriter::new(out);
     serde_json::to_writer_pretty(&mut out, &document).map_err(io::Error::other)?;
@@ -216,6 +215,13 @@ mod tests {
         let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]]).unwrap();
         let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
         sample_loops(&traj, &Euclidean, &loops, &Sampler::new(SamplerKind::Alpha, SampleSize::Rate(1.0), 0)).unwrap()
+    }
+
+    #[test]
+    fn the_header_names_the_row_fields() {
+        assert_eq!(CSV_HEADER, SAMPLE_COLUMNS.join(","));
+        let row = SampleRow::from(&samples().rows()[0]);
+        assert_eq!(crate::csv_rows::inferred_columns(&row), SAMPLE_COLUMNS);
     }
 
     #[test]

@@ -1,0 +1,258 @@
+//! `components.csv`: the loop components of a result, one row each ([`ComponentRow`]).
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use loops_core::{LoopComponent, Loops, Trajectory};
+
+use crate::atomic::write_atomically;
+use crate::csv_rows::write_csv;
+use crate::error::WriteError;
+
+/// The columns of `components.csv`, without the optional `samples`: the names of the Python
+/// API's `Loops.components` columns.
+pub const COMPONENT_COLUMNS: [&str; 17] = [
+    "id",
+    "trivial",
+    "area_s2",
+    "pair_count",
+    "run_count",
+    "holes",
+    "i_min",
+    "i_max",
+    "j_min",
+    "j_max",
+    "t_min_s",
+    "t_max_s",
+    "t_prime_min_s",
+    "t_prime_max_s",
+    "closest_i",
+    "closest_j",
+    "closest_distance",
+];
+
+/// One row of `components.csv`: a [`LoopComponent`] with the times of its index ranges.
+///
+/// `i` indexes poses by t, `j` by t′ (`i_min..=i_max` and `j_min..=j_max` are the component's
+/// index ranges); times are the poses' own timestamps, seconds.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ComponentRow {
+    /// The component's id: its index in [`Loops::components`].
+    pub id: usize,
+    /// Whether the component is trivial (touches the diagonal t = t′ only).
+    pub trivial: bool,
+    /// Its area in the (t, t′) plane, s².
+    pub area_s2: f64,
+    /// Its number of pose pairs.
+    pub pair_count: u64,
+    /// Its number of runs (row intervals).
+    pub run_count: usize,
+    /// Its number of holes.
+    pub holes: u64,
+    /// First pose index by t.
+    pub i_min: usize,
+    /// Last pose index by t.
+    pub i_max: usize,
+    /// First pose index by t′.
+    pub j_min: usize,
+    /// Last pose index by t′.
+    pub j_max: usize,
+    /// Time of pose `i_min`, seconds.
+    pub t_min_s: f64,
+    /// Time of pose `i_max`, seconds.
+    pub t_max_s: f64,
+    /// Time of pose `j_min`, seconds.
+    pub t_prime_min_s: f64,
+    /// Time of pose `j_max`, seconds.
+    pub t_prime_max_s: f64,
+    /// The pair of the component closest in the metric: pose by t.
+    pub closest_i: usize,
+    /// The pair of the component closest in the metric: pose by t′.
+    pub closest_j: usize,
+    /// δ of that pair, in the metric's unit.
+    pub closest_distance: f64,
+    /// Samples drawn from the component, when a sampling is written with it (the column is
+    /// left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples: Option<u64>,
+}
+
+impl ComponentRow {
+    /// The row of `component`, with the times of `timestamps_s` (the trajectory the loops
+    /// were found on) and, optionally, its number of samples.
+    ///
+    /// # Panics
+    /// When the component's indices are outside `timestamps_s` (loops of another trajectory).
+    pub fn new(component: &LoopComponent, timestamps_s: &[f64], samples: Option<u64>) -> Self {
+        let c = component;
+        Self {
+            id: c.id,
+            trivial: c.trivial,
+            area_s2: c.area_s2,
+            pair_count: c.pairs,
+            run_count: c.runs,
+            holes: c.holes,
+            i_min: c.rows[0],
+            i_max: c.rows[1],
+            j_min: c.columns[0],
+            j_max: c.columns[1],
+            t_min_s: timestamps_s[c.rows[0]],
+            t_max_s: timestamps_s[c.rows[1]],
+            t_prime_min_s: timestamps_s[c.columns[0]],
+            t_prime_max_s: timestamps_s[c.columns[1]],
+            closest_i: c.closest_pair[0],
+            closest_j: c.closest_pair[1],
+            closest_distance: c.closest_distance,
+            samples,
+        }
+    }
+}
+
+/// The rows of `components.csv`: one per component of `loops`, in id order, with the times of
+/// `traj` (the trajectory the loops were found on). With `samples_per_component` (by component
+/// id, as [`SampleQuality::per_component`](loops_core::SampleQuality::per_component)), each row
+/// has its number of samples (0 for an id past its end). O(components).
+///
+/// # Panics
+/// When `loops` was not found on `traj` (a component index outside it).
+pub fn component_rows(traj: &Trajectory, loops: &Loops, samples_per_component: Option<&[u64]>) -> Vec<ComponentRow> {
+    let t = traj.timestamps_s();
+    loops
+        .components()
+        .iter()
+        .map(|c| ComponentRow::new(c, t, samples_per_component.map(|s| s.get(c.id).copied().unwrap_or(0))))
+        .collect()
+}
+
+/// Writes `components.csv` to `out`: a header of [`COMPONENT_COLUMNS`] (and `samples` with
+/// `samples_per_component`), then the [`component_rows`]. Numbers are printed in the shortest
+/// form that reads back as the same `f64`, without an exponent. O(components).
+///
+/// # Errors
+/// What `out` returns.
+///
+/// # Panics
+/// As [`component_rows`].
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, Trajectory, find_loops};
+/// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]])?;
+/// let loops = find_loops(&traj, &Euclidean, 0.5)?;
+/// let mut text = Vec::new();
+/// loops_io::components_to_csv(&traj, &loops, None, &mut text).unwrap();
+/// let text = String::from_utf8(text).unwrap();
+/// assert!(text.starts_with("id,trivial,area_s2,pair_count,run_count,holes,i_min,"));
+/// assert_eq!(text.lines().count(), 1 + loops.components().len());
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn components_to_csv<W: Write>(
+    traj: &Trajectory,
+    loops: &Loops,
+    samples_per_component: Option<&[u64]>,
+    out: W,
+) -> io::Result<()> {
+    let mut columns = COMPONENT_COLUMNS.to_vec();
+    if samples_per_component.is_some() {
+        columns.push("samples");
+    }
+    write_csv(out, &columns, component_rows(traj, loops, samples_per_component))
+}
+
+/// Writes `components.csv` ([`components_to_csv`]) to the file `path`, atomically
+/// ([`write_atomically`](crate::write_atomically)); an existing file is replaced only with
+/// `overwrite`.
+///
+/// # Errors
+/// [`WriteError::Exists`] when `path` exists and `overwrite` is false; [`WriteError::Write`]
+/// when it cannot be written.
+///
+/// # Panics
+/// As [`component_rows`].
+pub fn write_components(
+    path: impl AsRef<Path>,
+    traj: &Trajectory,
+    loops: &Loops,
+    samples_per_component: Option<&[u64]>,
+    overwrite: bool,
+) -> Result<(), WriteError> {
+    write_atomically(path, overwrite, |file| components_to_csv(traj, loops, samples_per_component, file))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::fmt::Write as _;
+
+    use loops_core::{Euclidean, find_loops};
+
+    use super::*;
+
+    fn result() -> (Trajectory, Loops) {
+        let t = vec![0.0, 0.5, 1.0, 1.5, 2.0, 3.0000001, 10.0];
+        let x: [[f64; 1]; 7] = [[0.0], [1.0], [2.0], [1.0], [0.0], [0.05], [7.0]];
+        let traj = Trajectory::from_points(t, &x).unwrap();
+        let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
+        (traj, loops)
+    }
+
+    /// components.csv as `loops run` wrote it with `writeln!`.
+    fn by_hand(traj: &Trajectory, loops: &Loops, samples: Option<&[u64]>) -> String {
+        let t = traj.timestamps_s();
+        let mut csv = COMPONENT_COLUMNS.join(",");
+        if samples.is_some() {
+            csv += ",samples";
+        }
+        csv.push('\n');
+        for c in loops.components() {
+            let _ = write!(
+                csv,
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                c.id,
+                c.trivial,
+                c.area_s2,
+                c.pairs,
+                c.runs,
+                c.holes,
+                c.rows[0],
+                c.rows[1],
+                c.columns[0],
+                c.columns[1],
+                t[c.rows[0]],
+                t[c.rows[1]],
+                t[c.columns[0]],
+                t[c.columns[1]],
+                c.closest_pair[0],
+                c.closest_pair[1],
+                c.closest_distance,
+            );
+            if let Some(samples) = samples {
+                let _ = write!(csv, ",{}", samples.get(c.id).copied().unwrap_or(0));
+            }
+            csv.push('\n');
+        }
+        csv
+    }
+
+    #[test]
+    fn the_bytes_are_those_written_by_hand() {
+        let (traj, loops) = result();
+        assert!(loops.components().iter().any(|c| !c.trivial));
+        for samples in [None, Some(&[3u64, 0][..])] {
+            let mut out = Vec::new();
+            components_to_csv(&traj, &loops, samples, &mut out).unwrap();
+            assert_eq!(String::from_utf8(out).unwrap(), by_hand(&traj, &loops, samples));
+        }
+    }
+
+    #[test]
+    fn the_columns_name_the_row_fields() {
+        let (traj, loops) = result();
+        let rows = component_rows(&traj, &loops, Some(&[1]));
+        let mut expected: Vec<&str> = COMPONENT_COLUMNS.to_vec();
+        expected.push("samples");
+        assert_eq!(crate::csv_rows::inferred_columns(&rows[0]), expected);
+        assert_eq!(rows[0].samples, Some(1));
+        assert_eq!(rows.last().unwrap().samples, Some(0));
+    }
+}

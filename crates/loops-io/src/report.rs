@@ -1,0 +1,190 @@
+//! The loops report in JSON (`loops components --json`): the result's facts and every
+//! component ([`LoopsReport`]).
+
+use std::io::{self, BufWriter, Write};
+use std::path::Path;
+
+use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
+
+use crate::atomic::write_atomically;
+use crate::error::WriteError;
+
+/// What [`find_loops`](loops_core::find_loops) found on a trajectory, as a JSON document.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct LoopsReport {
+    /// Where the trajectory came from: a file name, `synthetic`, ...
+    pub source: String,
+    /// The number of poses.
+    pub poses: usize,
+    /// The trajectory's time span, seconds.
+    pub span_s: f64,
+    /// γ, in the metric's unit.
+    pub gamma: f64,
+    /// The metric's name.
+    pub metric: String,
+    /// The number of pose pairs in S_γ.
+    pub pairs: u64,
+    /// The mean loop duration over the whole trajectory, seconds.
+    pub loop_density_s: f64,
+    /// The result's warnings, as sentences.
+    pub warnings: Vec<String>,
+    /// Every component, by id.
+    pub components: Vec<ComponentReport>,
+}
+
+/// One component of a [`LoopsReport`]: ranges as `[first, last]`, times in seconds (the poses'
+/// own timestamps).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ComponentReport {
+    /// The component's id.
+    pub id: usize,
+    /// Whether it is trivial (touches the diagonal t = t′ only).
+    pub trivial: bool,
+    /// Its area in the (t, t′) plane, s².
+    pub area_s2: f64,
+    /// Its number of pose pairs.
+    pub pair_count: u64,
+    /// Its number of runs (row intervals).
+    pub run_count: usize,
+    /// Its number of holes.
+    pub holes: u64,
+    /// The times of its first and last pose by t, seconds.
+    pub t_range_s: [f64; 2],
+    /// The times of its first and last pose by t′, seconds.
+    pub t_prime_range_s: [f64; 2],
+    /// Its first and last pose index by t.
+    pub i_range: [usize; 2],
+    /// Its first and last pose index by t′.
+    pub j_range: [usize; 2],
+    /// Its pair closest in the metric, `[i, j]`.
+    pub closest_pair: [usize; 2],
+    /// δ of that pair, in the metric's unit.
+    pub closest_distance: f64,
+}
+
+impl ComponentReport {
+    /// The report of `component`, with the times of `timestamps_s` (the trajectory the loops
+    /// were found on).
+    ///
+    /// # Panics
+    /// When the component's indices are outside `timestamps_s`.
+    pub fn new(component: &LoopComponent, timestamps_s: &[f64]) -> Self {
+        let (c, t) = (component, timestamps_s);
+        Self {
+            id: c.id,
+            trivial: c.trivial,
+            area_s2: c.area_s2,
+            pair_count: c.pairs,
+            run_count: c.runs,
+            holes: c.holes,
+            t_range_s: [t[c.rows[0]], t[c.rows[1]]],
+            t_prime_range_s: [t[c.columns[0]], t[c.columns[1]]],
+            i_range: c.rows,
+            j_range: c.columns,
+            closest_pair: c.closest_pair,
+            closest_distance: c.closest_distance,
+        }
+    }
+}
+
+impl LoopsReport {
+    /// The report of `loops`, found on `traj` read from `source`. O(poses + components).
+    ///
+    /// # Errors
+    /// What [`Loops::loop_density`] returns (nothing for loops found on `traj`).
+    ///
+    /// # Panics
+    /// When `loops` was not found on `traj` (a component index outside it).
+    pub fn new(source: &str, traj: &Trajectory, loops: &Loops) -> Result<Self, loops_core::Error> {
+        let t = traj.timestamps_s();
+        Ok(Self {
+            source: source.to_owned(),
+            poses: traj.len(),
+            span_s: traj.span_s(),
+            gamma: loops.gamma(),
+            metric: loops.metric().to_owned(),
+            pairs: loops.pairs(),
+            loop_density_s: loops.loop_density(t[0], t[t.len() - 1], Selection::All, Side::Both, Scale::Seconds)?,
+            warnings: loops.warnings().iter().map(ToString::to_string).collect(),
+            components: loops.components().iter().map(|c| ComponentReport::new(c, t)).collect(),
+        })
+    }
+}
+
+/// Writes `report` to `out` as pretty-printed JSON and a final newline. O(components).
+///
+/// # Errors
+/// What `out` returns.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, Trajectory, find_loops};
+/// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]])?;
+/// let loops = find_loops(&traj, &Euclidean, 0.5)?;
+/// let report = loops_io::LoopsReport::new("line", &traj, &loops)?;
+/// let mut text = Vec::new();
+/// loops_io::loops_report_to_json(&report, &mut text).unwrap();
+/// let value: serde_json::Value = serde_json::from_slice(&text).unwrap();
+/// assert_eq!(value["poses"], 4);
+/// assert_eq!(value["components"][0]["i_range"], serde_json::json!([0, 0])); // [first, last]
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn loops_report_to_json<W: Write>(report: &LoopsReport, out: W) -> io::Result<()> {
+    let mut out = BufWriter::new(out);
+    serde_json::to_writer_pretty(&mut out, report).map_err(io::Error::other)?;
+    writeln!(out)?;
+    out.flush()
+}
+
+/// Writes `report` ([`loops_report_to_json`]) to the file `path`, atomically
+/// ([`write_atomically`](crate::write_atomically)); an existing file is replaced only with
+/// `overwrite`.
+///
+/// # Errors
+/// [`WriteError::Exists`] when `path` exists and `overwrite` is false; [`WriteError::Write`]
+/// when it cannot be written.
+pub fn write_loops_report(path: impl AsRef<Path>, report: &LoopsReport, overwrite: bool) -> Result<(), WriteError> {
+    write_atomically(path, overwrite, |file| loops_report_to_json(report, file))
+}
+
+#[cfg(test)]
+mod tests {
+    use loops_core::{Euclidean, find_loops};
+
+    use super::*;
+
+    #[test]
+    fn the_document_is_what_serde_json_prints() {
+        let traj =
+            Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0, 4.5], &[[0.0], [1.0], [1.0], [0.0], [0.1]]).unwrap();
+        let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
+        let report = LoopsReport::new("drive.tum", &traj, &loops).unwrap();
+        let mut out = Vec::new();
+        loops_report_to_json(&report, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert_eq!(text, serde_json::to_string_pretty(&report).unwrap() + "\n");
+        let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+        // The keys in the order of the CLI's report (serde_json's `Value` sorts them: look at the text).
+        let component = &text[text.find("\"components\"").unwrap()..];
+        let at = |key: &str| component.find(&format!("\"{key}\":")).unwrap();
+        let keys = [
+            "id",
+            "trivial",
+            "area_s2",
+            "pair_count",
+            "run_count",
+            "holes",
+            "t_range_s",
+            "t_prime_range_s",
+            "i_range",
+            "j_range",
+            "closest_pair",
+            "closest_distance",
+        ];
+        assert!(keys.windows(2).all(|pair| at(pair[0]) < at(pair[1])));
+        assert_eq!(value["poses"], 5);
+        assert_eq!(value["span_s"], 4.5);
+    }
+}
