@@ -1,6 +1,18 @@
-//! The little rotation algebra the formats need: quaternions `[x, y, z, w]` from matrices,
-//! headings and roll-pitch-yaw, products and relative poses, and the local east-north-up frame
-//! of an ECEF point.
+//! The rotations the formats need, on nalgebra's `UnitQuaternion`: quaternions `[x, y, z, w]`
+//! (the order of the files and of nalgebra's coordinates) from headings and roll-pitch-yaw,
+//! normalised, headings of them and relative poses, bit for bit as the hand-written algebra they
+//! replace (a test checks), so the written files keep their bytes. Two things stay by hand:
+//!
+//! - the quaternion of a rotation matrix keeps Shepperd's method with its branch on the largest
+//!   of the trace and the diagonal: nalgebra's `UnitQuaternion::from_rotation_matrix` branches on
+//!   `trace > 0` and does not normalise. For the not-quite-orthonormal matrices of files printed
+//!   to a few digits (KITTI), the two branches give quaternions that differ by the matrix's
+//!   error (~1e-7), and the sign convention differs (largest component positive here), so the
+//!   orientations read from such files would change;
+//! - the east-north-up frame of an ECEF point (WGS84 geodetic latitude): nalgebra has no
+//!   geodesy.
+
+use nalgebra::{Quaternion, UnitQuaternion, Vector3, Vector4};
 
 /// The unit quaternion of a rotation matrix (rows), by Shepperd's method: stable for every
 /// rotation, normalised (matrices printed to a few digits are not quite orthonormal).
@@ -22,61 +34,59 @@ pub(crate) fn quaternion_from_matrix(r: [[f64; 3]; 3]) -> [f64; 4] {
     normalized(q).unwrap_or([0.0, 0.0, 0.0, 1.0])
 }
 
-/// The rotation by `yaw_rad` about z.
-pub(crate) fn quaternion_from_yaw(yaw_rad: f64) -> [f64; 4] {
-    let (s, c) = (0.5 * yaw_rad).sin_cos();
-    [0.0, 0.0, s, c]
+/// `[x, y, z, w]` as nalgebra's quaternion.
+fn quaternion(q: [f64; 4]) -> Quaternion<f64> {
+    Quaternion::from_vector(Vector4::from(q))
 }
 
-/// The heading (rotation about z) of `q`, radians in (-π, π].
+/// A unit quaternion as `[x, y, z, w]`.
+fn xyzw(q: UnitQuaternion<f64>) -> [f64; 4] {
+    q.into_inner().coords.into()
+}
+
+/// The rotation by `yaw_rad` about z; `x` and `y` are `+0`, as the files print them (`0`, not
+/// `-0`).
+pub(crate) fn quaternion_from_yaw(yaw_rad: f64) -> [f64; 4] {
+    let [x, y, z, w] = xyzw(UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw_rad));
+    // `0 * sin` is `-0` for a negative sine; adding `+0` makes it `+0` and leaves the rest.
+    [x + 0.0, y + 0.0, z, w]
+}
+
+/// The heading (rotation about z) of the unit quaternion `q`, radians in (-π, π]: the direction
+/// of the rotated x axis in the x-y plane (defined at every pitch, unlike nalgebra's
+/// `euler_angles`, which gives a yaw of 0 at a pitch of ±90°).
 pub(crate) fn yaw_of(q: [f64; 4]) -> f64 {
-    let [x, y, z, w] = q;
-    (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+    let heading = UnitQuaternion::new_unchecked(quaternion(q)) * Vector3::x();
+    heading.y.atan2(heading.x)
 }
 
 /// The rotation `R = Rz(yaw) Ry(pitch) Rx(roll)` (TORO's `VERTEX3`).
 pub(crate) fn quaternion_from_roll_pitch_yaw(roll_rad: f64, pitch_rad: f64, yaw_rad: f64) -> [f64; 4] {
-    let (sr, cr) = (0.5 * roll_rad).sin_cos();
-    let (sp, cp) = (0.5 * pitch_rad).sin_cos();
-    let (sy, cy) = (0.5 * yaw_rad).sin_cos();
-    [sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy]
+    xyzw(UnitQuaternion::from_euler_angles(roll_rad, pitch_rad, yaw_rad))
 }
 
 /// `q / ‖q‖`, or `None` for a zero or non-finite quaternion.
+///
+/// The norm is summed in `x, y, z, w` order, as the written files always had it: nalgebra's
+/// `norm` (an unrolled dot product) rounds differently in the last bit, which would change the
+/// digits of the quaternions in g2o files.
 pub(crate) fn normalized(q: [f64; 4]) -> Option<[f64; 4]> {
     let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-    (norm.is_finite() && norm > 0.0).then(|| q.map(|v| v / norm))
-}
-
-/// The product `a b` (apply `b`, then `a`).
-pub(crate) fn multiply(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
-    let [ax, ay, az, aw] = a;
-    let [bx, by, bz, bw] = b;
-    [
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    ]
-}
-
-/// The inverse of a unit quaternion.
-pub(crate) fn conjugate(q: [f64; 4]) -> [f64; 4] {
-    [-q[0], -q[1], -q[2], q[3]]
-}
-
-/// `v` rotated by the unit quaternion `q`.
-pub(crate) fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
-    let [x, y, z, _] = multiply(multiply(q, [v[0], v[1], v[2], 0.0]), conjugate(q));
-    [x, y, z]
+    (norm.is_finite() && norm > 0.0).then(|| xyzw(UnitQuaternion::new_unchecked(quaternion(q) / norm)))
 }
 
 /// The pose of `b` in the frame of `a` (`a⁻¹ b`), for unit quaternions: translation and
 /// rotation.
+///
+/// The translation is rotated by the product `a⁻¹ (b − a) a` of nalgebra's quaternions, as the
+/// written g2o files always had it: `UnitQuaternion::inverse_transform_vector` (a cross-product
+/// form) rounds differently in the last bit.
 pub(crate) fn relative_pose(a: ([f64; 3], [f64; 4]), b: ([f64; 3], [f64; 4])) -> ([f64; 3], [f64; 4]) {
-    let inverse = conjugate(a.1);
-    let delta = [b.0[0] - a.0[0], b.0[1] - a.0[1], b.0[2] - a.0[2]];
-    (rotate(inverse, delta), multiply(inverse, b.1))
+    let rotation_a = quaternion(a.1);
+    let inverse = rotation_a.conjugate();
+    let delta = Quaternion::from_imag(Vector3::from(b.0) - Vector3::from(a.0));
+    let translation = (inverse * delta * rotation_a).imag();
+    (translation.into(), (inverse * quaternion(b.1)).coords.into())
 }
 
 /// The rows of the rotation from ECEF to the local east-north-up frame at `origin` (ECEF
@@ -110,6 +120,16 @@ pub(crate) fn ecef_to_enu(origin: [f64; 3]) -> [[f64; 3]; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The product `a b` (apply `b`, then `a`).
+    fn multiply(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+        (quaternion(a) * quaternion(b)).coords.into()
+    }
+
+    /// `v` rotated by the unit quaternion `q`.
+    fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+        (UnitQuaternion::new_unchecked(quaternion(q)) * Vector3::from(v)).into()
+    }
 
     fn matrix(q: [f64; 4]) -> [[f64; 3]; 3] {
         let [x, y, z, w] = q;
@@ -189,5 +209,79 @@ mod tests {
                 assert!((dot - f64::from(u8::from(i == j))).abs() < 1e-12);
             }
         }
+    }
+
+    /// The hand-written algebra these functions replaced: nalgebra gives its results bit for
+    /// bit, so the written files keep their bytes.
+    mod reference {
+        pub(super) fn yaw_of([x, y, z, w]: [f64; 4]) -> f64 {
+            (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+        }
+
+        pub(super) fn multiply([ax, ay, az, aw]: [f64; 4], [bx, by, bz, bw]: [f64; 4]) -> [f64; 4] {
+            [
+                aw * bx + ax * bw + ay * bz - az * by,
+                aw * by - ax * bz + ay * bw + az * bx,
+                aw * bz + ax * by - ay * bx + az * bw,
+                aw * bw - ax * bx - ay * by - az * bz,
+            ]
+        }
+
+        pub(super) fn relative_pose(a: ([f64; 3], [f64; 4]), b: ([f64; 3], [f64; 4])) -> ([f64; 3], [f64; 4]) {
+            let inverse = [-a.1[0], -a.1[1], -a.1[2], a.1[3]];
+            let [dx, dy, dz] = [b.0[0] - a.0[0], b.0[1] - a.0[1], b.0[2] - a.0[2]];
+            let [x, y, z, _] = multiply(multiply(inverse, [dx, dy, dz, 0.0]), a.1);
+            ([x, y, z], multiply(inverse, b.1))
+        }
+    }
+
+    #[test]
+    fn nalgebra_gives_the_hand_written_results_bit_for_bit() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..2000 {
+            let raw = [uniform(), uniform(), uniform(), uniform()];
+            let q = normalized(raw).unwrap();
+            let norm = raw.iter().map(|v| v * v).sum::<f64>().sqrt();
+            assert_eq!(q, raw.map(|v| v / norm));
+            assert_eq!(yaw_of(q), reference::yaw_of(q), "{q:?}");
+            let a = ([uniform() * 100.0, uniform() * 100.0, uniform()], q);
+            let b = (
+                [uniform() * 100.0, uniform() * 100.0, uniform()],
+                normalized([uniform(), 0.1, uniform(), 1.0]).unwrap(),
+            );
+            let (t, r) = relative_pose(a, b);
+            let (t_ref, r_ref) = reference::relative_pose(a, b);
+            assert_eq!((t, r), (t_ref, r_ref), "{a:?} {b:?}");
+            let (roll, pitch, yaw) = (uniform() * 3.2, uniform() * 1.6, uniform() * 3.2);
+            let (sr, cr) = (0.5 * roll).sin_cos();
+            let (sp, cp) = (0.5 * pitch).sin_cos();
+            let (sy, cy) = (0.5 * yaw).sin_cos();
+            let rpy = [
+                sr * cp * cy - cr * sp * sy,
+                cr * sp * cy + sr * cp * sy,
+                cr * cp * sy - sr * sp * cy,
+                cr * cp * cy + sr * sp * sy,
+            ];
+            assert_eq!(quaternion_from_roll_pitch_yaw(roll, pitch, yaw), rpy);
+            assert_eq!(quaternion_from_yaw(yaw * 2.0), [0.0, 0.0, (yaw).sin(), (yaw).cos()]);
+        }
+        for yaw in [-7.0, -3.0, -1.0, 0.0, 2.0, 4.0] {
+            assert!(quaternion_from_yaw(yaw)[..2].iter().all(|v| v.is_sign_positive()), "{yaw}");
+        }
+        assert_eq!(normalized([0.0; 4]), None);
+        assert_eq!(normalized([f64::NAN, 0.0, 0.0, 1.0]), None);
+        assert_eq!(normalized([f64::INFINITY, 0.0, 0.0, 1.0]), None);
+        // A heading at a pitch of 90°.
+        let pitched = multiply(
+            quaternion_from_yaw(0.5),
+            [0.0, std::f64::consts::FRAC_1_SQRT_2, 0.0, std::f64::consts::FRAC_1_SQRT_2],
+        );
+        assert!((yaw_of(pitched) - reference::yaw_of(pitched)).abs() < 1e-12);
     }
 }

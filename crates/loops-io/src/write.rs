@@ -181,6 +181,8 @@ pub fn write_g2o_edges(
                 let (theta_i, theta_j) = (yaw_of(a.1), yaw_of(b.1));
                 let (s, c) = theta_i.sin_cos();
                 let (dx, dy) = (b.0[0] - a.0[0], b.0[1] - a.0[1]);
+                // Wrapped into (-π, π] here until loops-core makes its angle wrap public (issue 13,
+                // the core's part): then this calls it, and the copy goes.
                 let mut dtheta = theta_j - theta_i;
                 if dtheta > std::f64::consts::PI {
                     dtheta -= std::f64::consts::TAU;
