@@ -220,7 +220,7 @@ def describe_workload(workload: Workload) -> dict:
     from scipy.spatial import cKDTree
 
     loops, poses = make_loops(workload)
-    facts = {"poses": poses, "pairs": (loops.pairs - poses) // 2, "neighbours": {}}
+    facts = {"poses": poses, "pairs": (loops.pair_count - poses) // 2, "neighbours": {}}
     for n in workload.sizes:
         t, t_prime = make_detections(workload, n, loops)
         points = np.c_[t, t_prime]

@@ -152,7 +152,7 @@ def check_lattice(traj, gamma_m: float, keys, labels, count: int, pair_count: in
     loops = il.find_loops(traj, gamma=gamma_m)
     runs = loops.runs()
     ours_count = len(loops.components["id"])
-    ours_pairs = (loops.pairs - n) // 2
+    ours_pairs = (loops.pair_count - n) // 2
     problems = []
     if pair_count != ours_pairs:
         problems.append(f"pairs i < j: scipy {pair_count}, ours {ours_pairs}")
@@ -234,8 +234,8 @@ def worker(args: argparse.Namespace) -> None:
     if args.worker.startswith("ours"):
         loops, components, _ = result
         report.update(
-            pairs_upper=(loops.pairs - len(traj)) // 2,
-            cells_upper=(loops.pairs + len(traj)) // 2,
+            pairs_upper=(loops.pair_count - len(traj)) // 2,
+            cells_upper=(loops.pair_count + len(traj)) // 2,
             components=len(components["id"]),
             nontrivial=int((~components["trivial"]).sum()),
             runs=len(loops.runs()["row"]),
@@ -488,7 +488,7 @@ def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str
         "- **scipy cKDTree.query_pairs**: builds a KD-tree and lists every pair i < j with "
         "‖x_i − x_j‖ ≤ γ as an (m, 2) array. This is only the input of a component analysis: it "
         "neither groups the pairs nor measures anything. The harness checks that its pair count "
-        "equals ours, `(loops.pairs − n) / 2`.",
+        "equals ours, `(loops.pair_count − n) / 2`.",
         "- **scipy lattice pipeline**: the obvious exact way to get components. query_pairs, "
         "plus the diagonal, gives every cell (i, j), i ≤ j, of S_γ; cells are encoded as int64 "
         "keys i·n + j and sorted; the 4-neighbours (i, j + 1) and (i + 1, j) are found with "

@@ -129,7 +129,7 @@ def main() -> int:
     cluster_s = time.perf_counter() - start
     nontrivial = ~table["trivial"]
     area = table["area_s2"]
-    pairs_upper = (loops.pairs - len(traj)) // 2
+    pairs_upper = (loops.pair_count - len(traj)) // 2
 
     lines = [HEADER, "|---|---|" + "---:|" * 13 + "---|"]
     numbers: dict[tuple[str, str], dict] = {}

@@ -187,8 +187,8 @@ def check_dense(traj, gamma_m: float, inside, labels) -> dict:
     runs = loops.runs()
     k = len(loops.components["id"])
     problems = []
-    if loops.pairs != int(inside.sum()):
-        problems.append(f"pairs of S_γ: dense {int(inside.sum())}, ours {loops.pairs}")
+    if loops.pair_count != int(inside.sum()):
+        problems.append(f"pairs of S_γ: dense {int(inside.sum())}, ours {loops.pair_count}")
     row, start, end, component = (runs[key] for key in ("row", "start", "end", "component"))
     diff = np.zeros((n, n + 1), dtype=np.int32)
     np.add.at(diff, (row, start), component + 1)
@@ -458,8 +458,8 @@ def worker(args: argparse.Namespace) -> None:
         )
         report.update(
             poses=len(traj),
-            pairs_upper=(loops.pairs - len(traj)) // 2,
-            cells_upper=(loops.pairs + len(traj)) // 2,
+            pairs_upper=(loops.pair_count - len(traj)) // 2,
+            cells_upper=(loops.pair_count + len(traj)) // 2,
             components=len(components["id"]),
             nontrivial=int((~components["trivial"]).sum()),
             runs=len(runs["row"]),

@@ -100,7 +100,7 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     table = read_csv(folder / "components.csv")
     ours = loops.components
     assert len(table["id"]) == len(ours["id"]) > 1
-    for name in ("id", "pairs", "runs", "holes", "i_min", "i_max", "j_min", "j_max"):
+    for name in ("id", "pair_count", "run_count", "holes", "i_min", "i_max", "j_min", "j_max"):
         np.testing.assert_array_equal(
             np.array(table[name], dtype=np.int64), ours[name], err_msg=name
         )
@@ -131,7 +131,7 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     # summary.json.
     summary = json.loads((folder / "summary.json").read_text())
     assert summary["poses"] == len(traj)
-    assert summary["pairs"] == loops.pairs
+    assert summary["pair_count"] == loops.pair_count
     assert summary["components"] == len(ours["id"])
     assert summary["quality"]["covered"] == quality.covered
     assert summary["samples"] == len(samples) == BUDGET

@@ -45,16 +45,16 @@ def test_cli_json_equals_python_api(tmp_path: Path, loops_binary: Path) -> None:
     loops = il.find_loops(read, gamma=40.0)
     table = loops.components
     assert report["poses"] == len(traj)
-    assert report["pairs"] == loops.pairs
+    assert report["pair_count"] == loops.pair_count
     assert len(report["components"]) == len(table["id"]) > 1
     for row, c in enumerate(report["components"]):
         assert c["id"] == table["id"][row]
         assert c["trivial"] == table["trivial"][row]
         assert c["area_s2"] == pytest.approx(table["area_s2"][row], rel=1e-12)
-        assert c["pairs"] == table["pairs"][row]
+        assert c["pair_count"] == table["pair_count"][row]
         assert c["holes"] == table["holes"][row]
-        assert c["index_range"] == [table["i_min"][row], table["i_max"][row]]
-        assert c["index_prime_range"] == [table["j_min"][row], table["j_max"][row]]
+        assert c["i_range"] == [table["i_min"][row], table["i_max"][row]]
+        assert c["j_range"] == [table["j_min"][row], table["j_max"][row]]
         assert c["closest_pair"] == [table["closest_i"][row], table["closest_j"][row]]
         assert c["closest_distance"] == pytest.approx(table["closest_distance"][row], abs=1e-12)
     density = loops.loop_density(traj.timestamps[0], traj.timestamps[-1])

@@ -381,7 +381,7 @@ def test_samples_per_component_counts_by_component_sorted_by_area(loop2):
     counts = {"alpha": {lap: 3, corner: 1}, "one": {corner: 1}}
     for index, name in enumerate(samples):
         expected = np.array([counts[name].get(c, 0) for c in by_area], dtype=float)
-        percent = 100 * expected / table["pairs"][by_area]
+        percent = 100 * expected / table["pair_count"][by_area]
         x, y = top.lines[index].get_data()
         np.testing.assert_array_equal(x, np.arange(1, len(by_area) + 1))
         np.testing.assert_allclose(np.nan_to_num(y), percent)

@@ -132,13 +132,13 @@ def test_report_renders_in_chromium(report: Path) -> None:
         expected = list(csv.DictReader(f))
     assert len(page["rows"]) == len(expected) > 1
     header = page["header"]
-    column = {name: header.index(name) for name in ("id", "trivial", "area_s2", "pairs", "holes")}
+    column = {name: header.index(name) for name in ("id", "trivial", "area_s2", "pair_count", "holes")}
     t0 = json.loads((report / "summary.json").read_text())["t0_s"]
     for row, want in zip(page["rows"], expected, strict=True):
         assert int(row[column["id"]]) == int(want["id"])
         assert row[column["trivial"]] in ("yes", "no", "true", "false")
         assert (row[column["trivial"]] in ("yes", "true")) == (want["trivial"] == "true")
-        assert int(row[column["pairs"]].replace(",", "")) == int(want["pairs"])
+        assert int(row[column["pair_count"]].replace(",", "")) == int(want["pair_count"])
         assert int(row[column["holes"]]) == int(want["holes"])
         shown = float(row[column["area_s2"]].replace(",", ""))
         assert shown == pytest.approx(float(want["area_s2"]), rel=1e-3, abs=0.06)

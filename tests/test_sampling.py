@@ -214,7 +214,7 @@ def test_drawn_detections_lie_in_s_gamma(drive):
     d = np.linalg.norm(traj.positions[i] - traj.positions[j], axis=1)
     assert np.all(d <= 40.0)
     # About 1% of the pairs i < j of S_γ.
-    pairs = (loops.pairs - len(traj)) // 2
+    pairs = (loops.pair_count - len(traj)) // 2
     assert abs(len(det) - 0.01 * pairs) < 5 * math.sqrt(0.01 * pairs)
     # Distinct pairs in row-major order.
     keys = i.astype(np.int64) * len(traj) + j

@@ -150,7 +150,7 @@ class Loops:
     def span_s(self) -> float:
         """Last minus first timestamp, seconds."""
     @property
-    def pairs(self) -> int:
+    def pair_count(self) -> int:
         """Lattice cells of S_gamma in the full plane (both halves and the diagonal)."""
     @property
     def warnings(self) -> list[str]:
@@ -386,7 +386,7 @@ class SampleQuality:
         """P1 as a fraction."""
     @property
     def missed(self) -> Table:
-        """P1: the components without a sample, largest first: id, trivial, area_s2, pairs."""
+        """P1: the components without a sample, largest first: id, trivial, area_s2, pair_count."""
     @property
     def epsilon_s(self) -> float:
         """The epsilon of P2, seconds."""

@@ -468,7 +468,7 @@ def samples_per_component(
         axes: two Axes (top, bottom); a new figure with two rows when ``None``.
         available: what the samplers chose from, per component: the detections they were
             drawn from (any samples-like value, e.g. :class:`~inexact_loops.Detections`, as in
-            the paper), or a count per component id; default ``loops.components["pairs"]``,
+            the paper), or a count per component id; default ``loops.components["pair_count"]``,
             the pairs of S_gamma (the half t <= t' of a non-trivial component).
         include_trivial: count the trivial components (simple loops) too.
         log_scale: a logarithmic percentage axis (the percentages span orders of magnitude).
@@ -502,7 +502,7 @@ def samples_per_component(
     table = loops.components
     k = len(table["id"])
     if available is None:
-        pool = np.asarray(table["pairs"], dtype=float)
+        pool = np.asarray(table["pair_count"], dtype=float)
     elif isinstance(available, (np.ndarray, list, tuple)) and np.ndim(available) == 1:
         pool = np.asarray(available, dtype=float)
         if pool.shape != (k,):

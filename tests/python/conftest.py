@@ -117,7 +117,7 @@ def check_against_dense(loops, timestamps, positions, gamma: float) -> DenseRefe
     span = ref.t[-1] - ref.t[0]
     assert len(loops) == n
     assert loops.gamma == gamma
-    assert loops.pairs == int(M.sum()), "pairs of S_gamma in the full plane"
+    assert loops.pair_count == int(M.sum()), "pairs of S_gamma in the full plane"
 
     # --- runs: maximal, disjoint, row by row, covering exactly the upper triangle of M.
     runs = loops.runs()
@@ -162,7 +162,7 @@ def check_against_dense(loops, timestamps, positions, gamma: float) -> DenseRefe
         )
         if not trivial:
             assert np.all(upper_in_box[mask]), f"{what}: the reported half lies above the diagonal"
-        assert table["pairs"][c] == mask.sum(), f"{what}: pairs"
+        assert table["pair_count"][c] == mask.sum(), f"{what}: pairs"
         area = float(w[rows] @ mask @ w[cols])
         _close(table["area_s2"][c], area, span * span, f"{what}: area")
         total_area += area if trivial else 2 * area

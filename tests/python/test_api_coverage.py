@@ -329,14 +329,14 @@ def test_descriptors():
 # --- find_loops and Loops -------------------------------------------------------------------------
 
 
-@covers("find_loops", "Loops", "Loops.gamma", "Loops.metric", "Loops.span_s", "Loops.pairs")
+@covers("find_loops", "Loops", "Loops.gamma", "Loops.metric", "Loops.span_s", "Loops.pair_count")
 def test_find_loops_counts_the_dense_pairs(traj, loops):
     distances = cdist(traj.positions, traj.positions)
-    assert loops.pairs == np.count_nonzero(distances <= 4.0)
+    assert loops.pair_count == np.count_nonzero(distances <= 4.0)
     assert loops.gamma == 4.0 and loops.metric == "euclidean" and loops.span_s == traj.span_s
     assert len(loops) == N
     by_callable = il.find_loops(traj, gamma=4.0, metric=lambda a, b: float(np.linalg.norm(a - b)))
-    assert by_callable.pairs == loops.pairs
+    assert by_callable.pair_count == loops.pair_count
 
 
 @covers("find_loops")
@@ -383,7 +383,7 @@ def test_components_and_runs_agree(loops):
     table, runs = loops.components, loops.runs()
     assert table["trivial"].tolist() == [True, False]
     pairs_upper = ((runs["end"] - runs["start"] + 1) * 1).sum()
-    assert pairs_upper == (loops.pairs + len(loops)) // 2
+    assert pairs_upper == (loops.pair_count + len(loops)) // 2
     for c in table["id"]:
         rows = runs["row"][runs["component"] == c]
         assert rows.min() == table["i_min"][c] and rows.max() == table["i_max"][c]
@@ -647,7 +647,7 @@ def test_draw_detections_and_its_errors(loops):
     assert all(
         loops.component_of(i, j) is not None and i < j for i, j in zip(det.i, det.j, strict=True)
     )
-    assert len(il.draw_detections(loops, rate=1.0, seed=0)) == (loops.pairs - N) // 2
+    assert len(il.draw_detections(loops, rate=1.0, seed=0)) == (loops.pair_count - N) // 2
     with raises(il.InvalidParameterError, "rate or budget"):
         il.draw_detections(loops, seed=0)
     with raises(il.InvalidParameterError, "not both", "rate=0.5", "budget=3"):
@@ -782,7 +782,7 @@ def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
 def test_samples_columns(traj, loops, clusters):
     samples = il.sample(loops, "one", budget=2, seed=0, trajectory=traj)
     assert samples.sampler == "one" and samples.groups == 2 and len(samples) == 2
-    assert samples.available == (loops.pairs - N) // 2 and samples.poses == N
+    assert samples.available == (loops.pair_count - N) // 2 and samples.poses == N
     assert samples.warnings == []
     assert sorted(samples.component.tolist()) == [0, 1]
     for k in range(2):

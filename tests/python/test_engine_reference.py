@@ -121,7 +121,7 @@ def assert_same_loops(a, b) -> None:
         np.testing.assert_array_equal(table_a[key], table_b[key], err_msg=key)
     np.testing.assert_array_equal(a.loop_duration(), b.loop_duration())
     assert a.warnings == b.warnings
-    assert a.pairs == b.pairs
+    assert a.pair_count == b.pair_count
 
 
 @settings(
@@ -182,14 +182,14 @@ def test_degenerate_cases(check_dense, name):
     if name == "all_identical":
         # One trivial component: the whole square.
         assert loops.components["trivial"].tolist() == [True]
-        assert loops.pairs == n * n
+        assert loops.pair_count == n * n
     elif name in ("all_steps_beyond_gamma", "two_poses_far"):
         # Only the diagonal cells, each its own trivial component.
         assert loops.components["trivial"].all()
         assert len(loops.components["id"]) == len(t) == ref.count
         assert len(loops.warnings) == 1
     elif name == "two_poses_tie":
-        assert loops.pairs == 4
+        assert loops.pair_count == 4
         assert loops.components["trivial"].tolist() == [True]
     elif name == "detour_around_gap":
         assert loops.components["trivial"].tolist() == [True]

@@ -92,7 +92,7 @@ def test_from_evo_se3_reorders_w_first_quaternions():
     metric = "se3(rotation_weight_m_per_rad=2)"
     ours = il.find_loops(traj, gamma=3.0, metric=metric)
     theirs = il.find_loops(reference, gamma=3.0, metric=metric)
-    assert ours.pairs == theirs.pairs > N
+    assert ours.pair_count == theirs.pair_count > N
     for key, column in ours.components.items():
         if column.dtype == np.float64:  # evo's quaternions are its own, from the matrices
             np.testing.assert_allclose(column, theirs.components[key], rtol=1e-12, err_msg=key)
@@ -109,7 +109,7 @@ def test_from_evo_rotation_distances_match_scipy(metric, gamma):
     angles = np.array([(rotations[k].inv() * rotations).magnitude() for k in range(N)])
     within = angles <= gamma
     assert 0 < within.sum() < N * N
-    assert loops.pairs == within.sum()
+    assert loops.pair_count == within.sum()
     for i, j in [(0, 1), (0, N - 1), (10, 60), (40, 41)]:
         assert (loops.component_of(i, j) is not None) == within[i, j], (i, j)
 
@@ -275,8 +275,8 @@ def results():
 
 TABLES = {
     "Loops.components": (lambda r: r.loops.components, {
-        "id": "int64", "trivial": "bool", "area_s2": "float64", "pairs": "int64",
-        "runs": "int64", "holes": "int64", "t_min_s": "float64", "t_max_s": "float64",
+        "id": "int64", "trivial": "bool", "area_s2": "float64", "pair_count": "int64",
+        "run_count": "int64", "holes": "int64", "t_min_s": "float64", "t_max_s": "float64",
         "t_prime_min_s": "float64", "t_prime_max_s": "float64", "i_min": "int64",
         "i_max": "int64", "j_min": "int64", "j_max": "int64", "closest_i": "int64",
         "closest_j": "int64", "closest_distance": "float64",
@@ -290,7 +290,7 @@ TABLES = {
         "area_proxy_s2": "float64", "anchor": "int64",
     }),
     "SampleQuality.missed": (lambda r: r.quality.missed, {
-        "id": "int64", "trivial": "bool", "area_s2": "float64", "pairs": "int64",
+        "id": "int64", "trivial": "bool", "area_s2": "float64", "pair_count": "int64",
     }),
 }  # fmt: skip
 

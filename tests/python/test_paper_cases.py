@@ -56,11 +56,11 @@ def test_95_percent_circle(check_dense):
     assert table["trivial"].tolist() == [True, False]
     assert loops.warnings == []
     # The trivial component is exactly the band around the diagonal.
-    assert table["pairs"][0] == n + 2 * sum(n - k for k in range(1, band + 1))
+    assert table["pair_count"][0] == n + 2 * sum(n - k for k in range(1, band + 1))
     # The non-trivial one is the triangle i + (n-1-j) <= corner, located at (0, 1).
     expected = {(i, j) for i in range(corner + 1) for j in range(n - 1 - corner + i, n)}
     assert component_cells(loops, 1) == expected
-    assert table["pairs"][1] == (corner + 1) * (corner + 2) // 2
+    assert table["pair_count"][1] == (corner + 1) * (corner + 2) // 2
     assert (table["i_min"][1], table["i_max"][1]) == (0, corner)
     assert (table["j_min"][1], table["j_max"][1]) == (n - 1 - corner, n - 1)
     span = t[-1]
@@ -109,12 +109,12 @@ def test_double_loop_merges_as_gamma_grows(check_dense, gamma):
         assert (table["i_min"][lap], table["i_max"][lap]) == (0, per_lap + k)
         assert (table["j_min"][lap], table["j_max"][lap]) == (per_lap - k, n - 1)
         # Corner: j - i >= 2 laps - k.
-        assert table["pairs"][end] == (k + 1) * (k + 2) // 2
+        assert table["pair_count"][end] == (k + 1) * (k + 2) // 2
         assert table["holes"].tolist() == [0, 0, 0]
     else:
         # All within gamma: the whole square, one trivial component.
         assert table["trivial"].tolist() == [True]
-        assert loops.pairs == n * n == table["pairs"][0]
+        assert loops.pair_count == n * n == table["pair_count"][0]
         assert table["area_s2"][0] == pytest.approx(t[-1] ** 2)
         assert loops.is_simple(0, per_lap) and loops.is_simple(0, n - 1)
 

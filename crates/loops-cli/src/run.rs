@@ -95,7 +95,7 @@ pub(crate) struct LogSummary {
     pub(crate) components: usize,
     pub(crate) nontrivial_components: usize,
     pub(crate) holes: u64,
-    pub(crate) pairs: u64,
+    pub(crate) pair_count: u64,
     pub(crate) loop_area_s2: f64,
     pub(crate) loop_density_s: f64,
     pub(crate) sampler: String,
@@ -329,12 +329,12 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         poses: traj.len(),
         t0_s: a,
         span_s: traj.span_s(),
-        metric: loops.metric().to_owned(),
+        metric: loops.metric_name().to_owned(),
         gamma,
         components: components.len(),
         nontrivial_components: components.iter().filter(|c| !c.trivial).count(),
         holes: components.iter().map(|c| c.holes).sum(),
-        pairs: loops.pairs(),
+        pair_count: loops.pair_count(),
         loop_area_s2: loops.loop_area(a, b, Selection::All, Side::Both, Scale::Seconds)?,
         loop_density_s: loops.loop_density(a, b, Selection::All, Side::Both, Scale::Seconds)?,
         sampler: samples.sampler().name().to_owned(),
@@ -448,7 +448,7 @@ fn size_text(size: SampleSize) -> String {
 
 /// The header of components.csv.
 /// The names are those of the Python API's `Loops.components` columns, plus `samples`.
-pub(crate) const COMPONENTS_HEADER: &str = "id,trivial,area_s2,pairs,runs,holes,i_min,i_max,j_min,j_max,\
+pub(crate) const COMPONENTS_HEADER: &str = "id,trivial,area_s2,pair_count,run_count,holes,i_min,i_max,j_min,j_max,\
     t_min_s,t_max_s,t_prime_min_s,t_prime_max_s,closest_i,closest_j,closest_distance,samples";
 
 /// components.csv: one row per component in id order; times are the poses' own timestamps.
@@ -464,17 +464,17 @@ fn components_csv(traj: &Trajectory, loops: &Loops, quality: &SampleQuality) -> 
             c.id,
             c.trivial,
             c.area_s2,
-            c.pairs,
-            c.runs,
+            c.pair_count,
+            c.run_count,
             c.holes,
-            c.rows[0],
-            c.rows[1],
-            c.columns[0],
-            c.columns[1],
-            t[c.rows[0]],
-            t[c.rows[1]],
-            t[c.columns[0]],
-            t[c.columns[1]],
+            c.i_range[0],
+            c.i_range[1],
+            c.j_range[0],
+            c.j_range[1],
+            t[c.i_range[0]],
+            t[c.i_range[1]],
+            t[c.j_range[0]],
+            t[c.j_range[1]],
             c.closest_pair[0],
             c.closest_pair[1],
             c.closest_distance,

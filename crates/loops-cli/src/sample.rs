@@ -128,7 +128,7 @@ fn write_summary(
         "  {} poses; gamma {} ({}): {} components ({} non-trivial)",
         traj.len(),
         loops.gamma(),
-        loops.metric(),
+        loops.metric_name(),
         loops.components().len(),
         nontrivial
     )
@@ -142,7 +142,7 @@ fn write_summary(
     let mut missed: Vec<_> = quality.missed.iter().filter(|m| !m.trivial).collect();
     missed.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2));
     for m in missed.iter().take(5) {
-        writeln!(out, "    missed component {}: {:.1} s², {} pairs", m.id, m.area_s2, m.pairs)?;
+        writeln!(out, "    missed component {}: {:.1} s², {} pairs", m.id, m.area_s2, m.pair_count)?;
     }
     if missed.len() > 5 {
         writeln!(out, "    ... {} more missed", missed.len() - 5)?;

@@ -174,7 +174,7 @@ fn se3_metric_uses_the_file_orientations() {
         ]);
         assert!(output.status.success(), "{metric}: {}", stderr(&output));
         let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-        report["pairs"].as_u64().unwrap()
+        report["pair_count"].as_u64().unwrap()
     };
     let euclidean = pairs("euclidean");
     let se3 = pairs("se3(rotation_weight_m_per_rad=10)");

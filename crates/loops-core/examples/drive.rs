@@ -21,7 +21,7 @@ fn main() -> Result<(), loops_core::Error> {
         "{} poses, gamma {gamma} m: {} runs, {} pairs, {} components ({} non-trivial) in {:.3} s",
         drive.trajectory.len(),
         loops.sublevel_set().runs().len(),
-        loops.pairs(),
+        loops.pair_count(),
         loops.components().len(),
         nontrivial,
         elapsed.as_secs_f64()

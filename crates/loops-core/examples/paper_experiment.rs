@@ -28,7 +28,7 @@ fn main() -> Result<(), loops_core::Error> {
     println!(
         "urban drive: {} poses, gamma {GAMMA_M} m: {} pairs of S_gamma, {} components ({} non-trivial), {:.2} s",
         traj.len(),
-        loops.pairs(),
+        loops.pair_count(),
         loops.components().len(),
         nontrivial,
         start.elapsed().as_secs_f64()

@@ -25,15 +25,15 @@ pub struct LoopComponent {
     /// Area in the (t, t′) plane, s²: Σ w_i w_j over its cells.
     pub area_s2: f64,
     /// Number of lattice cells (i, j).
-    pub pairs: u64,
+    pub pair_count: u64,
     /// Number of runs (row intervals) in the upper half.
-    pub runs: usize,
+    pub run_count: usize,
     /// Number of holes (bounded background regions, 8-connected background) in the full plane.
     pub holes: u64,
-    /// First and last row index i (time t) of the reported half.
-    pub rows: [usize; 2],
-    /// First and last column index j (time t′) of the reported half.
-    pub columns: [usize; 2],
+    /// First and last pose index i (time t) of the reported half.
+    pub i_range: [usize; 2],
+    /// First and last pose index j (time t′) of the reported half.
+    pub j_range: [usize; 2],
     /// The pair (i, j), i ≤ j, with the smallest distance: the argmin of the metric's
     /// [`distance_rank`](crate::Metric::distance_rank) (δ² for the Euclidean metric, which
     /// orders as δ does up to rounding), earliest in row order on ties.
@@ -134,11 +134,11 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
                 id,
                 trivial: t.trivial,
                 area_s2,
-                pairs,
-                runs: t.runs,
+                pair_count: pairs,
+                run_count: t.runs,
                 holes: (1 - euler) as u64,
-                rows,
-                columns,
+                i_range: rows,
+                j_range: columns,
                 closest_pair: t.closest.1,
                 closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
             }

@@ -8,7 +8,6 @@ use rand_chacha::ChaCha8Rng;
 use crate::error::{Error, Result};
 use crate::loops::Loops;
 use crate::sample::SampleSize;
-use crate::sublevel::Run;
 use crate::trajectory::Trajectory;
 
 mod sealed {
@@ -323,18 +322,18 @@ impl PairSpace {
     pub(crate) fn of_loops(loops: &Loops, min_gap_s: f64) -> Self {
         let mut space = Self::default();
         let first = FirstColumn::new(loops.timestamps_s(), min_gap_s);
-        for (i, run, _) in loops.runs() {
-            space.push(i, run, first.of_row(i));
+        for run in loops.runs() {
+            space.push(run.row, run.start, run.end, first.of_row(run.row));
         }
         space
     }
 
-    /// Adds the part of `run` (of row `i`) at columns ≥ `first_column`.
-    pub(crate) fn push(&mut self, i: usize, run: Run, first_column: usize) {
-        let start = (run.start as usize).max(first_column);
-        if start <= run.end as usize {
-            let total = self.len() + (run.end as usize - start + 1) as u64;
-            self.segments.push(Segment { row: i as u32, start: start as u32, end: run.end });
+    /// Adds the columns `start..=end` of row `i` that are ≥ `first_column`.
+    pub(crate) fn push(&mut self, i: usize, start: usize, end: usize, first_column: usize) {
+        let start = start.max(first_column);
+        if start <= end {
+            let total = self.len() + (end - start + 1) as u64;
+            self.segments.push(Segment { row: i as u32, start: start as u32, end: end as u32 });
             self.ends.push(total);
         }
     }

@@ -57,7 +57,7 @@ pub use cluster::{DetectionCluster, DetectionClusters, cluster_detections};
 pub use component::LoopComponent;
 pub use detection::{Detection, Detections, Timeline};
 pub use error::{Error, Result};
-pub use loops::{Loops, Warning, check_gamma, find_loops};
+pub use loops::{LabelledRun, Loops, Warning, check_gamma, find_loops};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
     angle_difference,

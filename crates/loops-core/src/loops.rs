@@ -6,7 +6,7 @@ use crate::component::{LoopComponent, label_components};
 use crate::error::{Error, Result};
 use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
 use crate::metric::Metric;
-use crate::sublevel::{Run, SublevelSet};
+use crate::sublevel::SublevelSet;
 use crate::trajectory::{Trajectory, cell_of};
 
 /// Something worth telling the user about a result that is still correct.
@@ -37,6 +37,32 @@ impl fmt::Display for Warning {
                  {trivial_components} trivial component(s)"
             ),
         }
+    }
+}
+
+/// One run of S_γ's upper half (row `row`, columns `start..=end`, `row ≤ start`) and the loop
+/// component it belongs to, as [`Loops::runs`] yields them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct LabelledRun {
+    /// Row: pose index i (time t).
+    pub row: usize,
+    /// First column: pose index j (time t′), inclusive.
+    pub start: usize,
+    /// Last column, inclusive.
+    pub end: usize,
+    /// Id of its component in [`Loops::components`].
+    pub component: usize,
+}
+
+impl LabelledRun {
+    /// Number of cells (i, j) of the run.
+    pub fn len(&self) -> usize {
+        self.end - self.start + 1
+    }
+
+    /// Never: a run has at least one cell.
+    pub fn is_empty(&self) -> bool {
+        false
     }
 }
 
@@ -135,8 +161,9 @@ impl Loops {
         self.gamma
     }
 
-    /// The metric's name.
-    pub fn metric(&self) -> &str {
+    /// The metric's name, as [`Metric::name`] gives it (a [`MetricSpec`](crate::MetricSpec)
+    /// parses it back).
+    pub fn metric_name(&self) -> &str {
         &self.metric
     }
 
@@ -180,11 +207,27 @@ impl Loops {
         &self.labels
     }
 
-    /// Every run as `(row, run, component id)`, row after row.
-    pub fn runs(&self) -> impl Iterator<Item = (usize, Run, usize)> + '_ {
+    /// Every run of the upper half with its component, row after row, columns increasing.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Euclidean, LabelledRun, Trajectory, find_loops};
+    /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0], [5.0], [0.0]])?;
+    /// let loops = find_loops(&traj, &Euclidean, 1.0)?;
+    /// let first = loops.runs().next();
+    /// assert_eq!(first, Some(LabelledRun { row: 0, start: 0, end: 0, component: 0 }));
+    /// assert_eq!(loops.runs().count(), 4); // (0, 0), (0, 2), (1, 1), (2, 2)
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn runs(&self) -> impl Iterator<Item = LabelledRun> + '_ {
         (0..self.len()).flat_map(move |i| {
             let offset = self.set.row_offset(i);
-            self.set.row(i).iter().enumerate().map(move |(k, run)| (i, *run, self.labels[offset + k] as usize))
+            self.set.row(i).iter().enumerate().map(move |(k, run)| LabelledRun {
+                row: i,
+                start: run.start as usize,
+                end: run.end as usize,
+                component: self.labels[offset + k] as usize,
+            })
         })
     }
 
@@ -216,7 +259,7 @@ impl Loops {
     }
 
     /// Number of lattice cells of S_γ in the full (t, t′) plane, both halves.
-    pub fn pairs(&self) -> u64 {
+    pub fn pair_count(&self) -> u64 {
         let diagonal =
             (0..self.len()).filter(|&i| self.set.row(i).first().is_some_and(|r| r.start as usize == i)).count();
         2 * self.set.upper_pairs() - diagonal as u64

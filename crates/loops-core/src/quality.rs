@@ -14,8 +14,8 @@ pub struct MissedComponent {
     pub trivial: bool,
     /// Its area, s² (as [`LoopComponent::area_s2`](crate::LoopComponent::area_s2)).
     pub area_s2: f64,
-    /// Its lattice cells (as [`LoopComponent::pairs`](crate::LoopComponent::pairs)).
-    pub pairs: u64,
+    /// Its lattice cells (as [`LoopComponent::pair_count`](crate::LoopComponent::pair_count)).
+    pub pair_count: u64,
 }
 
 /// The ε of the paper's experiment, seconds: the default detection-graph radius and P2 radius.
@@ -119,8 +119,8 @@ pub fn sample_quality(samples: &Samples, loops: &Loops, epsilon_s: f64) -> Resul
     let pairs = samples.pairs_on(loops.timestamps_s())?;
     let components = loops.components();
     let mut samplable = vec![false; components.len()];
-    for (i, run, c) in loops.runs() {
-        samplable[c] |= run.end as usize > i;
+    for run in loops.runs() {
+        samplable[run.component] |= run.end > run.row;
     }
     let labels: Vec<Option<usize>> = pairs.iter().map(|p| loops.component_of(p[0], p[1])).collect();
     let mut per_component = vec![0u64; components.len()];
@@ -134,7 +134,7 @@ pub fn sample_quality(samples: &Samples, loops: &Loops, epsilon_s: f64) -> Resul
         .iter()
         .filter(counted)
         .filter(|c| per_component[c.id] == 0)
-        .map(|c| MissedComponent { id: c.id, trivial: c.trivial, area_s2: c.area_s2, pairs: c.pairs })
+        .map(|c| MissedComponent { id: c.id, trivial: c.trivial, area_s2: c.area_s2, pair_count: c.pair_count })
         .collect();
     missed.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2).then(a.id.cmp(&b.id)));
     let total = components.iter().filter(counted).count();

@@ -596,16 +596,16 @@ pub fn sample_loops<M: Metric + ?Sized>(
         SamplerKind::Alpha => {
             // The off-diagonal pairs (j > i) of the wanted components.
             let mut space = PairSpace::default();
-            for (i, run, _) in loops.runs().filter(|&(_, _, c)| wanted(c)) {
-                space.push(i, run, i + 1);
+            for run in loops.runs().filter(|run| wanted(run.component)) {
+                space.push(run.row, run.start, run.end, run.row + 1);
             }
             let numbers = draw_numbers(space.len(), sampler.size, &mut rng, &mut warnings);
             (space.pairs_at(&numbers).into_iter().map(|p| (p, None)).collect(), 0, space.len())
         }
         SamplerKind::One | SamplerKind::Rho | SamplerKind::RhoDispersed => {
             let mut spaces = vec![PairSpace::default(); loops.components().len()];
-            for (i, run, c) in loops.runs().filter(|&(_, _, c)| wanted(c)) {
-                spaces[c].push(i, run, i + 1);
+            for run in loops.runs().filter(|run| wanted(run.component)) {
+                spaces[run.component].push(run.row, run.start, run.end, run.row + 1);
             }
             let ids: Vec<usize> = (0..spaces.len()).filter(|&c| spaces[c].len() > 0).collect();
             let spaces: Vec<PairSpace> = ids.iter().map(|&c| std::mem::take(&mut spaces[c])).collect();

@@ -280,7 +280,7 @@ fn draw_rejects_bad_sizes() {
         Detections::draw(&loops, SampleSize::Budget(0), 0),
         Err(Error::InvalidParameter { name: "budget", .. })
     ));
-    let too_many = loops.pairs() as usize;
+    let too_many = loops.pair_count() as usize;
     assert!(Detections::draw(&loops, SampleSize::Budget(too_many), 0).is_err());
     // A rate so small that nothing is drawn: an empty detection set is an error.
     assert_eq!(Detections::draw(&loops, SampleSize::Rate(1e-15), 0).unwrap_err(), Error::NoDetections);

@@ -56,10 +56,10 @@ fn fig_2a_circle_95_percent() {
         let delta = chord_angle(gamma, radius);
         let leg = (sweep - (TAU - delta)) / sweep; // in t
         assert!(leg > 10.0 / n as f64, "the triangle spans several samples");
-        assert_eq!(corner.rows[0], 0, "rows start at t = 0");
-        assert_eq!(corner.columns[1], n - 1, "columns end at t = 1");
-        assert!(corner.rows[1].abs_diff(index_of(leg, n)) <= 1, "{corner:?}");
-        assert!(corner.columns[0].abs_diff(index_of(1.0 - leg, n) + 1) <= 1, "{corner:?}");
+        assert_eq!(corner.i_range[0], 0, "rows start at t = 0");
+        assert_eq!(corner.j_range[1], n - 1, "columns end at t = 1");
+        assert!(corner.i_range[1].abs_diff(index_of(leg, n)) <= 1, "{corner:?}");
+        assert!(corner.j_range[0].abs_diff(index_of(1.0 - leg, n) + 1) <= 1, "{corner:?}");
         // Area of the half triangle, s², up to the lattice's staircase.
         let triangle_s2 = 0.5 * leg * leg;
         assert!((corner.area_s2 - triangle_s2).abs() <= 0.15 * triangle_s2, "{} vs {triangle_s2}", corner.area_s2);
@@ -71,7 +71,7 @@ fn fig_2a_circle_95_percent() {
         let d = delta / sweep;
         let band_s2 = 1.0 - (1.0 - d) * (1.0 - d);
         assert!((band.area_s2 - band_s2).abs() <= 0.02 * band_s2, "{} vs {band_s2}", band.area_s2);
-        assert_eq!(band.rows, [0, n - 1]);
+        assert_eq!(band.i_range, [0, n - 1]);
     }
 }
 
@@ -105,17 +105,17 @@ fn fig_2b_double_loop_merges_into_the_trivial_component() {
     let (trivial, others) = split(&loops);
     assert_eq!((trivial.len(), others.len()), (1, 2), "{:?}", loops.components());
     let (one_lap, two_laps): (Vec<&LoopComponent>, Vec<&LoopComponent>) =
-        others.iter().partition(|c| c.rows[1] > index_of(lead + lap / 2.0, n));
+        others.iter().partition(|c| c.i_range[1] > index_of(lead + lap / 2.0, n));
     let (one_lap, two_laps) = (one_lap[0], two_laps[0]);
     let gap_in_t = |c: &LoopComponent| (c.closest_pair[1] - c.closest_pair[0]) as f64 / (n - 1) as f64;
     // One lap apart: rows over lap 1, columns over lap 2; closest where the laps coincide.
-    assert!(one_lap.rows[0] <= index_of(lead, n) && one_lap.rows[1] >= index_of(lead + lap, n));
-    assert!(one_lap.columns[0] <= index_of(lead + lap, n) && one_lap.columns[1] >= index_of(1.0 - lead, n));
+    assert!(one_lap.i_range[0] <= index_of(lead, n) && one_lap.i_range[1] >= index_of(lead + lap, n));
+    assert!(one_lap.j_range[0] <= index_of(lead + lap, n) && one_lap.j_range[1] >= index_of(1.0 - lead, n));
     assert!((gap_in_t(one_lap) - lap).abs() < 0.01, "{one_lap:?}");
     // Two laps apart: from the way in (before lap 1) to the way out (after lap 2).
-    assert!(two_laps.rows[0] < index_of(lead, n) && two_laps.columns[1] > index_of(1.0 - lead, n));
-    assert!(two_laps.rows[1] < index_of(lead + lap / 2.0, n));
-    assert!(two_laps.columns[0] > index_of(1.0 - lead - lap / 2.0, n));
+    assert!(two_laps.i_range[0] < index_of(lead, n) && two_laps.j_range[1] > index_of(1.0 - lead, n));
+    assert!(two_laps.i_range[1] < index_of(lead + lap / 2.0, n));
+    assert!(two_laps.j_range[0] > index_of(1.0 - lead - lap / 2.0, n));
     assert!((gap_in_t(two_laps) - 2.0 * lap).abs() < 0.01, "{two_laps:?}");
     for c in [one_lap, two_laps] {
         assert_eq!(c.holes, 0);
@@ -214,7 +214,7 @@ fn lollipop_out_and_back_is_a_non_trivial_loop_not_a_hole() {
         assert_eq!(trivial[0].holes, 0);
         let back = others[0];
         assert_eq!(back.holes, 0);
-        assert_eq!((back.rows[0], back.columns[1]), (0, n - 1));
+        assert_eq!((back.i_range[0], back.j_range[1]), (0, n - 1));
         assert_eq!(back.closest_distance, 0.0);
     }
 }

@@ -30,7 +30,7 @@ fn setup() -> Setup {
 
 /// Components with at least one pair i < j: the groups of the exact route.
 fn samplable(loops: &Loops) -> BTreeSet<usize> {
-    loops.runs().filter(|(i, run, _)| run.end as usize > *i).map(|(_, _, c)| c).collect()
+    loops.runs().filter(|run| run.end > run.row).map(|run| run.component).collect()
 }
 
 #[test]

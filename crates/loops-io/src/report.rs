@@ -24,7 +24,7 @@ pub struct LoopsReport {
     /// The metric's name.
     pub metric: String,
     /// The number of pose pairs in S_γ.
-    pub pairs: u64,
+    pub pair_count: u64,
     /// The mean loop duration over the whole trajectory, seconds.
     pub loop_density_s: f64,
     /// The result's warnings, as sentences.
@@ -76,13 +76,13 @@ impl ComponentReport {
             id: c.id,
             trivial: c.trivial,
             area_s2: c.area_s2,
-            pair_count: c.pairs,
-            run_count: c.runs,
+            pair_count: c.pair_count,
+            run_count: c.run_count,
             holes: c.holes,
-            t_range_s: [t[c.rows[0]], t[c.rows[1]]],
-            t_prime_range_s: [t[c.columns[0]], t[c.columns[1]]],
-            i_range: c.rows,
-            j_range: c.columns,
+            t_range_s: [t[c.i_range[0]], t[c.i_range[1]]],
+            t_prime_range_s: [t[c.j_range[0]], t[c.j_range[1]]],
+            i_range: c.i_range,
+            j_range: c.j_range,
             closest_pair: c.closest_pair,
             closest_distance: c.closest_distance,
         }
@@ -104,8 +104,8 @@ impl LoopsReport {
             poses: traj.len(),
             span_s: traj.span_s(),
             gamma: loops.gamma(),
-            metric: loops.metric().to_owned(),
-            pairs: loops.pairs(),
+            metric: loops.metric_name().to_owned(),
+            pair_count: loops.pair_count(),
             loop_density_s: loops.loop_density(t[0], t[t.len() - 1], Selection::All, Side::Both, Scale::Seconds)?,
             warnings: loops.warnings().iter().map(ToString::to_string).collect(),
             components: loops.components().iter().map(|c| ComponentReport::new(c, t)).collect(),

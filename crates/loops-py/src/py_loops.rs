@@ -121,11 +121,11 @@ impl Loops {
         format!(
             "Loops(gamma={}, metric={}, {} poses, {} components ({} non-trivial), {} pairs)",
             self.inner.gamma(),
-            self.inner.metric(),
+            self.inner.metric_name(),
             self.inner.len(),
             self.inner.components().len(),
             nontrivial,
-            self.inner.pairs()
+            self.inner.pair_count()
         )
     }
 
@@ -138,7 +138,7 @@ impl Loops {
     /// The metric's name.
     #[getter]
     fn metric(&self) -> String {
-        self.inner.metric().to_owned()
+        self.inner.metric_name().to_owned()
     }
 
     /// Last minus first timestamp, seconds.
@@ -149,8 +149,8 @@ impl Loops {
 
     /// Number of lattice cells (i, j) of S_γ in the full plane, both halves and the diagonal.
     #[getter]
-    fn pairs(&self) -> u64 {
-        self.inner.pairs()
+    fn pair_count(&self) -> u64 {
+        self.inner.pair_count()
     }
 
     /// Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences.
@@ -162,7 +162,7 @@ impl Loops {
     /// The loop components as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row
     /// a component, by id; ``.to_pandas()`` for a DataFrame): ``id`` (int64), ``trivial``
     /// (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
-    /// set for a trivial one), ``pairs`` (int64, cells, same rule), ``runs``, ``holes`` (int64),
+    /// set for a trivial one), ``pair_count`` (int64, cells, same rule), ``run_count``, ``holes`` (int64),
     /// ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
     /// ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
     /// ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
@@ -189,17 +189,17 @@ impl Loops {
                 ("id", ints(&|c| c.id)),
                 ("trivial", to_numpy(py, cs.iter().map(|c| c.trivial).collect()).into_any()),
                 ("area_s2", floats(&|c| c.area_s2)),
-                ("pairs", ints(&|c| c.pairs as usize)),
-                ("runs", ints(&|c| c.runs)),
+                ("pair_count", ints(&|c| c.pair_count as usize)),
+                ("run_count", ints(&|c| c.run_count)),
                 ("holes", ints(&|c| c.holes as usize)),
-                ("t_min_s", floats(&|c| t[c.rows[0]])),
-                ("t_max_s", floats(&|c| t[c.rows[1]])),
-                ("t_prime_min_s", floats(&|c| t[c.columns[0]])),
-                ("t_prime_max_s", floats(&|c| t[c.columns[1]])),
-                ("i_min", ints(&|c| c.rows[0])),
-                ("i_max", ints(&|c| c.rows[1])),
-                ("j_min", ints(&|c| c.columns[0])),
-                ("j_max", ints(&|c| c.columns[1])),
+                ("t_min_s", floats(&|c| t[c.i_range[0]])),
+                ("t_max_s", floats(&|c| t[c.i_range[1]])),
+                ("t_prime_min_s", floats(&|c| t[c.j_range[0]])),
+                ("t_prime_max_s", floats(&|c| t[c.j_range[1]])),
+                ("i_min", ints(&|c| c.i_range[0])),
+                ("i_max", ints(&|c| c.i_range[1])),
+                ("j_min", ints(&|c| c.j_range[0])),
+                ("j_max", ints(&|c| c.j_range[1])),
                 ("closest_i", ints(&|c| c.closest_pair[0])),
                 ("closest_j", ints(&|c| c.closest_pair[1])),
                 ("closest_distance", floats(&|c| c.closest_distance)),
@@ -225,11 +225,11 @@ impl Loops {
             Vec::with_capacity(count),
             Vec::with_capacity(count),
         );
-        for (i, run, c) in self.inner.runs() {
-            row.push(i as i64);
-            start.push(i64::from(run.start));
-            end.push(i64::from(run.end));
-            component.push(c as i64);
+        for run in self.inner.runs() {
+            row.push(run.row as i64);
+            start.push(run.start as i64);
+            end.push(run.end as i64);
+            component.push(run.component as i64);
         }
         table(
             py,

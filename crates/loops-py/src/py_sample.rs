@@ -149,11 +149,11 @@ fn loops_metric(metric: Option<&Bound<'_, PyAny>>, loops: &loops_core::Loops) ->
     if metric.is_some() {
         return MetricArg::from_py(metric);
     }
-    match loops.metric().parse::<MetricSpec>() {
+    match loops.metric_name().parse::<MetricSpec>() {
         Ok(spec) => Ok(MetricArg::Spec(spec)),
         Err(_) => Err(invalid_parameter(format!(
             "the loops were found with the metric {:?}, which is not a metric name: pass metric= (the same callable)",
-            loops.metric()
+            loops.metric_name()
         ))),
     }
 }
@@ -1025,7 +1025,7 @@ impl SampleQuality {
 
     /// P1: the components without a sample, largest area first, as a
     /// :class:`~inexact_loops.Table`: ``id`` (int64), ``trivial`` (bool), ``area_s2``
-    /// (float64, s²), ``pairs`` (int64).
+    /// (float64, s²), ``pair_count`` (int64).
     #[getter]
     fn missed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let missed = &self.inner.missed;
@@ -1035,7 +1035,7 @@ impl SampleQuality {
                 ("id", to_numpy(py, missed.iter().map(|m| m.id as i64).collect()).into_any()),
                 ("trivial", to_numpy(py, missed.iter().map(|m| m.trivial).collect()).into_any()),
                 ("area_s2", to_numpy(py, missed.iter().map(|m| m.area_s2).collect()).into_any()),
-                ("pairs", to_numpy(py, missed.iter().map(|m| m.pairs as i64).collect()).into_any()),
+                ("pair_count", to_numpy(py, missed.iter().map(|m| m.pair_count as i64).collect()).into_any()),
             ],
         )
     }

@@ -82,11 +82,11 @@ fn grid(input: &ReportInput<'_>, poses: &[usize], relative_s: &[f64]) -> Grid {
                 label[at] = Some(c);
             }
         };
-        for (i, run, c) in loops.runs() {
-            let a = pixel(i);
-            for b in pixel(run.start as usize)..=pixel(run.end as usize) {
-                claim(b * m + a, c as u32);
-                claim(a * m + b, c as u32);
+        for run in loops.runs() {
+            let a = pixel(run.row);
+            for b in pixel(run.start)..=pixel(run.end) {
+                claim(b * m + a, run.component as u32);
+                claim(a * m + b, run.component as u32);
             }
         }
     }
@@ -354,7 +354,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     let mut largest: Vec<_> = components.iter().filter(|c| !c.trivial).collect();
     largest.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2).then(a.id.cmp(&b.id)));
     for c in largest.iter().take(LABELLED_COMPONENTS) {
-        let (x, y) = plot.point(time(c.rows[0]), time(c.columns[1]));
+        let (x, y) = plot.point(time(c.i_range[0]), time(c.j_range[1]));
         let label = format!("#{}", c.id);
         let width = 7.0 * label.len() as f64;
         let (x, anchor) = if x - width - 2.0 < area.left { (x + 2.0, "start") } else { (x - 2.0, "end") };
@@ -395,7 +395,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     }
     plot.push_clipped(&overlay);
     plot.axes("t (s from the first pose)", "t′ (s from the first pose)", 6, 6);
-    plot.colour_bar(ICE, colour_scale, &format!("δ ({}), square-root scale", loops.metric()), &[(gamma, "γ")]);
+    plot.colour_bar(ICE, colour_scale, &format!("δ ({}), square-root scale", loops.metric_name()), &[(gamma, "γ")]);
     let svg = plot.finish("Pairwise distance over the time × time plane");
 
     let nontrivial = components.iter().filter(|c| !c.trivial).count();

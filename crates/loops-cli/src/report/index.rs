@@ -49,7 +49,7 @@ pub(crate) fn render(batch: &BatchSummary<'_>) -> String {
                                     td { (format!("{:.1}", s.span_s)) }
                                     td { (s.components) }
                                     td { (s.nontrivial_components) }
-                                    td { (s.pairs) }
+                                    td { (s.pair_count) }
                                     td { (format!("{:.2}", s.loop_density_s)) }
                                     td { (s.samples) }
                                     td { (s.quality.nontrivial_covered) "/" (s.quality.nontrivial_components) }

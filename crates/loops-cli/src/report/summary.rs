@@ -37,7 +37,7 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                     dt { "components" }
                     dd { b { (nontrivial) } " non-trivial, " (components.len() - nontrivial) " trivial" }
                     dt { "pairs in S" sub { "γ" } }
-                    dd { (thousands(loops.pairs())) }
+                    dd { (thousands(loops.pair_count())) }
                     dt { "loop density ρ" }
                     dd {
                         @if let Some(d) = density {

@@ -12,8 +12,8 @@ const COLUMNS: [(&str, &str); 14] = [
     ("id", "component id (order of first cell, row by row)"),
     ("trivial", "holds diagonal cells (i, i): its pairs are simple loops"),
     ("area_s2", "area in the (t, t′) plane, s² (the half with t ≤ t′)"),
-    ("pairs", "lattice cells (i, j)"),
-    ("runs", "row intervals"),
+    ("pair_count", "lattice cells (i, j)"),
+    ("run_count", "row intervals"),
     ("holes", "holes in the full plane"),
     ("t_min_s", "first t, seconds from the first pose (components.csv: the pose's own time)"),
     ("t_max_s", "last t, seconds from the first pose"),
@@ -61,13 +61,13 @@ pub(super) fn components_section(input: &ReportInput<'_>) -> Markup {
                                 td { i.swatch.(swatch_class(c)) {} (c.id) }
                                 td { @if c.trivial { "yes" } @else { "no" } }
                                 td { (format!("{:.1}", c.area_s2)) }
-                                td { (c.pairs) }
-                                td { (c.runs) }
+                                td { (c.pair_count) }
+                                td { (c.run_count) }
                                 td { (c.holes) }
-                                td { (format!("{:.2}", time(c.rows[0]))) }
-                                td { (format!("{:.2}", time(c.rows[1]))) }
-                                td { (format!("{:.2}", time(c.columns[0]))) }
-                                td { (format!("{:.2}", time(c.columns[1]))) }
+                                td { (format!("{:.2}", time(c.i_range[0]))) }
+                                td { (format!("{:.2}", time(c.i_range[1]))) }
+                                td { (format!("{:.2}", time(c.j_range[0]))) }
+                                td { (format!("{:.2}", time(c.j_range[1]))) }
                                 td { (c.closest_pair[0]) }
                                 td { (c.closest_pair[1]) }
                                 td { (format!("{:.3}", c.closest_distance)) }

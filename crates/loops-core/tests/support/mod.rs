@@ -609,7 +609,7 @@ pub fn check_components(traj: &Trajectory, loops: &Loops, dense: &DenseLoops) ->
     let n = traj.len();
     let span = traj.span_s();
     ensure!(loops.len() == n, "len");
-    ensure!(loops.pairs() == dense.set.cells(), "pairs {} vs dense {}", loops.pairs(), dense.set.cells());
+    ensure!(loops.pair_count() == dense.set.cells(), "pairs {} vs dense {}", loops.pair_count(), dense.set.cells());
 
     // The same-component relation, both ways: a bijection between engine ids and dense labels
     // of the upper half, respected by every cell.
@@ -662,14 +662,14 @@ pub fn check_components(traj: &Trajectory, loops: &Loops, dense: &DenseLoops) ->
             // A non-trivial component and its mirror are two dense components.
             ensure!(d.mirror != dense.upper_order[id], "non-trivial mirror: {at}");
         }
-        ensure!(c.pairs == d.cells, "pairs: {at}");
+        ensure!(c.pair_count == d.cells, "pairs: {at}");
         ensure!(close(c.area_s2, d.area_s2, span * span), "area: {at}");
-        ensure!(c.runs == d.upper_runs, "runs: {at}");
+        ensure!(c.run_count == d.upper_runs, "runs: {at}");
         ensure!(d.euler <= 1, "dense Euler number above 1: {at}");
         ensure!(d.holes_by_fill as i64 == 1 - d.euler, "the two dense hole counts differ: {at}");
         ensure!(c.holes as i64 == 1 - d.euler, "holes: {at}");
-        ensure!(c.rows == d.rows, "rows: {at}");
-        ensure!(c.columns == d.columns, "columns: {at}");
+        ensure!(c.i_range == d.rows, "rows: {at}");
+        ensure!(c.j_range == d.columns, "columns: {at}");
         ensure!(c.closest_distance == d.closest.0, "closest distance: {at}");
         ensure!(!d.trivial || c.closest_distance == 0.0, "trivial closest: {at}");
         let [ci, cj] = c.closest_pair;
