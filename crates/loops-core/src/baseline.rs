@@ -8,79 +8,117 @@
 use rand::Rng;
 
 use crate::ball_tree::BallTree;
-use crate::detection::{PairSpace, bernoulli_indices, choose_indices};
+use crate::draw::{PairSpace, SampleSize, SampleWarning, draw_numbers};
 use crate::error::{Error, Result};
 use crate::loops::Loops;
 use crate::metric::Metric;
-use crate::sample::{SampleSize, SampleWarning, SamplerKind};
 use crate::trajectory::Trajectory;
 
-/// Parameters of the baseline candidate rules. Distances are in the metric's unit (metres for
-/// positions); the defaults are those of the systems' own configurations, with the search radius
-/// set to γ.
-///
-/// | rule | what it does |
-/// |---|---|
-/// | `lio-sam` | every `lio_sam_period_s` (1 s, `loopClosureFrequency`), the latest keyframe (one per `lio_sam_keyframe_step` of motion, 1 m) is matched with its nearest keyframe within γ that is older than `lio_sam_min_age_s` (30 s, `historyKeyframeSearchTimeDiff`); a keyframe is searched once |
-/// | `hdl-graph-slam` | at each keyframe (one per `hdl_keyframe_step`, 2 m, `keyframe_delta_trans`), if it has travelled `hdl_edge_spacing` since the last loop edge (`distance_from_last_edge_thresh`), the candidates are the keyframes within γ at least `hdl_min_travel` of travel back (`accum_distance_thresh`); the closest one is kept, so there is at most one loop per stretch of travel |
-/// | `cartographer` | every pair within γ, except those closer in time than `cartographer_min_gap_s` (the node's own submaps), kept at a fixed random ratio (`sampling_ratio`: the rate) |
-/// | `time-gap` | every pair within γ and at least `time_gap_s` apart in time, randomly thinned |
-///
-/// # Examples
-/// ```
-/// use loops_core::BaselineParams;
-/// let params = BaselineParams { lio_sam_min_age_s: 60.0, ..BaselineParams::default() };
-/// assert_eq!(params.lio_sam_period_s, 1.0);
-/// ```
-#[derive(Debug, Clone, PartialEq)]
-pub struct BaselineParams {
-    /// LIO-SAM: distance moved between keyframes (1 m).
-    pub lio_sam_keyframe_step: f64,
-    /// LIO-SAM: seconds between loop searches (1 s: 1 Hz).
-    pub lio_sam_period_s: f64,
-    /// LIO-SAM: a candidate keyframe is more than this many seconds older (30 s).
-    pub lio_sam_min_age_s: f64,
-    /// hdl_graph_slam: distance moved between keyframes (2 m).
-    pub hdl_keyframe_step: f64,
-    /// hdl_graph_slam: least travel (path length) between the two keyframes of a loop; `None`:
-    /// 2γ, so that no pair on one straight stretch qualifies.
-    pub hdl_min_travel: Option<f64>,
-    /// hdl_graph_slam: least travel between two loop edges; `None`: γ.
-    pub hdl_edge_spacing: Option<f64>,
-    /// Cartographer: pairs closer in time than this are within the node's own submaps (10 s).
-    pub cartographer_min_gap_s: f64,
-    /// Time-gap rule: the least time between the two poses of a candidate (30 s).
-    pub time_gap_s: f64,
+/// LIO-SAM's loop-candidate rule: every `period_s` (1 s, `loopClosureFrequency`), the latest
+/// keyframe (one per `keyframe_step` of motion, 1 m) is matched with its nearest keyframe within
+/// γ that is older than `min_age_s` (30 s, `historyKeyframeSearchTimeDiff`); a keyframe is
+/// searched once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LioSam {
+    /// Distance moved between keyframes, in the metric's unit (1 m).
+    pub keyframe_step: f64,
+    /// Seconds between loop searches (1 s: 1 Hz); positive.
+    pub period_s: f64,
+    /// A candidate keyframe is more than this many seconds older (30 s).
+    pub min_age_s: f64,
 }
 
-impl Default for BaselineParams {
+impl Default for LioSam {
     fn default() -> Self {
-        Self {
-            lio_sam_keyframe_step: 1.0,
-            lio_sam_period_s: 1.0,
-            lio_sam_min_age_s: 30.0,
-            hdl_keyframe_step: 2.0,
-            hdl_min_travel: None,
-            hdl_edge_spacing: None,
-            cartographer_min_gap_s: 10.0,
-            time_gap_s: 30.0,
-        }
+        Self { keyframe_step: 1.0, period_s: 1.0, min_age_s: 30.0 }
     }
 }
 
-impl BaselineParams {
-    fn validate(&self) -> Result<()> {
-        let checks: [(&'static str, f64, bool); 8] = [
-            ("lio_sam_keyframe_step", self.lio_sam_keyframe_step, false),
-            ("lio_sam_period_s", self.lio_sam_period_s, true),
-            ("lio_sam_min_age_s", self.lio_sam_min_age_s, false),
-            ("hdl_keyframe_step", self.hdl_keyframe_step, false),
-            ("hdl_min_travel", self.hdl_min_travel.unwrap_or(0.0), false),
-            ("hdl_edge_spacing", self.hdl_edge_spacing.unwrap_or(0.0), false),
-            ("cartographer_min_gap_s", self.cartographer_min_gap_s, false),
-            ("time_gap_s", self.time_gap_s, false),
-        ];
-        for (name, value, positive) in checks {
+/// hdl_graph_slam's loop-candidate rule: at each keyframe (one per `keyframe_step`, 2 m,
+/// `keyframe_delta_trans`), if it has travelled `edge_spacing` since the last loop edge
+/// (`distance_from_last_edge_thresh`), the candidates are the keyframes within γ at least
+/// `min_travel` of travel back (`accum_distance_thresh`); the closest one is kept, so there is at
+/// most one loop per stretch of travel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HdlGraphSlam {
+    /// Distance moved between keyframes, in the metric's unit (2 m).
+    pub keyframe_step: f64,
+    /// Least travel (path length) between the two keyframes of a loop; `None`: 2γ, so that no
+    /// pair on one straight stretch qualifies.
+    pub min_travel: Option<f64>,
+    /// Least travel between two loop edges; `None`: γ.
+    pub edge_spacing: Option<f64>,
+}
+
+impl Default for HdlGraphSlam {
+    fn default() -> Self {
+        Self { keyframe_step: 2.0, min_travel: None, edge_spacing: None }
+    }
+}
+
+/// Cartographer's loop-candidate rule: every pair within γ, except those closer in time than
+/// `min_gap_s` (the node's own submaps), kept at a fixed random ratio (`sampling_ratio`: the
+/// sampler's rate).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cartographer {
+    /// Pairs closer in time than this are within the node's own submaps (10 s).
+    pub min_gap_s: f64,
+}
+
+impl Default for Cartographer {
+    fn default() -> Self {
+        Self { min_gap_s: 10.0 }
+    }
+}
+
+/// The time-gap rule: every pair within γ and at least `gap_s` apart in time, randomly thinned.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TimeGap {
+    /// The least time between the two poses of a candidate (30 s).
+    pub gap_s: f64,
+}
+
+impl Default for TimeGap {
+    fn default() -> Self {
+        Self { gap_s: 30.0 }
+    }
+}
+
+/// One baseline rule with its parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Baseline {
+    /// [`LioSam`].
+    LioSam(LioSam),
+    /// [`HdlGraphSlam`].
+    HdlGraphSlam(HdlGraphSlam),
+    /// [`Cartographer`].
+    Cartographer(Cartographer),
+    /// [`TimeGap`].
+    TimeGap(TimeGap),
+}
+
+impl Baseline {
+    /// Checks the parameters: finite, ≥ 0 (the LIO-SAM period > 0). The names in errors are
+    /// those of the flat keyword arguments (`lio_sam_period_s`, ...).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad parameter.
+    pub fn validate(&self) -> Result<()> {
+        let checks: &[(&'static str, f64, bool)] = match self {
+            Self::LioSam(p) => &[
+                ("lio_sam_keyframe_step", p.keyframe_step, false),
+                ("lio_sam_period_s", p.period_s, true),
+                ("lio_sam_min_age_s", p.min_age_s, false),
+            ],
+            Self::HdlGraphSlam(p) => &[
+                ("hdl_keyframe_step", p.keyframe_step, false),
+                ("hdl_min_travel", p.min_travel.unwrap_or(0.0), false),
+                ("hdl_edge_spacing", p.edge_spacing.unwrap_or(0.0), false),
+            ],
+            Self::Cartographer(p) => &[("cartographer_min_gap_s", p.min_gap_s, false)],
+            Self::TimeGap(p) => &[("time_gap_s", p.gap_s, false)],
+        };
+        for &(name, value, positive) in checks {
             let ok = value.is_finite() && if positive { value > 0.0 } else { value >= 0.0 };
             if !ok {
                 let expected = if positive { "a positive finite number" } else { "a finite number >= 0" };
@@ -91,63 +129,57 @@ impl BaselineParams {
     }
 }
 
+/// The parameters of every baseline rule, as a [`Sampler`](crate::Sampler) carries them (it
+/// uses those of its kind). Distances are in the metric's unit (metres for positions); the
+/// defaults are those of the systems' own configurations, with the search radius set to γ.
+///
+/// # Examples
+/// ```
+/// use loops_core::{BaselineParams, LioSam};
+/// let params = BaselineParams { lio_sam: LioSam { min_age_s: 60.0, ..LioSam::default() }, ..BaselineParams::default() };
+/// assert_eq!(params.lio_sam.period_s, 1.0);
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BaselineParams {
+    /// For the `lio-sam` sampler.
+    pub lio_sam: LioSam,
+    /// For the `hdl-graph-slam` sampler.
+    pub hdl_graph_slam: HdlGraphSlam,
+    /// For the `cartographer` sampler.
+    pub cartographer: Cartographer,
+    /// For the `time-gap` sampler.
+    pub time_gap: TimeGap,
+}
+
 /// The pairs (i < j) a baseline rule proposes, thinned to `size`; the number of pairs the rule
 /// proposed before thinning; warnings.
 pub(crate) fn baseline_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
-    kind: SamplerKind,
+    baseline: &Baseline,
     traj: &Trajectory,
     metric: &M,
     loops: &Loops,
-    params: &BaselineParams,
     size: SampleSize,
     rng: &mut R,
 ) -> Result<(Vec<[u32; 2]>, u64, Vec<SampleWarning>)> {
-    params.validate()?;
+    baseline.validate()?;
     let gamma = loops.gamma();
-    let rule: Vec<[u32; 2]> = match kind {
-        SamplerKind::Cartographer | SamplerKind::TimeGap => {
-            let gap_s =
-                if kind == SamplerKind::Cartographer { params.cartographer_min_gap_s } else { params.time_gap_s };
-            let space = PairSpace::of_loops(loops, gap_s);
-            let (pairs, warnings) = thin_space(&space, size, rng);
-            return Ok((pairs, space.len(), warnings));
-        }
-        SamplerKind::LioSam => lio_sam(traj, metric, gamma, params),
-        SamplerKind::HdlGraphSlam => hdl_graph_slam(traj, metric, gamma, params),
-        _ => unreachable!("not a baseline: {kind:?}"),
+    let mut warnings = Vec::new();
+    let (space, rule) = match baseline {
+        Baseline::Cartographer(p) => (PairSpace::of_loops(loops, p.min_gap_s), None),
+        Baseline::TimeGap(p) => (PairSpace::of_loops(loops, p.gap_s), None),
+        Baseline::LioSam(p) => (PairSpace::default(), Some(lio_sam(traj, metric, gamma, p))),
+        Baseline::HdlGraphSlam(p) => (PairSpace::default(), Some(hdl_graph_slam(traj, metric, gamma, p))),
     };
-    let indices = thin(rule.len() as u64, size, rng);
-    let mut warnings = Vec::new();
-    if let SampleSize::Budget(budget) = size
-        && (budget as u64) > rule.len() as u64
-    {
-        warnings.push(SampleWarning::BudgetAboveAvailable { budget, available: rule.len() as u64 });
-    }
-    Ok((indices.into_iter().map(|k| rule[k as usize]).collect(), rule.len() as u64, warnings))
-}
-
-/// Numbers of the items kept out of `len`: each with probability p, or `budget` of them (all
-/// when fewer).
-fn thin<R: Rng + ?Sized>(len: u64, size: SampleSize, rng: &mut R) -> Vec<u64> {
-    match size {
-        SampleSize::Rate(rate) => bernoulli_indices(len, rate, rng),
-        SampleSize::Budget(budget) => choose_indices(len, (budget as u64).min(len), rng),
-    }
-}
-
-fn thin_space<R: Rng + ?Sized>(
-    space: &PairSpace,
-    size: SampleSize,
-    rng: &mut R,
-) -> (Vec<[u32; 2]>, Vec<SampleWarning>) {
-    let indices = thin(space.len(), size, rng);
-    let mut warnings = Vec::new();
-    if let SampleSize::Budget(budget) = size
-        && (budget as u64) > space.len()
-    {
-        warnings.push(SampleWarning::BudgetAboveAvailable { budget, available: space.len() });
-    }
-    (space.pairs_at(&indices), warnings)
+    Ok(match rule {
+        None => {
+            let indices = draw_numbers(space.len(), size, rng, &mut warnings);
+            (space.pairs_at(&indices), space.len(), warnings)
+        }
+        Some(rule) => {
+            let indices = draw_numbers(rule.len() as u64, size, rng, &mut warnings);
+            (indices.into_iter().map(|k| rule[k as usize]).collect(), rule.len() as u64, warnings)
+        }
+    })
 }
 
 /// Keyframes: the first pose, then every pose at least `step` from the previous keyframe.
@@ -199,13 +231,13 @@ impl<'a, M: Metric + ?Sized> NearestKeyframe<'a, M> {
     }
 }
 
-fn lio_sam<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64, params: &BaselineParams) -> Vec<[u32; 2]> {
+fn lio_sam<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64, params: &LioSam) -> Vec<[u32; 2]> {
     let times = traj.timestamps_s();
-    let keyframes = keyframes(traj, metric, params.lio_sam_keyframe_step);
+    let keyframes = keyframes(traj, metric, params.keyframe_step);
     let search = NearestKeyframe::new(traj, metric, &keyframes, gamma);
     let mut out = Vec::new();
     let (start, end) = (times[0], times[times.len() - 1]);
-    let period = params.lio_sam_period_s;
+    let period = params.period_s;
     let tick = |m: f64| start + m * period;
     // The search runs at ticks start + m · period (m ≥ 1) on the latest keyframe; a keyframe is
     // searched when a tick falls before the next keyframe (searching it again finds the same).
@@ -223,7 +255,7 @@ fn lio_sam<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64, params
         if now >= next || now > end {
             continue;
         }
-        let limit = times.partition_point(|&t| times[current] - t > params.lio_sam_min_age_s);
+        let limit = times.partition_point(|&t| times[current] - t > params.min_age_s);
         if let Some(j) = search.find(current, limit) {
             out.push([j as u32, current as u32]);
         }
@@ -235,16 +267,16 @@ fn hdl_graph_slam<M: Metric + ?Sized>(
     traj: &Trajectory,
     metric: &M,
     gamma: f64,
-    params: &BaselineParams,
+    params: &HdlGraphSlam,
 ) -> Vec<[u32; 2]> {
-    let keyframes = keyframes(traj, metric, params.hdl_keyframe_step);
+    let keyframes = keyframes(traj, metric, params.keyframe_step);
     let mut travel = Vec::with_capacity(keyframes.len());
     travel.push(0.0);
     for w in keyframes.windows(2) {
         travel.push(travel[travel.len() - 1] + metric.distance(traj.point(w[0]), traj.point(w[1])));
     }
-    let min_travel = params.hdl_min_travel.unwrap_or(2.0 * gamma);
-    let edge_spacing = params.hdl_edge_spacing.unwrap_or(gamma);
+    let min_travel = params.min_travel.unwrap_or(2.0 * gamma);
+    let edge_spacing = params.edge_spacing.unwrap_or(gamma);
     let search = NearestKeyframe::new(traj, metric, &keyframes, gamma);
     let mut out = Vec::new();
     let mut last_edge = f64::NEG_INFINITY;
@@ -295,11 +327,16 @@ mod tests {
     #[test]
     fn lio_sam_matches_nearest_old_keyframe() {
         let (traj, loops) = out_and_back();
-        let params = BaselineParams::default();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let (pairs, _, warnings) =
-            baseline_pairs(SamplerKind::LioSam, &traj, &Euclidean, &loops, &params, SampleSize::Rate(1.0), &mut rng)
-                .unwrap();
+        let (pairs, _, warnings) = baseline_pairs(
+            &Baseline::LioSam(LioSam::default()),
+            &traj,
+            &Euclidean,
+            &loops,
+            SampleSize::Rate(1.0),
+            &mut rng,
+        )
+        .unwrap();
         assert!(warnings.is_empty());
         assert!(!pairs.is_empty());
         let times = traj.timestamps_s();
@@ -315,14 +352,12 @@ mod tests {
     #[test]
     fn hdl_keeps_one_per_stretch() {
         let (traj, loops) = out_and_back();
-        let params = BaselineParams::default();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
         let (pairs, proposed, _) = baseline_pairs(
-            SamplerKind::HdlGraphSlam,
+            &Baseline::HdlGraphSlam(HdlGraphSlam::default()),
             &traj,
             &Euclidean,
             &loops,
-            &params,
             SampleSize::Rate(1.0),
             &mut rng,
         )
@@ -334,11 +369,10 @@ mod tests {
             assert!(w[1][1] - w[0][1] >= 25, "{pairs:?}");
         }
         let budget = baseline_pairs(
-            SamplerKind::HdlGraphSlam,
+            &Baseline::HdlGraphSlam(HdlGraphSlam::default()),
             &traj,
             &Euclidean,
             &loops,
-            &params,
             SampleSize::Budget(1000),
             &mut rng,
         )
@@ -350,17 +384,19 @@ mod tests {
     #[test]
     fn gap_rules_stay_beyond_the_gap() {
         let (traj, loops) = out_and_back();
-        let params = BaselineParams::default();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let (pairs, _, _) =
-            baseline_pairs(SamplerKind::TimeGap, &traj, &Euclidean, &loops, &params, SampleSize::Budget(50), &mut rng)
-                .unwrap();
+        let (pairs, _, _) = baseline_pairs(
+            &Baseline::TimeGap(TimeGap::default()),
+            &traj,
+            &Euclidean,
+            &loops,
+            SampleSize::Budget(50),
+            &mut rng,
+        )
+        .unwrap();
         assert_eq!(pairs.len(), 50);
         assert!(pairs.iter().all(|&[i, j]| j - i >= 30 && loops.component_of(i as usize, j as usize).is_some()));
-        let bad = BaselineParams { lio_sam_period_s: 0.0, ..BaselineParams::default() };
-        assert!(
-            baseline_pairs(SamplerKind::LioSam, &traj, &Euclidean, &loops, &bad, SampleSize::Rate(1.0), &mut rng)
-                .is_err()
-        );
+        let bad = Baseline::LioSam(LioSam { period_s: 0.0, ..LioSam::default() });
+        assert!(baseline_pairs(&bad, &traj, &Euclidean, &loops, SampleSize::Rate(1.0), &mut rng).is_err());
     }
 }

@@ -2,40 +2,22 @@
 //! believed to come back to itself, given by the user (place recognition) or drawn uniformly from
 //! the exact S_γ.
 
-use rand::{Rng, RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+use crate::draw::{PairSpace, SampleSize};
 use crate::error::{Error, Result};
 use crate::loops::Loops;
-use crate::sample::SampleSize;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Timeline, nearest_pose};
 
-mod sealed {
-    pub trait Sealed {}
-    impl Sealed for crate::trajectory::Trajectory {}
-    impl Sealed for crate::loops::Loops {}
-}
-
-/// Something that carries the timestamps of a trajectory's poses: a [`Trajectory`], or the
-/// [`Loops`] found on one. Detections given by times are placed on its poses, detections given
-/// by pose indices take their times from it.
-///
-/// Sealed: the timestamps are known to be finite, strictly increasing and at least two.
-pub trait Timeline: sealed::Sealed {
-    /// Timestamps of the poses, seconds, strictly increasing.
-    fn pose_times_s(&self) -> &[f64];
-}
-
-impl Timeline for Trajectory {
-    fn pose_times_s(&self) -> &[f64] {
-        self.timestamps_s()
-    }
-}
-
-impl Timeline for Loops {
-    fn pose_times_s(&self) -> &[f64] {
-        self.timestamps_s()
-    }
+/// The pose nearest the time `t` of detection `index` (see [`Detections::locate`]).
+pub(crate) fn place_detection(times: &[f64], t: f64, index: usize) -> Result<usize> {
+    nearest_pose(times, t).ok_or(Error::DetectionOutsideSpan {
+        index,
+        time_s: t,
+        start_s: times[0],
+        end_s: times[times.len() - 1],
+    })
 }
 
 /// One detection, as [`Detections::get`] returns it.
@@ -172,7 +154,7 @@ impl Detections {
         let times = timeline.pose_times_s();
         let mut pairs = Vec::with_capacity(self.len());
         for (index, (&a, &b)) in self.t_s.iter().zip(&self.t_prime_s).enumerate() {
-            pairs.push([nearest_pose(times, a, index)? as u32, nearest_pose(times, b, index)? as u32]);
+            pairs.push([place_detection(times, a, index)? as u32, place_detection(times, b, index)? as u32]);
         }
         Ok(Self { located: Some(Located { pairs, poses: times.len() }), ..self })
     }
@@ -289,157 +271,10 @@ impl Detections {
     }
 }
 
-/// The pose whose time cell holds `t` (the nearest timestamp, ties to the earlier one).
-pub(crate) fn nearest_pose(times: &[f64], t: f64, index: usize) -> Result<usize> {
-    let (start_s, end_s) = (times[0], times[times.len() - 1]);
-    if !(t >= start_s && t <= end_s) {
-        return Err(Error::DetectionOutsideSpan { index, time_s: t, start_s, end_s });
-    }
-    let k = times.partition_point(|&x| x < t);
-    Ok(if k == 0 || t - times[k - 1] > times[k] - t { k } else { k - 1 })
-}
-
-/// A stretch `start..=end` of columns of one row: pairs (row, j).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) struct Segment {
-    pub row: u32,
-    pub start: u32,
-    pub end: u32,
-}
-
-/// A set of lattice pairs given as segments of rows, numbered 0..len in segment order: uniform
-/// draws pick a number, then its segment (runs weighted by length) and a column. Never a list of
-/// pairs.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct PairSpace {
-    segments: Vec<Segment>,
-    /// `ends[s]`: number of pairs in segments 0..=s.
-    ends: Vec<u64>,
-}
-
-impl PairSpace {
-    /// The off-diagonal pairs (i < j) of S_γ with `t_j − t_i ≥ min_gap_s`, row-major.
-    pub(crate) fn of_loops(loops: &Loops, min_gap_s: f64) -> Self {
-        let mut space = Self::default();
-        let first = FirstColumn::new(loops.timestamps_s(), min_gap_s);
-        for run in loops.runs() {
-            space.push(run.row, run.start, run.end, first.of_row(run.row));
-        }
-        space
-    }
-
-    /// Adds the columns `start..=end` of row `i` that are ≥ `first_column`.
-    pub(crate) fn push(&mut self, i: usize, start: usize, end: usize, first_column: usize) {
-        let start = start.max(first_column);
-        if start <= end {
-            let total = self.len() + (end - start + 1) as u64;
-            self.segments.push(Segment { row: i as u32, start: start as u32, end: end as u32 });
-            self.ends.push(total);
-        }
-    }
-
-    /// Number of pairs.
-    pub(crate) fn len(&self) -> u64 {
-        self.ends.last().copied().unwrap_or(0)
-    }
-
-    /// The segments, in order.
-    pub(crate) fn segments(&self) -> &[Segment] {
-        &self.segments
-    }
-
-    /// Pair number `k < len()`. O(log segments).
-    #[cfg(test)]
-    pub(crate) fn pair(&self, k: u64) -> [u32; 2] {
-        let s = self.ends.partition_point(|&end| end <= k);
-        let before = if s == 0 { 0 } else { self.ends[s - 1] };
-        let segment = self.segments[s];
-        [segment.row, segment.start + (k - before) as u32]
-    }
-
-    /// The pairs at increasing numbers, by one walk over the segments. O(segments + k).
-    pub(crate) fn pairs_at(&self, sorted: &[u64]) -> Vec<[u32; 2]> {
-        let mut out = Vec::with_capacity(sorted.len());
-        let mut s = 0;
-        for &k in sorted {
-            while self.ends[s] <= k {
-                s += 1;
-            }
-            let before = if s == 0 { 0 } else { self.ends[s - 1] };
-            out.push([self.segments[s].row, self.segments[s].start + (k - before) as u32]);
-        }
-        out
-    }
-
-    /// Every number independently with probability `rate` in (0, 1], increasing: geometric
-    /// skips, O(drawn).
-    pub(crate) fn bernoulli<R: Rng + ?Sized>(&self, rate: f64, rng: &mut R) -> Vec<u64> {
-        bernoulli_indices(self.len(), rate, rng)
-    }
-
-    /// `count ≤ len()` distinct numbers, uniformly, increasing. O(count) expected.
-    pub(crate) fn choose<R: Rng + ?Sized>(&self, count: u64, rng: &mut R) -> Vec<u64> {
-        choose_indices(self.len(), count, rng)
-    }
-}
-
-/// Numbers in 0..len, each independently with probability `rate` ∈ (0, 1], increasing.
-pub(crate) fn bernoulli_indices<R: Rng + ?Sized>(len: u64, rate: f64, rng: &mut R) -> Vec<u64> {
-    if rate >= 1.0 {
-        return (0..len).collect();
-    }
-    let log_keep = (-rate).ln_1p(); // ln(1 − p) < 0
-    let mut skip = || {
-        let u: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-        let gap = (u.ln() / log_keep).floor();
-        if gap < 1e18 { gap as u64 } else { u64::MAX / 2 }
-    };
-    let mut out = Vec::with_capacity((len as f64 * rate * 1.1) as usize + 16);
-    let mut k = skip();
-    while k < len {
-        out.push(k);
-        k = k.saturating_add(1 + skip());
-    }
-    out
-}
-
-/// `count ≤ len` distinct numbers in 0..len, uniformly, increasing.
-pub(crate) fn choose_indices<R: Rng + ?Sized>(len: u64, count: u64, rng: &mut R) -> Vec<u64> {
-    debug_assert!(count <= len);
-    if count == len {
-        return (0..len).collect();
-    }
-    let mut out: Vec<u64> =
-        rand::seq::index::sample(rng, len as usize, count as usize).into_iter().map(|k| k as u64).collect();
-    out.sort_unstable();
-    out
-}
-
-/// The first column j > i with `t_j − t_i ≥ gap` of each row.
-pub(crate) struct FirstColumn<'a> {
-    times: &'a [f64],
-    gap_s: f64,
-}
-
-impl<'a> FirstColumn<'a> {
-    pub(crate) fn new(times: &'a [f64], gap_s: f64) -> Self {
-        Self { times, gap_s }
-    }
-
-    pub(crate) fn of_row(&self, i: usize) -> usize {
-        if self.gap_s <= 0.0 {
-            return i + 1;
-        }
-        let t_i = self.times[i];
-        let gap = self.gap_s;
-        i + 1 + self.times[i + 1..].partition_point(|&t| t - t_i < gap)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Euclidean, find_loops};
+    use crate::trajectory::Trajectory;
 
     fn line() -> Trajectory {
         Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0, 4.0], &[[0.0], [1.0], [2.0], [1.0], [0.0]]).unwrap()
@@ -474,40 +309,5 @@ mod tests {
         assert_eq!(err, Error::PoseIndexOutOfRange { index: 0, pose: 5, poses: 5 });
         let det = Detections::from_indices(&traj, &[4, 1], &[0, 1]).unwrap();
         assert_eq!(det.get(0), Detection { t_s: 0.0, t_prime_s: 4.0, pair: Some([0, 4]), score: None });
-    }
-
-    #[test]
-    fn pair_space_numbers_every_pair_once() {
-        let traj = line();
-        let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
-        let space = PairSpace::of_loops(&loops, 0.0);
-        let all: Vec<[u32; 2]> = (0..space.len()).map(|k| space.pair(k)).collect();
-        let mut brute = Vec::new();
-        for i in 0..5 {
-            for j in i + 1..5 {
-                if loops.component_of(i, j).is_some() {
-                    brute.push([i as u32, j as u32]);
-                }
-            }
-        }
-        assert_eq!(all, brute);
-        let indices: Vec<u64> = (0..space.len()).collect();
-        assert_eq!(space.pairs_at(&indices), brute);
-        // With a gap of 2 s only pairs at least two poses apart remain.
-        let gapped = PairSpace::of_loops(&loops, 2.0);
-        let kept: Vec<[u32; 2]> = (0..gapped.len()).map(|k| gapped.pair(k)).collect();
-        assert_eq!(kept, brute.iter().copied().filter(|p| p[1] - p[0] >= 2).collect::<Vec<_>>());
-    }
-
-    #[test]
-    fn bernoulli_rate_is_about_right() {
-        let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let drawn = bernoulli_indices(1_000_000, 0.01, &mut rng);
-        assert!((9_500..10_500).contains(&drawn.len()), "{}", drawn.len());
-        assert!(drawn.windows(2).all(|w| w[0] < w[1]));
-        assert_eq!(bernoulli_indices(10, 1.0, &mut rng), (0..10).collect::<Vec<_>>());
-        let chosen = choose_indices(100, 30, &mut rng);
-        assert_eq!(chosen.len(), 30);
-        assert!(chosen.windows(2).all(|w| w[0] < w[1]) && chosen[29] < 100);
     }
 }

@@ -240,6 +240,18 @@ pub enum Error {
         /// Last timestamp of the trajectory, seconds.
         end_s: f64,
     },
+    /// A time to place on a trajectory that lies outside its time span.
+    #[error("time {index} ({time_s} s) lies outside the trajectory's time span [{start_s}, {end_s}] s")]
+    TimeOutsideSpan {
+        /// Index of the time in its list.
+        index: usize,
+        /// The offending time, seconds.
+        time_s: f64,
+        /// First timestamp of the trajectory, seconds.
+        start_s: f64,
+        /// Last timestamp of the trajectory, seconds.
+        end_s: f64,
+    },
     /// A pose index past the end of the trajectory.
     #[error("detection {index} refers to pose {pose}, but the trajectory has {poses} poses")]
     PoseIndexOutOfRange {

@@ -16,6 +16,15 @@
 //!
 //! What it does not do: read files (that is `loops-io`), talk to Python or a terminal.
 //!
+//! ## Module order
+//! The private modules follow the paper, and each uses only modules before it (no cycles):
+//! `trajectory` (ξ, time cells, [`Timeline`]) → `metric` (δ) → `manifold` and `pose` (metrics
+//! and points on manifolds) → `spec` ([`MetricSpec`]) → `sublevel` (S_γ, [`check_gamma`]) →
+//! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → `draw` ([`SampleSize`],
+//! uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph, [`check_epsilon_s`]) →
+//! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `synth`,
+//! `ball_tree` and `union_find` are helpers. Every public item is re-exported here.
+//!
 //! ## Quickstart
 //! ```
 //! use loops_core::{Euclidean, Scale, Selection, Side, UrbanDrive, find_loops};
@@ -39,6 +48,7 @@ mod baseline;
 mod cluster;
 mod component;
 mod detection;
+mod draw;
 mod error;
 mod loops;
 mod manifold;
@@ -47,29 +57,32 @@ mod metric;
 mod pose;
 mod quality;
 mod sample;
+mod spec;
 mod sublevel;
 mod synth;
 mod trajectory;
 mod union_find;
 
-pub use baseline::BaselineParams;
-pub use cluster::{DetectionCluster, DetectionClusters, cluster_detections};
+pub use baseline::{Baseline, BaselineParams, Cartographer, HdlGraphSlam, LioSam, TimeGap};
+pub use cluster::{DEFAULT_EPSILON_S, DetectionCluster, DetectionClusters, check_epsilon_s, cluster_detections};
 pub use component::LoopComponent;
-pub use detection::{Detection, Detections, Timeline};
+pub use detection::{Detection, Detections};
+pub use draw::{SampleSize, SampleWarning};
 pub use error::{Error, Result};
-pub use loops::{LabelledRun, Loops, Warning, check_gamma, find_loops};
+pub use loops::{LabelledRun, Loops, Warning, find_loops};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
-    angle_difference,
+    angle_difference, wrap_angle,
 };
 pub use measure::{Scale, Selection, Side};
-pub use metric::{Euclidean, Metric, MetricSpec};
+pub use metric::{Euclidean, Metric};
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
-pub use quality::{DEFAULT_EPSILON_S, MissedComponent, SampleQuality, check_epsilon_s, sample_quality};
-pub use sample::{Sample, SampleSize, SampleWarning, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
-pub use sublevel::{Run, SublevelSet};
+pub use quality::{MissedComponent, SampleQuality, sample_quality};
+pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
+pub use spec::MetricSpec;
+pub use sublevel::{Run, SublevelSet, check_gamma};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive};
-pub use trajectory::{MAX_POSES, Trajectory};
+pub use trajectory::{MAX_POSES, Timeline, Trajectory};
 
 /// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).
 ///

@@ -6,8 +6,9 @@ use crate::component::{LoopComponent, label_components};
 use crate::error::{Error, Result};
 use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
 use crate::metric::Metric;
+use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::SublevelSet;
-use crate::trajectory::{Trajectory, cell_of};
+use crate::trajectory::{Timeline, Trajectory, cell_of, sealed};
 
 /// Something worth telling the user about a result that is still correct.
 #[derive(Debug, Clone, PartialEq)]
@@ -81,21 +82,6 @@ pub struct Loops {
     warnings: Vec<Warning>,
 }
 
-/// Checks a distance threshold γ: positive and finite. Front ends call it to refuse a bad γ
-/// before any work; the engine calls it too.
-///
-/// # Errors
-/// [`Error::InvalidGamma`] otherwise.
-///
-/// # Examples
-/// ```
-/// assert!(loops_core::check_gamma(40.0).is_ok());
-/// assert!(loops_core::check_gamma(-1.0).is_err());
-/// ```
-pub fn check_gamma(gamma: f64) -> Result<()> {
-    if gamma.is_finite() && gamma > 0.0 { Ok(()) } else { Err(Error::InvalidGamma(gamma)) }
-}
-
 /// Finds every inexact loop of `traj` under `metric` at threshold `gamma` (the metric's unit),
 /// exactly, and partitions them into loop components.
 ///
@@ -122,6 +108,24 @@ pub fn check_gamma(gamma: f64) -> Result<()> {
 pub fn find_loops<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Loops> {
     let set = SublevelSet::compute(traj, metric, gamma)?;
     Ok(Loops::from_set(traj, metric, set))
+}
+
+impl sealed::Sealed for Loops {}
+
+impl Timeline for Loops {
+    fn pose_times_s(&self) -> &[f64] {
+        self.timestamps_s()
+    }
+}
+
+impl MetricSpec {
+    /// [`find_loops`] under this metric, dispatched once so the engine's loops stay monomorphic.
+    ///
+    /// # Errors
+    /// As [`find_loops`].
+    pub fn find_loops(&self, traj: &Trajectory, gamma: f64) -> Result<Loops> {
+        with_metric!(self, m => find_loops(traj, m, gamma))
+    }
 }
 
 impl Loops {

@@ -71,11 +71,26 @@ impl std::str::FromStr for RotationDistance {
     }
 }
 
-/// The least angular difference |a − b| mod 2π, in [0, π].
+/// An angle wrapped to (−π, π], radians: the one angle wrap of the workspace.
+///
+/// # Examples
+/// ```
+/// use loops_core::wrap_angle;
+/// use std::f64::consts::PI;
+/// assert_eq!(wrap_angle(PI), PI);
+/// assert_eq!(wrap_angle(-PI), PI);
+/// assert!((wrap_angle(3.0 * PI / 2.0) + PI / 2.0).abs() < 1e-15);
+/// ```
+#[inline]
+pub fn wrap_angle(angle_rad: f64) -> f64 {
+    let a = angle_rad.rem_euclid(TAU);
+    if a > PI { a - TAU } else { a }
+}
+
+/// The least angular difference |a − b| mod 2π, in [0, π]: `|wrap_angle(a − b)|`.
 #[inline]
 pub fn angle_difference(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(TAU);
-    d.min(TAU - d)
+    wrap_angle(a - b).abs()
 }
 
 fn check_unit(traj: &Trajectory, offset: usize, len: usize, what: fn(usize, f64) -> Error) -> Result<()> {

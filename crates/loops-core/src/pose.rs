@@ -1,9 +1,8 @@
 //! Validated constructors of trajectories on manifolds, laying points out as the metrics in
 //! [`manifold`](crate::So3) expect.
 
-use std::f64::consts::PI;
-
 use crate::error::{Error, Result};
+use crate::manifold::wrap_angle;
 use crate::trajectory::Trajectory;
 
 /// How far from unit length a quaternion handed to a constructor may be before it is an error
@@ -68,12 +67,6 @@ fn normalised(index: usize, v: &[f64]) -> Result<Vec<f64>> {
     let scaled: Vec<f64> = v.iter().map(|x| x / largest).collect();
     let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
     Ok(scaled.iter().map(|x| x / norm).collect())
-}
-
-/// An angle wrapped to (−π, π].
-fn wrapped(angle: f64) -> f64 {
-    let a = angle.rem_euclid(2.0 * PI);
-    if a > PI { a - 2.0 * PI } else { a }
 }
 
 fn latitude_checked(index: usize, latitude_deg: f64) -> Result<f64> {
@@ -176,7 +169,7 @@ impl Trajectory {
         let mut coords = Vec::with_capacity(3 * poses_xy_theta.len());
         for (index, p) in poses_xy_theta.iter().enumerate() {
             finite_row(index, p)?;
-            coords.extend_from_slice(&[p[0], p[1], wrapped(p[2])]);
+            coords.extend_from_slice(&[p[0], p[1], wrap_angle(p[2])]);
         }
         Self::new(timestamps_s, coords, 3)
     }
@@ -191,7 +184,7 @@ impl Trajectory {
             let dim = dim.max(1);
             return Err(Error::NonFiniteCoordinate { index: k / dim, axis: k % dim, value: angles_rad[k] });
         }
-        Self::new(timestamps_s, angles_rad.iter().map(|&a| wrapped(a)).collect(), dim)
+        Self::new(timestamps_s, angles_rad.iter().map(|&a| wrap_angle(a)).collect(), dim)
     }
 
     /// Points on the sphere S² for [`Sphere`](crate::Sphere): any non-zero vectors, normalised.

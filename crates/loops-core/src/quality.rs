@@ -1,7 +1,8 @@
 //! How representative a sample is (paper, Sec. 5.2: P1, P2, P3), measured against the exact
 //! loop components of S_γ, never against the detection clusters it may have been drawn from.
 
-use crate::error::{Error, Result};
+use crate::cluster::check_epsilon_s;
+use crate::error::Result;
 use crate::loops::Loops;
 use crate::sample::Samples;
 
@@ -16,26 +17,6 @@ pub struct MissedComponent {
     pub area_s2: f64,
     /// Its lattice cells (as [`LoopComponent::pair_count`](crate::LoopComponent::pair_count)).
     pub pair_count: u64,
-}
-
-/// The ε of the paper's experiment, seconds: the default detection-graph radius and P2 radius.
-pub const DEFAULT_EPSILON_S: f64 = 30.0;
-
-/// Checks an ε in seconds (detection-graph radius, P2 radius): positive and finite. Front ends
-/// call it to refuse a bad ε before any work.
-///
-/// # Errors
-/// [`Error::InvalidParameter`] otherwise.
-pub fn check_epsilon_s(epsilon_s: f64) -> Result<()> {
-    if epsilon_s.is_finite() && epsilon_s > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::InvalidParameter {
-            name: "epsilon_s",
-            value: epsilon_s,
-            expected: "a positive finite duration, seconds",
-        })
-    }
 }
 
 /// P1, P2 and P3 of a sample (paper, Sec. 5.2).

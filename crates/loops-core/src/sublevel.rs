@@ -4,9 +4,24 @@
 use rayon::prelude::*;
 
 use crate::ball_tree::{BallTree, Leaf};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
+
+/// Checks a distance threshold γ: positive and finite. Front ends call it to refuse a bad γ
+/// before any work; the engine calls it too.
+///
+/// # Errors
+/// [`Error::InvalidGamma`] otherwise.
+///
+/// # Examples
+/// ```
+/// assert!(loops_core::check_gamma(40.0).is_ok());
+/// assert!(loops_core::check_gamma(-1.0).is_err());
+/// ```
+pub fn check_gamma(gamma: f64) -> Result<()> {
+    if gamma.is_finite() && gamma > 0.0 { Ok(()) } else { Err(Error::InvalidGamma(gamma)) }
+}
 
 /// A maximal interval of columns `start..=end` of one row `i` of S_γ, with `i ≤ start`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -79,7 +94,7 @@ impl SublevelSet {
     /// # Errors
     /// [`Error::InvalidGamma`](crate::Error::InvalidGamma) when γ is not positive and finite; the metric's dimension error.
     pub fn compute<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
-        crate::loops::check_gamma(gamma)?;
+        check_gamma(gamma)?;
         metric.validate(traj)?;
         let n = traj.len();
         let (arc, balls) = rayon::join(|| ArcLength::new(traj, metric), || BallTree::new(traj, metric, LEAF_SIZE));
@@ -136,7 +151,7 @@ impl SublevelSet {
     /// # Errors
     /// As [`SublevelSet::compute`].
     pub fn brute_force<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
-        crate::loops::check_gamma(gamma)?;
+        check_gamma(gamma)?;
         metric.validate(traj)?;
         let n = traj.len();
         let mut set = Self { gamma, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };

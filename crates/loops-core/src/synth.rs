@@ -85,6 +85,34 @@ impl Districts {
     /// A default time in each district: 10,000 s (2.8 h, 10⁵ poses at 10 Hz).
     pub const DEFAULT_DWELL_S: f64 = 10_000.0;
 
+    /// The districts from the options of a front end: a side (metres) and, optionally, a time
+    /// in each (seconds, default [`DEFAULT_DWELL_S`](Self::DEFAULT_DWELL_S)); no side, no
+    /// districts. The values themselves are checked by [`UrbanDrive::generate`].
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] (`district_dwell_s`) for a time without a side.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::Districts;
+    /// assert_eq!(Districts::from_options(None, None)?, None);
+    /// let d = Districts::from_options(Some(1000.0), None)?.unwrap();
+    /// assert_eq!((d.side_m, d.dwell_s), (1000.0, Districts::DEFAULT_DWELL_S));
+    /// assert!(Districts::from_options(None, Some(600.0)).is_err());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn from_options(side_m: Option<f64>, dwell_s: Option<f64>) -> Result<Option<Self>> {
+        match (side_m, dwell_s) {
+            (Some(side_m), dwell_s) => Ok(Some(Self { side_m, dwell_s: dwell_s.unwrap_or(Self::DEFAULT_DWELL_S) })),
+            (None, Some(value)) => Err(Error::InvalidParameter {
+                name: "district_dwell_s",
+                value,
+                expected: "to come with district_m (the side of the districts)",
+            }),
+            (None, None) => Ok(None),
+        }
+    }
+
     /// The nodes (inclusive ranges along x and y) of the district the drive works at time
     /// `t_s`, in a city of `blocks` blocks a side.
     fn area(&self, t_s: f64, blocks: i64, block_m: f64) -> [[i64; 2]; 2] {
@@ -144,6 +172,10 @@ impl SyntheticDrive {
 }
 
 impl UrbanDrive {
+    /// The γ of the paper's experiment on this drive, metres: the threshold of the demos (the
+    /// default drive then has about the paper's 490 loop components).
+    pub const DEFAULT_GAMMA_M: f64 = 40.0;
+
     /// Generates the drive. Deterministic in the parameters (ChaCha8 seeded by `seed`).
     ///
     /// # Errors

@@ -28,6 +28,30 @@ pub struct Trajectory {
     cell_widths_s: Vec<f64>,
 }
 
+pub(crate) mod sealed {
+    /// Implemented by the types whose timestamps are known to be valid.
+    pub trait Sealed {}
+}
+
+/// Something that carries the timestamps of a trajectory's poses: a [`Trajectory`], or the
+/// [`Loops`](crate::Loops) found on one. Detections given by times are placed on its poses,
+/// detections given by pose indices take their times from it, and a
+/// [`PlaneGrid`](crate::PlaneGrid) picks its poses.
+///
+/// Sealed: the timestamps are known to be finite, strictly increasing and at least two.
+pub trait Timeline: sealed::Sealed {
+    /// Timestamps of the poses, seconds, strictly increasing.
+    fn pose_times_s(&self) -> &[f64];
+}
+
+impl sealed::Sealed for Trajectory {}
+
+impl Timeline for Trajectory {
+    fn pose_times_s(&self) -> &[f64] {
+        self.timestamps_s()
+    }
+}
+
 /// The largest number of poses the engine indexes (it stores columns as `u32`).
 pub const MAX_POSES: usize = u32::MAX as usize - 1;
 
@@ -120,6 +144,37 @@ impl Trajectory {
         self.timestamps_s[self.len() - 1] - self.timestamps_s[0]
     }
 
+    /// The pose nearest each time (seconds, on the clock of the timestamps): the pose whose
+    /// time cell holds it, ties to the earlier pose. O(times · log n).
+    ///
+    /// # Errors
+    /// [`Error::TimeOutsideSpan`] for a time before the first or after the last timestamp (or
+    /// NaN), naming its index in `times_s`.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::Trajectory;
+    /// let traj = Trajectory::from_points(vec![0.0, 1.0, 3.0], &[[0.0], [1.0], [2.0]])?;
+    /// assert_eq!(traj.nearest_poses(&[0.4, 0.5, 2.1, 3.0])?, [0, 0, 2, 2]);
+    /// assert!(traj.nearest_poses(&[3.5]).is_err());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn nearest_poses(&self, times_s: &[f64]) -> Result<Vec<usize>> {
+        let times = &self.timestamps_s;
+        times_s
+            .iter()
+            .enumerate()
+            .map(|(index, &t)| {
+                nearest_pose(times, t).ok_or(Error::TimeOutsideSpan {
+                    index,
+                    time_s: t,
+                    start_s: times[0],
+                    end_s: times[times.len() - 1],
+                })
+            })
+            .collect()
+    }
+
     /// A copy whose points are `f(point)`: same timestamps, new dimension.
     ///
     /// # Errors
@@ -145,6 +200,16 @@ fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// The pose whose time cell holds `t` (the nearest timestamp, ties to the earlier one), `None`
+/// outside `[times[0], times[n − 1]]` or for NaN. O(log n).
+pub(crate) fn nearest_pose(times: &[f64], t: f64) -> Option<usize> {
+    if !(t >= times[0] && t <= times[times.len() - 1]) {
+        return None;
+    }
+    let k = times.partition_point(|&x| x < t);
+    Some(if k == 0 || t - times[k - 1] > times[k] - t { k } else { k - 1 })
 }
 
 /// The one time-weight rule: cell `i` is `[m_{i−1}, m_i]`, midpoints between samples, clipped to

@@ -15,7 +15,10 @@ use crate::error::{Failure, invalid_parameter, value_error};
 use crate::py_loops::Loops;
 use crate::py_metric::MetricArg;
 use crate::py_trajectory::Trajectory;
-use loops_core::{BaselineParams, Metric, MetricSpec, SampleSize, Sampler, SamplerKind, Timeline};
+use loops_core::{
+    BaselineParams, Cartographer, HdlGraphSlam, LioSam, Metric, MetricSpec, SampleSize, Sampler, SamplerKind, TimeGap,
+    Timeline,
+};
 
 // ---------------------------------------------------------------------------------------------
 // Conversions.
@@ -629,14 +632,18 @@ pub(crate) fn sample(
     let size = sample_size(rate, budget)?;
     let d = BaselineParams::default();
     let baseline = BaselineParams {
-        lio_sam_keyframe_step: lio_sam_keyframe_step.unwrap_or(d.lio_sam_keyframe_step),
-        lio_sam_period_s: lio_sam_period_s.unwrap_or(d.lio_sam_period_s),
-        lio_sam_min_age_s: lio_sam_min_age_s.unwrap_or(d.lio_sam_min_age_s),
-        hdl_keyframe_step: hdl_keyframe_step.unwrap_or(d.hdl_keyframe_step),
-        hdl_min_travel: hdl_min_travel.or(d.hdl_min_travel),
-        hdl_edge_spacing: hdl_edge_spacing.or(d.hdl_edge_spacing),
-        cartographer_min_gap_s: cartographer_min_gap_s.unwrap_or(d.cartographer_min_gap_s),
-        time_gap_s: time_gap_s.unwrap_or(d.time_gap_s),
+        lio_sam: LioSam {
+            keyframe_step: lio_sam_keyframe_step.unwrap_or(d.lio_sam.keyframe_step),
+            period_s: lio_sam_period_s.unwrap_or(d.lio_sam.period_s),
+            min_age_s: lio_sam_min_age_s.unwrap_or(d.lio_sam.min_age_s),
+        },
+        hdl_graph_slam: HdlGraphSlam {
+            keyframe_step: hdl_keyframe_step.unwrap_or(d.hdl_graph_slam.keyframe_step),
+            min_travel: hdl_min_travel.or(d.hdl_graph_slam.min_travel),
+            edge_spacing: hdl_edge_spacing.or(d.hdl_graph_slam.edge_spacing),
+        },
+        cartographer: Cartographer { min_gap_s: cartographer_min_gap_s.unwrap_or(d.cartographer.min_gap_s) },
+        time_gap: TimeGap { gap_s: time_gap_s.unwrap_or(d.time_gap.gap_s) },
     };
     let spec = Sampler { kind, size, seed, baseline, skip_trivial };
     if let Ok(clusters) = source.cast::<DetectionClusters>() {

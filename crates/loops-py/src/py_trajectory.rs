@@ -365,20 +365,8 @@ pub(crate) fn urban_drive(
     se3: bool,
 ) -> PyResult<Trajectory> {
     let d = loops_core::UrbanDrive::default();
-    let districts = match (district_m, district_dwell_s) {
-        (Some(side_m), dwell_s) => {
-            Some(loops_core::Districts { side_m, dwell_s: dwell_s.unwrap_or(loops_core::Districts::DEFAULT_DWELL_S) })
-        }
-        (None, Some(value)) => {
-            let error = loops_core::Error::InvalidParameter {
-                name: "district_dwell_s",
-                value,
-                expected: "to come with district_m (the side of the districts)",
-            };
-            return Err(Failure::Core(error).into());
-        }
-        (None, None) => None,
-    };
+    let districts =
+        loops_core::Districts::from_options(district_m, district_dwell_s).map_err(|e| PyErr::from(Failure::Core(e)))?;
     let spec = loops_core::UrbanDrive {
         duration_s: duration_s.unwrap_or(d.duration_s),
         rate_hz: rate_hz.unwrap_or(d.rate_hz),

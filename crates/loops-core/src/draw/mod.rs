@@ -1,0 +1,174 @@
+//! Draws: how many to take ([`SampleSize`]), the warnings a budget can give, uniform draws of
+//! item numbers, and the pairs of S_γ numbered over their runs (`PairSpace`) so that uniform
+//! draws of pairs never list them. Shared by the drawn detections, the samplers and the
+//! baselines.
+
+mod pair_space;
+mod quota;
+
+use std::fmt;
+
+use rand::{Rng, RngExt};
+
+use crate::error::{Error, Result};
+
+pub(crate) use pair_space::PairSpace;
+pub(crate) use quota::group_quotas;
+
+/// How many samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SampleSize {
+    /// The sampler's own rate: c per group (σ_1), r per group per trajectory point (σ_ρ), the
+    /// probability of keeping each detection or pair (σ_α, baselines; in (0, 1]). σ_1 and σ_ρ
+    /// round c and r·rows randomly (keeping the expectation) and keep at least one per group.
+    Rate(f64),
+    /// Exactly this many samples (fewer only when fewer exist, with a warning). σ_1 and σ_ρ
+    /// scale c or r to fit, keeping at least one per group whenever the budget allows it.
+    Budget(usize),
+}
+
+impl SampleSize {
+    /// The budget used when neither a rate nor a budget is given (command-line defaults): enough
+    /// for at least one sample per component of a few hours of driving.
+    pub const DEFAULT_BUDGET: usize = 1_000;
+
+    /// The size from an optional rate or budget: at most one of them, and
+    /// [`Budget`](Self::Budget)`(`[`DEFAULT_BUDGET`](Self::DEFAULT_BUDGET)`)` without either.
+    ///
+    /// # Errors
+    /// [`Error::SampleSizeChoice`] for both.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::SampleSize;
+    /// assert_eq!(SampleSize::or_default(None, None)?, SampleSize::Budget(SampleSize::DEFAULT_BUDGET));
+    /// assert_eq!(SampleSize::or_default(Some(0.5), None)?, SampleSize::Rate(0.5));
+    /// assert!(SampleSize::or_default(Some(0.5), Some(10)).is_err());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn or_default(rate: Option<f64>, budget: Option<usize>) -> Result<Self> {
+        match (rate, budget) {
+            (None, None) => Ok(Self::Budget(Self::DEFAULT_BUDGET)),
+            _ => Self::from_rate_or_budget(rate, budget),
+        }
+    }
+
+    /// The size from a rate or a budget, given as options (as a command line or keyword
+    /// arguments have them): exactly one must be given.
+    ///
+    /// # Errors
+    /// [`Error::SampleSizeChoice`] for both or neither.
+    pub fn from_rate_or_budget(rate: Option<f64>, budget: Option<usize>) -> Result<Self> {
+        match (rate, budget) {
+            (Some(rate), None) => Ok(Self::Rate(rate)),
+            (None, Some(budget)) => Ok(Self::Budget(budget)),
+            _ => Err(Error::SampleSizeChoice { rate, budget }),
+        }
+    }
+}
+
+/// Something to know about a sample that is still valid.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SampleWarning {
+    /// A budget smaller than the number of groups: some groups get no sample, so P1 cannot
+    /// hold. Groups got one sample each, chosen with probability ∝ their weight.
+    BudgetBelowGroups {
+        /// The budget.
+        budget: usize,
+        /// The number of groups.
+        groups: usize,
+    },
+    /// Fewer candidates than the budget: all of them were returned.
+    BudgetAboveAvailable {
+        /// The budget.
+        budget: usize,
+        /// The number of candidates.
+        available: u64,
+    },
+}
+
+impl fmt::Display for SampleWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::BudgetBelowGroups { budget, groups } => write!(
+                f,
+                "budget {budget} is smaller than the {groups} groups: {} groups get no sample (P1 cannot hold)",
+                groups - budget
+            ),
+            Self::BudgetAboveAvailable { budget, available } => {
+                write!(f, "budget {budget} is more than the {available} candidates: all of them were returned")
+            }
+        }
+    }
+}
+
+/// Numbers in 0..len, each independently with probability `rate` ∈ (0, 1], increasing.
+pub(crate) fn bernoulli_indices<R: Rng + ?Sized>(len: u64, rate: f64, rng: &mut R) -> Vec<u64> {
+    if rate >= 1.0 {
+        return (0..len).collect();
+    }
+    let log_keep = (-rate).ln_1p(); // ln(1 − p) < 0
+    let mut skip = || {
+        let u: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+        let gap = (u.ln() / log_keep).floor();
+        if gap < 1e18 { gap as u64 } else { u64::MAX / 2 }
+    };
+    let mut out = Vec::with_capacity((len as f64 * rate * 1.1) as usize + 16);
+    let mut k = skip();
+    while k < len {
+        out.push(k);
+        k = k.saturating_add(1 + skip());
+    }
+    out
+}
+
+/// `count ≤ len` distinct numbers in 0..len, uniformly, increasing.
+pub(crate) fn choose_indices<R: Rng + ?Sized>(len: u64, count: u64, rng: &mut R) -> Vec<u64> {
+    debug_assert!(count <= len);
+    if count == len {
+        return (0..len).collect();
+    }
+    let mut out: Vec<u64> =
+        rand::seq::index::sample(rng, len as usize, count as usize).into_iter().map(|k| k as u64).collect();
+    out.sort_unstable();
+    out
+}
+
+/// Numbers of the items kept out of `len` (σ_α): each with probability p, or exactly `budget`.
+pub(crate) fn draw_numbers<R: Rng + ?Sized>(
+    len: u64,
+    size: SampleSize,
+    rng: &mut R,
+    warnings: &mut Vec<SampleWarning>,
+) -> Vec<u64> {
+    match size {
+        SampleSize::Rate(rate) => bernoulli_indices(len, rate, rng),
+        SampleSize::Budget(budget) => {
+            if budget as u64 > len {
+                warnings.push(SampleWarning::BudgetAboveAvailable { budget, available: len });
+            }
+            choose_indices(len, (budget as u64).min(len), rng)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    #[test]
+    fn bernoulli_rate_is_about_right() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let drawn = bernoulli_indices(1_000_000, 0.01, &mut rng);
+        assert!((9_500..10_500).contains(&drawn.len()), "{}", drawn.len());
+        assert!(drawn.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(bernoulli_indices(10, 1.0, &mut rng), (0..10).collect::<Vec<_>>());
+        let chosen = choose_indices(100, 30, &mut rng);
+        assert_eq!(chosen.len(), 30);
+        assert!(chosen.windows(2).all(|w| w[0] < w[1]) && chosen[29] < 100);
+    }
+}

@@ -1,0 +1,183 @@
+//! Samples per group: quotas proportional to weights, capped, rounded at random to integers
+//! that keep the expectation (σ_1 and σ_ρ).
+
+use rand::{Rng, RngExt};
+
+use super::{SampleSize, SampleWarning};
+
+/// Samples per group for σ_1 (`weights` all 1) and σ_ρ (`weights` = rows): quotas
+/// `q_g = clamp(s · w_g, lo, cap_g)`, rounded at random to integers with the same expectation.
+///
+/// Rate mode: s is the rate, lo = 1, each group rounded independently. Budget mode: s solves
+/// Σ q_g = B exactly (a sweep over the breakpoints of the piecewise linear sum), lo = 1 when
+/// B ≥ #groups (P1), else 0 with a warning; then systematic sampling of the fractional parts
+/// gives integers summing to exactly B (all caps when B exceeds them, with a warning).
+pub(crate) fn group_quotas<R: Rng + ?Sized>(
+    weights: &[f64],
+    caps: &[u64],
+    size: SampleSize,
+    rng: &mut R,
+    warnings: &mut Vec<SampleWarning>,
+) -> Vec<u64> {
+    let groups = weights.len();
+    match size {
+        SampleSize::Rate(rate) => weights
+            .iter()
+            .zip(caps)
+            .map(|(&w, &cap)| {
+                let q = (rate * w).clamp(1.0, cap as f64);
+                let floor = q.floor();
+                let up = rng.random::<f64>() < q - floor;
+                (floor as u64 + u64::from(up)).min(cap)
+            })
+            .collect(),
+        SampleSize::Budget(budget) => {
+            let available: u64 = caps.iter().sum();
+            if budget as u64 >= available {
+                if budget as u64 > available {
+                    warnings.push(SampleWarning::BudgetAboveAvailable { budget, available });
+                }
+                return caps.to_vec();
+            }
+            let lo = if budget >= groups {
+                1.0
+            } else {
+                warnings.push(SampleWarning::BudgetBelowGroups { budget, groups });
+                0.0
+            };
+            let scale = solve_scale(weights, caps, lo, budget as f64);
+            let quotas: Vec<f64> =
+                weights.iter().zip(caps).map(|(&w, &cap)| (scale * w).clamp(lo, cap as f64)).collect();
+            round_to_total(&quotas, caps, budget as u64, rng)
+        }
+    }
+}
+
+/// The s ≥ 0 with Σ clamp(s · w_g, lo, cap_g) = total, for lo · #groups ≤ total < Σ cap.
+fn solve_scale(weights: &[f64], caps: &[u64], lo: f64, total: f64) -> f64 {
+    // F(s) = constant + slope · s between breakpoints: a group enters the linear part at lo / w
+    // and leaves it (saturated) at cap / w.
+    let mut events: Vec<(f64, bool, usize)> = Vec::with_capacity(2 * weights.len());
+    for (g, (&w, &cap)) in weights.iter().zip(caps).enumerate() {
+        events.push((lo / w, true, g));
+        events.push((cap as f64 / w, false, g));
+    }
+    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+    let (mut constant, mut slope) = (lo * weights.len() as f64, 0.0);
+    let mut last = 0.0;
+    for (s, enter, g) in events {
+        let value = constant + slope * s;
+        if value >= total {
+            // F is continuous and non-decreasing: the crossing is in [last, s].
+            return if slope > 0.0 { ((total - constant) / slope).clamp(last, s) } else { last };
+        }
+        if enter {
+            constant -= lo;
+            slope += weights[g];
+        } else {
+            constant += caps[g] as f64;
+            slope -= weights[g];
+        }
+        last = s;
+    }
+    last
+}
+
+/// Integers k_g ∈ [⌊q_g⌋, ⌈q_g⌉] ∩ [0, cap_g] with Σ k_g = total, k_g = ⌈q_g⌉ with probability
+/// about the fractional part (systematic sampling); Σ q_g ≈ total.
+fn round_to_total<R: Rng + ?Sized>(quotas: &[f64], caps: &[u64], total: u64, rng: &mut R) -> Vec<u64> {
+    let mut counts: Vec<u64> = quotas.iter().zip(caps).map(|(&q, &cap)| (q.floor() as u64).min(cap)).collect();
+    let assigned: u64 = counts.iter().sum();
+    let mut deficit = total.saturating_sub(assigned);
+    let fractions: Vec<f64> =
+        quotas.iter().zip(&counts).zip(caps).map(|((&q, &k), &cap)| if k < cap { q - k as f64 } else { 0.0 }).collect();
+    let sum: f64 = fractions.iter().sum();
+    if deficit > 0 && sum > 0.0 {
+        let step = sum / deficit as f64;
+        let mut point = rng.random::<f64>() * step;
+        let mut start = 0.0;
+        for (g, &fraction) in fractions.iter().enumerate() {
+            let end = start + fraction;
+            let mut hit = false;
+            while point < end && deficit > 0 {
+                hit = true;
+                point += step;
+            }
+            if hit {
+                counts[g] += 1;
+                deficit -= 1;
+            }
+            start = end;
+        }
+    }
+    // Rounding left something over: the largest remaining fractions, then any room left.
+    if deficit > 0 {
+        let mut open: Vec<usize> = (0..counts.len()).filter(|&g| counts[g] < caps[g]).collect();
+        open.sort_by(|&a, &b| {
+            (quotas[b] - counts[b] as f64).total_cmp(&(quotas[a] - counts[a] as f64)).then(a.cmp(&b))
+        });
+        for g in open.into_iter().cycle().take(4 * counts.len() + deficit as usize) {
+            if deficit == 0 {
+                break;
+            }
+            if counts[g] < caps[g] {
+                counts[g] += 1;
+                deficit -= 1;
+            }
+        }
+    }
+    debug_assert_eq!(counts.iter().sum::<u64>(), total);
+    counts
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    #[test]
+    fn budget_quotas_sum_exactly_and_cover() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let weights: Vec<f64> = (1..=50).map(|k| (k * k) as f64).collect();
+        let caps: Vec<u64> = (1..=50).map(|k| 3 * k as u64).collect();
+        for budget in [50, 51, 77, 400, 1000, 3824] {
+            let mut warnings = Vec::new();
+            let q = group_quotas(&weights, &caps, SampleSize::Budget(budget), &mut rng, &mut warnings);
+            assert_eq!(q.iter().sum::<u64>(), budget as u64);
+            assert!(q.iter().zip(&caps).all(|(&k, &cap)| k >= 1 && k <= cap), "{q:?}");
+            assert!(warnings.is_empty());
+        }
+        let mut warnings = Vec::new();
+        let q = group_quotas(&weights, &caps, SampleSize::Budget(20), &mut rng, &mut warnings);
+        assert_eq!(q.iter().sum::<u64>(), 20);
+        assert!(matches!(warnings[..], [SampleWarning::BudgetBelowGroups { budget: 20, groups: 50 }]));
+        let mut warnings = Vec::new();
+        let q = group_quotas(&weights, &caps, SampleSize::Budget(5000), &mut rng, &mut warnings);
+        assert_eq!(q, caps);
+        assert!(matches!(warnings[..], [SampleWarning::BudgetAboveAvailable { budget: 5000, available: 3825 }]));
+    }
+
+    #[test]
+    fn quotas_follow_weights() {
+        // Uncapped: proportional to the weights; randomised rounding keeps the expectation.
+        let weights = [1.0, 2.0, 3.5];
+        let caps = [1000, 1000, 1000];
+        let mut mean = [0.0; 3];
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..2000 {
+            let q = group_quotas(&weights, &caps, SampleSize::Budget(13), &mut rng, &mut Vec::new());
+            assert_eq!(q.iter().sum::<u64>(), 13);
+            for g in 0..3 {
+                mean[g] += q[g] as f64 / 2000.0;
+            }
+        }
+        for (g, expected) in [2.0, 4.0, 7.0].iter().enumerate() {
+            assert!((mean[g] - expected).abs() < 0.05, "{mean:?}");
+        }
+        // Rate mode: at least one, rounded at random.
+        let q = group_quotas(&[0.1, 10.0], &[5, 5], SampleSize::Rate(0.5), &mut rng, &mut Vec::new());
+        assert_eq!(q, [1, 5]);
+    }
+}

@@ -1,0 +1,146 @@
+//! The dispersed σ_ρ: a group's samples spread evenly over its rows, each the row's preferred
+//! item (its closest pair, or its best-scored detection).
+
+use std::collections::BTreeSet;
+
+use rand::{Rng, RngExt};
+
+use crate::draw::PairSpace;
+use crate::loops::Loops;
+use crate::metric::Metric;
+use crate::trajectory::Trajectory;
+
+/// Evenly spaced picks along a cluster: `q` positions stratified over its rows (distinct t,
+/// time order), each the best-scored detection of its row (the middle one without scores);
+/// beyond one per row, the rest evenly over the remaining detections.
+pub(super) fn disperse_detections<R: Rng + ?Sized>(
+    members: &[u32],
+    q: u64,
+    xs: &[f64],
+    scores: Option<&[f64]>,
+    rng: &mut R,
+) -> Vec<u32> {
+    let mut rows = vec![0usize];
+    rows.extend((1..members.len()).filter(|&p| xs[members[p] as usize] != xs[members[p - 1] as usize]));
+    rows.push(members.len());
+    let row_count = rows.len() - 1;
+    let preferred = |r: usize| -> usize {
+        let (a, b) = (rows[r], rows[r + 1]);
+        match scores {
+            Some(s) => {
+                (a..b).fold(a, |best, p| if s[members[p] as usize] > s[members[best] as usize] { p } else { best })
+            }
+            None => a + (b - a - 1) / 2,
+        }
+    };
+    let positions = spread(row_count, members.len(), q, preferred, rng);
+    positions.into_iter().map(|p| members[p as usize]).collect()
+}
+
+/// `q` of `total` items: stratified over `rows` rows (the `preferred` item of each picked row),
+/// and beyond one per row, the rest evenly spaced over the items not yet picked.
+fn spread<R: Rng + ?Sized>(
+    rows: usize,
+    total: usize,
+    q: u64,
+    preferred: impl Fn(usize) -> usize,
+    rng: &mut R,
+) -> Vec<u64> {
+    let q = q as usize;
+    let offset = rng.random::<f64>();
+    if q <= rows {
+        return (0..q)
+            .map(|k| {
+                let r = (((k as f64 + offset) * rows as f64 / q as f64) as usize).min(rows - 1);
+                preferred(r) as u64
+            })
+            .collect();
+    }
+    let mut chosen: BTreeSet<u64> = (0..rows).map(|r| preferred(r) as u64).collect();
+    let extra = q - rows;
+    for k in 0..extra {
+        let mut p = (((k as f64 + offset) * total as f64 / extra as f64) as usize).min(total - 1) as u64;
+        while chosen.contains(&p) {
+            p = (p + 1) % total as u64;
+        }
+        chosen.insert(p);
+    }
+    chosen.into_iter().collect()
+}
+
+/// In a run on the diagonal (whose closest pair is the pose itself): the closest column after
+/// the run's farthest point from x_i, i.e. where the path comes back along the same way (the
+/// last column when it never does).
+fn return_column<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, i: usize, start: u32, end: u32) -> u32 {
+    let x = traj.point(i);
+    let distances: Vec<f64> = (start..=end).map(|j| metric.distance(x, traj.point(j as usize))).collect();
+    let farthest = distances.iter().enumerate().fold(0, |best, (k, &d)| if d > distances[best] { k } else { best });
+    let back = distances[farthest..]
+        .iter()
+        .enumerate()
+        .fold(farthest, |best, (k, &d)| if d < distances[best] { farthest + k } else { best });
+    start + back as u32
+}
+
+/// The dispersed σ_ρ on one exact component: rows evenly spaced, each its closest pair.
+pub(super) fn disperse_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
+    space: &PairSpace,
+    q: u64,
+    traj: &Trajectory,
+    metric: &M,
+    loops: &Loops,
+    rng: &mut R,
+) -> Vec<[u32; 2]> {
+    let segments = space.segments();
+    let mut rows = vec![0usize];
+    rows.extend((1..segments.len()).filter(|&s| segments[s].row != segments[s - 1].row));
+    rows.push(segments.len());
+    let set = loops.sublevel_set();
+    let closest = set.closest_columns();
+    // The closest pair of a row of the component, as its number in `space`.
+    let mut numbers = Vec::with_capacity(segments.len() + 1);
+    numbers.push(0u64);
+    for segment in segments {
+        numbers.push(numbers[numbers.len() - 1] + (segment.end - segment.start) as u64 + 1);
+    }
+    let preferred = |r: usize| -> usize {
+        let mut best: Option<(f64, usize, u64)> = None;
+        for s in rows[r]..rows[r + 1] {
+            let segment = segments[s];
+            let i = segment.row as usize;
+            let column = match set.run_index(i, segment.start as usize) {
+                Some(run) if set.runs()[run].start as usize > i => closest[run],
+                _ => return_column(traj, metric, i, segment.start, segment.end),
+            };
+            let d = metric.distance(traj.point(i), traj.point(column as usize));
+            let number = numbers[s] + (column - segment.start) as u64;
+            if best.is_none_or(|(b, c, _)| (d, column as usize) < (b, c)) {
+                best = Some((d, column as usize, number));
+            }
+        }
+        best.map_or(numbers[rows[r]] as usize, |(_, _, number)| number as usize)
+    };
+    let total = space.len() as usize;
+    let mut picked = spread(rows.len() - 1, total, q, preferred, rng);
+    picked.sort_unstable();
+    space.pairs_at(&picked)
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    #[test]
+    fn spread_is_even() {
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let picks = spread(100, 100, 10, |r| r, &mut rng);
+        assert_eq!(picks.len(), 10);
+        assert!(picks.windows(2).all(|w| w[1] - w[0] == 10), "{picks:?}");
+        let picks = spread(3, 10, 6, |r| 3 * r, &mut rng);
+        assert_eq!(picks.len(), 6);
+        assert!([0, 3, 6].iter().all(|p| picks.contains(p)));
+    }
+}

@@ -1,0 +1,161 @@
+//! Sampling the exact loop components of S_γ, or running a baseline rule on the trajectory.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::disperse::disperse_pairs;
+use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
+use crate::baseline::baseline_pairs;
+use crate::draw::{PairSpace, draw_numbers, group_quotas};
+use crate::error::{Error, Result};
+use crate::loops::Loops;
+use crate::metric::Metric;
+use crate::spec::{MetricSpec, with_metric};
+use crate::trajectory::Trajectory;
+
+impl MetricSpec {
+    /// [`sample_loops`] under this metric.
+    ///
+    /// # Errors
+    /// As [`sample_loops`].
+    pub fn sample_loops(&self, traj: &Trajectory, loops: &Loops, sampler: &Sampler) -> Result<Samples> {
+        with_metric!(self, m => sample_loops(traj, m, loops, sampler))
+    }
+}
+
+/// Samples straight from the exact loop components of `loops` (beyond the paper: no detection
+/// step, so no component can be missed by clustering), or runs a baseline rule on the
+/// trajectory. A sample is a lattice pair (i, j), i < j, of S_γ (the diagonal is no loop); every
+/// sample carries its component and its distance.
+///
+/// Groups are the components with at least one such pair; "trajectory points" of a component
+/// (σ_ρ) are its rows i. Uniform picks within a component choose pair numbers over its runs
+/// (runs weighted by length, then a column); the dispersed σ_ρ takes evenly spaced rows and the
+/// closest pair of each (from the runs' closest columns; in a run on the diagonal, whose closest
+/// pair is the pose itself, the closest column after the run's farthest point: a return along
+/// the same way, or the run's last column). σ_α and the gap rules draw over the runs of all of
+/// S_γ. With [`Sampler::skip_trivial`], σ_1, σ_ρ and σ_α leave out the trivial components.
+/// Never a list of all pairs: memory O(runs + samples); time O(runs + samples · log runs),
+/// plus the baselines' neighbour searches.
+///
+/// # Errors
+/// [`Error::TrajectoryMismatch`] unless `loops` was found on `traj`; [`Error::InvalidParameter`]
+/// for a budget of 0, a rate out of range or a bad baseline parameter; [`Error::NotApplicable`]
+/// for `skip_trivial` with a baseline.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind, UrbanDrive, find_loops, sample_loops};
+/// let drive = UrbanDrive { duration_s: 900.0, ..UrbanDrive::default() }.generate()?;
+/// let loops = find_loops(&drive.trajectory, &Euclidean, 40.0)?;
+/// let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(200), 1);
+/// let samples = sample_loops(&drive.trajectory, &Euclidean, &loops, &sampler)?;
+/// assert_eq!(samples.len(), 200);
+/// let groups = samples.groups();
+/// let covered: std::collections::BTreeSet<_> = samples.rows().iter().map(|s| s.component).collect();
+/// assert_eq!(covered.len(), groups); // at least one sample per component (P1)
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn sample_loops<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    metric: &M,
+    loops: &Loops,
+    sampler: &Sampler,
+) -> Result<Samples> {
+    check_same_trajectory(traj, loops)?;
+    metric.check_dim(traj.dim())?;
+    let kind = sampler.kind;
+    sampler.size.validate(kind)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
+    let mut warnings = Vec::new();
+    sampler.check_applicable()?;
+    let components = loops.components();
+    let wanted = |c: usize| !(sampler.skip_trivial && components[c].trivial);
+    let (pairs, groups, available): (Vec<Picked>, usize, u64) = match (kind, kind.baseline(&sampler.baseline)) {
+        (_, Some(baseline)) => {
+            let (pairs, proposed, rule_warnings) =
+                baseline_pairs(&baseline, traj, metric, loops, sampler.size, &mut rng)?;
+            warnings.extend(rule_warnings);
+            (pairs.into_iter().map(|p| (p, None)).collect(), 0, proposed)
+        }
+        (SamplerKind::Alpha, None) => {
+            // The off-diagonal pairs (j > i) of the wanted components.
+            let mut space = PairSpace::default();
+            for run in loops.runs().filter(|run| wanted(run.component)) {
+                space.push(run.row, run.start, run.end, run.row + 1);
+            }
+            let numbers = draw_numbers(space.len(), sampler.size, &mut rng, &mut warnings);
+            (space.pairs_at(&numbers).into_iter().map(|p| (p, None)).collect(), 0, space.len())
+        }
+        (_, None) => {
+            let mut spaces = vec![PairSpace::default(); loops.components().len()];
+            for run in loops.runs().filter(|run| wanted(run.component)) {
+                spaces[run.component].push(run.row, run.start, run.end, run.row + 1);
+            }
+            let ids: Vec<usize> = (0..spaces.len()).filter(|&c| spaces[c].len() > 0).collect();
+            let spaces: Vec<PairSpace> = ids.iter().map(|&c| std::mem::take(&mut spaces[c])).collect();
+            let rows_of = |s: &PairSpace| 1 + s.segments().windows(2).filter(|w| w[0].row != w[1].row).count();
+            let weights: Vec<f64> = match kind {
+                SamplerKind::One => vec![1.0; spaces.len()],
+                _ => spaces.iter().map(|s| rows_of(s) as f64).collect(),
+            };
+            let caps: Vec<u64> = spaces.iter().map(PairSpace::len).collect();
+            let quotas = group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings);
+            let picks: Vec<Vec<Picked>> = spaces
+                .par_iter()
+                .zip(&quotas)
+                .zip(&ids)
+                .map(|((space, &q), &c)| {
+                    let mut rng = group_rng(sampler.seed, c);
+                    let pairs = if kind == SamplerKind::RhoDispersed {
+                        disperse_pairs(space, q, traj, metric, loops, &mut rng)
+                    } else {
+                        space.pairs_at(&space.choose(q, &mut rng))
+                    };
+                    pairs.into_iter().map(|p| (p, Some(c))).collect()
+                })
+                .collect();
+            (picks.concat(), ids.len(), caps.iter().sum())
+        }
+    };
+    let times = traj.timestamps_s();
+    let rows = pairs
+        .into_iter()
+        .map(|([i, j], component)| {
+            let (i, j) = (i as usize, j as usize);
+            Sample {
+                pair: Some([i, j]),
+                t_s: times[i],
+                t_prime_s: times[j],
+                component: component.or_else(|| loops.component_of(i, j)),
+                cluster: None,
+                detection: None,
+                distance: Some(metric.distance(traj.point(i), traj.point(j))),
+                score: None,
+                sampler: kind,
+            }
+        })
+        .collect();
+    let mut samples = Samples::new(kind, rows, groups, available, Some(traj.len()));
+    samples.warnings = warnings;
+    Ok(samples)
+}
+
+/// A pair (i, j) and its component, when the sampler knows it.
+type Picked = ([u32; 2], Option<usize>);
+
+/// Errors unless `loops` was found on a trajectory with the timestamps of `traj`.
+pub(crate) fn check_same_trajectory(traj: &Trajectory, loops: &Loops) -> Result<()> {
+    let (a, b) = (traj.timestamps_s(), loops.timestamps_s());
+    let differ = a.iter().zip(b).position(|(x, y)| x != y);
+    match differ {
+        None if a.len() == b.len() => Ok(()),
+        _ => Err(Error::TrajectoryMismatch {
+            what: "trajectory",
+            index: differ.unwrap_or(a.len().min(b.len())),
+            poses: a.len(),
+            loops_poses: b.len(),
+        }),
+    }
+}

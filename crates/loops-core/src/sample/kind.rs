@@ -1,0 +1,248 @@
+//! Which sampler, how many samples, the seed: [`SamplerKind`] and [`Sampler`].
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::baseline::{Baseline, BaselineParams};
+use crate::draw::SampleSize;
+use crate::error::{Error, Result};
+
+/// Which sampler (paper, Sec. 5; DESIGN §4.5). Parsed from and printed as its name.
+///
+/// | name | sampler |
+/// |---|---|
+/// | `one` | σ_1 ∈ O(1): c samples per group, uniform within it |
+/// | `rho` | σ_ρ ∈ O(ρ): r samples per group per trajectory point (row of the group), uniform within it |
+/// | `rho-dispersed` | σ_ρ's counts, spread evenly along each group (stratified over its rows), each the row's closest pair (best score for detections) |
+/// | `alpha` | σ_α ∈ O(α): uniform over all detections (or pairs of S_γ), no groups |
+/// | `lio-sam`, `hdl-graph-slam`, `cartographer`, `time-gap` | baselines of deployed systems, see [`BaselineParams`] |
+///
+/// A *group* is a detection cluster ([`sample_clusters`]) or an exact loop component
+/// ([`sample_loops`]).
+///
+/// # Examples
+/// ```
+/// use loops_core::SamplerKind;
+/// let kind: SamplerKind = "rho".parse()?;
+/// assert_eq!(kind, SamplerKind::Rho);
+/// assert_eq!(SamplerKind::LioSam.to_string(), "lio-sam");
+/// let err = "sigma".parse::<SamplerKind>().unwrap_err();
+/// assert!(err.to_string().contains("one, rho, rho-dispersed, alpha"));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum SamplerKind {
+    /// σ_1: a constant number per group.
+    One,
+    /// σ_ρ: a constant number per group per trajectory point. The default: it covers every
+    /// component (P1) and samples large ones more (P3) without oversampling them (P2).
+    #[default]
+    Rho,
+    /// σ_ρ spread along each group, preferring each row's closest pair.
+    RhoDispersed,
+    /// σ_α: uniform over detections (or over S_γ).
+    Alpha,
+    /// LIO-SAM: nearest keyframe within γ older than a time gap, searched at 1 Hz.
+    LioSam,
+    /// hdl_graph_slam: a keyframe within γ after a minimum travel, one per stretch of travel.
+    HdlGraphSlam,
+    /// Cartographer: a fixed random ratio of the pairs within γ.
+    Cartographer,
+    /// All pairs within γ beyond a time gap, randomly thinned.
+    TimeGap,
+}
+
+impl SamplerKind {
+    /// Every sampler, in the order of [`NAMES`](Self::NAMES).
+    pub const ALL: [Self; 8] = [
+        Self::One,
+        Self::Rho,
+        Self::RhoDispersed,
+        Self::Alpha,
+        Self::LioSam,
+        Self::HdlGraphSlam,
+        Self::Cartographer,
+        Self::TimeGap,
+    ];
+
+    /// The accepted names.
+    pub const NAMES: &'static str = "one, rho, rho-dispersed, alpha, lio-sam, hdl-graph-slam, cartographer, time-gap";
+
+    /// The samplers that work on detection clusters.
+    pub const CLUSTER_NAMES: &'static str = "one, rho, rho-dispersed, alpha";
+
+    /// The name, as parsed.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::One => "one",
+            Self::Rho => "rho",
+            Self::RhoDispersed => "rho-dispersed",
+            Self::Alpha => "alpha",
+            Self::LioSam => "lio-sam",
+            Self::HdlGraphSlam => "hdl-graph-slam",
+            Self::Cartographer => "cartographer",
+            Self::TimeGap => "time-gap",
+        }
+    }
+
+    /// The symbol of the sampler in the paper (σ_1, σ_ρ, σ_α), or the name of the system whose
+    /// rule a baseline follows: for figures and reports.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::SamplerKind;
+    /// assert_eq!(SamplerKind::Rho.symbol(), "σ_ρ");
+    /// assert_eq!(SamplerKind::LioSam.symbol(), "LIO-SAM");
+    /// ```
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Self::One => "σ_1",
+            Self::Rho => "σ_ρ",
+            Self::RhoDispersed => "σ_ρ dispersed",
+            Self::Alpha => "σ_α",
+            Self::LioSam => "LIO-SAM",
+            Self::HdlGraphSlam => "hdl_graph_slam",
+            Self::Cartographer => "Cartographer",
+            Self::TimeGap => "time gap",
+        }
+    }
+
+    /// Whether this is a baseline of a deployed system (it needs the trajectory).
+    pub fn is_baseline(self) -> bool {
+        self.baseline(&BaselineParams::default()).is_some()
+    }
+
+    /// The baseline rule this sampler runs, with its parameters taken from `params`; `None` for
+    /// σ_1, σ_ρ, the dispersed σ_ρ and σ_α.
+    pub fn baseline(self, params: &BaselineParams) -> Option<Baseline> {
+        match self {
+            Self::One | Self::Rho | Self::RhoDispersed | Self::Alpha => None,
+            Self::LioSam => Some(Baseline::LioSam(params.lio_sam)),
+            Self::HdlGraphSlam => Some(Baseline::HdlGraphSlam(params.hdl_graph_slam)),
+            Self::Cartographer => Some(Baseline::Cartographer(params.cartographer)),
+            Self::TimeGap => Some(Baseline::TimeGap(params.time_gap)),
+        }
+    }
+}
+
+impl fmt::Display for SamplerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SamplerKind {
+    type Err = Error;
+
+    fn from_str(name: &str) -> Result<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name).ok_or_else(|| Error::UnknownName {
+            kind: "sampler",
+            name: name.to_owned(),
+            expected: Self::NAMES,
+        })
+    }
+}
+
+impl SampleSize {
+    /// Checks the size for a sampler of this kind.
+    pub(crate) fn validate(self, kind: SamplerKind) -> Result<()> {
+        match self {
+            Self::Budget(0) => {
+                Err(Error::InvalidParameter { name: "budget", value: 0.0, expected: "at least 1 sample" })
+            }
+            Self::Budget(_) => Ok(()),
+            Self::Rate(rate) => {
+                let (ok, expected) = match kind {
+                    SamplerKind::One => (rate > 0.0, "a positive number of samples per group"),
+                    SamplerKind::Rho | SamplerKind::RhoDispersed => {
+                        (rate > 0.0, "a positive number of samples per group per trajectory point")
+                    }
+                    _ => (rate > 0.0 && rate <= 1.0, "a probability in (0, 1]"),
+                };
+                if ok && rate.is_finite() {
+                    Ok(())
+                } else {
+                    Err(Error::InvalidParameter { name: "rate", value: rate, expected })
+                }
+            }
+        }
+    }
+}
+
+/// A sampler: which one, how many, the seed, and the parameters of the baselines.
+///
+/// Seeded with ChaCha8: the same sampler on the same input gives the same samples on every
+/// machine and any number of threads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sampler {
+    /// Which sampler.
+    pub kind: SamplerKind,
+    /// How many samples.
+    pub size: SampleSize,
+    /// The seed.
+    pub seed: u64,
+    /// Parameters of the baselines (ignored by σ_1, σ_ρ, σ_α).
+    pub baseline: BaselineParams,
+    /// Leave out the trivial loop components ([`sample_loops`] with σ_1, σ_ρ and σ_α). A
+    /// trivial component holds the diagonal: its pairs are simple loops (the trajectory stayed
+    /// within γ between t and t′, e.g. the next poses, or a stop), which odometry already ties
+    /// together. σ_ρ on S_γ gives it a weight equal to all the rows of the drive, so it would
+    /// otherwise take a large share of the budget (about a third on the default drive) for
+    /// pairs a scan matcher does not need. Off by default: the paper's samplers cover all of
+    /// S_γ.
+    pub skip_trivial: bool,
+}
+
+impl Sampler {
+    /// The seed used when none is given (command-line defaults).
+    pub const DEFAULT_SEED: u64 = 0;
+
+    /// A sampler with the default baseline parameters.
+    pub fn new(kind: SamplerKind, size: SampleSize, seed: u64) -> Self {
+        Self { kind, size, seed, baseline: BaselineParams::default(), skip_trivial: false }
+    }
+
+    /// Checks that its options apply to its kind, before any input is seen: front ends call it
+    /// to refuse a bad combination up front; [`sample_loops`] calls it too.
+    ///
+    /// # Errors
+    /// [`Error::NotApplicable`] for [`Sampler::skip_trivial`] with a baseline, which keeps its
+    /// own candidate rule.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{SampleSize, Sampler, SamplerKind};
+    /// let rho = Sampler { skip_trivial: true, ..Sampler::new(SamplerKind::Rho, SampleSize::Budget(10), 0) };
+    /// assert!(rho.check_applicable().is_ok());
+    /// let lio_sam = Sampler { kind: SamplerKind::LioSam, ..rho };
+    /// assert!(lio_sam.check_applicable().is_err());
+    /// ```
+    pub fn check_applicable(&self) -> Result<()> {
+        if self.skip_trivial && self.kind.is_baseline() {
+            return Err(Error::NotApplicable {
+                option: "skip_trivial",
+                to: format!("the {} baseline", self.kind),
+                reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
+                         rho-dispersed or alpha",
+            });
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for kind in SamplerKind::ALL {
+            assert_eq!(kind.name().parse::<SamplerKind>().unwrap(), kind);
+        }
+        let err = "sigma_rho".parse::<SamplerKind>().unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "unknown sampler \"sigma_rho\": expected one of one, rho, rho-dispersed, alpha, lio-sam, hdl-graph-slam, cartographer, time-gap"
+        );
+    }
+}

@@ -1,0 +1,154 @@
+//! What a sampler returns: [`Sample`] rows and the [`Samples`] with what the sampler knew.
+
+use super::SamplerKind;
+use crate::detection::place_detection;
+use crate::draw::SampleWarning;
+use crate::error::{Error, Result};
+use crate::loops::Loops;
+use crate::metric::Metric;
+use crate::trajectory::Trajectory;
+
+/// One sampled loop: a candidate pair for the scan matcher.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Pose indices (i, j), i ≤ j, when known (always from [`sample_loops`]; from
+    /// [`sample_clusters`] when the detections are placed on a trajectory).
+    pub pair: Option<[usize; 2]>,
+    /// The earlier time, seconds (the detection's own time for detections).
+    pub t_s: f64,
+    /// The later time, seconds.
+    pub t_prime_s: f64,
+    /// The exact loop component holding (i, j), when known.
+    pub component: Option<usize>,
+    /// The detection cluster it was drawn from (detections only).
+    pub cluster: Option<usize>,
+    /// The index of the detection (detections only).
+    pub detection: Option<usize>,
+    /// δ(x_i, x_j) in the metric's unit, when measured.
+    pub distance: Option<f64>,
+    /// The detection's score, when it has one.
+    pub score: Option<f64>,
+    /// The sampler that chose it.
+    pub sampler: SamplerKind,
+}
+
+/// The samples a sampler chose, in order of (t, t′), with what it knew.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Samples {
+    sampler: SamplerKind,
+    rows: Vec<Sample>,
+    groups: usize,
+    available: u64,
+    poses: Option<usize>,
+    pub(super) warnings: Vec<SampleWarning>,
+}
+
+impl Samples {
+    /// The samples, ordered by (t, t′).
+    pub fn rows(&self) -> &[Sample] {
+        &self.rows
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether there are none (a baseline may find nothing).
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// The sampler.
+    pub fn sampler(&self) -> SamplerKind {
+        self.sampler
+    }
+
+    /// Number of groups sampled from (clusters or components with a pair to sample; 0 for σ_α
+    /// and the baselines, which do not group).
+    pub fn groups(&self) -> usize {
+        self.groups
+    }
+
+    /// Number of candidates the sampler chose from (detections, pairs, or the rule's pairs).
+    pub fn available(&self) -> u64 {
+        self.available
+    }
+
+    /// Number of poses of the trajectory the pairs index, when known.
+    pub fn poses(&self) -> Option<usize> {
+        self.poses
+    }
+
+    /// Warnings (budget below the number of groups, or above the candidates).
+    pub fn warnings(&self) -> &[SampleWarning] {
+        &self.warnings
+    }
+
+    /// Fills in pose pairs (placing times on the nearest poses where missing) and the exact
+    /// component of every sample. O(samples · log).
+    ///
+    /// # Errors
+    /// [`Error::TrajectoryMismatch`] when the samples index another trajectory;
+    /// [`Error::DetectionOutsideSpan`] for a time outside the loops' trajectory.
+    pub fn locate(&mut self, loops: &Loops) -> Result<()> {
+        let pairs = self.pairs_on(loops.timestamps_s())?;
+        for (row, pair) in self.rows.iter_mut().zip(pairs) {
+            row.pair = Some(pair);
+            row.component = loops.component_of(pair[0], pair[1]);
+        }
+        self.poses = Some(loops.len());
+        Ok(())
+    }
+
+    /// Fills in the distance δ(x_i, x_j) of every sample (placing times on the nearest poses
+    /// where pairs are missing). O(samples) distances.
+    ///
+    /// # Errors
+    /// As [`locate`](Self::locate), for `traj`; the metric's dimension error.
+    pub fn measure<M: Metric + ?Sized>(&mut self, traj: &Trajectory, metric: &M) -> Result<()> {
+        metric.check_dim(traj.dim())?;
+        let pairs = self.pairs_on(traj.timestamps_s())?;
+        for (row, pair) in self.rows.iter_mut().zip(pairs) {
+            row.pair = Some(pair);
+            row.distance = Some(metric.distance(traj.point(pair[0]), traj.point(pair[1])));
+        }
+        self.poses = Some(traj.len());
+        Ok(())
+    }
+
+    /// The pose pair of every sample on a trajectory with these timestamps.
+    pub(crate) fn pairs_on(&self, times: &[f64]) -> Result<Vec<[usize; 2]>> {
+        if let Some(poses) = self.poses
+            && poses != times.len()
+        {
+            return Err(Error::TrajectoryMismatch {
+                what: "samples",
+                index: poses.min(times.len()),
+                poses,
+                loops_poses: times.len(),
+            });
+        }
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(k, row)| match row.pair {
+                Some(pair) => Ok(pair),
+                None => Ok([place_detection(times, row.t_s, k)?, place_detection(times, row.t_prime_s, k)?]),
+            })
+            .collect()
+    }
+
+    pub(super) fn new(
+        sampler: SamplerKind,
+        mut rows: Vec<Sample>,
+        groups: usize,
+        available: u64,
+        poses: Option<usize>,
+    ) -> Self {
+        rows.sort_by(|a, b| {
+            a.t_s.total_cmp(&b.t_s).then(a.t_prime_s.total_cmp(&b.t_prime_s)).then(a.detection.cmp(&b.detection))
+        });
+        Self { sampler, rows, groups, available, poses, warnings: Vec::new() }
+    }
+}
