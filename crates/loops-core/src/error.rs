@@ -252,6 +252,34 @@ pub enum Error {
         /// Last timestamp of the trajectory, seconds.
         end_s: f64,
     },
+    /// A time window of the (t, t′) plane with no pose in it.
+    #[error("no pose with {axis} in [{start_s}, {end_s}] s (from the first pose)")]
+    EmptyWindow {
+        /// The axis: `t` or `t′`.
+        axis: &'static str,
+        /// Start of the window, seconds from the first pose.
+        start_s: f64,
+        /// End of the window, seconds from the first pose.
+        end_s: f64,
+    },
+    /// A [`PlaneGrid`](crate::PlaneGrid) used with a trajectory (or loops) other than its own.
+    #[error("the plane grid was made for {grid_poses} poses, not {poses}")]
+    PlaneGridMismatch {
+        /// Poses of the trajectory the grid was made for.
+        grid_poses: usize,
+        /// Poses of the trajectory given.
+        poses: usize,
+    },
+    /// An image whose number of values is not its width times its height.
+    #[error("{len} values do not make an image of {width} × {height} pixels")]
+    ImageSizeMismatch {
+        /// The number of values given.
+        len: usize,
+        /// Width, pixels.
+        width: usize,
+        /// Height, pixels.
+        height: usize,
+    },
     /// A pose index past the end of the trajectory.
     #[error("detection {index} refers to pose {pose}, but the trajectory has {poses} poses")]
     PoseIndexOutOfRange {

@@ -14,13 +14,18 @@
 //!   with [`MetricSpec`]. Validated pose constructors: [`Trajectory::se3`] and friends.
 //! - A seeded synthetic urban drive for demos and benchmarks: [`UrbanDrive`].
 //!
+//! - Figures' data on the (t, t′) plane: the pairwise distance π_ξ on a grid of poses for any
+//!   metric, the component of every pixel, the outlines ∂Ω and isocontours: [`PlaneGrid`],
+//!   [`distance_image`], [`Loops::label_image`], [`component_outlines`], [`isocontour`].
+//!
 //! What it does not do: read files (that is `loops-io`), talk to Python or a terminal.
 //!
 //! ## Module order
 //! The private modules follow the paper, and each uses only modules before it (no cycles):
 //! `trajectory` (ξ, time cells, [`Timeline`]) → `metric` (δ) → `manifold` and `pose` (metrics
 //! and points on manifolds) → `spec` ([`MetricSpec`]) → `sublevel` (S_γ, [`check_gamma`]) →
-//! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → `draw` ([`SampleSize`],
+//! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → `plane` (π_ξ and ∂Ω on a
+//! [`PlaneGrid`]) → `draw` ([`SampleSize`],
 //! uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph, [`check_epsilon_s`]) →
 //! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `synth`,
 //! `ball_tree` and `union_find` are helpers. Every public item is re-exported here.
@@ -54,6 +59,7 @@ mod loops;
 mod manifold;
 mod measure;
 mod metric;
+mod plane;
 mod pose;
 mod quality;
 mod sample;
@@ -76,6 +82,9 @@ pub use manifold::{
 };
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric};
+pub use plane::{
+    Border, PixelEdge, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments,
+};
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
 pub use quality::{MissedComponent, SampleQuality, sample_quality};
 pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};

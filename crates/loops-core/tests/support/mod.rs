@@ -291,7 +291,7 @@ pub fn sampled(n: usize, f: impl Fn(f64) -> [f64; 2]) -> Trajectory {
 // Dense reference
 // ---------------------------------------------------------------------------------------------
 
-const OUTSIDE: u32 = u32::MAX;
+pub const OUTSIDE: u32 = u32::MAX;
 
 /// S_γ as a full symmetric n × n matrix, every pair measured.
 pub struct DenseSet {
