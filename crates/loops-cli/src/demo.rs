@@ -22,9 +22,7 @@ pub(crate) struct DemoArgs {
     #[arg(long, default_value_t = UrbanDrive::default().seed)]
     seed: u64,
     /// The distance threshold γ, metres.
-    // TODO(core): the demo's γ belongs with the drive it suits (e.g. `UrbanDrive::DEMO_GAMMA_M`),
-    // so that Python's demo and this flag read one default.
-    #[arg(long, value_name = "GAMMA_M", default_value_t = 40.0)]
+    #[arg(long, value_name = "GAMMA_M", default_value_t = UrbanDrive::DEFAULT_GAMMA_M)]
     gamma: f64,
     /// Worker threads (default: one per core).
     #[arg(long)]
