@@ -55,6 +55,10 @@ pub fn write_atomically(
     }
     let name = path.file_name().ok_or_else(|| failed(io::Error::other("the path names no file")))?;
     let dir = path.parent().filter(|dir| !dir.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    // A missing or unreadable folder is reported with the operating system's own error (and
+    // errno, so Python raises FileNotFoundError): `tempfile` would wrap it with the temporary
+    // file's name.
+    std::fs::metadata(dir).map_err(failed)?;
     let prefix = format!(".{}.", name.to_string_lossy());
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(".tmp");
@@ -135,6 +139,18 @@ mod tests {
         for path in [dir.join("missing/out.txt"), dir.join("..")] {
             let error = write_atomically(&path, true, |file| file.write_all(b"x")).unwrap_err();
             assert!(matches!(error, WriteError::Write { .. }), "{path:?}: {error}");
+        }
+        // The operating system's error, naming the file asked for (not the temporary one).
+        let path = dir.join("missing/out.txt");
+        match write_atomically(&path, false, |file| file.write_all(b"x")).unwrap_err() {
+            WriteError::Write { path: named, error } => {
+                assert_eq!(
+                    (named, error.kind(), error.raw_os_error().is_some()),
+                    (path, io::ErrorKind::NotFound, true)
+                );
+                assert!(!error.to_string().contains(".tmp"), "{error}");
+            }
+            other => panic!("{other}"),
         }
         fs::remove_dir_all(&dir).unwrap();
     }

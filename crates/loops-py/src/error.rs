@@ -1,6 +1,9 @@
 //! The Python exception hierarchy and the one place core errors become Python exceptions.
 
-use pyo3::exceptions::{PyFileExistsError, PyIndexError, PyOSError, PyValueError};
+use pyo3::exceptions::{
+    PyFileExistsError, PyFileNotFoundError, PyIndexError, PyIsADirectoryError, PyNotADirectoryError, PyOSError,
+    PyPermissionError, PyValueError,
+};
 use pyo3::{PyErr, import_exception};
 
 // The hierarchy lives in Python (`inexact_loops/errors.py`) so that classes can also be
@@ -37,6 +40,24 @@ impl From<loops_io::WriteError> for Failure {
     }
 }
 
+/// `OSError` with the operating system's errno (Python then raises its subclass:
+/// `FileNotFoundError`, `PermissionError`, ...), or the subclass of the error's kind when a
+/// library error carries no errno.
+fn os_error(error: &std::io::Error, message: String) -> PyErr {
+    use std::io::ErrorKind;
+    if let Some(errno) = error.raw_os_error() {
+        return PyOSError::new_err((errno, message));
+    }
+    match error.kind() {
+        ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+        ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+        ErrorKind::AlreadyExists => PyFileExistsError::new_err(message),
+        ErrorKind::IsADirectory => PyIsADirectoryError::new_err(message),
+        ErrorKind::NotADirectory => PyNotADirectoryError::new_err(message),
+        _ => PyOSError::new_err(message),
+    }
+}
+
 impl From<Failure> for PyErr {
     fn from(failure: Failure) -> Self {
         match failure {
@@ -44,7 +65,7 @@ impl From<Failure> for PyErr {
             Failure::Io(error) => {
                 let message = error.to_string();
                 match *error {
-                    loops_io::IoError::Open { error, .. } => PyOSError::new_err((error.raw_os_error(), message)),
+                    loops_io::IoError::Open { error, .. } => os_error(&error, message),
                     loops_io::IoError::Trajectory { error, .. } => core_error(&error, message),
                     _ => LoopsIOError::new_err(message),
                 }
@@ -53,7 +74,7 @@ impl From<Failure> for PyErr {
                 let message = error.to_string();
                 match error {
                     loops_io::WriteError::Exists { .. } => PyFileExistsError::new_err(message),
-                    loops_io::WriteError::Write { error, .. } => PyOSError::new_err((error.raw_os_error(), message)),
+                    loops_io::WriteError::Write { error, .. } => os_error(&error, message),
                     _ => LoopsIOError::new_err(message),
                 }
             }
