@@ -1,6 +1,9 @@
-//! numpy arrays in and out.
+//! numpy arrays in and out: the one place the bindings turn Python arguments into Rust buffers
+//! and Rust results into numpy columns and `Table`s.
 
-use numpy::{PyArray1, PyArrayDescrMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArrayDescrMethods, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::{PyIndexError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -43,6 +46,55 @@ pub(crate) fn real_array(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> 
     Ok(Real { values, shape })
 }
 
+/// A 1-D array of real numbers.
+pub(crate) fn real_column(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
+    let array = real_array(py, obj, name)?;
+    if array.shape.len() != 1 {
+        return Err(value_error(format!("{name} must be 1-dimensional (n,), got shape {:?}", array.shape)));
+    }
+    Ok(array.values)
+}
+
+/// A 1-D array of pose indices (any integer dtype; an empty list too).
+///
+/// # Errors
+/// `TypeError` for a non-integer dtype, `ValueError` for a wrong shape, `IndexError` for a
+/// negative index.
+pub(crate) fn index_column(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<usize>> {
+    let numpy = py.import("numpy")?;
+    let array = numpy.call_method1("asarray", (obj,))?;
+    let untyped = array
+        .cast::<PyUntypedArray>()
+        .map_err(|_| PyTypeError::new_err(format!("{name} must be an array of pose indices")))?;
+    if untyped.ndim() != 1 {
+        return Err(value_error(format!("{name} must be 1-dimensional (n,), got shape {:?}", untyped.shape())));
+    }
+    if untyped.len() == 0 {
+        return Ok(Vec::new());
+    }
+    let kind = untyped.dtype().kind();
+    let as_dtype = |dtype: &str| numpy.call_method("asarray", (&array,), Some(&[("dtype", dtype)].into_py_dict(py)?));
+    match kind {
+        b'u' => {
+            let view: PyReadonlyArray1<'_, u64> = as_dtype("uint64")?.extract()?;
+            let values = view.as_array();
+            Ok(values.iter().map(|&v| usize::try_from(v).unwrap_or(usize::MAX)).collect())
+        }
+        b'i' => {
+            let view: PyReadonlyArray1<'_, i64> = as_dtype("int64")?.extract()?;
+            let values = view.as_array();
+            if let Some((k, v)) = values.iter().enumerate().find(|(_, v)| **v < 0) {
+                return Err(PyIndexError::new_err(format!("{name}[{k}] = {v} is not a pose index (negative)")));
+            }
+            Ok(values.iter().map(|&v| v as usize).collect())
+        }
+        _ => Err(PyTypeError::new_err(format!(
+            "{name} must hold pose indices (an integer dtype), got dtype {}",
+            untyped.dtype().str()?
+        ))),
+    }
+}
+
 /// Timestamps `(n,)` and points `(n,)` or `(n, d)` as flat buffers and a dimension.
 ///
 /// # Errors
@@ -53,10 +105,7 @@ pub(crate) fn timestamps_and_points(
     points: &Bound<'_, PyAny>,
     points_name: &str,
 ) -> PyResult<(Vec<f64>, Vec<f64>, usize)> {
-    let t = real_array(py, timestamps, "timestamps")?;
-    if t.shape.len() != 1 {
-        return Err(value_error(format!("timestamps must be 1-dimensional (n,), got shape {:?}", t.shape)));
-    }
+    let t = real_column(py, timestamps, "timestamps")?;
     let p = real_array(py, points, points_name)?;
     let dim = match p.shape.as_slice() {
         [_] => 1,
@@ -65,10 +114,10 @@ pub(crate) fn timestamps_and_points(
             return Err(value_error(format!("{points_name} must have shape (n,) or (n, d), got shape {shape:?}")));
         }
     };
-    if p.shape[0] != t.shape[0] {
-        return Err(value_error(format!("timestamps has {} rows but {points_name} has {}", t.shape[0], p.shape[0])));
+    if p.shape[0] != t.len() {
+        return Err(value_error(format!("timestamps has {} rows but {points_name} has {}", t.len(), p.shape[0])));
     }
-    Ok((t.values, p.values, dim))
+    Ok((t, p.values, dim))
 }
 
 /// Timestamps and points of exactly `D` coordinates each, as fixed-size rows.
@@ -126,6 +175,45 @@ pub(crate) fn to_numpy<'py, T: numpy::Element>(py: Python<'py>, values: Vec<T>) 
     PyArray1::from_vec(py, values)
 }
 
+/// An optional column as a numpy array, `None` when no row has a value.
+pub(crate) fn optional_column<'py, T: numpy::Element + Copy>(
+    py: Python<'py>,
+    values: impl Iterator<Item = Option<T>>,
+    missing: T,
+) -> Option<Bound<'py, PyArray1<T>>> {
+    let mut any = false;
+    let column: Vec<T> = values
+        .map(|v| {
+            any |= v.is_some();
+            v.unwrap_or(missing)
+        })
+        .collect();
+    any.then(|| to_numpy(py, column))
+}
+
+/// Ids as int64, −1 where there is none.
+pub(crate) fn id_column<'py>(
+    py: Python<'py>,
+    values: impl Iterator<Item = Option<usize>>,
+) -> Bound<'py, PyArray1<i64>> {
+    to_numpy(py, values.map(|v| v.map_or(-1, |v| v as i64)).collect())
+}
+
+/// A table column of `rows`, one value each, as int64 (ids, indices and counts).
+pub(crate) fn int64_column<'py, R>(py: Python<'py>, rows: &[R], value: impl Fn(&R) -> usize) -> Bound<'py, PyAny> {
+    to_numpy(py, rows.iter().map(|row| value(row) as i64).collect()).into_any()
+}
+
+/// A table column of `rows`, one value each, as float64.
+pub(crate) fn float64_column<'py, R>(py: Python<'py>, rows: &[R], value: impl Fn(&R) -> f64) -> Bound<'py, PyAny> {
+    to_numpy(py, rows.iter().map(value).collect()).into_any()
+}
+
+/// A table column of `rows`, one value each, as bool.
+pub(crate) fn bool_column<'py, R>(py: Python<'py>, rows: &[R], value: impl Fn(&R) -> bool) -> Bound<'py, PyAny> {
+    to_numpy(py, rows.iter().map(value).collect()).into_any()
+}
+
 /// The Python class of tabular results (`inexact_loops/table.py`: a `dict` of numpy columns with
 /// `to_pandas()`), imported once.
 static TABLE: PyOnceLock<Py<PyType>> = PyOnceLock::new();
@@ -140,4 +228,15 @@ pub(crate) fn table<'py>(
         table.set_item(name, column)?;
     }
     Ok(table)
+}
+
+/// A `pandas.DataFrame` of `columns` in the order given (columns that are `None` are left out).
+///
+/// # Errors
+/// `ImportError` when pandas is not installed.
+pub(crate) fn data_frame<'py>(
+    py: Python<'py>,
+    columns: impl IntoIterator<Item = Option<(&'static str, Bound<'py, PyAny>)>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    table(py, columns.into_iter().flatten())?.call_method0("to_pandas")
 }

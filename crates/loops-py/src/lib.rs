@@ -2,12 +2,23 @@
 //!
 //! Thin adapters only: convert numpy arrays, release the GIL, call `loops-core` / `loops-io`,
 //! map errors. No algorithm, validation rule or default of their own.
+//!
+//! One module per class, with the functions that return it, in the paper's order:
+//! `py_trajectory` (`Trajectory`, `urban_drive`, `read_trajectory`, `list_topics`), `py_loops`
+//! (`Loops`, `find_loops`), `py_detections` (`Detections`, `draw_detections`), `py_clusters`
+//! (`DetectionClusters`, `cluster_detections`), `py_samples` (`Samples`, `sample`) and
+//! `py_quality` (`SampleQuality`, `sample_quality`). Below them: `convert` (arguments to Rust
+//! buffers, results to numpy columns and tables), `py_metric` (metric arguments) and `error`
+//! (the one mapping of errors to exceptions).
 
 mod convert;
 mod error;
+mod py_clusters;
+mod py_detections;
 mod py_loops;
 mod py_metric;
-mod py_sample;
+mod py_quality;
+mod py_samples;
 mod py_trajectory;
 
 use pyo3::prelude::*;
@@ -37,13 +48,13 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_trajectory::urban_drive, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::read_trajectory, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::list_topics, module)?)?;
-    module.add_class::<py_sample::Detections>()?;
-    module.add_class::<py_sample::DetectionClusters>()?;
-    module.add_class::<py_sample::Samples>()?;
-    module.add_class::<py_sample::SampleQuality>()?;
-    module.add_function(wrap_pyfunction!(py_sample::draw_detections, module)?)?;
-    module.add_function(wrap_pyfunction!(py_sample::cluster_detections, module)?)?;
-    module.add_function(wrap_pyfunction!(py_sample::sample, module)?)?;
-    module.add_function(wrap_pyfunction!(py_sample::sample_quality, module)?)?;
+    module.add_class::<py_detections::Detections>()?;
+    module.add_class::<py_clusters::DetectionClusters>()?;
+    module.add_class::<py_samples::Samples>()?;
+    module.add_class::<py_quality::SampleQuality>()?;
+    module.add_function(wrap_pyfunction!(py_detections::draw_detections, module)?)?;
+    module.add_function(wrap_pyfunction!(py_clusters::cluster_detections, module)?)?;
+    module.add_function(wrap_pyfunction!(py_samples::sample, module)?)?;
+    module.add_function(wrap_pyfunction!(py_quality::sample_quality, module)?)?;
     Ok(())
 }

@@ -4,13 +4,12 @@ use std::sync::Arc;
 
 use pyo3::prelude::*;
 
-use crate::convert::{pose_index, table, to_numpy};
+use crate::convert::{bool_column, float64_column, int64_column, pose_index, table, to_numpy};
 use crate::detached;
 use crate::error::Failure;
+use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_trajectory::Trajectory;
-use loops_core::{Scale, Selection, Side};
-
-use crate::py_metric::MetricArg;
+use loops_core::{LabelledRun, Scale, Selection, Side};
 
 /// Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
 /// (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
@@ -48,20 +47,10 @@ pub(crate) fn find_loops(
     threads: Option<usize>,
 ) -> PyResult<Loops> {
     let traj = Arc::clone(&trajectory.inner);
-    let inner = match MetricArg::from_py(metric)? {
-        MetricArg::Spec(spec) => {
-            detached(py, move || Ok(loops_core::with_threads(threads, || spec.find_loops(&traj, gamma))??))?
-        }
-        MetricArg::Callable(callable) => {
-            let result = detached(py, || {
-                Ok(loops_core::with_threads(Some(1), || loops_core::find_loops(&traj, &callable, gamma))??)
-            });
-            if let Some(error) = callable.take_error() {
-                return Err(error);
-            }
-            result?
-        }
-    };
+    let inner = MetricArg::from_py(metric)?.run(py, threads, |metric| match metric {
+        MetricRef::Spec(spec) => spec.find_loops(&traj, gamma),
+        MetricRef::Callable(callable) => loops_core::find_loops(&traj, callable, gamma),
+    })?;
     Ok(Loops { inner: Arc::new(inner) })
 }
 
@@ -178,31 +167,26 @@ impl Loops {
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let cs = self.inner.components();
         let t = self.inner.timestamps_s();
-        let ints = |f: &dyn Fn(&loops_core::LoopComponent) -> usize| {
-            to_numpy(py, cs.iter().map(|c| f(c) as i64).collect()).into_any()
-        };
-        let floats =
-            |f: &dyn Fn(&loops_core::LoopComponent) -> f64| to_numpy(py, cs.iter().map(f).collect()).into_any();
         table(
             py,
             [
-                ("id", ints(&|c| c.id)),
-                ("trivial", to_numpy(py, cs.iter().map(|c| c.trivial).collect()).into_any()),
-                ("area_s2", floats(&|c| c.area_s2)),
-                ("pair_count", ints(&|c| c.pair_count as usize)),
-                ("run_count", ints(&|c| c.run_count)),
-                ("holes", ints(&|c| c.holes as usize)),
-                ("t_min_s", floats(&|c| t[c.i_range[0]])),
-                ("t_max_s", floats(&|c| t[c.i_range[1]])),
-                ("t_prime_min_s", floats(&|c| t[c.j_range[0]])),
-                ("t_prime_max_s", floats(&|c| t[c.j_range[1]])),
-                ("i_min", ints(&|c| c.i_range[0])),
-                ("i_max", ints(&|c| c.i_range[1])),
-                ("j_min", ints(&|c| c.j_range[0])),
-                ("j_max", ints(&|c| c.j_range[1])),
-                ("closest_i", ints(&|c| c.closest_pair[0])),
-                ("closest_j", ints(&|c| c.closest_pair[1])),
-                ("closest_distance", floats(&|c| c.closest_distance)),
+                ("id", int64_column(py, cs, |c| c.id)),
+                ("trivial", bool_column(py, cs, |c| c.trivial)),
+                ("area_s2", float64_column(py, cs, |c| c.area_s2)),
+                ("pair_count", int64_column(py, cs, |c| c.pair_count as usize)),
+                ("run_count", int64_column(py, cs, |c| c.run_count)),
+                ("holes", int64_column(py, cs, |c| c.holes as usize)),
+                ("t_min_s", float64_column(py, cs, |c| t[c.i_range[0]])),
+                ("t_max_s", float64_column(py, cs, |c| t[c.i_range[1]])),
+                ("t_prime_min_s", float64_column(py, cs, |c| t[c.j_range[0]])),
+                ("t_prime_max_s", float64_column(py, cs, |c| t[c.j_range[1]])),
+                ("i_min", int64_column(py, cs, |c| c.i_range[0])),
+                ("i_max", int64_column(py, cs, |c| c.i_range[1])),
+                ("j_min", int64_column(py, cs, |c| c.j_range[0])),
+                ("j_max", int64_column(py, cs, |c| c.j_range[1])),
+                ("closest_i", int64_column(py, cs, |c| c.closest_pair[0])),
+                ("closest_j", int64_column(py, cs, |c| c.closest_pair[1])),
+                ("closest_distance", float64_column(py, cs, |c| c.closest_distance)),
             ],
         )
     }
@@ -218,26 +202,14 @@ impl Loops {
     ///     >>> {name: column.tolist() for name, column in runs.items()}
     ///     {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
     fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let count = self.inner.sublevel_set().runs().len();
-        let (mut row, mut start, mut end, mut component) = (
-            Vec::with_capacity(count),
-            Vec::with_capacity(count),
-            Vec::with_capacity(count),
-            Vec::with_capacity(count),
-        );
-        for run in self.inner.runs() {
-            row.push(run.row as i64);
-            start.push(run.start as i64);
-            end.push(run.end as i64);
-            component.push(run.component as i64);
-        }
+        let runs: Vec<LabelledRun> = self.inner.runs().collect();
         table(
             py,
             [
-                ("row", to_numpy(py, row).into_any()),
-                ("start", to_numpy(py, start).into_any()),
-                ("end", to_numpy(py, end).into_any()),
-                ("component", to_numpy(py, component).into_any()),
+                ("row", int64_column(py, &runs, |run| run.row)),
+                ("start", int64_column(py, &runs, |run| run.start)),
+                ("end", int64_column(py, &runs, |run| run.end)),
+                ("component", int64_column(py, &runs, |run| run.component)),
             ],
         )
     }

@@ -8,6 +8,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
+use crate::detached;
 use crate::error::Failure;
 
 /// What `find_loops(metric=...)` was given.
@@ -47,6 +48,49 @@ impl MetricArg {
             Self::Spec(spec) => Ok(spec),
             Self::Callable(_) => {
                 Err(crate::error::value_error(format!("{function} takes a metric name or object, not a callable")))
+            }
+        }
+    }
+}
+
+/// The metric a job runs under, as [`MetricArg::run`] hands it over.
+pub(crate) enum MetricRef<'a> {
+    /// A core metric: jobs that have a `MetricSpec` method keep the engine's loops monomorphic.
+    Spec(&'a loops_core::MetricSpec),
+    Callable(&'a PyCallableMetric),
+}
+
+impl MetricRef<'_> {
+    /// The metric as a trait object (dispatched per distance).
+    pub(crate) fn as_metric(&self) -> &dyn loops_core::Metric {
+        match self {
+            Self::Spec(spec) => spec.as_metric(),
+            Self::Callable(callable) => *callable,
+        }
+    }
+}
+
+impl MetricArg {
+    /// Runs `f` under this metric without the GIL: a spec on `threads` threads (`None`: one
+    /// per core), a Python callable on one (it takes the GIL for every distance). An exception
+    /// the callable raised is the result, before any error of `f`.
+    pub(crate) fn run<T: Send>(
+        self,
+        py: Python<'_>,
+        threads: Option<usize>,
+        f: impl FnOnce(MetricRef<'_>) -> loops_core::Result<T> + Send,
+    ) -> PyResult<T> {
+        match self {
+            Self::Spec(spec) => {
+                detached(py, move || Ok(loops_core::with_threads(threads, || f(MetricRef::Spec(&spec)))??))
+            }
+            Self::Callable(callable) => {
+                let result =
+                    detached(py, || Ok(loops_core::with_threads(Some(1), || f(MetricRef::Callable(&callable)))??));
+                if let Some(error) = callable.take_error() {
+                    return Err(error);
+                }
+                result
             }
         }
     }
