@@ -132,7 +132,9 @@ def test_report_renders_in_chromium(report: Path) -> None:
         expected = list(csv.DictReader(f))
     assert len(page["rows"]) == len(expected) > 1
     header = page["header"]
-    column = {name: header.index(name) for name in ("id", "trivial", "area_s2", "pair_count", "holes")}
+    column = {
+        name: header.index(name) for name in ("id", "trivial", "area_s2", "pair_count", "holes")
+    }
     t0 = json.loads((report / "summary.json").read_text())["t0_s"]
     for row, want in zip(page["rows"], expected, strict=True):
         assert int(row[column["id"]]) == int(want["id"])

@@ -63,7 +63,8 @@ def test_kitti00_labelled_pairs_are_non_trivial_loops(kitti00, check_dense):
     print("  id trivial   area_s2   pairs  i_min..i_max   j_min..j_max  holes  labelled")
     for c in table["id"]:
         print(
-            f"  {c:2d} {bool(trivial[c])!s:5} {table['area_s2'][c]:9.3f} {table['pair_count'][c]:7d}"
+            f"  {c:2d} {bool(trivial[c])!s:5} {table['area_s2'][c]:9.3f}"
+            f" {table['pair_count'][c]:7d}"
             f"  {table['i_min'][c]:5d}..{table['i_max'][c]:<5d}"
             f"  {table['j_min'][c]:5d}..{table['j_max'][c]:<5d} {table['holes'][c]:5d}"
             f"  {int((component == c).sum()):8d}"
