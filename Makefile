@@ -2,7 +2,7 @@
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 
-.PHONY: demo test test-rust test-python python lint bench compare fmt
+.PHONY: demo test test-rust test-python python lint bench compare fmt stubs
 
 ## Build the CLI and run it on the built-in 2.1 h urban drive; then a batch over three
 ## synthetic MCAP logs, with reports in demo/results/index.html.
@@ -40,6 +40,11 @@ lint:
 fmt:
 	cargo fmt --all
 	$(PYTHON) -m ruff format python tests benches
+
+## Copy the compiled module's docstrings into python/inexact_loops/_core.pyi (the stub IDEs
+## show); tests/python/test_stubs.py fails until they are equal.
+stubs: python
+	$(PYTHON) tests/stubs.py
 
 ## Criterion benchmarks (Rust).
 bench:

@@ -1,4 +1,8 @@
-"""Type stubs of the compiled module ``inexact_loops._core``."""
+"""Type stubs of the compiled module ``inexact_loops._core``.
+
+The docstrings are the bindings', copied by ``python tests/stubs.py`` (``make stubs``): edit
+them in ``crates/loops-py``, not here.
+"""
 
 from collections.abc import Callable
 from os import PathLike
@@ -62,7 +66,26 @@ _MetricArg = (
 
 @final
 class Trajectory:
-    """A sampled trajectory: strictly increasing timestamps (seconds) and one point each."""
+    """A sampled trajectory: strictly increasing timestamps (seconds) and one point per timestamp.
+
+    Args:
+        timestamps: shape ``(n,)``, seconds, strictly increasing, finite.
+        positions: shape ``(n, d)`` (or ``(n,)`` for d = 1), finite; any real dtype and any memory
+            order (C, Fortran, strided) is read correctly.
+
+    Raises:
+        InvalidTrajectoryError: NaN or infinite values, unsorted or duplicate timestamps, fewer
+            than 2 poses; the message names the first bad index.
+        ValueError: wrong shapes. TypeError: non-numeric dtypes.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> traj = il.Trajectory(np.array([0.0, 1.0, 3.0]), np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]))
+        >>> len(traj), traj.dim
+        (3, 2)
+        >>> traj.cell_widths
+        array([0.5, 1.5, 1. ])
+    """
 
     def __new__(cls, timestamps: npt.ArrayLike, positions: npt.ArrayLike) -> Trajectory: ...
     def __len__(self) -> int: ...
@@ -77,7 +100,9 @@ class Trajectory:
         """Points, shape ``(n, d)`` (a copy)."""
     @property
     def cell_widths(self) -> npt.NDArray[np.float64]:
-        """Time-cell widths w_i, seconds, shape ``(n,)``; they sum to ``span_s``."""
+        """Time-cell widths w_i, seconds, shape ``(n,)``: sample i stands for the cell between the
+        midpoints to its neighbours (half cells at the ends); they sum to ``span_s``.
+        """
     @property
     def span_s(self) -> float:
         """Last minus first timestamp, seconds."""
@@ -89,7 +114,20 @@ class Trajectory:
         *,
         quaternion_tolerance: float | None = None,
     ) -> Trajectory:
-        """SE(3) poses: positions (n, 3) and quaternions (n, 4) in x, y, z, w order."""
+        """SE(3) poses, for the ``se3`` / ``se3_rotation`` metrics: positions ``(n, 3)`` and
+        orientations as quaternions ``(n, 4)`` in **x, y, z, w** order (the ROS and
+        ``scipy.spatial.transform.Rotation.as_quat()`` order). Quaternions within
+        ``quaternion_tolerance`` (default 1e-6) of unit length are normalised; others (zero
+        included) raise, naming the pose. Files that print few decimals need a looser tolerance
+        (:func:`read_trajectory` uses 1e-3).
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> q = np.array([[0, 0, 0, 1.0], [0, 0, 1.0, 0]])
+            >>> traj = il.Trajectory.se3(np.array([0.0, 1.0]), np.zeros((2, 3)), q)
+            >>> traj.positions.shape
+            (2, 7)
+        """
     @staticmethod
     def so3(
         timestamps: npt.ArrayLike,
@@ -97,35 +135,54 @@ class Trajectory:
         *,
         quaternion_tolerance: float | None = None,
     ) -> Trajectory:
-        """Rotations: quaternions (n, 4) in x, y, z, w order."""
+        """Rotations, for the ``so3`` metric: quaternions ``(n, 4)`` in x, y, z, w order, normalised
+        as in :meth:`se3`.
+        """
     @staticmethod
     def so3_from_rotation_vectors(
         timestamps: npt.ArrayLike, rotation_vectors: npt.ArrayLike
     ) -> Trajectory:
-        """Rotations from rotation vectors (n, 3), radians."""
+        """Rotations, for the ``so3`` metric, from rotation vectors ``(n, 3)`` (axis × angle,
+        radians; ``Rotation.as_rotvec()``).
+        """
     @staticmethod
     def se2(timestamps: npt.ArrayLike, poses_xy_theta: npt.ArrayLike) -> Trajectory:
-        """Planar poses (n, 3): x, y, heading (radians)."""
+        """Planar poses, for the ``se2`` metric: ``(n, 3)`` rows of x, y (metres) and heading θ
+        (radians, wrapped to (−π, π]).
+        """
     @staticmethod
     def torus(timestamps: npt.ArrayLike, angles_rad: npt.ArrayLike) -> Trajectory:
-        """Points on a torus: angles (n, k), radians."""
+        """Points on a torus S¹ × … × S¹, for the ``torus`` metric: angles ``(n, k)`` in radians
+        (wrapped to (−π, π]).
+        """
     @staticmethod
     def sphere(timestamps: npt.ArrayLike, vectors: npt.ArrayLike) -> Trajectory:
-        """Points on the sphere: non-zero vectors (n, 3), normalised."""
+        """Points on the sphere S², for the ``sphere`` metric: non-zero vectors ``(n, 3)``,
+        normalised.
+        """
     @staticmethod
     def sphere_from_lat_lon(timestamps: npt.ArrayLike, lat_lon_deg: npt.ArrayLike) -> Trajectory:
-        """Points on the sphere from latitude and longitude (n, 2), degrees."""
+        """Points on the sphere S², for the ``sphere`` metric, from ``(n, 2)`` latitude and
+        longitude in degrees.
+        """
     @staticmethod
     def gnss(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
-        """GNSS fixes (n, 3): latitude, longitude (degrees), height (metres)."""
+        """GNSS fixes, for the ``haversine`` metric: ``(n, 3)`` latitude (degrees, within ±90),
+        longitude (degrees) and height (metres).
+        """
     @staticmethod
     def gnss_ecef(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
-        """GNSS fixes as ECEF positions relative to the first fix, metres."""
+        """GNSS fixes as WGS 84 Earth-centred positions relative to the first fix (metres), for the
+        ``euclidean`` metric; input as in :meth:`gnss`.
+        """
     @staticmethod
     def descriptors(
         timestamps: npt.ArrayLike, descriptors: npt.ArrayLike, *, normalize: bool = True
     ) -> Trajectory:
-        """Descriptor vectors (n, d), normalised for the angular metric."""
+        """Descriptor vectors (place recognition) ``(n, d)``: normalised to unit length for the
+        ``angular`` metric when ``normalize``, kept as given (for ``euclidean``) otherwise. A
+        list of rows of unequal length raises ``ValueError`` naming the row.
+        """
     @staticmethod
     def from_evo(
         trajectory: _EvoTrajectory,
@@ -133,16 +190,55 @@ class Trajectory:
         metric: str | _MetricLike | None = None,
         axes: tuple[int, int] | None = None,
     ) -> Trajectory:
-        """A trajectory from an evo ``PoseTrajectory3D`` (quaternions w first), for ``metric``."""
+        """A trajectory from an `evo <https://github.com/MichaelGrupp/evo>`_ ``PoseTrajectory3D``
+        (or any object with its attributes ``timestamps`` ``(n,)`` seconds, ``positions_xyz``
+        ``(n, 3)`` and ``orientations_quat_wxyz`` ``(n, 4)``, quaternions **w first**, as evo
+        stores them). evo itself is not imported.
+
+        What is built follows ``metric`` exactly as in :func:`read_trajectory`: positions
+        (x, y, z) for Euclidean (the default), or the plane ``axes`` of them; positions and
+        orientations for ``se3`` / ``se3_rotation`` (as :meth:`se3`); orientations for ``so3``;
+        x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are normalised.
+
+        Args:
+            trajectory: an ``evo.core.trajectory.PoseTrajectory3D``.
+            metric: the metric the trajectory is for, a name or :mod:`inexact_loops.metrics`
+                object (as in :func:`find_loops`); ``None`` is Euclidean.
+            axes: with the Euclidean metric, keep only these position axes, e.g. ``(0, 1)``.
+
+        Raises:
+            TypeError: ``trajectory`` lacks one of the attributes (the message names them all,
+                e.g. ``timestamps`` for an evo ``PosePath3D``), or holds non-numeric values.
+            ValueError: arrays of the wrong shape (named by attribute).
+            InvalidTrajectoryError: NaN, unsorted timestamps, a quaternion far from unit length,
+                naming the pose.
+            InvalidParameterError: an unknown metric, or one whose points are not poses.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> from types import SimpleNamespace  # stands in for evo's PoseTrajectory3D here
+            >>> evo_traj = SimpleNamespace(
+            ...     timestamps=np.array([0.0, 0.1, 0.2]),
+            ...     positions_xyz=np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]]),
+            ...     orientations_quat_wxyz=np.tile([1.0, 0, 0, 0], (3, 1)),
+            ... )
+            >>> il.Trajectory.from_evo(evo_traj).positions[-1]
+            array([2., 0., 0.])
+            >>> il.Trajectory.from_evo(evo_traj, metric="se3(rotation_weight_m_per_rad=1)").dim
+            7
+        """
 
 @final
 class Loops:
-    """The inexact loops of a trajectory at one gamma; returned by :func:`find_loops`."""
+    """The inexact loops of a trajectory at one γ: the sublevel set S_γ as runs, its loop
+    components, and the loop duration, area and density over them. Returned by
+    :func:`find_loops`.
+    """
 
     def __len__(self) -> int: ...
     @property
     def gamma(self) -> float:
-        """The threshold gamma."""
+        """The threshold γ."""
     @property
     def metric(self) -> str:
         """The metric's name."""
@@ -151,19 +247,66 @@ class Loops:
         """Last minus first timestamp, seconds."""
     @property
     def pair_count(self) -> int:
-        """Lattice cells of S_gamma in the full plane (both halves and the diagonal)."""
+        """Number of lattice cells (i, j) of S_γ in the full plane, both halves and the diagonal."""
     @property
     def warnings(self) -> list[str]:
-        """Warnings about the result, as sentences."""
+        """Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences."""
     @property
     def components(self) -> Table:
-        """The loop components as a Table of numpy columns, one row a component."""
+        """The loop components as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row
+        a component, by id; ``.to_pandas()`` for a DataFrame): ``id`` (int64), ``trivial``
+        (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
+        set for a trivial one), ``pair_count`` (int64, cells, same rule), ``run_count``, ``holes`` (int64),
+        ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
+        ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
+        ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+            >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+            >>> table = il.find_loops(traj, gamma=4.0).components
+            >>> table["id"].dtype, table["trivial"].tolist(), table["i_max"].tolist()
+            (dtype('int64'), [True, False], [199, 7])
+        """
     def runs(self) -> Table:
-        """The runs of S_gamma's upper half (int64): ``row``, ``start``, ``end``, ``component``."""
+        """The runs of S_γ's upper half (j ≥ i), row by row, as a :class:`~inexact_loops.Table` of
+        int64 columns: ``row`` i, columns ``start``..=``end`` (inclusive) and ``component`` id.
+        For plotting.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> runs = il.find_loops(traj, gamma=0.5).runs()
+            >>> {name: column.tolist() for name, column in runs.items()}
+            {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
+        """
     def component_of(self, i: int, j: int) -> int | None:
-        """The component id of the pair (i, j), or ``None`` when it is not in S_gamma."""
+        """The component id of the pair (i, j) (either order), or ``None`` when δ > γ.
+
+        Raises:
+            IndexError: ``i`` or ``j`` is not a pose index (negative, or past the last pose).
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops.component_of(3, 0), loops.component_of(0, 1)
+            (1, None)
+        """
     def is_simple(self, i: int, j: int) -> bool:
-        """Whether (i, j) is a simple loop: a pair in a trivial component."""
+        """Whether (i, j) is a simple loop: a pair in a trivial component.
+
+        Raises:
+            IndexError: ``i`` or ``j`` is not a pose index (negative, or past the last pose).
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops.is_simple(1, 2), loops.is_simple(0, 3)
+            (True, False)
+        """
     def loop_duration(
         self,
         *,
@@ -171,7 +314,17 @@ class Loops:
         side: _Side | str = "both",
         normalized: bool = False,
     ) -> npt.NDArray[np.float64]:
-        """Loop duration tau(t_i) for every sample, seconds (or normalized)."""
+        """Loop duration τ(t_i) for every sample: how long the trajectory stays within γ of
+        ξ(t_i) (paper, Eq. 6).
+
+        Args:
+            components: component ids to restrict to; ``None`` is all of S_γ.
+            side: ``"both"`` (every t′), ``"begin"`` (t′ > t) or ``"end"`` (t′ < t).
+            normalized: fractions of the span instead of seconds.
+
+        Returns:
+            numpy array, shape ``(n,)``.
+        """
     def loop_area(
         self,
         a: float,
@@ -181,7 +334,12 @@ class Loops:
         side: _Side | str = "both",
         normalized: bool = False,
     ) -> float:
-        """Loop area alpha(a, b), s^2 (or normalized)."""
+        """Loop area α(a, b) = ∫_a^b τ(t) dt (paper, Eq. 7), s² (or normalized units, where a and
+        b are fractions of the span).
+
+        Args: as :meth:`loop_duration`, plus the interval ``a < b`` (seconds, same clock as the
+        timestamps).
+        """
     def loop_density(
         self,
         a: float,
@@ -191,7 +349,9 @@ class Loops:
         side: _Side | str = "both",
         normalized: bool = False,
     ) -> float:
-        """Loop density rho(a, b) = alpha(a, b) / (b - a), seconds (or normalized)."""
+        """Loop density ρ(a, b) = α(a, b) / (b − a) (paper, Eq. 8): the mean loop duration over
+        [a, b], seconds (or normalized).
+        """
 
 def find_loops(
     trajectory: Trajectory,
@@ -203,7 +363,33 @@ def find_loops(
     | None = None,
     threads: int | None = None,
 ) -> Loops:
-    """Every inexact loop of ``trajectory`` at threshold ``gamma``, exactly, in components."""
+    """Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
+    (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
+
+    Args:
+        trajectory: a :class:`Trajectory` (for a manifold, built by the matching constructor,
+            e.g. :meth:`Trajectory.se3`).
+        gamma: the distance threshold γ > 0, in the metric's unit (metres for positions).
+        metric: ``None`` (Euclidean), a name such as ``"se3(rotation_weight_m_per_rad=10)"``, an
+            :mod:`inexact_loops.metrics` object such as ``il.metrics.SE3(rotation_weight_m_per_rad=10)``,
+            or — a slow path, one Python call per distance on one thread — any callable
+            ``f(a, b) -> float`` on two points (numpy arrays) satisfying the triangle inequality.
+        threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+
+    Returns:
+        :class:`Loops`.
+
+    Raises:
+        InvalidParameterError: gamma not positive and finite, unknown metric, threads = 0.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+        >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+        >>> loops = il.find_loops(traj, gamma=4.0)
+        >>> loops.components["trivial"].tolist()
+        [True, False]
+    """
 
 def urban_drive(
     *,
@@ -223,7 +409,27 @@ def urban_drive(
     district_dwell_s: float | None = None,
     se3: bool = False,
 ) -> Trajectory:
-    """A seeded synthetic drive on a Manhattan grid (x, y, z metres)."""
+    """A seeded synthetic drive on a Manhattan grid (x, y, z in metres, 10 Hz by default).
+
+    Every argument left as ``None`` takes the library default: a 1 km² city of 100 m blocks,
+    2.1 h at 10 Hz (75,600 poses), 5–12 m/s, stops of 5 s – 4 min at some intersections.
+    With ``se3=True`` the poses carry the heading of travel as an orientation (for the ``se3``
+    metrics); otherwise they are positions (x, y, z).
+
+    With ``district_m`` the drive works the city one square district of that side at a time,
+    ``district_dwell_s`` seconds each (default 10,000 s), in snake order: the revisits of a place
+    stay bounded however long the drive, as for a delivery or mapping vehicle. Without it the
+    drive roams the whole city.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> traj = il.urban_drive(duration_s=60.0, seed=3)
+        >>> len(traj), traj.dim
+        (600, 3)
+        >>> big = il.urban_drive(duration_s=600.0, city_size_m=10_000.0, district_m=1000.0)
+        >>> bool(big.positions[:, :2].max() < 1005.0)
+        True
+    """
 
 def read_trajectory(
     path: str | PathLike[str] | list[str | PathLike[str]],
@@ -236,14 +442,74 @@ def read_trajectory(
     frames: tuple[str, str] | None = None,
     rate_hz: float | None = None,
 ) -> Trajectory:
-    """Reads a trajectory file (TUM, CSV, KITTI, EuRoC, TUC, g2o, MCAP)."""
+    """Reads a trajectory file: TUM, CSV, KITTI, EuRoC, TUC, g2o/TORO pose graphs, or MCAP logs
+    (ROS 2 and Foxglove pose, odometry and transform messages) — by ``format``, or told from the
+    extension and first line.
+
+    Args:
+        path: the file, or a list of MCAP files read as one trajectory in time order.
+        format: ``"tum"``, ``"csv"``, ``"kitti"``, ``"euroc"``, ``"tuc"``, ``"g2o"``,
+            ``"mcap"``, or ``None`` to tell.
+        axes: keep only these position axes, e.g. ``(0, 2)`` for KITTI's ground plane.
+        metric: the metric the trajectory is for (as in :func:`find_loops`): positions for
+            Euclidean (the default); positions and orientations for ``se3``; orientations for
+            ``so3``; x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are
+            normalised (files often print 4 decimals).
+        topic: the MCAP topic; ``None`` picks the one topic with poses (several: an error
+            listing them, see :func:`list_topics`).
+        time: MCAP times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
+        frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
+            topic's only pair.
+        rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
+
+    Raises:
+        OSError: the file cannot be opened. LoopsIOError: a malformed line or message (the
+        message names file, line or byte offset, topic). InvalidTrajectoryError: e.g. unsorted
+        timestamps (names the line or message). InvalidParameterError: an unknown format or
+        time source, a metric whose points are not poses (named), bad axes, an empty list.
+        TypeError: ``path`` is not a str, an ``os.PathLike`` or a list of them.
+    """
 
 def list_topics(path: str | PathLike[str]) -> list[dict[str, object]]:
-    """The topics of an MCAP file, one dict per channel."""
+    """The topics of an MCAP file: one dict per channel with ``topic``, ``schema``,
+    ``encoding``, ``messages``, ``start_ns`` and ``end_ns`` (log time, ``None`` when empty) and
+    ``pose_type`` (the pose message type the library reads from it, or ``None``).
+
+    Raises:
+        OSError: the file cannot be opened. LoopsIOError: not a valid MCAP file (names the
+        offset).
+    """
 
 @final
 class Detections:
-    """Detections: unordered pairs of times (t, t'), seconds, with optional scores."""
+    """A set of detections D: unordered pairs of times (t, t′), seconds, at which the trajectory is
+    believed to come back to itself (place recognition), with optional scores and, once placed
+    on a trajectory, the pose indices (i, j) of each pair.
+
+    A pair given as (t′, t) with t′ > t is stored as (t, t′): loop components are reported on
+    the half t ≤ t′. Rows keep the order they were given in; duplicates are allowed.
+
+    Args:
+        t, t_prime: shape ``(n,)``, seconds, finite, n ≥ 1; either order within a pair.
+        scores: shape ``(n,)``, finite (higher is more confident), or ``None``.
+
+    Raises:
+        InvalidParameterError: no detections, columns of different lengths, a NaN or infinite
+            value (the message names the detection).
+        ValueError: wrong shapes. TypeError: non-numeric dtypes.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> det = il.Detections([30.0, 100.0], [10.0, 400.0], scores=[0.9, 0.4])
+        >>> det.t.tolist(), det.t_prime.tolist(), len(det)
+        ([10.0, 100.0], [30.0, 400.0], 2)
+        >>> det.i is None  # not placed on a trajectory
+        True
+        >>> traj = il.Trajectory([0.0, 1.0, 2.0], [0.0, 5.0, 0.0])
+        >>> by_index = il.Detections.from_indices(traj, [2], [0])
+        >>> by_index.t.tolist(), by_index.t_prime.tolist(), by_index.i.tolist()
+        ([0.0], [2.0], [0])
+    """
 
     def __new__(
         cls, t: npt.ArrayLike, t_prime: npt.ArrayLike, scores: npt.ArrayLike | None = None
@@ -255,72 +521,144 @@ class Detections:
         j: npt.ArrayLike,
         scores: npt.ArrayLike | None = None,
     ) -> Detections:
-        """Detections from pose indices (i, j); the times are the poses' timestamps."""
+        """Detections from pose indices (i, j) of a trajectory, either order within a pair; the
+        times are the poses' timestamps.
+
+        Args:
+            trajectory_or_loops: the :class:`Trajectory`, or the :class:`Loops` found on it.
+            i, j: shape ``(n,)``, integer pose indices.
+            scores: shape ``(n,)`` or ``None``.
+
+        Raises:
+            IndexError: an index past the last pose (or negative), naming the detection.
+            InvalidParameterError: no detections, columns of different lengths.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> det = il.Detections.from_indices(traj, [3, 1], [0, 2])
+            >>> det.i.tolist(), det.j.tolist(), det.t_prime.tolist()
+            ([0, 1], [3, 2], [3.0, 2.0])
+        """
     def locate(self, trajectory_or_loops: Trajectory | Loops) -> Detections:
-        """The same detections placed on the nearest poses of a trajectory."""
+        """The same detections placed on a trajectory: each time goes to the nearest pose (the
+        pose whose time cell holds it; ties to the earlier), filling :attr:`i` and :attr:`j`.
+        The times are kept as given.
+
+        Raises:
+            InvalidParameterError: a time outside the trajectory's time span, naming the
+                detection.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> det = il.Detections([0.1, 2.2], [2.9, 1.4]).locate(traj)
+            >>> det.i.tolist(), det.j.tolist()
+            ([0, 1], [3, 2])
+        """
     def __len__(self) -> int: ...
     @property
     def t(self) -> npt.NDArray[np.float64]:
-        """The earlier time t of each pair, seconds."""
+        """The earlier time t of each pair, seconds, shape ``(n,)``."""
     @property
     def t_prime(self) -> npt.NDArray[np.float64]:
-        """The later time t' >= t of each pair, seconds."""
+        """The later time t′ ≥ t of each pair, seconds, shape ``(n,)``."""
     @property
     def i(self) -> npt.NDArray[np.int64] | None:
-        """Pose index i of each pair, or ``None`` when not placed on a trajectory."""
+        """Pose index i (of t) of each pair, int64, or ``None`` when not placed on a trajectory."""
     @property
     def j(self) -> npt.NDArray[np.int64] | None:
-        """Pose index j >= i of each pair, or ``None`` when not placed on a trajectory."""
+        """Pose index j ≥ i (of t′) of each pair, int64, or ``None`` when not placed."""
     @property
     def score(self) -> npt.NDArray[np.float64] | None:
         """The score of each pair, or ``None`` without scores."""
     @property
     def poses(self) -> int | None:
-        """Poses of the trajectory the detections are placed on, or ``None``."""
+        """Number of poses of the trajectory the detections are placed on, or ``None``."""
     def to_pandas(self) -> pandas.DataFrame:
-        """The detections as a DataFrame (needs pandas): t, t_prime[, i, j][, score]."""
+        """The detections as a ``pandas.DataFrame``, one row a detection in the order given:
+        columns ``t``, ``t_prime`` (float64, seconds), then ``i``, ``j`` (int64) once placed on
+        a trajectory and ``score`` (float64) when there are scores.
+
+        Raises:
+            ImportError: pandas is not installed (it is not a dependency of the library).
+
+        Example:
+            >>> import inexact_loops as il
+            >>> traj = il.Trajectory([0.0, 1.0, 2.0], [0.0, 5.0, 0.0])
+            >>> frame = il.Detections([2.0], [0.1], scores=[0.5]).locate(traj).to_pandas()
+            >>> list(frame.columns), frame.loc[0, "j"]
+            (['t', 't_prime', 'i', 'j', 'score'], np.int64(2))
+        """
 
 @final
 class DetectionClusters:
-    """The connected components of the epsilon graph of detections."""
+    """The connected components of the ε graph of a detection set: approximations of the loop
+    components. Returned by :func:`cluster_detections`.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> det = il.Detections([0.0, 20.0, 500.0], [100.0, 100.0, 900.0])
+        >>> clusters = il.cluster_detections(det, epsilon_s=30.0)
+        >>> len(clusters), clusters.labels.tolist(), clusters.clusters["t_max_s"].tolist()
+        (2, [0, 0, 1], [20.0, 500.0])
+    """
 
     def __len__(self) -> int: ...
     @property
     def epsilon_s(self) -> float:
-        """The threshold epsilon, seconds."""
+        """The threshold ε, seconds."""
     @property
     def cell_side_s(self) -> float:
-        """Side of the grid cells, seconds."""
+        """Side of the grid cells, seconds (a little less than ε/√2)."""
     @property
     def detections(self) -> Detections:
         """The detections that were clustered."""
     @property
     def labels(self) -> npt.NDArray[np.int64]:
-        """The cluster id of each detection."""
+        """The cluster id of each detection, int64, in the order of the detections."""
     @property
     def clusters(self) -> Table:
-        """The clusters as a Table of numpy columns, one row a cluster."""
+        """The clusters as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row a
+        cluster, by id; ``.to_pandas()`` for a DataFrame): ``id``, ``size`` (detections; int64),
+        ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (extents, seconds;
+        float64), ``cells`` (grid cells holding its detections; int64), ``area_proxy_s2``
+        (cells × side², s²; float64), ``anchor`` (index of its smallest detection in (t, t′)
+        order; int64).
+        """
 
 @final
 class Samples:
-    """The samples a sampler chose, in order of (t, t'), as numpy columns."""
+    """The samples a sampler chose — candidate pairs for the scan matcher — in order of (t, t′),
+    as numpy columns. Returned by :func:`sample`.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> det = il.Detections([0.0, 0.0, 500.0], [100.0, 101.0, 900.0], scores=[0.2, 0.8, 0.5])
+        >>> clusters = il.cluster_detections(det, epsilon_s=30.0)
+        >>> samples = il.sample(clusters, "rho-dispersed", budget=2, seed=0)
+        >>> samples.t_prime.tolist(), samples.cluster.tolist(), samples.score.tolist()
+        ([101.0, 900.0], [0, 1], [0.8, 0.5])
+    """
 
     def __len__(self) -> int: ...
     @property
     def sampler(self) -> str:
-        """The sampler's name."""
+        """The sampler's name (``"one"``, ``"rho"``, ...)."""
     @property
     def groups(self) -> int:
-        """Number of groups (clusters or components) sampled from."""
+        """Number of groups sampled from (clusters, or components with a pair; 0 for σ_α and the
+        baselines, which do not group).
+        """
     @property
     def available(self) -> int:
-        """Number of candidates the sampler chose from."""
+        """Number of candidates the sampler chose from (detections, pairs, or a rule's pairs)."""
     @property
     def poses(self) -> int | None:
-        """Poses of the trajectory the pairs index, or ``None``."""
+        """Number of poses of the trajectory the pairs index, or ``None``."""
     @property
     def warnings(self) -> list[str]:
-        """Warnings, as sentences."""
+        """Warnings (a budget below the number of groups, or above the candidates), as sentences."""
     @property
     def t(self) -> npt.NDArray[np.float64]:
         """The earlier time of each sample, seconds."""
@@ -329,46 +667,137 @@ class Samples:
         """The later time of each sample, seconds."""
     @property
     def i(self) -> npt.NDArray[np.int64] | None:
-        """Pose index i of each sample, or ``None`` when not placed on a trajectory."""
+        """Pose index i of each sample, int64, or ``None`` when not placed on a trajectory."""
     @property
     def j(self) -> npt.NDArray[np.int64] | None:
-        """Pose index j of each sample, or ``None`` when not placed on a trajectory."""
+        """Pose index j ≥ i of each sample, int64, or ``None`` when not placed on a trajectory."""
     @property
     def component(self) -> npt.NDArray[np.int64]:
-        """The exact loop component of each sample; -1 when unknown or outside S_gamma."""
+        """The exact loop component of each sample, int64; −1 when unknown (samples of clusters
+        before :meth:`locate`) or outside S_γ.
+        """
     @property
     def cluster(self) -> npt.NDArray[np.int64]:
-        """The detection cluster of each sample; -1 for samples of Loops."""
+        """The detection cluster each sample was drawn from, int64; −1 for samples of ``Loops``."""
     @property
     def detection(self) -> npt.NDArray[np.int64]:
-        """The detection index of each sample; -1 for samples of Loops."""
+        """The index of the detection each sample is, int64; −1 for samples of ``Loops``."""
     @property
     def distance(self) -> npt.NDArray[np.float64]:
-        """delta(x_i, x_j) of each sample; NaN where not measured."""
+        """δ(x_i, x_j) of each sample in the metric's unit; NaN where not measured."""
     @property
     def score(self) -> npt.NDArray[np.float64] | None:
-        """The detection's score of each sample, or ``None``."""
+        """The detection's score of each sample, or ``None`` when the detections had none."""
     def locate(self, loops: Loops) -> Samples:
-        """The same samples placed on the loops' poses, with their exact components."""
+        """The same samples placed on the poses of ``loops``' trajectory (where not yet), with the
+        exact loop component of each (:attr:`component`).
+
+        Raises:
+            InvalidParameterError: the samples index another trajectory, or a time lies outside
+                its span.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> clusters = il.cluster_detections(il.Detections([0.0], [3.0]), epsilon_s=1.0)
+            >>> il.sample(clusters, "alpha", rate=1.0, seed=0).locate(loops).component.tolist()
+            [1]
+        """
     def measure(self, trajectory: Trajectory, *, metric: _MetricArg = None) -> Samples:
-        """The same samples placed on ``trajectory``, with their distances."""
+        """The same samples placed on ``trajectory`` (where not yet), with the distance
+        δ(x_i, x_j) of each (:attr:`distance`) under ``metric`` (as in :func:`find_loops`;
+        ``None`` is the default metric).
+
+        Raises:
+            InvalidParameterError: the samples index another trajectory, or a time lies outside
+                its span.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.5]))
+            >>> clusters = il.cluster_detections(il.Detections([0.0], [3.0]), epsilon_s=1.0)
+            >>> il.sample(clusters, "alpha", rate=1.0, seed=0).measure(traj).distance.tolist()
+            [0.5]
+        """
     def to_pandas(self) -> pandas.DataFrame:
-        """The samples as a DataFrame (needs pandas), one row a sample."""
+        """The samples as a ``pandas.DataFrame``, one row a sample in order of (t, t′): columns
+        ``t``, ``t_prime`` (float64, seconds), ``i``, ``j`` (int64; only when placed on a
+        trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
+        ``distance`` (float64, NaN where not measured) and ``score`` (float64; only when the
+        detections had scores) — the getters of the same names.
+
+        Raises:
+            ImportError: pandas is not installed (it is not a dependency of the library).
+
+        Example:
+            >>> import inexact_loops as il
+            >>> clusters = il.cluster_detections(il.Detections([0.0, 500.0], [3.0, 900.0]), epsilon_s=1.0)
+            >>> frame = il.sample(clusters, "one", budget=2, seed=0).to_pandas()
+            >>> list(frame.columns), frame["cluster"].tolist()
+            (['t', 't_prime', 'component', 'cluster', 'detection', 'distance'], [0, 1])
+        """
     def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
-        """Writes the samples as CSV, atomically."""
+        """Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
+        distance,score,sampler``, then one line a sample; unknown values are empty fields.
+        Atomic (a temporary file renamed into place).
+
+        Raises:
+            FileExistsError: ``path`` exists and ``overwrite`` is false.
+            OSError: the file cannot be written.
+
+        Example:
+            >>> import os, tempfile, inexact_loops as il
+            >>> clusters = il.cluster_detections(il.Detections([0.0], [3.0]), epsilon_s=1.0)
+            >>> samples = il.sample(clusters, "alpha", rate=1.0, seed=0)
+            >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
+            >>> samples.to_csv(path)
+            >>> open(path).read().splitlines()[1]
+            '0,3,,,,0,0,,,alpha'
+        """
     def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
-        """Writes the samples as JSON, atomically."""
+        """Writes the samples as one JSON object: ``sampler``, ``count``, ``groups``,
+        ``available``, ``poses``, ``warnings`` and ``samples`` (a list of objects with the CSV's
+        columns; ``null`` for unknown values). Atomic, as :meth:`to_csv`.
+
+        Raises:
+            FileExistsError: ``path`` exists and ``overwrite`` is false.
+            OSError: the file cannot be written.
+
+        Example:
+            >>> import json, os, tempfile, inexact_loops as il
+            >>> clusters = il.cluster_detections(il.Detections([0.0], [3.0]), epsilon_s=1.0)
+            >>> path = os.path.join(tempfile.mkdtemp(), "samples.json")
+            >>> il.sample(clusters, "alpha", rate=1.0, seed=0).to_json(path)
+            >>> json.load(open(path))["samples"][0]["t_prime_s"]
+            3.0
+        """
 
 @final
 class SampleQuality:
-    """P1, P2 and P3 of a sample, against the exact loop components."""
+    """P1, P2 and P3 of a sample (paper, Sec. 5.2), measured against the exact loop components of
+    S_γ. Returned by :func:`sample_quality`.
+
+    Components count when they hold a pair (i, j) with i < j (a lone diagonal cell cannot be
+    sampled).
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+        >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+        >>> loops = il.find_loops(traj, gamma=4.0)
+        >>> samples = il.sample(loops, "one", budget=2, seed=0, trajectory=traj)
+        >>> quality = il.sample_quality(samples, loops, epsilon_s=1.0)
+        >>> quality.covered, quality.components, quality.coverage, quality.per_component.tolist()
+        (2, 2, 1.0, [1, 1])
+    """
 
     @property
     def samples(self) -> int:
         """Number of samples."""
     @property
     def outside(self) -> int:
-        """Samples outside S_gamma."""
+        """Samples outside S_γ (δ > γ: false detections)."""
     @property
     def components(self) -> int:
         """Loop components that can be sampled."""
@@ -377,53 +806,117 @@ class SampleQuality:
         """P1: components with at least one sample."""
     @property
     def nontrivial_components(self) -> int:
-        """Non-trivial components that can be sampled."""
+        """Non-trivial components (revisits proper) that can be sampled."""
     @property
     def nontrivial_covered(self) -> int:
         """P1 over the non-trivial components."""
     @property
     def coverage(self) -> float:
-        """P1 as a fraction."""
+        """P1 as a fraction: covered / components (1 without components)."""
     @property
     def missed(self) -> Table:
-        """P1: the components without a sample, largest first: id, trivial, area_s2, pair_count."""
+        """P1: the components without a sample, largest area first, as a
+        :class:`~inexact_loops.Table`: ``id`` (int64), ``trivial`` (bool), ``area_s2``
+        (float64, s²), ``pair_count`` (int64).
+        """
     @property
     def epsilon_s(self) -> float:
-        """The epsilon of P2, seconds."""
+        """The ε of P2, seconds."""
     @property
     def redundant(self) -> int:
-        """P2: samples with another sample of their component within epsilon."""
+        """P2: samples with another sample of the same component within ε."""
     @property
     def redundancy(self) -> float:
-        """P2 as a fraction."""
+        """P2 as a fraction: redundant / samples (0 without samples)."""
     @property
     def median_spacing_s(self) -> float | None:
-        """P2: median distance to the nearest other sample of the same component, seconds."""
+        """P2: median distance from a sample to the nearest other sample of its component,
+        seconds; ``None`` when no component has two samples.
+        """
     @property
     def p3_slope(self) -> float | None:
-        """P3: slope of ln(samples) on ln(area) across the covered components."""
+        """P3: least-squares slope of ln(samples) on ln(area) across the covered components (≈ 0
+        for σ_1, ≈ 1 for σ_α); ``None`` with fewer than two distinct areas.
+        """
     @property
     def p3_components(self) -> int:
         """Number of components in the P3 fit."""
     @property
     def per_component(self) -> npt.NDArray[np.int64]:
-        """Samples per component, int64, by component id (one per row of Loops.components)."""
+        """Samples per component, int64, by component id: one entry per row of
+        :attr:`Loops.components`, so it can be added to that table as a column.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+            >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
+            >>> loops = il.find_loops(traj, gamma=4.0)
+            >>> samples = il.sample(loops, "alpha", budget=5, seed=0, trajectory=traj)
+            >>> table = loops.components
+            >>> table["samples"] = il.sample_quality(samples, loops).per_component
+            >>> int(table["samples"].sum()), table.num_rows
+            (5, 2)
+        """
     @property
     def sample_components(self) -> npt.NDArray[np.int64]:
-        """The exact component of each sample; -1 outside S_gamma."""
+        """The exact component of each sample, int64, in the samples' order; −1 outside S_γ."""
     @property
     def nearest_spacing_s(self) -> npt.NDArray[np.float64]:
-        """Each sample's distance to the nearest other sample of its component, seconds."""
+        """Each sample's distance to the nearest other sample of its component, seconds, in the
+        samples' order; NaN when alone in its component or outside S_γ.
+        """
 
 def draw_detections(
     loops: Loops, *, rate: float | None = None, budget: int | None = None, seed: int
 ) -> Detections:
-    """Detections drawn uniformly from the exact S_gamma of ``loops``."""
+    """Detections drawn uniformly from the exact S_γ of ``loops``, without materialising it: the
+    off-diagonal pairs (i, j), i < j, of its runs, placed on the trajectory, in row-major order.
+
+    Args:
+        loops: from :func:`find_loops`.
+        rate: every pair independently with this probability, in (0, 1]; or
+        budget: exactly this many distinct pairs (at most the pairs of S_γ). Give one of them.
+        seed: the seed (ChaCha8): the same seed gives the same detections on every machine.
+
+    Raises:
+        InvalidParameterError: rate and budget both or neither, a rate outside (0, 1], a
+            budget of 0 or above the pairs available, an empty draw.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> loops = il.find_loops(il.urban_drive(duration_s=600.0), gamma=40.0)
+        >>> det = il.draw_detections(loops, budget=1000, seed=7)
+        >>> len(det), all(loops.component_of(i, j) is not None for i, j in zip(det.i, det.j))
+        (1000, True)
+    """
 
 def cluster_detections(
     detections: Detections, *, epsilon_s: float | None = None, threads: int | None = None
 ) -> DetectionClusters:
-    """The exact connected components of the epsilon graph of the detections."""
+    """Clusters detections exactly: the connected components of the graph with an edge between
+    every two detections within ``epsilon_s`` seconds of each other (Euclidean in the (t, t′)
+    plane, ``<= ε``): DBSCAN with ``min_samples=1``, without enumerating the ε-pairs.
+
+    Args:
+        detections: :class:`Detections`.
+        epsilon_s: ε > 0, seconds; ``None`` takes the library default (30 s, the paper's).
+        threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+
+    Returns:
+        :class:`DetectionClusters`; cluster ids follow each cluster's smallest (t, t′), so they
+        do not depend on the order of the detections.
+
+    Raises:
+        InvalidParameterError: ε not positive and finite (or below the floating-point
+            resolution of the detections' time range), threads = 0.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> det = il.Detections([0.0, 30.0, 60.0, 500.0], [1000.0, 1000.0, 1000.0, 900.0])
+        >>> clusters = il.cluster_detections(det, epsilon_s=30.0)
+        >>> clusters.labels.tolist(), clusters.clusters["size"].tolist()
+        ([0, 0, 0, 1], [3, 1])
+    """
 
 def sample(
     source: DetectionClusters | Loops,
@@ -445,9 +938,85 @@ def sample(
     cartographer_min_gap_s: float | None = None,
     time_gap_s: float | None = None,
 ) -> Samples:
-    """Samples inexact loops from detection clusters or exact loop components."""
+    """Samples inexact loops (paper, Sec. 5): from detection clusters, or straight from the exact
+    loop components of S_γ.
+
+    Args:
+        source: :class:`DetectionClusters` (from :func:`cluster_detections`: groups are the
+            clusters, picks are detections) or :class:`Loops` (from :func:`find_loops`: groups
+            are the exact components, picks are pairs (i, j), i < j, of S_γ; needs
+            ``trajectory``).
+        sampler: ``"one"`` (σ_1: c per group), ``"rho"`` (σ_ρ: r per group per trajectory
+            point), ``"rho-dispersed"`` (σ_ρ's counts spread evenly along each group, each the
+            row's closest pair, or best-scored detection), ``"alpha"`` (σ_α: uniform over all
+            detections or pairs), or a baseline of a deployed SLAM system (``Loops`` only):
+            ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``, ``"time-gap"``.
+        rate: the sampler's own rate (c, r, or a probability in (0, 1] for σ_α and the
+            baselines); or
+        budget: exactly this many samples (fewer only when fewer exist, with a warning); σ_1 and
+            σ_ρ keep at least one per group whenever the budget allows it (P1). Give one.
+        seed: the seed (ChaCha8): the same samples on every machine and thread count.
+        trajectory: the :class:`Trajectory` the loops were found on (required for ``Loops``);
+            with clusters, optional: the samples are then placed on it and their distances
+            measured.
+        metric: as in :func:`find_loops`; ``None`` takes the loops' own metric (for clusters,
+            the default metric).
+        threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+        skip_trivial: leave out the trivial loop components (``Loops`` with σ_1, σ_ρ or σ_α):
+            their pairs are simple loops (the next poses, a stop) that odometry already ties
+            together, and σ_ρ would otherwise spend a large share of the budget on them.
+        lio_sam_keyframe_step, lio_sam_period_s, lio_sam_min_age_s, hdl_keyframe_step,
+        hdl_min_travel, hdl_edge_spacing, cartographer_min_gap_s, time_gap_s: parameters of
+            the baselines (metric units and seconds); ``None`` takes the library default.
+
+    Returns:
+        :class:`Samples`.
+
+    Raises:
+        InvalidParameterError: an unknown sampler (the message lists the names), a baseline on
+            clusters, rate and budget both or neither, a budget of 0, a rate out of range, a
+            trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline.
+        TypeError: ``Loops`` without ``trajectory``.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> traj = il.urban_drive(duration_s=900.0)
+        >>> loops = il.find_loops(traj, gamma=40.0)
+        >>> samples = il.sample(loops, "rho", budget=200, seed=1, trajectory=traj)
+        >>> len(samples), samples.sampler, set(samples.component.tolist()) == set(range(len(loops.components["id"])))
+        (200, 'rho', True)
+        >>> det = il.draw_detections(loops, rate=0.01, seed=0)
+        >>> clusters = il.cluster_detections(det, epsilon_s=30.0)
+        >>> samples = il.sample(clusters, "one", budget=len(clusters), seed=0)
+        >>> sorted(samples.cluster.tolist()) == list(range(len(clusters)))
+        True
+    """
 
 def sample_quality(
     samples: Samples, loops: Loops, *, epsilon_s: float | None = None
 ) -> SampleQuality:
-    """P1, P2 and P3 of ``samples`` against the exact loop components of ``loops``."""
+    """Measures how representative ``samples`` are of the loops (paper, Sec. 5.2): P1 (every loop
+    component covered), P2 (no redundant samples), P3 (more samples for bigger components),
+    against the exact components of ``loops`` — never against the detection clusters. Samples
+    given only by times are placed on the nearest poses.
+
+    Args:
+        samples: :class:`Samples`.
+        loops: the :class:`Loops` to measure against (same trajectory).
+        epsilon_s: the P2 radius, seconds: a sample with another sample of its component
+            within ε in the (t, t′) plane is redundant; ``None`` takes the library default
+            (30 s, the paper's).
+
+    Raises:
+        InvalidParameterError: ε not positive and finite, samples of another trajectory, a
+            sample time outside its span.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> traj = il.urban_drive(duration_s=900.0)
+        >>> loops = il.find_loops(traj, gamma=40.0)
+        >>> samples = il.sample(loops, "one", budget=500, seed=0, trajectory=traj)
+        >>> quality = il.sample_quality(samples, loops, epsilon_s=30.0)
+        >>> quality.covered == quality.components, quality.missed["id"].tolist()
+        (True, [])
+    """
