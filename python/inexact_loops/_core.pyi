@@ -240,8 +240,10 @@ class Loops:
     def gamma(self) -> float:
         """The threshold γ."""
     @property
-    def metric(self) -> str:
-        """The metric's name."""
+    def metric_name(self) -> str:
+        """The name of the metric the loops were found with: its spec (``"euclidean"``,
+        ``"se3(rotation_weight_m_per_rad=10, rotation=geodesic)"``), or a callable's ``__name__``.
+        """
     @property
     def span_s(self) -> float:
         """Last minus first timestamp, seconds."""

@@ -129,7 +129,7 @@ def distance_image(
             ``f(A, B)`` returning the ``(len(A), len(B))`` distances between two arrays of
             points (rows of ``traj.positions``), e.g. ``scipy.spatial.distance.cdist``. The
             image is computed here, in numpy, only for the Euclidean metric: for any other
-            metric (``loops.metric`` not Euclidean) pass the callable.
+            metric (``loops.metric_name`` not Euclidean) pass the callable.
         samples: samples to overlay (see the module docstring), or ``{name: samples}``.
         outlines: draw component outlines; default: when ``loops`` is given.
         cmap: the image's colormap.
@@ -151,7 +151,7 @@ def distance_image(
             callable, ``max_pixels`` not an integer, ``window_s`` not two intervals, samples
             that are not index pairs.
         ValueError: ``loops`` of another trajectory, ``outlines=True`` without ``loops``, a
-            non-Euclidean ``loops.metric`` (or ``metric`` name) without a callable, a callable
+            non-Euclidean ``loops.metric_name`` (or ``metric`` name) without a callable, a callable
             returning the wrong shape, gamma not positive, ``max_pixels < 2``, an empty or
             reversed window, sample indices out of range.
 
@@ -646,10 +646,10 @@ def _euclidean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _pairwise_metric(metric: object, loops: Loops | None) -> PairwiseMetric:
     if metric is None:
-        if loops is not None and not _is_euclidean(loops.metric):
+        if loops is not None and not _is_euclidean(loops.metric_name):
             raise ValueError(
                 f"distance_image computes the image only for the Euclidean metric, and these "
-                f"loops use {loops.metric}: pass metric=f(A, B) returning the pairwise "
+                f"loops use {loops.metric_name}: pass metric=f(A, B) returning the pairwise "
                 "distances between two arrays of points"
             )
         return _euclidean

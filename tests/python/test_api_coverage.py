@@ -329,11 +329,13 @@ def test_descriptors():
 # --- find_loops and Loops -------------------------------------------------------------------------
 
 
-@covers("find_loops", "Loops", "Loops.gamma", "Loops.metric", "Loops.span_s", "Loops.pair_count")
+@covers(
+    "find_loops", "Loops", "Loops.gamma", "Loops.metric_name", "Loops.span_s", "Loops.pair_count"
+)
 def test_find_loops_counts_the_dense_pairs(traj, loops):
     distances = cdist(traj.positions, traj.positions)
     assert loops.pair_count == np.count_nonzero(distances <= 4.0)
-    assert loops.gamma == 4.0 and loops.metric == "euclidean" and loops.span_s == traj.span_s
+    assert loops.gamma == 4.0 and loops.metric_name == "euclidean" and loops.span_s == traj.span_s
     assert len(loops) == N
     by_callable = il.find_loops(traj, gamma=4.0, metric=lambda a, b: float(np.linalg.norm(a - b)))
     assert by_callable.pair_count == loops.pair_count
@@ -941,7 +943,7 @@ def test_metric_objects_and_their_errors():
     }
     for metric in specs:
         traj = points[metric.spec.split("(")[0].removesuffix("_rotation")]
-        assert il.find_loops(traj, gamma=0.5, metric=metric).metric.startswith(
+        assert il.find_loops(traj, gamma=0.5, metric=metric).metric_name.startswith(
             metric.spec.split("(")[0]
         )
     with pytest.raises(TypeError, match="rotation_weight_m_per_rad"):

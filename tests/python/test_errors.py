@@ -216,7 +216,7 @@ def test_unknown_metric_is_named():
     with pytest.raises(il.InvalidParameterError, match=r'"manhattan".*euclidean'):
         il.find_loops(traj, gamma=1.0, metric="manhattan")
     loops = il.find_loops(traj, gamma=1.0, metric="euclidean")
-    assert loops.metric == "euclidean"
+    assert loops.metric_name == "euclidean"
 
 
 def test_zero_threads():

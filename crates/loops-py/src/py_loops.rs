@@ -124,9 +124,10 @@ impl Loops {
         self.inner.gamma()
     }
 
-    /// The metric's name.
+    /// The name of the metric the loops were found with: its spec (``"euclidean"``,
+    /// ``"se3(rotation_weight_m_per_rad=10, rotation=geodesic)"``), or a callable's ``__name__``.
     #[getter]
-    fn metric(&self) -> String {
+    fn metric_name(&self) -> String {
         self.inner.metric_name().to_owned()
     }
 
