@@ -83,6 +83,19 @@ def test_non_finite_timestamp_names_the_index(index, value):
         il.Trajectory(t, p)
 
 
+def test_magnitudes_the_arithmetic_cannot_hold_are_refused():
+    # Squared distances of 1e155 overflow to inf; timestamps near f64's limit make the span
+    # infinite. Both are refused, naming the pose and the value.
+    t, p = ring()
+    p[5, 1] = 1e155
+    with pytest.raises(il.InvalidTrajectoryError, match=r"coordinate 1 of pose 5 is 1e155"):
+        il.Trajectory(t, p)
+    t, p = ring()
+    t[-1] = 1.7e308
+    with pytest.raises(il.InvalidTrajectoryError, match=rf"index {N - 1} is 1.7e308 s"):
+        il.Trajectory(t, p)
+
+
 @pytest.mark.parametrize("kind", ["decreasing", "duplicate"])
 def test_timestamps_must_strictly_increase(kind):
     t, p = ring()

@@ -53,6 +53,28 @@ pub enum Error {
         /// The offending value.
         value: f64,
     },
+    /// A timestamp beyond [`MAX_MAGNITUDE`](crate::MAX_MAGNITUDE) seconds.
+    #[error("timestamp at index {index} is {value:e} s, beyond ±{max:e}: spans and areas would overflow")]
+    TimestampTooLarge {
+        /// Pose index.
+        index: usize,
+        /// The offending value, seconds.
+        value: f64,
+        /// The largest magnitude accepted.
+        max: f64,
+    },
+    /// A coordinate beyond [`MAX_MAGNITUDE`](crate::MAX_MAGNITUDE).
+    #[error("coordinate {axis} of pose {index} is {value:e}, beyond ±{max:e}: distances would overflow")]
+    CoordinateTooLarge {
+        /// Pose index.
+        index: usize,
+        /// Coordinate (column) index within the pose.
+        axis: usize,
+        /// The offending value.
+        value: f64,
+        /// The largest magnitude accepted.
+        max: f64,
+    },
     /// A coordinate that is NaN or infinite.
     #[error("coordinate {axis} of pose {index} is not finite ({value})")]
     NonFiniteCoordinate {

@@ -91,7 +91,7 @@ pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_
 pub use spec::MetricSpec;
 pub use sublevel::{Run, SublevelSet, check_gamma};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive};
-pub use trajectory::{MAX_POSES, Timeline, Trajectory};
+pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Timeline, Trajectory};
 
 /// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).
 ///

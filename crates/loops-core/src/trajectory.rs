@@ -55,6 +55,13 @@ impl Timeline for Trajectory {
 /// The largest number of poses the engine indexes (it stores columns as `u32`).
 pub const MAX_POSES: usize = u32::MAX as usize - 1;
 
+/// The largest magnitude of a timestamp (seconds) or a coordinate that a trajectory accepts:
+/// 1e150. Beyond it the engine's arithmetic cannot hold the answer — squared distances
+/// overflow to infinity near 1e154, and spans, time cells and areas (s²) of timestamps near
+/// f64's limit become infinite or NaN — so such values are refused, naming pose and value,
+/// instead of giving a wrong answer.
+pub const MAX_MAGNITUDE: f64 = 1e150;
+
 impl Trajectory {
     /// A trajectory from timestamps (seconds) and a flat row-major buffer of `dim` coordinates
     /// per pose.
@@ -84,6 +91,10 @@ impl Trajectory {
         validate_timestamps(&timestamps_s)?;
         if let Some(k) = coords.iter().position(|c| !c.is_finite()) {
             return Err(Error::NonFiniteCoordinate { index: k / dim, axis: k % dim, value: coords[k] });
+        }
+        if let Some(k) = coords.iter().position(|c| c.abs() > MAX_MAGNITUDE) {
+            let (index, axis, value) = (k / dim, k % dim, coords[k]);
+            return Err(Error::CoordinateTooLarge { index, axis, value, max: MAX_MAGNITUDE });
         }
         let cell_widths_s = cell_widths(&timestamps_s);
         Ok(Self { timestamps_s, coords, dim, cell_widths_s })
@@ -191,6 +202,9 @@ impl Trajectory {
 fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {
     if let Some(index) = timestamps_s.iter().position(|t| !t.is_finite()) {
         return Err(Error::NonFiniteTimestamp { index, value: timestamps_s[index] });
+    }
+    if let Some(index) = timestamps_s.iter().position(|t| t.abs() > MAX_MAGNITUDE) {
+        return Err(Error::TimestampTooLarge { index, value: timestamps_s[index], max: MAX_MAGNITUDE });
     }
     if let Some(k) = timestamps_s.windows(2).position(|w| w[1] <= w[0]) {
         return Err(Error::TimestampsNotIncreasing {

@@ -107,15 +107,34 @@ fn long_lattice_back_and_forth_across_tasks() {
     }
 }
 
-/// A step whose squared length overflows makes δ = ∞ (the Euclidean distance squares without
-/// scaling). The brute force then keeps (0, 2), two identical points; the scan must as well.
+/// Values the arithmetic cannot hold are refused, naming pose and value: coordinates of 1e155
+/// (their squared differences overflow to ∞, which once dropped pairs) and timestamps near
+/// f64's limit (an infinite span and NaN areas). At the largest magnitude accepted the scan
+/// still equals the brute force, and spans and areas are finite.
 #[test]
-fn overflowing_step_does_not_skip_a_revisit() {
-    let traj = line(&[0.0, 1e155, 0.0]);
-    let brute = SublevelSet::brute_force(&traj, &Euclidean, 1.0).unwrap();
-    assert_eq!(brute.row(0), &[Run { start: 0, end: 0 }, Run { start: 2, end: 2 }]);
-    let set = SublevelSet::compute(&traj, &Euclidean, 1.0).unwrap();
-    assert_eq!(set.row(0), brute.row(0), "(0, 2) is at distance 0");
+fn magnitudes_beyond_the_arithmetic_are_refused() {
+    use loops_core::{Error, MAX_MAGNITUDE, Scale, Selection, Side};
+    let refused = Trajectory::new(vec![0.0, 1.0, 2.0], vec![0.0, 1e155, 0.0], 1).unwrap_err();
+    assert!(
+        matches!(refused, Error::CoordinateTooLarge { index: 1, axis: 0, value, .. } if value == 1e155),
+        "{refused}"
+    );
+    assert!(refused.to_string().contains("pose 1"), "{refused}");
+    let refused = Trajectory::new(vec![-1.7e308, 0.0, 1.7e308], vec![0.0, 1.0, 2.0], 1).unwrap_err();
+    assert!(matches!(refused, Error::TimestampTooLarge { index: 0, .. }), "{refused}");
+
+    let traj = line(&[0.0, MAX_MAGNITUDE, -MAX_MAGNITUDE, 0.0, MAX_MAGNITUDE]);
+    for gamma in [1.0, 1.5 * MAX_MAGNITUDE, 2.0 * MAX_MAGNITUDE] {
+        let set = SublevelSet::compute(&traj, &Euclidean, gamma).unwrap();
+        assert_eq!(set, SublevelSet::brute_force(&traj, &Euclidean, gamma).unwrap(), "γ {gamma}");
+    }
+    let times = vec![-MAX_MAGNITUDE, 0.0, MAX_MAGNITUDE];
+    let wide = Trajectory::new(times, vec![0.0, 0.5, 0.0], 1).unwrap();
+    let loops = find_loops(&wide, &Euclidean, 1.0).unwrap();
+    let (a, b) = (-MAX_MAGNITUDE, MAX_MAGNITUDE);
+    let alpha = loops.loop_area(a, b, Selection::All, Side::Both, Scale::Seconds).unwrap();
+    assert!(alpha.is_finite() && alpha > 0.0, "{alpha}");
+    assert!(loops.loop_duration(Selection::All, Side::Both, Scale::Seconds).unwrap().iter().all(|t| t.is_finite()));
 }
 
 /// Two cells of one run whose squared distances differ by one ulp but whose δ (after the square

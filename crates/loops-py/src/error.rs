@@ -94,6 +94,8 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
         | E::RaggedCoordinates { .. }
         | E::NonFiniteTimestamp { .. }
         | E::NonFiniteCoordinate { .. }
+        | E::TimestampTooLarge { .. }
+        | E::CoordinateTooLarge { .. }
         | E::TimestampsNotIncreasing { .. }
         | E::TooManyPoses { .. }
         | E::NonUnitQuaternion { .. }
