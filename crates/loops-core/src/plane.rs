@@ -33,6 +33,11 @@ use crate::trajectory::{Timeline, Trajectory};
 /// each showing the pose of the window nearest its centre time (ties to the earlier pose; a pose
 /// may show in two neighbouring pixels when poses are sparser than pixels there).
 ///
+/// Each pixel stands for a stretch of time, its *edges* ([`column_edges_s`](Self::column_edges_s),
+/// [`row_edges_s`](Self::row_edges_s)): on a downsampled axis the even steps over the window, so
+/// pixel units map to seconds affinely; on an axis of every pose the midpoints between the
+/// poses' times, half a step beyond the first and the last (the window itself for a single pose).
+///
 /// # Examples
 /// ```
 /// use loops_core::{PlaneGrid, Trajectory};
@@ -43,12 +48,16 @@ use crate::trajectory::{Timeline, Trajectory};
 /// assert_eq!(coarse.columns(), &[1, 4, 7]);
 /// let zoom = PlaneGrid::new(&traj, Some(([2.0, 4.0], [6.5, 9.0])), 100)?;
 /// assert_eq!((zoom.columns(), zoom.rows()), (&[2, 3, 4][..], &[7, 8, 9][..]));
+/// assert_eq!(coarse.column_edges_s(), &[0.0, 3.0, 6.0, 9.0]);
+/// assert_eq!(zoom.column_edges_s(), &[1.5, 2.5, 3.5, 4.5]);
 /// # Ok::<(), loops_core::Error>(())
 /// ```
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PlaneGrid {
     columns: Vec<usize>,
     rows: Vec<usize>,
+    column_edges_s: Vec<f64>,
+    row_edges_s: Vec<f64>,
     poses: usize,
 }
 
@@ -75,13 +84,13 @@ impl PlaneGrid {
         let times = timeline.pose_times_s();
         let span_s = times[times.len() - 1] - times[0];
         let (t_window, t_prime_window) = window_s.unwrap_or(([0.0, span_s], [0.0, span_s]));
-        let columns = axis_poses(times, t_window, max_pixels, "t")?;
-        let rows = if t_prime_window == t_window {
-            columns.clone()
+        let (columns, column_edges_s) = axis_poses(times, t_window, max_pixels, "t")?;
+        let (rows, row_edges_s) = if t_prime_window == t_window {
+            (columns.clone(), column_edges_s.clone())
         } else {
             axis_poses(times, t_prime_window, max_pixels, "t′")?
         };
-        Ok(Self { columns, rows, poses: times.len() })
+        Ok(Self { columns, rows, column_edges_s, row_edges_s, poses: times.len() })
     }
 
     /// The pose index i of each image column (time t), increasing.
@@ -92,6 +101,18 @@ impl PlaneGrid {
     /// The pose index j of each image row (time t′), increasing: row 0 is the earliest t′.
     pub fn rows(&self) -> &[usize] {
         &self.rows
+    }
+
+    /// The time each column stands for: `width + 1` increasing boundaries, seconds from the
+    /// first pose (column a spans `[edges[a], edges[a + 1]]`; see [`PlaneGrid`]).
+    pub fn column_edges_s(&self) -> &[f64] {
+        &self.column_edges_s
+    }
+
+    /// The time each row stands for: `height + 1` increasing boundaries, seconds from the first
+    /// pose, as [`column_edges_s`](Self::column_edges_s).
+    pub fn row_edges_s(&self) -> &[f64] {
+        &self.row_edges_s
     }
 
     /// Number of columns (at least 1).
@@ -115,8 +136,13 @@ impl PlaneGrid {
     }
 }
 
-/// The poses along one axis of the grid (see [`PlaneGrid`]).
-fn axis_poses(times: &[f64], window_s: [f64; 2], max_pixels: usize, axis: &'static str) -> Result<Vec<usize>> {
+/// The poses along one axis of the grid and the pixels' edges (see [`PlaneGrid`]).
+fn axis_poses(
+    times: &[f64],
+    window_s: [f64; 2],
+    max_pixels: usize,
+    axis: &'static str,
+) -> Result<(Vec<usize>, Vec<f64>)> {
     let [a, b] = window_s;
     if !(a.is_finite() && b.is_finite() && a < b) {
         return Err(Error::InvalidInterval { a, b });
@@ -129,11 +155,12 @@ fn axis_poses(times: &[f64], window_s: [f64; 2], max_pixels: usize, axis: &'stat
         return Err(Error::EmptyWindow { axis, start_s: a, end_s: b });
     }
     if hi - lo <= max_pixels {
-        return Ok((lo..hi).collect());
+        return Ok(((lo..hi).collect(), pose_edges(&times[lo..hi], t0, window_s)));
     }
     let inside = &times[lo..hi];
     let step = (b - a) / max_pixels as f64;
-    Ok((0..max_pixels)
+    let edges = (0..=max_pixels).map(|k| if k == max_pixels { b } else { a + k as f64 * step }).collect();
+    let poses = (0..max_pixels)
         .map(|k| {
             let centre = a + (k as f64 + 0.5) * step;
             let after = inside.partition_point(|&t| t - t0 < centre).min(inside.len() - 1);
@@ -144,7 +171,21 @@ fn axis_poses(times: &[f64], window_s: [f64; 2], max_pixels: usize, axis: &'stat
             };
             lo + nearest
         })
-        .collect())
+        .collect();
+    Ok((poses, edges))
+}
+
+/// The edges of pixels that show one pose each (`inside`, times on the clock of `t0`): the
+/// midpoints between neighbours, half a step beyond the ends; the window for a single pose.
+fn pose_edges(inside: &[f64], t0: f64, [a, b]: [f64; 2]) -> Vec<f64> {
+    let relative: Vec<f64> = inside.iter().map(|t| t - t0).collect();
+    let [first, .., last] = relative[..] else { return vec![a, b] };
+    let mids = relative.windows(2).map(|w| (w[0] + w[1]) / 2.0);
+    let (after_first, before_last) = ((relative[0] + relative[1]) / 2.0, (relative[relative.len() - 2] + last) / 2.0);
+    std::iter::once(first - (after_first - first))
+        .chain(mids)
+        .chain(std::iter::once(last + (last - before_last)))
+        .collect()
 }
 
 /// The pairwise distance π_ξ on a grid: δ(x_i, x_j) for column pose i and row pose j, row-major
@@ -297,6 +338,32 @@ pub enum Border {
     /// The image continues its outermost pixels: no edge along the border, so a component cut
     /// by a zoom window stays open there.
     Open,
+}
+
+impl Border {
+    /// The accepted names.
+    pub const NAMES: &'static str = "closed, open";
+}
+
+impl std::str::FromStr for Border {
+    type Err = Error;
+
+    /// `"closed"` or `"open"`.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::Border;
+    /// assert_eq!("open".parse::<Border>()?, Border::Open);
+    /// assert!("ajar".parse::<Border>().is_err());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    fn from_str(name: &str) -> Result<Self> {
+        match name {
+            "closed" => Ok(Self::Closed),
+            "open" => Ok(Self::Open),
+            _ => Err(Error::UnknownName { kind: "border", name: name.to_owned(), expected: Self::NAMES }),
+        }
+    }
 }
 
 /// One unit edge of the pixel lattice with different labels on its two sides.
@@ -532,6 +599,19 @@ mod tests {
         assert_eq!(err, Error::EmptyWindow { axis: "t", start_s: 3.0, end_s: 9.0 });
         assert!(matches!(PlaneGrid::new(&traj, Some(([3.0, 3.0], [0.0, 1.0])), 5), Err(Error::InvalidInterval { .. })));
         assert!(matches!(PlaneGrid::new(&traj, None, 0), Err(Error::InvalidParameter { name: "max_pixels", .. })));
+    }
+
+    #[test]
+    fn edges_are_even_steps_or_midpoints() {
+        let traj = Trajectory::from_points(vec![5.0, 6.0, 7.0, 15.0], &[[0.0]; 4]).unwrap();
+        let coarse = PlaneGrid::new(&traj, None, 3).unwrap();
+        assert_eq!(coarse.column_edges_s(), [0.0, 10.0 / 3.0, 20.0 / 3.0, 10.0]);
+        assert_eq!(coarse.row_edges_s(), coarse.column_edges_s());
+        let all = PlaneGrid::new(&traj, None, 4).unwrap();
+        assert_eq!(all.column_edges_s(), [-0.5, 0.5, 1.5, 6.0, 14.0]);
+        let zoom = PlaneGrid::new(&traj, Some(([9.5, 10.0], [0.5, 2.5])), 4).unwrap();
+        assert_eq!((zoom.columns(), zoom.column_edges_s()), (&[3][..], &[9.5, 10.0][..]));
+        assert_eq!((zoom.rows(), zoom.row_edges_s()), (&[1, 2][..], &[0.5, 1.5, 2.5][..]));
     }
 
     #[test]

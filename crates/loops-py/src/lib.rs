@@ -17,6 +17,7 @@ mod py_clusters;
 mod py_detections;
 mod py_loops;
 mod py_metric;
+mod py_plane;
 mod py_quality;
 mod py_samples;
 mod py_trajectory;
@@ -56,5 +57,12 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_clusters::cluster_detections, module)?)?;
     module.add_function(wrap_pyfunction!(py_samples::sample, module)?)?;
     module.add_function(wrap_pyfunction!(py_quality::sample_quality, module)?)?;
+    module.add_class::<py_plane::PlaneGrid>()?;
+    module.add_function(wrap_pyfunction!(py_plane::distance_image, module)?)?;
+    module.add_function(wrap_pyfunction!(py_plane::outline_segments, module)?)?;
+    module.add_function(wrap_pyfunction!(py_plane::component_outlines, module)?)?;
+    module.add_function(wrap_pyfunction!(py_plane::chain_polylines, module)?)?;
+    module.add_function(wrap_pyfunction!(py_plane::isocontour, module)?)?;
+    module.add_function(wrap_pyfunction!(py_plane::sampler_symbol, module)?)?;
     Ok(())
 }

@@ -13,14 +13,15 @@ use crate::py_loops::Loops;
 use crate::py_trajectory::Trajectory;
 use loops_core::{SampleSize, Timeline};
 
-/// Something detections can be placed on: a `Trajectory` or the `Loops` found on one.
-enum TimelineArg {
+/// Something detections can be placed on (and a `PlaneGrid` made for): a `Trajectory` or the
+/// `Loops` found on one.
+pub(crate) enum TimelineArg {
     Trajectory(Arc<loops_core::Trajectory>),
     Loops(Arc<loops_core::Loops>),
 }
 
 impl TimelineArg {
-    fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<Self> {
+    pub(crate) fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<Self> {
         if let Ok(trajectory) = obj.cast::<Trajectory>() {
             Ok(Self::Trajectory(Arc::clone(&trajectory.get().inner)))
         } else if let Ok(loops) = obj.cast::<Loops>() {
@@ -33,7 +34,7 @@ impl TimelineArg {
         }
     }
 
-    fn timeline(&self) -> &dyn Timeline {
+    pub(crate) fn timeline(&self) -> &dyn Timeline {
         match self {
             Self::Trajectory(trajectory) => trajectory.as_ref(),
             Self::Loops(loops) => loops.as_ref(),

@@ -247,6 +247,90 @@ impl Loops {
         Ok(self.inner.is_simple(i, j))
     }
 
+    /// The loop component of every pixel of ``grid``: the component holding the pair (column
+    /// pose, row pose), either order (so the image is mirrored across the diagonal), −1
+    /// outside S_γ. The same pixels as :func:`distance_image`: −1 exactly where δ > γ. With a
+    /// grid of every pose it is the lattice of the components itself; when the grid downsamples,
+    /// a component smaller than a pixel may hold no pixel's pair (mark it at its closest pair).
+    ///
+    /// Args:
+    ///     grid: a :class:`PlaneGrid` made for these loops (or their trajectory).
+    ///
+    /// Returns:
+    ///     int64 array, shape ``(grid.height, grid.width)``, row 0 the earliest t′.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a grid made for another number of poses.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 5.0, 5.0, 0.0]))  # out and back
+    ///     >>> loops = il.find_loops(traj, gamma=1.0)
+    ///     >>> loops.label_image(il.PlaneGrid(loops, 10)).tolist()
+    ///     [[0, -1, -1, 1], [-1, 2, 2, -1], [-1, 2, 2, -1], [1, -1, -1, 3]]
+    fn label_image<'py>(
+        &self,
+        py: Python<'py>,
+        grid: &crate::py_plane::PlaneGrid,
+    ) -> PyResult<Bound<'py, numpy::PyArray2<i64>>> {
+        crate::py_plane::label_image(py, &self.inner, grid)
+    }
+
+    /// The component id of each pair ``(i[k], j[k])`` (either order), −1 outside S_γ: what
+    /// :meth:`component_of` gives, for many pairs at once (a binary search over the runs each).
+    ///
+    /// Args:
+    ///     i, j: integer pose indices, shape ``(m,)``.
+    ///
+    /// Returns:
+    ///     int64 array, shape ``(m,)``.
+    ///
+    /// Raises:
+    ///     IndexError: a pose index past the last pose (or negative).
+    ///     ValueError: ``i`` and ``j`` of different lengths.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops.components_of_pairs([3, 0, 0], [0, 3, 1]).tolist()
+    ///     [1, 1, -1]
+    fn components_of_pairs<'py>(
+        &self,
+        py: Python<'py>,
+        i: &Bound<'_, PyAny>,
+        j: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, numpy::PyArray1<i64>>> {
+        crate::py_plane::components_of_pairs(py, &self.inner, i, j)
+    }
+
+    /// How many of the pairs ``(i[k], j[k])`` each component holds, by component id (pairs
+    /// outside S_γ are not counted).
+    ///
+    /// Args:
+    ///     i, j: as :meth:`components_of_pairs`.
+    ///
+    /// Returns:
+    ///     int64 array, shape ``(number of components,)``.
+    ///
+    /// Raises:
+    ///     As :meth:`components_of_pairs`.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops.pair_counts_per_component([3, 0, 0, 1], [0, 3, 1, 2]).tolist()
+    ///     [0, 2, 1, 0]
+    fn pair_counts_per_component<'py>(
+        &self,
+        py: Python<'py>,
+        i: &Bound<'_, PyAny>,
+        j: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, numpy::PyArray1<i64>>> {
+        crate::py_plane::pair_counts_per_component(py, &self.inner, i, j)
+    }
+
     /// Loop duration τ(t_i) for every sample: how long the trajectory stays within γ of
     /// ξ(t_i) (paper, Eq. 6).
     ///

@@ -91,6 +91,26 @@ impl Trajectory {
         self.inner.span_s()
     }
 
+    /// The pose nearest each time: the pose whose time cell holds it, ties to the earlier pose.
+    ///
+    /// Args:
+    ///     times_s: times, seconds on the clock of the timestamps, shape ``(m,)``.
+    ///
+    /// Returns:
+    ///     int64 pose indices, shape ``(m,)``.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a time outside the trajectory's time span (or NaN), naming it.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.array([0.0, 1.0, 3.0]), np.zeros(3))
+    ///     >>> traj.nearest_poses([0.4, 0.5, 2.1, 3.0]).tolist()
+    ///     [0, 0, 2, 2]
+    fn nearest_poses<'py>(&self, py: Python<'py>, times_s: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        crate::py_plane::nearest_poses(py, &self.inner, times_s)
+    }
+
     /// SE(3) poses, for the ``se3`` / ``se3_rotation`` metrics: positions ``(n, 3)`` and
     /// orientations as quaternions ``(n, 4)`` in **x, y, z, w** order (the ROS and
     /// ``scipy.spatial.transform.Rotation.as_quat()`` order). Quaternions within

@@ -2,13 +2,18 @@
 //! [`MAX_GRID`]² pixels, with the γ isocontour, the loop-component outlines and the samples
 //! drawn over it.
 //!
-//! Pixel (a, b) shows the pair of poses nearest the centre times of column a (t) and row b (t′),
-//! and carries that pair's component (`Loops::component_of`). The isocontour (marching squares
-//! on the pixel centres) and the outlines (edges between pixels of different components) are
-//! drawn in pixel units under one transform, so their coordinates are small numbers.
+//! Everything on the plane comes from `loops_core::plane`, as `inexact_loops.plot` gets it: the
+//! grid of poses ([`PlaneGrid`]), the distance of each pixel's pair
+//! ([`MetricSpec::distance_image`]), its component ([`Loops::label_image`]), the outlines
+//! ([`component_outlines`], closed along the border so they can be filled) and the γ isocontour
+//! ([`isocontour`]). They are in pixel units, drawn under one affine transform onto the plot
+//! (whose axes span the grid's pixel edges), so their coordinates are small numbers. This module
+//! only draws them.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+
+use loops_core::{Border, PlaneGrid, component_outlines, isocontour};
 
 use super::png::PaletteImage;
 use super::svg::{self, ICE, Plot, Rect, Rgb, Scale, px};
@@ -31,208 +36,16 @@ const LABELLED_COMPONENTS: usize = 8;
 /// Side of the plot area, pixels.
 const AREA_SIDE: f64 = 440.0;
 
-/// The downsampled plane: `m × m` pixels, index `b · m + a` for column a (time t) and row b
-/// (time t′, upwards).
-struct Grid {
-    m: usize,
-    /// δ of each pixel's pair.
-    distance: Vec<f64>,
-    /// The component of each pixel's pair (`None`: not in S_γ, or no labels available).
-    label: Vec<Option<u32>>,
-}
-
-/// For `m` pixels evenly over `[0, span]`, the pose nearest each pixel's centre time
-/// (`relative_s`: pose times from the first, increasing).
-fn pixel_poses(relative_s: &[f64], m: usize) -> Vec<usize> {
-    let span = relative_s.last().copied().unwrap_or(0.0);
-    (0..m)
-        .map(|k| {
-            let centre = (k as f64 + 0.5) * span / m as f64;
-            let after = relative_s.partition_point(|&t| t < centre).min(relative_s.len() - 1);
-            if after > 0 && centre - relative_s[after - 1] <= relative_s[after] - centre { after - 1 } else { after }
-        })
-        .collect()
-}
-
-fn grid(input: &ReportInput<'_>, poses: &[usize], relative_s: &[f64]) -> Grid {
-    let (traj, loops) = (input.traj, input.loops);
-    let m = poses.len();
-    let mut distance = vec![0.0; m * m];
-    for b in 0..m {
-        for a in 0..=b {
-            let d = input.metric.distance(traj.point(poses[a]), traj.point(poses[b]));
-            (distance[b * m + a], distance[a * m + b]) = (d, d);
-        }
-    }
-    // Labels from the runs of S_γ: every component gets the pixels its cells fall in, however
-    // small it is. Where components share a pixel, a non-trivial one wins over a trivial one,
-    // then the larger area.
-    let mut label: Vec<Option<u32>> = vec![None; m * m];
-    let components = loops.components();
-    if loops.len() == relative_s.len() && m > 0 {
-        let span_s = relative_s[relative_s.len() - 1];
-        let pixel = |i: usize| ((relative_s[i] / span_s * m as f64) as usize).min(m - 1);
-        let rank = |c: u32| components.get(c as usize).map(|c| (!c.trivial, c.area_s2));
-        let mut claim = |at: usize, c: u32| {
-            let wins = match label[at] {
-                None => true,
-                Some(old) => old != c && rank(c).partial_cmp(&rank(old)) == Some(std::cmp::Ordering::Greater),
-            };
-            if wins {
-                label[at] = Some(c);
-            }
-        };
-        for run in loops.runs() {
-            let a = pixel(run.row);
-            for b in pixel(run.start)..=pixel(run.end) {
-                claim(b * m + a, run.component as u32);
-                claim(a * m + b, run.component as u32);
-            }
-        }
-    }
-    Grid { m, distance, label }
-}
-
-/// Joins edges (pairs of vertex ids) into polylines, each a list of vertex ids (closed ones end
-/// where they start). Deterministic: chains start at the first unused edge, in input order.
-fn chains(edges: &[(u32, u32)]) -> Vec<Vec<u32>> {
-    let mut ends: Vec<(u32, u32)> =
-        edges.iter().enumerate().flat_map(|(k, &(a, b))| [(a, k as u32), (b, k as u32)]).collect();
-    ends.sort_unstable();
-    let mut used = vec![false; edges.len()];
-    let next = |vertex: u32, used: &[bool]| -> Option<usize> {
-        let first = ends.partition_point(|e| e.0 < vertex);
-        ends[first..].iter().take_while(|e| e.0 == vertex).map(|e| e.1 as usize).find(|&k| !used[k])
-    };
-    let extend = |line: &mut Vec<u32>, used: &mut Vec<bool>| {
-        while let Some(&end) = line.last() {
-            let Some(k) = next(end, used) else { break };
-            used[k] = true;
-            let (a, b) = edges[k];
-            line.push(if a == end { b } else { a });
-        }
-    };
-    let mut result = Vec::new();
-    for k in 0..edges.len() {
-        if used[k] {
-            continue;
-        }
-        used[k] = true;
-        let (a, b) = edges[k];
-        let mut forward = vec![a, b];
-        extend(&mut forward, &mut used);
-        let mut backward = vec![a];
-        if forward.last() != Some(&a) {
-            extend(&mut backward, &mut used);
-        }
-        backward.reverse();
-        backward.pop();
-        backward.extend(forward);
-        result.push(backward);
-    }
-    result
-}
-
-/// The `level` isocontour of `values` (m × m, pixel centres at (a + ½, b + ½)) by marching
-/// squares, as polylines in pixel units. Saddles are resolved by the cell's mean.
-fn isocontour(values: &[f64], m: usize, level: f64) -> Vec<Vec<(f64, f64)>> {
-    let v = |a: usize, b: usize| values[b * m + a] - level;
-    // Grid edges between pixel centres: 2(b·m + a) to the right of (a, b), + 1 above it.
-    let right = |a: usize, b: usize| 2 * (b * m + a) as u32;
-    let up = |a: usize, b: usize| 2 * (b * m + a) as u32 + 1;
-    let mut segments = Vec::new();
-    for b in 0..m.saturating_sub(1) {
-        for a in 0..m - 1 {
-            let corners = [v(a, b), v(a + 1, b), v(a + 1, b + 1), v(a, b + 1)];
-            let case = corners.iter().enumerate().fold(0, |acc, (k, &c)| acc | (usize::from(c <= 0.0) << k));
-            let (bottom, east, top, west) = (right(a, b), up(a + 1, b), right(a, b + 1), up(a, b));
-            let centre_inside = corners.iter().sum::<f64>() <= 0.0;
-            let pairs: &[(u32, u32)] = match case {
-                0 | 15 => &[],
-                1 | 14 => &[(west, bottom)],
-                2 | 13 => &[(bottom, east)],
-                3 | 12 => &[(west, east)],
-                4 | 11 => &[(east, top)],
-                6 | 9 => &[(bottom, top)],
-                7 | 8 => &[(west, top)],
-                5 if centre_inside => &[(bottom, east), (top, west)],
-                5 => &[(west, bottom), (east, top)],
-                10 if centre_inside => &[(west, bottom), (east, top)],
-                _ => &[(bottom, east), (top, west)],
-            };
-            segments.extend_from_slice(pairs);
-        }
-    }
-    let point = |edge: u32| {
-        let (cell, vertical) = ((edge / 2) as usize, edge % 2 == 1);
-        let (a, b) = (cell % m, cell / m);
-        let (v0, v1) = if vertical { (v(a, b), v(a, b + 1)) } else { (v(a, b), v(a + 1, b)) };
-        let f = if v0 == v1 { 0.5 } else { (v0 / (v0 - v1)).clamp(0.0, 1.0) };
-        let (x, y) = (a as f64 + 0.5, b as f64 + 0.5);
-        if vertical { (x, y + f) } else { (x + f, y) }
-    };
-    chains(&segments).into_iter().map(|line| line.into_iter().map(point).collect()).collect()
-}
-
-/// Per component (by id, ascending), the edges between its pixels and the others, as polylines
-/// of lattice vertices `(x, y)` (pixel corners, in pixel units).
-fn outlines(grid: &Grid) -> BTreeMap<u32, Vec<Vec<(u32, u32)>>> {
-    let m = grid.m;
-    let side = m as u32 + 1;
-    let label = |a: usize, b: usize| grid.label[b * m + a];
-    let mut edges: BTreeMap<u32, Vec<(u32, u32)>> = BTreeMap::new();
-    let mut add = |c: Option<u32>, edge: (u32, u32)| {
-        if let Some(c) = c {
-            edges.entry(c).or_default().push(edge);
-        }
-    };
-    let vertex = |a: usize, b: usize| b as u32 * side + a as u32;
-    for b in 0..m {
-        for a in 0..=m {
-            // The vertical edge left of pixel (a, b).
-            let left = if a > 0 { label(a - 1, b) } else { None };
-            let here = if a < m { label(a, b) } else { None };
-            if left != here {
-                let edge = (vertex(a, b), vertex(a, b + 1));
-                add(left, edge);
-                add(here, edge);
-            }
-        }
-    }
-    for b in 0..=m {
-        for a in 0..m {
-            // The horizontal edge below pixel (a, b).
-            let below = if b > 0 { label(a, b - 1) } else { None };
-            let here = if b < m { label(a, b) } else { None };
-            if below != here {
-                let edge = (vertex(a, b), vertex(a + 1, b));
-                add(below, edge);
-                add(here, edge);
-            }
-        }
-    }
-    edges
-        .into_iter()
-        .map(|(c, edges)| {
-            let lines = chains(&edges)
-                .into_iter()
-                .map(|line| line.into_iter().map(|v| (v % side, v / side)).collect())
-                .collect();
-            (c, lines)
-        })
-        .collect()
-}
-
 /// Path data of lattice polylines: absolute start, then relative `h`/`v` moves, one per
 /// straight run.
-fn lattice_path(lines: &[Vec<(u32, u32)>]) -> String {
+fn lattice_path(lines: &[Vec<[u32; 2]>]) -> String {
     let mut d = String::new();
     for line in lines {
-        let Some(&(x0, y0)) = line.first() else { continue };
+        let Some(&[x0, y0]) = line.first() else { continue };
         let _ = write!(d, "M{x0} {y0}");
         let mut run: Option<(bool, i64)> = None; // (horizontal, length)
         for w in line.windows(2) {
-            let (dx, dy) = (i64::from(w[1].0) - i64::from(w[0].0), i64::from(w[1].1) - i64::from(w[0].1));
+            let (dx, dy) = (i64::from(w[1][0]) - i64::from(w[0][0]), i64::from(w[1][1]) - i64::from(w[0][1]));
             let step = if dy == 0 { (true, dx) } else { (false, dy) };
             run = match run {
                 Some((h, length)) if h == step.0 && length.signum() == step.1.signum() => Some((h, length + step.1)),
@@ -253,19 +66,41 @@ fn lattice_path(lines: &[Vec<(u32, u32)>]) -> String {
     d
 }
 
+/// The plane as the core derives it: the grid, the distance and the component of each pixel.
+struct Plane {
+    grid: PlaneGrid,
+    distance: Vec<f64>,
+    labels: Vec<Option<u32>>,
+}
+
+fn plane(input: &ReportInput<'_>) -> loops_core::Result<Plane> {
+    let grid = PlaneGrid::new(input.traj, None, MAX_GRID)?;
+    let distance = input.metric.distance_image(input.traj, &grid)?;
+    let labels = input.loops.label_image(&grid)?;
+    Ok(Plane { grid, distance, labels })
+}
+
 /// Figure: the pairwise distance with the γ isocontour, component outlines and samples.
 pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     let (traj, loops) = (input.traj, input.loops);
     let t0 = traj.timestamps_s()[0];
     let relative_s: Vec<f64> = traj.timestamps_s().iter().map(|t| t - t0).collect();
-    let span_s = traj.span_s();
-    let m = traj.len().min(MAX_GRID);
-    let poses = pixel_poses(&relative_s, m);
-    let grid = grid(input, &poses, &relative_s);
+    let plane = match plane(input) {
+        Ok(plane) => plane,
+        Err(err) => {
+            let caption = maud::html! { b { "Pairwise distance." } " Not drawn: " (err) };
+            return figure("pairwise-distance", "", caption);
+        }
+    };
+    let grid = &plane.grid;
+    // A square image (no window): its side in pixels, and the time span its pixels stand for.
+    let m = grid.width();
+    let edges = grid.column_edges_s();
+    let (start_s, end_s) = (edges[0], edges[m]);
     let gamma = loops.gamma();
     // A square-root colour scale: the small distances, where S_γ and its near misses are, get
     // most of the colours.
-    let d_max = grid.distance.iter().copied().filter(|d| d.is_finite()).fold(0.0, f64::max);
+    let d_max = plane.distance.iter().copied().filter(|d| d.is_finite()).fold(0.0, f64::max);
     let colour_scale = Scale::sqrt(0.0, if d_max > 0.0 { d_max } else { gamma }).onto(0.0, 1.0);
     let area = Rect { left: 64.0, top: 10.0, width: AREA_SIDE, height: AREA_SIDE };
     let mut plot = Plot::new(
@@ -273,8 +108,8 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
         area.right() + 120.0,
         area.bottom() + 48.0,
         area,
-        Scale::linear(0.0, span_s),
-        Scale::linear(0.0, span_s),
+        Scale::linear(start_s, end_s),
+        Scale::linear(start_s, end_s),
     );
 
     // The image, in 256 shades: row 0 at the top is the last t′.
@@ -282,7 +117,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     let mut image = PaletteImage::new(m as u32, m as u32, palette);
     for b in 0..m {
         for a in 0..m {
-            let shade = (colour_scale.map(grid.distance[b * m + a]).clamp(0.0, 1.0) * 255.0).round() as u8;
+            let shade = (colour_scale.map(plane.distance[b * m + a]).clamp(0.0, 1.0) * 255.0).round() as u8;
             image.set(a, m - 1 - b, shade);
         }
     }
@@ -307,7 +142,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
         area.bottom()
     );
     let components = loops.components();
-    let outlined = outlines(&grid);
+    let outlined = component_outlines(&plane.labels, m, m, Border::Closed).unwrap_or_default();
     // One path per colour (components never overlap, so even-odd filling stays right).
     let mut by_colour: BTreeMap<(bool, Rgb), String> = BTreeMap::new();
     for (&c, lines) in &outlined {
@@ -323,8 +158,8 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
         );
     }
     let mut contour = String::new();
-    for line in isocontour(&grid.distance, m, gamma) {
-        for (k, &(x, y)) in line.iter().enumerate() {
+    for line in isocontour(&plane.distance, m, m, gamma).unwrap_or_default() {
+        for (k, &[x, y]) in line.iter().enumerate() {
             contour.push(if k == 0 { 'M' } else { 'L' });
             px(&mut contour, x);
             contour.push(' ');
@@ -336,7 +171,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     }
     overlay.push_str("</g>");
 
-    // Components whose every pixel a larger one holds: a cross at their closest pair.
+    // Components that hold none of the pixels' pairs: a cross at their closest pair.
     let time = |i: usize| relative_s.get(i).copied().unwrap_or(0.0);
     let small: Vec<_> = components.iter().filter(|c| !outlined.contains_key(&(c.id as u32))).collect();
     let mut crosses: BTreeMap<Rgb, String> = BTreeMap::new();
@@ -401,14 +236,14 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     let nontrivial = components.iter().filter(|c| !c.trivial).count();
     let caption = format!(
         "<b>Pairwise distance.</b> δ(x<sub>i</sub>, x<sub>j</sub>) over the (t, t′) plane, {m} × {m} pixels{down} \
-         (dark: close). White line: the γ = {gamma} isocontour of these δ. Coloured: the pixels holding pairs of the \
-         {nontrivial} non-trivial loop components, in both halves (grey: the trivial one{trivials}, along the \
-         diagonal), so that every component shows however small{labelled}. \
+         (dark: close). White line: the γ = {gamma} isocontour of these δ. Coloured: the pixels whose pair lies in one \
+         of the {nontrivial} non-trivial loop components, in both halves (grey: the trivial one{trivials}, along \
+         the diagonal){labelled}. \
          {small}Red dots: {dots_text} at (t, t′), t ≤ t′.",
         down = if m < traj.len() {
             format!(
                 " of {} s each, showing the pair of poses nearest its centre ({} poses downsampled)",
-                three_digits(span_s / m as f64),
+                three_digits((end_s - start_s) / m as f64),
                 traj.len()
             )
         } else {
@@ -423,8 +258,8 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
         small = match small.len() {
             0 => String::new(),
             count => format!(
-                "{count} component{s} sharing every pixel with larger ones {are} marked + at {their} closest \
-                 pair{shown}. ",
+                "{count} component{s} smaller than a pixel, holding none of the pixels' pairs, {are} marked + \
+                 at {their} closest pair{shown}. ",
                 s = if count == 1 { "" } else { "s" },
                 are = if count == 1 { "is" } else { "are" },
                 their = if count == 1 { "its" } else { "their" },
@@ -452,14 +287,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn pixels_take_the_nearest_pose() {
-        let relative_s = [0.0, 1.0, 2.0, 10.0];
-        // Centres at 1.25, 3.75, 6.25 and 8.75 s.
-        assert_eq!(pixel_poses(&relative_s, 4), [1, 2, 3, 3]);
-        assert_eq!(pixel_poses(&relative_s, 1), [2]);
-    }
-
-    #[test]
     fn three_digits_are_shown() {
         assert_eq!(three_digits(18.9), "18.9");
         assert_eq!(three_digits(0.125), "0.125");
@@ -468,40 +295,8 @@ mod tests {
     }
 
     #[test]
-    fn chains_join_edges_into_closed_and_open_lines() {
-        // A unit square (out of order) and a separate open path.
-        let square = [(0, 1), (2, 3), (1, 2), (3, 0)];
-        let got = chains(&square);
-        assert_eq!(got.len(), 1);
-        assert_eq!(got[0].len(), 5);
-        assert_eq!(got[0].first(), got[0].last());
-        assert_eq!(chains(&[(5, 6), (7, 8), (6, 7)]), [vec![5, 6, 7, 8]]);
-        assert!(chains(&[]).is_empty());
-    }
-
-    #[test]
-    fn isocontour_of_a_bump_is_one_closed_line() {
-        let m = 9;
-        let values: Vec<f64> = (0..m * m)
-            .map(|k| {
-                let (a, b) = ((k % m) as f64 - 4.0, (k / m) as f64 - 4.0);
-                a.hypot(b)
-            })
-            .collect();
-        let lines = isocontour(&values, m, 2.5);
-        assert_eq!(lines.len(), 1);
-        assert_eq!(lines[0].first(), lines[0].last());
-        for &(x, y) in &lines[0] {
-            let r = (x - 4.5).hypot(y - 4.5);
-            assert!((r - 2.5).abs() < 0.3, "{r}");
-        }
-        assert!(isocontour(&values, m, -1.0).is_empty());
-        assert!(isocontour(&[0.0], 1, 1.0).is_empty());
-    }
-
-    #[test]
     fn lattice_paths_merge_straight_runs() {
-        let square = vec![vec![(0, 0), (1, 0), (2, 0), (2, 1), (2, 2), (1, 2), (0, 2), (0, 1), (0, 0)]];
+        let square = vec![vec![[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [1, 2], [0, 2], [0, 1], [0, 0]]];
         assert_eq!(lattice_path(&square), "M0 0h2v2h-2v-2z");
     }
 }
