@@ -129,7 +129,10 @@ def test_distance_image_downsamples_long_trajectories():
     ax = plot.distance_image(traj, loops, max_pixels=300)
     image = np.asarray(ax.images[0].get_array())
     assert image.shape == (300, 300)
-    grid = np.unique(np.round(np.linspace(0, n - 1, 300)).astype(int))
+    # 300 pixels evenly spaced in time, each showing the pose nearest its centre.
+    relative = t - t[0]
+    centres = (np.arange(300) + 0.5) * relative[-1] / 300
+    grid = np.abs(relative[None, :] - centres[:, None]).argmin(axis=1)
     np.testing.assert_allclose(image, cdist(p[grid], p[grid]), atol=1e-9)
     span = t[-1] - t[0]
     lo, hi = ax.get_xlim()
@@ -175,12 +178,13 @@ def test_distance_image_with_a_callable_metric():
     labels, _ = ndimage.label(image <= 1.0)
     assert len(line_collections(ax)[0].get_segments()) == boundary_edges(labels)
     assert "π(t, t′) (rad)" in ax.figure.axes[1].get_ylabel()
-    with pytest.raises(ValueError, match="Euclidean metric"):
-        plot.distance_image(traj, loops)  # torus loops, no callable
-    with pytest.raises(ValueError, match="Euclidean metric"):
-        plot.distance_image(traj, metric="torus")
-    with pytest.raises(ValueError, match="Euclidean metric"):
-        plot.distance_image(traj, metric=il.metrics.Torus())
+    # Any metric is computed by the core: the loops' own, a name or a metric object.
+    for ax in (
+        plot.distance_image(traj, loops),
+        plot.distance_image(traj, metric="torus"),
+        plot.distance_image(traj, metric=il.metrics.Torus()),
+    ):
+        np.testing.assert_allclose(ax.images[0].get_array(), torus(angles, angles), atol=1e-12)
     with pytest.raises(TypeError, match="metric must be"):
         plot.distance_image(traj, metric=42)
     with pytest.raises(ValueError, match="metric returned shape"):
@@ -428,7 +432,7 @@ def test_pair_lookup_equals_component_of():
     loops = il.find_loops(il.Trajectory(np.arange(400) * 0.1, p), gamma=3.0)
     i, j = rng.integers(0, 400, 3000), rng.integers(0, 400, 3000)
     expected = [loops.component_of(int(a), int(b)) for a, b in zip(i, j, strict=True)]
-    found = plot._components_of(loops, i, j)
+    found = loops.components_of_pairs(i, j)
     assert found.tolist() == [-1 if c is None else c for c in expected]
 
 

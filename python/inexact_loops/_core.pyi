@@ -19,16 +19,23 @@ __all__ = [
     "DetectionClusters",
     "Detections",
     "Loops",
+    "PlaneGrid",
     "SampleQuality",
     "Samples",
     "Trajectory",
     "__version__",
+    "chain_polylines",
     "cluster_detections",
+    "component_outlines",
+    "distance_image",
     "draw_detections",
     "find_loops",
+    "isocontour",
+    "outline_segments",
     "read_trajectory",
     "sample",
     "sample_quality",
+    "sampler_symbol",
     "urban_drive",
 ]
 
@@ -106,6 +113,8 @@ class Trajectory:
     @property
     def span_s(self) -> float:
         """Last minus first timestamp, seconds."""
+    def nearest_poses(self, times_s: npt.ArrayLike) -> npt.NDArray[np.int64]:
+        """The pose nearest each time (seconds), ties to the earlier pose."""
     @staticmethod
     def se3(
         timestamps: npt.ArrayLike,
@@ -309,6 +318,14 @@ class Loops:
             >>> loops.is_simple(1, 2), loops.is_simple(0, 3)
             (True, False)
         """
+    def label_image(self, grid: PlaneGrid) -> npt.NDArray[np.int64]:
+        """The component of every pixel of ``grid`` (height, width), -1 outside S_gamma."""
+    def components_of_pairs(self, i: npt.ArrayLike, j: npt.ArrayLike) -> npt.NDArray[np.int64]:
+        """The component id of each pair (i[k], j[k]), either order; -1 outside S_gamma."""
+    def pair_counts_per_component(
+        self, i: npt.ArrayLike, j: npt.ArrayLike
+    ) -> npt.NDArray[np.int64]:
+        """How many of the pairs (i[k], j[k]) each component holds, by component id."""
     def loop_duration(
         self,
         *,
@@ -1022,3 +1039,64 @@ def sample_quality(
         >>> quality.covered == quality.components, quality.missed["id"].tolist()
         (True, [])
     """
+
+@final
+class PlaneGrid:
+    """The poses an image of the (t, t') plane shows: one per column (t) and per row (t')."""
+
+    def __new__(
+        cls,
+        trajectory_or_loops: Trajectory | Loops,
+        max_pixels: int,
+        *,
+        window_s: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    ) -> PlaneGrid: ...
+    @property
+    def columns(self) -> npt.NDArray[np.int64]:
+        """The pose index i of each column (time t), increasing."""
+    @property
+    def rows(self) -> npt.NDArray[np.int64]:
+        """The pose index j of each row (time t'), increasing."""
+    @property
+    def column_edges_s(self) -> npt.NDArray[np.float64]:
+        """The time each column stands for: width + 1 boundaries, seconds from the first pose."""
+    @property
+    def row_edges_s(self) -> npt.NDArray[np.float64]:
+        """The time each row stands for: height + 1 boundaries, seconds from the first pose."""
+    @property
+    def width(self) -> int:
+        """Number of columns."""
+    @property
+    def height(self) -> int:
+        """Number of rows."""
+    @property
+    def poses(self) -> int:
+        """Number of poses of the trajectory the grid was made for."""
+
+def distance_image(
+    trajectory: Trajectory,
+    grid: PlaneGrid,
+    *,
+    metric: _MetricArg = None,
+    threads: int | None = None,
+) -> npt.NDArray[np.float64]:
+    """The pairwise distance on a grid, (height, width), for any metric."""
+
+def outline_segments(
+    labels: npt.ArrayLike, *, border: Literal["closed", "open"] | str = "closed"
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """The pixel edges where the label changes, (k, 2, 2), and the labels on their sides."""
+
+def component_outlines(
+    labels: npt.ArrayLike, *, border: Literal["closed", "open"] | str = "closed"
+) -> dict[int, list[npt.NDArray[np.int64]]]:
+    """The outline of each component of a label image, as polylines of pixel corners."""
+
+def chain_polylines(edges: npt.ArrayLike) -> list[npt.NDArray[np.int64]]:
+    """Joins edges (vertex ids or vertices) into polylines, each edge used once."""
+
+def isocontour(values: npt.ArrayLike, level: float) -> list[npt.NDArray[np.float64]]:
+    """The level isocontour of an image by marching squares, in pixel units."""
+
+def sampler_symbol(sampler: _SamplerName | str) -> str:
+    """The symbol of a sampler in the paper (sigma_rho, ...) or the baseline's system name."""

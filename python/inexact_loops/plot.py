@@ -53,7 +53,9 @@ except ImportError as err:  # pragma: no cover - exercised only without matplotl
     ) from err
 
 from . import metrics as _metrics
-from ._core import Loops, Trajectory
+from ._core import Loops, PlaneGrid, Trajectory, outline_segments, sampler_symbol
+from ._core import distance_image as _core_distance_image
+from .errors import InvalidParameterError
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -66,12 +68,13 @@ __all__ = [
     "trajectory_by_duration",
 ]
 
-#: Colour and legend label of the paper's samplers (Figs. 6-8), by sampler name.
+#: Colour and legend label of the paper's samplers (Figs. 6-8), by sampler name: the core's
+#: symbol (:func:`~inexact_loops.sampler_symbol`) and the sampler's order of growth.
 PAPER_SAMPLERS: dict[str, tuple[str, str]] = {
-    "alpha": ("magenta", "σ_α ∈ O(α)"),
-    "rho": ("forestgreen", "σ_ρ ∈ O(ρ)"),
-    "one": ("deepskyblue", "σ_1 ∈ O(1)"),
-    "rho-dispersed": ("darkorange", "σ_ρ dispersed"),
+    "alpha": ("magenta", f"{sampler_symbol('alpha')} ∈ O(α)"),
+    "rho": ("forestgreen", f"{sampler_symbol('rho')} ∈ O(ρ)"),
+    "one": ("deepskyblue", f"{sampler_symbol('one')} ∈ O(1)"),
+    "rho-dispersed": ("darkorange", sampler_symbol("rho-dispersed")),
 }
 
 #: Colours of successive gamma isocontours.
@@ -109,12 +112,17 @@ def distance_image(
 ) -> Axes:
     """The pairwise distance function pi(t, t') = delta(xi(t), xi(t')) as an image.
 
-    The image is computed with numpy on a grid of at most ``max_pixels`` poses per side (every
-    pose when there are fewer; otherwise evenly spaced poses), so it costs O(max_pixels²)
-    whatever the trajectory's length. Drawn on it: the gamma isocontours, the outlines of the
-    loop components of ``loops`` (its runs rasterised on the same grid and mirrored: the
-    staircase is the lattice of the exact components at the image's resolution), and samples
-    as points at (t_i, t_j).
+    The image is the core's, as the command line's report draws it: on a
+    :class:`~inexact_loops.PlaneGrid` of at most ``max_pixels`` pixels per side (every pose
+    when there are fewer; otherwise pixels evenly spaced in time, each showing the pose nearest
+    its centre), the distance of each pixel's pair under any metric
+    (:func:`~inexact_loops.distance_image`), so it costs O(max_pixels²) whatever the
+    trajectory's length. Drawn on it: the gamma isocontours, the outlines of the loop
+    components of ``loops`` (each pixel labelled with its pair's component,
+    :meth:`~inexact_loops.Loops.label_image`, outlined by
+    :func:`~inexact_loops.outline_segments`: with every pose, the lattice of the exact
+    components; a component smaller than a pixel may hold no pixel's pair and show no
+    outline), and samples as points at (t_i, t_j).
 
     Args:
         traj: the trajectory.
@@ -125,11 +133,11 @@ def distance_image(
             without ``loops``.
         ax: the Axes to draw into; a new figure when ``None``.
         max_pixels: largest image side, pixels (>= 2).
-        metric: ``None`` or ``"euclidean"`` (L2 on ``traj.positions``), or a callable
-            ``f(A, B)`` returning the ``(len(A), len(B))`` distances between two arrays of
-            points (rows of ``traj.positions``), e.g. ``scipy.spatial.distance.cdist``. The
-            image is computed here, in numpy, only for the Euclidean metric: for any other
-            metric (``loops.metric_name`` not Euclidean) pass the callable.
+        metric: ``None`` (the metric of ``loops``, Euclidean without ``loops``), a metric
+            name such as ``"so3"`` or an :mod:`inexact_loops.metrics` object, computed by the
+            core for any metric; or, a slow path, a callable ``f(A, B)`` returning the
+            ``(len(A), len(B))`` distances between two arrays of points (rows of
+            ``traj.positions``), e.g. ``scipy.spatial.distance.cdist``.
         samples: samples to overlay (see the module docstring), or ``{name: samples}``.
         outlines: draw component outlines; default: when ``loops`` is given.
         cmap: the image's colormap.
@@ -147,13 +155,15 @@ def distance_image(
         The Axes: x is t, y is t', seconds from the first timestamp.
 
     Raises:
-        TypeError: ``traj`` or ``loops`` of the wrong type, ``metric`` neither a name nor a
-            callable, ``max_pixels`` not an integer, ``window_s`` not two intervals, samples
-            that are not index pairs.
-        ValueError: ``loops`` of another trajectory, ``outlines=True`` without ``loops``, a
-            non-Euclidean ``loops.metric_name`` (or ``metric`` name) without a callable, a callable
-            returning the wrong shape, gamma not positive, ``max_pixels < 2``, an empty or
-            reversed window, sample indices out of range.
+        TypeError: ``traj`` or ``loops`` of the wrong type, ``metric`` neither a name, a
+            metric object nor a callable, ``max_pixels`` not an integer, ``window_s`` not two
+            intervals, samples that are not index pairs.
+        ValueError: ``loops`` of another trajectory, ``outlines=True`` without ``loops``, loops
+            found with a callable metric and no ``metric`` given, a callable returning the
+            wrong shape, gamma not positive, ``max_pixels < 2``, an empty or reversed window,
+            sample indices out of range, sample times outside the trajectory's span
+            (:class:`~inexact_loops.InvalidParameterError` for an unknown metric name, a
+            window without poses, or a trajectory the metric cannot take).
 
     Example:
         >>> import matplotlib
@@ -180,23 +190,14 @@ def distance_image(
         raise TypeError(f"max_pixels must be an integer, got {type(max_pixels).__name__}")
     if max_pixels < 2:
         raise ValueError(f"max_pixels must be at least 2, got {max_pixels}")
-    distance = _pairwise_metric(metric, loops)
     sample_sets = _named_samples(samples)
 
-    timestamps = traj.timestamps
-    relative = timestamps - timestamps[0]
-    x_window, y_window = _window(window_s, float(relative[-1]))
-    ix = _grid(relative, x_window, int(max_pixels), "t")
-    iy = ix if y_window == x_window else _grid(relative, y_window, int(max_pixels), "t′")
-    positions = traj.positions
-    image = np.asarray(distance(positions[iy], positions[ix]), dtype=float)
-    if image.shape != (len(iy), len(ix)):
-        raise ValueError(
-            f"metric returned shape {image.shape}, expected {(len(iy), len(ix))}: "
-            "it must give the pairwise distances between two arrays of points"
-        )
-    x, y = relative[ix], relative[iy]
-    x_edges, y_edges = _cell_edges(x), _cell_edges(y)
+    grid = PlaneGrid(
+        loops if loops is not None else traj, int(max_pixels), window_s=_window(window_s)
+    )
+    image = _distance_image(traj, grid, metric, loops)
+    x_edges, y_edges = grid.column_edges_s, grid.row_edges_s
+    x, y = _centres(x_edges), _centres(y_edges)
 
     import matplotlib.pyplot as plt
     from matplotlib import patheffects
@@ -241,8 +242,9 @@ def distance_image(
             )
     if outlines:
         assert loops is not None
-        labels = _label_image(loops, ix, iy)
-        segments = _outline_segments(labels, x_edges, y_edges)
+        # Pixel corners (pixel units) to seconds: corner k of an axis is its k-th pixel edge.
+        edges, _ = outline_segments(loops.label_image(grid), border="open")
+        segments = np.stack([x_edges[edges[..., 0]], y_edges[edges[..., 1]]], axis=-1)
         ax.add_collection(
             LineCollection(segments, colors=outline_color, linewidths=0.8, path_effects=edge)
         )
@@ -256,8 +258,9 @@ def distance_image(
                 label=f"components (γ = {loops.gamma:g}{unit})",
             )
         )
+    timestamps = traj.timestamps
     for k, (name, value) in enumerate(sample_sets):
-        i, j = _sample_pairs(value, len(traj), timestamps)
+        i, j = _sample_pairs(value, len(traj), traj)
         color, label = _sampler_style(name, k)
         t0 = timestamps[0]
         ax.scatter(
@@ -417,7 +420,7 @@ def sample_pairs(
     ax = _axes(ax)
     ax.plot(xy[:, 0], xy[:, 1], color=trajectory_color, lw=0.8, zorder=1, label="trajectory")
     for k, (name, value) in enumerate(sample_sets):
-        i, j = _sample_pairs(value, len(traj), traj.timestamps)
+        i, j = _sample_pairs(value, len(traj), traj)
         default_color, label = _sampler_style(name, k)
         line_color = color if (color is not None and len(sample_sets) == 1) else default_color
         segments = np.stack([xy[i], xy[j]], axis=1)
@@ -633,46 +636,44 @@ def _gammas(gamma: float | Sequence[float] | None, loops: Loops | None) -> list[
     return out
 
 
-def _is_euclidean(metric: object) -> bool:
-    if isinstance(metric, _metrics.Euclidean):
-        return True
-    return isinstance(metric, str) and metric.strip().lower() in ("euclidean", "l2")
-
-
-def _euclidean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    diff = a[:, None, :] - b[None, :, :]
-    return np.sqrt(np.einsum("ijk,ijk->ij", diff, diff))
-
-
-def _pairwise_metric(metric: object, loops: Loops | None) -> PairwiseMetric:
-    if metric is None:
-        if loops is not None and not _is_euclidean(loops.metric_name):
-            raise ValueError(
-                f"distance_image computes the image only for the Euclidean metric, and these "
-                f"loops use {loops.metric_name}: pass metric=f(A, B) returning the pairwise "
-                "distances between two arrays of points"
-            )
-        return _euclidean
-    if _is_euclidean(metric):
-        return _euclidean
-    if isinstance(metric, (str, _metrics.Metric)):
-        raise ValueError(
-            f"distance_image computes the image only for the Euclidean metric, not {metric}: "
-            "pass metric=f(A, B) returning the pairwise distances between two arrays of points"
-        )
+def _distance_image(
+    traj: Trajectory, grid: PlaneGrid, metric: object, loops: Loops | None
+) -> np.ndarray:
+    """The image ``(height, width)``: by the core for a metric name or object (default the
+    loops' metric), or the slow path, a callable ``f(A, B)`` on the grid's points."""
+    if metric is None or isinstance(metric, (str, _metrics.Metric)):
+        name = loops.metric_name if (metric is None and loops is not None) else metric
+        try:
+            return _core_distance_image(traj, grid, metric=name)
+        except InvalidParameterError as err:
+            if metric is None and loops is not None and "metric" in str(err):
+                raise ValueError(
+                    f"these loops use the metric {loops.metric_name!r}, which is not one the "
+                    "library knows by name: pass metric=f(A, B) returning the pairwise "
+                    "distances between two arrays of points"
+                ) from err
+            raise
     if callable(metric):
-        return metric  # type: ignore[return-value]
+        positions = traj.positions
+        image = np.asarray(metric(positions[grid.rows], positions[grid.columns]), dtype=float)
+        if image.shape != (grid.height, grid.width):
+            raise ValueError(
+                f"metric returned shape {image.shape}, expected {(grid.height, grid.width)}: "
+                "it must give the pairwise distances between two arrays of points"
+            )
+        return image
     raise TypeError(
-        f"metric must be None, 'euclidean' or a callable f(A, B), got {type(metric).__name__}"
+        "metric must be None, a metric name or inexact_loops.metrics object, or a callable "
+        f"f(A, B), got {type(metric).__name__}"
     )
 
 
 def _window(
-    window_s: tuple[tuple[float, float], tuple[float, float]] | None, span_s: float
-) -> tuple[tuple[float, float], tuple[float, float]]:
-    """((t_lo, t_hi), (t'_lo, t'_hi)) in seconds from the first timestamp."""
+    window_s: tuple[tuple[float, float], tuple[float, float]] | None,
+) -> tuple[tuple[float, float], tuple[float, float]] | None:
+    """((t_lo, t_hi), (t'_lo, t'_hi)) in seconds from the first timestamp, as floats."""
     if window_s is None:
-        return (0.0, span_s), (0.0, span_s)
+        return None
     try:
         (a, b), (c, d) = window_s
         box = (float(a), float(b)), (float(c), float(d))
@@ -686,70 +687,15 @@ def _window(
     return box
 
 
-def _grid(
-    relative_s: np.ndarray, window: tuple[float, float], max_pixels: int, axis: str
-) -> np.ndarray:
-    """Pose indices of one image axis: every pose in the window, or ``max_pixels`` evenly
-    spaced ones (the first and last included)."""
-    lo, hi = (
-        np.searchsorted(relative_s, window[0], "left"),
-        np.searchsorted(relative_s, window[1], "right"),
-    )
-    if hi - lo < 1:
-        raise ValueError(f"window_s: no pose with {axis} in [{window[0]:g}, {window[1]:g}] s")
-    if hi - lo <= max_pixels:
-        return np.arange(lo, hi)
-    return np.unique(np.round(np.linspace(lo, hi - 1, max_pixels)).astype(np.int64))
-
-
-def _cell_edges(centres: np.ndarray) -> np.ndarray:
-    """Pixel boundaries: midpoints between centres, half a step beyond both ends."""
-    if len(centres) == 1:
-        return np.array([centres[0] - 0.5, centres[0] + 0.5])
-    mids = (centres[:-1] + centres[1:]) / 2
-    first = centres[0] - (mids[0] - centres[0])
-    last = centres[-1] + (centres[-1] - mids[-1])
-    return np.concatenate(([first], mids, [last]))
-
-
-def _label_image(loops: Loops, ix: np.ndarray, iy: np.ndarray) -> np.ndarray:
-    """Component id of every grid cell (t = ix[q], t' = iy[p]) as ``labels[p, q]``, -1 outside
-    S_gamma. Only the runs of the grid's rows are read: a cell with t' >= t lies in row t's
-    runs, one with t' <= t in row t''s (the mirror)."""
-    runs = loops.runs()
-    row, start, end, comp = (np.asarray(runs[key]) for key in ("row", "start", "end", "component"))
-    labels = np.full((len(iy), len(ix)), -1, dtype=np.int64)
-    for rows, cols, transpose in ((ix, iy, True), (iy, ix, False)):
-        pixel = np.full(len(loops), -1, dtype=np.int64)
-        pixel[rows] = np.arange(len(rows))
-        keep = pixel[row] >= 0
-        first = np.searchsorted(cols, start[keep], side="left")
-        length = np.searchsorted(cols, end[keep], side="right") - first
-        total = int(length.sum())
-        if not total:
-            continue
-        offsets = np.arange(total) - np.repeat(np.cumsum(length) - length, length)
-        r = np.repeat(pixel[row[keep]], length)
-        c = np.repeat(first, length) + offsets
-        ids = np.repeat(comp[keep], length)
-        if transpose:
-            labels[c, r] = ids
-        else:
-            labels[r, c] = ids
-    return labels
-
-
-def _outline_segments(labels: np.ndarray, x_edges: np.ndarray, y_edges: np.ndarray) -> np.ndarray:
-    """Segments (k, 2, 2) along every pixel edge where the component id changes; the image's
-    border continues the outermost pixels (a component cut by the window stays open)."""
-    padded = np.pad(labels, 1, mode="edge")
-    # Vertical edges: between horizontal neighbours (columns q-1 and q, at x = x_edges[q]).
-    p, q = np.nonzero(padded[1:-1, :-1] != padded[1:-1, 1:])
-    vertical = np.stack([np.c_[x_edges[q], y_edges[p]], np.c_[x_edges[q], y_edges[p + 1]]], 1)
-    # Horizontal edges: between vertical neighbours (rows p-1 and p, at y = y_edges[p]).
-    p, q = np.nonzero(padded[:-1, 1:-1] != padded[1:, 1:-1])
-    horizontal = np.stack([np.c_[x_edges[q], y_edges[p]], np.c_[x_edges[q + 1], y_edges[p]]], 1)
-    return np.concatenate([vertical, horizontal]).reshape(-1, 2, 2)
+def _centres(edges: np.ndarray) -> np.ndarray:
+    """Pixel centres whose midpoints are the pixels' ``edges`` (NonUniformImage puts a pixel's
+    boundaries midway between centres): the poses' times on an axis of every pose, the middle
+    of each even step on a downsampled one."""
+    centres = np.empty(len(edges) - 1)
+    centres[0] = (edges[0] + edges[1]) / 2
+    for k in range(1, len(centres)):
+        centres[k] = 2 * edges[k] - centres[k - 1]
+    return centres
 
 
 def _plane(traj: Trajectory, axes: tuple[int, int]) -> np.ndarray:
@@ -778,10 +724,17 @@ def _frame(ax: Axes, xy: np.ndarray, axes: tuple[int, int], unit: str) -> None:
 
 
 def _sampler_style(name: str | None, index: int) -> tuple[str, str]:
+    """Colour and label: the paper's for its samplers, else the core's symbol of a sampler it
+    knows (``"lio-sam"``: LIO-SAM), else the name given."""
     if name is not None and name in PAPER_SAMPLERS:
         return PAPER_SAMPLERS[name]
     color = f"C{index % 10}"
-    return color, name if name is not None else "samples"
+    if name is None:
+        return color, "samples"
+    try:
+        return color, sampler_symbol(name)
+    except InvalidParameterError:
+        return color, name
 
 
 _INDEX_KEYS = ("i", "j")
@@ -817,12 +770,13 @@ def _field(samples: object, key: str) -> Any:
 
 
 def _sample_pairs(
-    samples: object, n: int, timestamps: np.ndarray | None
+    samples: object, n: int, traj: Trajectory | None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Pose indices (i, j) of one sampler's samples, checked against ``n`` poses.
 
     From ``i`` and ``j`` columns (or attributes), else from ``t`` and ``t_prime`` times mapped
-    to the nearest poses (needs ``timestamps``), else from an (m, 2) integer array."""
+    to the nearest poses of ``traj`` (:meth:`~inexact_loops.Trajectory.nearest_poses`), else
+    from an (m, 2) integer array."""
     i, j = _field(samples, "i"), _field(samples, "j")
     if i is not None and j is not None:
         i, j = _indices(i, "i"), _indices(j, "j")
@@ -836,12 +790,13 @@ def _sample_pairs(
             None,
         )
         if times is not None:
-            if timestamps is None:
+            if traj is None:
                 raise ValueError(
                     "samples have times but no pose indices: place them on the trajectory "
                     "first (e.g. samples.locate(loops))"
                 )
-            i, j = _nearest(timestamps, times[0]), _nearest(timestamps, times[1])
+            i = traj.nearest_poses(np.asarray(times[0], dtype=float).ravel())
+            j = traj.nearest_poses(np.asarray(times[1], dtype=float).ravel())
         elif isinstance(samples, Mapping) or not isinstance(samples, (np.ndarray, list, tuple)):
             raise TypeError(
                 "samples must be an (m, 2) array of pose index pairs, or have 'i' and 'j' (pose "
@@ -874,33 +829,11 @@ def _indices(values: object, name: str) -> np.ndarray:
     return array.astype(np.int64).ravel()
 
 
-def _nearest(timestamps: np.ndarray, times: object) -> np.ndarray:
-    t = np.asarray(times, dtype=float).ravel()
-    right = np.clip(np.searchsorted(timestamps, t), 1, len(timestamps) - 1)
-    left = right - 1
-    closer_left = (t - timestamps[left]) <= (timestamps[right] - t)
-    return np.where(closer_left, left, right).astype(np.int64)
-
-
-def _components_of(loops: Loops, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """The component id of each pair (i, j) (either order), -1 outside S_gamma: the run of
-    row min(i, j) that covers column max(i, j), found by binary search over the runs."""
-    runs = loops.runs()
-    row, start, end, comp = (np.asarray(runs[key]) for key in ("row", "start", "end", "component"))
-    lo, hi = np.minimum(i, j), np.maximum(i, j)
-    stride = np.int64(len(loops) + 1)
-    keys = row * stride + start  # sorted: runs come row by row, in order
-    at = np.searchsorted(keys, lo * stride + hi, side="right") - 1
-    safe = np.clip(at, 0, None)
-    inside = (at >= 0) & (row[safe] == lo) & (end[safe] >= hi)
-    return np.where(inside, comp[safe], -1).astype(np.int64)
-
-
 def _counts_per_component(samples: object, loops: Loops, k: int) -> np.ndarray:
     """Number of samples in each component id (samples outside S_gamma are not counted).
 
-    A mapping's ``component`` column is used as given; otherwise the components are looked
-    up from the pairs (i, j)."""
+    A mapping's ``component`` column is used as given; otherwise the core counts the pairs
+    (i, j) per component (:meth:`~inexact_loops.Loops.pair_counts_per_component`)."""
     given = samples.get("component") if isinstance(samples, Mapping) else None
     if given is not None:
         component = np.asarray(given)
@@ -909,7 +842,7 @@ def _counts_per_component(samples: object, loops: Loops, k: int) -> np.ndarray:
         component = component.astype(np.int64).ravel()
     else:
         i, j = _sample_pairs(samples, len(loops), None)
-        component = _components_of(loops, i, j)
+        return loops.pair_counts_per_component(i, j).astype(float)
     inside = component[component >= 0]
     if len(inside) and inside.max() >= k:
         raise ValueError(f"samples: component id {inside.max()} out of range ({k} components)")

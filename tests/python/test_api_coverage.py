@@ -40,6 +40,41 @@ ELSEWHERE = {
     "Detections.to_pandas": ("python/test_interop.py", "test_detections_to_pandas"),
     "Samples.to_pandas": ("python/test_interop.py", "test_samples_to_pandas_equals_the_csv"),
     "Table.to_pandas": ("python/test_interop.py", "test_tables_to_pandas"),
+    **{
+        name: ("python/test_plane.py", "test_grid_of_every_pose_and_of_evenly_spaced_pixels")
+        for name in (
+            "PlaneGrid",
+            "PlaneGrid.columns",
+            "PlaneGrid.rows",
+            "PlaneGrid.column_edges_s",
+            "PlaneGrid.row_edges_s",
+            "PlaneGrid.width",
+            "PlaneGrid.height",
+            "PlaneGrid.poses",
+        )
+    },
+    "distance_image": (
+        "python/test_plane.py",
+        "test_so3_and_se3_distance_images_equal_scipy_rotations",
+    ),
+    "Loops.label_image": ("python/test_plane.py", "test_label_image_is_the_dense_labelling_folded"),
+    "Loops.components_of_pairs": ("python/test_plane.py", "test_components_of_pairs_and_counts"),
+    "Loops.pair_counts_per_component": (
+        "python/test_plane.py",
+        "test_components_of_pairs_and_counts",
+    ),
+    "Trajectory.nearest_poses": ("python/test_plane.py", "test_nearest_poses_are_the_argmin"),
+    "outline_segments": (
+        "python/test_plane.py",
+        "test_outlines_are_the_pixel_sides_between_labels",
+    ),
+    "component_outlines": (
+        "python/test_plane.py",
+        "test_outlines_are_the_pixel_sides_between_labels",
+    ),
+    "chain_polylines": ("python/test_plane.py", "test_chain_polylines_use_every_edge_once"),
+    "isocontour": ("python/test_plane.py", "test_isocontour_crosses_between_pixel_centres"),
+    "sampler_symbol": ("python/test_plane.py", "test_sampler_symbols_come_from_the_core"),
 }
 
 
