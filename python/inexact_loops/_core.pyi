@@ -114,7 +114,23 @@ class Trajectory:
     def span_s(self) -> float:
         """Last minus first timestamp, seconds."""
     def nearest_poses(self, times_s: npt.ArrayLike) -> npt.NDArray[np.int64]:
-        """The pose nearest each time (seconds), ties to the earlier pose."""
+        """The pose nearest each time: the pose whose time cell holds it, ties to the earlier pose.
+
+        Args:
+            times_s: times, seconds on the clock of the timestamps, shape ``(m,)``.
+
+        Returns:
+            int64 pose indices, shape ``(m,)``.
+
+        Raises:
+            InvalidParameterError: a time outside the trajectory's time span (or NaN), naming it.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.array([0.0, 1.0, 3.0]), np.zeros(3))
+            >>> traj.nearest_poses([0.4, 0.5, 2.1, 3.0]).tolist()
+            [0, 0, 2, 2]
+        """
     @staticmethod
     def se3(
         timestamps: npt.ArrayLike,
@@ -319,13 +335,71 @@ class Loops:
             (True, False)
         """
     def label_image(self, grid: PlaneGrid) -> npt.NDArray[np.int64]:
-        """The component of every pixel of ``grid`` (height, width), -1 outside S_gamma."""
+        """The loop component of every pixel of ``grid``: the component holding the pair (column
+        pose, row pose), either order (so the image is mirrored across the diagonal), −1
+        outside S_γ. The same pixels as :func:`distance_image`: −1 exactly where δ > γ. With a
+        grid of every pose it is the lattice of the components itself; when the grid downsamples,
+        a component smaller than a pixel may hold no pixel's pair (mark it at its closest pair).
+
+        Args:
+            grid: a :class:`PlaneGrid` made for these loops (or their trajectory).
+
+        Returns:
+            int64 array, shape ``(grid.height, grid.width)``, row 0 the earliest t′.
+
+        Raises:
+            InvalidParameterError: a grid made for another number of poses.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 5.0, 5.0, 0.0]))  # out and back
+            >>> loops = il.find_loops(traj, gamma=1.0)
+            >>> loops.label_image(il.PlaneGrid(loops, 10)).tolist()
+            [[0, -1, -1, 1], [-1, 2, 2, -1], [-1, 2, 2, -1], [1, -1, -1, 3]]
+        """
     def components_of_pairs(self, i: npt.ArrayLike, j: npt.ArrayLike) -> npt.NDArray[np.int64]:
-        """The component id of each pair (i[k], j[k]), either order; -1 outside S_gamma."""
+        """The component id of each pair ``(i[k], j[k])`` (either order), −1 outside S_γ: what
+        :meth:`component_of` gives, for many pairs at once (a binary search over the runs each).
+
+        Args:
+            i, j: integer pose indices, shape ``(m,)``.
+
+        Returns:
+            int64 array, shape ``(m,)``.
+
+        Raises:
+            IndexError: a pose index past the last pose (or negative).
+            ValueError: ``i`` and ``j`` of different lengths.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops.components_of_pairs([3, 0, 0], [0, 3, 1]).tolist()
+            [1, 1, -1]
+        """
     def pair_counts_per_component(
         self, i: npt.ArrayLike, j: npt.ArrayLike
     ) -> npt.NDArray[np.int64]:
-        """How many of the pairs (i[k], j[k]) each component holds, by component id."""
+        """How many of the pairs ``(i[k], j[k])`` each component holds, by component id (pairs
+        outside S_γ are not counted).
+
+        Args:
+            i, j: as :meth:`components_of_pairs`.
+
+        Returns:
+            int64 array, shape ``(number of components,)``.
+
+        Raises:
+            As :meth:`components_of_pairs`.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops.pair_counts_per_component([3, 0, 0, 1], [0, 3, 1, 2]).tolist()
+            [0, 2, 1, 0]
+        """
     def loop_duration(
         self,
         *,
@@ -1042,7 +1116,37 @@ def sample_quality(
 
 @final
 class PlaneGrid:
-    """The poses an image of the (t, t') plane shows: one per column (t) and per row (t')."""
+    """The poses an image of the (t, t′) plane shows: one pose per column (time t) and one per row
+    (time t′), for :func:`distance_image` and :meth:`Loops.label_image`.
+
+    Along each axis: every pose whose time lies in the window when at most ``max_pixels`` do;
+    otherwise ``max_pixels`` pixels evenly spaced in time over the window, each showing the pose
+    nearest its centre time (ties to the earlier pose; where poses are sparser than pixels, one
+    pose shows in neighbouring pixels).
+
+    Args:
+        trajectory_or_loops: the :class:`Trajectory`, or the :class:`Loops` found on it.
+        max_pixels: the most pixels a side (at least 1).
+        window_s: ``((t_min, t_max), (t_prime_min, t_prime_max))``, seconds from the first pose;
+            ``None`` is the whole plane.
+
+    Raises:
+        InvalidParameterError: ``max_pixels`` = 0, a window side that is not finite with
+            min < max, or with no pose in it.
+        TypeError: ``trajectory_or_loops`` of another type.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> traj = il.Trajectory(np.arange(10.0), np.zeros(10))
+        >>> il.PlaneGrid(traj, 100).columns.tolist()
+        [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]
+        >>> coarse = il.PlaneGrid(traj, 3)  # pixel centres at 1.5, 4.5 and 7.5 s
+        >>> coarse.columns.tolist(), coarse.column_edges_s.tolist()
+        ([1, 4, 7], [0.0, 3.0, 6.0, 9.0])
+        >>> zoom = il.PlaneGrid(traj, 100, window_s=((2.0, 4.0), (6.5, 9.0)))
+        >>> zoom.columns.tolist(), zoom.rows.tolist(), zoom.column_edges_s.tolist()
+        ([2, 3, 4], [7, 8, 9], [1.5, 2.5, 3.5, 4.5])
+    """
 
     def __new__(
         cls,
@@ -1053,16 +1157,24 @@ class PlaneGrid:
     ) -> PlaneGrid: ...
     @property
     def columns(self) -> npt.NDArray[np.int64]:
-        """The pose index i of each column (time t), increasing."""
+        """The pose index i of each column (time t), increasing: int64, shape ``(width,)``."""
     @property
     def rows(self) -> npt.NDArray[np.int64]:
-        """The pose index j of each row (time t'), increasing."""
+        """The pose index j of each row (time t′), increasing (row 0 is the earliest t′): int64,
+        shape ``(height,)``.
+        """
     @property
     def column_edges_s(self) -> npt.NDArray[np.float64]:
-        """The time each column stands for: width + 1 boundaries, seconds from the first pose."""
+        """The time each column stands for: ``width + 1`` increasing boundaries, seconds from the
+        first pose (column a spans ``[edges[a], edges[a + 1]]``). Even steps over the window when
+        the axis is downsampled; otherwise the midpoints between the poses' times, half a step
+        beyond the first and the last.
+        """
     @property
     def row_edges_s(self) -> npt.NDArray[np.float64]:
-        """The time each row stands for: height + 1 boundaries, seconds from the first pose."""
+        """The time each row stands for: ``height + 1`` increasing boundaries, seconds from the
+        first pose, as :attr:`column_edges_s`.
+        """
     @property
     def width(self) -> int:
         """Number of columns."""
@@ -1080,23 +1192,155 @@ def distance_image(
     metric: _MetricArg = None,
     threads: int | None = None,
 ) -> npt.NDArray[np.float64]:
-    """The pairwise distance on a grid, (height, width), for any metric."""
+    """The pairwise distance π(t, t′) = δ(ξ(t), ξ(t′)) on a grid: ``image[b, a]`` is δ between the
+    column pose ``grid.columns[a]`` and the row pose ``grid.rows[b]``, in the metric's unit, for
+    any metric (SE(3), SO(3), ...). Rows are computed in parallel without the GIL; the cost is one
+    distance per pixel, whatever the trajectory's length.
+
+    Args:
+        trajectory: the :class:`Trajectory`.
+        grid: a :class:`PlaneGrid` made for it.
+        metric: as :func:`find_loops`: ``None`` (Euclidean), a name such as ``"so3"``, an
+            :mod:`inexact_loops.metrics` object, or — slow, one Python call per pixel on one
+            thread — a callable ``f(a, b) -> float``.
+        threads: worker threads; ``None`` uses one per core.
+
+    Returns:
+        float64 array, shape ``(grid.height, grid.width)``.
+
+    Raises:
+        InvalidParameterError: a grid made for another number of poses, an unknown metric.
+        InvalidTrajectoryError: a trajectory the metric cannot take (e.g. not unit quaternions).
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> s = np.sqrt(0.5)  # rotations about z by 0, 90° and 180°
+        >>> traj = il.Trajectory.so3(np.arange(3.0), [[0, 0, 0, 1.0], [0, 0, s, s], [0, 0, 1.0, 0]])
+        >>> image = il.distance_image(traj, il.PlaneGrid(traj, 8), metric="so3")
+        >>> np.round(image / np.pi, 6).tolist()
+        [[0.0, 0.5, 1.0], [0.5, 0.0, 0.5], [1.0, 0.5, 0.0]]
+    """
 
 def outline_segments(
     labels: npt.ArrayLike, *, border: Literal["closed", "open"] | str = "closed"
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
-    """The pixel edges where the label changes, (k, 2, 2), and the labels on their sides."""
+    """The edges of the pixel lattice where the label changes: the outlines ∂Ω of the components
+    of a label image (as :meth:`Loops.label_image` gives), vertical edges first (row by row,
+    left to right), then horizontal ones (bottom to top). In pixel units: column a spans
+    x ∈ [a, a + 1], row b spans y ∈ [b, b + 1].
+
+    Args:
+        labels: integer array ``(height, width)``, negative where a pixel has no component.
+        border: ``"closed"`` (nothing lies outside the image: components touching the border
+            are closed along it) or ``"open"`` (the image continues its outermost pixels: no
+            edges along the border, a component cut by a zoom window stays open).
+
+    Returns:
+        ``(edges, sides)``: int64 arrays ``(k, 2, 2)``, each edge's two vertices ``[x, y]`` (the
+        second one up or to the right of the first), and ``(k, 2)``, the labels on its two sides
+        (left and right of a vertical edge, below and above a horizontal one; −1 for none).
+
+    Raises:
+        ValueError: ``labels`` not 2-dimensional. TypeError: not integers.
+        InvalidParameterError: an unknown ``border``.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> labels = np.full((3, 3), -1)
+        >>> labels[1, 1] = 7  # one pixel: its four sides
+        >>> edges, sides = il.outline_segments(labels)
+        >>> edges.shape, sides.tolist()
+        ((4, 2, 2), [[-1, 7], [7, -1], [-1, 7], [7, -1]])
+        >>> edges[0].tolist()  # the left side of the pixel, upwards
+        [[1, 1], [1, 2]]
+        >>> len(il.outline_segments(np.ones((2, 2), int), border="open")[0])
+        0
+    """
 
 def component_outlines(
     labels: npt.ArrayLike, *, border: Literal["closed", "open"] | str = "closed"
 ) -> dict[int, list[npt.NDArray[np.int64]]]:
-    """The outline of each component of a label image, as polylines of pixel corners."""
+    """The outline of each component of a label image as polylines of pixel corners: the edges of
+    :func:`outline_segments` with that component on either side, joined by
+    :func:`chain_polylines`. With ``border="closed"`` every polyline is closed (its last vertex
+    is its first), so it can be filled (even-odd: holes stay empty).
+
+    Args:
+        labels, border: as :func:`outline_segments`.
+
+    Returns:
+        ``{component id: [polyline, ...]}``, each polyline an int64 array ``(m, 2)`` of
+        vertices ``[x, y]`` in pixel units; ids in increasing order.
+
+    Raises:
+        As :func:`outline_segments`.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> labels = np.array([[4, 4, -1], [-1, -1, -1]])  # a 2 × 1 component, bottom left
+        >>> outlines = il.component_outlines(labels)
+        >>> list(outlines), outlines[4][0].tolist()
+        ([4], [[0, 0], [0, 1], [1, 1], [2, 1], [2, 0], [1, 0], [0, 0]])
+    """
 
 def chain_polylines(edges: npt.ArrayLike) -> list[npt.NDArray[np.int64]]:
-    """Joins edges (vertex ids or vertices) into polylines, each edge used once."""
+    """Joins edges into polylines, each edge used once; a closed polyline ends with its first
+    vertex. Deterministic: a polyline starts at the first unused edge in input order and is
+    extended forwards, then backwards, each time along the first unused edge at its end.
+
+    Args:
+        edges: integer array ``(k, 2)`` of vertex ids, or ``(k, 2, 2)`` of vertices ``[x, y]``
+            (the edges of :func:`outline_segments`), either direction.
+
+    Returns:
+        A list of int64 arrays: ``(m,)`` vertex ids, or ``(m, 2)`` vertices.
+
+    Raises:
+        ValueError: another shape. TypeError: not integers.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> [line.tolist() for line in il.chain_polylines([[0, 1], [2, 3], [1, 2], [3, 0], [5, 6]])]
+        [[0, 1, 2, 3, 0], [5, 6]]
+    """
 
 def isocontour(values: npt.ArrayLike, level: float) -> list[npt.NDArray[np.float64]]:
-    """The level isocontour of an image by marching squares, in pixel units."""
+    """The ``level`` isocontour of an image by marching squares on the pixel centres (pixel
+    (a, b) at (a + ½, b + ½)), as polylines of points ``[x, y]`` in pixel units, crossings placed
+    by linear interpolation; saddles resolved by the mean of the cell's corners, NaN counted as
+    above the level. For the γ isocontour of π, pass a :func:`distance_image` and γ.
+
+    Args:
+        values: real array ``(height, width)``.
+        level: the level.
+
+    Returns:
+        A list of float64 arrays ``(m, 2)``; a closed line ends with its first point.
+
+    Raises:
+        ValueError: ``values`` not 2-dimensional. TypeError: not real numbers.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> b, a = np.mgrid[0:9, 0:9]
+        >>> cone = np.hypot(a - 4.0, b - 4.0)  # 0 at the pixel centre (4.5, 4.5)
+        >>> (line,) = il.isocontour(cone, 2.5)
+        >>> bool((line[0] == line[-1]).all()), bool(np.allclose(np.hypot(*(line - 4.5).T), 2.5, atol=0.3))
+        (True, True)
+    """
 
 def sampler_symbol(sampler: _SamplerName | str) -> str:
-    """The symbol of a sampler in the paper (sigma_rho, ...) or the baseline's system name."""
+    """The symbol of a sampler in the paper (``"σ_1"``, ``"σ_ρ"``, ``"σ_α"``), or the name of the
+    system whose rule a baseline follows (``"LIO-SAM"``, ...): for figures and reports.
+
+    Args:
+        sampler: a sampler's name, as :func:`sample` takes it (``"one"``, ``"rho"``, ...).
+
+    Raises:
+        InvalidParameterError: an unknown sampler (the message lists the names).
+
+    Example:
+        >>> import inexact_loops as il
+        >>> il.sampler_symbol("rho"), il.sampler_symbol("lio-sam")
+        ('σ_ρ', 'LIO-SAM')
+    """
