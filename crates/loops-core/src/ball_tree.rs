@@ -109,28 +109,10 @@ impl BallTree {
         out: &mut Vec<Leaf>,
     ) {
         out.clear();
-        let mut stack: Vec<u32> = Vec::with_capacity(64);
-        stack.push(0);
-        while let Some(index) = stack.pop() {
-            let node = self.nodes[index as usize];
-            if (node.hi as usize) <= from {
-                continue;
-            }
-            let d = metric.distance(x, self.centre(index));
-            if d - node.radius > reach {
-                continue;
-            }
-            let inside = d + node.radius <= inside_reach;
-            if inside || node.left == LEAF {
-                match out.last_mut() {
-                    Some(last) if inside && last.inside && last.hi == node.lo => last.hi = node.hi,
-                    _ => out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside }),
-                }
-            } else {
-                stack.push(node.left + 1);
-                stack.push(node.left);
-            }
-        }
+        self.walk(metric, x, from, (reach, inside_reach), |node, inside| match out.last_mut() {
+            Some(last) if inside && last.inside && last.hi == node.lo => last.hi = node.hi,
+            _ => out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside }),
+        });
     }
 
     /// The pose of `lo..=hi` closest to `x` under the metric's
@@ -206,6 +188,20 @@ impl BallTree {
         reach: f64,
         mut visit: impl FnMut(&Node),
     ) {
+        self.walk(metric, x, from, (reach, f64::NEG_INFINITY), |node, _| visit(node));
+    }
+
+    /// The walk of the hierarchy, in increasing order of poses: nodes ending by `from`, or
+    /// whose ball stays farther than `reach` from `x`, are skipped; a node whose ball lies within
+    /// `inside_reach` of `x` is visited whole (`inside`), and so is every other leaf.
+    fn walk<M: Metric + ?Sized>(
+        &self,
+        metric: &M,
+        x: &[f64],
+        from: usize,
+        (reach, inside_reach): (f64, f64),
+        mut visit: impl FnMut(&Node, bool),
+    ) {
         let mut stack: Vec<u32> = Vec::with_capacity(64);
         stack.push(0);
         while let Some(index) = stack.pop() {
@@ -213,11 +209,13 @@ impl BallTree {
             if (node.hi as usize) <= from {
                 continue;
             }
-            if metric.distance(x, self.centre(index)) - node.radius > reach {
+            let d = metric.distance(x, self.centre(index));
+            if d - node.radius > reach {
                 continue;
             }
-            if node.left == LEAF {
-                visit(&node);
+            let inside = d + node.radius <= inside_reach;
+            if inside || node.left == LEAF {
+                visit(&node, inside);
             } else {
                 stack.push(node.left + 1);
                 stack.push(node.left);
