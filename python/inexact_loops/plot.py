@@ -274,15 +274,7 @@ def distance_image(
         )
         handles.append(Line2D([], [], color=color, marker="o", ls="none", label=label))
     if legend and handles:
-        ax.legend(
-            handles=handles,
-            loc="lower left",
-            bbox_to_anchor=(0.0, 1.01),
-            ncol=2,
-            fontsize="small",
-            frameon=False,
-            borderaxespad=0.0,
-        )
+        _legend_above(ax, handles=handles)
     return ax
 
 
@@ -436,14 +428,7 @@ def sample_pairs(
         )
     _frame(ax, xy, axes, position_unit)
     if legend:
-        ax.legend(
-            loc="lower left",
-            bbox_to_anchor=(0.0, 1.01),
-            ncol=2,
-            fontsize="small",
-            frameon=False,
-            borderaxespad=0.0,
-        )
+        _legend_above(ax)
     return ax
 
 
@@ -611,6 +596,19 @@ def _check_loops(loops: object, traj: Trajectory) -> None:
             f"loops has {len(loops)} poses but the trajectory {len(traj)}: "
             "pass the result of find_loops on this trajectory"
         )
+
+
+def _legend_above(ax: Axes, **handles: Any) -> None:
+    """The legend in two columns above the axes, outside the data."""
+    ax.legend(
+        **handles,
+        loc="lower left",
+        bbox_to_anchor=(0.0, 1.01),
+        ncol=2,
+        fontsize="small",
+        frameon=False,
+        borderaxespad=0.0,
+    )
 
 
 def _axes(ax: Axes | None) -> Axes:
