@@ -379,8 +379,8 @@ def test_unknown_format(tmp_path):
     path.write_text(TUM_OK)
     with pytest.raises(il.InvalidParameterError, match=r'"rosbag".*tum.*csv'):
         il.read_trajectory(path, format="rosbag")
-    other = tmp_path / "drive.bag"
+    other = tmp_path / "drive.log"
     other.write_text(TUM_OK)
-    with pytest.raises(il.LoopsIOError, match=r'"\.bag"'):
+    with pytest.raises(il.LoopsIOError, match=r'"\.log"'):
         il.read_trajectory(other)
     assert len(il.read_trajectory(other, format="tum")) == 6

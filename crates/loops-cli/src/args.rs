@@ -16,14 +16,16 @@ use loops_core::{DEFAULT_EPSILON_S, MetricSpec, SampleSize, Sampler, SamplerKind
 /// The flags that say how to read a pose file, shared by every command that reads one.
 #[derive(Debug, Args)]
 pub(crate) struct InputArgs {
-    /// File format: tum, csv, kitti, euroc, tuc, g2o, mcap (default: from the extension and
-    /// first line).
+    /// File format: tum, csv, kitti, euroc, tuc, g2o, mcap, rosbag2, ros1 (default: from the
+    /// extension and first line; a folder is a rosbag2 bag).
     #[arg(long)]
     format: Option<String>,
-    /// MCAP topic to read (default: the one topic with poses; `loops info` lists them).
+    /// Topic to read from MCAP files and bags (default: the one topic with poses; `loops info`
+    /// lists them).
     #[arg(long)]
     topic: Option<String>,
-    /// MCAP time of each pose: header (the message stamp), log or publish.
+    /// Time of each pose from MCAP files and bags: header (the message stamp), log or publish
+    /// (bags record one time: log and publish both take it).
     #[arg(long)]
     time: Option<String>,
     /// Parent and child frame of a transform topic (TF), e.g. odom,base_link.

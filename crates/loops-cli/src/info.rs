@@ -22,10 +22,10 @@ pub(crate) struct InfoArgs {
 pub(crate) fn info(args: InfoArgs) -> Result<()> {
     let mut stdout = std::io::stdout().lock();
     let options = args.input.options()?;
-    let is_mcap = options.format == Some(loops_io::Format::Mcap)
-        || (options.format.is_none() && loops_io::Format::from_path(&args.file) == Some(loops_io::Format::Mcap));
+    let has_topics =
+        options.format.or_else(|| loops_io::Format::detect(&args.file)).is_some_and(loops_io::Format::has_topics);
     writeln!(stdout, "{}", args.file.display())?;
-    if is_mcap {
+    if has_topics {
         let topics = loops_io::list_topics(&args.file)?;
         writeln!(
             stdout,

@@ -16,8 +16,10 @@ pub type Result<T, E = IoError> = std::result::Result<T, E>;
 /// Everything that can go wrong reading or writing a pose file. The message always starts with
 /// the file's path, then where in it: `line N` for text files (`drive.tum line 12: column 3
 /// ("abc") is not a number`), the byte offset for the structure of an MCAP file (`drive.mcap
-/// offset 1234: ...`), the topic and the message's offset for an MCAP message (`drive.mcap
-/// topic /odom, message at offset 1234: ...`).
+/// offset 1234: ...`, `drive.bag offset 4117: ...`), the topic and the message's offset for a
+/// message (`drive.mcap topic /odom, message at offset 1234: ...`), or its row for a rosbag2
+/// sqlite3 file (`bag/bag_0.db3 row 17: ...`, `bag/bag_0.db3 topic /odom, message at row 17:
+/// ...`).
 ///
 /// Each message is complete on its own, so the wrapped errors (`error` fields) are public fields
 /// to match on and are not repeated as [`source`](std::error::Error::source): a report that
@@ -145,8 +147,9 @@ pub enum IoError {
         topic: Box<TopicInfo>,
     },
     /// The topic has a channel but no message, or messages without poses.
-    #[error("{} topic {}: no poses ({} message{}; its channel is in the record at offset {channel_offset})",
-        .path.display(), .topic.topic, .topic.message_count, if .topic.message_count == 1 { "" } else { "s" })]
+    #[error("{} topic {}: no poses ({} message{}; {})",
+        .path.display(), .topic.topic, .topic.message_count, if .topic.message_count == 1 { "" } else { "s" },
+        channel_place(.path, *.channel_offset))]
     EmptyTopic {
         /// The file of the topic's first channel record.
         path: PathBuf,
@@ -168,6 +171,38 @@ pub enum IoError {
         /// The pairs on the topic, with their transform counts.
         pairs: Vec<FramePairInfo>,
     },
+    /// A ROS 1 bag whose structure is broken at a byte offset: not a ROS 1 bag of format 2.0,
+    /// cut short, a record whose header does not parse, a chunk that does not decompress.
+    #[error("{} offset {offset}: {message}", .path.display())]
+    Ros1 {
+        /// The file.
+        path: PathBuf,
+        /// Byte offset in the file of the record at fault (of the chunk, for a record in one).
+        offset: u64,
+        /// What is wrong; for a record in a chunk, naming its byte in the decompressed chunk.
+        message: String,
+    },
+    /// A rosbag2 sqlite3 file (`.db3`) that SQLite cannot read, that lacks the rosbag2 tables,
+    /// or whose row does not fit them (a message on an unknown topic, data that is not a blob).
+    #[error("{}{}: {message}", .path.display(), .row.map(|row| format!(" row {row}")).unwrap_or_default())]
+    Sqlite {
+        /// The file (the compressed file, for a `.db3.zstd`).
+        path: PathBuf,
+        /// The row id in the `messages` table, when one row is at fault.
+        row: Option<i64>,
+        /// What is wrong, with SQLite's own message where it has one.
+        message: String,
+    },
+    /// A rosbag2 bag that cannot be read as a whole: a `metadata.yaml` without the fields
+    /// needed, a storage file it lists that is missing, a storage or compression this crate
+    /// does not read, a file-compressed storage file that does not decompress.
+    #[error("{}: {message}", .path.display())]
+    Bag {
+        /// The file at fault (`metadata.yaml`, a storage file), or the bag's folder.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
     /// A file could not be written: it exists and overwriting was not asked for, or the system
     /// refused.
     #[error(transparent)]
@@ -184,6 +219,9 @@ impl IoError {
             | Self::Detections { path, .. }
             | Self::UnknownFormat { path, .. }
             | Self::Mcap { path, .. }
+            | Self::Ros1 { path, .. }
+            | Self::Sqlite { path, .. }
+            | Self::Bag { path, .. }
             | Self::TopicNotFound { path, .. }
             | Self::NoPoseTopic { path, .. }
             | Self::AmbiguousTopic { path, .. }
@@ -205,12 +243,14 @@ impl IoError {
         }
     }
 
-    /// The byte offset in an MCAP file the error is about, when there is one: of the record at
-    /// fault, of the message (of its chunk, for a message in a chunk), or of an empty topic's
-    /// channel record.
+    /// The byte offset in an MCAP file or ROS 1 bag the error is about, when there is one: of
+    /// the record at fault, of the message (of its chunk, for a message in a chunk), or of an
+    /// empty topic's channel record. For a rosbag2 sqlite3 file, the row id (see
+    /// [`MessageLocation`]).
     pub fn offset(&self) -> Option<u64> {
         match self {
-            Self::Mcap { offset, .. } => Some(*offset),
+            Self::Mcap { offset, .. } | Self::Ros1 { offset, .. } => Some(*offset),
+            Self::Sqlite { row, .. } => row.and_then(|row| u64::try_from(row).ok()),
             Self::Message { location, .. } => Some(location.offset),
             Self::Trajectory { messages: Some(messages), .. } => Some(messages.message.offset),
             Self::EmptyTopic { channel_offset, .. } => Some(*channel_offset),
@@ -218,7 +258,7 @@ impl IoError {
         }
     }
 
-    /// The MCAP topic the error is about, when there is one.
+    /// The topic the error is about, when there is one.
     pub fn topic(&self) -> Option<&str> {
         match self {
             Self::Message { location, .. } => Some(&location.topic),
@@ -278,30 +318,51 @@ pub struct TrajectoryMessages {
     pub previous: Option<MessageLocation>,
 }
 
-/// Where a message lies in an MCAP file: the file, its topic, and its byte offset.
+/// Where a message lies in an MCAP file or a bag: the file, its topic, and its byte offset.
 ///
 /// Displays as `drive.mcap topic /odom, message at offset 1234`, or for a message inside a
-/// compressed or uncompressed chunk `drive.mcap topic /odom, message at byte 56 of the chunk at
-/// offset 1234` (the byte counts from the start of the chunk's decompressed records).
+/// compressed or uncompressed chunk (MCAP, ROS 1) `drive.mcap topic /odom, message at byte 56 of
+/// the chunk at offset 1234` (the byte counts from the start of the chunk's decompressed
+/// records). In a rosbag2 sqlite3 file (a file named `*.db3`, or `*.db3.zstd` compressed) the
+/// offset is the message's row id in the `messages` table: `bag_0.db3 topic /odom, message at
+/// row 17`. In a file-compressed bag file the offset is in the decompressed file.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct MessageLocation {
     /// The file.
     pub path: PathBuf,
     /// The message's topic.
     pub topic: String,
-    /// Byte offset in the file of the message record, or of the chunk record holding it.
+    /// Byte offset in the file of the message record, or of the chunk record holding it; the
+    /// row id in a rosbag2 sqlite3 file.
     pub offset: u64,
     /// For a message in a chunk: its byte offset in the chunk's decompressed records.
     pub offset_in_chunk: Option<u64>,
 }
 
+impl MessageLocation {
+    /// Where in its file: `message at offset 1234`, `message at byte 56 of the chunk at offset
+    /// 1234`, `message at row 17`.
+    fn place(&self) -> String {
+        match self.offset_in_chunk {
+            Some(inner) => format!("message at byte {inner} of the chunk at offset {}", self.offset),
+            None if crate::bag::is_sqlite_name(&self.path) => format!("message at row {}", self.offset),
+            None => format!("message at offset {}", self.offset),
+        }
+    }
+}
+
 impl fmt::Display for MessageLocation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} topic {}, message at ", self.path.display(), self.topic)?;
-        match self.offset_in_chunk {
-            Some(inner) => write!(f, "byte {inner} of the chunk at offset {}", self.offset),
-            None => write!(f, "offset {}", self.offset),
-        }
+        write!(f, "{} topic {}, {}", self.path.display(), self.topic, self.place())
+    }
+}
+
+/// Where an empty topic's channel lies: a record, or a row of a sqlite3 file's `topics`.
+fn channel_place(path: &Path, offset: u64) -> String {
+    if crate::bag::is_sqlite_name(path) {
+        format!("it is row {offset} of the topics table")
+    } else {
+        format!("its channel is in the record at offset {offset}")
     }
 }
 
@@ -343,10 +404,7 @@ fn trajectory_message(
         (true, Error::TimestampsNotIncreasing { previous_s, value_s, .. }) => {
             let previous = match (previous_message, previous_line) {
                 (Some(previous), _) if previous.path == message.map_or(path, |m| &m.path) => {
-                    match previous.offset_in_chunk {
-                        Some(inner) => format!(" (message at byte {inner} of the chunk at offset {})", previous.offset),
-                        None => format!(" (message at offset {})", previous.offset),
-                    }
+                    format!(" ({})", previous.place())
                 }
                 (Some(previous), _) => format!(" ({previous})"),
                 (None, Some(p)) => format!(" (line {p})"),

@@ -7,7 +7,7 @@ use std::str::FromStr;
 /// A pose file format this crate reads.
 ///
 /// Names (for [`FromStr`] and [`Display`](fmt::Display)) are lower case: `tum`, `csv`, `kitti`,
-/// `euroc`, `g2o`, `tuc`, `mcap`.
+/// `euroc`, `g2o`, `tuc`, `mcap`, `rosbag2`, `ros1`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Format {
@@ -25,15 +25,29 @@ pub enum Format {
     Tuc,
     /// MCAP, from ROS 2 or Foxglove ([`read_mcap`](crate::read_mcap)).
     Mcap,
+    /// A rosbag2 bag: its folder, its `metadata.yaml`, or one of its files, sqlite3 (`.db3`) or
+    /// MCAP, compressed or not ([`read_rosbag2`](crate::read_rosbag2)).
+    Rosbag2,
+    /// A ROS 1 bag, format 2.0 (`.bag`; [`read_ros1`](crate::read_ros1)).
+    Ros1,
 }
 
 /// The names [`Format::from_str`] accepts, as the error lists them.
-const NAMES: &str = "tum, csv, kitti, euroc, g2o, tuc, mcap";
+const NAMES: &str = "tum, csv, kitti, euroc, g2o, tuc, mcap, rosbag2, ros1";
 
 impl Format {
     /// Every format, in the order error messages list them.
-    pub const ALL: [Format; 7] =
-        [Format::Tum, Format::Csv, Format::Kitti, Format::Euroc, Format::G2o, Format::Tuc, Format::Mcap];
+    pub const ALL: [Format; 9] = [
+        Format::Tum,
+        Format::Csv,
+        Format::Kitti,
+        Format::Euroc,
+        Format::G2o,
+        Format::Tuc,
+        Format::Mcap,
+        Format::Rosbag2,
+        Format::Ros1,
+    ];
 
     /// The format's name: `tum`, `csv`, ...
     pub fn name(self) -> &'static str {
@@ -45,6 +59,8 @@ impl Format {
             Self::G2o => "g2o",
             Self::Tuc => "tuc",
             Self::Mcap => "mcap",
+            Self::Rosbag2 => "rosbag2",
+            Self::Ros1 => "ros1",
         }
     }
 
@@ -58,14 +74,17 @@ impl Format {
             Self::Csv => &["csv"],
             Self::G2o => &["g2o", "graph"],
             Self::Mcap => &["mcap"],
+            Self::Rosbag2 => &["db3", "yaml", "zstd", "lz4"],
+            Self::Ros1 => &["bag"],
             Self::Kitti | Self::Euroc | Self::Tuc => &[],
         }
     }
 
     /// The format a file's extension suggests, in any case: `.tum` and `.txt` are TUM, `.csv`
-    /// is CSV, `.g2o` and `.graph` are pose graphs, `.mcap` is MCAP. `None` for other extensions
-    /// and none. Only the name is looked at, not the contents (but see
-    /// [`read_trajectory`](crate::read_trajectory)).
+    /// is CSV, `.g2o` and `.graph` are pose graphs, `.mcap` is MCAP, `.db3`, `.yaml` (a bag's
+    /// `metadata.yaml`) and the file-compressed `.zstd` and `.lz4` are rosbag2, `.bag` is ROS 1.
+    /// `None` for other extensions and none. Only the name is looked at, not the contents (but
+    /// see [`detect`](Self::detect) and [`read_trajectory`](crate::read_trajectory)).
     ///
     /// # Examples
     /// ```
@@ -73,11 +92,29 @@ impl Format {
     /// assert_eq!(Format::from_path("runs/fr2_desk_groundtruth.TXT"), Some(Format::Tum));
     /// assert_eq!(Format::from_path("drive.csv"), Some(Format::Csv));
     /// assert_eq!(Format::from_path("drive.mcap"), Some(Format::Mcap));
-    /// assert_eq!(Format::from_path("drive.bag"), None);
+    /// assert_eq!(Format::from_path("drive.bag"), Some(Format::Ros1));
+    /// assert_eq!(Format::from_path("bag/rosbag2_0.db3.zstd"), Some(Format::Rosbag2));
+    /// assert_eq!(Format::from_path("drive.log"), None);
     /// ```
     pub fn from_path(path: impl AsRef<Path>) -> Option<Format> {
         let extension = path.as_ref().extension()?.to_str()?.to_ascii_lowercase();
         Self::ALL.into_iter().find(|format| format.extensions().contains(&extension.as_str()))
+    }
+}
+
+impl Format {
+    /// The format of `path` as [`read_trajectory`](crate::read_trajectory) tells it without
+    /// being told: a folder is a rosbag2 bag, a file goes by its extension
+    /// ([`from_path`](Self::from_path)).
+    pub fn detect(path: impl AsRef<Path>) -> Option<Format> {
+        let path = path.as_ref();
+        if path.is_dir() { Some(Format::Rosbag2) } else { Self::from_path(path) }
+    }
+
+    /// Whether files of this format hold topics ([`list_topics`](crate::list_topics) lists
+    /// them): MCAP, rosbag2 and ROS 1.
+    pub fn has_topics(self) -> bool {
+        matches!(self, Self::Mcap | Self::Rosbag2 | Self::Ros1)
     }
 }
 

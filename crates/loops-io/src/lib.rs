@@ -9,7 +9,9 @@
 //!
 //! | format | reader | content | extensions |
 //! |---|---|---|---|
-//! | MCAP (ROS 2, Foxglove) | [`read_mcap`], [`read_mcap_files`], [`list_topics`] | one topic of [`PoseType`]: ROS 2 CDR `PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`, `Odometry`, `TFMessage`; Foxglove `PoseInFrame`, `PosesInFrame`, `FrameTransform(s)`, `Odometry` in protobuf or JSON | `.mcap` |
+//! | MCAP (ROS 2, Foxglove) | [`read_mcap`], [`read_mcap_files`], [`list_topics`] | one topic of [`PoseType`]: ROS 2 CDR `PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`, `Odometry`, `TFMessage`; the same in ROS 1 encoding; Foxglove `PoseInFrame`, `PosesInFrame`, `FrameTransform(s)`, `Odometry` in protobuf or JSON | `.mcap` |
+//! | rosbag2 (sqlite3, MCAP) | [`read_rosbag2`], [`list_topics`] | the ROS types above; the bag's folder, `metadata.yaml` or a storage file; splits; zstd per message or per file | folder, `.db3`, `.yaml`, `.zstd` |
+//! | ROS 1 bag (format 2.0) | [`read_ros1`], [`list_topics`] | the ROS types above and `tf/tfMessage`; chunks uncompressed, bz2 or lz4 | `.bag` |
 //! | TUM RGB-D | [`read_tum`] | `timestamp tx ty tz qx qy qz qw` | `.tum`, `.txt` |
 //! | CSV | [`read_csv`] | `t,x,y` or `t,x,y,z`, optional header | `.csv` |
 //! | KITTI | [`read_kitti`] | `[t] r00 r01 r02 tx ... r22 tz`, times from a rate or file if none | (`.txt`) |
@@ -28,7 +30,7 @@
 //! /odom, message at byte 96 of the chunk at offset 4242: the CDR message ends at byte 60, but
 //! nav_msgs/msg/Odometry needs ...`. No input makes a reader panic.
 //!
-//! What it does not do (yet): ROS 1 bags and ROS 1 messages in MCAP; compose TF trees (one
+//! What it does not do (yet): ROS 1 bags of format 1.x; compose TF trees (one
 //! parent-child pair is read as is); read the times of a `PosesInFrame` path pose by pose (all
 //! poses of a message get its stamp); normalise quaternions in a table (the trajectory
 //! constructors do); drop duplicate timestamps (they are reported, not fixed).
@@ -71,6 +73,7 @@
 // 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
 //    `loop_duration`, `report`, `quality`, `samples`; and `write` (TUM, g2o).
 mod atomic;
+mod bag;
 mod cdr;
 mod cdr_write;
 mod components;
@@ -103,8 +106,9 @@ mod tum;
 mod write;
 
 pub use crate::csv::read_csv;
-pub use crate::mcap::{McapOptions, TimeSource, list_topics, read_mcap, read_mcap_files};
+pub use crate::mcap::{McapOptions, TimeSource, read_mcap, read_mcap_files};
 pub use atomic::write_atomically;
+pub use bag::{list_topics, read_ros1, read_rosbag2};
 pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
 pub use detections::{DetectionTable, read_detections};
 pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};

@@ -136,48 +136,16 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTa
 /// - [`IoError::Trajectory`] holding [`loops_core::Error::InvalidParameter`] for no file at all.
 pub fn read_mcap_files<P: AsRef<Path>>(paths: &[P], options: &McapOptions) -> Result<PoseTable> {
     let files: Vec<PathBuf> = paths.iter().map(|path| path.as_ref().to_path_buf()).collect();
-    let Some(first) = files.first().cloned() else {
+    if files.is_empty() {
         return Err(IoError::invalid(Path::new(""), "number of MCAP files", 0.0, "at least one file"));
-    };
+    }
     let mut scan = Scan::new(Some(options));
     for (index, path) in files.iter().enumerate() {
         scan.file = index;
         scan.path = path.clone();
         walk(path, &mut scan)?;
     }
-    let bucket = scan.choose(&first, options)?;
-    let (group, frames) = choose_group(&files, bucket, options)?;
-    let mut rows = std::mem::take(&mut bucket.groups[group].rows);
-    rows.sort_by_key(|row| row.stamp_ns);
-    let mut table = PoseTable::empty(&first, 3);
-    table.timestamps_s = rows.iter().map(|row| seconds_of_ns(row.stamp_ns)).collect();
-    table.timestamps_ns = Some(rows.iter().map(|row| row.stamp_ns).collect());
-    table.positions = rows.iter().map(|row| row.position).collect();
-    table.orientations_xyzw = Some(rows.iter().map(|row| row.orientation).collect());
-    table.messages = Some(MessageSources {
-        files,
-        topic: bucket.info.topic.clone(),
-        schema_name: bucket.info.schema_name.clone(),
-        frames,
-        messages: rows.iter().map(|row| row.source).collect(),
-    });
-    Ok(table)
-}
-
-/// The topics of an MCAP file: name, schema, encodings, message count, log time span and
-/// whether this crate reads poses from it; sorted by topic. For `loops info`.
-///
-/// Time O(file size): the messages are counted, not decoded.
-///
-/// # Errors
-/// [`IoError::Open`] when the file cannot be read; [`IoError::Mcap`] naming the offset when it
-/// is not MCAP, cut short, or broken.
-pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>> {
-    let path = path.as_ref();
-    let mut scan = Scan::new(None);
-    scan.path = path.to_path_buf();
-    walk(path, &mut scan)?;
-    Ok(scan.topics())
+    scan.into_table(files, options)
 }
 
 /// One pose, with where it came from.
@@ -214,23 +182,49 @@ struct Bucket {
 
 /// Collects topics and, when reading, poses.
 #[derive(Debug)]
-struct Scan<'o> {
+pub(crate) struct Scan<'o> {
     /// `None` to count only.
     options: Option<&'o McapOptions>,
     /// The file being walked: its index and path.
-    file: usize,
-    path: PathBuf,
+    pub(crate) file: usize,
+    pub(crate) path: PathBuf,
     buckets: Vec<Bucket>,
     index: HashMap<ChannelKey, usize>,
 }
 
 impl<'o> Scan<'o> {
-    fn new(options: Option<&'o McapOptions>) -> Self {
+    pub(crate) fn new(options: Option<&'o McapOptions>) -> Self {
         Self { options, file: 0, path: PathBuf::new(), buckets: Vec::new(), index: HashMap::new() }
     }
 
+    /// The poses of the topic to read, as a table (see [`read_mcap_files`]): `files` are the
+    /// files walked, in order; the first names the table.
+    pub(crate) fn into_table(mut self, files: Vec<PathBuf>, options: &McapOptions) -> Result<PoseTable> {
+        let Some(first) = files.first().cloned() else {
+            return Err(IoError::invalid(Path::new(""), "number of files", 0.0, "at least one file"));
+        };
+        let scan = &mut self;
+        let bucket = scan.choose(&first, options)?;
+        let (group, frames) = choose_group(&files, bucket, options)?;
+        let mut rows = std::mem::take(&mut bucket.groups[group].rows);
+        rows.sort_by_key(|row| row.stamp_ns);
+        let mut table = PoseTable::empty(&first, 3);
+        table.timestamps_s = rows.iter().map(|row| seconds_of_ns(row.stamp_ns)).collect();
+        table.timestamps_ns = Some(rows.iter().map(|row| row.stamp_ns).collect());
+        table.positions = rows.iter().map(|row| row.position).collect();
+        table.orientations_xyzw = Some(rows.iter().map(|row| row.orientation).collect());
+        table.messages = Some(MessageSources {
+            files,
+            topic: bucket.info.topic.clone(),
+            schema_name: bucket.info.schema_name.clone(),
+            frames,
+            messages: rows.iter().map(|row| row.source).collect(),
+        });
+        Ok(table)
+    }
+
     /// The topics, sorted.
-    fn topics(&self) -> Vec<TopicInfo> {
+    pub(crate) fn topics(&self) -> Vec<TopicInfo> {
         let mut topics: Vec<TopicInfo> = self.buckets.iter().map(|bucket| bucket.info.clone()).collect();
         topics.sort_by(|a, b| {
             (&a.topic, &a.schema_name, &a.message_encoding).cmp(&(&b.topic, &b.schema_name, &b.message_encoding))
@@ -343,6 +337,10 @@ fn choose_group(
 }
 
 impl Visitor for Scan<'_> {
+    fn decodes(&self, channel: usize) -> bool {
+        self.buckets[channel].decode
+    }
+
     fn channel(&mut self, key: ChannelKey, at: At) -> usize {
         if let Some(&index) = self.index.get(&key) {
             return index;

@@ -52,12 +52,18 @@ pub(crate) struct MessageHeader {
     pub(crate) publish_time: u64,
 }
 
-/// What the walker reports: channels as they appear, and messages.
+/// What the walker reports: channels as they appear, and messages. The walkers of the bags
+/// (rosbag2 sqlite3, ROS 1) report to the same visitor.
 pub(crate) trait Visitor {
     /// A channel appears (for the first time in this file); returns the visitor's index for it.
     fn channel(&mut self, key: ChannelKey, at: At) -> usize;
     /// A message on the channel the visitor numbered `channel`.
     fn message(&mut self, channel: usize, header: MessageHeader, data: &[u8], at: At) -> Result<()>;
+    /// Whether the visitor decodes the messages of `channel` (a walker may skip reading the
+    /// bytes of the others, and pass empty data).
+    fn decodes(&self, _channel: usize) -> bool {
+        true
+    }
 }
 
 /// The name of a record type, for messages.

@@ -11,7 +11,11 @@ pub(crate) fn decode_samples(
     emit: impl FnMut(Sample<'_>),
 ) -> Result<(), String> {
     match encoding {
-        MessageEncoding::Cdr => cdr::decode(pose_type, data, emit),
+        MessageEncoding::Cdr => match crate::bag::compression::message_frame(data) {
+            None => cdr::decode(pose_type, data, emit),
+            Some(frame) => cdr::decode(pose_type, &crate::bag::compression::decompress_message(frame, data)?, emit),
+        },
+        MessageEncoding::Ros1 => crate::bag::ros1_message::decode(pose_type, data, emit),
         MessageEncoding::Protobuf => foxglove::decode_protobuf(pose_type, data, emit),
         MessageEncoding::Json => foxglove::decode_json(pose_type, data, emit),
     }
@@ -70,7 +74,7 @@ pub fn decode_poses(
     encoding: MessageEncoding,
     data: &[u8],
 ) -> Result<Vec<DecodedPose>, DecodeError> {
-    if pose_type.is_ros() != (encoding == MessageEncoding::Cdr) {
+    if pose_type.is_ros() != encoding.is_ros() {
         return Err(DecodeError(format!("{pose_type} in {encoding} is not a type this crate reads")));
     }
     let mut poses = Vec::new();

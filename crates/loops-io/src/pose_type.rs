@@ -6,14 +6,16 @@ use std::fmt;
 
 /// The types [`read_mcap`](crate::read_mcap) reads, as error messages list them.
 pub(crate) const SUPPORTED_TYPES: &str = "geometry_msgs/msg/PoseStamped, geometry_msgs/msg/PoseWithCovarianceStamped, \
-     geometry_msgs/msg/TransformStamped, nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage in cdr; foxglove.PoseInFrame, \
+     geometry_msgs/msg/TransformStamped, nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage in cdr or ros1 (and tf/tfMessage \
+     in ros1); foxglove.PoseInFrame, \
      foxglove.PosesInFrame, foxglove.FrameTransform, foxglove.FrameTransforms, foxglove.Odometry in protobuf or json";
 
 /// A message type this crate reads poses from.
 ///
-/// ROS 2 types come in CDR; Foxglove types in protobuf or JSON ([`MessageEncoding`]). A type
-/// is matched by its schema name: `geometry_msgs/msg/PoseStamped` (or the ROS 1 spelling
-/// `geometry_msgs/PoseStamped`), `foxglove.PoseInFrame`.
+/// ROS types come in CDR (ROS 2) or in the ROS 1 serialisation; Foxglove types in protobuf or
+/// JSON ([`MessageEncoding`]). A type is matched by its schema name:
+/// `geometry_msgs/msg/PoseStamped` (or the ROS 1 spelling `geometry_msgs/PoseStamped`; `tf/tfMessage`
+/// is read as `TFMessage`), `foxglove.PoseInFrame`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[non_exhaustive]
 pub enum PoseType {
@@ -44,8 +46,11 @@ pub enum PoseType {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[non_exhaustive]
 pub enum MessageEncoding {
-    /// ROS 2 CDR (`cdr`).
+    /// ROS 2 CDR (`cdr`); a message compressed by rosbag2 (zstd, or an lz4 frame) is
+    /// decompressed first.
     Cdr,
+    /// The ROS 1 serialisation (`ros1`): little endian, unaligned, no encapsulation header.
+    Ros1,
     /// Protocol buffers (`protobuf`).
     Protobuf,
     /// JSON (`json`).
@@ -83,7 +88,7 @@ impl PoseType {
         }
     }
 
-    /// Whether this is a ROS 2 type (CDR) rather than a Foxglove one (protobuf, JSON).
+    /// Whether this is a ROS type (CDR or ROS 1) rather than a Foxglove one (protobuf, JSON).
     pub fn is_ros(self) -> bool {
         matches!(
             self,
@@ -106,7 +111,7 @@ impl PoseType {
     }
 
     /// The type and encoding of a channel with this schema name and message encoding, if this
-    /// crate reads it: ROS 2 types in `cdr`, Foxglove types in `protobuf` or `json`.
+    /// crate reads it: ROS types in `cdr` or `ros1`, Foxglove types in `protobuf` or `json`.
     ///
     /// # Examples
     /// ```
@@ -120,15 +125,25 @@ impl PoseType {
     pub fn of_channel(schema_name: &str, message_encoding: &str) -> Option<(PoseType, MessageEncoding)> {
         let encoding = match message_encoding {
             "cdr" => MessageEncoding::Cdr,
+            "ros1" => MessageEncoding::Ros1,
             "protobuf" => MessageEncoding::Protobuf,
             "json" => MessageEncoding::Json,
             _ => return None,
         };
         let pose_type = Self::ALL.into_iter().find(|t| {
             let name = t.schema_name();
-            name == schema_name || (t.is_ros() && name.replacen("/msg/", "/", 1) == schema_name)
+            name == schema_name
+                || (t.is_ros() && name.replacen("/msg/", "/", 1) == schema_name)
+                || (*t == Self::TfMessage && schema_name == "tf/tfMessage")
         })?;
-        (pose_type.is_ros() == (encoding == MessageEncoding::Cdr)).then_some((pose_type, encoding))
+        (pose_type.is_ros() == encoding.is_ros()).then_some((pose_type, encoding))
+    }
+}
+
+impl MessageEncoding {
+    /// Whether this is a ROS encoding (CDR or ROS 1), of ROS types.
+    pub fn is_ros(self) -> bool {
+        matches!(self, Self::Cdr | Self::Ros1)
     }
 }
 
@@ -142,6 +157,7 @@ impl fmt::Display for MessageEncoding {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
             Self::Cdr => "cdr",
+            Self::Ros1 => "ros1",
             Self::Protobuf => "protobuf",
             Self::Json => "json",
         })
@@ -174,7 +190,9 @@ mod tests {
             }
         }
         assert_eq!(PoseType::of_channel("geometry_msgs/PoseStamped", "cdr").map(|t| t.0), Some(PoseType::PoseStamped));
-        assert_eq!(PoseType::of_channel("geometry_msgs/msg/PoseStamped", "ros1"), None);
+        assert_eq!(PoseType::of_channel("geometry_msgs/PoseStamped", "ros1").map(|t| t.0), Some(PoseType::PoseStamped));
+        assert_eq!(PoseType::of_channel("tf/tfMessage", "ros1").map(|t| t.0), Some(PoseType::TfMessage));
+        assert_eq!(PoseType::of_channel("foxglove.PoseInFrame", "ros1"), None);
         assert_eq!(PoseType::of_channel("nav_msgs/msg/Odometry", "json"), None);
         assert_eq!(PoseType::of_channel("sensor_msgs/msg/Imu", "cdr"), None);
     }

@@ -2,6 +2,7 @@
 
 use std::path::Path;
 
+use crate::bag::{read_ros1, read_rosbag2};
 use crate::csv::parse_csv;
 use crate::error::{IoError, Result};
 use crate::euroc::{looks_like_euroc, parse_euroc};
@@ -82,7 +83,8 @@ pub fn read_trajectory(path: impl AsRef<Path>, format: Option<Format>) -> Result
 }
 
 /// Reads a pose file as `options` say: in `options.format`, or when `None` in the format its
-/// extension ([`Format::from_path`]) and its first data line suggest.
+/// extension ([`Format::from_path`]) and its first data line suggest; a folder is a rosbag2 bag
+/// ([`Format::detect`]). MCAP files and bags take `options.mcap` (topic, time, frame pair).
 ///
 /// The first line overrides the extension where the extension is shared: a `.txt` file whose
 /// first data line is 12 or 13 numbers is KITTI, `point2` / `point3` / `angle` is libRSF (TUC),
@@ -98,13 +100,16 @@ pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
     let path = path.as_ref();
     let format = match options.format {
         Some(format) => format,
-        None => Format::from_path(path).ok_or_else(|| IoError::UnknownFormat {
+        None => Format::detect(path).ok_or_else(|| IoError::UnknownFormat {
             path: path.to_path_buf(),
             extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
         })?,
     };
-    if format == Format::Mcap {
-        return read_mcap(path, &options.mcap);
+    match format {
+        Format::Mcap => return read_mcap(path, &options.mcap),
+        Format::Rosbag2 => return read_rosbag2(path, &options.mcap),
+        Format::Ros1 => return read_ros1(path, &options.mcap),
+        _ => {}
     }
     let text = text::read_text(path)?;
     let sniffed = match (options.format, format) {
@@ -123,7 +128,7 @@ pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
         Format::Euroc => parse_euroc(path, &text),
         Format::G2o => parse_pose_graph(path, &text, &options.timing).map(|graph| graph.vertices),
         Format::Tuc => parse_tuc(path, &text),
-        Format::Mcap => unreachable!("MCAP is read above"),
+        Format::Mcap | Format::Rosbag2 | Format::Ros1 => unreachable!("logs with topics are read above"),
     }
 }
 

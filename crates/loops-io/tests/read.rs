@@ -335,7 +335,7 @@ mod format {
         let error = "bag".parse::<Format>().unwrap_err();
         assert_eq!(
             error.to_string(),
-            r#"unknown file format "bag": expected one of tum, csv, kitti, euroc, g2o, tuc, mcap"#
+            r#"unknown file format "bag": expected one of tum, csv, kitti, euroc, g2o, tuc, mcap, rosbag2, ros1"#
         );
         assert!(matches!(error, loops_core::Error::UnknownName { .. }));
     }
@@ -376,12 +376,12 @@ mod format {
 
     #[test]
     fn unknown_extension() {
-        let file = TempFile::new("drive.bag", "");
+        let file = TempFile::new("drive.log", "");
         let error = read_trajectory(file.path(), None).unwrap_err();
-        assert!(matches!(&error, IoError::UnknownFormat { extension: Some(e), .. } if e == "bag"), "{error:?}");
+        assert!(matches!(&error, IoError::UnknownFormat { extension: Some(e), .. } if e == "log"), "{error:?}");
         assert_eq!(
             after_path(&error, &file),
-            r#": cannot tell the file format from the extension ".bag": expected .tum or .txt for tum, .csv for csv, .g2o or .graph for g2o, .mcap for mcap, or name the format (tum, csv, kitti, euroc, g2o, tuc, mcap)"#
+            r#": cannot tell the file format from the extension ".log": expected .tum or .txt for tum, .csv for csv, .g2o or .graph for g2o, .mcap for mcap, .db3 or .yaml or .zstd or .lz4 for rosbag2, .bag for ros1, or name the format (tum, csv, kitti, euroc, g2o, tuc, mcap, rosbag2, ros1)"#
         );
         let file = TempFile::new("poses", "");
         let error = read_trajectory(file.path(), None).unwrap_err();

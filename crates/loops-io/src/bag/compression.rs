@@ -1,0 +1,295 @@
+//! Decompression for bags, every output bounded: rosbag2's per-message and per-file compression
+//! (zstd, the only compressor rosbag2 ships; lz4 frames too, for third-party plugins) and ROS 1's
+//! chunk compression (bz2, lz4).
+//!
+//! The codecs are crates: `zstd` (libzstd, as the `mcap` crate already links it), `lz4_flex`
+//! (LZ4 frame format, pure Rust; ROS 1's `roslz4` writes standard LZ4 frames) and `bzip2` (with
+//! its pure-Rust `libbz2-rs-sys` back end). Only the limits are ours: no output grows past what
+//! its container declares (a ROS 1 chunk's `size`), or past [`MAX_MESSAGE_BYTES`] for one
+//! message and [`MAX_FILE_BYTES`] for a decompressed storage file, whatever the input claims;
+//! buffers grow with the output actually produced, never from a declared length alone.
+
+use std::fs::File;
+use std::io::{self, BufReader, BufWriter, Read, Write};
+use std::path::Path;
+
+use crate::error::{IoError, Result};
+
+/// A compressed frame, by its magic number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Frame {
+    /// A zstd frame: `28 b5 2f fd`.
+    Zstd,
+    /// An LZ4 frame: `04 22 4d 18`.
+    Lz4,
+}
+
+impl Frame {
+    /// The frame whose magic `data` starts with.
+    pub(crate) fn of(data: &[u8]) -> Option<Frame> {
+        match data.get(..4)? {
+            [0x28, 0xb5, 0x2f, 0xfd] => Some(Frame::Zstd),
+            [0x04, 0x22, 0x4d, 0x18] => Some(Frame::Lz4),
+            _ => None,
+        }
+    }
+
+    /// The frame a file name's last extension names: `.zstd` (rosbag2's name), `.zst`, `.lz4`.
+    pub(crate) fn of_name(path: &Path) -> Option<Frame> {
+        let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+        match extension.as_str() {
+            "zstd" | "zst" => Some(Frame::Zstd),
+            "lz4" => Some(Frame::Lz4),
+            _ => None,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Frame::Zstd => "zstd",
+            Frame::Lz4 => "lz4",
+        }
+    }
+}
+
+/// Largest decompressed message: 64 MiB. The messages read are poses (a `TFMessage` of a
+/// thousand transforms is about 100 kB), so a larger one is corrupt.
+pub(crate) const MAX_MESSAGE_BYTES: u64 = 64 << 20;
+
+/// Largest decompressed storage file (`.db3.zstd`, `.mcap.zstd`): 32 GiB, written to a
+/// temporary file in the system's temporary folder (`TMPDIR`) and removed after reading.
+pub(crate) const MAX_FILE_BYTES: u64 = 32 << 30;
+
+/// How a CDR message from a rosbag2 bag with `compression_mode: message` is compressed, if it
+/// is: a CDR message starts with `00`, a compressed one with its frame's magic.
+pub(crate) fn message_frame(data: &[u8]) -> Option<Frame> {
+    Frame::of(data)
+}
+
+thread_local! {
+    /// One zstd context per thread, reused: creating one per message would cost more than the
+    /// decompression of a small message.
+    static ZSTD: std::cell::RefCell<Option<zstd::bulk::Decompressor<'static>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Decompresses one message, at most [`MAX_MESSAGE_BYTES`].
+///
+/// # Errors
+/// What the codec says, or that the message decompresses to more than the limit.
+pub(crate) fn decompress_message(frame: Frame, data: &[u8]) -> std::result::Result<Vec<u8>, String> {
+    let failed =
+        |error: &dyn std::fmt::Display| format!("the {} compressed message does not decompress: {error}", frame.name());
+    if frame == Frame::Zstd {
+        // A frame that declares its size (rosbag2's do) decompresses in one call.
+        if let Ok(Some(size)) = zstd::zstd_safe::get_frame_content_size(data) {
+            if size > MAX_MESSAGE_BYTES {
+                return Err(too_large(frame, size));
+            }
+            return ZSTD.with(|cell| {
+                let mut cell = cell.borrow_mut();
+                let decompressor = match cell.as_mut() {
+                    Some(decompressor) => decompressor,
+                    None => cell.insert(zstd::bulk::Decompressor::new().map_err(|e| failed(&e))?),
+                };
+                let out = decompressor.decompress(data, size as usize).map_err(|e| failed(&e))?;
+                if out.len() as u64 != size {
+                    return Err(failed(&format!("it declares {size} bytes but holds {}", out.len())));
+                }
+                Ok(out)
+            });
+        }
+    }
+    let mut out = Vec::new();
+    let read = match frame {
+        Frame::Zstd => zstd::stream::read::Decoder::with_buffer(data)
+            .and_then(|decoder| decoder.take(MAX_MESSAGE_BYTES + 1).read_to_end(&mut out)),
+        Frame::Lz4 => lz4_flex::frame::FrameDecoder::new(data).take(MAX_MESSAGE_BYTES + 1).read_to_end(&mut out),
+    };
+    read.map_err(|e| failed(&e))?;
+    if out.len() as u64 > MAX_MESSAGE_BYTES {
+        return Err(too_large(frame, out.len() as u64));
+    }
+    Ok(out)
+}
+
+fn too_large(frame: Frame, size: u64) -> String {
+    format!(
+        "the {} compressed message decompresses to {size} bytes or more, over the limit of {} MiB for one message",
+        frame.name(),
+        MAX_MESSAGE_BYTES >> 20
+    )
+}
+
+/// Decompresses the storage file at `path` (`.db3.zstd`, `.mcap.zstd`) into a temporary file,
+/// at most [`MAX_FILE_BYTES`]; the file is removed when the handle drops.
+///
+/// # Errors
+/// [`IoError::Open`] when the file cannot be read; [`IoError::Bag`] naming the file when it is
+/// not in `frame`'s format, does not decompress (with the number of bytes decompressed before
+/// the fault), is larger than the limit, or the temporary file cannot be written.
+pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::NamedTempFile> {
+    let bag_error = |message: String| IoError::Bag { path: path.to_path_buf(), message };
+    let mut input = BufReader::with_capacity(
+        1 << 20,
+        File::open(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?,
+    );
+    let mut magic = [0u8; 4];
+    let got = read_up_to(&mut input, &mut magic).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
+    if Frame::of(&magic[..got]) != Some(frame) {
+        return Err(bag_error(format!(
+            "not a {} file: it starts with {:02x?}, not the {} magic number",
+            frame.name(),
+            &magic[..got],
+            frame.name()
+        )));
+    }
+    let input = io::Cursor::new(magic).chain(input);
+    let temp = tempfile::Builder::new()
+        .prefix("loops-bag-")
+        .tempfile()
+        .map_err(|e| bag_error(format!("cannot create a temporary file to decompress into: {e}")))?;
+    let mut output = Counting { inner: BufWriter::with_capacity(1 << 20, temp.as_file()), written: 0 };
+    let copied = match frame {
+        Frame::Zstd => zstd::stream::read::Decoder::new(input)
+            .and_then(|decoder| io::copy(&mut decoder.take(MAX_FILE_BYTES + 1), &mut output)),
+        Frame::Lz4 => io::copy(&mut lz4_flex::frame::FrameDecoder::new(input).take(MAX_FILE_BYTES + 1), &mut output),
+    };
+    let written = output.written;
+    let flushed = copied.and_then(|_| output.inner.flush());
+    drop(output);
+    flushed.map_err(|e| {
+        let what = if e.kind() == io::ErrorKind::Other || e.kind() == io::ErrorKind::InvalidData {
+            "it does not decompress"
+        } else {
+            "decompressing it failed"
+        };
+        bag_error(format!("{what} ({} after {written} decompressed bytes): {e}", frame.name()))
+    })?;
+    if written > MAX_FILE_BYTES {
+        return Err(bag_error(format!(
+            "it decompresses to more than {} GiB, the limit for one storage file",
+            MAX_FILE_BYTES >> 30
+        )));
+    }
+    Ok(temp)
+}
+
+/// Reads into `buffer` until it is full or the input ends; returns the bytes read.
+fn read_up_to(reader: &mut impl Read, buffer: &mut [u8]) -> io::Result<usize> {
+    let mut filled = 0;
+    while filled < buffer.len() {
+        match reader.read(&mut buffer[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(filled)
+}
+
+/// A writer that counts what it writes.
+struct Counting<W> {
+    inner: W,
+    written: u64,
+}
+
+impl<W: Write> Write for Counting<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.written += n as u64;
+        Ok(n)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// How a ROS 1 chunk is compressed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ChunkCompression {
+    None,
+    Bz2,
+    Lz4,
+}
+
+/// Decompresses a ROS 1 chunk's data into `out` (cleared first), which must come to exactly
+/// `size` bytes, the size the chunk declares.
+///
+/// # Errors
+/// What the codec says, or that the output is shorter or longer than declared.
+pub(crate) fn decompress_chunk(
+    compression: ChunkCompression,
+    data: &[u8],
+    size: u64,
+    out: &mut Vec<u8>,
+) -> std::result::Result<(), String> {
+    out.clear();
+    let (name, read) = match compression {
+        ChunkCompression::None => {
+            if data.len() as u64 != size {
+                return Err(format!("the uncompressed chunk holds {} bytes but declares {size}", data.len()));
+            }
+            out.extend_from_slice(data);
+            return Ok(());
+        }
+        ChunkCompression::Bz2 => ("bz2", bzip2::read::BzDecoder::new(data).take(size + 1).read_to_end(out)),
+        ChunkCompression::Lz4 => ("lz4", lz4_flex::frame::FrameDecoder::new(data).take(size + 1).read_to_end(out)),
+    };
+    read.map_err(|e| format!("the {name} chunk does not decompress: {e}"))?;
+    if out.len() as u64 != size {
+        let what = if out.len() as u64 > size { "more" } else { "fewer" };
+        return Err(format!("the {name} chunk decompresses to {what} bytes than the {size} it declares"));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_round_trip_and_garbage_fails() {
+        let plain: Vec<u8> = (0..1000u32).flat_map(|i| (i % 7).to_le_bytes()).collect();
+        let zstd = zstd::bulk::compress(&plain, 3).unwrap();
+        assert_eq!(message_frame(&zstd), Some(Frame::Zstd));
+        assert_eq!(decompress_message(Frame::Zstd, &zstd).unwrap(), plain);
+        let lz4 = {
+            let mut encoder = lz4_flex::frame::FrameEncoder::new(Vec::new());
+            encoder.write_all(&plain).unwrap();
+            encoder.finish().unwrap()
+        };
+        assert_eq!(message_frame(&lz4), Some(Frame::Lz4));
+        assert_eq!(decompress_message(Frame::Lz4, &lz4).unwrap(), plain);
+        for cut in [4, 10, zstd.len() - 1] {
+            assert!(decompress_message(Frame::Zstd, &zstd[..cut]).is_err(), "{cut}");
+        }
+        assert!(decompress_message(Frame::Lz4, &lz4[..lz4.len() - 10]).is_err());
+        assert_eq!(message_frame(&[0, 1, 0, 0]), None);
+    }
+
+    #[test]
+    fn a_message_bomb_stops_at_the_limit() {
+        let zeros = vec![0u8; (MAX_MESSAGE_BYTES + 10) as usize];
+        let zstd = zstd::bulk::compress(&zeros, 1).unwrap();
+        let error = decompress_message(Frame::Zstd, &zstd).unwrap_err();
+        assert!(error.contains("over the limit of 64 MiB"), "{error}");
+    }
+
+    #[test]
+    fn chunks_must_have_their_declared_size() {
+        let plain = b"hello chunk hello chunk hello chunk".to_vec();
+        let mut out = Vec::new();
+        decompress_chunk(ChunkCompression::None, &plain, plain.len() as u64, &mut out).unwrap();
+        assert_eq!(out, plain);
+        let mut bz2 = Vec::new();
+        bzip2::read::BzEncoder::new(&plain[..], bzip2::Compression::best()).read_to_end(&mut bz2).unwrap();
+        decompress_chunk(ChunkCompression::Bz2, &bz2, plain.len() as u64, &mut out).unwrap();
+        assert_eq!(out, plain);
+        let error = decompress_chunk(ChunkCompression::Bz2, &bz2, 5, &mut out).unwrap_err();
+        assert!(error.contains("more bytes than the 5"), "{error}");
+        let error = decompress_chunk(ChunkCompression::Bz2, &bz2, 500, &mut out).unwrap_err();
+        assert!(error.contains("fewer bytes than the 500"), "{error}");
+        assert!(decompress_chunk(ChunkCompression::Lz4, &bz2, 5, &mut out).is_err());
+    }
+}

@@ -1,0 +1,175 @@
+//! Bags: rosbag2 (sqlite3 and MCAP storage, compressed per message or per file, split in
+//! several files) and ROS 1 (format 2.0), read into the same topic scan as MCAP files.
+//!
+//! Each storage file is walked by the reader of its kind, which reports topics and messages to
+//! the MCAP reader's scan: topic choice, frame pairs, time sources, the table and its errors
+//! are the same for every kind. What is ours and what is a crate's:
+//!
+//! | part | how | module |
+//! |---|---|---|
+//! | `metadata.yaml` | `serde_yaml_ng` + serde derive | [`rosbag2`] |
+//! | sqlite3 storage (`.db3`) | `rusqlite`, SQLite bundled | [`sqlite`] |
+//! | MCAP storage (`.mcap`) | the crate's MCAP walker (`mcap` crate) | `crate::mcap` |
+//! | zstd, lz4, bz2 | `zstd`, `lz4_flex`, `bzip2`; the size limits are ours | [`compression`] |
+//! | ROS 1 records | by hand (the `rosbag` crate does not fit: see the module) | [`ros1`] |
+//! | ROS 1 messages | by hand, five types | [`ros1_message`] |
+
+pub(crate) mod compression;
+mod ros1;
+pub(crate) mod ros1_message;
+mod rosbag2;
+mod sqlite;
+
+use std::path::{Path, PathBuf};
+
+pub(crate) use rosbag2::is_sqlite_name;
+
+use crate::error::{IoError, Result};
+use crate::format::Format;
+use crate::mcap::{McapOptions, Scan};
+use crate::mcap_records::Visitor;
+use crate::table::PoseTable;
+use crate::topic::TopicInfo;
+use rosbag2::{Rosbag2, Storage, StorageFile};
+
+/// Reads the poses of one topic of a rosbag2 bag, named the way users name it: the bag's folder,
+/// its `metadata.yaml`, or one of its storage files (`.db3`, `.mcap`, `.db3.zstd`,
+/// `.mcap.zstd`: that file alone).
+///
+/// - Storage: sqlite3 (`.db3`, the default of ROS 2 Foxy to Humble) and MCAP (the default since
+///   Iron).
+/// - Splits: the files `metadata.yaml` lists (`relative_file_paths`), in its order; for a folder
+///   without `metadata.yaml`, its `.db3` / `.mcap` files ordered by split index (`bag_2` before
+///   `bag_10`). Poses of all files make one table, sorted by time.
+/// - Compression: `compression_mode: message` (each CDR message a zstd frame, recognised by its
+///   magic number whether or not `metadata.yaml` says so; an lz4 frame too), and `compression_mode:
+///   file` (each storage file compressed whole, `*.db3.zstd`, `*.mcap.zstd`; decompressed to a
+///   temporary file in `TMPDIR`, at most 32 GiB, removed after reading). One message may
+///   decompress to at most 64 MiB.
+/// - Topic, time and frame pair as `options` say, as for [`read_mcap`](crate::read_mcap). A
+///   sqlite3 file records one time per message, so [`TimeSource::Log`](crate::TimeSource::Log)
+///   and [`TimeSource::Publish`](crate::TimeSource::Publish) both take it.
+///
+/// The table's [`messages`](PoseTable::messages) name the storage files (the compressed file,
+/// for a file-compressed one) and, for sqlite3, each message's row id in place of the offset.
+///
+/// Time O(size of the bag): every message is visited once; in a sqlite3 file the data of topics
+/// not read stays on disk.
+///
+/// # Errors
+/// - [`IoError::Open`] when a file cannot be read; [`IoError::Parse`] (with the line) for a
+///   `metadata.yaml` that is not one; [`IoError::Bag`] for a bag whose metadata lists a missing
+///   file, a storage or compression this crate does not read, or a compressed file that does
+///   not decompress;
+/// - [`IoError::Sqlite`] naming the file (and row) for a `.db3` that SQLite cannot read or that
+///   lacks the rosbag2 tables; [`IoError::Mcap`] naming the offset for a broken `.mcap`;
+/// - [`IoError::Message`] naming the file, topic and offset (or row) for a message that does not
+///   decompress or decode;
+/// - the topic and frame errors of [`read_mcap_files`](crate::read_mcap_files).
+///
+/// # Examples
+/// ```no_run
+/// use loops_io::{McapOptions, read_rosbag2};
+/// let by_folder = read_rosbag2("runs/drive", &McapOptions::default().topic("/odom"))?;
+/// let by_metadata = read_rosbag2("runs/drive/metadata.yaml", &McapOptions::default().topic("/odom"))?;
+/// assert_eq!(by_folder.positions, by_metadata.positions);
+/// # Ok::<(), loops_io::IoError>(())
+/// ```
+pub fn read_rosbag2(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTable> {
+    let bag = Rosbag2::resolve(path.as_ref())?;
+    let mut scan = Scan::new(Some(options));
+    let mut files = Vec::with_capacity(bag.files.len());
+    for (index, file) in bag.files.iter().enumerate() {
+        scan.file = index;
+        scan.path = file.path.clone();
+        walk_storage(file, &mut scan)?;
+        files.push(file.path.clone());
+    }
+    scan.into_table(files, options)
+}
+
+/// Reads the poses of one topic of a ROS 1 bag (format 2.0; chunks uncompressed, bz2 or lz4):
+/// `geometry_msgs/PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`,
+/// `nav_msgs/Odometry`, `tf/tfMessage` and `tf2_msgs/TFMessage` (one frame pair).
+///
+/// Topic, time and frame pair as `options` say, as for [`read_mcap`](crate::read_mcap); a ROS 1
+/// message has one record time, which [`TimeSource::Log`](crate::TimeSource::Log) and
+/// [`TimeSource::Publish`](crate::TimeSource::Publish) both take. The table's
+/// [`messages`](PoseTable::messages) locate each message as in an MCAP file: the chunk's offset
+/// and the byte in the decompressed chunk.
+///
+/// Time O(file size): every chunk is decompressed once, one at a time.
+///
+/// # Errors
+/// [`IoError::Open`] when the file cannot be read; [`IoError::Ros1`] naming the offset for a file
+/// that is not a bag of format 2.0, is cut short, or has a record or chunk that does not parse or
+/// decompress; [`IoError::Message`] naming topic and offset for a message of the topic read
+/// that does not decode (shorter or longer than its type); the topic and frame errors of
+/// [`read_mcap_files`](crate::read_mcap_files).
+pub fn read_ros1(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTable> {
+    let path = path.as_ref();
+    let mut scan = Scan::new(Some(options));
+    scan.path = path.to_path_buf();
+    ros1::walk(path, &mut scan)?;
+    scan.into_table(vec![path.to_path_buf()], options)
+}
+
+/// The topics of an MCAP file, a rosbag2 bag (folder, `metadata.yaml` or storage file; all its
+/// splits counted together) or a ROS 1 bag: name, type, encodings, message count, time span and
+/// whether this crate reads poses from it; sorted by topic. For `loops info`.
+///
+/// The kind is told as [`Format::detect`] does (a folder is a rosbag2 bag, `.bag` is ROS 1, ...);
+/// any other file is read as MCAP.
+///
+/// Time O(size of the file or bag): the messages are counted, not decoded.
+///
+/// # Errors
+/// As the reader of the kind ([`read_mcap`](crate::read_mcap), [`read_rosbag2`],
+/// [`read_ros1`]), for the structure of the files.
+pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>> {
+    let path = path.as_ref();
+    let mut scan = Scan::new(None);
+    match Format::detect(path) {
+        Some(Format::Rosbag2) => {
+            for (index, file) in Rosbag2::resolve(path)?.files.iter().enumerate() {
+                scan.file = index;
+                scan.path = file.path.clone();
+                walk_storage(file, &mut scan)?;
+            }
+        }
+        Some(Format::Ros1) => {
+            scan.path = path.to_path_buf();
+            ros1::walk(path, &mut scan)?;
+        }
+        _ => {
+            scan.path = path.to_path_buf();
+            crate::mcap_records::walk(path, &mut scan)?;
+        }
+    }
+    Ok(scan.topics())
+}
+
+/// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole.
+fn walk_storage(file: &StorageFile, visitor: &mut impl Visitor) -> Result<()> {
+    let decompressed = match file.compression {
+        Some(frame) => Some(compression::decompress_file(&file.path, frame)?),
+        None => None,
+    };
+    let walked = decompressed.as_ref().map_or(file.path.as_path(), |temp| temp.path());
+    match file.storage {
+        Storage::Sqlite3 => sqlite::walk(walked, &file.path, visitor),
+        Storage::Mcap => crate::mcap_records::walk(walked, visitor).map_err(|error| renamed(error, walked, &file.path)),
+    }
+}
+
+/// An error about the decompressed copy `temp`, made about the file `shown` it came from.
+fn renamed(error: IoError, temp: &Path, shown: &Path) -> IoError {
+    let fix = |path: PathBuf| if path == temp { shown.to_path_buf() } else { path };
+    match error {
+        IoError::Open { path, error } => IoError::Open { path: fix(path), error },
+        IoError::Mcap { path, offset, message } => {
+            IoError::Mcap { path: fix(path), offset, message: format!("{message} (offset in the decompressed file)") }
+        }
+        other => other,
+    }
+}

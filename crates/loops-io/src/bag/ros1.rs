@@ -1,0 +1,522 @@
+//! ROS 1 bags, format 2.0: the records, walked by hand; chunks decompressed (none, bz2, lz4)
+//! one at a time.
+//!
+//! A bag is `#ROSBAG V2.0\n`, then records: a `u32` header length, the header (fields `u32
+//! length, name=value`; `op` says the record's kind), a `u32` data length, the data. The bag
+//! header (op 3) comes first and says where the index starts; then chunks (op 5: compressed
+//! connection (op 7) and message data (op 2) records), each followed by its index data records
+//! (op 4: the time and offset of every message of one connection in the chunk); then the index:
+//! connection records and chunk info records (op 6: per chunk, the message count of each
+//! connection). The file is walked from the start, so every record has an offset to name in
+//! errors; the index records are checked for their declared sizes and otherwise skipped, since
+//! the walk sees every message. A bag whose index was never written (a recording that died:
+//! the bag header's index offset is 0) is read as far as its records are whole.
+//!
+//! Why by hand: the `rosbag` crate (0.6) reads this format, but maps the file into memory
+//! (undefined behaviour if the file changes while mapped, which our `unsafe_code = "deny"`
+//! rules out for our own code), panics on index records whose data does not fit their count,
+//! pre-allocates a chunk's declared size (up to 4 GiB) before decompressing, links the C `lz4`
+//! library, and reports errors without the offset of the record at fault. The format is small
+//! (six record kinds of a few fixed fields), so a walker of our own costs less than working
+//! around those, and gives errors of the same shape as the MCAP reader's.
+//!
+//! Every length is checked against what is left of its container (the file, or the
+//! decompressed chunk) before anything is read or allocated; a chunk may not declare more than
+//! 1 GiB decompressed, and its output may not exceed what it declares.
+
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{BufReader, Read};
+use std::path::Path;
+
+use crate::bag::compression::{ChunkCompression, decompress_chunk};
+use crate::error::{IoError, Result};
+use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
+
+/// The first line of a bag of format 2.0.
+const VERSION: &[u8; 13] = b"#ROSBAG V2.0\n";
+
+/// Largest chunk read, compressed or not: 1 GiB (rosbag writes chunks of 768 kB).
+const MAX_CHUNK_BYTES: u64 = 1 << 30;
+
+/// Record kinds (`op`).
+mod op {
+    pub(super) const MESSAGE_DATA: u8 = 0x02;
+    pub(super) const BAG_HEADER: u8 = 0x03;
+    pub(super) const INDEX_DATA: u8 = 0x04;
+    pub(super) const CHUNK: u8 = 0x05;
+    pub(super) const CHUNK_INFO: u8 = 0x06;
+    pub(super) const CONNECTION: u8 = 0x07;
+}
+
+fn record_name(op: u8) -> String {
+    match op {
+        op::MESSAGE_DATA => "message data".into(),
+        op::BAG_HEADER => "bag header".into(),
+        op::INDEX_DATA => "index data".into(),
+        op::CHUNK => "chunk".into(),
+        op::CHUNK_INFO => "chunk info".into(),
+        op::CONNECTION => "connection".into(),
+        other => format!("unknown (op 0x{other:02x})"),
+    }
+}
+
+/// The fields of a record header this reader uses (a header may hold others; they are
+/// ignored, as the format allows).
+#[derive(Debug, Default, Clone)]
+struct Fields {
+    op: Option<u8>,
+    conn: Option<u32>,
+    /// `time`, as nanoseconds.
+    time_ns: Option<u64>,
+    index_pos: Option<u64>,
+    compression: Option<ChunkCompression>,
+    size: Option<u32>,
+    /// `topic`, as a byte range of the header.
+    topic: Option<(usize, usize)>,
+    ver: Option<u32>,
+    count: Option<u32>,
+}
+
+/// The `name=value` fields of a record header or connection header, each `u32 length` first.
+fn header_fields(bytes: &[u8]) -> impl Iterator<Item = std::result::Result<(&str, usize, &[u8]), String>> {
+    let mut pos = 0usize;
+    std::iter::from_fn(move || {
+        if pos >= bytes.len() {
+            return None;
+        }
+        let result = (|| {
+            let len_bytes = bytes
+                .get(pos..pos + 4)
+                .ok_or_else(|| format!("a field length at byte {pos} is cut short by the end of the header"))?;
+            let len = u32::from_le_bytes(len_bytes.try_into().expect("4 bytes")) as usize;
+            let start = pos + 4;
+            let field = start
+                .checked_add(len)
+                .and_then(|end| bytes.get(start..end))
+                .ok_or_else(|| format!("the field at byte {pos} is {len} bytes long, past the end of the header"))?;
+            let equals = field
+                .iter()
+                .position(|&b| b == b'=')
+                .ok_or_else(|| format!("the field at byte {pos} has no '=' between name and value"))?;
+            let name = std::str::from_utf8(&field[..equals])
+                .map_err(|_| format!("the name of the field at byte {pos} is not UTF-8"))?;
+            pos = start + len;
+            Ok((name, start + equals + 1, &field[equals + 1..]))
+        })();
+        if result.is_err() {
+            pos = bytes.len();
+        }
+        Some(result)
+    })
+}
+
+/// A fixed-width little-endian field.
+fn fixed<const N: usize>(name: &str, value: &[u8]) -> std::result::Result<[u8; N], String> {
+    value.try_into().map_err(|_| format!("the field {name} is {} bytes long, not {N}", value.len()))
+}
+
+fn parse_header(bytes: &[u8]) -> std::result::Result<Fields, String> {
+    let mut out = Fields::default();
+    for field in header_fields(bytes) {
+        let (name, start, value) = field?;
+        match name {
+            "op" => out.op = Some(fixed::<1>(name, value)?[0]),
+            "conn" => out.conn = Some(u32::from_le_bytes(fixed(name, value)?)),
+            "ver" => out.ver = Some(u32::from_le_bytes(fixed(name, value)?)),
+            "count" => out.count = Some(u32::from_le_bytes(fixed(name, value)?)),
+            "size" => out.size = Some(u32::from_le_bytes(fixed(name, value)?)),
+            "index_pos" => out.index_pos = Some(u64::from_le_bytes(fixed(name, value)?)),
+            "time" => {
+                let time: [u8; 8] = fixed(name, value)?;
+                let sec = u32::from_le_bytes(time[..4].try_into().expect("4 bytes"));
+                let nsec = u32::from_le_bytes(time[4..].try_into().expect("4 bytes"));
+                out.time_ns = Some(u64::from(sec) * 1_000_000_000 + u64::from(nsec));
+            }
+            "compression" => {
+                out.compression = Some(match value {
+                    b"none" => ChunkCompression::None,
+                    b"bz2" => ChunkCompression::Bz2,
+                    b"lz4" => ChunkCompression::Lz4,
+                    other => {
+                        return Err(format!(
+                            "unknown chunk compression {:?}: expected none, bz2 or lz4",
+                            String::from_utf8_lossy(other)
+                        ));
+                    }
+                })
+            }
+            "topic" => out.topic = Some((start, start + value.len())),
+            _ => {}
+        }
+    }
+    Ok(out)
+}
+
+/// Walks the records of the ROS 1 bag at `path`, reporting connections (as channels) and
+/// messages to `visitor`.
+pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
+    let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
+    let file = File::open(path).map_err(open_error)?;
+    let len = file.metadata().map_err(open_error)?.len();
+    let mut walker = Walker {
+        path,
+        reader: BufReader::with_capacity(1 << 20, file),
+        len,
+        connections: HashMap::new(),
+        header: Vec::new(),
+        raw: Vec::new(),
+        chunk: Vec::new(),
+    };
+    walker.run(visitor)
+}
+
+#[derive(Debug)]
+struct Walker<'p> {
+    path: &'p Path,
+    reader: BufReader<File>,
+    /// The file's length in bytes.
+    len: u64,
+    /// Connection id to the visitor's channel.
+    connections: HashMap<u32, usize>,
+    /// Reused buffers: a record header, a record's data, a decompressed chunk.
+    header: Vec<u8>,
+    raw: Vec<u8>,
+    chunk: Vec<u8>,
+}
+
+impl Walker<'_> {
+    fn error(&self, offset: u64, message: impl Into<String>) -> IoError {
+        IoError::Ros1 { path: self.path.to_path_buf(), offset, message: message.into() }
+    }
+
+    fn read_into(&mut self, buffer: Buffer, offset: u64, len: u64) -> Result<()> {
+        let Self { reader, header, raw, path, .. } = self;
+        let target = match buffer {
+            Buffer::Header => header,
+            Buffer::Raw => raw,
+        };
+        target.clear();
+        target.resize(len as usize, 0);
+        reader.read_exact(target).map_err(|e| IoError::Ros1 {
+            path: path.to_path_buf(),
+            offset,
+            message: format!("cannot read the file: {e}"),
+        })
+    }
+
+    fn read_u32(&mut self, offset: u64) -> Result<u32> {
+        let mut bytes = [0u8; 4];
+        self.reader.read_exact(&mut bytes).map_err(|e| self.error(offset, format!("cannot read the file: {e}")))?;
+        Ok(u32::from_le_bytes(bytes))
+    }
+
+    fn skip(&mut self, offset: u64, len: u64) -> Result<()> {
+        self.reader.seek_relative(len as i64).map_err(|e| self.error(offset, format!("cannot read the file: {e}")))
+    }
+
+    fn run(&mut self, visitor: &mut impl Visitor) -> Result<()> {
+        let mut version = [0u8; 13];
+        let start = self.reader.read_exact(&mut version);
+        if start.is_err() || &version != VERSION {
+            let what = if version.starts_with(b"#ROSBAG V") {
+                let line = version.split(|&b| b == b'\n').next().unwrap_or(&version);
+                format!(
+                    "a ROS bag of format {:?}, which this crate does not read: it reads format 2.0 (#ROSBAG V2.0)",
+                    String::from_utf8_lossy(&line[9..])
+                )
+            } else {
+                format!("not a ROS 1 bag: it does not start with \"#ROSBAG V2.0\"; the file is {} bytes long", self.len)
+            };
+            return Err(self.error(0, what));
+        }
+        let mut pos = VERSION.len() as u64;
+        let mut index_pos: Option<u64> = None;
+        let mut index_found = false;
+        while pos < self.len {
+            let at = pos;
+            let left = self.len - pos;
+            if left < 4 {
+                return Err(self.error(at, "the file ends in the middle of a record's header length: it is truncated"));
+            }
+            let header_len = u64::from(self.read_u32(at)?);
+            if header_len > left - 4 {
+                return Err(self.error(
+                    at,
+                    format!(
+                        "the record header is {header_len} bytes long, but the file has {} bytes left: it is truncated",
+                        left - 4
+                    ),
+                ));
+            }
+            self.read_into(Buffer::Header, at, header_len)?;
+            let fields = parse_header(&self.header)
+                .map_err(|message| self.error(at, format!("the record header does not parse: {message}")))?;
+            let Some(op) = fields.op else {
+                return Err(self.error(at, "the record header has no op field"));
+            };
+            let left = left - 4 - header_len;
+            if left < 4 {
+                return Err(self.error(
+                    at,
+                    format!("the file ends before the data length of the {} record: it is truncated", record_name(op)),
+                ));
+            }
+            let data_len = u64::from(self.read_u32(at)?);
+            if data_len > left - 4 {
+                return Err(self.error(
+                    at,
+                    format!(
+                        "the {} record's data is {data_len} bytes long, but the file has {} bytes left: it is truncated",
+                        record_name(op),
+                        left - 4
+                    ),
+                ));
+            }
+            if index_pos.is_none() {
+                if op != op::BAG_HEADER {
+                    return Err(
+                        self.error(at, format!("the first record is a {} record, not the bag header", record_name(op)))
+                    );
+                }
+                let Some(declared) = fields.index_pos else {
+                    return Err(self.error(at, "the bag header has no index_pos field"));
+                };
+                index_pos = Some(declared);
+                self.skip(at, data_len)?;
+                pos = at + 8 + header_len + data_len;
+                continue;
+            }
+            if Some(at) == index_pos {
+                index_found = true;
+            }
+            match op {
+                op::CHUNK => self.chunk(at, &fields, data_len, visitor)?,
+                op::CONNECTION | op::MESSAGE_DATA => {
+                    if data_len > MAX_CHUNK_BYTES {
+                        return Err(self.error(at, format!("the {} record is over 1 GiB", record_name(op))));
+                    }
+                    self.read_into(Buffer::Raw, at, data_len)?;
+                    let header = std::mem::take(&mut self.header);
+                    let data = std::mem::take(&mut self.raw);
+                    let result = self.record(op, &fields, &header, &data, At { offset: at, in_chunk: None }, visitor);
+                    (self.header, self.raw) = (header, data);
+                    result?;
+                }
+                op::INDEX_DATA | op::CHUNK_INFO => {
+                    let (entry, what) =
+                        if op == op::INDEX_DATA { (12, "time and offset") } else { (8, "connection and count") };
+                    if fields.ver != Some(1) {
+                        return Err(self
+                            .error(at, format!("the {} record has version {:?}, not 1", record_name(op), fields.ver)));
+                    }
+                    let count = fields
+                        .count
+                        .ok_or_else(|| self.error(at, format!("the {} record has no count field", record_name(op))))?;
+                    if u64::from(count) * entry != data_len {
+                        return Err(self.error(
+                            at,
+                            format!(
+                                "the {} record declares {count} entries ({what}, {entry} bytes each), but its data is {data_len} bytes",
+                                record_name(op)
+                            ),
+                        ));
+                    }
+                    self.skip(at, data_len)?;
+                }
+                op::BAG_HEADER => return Err(self.error(at, "a second bag header")),
+                other => return Err(self.error(at, format!("a record of unknown kind (op 0x{other:02x})"))),
+            }
+            pos = at + 8 + header_len + data_len;
+        }
+        match index_pos {
+            None => Err(self.error(pos, "the file ends before its bag header: it is truncated")),
+            Some(declared) if declared != 0 && declared >= self.len => Err(self.error(
+                self.len,
+                format!(
+                    "the file ends before the index at offset {declared} that its bag header declares: it is truncated"
+                ),
+            )),
+            Some(declared) if declared != 0 && !index_found => Err(self.error(
+                declared,
+                "no record starts at the index offset that the bag header declares: the file is corrupt",
+            )),
+            Some(_) => Ok(()),
+        }
+    }
+
+    /// A chunk record at `at`: its data decompressed, then its records walked.
+    fn chunk(&mut self, at: u64, fields: &Fields, data_len: u64, visitor: &mut impl Visitor) -> Result<()> {
+        let (Some(compression), Some(size)) = (fields.compression, fields.size) else {
+            return Err(self.error(at, "the chunk record lacks its compression or size field"));
+        };
+        let size = u64::from(size);
+        if data_len > MAX_CHUNK_BYTES || size > MAX_CHUNK_BYTES {
+            return Err(self.error(
+                at,
+                format!("the chunk is {data_len} bytes, {size} decompressed; this reader takes chunks up to 1 GiB"),
+            ));
+        }
+        self.read_into(Buffer::Raw, at, data_len)?;
+        let mut chunk = std::mem::take(&mut self.chunk);
+        let result = decompress_chunk(compression, &self.raw, size, &mut chunk)
+            .map_err(|message| self.error(at, message))
+            .and_then(|()| self.chunk_records(at, &chunk, visitor));
+        self.chunk = chunk;
+        result
+    }
+
+    /// The records of the decompressed chunk at `at`.
+    fn chunk_records(&mut self, at: u64, chunk: &[u8], visitor: &mut impl Visitor) -> Result<()> {
+        let mut pos = 0usize;
+        while pos < chunk.len() {
+            let inner = pos;
+            let fail =
+                |message: String| self.error(at, format!("in the record at byte {inner} of this chunk: {message}"));
+            let length = |pos: usize, what: &str| -> Result<usize> {
+                let bytes = chunk
+                    .get(pos..pos + 4)
+                    .ok_or_else(|| fail(format!("the chunk ends in the middle of the record's {what} length")))?;
+                Ok(u32::from_le_bytes(bytes.try_into().expect("4 bytes")) as usize)
+            };
+            let header_len = length(pos, "header")?;
+            let header_start = pos + 4;
+            let header =
+                header_start.checked_add(header_len).and_then(|end| chunk.get(header_start..end)).ok_or_else(|| {
+                    fail(format!(
+                        "the record header is {header_len} bytes long, past the end of the chunk ({} bytes)",
+                        chunk.len()
+                    ))
+                })?;
+            let fields =
+                parse_header(header).map_err(|message| fail(format!("the record header does not parse: {message}")))?;
+            let op = fields.op.ok_or_else(|| fail("the record header has no op field".into()))?;
+            let data_at = header_start + header_len;
+            let data_len = length(data_at, "data")?;
+            let data_start = data_at + 4;
+            let data =
+                data_start.checked_add(data_len).and_then(|end| chunk.get(data_start..end)).ok_or_else(|| {
+                    fail(format!(
+                        "the {} record's data is {data_len} bytes long, past the end of the chunk ({} bytes)",
+                        record_name(op),
+                        chunk.len()
+                    ))
+                })?;
+            if !matches!(op, op::CONNECTION | op::MESSAGE_DATA) {
+                return Err(fail(format!("a {} record inside a chunk", record_name(op))));
+            }
+            self.record(op, &fields, header, data, At { offset: at, in_chunk: Some(inner as u64) }, visitor)?;
+            pos = data_start + data_len;
+        }
+        Ok(())
+    }
+
+    /// A connection or message data record, at the top level or in a chunk.
+    fn record(
+        &mut self,
+        op: u8,
+        fields: &Fields,
+        header: &[u8],
+        data: &[u8],
+        at: At,
+        visitor: &mut impl Visitor,
+    ) -> Result<()> {
+        let fail = |message: String| {
+            let message = match at.in_chunk {
+                Some(inner) => format!("in the record at byte {inner} of this chunk: {message}"),
+                None => message,
+            };
+            self.error(at.offset, message)
+        };
+        let Some(conn) = fields.conn else {
+            return Err(fail(format!("the {} record has no conn field", record_name(op))));
+        };
+        if op == op::MESSAGE_DATA {
+            let Some(&channel) = self.connections.get(&conn) else {
+                return Err(fail(format!(
+                    "a message on connection {conn}, which no earlier connection record defines"
+                )));
+            };
+            let Some(time_ns) = fields.time_ns else {
+                return Err(fail("the message data record has no time field".into()));
+            };
+            let header = MessageHeader { channel_id: 0, log_time: time_ns, publish_time: time_ns };
+            return visitor.message(channel, header, data, at);
+        }
+        if self.connections.contains_key(&conn) {
+            return Ok(());
+        }
+        let topic = match fields.topic {
+            Some((start, end)) => std::str::from_utf8(&header[start..end])
+                .map_err(|_| fail(format!("the topic of connection {conn} is not UTF-8")))?,
+            None => return Err(fail(format!("connection {conn} has no topic field"))),
+        };
+        let mut schema_name = None;
+        for field in header_fields(data) {
+            let (name, _, value) =
+                field.map_err(|message| fail(format!("the connection header does not parse: {message}")))?;
+            if name == "type" {
+                schema_name = Some(
+                    std::str::from_utf8(value)
+                        .map_err(|_| fail(format!("the type of connection {conn} is not UTF-8")))?
+                        .to_owned(),
+                );
+            }
+        }
+        let Some(schema_name) = schema_name else {
+            return Err(fail(format!("the connection header of connection {conn} ({topic}) has no type field")));
+        };
+        let key = ChannelKey {
+            topic: topic.to_owned(),
+            schema_name,
+            schema_encoding: "ros1msg".to_owned(),
+            message_encoding: "ros1".to_owned(),
+        };
+        let channel = visitor.channel(key, at);
+        self.connections.insert(conn, channel);
+        Ok(())
+    }
+}
+
+/// Which reused buffer a read fills.
+#[derive(Debug, Clone, Copy)]
+enum Buffer {
+    Header,
+    Raw,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field(name: &str, value: &[u8]) -> Vec<u8> {
+        let mut out = ((name.len() + 1 + value.len()) as u32).to_le_bytes().to_vec();
+        out.extend(name.as_bytes());
+        out.push(b'=');
+        out.extend(value);
+        out
+    }
+
+    #[test]
+    fn headers_parse_and_bad_ones_say_why() {
+        let mut header = field("op", &[2]);
+        header.extend(field("conn", &7u32.to_le_bytes()));
+        header.extend(field("time", &[1, 0, 0, 0, 2, 0, 0, 0]));
+        header.extend(field("topic", b"/odom"));
+        header.extend(field("other", b"x=y"));
+        let fields = parse_header(&header).unwrap();
+        assert_eq!((fields.op, fields.conn, fields.time_ns), (Some(2), Some(7), Some(1_000_000_002)));
+        let (start, end) = fields.topic.unwrap();
+        assert_eq!(&header[start..end], b"/odom");
+
+        let error = parse_header(&field("conn", &[1, 2])).unwrap_err();
+        assert_eq!(error, "the field conn is 2 bytes long, not 4");
+        let error = parse_header(&[9, 0, 0, 0, b'a']).unwrap_err();
+        assert!(error.contains("past the end of the header"), "{error}");
+        let error = parse_header(&[1, 0, 0, 0, b'a']).unwrap_err();
+        assert!(error.contains("no '='"), "{error}");
+        assert!(parse_header(&[1, 0]).unwrap_err().contains("cut short"));
+        let error = parse_header(&field("compression", b"zip")).unwrap_err();
+        assert!(error.contains("unknown chunk compression \"zip\""), "{error}");
+    }
+}

@@ -1,0 +1,260 @@
+//! rosbag2 bags as users name them: the folder, its `metadata.yaml`, or one storage file; the
+//! storage files in order, with their storage plugin and file compression.
+//!
+//! `metadata.yaml` is read with `serde_yaml_ng` (serde derive on the few fields needed). Among
+//! the YAML crates that build here, it is the maintained continuation of `serde_yaml` (archived
+//! in 2024) with the same API and the same YAML 1.1 behaviour that rosbag2's own writer (yaml-cpp)
+//! targets, it reports errors with a line, and it keeps serde's derive, which `yaml-rust2` (a
+//! DOM without serde) would make us replace by hand-written field lookups. `serde_norway` is a
+//! fork of the same code with fewer users.
+//!
+//! The fields read: `storage_identifier` (`sqlite3` or `mcap`), `relative_file_paths` (the
+//! splits, in recording order; else `files[].path`), `compression_format` (`zstd`; `lz4` for
+//! third-party plugins) and `compression_mode` (`FILE`: each storage file is compressed as a
+//! whole and named `*.zstd`; `MESSAGE`: each message is compressed, which the CDR decoder
+//! recognises by the frame's magic number whatever the metadata says). Everything else
+//! (durations, counts, QoS) is ignored: the storage files are the truth.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::bag::compression::Frame;
+use crate::error::{IoError, Result};
+
+/// A storage plugin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Storage {
+    Sqlite3,
+    Mcap,
+}
+
+/// One storage file of a bag.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct StorageFile {
+    /// The file as it is on disk (compressed, for file compression).
+    pub(crate) path: PathBuf,
+    pub(crate) storage: Storage,
+    /// How the whole file is compressed, if it is.
+    pub(crate) compression: Option<Frame>,
+}
+
+/// The storage files of a bag, in order.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Rosbag2 {
+    pub(crate) files: Vec<StorageFile>,
+}
+
+#[derive(Debug, Deserialize)]
+struct MetadataFile {
+    rosbag2_bagfile_information: Metadata,
+}
+
+#[derive(Debug, Deserialize)]
+struct Metadata {
+    #[serde(default)]
+    storage_identifier: Option<String>,
+    #[serde(default)]
+    relative_file_paths: Vec<String>,
+    #[serde(default)]
+    files: Vec<FileEntry>,
+    #[serde(default)]
+    compression_format: Option<String>,
+    #[serde(default)]
+    compression_mode: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+struct FileEntry {
+    path: String,
+}
+
+/// The storage a file name says: `.db3` or `.mcap`, under a `.zstd` / `.lz4` compression
+/// extension or not; and that compression.
+fn storage_of_name(path: &Path) -> Option<(Storage, Option<Frame>)> {
+    let compression = Frame::of_name(path);
+    let inner = if compression.is_some() { Path::new(path.file_stem()?) } else { path };
+    let storage = match inner.extension()?.to_str()?.to_ascii_lowercase().as_str() {
+        "db3" => Storage::Sqlite3,
+        "mcap" => Storage::Mcap,
+        _ => return None,
+    };
+    Some((storage, compression))
+}
+
+/// Whether `path` names a rosbag2 sqlite3 file (`*.db3`, `*.db3.zstd`): its offsets are rows.
+pub(crate) fn is_sqlite_name(path: &Path) -> bool {
+    matches!(storage_of_name(path), Some((Storage::Sqlite3, _)))
+}
+
+impl Rosbag2 {
+    /// The bag at `path`: a folder (with or without `metadata.yaml`), a `metadata.yaml` (or any
+    /// `.yaml` file of a bag), or one storage file (that file alone).
+    ///
+    /// # Errors
+    /// [`IoError::Open`] when the path cannot be read; [`IoError::Parse`] with the line for a
+    /// `metadata.yaml` that is not YAML or lacks `rosbag2_bagfile_information`; [`IoError::Bag`]
+    /// for a metadata file listing no file or a missing one, a storage or compression this
+    /// crate does not read, a folder without metadata or storage files, or a file whose name
+    /// is not a storage file's.
+    pub(crate) fn resolve(path: &Path) -> Result<Rosbag2> {
+        let bag_error = |path: &Path, message: String| IoError::Bag { path: path.to_path_buf(), message };
+        if path.is_dir() {
+            let metadata = path.join("metadata.yaml");
+            if metadata.is_file() {
+                return Self::from_metadata(&metadata);
+            }
+            return Self::from_folder(path);
+        }
+        let is_yaml = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"));
+        if is_yaml {
+            return Self::from_metadata(path);
+        }
+        std::fs::metadata(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
+        match storage_of_name(path) {
+            Some((storage, compression)) => Ok(Rosbag2 { files: vec![StorageFile { path: path.to_path_buf(), storage, compression }] }),
+            None => Err(bag_error(
+                path,
+                "not a rosbag2 storage file: expected a .db3 or .mcap file (or .db3.zstd, .mcap.zstd), a bag's folder, \
+                 or its metadata.yaml"
+                    .to_owned(),
+            )),
+        }
+    }
+
+    fn from_metadata(metadata_path: &Path) -> Result<Rosbag2> {
+        let bag_error = |message: String| IoError::Bag { path: metadata_path.to_path_buf(), message };
+        let text = std::fs::read_to_string(metadata_path)
+            .map_err(|error| IoError::Open { path: metadata_path.to_path_buf(), error })?;
+        let file: MetadataFile = serde_yaml_ng::from_str(&text).map_err(|error| {
+            let line = error.location().map_or(1, |location| location.line());
+            IoError::parse(metadata_path, line, format!("not a rosbag2 metadata.yaml: {error}"))
+        })?;
+        let metadata = file.rosbag2_bagfile_information;
+        let folder = metadata_path.parent().unwrap_or(Path::new("."));
+        let declared = match metadata.storage_identifier.as_deref().map(str::to_ascii_lowercase).as_deref() {
+            Some("sqlite3") => Some(Storage::Sqlite3),
+            Some("mcap") => Some(Storage::Mcap),
+            None | Some("") => None,
+            Some(other) => {
+                return Err(bag_error(format!(
+                    "storage_identifier {other:?}: this crate reads the sqlite3 and mcap storage plugins"
+                )));
+            }
+        };
+        let format = metadata.compression_format.as_deref().unwrap_or("").to_ascii_lowercase();
+        let mode = metadata.compression_mode.as_deref().unwrap_or("").to_ascii_lowercase();
+        let file_frame = match (mode.as_str(), format.as_str()) {
+            ("" | "none", _) | ("message", "zstd" | "lz4") => None,
+            ("file", "zstd") => Some(Frame::Zstd),
+            ("file", "lz4") => Some(Frame::Lz4),
+            ("file" | "message", other) => {
+                return Err(bag_error(format!(
+                    "compression_format {other:?}: this crate reads zstd (and lz4) compressed bags"
+                )));
+            }
+            (other, _) => {
+                return Err(bag_error(format!("compression_mode {other:?}: expected FILE, MESSAGE or none")));
+            }
+        };
+        let names: Vec<String> = if metadata.relative_file_paths.is_empty() {
+            metadata.files.into_iter().map(|file| file.path).collect()
+        } else {
+            metadata.relative_file_paths
+        };
+        if names.is_empty() {
+            return Err(bag_error("the bag lists no storage file (relative_file_paths is empty)".to_owned()));
+        }
+        let mut files = Vec::with_capacity(names.len());
+        for name in names {
+            let mut path = folder.join(&name);
+            // rosbag2 lists a file-compressed split under its compressed name; accept the plain
+            // name too, when only the compressed file is there.
+            if !path.exists() && file_frame.is_some() {
+                let compressed =
+                    folder.join(format!("{name}.{}", if file_frame == Some(Frame::Lz4) { "lz4" } else { "zstd" }));
+                if compressed.exists() {
+                    path = compressed;
+                }
+            }
+            if !path.is_file() {
+                return Err(bag_error(format!(
+                    "the storage file {name:?} that the bag lists is missing: no {}",
+                    path.display()
+                )));
+            }
+            let (storage, compression) = match storage_of_name(&path) {
+                Some((storage, compression)) => (storage, compression),
+                None => match declared {
+                    Some(storage) => (storage, file_frame),
+                    None => {
+                        return Err(bag_error(format!(
+                            "cannot tell the storage of {name:?}: no storage_identifier, and the name is not .db3 or .mcap"
+                        )));
+                    }
+                },
+            };
+            files.push(StorageFile { path, storage, compression });
+        }
+        Ok(Rosbag2 { files })
+    }
+
+    /// A folder without `metadata.yaml`: its storage files, splits in order of their index.
+    fn from_folder(folder: &Path) -> Result<Rosbag2> {
+        let entries = std::fs::read_dir(folder).map_err(|error| IoError::Open { path: folder.to_path_buf(), error })?;
+        let mut files = Vec::new();
+        for entry in entries {
+            let path = entry.map_err(|error| IoError::Open { path: folder.to_path_buf(), error })?.path();
+            if let (true, Some((storage, compression))) = (path.is_file(), storage_of_name(&path)) {
+                files.push(StorageFile { path, storage, compression });
+            }
+        }
+        if files.is_empty() {
+            return Err(IoError::Bag {
+                path: folder.to_path_buf(),
+                message: "not a rosbag2 bag: the folder has no metadata.yaml and no .db3 or .mcap file".to_owned(),
+            });
+        }
+        files.sort_by_key(|file| split_key(&file.path));
+        Ok(Rosbag2 { files })
+    }
+}
+
+/// The order of splits named `<bag>_<index>.<ext>`: by name before the index, then by the index
+/// as a number (`_2` before `_10`), then by the whole name.
+fn split_key(path: &Path) -> (String, u64, String) {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = name.split('.').next().unwrap_or("");
+    match stem.rsplit_once('_') {
+        Some((base, index)) if !index.is_empty() && index.bytes().all(|b| b.is_ascii_digit()) => {
+            (base.to_owned(), index.parse().unwrap_or(u64::MAX), name)
+        }
+        _ => (stem.to_owned(), 0, name),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn storage_from_names() {
+        assert_eq!(storage_of_name(Path::new("b/x_0.db3")), Some((Storage::Sqlite3, None)));
+        assert_eq!(storage_of_name(Path::new("b/x_0.MCAP")), Some((Storage::Mcap, None)));
+        assert_eq!(storage_of_name(Path::new("b/x_0.db3.zstd")), Some((Storage::Sqlite3, Some(Frame::Zstd))));
+        assert_eq!(storage_of_name(Path::new("b/x_0.mcap.lz4")), Some((Storage::Mcap, Some(Frame::Lz4))));
+        assert_eq!(storage_of_name(Path::new("b/x.tum.zstd")), None);
+        assert!(is_sqlite_name(Path::new("x.db3.zstd")));
+        assert!(!is_sqlite_name(Path::new("x.mcap")));
+    }
+
+    #[test]
+    fn splits_sort_by_their_index() {
+        let mut names = ["bag_10.db3", "bag_2.db3", "bag_0.db3", "bag_1.db3"].map(PathBuf::from).to_vec();
+        names.sort_by_key(|path| split_key(path));
+        assert_eq!(names, ["bag_0.db3", "bag_1.db3", "bag_2.db3", "bag_10.db3"].map(PathBuf::from));
+    }
+}
