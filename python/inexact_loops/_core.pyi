@@ -535,22 +535,24 @@ def read_trajectory(
     frames: tuple[str, str] | None = None,
     rate_hz: float | None = None,
 ) -> Trajectory:
-    """Reads a trajectory file: TUM, CSV, KITTI, EuRoC, TUC, g2o/TORO pose graphs, or MCAP logs
-    (ROS 2 and Foxglove pose, odometry and transform messages) — by ``format``, or told from the
-    extension and first line.
+    """Reads a trajectory file: TUM, CSV, KITTI, EuRoC, TUC, g2o/TORO pose graphs, MCAP logs
+    (ROS 2 and Foxglove pose, odometry and transform messages), rosbag2 bags (sqlite3 or MCAP,
+    compressed or not, split or not) or ROS 1 bags — by ``format``, or told from the extension
+    and first line (a folder is a rosbag2 bag).
 
     Args:
-        path: the file, or a list of MCAP files read as one trajectory in time order.
+        path: the file (or a rosbag2 bag's folder or ``metadata.yaml``), or a list of MCAP files
+            read as one trajectory in time order.
         format: ``"tum"``, ``"csv"``, ``"kitti"``, ``"euroc"``, ``"tuc"``, ``"g2o"``,
-            ``"mcap"``, or ``None`` to tell.
+            ``"mcap"``, ``"rosbag2"``, ``"ros1"``, or ``None`` to tell.
         axes: keep only these position axes, e.g. ``(0, 2)`` for KITTI's ground plane.
         metric: the metric the trajectory is for (as in :func:`find_loops`): positions for
             Euclidean (the default); positions and orientations for ``se3``; orientations for
             ``so3``; x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are
             normalised (files often print 4 decimals).
-        topic: the MCAP topic; ``None`` picks the one topic with poses (several: an error
+        topic: the topic (MCAP, bags); ``None`` picks the one topic with poses (several: an error
             listing them, see :func:`list_topics`).
-        time: MCAP times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
+        time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
         frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
             topic's only pair.
         rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
@@ -564,13 +566,14 @@ def read_trajectory(
     """
 
 def list_topics(path: str | PathLike[str]) -> list[dict[str, object]]:
-    """The topics of an MCAP file: one dict per channel with ``topic``, ``schema``,
+    """The topics of an MCAP file, a rosbag2 bag (its folder, ``metadata.yaml`` or a storage
+    file) or a ROS 1 bag: one dict per topic with ``topic``, ``schema``,
     ``encoding``, ``messages``, ``start_ns`` and ``end_ns`` (log time, ``None`` when empty) and
     ``pose_type`` (the pose message type the library reads from it, or ``None``).
 
     Raises:
-        OSError: the file cannot be opened. LoopsIOError: not a valid MCAP file (names the
-        offset).
+        OSError: the file cannot be opened. LoopsIOError: not a valid MCAP file or bag (names
+        the offset, or the sqlite row).
     """
 
 @final
