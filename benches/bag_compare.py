@@ -72,7 +72,9 @@ def main(argv: list[str]) -> int:
     bags = {"rosbag2 sqlite3": folder / "bench-sqlite3", "ROS 1": folder / "bench.bag"}
     if not all(path.exists() for path in bags.values()):
         print(f"writing {count:,} messages with rosbags into {folder} ...", file=sys.stderr)
-        subprocess.run([sys.executable, str(FIXTURES), "--bench", str(count), str(folder)], check=True)
+        subprocess.run(
+            [sys.executable, str(FIXTURES), "--bench", str(count), str(folder)], check=True
+        )
     rows = [
         "| bag | size (MB) | inexact-loops (s) | poses/s | rosbags (s) | messages/s | ratio |",
         "|---|---:|---:|---:|---:|---:|---:|",

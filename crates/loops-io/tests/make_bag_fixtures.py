@@ -74,7 +74,9 @@ class Messages:
         self.store = store
 
     def time(self, ns: int):
-        return self.t["builtin_interfaces/msg/Time"](sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+        return self.t["builtin_interfaces/msg/Time"](
+            sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000
+        )
 
     def header(self, ns: int, frame: str, seq: int):
         if self.ros1:
@@ -102,14 +104,18 @@ class Messages:
     def message(self, kind: str, seq: int, ns: int, p, q):
         t = self.t
         if kind == "PoseStamped":
-            return t["geometry_msgs/msg/PoseStamped"](header=self.header(ns, "map", seq), pose=self.pose(p, q))
+            return t["geometry_msgs/msg/PoseStamped"](
+                header=self.header(ns, "map", seq), pose=self.pose(p, q)
+            )
         covariance = [0.01 * i for i in range(36)]
         import numpy as np
 
         return t["nav_msgs/msg/Odometry"](
             header=self.header(ns, "odom", seq),
             child_frame_id="base_link",
-            pose=t["geometry_msgs/msg/PoseWithCovariance"](pose=self.pose(p, q), covariance=np.array(covariance)),
+            pose=t["geometry_msgs/msg/PoseWithCovariance"](
+                pose=self.pose(p, q), covariance=np.array(covariance)
+            ),
             twist=t["geometry_msgs/msg/TwistWithCovariance"](
                 twist=t["geometry_msgs/msg/Twist"](
                     linear=t["geometry_msgs/msg/Vector3"](x=1.0, y=0.0, z=0.0),
@@ -136,7 +142,10 @@ class Messages:
         return self.store.serialize_cdr(message, typename)
 
 
-TYPES = {"PoseStamped": ("/pose", "geometry_msgs/msg/PoseStamped"), "Odometry": ("/odom", "nav_msgs/msg/Odometry")}
+TYPES = {
+    "PoseStamped": ("/pose", "geometry_msgs/msg/PoseStamped"),
+    "Odometry": ("/odom", "nav_msgs/msg/Odometry"),
+}
 
 
 def write_rosbag2(folder: Path, store, poses, kind, storage, mode, with_extras=True) -> None:
@@ -146,20 +155,33 @@ def write_rosbag2(folder: Path, store, poses, kind, storage, mode, with_extras=T
     writer = Writer2(folder, version=9, storage_plugin=plugin)
     if mode != "none":
         writer.set_compression(
-            CompressionMode.MESSAGE if mode == "message" else CompressionMode.FILE, CompressionFormat.ZSTD
+            CompressionMode.MESSAGE if mode == "message" else CompressionMode.FILE,
+            CompressionFormat.ZSTD,
         )
     with writer:
         pose_conn = writer.add_connection(topic, typename, typestore=store)
-        tf_conn = writer.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=store) if with_extras else None
-        chat_conn = writer.add_connection("/chatter", "std_msgs/msg/String", typestore=store) if with_extras else None
+        tf_conn = (
+            writer.add_connection("/tf", "tf2_msgs/msg/TFMessage", typestore=store)
+            if with_extras
+            else None
+        )
+        chat_conn = (
+            writer.add_connection("/chatter", "std_msgs/msg/String", typestore=store)
+            if with_extras
+            else None
+        )
         for seq, (ns, p, q) in enumerate(poses):
             log = ns + LOG_DELAY_NS
-            writer.write(pose_conn, log, build.serialize(build.message(kind, seq, ns, p, q), typename))
+            writer.write(
+                pose_conn, log, build.serialize(build.message(kind, seq, ns, p, q), typename)
+            )
             if with_extras:
                 tf = build.tf("tf2_msgs/msg/TFMessage", seq, ns, p, q)
                 writer.write(tf_conn, log, build.serialize(tf, "tf2_msgs/msg/TFMessage"))
                 if seq % 10 == 0:
-                    writer.write(chat_conn, log, build.serialize(build.chatter(seq), "std_msgs/msg/String"))
+                    writer.write(
+                        chat_conn, log, build.serialize(build.chatter(seq), "std_msgs/msg/String")
+                    )
 
 
 def write_split(folder: Path, store, poses, kind, storage) -> list[str]:
@@ -171,7 +193,9 @@ def write_split(folder: Path, store, poses, kind, storage) -> list[str]:
     names, metas = [], []
     for index in range(3):
         part = parts / f"part{index}"
-        write_rosbag2(part, store, poses[index * third : (index + 1) * third], kind, storage, "none")
+        write_rosbag2(
+            part, store, poses[index * third : (index + 1) * third], kind, storage, "none"
+        )
         yaml = YAML()
         meta = yaml.load((part / "metadata.yaml").read_text())
         info = meta["rosbag2_bagfile_information"]
@@ -185,11 +209,17 @@ def write_split(folder: Path, store, poses, kind, storage) -> list[str]:
             entry["path"] = name
     first = metas[0]["rosbag2_bagfile_information"]
     first["relative_file_paths"] = names
-    first["files"] = [entry for meta in metas for entry in meta["rosbag2_bagfile_information"].get("files", [])]
-    first["message_count"] = sum(meta["rosbag2_bagfile_information"]["message_count"] for meta in metas)
+    first["files"] = [
+        entry for meta in metas for entry in meta["rosbag2_bagfile_information"].get("files", [])
+    ]
+    first["message_count"] = sum(
+        meta["rosbag2_bagfile_information"]["message_count"] for meta in metas
+    )
     for topic_index, topic in enumerate(first["topics_with_message_count"]):
         topic["message_count"] = sum(
-            meta["rosbag2_bagfile_information"]["topics_with_message_count"][topic_index]["message_count"]
+            meta["rosbag2_bagfile_information"]["topics_with_message_count"][topic_index][
+                "message_count"
+            ]
             for meta in metas
         )
     with (folder / "metadata.yaml").open("w") as out:
@@ -211,11 +241,25 @@ def write_ros1(path: Path, store, poses, kind, compression) -> None:
         chat_conn = writer.add_connection("/chatter", "std_msgs/msg/String", typestore=store)
         for seq, (ns, p, q) in enumerate(poses):
             log = ns + LOG_DELAY_NS
-            writer.write(pose_conn, log, build.serialize(build.message(kind, seq, ns, p, q), typename))
-            writer.write(tf_conn, log, build.serialize(build.tf("tf2_msgs/msg/TFMessage", seq, ns, p, q), "tf2_msgs/msg/TFMessage"))
-            writer.write(tf_old_conn, log, build.serialize(build.tf("tf/msg/tfMessage", seq, ns, p, q), "tf/msg/tfMessage"))
+            writer.write(
+                pose_conn, log, build.serialize(build.message(kind, seq, ns, p, q), typename)
+            )
+            writer.write(
+                tf_conn,
+                log,
+                build.serialize(
+                    build.tf("tf2_msgs/msg/TFMessage", seq, ns, p, q), "tf2_msgs/msg/TFMessage"
+                ),
+            )
+            writer.write(
+                tf_old_conn,
+                log,
+                build.serialize(build.tf("tf/msg/tfMessage", seq, ns, p, q), "tf/msg/tfMessage"),
+            )
             if seq % 10 == 0:
-                writer.write(chat_conn, log, build.serialize(build.chatter(seq), "std_msgs/msg/String"))
+                writer.write(
+                    chat_conn, log, build.serialize(build.chatter(seq), "std_msgs/msg/String")
+                )
 
 
 def storage_files(folder: Path) -> list[str]:
@@ -239,22 +283,36 @@ def make_all(poses_path: Path, out: Path) -> None:
                 else:
                     write_rosbag2(folder, ros2, poses, kind, storage, mode)
                 fixtures.append(
-                    {"name": name, "kind": "rosbag2", "storage": storage, "compression": mode, "type": kind,
-                     "topic": topic, "folder": name, "files": [f"{name}/{f}" for f in storage_files(folder)]}
+                    {
+                        "name": name,
+                        "kind": "rosbag2",
+                        "storage": storage,
+                        "compression": mode,
+                        "type": kind,
+                        "topic": topic,
+                        "folder": name,
+                        "files": [f"{name}/{f}" for f in storage_files(folder)],
+                    }
                 )
         for compression in ("none", "bz2", "lz4"):
             name = f"ros1-{compression}-{kind}.bag"
             write_ros1(out / name, ros1, poses, kind, compression)
             fixtures.append(
-                {"name": name, "kind": "ros1", "compression": compression, "type": kind, "topic": topic,
-                 "files": [name]}
+                {
+                    "name": name,
+                    "kind": "ros1",
+                    "compression": compression,
+                    "type": kind,
+                    "topic": topic,
+                    "files": [name],
+                }
             )
     manifest = {"log_delay_ns": LOG_DELAY_NS, "poses": len(poses), "fixtures": fixtures}
     (out / "manifest.json").write_text(json.dumps(manifest, indent=1))
 
 
 def make_bench(count: int, out: Path) -> None:
-    """`count` PoseStamped on /pose at 10 Hz: a rosbag2 sqlite3 bag and a ROS 1 bag (uncompressed)."""
+    """`count` PoseStamped on /pose at 10 Hz: a rosbag2 sqlite3 bag, a ROS 1 bag (uncompressed)."""
     import math
 
     ros2, ros1 = typestores()
@@ -262,8 +320,13 @@ def make_bench(count: int, out: Path) -> None:
     poses = []
     for i in range(count):
         angle = i * 1e-3
-        poses.append((1_700_000_000_000_000_000 + i * 100_000_000, [100 * math.cos(angle), 100 * math.sin(angle), 0.0],
-                      [0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)]))
+        poses.append(
+            (
+                1_700_000_000_000_000_000 + i * 100_000_000,
+                [100 * math.cos(angle), 100 * math.sin(angle), 0.0],
+                [0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)],
+            )
+        )
     folder = out / "bench-sqlite3"
     shutil.rmtree(folder, ignore_errors=True)
     write_rosbag2(folder, ros2, poses, "PoseStamped", "sqlite3", "none", with_extras=False)
@@ -273,12 +336,14 @@ def make_bench(count: int, out: Path) -> None:
     with Writer1(bag) as writer:
         conn = writer.add_connection("/pose", "geometry_msgs/msg/PoseStamped", typestore=ros1)
         for seq, (ns, p, q) in enumerate(poses):
-            data = build.serialize(build.message("PoseStamped", seq, ns, p, q), "geometry_msgs/msg/PoseStamped")
+            data = build.serialize(
+                build.message("PoseStamped", seq, ns, p, q), "geometry_msgs/msg/PoseStamped"
+            )
             writer.write(conn, ns, data)
 
 
 def read_all(path: Path) -> None:
-    """Reads every /pose message of a bag with rosbags and deserialises it; prints count and seconds."""
+    """Reads every message of a bag with rosbags and deserialises it; prints count and seconds."""
     import numpy as np
 
     start = time.perf_counter()
