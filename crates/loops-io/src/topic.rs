@@ -1,12 +1,12 @@
-//! What an MCAP file holds, as [`list_topics`](crate::list_topics) reports it and as errors
+//! What an MCAP file or a bag holds, as [`list_topics`](crate::list_topics) reports it and as errors
 //! list it: its topics, and the frame pairs of a transform topic.
 
 use std::fmt;
 
 use crate::pose_type::PoseType;
 
-/// One topic of an MCAP file (or of several files, counted together), as [`list_topics`]
-/// reports it and as errors list them.
+/// One topic of an MCAP file or a bag (or of several files, counted together), as
+/// [`list_topics`](crate::list_topics) reports it and as errors list them.
 ///
 /// Displays as `/odom (nav_msgs/msg/Odometry, cdr, 120 messages)`.
 #[derive(Debug, Clone, PartialEq, Eq)]
