@@ -442,7 +442,7 @@ type Component = (bool, u64, u64, [usize; 2], [usize; 2]);
 fn components(table: &PoseTable) -> Vec<Component> {
     let trajectory = table.to_trajectory().expect("trajectory");
     let loops = find_loops(&trajectory, &Euclidean, 10.0).expect("loops");
-    loops.components().iter().map(|c| (c.trivial, c.pairs, c.holes, c.rows, c.columns)).collect()
+    loops.components().iter().map(|c| (c.trivial, c.pair_count, c.holes, c.i_range, c.j_range)).collect()
 }
 
 #[test]
