@@ -1,5 +1,11 @@
 //! Validated constructors of trajectories on manifolds, laying points out as the metrics in
 //! [`manifold`](crate::So3) expect.
+//!
+//! The only rotation algebra here is one formula (a rotation vector to a unit quaternion, with
+//! its series near 0) and the normalisation of inputs, written out rather than taken from
+//! nalgebra: the core keeps no linear-algebra dependency for two lines, and the metrics compare
+//! quaternions with their own rounding-stable formulas (`RotationDistance::between`). Frames
+//! from files (matrices, Euler angles, relative poses) are loops-io's, on nalgebra.
 
 use crate::error::{Error, Result};
 use crate::manifold::wrap_angle;

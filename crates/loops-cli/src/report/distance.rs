@@ -4,7 +4,7 @@
 //!
 //! Everything on the plane comes from `loops_core::plane`, as `inexact_loops.plot` gets it: the
 //! grid of poses ([`PlaneGrid`]), the distance of each pixel's pair
-//! ([`MetricSpec::distance_image`]), its component ([`Loops::label_image`]), the outlines
+//! ([`MetricSpec::distance_image`](loops_core::MetricSpec::distance_image)), its component ([`Loops::label_image`](loops_core::Loops::label_image)), the outlines
 //! ([`component_outlines`], closed along the border so they can be filled) and the γ isocontour
 //! ([`isocontour`]). They are in pixel units, drawn under one affine transform onto the plot
 //! (whose axes span the grid's pixel edges), so their coordinates are small numbers. This module

@@ -1,5 +1,5 @@
-//! `report.html`: one self-contained page per log (no network; figures inline as SVG or PNG),
-//! and `index.html`, the batch's page ([`index`]).
+//! `report.html`: one self-contained page per log (no network; figures inline as SVG or PNG).
+//! The batch's `index.html` belongs to `loops run` (`run/index.rs`).
 //!
 //! The page has a summary (trajectory, loops, samples and their P1–P3; [`summary`]), then four
 //! figures and the components table:
@@ -21,14 +21,13 @@
 //! here with the fewest new crates (maud, maud_macros, proc-macro2-diagnostics and
 //! version_check, over the syn the workspace already has; askama adds six, a TOML parser and a
 //! glob matcher among them), and because the figures are built in Rust anyway: a template file
-//! per figure would only pass strings through. The style sheets are files of their own
-//! (`report.css`, `index.css`), included at compile time.
+//! per figure would only pass strings through. The style sheet is a file of its own
+//! (`report.css`), included at compile time.
 //!
 //! Plotting (scales, ticks, colour maps) is in [`svg`], PNG images in [`png`], colours and
 //! markers in [`palette`], number formats in [`numbers`].
 
 mod distance;
-pub(crate) mod index;
 mod numbers;
 mod palette;
 mod per_component;

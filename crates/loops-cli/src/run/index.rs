@@ -3,7 +3,7 @@
 use maud::{DOCTYPE, PreEscaped, html};
 use percent_encoding::{AsciiSet, NON_ALPHANUMERIC, utf8_percent_encode};
 
-use crate::run::BatchSummary;
+use super::BatchSummary;
 
 /// The page's style sheet.
 const STYLE: &str = include_str!("index.css");

@@ -6,6 +6,8 @@
 //! any failed. Each log's files are written into a hidden staging folder that is renamed to the
 //! log's name when all are written (see [`crate::guard`]), so a folder is whole or absent.
 
+mod index;
+
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -236,7 +238,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     };
     let json = serde_json::to_string_pretty(&summary)? + "\n";
     guard::write_atomically(&args.out.join("summary.json"), json.as_bytes(), true)?;
-    guard::write_atomically(&args.out.join("index.html"), report::index::render(&summary).as_bytes(), true)?;
+    guard::write_atomically(&args.out.join("index.html"), index::render(&summary).as_bytes(), true)?;
 
     if let Some(JsonTo::File(path)) = &args.json {
         guard::write_atomically(path, json.as_bytes(), args.force)?;
