@@ -345,7 +345,7 @@ impl MessageLocation {
     fn place(&self) -> String {
         match self.offset_in_chunk {
             Some(inner) => format!("message at byte {inner} of the chunk at offset {}", self.offset),
-            None if crate::bag::is_sqlite_name(&self.path) => format!("message at row {}", self.offset),
+            None if is_sqlite_name(&self.path) => format!("message at row {}", self.offset),
             None => format!("message at offset {}", self.offset),
         }
     }
@@ -359,7 +359,7 @@ impl fmt::Display for MessageLocation {
 
 /// Where an empty topic's channel lies: a record, or a row of a sqlite3 file's `topics`.
 fn channel_place(path: &Path, offset: u64) -> String {
-    if crate::bag::is_sqlite_name(path) {
+    if is_sqlite_name(path) {
         format!("it is row {offset} of the topics table")
     } else {
         format!("its channel is in the record at offset {offset}")
@@ -440,4 +440,12 @@ fn unknown_format_message(extension: Option<&str>) -> String {
         known.join(", "),
         names.join(", ")
     )
+}
+
+/// Whether `path` names a rosbag2 sqlite3 file (`*.db3`, or compressed `*.db3.zstd`,
+/// `*.db3.zst`, `*.db3.lz4`): offsets in its errors are rows.
+pub(crate) fn is_sqlite_name(path: &std::path::Path) -> bool {
+    let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let inner = [".zstd", ".zst", ".lz4"].iter().find_map(|suffix| name.strip_suffix(suffix)).unwrap_or(&name);
+    inner.ends_with(".db3")
 }

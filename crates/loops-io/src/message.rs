@@ -11,11 +11,11 @@ pub(crate) fn decode_samples(
     emit: impl FnMut(Sample<'_>),
 ) -> Result<(), String> {
     match encoding {
-        MessageEncoding::Cdr => match crate::bag::compression::message_frame(data) {
+        MessageEncoding::Cdr => match crate::compression::message_frame(data) {
             None => cdr::decode(pose_type, data, emit),
-            Some(frame) => cdr::decode(pose_type, &crate::bag::compression::decompress_message(frame, data)?, emit),
+            Some(frame) => cdr::decode(pose_type, &crate::compression::decompress_message(frame, data)?, emit),
         },
-        MessageEncoding::Ros1 => crate::bag::ros1_message::decode(pose_type, data, emit),
+        MessageEncoding::Ros1 => crate::ros1_message::decode(pose_type, data, emit),
         MessageEncoding::Protobuf => foxglove::decode_protobuf(pose_type, data, emit),
         MessageEncoding::Json => foxglove::decode_json(pose_type, data, emit),
     }

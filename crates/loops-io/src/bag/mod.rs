@@ -10,19 +10,15 @@
 //! | `metadata.yaml` | `serde_yaml_ng` + serde derive | [`rosbag2`] |
 //! | sqlite3 storage (`.db3`) | `rusqlite`, SQLite bundled | [`sqlite`] |
 //! | MCAP storage (`.mcap`) | the crate's MCAP walker (`mcap` crate) | `crate::mcap` |
-//! | zstd, lz4, bz2 | `zstd`, `lz4_flex`, `bzip2`; the size limits are ours | [`compression`] |
+//! | zstd, lz4, bz2 | `zstd`, `lz4_flex`, `bzip2`; the size limits are ours | [`compression`](crate::compression) |
 //! | ROS 1 records | by hand (the `rosbag` crate does not fit: see the module) | [`ros1`] |
-//! | ROS 1 messages | by hand, five types | [`ros1_message`] |
+//! | ROS 1 messages | by hand, five types | [`ros1_message`](crate::ros1_message) |
 
-pub(crate) mod compression;
 mod ros1;
-pub(crate) mod ros1_message;
 mod rosbag2;
 mod sqlite;
 
 use std::path::{Path, PathBuf};
-
-pub(crate) use rosbag2::is_sqlite_name;
 
 use crate::error::{IoError, Result};
 use crate::format::Format;
@@ -152,7 +148,7 @@ pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>> {
 /// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole.
 fn walk_storage(file: &StorageFile, visitor: &mut impl Visitor) -> Result<()> {
     let decompressed = match file.compression {
-        Some(frame) => Some(compression::decompress_file(&file.path, frame)?),
+        Some(frame) => Some(crate::compression::decompress_file(&file.path, frame)?),
         None => None,
     };
     let walked = decompressed.as_ref().map_or(file.path.as_path(), |temp| temp.path());

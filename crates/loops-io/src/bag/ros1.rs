@@ -29,7 +29,7 @@ use std::fs::File;
 use std::io::{BufReader, Read};
 use std::path::Path;
 
-use crate::bag::compression::{ChunkCompression, decompress_chunk};
+use crate::compression::{ChunkCompression, decompress_chunk};
 use crate::error::{IoError, Result};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
 

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::bag::compression::Frame;
+use crate::compression::Frame;
 use crate::error::{IoError, Result};
 
 /// A storage plugin.
@@ -80,11 +80,6 @@ fn storage_of_name(path: &Path) -> Option<(Storage, Option<Frame>)> {
         _ => return None,
     };
     Some((storage, compression))
-}
-
-/// Whether `path` names a rosbag2 sqlite3 file (`*.db3`, `*.db3.zstd`): its offsets are rows.
-pub(crate) fn is_sqlite_name(path: &Path) -> bool {
-    matches!(storage_of_name(path), Some((Storage::Sqlite3, _)))
 }
 
 impl Rosbag2 {
@@ -247,8 +242,8 @@ mod tests {
         assert_eq!(storage_of_name(Path::new("b/x_0.db3.zstd")), Some((Storage::Sqlite3, Some(Frame::Zstd))));
         assert_eq!(storage_of_name(Path::new("b/x_0.mcap.lz4")), Some((Storage::Mcap, Some(Frame::Lz4))));
         assert_eq!(storage_of_name(Path::new("b/x.tum.zstd")), None);
-        assert!(is_sqlite_name(Path::new("x.db3.zstd")));
-        assert!(!is_sqlite_name(Path::new("x.mcap")));
+        assert!(crate::error::is_sqlite_name(Path::new("x.db3.zstd")));
+        assert!(!crate::error::is_sqlite_name(Path::new("x.mcap")));
     }
 
     #[test]
