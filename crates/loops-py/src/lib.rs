@@ -57,7 +57,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_clusters::cluster_detections, module)?)?;
     module.add_function(wrap_pyfunction!(py_samples::sample, module)?)?;
     module.add_function(wrap_pyfunction!(py_quality::sample_quality, module)?)?;
-    module.add_class::<py_plane::PlaneGrid>()?;
+    module.add_class::<py_loops::PlaneGrid>()?;
     module.add_function(wrap_pyfunction!(py_plane::distance_image, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::outline_segments, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::component_outlines, module)?)?;

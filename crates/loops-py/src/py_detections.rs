@@ -3,44 +3,13 @@
 use std::sync::Arc;
 
 use numpy::PyArray1;
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::convert::{data_frame, index_column, real_column, to_numpy};
 use crate::detached;
 use crate::error::Failure;
-use crate::py_loops::Loops;
-use crate::py_trajectory::Trajectory;
-use loops_core::{SampleSize, Timeline};
-
-/// Something detections can be placed on (and a `PlaneGrid` made for): a `Trajectory` or the
-/// `Loops` found on one.
-pub(crate) enum TimelineArg {
-    Trajectory(Arc<loops_core::Trajectory>),
-    Loops(Arc<loops_core::Loops>),
-}
-
-impl TimelineArg {
-    pub(crate) fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<Self> {
-        if let Ok(trajectory) = obj.cast::<Trajectory>() {
-            Ok(Self::Trajectory(Arc::clone(&trajectory.get().inner)))
-        } else if let Ok(loops) = obj.cast::<Loops>() {
-            Ok(Self::Loops(Arc::clone(&loops.get().inner)))
-        } else {
-            Err(PyTypeError::new_err(format!(
-                "trajectory_or_loops must be a Trajectory or Loops, got {}",
-                obj.get_type().name()?
-            )))
-        }
-    }
-
-    pub(crate) fn timeline(&self) -> &dyn Timeline {
-        match self {
-            Self::Trajectory(trajectory) => trajectory.as_ref(),
-            Self::Loops(loops) => loops.as_ref(),
-        }
-    }
-}
+use crate::py_loops::{Loops, TimelineArg};
+use loops_core::SampleSize;
 
 /// A set of detections D: unordered pairs of times (t, t′), seconds, at which the trajectory is
 /// believed to come back to itself (place recognition), with optional scores and, once placed

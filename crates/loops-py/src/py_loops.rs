@@ -2,14 +2,16 @@
 
 use std::sync::Arc;
 
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
-use crate::convert::{bool_column, float64_column, int64_column, pose_index, table, to_numpy};
+use crate::convert::{bool_column, float64_column, index_column, int64_column, pose_index, table, to_numpy};
 use crate::detached;
-use crate::error::Failure;
+use crate::error::{Failure, value_error};
 use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_trajectory::Trajectory;
-use loops_core::{LabelledRun, Scale, Selection, Side};
+use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
 
 /// Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
 /// (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
@@ -268,12 +270,8 @@ impl Loops {
     ///     >>> loops = il.find_loops(traj, gamma=1.0)
     ///     >>> loops.label_image(il.PlaneGrid(loops, 10)).tolist()
     ///     [[0, -1, -1, 1], [-1, 2, 2, -1], [-1, 2, 2, -1], [1, -1, -1, 3]]
-    fn label_image<'py>(
-        &self,
-        py: Python<'py>,
-        grid: &crate::py_plane::PlaneGrid,
-    ) -> PyResult<Bound<'py, numpy::PyArray2<i64>>> {
-        crate::py_plane::label_image(py, &self.inner, grid)
+    fn label_image<'py>(&self, py: Python<'py>, grid: &PlaneGrid) -> PyResult<Bound<'py, numpy::PyArray2<i64>>> {
+        label_image(py, &self.inner, grid)
     }
 
     /// The component id of each pair ``(i[k], j[k])`` (either order), −1 outside S_γ: what
@@ -301,7 +299,7 @@ impl Loops {
         i: &Bound<'_, PyAny>,
         j: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, numpy::PyArray1<i64>>> {
-        crate::py_plane::components_of_pairs(py, &self.inner, i, j)
+        components_of_pairs(py, &self.inner, i, j)
     }
 
     /// How many of the pairs ``(i[k], j[k])`` each component holds, by component id (pairs
@@ -328,7 +326,7 @@ impl Loops {
         i: &Bound<'_, PyAny>,
         j: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, numpy::PyArray1<i64>>> {
-        crate::py_plane::pair_counts_per_component(py, &self.inner, i, j)
+        pair_counts_per_component(py, &self.inner, i, j)
     }
 
     /// Loop duration τ(t_i) for every sample: how long the trajectory stays within γ of
@@ -391,4 +389,184 @@ impl Loops {
             loops.loop_density(a, b, selection(&components), side, scale)
         })
     }
+}
+
+/// Something detections can be placed on (and a `PlaneGrid` made for): a `Trajectory` or the
+/// `Loops` found on one.
+pub(crate) enum TimelineArg {
+    Trajectory(Arc<loops_core::Trajectory>),
+    Loops(Arc<loops_core::Loops>),
+}
+
+impl TimelineArg {
+    pub(crate) fn from_py(obj: &Bound<'_, PyAny>) -> PyResult<Self> {
+        if let Ok(trajectory) = obj.cast::<Trajectory>() {
+            Ok(Self::Trajectory(Arc::clone(&trajectory.get().inner)))
+        } else if let Ok(loops) = obj.cast::<Loops>() {
+            Ok(Self::Loops(Arc::clone(&loops.get().inner)))
+        } else {
+            Err(PyTypeError::new_err(format!(
+                "trajectory_or_loops must be a Trajectory or Loops, got {}",
+                obj.get_type().name()?
+            )))
+        }
+    }
+
+    pub(crate) fn timeline(&self) -> &dyn Timeline {
+        match self {
+            Self::Trajectory(trajectory) => trajectory.as_ref(),
+            Self::Loops(loops) => loops.as_ref(),
+        }
+    }
+}
+
+/// The poses an image of the (t, t′) plane shows: one pose per column (time t) and one per row
+/// (time t′), for :func:`distance_image` and :meth:`Loops.label_image`.
+///
+/// Along each axis: every pose whose time lies in the window when at most ``max_pixels`` do;
+/// otherwise ``max_pixels`` pixels evenly spaced in time over the window, each showing the pose
+/// nearest its centre time (ties to the earlier pose; where poses are sparser than pixels, one
+/// pose shows in neighbouring pixels).
+///
+/// Args:
+///     trajectory_or_loops: the :class:`Trajectory`, or the :class:`Loops` found on it.
+///     max_pixels: the most pixels a side (at least 1).
+///     window_s: ``((t_min, t_max), (t_prime_min, t_prime_max))``, seconds from the first pose;
+///         ``None`` is the whole plane.
+///
+/// Raises:
+///     InvalidParameterError: ``max_pixels`` = 0, a window side that is not finite with
+///         min < max, or with no pose in it.
+///     TypeError: ``trajectory_or_loops`` of another type.
+///
+/// Example:
+///     >>> import numpy as np, inexact_loops as il
+///     >>> traj = il.Trajectory(np.arange(10.0), np.zeros(10))
+///     >>> il.PlaneGrid(traj, 100).columns.tolist()
+///     [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]
+///     >>> coarse = il.PlaneGrid(traj, 3)  # pixel centres at 1.5, 4.5 and 7.5 s
+///     >>> coarse.columns.tolist(), coarse.column_edges_s.tolist()
+///     ([1, 4, 7], [0.0, 3.0, 6.0, 9.0])
+///     >>> zoom = il.PlaneGrid(traj, 100, window_s=((2.0, 4.0), (6.5, 9.0)))
+///     >>> zoom.columns.tolist(), zoom.rows.tolist(), zoom.column_edges_s.tolist()
+///     ([2, 3, 4], [7, 8, 9], [1.5, 2.5, 3.5, 4.5])
+#[pyclass(frozen, module = "inexact_loops._core")]
+#[derive(Debug)]
+pub(crate) struct PlaneGrid {
+    pub(crate) inner: Arc<loops_core::PlaneGrid>,
+}
+
+#[pymethods]
+impl PlaneGrid {
+    #[new]
+    #[pyo3(signature = (trajectory_or_loops, max_pixels, *, window_s=None))]
+    fn new(
+        py: Python<'_>,
+        trajectory_or_loops: &Bound<'_, PyAny>,
+        max_pixels: usize,
+        window_s: Option<((f64, f64), (f64, f64))>,
+    ) -> PyResult<Self> {
+        let timeline = TimelineArg::from_py(trajectory_or_loops)?;
+        let window = window_s.map(|((a, b), (c, d))| ([a, b], [c, d]));
+        let inner = detached(py, move || Ok(loops_core::PlaneGrid::new(timeline.timeline(), window, max_pixels)?))?;
+        Ok(Self { inner: Arc::new(inner) })
+    }
+
+    fn __repr__(&self) -> String {
+        format!("PlaneGrid({} × {} pixels of {} poses)", self.inner.width(), self.inner.height(), self.inner.poses())
+    }
+
+    /// The pose index i of each column (time t), increasing: int64, shape ``(width,)``.
+    #[getter]
+    fn columns<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        to_numpy(py, self.inner.columns().iter().map(|&i| i as i64).collect())
+    }
+
+    /// The pose index j of each row (time t′), increasing (row 0 is the earliest t′): int64,
+    /// shape ``(height,)``.
+    #[getter]
+    fn rows<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        to_numpy(py, self.inner.rows().iter().map(|&j| j as i64).collect())
+    }
+
+    /// The time each column stands for: ``width + 1`` increasing boundaries, seconds from the
+    /// first pose (column a spans ``[edges[a], edges[a + 1]]``). Even steps over the window when
+    /// the axis is downsampled; otherwise the midpoints between the poses' times, half a step
+    /// beyond the first and the last.
+    #[getter]
+    fn column_edges_s<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        to_numpy(py, self.inner.column_edges_s().to_vec())
+    }
+
+    /// The time each row stands for: ``height + 1`` increasing boundaries, seconds from the
+    /// first pose, as :attr:`column_edges_s`.
+    #[getter]
+    fn row_edges_s<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        to_numpy(py, self.inner.row_edges_s().to_vec())
+    }
+
+    /// Number of columns.
+    #[getter]
+    fn width(&self) -> usize {
+        self.inner.width()
+    }
+
+    /// Number of rows.
+    #[getter]
+    fn height(&self) -> usize {
+        self.inner.height()
+    }
+
+    /// Number of poses of the trajectory the grid was made for.
+    #[getter]
+    fn poses(&self) -> usize {
+        self.inner.poses()
+    }
+}
+
+/// `Loops.label_image`: the component of every pixel, −1 outside S_γ.
+pub(crate) fn label_image<'py>(
+    py: Python<'py>,
+    loops: &Arc<loops_core::Loops>,
+    grid: &PlaneGrid,
+) -> PyResult<Bound<'py, PyArray2<i64>>> {
+    let (loops, plane) = (Arc::clone(loops), Arc::clone(&grid.inner));
+    let labels = detached(py, move || Ok(loops.label_image(&plane)?))?;
+    to_numpy(py, labels.into_iter().map(|c| c.map_or(-1, i64::from)).collect())
+        .reshape([grid.inner.height(), grid.inner.width()])
+}
+
+/// The pairs `(i[k], j[k])` of two index columns.
+fn pairs(py: Python<'_>, i: &Bound<'_, PyAny>, j: &Bound<'_, PyAny>) -> PyResult<Vec<[usize; 2]>> {
+    let (i, j) = (index_column(py, i, "i")?, index_column(py, j, "j")?);
+    if i.len() != j.len() {
+        return Err(value_error(format!("i has {} values but j has {}: one of each per pair", i.len(), j.len())));
+    }
+    Ok(i.into_iter().zip(j).map(|(i, j)| [i, j]).collect())
+}
+
+/// `Loops.components_of_pairs`: the component of each pair, −1 outside S_γ.
+pub(crate) fn components_of_pairs<'py>(
+    py: Python<'py>,
+    loops: &Arc<loops_core::Loops>,
+    i: &Bound<'_, PyAny>,
+    j: &Bound<'_, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let pairs = pairs(py, i, j)?;
+    let loops = Arc::clone(loops);
+    let ids = detached(py, move || Ok(loops.components_of_pairs(&pairs)?))?;
+    Ok(to_numpy(py, ids.into_iter().map(|c| c.map_or(-1, |c| c as i64)).collect()))
+}
+
+/// `Loops.pair_counts_per_component`: how many of the pairs each component holds.
+pub(crate) fn pair_counts_per_component<'py>(
+    py: Python<'py>,
+    loops: &Arc<loops_core::Loops>,
+    i: &Bound<'_, PyAny>,
+    j: &Bound<'_, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let pairs = pairs(py, i, j)?;
+    let loops = Arc::clone(loops);
+    let counts = detached(py, move || Ok(loops.pair_counts_per_component(&pairs)?))?;
+    Ok(to_numpy(py, counts.into_iter().map(|c| c as i64).collect()))
 }

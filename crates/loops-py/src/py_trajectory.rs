@@ -8,7 +8,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyList, PyTuple};
 
-use crate::convert::{check_rows_equal_length, timestamps_and_points, timestamps_and_rows, to_numpy};
+use crate::convert::{check_rows_equal_length, real_column, timestamps_and_points, timestamps_and_rows, to_numpy};
 use crate::detached;
 use crate::error::Failure;
 use crate::py_metric::MetricArg;
@@ -108,7 +108,7 @@ impl Trajectory {
     ///     >>> traj.nearest_poses([0.4, 0.5, 2.1, 3.0]).tolist()
     ///     [0, 0, 2, 2]
     fn nearest_poses<'py>(&self, py: Python<'py>, times_s: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        crate::py_plane::nearest_poses(py, &self.inner, times_s)
+        nearest_poses(py, &self.inner, times_s)
     }
 
     /// SE(3) poses, for the ``se3`` / ``se3_rotation`` metrics: positions ``(n, 3)`` and
@@ -532,4 +532,16 @@ pub(crate) fn list_topics<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Vec<B
             Ok(row)
         })
         .collect()
+}
+
+/// `Trajectory.nearest_poses`: the pose nearest each time.
+pub(crate) fn nearest_poses<'py>(
+    py: Python<'py>,
+    traj: &Arc<loops_core::Trajectory>,
+    times_s: &Bound<'_, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let times = real_column(py, times_s, "times_s")?;
+    let traj = Arc::clone(traj);
+    let poses = detached(py, move || Ok(traj.nearest_poses(&times)?))?;
+    Ok(to_numpy(py, poses.into_iter().map(|i| i as i64).collect()))
 }
