@@ -9,7 +9,6 @@
 //! `shared/data` is absent.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 
 use loops_core::{Euclidean, find_loops};
@@ -18,6 +17,9 @@ use loops_io::{
     read_rosbag2, read_trajectory, read_trajectory_with,
 };
 use serde_json::Value;
+
+mod support;
+use support::python_fixtures;
 
 /// One pose: stamp (ns), position, orientation.
 type Pose = (i64, [f64; 3], [f64; 4]);
@@ -40,33 +42,13 @@ fn make_fixtures(name: &str, poses: &[Pose]) -> Option<(PathBuf, Value)> {
     lines.hash(&mut hasher);
     let root = Path::new(env!("CARGO_TARGET_TMPDIR"));
     let dir = root.join(format!("bag-fixtures-{name}-{:016x}", hasher.finish()));
-    if !dir.join("manifest.json").is_file() {
-        let building = dir.with_extension(format!("tmp{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&building);
-        let poses_file = root.join(format!("bag-poses-{name}-{}.txt", std::process::id()));
+    let poses_file = root.join(format!("bag-poses-{name}-{}.txt", std::process::id()));
+    let fixtures = python_fixtures("the bag tests", &script, dir, || {
         std::fs::write(&poses_file, lines).expect("poses file");
-        let output = match Command::new("python3").arg(&script).arg(&poses_file).arg(&building).output() {
-            Ok(output) => output,
-            Err(error) => {
-                eprintln!("skipping the bag tests: cannot run python3 ({error})");
-                return None;
-            }
-        };
-        let _ = std::fs::remove_file(&poses_file);
-        match output.status.code() {
-            Some(0) => {}
-            Some(3) => {
-                eprintln!("skipping the bag tests: {}", String::from_utf8_lossy(&output.stderr).trim());
-                return None;
-            }
-            _ => panic!("{} failed: {}", script.display(), String::from_utf8_lossy(&output.stderr)),
-        }
-        if std::fs::rename(&building, &dir).is_err() {
-            let _ = std::fs::remove_dir_all(&building);
-        }
-    }
-    let manifest = std::fs::read_to_string(dir.join("manifest.json")).expect("manifest");
-    Some((dir, serde_json::from_str(&manifest).expect("manifest JSON")))
+        vec![poses_file.clone().into()]
+    });
+    let _ = std::fs::remove_file(&poses_file);
+    fixtures
 }
 
 /// 60 poses with awkward numbers: negative zero, tiny and huge values, stamps near the end of

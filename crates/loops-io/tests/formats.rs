@@ -9,6 +9,9 @@ use loops_io::{
     read_pose_graph, read_trajectory, read_trajectory_with, read_tuc, read_tum, write_g2o_edges, write_tum,
 };
 
+mod support;
+use support::real_data_dir;
+
 /// A fresh folder in the temp folder, removed when dropped.
 struct TempDir(PathBuf);
 
@@ -479,16 +482,6 @@ mod writers {
 mod real_data {
     use super::*;
 
-    fn data_dir() -> Option<PathBuf> {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-        if dir.is_dir() {
-            Some(dir)
-        } else {
-            eprintln!("skipping: no real data at {} (it lives beside the checkout in CI)", dir.display());
-            None
-        }
-    }
-
     fn data_lines(path: &Path, starting: &str) -> usize {
         std::fs::read_to_string(path)
             .unwrap()
@@ -506,7 +499,7 @@ mod real_data {
 
     #[test]
     fn kitti_odometry_sequences() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         for sequence in 0..=10 {
             let path = dir.join(format!("kitti_odometry/{sequence:02}.txt"));
             let table = read_trajectory(&path, None).unwrap();
@@ -524,7 +517,7 @@ mod real_data {
 
     #[test]
     fn mulran_has_no_timestamps_and_takes_ten_hertz() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         for (name, poses) in [
             ("kaist01_localization_poses01_seq02asmap.txt", 8226),
             ("kaist02_localization_poses02_seq02asmap.txt", 8941),
@@ -551,7 +544,7 @@ mod real_data {
 
     #[test]
     fn euroc_v102() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let path = dir.join("euroc/evo_V102_groundtruth.csv");
         let table = read_trajectory(&path, None).unwrap();
         assert_eq!(table, read_euroc(&path).unwrap());
@@ -566,7 +559,7 @@ mod real_data {
 
     #[test]
     fn tuc_slam_point2_with_headings() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         for (name, poses) in [("Corridor_GT.txt", 11346), ("Lecture_Hall_GT.txt", 6919)] {
             let path = dir.join("tuc/SLAM").join(name);
             let table = read_trajectory(&path, None).unwrap();
@@ -596,7 +589,7 @@ mod real_data {
 
     #[test]
     fn tuc_point3_ecef_becomes_local_east_north_up() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let mut paths = vec![dir.join("tuc/Chemnitz_City/Chemnitz_GT.txt")];
         for entry in std::fs::read_dir(dir.join("tuc/smartLoc")).unwrap() {
             let path = entry.unwrap().path();
@@ -649,7 +642,7 @@ mod real_data {
 
     #[test]
     fn pose_graphs_and_their_loop_closures() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         for (name, vertices, edges, loops) in [
             ("input_INTEL_g2o.g2o", 1228, 1483, Some(256)),
             ("input_M3500_g2o.g2o", 3500, 5453, Some(1954)),
@@ -675,7 +668,7 @@ mod real_data {
 
     #[test]
     fn candidate_edges_from_kitti_ground_truth() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let table = read_kitti(dir.join("kitti_odometry/00.txt"), &Timing::FromFile).unwrap();
         let out = TempDir::new();
         let path = out.0.join("candidates.g2o");

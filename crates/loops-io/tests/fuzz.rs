@@ -13,6 +13,9 @@ use loops_io::{McapOptions, MessageEncoding, PoseType, Timing, decode_poses, lis
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 
+mod support;
+use support::{mutate, mutations};
+
 fn config(seed: u64) -> ProptestConfig {
     ProptestConfig {
         cases: ProptestConfig::default().cases.max(256),
@@ -174,61 +177,6 @@ fn check_decoded(pose_type: PoseType, encoding: MessageEncoding, data: &[u8], ex
     }
 }
 
-/// A mutation of a byte string: truncate, flip a byte, overwrite 4 bytes, insert, remove.
-#[derive(Debug, Clone)]
-enum Mutation {
-    Truncate(prop::sample::Index),
-    Flip(prop::sample::Index, u8),
-    Overwrite(prop::sample::Index, [u8; 4]),
-    Insert(prop::sample::Index, Vec<u8>),
-    Remove(prop::sample::Index, usize),
-}
-
-fn mutation() -> impl Strategy<Value = Mutation> {
-    prop_oneof![
-        any::<prop::sample::Index>().prop_map(Mutation::Truncate),
-        (any::<prop::sample::Index>(), 1u8..=255).prop_map(|(i, b)| Mutation::Flip(i, b)),
-        (any::<prop::sample::Index>(), any::<[u8; 4]>()).prop_map(|(i, b)| Mutation::Overwrite(i, b)),
-        (any::<prop::sample::Index>(), proptest::collection::vec(any::<u8>(), 1..16))
-            .prop_map(|(i, b)| Mutation::Insert(i, b)),
-        (any::<prop::sample::Index>(), 1usize..64).prop_map(|(i, n)| Mutation::Remove(i, n)),
-    ]
-}
-
-fn mutate(data: &[u8], mutations: &[Mutation]) -> Vec<u8> {
-    let mut data = data.to_vec();
-    for mutation in mutations {
-        if data.is_empty() {
-            break;
-        }
-        match mutation {
-            Mutation::Truncate(i) => data.truncate(i.index(data.len())),
-            Mutation::Flip(i, b) => {
-                let i = i.index(data.len());
-                data[i] ^= b;
-            }
-            Mutation::Overwrite(i, b) => {
-                let i = i.index(data.len());
-                for (k, byte) in b.iter().enumerate() {
-                    if let Some(slot) = data.get_mut(i + k) {
-                        *slot = *byte;
-                    }
-                }
-            }
-            Mutation::Insert(i, bytes) => {
-                let i = i.index(data.len());
-                data.splice(i..i, bytes.iter().copied());
-            }
-            Mutation::Remove(i, n) => {
-                let i = i.index(data.len());
-                let end = (i + n).min(data.len());
-                data.drain(i..end);
-            }
-        }
-    }
-    data
-}
-
 proptest! {
     #![proptest_config(config(0xCD5))]
 
@@ -261,7 +209,7 @@ proptest! {
     fn cdr_mutated_messages_never_panic(
         poses in proptest::collection::vec(pose(), 1..4),
         little_endian in any::<bool>(),
-        mutations in proptest::collection::vec(mutation(), 1..4),
+        mutations in mutations(),
     ) {
         for pose_type in ROS_TYPES {
             let (data, _) = cdr_message(pose_type, &poses, little_endian, false);
@@ -433,7 +381,7 @@ proptest! {
     #[test]
     fn mutated_protobuf_and_json_never_panic(
         poses in proptest::collection::vec(finite_pose(), 1..4),
-        mutations in proptest::collection::vec(mutation(), 1..4),
+        mutations in mutations(),
     ) {
         for pose_type in FOXGLOVE_TYPES {
             let (protobuf, json, _) = foxglove_message(pose_type, &poses);
@@ -495,7 +443,7 @@ proptest! {
     fn mcap_files_read_back_and_mutations_never_panic(
         poses in proptest::collection::vec(pose(), 1..12),
         (compression, chunk_size) in compression(),
-        mutations in proptest::collection::vec(mutation(), 1..4),
+        mutations in mutations(),
     ) {
         let bytes = mcap_file(&poses, compression, chunk_size);
         let path = scratch("mutated.mcap");

@@ -21,6 +21,9 @@ use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 
+mod support;
+use support::{mutate, mutation, mutations};
+
 /// Runs `test` on values of `strategy`: 256 cases from `seed`, or rounds of them for
 /// `LOOPS_FUZZ_SECONDS` seconds.
 fn fuzz<S: Strategy>(name: &str, seed: u64, strategy: S, test: impl Fn(S::Value) -> Result<(), TestCaseError>) {
@@ -81,65 +84,6 @@ fn stamp_ns(pose: &Pose) -> i64 {
 
 fn bits<const N: usize>(values: [f64; N]) -> [u64; N] {
     values.map(f64::to_bits)
-}
-
-/// A mutation of a byte string: truncate, flip a byte, overwrite 4 bytes, insert, remove.
-#[derive(Debug, Clone)]
-enum Mutation {
-    Truncate(prop::sample::Index),
-    Flip(prop::sample::Index, u8),
-    Overwrite(prop::sample::Index, [u8; 4]),
-    Insert(prop::sample::Index, Vec<u8>),
-    Remove(prop::sample::Index, usize),
-}
-
-fn mutation() -> impl Strategy<Value = Mutation> {
-    prop_oneof![
-        any::<prop::sample::Index>().prop_map(Mutation::Truncate),
-        (any::<prop::sample::Index>(), 1u8..=255).prop_map(|(i, b)| Mutation::Flip(i, b)),
-        (any::<prop::sample::Index>(), any::<[u8; 4]>()).prop_map(|(i, b)| Mutation::Overwrite(i, b)),
-        (any::<prop::sample::Index>(), proptest::collection::vec(any::<u8>(), 1..16))
-            .prop_map(|(i, b)| Mutation::Insert(i, b)),
-        (any::<prop::sample::Index>(), 1usize..64).prop_map(|(i, n)| Mutation::Remove(i, n)),
-    ]
-}
-
-fn mutations() -> impl Strategy<Value = Vec<Mutation>> {
-    proptest::collection::vec(mutation(), 1..4)
-}
-
-fn mutate(data: &[u8], mutations: &[Mutation]) -> Vec<u8> {
-    let mut data = data.to_vec();
-    for mutation in mutations {
-        if data.is_empty() {
-            break;
-        }
-        match mutation {
-            Mutation::Truncate(i) => data.truncate(i.index(data.len())),
-            Mutation::Flip(i, b) => {
-                let i = i.index(data.len());
-                data[i] ^= b;
-            }
-            Mutation::Overwrite(i, b) => {
-                let i = i.index(data.len());
-                for (k, byte) in b.iter().enumerate() {
-                    if let Some(slot) = data.get_mut(i + k) {
-                        *slot = *byte;
-                    }
-                }
-            }
-            Mutation::Insert(i, bytes) => {
-                let i = i.index(data.len());
-                data.splice(i..i, bytes.iter().copied());
-            }
-            Mutation::Remove(i, n) => {
-                let i = i.index(data.len());
-                let end = (i + n).min(data.len());
-                data.drain(i..end);
-            }
-        }
-    }
-    data
 }
 
 /// Every error names the file first.

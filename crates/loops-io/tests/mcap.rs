@@ -4,11 +4,13 @@
 //! files; broken files. Skipped, with a message, when python3 or the packages are missing.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 
 use loops_io::{IoError, McapOptions, PoseType, TimeSource, list_topics, read_mcap, read_mcap_files, seconds_of_ns};
 use serde_json::Value;
+
+mod support;
+use support::python_fixtures;
 
 /// The fixture folder and its manifest, made once per script version (cached in the target
 /// folder), or `None` when Python cannot make them here.
@@ -25,31 +27,7 @@ fn make_fixtures() -> Option<(PathBuf, Value)> {
     let mut hasher = DefaultHasher::new();
     source.hash(&mut hasher);
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("mcap-fixtures-{:016x}", hasher.finish()));
-    if !dir.join("manifest.json").is_file() {
-        let building = dir.with_extension(format!("tmp{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&building);
-        let output = match Command::new("python3").arg(&script).arg(&building).output() {
-            Ok(output) => output,
-            Err(error) => {
-                eprintln!("skipping the MCAP tests: cannot run python3 ({error})");
-                return None;
-            }
-        };
-        match output.status.code() {
-            Some(0) => {}
-            Some(3) => {
-                eprintln!("skipping the MCAP tests: {}", String::from_utf8_lossy(&output.stderr).trim());
-                return None;
-            }
-            _ => panic!("{} failed: {}", script.display(), String::from_utf8_lossy(&output.stderr)),
-        }
-        // Another test process may have won the race; either copy is complete.
-        if std::fs::rename(&building, &dir).is_err() {
-            let _ = std::fs::remove_dir_all(&building);
-        }
-    }
-    let manifest = std::fs::read_to_string(dir.join("manifest.json")).expect("manifest");
-    Some((dir, serde_json::from_str(&manifest).expect("manifest JSON")))
+    python_fixtures("the MCAP tests", &script, dir, Vec::new)
 }
 
 /// The fixture folder and manifest, or return from the test (after the message printed once).

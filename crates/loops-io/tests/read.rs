@@ -5,6 +5,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use loops_io::{Format, IoError, PoseTable, read_csv, read_trajectory, read_tum};
 
+mod support;
+use support::real_data_dir;
+
 /// A file in the temp folder, removed when dropped. Names are unique per process and file.
 struct TempFile(PathBuf);
 
@@ -530,17 +533,6 @@ mod garbage {
 mod real_data {
     use super::*;
 
-    /// `shared/data`, or `None` (with a message) when this checkout has no data beside it.
-    fn data_dir() -> Option<PathBuf> {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-        if dir.is_dir() {
-            Some(dir)
-        } else {
-            eprintln!("skipping: no real data at {} (it lives beside the checkout in CI)", dir.display());
-            None
-        }
-    }
-
     fn assert_unit_quaternions(table: &PoseTable, tolerance: f64) {
         for (orientation, line) in table.orientations_xyzw.as_ref().unwrap().iter().zip(&table.source_lines) {
             let norm = orientation.iter().map(|q| q * q).sum::<f64>().sqrt();
@@ -550,7 +542,7 @@ mod real_data {
 
     #[test]
     fn tum_rgbd_fr2_desk_has_a_duplicate_timestamp() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let path = dir.join("tum_rgbd/fr2_desk_groundtruth.txt");
         let table = read_trajectory(&path, None).unwrap();
         assert_eq!(table.timestamps_s.len(), 20957, "poses, as its README says");
@@ -572,7 +564,7 @@ mod real_data {
 
     #[test]
     fn tum_rgbd_fr1_xyz() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let table = read_tum(dir.join("tum_rgbd/freiburg1_xyz-groundtruth.txt")).unwrap();
         assert_eq!(table.timestamps_s.len(), 3000);
         assert_unit_quaternions(&table, 1e-3);
@@ -583,7 +575,7 @@ mod real_data {
 
     #[test]
     fn urbannav_ground_truth_csv_files_are_tum() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         for (name, poses) in [
             ("gt_slam_UrbanNav-HK-CHTunnel-20210518.csv", 401),
             ("gt_slam_UrbanNav-HK-Mongkok-20210518.csv", 2312),
@@ -606,7 +598,7 @@ mod real_data {
 
     #[test]
     fn urbannav_novatel_exports_are_not_tum() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let error = read_trajectory(dir.join("urbannav_hk/UrbanNav_TST_GT.txt"), None).unwrap_err();
         assert!(
             error.to_string().ends_with("line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 20"),
@@ -619,7 +611,7 @@ mod real_data {
 
     #[test]
     fn kitti_txt_is_read_as_kitti_not_tum() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         let path = dir.join("kitti_odometry/00.txt");
         let table = read_trajectory(&path, None).unwrap();
         assert_eq!(table.len(), 4541);
@@ -633,7 +625,7 @@ mod real_data {
 
     #[test]
     fn euroc_csv_is_not_misread() {
-        let Some(dir) = data_dir() else { return };
+        let Some(dir) = real_data_dir() else { return };
         // The "#timestamp [ns], ..." header is a comment; 17 unnamed columns are not t, x, y[, z].
         let error = read_csv(dir.join("euroc/evo_V102_groundtruth.csv")).unwrap_err();
         assert!(error.to_string().contains("line 2: expected 3 columns (t, x, y) or 4 (t, x, y, z)"), "{error}");
