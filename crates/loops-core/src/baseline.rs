@@ -324,19 +324,23 @@ mod tests {
         (traj, loops)
     }
 
+    /// `baseline`'s pairs (and proposed count, warnings) on `traj` under the Euclidean metric.
+    fn pairs_of(
+        baseline: &Baseline,
+        traj: &Trajectory,
+        loops: &Loops,
+        size: SampleSize,
+        rng: &mut ChaCha8Rng,
+    ) -> (Vec<[u32; 2]>, u64, Vec<SampleWarning>) {
+        baseline_pairs(baseline, traj, &Euclidean, loops, size, rng).unwrap()
+    }
+
     #[test]
     fn lio_sam_matches_nearest_old_keyframe() {
         let (traj, loops) = out_and_back();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let (pairs, _, warnings) = baseline_pairs(
-            &Baseline::LioSam(LioSam::default()),
-            &traj,
-            &Euclidean,
-            &loops,
-            SampleSize::Rate(1.0),
-            &mut rng,
-        )
-        .unwrap();
+        let (pairs, _, warnings) =
+            pairs_of(&Baseline::LioSam(LioSam::default()), &traj, &loops, SampleSize::Rate(1.0), &mut rng);
         assert!(warnings.is_empty());
         assert!(!pairs.is_empty());
         let times = traj.timestamps_s();
@@ -353,30 +357,21 @@ mod tests {
     fn hdl_keeps_one_per_stretch() {
         let (traj, loops) = out_and_back();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let (pairs, proposed, _) = baseline_pairs(
-            &Baseline::HdlGraphSlam(HdlGraphSlam::default()),
-            &traj,
-            &Euclidean,
-            &loops,
-            SampleSize::Rate(1.0),
-            &mut rng,
-        )
-        .unwrap();
+        let (pairs, proposed, _) =
+            pairs_of(&Baseline::HdlGraphSlam(HdlGraphSlam::default()), &traj, &loops, SampleSize::Rate(1.0), &mut rng);
         assert!(!pairs.is_empty());
         assert_eq!(proposed, pairs.len() as u64);
         // Consecutive edges are at least γ = 25 m of travel apart (1 m per pose here).
         for w in pairs.windows(2) {
             assert!(w[1][1] - w[0][1] >= 25, "{pairs:?}");
         }
-        let budget = baseline_pairs(
+        let budget = pairs_of(
             &Baseline::HdlGraphSlam(HdlGraphSlam::default()),
             &traj,
-            &Euclidean,
             &loops,
             SampleSize::Budget(1000),
             &mut rng,
-        )
-        .unwrap();
+        );
         assert_eq!(budget.0.len(), pairs.len());
         assert!(matches!(budget.2[..], [SampleWarning::BudgetAboveAvailable { budget: 1000, .. }]));
     }
@@ -385,15 +380,8 @@ mod tests {
     fn gap_rules_stay_beyond_the_gap() {
         let (traj, loops) = out_and_back();
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let (pairs, _, _) = baseline_pairs(
-            &Baseline::TimeGap(TimeGap::default()),
-            &traj,
-            &Euclidean,
-            &loops,
-            SampleSize::Budget(50),
-            &mut rng,
-        )
-        .unwrap();
+        let (pairs, _, _) =
+            pairs_of(&Baseline::TimeGap(TimeGap::default()), &traj, &loops, SampleSize::Budget(50), &mut rng);
         assert_eq!(pairs.len(), 50);
         assert!(pairs.iter().all(|&[i, j]| j - i >= 30 && loops.component_of(i as usize, j as usize).is_some()));
         let bad = Baseline::LioSam(LioSam { period_s: 0.0, ..LioSam::default() });
