@@ -106,19 +106,19 @@ const MAX_CHUNK_BUFFER: u64 = 1 << 30;
 /// The bytes between records: opcode and length.
 const RECORD_HEADER: u64 = 9;
 
-/// Walks the records of the MCAP file at `path`, reporting channels and messages to `visitor`.
-pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
+/// The file at `path` opened for a record walk (MCAP or ROS 1 bag): a buffered reader and the
+/// file's length in bytes, which bounds every record length read from it.
+pub(crate) fn open_records(path: &Path) -> Result<(BufReader<File>, u64)> {
     let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
     let file = File::open(path).map_err(open_error)?;
     let len = file.metadata().map_err(open_error)?.len();
-    let mut walker = Walker {
-        path,
-        reader: BufReader::with_capacity(1 << 20, file),
-        len,
-        schemas: HashMap::new(),
-        channels: HashMap::new(),
-        body: Vec::new(),
-    };
+    Ok((BufReader::with_capacity(1 << 20, file), len))
+}
+
+/// Walks the records of the MCAP file at `path`, reporting channels and messages to `visitor`.
+pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
+    let (reader, len) = open_records(path)?;
+    let mut walker = Walker { path, reader, len, schemas: HashMap::new(), channels: HashMap::new(), body: Vec::new() };
     walker.run(visitor)
 }
 

@@ -31,7 +31,7 @@ use std::path::Path;
 
 use crate::compression::{ChunkCompression, decompress_chunk};
 use crate::error::{IoError, Result};
-use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
+use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor, open_records};
 
 /// The first line of a bag of format 2.0.
 const VERSION: &[u8; 13] = b"#ROSBAG V2.0\n";
@@ -156,12 +156,10 @@ fn parse_header(bytes: &[u8]) -> std::result::Result<Fields, String> {
 /// Walks the records of the ROS 1 bag at `path`, reporting connections (as channels) and
 /// messages to `visitor`.
 pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
-    let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
-    let file = File::open(path).map_err(open_error)?;
-    let len = file.metadata().map_err(open_error)?.len();
+    let (reader, len) = open_records(path)?;
     let mut walker = Walker {
         path,
-        reader: BufReader::with_capacity(1 << 20, file),
+        reader,
         len,
         connections: HashMap::new(),
         header: Vec::new(),
