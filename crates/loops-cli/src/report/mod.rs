@@ -83,36 +83,45 @@ pub(crate) struct ReportInput<'a> {
 /// Never panics on a valid run's input, including logs with no non-trivial component, no
 /// sample, or every pose at one position.
 pub(crate) fn render(input: &ReportInput<'_>) -> String {
+    let title = html! { (input.name) " — inexact loops" };
+    let style = html! { (PreEscaped(STYLE)) (PreEscaped(palette::swatch_style())) };
+    let body = html! {
+        main {
+            header {
+                h1 { (input.name) }
+                p.source { (input.source) }
+            }
+            (summary::cards(input))
+            (summary::warnings(input))
+            section.figures {
+                (trajectory::loop_duration_figure(input))
+                (distance::distance_figure(input))
+                (trajectory::sampled_pairs_figure(input))
+                (per_component::per_component_figure(input))
+            }
+            (table::components_section(input))
+            footer {
+                "Written by loops " (env!("CARGO_PKG_VERSION"))
+                " · inexact loops after E. Nelson, “Inexact Loops in Robotics Problems”."
+            }
+        }
+    };
+    page(title, style, body)
+}
+
+/// A self-contained HTML page as one string (ending in a newline): UTF-8, a viewport for
+/// phones, `title`, the inline `style` and `body`.
+pub(crate) fn page(title: Markup, style: Markup, body: Markup) -> String {
     let page = html! {
         (DOCTYPE)
         html lang="en" {
             head {
                 meta charset="utf-8";
                 meta name="viewport" content="width=device-width, initial-scale=1";
-                title { (input.name) " — inexact loops" }
-                style { (PreEscaped(STYLE)) (PreEscaped(palette::swatch_style())) }
+                title { (title) }
+                style { (style) }
             }
-            body {
-                main {
-                    header {
-                        h1 { (input.name) }
-                        p.source { (input.source) }
-                    }
-                    (summary::cards(input))
-                    (summary::warnings(input))
-                    section.figures {
-                        (trajectory::loop_duration_figure(input))
-                        (distance::distance_figure(input))
-                        (trajectory::sampled_pairs_figure(input))
-                        (per_component::per_component_figure(input))
-                    }
-                    (table::components_section(input))
-                    footer {
-                        "Written by loops " (env!("CARGO_PKG_VERSION"))
-                        " · inexact loops after E. Nelson, “Inexact Loops in Robotics Problems”."
-                    }
-                }
-            }
+            body { (body) }
         }
     };
     page.into_string() + "\n"

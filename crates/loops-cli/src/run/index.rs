@@ -1,9 +1,10 @@
 //! `index.html`: the batch of `loops run` at a glance, a row per log linking to its report.
 
-use maud::{DOCTYPE, PreEscaped, html};
+use maud::{PreEscaped, html};
 use percent_encoding::{AsciiSet, NON_ALPHANUMERIC, utf8_percent_encode};
 
 use super::BatchSummary;
+use crate::report::page;
 
 /// The page's style sheet.
 const STYLE: &str = include_str!("index.css");
@@ -14,63 +15,53 @@ const SEGMENT: &AsciiSet = &NON_ALPHANUMERIC.remove(b'-').remove(b'.').remove(b'
 
 /// The page, as one HTML string (inline CSS, no script, no link but to the logs' reports).
 pub(crate) fn render(batch: &BatchSummary<'_>) -> String {
-    let page = html! {
-        (DOCTYPE)
-        html lang="en" {
-            head {
-                meta charset="utf-8";
-                meta name="viewport" content="width=device-width, initial-scale=1";
-                title { "loops run: " (batch.logs) " logs" }
-                style { (PreEscaped(STYLE)) }
-            }
-            body {
-                h1 { "Inexact loops: " (batch.logs) " logs" }
-                p {
-                    "γ = " (batch.gamma) " (" (batch.metric) "); sampler " (batch.sampler) " (" (batch.sample_size)
-                    ", seed " (batch.seed) @if batch.skip_trivial { ", trivial components skipped" } "); ε = "
-                    (batch.epsilon_s) " s. " (batch.succeeded) " done, " (batch.failed) " failed, in "
-                    (format!("{:.1}", batch.seconds)) " s."
+    let title = html! { "loops run: " (batch.logs) " logs" };
+    let body = html! {
+        h1 { "Inexact loops: " (batch.logs) " logs" }
+        p {
+            "γ = " (batch.gamma) " (" (batch.metric) "); sampler " (batch.sampler) " (" (batch.sample_size)
+            ", seed " (batch.seed) @if batch.skip_trivial { ", trivial components skipped" } "); ε = "
+            (batch.epsilon_s) " s. " (batch.succeeded) " done, " (batch.failed) " failed, in "
+            (format!("{:.1}", batch.seconds)) " s."
+        }
+        table #logs {
+            thead {
+                tr {
+                    th { "log" } th { "source" } th { "poses" } th { "span (s)" } th { "components" }
+                    th { "non-trivial" } th { "pairs" } th { "loop density (s)" } th { "samples" }
+                    th { "P1 (non-trivial)" } th { "time (s)" } th { "status" }
                 }
-                table #logs {
-                    thead {
+            }
+            tbody {
+                @for r in batch.results {
+                    @if let Some(s) = &r.summary {
                         tr {
-                            th { "log" } th { "source" } th { "poses" } th { "span (s)" } th { "components" }
-                            th { "non-trivial" } th { "pairs" } th { "loop density (s)" } th { "samples" }
-                            th { "P1 (non-trivial)" } th { "time (s)" } th { "status" }
+                            td { a href={ (utf8_percent_encode(&r.name, SEGMENT)) "/report.html" } { (r.name) } }
+                            td { (r.source) }
+                            td { (s.poses) }
+                            td { (format!("{:.1}", s.span_s)) }
+                            td { (s.components) }
+                            td { (s.nontrivial_components) }
+                            td { (s.pair_count) }
+                            td { (format!("{:.2}", s.loop_density_s)) }
+                            td { (s.samples) }
+                            td { (s.quality.nontrivial_covered) "/" (s.quality.nontrivial_components) }
+                            td { (format!("{:.2}", s.seconds.total)) }
+                            td.ok { "ok" }
                         }
-                    }
-                    tbody {
-                        @for r in batch.results {
-                            @if let Some(s) = &r.summary {
-                                tr {
-                                    td { a href={ (utf8_percent_encode(&r.name, SEGMENT)) "/report.html" } { (r.name) } }
-                                    td { (r.source) }
-                                    td { (s.poses) }
-                                    td { (format!("{:.1}", s.span_s)) }
-                                    td { (s.components) }
-                                    td { (s.nontrivial_components) }
-                                    td { (s.pair_count) }
-                                    td { (format!("{:.2}", s.loop_density_s)) }
-                                    td { (s.samples) }
-                                    td { (s.quality.nontrivial_covered) "/" (s.quality.nontrivial_components) }
-                                    td { (format!("{:.2}", s.seconds.total)) }
-                                    td.ok { "ok" }
-                                }
-                            } @else {
-                                tr.failed {
-                                    td { (r.name) }
-                                    td { (r.source) }
-                                    td colspan="9" { (r.error.as_deref().unwrap_or("unknown error")) }
-                                    td.bad { "failed" }
-                                }
-                            }
+                    } @else {
+                        tr.failed {
+                            td { (r.name) }
+                            td { (r.source) }
+                            td colspan="9" { (r.error.as_deref().unwrap_or("unknown error")) }
+                            td.bad { "failed" }
                         }
                     }
                 }
             }
         }
     };
-    page.into_string() + "\n"
+    page(title, PreEscaped(STYLE.to_string()), body)
 }
 
 #[cfg(test)]
