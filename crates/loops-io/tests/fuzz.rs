@@ -14,7 +14,7 @@ use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 
 mod support;
-use support::{mutate, mutations};
+use support::{ROS_TYPES, mutate, mutations};
 
 fn config(seed: u64) -> ProptestConfig {
     ProptestConfig {
@@ -122,14 +122,6 @@ impl Cdr {
         self.pose(pose);
     }
 }
-
-const ROS_TYPES: [PoseType; 5] = [
-    PoseType::PoseStamped,
-    PoseType::PoseWithCovarianceStamped,
-    PoseType::TransformStamped,
-    PoseType::Odometry,
-    PoseType::TfMessage,
-];
 
 /// A valid CDR message of `pose_type` holding `poses` (one, except for TF), and what reads back.
 fn cdr_message(pose_type: PoseType, poses: &[Pose], little_endian: bool, xcdr2: bool) -> (Vec<u8>, Vec<Pose>) {

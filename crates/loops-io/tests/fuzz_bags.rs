@@ -22,7 +22,7 @@ use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 
 mod support;
-use support::{mutate, mutation, mutations};
+use support::{ROS_TYPES, mutate, mutation, mutations};
 
 /// Runs `test` on values of `strategy`: 256 cases from `seed`, or rounds of them for
 /// `LOOPS_FUZZ_SECONDS` seconds.
@@ -127,14 +127,6 @@ fn cdr_pose_stamped(pose: &Pose) -> Vec<u8> {
     }
     out
 }
-
-const ROS_TYPES: [PoseType; 5] = [
-    PoseType::PoseStamped,
-    PoseType::PoseWithCovarianceStamped,
-    PoseType::TransformStamped,
-    PoseType::Odometry,
-    PoseType::TfMessage,
-];
 
 #[test]
 fn messages() {

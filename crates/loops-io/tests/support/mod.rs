@@ -6,8 +6,18 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use loops_io::PoseType;
 use proptest::prelude::*;
 use serde_json::Value;
+
+/// The ROS message types that carry a pose.
+pub const ROS_TYPES: [PoseType; 5] = [
+    PoseType::PoseStamped,
+    PoseType::PoseWithCovarianceStamped,
+    PoseType::TransformStamped,
+    PoseType::Odometry,
+    PoseType::TfMessage,
+];
 
 /// A mutation of a byte string: truncate, flip a byte, overwrite 4 bytes, insert, remove.
 #[derive(Debug, Clone)]
