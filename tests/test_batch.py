@@ -168,6 +168,72 @@ def test_skip_trivial_run_equals_the_python_api(tmp_path: Path, batch, loops_cli
     assert refused.returncode == 2 and "--skip-trivial does not apply" in refused.stderr
 
 
+def test_python_writes_the_files_of_loops_run(tmp_path: Path, batch, loops_cli: Path) -> None:
+    """components.csv and loop_duration.csv from Python are, byte for byte, those of `loops run`;
+    the JSON report those of `loops components --json`."""
+    log = batch["logs"][0]
+    folder = batch["out"] / log.stem
+    traj = il.read_trajectory(log)
+    loops = il.find_loops(traj, gamma=GAMMA_M)
+    samples = il.sample(loops, "rho", budget=BUDGET, seed=SEED, trajectory=traj)
+    per_component = il.sample_quality(samples, loops).per_component
+    loops.components_to_csv(tmp_path / "components.csv", samples_per_component=per_component)
+    loops.loop_duration_to_csv(tmp_path / "loop_duration.csv", traj)
+    for name in ("components.csv", "loop_duration.csv"):
+        assert (tmp_path / name).read_bytes() == (folder / name).read_bytes(), name
+    loops.to_json(tmp_path / "loops.json", source=str(log))
+    cli = subprocess.run(
+        [loops_cli, "components", log, "--gamma", str(GAMMA_M), "--json", "-"],
+        capture_output=True,
+        check=True,
+    )
+    assert (tmp_path / "loops.json").read_bytes() == cli.stdout
+    # Kept unless overwrite; replaced with it; nothing else left in the folder.
+    with pytest.raises(FileExistsError):
+        loops.components_to_csv(tmp_path / "components.csv")
+    loops.components_to_csv(tmp_path / "components.csv", overwrite=True)
+    assert "samples" not in (tmp_path / "components.csv").read_text().splitlines()[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "components.csv",
+        "loop_duration.csv",
+        "loops.json",
+    ]
+    other = il.Trajectory(traj.timestamps[:-1], traj.positions[:-1])
+    with pytest.raises(il.InvalidParameterError, match="different trajectories"):
+        loops.loop_duration_to_csv(tmp_path / "other.csv", other)
+
+
+def test_concurrent_runs_into_one_folder(tmp_path: Path, loops_cli: Path) -> None:
+    """Issue 15, item 3: a second `loops run` into a folder a run holds stops at once, naming
+    the folder and the holder's pid; the first finishes undisturbed."""
+    logs = tmp_path / "logs"
+    subprocess.run(
+        [loops_cli, "synth", logs, "--count", "2", "--duration-s", "1800"],
+        check=True,
+        capture_output=True,
+    )
+    out = tmp_path / "results"
+    out.mkdir()
+    args = [loops_cli, "run", *sorted(logs.glob("*.mcap")), "--out", out, "--threads", "1"]
+    first = subprocess.Popen(
+        [*args, "--gamma", "20"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 60
+    while not (out / "loops-run.json").exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    second = subprocess.run([*args, "--gamma", "40", "--force"], capture_output=True, text=True)
+    running = first.poll() is None
+    first.communicate(timeout=600)
+    if not running:
+        pytest.skip("the first run finished before the second started")
+    assert second.returncode == 2, second.stderr
+    assert str(out) in second.stderr and f"pid {first.pid}" in second.stderr, second.stderr
+    assert first.returncode == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["gamma"], summary["succeeded"], summary["failed"]) == (20.0, 2, 0)
+    assert not [p for p in out.rglob(".*")]
+
+
 def test_existing_results_are_kept_without_force(batch, loops_cli: Path) -> None:
     out = batch["out"]
     before = (out / "summary.json").read_bytes()

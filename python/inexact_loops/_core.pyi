@@ -445,6 +445,102 @@ class Loops:
         """Loop density ρ(a, b) = α(a, b) / (b − a) (paper, Eq. 8): the mean loop duration over
         [a, b], seconds (or normalized).
         """
+    def components_to_csv(
+        self,
+        path: str | PathLike[str],
+        *,
+        samples_per_component: npt.ArrayLike | None = None,
+        overwrite: bool = False,
+    ) -> None:
+        """Writes ``components.csv``, the file ``loops run`` writes: one row per component, by id,
+        with the columns of :attr:`components` (``id, trivial, area_s2, pair_count, run_count,
+        holes, i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
+        closest_i, closest_j, closest_distance``) and, with ``samples_per_component``, a last
+        column ``samples``. Numbers are printed in the shortest form that reads back as the same
+        float. Atomic (a temporary file renamed into place).
+
+        Args:
+            path: the file.
+            samples_per_component: samples per component, by id: one count per component, as
+                ``sample_quality(samples, loops).per_component``.
+            overwrite: replace an existing file.
+
+        Raises:
+            FileExistsError: ``path`` exists and ``overwrite`` is false.
+            OSError: the file cannot be written.
+            ValueError: ``samples_per_component`` does not hold one count per component.
+
+        Example:
+            >>> import os, tempfile, numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
+            >>> il.find_loops(traj, gamma=0.5).components_to_csv(path)
+            >>> open(path).read().splitlines()[2]
+            '1,false,0.25,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+        """
+    def loop_duration_to_csv(
+        self,
+        path: str | PathLike[str],
+        trajectory: Trajectory,
+        *,
+        overwrite: bool = False,
+    ) -> None:
+        """Writes ``loop_duration.csv``, the file ``loops run`` writes: one row per pose, ``index,
+        t_s, x, y, z, loop_duration_s`` (τ of :meth:`loop_duration`, seconds). ``x, y, z`` are
+        the trajectory's first three coordinates (0 for those it lacks): its positions for a
+        trajectory of positions or of SE(3) poses, the chart's first coordinates otherwise.
+        Atomic, as :meth:`components_to_csv`.
+
+        Args:
+            path: the file.
+            trajectory: the :class:`Trajectory` these loops were found on.
+            overwrite: replace an existing file.
+
+        Raises:
+            FileExistsError: ``path`` exists and ``overwrite`` is false.
+            OSError: the file cannot be written.
+            InvalidParameterError: ``trajectory`` is not the one of these loops (other timestamps).
+
+        Example:
+            >>> import os, tempfile, numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> path = os.path.join(tempfile.mkdtemp(), "loop_duration.csv")
+            >>> il.find_loops(traj, gamma=0.5).loop_duration_to_csv(path, traj)
+            >>> open(path).read().splitlines()[:2]
+            ['index,t_s,x,y,z,loop_duration_s', '0,0,0,0,0,1']
+        """
+    def to_json(
+        self,
+        path: str | PathLike[str],
+        *,
+        source: str | None = None,
+        overwrite: bool = False,
+    ) -> None:
+        """Writes the loops as the JSON report of ``loops components --json``: ``source``,
+        ``poses``, ``span_s``, ``gamma``, ``metric``, ``pair_count``, ``loop_density_s``,
+        ``warnings`` and ``components`` (a list of objects with ``id``, ``trivial``,
+        ``area_s2``, ``pair_count``, ``run_count``, ``holes``, ``t_range_s``,
+        ``t_prime_range_s``, ``i_range``, ``j_range``, ``closest_pair``, ``closest_distance``;
+        ranges as ``[first, last]``). Atomic, as :meth:`components_to_csv`.
+
+        Args:
+            path: the file.
+            source: where the trajectory came from (a file name), or ``None`` (``null``).
+            overwrite: replace an existing file.
+
+        Raises:
+            FileExistsError: ``path`` exists and ``overwrite`` is false.
+            OSError: the file cannot be written.
+
+        Example:
+            >>> import json, os, tempfile, numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
+            >>> path = os.path.join(tempfile.mkdtemp(), "loops.json")
+            >>> il.find_loops(traj, gamma=0.5).to_json(path, source="line.csv")
+            >>> report = json.load(open(path))
+            >>> report["source"], report["poses"], report["components"][1]["i_range"]
+            ('line.csv', 4, [0, 0])
+        """
 
 def find_loops(
     trajectory: Trajectory,

@@ -9,6 +9,7 @@ against independent formulas (numpy, scipy, scikit-learn) where there is one.
 
 from __future__ import annotations
 
+import csv
 import importlib.metadata
 import json
 import re
@@ -890,6 +891,44 @@ def test_samples_files_and_their_errors(tmp_path, clusters):
         write(path, overwrite=True)
         with raises(FileNotFoundError, "missing"):
             write(tmp_path / "missing" / path.name)
+
+
+@covers("Loops.components_to_csv", "Loops.loop_duration_to_csv", "Loops.to_json")
+def test_loops_files_and_their_errors(tmp_path, traj, loops):
+    samples = il.sample(loops, "one", budget=2, seed=0, trajectory=traj)
+    components, durations, report = (tmp_path / n for n in ("c.csv", "d.csv", "r.json"))
+    per_component = il.sample_quality(samples, loops, epsilon_s=1.0).per_component
+    loops.components_to_csv(components, samples_per_component=per_component)
+    loops.loop_duration_to_csv(durations, traj)
+    loops.to_json(report)
+    table = list(csv.DictReader(components.open()))
+    assert [int(row["id"]) for row in table] == loops.components["id"].tolist()
+    assert [int(row["samples"]) for row in table] == per_component.tolist()
+    rows = list(csv.DictReader(durations.open()))
+    tau = [float(r["loop_duration_s"]) for r in rows]
+    np.testing.assert_array_equal(tau, loops.loop_duration())
+    np.testing.assert_array_equal([float(r["x"]) for r in rows], traj.positions[:, 0])
+    assert {r["z"] for r in rows} == {"0"}  # a 2-D trajectory
+    document = json.loads(report.read_text())
+    assert document["source"] is None and document["poses"] == len(traj)
+    assert [c["id"] for c in document["components"]] == loops.components["id"].tolist()
+    writes = (
+        (lambda path, **kw: loops.components_to_csv(path, **kw), components),
+        (lambda path, **kw: loops.loop_duration_to_csv(path, traj, **kw), durations),
+        (lambda path, **kw: loops.to_json(path, **kw), report),
+    )
+    for write, path in writes:
+        with raises(FileExistsError, path.name, "refusing to overwrite"):
+            write(path)
+        write(path, overwrite=True)
+        with raises(FileNotFoundError, "missing"):
+            write(tmp_path / "missing" / path.name)
+    shorter = il.Trajectory(traj.timestamps[:-1], traj.positions[:-1])
+    with raises(il.InvalidParameterError, "different trajectories"):
+        loops.loop_duration_to_csv(tmp_path / "other.csv", shorter)
+    with raises(ValueError, "one count each"):
+        loops.components_to_csv(tmp_path / "other.csv", samples_per_component=per_component[:-1])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.csv", "d.csv", "r.json"]
 
 
 @covers(

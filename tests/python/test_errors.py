@@ -384,3 +384,29 @@ def test_unknown_format(tmp_path):
     with pytest.raises(il.LoopsIOError, match=r'"\.log"'):
         il.read_trajectory(other)
     assert len(il.read_trajectory(other, format="tum")) == 6
+
+
+# --- issue 15: refused at once, named by the core --------------------------------------------
+
+
+def test_thread_counts_past_the_cap_are_refused_at_once():
+    """Item 14: a million threads is refused by the core's cap, before any thread starts."""
+    import time
+
+    t, p = ring()
+    traj = il.Trajectory(t, p)
+    start = time.monotonic()
+    with pytest.raises(il.InvalidParameterError, match="threads = 1000000 is invalid: between 1"):
+        il.find_loops(traj, gamma=4.0, threads=1_000_000)
+    loops = il.find_loops(traj, gamma=4.0)
+    with pytest.raises(il.InvalidParameterError, match="between 1 and 1024"):
+        il.sample(loops, "one", budget=1, seed=0, trajectory=traj, threads=1025)
+    assert time.monotonic() - start < 10
+
+
+def test_a_repeated_metric_key_is_named():
+    """Item 20: the metric parser names a repeated key rather than a missing one."""
+    t, p = ring()
+    traj = il.Trajectory(t, p)
+    with pytest.raises(il.InvalidParameterError, match="repeated parameter 'rotation'"):
+        il.find_loops(traj, gamma=1.0, metric="so3(rotation=chordal,rotation=geodesic)")

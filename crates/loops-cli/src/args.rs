@@ -4,7 +4,9 @@
 //!
 //! Each group converts its flags into the type of `loops-core` or `loops-io` that says the same
 //! thing, once; defaults come from those types (`default_value_t = ...::default()`), and values
-//! are validated where the concept lives, not here.
+//! are validated where the concept lives, not here. Real-valued flags take any value a float
+//! parses from, `-inf` and `NaN` included (`allow_hyphen_values`), so the core's check names
+//! what is wrong with it.
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -32,7 +34,7 @@ pub(crate) struct InputArgs {
     #[arg(long, value_delimiter = ',', value_name = "PARENT,CHILD")]
     frames: Option<Vec<String>>,
     /// For files without times (KITTI poses, pose graphs): pose i at i / RATE_HZ seconds.
-    #[arg(long, value_name = "RATE_HZ")]
+    #[arg(long, value_name = "RATE_HZ", allow_hyphen_values = true)]
     rate_hz: Option<f64>,
     /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
@@ -88,7 +90,7 @@ pub(crate) struct EngineArgs {
     /// The distance threshold γ, in the metric's unit: metres for euclidean, se3 and se2 (their
     /// rotation weighted in m/rad) and haversine; radians under so3, se3_rotation, torus and
     /// angular; the radius's unit under sphere.
-    #[arg(long, value_name = "GAMMA")]
+    #[arg(long, value_name = "GAMMA", allow_hyphen_values = true)]
     pub(crate) gamma: f64,
     /// The metric: euclidean, se3(rotation_weight_m_per_rad=W[, rotation=geodesic|chordal]),
     /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W), torus, sphere(radius=R),
@@ -119,13 +121,19 @@ pub(crate) struct SamplingArgs {
     #[arg(long, conflicts_with = "rate")]
     pub(crate) budget: Option<usize>,
     /// The sampler's rate instead of a budget (per component, per row, or per candidate).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub(crate) rate: Option<f64>,
     /// Seed of the random choices.
     #[arg(long, default_value_t = Sampler::DEFAULT_SEED)]
     pub(crate) seed: u64,
     /// Radius of the detection graph and of the P2 redundancy measure, seconds.
-    #[arg(long = "epsilon-s", visible_alias = "epsilon", value_name = "EPSILON_S", default_value_t = DEFAULT_EPSILON_S)]
+    #[arg(
+        long = "epsilon-s",
+        visible_alias = "epsilon",
+        value_name = "EPSILON_S",
+        default_value_t = DEFAULT_EPSILON_S,
+        allow_hyphen_values = true
+    )]
     pub(crate) epsilon_s: f64,
     /// Leave out the trivial loop components (simple loops: the next poses, stops), which
     /// odometry already ties together (one, rho, rho-dispersed, alpha; not with --detections).

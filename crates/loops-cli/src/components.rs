@@ -1,5 +1,5 @@
 //! `loops components`: the loop components of a pose file, as a table on stdout and, on request,
-//! a JSON report. `loops demo` prints the same for its synthetic drive.
+//! a JSON report (loops-io's [`LoopsReport`]). `loops demo` prints the same for its synthetic drive.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use clap::Args;
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
-use serde::Serialize;
+use loops_io::LoopsReport;
 
 use crate::args::{EngineArgs, InputArgs, JsonTo, OutputArgs};
 use crate::guard;
@@ -60,15 +60,17 @@ pub(crate) fn print(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64
         eprintln!("loops: warning: {warning}");
     }
     let mut stdout = std::io::stdout().lock();
+    let report = || LoopsReport::new(Some(source), loops);
     if out.json == Some(JsonTo::Stdout) {
-        stdout.write_all(json_report(source, traj, loops)?.as_bytes())?;
+        loops_io::loops_report_to_json(&report()?, &mut stdout)?;
         return Ok(stdout.flush()?);
     }
     write_table(&mut stdout, source, traj, loops, seconds, out.limit)?;
     stdout.flush()?;
     if let Some(JsonTo::File(path)) = &out.json {
-        let json = json_report(source, traj, loops)?;
-        guard::write_atomically(path, json.as_bytes(), out.force)
+        let report = report()?;
+        guard::with_writes(|_| loops_io::write_loops_report(path, &report, out.force))
+            .map_err(guard::write_error)
             .with_context(|| format!("writing {}", path.display()))?;
         writeln!(stdout, "wrote {}", path.display())?;
     }
@@ -139,67 +141,4 @@ fn write_table(
         writeln!(out, "  ... {} more (--limit 0 shows all)", order.len() - shown)?;
     }
     Ok(())
-}
-
-#[derive(Serialize)]
-struct JsonReport<'a> {
-    source: &'a str,
-    poses: usize,
-    span_s: f64,
-    gamma: f64,
-    metric: &'a str,
-    pair_count: u64,
-    loop_density_s: f64,
-    warnings: Vec<String>,
-    components: Vec<JsonComponent>,
-}
-
-#[derive(Serialize)]
-struct JsonComponent {
-    id: usize,
-    trivial: bool,
-    area_s2: f64,
-    pair_count: u64,
-    run_count: usize,
-    holes: u64,
-    t_range_s: [f64; 2],
-    t_prime_range_s: [f64; 2],
-    i_range: [usize; 2],
-    j_range: [usize; 2],
-    closest_pair: [usize; 2],
-    closest_distance: f64,
-}
-
-/// The result as a JSON document (every component, by id).
-fn json_report(source: &str, traj: &Trajectory, loops: &Loops) -> Result<String> {
-    let t = traj.timestamps_s();
-    let report = JsonReport {
-        source,
-        poses: traj.len(),
-        span_s: traj.span_s(),
-        gamma: loops.gamma(),
-        metric: loops.metric_name(),
-        pair_count: loops.pair_count(),
-        loop_density_s: loops.loop_density(t[0], t[t.len() - 1], Selection::All, Side::Both, Scale::Seconds)?,
-        warnings: loops.warnings().iter().map(ToString::to_string).collect(),
-        components: loops
-            .components()
-            .iter()
-            .map(|c| JsonComponent {
-                id: c.id,
-                trivial: c.trivial,
-                area_s2: c.area_s2,
-                pair_count: c.pair_count,
-                run_count: c.run_count,
-                holes: c.holes,
-                t_range_s: [t[c.i_range[0]], t[c.i_range[1]]],
-                t_prime_range_s: [t[c.j_range[0]], t[c.j_range[1]]],
-                i_range: c.i_range,
-                j_range: c.j_range,
-                closest_pair: c.closest_pair,
-                closest_distance: c.closest_distance,
-            })
-            .collect(),
-    };
-    Ok(serde_json::to_string_pretty(&report)? + "\n")
 }

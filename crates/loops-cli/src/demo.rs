@@ -16,13 +16,13 @@ use crate::components;
 )]
 pub(crate) struct DemoArgs {
     /// Length of the drive, seconds.
-    #[arg(long, default_value_t = UrbanDrive::default().duration_s)]
+    #[arg(long, default_value_t = UrbanDrive::default().duration_s, allow_hyphen_values = true)]
     duration_s: f64,
     /// Seed of the drive.
     #[arg(long, default_value_t = UrbanDrive::default().seed)]
     seed: u64,
     /// The distance threshold γ, metres.
-    #[arg(long, value_name = "GAMMA_M", default_value_t = UrbanDrive::DEFAULT_GAMMA_M)]
+    #[arg(long, value_name = "GAMMA_M", default_value_t = UrbanDrive::DEFAULT_GAMMA_M, allow_hyphen_values = true)]
     gamma: f64,
     /// Worker threads (default: one per core).
     #[arg(long)]

@@ -7,7 +7,6 @@
 //! `loops` created that stayed empty), says so, and exits with 130. What is left is what was
 //! finished: whole files and whole per-log folders.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
@@ -24,9 +23,12 @@ pub(crate) struct Writes {
     staged: Vec<PathBuf>,
     /// Folders `loops` created, removed on interrupt if still empty (innermost first).
     created: Vec<PathBuf>,
+    /// Marker files of output folders, removed on interrupt with their folder when `loops`
+    /// created it and it holds nothing else.
+    markers: Vec<PathBuf>,
 }
 
-static WRITES: Mutex<Writes> = Mutex::new(Writes { staged: Vec::new(), created: Vec::new() });
+static WRITES: Mutex<Writes> = Mutex::new(Writes { staged: Vec::new(), created: Vec::new(), markers: Vec::new() });
 
 fn lock() -> MutexGuard<'static, Writes> {
     // A panic while writing leaves the list as it was: still right to clean up.
@@ -46,6 +48,15 @@ pub(crate) fn install() -> Result<()> {
         for dir in &writes.staged {
             if std::fs::remove_dir_all(dir).is_ok() {
                 removed += 1;
+            }
+        }
+        for marker in &writes.markers {
+            let alone = marker
+                .parent()
+                .and_then(|dir| std::fs::read_dir(dir).ok())
+                .is_some_and(|mut e| e.next().is_some() && e.next().is_none());
+            if alone && marker.parent().is_some_and(|dir| writes.created.iter().any(|c| c == dir)) {
+                let _ = std::fs::remove_file(marker);
             }
         }
         for dir in writes.created.iter().rev() {
@@ -77,6 +88,13 @@ impl Writes {
         Ok(())
     }
 
+    /// Remembers the marker file of an output folder (see [`Writes::markers`]).
+    pub(crate) fn marker(&mut self, path: &Path) {
+        if !self.markers.iter().any(|p| p == path) {
+            self.markers.push(path.to_path_buf());
+        }
+    }
+
     /// Creates a staging folder, removed on interrupt until [`commit`](Self::commit)ted.
     pub(crate) fn stage(&mut self, dir: &Path) -> Result<()> {
         if dir.exists() {
@@ -94,15 +112,24 @@ impl Writes {
     }
 
     /// Renames the staging folder `staged` to `dir`. An existing `dir` is replaced only with
-    /// `force`, and only when it is a folder `loops run` wrote (it holds `marker`): never a file
-    /// or folder of the user's.
-    pub(crate) fn commit(&mut self, staged: &Path, dir: &Path, force: bool, marker: &str) -> Result<()> {
+    /// `force`, and only when it is a folder `loops run` wrote (`owned`): never a file or folder
+    /// of the user's. The staging folder is removed when it cannot be renamed.
+    pub(crate) fn commit(&mut self, staged: &Path, dir: &Path, force: bool, owned: bool) -> Result<()> {
+        let committed = self.rename(staged, dir, force, owned);
+        if committed.is_err() {
+            let _ = std::fs::remove_dir_all(staged);
+        }
+        self.staged.retain(|d| d != staged);
+        committed
+    }
+
+    fn rename(&self, staged: &Path, dir: &Path, force: bool, owned: bool) -> Result<()> {
         if dir.exists() || dir.is_symlink() {
             if !force {
                 bail!("{} exists; pass --force to replace it", dir.display());
             }
-            if !dir.is_dir() || dir.is_symlink() || !dir.join(marker).is_file() {
-                bail!("{} exists and is not an output of `loops run` (no {marker}); not replacing it", dir.display());
+            if !dir.is_dir() || dir.is_symlink() || !owned {
+                bail!("{} exists and is not an output of `loops run`; not replacing it", dir.display());
             }
             let old = dir.with_file_name(format!(
                 ".{}.old-{}",
@@ -120,20 +147,15 @@ impl Writes {
             std::fs::rename(staged, dir)
                 .with_context(|| format!("renaming {} to {}", staged.display(), dir.display()))?;
         }
-        self.staged.retain(|d| d != staged);
         Ok(())
     }
 }
 
-/// Writes `bytes` to `path` with [`loops_io::write_atomically`] (a temporary file beside it,
-/// synced, then renamed), under the write lock: readers never see a partial file, and an
-/// interrupt leaves either the old file or the new one. An existing `path` is replaced only with
-/// `force`.
-pub(crate) fn write_atomically(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
-    with_writes(|_| match loops_io::write_atomically(path, force, |file| file.write_all(bytes)) {
-        Ok(()) => Ok(()),
-        Err(WriteError::Exists { .. }) => bail!("{} exists; pass --force to replace it", path.display()),
-        Err(WriteError::Write { error, .. }) => Err(error).with_context(|| format!("writing {}", path.display())),
-        Err(error) => Err(error.into()),
-    })
+/// The CLI's words for a refused write: an existing file is kept unless `--force`.
+pub(crate) fn write_error(error: WriteError) -> anyhow::Error {
+    match error {
+        WriteError::Exists { path } => anyhow::anyhow!("{} exists; pass --force to replace it", path.display()),
+        WriteError::Write { path, error } => anyhow::Error::new(error).context(format!("writing {}", path.display())),
+        error => error.into(),
+    }
 }

@@ -10,6 +10,7 @@ mod components;
 mod demo;
 mod guard;
 mod info;
+mod out_dir;
 mod progress;
 mod report;
 mod run;

@@ -9,6 +9,7 @@ use clap::Args;
 use loops_core::{Loops, SampleQuality, Samples, Trajectory, cluster_detections, sample_clusters, sample_quality};
 
 use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
+use crate::guard;
 
 /// Candidate loop-closure pairs for a scan matcher, from the exact loop components or from
 /// clustered detections, with coverage (P1), redundancy (P2) and growth (P3).
@@ -79,28 +80,35 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     } else {
         write_summary(&mut stdout, &args.file, &traj, &loops, &samples, &quality)?;
     }
-    // With `--json -`, stdout holds the JSON only: the lines saying what was written are left out.
-    let mut wrote = |line: String| -> Result<()> {
-        if args.json != Some(JsonTo::Stdout) {
-            writeln!(stdout, "{line}")?;
-        }
-        Ok(())
-    };
-    let files =
+    // Every file is prepared first and written only when all could be: a command that fails
+    // writes nothing.
+    let mut files = loops_io::StagedFiles::new();
+    let mut lines = Vec::new();
+    let formats =
         [(args.csv.as_ref(), loops_io::SamplesFormat::Csv), (json_file(&args.json), loops_io::SamplesFormat::Json)];
-    for (path, format) in files {
+    for (path, format) in formats {
         if let Some(path) = path {
-            crate::guard::with_writes(|_| loops_io::write_samples(path, &samples, format, args.force))?;
-            wrote(format!("wrote {} samples to {}", samples.len(), path.display()))?;
+            files
+                .stage(path, args.force, |file| match format {
+                    loops_io::SamplesFormat::Csv => loops_io::samples_to_csv(&samples, file),
+                    _ => loops_io::samples_to_json(&samples, file),
+                })
+                .map_err(guard::write_error)?;
+            lines.push(format!("wrote {} samples to {}", samples.len(), path.display()));
         }
     }
     if let Some(path) = &args.g2o {
         let pairs: Vec<(usize, usize)> = samples.rows().iter().filter_map(|s| s.pair).map(|[i, j]| (i, j)).collect();
-        let options = loops_io::G2oOptions::default().overwrite(args.force);
-        crate::guard::with_writes(|_| {
-            loops_io::write_g2o_edges(path, &table, &pairs, &options).map_err(anyhow::Error::from)
-        })?;
-        wrote(format!("wrote {} g2o edges to {}", pairs.len(), path.display()))?;
+        let edges = loops_io::g2o_edges_text(&table, &pairs, &loops_io::G2oOptions::default())?;
+        files.stage(path, args.force, |file| file.write_all(edges.as_bytes())).map_err(guard::write_error)?;
+        lines.push(format!("wrote {} g2o edges to {}", pairs.len(), path.display()));
+    }
+    guard::with_writes(|_| files.persist()).map_err(guard::write_error)?;
+    // With `--json -`, stdout holds the JSON only: the lines saying what was written are left out.
+    if args.json != Some(JsonTo::Stdout) {
+        for line in lines {
+            writeln!(stdout, "{line}")?;
+        }
     }
     Ok(())
 }

@@ -93,16 +93,44 @@ pub use sublevel::{Run, SublevelSet, check_gamma};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Timeline, Trajectory};
 
+/// The most worker threads [`with_threads`] starts: far more than any machine has cores (the
+/// engine gains nothing past one thread per core), and few enough that a mistyped count is
+/// refused at once instead of spending minutes starting threads.
+pub const MAX_THREADS: usize = 1024;
+
+/// Checks a thread count before any thread starts: 1 to [`MAX_THREADS`].
+///
+/// # Errors
+/// [`Error::InvalidParameter`] for 0 or more than [`MAX_THREADS`].
+pub fn check_threads(threads: usize) -> Result<()> {
+    const EXPECTED: &str = "between 1 and 1024 (loops_core::MAX_THREADS)";
+    const _: () = assert!(MAX_THREADS == 1024, "EXPECTED names the cap");
+    if (1..=MAX_THREADS).contains(&threads) {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter { name: "threads", value: threads as f64, expected: EXPECTED })
+    }
+}
+
 /// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).
 ///
 /// Results of this crate do not depend on the thread count.
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] when `threads` is 0 or the pool cannot be built.
+/// [`Error::InvalidParameter`] when `threads` is 0 or more than [`MAX_THREADS`]
+/// ([`check_threads`]; no thread is started then), or the pool cannot be built.
+///
+/// # Examples
+/// ```
+/// assert_eq!(loops_core::with_threads(Some(2), || 1 + 1)?, 2);
+/// assert!(loops_core::with_threads(Some(loops_core::MAX_THREADS + 1), || ()).is_err());
+/// # Ok::<(), loops_core::Error>(())
+/// ```
 pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> Result<R> {
     match threads {
         None => Ok(f()),
         Some(count) => {
+            check_threads(count)?;
             let pool = rayon::ThreadPoolBuilder::new().num_threads(count).build();
             match (count, pool) {
                 (1.., Ok(pool)) => Ok(pool.install(f)),
@@ -113,5 +141,21 @@ pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Sen
                 }),
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thread_counts_past_the_cap_are_refused_before_any_thread_starts() {
+        let start = std::time::Instant::now();
+        let error = with_threads(Some(1_000_000), || ()).unwrap_err();
+        assert!(matches!(error, Error::InvalidParameter { name: "threads", .. }));
+        assert!(error.to_string().contains(&format!("between 1 and {MAX_THREADS}")), "{error}");
+        assert!(start.elapsed().as_secs() < 5);
+        assert!(with_threads(Some(0), || ()).is_err());
+        assert_eq!(with_threads(Some(MAX_THREADS.min(4)), || 7).unwrap(), 7);
     }
 }

@@ -235,6 +235,25 @@ impl Loops {
         })
     }
 
+    /// Checks that `traj` is the trajectory these loops were found on: the same timestamps
+    /// (points are not compared). O(poses).
+    ///
+    /// # Errors
+    /// [`Error::TrajectoryMismatch`] naming the first pose whose time differs, or the pose counts.
+    pub fn check_trajectory(&self, traj: &Trajectory) -> Result<()> {
+        let (a, b) = (traj.timestamps_s(), self.timestamps_s());
+        let differ = a.iter().zip(b).position(|(x, y)| x != y);
+        match differ {
+            None if a.len() == b.len() => Ok(()),
+            _ => Err(Error::TrajectoryMismatch {
+                what: "trajectory",
+                index: differ.unwrap_or(a.len().min(b.len())),
+                poses: a.len(),
+                loops_poses: b.len(),
+            }),
+        }
+    }
+
     /// Checks that `index` is a pose index.
     ///
     /// # Errors

@@ -154,7 +154,11 @@ impl std::str::FromStr for MetricSpec {
         let mut params: Vec<(String, String)> = Vec::new();
         for item in args.split(',').map(str::trim).filter(|item| !item.is_empty()) {
             let (key, value) = item.split_once('=').ok_or_else(|| invalid(format!("{item:?} is not key=value")))?;
-            params.push((key.trim().to_owned(), value.trim().to_owned()));
+            let key = key.trim();
+            if params.iter().any(|(k, _)| k == key) {
+                return Err(invalid(format!("repeated parameter '{key}'")));
+            }
+            params.push((key.to_owned(), value.trim().to_owned()));
         }
         let mut take = |key: &str| -> Option<String> {
             let at = params.iter().position(|(k, _)| k == key)?;
@@ -259,6 +263,17 @@ mod tests {
             "torus(radius=1)",
         ] {
             assert!(bad.parse::<MetricSpec>().is_err(), "{bad}");
+        }
+        // A key given twice is refused as such, not as a parameter the metric lacks.
+        for repeated in
+            ["so3(rotation=chordal,rotation=geodesic)", "se3(rotation_weight_m_per_rad=1, rotation_weight_m_per_rad=2)"]
+        {
+            let error = repeated.parse::<MetricSpec>().unwrap_err().to_string();
+            assert!(
+                error.ends_with("repeated parameter 'rotation'")
+                    || error.ends_with("repeated parameter 'rotation_weight_m_per_rad'"),
+                "{error}"
+            );
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use std::fs::File;
 use std::io;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::error::WriteError;
 
@@ -47,33 +47,147 @@ pub fn write_atomically(
     overwrite: bool,
     fill: impl FnOnce(&mut File) -> io::Result<()>,
 ) -> Result<(), WriteError> {
-    let path = path.as_ref();
-    let exists = || WriteError::Exists { path: path.to_path_buf() };
-    let failed = |error: io::Error| WriteError::Write { path: path.to_path_buf(), error };
-    if !overwrite && path.symlink_metadata().is_ok() {
-        return Err(exists());
+    Staged::new(path.as_ref(), overwrite, fill)?.persist()
+}
+
+/// Several files written all or none, for a command that writes more than one: each file is
+/// filled into its temporary file ([`stage`](Self::stage), checked and synced as by
+/// [`write_atomically`]) and nothing is moved into place until every one succeeded
+/// ([`persist`](Self::persist)). Dropped without `persist`, the temporary files are removed and
+/// nothing was written.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use std::io::Write;
+/// use loops_io::{StagedFiles, WriteError};
+///
+/// let dir = std::env::temp_dir().join(format!("loops-io-staged-{}", std::process::id()));
+/// std::fs::create_dir_all(&dir)?;
+/// std::fs::write(dir.join("input.tum"), "0 0 0 0 0 0 0 1\n")?;
+/// let mut files = StagedFiles::new();
+/// files.stage(dir.join("pairs.csv"), false, |file| file.write_all(b"i,j\n"))?;
+/// // The second file is refused: the first is not written either.
+/// let refused = files.stage(dir.join("input.tum"), false, |file| file.write_all(b"EDGE_SE2\n"));
+/// assert!(matches!(refused, Err(WriteError::Exists { .. })));
+/// drop(files);
+/// assert!(!dir.join("pairs.csv").exists());
+/// # std::fs::remove_dir_all(&dir)?;
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Debug, Default)]
+pub struct StagedFiles {
+    files: Vec<Staged>,
+}
+
+impl StagedFiles {
+    /// No files yet.
+    pub fn new() -> Self {
+        Self::default()
     }
-    let name = path.file_name().ok_or_else(|| failed(io::Error::other("the path names no file")))?;
-    let dir = path.parent().filter(|dir| !dir.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    // A missing or unreadable folder is reported with the operating system's own error (and
-    // errno, so Python raises FileNotFoundError): `tempfile` would wrap it with the temporary
-    // file's name.
-    std::fs::metadata(dir).map_err(failed)?;
-    let prefix = format!(".{}.", name.to_string_lossy());
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut temporary = builder.tempfile_in(dir).map_err(failed)?;
-    fill(temporary.as_file_mut()).and_then(|()| temporary.as_file().sync_all()).map_err(failed)?;
-    let placed = if overwrite { temporary.persist(path) } else { temporary.persist_noclobber(path) };
-    match placed {
-        Ok(_) => {}
-        // The temporary file is removed as the error drops.
-        Err(error) if !overwrite && error.error.kind() == io::ErrorKind::AlreadyExists => return Err(exists()),
-        Err(error) => return Err(failed(error.error)),
+
+    /// Fills the file `path` into a temporary file beside it, synced, and keeps it for
+    /// [`persist`](Self::persist): as [`write_atomically`] up to the rename.
+    ///
+    /// # Errors
+    /// As [`write_atomically`]; [`WriteError::Exists`] too when `path` is already staged here.
+    pub fn stage(
+        &mut self,
+        path: impl AsRef<Path>,
+        overwrite: bool,
+        fill: impl FnOnce(&mut File) -> io::Result<()>,
+    ) -> Result<(), WriteError> {
+        let path = path.as_ref();
+        if self.files.iter().any(|staged| staged.path == path) {
+            return Err(WriteError::Exists { path: path.to_path_buf() });
+        }
+        self.files.push(Staged::new(path, overwrite, fill)?);
+        Ok(())
     }
-    sync_directory(dir).map_err(failed)
+
+    /// Number of files staged.
+    pub fn len(&self) -> usize {
+        self.files.len()
+    }
+
+    /// Whether no file is staged.
+    pub fn is_empty(&self) -> bool {
+        self.files.is_empty()
+    }
+
+    /// Moves every staged file into place, in the order staged. When one cannot be (another
+    /// writer created it meanwhile, the disk failed), the files this call created are removed
+    /// again, so none is left; a file replaced with `overwrite` keeps its new content.
+    ///
+    /// # Errors
+    /// As [`write_atomically`], for the first file that could not be moved into place.
+    pub fn persist(self) -> Result<(), WriteError> {
+        let mut created = Vec::new();
+        for staged in self.files {
+            let (path, existed) = (staged.path.clone(), staged.existed);
+            if let Err(error) = staged.persist() {
+                for path in created {
+                    let _ = std::fs::remove_file(path);
+                }
+                return Err(error);
+            }
+            if !existed {
+                created.push(path);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One file filled into its temporary file, not yet moved into place.
+#[derive(Debug)]
+struct Staged {
+    path: PathBuf,
+    dir: PathBuf,
+    overwrite: bool,
+    /// Whether `path` existed when staged (it is then replaced, never removed).
+    existed: bool,
+    temporary: tempfile::NamedTempFile,
+}
+
+impl Staged {
+    fn new(path: &Path, overwrite: bool, fill: impl FnOnce(&mut File) -> io::Result<()>) -> Result<Self, WriteError> {
+        let failed = |error: io::Error| WriteError::Write { path: path.to_path_buf(), error };
+        let existed = path.symlink_metadata().is_ok();
+        if !overwrite && existed {
+            return Err(WriteError::Exists { path: path.to_path_buf() });
+        }
+        let name = path.file_name().ok_or_else(|| failed(io::Error::other("the path names no file")))?;
+        let dir = path.parent().filter(|dir| !dir.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let prefix = format!(".{}.", name.to_string_lossy());
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        // A missing folder is told first: tempfile wraps the system's error with the temporary
+        // file's path and hides its code (Python raises FileNotFoundError with it).
+        std::fs::metadata(dir).map_err(failed)?;
+        let mut temporary = builder.tempfile_in(dir).map_err(failed)?;
+        fill(temporary.as_file_mut()).and_then(|()| temporary.as_file().sync_all()).map_err(failed)?;
+        Ok(Self { path: path.to_path_buf(), dir: dir.to_path_buf(), overwrite, existed, temporary })
+    }
+
+    fn persist(self) -> Result<(), WriteError> {
+        let path = self.path;
+        let failed = |error: io::Error| WriteError::Write { path: path.clone(), error };
+        let placed =
+            if self.overwrite { self.temporary.persist(&path) } else { self.temporary.persist_noclobber(&path) };
+        match placed {
+            Ok(_) => {}
+            // The temporary file is removed as the error drops.
+            Err(error) if !self.overwrite && error.error.kind() == io::ErrorKind::AlreadyExists => {
+                return Err(WriteError::Exists { path });
+            }
+            Err(error) => return Err(failed(error.error)),
+        }
+        sync_directory(&self.dir).map_err(failed)
+    }
 }
 
 /// Makes the rename into `dir` durable: fsync of the directory (Unix; elsewhere nothing to do).
@@ -140,18 +254,48 @@ mod tests {
             let error = write_atomically(&path, true, |file| file.write_all(b"x")).unwrap_err();
             assert!(matches!(error, WriteError::Write { .. }), "{path:?}: {error}");
         }
-        // The operating system's error, naming the file asked for (not the temporary one).
-        let path = dir.join("missing/out.txt");
-        match write_atomically(&path, false, |file| file.write_all(b"x")).unwrap_err() {
-            WriteError::Write { path: named, error } => {
-                assert_eq!(
-                    (named, error.kind(), error.raw_os_error().is_some()),
-                    (path, io::ErrorKind::NotFound, true)
-                );
-                assert!(!error.to_string().contains(".tmp"), "{error}");
-            }
-            other => panic!("{other}"),
-        }
+        // A missing folder keeps its code (Python raises FileNotFoundError for it), and the
+        // message names the file, not a temporary one.
+        let error = write_atomically(dir.join("missing/out.txt"), true, |_| Ok(())).unwrap_err();
+        let WriteError::Write { error: os, .. } = &error else { panic!("{error}") };
+        assert_eq!(os.kind(), io::ErrorKind::NotFound);
+        assert!(os.raw_os_error().is_some() && !error.to_string().contains(".tmp"), "{error}");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn staged_files_are_written_all_or_none() {
+        let dir = scratch("staged");
+        let taken = dir.join("taken.txt");
+        fs::write(&taken, "the user's").unwrap();
+        let mut files = StagedFiles::new();
+        files.stage(dir.join("a.csv"), false, |file| file.write_all(b"a")).unwrap();
+        assert!(matches!(files.stage(dir.join("a.csv"), true, |_| Ok(())), Err(WriteError::Exists { .. })));
+        assert!(matches!(files.stage(&taken, false, |_| Ok(())), Err(WriteError::Exists { .. })));
+        assert!(matches!(
+            files.stage(dir.join("b.csv"), false, |_| Err(io::Error::other("no"))),
+            Err(WriteError::Write { .. })
+        ));
+        assert_eq!(files.len(), 1);
+        drop(files);
+        // Nothing written, no temporary file left.
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        // All staged: all written.
+        let mut files = StagedFiles::new();
+        files.stage(dir.join("a.csv"), false, |file| file.write_all(b"a")).unwrap();
+        files.stage(&taken, true, |file| file.write_all(b"b")).unwrap();
+        files.persist().unwrap();
+        assert_eq!(fs::read_to_string(dir.join("a.csv")).unwrap(), "a");
+        assert_eq!(fs::read_to_string(&taken).unwrap(), "b");
+        // One that cannot be moved in place: the files created before it are removed again.
+        let mut files = StagedFiles::new();
+        files.stage(dir.join("c.csv"), false, |file| file.write_all(b"c")).unwrap();
+        files.stage(dir.join("d.csv"), false, |file| file.write_all(b"d")).unwrap();
+        fs::write(dir.join("d.csv"), "another writer's").unwrap();
+        assert!(matches!(files.persist(), Err(WriteError::Exists { .. })));
+        assert!(!dir.join("c.csv").exists());
+        assert_eq!(fs::read_to_string(dir.join("d.csv")).unwrap(), "another writer's");
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 3);
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -3,7 +3,7 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use loops_core::{LoopComponent, Loops, Trajectory};
+use loops_core::{LoopComponent, Loops};
 
 use crate::atomic::write_atomically;
 use crate::csv_rows::write_csv;
@@ -110,14 +110,11 @@ impl ComponentRow {
 }
 
 /// The rows of `components.csv`: one per component of `loops`, in id order, with the times of
-/// `traj` (the trajectory the loops were found on). With `samples_per_component` (by component
-/// id, as [`SampleQuality::per_component`](loops_core::SampleQuality::per_component)), each row
-/// has its number of samples (0 for an id past its end). O(components).
-///
-/// # Panics
-/// When `loops` was not found on `traj` (a component index outside it).
-pub fn component_rows(traj: &Trajectory, loops: &Loops, samples_per_component: Option<&[u64]>) -> Vec<ComponentRow> {
-    let t = traj.timestamps_s();
+/// the trajectory they were found on. With `samples_per_component` (by component id, as
+/// [`SampleQuality::per_component`](loops_core::SampleQuality::per_component)), each row has its
+/// number of samples (0 for an id past its end). O(components).
+pub fn component_rows(loops: &Loops, samples_per_component: Option<&[u64]>) -> Vec<ComponentRow> {
+    let t = loops.timestamps_s();
     loops
         .components()
         .iter()
@@ -132,32 +129,24 @@ pub fn component_rows(traj: &Trajectory, loops: &Loops, samples_per_component: O
 /// # Errors
 /// What `out` returns.
 ///
-/// # Panics
-/// As [`component_rows`].
-///
 /// # Examples
 /// ```
 /// use loops_core::{Euclidean, Trajectory, find_loops};
 /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]])?;
 /// let loops = find_loops(&traj, &Euclidean, 0.5)?;
 /// let mut text = Vec::new();
-/// loops_io::components_to_csv(&traj, &loops, None, &mut text).unwrap();
+/// loops_io::components_to_csv(&loops, None, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
 /// assert!(text.starts_with("id,trivial,area_s2,pair_count,run_count,holes,i_min,"));
 /// assert_eq!(text.lines().count(), 1 + loops.components().len());
 /// # Ok::<(), loops_core::Error>(())
 /// ```
-pub fn components_to_csv<W: Write>(
-    traj: &Trajectory,
-    loops: &Loops,
-    samples_per_component: Option<&[u64]>,
-    out: W,
-) -> io::Result<()> {
+pub fn components_to_csv<W: Write>(loops: &Loops, samples_per_component: Option<&[u64]>, out: W) -> io::Result<()> {
     let mut columns = COMPONENT_COLUMNS.to_vec();
     if samples_per_component.is_some() {
         columns.push("samples");
     }
-    write_csv(out, &columns, component_rows(traj, loops, samples_per_component))
+    write_csv(out, &columns, component_rows(loops, samples_per_component))
 }
 
 /// Writes `components.csv` ([`components_to_csv`]) to the file `path`, atomically
@@ -167,24 +156,20 @@ pub fn components_to_csv<W: Write>(
 /// # Errors
 /// [`WriteError::Exists`] when `path` exists and `overwrite` is false; [`WriteError::Write`]
 /// when it cannot be written.
-///
-/// # Panics
-/// As [`component_rows`].
 pub fn write_components(
     path: impl AsRef<Path>,
-    traj: &Trajectory,
     loops: &Loops,
     samples_per_component: Option<&[u64]>,
     overwrite: bool,
 ) -> Result<(), WriteError> {
-    write_atomically(path, overwrite, |file| components_to_csv(traj, loops, samples_per_component, file))
+    write_atomically(path, overwrite, |file| components_to_csv(loops, samples_per_component, file))
 }
 
 #[cfg(test)]
 mod tests {
     use std::fmt::Write as _;
 
-    use loops_core::{Euclidean, find_loops};
+    use loops_core::{Euclidean, Trajectory, find_loops};
 
     use super::*;
 
@@ -240,15 +225,15 @@ mod tests {
         assert!(loops.components().iter().any(|c| !c.trivial));
         for samples in [None, Some(&[3u64, 0][..])] {
             let mut out = Vec::new();
-            components_to_csv(&traj, &loops, samples, &mut out).unwrap();
+            components_to_csv(&loops, samples, &mut out).unwrap();
             assert_eq!(String::from_utf8(out).unwrap(), by_hand(&traj, &loops, samples));
         }
     }
 
     #[test]
     fn the_columns_name_the_row_fields() {
-        let (traj, loops) = result();
-        let rows = component_rows(&traj, &loops, Some(&[1]));
+        let (_, loops) = result();
+        let rows = component_rows(&loops, Some(&[1]));
         let mut expected: Vec<&str> = COMPONENT_COLUMNS.to_vec();
         expected.push("samples");
         assert_eq!(crate::csv_rows::inferred_columns(&rows[0]), expected);

@@ -23,7 +23,8 @@
 //! extension and first line. Writers: [`write_tum`] for trajectories, [`write_g2o_edges`] for
 //! candidate loop-closure edges with relative-pose guesses; both atomic, and never replacing a
 //! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
-//! the workspace: the CLI writes its files through it too.
+//! the workspace: the CLI writes its files through it too; [`StagedFiles`] writes several files
+//! all or none (a command that fails writes nothing).
 //!
 //! Every error is an [`IoError`] whose message starts with the file and the line, or the topic
 //! and byte offset: `drive.tum line 12: column 3 ("abc") is not a number`, `drive.mcap topic
@@ -109,7 +110,7 @@ mod write;
 
 pub use crate::csv::read_csv;
 pub use crate::mcap::{McapOptions, TimeSource, read_mcap, read_mcap_files};
-pub use atomic::write_atomically;
+pub use atomic::{StagedFiles, write_atomically};
 pub use bag::{list_topics, read_ros1, read_rosbag2};
 pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
 pub use detections::{DetectionTable, read_detections};
@@ -119,7 +120,8 @@ pub use format::Format;
 pub use graph::{GraphEdge, PoseGraph, read_pose_graph};
 pub use kitti::read_kitti;
 pub use loop_duration::{
-    LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, write_loop_duration,
+    LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
+    write_loop_duration,
 };
 pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_mcap};
 pub use message::{DecodeError, DecodedPose, decode_poses};
@@ -133,4 +135,4 @@ pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::read_tuc;
 pub use tum::read_tum;
-pub use write::{EdgeKind, G2oOptions, write_g2o_edges, write_tum};
+pub use write::{EdgeKind, G2oOptions, g2o_edges_text, write_g2o_edges, write_tum};

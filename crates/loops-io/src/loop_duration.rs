@@ -44,6 +44,31 @@ pub fn loop_duration_rows(
     })
 }
 
+/// The `x`, `y`, `z` of `loop_duration.csv` for a trajectory read without its file's
+/// [`PoseTable`](crate::PoseTable) (whose positions the CLI writes): each point's first three
+/// coordinates, 0 for those a point lacks (1-D and 2-D trajectories, as the readers fill `z`).
+/// These are the positions for trajectories of positions and of SE(3) poses (position first);
+/// for other charts (an SE(2) pose's heading, quaternions, angles) they are the chart's first
+/// coordinates. O(poses).
+///
+/// # Examples
+/// ```
+/// let traj = loops_core::Trajectory::from_points(vec![0.0, 1.0], &[[1.0, 2.0], [3.0, 4.0]])?;
+/// assert_eq!(loops_io::point_positions(&traj), vec![[1.0, 2.0, 0.0], [3.0, 4.0, 0.0]]);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn point_positions(traj: &loops_core::Trajectory) -> Vec<[f64; 3]> {
+    (0..traj.len())
+        .map(|i| {
+            let mut position = [0.0; 3];
+            for (axis, &value) in position.iter_mut().zip(traj.point(i)) {
+                *axis = value;
+            }
+            position
+        })
+        .collect()
+}
+
 /// Writes `loop_duration.csv` to `out`: a header of [`LOOP_DURATION_COLUMNS`], then the
 /// [`loop_duration_rows`]. Numbers are printed in the shortest form that reads back as the same
 /// `f64`, without an exponent. O(poses).

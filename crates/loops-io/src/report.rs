@@ -4,7 +4,7 @@
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
-use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
+use loops_core::{LoopComponent, Loops, Scale, Selection, Side};
 
 use crate::atomic::write_atomically;
 use crate::error::WriteError;
@@ -13,8 +13,8 @@ use crate::error::WriteError;
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct LoopsReport {
-    /// Where the trajectory came from: a file name, `synthetic`, ...
-    pub source: String,
+    /// Where the trajectory came from: a file name, `synthetic`, ... (`null` when not told).
+    pub source: Option<String>,
     /// The number of poses.
     pub poses: usize,
     /// The trajectory's time span, seconds.
@@ -90,19 +90,18 @@ impl ComponentReport {
 }
 
 impl LoopsReport {
-    /// The report of `loops`, found on `traj` read from `source`. O(poses + components).
+    /// The report of `loops`, found on a trajectory read from `source` (when known).
+    /// O(poses + components).
     ///
     /// # Errors
-    /// What [`Loops::loop_density`] returns (nothing for loops found on `traj`).
-    ///
-    /// # Panics
-    /// When `loops` was not found on `traj` (a component index outside it).
-    pub fn new(source: &str, traj: &Trajectory, loops: &Loops) -> Result<Self, loops_core::Error> {
-        let t = traj.timestamps_s();
+    /// What [`Loops::loop_density`] returns (nothing for a result of
+    /// [`find_loops`](loops_core::find_loops)).
+    pub fn new(source: Option<&str>, loops: &Loops) -> Result<Self, loops_core::Error> {
+        let t = loops.timestamps_s();
         Ok(Self {
-            source: source.to_owned(),
-            poses: traj.len(),
-            span_s: traj.span_s(),
+            source: source.map(str::to_owned),
+            poses: loops.len(),
+            span_s: loops.span_s(),
             gamma: loops.gamma(),
             metric: loops.metric_name().to_owned(),
             pair_count: loops.pair_count(),
@@ -123,7 +122,7 @@ impl LoopsReport {
 /// use loops_core::{Euclidean, Trajectory, find_loops};
 /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]])?;
 /// let loops = find_loops(&traj, &Euclidean, 0.5)?;
-/// let report = loops_io::LoopsReport::new("line", &traj, &loops)?;
+/// let report = loops_io::LoopsReport::new(Some("line"), &loops)?;
 /// let mut text = Vec::new();
 /// loops_io::loops_report_to_json(&report, &mut text).unwrap();
 /// let value: serde_json::Value = serde_json::from_slice(&text).unwrap();
@@ -151,7 +150,7 @@ pub fn write_loops_report(path: impl AsRef<Path>, report: &LoopsReport, overwrit
 
 #[cfg(test)]
 mod tests {
-    use loops_core::{Euclidean, find_loops};
+    use loops_core::{Euclidean, Trajectory, find_loops};
 
     use super::*;
 
@@ -160,7 +159,7 @@ mod tests {
         let traj =
             Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0, 4.5], &[[0.0], [1.0], [1.0], [0.0], [0.1]]).unwrap();
         let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
-        let report = LoopsReport::new("drive.tum", &traj, &loops).unwrap();
+        let report = LoopsReport::new(Some("drive.tum"), &loops).unwrap();
         let mut out = Vec::new();
         loops_report_to_json(&report, &mut out).unwrap();
         let text = String::from_utf8(out).unwrap();

@@ -152,6 +152,16 @@ pub fn write_g2o_edges(
     pairs: &[(usize, usize)],
     options: &G2oOptions,
 ) -> Result<()> {
+    let lines = g2o_edges_text(table, pairs, options)?;
+    write_atomically(path.as_ref(), options.overwrite, |file| file.write_all(lines.as_bytes())).map_err(IoError::Write)
+}
+
+/// The text [`write_g2o_edges`] writes (its `overwrite` option aside): for a command that writes
+/// several files all or none ([`StagedFiles`](crate::StagedFiles)). O(n + pairs).
+///
+/// # Errors
+/// As [`write_g2o_edges`], but for writing.
+pub fn g2o_edges_text(table: &PoseTable, pairs: &[(usize, usize)], options: &G2oOptions) -> Result<String> {
     let len = table.len();
     if let Some(&index) = pairs.iter().flat_map(|(i, j)| [i, j]).find(|&&index| index >= len) {
         return Err(table.locate(Error::IndexOutOfRange { index, len }));
@@ -199,5 +209,5 @@ pub fn write_g2o_edges(
             }
         };
     }
-    write_atomically(path.as_ref(), options.overwrite, |file| file.write_all(lines.as_bytes())).map_err(IoError::Write)
+    Ok(lines)
 }

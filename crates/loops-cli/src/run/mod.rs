@@ -4,11 +4,12 @@
 //! Logs are processed in parallel (and each one's engine in parallel within it) on the
 //! `--threads` pool. A log that fails is reported and the others go on; the exit code is 1 when
 //! any failed. Each log's files are written into a hidden staging folder that is renamed to the
-//! log's name when all are written (see [`crate::guard`]), so a folder is whole or absent.
+//! log's name when all are written (see [`crate::guard`]), so a folder is whole or absent. One
+//! run at a time owns `--out`, and `--force` replaces only what `loops run` wrote there (see
+//! [`crate::out_dir`]). The files themselves are loops-io's.
 
 mod index;
 
-use std::fmt::Write as _;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -17,20 +18,22 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use loops_core::{
-    Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Samples, Scale, Selection, Side, Trajectory,
+    Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Scale, Selection, Side, Trajectory,
     sample_quality,
 };
+use loops_io::{QualitySummary, SamplesFormat, WriteError};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
 use crate::guard;
+use crate::out_dir::OutDir;
 use crate::progress::{self, Batch};
 use crate::report::{self, ReportInput};
 
-/// The file in each log folder that marks it as written by `loops run` (and replaceable with
-/// `--force`).
-const MARKER: &str = "summary.json";
+/// The file each log folder of `loops run` holds (it is replaced with `--force` only when it
+/// holds it, and the marker of --out lists it).
+const LOG_SUMMARY: &str = "summary.json";
 
 /// The samplers of the samples-per-component figure (the run's own is added when not among them).
 const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::Alpha];
@@ -113,20 +116,6 @@ pub(crate) struct LogSummary {
     pub(crate) files: [&'static str; 5],
 }
 
-#[derive(Debug, Serialize)]
-pub(crate) struct QualitySummary {
-    pub(crate) sampler: String,
-    pub(crate) samples: usize,
-    pub(crate) outside: usize,
-    pub(crate) components: usize,
-    pub(crate) covered: usize,
-    pub(crate) nontrivial_components: usize,
-    pub(crate) nontrivial_covered: usize,
-    pub(crate) redundant: usize,
-    pub(crate) median_spacing_s: Option<f64>,
-    pub(crate) p3_slope: Option<f64>,
-}
-
 #[derive(Debug, Default, Serialize)]
 pub(crate) struct Seconds {
     pub(crate) read: f64,
@@ -169,6 +158,7 @@ struct Settings<'a> {
     args: &'a RunArgs,
     spec: MetricSpec,
     sampler: Sampler,
+    out: &'a OutDir,
 }
 
 pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
@@ -178,7 +168,10 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     // Refused once, before any log is read, rather than once per log.
     loops_core::check_gamma(args.engine.gamma)?;
     loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
-    check_out(&args.out, args.force)?;
+    args.engine.threads.map(loops_core::check_threads).transpose()?;
+    if args.out.exists() && !args.out.is_dir() {
+        bail!("--out {} exists and is not a folder", args.out.display());
+    }
     if let Some(JsonTo::File(path)) = &args.json
         && path.exists()
         && !args.force
@@ -187,8 +180,9 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     }
     let jobs = jobs(&args.logs, &args.out)?;
     guard::with_writes(|writes| writes.create_dir(&args.out))?;
+    let out = OutDir::take(&args.out, args.force)?;
 
-    let settings = Settings { args: &args, spec, sampler };
+    let settings = Settings { args: &args, spec, sampler, out: &out };
     let batch = Batch::new(progress::Mode::detect(args.quiet), jobs.len());
     batch.println(&format!(
         "loops: {} log(s), gamma {} ({}), sampler {} ({}), results to {}",
@@ -237,11 +231,14 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
         results: &outcomes,
     };
     let json = serde_json::to_string_pretty(&summary)? + "\n";
-    guard::write_atomically(&args.out.join("summary.json"), json.as_bytes(), true)?;
-    guard::write_atomically(&args.out.join("index.html"), index::render(&summary).as_bytes(), true)?;
-
+    let index = index::render(&summary);
+    // Both are ours (OutDir::take refused a user's): listed, then replaced.
+    for (name, bytes) in [("summary.json", json.as_bytes()), ("index.html", index.as_bytes())] {
+        guard::with_writes(|writes| out.claim(writes, name))?;
+        write_file(&args.out.join(name), bytes, true)?;
+    }
     if let Some(JsonTo::File(path)) = &args.json {
-        guard::write_atomically(path, json.as_bytes(), args.force)?;
+        write_file(path, json.as_bytes(), args.force)?;
     }
     let mut stdout = std::io::stdout().lock();
     if args.json == Some(JsonTo::Stdout) {
@@ -253,27 +250,14 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     Ok(if failed == 0 { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
-/// Refuses an --out that holds something other than an earlier run's results, before any work.
-fn check_out(out: &Path, force: bool) -> Result<()> {
-    if out.exists() && !out.is_dir() {
-        bail!("--out {} exists and is not a folder", out.display());
-    }
-    let has_entries =
-        out.is_dir() && std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))?.next().is_some();
-    if has_entries && !force {
-        bail!("--out {} exists and is not empty; pass --force to replace the results of an earlier run", out.display());
-    }
-    Ok(())
-}
-
 /// A folder name per log: the file stem, with `-2`, `-3`, ... for repeated stems. Logs inside
-/// --out are refused (results must never land on inputs).
+/// --out are refused (results must never land on inputs), with links resolved on both sides.
 fn jobs(logs: &[PathBuf], out: &Path) -> Result<Vec<Job>> {
-    let out_abs = std::path::absolute(out).with_context(|| format!("resolving {}", out.display()))?;
+    let out_abs = resolved(out)?;
     let mut names: Vec<String> = Vec::with_capacity(logs.len());
     let mut jobs = Vec::with_capacity(logs.len());
     for path in logs {
-        let abs = std::path::absolute(path).with_context(|| format!("resolving {}", path.display()))?;
+        let abs = resolved(path)?;
         if abs.starts_with(&out_abs) {
             bail!("{} lies inside --out {}; write the results elsewhere", path.display(), out.display());
         }
@@ -291,6 +275,26 @@ fn jobs(logs: &[PathBuf], out: &Path) -> Result<Vec<Job>> {
         jobs.push(Job { path: path.clone(), name });
     }
     Ok(jobs)
+}
+
+/// `path` with every link resolved ([`std::fs::canonicalize`]), also when it does not exist yet:
+/// its longest existing ancestor resolved, and the rest appended.
+fn resolved(path: &Path) -> Result<PathBuf> {
+    let absolute = std::path::absolute(path).with_context(|| format!("resolving {}", path.display()))?;
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    loop {
+        match std::fs::canonicalize(existing) {
+            Ok(real) => return Ok(rest.iter().rev().fold(real, |dir, part| dir.join(part))),
+            Err(_) => match (existing.parent(), existing.file_name()) {
+                (Some(parent), Some(name)) => {
+                    rest.push(name.to_owned());
+                    existing = parent;
+                }
+                _ => return Ok(absolute),
+            },
+        }
+    }
 }
 
 /// Reads, finds, samples and writes one log.
@@ -345,8 +349,8 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         skip_trivial: settings.sampler.skip_trivial,
         epsilon_s,
         samples: samples.len(),
-        quality: quality_summary(samples.sampler(), &quality),
-        comparison: comparison.iter().map(|(kind, q)| quality_summary(*kind, q)).collect(),
+        quality: QualitySummary::new(samples.sampler(), &quality),
+        comparison: comparison.iter().map(|(kind, q)| QualitySummary::new(*kind, q)).collect(),
         seconds: Seconds::default(),
         warnings: loops
             .warnings()
@@ -371,17 +375,22 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         skip_trivial: settings.sampler.skip_trivial,
         seconds: seconds.find_loops,
     });
-    let files: [(&str, Vec<u8>); 4] = [
-        ("components.csv", components_csv(&traj, &loops, &quality).into_bytes()),
-        ("samples.csv", samples_csv(&samples)?),
-        ("loop_duration.csv", loop_duration_csv(&table, &traj, &loop_duration_s).into_bytes()),
-        ("report.html", html.into_bytes()),
-    ];
     seconds.write = clock.elapsed().as_secs_f64();
     seconds.total = start.elapsed().as_secs_f64();
     summary.seconds = seconds;
     let json = serde_json::to_string_pretty(&summary)? + "\n";
-    write_folder(&args.out, &job.name, &files, json.as_bytes(), args.force)?;
+    write_folder(settings, &job.name, |dir| {
+        let file = |name: &str| dir.join(name);
+        let per_component = Some(quality.per_component.as_slice());
+        written(|| loops_io::write_components(file("components.csv"), &loops, per_component, false))?;
+        written(|| loops_io::write_samples(&file("samples.csv"), &samples, SamplesFormat::Csv, false))?;
+        written(|| {
+            let t = traj.timestamps_s();
+            loops_io::write_loop_duration(file("loop_duration.csv"), t, &table.positions, &loop_duration_s, false)
+        })?;
+        write_file(&file("report.html"), html.as_bytes(), false)?;
+        write_file(&file(LOG_SUMMARY), json.as_bytes(), false)
+    })?;
     Ok(summary)
 }
 
@@ -408,17 +417,27 @@ fn compare_samplers(
         .collect()
 }
 
-/// Writes one log's files into a staging folder, then renames it to `out/name`.
-fn write_folder(out: &Path, name: &str, files: &[(&str, Vec<u8>)], summary: &[u8], force: bool) -> Result<()> {
+/// Writes one log's files into a staging folder (`write`), then lists `name` in the marker of
+/// --out and renames the folder to `out/name`. The staging folder is removed when anything fails.
+fn write_folder(settings: &Settings<'_>, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let (out, force) = (&settings.args.out, settings.args.force);
     let staged = out.join(format!(".{name}.partial-{}", std::process::id()));
     guard::with_writes(|writes| writes.stage(&staged))?;
-    let written = files
-        .iter()
-        .map(|(file, bytes)| (*file, bytes.as_slice()))
-        .chain([(MARKER, summary)])
-        .try_for_each(|(file, bytes)| guard::write_atomically(&staged.join(file), bytes, false));
+    let written = write(&staged);
+    let target = out.join(name);
+    let owned = settings.out.owns(name) && target.join(LOG_SUMMARY).is_file();
     guard::with_writes(|writes| match written {
-        Ok(()) => writes.commit(&staged, &out.join(name), force, MARKER),
+        Ok(()) => {
+            // Listed before it is moved in place: what is ours is never unlisted.
+            let claimed = if target.exists() && !(force && owned) { Ok(()) } else { settings.out.claim(writes, name) };
+            match claimed {
+                Ok(()) => writes.commit(&staged, &target, force, owned),
+                Err(error) => {
+                    writes.discard(&staged);
+                    Err(error)
+                }
+            }
+        }
         Err(error) => {
             writes.discard(&staged);
             Err(error)
@@ -426,19 +445,15 @@ fn write_folder(out: &Path, name: &str, files: &[(&str, Vec<u8>)], summary: &[u8
     })
 }
 
-fn quality_summary(kind: SamplerKind, q: &SampleQuality) -> QualitySummary {
-    QualitySummary {
-        sampler: kind.name().to_owned(),
-        samples: q.samples,
-        outside: q.outside,
-        components: q.components,
-        covered: q.covered,
-        nontrivial_components: q.nontrivial_components,
-        nontrivial_covered: q.nontrivial_covered,
-        redundant: q.redundant,
-        median_spacing_s: q.median_spacing_s,
-        p3_slope: q.p3_slope,
-    }
+/// Writes `bytes` to `path` atomically ([`loops_io::write_atomically`]), under the write lock of
+/// [`guard`]; an existing file is replaced only with `force`.
+fn write_file(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
+    written(|| loops_io::write_atomically(path, force, |file| file.write_all(bytes)))
+}
+
+/// Runs one write of loops-io under the write lock of [`guard`], in the CLI's words.
+fn written(write: impl FnOnce() -> Result<(), WriteError>) -> Result<()> {
+    guard::with_writes(|_| write()).map_err(guard::write_error)
 }
 
 fn size_text(size: SampleSize) -> String {
@@ -446,61 +461,6 @@ fn size_text(size: SampleSize) -> String {
         SampleSize::Budget(b) => format!("budget {b}"),
         SampleSize::Rate(r) => format!("rate {r}"),
     }
-}
-
-/// The header of components.csv.
-/// The names are those of the Python API's `Loops.components` columns, plus `samples`.
-pub(crate) const COMPONENTS_HEADER: &str = "id,trivial,area_s2,pair_count,run_count,holes,i_min,i_max,j_min,j_max,\
-    t_min_s,t_max_s,t_prime_min_s,t_prime_max_s,closest_i,closest_j,closest_distance,samples";
-
-/// components.csv: one row per component in id order; times are the poses' own timestamps.
-fn components_csv(traj: &Trajectory, loops: &Loops, quality: &SampleQuality) -> String {
-    let t = traj.timestamps_s();
-    let mut csv = String::with_capacity(64 * (loops.components().len() + 1));
-    csv.push_str(COMPONENTS_HEADER);
-    csv.push('\n');
-    for c in loops.components() {
-        let _ = writeln!(
-            csv,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            c.id,
-            c.trivial,
-            c.area_s2,
-            c.pair_count,
-            c.run_count,
-            c.holes,
-            c.i_range[0],
-            c.i_range[1],
-            c.j_range[0],
-            c.j_range[1],
-            t[c.i_range[0]],
-            t[c.i_range[1]],
-            t[c.j_range[0]],
-            t[c.j_range[1]],
-            c.closest_pair[0],
-            c.closest_pair[1],
-            c.closest_distance,
-            quality.per_component.get(c.id).copied().unwrap_or(0)
-        );
-    }
-    csv
-}
-
-/// loop_duration.csv: τ of every pose, with its time and position.
-fn loop_duration_csv(table: &loops_io::PoseTable, traj: &Trajectory, loop_duration_s: &[f64]) -> String {
-    let mut csv = String::with_capacity(48 * (traj.len() + 1));
-    csv.push_str("index,t_s,x,y,z,loop_duration_s\n");
-    for (i, (&t, &tau)) in traj.timestamps_s().iter().zip(loop_duration_s).enumerate() {
-        let [x, y, z] = table.positions.get(i).copied().unwrap_or([f64::NAN; 3]);
-        let _ = writeln!(csv, "{i},{t},{x},{y},{z},{tau}");
-    }
-    csv
-}
-
-fn samples_csv(samples: &Samples) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    loops_io::samples_to_csv(samples, &mut bytes)?;
-    Ok(bytes)
 }
 
 fn outcome_line(s: &LogSummary) -> String {

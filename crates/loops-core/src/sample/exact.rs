@@ -8,7 +8,7 @@ use super::disperse::disperse_pairs;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::baseline::baseline_pairs;
 use crate::draw::{PairSpace, draw_numbers, group_quotas};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::loops::Loops;
 use crate::metric::Metric;
 use crate::spec::{MetricSpec, with_metric};
@@ -40,8 +40,8 @@ impl MetricSpec {
 /// plus the baselines' neighbour searches.
 ///
 /// # Errors
-/// [`Error::TrajectoryMismatch`] unless `loops` was found on `traj`; [`Error::InvalidParameter`]
-/// for a budget of 0, a rate out of range or a bad baseline parameter; [`Error::NotApplicable`]
+/// [`Error::TrajectoryMismatch`](crate::Error::TrajectoryMismatch) unless `loops` was found on `traj`; [`Error::InvalidParameter`](crate::Error::InvalidParameter)
+/// for a budget of 0, a rate out of range or a bad baseline parameter; [`Error::NotApplicable`](crate::Error::NotApplicable)
 /// for `skip_trivial` with a baseline.
 ///
 /// # Examples
@@ -63,7 +63,7 @@ pub fn sample_loops<M: Metric + ?Sized>(
     loops: &Loops,
     sampler: &Sampler,
 ) -> Result<Samples> {
-    check_same_trajectory(traj, loops)?;
+    loops.check_trajectory(traj)?;
     metric.check_dim(traj.dim())?;
     let kind = sampler.kind;
     sampler.size.validate(kind)?;
@@ -144,18 +144,3 @@ pub fn sample_loops<M: Metric + ?Sized>(
 
 /// A pair (i, j) and its component, when the sampler knows it.
 type Picked = ([u32; 2], Option<usize>);
-
-/// Errors unless `loops` was found on a trajectory with the timestamps of `traj`.
-pub(crate) fn check_same_trajectory(traj: &Trajectory, loops: &Loops) -> Result<()> {
-    let (a, b) = (traj.timestamps_s(), loops.timestamps_s());
-    let differ = a.iter().zip(b).position(|(x, y)| x != y);
-    match differ {
-        None if a.len() == b.len() => Ok(()),
-        _ => Err(Error::TrajectoryMismatch {
-            what: "trajectory",
-            index: differ.unwrap_or(a.len().min(b.len())),
-            poses: a.len(),
-            loops_poses: b.len(),
-        }),
-    }
-}

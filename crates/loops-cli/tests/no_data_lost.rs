@@ -1,0 +1,219 @@
+//! Issue 15, "data lost or overwritten" (items 1–5) and the flags of items 14 and 20: each test
+//! reproduces what the attack sweep did, and fails on the code before the fix.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn loops(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("loops-cli-lost-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// Two laps of a 40 m square at 1 m/s, as TUM.
+fn laps(dir: &Path, name: &str) -> PathBuf {
+    let path = dir.join(name);
+    let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
+    for k in 0..320 {
+        let s = f64::from(k % 160) * 0.25;
+        let (x, y) = match k % 160 / 40 {
+            0 => (s, 0.0),
+            1 => (10.0, s - 10.0),
+            2 => (30.0 - s, 10.0),
+            _ => (0.0, 40.0 - s),
+        };
+        text += &format!("{k}.0 {x} {y} 0 0 0 0 1\n");
+    }
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(log: &Path, out: &Path, extra: &[&str]) -> Output {
+    let args = ["run", log.to_str().unwrap(), "--gamma", "2", "--budget", "20", "--out", out.to_str().unwrap()];
+    loops(&[&args[..], extra].concat())
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+/// Item 1: `--force` never replaces a user's `index.html` or `summary.json` in --out.
+#[test]
+fn force_keeps_the_users_top_level_files() {
+    let dir = temp_dir("top");
+    let log = laps(&dir, "a.tum");
+    for name in ["index.html", "summary.json"] {
+        let out = dir.join(format!("o-{name}"));
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(out.join(name), "mine\n").unwrap();
+        let output = run(&log, &out, &["--force"]);
+        assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+        let err = stderr(&output);
+        assert!(err.contains(name) && err.contains("did not write"), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert_eq!(std::fs::read_to_string(out.join(name)).unwrap(), "mine\n");
+        assert_eq!(names(&out), [name], "nothing else written");
+    }
+    // Results of an earlier run are replaced with --force, as before.
+    let out = dir.join("ours");
+    assert!(run(&log, &out, &[]).status.success());
+    let again = run(&log, &out, &["--force"]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    assert_eq!(names(&out), ["a", "index.html", "loops-run.json", "summary.json"]);
+    // A user's folder with a log's name is not replaced (and no staging folder stays behind).
+    let mine = dir.join("mine");
+    std::fs::create_dir_all(mine.join("a")).unwrap();
+    std::fs::write(mine.join("a/summary.json"), "{}").unwrap();
+    let clash = run(&log, &mine, &["--force"]);
+    assert_eq!(clash.status.code(), Some(1), "{}", stderr(&clash));
+    assert!(stderr(&clash).contains("not an output of `loops run`"), "{}", stderr(&clash));
+    assert_eq!(std::fs::read_to_string(mine.join("a/summary.json")).unwrap(), "{}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 2: a log reached through a link to --out's folder is inside --out.
+#[cfg(unix)]
+#[test]
+fn logs_inside_out_are_found_through_links() {
+    let dir = temp_dir("link");
+    let logs = dir.join("logs");
+    std::fs::create_dir(&logs).unwrap();
+    let log = laps(&logs, "a.tum");
+    let link = dir.join("linkdir");
+    std::os::unix::fs::symlink(&logs, &link).unwrap();
+    let before = std::fs::read(&log).unwrap();
+    let output = run(&log, &link, &["--force"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("lies inside --out"), "{}", stderr(&output));
+    assert_eq!(names(&logs), ["a.tum"]);
+    assert_eq!(std::fs::read(&log).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 3: a run holds --out; another stops at once, naming the folder and the holder's pid.
+#[cfg(unix)]
+#[test]
+fn a_second_run_into_a_held_folder_stops() {
+    let dir = temp_dir("lock");
+    let log = laps(&dir, "a.tum");
+    let out = dir.join("out");
+    // An earlier run leaves its marker; this test then holds the folder as a run does.
+    assert!(run(&log, &out, &[]).status.success());
+    let marker: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("loops-run.json")).unwrap()).unwrap();
+    let holder = std::fs::File::open(&out).unwrap();
+    holder.try_lock().unwrap();
+    let before = std::fs::read(out.join("summary.json")).unwrap();
+    let start = std::time::Instant::now();
+    let second = run(&log, &out, &["--force"]);
+    assert!(start.elapsed().as_secs() < 30);
+    assert_eq!(second.status.code(), Some(2), "{}", stderr(&second));
+    let err = stderr(&second);
+    assert!(err.contains(out.to_str().unwrap()) && err.contains("in use"), "{err}");
+    assert!(err.contains(&format!("pid {}", marker["pid"])), "{err}");
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), before);
+    holder.unlock().unwrap();
+    assert!(run(&log, &out, &["--force"]).status.success());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 4: a failed log leaves no staging folder; what killed runs left is removed by the next
+/// run into the folder, which says so.
+#[test]
+fn staging_folders_do_not_stay_behind() {
+    let dir = temp_dir("staging");
+    let log = laps(&dir, "a.tum");
+    let out = dir.join("out");
+    std::fs::create_dir_all(out.join("a")).unwrap();
+    std::fs::write(out.join("a/notes.txt"), "mine").unwrap();
+    for _ in 0..2 {
+        let clash = run(&log, &out, &["--force"]);
+        assert_eq!(clash.status.code(), Some(1), "{}", stderr(&clash));
+        assert!(!names(&out).iter().any(|n| n.starts_with('.')), "{:?}", names(&out));
+    }
+    // What a SIGKILL leaves: a staging folder with a temporary file, a folder moved aside, a
+    // temporary file of the top level.
+    let killed = dir.join("killed");
+    assert!(run(&log, &killed, &[]).status.success());
+    std::fs::create_dir(killed.join(".a.partial-999999")).unwrap();
+    std::fs::write(killed.join(".a.partial-999999/.report.html.Xy12Ab.tmp"), "half").unwrap();
+    std::fs::create_dir(killed.join(".a.old-999998")).unwrap();
+    std::fs::write(killed.join(".index.html.Qw34Er.tmp"), "half").unwrap();
+    std::fs::write(killed.join(".my-notes"), "a user's hidden file").unwrap();
+    let next = run(&log, &killed, &["--force"]);
+    assert!(next.status.success(), "{}", stderr(&next));
+    assert!(stderr(&next).contains("removed 3 leftover(s) of an interrupted run"), "{}", stderr(&next));
+    assert_eq!(names(&killed), [".my-notes", "a", "index.html", "loops-run.json", "summary.json"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 5: a command that fails writes nothing.
+#[test]
+fn a_failing_sample_writes_no_file() {
+    let dir = temp_dir("sample");
+    let log = laps(&dir, "in.tum");
+    let csv = dir.join("x.csv");
+    let json = dir.join("x.json");
+    let args = ["sample", log.to_str().unwrap(), "--gamma", "2", "--budget", "10", "--csv", csv.to_str().unwrap()];
+    let output = loops(&[&args[..], &["--json", json.to_str().unwrap(), "--g2o", log.to_str().unwrap()]].concat());
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("in.tum exists"), "{}", stderr(&output));
+    assert_eq!(names(&dir), ["in.tum"], "no x.csv, no x.json, no temporary file");
+    let output = loops(&[&args[..], &["--g2o", dir.join("x.g2o").to_str().unwrap()]].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(names(&dir), ["in.tum", "x.csv", "x.g2o"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 14: a thread count past the core's cap is refused at once.
+#[test]
+fn huge_thread_counts_are_refused() {
+    let dir = temp_dir("threads");
+    let log = laps(&dir, "a.tum");
+    let start = std::time::Instant::now();
+    for command in ["components", "sample"] {
+        let output = loops(&[command, log.to_str().unwrap(), "--gamma", "2", "--threads", "1000000"]);
+        assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+        assert!(stderr(&output).contains("threads = 1000000 is invalid: between 1 and 1024"), "{}", stderr(&output));
+    }
+    let out = dir.join("out");
+    let output = run(&log, &out, &["--threads", "1000000"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(!out.exists(), "refused before anything is written");
+    assert!(start.elapsed().as_secs() < 30);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Item 20: `--gamma -inf` reaches the core's check; a repeated metric key is named as such.
+#[test]
+fn negative_and_infinite_values_reach_the_core() {
+    let dir = temp_dir("gamma");
+    let log = laps(&dir, "a.tum");
+    for gamma in ["-inf", "-1", "inf", "NaN"] {
+        let output = loops(&["components", log.to_str().unwrap(), "--gamma", gamma]);
+        assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+        assert!(stderr(&output).contains("gamma must be a positive finite distance"), "{gamma}: {}", stderr(&output));
+    }
+    let output = loops(&["demo", "--gamma", "-inf", "--duration-s", "60"]);
+    assert!(stderr(&output).contains("gamma must be a positive finite distance"), "{}", stderr(&output));
+    let output = loops(&["sample", log.to_str().unwrap(), "--gamma", "2", "--epsilon-s", "-inf"]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(!stderr(&output).contains("unexpected argument"), "{}", stderr(&output));
+    let metric = "so3(rotation=chordal,rotation=geodesic)";
+    let output = loops(&["components", log.to_str().unwrap(), "--gamma", "0.1", "--metric", metric]);
+    assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
+    assert!(stderr(&output).contains("repeated parameter 'rotation'"), "{}", stderr(&output));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
