@@ -109,6 +109,14 @@ pub enum Error {
     /// γ must be a positive, finite distance.
     #[error("gamma must be a positive finite distance, got {0}")]
     InvalidGamma(f64),
+    /// A separation bound (path length or time) must be finite and not negative.
+    #[error("the {what} separation must be a finite distance of at least 0, got {value}")]
+    InvalidSeparation {
+        /// `path` or `time`.
+        what: &'static str,
+        /// The offending value.
+        value: f64,
+    },
     /// A metric that cannot measure points of this dimension.
     #[error("metric {metric} needs points of dimension {expected}, got dimension {found}")]
     DimensionMismatch {

@@ -63,6 +63,7 @@ mod plane;
 mod pose;
 mod quality;
 mod sample;
+mod separation;
 mod spec;
 mod sublevel;
 mod synth;
@@ -75,7 +76,7 @@ pub use component::LoopComponent;
 pub use detection::{Detection, Detections};
 pub use draw::{SampleSize, SampleWarning};
 pub use error::{Error, Result};
-pub use loops::{LabelledRun, Loops, Warning, find_loops};
+pub use loops::{LabelledRun, Loops, Warning, find_loops, find_loops_separated};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
     angle_difference, wrap_angle,
@@ -88,8 +89,9 @@ pub use plane::{
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
 pub use quality::{MissedComponent, SampleQuality, sample_quality};
 pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
+pub use separation::Separation;
 pub use spec::MetricSpec;
-pub use sublevel::{Run, SublevelSet, check_gamma};
+pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Timeline, Trajectory};
 

@@ -6,6 +6,7 @@ use crate::component::{LoopComponent, label_components};
 use crate::error::{Error, Result};
 use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
 use crate::metric::Metric;
+use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::SublevelSet;
 use crate::trajectory::{Timeline, Trajectory, cell_of, sealed};
@@ -26,6 +27,13 @@ pub enum Warning {
         /// Number of trivial components.
         trivial_components: usize,
     },
+    /// No revisit at all: a separation was asked for, and no pair within γ keeps it.
+    NoLoops {
+        /// The threshold γ.
+        gamma: f64,
+        /// The separation the pairs had to keep.
+        separation: Separation,
+    },
 }
 
 impl fmt::Display for Warning {
@@ -36,6 +44,11 @@ impl fmt::Display for Warning {
                 "{gaps} consecutive pose pair(s) are farther apart than gamma (first at index {first_gap}, \
                  largest step {largest_step:.6}): the diagonal of S_gamma is broken there, and S_gamma has \
                  {trivial_components} trivial component(s)"
+            ),
+            Self::NoLoops { gamma, separation } => write!(
+                f,
+                "no revisit at gamma {gamma} with separation {separation}: no pair within gamma is that far \
+                 apart along the trajectory; try a larger gamma or a smaller separation"
             ),
         }
     }
@@ -73,6 +86,7 @@ impl LabelledRun {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Loops {
     gamma: f64,
+    separation: Separation,
     metric: String,
     timestamps_s: Vec<f64>,
     cell_widths_s: Vec<f64>,
@@ -106,7 +120,39 @@ pub struct Loops {
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn find_loops<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Loops> {
-    let set = SublevelSet::compute(traj, metric, gamma)?;
+    find_loops_separated(traj, metric, gamma, Separation::NONE)
+}
+
+/// Finds the *revisits* of `traj`: the loops whose two poses also lie `separation` apart along
+/// the trajectory (the subset X ⊆ S_γ of [`Separation`]), exactly, with their components,
+/// holes and measures. Pairs that odometry already ties together are left out, and no
+/// component is trivial. Same cost as [`find_loops`], or less: the scan of each row starts at
+/// its first separated column. With [`Separation::NONE`], exactly [`find_loops`].
+///
+/// # Errors
+/// As [`find_loops`]; [`Error::InvalidSeparation`] unless both bounds are finite and ≥ 0.
+///
+/// # Examples
+/// 1.9 laps of a circle, 200 poses a lap: one revisit component, the second lap along the first.
+/// ```
+/// use loops_core::{Euclidean, Separation, Trajectory, find_loops_separated};
+/// let n = 380;
+/// let angle = |i: usize| std::f64::consts::TAU * i as f64 / 200.0;
+/// let points: Vec<[f64; 2]> = (0..n).map(|i| [10.0 * angle(i).cos(), 10.0 * angle(i).sin()]).collect();
+/// let traj = Trajectory::from_points((0..n).map(|i| i as f64 * 0.1).collect(), &points)?;
+/// let loops = find_loops_separated(&traj, &Euclidean, 2.0, Separation::for_gamma(2.0))?;
+/// assert_eq!(loops.components().len(), 1);
+/// let lap = loops.components()[0].closest_pair;
+/// assert_eq!(lap[1] - lap[0], 200);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn find_loops_separated<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+) -> Result<Loops> {
+    let set = SublevelSet::compute_separated(traj, metric, gamma, separation)?;
     Ok(Loops::from_set(traj, metric, set))
 }
 
@@ -126,6 +172,23 @@ impl MetricSpec {
     pub fn find_loops(&self, traj: &Trajectory, gamma: f64) -> Result<Loops> {
         with_metric!(self, m => find_loops(traj, m, gamma))
     }
+
+    /// [`find_loops_separated`] under this metric.
+    ///
+    /// # Errors
+    /// As [`find_loops_separated`].
+    pub fn find_loops_separated(&self, traj: &Trajectory, gamma: f64, separation: Separation) -> Result<Loops> {
+        with_metric!(self, m => find_loops_separated(traj, m, gamma, separation))
+    }
+
+    /// [`path_length`](crate::path_length) under this metric.
+    ///
+    /// # Errors
+    /// The metric's dimension error.
+    pub fn path_length(&self, traj: &Trajectory) -> Result<Vec<f64>> {
+        self.validate(traj)?;
+        Ok(with_metric!(self, m => crate::sublevel::path_length(traj, m)))
+    }
 }
 
 impl Loops {
@@ -139,8 +202,13 @@ impl Loops {
         let n = traj.len();
         // A row whose first run does not reach column i + 1 breaks the diagonal (a metric that
         // breaks δ(x, x) = 0 may even leave the diagonal cell out).
-        let gaps: Vec<usize> =
-            (0..n - 1).filter(|&i| set.row(i).first().is_none_or(|r| (r.end as usize) <= i)).collect();
+        // A separated set has no diagonal to break.
+        let separation = set.separation();
+        let gaps: Vec<usize> = if separation.is_none() {
+            (0..n - 1).filter(|&i| set.row(i).first().is_none_or(|r| (r.end as usize) <= i)).collect()
+        } else {
+            Vec::new()
+        };
         let mut warnings = Vec::new();
         if let Some(&first_gap) = gaps.first() {
             let largest_step =
@@ -148,8 +216,14 @@ impl Loops {
             let trivial_components = labelling.components.iter().filter(|c| c.trivial).count();
             warnings.push(Warning::DiagonalBroken { gaps: gaps.len(), first_gap, largest_step, trivial_components });
         }
+        // Without a separation the trivial components always remain, and the paper's answer
+        // stays as it was; an empty sample is the samplers' warning.
+        if !separation.is_none() && labelling.components.is_empty() {
+            warnings.push(Warning::NoLoops { gamma: set.gamma(), separation });
+        }
         Self {
             gamma: set.gamma(),
+            separation,
             metric: metric.name(),
             timestamps_s: traj.timestamps_s().to_vec(),
             cell_widths_s: traj.cell_widths_s().to_vec(),
@@ -163,6 +237,16 @@ impl Loops {
     /// The threshold γ.
     pub fn gamma(&self) -> f64 {
         self.gamma
+    }
+
+    /// The separation its pairs keep ([`Separation::NONE`]: the paper's S_γ).
+    pub fn separation(&self) -> Separation {
+        self.separation
+    }
+
+    /// Whether these are revisits: a separation was asked for, so no component is trivial.
+    pub fn is_separated(&self) -> bool {
+        !self.separation.is_none()
     }
 
     /// The metric's name, as [`Metric::name`] gives it (a [`MetricSpec`](crate::MetricSpec)

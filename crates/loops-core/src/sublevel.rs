@@ -6,6 +6,7 @@ use rayon::prelude::*;
 use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::metric::Metric;
+use crate::separation::Separation;
 use crate::trajectory::Trajectory;
 
 /// Checks a distance threshold γ: positive and finite. Front ends call it to refuse a bad γ
@@ -52,10 +53,14 @@ impl Run {
 /// The upper half (j ≥ i, diagonal included) of S_γ on the sample lattice: every pair `(i, j)`
 /// with `δ(x_i, x_j) ≤ γ`, exactly, as runs per row. Never a list of pairs.
 ///
+/// With a [`Separation`], the subset X ⊆ S_γ of the pairs that also lie far enough apart along
+/// the trajectory (no diagonal cell then).
+///
 /// Memory is 12 bytes a run plus 8 bytes a row.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SublevelSet {
     gamma: f64,
+    separation: Separation,
     row_offsets: Vec<usize>,
     runs: Vec<Run>,
     closest: Vec<u32>,
@@ -94,11 +99,33 @@ impl SublevelSet {
     /// # Errors
     /// [`Error::InvalidGamma`](crate::Error::InvalidGamma) when γ is not positive and finite; the metric's dimension error.
     pub fn compute<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
+        Self::compute_separated(traj, metric, gamma, Separation::NONE)
+    }
+
+    /// The part X of S_γ whose pairs are also `separation` apart (DESIGN §9), by the same scan:
+    /// row i starts at its first separated column instead of at i, so runs are clipped where
+    /// they are produced and no distance is measured that [`compute`](Self::compute) would not
+    /// measure. With [`Separation::NONE`], exactly [`compute`](Self::compute).
+    ///
+    /// # Errors
+    /// As [`compute`](Self::compute); [`Error::InvalidSeparation`].
+    pub fn compute_separated<M: Metric + ?Sized>(
+        traj: &Trajectory,
+        metric: &M,
+        gamma: f64,
+        separation: Separation,
+    ) -> Result<Self> {
         check_gamma(gamma)?;
+        separation.check()?;
         metric.validate(traj)?;
         let n = traj.len();
-        let (arc, balls) = rayon::join(|| ArcLength::new(traj, metric), || BallTree::new(traj, metric, LEAF_SIZE));
-        let scanner = RowScanner { traj, metric, arc: &arc, balls: &balls, gamma };
+        let (mut arc, balls) = rayon::join(
+            || ArcLength::new(traj, metric, !separation.is_none()),
+            || BallTree::new(traj, metric, LEAF_SIZE),
+        );
+        let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s());
+        arc.plain = Vec::new();
+        let scanner = RowScanner { traj, metric, arc: &arc, balls: &balls, gamma, first_columns: &first_columns };
         let scan_batch = |blocks: std::ops::Range<usize>| -> Vec<Block> {
             blocks
                 .into_par_iter()
@@ -115,7 +142,8 @@ impl SublevelSet {
                 })
                 .collect()
         };
-        let mut set = Self { gamma, row_offsets: Vec::with_capacity(n + 1), runs: Vec::new(), closest: Vec::new() };
+        let mut set =
+            Self { gamma, separation, row_offsets: Vec::with_capacity(n + 1), runs: Vec::new(), closest: Vec::new() };
         set.row_offsets.push(0);
         // Blocks are scanned in parallel a batch at a time, and each batch is moved into the
         // result while the next one is scanned (the copy, and the page faults of a result that
@@ -151,14 +179,33 @@ impl SublevelSet {
     /// # Errors
     /// As [`SublevelSet::compute`].
     pub fn brute_force<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
+        Self::brute_force_separated(traj, metric, gamma, Separation::NONE)
+    }
+
+    /// Builds the separated set by measuring every pair, and testing each pair's separation on
+    /// its own against [`path_length`]: O(n²) time, for tests.
+    ///
+    /// # Errors
+    /// As [`SublevelSet::compute_separated`].
+    pub fn brute_force_separated<M: Metric + ?Sized>(
+        traj: &Trajectory,
+        metric: &M,
+        gamma: f64,
+        separation: Separation,
+    ) -> Result<Self> {
         check_gamma(gamma)?;
+        separation.check()?;
         metric.validate(traj)?;
         let n = traj.len();
-        let mut set = Self { gamma, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };
+        let (s, t) = (path_length(traj, metric), traj.timestamps_s());
+        let separated = |i: usize, j: usize| {
+            separation.is_none() || (j > i && s[j] - s[i] >= separation.path && t[j] - t[i] >= separation.time_s)
+        };
+        let mut set = Self { gamma, separation, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };
         for i in 0..n {
             let mut open: Option<(usize, usize)> = None;
             for j in i..=n {
-                let inside = j < n && metric.distance(traj.point(i), traj.point(j)) <= gamma;
+                let inside = j < n && separated(i, j) && metric.distance(traj.point(i), traj.point(j)) <= gamma;
                 match (inside, open) {
                     (true, None) => open = Some((j, j)),
                     (true, Some((a, _))) => open = Some((a, j)),
@@ -188,12 +235,18 @@ impl SublevelSet {
         self.gamma
     }
 
+    /// The separation the pairs keep ([`Separation::NONE`]: all of S_γ).
+    pub fn separation(&self) -> Separation {
+        self.separation
+    }
+
     /// Number of rows (poses).
     pub fn rows(&self) -> usize {
         self.row_offsets.len() - 1
     }
 
-    /// The runs of row `i`, in increasing column order; the first starts at column `i`.
+    /// The runs of row `i`, in increasing column order; without separation, the first starts at
+    /// column `i` (unless the metric breaks δ(x, x) = 0).
     ///
     /// # Panics
     /// If `i >= rows()`.
@@ -251,17 +304,39 @@ struct Block {
 /// by one vectorised pass over their cells.
 const TREE_CLOSEST_LEN: usize = 256;
 
+/// The cumulative path length s_k = Σ_{m<k} δ(x_m, x_{m+1}) of every pose under `metric`, in the
+/// metric's unit, summed in order (as `numpy.cumsum` of the steps sums them): the path length a
+/// [`Separation`] bounds. O(n).
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, Trajectory, path_length};
+/// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [3.0, 4.0], [3.0, 4.0]])?;
+/// assert_eq!(path_length(&traj, &Euclidean), vec![0.0, 5.0, 5.0]);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn path_length<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Vec<f64> {
+    ArcLength::new(traj, metric, true).plain
+}
+
 /// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
 struct ArcLength {
     s: Vec<f64>,
     margin: f64,
+    /// The plain sums ([`path_length`]) when asked for, from the same steps; else empty.
+    plain: Vec<f64>,
 }
 
 impl ArcLength {
-    fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Self {
+    fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, with_plain: bool) -> Self {
         let n = traj.len();
         let mut s = Vec::with_capacity(n);
+        let mut plain = Vec::with_capacity(if with_plain { n } else { 0 });
         let mut total = 0.0_f64;
+        let mut plain_total = 0.0_f64;
+        if with_plain {
+            plain.push(0.0);
+        }
         let mut largest_step = 0.0_f64;
         let scale = metric.rounding_scale(traj);
         s.push(0.0);
@@ -271,11 +346,15 @@ impl ArcLength {
             // Rounding up keeps s_k − s_j ≥ Σ δ over the stretch, so bounds never over-reach.
             total = (total + step).next_up();
             s.push(total);
+            if with_plain {
+                plain_total += step;
+                plain.push(plain_total);
+            }
         }
         // Rounding of δ (relative to the metric's scale: coordinates, or the radius an angle is
         // multiplied by) and of differences of s: 64 ulps of the largest magnitude in play.
         let margin = 64.0 * f64::EPSILON * (total + largest_step + scale + 1.0);
-        Self { s, margin }
+        Self { s, margin, plain }
     }
 
     /// Largest k ≥ j with s_k ≤ s_j + budget (k = j when the budget is below zero).
@@ -325,6 +404,8 @@ struct RowScanner<'a, M: ?Sized> {
     arc: &'a ArcLength,
     balls: &'a BallTree,
     gamma: f64,
+    /// The first column each row keeps ([`Separation::first_columns`]).
+    first_columns: &'a [u32],
 }
 
 impl<M: Metric + ?Sized> RowScanner<'_, M> {
@@ -338,7 +419,8 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         // A pose within `inside_reach` of the centre is within γ of every row, with room for the
         // rounding of the three distances of the triangle inequality.
         let reach = (self.gamma + radius + 2.0 * margin, self.gamma - radius - 3.0 * margin);
-        self.balls.near_spans(self.metric, centre, rows.start, reach, out);
+        // The first columns grow with the row, so the block's first row has the smallest.
+        self.balls.near_spans(self.metric, centre, self.first_columns[rows.start] as usize, reach, out);
     }
 
     fn scan_row(&self, i: usize, candidates: &[Leaf], out: &mut Block) {
@@ -346,8 +428,9 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         let margin = self.arc.margin;
         let reach = self.gamma + margin;
         let mut open: Option<(usize, usize)> = None;
-        // Next column to examine; columns before it are decided.
-        let mut j = i;
+        // Next column to examine; columns before it are decided (or not separated from i).
+        let first = self.first_columns[i] as usize;
+        let mut j = first;
         let mut next = 0;
         while next < candidates.len() {
             // Stretches that end before the scan: skipped in O(log) after a long run or jump.
@@ -357,7 +440,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             }
             let leaf = candidates[next];
             next += 1;
-            let (lo, hi) = ((leaf.lo as usize).max(i), leaf.hi as usize);
+            let (lo, hi) = ((leaf.lo as usize).max(first), leaf.hi as usize);
             if !leaf.inside && self.metric.distance(x_i, self.traj.point(leaf.centre as usize)) - leaf.radius > reach {
                 // Poses of a stretch whose ball stays farther than γ from x_i are all outside.
                 continue;
@@ -451,7 +534,7 @@ mod tests {
     #[test]
     fn gallop_bounds() {
         let traj = line(&[0.0, 0.0, 0.0, 1.0, 1.0, 5.0, 9.0]);
-        let arc = ArcLength::new(&traj, &Euclidean);
+        let arc = ArcLength::new(&traj, &Euclidean, false);
         // s = [0, 0, 0, 1, 1, 5, 9], each rounded up by at most a few ulps.
         assert_eq!(arc.last_within(0, 0.5), 2);
         assert_eq!(arc.last_within(0, 1.5), 4);

@@ -5,10 +5,10 @@
 
 mod support;
 
-use loops_core::{Euclidean, Trajectory, Warning, find_loops};
+use loops_core::{Euclidean, Separation, Trajectory, Warning, find_loops, find_loops_separated};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
-use support::{Case, any_case, check_against_dense, config, lattice_case};
+use support::{Case, any_case, check_against_dense, check_separated_against_dense, config, lattice_case};
 
 /// A sub-interval of time as fractions of the span, reaching a little outside it.
 fn interval() -> impl Strategy<Value = (f64, f64)> {
@@ -102,4 +102,67 @@ fn unbroken_diagonal_has_no_warning() {
     check_against_dense(&traj, 1.0, (0.1, 0.9)).unwrap();
     let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
     assert!(loops.warnings().is_empty());
+}
+
+/// A separation in path length, in time, or both; sometimes beyond the whole trajectory.
+fn separation() -> impl Strategy<Value = Separation> {
+    prop_oneof![
+        (0.0..30.0f64).prop_map(Separation::path),
+        (0.0..30.0f64).prop_map(Separation::time_s),
+        (0.0..20.0f64, 0.0..20.0f64).prop_map(|(path, time_s)| Separation { path, time_s }),
+        Just(Separation::time_s(1e-9)),
+    ]
+}
+
+fn check_separated(case: &Case, separation: Separation, interval: (f64, f64)) -> Result<(), TestCaseError> {
+    check_separated_against_dense(&case.traj, case.gamma, separation, interval).map_err(TestCaseError::fail)
+}
+
+proptest! {
+    #![proptest_config(config(256, 0x5EED_0014))]
+
+    /// Revisits (DESIGN §9): components, holes, closest pairs and τ/α/ρ of X = S_γ ∩ {pairs
+    /// `separation` apart} equal the dense matrix's.
+    #[test]
+    fn revisit_components_and_measures_equal_the_dense_reference(
+        case in any_case(250),
+        separation in separation(),
+        interval in interval(),
+    ) {
+        check_separated(&case, separation, interval)?;
+    }
+
+    #[test]
+    fn lattice_revisits_equal_the_dense_reference(
+        case in lattice_case(250),
+        separation in separation(),
+        interval in interval(),
+    ) {
+        check_separated(&case, separation, interval)?;
+    }
+}
+
+/// Out along a corridor and back: by the paper's topology one trivial component; at least 3
+/// apart along the path, the way back is one revisit of the way out, with no diagonal cell.
+#[test]
+fn out_and_back_is_one_revisit() {
+    let mut xs: Vec<f64> = (0..=10).map(f64::from).collect();
+    xs.extend((0..10).rev().map(f64::from));
+    let traj = line(&xs);
+    assert_eq!(find_loops(&traj, &Euclidean, 1.0).unwrap().components().len(), 1);
+    let separation = Separation::path(3.0);
+    check_separated_against_dense(&traj, 1.0, separation, (0.0, 1.0)).unwrap();
+    let revisits = find_loops_separated(&traj, &Euclidean, 1.0, separation).unwrap();
+    assert_eq!(revisits.components().len(), 1);
+    let c = &revisits.components()[0];
+    assert!(!c.trivial && c.closest_distance == 0.0);
+    // The turnaround at x = 10 (pose 10) is the nearest the way back comes to the way out.
+    assert_eq!(c.i_range, [0, 9]);
+    assert_eq!(c.j_range, [11, 20]);
+    // Nothing within the separation of the diagonal: (8, 12) is 4 apart, (9, 11) only 2.
+    assert!(revisits.component_of(8, 12).is_some() && revisits.component_of(9, 11).is_none());
+    // Far beyond the path's length: no revisit, and a warning that says so.
+    let none = find_loops_separated(&traj, &Euclidean, 1.0, Separation::path(100.0)).unwrap();
+    assert!(none.components().is_empty());
+    assert!(matches!(none.warnings(), [Warning::NoLoops { .. }]));
 }

@@ -4,7 +4,7 @@
 
 mod support;
 
-use loops_core::{Euclidean, Metric, Run, SublevelSet, Trajectory, find_loops, with_threads};
+use loops_core::{Euclidean, Metric, Run, Separation, SublevelSet, Trajectory, find_loops, with_threads};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 use support::{Case, DenseSet, any_case, config, float_case, lattice_case};
@@ -222,4 +222,105 @@ fn a_parked_robot_is_one_component() {
     let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
     assert_eq!(loops.components().len(), 1);
     assert_eq!(loops.components()[0].closest_distance, 0.0);
+}
+
+/// The Euclidean metric, counting the distances the scan measures (`distance`) and those the
+/// closest columns rank (`distance_rank`, `closest_in`: one per cell) apart.
+#[derive(Default)]
+struct Counting {
+    distances: std::sync::atomic::AtomicU64,
+    ranks: std::sync::atomic::AtomicU64,
+}
+
+impl Counting {
+    fn take(&self) -> (u64, u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        (self.distances.swap(0, Relaxed), self.ranks.swap(0, Relaxed))
+    }
+}
+
+impl Metric for Counting {
+    fn name(&self) -> String {
+        Euclidean.name()
+    }
+    fn check_dim(&self, dim: usize) -> loops_core::Result<()> {
+        Euclidean.check_dim(dim)
+    }
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.distances.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Euclidean.distance(a, b)
+    }
+    fn rounding_scale(&self, traj: &Trajectory) -> f64 {
+        Euclidean.rounding_scale(traj)
+    }
+    fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.ranks.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Euclidean.distance_rank(a, b)
+    }
+    fn closest_in(&self, x: &[f64], points: &[f64]) -> usize {
+        self.ranks.fetch_add((points.len() / x.len()) as u64, std::sync::atomic::Ordering::Relaxed);
+        Euclidean.closest_in(x, points)
+    }
+}
+
+/// The separated set equals the dense matrix restricted to pairs far enough apart and the
+/// brute force, and its scan measures no distance that the unseparated scan does not (DESIGN §9:
+/// each row starts at its first separated column, and from a later column the bounds jump at
+/// least as far).
+fn check_separated_set(case: &Case, separation: Separation) -> Result<(), TestCaseError> {
+    let Case { traj, gamma, .. } = case;
+    let counting = Counting::default();
+    let set = with_threads(Some(1), || SublevelSet::compute(traj, &counting, *gamma))??;
+    let (scan, _) = counting.take();
+    let separated = with_threads(Some(1), || SublevelSet::compute_separated(traj, &counting, *gamma, separation))??;
+    let (separated_scan, _) = counting.take();
+    prop_assert!(separated_scan <= scan, "{} distances separated, {} without ({})", separated_scan, scan, separation);
+    let dense = DenseSet::separated(traj, *gamma, separation);
+    for i in 0..traj.len() {
+        let expected = dense.upper_runs(i);
+        prop_assert_eq!(separated.row(i), expected.as_slice(), "row {} ({})", i, separation);
+        // Clipped where produced: a subset of the row of S_γ.
+        for run in separated.row(i) {
+            prop_assert!(set.contains(i, run.start as usize) && set.contains(i, run.end as usize));
+        }
+    }
+    prop_assert_eq!(&separated, &SublevelSet::brute_force_separated(traj, &Euclidean, *gamma, separation)?);
+    Ok(())
+}
+
+fn separation() -> impl Strategy<Value = Separation> {
+    prop_oneof![
+        (0.0..40.0f64).prop_map(Separation::path),
+        (0.0..40.0f64).prop_map(Separation::time_s),
+        (0.0..20.0f64, 0.0..20.0f64).prop_map(|(path, time_s)| Separation { path, time_s }),
+    ]
+}
+
+proptest! {
+    #![proptest_config(config(256, 0x5EED_0015))]
+
+    #[test]
+    fn separated_sets_equal_the_dense_matrix(case in any_case(400), separation in separation()) {
+        check_separated_set(&case, separation)?;
+    }
+}
+
+/// The urban drive (real-sized: 6,000 poses, γ = 40 m): the default separation measures fewer
+/// distances than S_γ's scan, ranks only the cells of runs it clips off the diagonal, and finds
+/// the same components as the brute force.
+#[test]
+fn separation_on_the_urban_drive_measures_fewer_distances() {
+    let traj = loops_core::UrbanDrive { duration_s: 600.0, ..Default::default() }.generate().unwrap().trajectory;
+    let gamma = loops_core::UrbanDrive::DEFAULT_GAMMA_M;
+    let counting = Counting::default();
+    let all = SublevelSet::compute(&traj, &counting, gamma).unwrap();
+    let (scan, ranks) = counting.take();
+    let separation = Separation::for_gamma(gamma);
+    let revisits = SublevelSet::compute_separated(&traj, &counting, gamma, separation).unwrap();
+    let (separated_scan, separated_ranks) = counting.take();
+    assert!(separated_scan < scan, "{separated_scan} vs {scan}");
+    let clipped_cells: u64 = revisits.runs().iter().map(|r| r.len() as u64).sum();
+    assert!(separated_ranks <= ranks + clipped_cells, "{separated_ranks} ranks vs {ranks} + {clipped_cells}");
+    assert!(revisits.upper_pairs() < all.upper_pairs());
+    assert_eq!(revisits, SublevelSet::brute_force_separated(&traj, &Euclidean, gamma, separation).unwrap());
 }

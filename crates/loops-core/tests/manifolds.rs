@@ -10,7 +10,7 @@ use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI, SQRT_2, TAU};
 
 use loops_core::{
     Angular, EARTH_RADIUS_M, Error, Euclidean, Haversine, Loops, Metric, MetricSpec, RotationDistance, Se2, Se3,
-    Se3Rotation, So3, Sphere, SublevelSet, Torus, Trajectory, find_loops,
+    Se3Rotation, Separation, So3, Sphere, SublevelSet, Torus, Trajectory, find_loops,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
@@ -1074,6 +1074,15 @@ fn check_engine(setup: &Setup, walk: &Walk) -> Result<(), TestCaseError> {
     // The same metric by name (statically dispatched), components included.
     let spec: MetricSpec = metric.name().parse()?;
     prop_assert_eq!(spec.find_loops(&traj, gamma)?, Loops::from_set(&traj, metric.as_ref(), brute));
+    // Revisits under the metric's own path length, 2γ apart (and half the span in time on odd
+    // walks).
+    let time_s = if walk.variant % 2 == 1 { 0.5 * traj.span_s() } else { 0.0 };
+    let separation = Separation { path: 2.0 * gamma, time_s };
+    let set = SublevelSet::compute_separated(&traj, metric.as_ref(), gamma, separation)?;
+    let brute = SublevelSet::brute_force_separated(&traj, metric.as_ref(), gamma, separation)?;
+    prop_assert_eq!(&set, &brute, "{}: separated by {}\n{}", metric.name(), separation, describe(&traj, gamma));
+    let loops = spec.find_loops_separated(&traj, gamma, separation)?;
+    prop_assert_eq!(loops, Loops::from_set(&traj, metric.as_ref(), brute));
     Ok(())
 }
 

@@ -12,7 +12,10 @@ use std::cmp::Ordering;
 use std::collections::VecDeque;
 use std::fmt;
 
-use loops_core::{Euclidean, Loops, Metric, Run, Scale, Selection, Side, Trajectory, Warning, find_loops};
+use loops_core::{
+    Euclidean, Loops, Metric, Run, Scale, Selection, Separation, Side, Trajectory, Warning, find_loops,
+    find_loops_separated,
+};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 
@@ -305,7 +308,22 @@ pub struct DenseSet {
 
 impl DenseSet {
     pub fn new(traj: &Trajectory, gamma: f64) -> Self {
+        Self::separated(traj, gamma, Separation::NONE)
+    }
+
+    /// The pairs within γ that are also `separation` apart: path length summed here, pose by
+    /// pose, and times subtracted pair by pair.
+    pub fn separated(traj: &Trajectory, gamma: f64, separation: Separation) -> Self {
         let n = traj.len();
+        let mut path = vec![0.0; n];
+        for k in 1..n {
+            path[k] = path[k - 1] + Euclidean.distance(traj.point(k - 1), traj.point(k));
+        }
+        let t = traj.timestamps_s();
+        let apart = |i: usize, j: usize| {
+            let (a, b) = (i.min(j), i.max(j));
+            separation.is_none() || (a < b && path[b] - path[a] >= separation.path && t[b] - t[a] >= separation.time_s)
+        };
         let mut distance = vec![0.0; n * n];
         for i in 0..n {
             for j in i..n {
@@ -314,7 +332,7 @@ impl DenseSet {
                 distance[j * n + i] = d;
             }
         }
-        let inside = distance.iter().map(|&d| d <= gamma).collect();
+        let inside = (0..n * n).map(|k| distance[k] <= gamma && apart(k / n, k % n)).collect();
         Self { n, gamma, distance, inside }
     }
 
@@ -386,7 +404,10 @@ pub struct DenseLoops {
 
 impl DenseLoops {
     pub fn new(traj: &Trajectory, gamma: f64) -> Self {
-        let set = DenseSet::new(traj, gamma);
+        Self::of(traj, DenseSet::new(traj, gamma))
+    }
+
+    pub fn of(traj: &Trajectory, set: DenseSet) -> Self {
         let n = set.n;
         let widths = traj.cell_widths_s().to_vec();
 
@@ -602,6 +623,25 @@ pub fn check_against_dense(traj: &Trajectory, gamma: f64, interval: (f64, f64)) 
     check_components(traj, &loops, &dense)?;
     check_measures(traj, &loops, &dense, interval)?;
     check_warning(traj, &loops, &dense)
+}
+
+/// As [`check_against_dense`], for the revisits `separation` apart.
+pub fn check_separated_against_dense(
+    traj: &Trajectory,
+    gamma: f64,
+    separation: Separation,
+    interval: (f64, f64),
+) -> Result<(), String> {
+    let loops = find_loops_separated(traj, &Euclidean, gamma, separation).map_err(|e| e.to_string())?;
+    let dense = DenseLoops::of(traj, DenseSet::separated(traj, gamma, separation));
+    check_components(traj, &loops, &dense)?;
+    check_measures(traj, &loops, &dense, interval)?;
+    ensure!(loops.components().iter().all(|c| !c.trivial), "a trivial revisit component");
+    match (dense.set.cells(), loops.warnings()) {
+        (0, [Warning::NoLoops { separation: s, .. }]) if *s == separation => Ok(()),
+        (cells, []) if cells > 0 => Ok(()),
+        (cells, warnings) => Err(format!("{cells} cells, warnings {warnings:?}")),
+    }
 }
 
 /// Partition, count, and every field of every component.
