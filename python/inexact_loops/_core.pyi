@@ -6,7 +6,7 @@ them in ``crates/loops-py``, not here.
 
 from collections.abc import Callable
 from os import PathLike
-from typing import Literal, Protocol, final
+from typing import ClassVar, Literal, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -254,6 +254,35 @@ class Trajectory:
         """
 
 @final
+class Separation:
+    """"""
+
+    DEFAULT_GAMMAS: ClassVar[float]
+    def __init__(self, *, path: float = 0.0, time_s: float = 0.0) -> None: ...
+    @staticmethod
+    def for_gamma(gamma: float) -> Separation:
+        """"""
+    @property
+    def path(self) -> float:
+        """"""
+    @property
+    def time_s(self) -> float:
+        """"""
+    @property
+    def is_none(self) -> bool:
+        """"""
+    def __eq__(self, other: object) -> bool: ...
+    def __ne__(self, other: object) -> bool: ...
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+
+def path_length(
+    trajectory: Trajectory,
+    *,
+    metric: str | _MetricLike | None = None,
+) -> npt.NDArray[np.float64]:
+    """"""
+
+@final
 class Loops:
     """The inexact loops of a trajectory at one γ: the sublevel set S_γ as runs, its loop
     components, and the loop duration, area and density over them. Returned by
@@ -264,6 +293,9 @@ class Loops:
     @property
     def gamma(self) -> float:
         """The threshold γ."""
+    @property
+    def separation(self) -> Separation:
+        """"""
     @property
     def metric_name(self) -> str:
         """The name of the metric the loops were found with: its spec (``"euclidean"``,
@@ -550,6 +582,7 @@ def find_loops(
     | _MetricLike
     | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float]
     | None = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
     threads: int | None = None,
 ) -> Loops:
     """Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair

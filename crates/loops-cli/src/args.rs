@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Result, bail};
 use clap::Args;
-use loops_core::{DEFAULT_EPSILON_S, MetricSpec, SampleSize, Sampler, SamplerKind, Trajectory};
+use loops_core::{DEFAULT_EPSILON_S, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory};
 
 /// The flags that say how to read a pose file, shared by every command that reads one.
 #[derive(Debug, Args)]
@@ -97,12 +97,51 @@ pub(crate) struct EngineArgs {
     /// haversine(radius_m=R), angular. SE(3), SO(3) and SE(2) use the file's orientations.
     #[arg(long, default_value_t = MetricSpec::default().name())]
     pub(crate) metric: String,
+    /// Revisits only: pairs at least this path length apart along the trajectory, in the
+    /// metric's unit [default: 4 x gamma, or 0 when only --separation-time is given].
+    #[arg(long, value_name = "LENGTH", allow_hyphen_values = true)]
+    pub(crate) separation_path: Option<f64>,
+    /// Revisits only: pairs at least this many seconds apart (LIO-SAM waits 30) [default: 0].
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    pub(crate) separation_time: Option<f64>,
+    /// The paper's S_gamma: no separation, so pairs that odometry ties together count too, as
+    /// trivial components and simple loops.
+    #[arg(long, conflicts_with_all = ["separation_path", "separation_time"])]
+    pub(crate) no_separation: bool,
     /// Worker threads (default: one per core). Results do not depend on it.
     #[arg(long)]
     pub(crate) threads: Option<usize>,
 }
 
 impl EngineArgs {
+    /// The separation the flags ask for, checked: `--no-separation`, the flags given, or the
+    /// default [`Separation::for_gamma`].
+    pub(crate) fn separation(&self) -> Result<Separation> {
+        let separation = match (self.no_separation, self.separation_path, self.separation_time) {
+            (true, ..) => Separation::NONE,
+            (false, None, None) => Separation::for_gamma(self.gamma),
+            (false, path, time_s) => Separation { path: path.unwrap_or(0.0), time_s: time_s.unwrap_or(0.0) },
+        };
+        separation.check()?;
+        Ok(separation)
+    }
+
+    /// How the separation was chosen, for a run's header: `separation: path >= 24 (the
+    /// default, 4 x gamma; --no-separation for the paper's S_gamma)`.
+    pub(crate) fn separation_line(&self, separation: Separation) -> String {
+        let how = if self.no_separation {
+            "--no-separation: the paper's S_gamma, trivial components included".to_owned()
+        } else if self.separation_path.is_none() && self.separation_time.is_none() {
+            format!(
+                "the default, {} x gamma; --separation-path/--separation-time to change, --no-separation for the paper's S_gamma",
+                Separation::DEFAULT_GAMMAS
+            )
+        } else {
+            "as given".to_owned()
+        };
+        format!("separation: {separation} ({how})")
+    }
+
     /// The metric `--metric` names.
     pub(crate) fn spec(&self) -> Result<MetricSpec> {
         Ok(self.metric.parse()?)

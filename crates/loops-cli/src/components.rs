@@ -38,8 +38,12 @@ pub(crate) fn components(args: ComponentsArgs) -> Result<()> {
     let source = args.file.display().to_string();
     let spec = args.engine.spec()?;
     let traj = args.input.read(&args.file, &spec)?;
-    let (loops, seconds) = timed(args.engine.threads, || spec.find_loops(&traj, args.engine.gamma))
-        .with_context(|| format!("finding loops in {source}"))?;
+    loops_core::check_gamma(args.engine.gamma)?;
+    let separation = args.engine.separation()?;
+    eprintln!("loops: {}", args.engine.separation_line(separation));
+    let (loops, seconds) =
+        timed(args.engine.threads, || spec.find_loops_separated(&traj, args.engine.gamma, separation))
+            .with_context(|| format!("finding loops in {source}"))?;
     print(&source, &traj, &loops, seconds, &args.output)
 }
 

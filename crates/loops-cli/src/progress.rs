@@ -109,6 +109,17 @@ impl Log<'_> {
         }
     }
 
+    /// A warning about the log's result: on stderr (above the bars), even with `--quiet`.
+    pub(crate) fn warn(&self, warning: &str) {
+        let line = format!("loops: warning: {}: {warning}", self.name);
+        match &self.batch.bars {
+            Some((multi, _)) => {
+                let _ = multi.println(&line);
+            }
+            None => eprintln!("{line}"),
+        }
+    }
+
     /// The log is done: `outcome` is its one-line result (or error).
     pub(crate) fn finish(self, ok: bool, outcome: &str) {
         let done = self.batch.finished.fetch_add(1, Ordering::SeqCst) + 1;

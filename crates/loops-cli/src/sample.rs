@@ -56,8 +56,11 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let epsilon_s = args.sampling.epsilon_s;
     let (table, traj) = args.input.read_table(&args.file, &spec)?;
     let gamma = args.engine.gamma;
+    loops_core::check_gamma(gamma)?;
+    let separation = args.engine.separation()?;
+    eprintln!("loops: {}", args.engine.separation_line(separation));
     let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
-        let loops = spec.find_loops(&traj, gamma)?;
+        let loops = spec.find_loops_separated(&traj, gamma, separation)?;
         let samples = match &args.detections {
             None => spec.sample_loops(&traj, &loops, &sampler)?,
             Some(path) => {
@@ -71,7 +74,7 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         Ok((loops, samples))
     })??;
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
-    for warning in samples.warnings() {
+    for warning in loops.warnings().iter().map(ToString::to_string).chain(samples.warnings().iter().map(ToString::to_string)) {
         eprintln!("loops: warning: {warning}");
     }
     let mut stdout = std::io::stdout().lock();

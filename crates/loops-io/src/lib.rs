@@ -128,7 +128,7 @@ pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
 pub use quality::QualitySummary;
 pub use read::{ReadOptions, read_trajectory, read_trajectory_with};
-pub use report::{ComponentReport, LoopsReport, loops_report_to_json, write_loops_report};
+pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, seconds_of_ns};
 pub use timing::Timing;

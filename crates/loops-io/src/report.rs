@@ -23,7 +23,9 @@ pub struct LoopsReport {
     pub gamma: f64,
     /// The metric's name.
     pub metric: String,
-    /// The number of pose pairs in S_γ.
+    /// The separation the pairs keep (both 0: the paper's S_γ).
+    pub separation: SeparationReport,
+    /// The number of pose pairs in S_γ (in the revisits, with a separation).
     pub pair_count: u64,
     /// The mean loop duration over the whole trajectory, seconds.
     pub loop_density_s: f64,
@@ -31,6 +33,21 @@ pub struct LoopsReport {
     pub warnings: Vec<String>,
     /// Every component, by id.
     pub components: Vec<ComponentReport>,
+}
+
+/// The separation of a [`LoopsReport`]: `{"path": 24.0, "time_s": 0.0}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SeparationReport {
+    /// Minimum path length between the poses of a pair, in the metric's unit.
+    pub path: f64,
+    /// Minimum time between them, seconds.
+    pub time_s: f64,
+}
+
+impl From<loops_core::Separation> for SeparationReport {
+    fn from(s: loops_core::Separation) -> Self {
+        Self { path: s.path, time_s: s.time_s }
+    }
 }
 
 /// One component of a [`LoopsReport`]: ranges as `[first, last]`, times in seconds (the poses'
@@ -104,6 +121,7 @@ impl LoopsReport {
             span_s: loops.span_s(),
             gamma: loops.gamma(),
             metric: loops.metric_name().to_owned(),
+            separation: loops.separation().into(),
             pair_count: loops.pair_count(),
             loop_density_s: loops.loop_density(t[0], t[t.len() - 1], Selection::All, Side::Both, Scale::Seconds)?,
             warnings: loops.warnings().iter().map(ToString::to_string).collect(),

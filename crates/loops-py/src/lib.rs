@@ -5,7 +5,7 @@
 //!
 //! One module per class, with the functions that return it, in the paper's order:
 //! `py_trajectory` (`Trajectory`, `urban_drive`, `read_trajectory`, `list_topics`), `py_loops`
-//! (`Loops`, `find_loops`), `py_detections` (`Detections`, `draw_detections`), `py_clusters`
+//! (`Loops`, `find_loops`, `path_length`), `py_separation` (`Separation`), `py_detections` (`Detections`, `draw_detections`), `py_clusters`
 //! (`DetectionClusters`, `cluster_detections`), `py_samples` (`Samples`, `sample`) and
 //! `py_quality` (`SampleQuality`, `sample_quality`). Below them: `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments) and `error`
@@ -20,6 +20,7 @@ mod py_metric;
 mod py_plane;
 mod py_quality;
 mod py_samples;
+mod py_separation;
 mod py_trajectory;
 
 use pyo3::prelude::*;
@@ -45,6 +46,8 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     module.add_class::<py_trajectory::Trajectory>()?;
     module.add_class::<py_loops::Loops>()?;
+    module.add_class::<py_separation::Separation>()?;
+    module.add_function(wrap_pyfunction!(py_loops::path_length, module)?)?;
     module.add_function(wrap_pyfunction!(py_loops::find_loops, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::urban_drive, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::read_trajectory, module)?)?;

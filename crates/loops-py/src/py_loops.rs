@@ -11,11 +11,17 @@ use crate::convert::{bool_column, float64_column, index_column, int64_column, po
 use crate::detached;
 use crate::error::{Failure, value_error};
 use crate::py_metric::{MetricArg, MetricRef};
+use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::Trajectory;
 use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
 
 /// Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
 /// (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
+///
+/// By default only *revisits* count: pairs at least ``Separation.for_gamma(gamma)`` (4 γ) apart
+/// along the path, the pairs a SLAM back end wants to match; pairs that odometry already ties
+/// together are left out, and no component is trivial. ``separation=None`` gives the paper's
+/// S_γ, with its trivial components and simple loops.
 ///
 /// Args:
 ///     trajectory: a :class:`Trajectory` (for a manifold, built by the matching constructor,
@@ -25,36 +31,77 @@ use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
 ///         :mod:`inexact_loops.metrics` object such as ``il.metrics.SE3(rotation_weight_m_per_rad=10)``,
 ///         or — a slow path, one Python call per distance on one thread — any callable
 ///         ``f(a, b) -> float`` on two points (numpy arrays) satisfying the triangle inequality.
+///     separation: ``"auto"`` (the default, ``Separation.for_gamma(gamma)``), ``None`` (the
+///         paper's S_γ), a path length in the metric's unit, or a :class:`Separation` (path
+///         length and/or time).
 ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
 ///
 /// Returns:
 ///     :class:`Loops`.
 ///
 /// Raises:
-///     InvalidParameterError: gamma not positive and finite, unknown metric, threads = 0.
+///     InvalidParameterError: gamma not positive and finite, unknown metric, a negative
+///         separation, threads = 0.
 ///
 /// Example:
+///     A 95% circle of radius 10 m: its ends come within 3.1 m of each other, 60 m apart along
+///     the path.
+///
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
 ///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
 ///     >>> loops = il.find_loops(traj, gamma=4.0)
-///     >>> loops.components["trivial"].tolist()
+///     >>> loops.separation, loops.components["trivial"].tolist()
+///     (Separation(path=16.0, time_s=0.0), [False])
+///     >>> il.find_loops(traj, gamma=4.0, separation=None).components["trivial"].tolist()
 ///     [True, False]
 #[pyfunction]
-#[pyo3(signature = (trajectory, *, gamma, metric=None, threads=None))]
+#[pyo3(signature = (trajectory, *, gamma, metric=None, separation=SeparationArg::Auto, threads=None))]
+#[pyo3(text_signature = "(trajectory, *, gamma, metric=None, separation='auto', threads=None)")]
 pub(crate) fn find_loops(
     py: Python<'_>,
     trajectory: &Trajectory,
     gamma: f64,
     metric: Option<&Bound<'_, PyAny>>,
+    separation: SeparationArg,
     threads: Option<usize>,
 ) -> PyResult<Loops> {
     let traj = Arc::clone(&trajectory.inner);
+    let separation = separation.at(gamma);
     let inner = MetricArg::from_py(metric)?.run(py, threads, |metric| match metric {
-        MetricRef::Spec(spec) => spec.find_loops(&traj, gamma),
-        MetricRef::Callable(callable) => loops_core::find_loops(&traj, callable, gamma),
+        MetricRef::Spec(spec) => spec.find_loops_separated(&traj, gamma, separation),
+        MetricRef::Callable(callable) => loops_core::find_loops_separated(&traj, callable, gamma, separation),
     })?;
     Ok(Loops { inner: Arc::new(inner) })
+}
+
+/// The cumulative path length of every pose under ``metric``: s_0 = 0, s_k = s_{k−1} + δ(x_{k−1},
+/// x_k), in the metric's unit, summed in order (as ``numpy.cumsum`` of the steps). A path
+/// :class:`Separation` bounds ``s[j] - s[i]``.
+///
+/// Args:
+///     trajectory: a :class:`Trajectory`.
+///     metric: as in :func:`find_loops` (a name or an :mod:`inexact_loops.metrics` object).
+///
+/// Returns:
+///     numpy.ndarray: float64, one value per pose.
+///
+/// Example:
+///     >>> import numpy as np, inexact_loops as il
+///     >>> traj = il.Trajectory(np.arange(3.0), np.array([[0.0, 0.0], [3.0, 4.0], [3.0, 4.0]]))
+///     >>> il.path_length(traj).tolist()
+///     [0.0, 5.0, 5.0]
+#[pyfunction]
+#[pyo3(signature = (trajectory, *, metric=None))]
+pub(crate) fn path_length<'py>(
+    py: Python<'py>,
+    trajectory: &Trajectory,
+    metric: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let spec = MetricArg::spec_from_py(metric, "path_length")?;
+    let traj = Arc::clone(&trajectory.inner);
+    let s = crate::detached(py, move || Ok(spec.path_length(&traj)?))?;
+    Ok(PyArray1::from_vec(py, s))
 }
 
 /// The inexact loops of a trajectory at one γ: the sublevel set S_γ as runs, its loop
@@ -111,9 +158,10 @@ impl Loops {
     fn __repr__(&self) -> String {
         let nontrivial = self.inner.components().iter().filter(|c| !c.trivial).count();
         format!(
-            "Loops(gamma={}, metric={}, {} poses, {} components ({} non-trivial), {} pairs)",
+            "Loops(gamma={}, metric={}, separation={}, {} poses, {} components ({} non-trivial), {} pairs)",
             self.inner.gamma(),
             self.inner.metric_name(),
+            self.inner.separation(),
             self.inner.len(),
             self.inner.components().len(),
             nontrivial,
@@ -125,6 +173,12 @@ impl Loops {
     #[getter]
     fn gamma(&self) -> f64 {
         self.inner.gamma()
+    }
+
+    /// The separation the pairs keep (:class:`Separation`; both 0 for the paper's S_γ).
+    #[getter]
+    fn separation(&self) -> Separation {
+        Separation { inner: self.inner.separation() }
     }
 
     /// The name of the metric the loops were found with: its spec (``"euclidean"``,
@@ -347,7 +401,7 @@ impl Loops {
         components: Option<Vec<usize>>,
         side: &str,
         normalized: bool,
-    ) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let tau = self.measure(py, side, normalized, move |loops, side, scale| {
             loops.loop_duration(selection(&components), side, scale)
         })?;

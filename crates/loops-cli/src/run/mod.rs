@@ -18,10 +18,10 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use loops_core::{
-    Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Scale, Selection, Side, Trajectory,
+    Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Scale, Selection, Separation, Side, Trajectory,
     sample_quality,
 };
-use loops_io::{QualitySummary, SamplesFormat, WriteError};
+use loops_io::{QualitySummary, SamplesFormat, SeparationReport, WriteError};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -97,6 +97,7 @@ pub(crate) struct LogSummary {
     pub(crate) span_s: f64,
     pub(crate) metric: String,
     pub(crate) gamma: f64,
+    pub(crate) separation: SeparationReport,
     pub(crate) components: usize,
     pub(crate) nontrivial_components: usize,
     pub(crate) holes: u64,
@@ -140,6 +141,7 @@ pub(crate) struct BatchSummary<'a> {
     pub(crate) out: String,
     pub(crate) gamma: f64,
     pub(crate) metric: String,
+    pub(crate) separation: SeparationReport,
     pub(crate) sampler: &'a str,
     pub(crate) sample_size: String,
     pub(crate) seed: u64,
@@ -158,6 +160,7 @@ struct Settings<'a> {
     args: &'a RunArgs,
     spec: MetricSpec,
     sampler: Sampler,
+    separation: Separation,
     out: &'a OutDir,
 }
 
@@ -167,6 +170,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     let sampler = args.sampling.sampler()?;
     // Refused once, before any log is read, rather than once per log.
     loops_core::check_gamma(args.engine.gamma)?;
+    let separation = args.engine.separation()?;
     loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
     args.engine.threads.map(loops_core::check_threads).transpose()?;
     if args.out.exists() && !args.out.is_dir() {
@@ -182,7 +186,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
     guard::with_writes(|writes| writes.create_dir(&args.out))?;
     let out = OutDir::take(&args.out, args.force)?;
 
-    let settings = Settings { args: &args, spec, sampler, out: &out };
+    let settings = Settings { args: &args, spec, sampler, separation, out: &out };
     let batch = Batch::new(progress::Mode::detect(args.quiet), jobs.len());
     batch.println(&format!(
         "loops: {} log(s), gamma {} ({}), sampler {} ({}), results to {}",
@@ -193,6 +197,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
         size_text(settings.sampler.size),
         args.out.display()
     ));
+    batch.println(&format!("loops: {}", args.engine.separation_line(separation)));
     let outcomes: Vec<LogOutcome> = loops_core::with_threads(args.engine.threads, || {
         jobs.par_iter()
             .map(|job| {
@@ -219,6 +224,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
         out: args.out.display().to_string(),
         gamma: args.engine.gamma,
         metric: settings.spec.name(),
+        separation: separation.into(),
         sampler: settings.sampler.kind.name(),
         sample_size: size_text(settings.sampler.size),
         seed: settings.sampler.seed,
@@ -313,7 +319,9 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
 
     log.stage(&format!("finding loops in {} poses", traj.len()));
     let clock = Instant::now();
-    let loops = spec.find_loops(&traj, gamma).with_context(|| format!("finding loops in {source}"))?;
+    let loops = spec
+        .find_loops_separated(&traj, gamma, settings.separation)
+        .with_context(|| format!("finding loops in {source}"))?;
     seconds.find_loops = clock.elapsed().as_secs_f64();
     let loop_duration_s = loops.loop_duration(Selection::All, Side::Both, Scale::Seconds)?;
 
@@ -337,6 +345,7 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         span_s: traj.span_s(),
         metric: loops.metric_name().to_owned(),
         gamma,
+        separation: loops.separation().into(),
         components: components.len(),
         nontrivial_components: components.iter().filter(|c| !c.trivial).count(),
         holes: components.iter().map(|c| c.holes).sum(),
@@ -378,6 +387,9 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
     seconds.write = clock.elapsed().as_secs_f64();
     seconds.total = start.elapsed().as_secs_f64();
     summary.seconds = seconds;
+    for warning in &summary.warnings {
+        log.warn(warning);
+    }
     let json = serde_json::to_string_pretty(&summary)? + "\n";
     write_folder(settings, &job.name, |dir| {
         let file = |name: &str| dir.join(name);
