@@ -126,26 +126,26 @@ impl EngineArgs {
         Ok(separation)
     }
 
-    /// How the separation was chosen, for a run's header: `separation: path >= 24 (the
-    /// default, 4 x gamma; --no-separation for the paper's S_gamma)`.
-    pub(crate) fn separation_line(&self, separation: Separation) -> String {
-        let how = if self.no_separation {
-            "--no-separation: the paper's S_gamma, trivial components included".to_owned()
-        } else if self.separation_path.is_none() && self.separation_time.is_none() {
-            format!(
-                "the default, {} x gamma; --separation-path/--separation-time to change, --no-separation for the paper's S_gamma",
-                Separation::DEFAULT_GAMMAS
-            )
-        } else {
-            "as given".to_owned()
-        };
-        format!("separation: {separation} ({how})")
-    }
-
     /// The metric `--metric` names.
     pub(crate) fn spec(&self) -> Result<MetricSpec> {
         Ok(self.metric.parse()?)
     }
+}
+
+/// How a result's separation was chosen, for a run's header: `separation: path >= 24 (the
+/// default, 4 x gamma; ...)`.
+pub(crate) fn separation_line(separation: Separation, gamma: f64) -> String {
+    let how = if separation.is_none() {
+        "--no-separation: the paper's S_gamma, trivial components included".to_owned()
+    } else if separation == Separation::for_gamma(gamma) {
+        format!(
+            "the default, {} x gamma; --separation-path/--separation-time to change, --no-separation for the paper's S_gamma",
+            Separation::DEFAULT_GAMMAS
+        )
+    } else {
+        "as given".to_owned()
+    };
+    format!("separation: {separation} ({how})")
 }
 
 /// How to sample: the flags `loops sample` and `loops run` share, with the core's defaults.

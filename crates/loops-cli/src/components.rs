@@ -10,7 +10,7 @@ use clap::Args;
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side, Trajectory};
 use loops_io::LoopsReport;
 
-use crate::args::{EngineArgs, InputArgs, JsonTo, OutputArgs};
+use crate::args::{EngineArgs, InputArgs, JsonTo, OutputArgs, separation_line};
 use crate::guard;
 
 /// List the loop components of a pose file (MCAP, TUM, CSV, KITTI, EuRoC, TUC or g2o).
@@ -40,7 +40,6 @@ pub(crate) fn components(args: ComponentsArgs) -> Result<()> {
     let traj = args.input.read(&args.file, &spec)?;
     loops_core::check_gamma(args.engine.gamma)?;
     let separation = args.engine.separation()?;
-    eprintln!("loops: {}", args.engine.separation_line(separation));
     let (loops, seconds) =
         timed(args.engine.threads, || spec.find_loops_separated(&traj, args.engine.gamma, separation))
             .with_context(|| format!("finding loops in {source}"))?;
@@ -100,6 +99,7 @@ fn write_table(
         Scale::Seconds,
     )?;
     writeln!(out, "{source}")?;
+    writeln!(out, "  {}", separation_line(loops.separation(), loops.gamma()))?;
     let t0 = traj.timestamps_s()[0];
     writeln!(
         out,

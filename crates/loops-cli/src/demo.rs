@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use loops_core::{MetricSpec, UrbanDrive};
+use loops_core::{MetricSpec, Separation, UrbanDrive};
 
 use crate::args::OutputArgs;
 use crate::components;
@@ -24,6 +24,9 @@ pub(crate) struct DemoArgs {
     /// The distance threshold γ, metres.
     #[arg(long, value_name = "GAMMA_M", default_value_t = UrbanDrive::DEFAULT_GAMMA_M, allow_hyphen_values = true)]
     gamma: f64,
+    /// The paper's S_gamma instead of the revisits at least 4 x gamma apart along the path.
+    #[arg(long)]
+    no_separation: bool,
     /// Worker threads (default: one per core).
     #[arg(long)]
     threads: Option<usize>,
@@ -35,7 +38,10 @@ pub(crate) fn demo(args: DemoArgs) -> Result<()> {
     let spec = UrbanDrive { duration_s: args.duration_s, seed: args.seed, ..UrbanDrive::default() };
     let drive = spec.generate().context("generating the urban drive")?;
     let source = format!("urban drive (seed {}, {:.0} s at {} Hz)", spec.seed, spec.duration_s, spec.rate_hz);
-    let (loops, seconds) =
-        components::timed(args.threads, || MetricSpec::Euclidean.find_loops(&drive.trajectory, args.gamma))?;
+    loops_core::check_gamma(args.gamma)?;
+    let separation = if args.no_separation { Separation::NONE } else { Separation::for_gamma(args.gamma) };
+    let (loops, seconds) = components::timed(args.threads, || {
+        MetricSpec::Euclidean.find_loops_separated(&drive.trajectory, args.gamma, separation)
+    })?;
     components::print(&source, &drive.trajectory, &loops, seconds, &args.output)
 }

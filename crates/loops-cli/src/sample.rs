@@ -58,7 +58,6 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let gamma = args.engine.gamma;
     loops_core::check_gamma(gamma)?;
     let separation = args.engine.separation()?;
-    eprintln!("loops: {}", args.engine.separation_line(separation));
     let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
         let loops = spec.find_loops_separated(&traj, gamma, separation)?;
         let samples = match &args.detections {
@@ -74,7 +73,9 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         Ok((loops, samples))
     })??;
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
-    for warning in loops.warnings().iter().map(ToString::to_string).chain(samples.warnings().iter().map(ToString::to_string)) {
+    for warning in
+        loops.warnings().iter().map(ToString::to_string).chain(samples.warnings().iter().map(ToString::to_string))
+    {
         eprintln!("loops: warning: {warning}");
     }
     let mut stdout = std::io::stdout().lock();
@@ -134,6 +135,7 @@ fn write_summary(
 ) -> Result<()> {
     let nontrivial = loops.components().iter().filter(|c| !c.trivial).count();
     writeln!(out, "{}", file.display())?;
+    writeln!(out, "  {}", crate::args::separation_line(loops.separation(), loops.gamma()))?;
     writeln!(
         out,
         "  {} poses; gamma {} ({}): {} components ({} non-trivial)",

@@ -43,18 +43,41 @@ fn components_table_and_json() {
     let dir = temp_dir("json");
     let file = out_and_back(&dir);
     let json = dir.join("out.json");
-    let output = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--json", json.to_str().unwrap()]);
+    let paper = ["components", file.to_str().unwrap(), "--gamma", "1.5", "--no-separation"];
+    let output = loops(&[&paper[..], &["--json", json.to_str().unwrap()]].concat());
     assert!(output.status.success(), "{}", stderr(&output));
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(stdout.contains("41 poses"), "{stdout}");
+    assert!(stdout.contains("separation: none (--no-separation"), "{stdout}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     // Going out and back along one line folds the path onto itself: every pair within γ of the
-    // turn is connected to the diagonal through the turning point, so it is all one trivial
-    // component, shaped like an X in the (t, t') plane.
+    // turn is connected to the diagonal through the turning point, so by the paper's topology it
+    // is all one trivial component, shaped like an X in the (t, t') plane.
     let components = report["components"].as_array().unwrap();
     assert_eq!(components.len(), 1, "{report}");
     assert_eq!(components[0]["trivial"], true);
     assert_eq!(report["poses"], 41);
+    assert_eq!(report["separation"], serde_json::json!({"path": 0.0, "time_s": 0.0}));
+    // By default only revisits count (at least 4γ = 6 apart along the path): the way back is one
+    // revisit of the way out, and the header says which separation was used.
+    let table = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5"]);
+    let table = String::from_utf8_lossy(&table.stdout);
+    assert!(table.contains("separation: path >= 6 (the default, 4 x gamma"), "{table}");
+    let revisits = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--json", "-"]);
+    assert!(revisits.status.success(), "{}", stderr(&revisits));
+    let report: serde_json::Value = serde_json::from_slice(&revisits.stdout).unwrap();
+    assert_eq!(report["separation"], serde_json::json!({"path": 6.0, "time_s": 0.0}));
+    let components = report["components"].as_array().unwrap();
+    assert_eq!(components.len(), 1, "{report}");
+    assert_eq!(components[0]["trivial"], false);
+    // Asked for by time instead, or beyond the path's length: the latter is a warning.
+    let far = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--separation-path", "1000"]);
+    assert!(far.status.success(), "{}", stderr(&far));
+    assert!(stderr(&far).contains("warning: no revisit at gamma 1.5"), "{}", stderr(&far));
+    assert_one_line_error(
+        &loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--separation-time", "-1"]),
+        "time separation",
+    );
 
     // The JSON is not replaced without --force, and is with it.
     let again = loops(&["components", file.to_str().unwrap(), "--gamma", "1.5", "--json", json.to_str().unwrap()]);
@@ -169,6 +192,7 @@ fn se3_metric_uses_the_file_orientations() {
             "1.5",
             "--metric",
             metric,
+            "--no-separation",
             "--json",
             json.to_str().unwrap(),
         ]);
@@ -260,11 +284,15 @@ fn sample_skip_trivial_keeps_only_revisits() {
         assert!(output.status.success(), "{}", stderr(&output));
         lags(&std::fs::read_to_string(out).unwrap())
     };
-    // The laps are 160 poses long: a revisit is about a lap apart; the trivial component holds
-    // the pairs a few poses apart.
-    let plain = run(&[], &dir.join("plain.csv"));
+    // The laps are 160 poses long: a revisit is about a lap apart; by the paper's topology the
+    // trivial component holds the pairs a few poses apart.
+    let plain = run(&["--no-separation"], &dir.join("plain.csv"));
     assert!(plain.iter().any(|&lag| lag < 20), "{plain:?}");
-    let skipping = run(&["--skip-trivial"], &dir.join("skip.csv"));
+    // By default (at least 4γ apart along the path) the budget goes to revisits only.
+    let default = run(&[], &dir.join("default.csv"));
+    assert_eq!(default.len(), 60);
+    assert!(default.iter().all(|&lag| lag > 100), "{default:?}");
+    let skipping = run(&["--no-separation", "--skip-trivial"], &dir.join("skip.csv"));
     assert_eq!(skipping.len(), 60);
     assert!(skipping.iter().all(|&lag| lag > 100), "{skipping:?}");
     assert_one_line_error(

@@ -123,7 +123,9 @@ impl<'py> FromPyObject<'_, 'py> for SeparationArg {
             return Ok(Self::Given(separation.get().inner));
         }
         if obj.is_instance_of::<pyo3::types::PyBool>() {
-            return Err(PyTypeError::new_err("separation must be \"auto\", None, a path length or an il.Separation, got bool"));
+            return Err(PyTypeError::new_err(
+                "separation must be \"auto\", None, a path length or an il.Separation, got bool",
+            ));
         }
         match obj.extract::<f64>() {
             Ok(path) => {

@@ -237,8 +237,7 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
     let caption = format!(
         "<b>Pairwise distance.</b> δ(x<sub>i</sub>, x<sub>j</sub>) over the (t, t′) plane, {m} × {m} pixels{down} \
          (dark: close). White line: the γ = {gamma} isocontour of these δ. Coloured: the pixels whose pair lies in one \
-         of the {nontrivial} non-trivial loop components, in both halves (grey: the trivial one{trivials}, along \
-         the diagonal){labelled}. \
+         of the {nontrivial} {kind}, in both halves{trivial_note}{labelled}. \
          {small}Red dots: {dots_text} at (t, t′), t ≤ t′.",
         down = if m < traj.len() {
             format!(
@@ -249,7 +248,19 @@ pub(super) fn distance_figure(input: &ReportInput<'_>) -> Markup {
         } else {
             String::new()
         },
-        trivials = if components.iter().filter(|c| c.trivial).count() > 1 { "s" } else { "" },
+        kind = if loops.is_separated() {
+            format!(
+                "revisit components (pairs {} apart along the trajectory; those nearer are left out)",
+                loops.separation()
+            )
+        } else {
+            "non-trivial loop components".to_owned()
+        },
+        trivial_note = match components.iter().filter(|c| c.trivial).count() {
+            0 => "",
+            1 => " (grey: the trivial one, along the diagonal)",
+            _ => " (grey: the trivial ones, along the diagonal)",
+        },
         labelled = match LABELLED_COMPONENTS.min(nontrivial) {
             0 => String::new(),
             1 => "; it is labelled with its id".to_owned(),

@@ -29,6 +29,15 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                     dt { "time span" } dd { (duration_text(span_s)) }
                     dt { "metric" } dd { code { (input.metric.name()) } }
                     dt { "γ" } dd { (loops.gamma()) }
+                    dt { "separation" }
+                    dd {
+                        @if loops.is_separated() {
+                            "revisits: pairs " (loops.separation().to_string().replace(">=", "≥"))
+                            span.muted { " apart along the trajectory" }
+                        } @else {
+                            "none " span.muted { "(the paper's S" sub { "γ" } ", trivial components included)" }
+                        }
+                    }
                 }
             }
             div.card {

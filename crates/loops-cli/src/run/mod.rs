@@ -197,7 +197,7 @@ pub(crate) fn run(args: RunArgs) -> Result<ExitCode> {
         size_text(settings.sampler.size),
         args.out.display()
     ));
-    batch.println(&format!("loops: {}", args.engine.separation_line(separation)));
+    batch.println(&format!("loops: {}", crate::args::separation_line(separation, args.engine.gamma)));
     let outcomes: Vec<LogOutcome> = loops_core::with_threads(args.engine.threads, || {
         jobs.par_iter()
             .map(|job| {
