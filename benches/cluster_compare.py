@@ -115,7 +115,7 @@ def make_loops(workload: Workload):
     import inexact_loops as il
 
     trajectory = workload.make_drive()
-    return il.find_loops(trajectory, gamma=GAMMA_M), len(trajectory)
+    return il.find_loops(trajectory, gamma=GAMMA_M, separation=None), len(trajectory)
 
 
 def make_detections(workload: Workload, n: int, loops=None):

@@ -88,7 +88,7 @@ def make_drive(duration_s: float | None):
 def ours(traj, gamma_m: float, threads: int):
     import inexact_loops as il
 
-    loops = il.find_loops(traj, gamma=gamma_m, threads=threads)
+    loops = il.find_loops(traj, gamma=gamma_m, threads=threads, separation=None)
     components = loops.components
     tau = loops.loop_duration()
     return loops, components, tau
@@ -149,7 +149,7 @@ def check_lattice(traj, gamma_m: float, keys, labels, count: int, pair_count: in
     import inexact_loops as il
 
     n = len(traj)
-    loops = il.find_loops(traj, gamma=gamma_m)
+    loops = il.find_loops(traj, gamma=gamma_m, separation=None)
     runs = loops.runs()
     ours_count = len(loops.components["id"])
     ours_pairs = (loops.pair_count - n) // 2
@@ -479,7 +479,7 @@ def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str
         "",
         "What each contender computes:",
         "",
-        "- **inexact-loops**: `il.find_loops(traj, gamma=40.0, threads=1)`, then "
+        "- **inexact-loops**: `il.find_loops(traj, gamma=40.0, threads=1, separation=None)`, then "
         "`loops.components` and `loops.loop_duration()`: the whole sublevel set S_γ as runs by "
         "arc-length skipping (DESIGN.md §4.1), its exact 4-connected loop components by "
         "union-find over runs with area, pairs, holes, extents and closest pair each, and the "

@@ -118,7 +118,7 @@ def main() -> int:
 
     traj = il.urban_drive()
     start = time.perf_counter()
-    loops = il.find_loops(traj, gamma=GAMMA_M)
+    loops = il.find_loops(traj, gamma=GAMMA_M, separation=None)
     loops_s = time.perf_counter() - start
     table = loops.components
     start = time.perf_counter()

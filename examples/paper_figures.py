@@ -156,7 +156,7 @@ def fig2() -> dict[str, Figure]:
     )
     for column, (title, (t, p)) in enumerate(cases.items()):
         traj = il.Trajectory(t, p)
-        by_gamma = [il.find_loops(traj, gamma=g) for g in (1.0, 3.0)]
+        by_gamma = [il.find_loops(traj, gamma=g, separation=None) for g in (1.0, 3.0)]
         if title.startswith("(d)"):
             holes = [int(loops.components["holes"][0]) for loops in by_gamma]
             assert all(h > 0 for h in holes), f"the corridor's trivial component has holes {holes}"
@@ -253,10 +253,10 @@ def fig4() -> dict[str, Figure]:
     circle = radius * np.c_[np.cos(s), np.sin(s)]
 
     torus = il.Trajectory.torus(t, circle)
-    torus_loops = il.find_loops(torus, gamma=1.0, metric="torus")
+    torus_loops = il.find_loops(torus, gamma=1.0, metric="torus", separation=None)
     rotations = il.Trajectory.so3_from_rotation_vectors(t, np.c_[circle, np.zeros(n)])
     so3_metric = il.metrics.SO3(rotation="chordal")
-    so3_loops = il.find_loops(rotations, gamma=1.5, metric=so3_metric)
+    so3_loops = il.find_loops(rotations, gamma=1.5, metric=so3_metric, separation=None)
 
     fig = plt.figure(figsize=(11, 10), constrained_layout=True)
     ax = fig.add_subplot(2, 2, 1, projection="3d")
@@ -325,7 +325,9 @@ def fig5(kitti: Path) -> dict[str, Figure]:
         name, plane, gamma = "synthetic urban drive (15 min)", (0, 1), 40.0
     weights = (0.0, 10.0)
     results = [
-        il.find_loops(traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=w))
+        il.find_loops(
+            traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=w), separation=None
+        )
         for w in weights
     ]
     fig, axes = plt.subplots(1, 3, figsize=(20, 6.6), constrained_layout=True)
@@ -435,7 +437,7 @@ def sample_zooms(traj, loops, samples: dict[str, object]) -> Figure:
 def sampling_figures() -> dict[str, Figure]:
     gamma, epsilon_s, budget = 40.0, 30.0, 10_000
     traj = il.urban_drive(duration_s=7560.0, seed=0)
-    loops = il.find_loops(traj, gamma=gamma)
+    loops = il.find_loops(traj, gamma=gamma, separation=None)
     table = loops.components
     nontrivial = np.flatnonzero(~table["trivial"])
     figures: dict[str, Figure] = {}

@@ -99,7 +99,9 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     # components.csv: every column of Loops.components, and samples per component.
     table = read_csv(folder / "components.csv")
     ours = loops.components
-    assert len(table["id"]) == len(ours["id"]) > 1
+    assert len(table["id"]) == len(ours["id"]) >= 1
+    # Both default to the revisits 4 gamma apart along the path.
+    assert loops.separation == il.Separation.for_gamma(GAMMA_M)
     for name in ("id", "pair_count", "run_count", "holes", "i_min", "i_max", "j_min", "j_max"):
         np.testing.assert_array_equal(
             np.array(table[name], dtype=np.int64), ours[name], err_msg=name
@@ -132,6 +134,7 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     summary = json.loads((folder / "summary.json").read_text())
     assert summary["poses"] == len(traj)
     assert summary["pair_count"] == loops.pair_count
+    assert summary["separation"] == {"path": 4 * GAMMA_M, "time_s": 0.0}
     assert summary["components"] == len(ours["id"])
     assert summary["quality"]["covered"] == quality.covered
     assert summary["samples"] == len(samples) == BUDGET

@@ -18,15 +18,21 @@ def engine_distance(points: np.ndarray, build, metric) -> float:
     outside S_γ, found by bisection (the engine only answers δ ≤ γ)."""
     traj = build(np.array([0.0, 1.0]), points)
     lo, hi = 0.0, 1.0
-    while il.find_loops(traj, gamma=hi, metric=metric).component_of(0, 1) is None:
+    while il.find_loops(traj, gamma=hi, metric=metric, separation=None).component_of(0, 1) is None:
         hi *= 2.0
-    if il.find_loops(traj, gamma=1e-300, metric=metric).component_of(0, 1) is not None:
+    if (
+        il.find_loops(traj, gamma=1e-300, metric=metric, separation=None).component_of(0, 1)
+        is not None
+    ):
         return 0.0
     for _ in range(80):
         mid = 0.5 * (lo + hi)
         if mid <= lo or mid >= hi:
             break
-        if il.find_loops(traj, gamma=mid, metric=metric).component_of(0, 1) is None:
+        if (
+            il.find_loops(traj, gamma=mid, metric=metric, separation=None).component_of(0, 1)
+            is None
+        ):
             lo = mid
         else:
             hi = mid
@@ -133,7 +139,7 @@ def test_engine_equals_brute_force_on_so3() -> None:
     rs = Rotation.from_rotvec(rv)
     dense = np.array([[(rs[i].inv() * rs[j]).magnitude() for j in range(250)] for i in range(250)])
     for gamma in [0.3, 1.0, 2.5]:
-        loops = il.find_loops(traj, gamma=gamma, metric="so3")
+        loops = il.find_loops(traj, gamma=gamma, metric="so3", separation=None)
         runs = loops.runs()
         mask = np.zeros_like(dense, dtype=bool)
         for r, a, b in zip(runs["row"], runs["start"], runs["end"], strict=True):
@@ -157,20 +163,24 @@ def test_bad_manifold_input() -> None:
         il.Trajectory.descriptors(t, [[1.0, 2.0], [0.0, 0.0]])
     traj = il.Trajectory.se3(t, np.zeros((2, 3)), [[0, 0, 0, 1.0], [0, 0, 0, 1.0]])
     with pytest.raises(il.InvalidParameterError, match="rotation_weight_m_per_rad"):
-        il.find_loops(traj, gamma=1.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=-1.0))
+        il.find_loops(
+            traj, gamma=1.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=-1.0), separation=None
+        )
     with pytest.raises(il.InvalidParameterError, match="dimension"):
-        il.find_loops(traj, gamma=1.0, metric="so3")
+        il.find_loops(traj, gamma=1.0, metric="so3", separation=None)
     with pytest.raises(TypeError, match="metric"):
-        il.find_loops(traj, gamma=1.0, metric=3)
+        il.find_loops(traj, gamma=1.0, metric=3, separation=None)
 
 
 def test_python_callable_metric_is_a_slow_path_that_agrees() -> None:
     traj = il.urban_drive(duration_s=60.0, seed=2)
-    fast = il.find_loops(traj, gamma=15.0)
-    slow = il.find_loops(traj, gamma=15.0, metric=lambda a, b: float(np.linalg.norm(a - b)))
+    fast = il.find_loops(traj, gamma=15.0, separation=None)
+    slow = il.find_loops(
+        traj, gamma=15.0, metric=lambda a, b: float(np.linalg.norm(a - b)), separation=None
+    )
     np.testing.assert_array_equal(fast.runs()["end"], slow.runs()["end"])
     with pytest.raises(ZeroDivisionError):
-        il.find_loops(traj, gamma=15.0, metric=lambda a, b: 1 / 0)
+        il.find_loops(traj, gamma=15.0, metric=lambda a, b: 1 / 0, separation=None)
 
 
 def kitti_se3(seq: str) -> il.Trajectory:
@@ -194,8 +204,12 @@ def test_fig5_opposite_direction_revisits_separate_under_se3() -> None:
     pair of them leaves S_γ."""
     traj = kitti_se3("08")
     gamma, weight = 10.0, 10.0
-    l2 = il.find_loops(traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=0.0))
-    se3 = il.find_loops(traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=weight))
+    l2 = il.find_loops(
+        traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=0.0), separation=None
+    )
+    se3 = il.find_loops(
+        traj, gamma=gamma, metric=il.metrics.SE3(rotation_weight_m_per_rad=weight), separation=None
+    )
     table = l2.components
     revisits = np.flatnonzero(~table["trivial"])
     print(
@@ -219,8 +233,12 @@ def test_fig5_holes_under_l2_not_under_se3() -> None:
     """KITTI 05 at γ = 80 m: some components are multiply connected under L2 on translations,
     none under SE(3) (10 m/rad) — the paper's Fig. 5 observation."""
     traj = kitti_se3("05")
-    l2 = il.find_loops(traj, gamma=80.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=0.0))
-    se3 = il.find_loops(traj, gamma=80.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=10.0))
+    l2 = il.find_loops(
+        traj, gamma=80.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=0.0), separation=None
+    )
+    se3 = il.find_loops(
+        traj, gamma=80.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=10.0), separation=None
+    )
     print(
         "KITTI 05 holes: L2",
         l2.components["holes"].tolist(),

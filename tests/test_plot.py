@@ -52,7 +52,7 @@ def double_loop(n_per_lap: int = 90) -> tuple[np.ndarray, np.ndarray]:
 def loop2():
     t, p = double_loop()
     traj = il.Trajectory(t, p)
-    return traj, il.find_loops(traj, gamma=1.0)
+    return traj, il.find_loops(traj, gamma=1.0, separation=None)
 
 
 def cell_widths(t: np.ndarray) -> np.ndarray:
@@ -125,7 +125,7 @@ def test_distance_image_downsamples_long_trajectories():
     p = np.cumsum(rng.normal(size=(n, 2)), axis=0)
     t = np.cumsum(rng.uniform(0.05, 0.15, n))  # uneven clock
     traj = il.Trajectory(t, p)
-    loops = il.find_loops(traj, gamma=4.0)
+    loops = il.find_loops(traj, gamma=4.0, separation=None)
     ax = plot.distance_image(traj, loops, max_pixels=300)
     image = np.asarray(ax.images[0].get_array())
     assert image.shape == (300, 300)
@@ -166,7 +166,7 @@ def test_distance_image_with_a_callable_metric():
     s = np.linspace(0, 2 * np.pi, n)
     angles = 7 * np.pi / 8 * np.c_[np.cos(s), np.sin(s)]
     traj = il.Trajectory.torus(np.arange(n) * 0.1, angles)
-    loops = il.find_loops(traj, gamma=1.0, metric="torus")
+    loops = il.find_loops(traj, gamma=1.0, metric="torus", separation=None)
 
     def torus(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         d = np.remainder(a[:, None] - b[None] + np.pi, 2 * np.pi) - np.pi
@@ -429,7 +429,7 @@ def test_samples_per_component_available_and_component_columns(loop2):
 def test_pair_lookup_equals_component_of():
     rng = np.random.default_rng(5)
     p = np.cumsum(rng.normal(size=(400, 2)), axis=0)
-    loops = il.find_loops(il.Trajectory(np.arange(400) * 0.1, p), gamma=3.0)
+    loops = il.find_loops(il.Trajectory(np.arange(400) * 0.1, p), gamma=3.0, separation=None)
     i, j = rng.integers(0, 400, 3000), rng.integers(0, 400, 3000)
     expected = [loops.component_of(int(a), int(b)) for a, b in zip(i, j, strict=True)]
     found = loops.components_of_pairs(i, j)
@@ -457,13 +457,15 @@ def test_samples_per_component_errors(loop2):
         plot.samples_per_component(loops, {"one": [[0, 10**6]]})
     spiral = il.Trajectory(np.arange(50.0), np.c_[np.arange(50.0), np.zeros(50)])
     with pytest.raises(ValueError, match="no loop component to show"):
-        plot.samples_per_component(il.find_loops(spiral, gamma=2.0), {"one": [[0, 1]]})
+        plot.samples_per_component(
+            il.find_loops(spiral, gamma=2.0, separation=None), {"one": [[0, 1]]}
+        )
 
 
 @pytest.mark.skipif(not hasattr(il, "sample"), reason="the sampling API is not built")
 def test_plots_take_the_sampling_api_results():
     traj = il.urban_drive(duration_s=900.0, seed=2)
-    loops = il.find_loops(traj, gamma=40.0)
+    loops = il.find_loops(traj, gamma=40.0, separation=None)
     detections = il.draw_detections(loops, rate=0.05, seed=1)
     clusters = il.cluster_detections(detections, epsilon_s=30.0)
     samples = {name: il.sample(clusters, name, budget=200, seed=1) for name in ("alpha", "one")}

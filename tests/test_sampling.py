@@ -198,7 +198,7 @@ def test_threads_and_order_do_not_change_clusters():
 def drive():
     """A 30 min urban drive at γ = 40 m, 1% of S_γ as detections, ε = 30 s."""
     traj = il.urban_drive(duration_s=1800.0, seed=3)
-    loops = il.find_loops(traj, gamma=40.0)
+    loops = il.find_loops(traj, gamma=40.0, separation=None)
     det = il.draw_detections(loops, rate=0.01, seed=1)
     clusters = il.cluster_detections(det, epsilon_s=30.0)
     return traj, loops, det, clusters
@@ -366,7 +366,9 @@ def test_sampling_uses_the_loops_metric():
     from scipy.spatial.transform import Rotation
 
     traj = il.urban_drive(duration_s=300.0, se3=True)
-    loops = il.find_loops(traj, gamma=40.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=10.0))
+    loops = il.find_loops(
+        traj, gamma=40.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=10.0), separation=None
+    )
     samples = il.sample(loops, "alpha", budget=300, seed=0, trajectory=traj)
     p, i, j = traj.positions, samples.i, samples.j
     angle = (Rotation.from_quat(p[i, 3:]).inv() * Rotation.from_quat(p[j, 3:])).magnitude()
@@ -380,7 +382,7 @@ def test_sampling_uses_the_loops_metric():
     def l1(a, b):
         return float(np.abs(a - b).sum())
 
-    callable_loops = il.find_loops(line, gamma=0.5, metric=l1)
+    callable_loops = il.find_loops(line, gamma=0.5, metric=l1, separation=None)
     with pytest.raises(il.InvalidParameterError, match='metric "l1", which is not a metric name'):
         il.sample(callable_loops, "one", budget=5, seed=0, trajectory=line)
     again = il.sample(callable_loops, "one", budget=5, seed=0, trajectory=line, metric=l1)
@@ -443,7 +445,7 @@ def small():
     """A 95% circle of radius 10 m at 10 Hz, γ = 4 m: one trivial and one non-trivial component."""
     angle = np.linspace(0.0, 0.95 * 2 * np.pi, 200)
     traj = il.Trajectory(np.arange(200) * 0.1, 10.0 * np.c_[np.cos(angle), np.sin(angle)])
-    loops = il.find_loops(traj, gamma=4.0)
+    loops = il.find_loops(traj, gamma=4.0, separation=None)
     det = il.Detections([0.0, 0.5, 19.0], [19.5, 19.9, 19.8], scores=[0.5, 0.9, 0.1])
     return traj, loops, det, il.cluster_detections(det, epsilon_s=1.0)
 
@@ -621,8 +623,8 @@ def corridor():
 
 def test_tuc_corridor_real_detections(corridor):
     traj, det, dropped, total = corridor
-    loops = il.find_loops(traj, gamma=CORRIDOR_GAMMA_M)
-    fine = il.find_loops(traj, gamma=CORRIDOR_FINE_GAMMA_M)
+    loops = il.find_loops(traj, gamma=CORRIDOR_GAMMA_M, separation=None)
+    fine = il.find_loops(traj, gamma=CORRIDOR_FINE_GAMMA_M, separation=None)
     clusters = il.cluster_detections(det, epsilon_s=CORRIDOR_EPSILON_S)
     assert CORRIDOR_BUDGET >= len(clusters)
     positions = traj.positions

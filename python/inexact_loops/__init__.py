@@ -5,13 +5,21 @@ gamma of itself. :func:`find_loops` finds all of them exactly and groups them in
 components* (connected components in the time x time plane); :class:`Loops` measures loop
 duration, loop area and loop density over them.
 
+By default only *revisits* count: pairs at least 4 gamma apart along the path
+(:class:`Separation`), the pairs a SLAM back end wants to match. ``separation=None`` gives the
+paper's S_gamma, whose trivial components hold the pairs that odometry already ties together.
+
 Example:
     >>> import inexact_loops as il
     >>> traj = il.urban_drive(duration_s=600.0, seed=7)
     >>> loops = il.find_loops(traj, gamma=40.0)
-    >>> table = loops.components
-    >>> bool(table["trivial"][0])
-    True
+    >>> loops.separation
+    Separation(path=160.0, time_s=0.0)
+    >>> bool(loops.components["trivial"].any())
+    False
+    >>> paper = il.find_loops(traj, gamma=40.0, separation=None)
+    >>> bool(paper.components["trivial"][0]), paper.pair_count > loops.pair_count
+    (True, True)
     >>> tau = loops.loop_duration()
     >>> tau.shape == (len(traj),)
     True

@@ -16,6 +16,8 @@ from .table import Table
 
 __all__ = [
     "list_topics",
+    "Separation",
+    "path_length",
     "DetectionClusters",
     "Detections",
     "Loops",
@@ -255,24 +257,44 @@ class Trajectory:
 
 @final
 class Separation:
-    """"""
+    """The minimum separation along the trajectory between the two poses of a loop: a path length
+    (the metric's unit, e.g. metres) and a time (seconds); both must hold. With either above 0,
+    :func:`find_loops` finds *revisits*: the pairs within γ that odometry does not already tie
+    together, and no component is trivial. ``Separation()`` (both 0) is the paper's S_γ.
 
-    DEFAULT_GAMMAS: ClassVar[float]
-    def __init__(self, *, path: float = 0.0, time_s: float = 0.0) -> None: ...
+    Args:
+        path: minimum path length between the poses, in the metric's unit (≥ 0).
+        time_s: minimum time between the poses, seconds (≥ 0).
+
+    Raises:
+        InvalidParameterError: a bound negative or not finite.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> il.Separation(path=24.0, time_s=30.0)
+        Separation(path=24.0, time_s=30.0)
+        >>> il.Separation.for_gamma(6.0)
+        Separation(path=24.0, time_s=0.0)
+    """
+
+    def __new__(cls, *, path: float = 0.0, time_s: float = 0.0) -> Separation: ...
     @staticmethod
     def for_gamma(gamma: float) -> Separation:
-        """"""
+        """The default of :func:`find_loops` (``separation="auto"``) at threshold ``gamma``: a path
+        of ``DEFAULT_GAMMAS`` · γ, no time separation; measured on real trajectories (README,
+        "Revisits").
+        """
     @property
     def path(self) -> float:
-        """"""
+        """Minimum path length between the poses, in the metric's unit."""
     @property
     def time_s(self) -> float:
-        """"""
+        """Minimum time between the poses, seconds."""
     @property
     def is_none(self) -> bool:
-        """"""
-    def __eq__(self, other: object) -> bool: ...
-    def __ne__(self, other: object) -> bool: ...
+        """Whether both are 0: the paper's S_γ, trivial components included."""
+    def __eq__(self, other: object, /) -> bool: ...
+    def __ne__(self, other: object, /) -> bool: ...
     __hash__: ClassVar[None]  # type: ignore[assignment]
 
 def path_length(
@@ -280,7 +302,23 @@ def path_length(
     *,
     metric: str | _MetricLike | None = None,
 ) -> npt.NDArray[np.float64]:
-    """"""
+    """The cumulative path length of every pose under ``metric``: s_0 = 0, s_k = s_{k−1} + δ(x_{k−1},
+    x_k), in the metric's unit, summed in order (as ``numpy.cumsum`` of the steps). A path
+    :class:`Separation` bounds ``s[j] - s[i]``.
+
+    Args:
+        trajectory: a :class:`Trajectory`.
+        metric: as in :func:`find_loops` (a name or an :mod:`inexact_loops.metrics` object).
+
+    Returns:
+        numpy.ndarray: float64, one value per pose.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> traj = il.Trajectory(np.arange(3.0), np.array([[0.0, 0.0], [3.0, 4.0], [3.0, 4.0]]))
+        >>> il.path_length(traj).tolist()
+        [0.0, 5.0, 5.0]
+    """
 
 @final
 class Loops:
@@ -295,7 +333,7 @@ class Loops:
         """The threshold γ."""
     @property
     def separation(self) -> Separation:
-        """"""
+        """The separation the pairs keep (:class:`Separation`; both 0 for the paper's S_γ)."""
     @property
     def metric_name(self) -> str:
         """The name of the metric the loops were found with: its spec (``"euclidean"``,
@@ -324,7 +362,7 @@ class Loops:
             >>> import numpy as np, inexact_loops as il
             >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
             >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-            >>> table = il.find_loops(traj, gamma=4.0).components
+            >>> table = il.find_loops(traj, gamma=4.0, separation=None).components
             >>> table["id"].dtype, table["trivial"].tolist(), table["i_max"].tolist()
             (dtype('int64'), [True, False], [199, 7])
         """
@@ -336,7 +374,7 @@ class Loops:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-            >>> runs = il.find_loops(traj, gamma=0.5).runs()
+            >>> runs = il.find_loops(traj, gamma=0.5, separation=None).runs()
             >>> {name: column.tolist() for name, column in runs.items()}
             {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
         """
@@ -349,7 +387,7 @@ class Loops:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
             >>> loops.component_of(3, 0), loops.component_of(0, 1)
             (1, None)
         """
@@ -362,7 +400,7 @@ class Loops:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
             >>> loops.is_simple(1, 2), loops.is_simple(0, 3)
             (True, False)
         """
@@ -385,7 +423,7 @@ class Loops:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 5.0, 5.0, 0.0]))  # out and back
-            >>> loops = il.find_loops(traj, gamma=1.0)
+            >>> loops = il.find_loops(traj, gamma=1.0, separation=None)
             >>> loops.label_image(il.PlaneGrid(loops, 10)).tolist()
             [[0, -1, -1, 1], [-1, 2, 2, -1], [-1, 2, 2, -1], [1, -1, -1, 3]]
         """
@@ -406,7 +444,7 @@ class Loops:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
             >>> loops.components_of_pairs([3, 0, 0], [0, 3, 1]).tolist()
             [1, 1, -1]
         """
@@ -428,7 +466,7 @@ class Loops:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
             >>> loops.pair_counts_per_component([3, 0, 0, 1], [0, 3, 1, 2]).tolist()
             [0, 2, 1, 0]
         """
@@ -506,7 +544,7 @@ class Loops:
             >>> import os, tempfile, numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
             >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
-            >>> il.find_loops(traj, gamma=0.5).components_to_csv(path)
+            >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
             >>> open(path).read().splitlines()[2]
             '1,false,0.25,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
         """
@@ -537,7 +575,7 @@ class Loops:
             >>> import os, tempfile, numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
             >>> path = os.path.join(tempfile.mkdtemp(), "loop_duration.csv")
-            >>> il.find_loops(traj, gamma=0.5).loop_duration_to_csv(path, traj)
+            >>> il.find_loops(traj, gamma=0.5, separation=None).loop_duration_to_csv(path, traj)
             >>> open(path).read().splitlines()[:2]
             ['index,t_s,x,y,z,loop_duration_s', '0,0,0,0,0,1']
         """
@@ -568,7 +606,7 @@ class Loops:
             >>> import json, os, tempfile, numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
             >>> path = os.path.join(tempfile.mkdtemp(), "loops.json")
-            >>> il.find_loops(traj, gamma=0.5).to_json(path, source="line.csv")
+            >>> il.find_loops(traj, gamma=0.5, separation=None).to_json(path, source="line.csv")
             >>> report = json.load(open(path))
             >>> report["source"], report["poses"], report["components"][1]["i_range"]
             ('line.csv', 4, [0, 0])
@@ -588,6 +626,11 @@ def find_loops(
     """Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
     (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
 
+    By default only *revisits* count: pairs at least ``Separation.for_gamma(gamma)`` (4 γ) apart
+    along the path, the pairs a SLAM back end wants to match; pairs that odometry already ties
+    together are left out, and no component is trivial. ``separation=None`` gives the paper's
+    S_γ, with its trivial components and simple loops.
+
     Args:
         trajectory: a :class:`Trajectory` (for a manifold, built by the matching constructor,
             e.g. :meth:`Trajectory.se3`).
@@ -596,20 +639,29 @@ def find_loops(
             :mod:`inexact_loops.metrics` object such as ``il.metrics.SE3(rotation_weight_m_per_rad=10)``,
             or — a slow path, one Python call per distance on one thread — any callable
             ``f(a, b) -> float`` on two points (numpy arrays) satisfying the triangle inequality.
+        separation: ``"auto"`` (the default, ``Separation.for_gamma(gamma)``), ``None`` (the
+            paper's S_γ), a path length in the metric's unit, or a :class:`Separation` (path
+            length and/or time).
         threads: worker threads; ``None`` uses one per core. Results do not depend on it.
 
     Returns:
         :class:`Loops`.
 
     Raises:
-        InvalidParameterError: gamma not positive and finite, unknown metric, threads = 0.
+        InvalidParameterError: gamma not positive and finite, unknown metric, a negative
+            separation, threads = 0.
 
     Example:
+        A 95% circle of radius 10 m: its ends come within 3.1 m of each other, 60 m apart along
+        the path.
+
         >>> import numpy as np, inexact_loops as il
         >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
         >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-        >>> loops = il.find_loops(traj, gamma=4.0)
-        >>> loops.components["trivial"].tolist()
+        >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
+        >>> loops.separation, loops.components["trivial"].tolist()
+        (Separation(path=16.0, time_s=0.0), [False])
+        >>> il.find_loops(traj, gamma=4.0, separation=None).components["trivial"].tolist()
         [True, False]
     """
 
@@ -924,7 +976,7 @@ class Samples:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-            >>> loops = il.find_loops(traj, gamma=0.5)
+            >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
             >>> clusters = il.cluster_detections(il.Detections([0.0], [3.0]), epsilon_s=1.0)
             >>> il.sample(clusters, "alpha", rate=1.0, seed=0).locate(loops).component.tolist()
             [1]
@@ -1010,7 +1062,7 @@ class SampleQuality:
         >>> import numpy as np, inexact_loops as il
         >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
         >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-        >>> loops = il.find_loops(traj, gamma=4.0)
+        >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
         >>> samples = il.sample(loops, "one", budget=2, seed=0, trajectory=traj)
         >>> quality = il.sample_quality(samples, loops, epsilon_s=1.0)
         >>> quality.covered, quality.components, quality.coverage, quality.per_component.tolist()
@@ -1075,7 +1127,7 @@ class SampleQuality:
             >>> import numpy as np, inexact_loops as il
             >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
             >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-            >>> loops = il.find_loops(traj, gamma=4.0)
+            >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
             >>> samples = il.sample(loops, "alpha", budget=5, seed=0, trajectory=traj)
             >>> table = loops.components
             >>> table["samples"] = il.sample_quality(samples, loops).per_component
@@ -1109,7 +1161,7 @@ def draw_detections(
 
     Example:
         >>> import inexact_loops as il
-        >>> loops = il.find_loops(il.urban_drive(duration_s=600.0), gamma=40.0)
+        >>> loops = il.find_loops(il.urban_drive(duration_s=600.0), gamma=40.0, separation=None)
         >>> det = il.draw_detections(loops, budget=1000, seed=7)
         >>> len(det), all(loops.component_of(i, j) is not None for i, j in zip(det.i, det.j))
         (1000, True)
@@ -1206,7 +1258,7 @@ def sample(
     Example:
         >>> import inexact_loops as il
         >>> traj = il.urban_drive(duration_s=900.0)
-        >>> loops = il.find_loops(traj, gamma=40.0)
+        >>> loops = il.find_loops(traj, gamma=40.0, separation=None)
         >>> samples = il.sample(loops, "rho", budget=200, seed=1, trajectory=traj)
         >>> len(samples), samples.sampler, set(samples.component.tolist()) == set(range(len(loops.components["id"])))
         (200, 'rho', True)
@@ -1239,7 +1291,7 @@ def sample_quality(
     Example:
         >>> import inexact_loops as il
         >>> traj = il.urban_drive(duration_s=900.0)
-        >>> loops = il.find_loops(traj, gamma=40.0)
+        >>> loops = il.find_loops(traj, gamma=40.0, separation=None)
         >>> samples = il.sample(loops, "one", budget=500, seed=0, trajectory=traj)
         >>> quality = il.sample_quality(samples, loops, epsilon_s=30.0)
         >>> quality.covered == quality.components, quality.missed["id"].tolist()

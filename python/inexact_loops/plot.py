@@ -28,7 +28,7 @@ Example:
     >>> from inexact_loops import plot
     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-    >>> loops = il.find_loops(traj, gamma=4.0)
+    >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
     >>> ax = plot.distance_image(traj, loops, gamma=[1.0, 4.0])
     >>> ax.get_xlabel()
     't (s)'
@@ -172,7 +172,7 @@ def distance_image(
         >>> from inexact_loops.plot import distance_image
         >>> s = np.linspace(0, 4 * np.pi, 300)  # a circle driven twice
         >>> traj = il.Trajectory(s, 1.05 * np.c_[np.cos(s), np.sin(s)])
-        >>> loops = il.find_loops(traj, gamma=1.0)
+        >>> loops = il.find_loops(traj, gamma=1.0, separation=None)
         >>> ax = distance_image(traj, loops, gamma=[1.0, 3.0], samples=np.array([[0, 150]]))
         >>> len(ax.images), len(ax.collections) >= 3  # image; contours, outlines, samples
         (1, True)
@@ -323,7 +323,7 @@ def trajectory_by_duration(
         >>> import inexact_loops as il
         >>> from inexact_loops.plot import trajectory_by_duration
         >>> traj = il.urban_drive(duration_s=300.0, seed=1)
-        >>> loops = il.find_loops(traj, gamma=40.0)
+        >>> loops = il.find_loops(traj, gamma=40.0, separation=None)
         >>> ax = trajectory_by_duration(traj, loops, side="begin")
         >>> len(ax.collections)
         1
@@ -476,7 +476,7 @@ def samples_per_component(
         >>> from inexact_loops.plot import samples_per_component
         >>> s = np.linspace(0, 4 * np.pi, 300)
         >>> traj = il.Trajectory(s, 1.05 * np.c_[np.cos(s), np.sin(s)])
-        >>> loops = il.find_loops(traj, gamma=1.0)
+        >>> loops = il.find_loops(traj, gamma=1.0, separation=None)
         >>> top, bottom = samples_per_component(loops, {"one": [[0, 150], [0, 299]]})
         >>> len(top.lines), len(bottom.lines)
         (1, 1)

@@ -36,7 +36,7 @@ class Table(dict[str, npt.NDArray[Any]]):
         >>> import numpy as np, inexact_loops as il
         >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
         >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-        >>> table = il.find_loops(traj, gamma=4.0).components
+        >>> table = il.find_loops(traj, gamma=4.0, separation=None).components
         >>> isinstance(table, dict), table.num_rows, str(table["area_s2"].dtype)
         (True, 2, 'float64')
         >>> list(table)[:3]

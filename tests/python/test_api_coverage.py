@@ -128,7 +128,7 @@ def traj() -> il.Trajectory:
 
 @pytest.fixture(scope="module")
 def loops(traj) -> il.Loops:
-    return il.find_loops(traj, gamma=4.0)
+    return il.find_loops(traj, gamma=4.0, separation=None)
 
 
 @pytest.fixture(scope="module")
@@ -157,7 +157,7 @@ def test_each_error_class_is_what_its_cases_raise(tmp_path):
     with raises(il.InvalidTrajectoryError, "pose 1"):
         il.Trajectory([0.0, 1.0], [0.0, np.nan])
     with raises(il.InvalidParameterError, "gamma", "-1"):
-        il.find_loops(il.Trajectory(*ring()), gamma=-1.0)
+        il.find_loops(il.Trajectory(*ring()), gamma=-1.0, separation=None)
     bad = tmp_path / "bad.tum"
     bad.write_text("0 0 0 0 0 0 0 1\n1 x 0 0 0 0 0 1\n")
     with raises(il.LoopsIOError, "bad.tum line 2", '"x"'):
@@ -171,6 +171,51 @@ def test_each_error_class_is_what_its_cases_raise(tmp_path):
 
 
 # --- Table ----------------------------------------------------------------------------------------
+
+
+@covers(
+    "Separation",
+    "Separation.for_gamma",
+    "Separation.is_none",
+    "Separation.path",
+    "Separation.time_s",
+    "Loops.separation",
+    "path_length",
+)
+def test_separation_and_path_length(traj) -> None:
+    # The default of find_loops: 4 gamma along the path, no time separation.
+    assert il.Separation.for_gamma(1.0) == il.Separation(path=4.0)
+    auto = il.Separation.for_gamma(4.0)
+    assert (auto.path, auto.time_s, auto.is_none) == (16.0, 0.0, False)
+    assert il.find_loops(traj, gamma=4.0).separation == auto
+    assert il.find_loops(traj, gamma=4.0, separation="auto").separation == auto
+    for paper in (None, "none", 0.0, il.Separation()):
+        found = il.find_loops(traj, gamma=4.0, separation=paper)
+        assert found.separation.is_none and found.separation == il.Separation(), paper
+    given = il.Separation(path=2.5, time_s=30.0)
+    assert il.find_loops(traj, gamma=4.0, separation=given).separation == given
+    assert il.find_loops(traj, gamma=4.0, separation=7).separation == il.Separation(path=7.0)
+    assert (
+        repr(given) == "Separation(path=2.5, time_s=30.0)"
+        and str(given) == "path >= 2.5, time >= 30 s"
+    )
+    with pytest.raises(il.InvalidParameterError, match="time separation"):
+        il.Separation(time_s=-1.0)
+    with pytest.raises(il.InvalidParameterError, match="path separation"):
+        il.find_loops(traj, gamma=4.0, separation=float("nan"))
+    with pytest.raises(il.InvalidParameterError, match="separation must be"):
+        il.find_loops(traj, gamma=4.0, separation="everything")
+    with pytest.raises(TypeError, match="separation must be"):
+        il.find_loops(traj, gamma=4.0, separation=True)
+    with pytest.raises(TypeError, match="separation must be"):
+        il.find_loops(traj, gamma=4.0, separation=[1.0])
+    with pytest.raises(il.InvalidParameterError, match="gamma"):
+        il.Separation.for_gamma(0.0)
+    # The path length is the running sum of the steps, as numpy sums them.
+    s = il.path_length(traj)
+    assert s.dtype == np.float64 and s.shape == (len(traj),) and s[0] == 0.0
+    steps = np.linalg.norm(np.diff(ring()[1], axis=0), axis=1)
+    np.testing.assert_array_equal(s[1:], np.cumsum(steps))
 
 
 @covers("Table", "Table.num_rows")
@@ -373,47 +418,53 @@ def test_find_loops_counts_the_dense_pairs(traj, loops):
     assert loops.pair_count == np.count_nonzero(distances <= 4.0)
     assert loops.gamma == 4.0 and loops.metric_name == "euclidean" and loops.span_s == traj.span_s
     assert len(loops) == N
-    by_callable = il.find_loops(traj, gamma=4.0, metric=lambda a, b: float(np.linalg.norm(a - b)))
+    by_callable = il.find_loops(
+        traj, gamma=4.0, metric=lambda a, b: float(np.linalg.norm(a - b)), separation=None
+    )
     assert by_callable.pair_count == loops.pair_count
 
 
 @covers("find_loops")
 def test_find_loops_errors(traj):
     with raises(il.InvalidParameterError, "gamma", "0"):
-        il.find_loops(traj, gamma=0.0)
+        il.find_loops(traj, gamma=0.0, separation=None)
     with raises(il.InvalidParameterError, "gamma", "NaN"):
-        il.find_loops(traj, gamma=np.nan)
+        il.find_loops(traj, gamma=np.nan, separation=None)
     with raises(il.InvalidParameterError, '"taxicab"', "euclidean"):
-        il.find_loops(traj, gamma=1.0, metric="taxicab")
+        il.find_loops(traj, gamma=1.0, metric="taxicab", separation=None)
     with raises(il.InvalidParameterError, "se3(", "dimension 7", "dimension 2"):
-        il.find_loops(traj, gamma=1.0, metric=metrics.SE3(rotation_weight_m_per_rad=1.0))
+        il.find_loops(
+            traj, gamma=1.0, metric=metrics.SE3(rotation_weight_m_per_rad=1.0), separation=None
+        )
     with raises(il.InvalidParameterError, "threads = 0"):
-        il.find_loops(traj, gamma=1.0, threads=0)
+        il.find_loops(traj, gamma=1.0, threads=0, separation=None)
     with pytest.raises(OverflowError) as negative:
-        il.find_loops(traj, gamma=1.0, threads=-1)
+        il.find_loops(traj, gamma=1.0, threads=-1, separation=None)
     assert "while processing 'threads'" in negative.value.__notes__
     with raises(TypeError, "metric must be a name", "got int"):
-        il.find_loops(traj, gamma=1.0, metric=3)
+        il.find_loops(traj, gamma=1.0, metric=3, separation=None)
     with raises(TypeError, "Trajectory"):
-        il.find_loops(traj.positions, gamma=1.0)
+        il.find_loops(traj.positions, gamma=1.0, separation=None)
     with raises(TypeError, "the metric callable must return a float, got str"):
-        il.find_loops(traj, gamma=1.0, metric=lambda a, b: "far")
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: "far", separation=None)
     with raises(ValueError, "the metric callable returned NaN"):
-        il.find_loops(traj, gamma=1.0, metric=lambda a, b: float("nan"))
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: float("nan"), separation=None)
     with raises(ValueError, "the metric callable returned -1"):
-        il.find_loops(traj, gamma=1.0, metric=lambda a, b: -1.0)
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: -1.0, separation=None)
     with pytest.raises(ZeroDivisionError):  # the callable's own exception, unchanged
-        il.find_loops(traj, gamma=1.0, metric=lambda a, b: 1 / 0)
+        il.find_loops(traj, gamma=1.0, metric=lambda a, b: 1 / 0, separation=None)
 
 
 @covers("Loops.warnings")
 def test_warnings_name_the_broken_diagonal():
-    loops = il.find_loops(il.Trajectory([0.0, 1, 2, 3], [0.0, 0, 100, 100]), gamma=1.0)
+    loops = il.find_loops(
+        il.Trajectory([0.0, 1, 2, 3], [0.0, 0, 100, 100]), gamma=1.0, separation=None
+    )
     assert len(loops.warnings) == 1
     assert (
         "first at index 1" in loops.warnings[0] and "farther apart than gamma" in loops.warnings[0]
     )
-    assert il.find_loops(il.Trajectory(*ring()), gamma=4.0).warnings == []
+    assert il.find_loops(il.Trajectory(*ring()), gamma=4.0, separation=None).warnings == []
 
 
 @covers("Loops.components", "Loops.runs")
@@ -783,7 +834,7 @@ def test_sample_errors(traj, loops, clusters):
 
 def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
     drive = il.urban_drive(duration_s=1200.0, seed=4)
-    found = il.find_loops(drive, gamma=40.0)
+    found = il.find_loops(drive, gamma=40.0, separation=None)
     table = found.components
     trivial = set(table["id"][table["trivial"]].tolist())
     nontrivial = set(table["id"][~table["trivial"]].tolist())
@@ -865,7 +916,7 @@ def test_samples_locate_measure_and_their_errors(traj, loops, clusters):
     with raises(il.InvalidParameterError, "detection 0 at 3.5 s", "outside", "[0, 1]"):
         samples.measure(short)
     with raises(il.InvalidParameterError, "detection 0 at 3.5 s", "outside"):
-        samples.locate(il.find_loops(short, gamma=1.0))
+        samples.locate(il.find_loops(short, gamma=1.0, separation=None))
     with raises(il.InvalidParameterError, "so3", "dimension 4", "dimension 2"):
         samples.measure(traj, metric="so3")
     with raises(TypeError, "Loops"):
@@ -977,7 +1028,7 @@ def test_sample_quality_and_its_errors(traj, loops):
         il.sample_quality(samples, loops, epsilon_s=0.0)
     with raises(il.InvalidParameterError, "epsilon_s = -inf"):
         il.sample_quality(samples, loops, epsilon_s=-np.inf)
-    other = il.find_loops(il.urban_drive(duration_s=60.0), gamma=10.0)
+    other = il.find_loops(il.urban_drive(duration_s=60.0), gamma=10.0, separation=None)
     with raises(il.InvalidParameterError, "different trajectories"):
         il.sample_quality(samples, other)
     with raises(TypeError, "Samples"):
@@ -1017,15 +1068,19 @@ def test_metric_objects_and_their_errors():
     }
     for metric in specs:
         traj = points[metric.spec.split("(")[0].removesuffix("_rotation")]
-        assert il.find_loops(traj, gamma=0.5, metric=metric).metric_name.startswith(
-            metric.spec.split("(")[0]
-        )
+        assert il.find_loops(
+            traj, gamma=0.5, metric=metric, separation=None
+        ).metric_name.startswith(metric.spec.split("(")[0])
     with pytest.raises(TypeError, match="rotation_weight_m_per_rad"):
         metrics.SE3()  # type: ignore[call-arg]
     with raises(il.InvalidParameterError, '"nope"', "geodesic", "chordal"):
-        il.find_loops(points["so3"], gamma=0.5, metric=metrics.SO3(rotation="nope"))  # type: ignore[arg-type]
+        il.find_loops(
+            points["so3"], gamma=0.5, metric=metrics.SO3(rotation="nope"), separation=None
+        )  # type: ignore[arg-type]
     with raises(il.InvalidParameterError, "sphere(radius=-1.0)", "radius"):
-        il.find_loops(points["sphere"], gamma=0.5, metric=metrics.Sphere(radius=-1.0))
+        il.find_loops(
+            points["sphere"], gamma=0.5, metric=metrics.Sphere(radius=-1.0), separation=None
+        )
 
 
 # --- the list -------------------------------------------------------------------------------------

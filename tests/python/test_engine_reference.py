@@ -139,8 +139,8 @@ def test_engine_equals_dense_reference(check_dense, case):
     np.testing.assert_allclose(
         traj.cell_widths, np.r_[steps[0], steps[:-1] + steps[1:], steps[-1]] / 2, rtol=1e-12
     )
-    one = il.find_loops(traj, gamma=gamma, threads=1)
-    two = il.find_loops(traj, gamma=gamma, threads=2)
+    one = il.find_loops(traj, gamma=gamma, threads=1, separation=None)
+    two = il.find_loops(traj, gamma=gamma, threads=2, separation=None)
     assert_same_loops(one, two)
     check_dense(one, t, p, gamma)
 
@@ -177,7 +177,7 @@ def test_degenerate_cases(check_dense, name):
         # cell (1, 2) through (0, 2), (0, 3), (1, 3): one trivial component whose full-plane
         # set has one hole, the cells (1, 2) and (2, 1) (diagonal neighbours).
         t, p = np.array([0.0, 1.0, 1.5, 4.0]), np.array([0.0, 0.9, -0.5, 0.2])
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     ref = check_dense(loops, t, p, gamma)
     if name == "all_identical":
         # One trivial component: the whole square.
@@ -206,7 +206,7 @@ def test_normalized_measures_do_not_lose_precision_on_a_unix_clock(span_s):
     for 1/64 s. Two poses within gamma: tau = span everywhere, normalized tau = 1, so
     alpha(0, 0.3) = 0.3 and rho(0, 0.3) = 1 exactly (both timestamps are exact floats)."""
     t = 1.3e9 + np.array([0.0, span_s])
-    loops = il.find_loops(il.Trajectory(t, np.array([[0.0], [0.5]])), gamma=1.0)
+    loops = il.find_loops(il.Trajectory(t, np.array([[0.0], [0.5]])), gamma=1.0, separation=None)
     assert loops.span_s == span_s
     np.testing.assert_allclose(loops.loop_duration(normalized=True), [1.0, 1.0], rtol=1e-12)
     assert loops.loop_area(0.0, 1.0, normalized=True) == pytest.approx(1.0, rel=1e-12)

@@ -22,7 +22,7 @@ def ring(n: int = N) -> tuple[np.ndarray, np.ndarray]:
 @pytest.fixture(scope="module")
 def loops():
     t, p = ring()
-    return il.find_loops(il.Trajectory(t, p), gamma=4.0)
+    return il.find_loops(il.Trajectory(t, p), gamma=4.0, separation=None)
 
 
 def assert_same_loops(a, b) -> None:
@@ -188,8 +188,10 @@ def test_memory_layouts_give_identical_results(layout):
     traj = il.Trajectory(strided_t, p)
     np.testing.assert_array_equal(traj.positions, walk)
     np.testing.assert_array_equal(traj.timestamps, t)
-    reference = il.find_loops(il.Trajectory(t, np.ascontiguousarray(walk)), gamma=3.0)
-    assert_same_loops(il.find_loops(traj, gamma=3.0), reference)
+    reference = il.find_loops(
+        il.Trajectory(t, np.ascontiguousarray(walk)), gamma=3.0, separation=None
+    )
+    assert_same_loops(il.find_loops(traj, gamma=3.0, separation=None), reference)
 
 
 @pytest.mark.parametrize("dtype", [np.int64, np.int32, np.uint16, np.float32, np.float16])
@@ -200,8 +202,10 @@ def test_integer_and_low_precision_inputs(dtype):
     typed = p.astype(dtype)
     traj = il.Trajectory(t.astype(dtype) if dtype != np.float16 else t, typed)
     np.testing.assert_array_equal(traj.positions, typed.astype(np.float64))
-    reference = il.find_loops(il.Trajectory(t.astype(float), typed.astype(np.float64)), gamma=2.0)
-    assert_same_loops(il.find_loops(traj, gamma=2.0), reference)
+    reference = il.find_loops(
+        il.Trajectory(t.astype(float), typed.astype(np.float64)), gamma=2.0, separation=None
+    )
+    assert_same_loops(il.find_loops(traj, gamma=2.0, separation=None), reference)
 
 
 def test_lists_and_1d_positions():
@@ -220,22 +224,22 @@ def test_lists_and_1d_positions():
 def test_bad_gamma(gamma, shown):
     traj = il.Trajectory(*ring())
     with pytest.raises(il.InvalidParameterError, match=r"gamma") as error:
-        il.find_loops(traj, gamma=gamma)
+        il.find_loops(traj, gamma=gamma, separation=None)
     assert str(error.value).endswith(shown)
 
 
 def test_unknown_metric_is_named():
     traj = il.Trajectory(*ring())
     with pytest.raises(il.InvalidParameterError, match=r'"manhattan".*euclidean'):
-        il.find_loops(traj, gamma=1.0, metric="manhattan")
-    loops = il.find_loops(traj, gamma=1.0, metric="euclidean")
+        il.find_loops(traj, gamma=1.0, metric="manhattan", separation=None)
+    loops = il.find_loops(traj, gamma=1.0, metric="euclidean", separation=None)
     assert loops.metric_name == "euclidean"
 
 
 def test_zero_threads():
     traj = il.Trajectory(*ring())
     with pytest.raises(il.InvalidParameterError, match=r"threads = 0"):
-        il.find_loops(traj, gamma=1.0, threads=0)
+        il.find_loops(traj, gamma=1.0, threads=0, separation=None)
 
 
 @pytest.mark.parametrize("side", ["middle", "Both", "", "start"])
@@ -397,8 +401,8 @@ def test_thread_counts_past_the_cap_are_refused_at_once():
     traj = il.Trajectory(t, p)
     start = time.monotonic()
     with pytest.raises(il.InvalidParameterError, match="threads = 1000000 is invalid: between 1"):
-        il.find_loops(traj, gamma=4.0, threads=1_000_000)
-    loops = il.find_loops(traj, gamma=4.0)
+        il.find_loops(traj, gamma=4.0, threads=1_000_000, separation=None)
+    loops = il.find_loops(traj, gamma=4.0, separation=None)
     with pytest.raises(il.InvalidParameterError, match="between 1 and 1024"):
         il.sample(loops, "one", budget=1, seed=0, trajectory=traj, threads=1025)
     assert time.monotonic() - start < 10
@@ -409,4 +413,6 @@ def test_a_repeated_metric_key_is_named():
     t, p = ring()
     traj = il.Trajectory(t, p)
     with pytest.raises(il.InvalidParameterError, match="repeated parameter 'rotation'"):
-        il.find_loops(traj, gamma=1.0, metric="so3(rotation=chordal,rotation=geodesic)")
+        il.find_loops(
+            traj, gamma=1.0, metric="so3(rotation=chordal,rotation=geodesic)", separation=None
+        )

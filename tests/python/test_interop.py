@@ -90,8 +90,8 @@ def test_from_evo_se3_reorders_w_first_quaternions():
     )
     reference = il.Trajectory.se3(evo.timestamps, evo.positions_xyz, rotations.as_quat())
     metric = "se3(rotation_weight_m_per_rad=2)"
-    ours = il.find_loops(traj, gamma=3.0, metric=metric)
-    theirs = il.find_loops(reference, gamma=3.0, metric=metric)
+    ours = il.find_loops(traj, gamma=3.0, metric=metric, separation=None)
+    theirs = il.find_loops(reference, gamma=3.0, metric=metric, separation=None)
     assert ours.pair_count == theirs.pair_count > N
     for key, column in ours.components.items():
         if column.dtype == np.float64:  # evo's quaternions are its own, from the matrices
@@ -105,7 +105,9 @@ def test_from_evo_rotation_distances_match_scipy(metric, gamma):
     """Pairs within gamma of each other in rotation angle, against scipy's geodesic angle: a
     w-first quaternion read as x-first would give other angles."""
     evo, rotations = evo_trajectory()
-    loops = il.find_loops(il.Trajectory.from_evo(evo, metric=metric), gamma=gamma, metric=metric)
+    loops = il.find_loops(
+        il.Trajectory.from_evo(evo, metric=metric), gamma=gamma, metric=metric, separation=None
+    )
     angles = np.array([(rotations[k].inv() * rotations).magnitude() for k in range(N)])
     within = angles <= gamma
     assert 0 < within.sum() < N * N
@@ -258,7 +260,7 @@ def test_from_evo_bad_metric_or_axes_are_named():
 @pytest.fixture(scope="module")
 def results():
     traj = il.urban_drive(duration_s=600.0, seed=7)
-    loops = il.find_loops(traj, gamma=40.0)
+    loops = il.find_loops(traj, gamma=40.0, separation=None)
     detections = il.draw_detections(loops, budget=300, seed=1)
     clusters = il.cluster_detections(detections, epsilon_s=30.0)
     samples = il.sample(loops, "rho", budget=50, seed=2, trajectory=traj)
@@ -394,7 +396,7 @@ def test_to_pandas_without_pandas_is_a_clear_import_error(results, monkeypatch):
 def test_importing_the_package_does_not_import_pandas_or_evo():
     code = (
         "import sys, inexact_loops as il\n"
-        "loops = il.find_loops(il.urban_drive(duration_s=60.0), gamma=20.0)\n"
+        "loops = il.find_loops(il.urban_drive(duration_s=60.0), gamma=20.0, separation=None)\n"
         "loops.components, loops.runs()\n"
         "assert 'pandas' not in sys.modules, 'pandas imported'\n"
         "assert 'evo' not in sys.modules, 'evo imported'\n"

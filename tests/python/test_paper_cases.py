@@ -43,7 +43,7 @@ def test_95_percent_circle(check_dense):
     angles = np.linspace(0.0, sweep, n)
     step = sweep / (n - 1)
     t, p = np.arange(n) * dt, circle_points(radius, angles)
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     check_dense(loops, t, p, gamma)
 
     band = half_width(gamma, radius, step)  # |i - j| <= band along the circle
@@ -88,7 +88,7 @@ def test_double_loop_merges_as_gamma_grows(check_dense, gamma):
     step = 2 * np.pi / per_lap
     t = np.arange(n) * 1.0
     p = circle_points(radius, np.arange(n) * step)
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     check_dense(loops, t, p, gamma)
     table = loops.components
 
@@ -127,7 +127,7 @@ def test_double_loop_components_only_merge():
     traj = il.Trajectory(np.arange(n) * 1.0, p)
     counts = []
     for gamma in np.linspace(1.0, 3.0, 21):
-        table = il.find_loops(traj, gamma=float(gamma)).components
+        table = il.find_loops(traj, gamma=float(gamma), separation=None).components
         counts.append(int((~table["trivial"]).sum()))
     assert counts[0] == 2 and counts[-1] == 0
     assert all(a >= b for a, b in zip(counts[:-1], counts[1:], strict=True)), counts
@@ -150,7 +150,7 @@ def test_outward_spiral_loops_are_all_simple(check_dense, gamma):
     p = spiral(r0=10.0, pitch=5.0, turns=3.0, ds=0.4)
     n = len(p)
     t = np.arange(n) * 0.1
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     check_dense(loops, t, p, gamma)
     table = loops.components
     assert table["trivial"].tolist() == [True]
@@ -170,7 +170,7 @@ def test_outward_spiral_above_the_pitch_has_one_lap_component(check_dense):
     n = len(p)
     t = np.arange(n) * 0.1
     gamma = 6.0
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     check_dense(loops, t, p, gamma)
     table = loops.components
     assert table["trivial"].tolist() == [True, False]
@@ -196,7 +196,7 @@ def test_shuttle_trivial_component_has_holes(check_dense):
     n = len(p)
     t = np.cumsum(np.r_[0.0, np.where(np.arange(n - 1) % 7 == 0, 0.3, 0.1)])  # uneven clock
     gamma = 1.0
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     check_dense(loops, t, p, gamma)
     table = loops.components
     assert table["trivial"].tolist() == [True]
@@ -223,7 +223,7 @@ def test_lollipop_stick_is_a_non_trivial_component(check_dense):
     p = np.r_[out, around, out[::-1]]
     n = len(p)
     t = np.arange(n) * 0.5
-    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma)
+    loops = il.find_loops(il.Trajectory(t, p), gamma=gamma, separation=None)
     check_dense(loops, t, p, gamma)
     table = loops.components
     assert table["trivial"].tolist() == [True, False]

@@ -88,7 +88,7 @@ def test_label_image_is_the_dense_labelling_folded():
     rng = np.random.default_rng(4)
     p = np.cumsum(rng.normal(size=(300, 2)), axis=0)
     traj = il.Trajectory(np.cumsum(rng.uniform(0.05, 0.2, 300)), p)
-    loops = il.find_loops(traj, gamma=3.0)
+    loops = il.find_loops(traj, gamma=3.0, separation=None)
     full, _ = ndimage.label(cdist(p, p) <= 3.0)
     folded = np.where(full > 0, np.minimum(full, full.T), 0)
     for grid in (
@@ -111,7 +111,7 @@ def test_label_image_is_the_dense_labelling_folded():
 
 def test_components_of_pairs_and_counts():
     traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    loops = il.find_loops(traj, gamma=0.5)
+    loops = il.find_loops(traj, gamma=0.5, separation=None)
     i, j = np.array([3, 0, 0, 1, 2]), np.array([0, 3, 1, 2, 1])
     ids = loops.components_of_pairs(i, j)
     assert ids.tolist() == [
@@ -220,12 +220,12 @@ def test_plot_distance_image_for_se3_and_so3_equals_scipy(manifold):
 
     if manifold == "se3":
         traj, spec, brute = se3_case()
-        loops = il.find_loops(traj, gamma=6.0, metric=spec)
+        loops = il.find_loops(traj, gamma=6.0, metric=spec, separation=None)
     else:
         r = rotations(60, 3)
         traj = il.Trajectory.so3(np.arange(60) * 0.5, r.as_quat())
         brute = so3_brute(r)
-        loops = il.find_loops(traj, gamma=0.3, metric="so3")
+        loops = il.find_loops(traj, gamma=0.3, metric="so3", separation=None)
     ax = plot.distance_image(traj, loops, distance_unit="")
     np.testing.assert_allclose(np.asarray(ax.images[0].get_array()), brute, atol=1e-9)
     # The outlines are those of the exact components (every pose shows).

@@ -37,8 +37,8 @@ def kitti00(data_dir):
 def test_kitti00_labelled_pairs_are_non_trivial_loops(kitti00, check_dense):
     t, xz, xyz, li, lj = kitti00
     traj = il.Trajectory(t, xz)
-    loops = il.find_loops(traj, gamma=KITTI_GAMMA_M, threads=2)
-    single = il.find_loops(traj, gamma=KITTI_GAMMA_M, threads=1)
+    loops = il.find_loops(traj, gamma=KITTI_GAMMA_M, threads=2, separation=None)
+    single = il.find_loops(traj, gamma=KITTI_GAMMA_M, threads=1, separation=None)
     for key, value in loops.runs().items():
         np.testing.assert_array_equal(value, single.runs()[key], err_msg=key)
     for key, value in loops.components.items():
@@ -110,6 +110,6 @@ def test_tum_freiburg1_xyz_equals_dense_reference(data_dir, check_dense):
     np.testing.assert_array_equal(traj.timestamps, columns[:, 0])
     np.testing.assert_array_equal(traj.positions, columns[:, 1:4])
     gamma = 0.05
-    loops = il.find_loops(traj, gamma=gamma)
+    loops = il.find_loops(traj, gamma=gamma, separation=None)
     check_dense(loops, columns[:, 0], columns[:, 1:4], gamma)
     assert (~loops.components["trivial"]).sum() > 0  # the camera sways back and forth

@@ -218,7 +218,7 @@ impl Detections {
 ///
 /// Example:
 ///     >>> import inexact_loops as il
-///     >>> loops = il.find_loops(il.urban_drive(duration_s=600.0), gamma=40.0)
+///     >>> loops = il.find_loops(il.urban_drive(duration_s=600.0), gamma=40.0, separation=None)
 ///     >>> det = il.draw_detections(loops, budget=1000, seed=7)
 ///     >>> len(det), all(loops.component_of(i, j) is not None for i, j in zip(det.i, det.j))
 ///     (1000, True)

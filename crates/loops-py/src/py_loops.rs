@@ -218,7 +218,7 @@ impl Loops {
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
     ///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-    ///     >>> table = il.find_loops(traj, gamma=4.0).components
+    ///     >>> table = il.find_loops(traj, gamma=4.0, separation=None).components
     ///     >>> table["id"].dtype, table["trivial"].tolist(), table["i_max"].tolist()
     ///     (dtype('int64'), [True, False], [199, 7])
     #[getter]
@@ -256,7 +256,7 @@ impl Loops {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    ///     >>> runs = il.find_loops(traj, gamma=0.5).runs()
+    ///     >>> runs = il.find_loops(traj, gamma=0.5, separation=None).runs()
     ///     >>> {name: column.tolist() for name, column in runs.items()}
     ///     {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
     fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -280,7 +280,7 @@ impl Loops {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
     ///     >>> loops.component_of(3, 0), loops.component_of(0, 1)
     ///     (1, None)
     fn component_of(&self, i: i64, j: i64) -> PyResult<Option<usize>> {
@@ -296,7 +296,7 @@ impl Loops {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
     ///     >>> loops.is_simple(1, 2), loops.is_simple(0, 3)
     ///     (True, False)
     fn is_simple(&self, i: i64, j: i64) -> PyResult<bool> {
@@ -322,7 +322,7 @@ impl Loops {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 5.0, 5.0, 0.0]))  # out and back
-    ///     >>> loops = il.find_loops(traj, gamma=1.0)
+    ///     >>> loops = il.find_loops(traj, gamma=1.0, separation=None)
     ///     >>> loops.label_image(il.PlaneGrid(loops, 10)).tolist()
     ///     [[0, -1, -1, 1], [-1, 2, 2, -1], [-1, 2, 2, -1], [1, -1, -1, 3]]
     fn label_image<'py>(&self, py: Python<'py>, grid: &PlaneGrid) -> PyResult<Bound<'py, numpy::PyArray2<i64>>> {
@@ -345,7 +345,7 @@ impl Loops {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
     ///     >>> loops.components_of_pairs([3, 0, 0], [0, 3, 1]).tolist()
     ///     [1, 1, -1]
     fn components_of_pairs<'py>(
@@ -372,7 +372,7 @@ impl Loops {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
     ///     >>> loops.pair_counts_per_component([3, 0, 0, 1], [0, 3, 1, 2]).tolist()
     ///     [0, 2, 1, 0]
     fn pair_counts_per_component<'py>(
@@ -471,7 +471,7 @@ impl Loops {
     ///     >>> import os, tempfile, numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
-    ///     >>> il.find_loops(traj, gamma=0.5).components_to_csv(path)
+    ///     >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
     ///     >>> open(path).read().splitlines()[2]
     ///     '1,false,0.25,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
     #[pyo3(signature = (path, *, samples_per_component=None, overwrite=false))]
@@ -517,7 +517,7 @@ impl Loops {
     ///     >>> import os, tempfile, numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "loop_duration.csv")
-    ///     >>> il.find_loops(traj, gamma=0.5).loop_duration_to_csv(path, traj)
+    ///     >>> il.find_loops(traj, gamma=0.5, separation=None).loop_duration_to_csv(path, traj)
     ///     >>> open(path).read().splitlines()[:2]
     ///     ['index,t_s,x,y,z,loop_duration_s', '0,0,0,0,0,1']
     #[pyo3(signature = (path, trajectory, *, overwrite=false))]
@@ -558,7 +558,7 @@ impl Loops {
     ///     >>> import json, os, tempfile, numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "loops.json")
-    ///     >>> il.find_loops(traj, gamma=0.5).to_json(path, source="line.csv")
+    ///     >>> il.find_loops(traj, gamma=0.5, separation=None).to_json(path, source="line.csv")
     ///     >>> report = json.load(open(path))
     ///     >>> report["source"], report["poses"], report["components"][1]["i_range"]
     ///     ('line.csv', 4, [0, 0])

@@ -20,7 +20,7 @@ use crate::py_samples::Samples;
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
 ///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-///     >>> loops = il.find_loops(traj, gamma=4.0)
+///     >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
 ///     >>> samples = il.sample(loops, "one", budget=2, seed=0, trajectory=traj)
 ///     >>> quality = il.sample_quality(samples, loops, epsilon_s=1.0)
 ///     >>> quality.covered, quality.components, quality.coverage, quality.per_component.tolist()
@@ -50,7 +50,7 @@ pub(crate) struct SampleQuality {
 /// Example:
 ///     >>> import inexact_loops as il
 ///     >>> traj = il.urban_drive(duration_s=900.0)
-///     >>> loops = il.find_loops(traj, gamma=40.0)
+///     >>> loops = il.find_loops(traj, gamma=40.0, separation=None)
 ///     >>> samples = il.sample(loops, "one", budget=500, seed=0, trajectory=traj)
 ///     >>> quality = il.sample_quality(samples, loops, epsilon_s=30.0)
 ///     >>> quality.covered == quality.components, quality.missed["id"].tolist()
@@ -193,7 +193,7 @@ impl SampleQuality {
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
     ///     >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-    ///     >>> loops = il.find_loops(traj, gamma=4.0)
+    ///     >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
     ///     >>> samples = il.sample(loops, "alpha", budget=5, seed=0, trajectory=traj)
     ///     >>> table = loops.components
     ///     >>> table["samples"] = il.sample_quality(samples, loops).per_component

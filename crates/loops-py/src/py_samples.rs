@@ -106,7 +106,7 @@ fn loops_metric(metric: Option<&Bound<'_, PyAny>>, loops: &loops_core::Loops) ->
 /// Example:
 ///     >>> import inexact_loops as il
 ///     >>> traj = il.urban_drive(duration_s=900.0)
-///     >>> loops = il.find_loops(traj, gamma=40.0)
+///     >>> loops = il.find_loops(traj, gamma=40.0, separation=None)
 ///     >>> samples = il.sample(loops, "rho", budget=200, seed=1, trajectory=traj)
 ///     >>> len(samples), samples.sampler, set(samples.component.tolist()) == set(range(len(loops.components["id"])))
 ///     (200, 'rho', True)
@@ -304,7 +304,7 @@ impl Samples {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.0]))
-    ///     >>> loops = il.find_loops(traj, gamma=0.5)
+    ///     >>> loops = il.find_loops(traj, gamma=0.5, separation=None)
     ///     >>> clusters = il.cluster_detections(il.Detections([0.0], [3.0]), epsilon_s=1.0)
     ///     >>> il.sample(clusters, "alpha", rate=1.0, seed=0).locate(loops).component.tolist()
     ///     [1]

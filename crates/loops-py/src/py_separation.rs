@@ -42,19 +42,12 @@ impl Separation {
     }
 
     /// The default of :func:`find_loops` (``separation="auto"``) at threshold ``gamma``: a path
-    /// of ``DEFAULT_GAMMAS`` · γ, no time separation; measured on real trajectories (README,
+    /// of 4 γ, no time separation; measured on real trajectories (README,
     /// "Revisits").
     #[staticmethod]
     fn for_gamma(gamma: f64) -> PyResult<Self> {
         loops_core::check_gamma(gamma).map_err(Failure::from)?;
         Ok(Self { inner: loops_core::Separation::for_gamma(gamma) })
-    }
-
-    /// The default path separation in multiples of γ.
-    #[classattr]
-    #[allow(non_snake_case)]
-    fn DEFAULT_GAMMAS() -> f64 {
-        loops_core::Separation::DEFAULT_GAMMAS
     }
 
     /// Minimum path length between the poses, in the metric's unit.
