@@ -1004,7 +1004,8 @@ def section(results: list[Result], args: argparse.Namespace, loads: tuple[str, s
         "2-thread run then gets less than 2 cores: see the cores busy below), so compare "
         "within a row rather than across runs.",
         "",
-        "- **inexact-loops**: `find_loops(traj, gamma=40.0, threads=1 or 2, separation=None)`, `.components`, "
+        "- **inexact-loops**: `find_loops(traj, gamma=40.0, threads=1 or 2, separation=None)`, "
+        "`.components`, "
         "`.loop_duration()`: all of S_γ as runs, its exact loop components with their measures, "
         "and τ per pose.",
         "- **cKDTree.query_pairs**: the pairs i < j within γ as an (m, 2) array, nothing more; "

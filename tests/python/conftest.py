@@ -111,7 +111,7 @@ def _close(actual, expected, scale: float, what: str) -> None:
 
 
 def check_against_dense(loops, timestamps, positions, gamma: float) -> DenseReference:
-    """Asserts that ``loops`` (from ``find_loops(..., gamma, separation=None)``) equals the dense reference."""
+    """Asserts that ``loops`` (``find_loops(..., gamma, separation=None)``) equals the reference."""
     ref = DenseReference(timestamps, positions, gamma)
     n, w, M, D = ref.n, ref.w, ref.M, ref.D
     span = ref.t[-1] - ref.t[0]
