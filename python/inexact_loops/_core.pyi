@@ -281,7 +281,7 @@ class Separation:
     @staticmethod
     def for_gamma(gamma: float) -> Separation:
         """The default of :func:`find_loops` (``separation="auto"``) at threshold ``gamma``: a path
-        of ``DEFAULT_GAMMAS`` · γ, no time separation; measured on real trajectories (README,
+        of 4 γ, no time separation; measured on real trajectories (README,
         "Revisits").
         """
     @property
@@ -658,7 +658,7 @@ def find_loops(
         >>> import numpy as np, inexact_loops as il
         >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
         >>> traj = il.Trajectory(np.arange(200) * 0.1, 10 * np.c_[np.cos(angle), np.sin(angle)])
-        >>> loops = il.find_loops(traj, gamma=4.0, separation=None)
+        >>> loops = il.find_loops(traj, gamma=4.0)
         >>> loops.separation, loops.components["trivial"].tolist()
         (Separation(path=16.0, time_s=0.0), [False])
         >>> il.find_loops(traj, gamma=4.0, separation=None).components["trivial"].tolist()
