@@ -346,7 +346,8 @@ impl Loops {
         if index < self.len() { Ok(()) } else { Err(Error::IndexOutOfRange { index, len: self.len() }) }
     }
 
-    /// The component holding the pair (i, j) (either order), or `None` when δ(x_i, x_j) > γ.
+    /// The component holding the pair (i, j) (either order), or `None` when δ(x_i, x_j) > γ or,
+    /// with a [`Separation`], when the pair is not that far apart.
     /// O(log runs in the row).
     ///
     /// # Panics

@@ -272,7 +272,8 @@ impl Loops {
         )
     }
 
-    /// The component id of the pair (i, j) (either order), or ``None`` when δ > γ.
+    /// The component id of the pair (i, j) (either order), or ``None`` when δ > γ or, with a
+    /// separation, when the pair is not that far apart along the trajectory.
     ///
     /// Raises:
     ///     IndexError: ``i`` or ``j`` is not a pose index (negative, or past the last pose).
