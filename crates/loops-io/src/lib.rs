@@ -130,7 +130,7 @@ pub use quality::QualitySummary;
 pub use read::{ReadOptions, read_trajectory, read_trajectory_with};
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
-pub use table::{MessageRef, MessageSources, PoseTable, seconds_of_ns};
+pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
 pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::read_tuc;

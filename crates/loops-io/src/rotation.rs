@@ -56,8 +56,21 @@ pub(crate) fn quaternion_from_yaw(yaw_rad: f64) -> [f64; 4] {
 /// of the rotated x axis in the x-y plane (defined at every pitch, unlike nalgebra's
 /// `euler_angles`, which gives a yaw of 0 at a pitch of ±90°).
 pub(crate) fn yaw_of(q: [f64; 4]) -> f64 {
-    let heading = UnitQuaternion::new_unchecked(quaternion(q)) * Vector3::x();
-    heading.y.atan2(heading.x)
+    heading_in_plane(q, [0, 1])
+}
+
+/// The heading of the unit quaternion `q` in the plane of the position axes `[a, b]` (0 = x,
+/// 1 = y, 2 = z), radians in (-π, π]: the direction of the rotated axis `a` projected on the
+/// plane, measured from axis `a` towards axis `b`. This is the rotation about the plane's normal
+/// `e_a × e_b`, the first angle of the intrinsic Euler sequence (normal, b, a): for `[0, 1]` the
+/// yaw about z ([`yaw_of`]); for `[0, 2]` (KITTI's ground plane, y pointing down) the rotation
+/// about −y, that is about up. Defined at every tilt but a rotated axis `a` along the normal.
+///
+/// Axes must be two different indices below 3 (the caller checks).
+pub(crate) fn heading_in_plane(q: [f64; 4], [a, b]: [usize; 2]) -> f64 {
+    let axis = Vector3::ith(a, 1.0);
+    let heading = UnitQuaternion::new_unchecked(quaternion(q)) * axis;
+    heading[b].atan2(heading[a])
 }
 
 /// The rotation `R = Rz(yaw) Ry(pitch) Rx(roll)` (TORO's `VERTEX3`).
@@ -173,6 +186,27 @@ mod tests {
         let ry = [0.0, (0.5 * pitch).sin(), 0.0, (0.5 * pitch).cos()];
         let rz = quaternion_from_yaw(yaw);
         assert!(close(quaternion_from_roll_pitch_yaw(roll, pitch, yaw), multiply(rz, multiply(ry, rx))));
+    }
+
+    #[test]
+    fn heading_in_a_plane_is_the_rotation_about_its_normal() {
+        // A heading φ about each axis, then a tilt about the other two: the heading in the plane
+        // normal to that axis is ±φ, the sign of e_a × e_b along the axis.
+        let about = |axis: usize, angle: f64| {
+            let mut q = [0.0, 0.0, 0.0, (0.5 * angle).cos()];
+            q[axis] = (0.5 * angle).sin();
+            q
+        };
+        for phi in [-2.5, -0.4, 0.0, 1.0, 3.0] {
+            for ([a, b], normal, sign) in [([0, 1], 2, 1.0), ([1, 0], 2, -1.0), ([0, 2], 1, -1.0), ([2, 0], 1, 1.0)] {
+                let heading = heading_in_plane(about(normal, phi), [a, b]);
+                assert!((heading - sign * phi).abs() < 1e-12, "{a},{b}: {heading} for {phi}");
+                // Tilting about the last axis of the sequence (a itself) leaves the heading.
+                let tilted = multiply(about(normal, phi), about(a, 0.3));
+                assert!((heading_in_plane(tilted, [a, b]) - sign * phi).abs() < 1e-12);
+            }
+        }
+        assert_eq!(yaw_of(quaternion_from_yaw(0.7)), heading_in_plane(quaternion_from_yaw(0.7), [0, 1]));
     }
 
     #[test]

@@ -97,6 +97,22 @@ impl MessageSources {
     }
 }
 
+/// Whether the trajectory `metric` needs from a pose table can be read on a plane of its
+/// positions ([`PoseTable::to_trajectory_for`] with `axes`): `euclidean` (the plane's two
+/// coordinates) and `se2` (those and the heading in the plane). `se3`, `se3_rotation` and `so3`
+/// measure whole poses, and the other metrics' points are not poses.
+///
+/// # Examples
+/// ```
+/// use loops_io::metric_takes_plane;
+/// assert!(metric_takes_plane(&"se2(rotation_weight_m_per_rad=5)".parse()?));
+/// assert!(!metric_takes_plane(&"so3".parse()?));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn metric_takes_plane(metric: &loops_core::MetricSpec) -> bool {
+    matches!(metric, loops_core::MetricSpec::Euclidean | loops_core::MetricSpec::Se2(_))
+}
+
 impl PoseTable {
     /// A table with no poses yet, for the readers to fill.
     pub(crate) fn empty(path: &Path, dim: usize) -> Self {
@@ -156,6 +172,30 @@ impl PoseTable {
     /// [`loops_core::Error::InvalidParameter`] when an axis is not one the file gives (2 for a
     /// 2-D file, or 3 and more) or both axes are the same.
     pub fn to_trajectory_plane(&self, axes: [usize; 2]) -> Result<Trajectory> {
+        self.check_plane(axes)?;
+        self.trajectory_of_axes(&axes)
+    }
+
+    /// Checks that `axes` name a plane of this table's positions: two different axes the file
+    /// gives (0 = x, 1 = y, and 2 = z for a 3-D file).
+    ///
+    /// # Errors
+    /// As [`to_trajectory_plane`](Self::to_trajectory_plane).
+    ///
+    /// # Examples
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-plane.csv", std::process::id()));
+    /// std::fs::write(&path, "t,x,y\n0,0,0\n1,1,0\n")?;
+    /// let table = loops_io::read_trajectory(&path, None)?;
+    /// assert!(table.check_plane([1, 0]).is_ok());
+    /// let error = table.check_plane([0, 2]).unwrap_err();
+    /// assert!(error.to_string().contains("a position axis of a 2-D file: 0 (x) or 1 (y)"), "{error}");
+    /// # std::fs::remove_file(&path)?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn check_plane(&self, axes: [usize; 2]) -> Result<()> {
         let given = self.axes_given()?;
         if let Some(&axis) = axes.iter().find(|axis| !given.contains(axis)) {
             let expected = match given.len() {
@@ -171,19 +211,24 @@ impl PoseTable {
                 expected: "two different axes",
             }));
         }
-        self.trajectory_of_axes(&axes)
+        Ok(())
     }
 
     /// The trajectory a metric needs from this table: positions for `euclidean` (all axes, or
     /// the plane `axes`), positions and orientations for `se3` / `se3_rotation`, orientations
-    /// for `so3`, and x, y with the heading (yaw of the orientation) for `se2`.
+    /// for `so3`, and for `se2` the two coordinates of the plane `axes` (default x, y) with the
+    /// heading in that plane, the rotation about its normal
+    /// ([`heading_in_plane`](Self::heading_in_plane)): yaw about z on x-y; on KITTI's x-z
+    /// ground plane the rotation about its y axis (which points down).
     ///
     /// # Errors
     /// As [`to_trajectory`](Self::to_trajectory); also [`IoError::Trajectory`] holding
     /// [`IoError::Parse`] when the metric needs orientations the file does not have;
     /// [`Error::MetricMismatch`] when the metric's points cannot come from a pose file (torus,
-    /// sphere, haversine, angular) or do not take `axes`; quaternions farther than [`FILE_QUATERNION_TOLERANCE`] from unit
-    /// length name their line (closer ones are normalised: files often print 4 decimals).
+    /// sphere, haversine, angular) or do not take `axes` (see [`metric_takes_plane`]); bad `axes`
+    /// as [`to_trajectory_plane`](Self::to_trajectory_plane); quaternions farther than
+    /// [`FILE_QUATERNION_TOLERANCE`] from unit length name their line (closer ones are
+    /// normalised: files often print 4 decimals).
     pub fn to_trajectory_for(&self, metric: &loops_core::MetricSpec, axes: Option<[usize; 2]>) -> Result<Trajectory> {
         use loops_core::MetricSpec as M;
         let unsupported =
@@ -191,7 +236,17 @@ impl PoseTable {
         match (metric, axes) {
             (M::Euclidean, None) => self.to_trajectory(),
             (M::Euclidean, Some(axes)) => self.to_trajectory_plane(axes),
-            (_, Some(_)) => Err(unsupported("axes go with the euclidean metric only")),
+            (M::Se2(_), axes) => {
+                let axes = axes.unwrap_or([0, 1]);
+                self.check_plane(axes)?;
+                let headings = self.heading_in_plane(axes)?;
+                let poses: Vec<[f64; 3]> =
+                    self.positions.iter().zip(headings).map(|(p, theta)| [p[axes[0]], p[axes[1]], theta]).collect();
+                Trajectory::se2(self.timestamps_s.clone(), &poses).map_err(|error| self.locate(error))
+            }
+            (_, Some(_)) => Err(unsupported(
+                "axes (a plane) go with the euclidean and se2 metrics; se3, se3_rotation and so3 measure whole poses",
+            )),
             (M::Se3(_) | M::Se3Rotation(_), None) => {
                 let orientations = self.orientations("se3")?;
                 Trajectory::se3_with_tolerance(
@@ -207,18 +262,51 @@ impl PoseTable {
                 Trajectory::so3_with_tolerance(self.timestamps_s.clone(), orientations, FILE_QUATERNION_TOLERANCE)
                     .map_err(|error| self.locate(error))
             }
-            (M::Se2(_), None) => {
-                let orientations = self.orientations("se2")?;
-                let poses: Vec<[f64; 3]> = self
-                    .positions
-                    .iter()
-                    .zip(orientations)
-                    .map(|(p, [x, y, z, w])| [p[0], p[1], (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))])
-                    .collect();
-                Trajectory::se2(self.timestamps_s.clone(), &poses).map_err(|error| self.locate(error))
-            }
             _ => Err(unsupported("a metric for poses: euclidean, se3, se3_rotation, so3 or se2")),
         }
+    }
+
+    /// The heading of every pose in the plane of the position axes `axes`, radians in (-π, π]:
+    /// the rotated axis `axes[0]` projected on the plane, measured from `axes[0]` towards
+    /// `axes[1]`, which is the rotation about the plane's normal `e_a × e_b` (the first angle of
+    /// the intrinsic Euler sequence normal, `axes[1]`, `axes[0]`). On x-y it is the yaw about z
+    /// (the first of the intrinsic Z-Y-X angles); on x-z, the ground plane of KITTI's camera
+    /// frame (x right, y down, z forward), it is the rotation about −y, which points up: minus
+    /// the first intrinsic Y-Z-X angle. The SE(2) poses of [`to_trajectory_for`](Self::to_trajectory_for)
+    /// take it. Quaternions are checked and normalised as for `se3`. O(n).
+    ///
+    /// # Errors
+    /// Bad `axes` as [`to_trajectory_plane`](Self::to_trajectory_plane); [`IoError::Parse`]
+    /// when the file has no orientations; a quaternion farther than
+    /// [`FILE_QUATERNION_TOLERANCE`] from unit length names its line.
+    ///
+    /// # Examples
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// // KITTI: a camera turned by 0.5 rad about its y axis (which points down).
+    /// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-heading.txt", std::process::id()));
+    /// let (c, s) = (0.5_f64.cos(), 0.5_f64.sin());
+    /// std::fs::write(&path, format!("0 1 0 0 0 0 1 0 0 0 0 1 0\n0.1 {c} 0 {s} 3 0 1 0 0 {} 0 {c} 4\n", -s))?;
+    /// let table = loops_io::read_trajectory(&path, Some(loops_io::Format::Kitti))?;
+    /// let theta = table.heading_in_plane([0, 2])?;
+    /// assert!((theta[1] + 0.5).abs() < 1e-12); // about −y, up: a right turn seen from above
+    /// # std::fs::remove_file(&path)?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn heading_in_plane(&self, axes: [usize; 2]) -> Result<Vec<f64>> {
+        self.check_plane(axes)?;
+        let orientations = self.orientations("se2")?;
+        // The core's check of unit quaternions (the error names the pose, placed on its line),
+        // and its normalised quaternions.
+        let rotations =
+            Trajectory::so3_with_tolerance(self.timestamps_s.clone(), orientations, FILE_QUATERNION_TOLERANCE)
+                .map_err(|error| self.locate(error))?;
+        Ok(rotations
+            .coords()
+            .chunks_exact(4)
+            .map(|q| crate::rotation::heading_in_plane([q[0], q[1], q[2], q[3]], axes))
+            .collect())
     }
 
     fn orientations(&self, metric: &str) -> Result<&[[f64; 4]]> {
@@ -272,6 +360,8 @@ impl PoseTable {
 
 #[cfg(test)]
 mod tests {
+    use std::f64::consts::PI;
+
     use super::*;
 
     fn table(timestamps_s: Vec<f64>, dim: usize) -> PoseTable {
@@ -316,6 +406,64 @@ mod tests {
         assert_eq!(error.to_string(), expected);
         let error = table(vec![0.0, 1.0], 4).to_trajectory_plane([0, 1]).unwrap_err();
         assert_eq!(error.to_string(), expected);
+    }
+
+    /// A table of poses turning by `heading_rad[i]` about `axis`, at the positions of `table`.
+    fn turning(heading_rad: &[f64], axis: usize) -> PoseTable {
+        let mut poses = table((0..heading_rad.len()).map(|i| i as f64).collect(), 3);
+        let quaternion = |angle: f64| {
+            let mut q = [0.0, 0.0, 0.0, (0.5 * angle).cos()];
+            q[axis] = (0.5 * angle).sin();
+            q
+        };
+        poses.orientations_xyzw = Some(heading_rad.iter().map(|&angle| quaternion(angle)).collect());
+        poses
+    }
+
+    #[test]
+    fn se2_on_a_plane_takes_its_coordinates_and_the_rotation_about_its_normal() {
+        let se2: loops_core::MetricSpec = "se2(rotation_weight_m_per_rad=1)".parse().unwrap();
+        let angles = [0.0, 0.5, -2.0, 3.0];
+        // KITTI's camera frame: turning about y (down); on x-z the heading is about -y (up).
+        let traj = turning(&angles, 1).to_trajectory_for(&se2, Some([0, 2])).unwrap();
+        for (i, angle) in angles.iter().enumerate() {
+            let [x, y, theta] = [traj.point(i)[0], traj.point(i)[1], traj.point(i)[2]];
+            assert_eq!([x, y], [i as f64, 100.0 * i as f64]);
+            assert!((theta + angle).abs() < 1e-12, "{theta} for {angle}");
+        }
+        let swapped = turning(&angles, 1).to_trajectory_for(&se2, Some([2, 0])).unwrap();
+        assert_eq!(&swapped.point(3)[..2], &[300.0, 3.0]);
+        assert!((swapped.point(3)[2] - 3.0).abs() < 1e-12);
+        // Without axes: x, y and the yaw about z, as before; a turn about y has none (x still
+        // points ahead up to a quarter turn, and back beyond).
+        let flat = turning(&angles, 2).to_trajectory_for(&se2, None).unwrap();
+        assert!((flat.point(1)[2] - 0.5).abs() < 1e-12 && flat.point(1)[..2] == [1.0, 10.0]);
+        let tilted = turning(&angles, 1).to_trajectory_for(&se2, None).unwrap();
+        let yaw: Vec<f64> = tilted.coords().chunks(3).map(|p| p[2].abs()).collect();
+        assert!(yaw[0] < 1e-12 && yaw[1] < 1e-12 && (yaw[2] - PI).abs() < 1e-12, "{yaw:?}");
+    }
+
+    #[test]
+    fn se2_on_a_plane_refuses_bad_axes_and_quaternions() {
+        let se2: loops_core::MetricSpec = "se2(rotation_weight_m_per_rad=1)".parse().unwrap();
+        for axes in [[0, 3], [2, 2]] {
+            let error = turning(&[0.0, 1.0], 1).to_trajectory_for(&se2, Some(axes)).unwrap_err();
+            assert!(matches!(error, IoError::Trajectory { error: Error::InvalidParameter { .. }, .. }), "{error:?}");
+        }
+        let mut zero = turning(&[0.0, 1.0, 2.0], 1);
+        zero.orientations_xyzw.as_mut().unwrap()[2] = [0.0; 4];
+        let error = zero.to_trajectory_for(&se2, Some([0, 2])).unwrap_err();
+        assert!(error.to_string().starts_with("drive.csv line 7: "), "{error}");
+        let error = table(vec![0.0, 1.0], 3).to_trajectory_for(&se2, Some([0, 2])).unwrap_err();
+        assert!(error.to_string().contains("the se2 metric needs orientations"), "{error}");
+        // se3 and so3 measure whole poses: a plane is refused, naming what takes one.
+        for metric in ["se3(rotation_weight_m_per_rad=1)", "so3"] {
+            let spec: loops_core::MetricSpec = metric.parse().unwrap();
+            assert!(!metric_takes_plane(&spec));
+            let error = turning(&[0.0, 1.0], 1).to_trajectory_for(&spec, Some([0, 2])).unwrap_err();
+            assert!(error.to_string().contains("euclidean and se2"), "{error}");
+        }
+        assert!(metric_takes_plane(&se2) && metric_takes_plane(&loops_core::MetricSpec::Euclidean));
     }
 
     #[test]
