@@ -36,7 +36,10 @@ pub(crate) struct InputArgs {
     /// For files without times (KITTI poses, pose graphs): pose i at i / RATE_HZ seconds.
     #[arg(long, value_name = "RATE_HZ", allow_hyphen_values = true)]
     rate_hz: Option<f64>,
-    /// Keep only these two position axes, e.g. 0,2 for KITTI's ground plane (x-z).
+    /// A plane of two position axes (0 = x, 1 = y, 2 = z), e.g. 0,2 for KITTI's ground plane
+    /// (x-z): euclidean measures positions in it, se2 takes its coordinates and the rotation
+    /// about its normal, and the maps of `loops run` draw it (under se3 and so3, only the maps)
+    /// [default: all axes; x-y for se2 and the maps].
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     axes: Option<Vec<usize>>,
 }
@@ -71,16 +74,29 @@ impl InputArgs {
         Ok(self.read_table(file, spec)?.1)
     }
 
-    /// Reads `file`: the poses as read (orientations included) and the trajectory `spec` needs.
+    /// Reads `file`: the poses as read (orientations included) and the trajectory `spec` needs,
+    /// on the plane of `--axes` when the metric takes one (checked against the file for the
+    /// others, which use it for the maps only).
     pub(crate) fn read_table(&self, file: &Path, spec: &MetricSpec) -> Result<(loops_io::PoseTable, Trajectory)> {
-        let axes = match self.axes.as_deref() {
+        let axes = self.plane()?;
+        let table = loops_io::read_trajectory_with(file, &self.options()?)?;
+        let traj = match axes {
+            Some(axes) if !loops_io::metric_takes_plane(spec) => {
+                table.check_plane(axes)?;
+                table.to_trajectory_for(spec, None)?
+            }
+            _ => table.to_trajectory_for(spec, axes)?,
+        };
+        Ok((table, traj))
+    }
+
+    /// The plane of `--axes`, if given: two position axes.
+    pub(crate) fn plane(&self) -> Result<Option<[usize; 2]>> {
+        Ok(match self.axes.as_deref() {
             None => None,
             Some(&[a, b]) => Some([a, b]),
             Some(other) => bail!("--axes takes two axis indices, got {other:?}"),
-        };
-        let table = loops_io::read_trajectory_with(file, &self.options()?)?;
-        let traj = table.to_trajectory_for(spec, axes)?;
-        Ok((table, traj))
+        })
     }
 }
 

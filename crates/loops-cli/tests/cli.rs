@@ -359,3 +359,99 @@ fn info_describes_a_text_file() {
     assert_one_line_error(&loops(&["info", file.to_str().unwrap(), "--time", "wall"]), "time source");
     assert_one_line_error(&loops(&["info", dir.join("nope.mcap").to_str().unwrap()]), "nope.mcap");
 }
+
+/// A TUM file in KITTI's camera frame (y down, the ground in x-z): out along z facing +z, then
+/// back facing −z (a half turn about y), 1 m per pose.
+fn out_and_back_on_the_ground(dir: &Path) -> (PathBuf, Vec<(f64, f64)>) {
+    let path = dir.join("ground.tum");
+    let mut text = String::new();
+    let mut poses = Vec::new();
+    for i in 0..=40 {
+        // Facing −z is the rotation by π about y: quaternion [0, 1, 0, 0].
+        let (z, q, heading) = if i <= 20 { (i, "0 0 0 1", 0.0) } else { (40 - i, "0 1 0 0", std::f64::consts::PI) };
+        text += &format!("{i}.0 0.5 1.5 {z}.0 {q}\n");
+        poses.push((f64::from(z), heading));
+    }
+    std::fs::write(&path, text).unwrap();
+    (path, poses)
+}
+
+#[test]
+fn se2_on_the_chosen_plane_takes_its_coordinates_and_heading() {
+    let dir = temp_dir("se2-plane");
+    let (path, poses) = out_and_back_on_the_ground(&dir);
+    let (weight, gamma) = (10.0, 1.5);
+    let metric = format!("se2(rotation_weight_m_per_rad={weight})");
+    let pairs = |axes: &[&str]| {
+        let mut args = vec!["components", path.to_str().unwrap(), "--gamma", "1.5", "--metric", &metric, "--json", "-"];
+        args.extend_from_slice(axes);
+        let output = loops(&args);
+        assert!(output.status.success(), "{axes:?}: {}", stderr(&output));
+        let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+        report["pair_count"].as_u64().unwrap()
+    };
+    // Brute force on x-z: |Δz| + W |Δθ| ≤ γ over the full plane (x is constant).
+    let expected = poses
+        .iter()
+        .flat_map(|a| poses.iter().map(move |b| (a, b)))
+        .filter(|(a, b)| (a.0 - b.0).abs() + weight * (a.1 - b.1).abs() <= gamma)
+        .count() as u64;
+    assert_eq!(pairs(&["--axes", "0,2"]), expected);
+    assert_eq!(pairs(&["--axes", "2,0"]), expected);
+    // On x-y every pose is at (0.5, 1.5): all pairs of a leg (the heading about z of a half
+    // turn about y is π as well), so the plane changes the answer.
+    assert_eq!(pairs(&[]), 21 * 21 + 20 * 20);
+    assert_one_line_error(
+        &loops(&["components", path.to_str().unwrap(), "--gamma", "1", "--metric", &metric, "--axes", "0,3"]),
+        "plane axis",
+    );
+}
+
+#[test]
+fn run_draws_the_maps_in_the_plane_of_axes() {
+    let dir = temp_dir("run-plane");
+    let (path, _) = out_and_back_on_the_ground(&dir);
+    let report = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec!["run", path.to_str().unwrap(), "--gamma", "1.5", "--budget", "10", "--quiet"];
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        let output = loops(&args);
+        assert!(output.status.success(), "{extra:?}: {}", stderr(&output));
+        std::fs::read_to_string(out.join("ground").join("report.html")).unwrap()
+    };
+    let labels = |html: &str| -> Vec<String> {
+        html.split("class=\"label\">").skip(1).filter_map(|s| s.split('<').next()).map(str::to_owned).collect()
+    };
+    let metres = |html: &str| labels(html).into_iter().filter(|l| l.ends_with("(m)")).collect::<Vec<_>>();
+    // Both maps, labelled with the plane's axes (across, then up), and the plane in the summary.
+    let xz = report("xz", &["--axes", "0,2"]);
+    assert_eq!(metres(&xz), ["x (m)", "z (m)", "x (m)", "z (m)"]);
+    assert!(xz.contains("<dt>map plane</dt><dd>x–z</dd>"), "the summary names the plane");
+    assert!(xz.contains("The trajectory in x–z"));
+    let zy = report("zy", &["--axes", "2,1"]);
+    assert_eq!(metres(&zy), ["z (m)", "y (m)", "z (m)", "y (m)"]);
+    // By default x-y; under se3 (whole poses) --axes chooses the maps only.
+    assert_eq!(metres(&report("default", &[])), ["x (m)", "y (m)", "x (m)", "y (m)"]);
+    let se3 = report("se3", &["--axes", "0,2", "--metric", "se3(rotation_weight_m_per_rad=10)"]);
+    assert_eq!(metres(&se3), ["x (m)", "z (m)", "x (m)", "z (m)"]);
+    // Axes the file does not have are refused before anything is written, whatever the metric.
+    for metric in ["euclidean", "so3"] {
+        let out = dir.join(format!("bad-{metric}"));
+        let output = loops(&[
+            "run",
+            path.to_str().unwrap(),
+            "--gamma",
+            "1",
+            "--metric",
+            metric,
+            "--axes",
+            "0,3",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(output.status.code(), Some(1), "{metric}: {}", stderr(&output));
+        assert!(stderr(&output).contains("plane axis"), "{metric}: {}", stderr(&output));
+        assert!(!out.join("ground").exists());
+    }
+}

@@ -6,9 +6,9 @@
 //!
 //! | `data-figure` | what | module |
 //! |---|---|---|
-//! | `loop-duration` | x–y path coloured by loop duration τ | [`trajectory`] |
+//! | `loop-duration` | the path in the chosen plane (`--axes`, x–y by default) coloured by loop duration τ | [`trajectory`] |
 //! | `pairwise-distance` | δ over the (t, t′) plane, γ isocontour, component outlines, samples | [`distance`] |
-//! | `sampled-pairs` | each sample as a line between its two poses | [`trajectory`] |
+//! | `sampled-pairs` | each sample as a line between its two poses, in the same plane | [`trajectory`] |
 //! | `samples-per-component` | samples per component against area, every sampler compared | [`per_component`] |
 //!
 //! and `<table id="components">`, one row per component ([`table`]). Every figure is drawn from
@@ -55,6 +55,8 @@ pub(crate) struct ReportInput<'a> {
     pub source: &'a str,
     /// The poses as read (x, y, z positions for drawing; orientations when the file has them).
     pub table: &'a loops_io::PoseTable,
+    /// The plane the maps draw: two axes of the table's positions (0 = x, 1 = y, 2 = z).
+    pub plane: [usize; 2],
     /// The trajectory the engine ran on (the metric's coordinates).
     pub traj: &'a Trajectory,
     /// The metric, for the downsampled pairwise-distance image.
@@ -196,6 +198,7 @@ mod tests {
                 name: "drive <1> & co.tum",
                 source: "logs/drive <1> & co.tum",
                 table: &self.table,
+                plane: [0, 1],
                 traj: &self.traj,
                 metric: &self.metric,
                 loops: &self.loops,

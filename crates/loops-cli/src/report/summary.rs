@@ -28,6 +28,7 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                     dt { "poses" } dd { (thousands(traj.len() as u64)) }
                     dt { "time span" } dd { (duration_text(span_s)) }
                     dt { "metric" } dd { code { (input.metric.name()) } }
+                    dt { "map plane" } dd { (super::trajectory::plane_name(input.plane)) }
                     dt { "γ" } dd { (loops.gamma()) }
                     dt { "separation" }
                     dd {

@@ -1,4 +1,5 @@
-//! The x–y figures: the trajectory coloured by loop duration τ, and the sampled pairs over it.
+//! The maps: the trajectory coloured by loop duration τ, and the sampled pairs over it, drawn in
+//! the plane the user chose (`--axes`; x–y by default) and labelled with its axes.
 //!
 //! A log of 10⁶ poses cannot be drawn pose by pose; the path is simplified in pixel space
 //! (radial distance, then Douglas–Peucker) to at most [`MAX_SEGMENTS`] segments, breaking it
@@ -23,22 +24,40 @@ const COLOUR_LEVELS: usize = 48;
 /// Width of the plot area, pixels.
 const AREA_WIDTH: f64 = 520.0;
 
-/// The plot of positions `x–y`, equal scales on both axes, with the positions as pixels.
+/// The plot of positions in a plane, equal scales on both axes, with the positions as pixels.
 struct MapPlot {
     plot: Plot,
     pixels: Vec<(f64, f64)>,
 }
 
-/// An equal-aspect x–y plot of `positions` (first two coordinates), `right` pixels of margin
-/// right of the area (for a colour bar).
-fn map_plot(id: &str, positions: &[[f64; 3]], right: f64) -> MapPlot {
+/// The name of a position axis (0, 1, 2: x, y, z), as the axis labels and captions print it.
+fn axis_name(axis: usize) -> String {
+    ["x", "y", "z"].get(axis).map_or_else(|| format!("axis {axis}"), |name| (*name).to_owned())
+}
+
+/// The plane's name, `x–z`.
+pub(super) fn plane_name([a, b]: [usize; 2]) -> String {
+    format!("{}–{}", axis_name(a), axis_name(b))
+}
+
+/// Labels the axes of a map of `plane` with the axes' names, in metres.
+fn map_axes(plot: &mut Plot, [a, b]: [usize; 2]) {
+    plot.axes(&format!("{} (m)", axis_name(a)), &format!("{} (m)", axis_name(b)), 6, 6);
+}
+
+/// An equal-aspect plot of `positions` in `plane` (axis `plane[0]` across, `plane[1]` up),
+/// `right` pixels of margin right of the area (for a colour bar).
+fn map_plot(id: &str, positions: &[[f64; 3]], [a, b]: [usize; 2], right: f64) -> MapPlot {
+    let coordinate = |p: &[f64; 3], axis: usize| p.get(axis).copied().unwrap_or(f64::NAN);
+    let in_plane = |p: &[f64; 3]| (coordinate(p, a), coordinate(p, b));
     // Non-finite coordinates (a table never validated) are drawn at the previous finite pose.
-    let mut last = positions.iter().find(|p| p[0].is_finite() && p[1].is_finite()).map_or((0.0, 0.0), |p| (p[0], p[1]));
+    let finite = |(x, y): (f64, f64)| x.is_finite() && y.is_finite();
+    let mut last = positions.iter().map(in_plane).find(|&p| finite(p)).unwrap_or((0.0, 0.0));
     let points: Vec<(f64, f64)> = positions
         .iter()
         .map(|p| {
-            if p[0].is_finite() && p[1].is_finite() {
-                last = (p[0], p[1]);
+            if finite(in_plane(p)) {
+                last = in_plane(p);
             }
             last
         })
@@ -227,7 +246,7 @@ fn start_and_end(plot: &mut Plot, pixels: &[(f64, f64)]) {
 pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
     let positions = &input.table.positions;
     let n = positions.len().min(input.loop_duration_s.len());
-    let MapPlot { mut plot, pixels } = map_plot("fig-tau", &positions[..n], 120.0);
+    let MapPlot { mut plot, pixels } = map_plot("fig-tau", &positions[..n], input.plane, 120.0);
     let tau = &input.loop_duration_s[..n];
     let scale = tau_scale(tau);
     let fractions: Vec<f64> = tau.iter().map(|&t| scale.map(t).clamp(0.0, 1.0)).collect();
@@ -246,11 +265,12 @@ pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
     }
     plot.push_clipped(&paths);
     start_and_end(&mut plot, &pixels);
-    plot.axes("x (m)", "y (m)", 6, 6);
+    map_axes(&mut plot, input.plane);
     plot.colour_bar(VIRIDIS, scale, "loop duration τ (s)", &[]);
-    let svg = plot.finish("The trajectory in x–y, coloured by loop duration");
+    let plane = plane_name(input.plane);
+    let svg = plot.finish(&format!("The trajectory in {plane}, coloured by loop duration"));
     let caption = format!(
-        "<b>Trajectory coloured by loop duration.</b> x–y positions of the {n} poses; colour is τ(t), the total time the \
+        "<b>Trajectory coloured by loop duration.</b> {plane} positions of the {n} poses; colour is τ(t), the total time the \
          trajectory spends within γ = {gamma} of the pose (its own passage included), so revisited streets stand out. \
          Drawn as {segments}{simplified}; open circle: start, square: end.{log}",
         gamma = input.loops.gamma(),
@@ -268,7 +288,7 @@ pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
 /// Figure: the sampled pairs, each a line between its two poses, over the trajectory in grey.
 pub(super) fn sampled_pairs_figure(input: &ReportInput<'_>) -> Markup {
     let positions = &input.table.positions;
-    let MapPlot { mut plot, pixels } = map_plot("fig-pairs", positions, 24.0);
+    let MapPlot { mut plot, pixels } = map_plot("fig-pairs", positions, input.plane, 24.0);
     plot.background("#ffffff");
     plot.grid(6, 6);
     let kept = thin(simplify(&pixels, |_| false, 0.5), MAX_SEGMENTS);
@@ -299,8 +319,8 @@ pub(super) fn sampled_pairs_figure(input: &ReportInput<'_>) -> Markup {
         lines.element(&format!("stroke=\"{colour}\" class=\"pair\""))
     ));
     start_and_end(&mut plot, &pixels);
-    plot.axes("x (m)", "y (m)", 6, 6);
-    let svg = plot.finish("Sampled loop-closure pairs over the trajectory");
+    map_axes(&mut plot, input.plane);
+    let svg = plot.finish(&format!("Sampled loop-closure pairs over the trajectory in {}", plane_name(input.plane)));
     let sampler = sampler_name(input.samples.sampler()).into_string();
     let mut caption = if drawn.is_empty() {
         format!("<b>Sampled pairs.</b> The {sampler} sampler drew no pair of poses to show.")

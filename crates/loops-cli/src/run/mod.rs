@@ -373,6 +373,7 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         name: &job.name,
         source: &source,
         table: &table,
+        plane: args.input.plane()?.unwrap_or([0, 1]),
         traj: &traj,
         metric: spec,
         loops: &loops,
