@@ -13,6 +13,12 @@ import it, ``inexact_loops.plot`` (or ``import inexact_loops.plot``) does.
 Every function draws into ``ax`` (a new figure when ``None``) and returns the Axes. Times are
 seconds from the trajectory's first timestamp.
 
+The maps (:func:`trajectory_by_duration`, :func:`sample_pairs`) draw a plane of two position
+axes, ``axes=(a, b)`` with 0 = x, 1 = y, 2 = z (e.g. ``(0, 2)`` for KITTI's ground plane), and
+label each axis with its name. A trajectory read on a plane (``read_trajectory(path,
+axes=(0, 2))``) remembers it (:attr:`~inexact_loops.Trajectory.plane_axes`): it is drawn and
+labelled in that plane by default, and ``axes`` names the same axes of the file.
+
 *Samples* are given as an ``(m, 2)`` integer array of pose index pairs (i, j); a mapping with
 ``i`` and ``j`` index columns (or ``t`` and ``t_prime`` times in seconds, mapped to the
 nearest poses) and optionally ``component``; or an object with such attributes, e.g.
@@ -38,6 +44,7 @@ Example:
 from __future__ import annotations
 
 import numbers
+import operator
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -286,7 +293,7 @@ def trajectory_by_duration(
     side: _Side = "both",
     components: list[int] | None = None,
     normalized: bool = False,
-    axes: tuple[int, int] = (0, 1),
+    axes: tuple[int, int] | None = None,
     cmap: str = "viridis",
     linewidth: float = 1.5,
     colorbar: bool = True,
@@ -299,11 +306,13 @@ def trajectory_by_duration(
     shows.
 
     Args:
-        traj: the trajectory; two coordinates of ``traj.positions`` are drawn.
+        traj: the trajectory; two position axes are drawn.
         loops: the result of :func:`~inexact_loops.find_loops` on ``traj``.
         ax: the Axes to draw into; a new figure when ``None``.
         side, components, normalized: as :meth:`Loops.loop_duration`.
-        axes: the two coordinates drawn as x and y (e.g. ``(0, 2)`` for KITTI's x-z ground plane).
+        axes: the plane drawn, two position axes across and up (e.g. ``(0, 2)`` for KITTI's x-z
+            ground plane), labelled with their names; by default the plane ``traj`` was read
+            on (:attr:`~inexact_loops.Trajectory.plane_axes`), else x-y.
         cmap: the colormap of tau.
         linewidth: line width, points.
         colorbar: add a colorbar of tau.
@@ -314,7 +323,7 @@ def trajectory_by_duration(
 
     Raises:
         TypeError: ``traj`` or ``loops`` of the wrong type.
-        ValueError: ``loops`` of another trajectory, ``axes`` not two coordinates of ``traj``.
+        ValueError: ``loops`` of another trajectory, ``axes`` not two axes ``traj`` holds.
         InvalidParameterError: a bad ``side`` or component id (from :meth:`Loops.loop_duration`).
 
     Example:
@@ -331,7 +340,7 @@ def trajectory_by_duration(
     """
     _check_trajectory(traj)
     _check_loops(loops, traj)
-    xy = _plane(traj, axes)
+    xy, names = _plane(traj, axes)
     tau = loops.loop_duration(side=side, components=components, normalized=normalized)
 
     import matplotlib.pyplot as plt
@@ -345,7 +354,7 @@ def trajectory_by_duration(
     lines.set_array(segment_tau[order])
     lines.set_clim(0.0, max(float(tau.max()), np.finfo(float).tiny))
     ax.add_collection(lines)
-    _frame(ax, xy, axes, position_unit)
+    _frame(ax, xy, names, position_unit)
     if colorbar:
         unit = "fraction of the span" if normalized else "s"
         what = {"both": "τ", "begin": "τ (loops that begin)", "end": "τ (loops that end)"}
@@ -359,7 +368,7 @@ def sample_pairs(
     samples: SamplesLike | Mapping[str, SamplesLike],
     *,
     ax: Axes | None = None,
-    axes: tuple[int, int] = (0, 1),
+    axes: tuple[int, int] | None = None,
     color: str | None = None,
     trajectory_color: str = "0.65",
     linewidth: float = 0.6,
@@ -374,7 +383,7 @@ def sample_pairs(
         samples: the samples (see the module docstring), or ``{name: samples}`` for several
             samplers, each in its colour.
         ax: the Axes to draw into; a new figure when ``None``.
-        axes: the two coordinates drawn as x and y.
+        axes: the plane drawn, as in :func:`trajectory_by_duration`.
         color: colour of the sample lines for a single sampler (default from its name).
         trajectory_color: colour of the path.
         linewidth: width of the sample lines, points.
@@ -387,7 +396,7 @@ def sample_pairs(
 
     Raises:
         TypeError: ``traj`` not a Trajectory; samples that are not index pairs.
-        ValueError: sample indices out of range; ``axes`` not two coordinates of ``traj``.
+        ValueError: sample indices out of range; ``axes`` not two axes ``traj`` holds.
 
     Example:
         >>> import matplotlib
@@ -402,7 +411,7 @@ def sample_pairs(
         >>> import matplotlib.pyplot as plt; plt.close("all")
     """
     _check_trajectory(traj)
-    xy = _plane(traj, axes)
+    xy, names = _plane(traj, axes)
     sample_sets = _named_samples(samples)
     if not sample_sets:
         raise ValueError("no samples given")
@@ -426,7 +435,7 @@ def sample_pairs(
                 label=f"{label} ({len(i)})",
             )
         )
-    _frame(ax, xy, axes, position_unit)
+    _frame(ax, xy, names, position_unit)
     if legend:
         _legend_above(ax)
     return ax
@@ -696,29 +705,51 @@ def _centres(edges: np.ndarray) -> np.ndarray:
     return centres
 
 
-def _plane(traj: Trajectory, axes: tuple[int, int]) -> np.ndarray:
+def _axis_name(axis: int) -> str:
+    """A position axis by name: x, y, z, then x3, x4, ..."""
+    return "xyz"[axis] if axis < 3 else f"x{axis}"
+
+
+def _plane(traj: Trajectory, axes: tuple[int, int] | None) -> tuple[np.ndarray, list[str]]:
+    """The points of the plane ``axes`` (position axes), shape ``(n, 2)``, and the axes' names.
+
+    A trajectory read on a plane holds only that plane's axes, as its first two coordinates.
+    """
+    plane = traj.plane_axes
+    if axes is None:
+        axes = plane if plane is not None else (0, 1)
     try:
-        a, b = (int(k) for k in axes)
+        a, b = (operator.index(k) for k in axes)
     except (TypeError, ValueError) as err:
-        raise ValueError(f"axes must be two coordinate indices, got {axes!r}") from err
+        raise ValueError(
+            f"axes must be two position axes (0 = x, 1 = y, 2 = z), got {axes!r}"
+        ) from err
+    if plane is not None:
+        held = {plane[0]: 0, plane[1]: 1}
+        if a not in held or b not in held or a == b:
+            names = "-".join(_axis_name(k) for k in plane)
+            raise ValueError(
+                f"axes must be two different axes of the plane {names} {tuple(plane)!r} this "
+                f"trajectory was read on, got {axes!r}: read it with axes={axes!r} (or none) to "
+                "draw another plane"
+            )
+        return traj.positions[:, [held[a], held[b]]], [_axis_name(a), _axis_name(b)]
     if not (0 <= a < traj.dim and 0 <= b < traj.dim) or a == b:
         raise ValueError(
             f"axes must be two different coordinates of the {traj.dim}-dimensional "
             f"positions, got {axes!r}"
         )
-    return traj.positions[:, [a, b]]
+    return traj.positions[:, [a, b]], [_axis_name(a), _axis_name(b)]
 
 
-def _frame(ax: Axes, xy: np.ndarray, axes: tuple[int, int], unit: str) -> None:
+def _frame(ax: Axes, xy: np.ndarray, names: list[str], unit: str) -> None:
     lo, hi = xy.min(axis=0), xy.max(axis=0)
     pad = 0.03 * max(float((hi - lo).max()), 1e-9)
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
     ax.set_aspect("equal")
-    names = "xyz"
-    label = [names[k] if k < 3 else f"x{k}" for k in axes]
-    ax.set_xlabel(f"{label[0]} ({unit})")
-    ax.set_ylabel(f"{label[1]} ({unit})")
+    ax.set_xlabel(f"{names[0]} ({unit})")
+    ax.set_ylabel(f"{names[1]} ({unit})")
 
 
 def _sampler_style(name: str | None, index: int) -> tuple[str, str]:

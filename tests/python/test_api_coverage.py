@@ -41,6 +41,10 @@ ELSEWHERE = {
     "Detections.to_pandas": ("python/test_interop.py", "test_detections_to_pandas"),
     "Samples.to_pandas": ("python/test_interop.py", "test_samples_to_pandas_equals_the_csv"),
     "Table.to_pandas": ("python/test_interop.py", "test_tables_to_pandas"),
+    "Trajectory.plane_axes": (
+        "test_ground_plane.py",
+        "test_maps_draw_and_label_the_plane_a_trajectory_was_read_on",
+    ),
     **{
         name: ("python/test_plane.py", "test_grid_of_every_pose_and_of_evenly_spaced_pixels")
         for name in (

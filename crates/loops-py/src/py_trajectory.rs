@@ -36,6 +36,9 @@ use crate::py_metric::MetricArg;
 #[derive(Debug, Clone)]
 pub(crate) struct Trajectory {
     pub(crate) inner: Arc<loops_core::Trajectory>,
+    /// The position axes of the source that the first two coordinates are, for a trajectory
+    /// read on a plane (`axes=`); what the maps of `inexact_loops.plot` label.
+    plane_axes: Option<(usize, usize)>,
 }
 
 #[pymethods]
@@ -64,6 +67,21 @@ impl Trajectory {
     #[getter]
     fn dim(&self) -> usize {
         self.inner.dim()
+    }
+
+    /// The plane a trajectory was read on: the position axes of its source (0 = x, 1 = y,
+    /// 2 = z) that its first two coordinates are, as given to :func:`read_trajectory` or
+    /// :meth:`from_evo` with ``axes=`` (Euclidean: the plane's two coordinates; ``se2``: those
+    /// and the heading in the plane); ``None`` for every other trajectory, whose coordinates are
+    /// its own. The maps of :mod:`inexact_loops.plot` draw and label this plane.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> il.Trajectory(np.arange(3.0), np.zeros((3, 2))).plane_axes is None
+    ///     True
+    #[getter]
+    fn plane_axes(&self) -> Option<(usize, usize)> {
+        self.plane_axes
     }
 
     /// Timestamps, seconds, shape ``(n,)`` (a copy).
@@ -242,13 +260,16 @@ impl Trajectory {
     /// What is built follows ``metric`` exactly as in :func:`read_trajectory`: positions
     /// (x, y, z) for Euclidean (the default), or the plane ``axes`` of them; positions and
     /// orientations for ``se3`` / ``se3_rotation`` (as :meth:`se3`); orientations for ``so3``;
-    /// x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are normalised.
+    /// x, y and yaw for ``se2`` (or the plane ``axes`` and the heading in it). Quaternions within
+    /// 1e-3 of unit length are normalised.
     ///
     /// Args:
     ///     trajectory: an ``evo.core.trajectory.PoseTrajectory3D``.
     ///     metric: the metric the trajectory is for, a name or :mod:`inexact_loops.metrics`
     ///         object (as in :func:`find_loops`); ``None`` is Euclidean.
-    ///     axes: with the Euclidean metric, keep only these position axes, e.g. ``(0, 1)``.
+    ///     axes: a plane of two position axes, e.g. ``(0, 2)``: Euclidean keeps only them, ``se2``
+    ///         takes them and the heading in that plane, as in :func:`read_trajectory`
+    ///         (:attr:`plane_axes`).
     ///
     /// Raises:
     ///     TypeError: ``trajectory`` lacks one of the attributes (the message names them all,
@@ -311,13 +332,13 @@ impl Trajectory {
         };
         // The table's own conversion picks what the metric needs, as for a file.
         let inner = detached(py, move || trajectory_for(&table, &spec, axes, Source::Memory))?;
-        Ok(Self { inner: Arc::new(inner) })
+        Ok(Self { inner: Arc::new(inner), plane_axes: axes })
     }
 }
 
 fn wrap(py: Python<'_>, f: impl FnOnce() -> loops_core::Result<loops_core::Trajectory> + Send) -> PyResult<Trajectory> {
     let inner = detached(py, || Ok(f()?))?;
-    Ok(Trajectory { inner: Arc::new(inner) })
+    Ok(Trajectory { inner: Arc::new(inner), plane_axes: None })
 }
 
 /// Where a pose table came from: errors name the file, or only poses.
@@ -418,11 +439,16 @@ pub(crate) fn urban_drive(
 ///         read as one trajectory in time order.
 ///     format: ``"tum"``, ``"csv"``, ``"kitti"``, ``"euroc"``, ``"tuc"``, ``"g2o"``,
 ///         ``"mcap"``, ``"rosbag2"``, ``"ros1"``, or ``None`` to tell.
-///     axes: keep only these position axes, e.g. ``(0, 2)`` for KITTI's ground plane.
+///     axes: a plane of two position axes (0 = x, 1 = y, 2 = z), e.g. ``(0, 2)`` for KITTI's
+///         ground plane: Euclidean keeps only these coordinates; ``se2`` takes them and the
+///         heading in the plane, the rotation about its normal (on x-z, the ground of KITTI's
+///         camera frame, about −y: up); ``se3`` and ``so3`` take none. The trajectory remembers
+///         it (:attr:`Trajectory.plane_axes`) for the plots.
 ///     metric: the metric the trajectory is for (as in :func:`find_loops`): positions for
 ///         Euclidean (the default); positions and orientations for ``se3``; orientations for
-///         ``so3``; x, y and yaw for ``se2``. Quaternions within 1e-3 of unit length are
-///         normalised (files often print 4 decimals).
+///         ``so3``; x, y and yaw about z for ``se2`` (or the plane ``axes`` and the heading in
+///         it). Quaternions within 1e-3 of unit length are normalised (files often print 4
+///         decimals).
 ///     topic: the topic (MCAP, bags); ``None`` picks the one topic with poses (several: an error
 ///         listing them, see :func:`list_topics`).
 ///     time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
@@ -477,7 +503,7 @@ pub(crate) fn read_trajectory(
         };
         trajectory_for(&table, &spec, axes, Source::File)
     })?;
-    Ok(Trajectory { inner: Arc::new(inner) })
+    Ok(Trajectory { inner: Arc::new(inner), plane_axes: axes })
 }
 
 /// `read_trajectory`'s `path`: one path, or a non-empty list of them.
