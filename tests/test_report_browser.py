@@ -1,6 +1,8 @@
 """The per-log report of `loops run`, rendered by headless Chromium: every figure is laid out
 and drawn, the components table matches components.csv, and nothing is fetched from the network.
-A screenshot of the rendered page is kept as a test artifact.
+A screenshot of the rendered page is kept as a test artifact. KITTI 00 run with `--axes 0,2`
+(from ../shared/data; skipped without it) draws its maps in x-z: the rendered tracks span both
+axes, are labelled x and z, and every drawn vertex is a pose's (x, z).
 
 Chromium is Debian's `chromium` package (`.ci/run` installs it); where it is missing the test
 is skipped with a message saying so.
@@ -171,3 +173,150 @@ def test_report_screenshot_is_kept_and_not_blank(report: Path) -> None:
     # Colour in the figures (viridis-coloured path, distance image), not only black text.
     colourful = pixels.max(axis=2) - pixels.min(axis=2) > 0.25
     assert colourful.mean() > 0.005
+
+
+# --------------------------------------------------------------------------------------------
+# KITTI 00 with --axes 0,2: the maps draw the ground plane (x-z), not the first two columns.
+# --------------------------------------------------------------------------------------------
+
+KITTI00 = ROOT / ".." / "shared" / "data" / "kitti_odometry" / "00.txt"
+MAPS = ("loop-duration", "sampled-pairs")
+
+# What the browser laid out in the two maps: the axis labels (and whether they are drawn
+# upright), the tick labels, the path data of the track and its rendered box, and the start and
+# end markers.
+MAPS_PAGE = """<!DOCTYPE html><html><body>
+<iframe id="report" src="REPORT" style="width:1400px;height:4000px"></iframe>
+<script>
+document.getElementById("report").addEventListener("load", () => {
+  const doc = document.getElementById("report").contentDocument;
+  const maps = {};
+  for (const name of MAPS) {
+    const svg = doc.querySelector(`.figure[data-figure="${name}"] svg`);
+    if (!svg) continue;
+    const texts = [...svg.querySelectorAll("text")].map((t) => {
+      const r = t.getBoundingClientRect();
+      const attribute = (name) => t.getAttribute(name);
+      return { text: t.textContent, cls: attribute("class"), anchor: attribute("text-anchor"),
+               x: +attribute("x"), y: +attribute("y"), upright: r.height > r.width };
+    });
+    const tracks = [...svg.querySelectorAll("path.track, path.grey-track")];
+    const boxes = tracks.map((p) => p.getBBox()).filter((b) => b.width + b.height > 0);
+    const least = (f) => Math.min(...boxes.map(f));
+    const most = (f) => Math.max(...boxes.map(f));
+    const box = boxes.length ? {
+      left: least((b) => b.x), right: most((b) => b.x + b.width),
+      top: least((b) => b.y), bottom: most((b) => b.y + b.height),
+    } : null;
+    const start = svg.querySelector("circle.start");
+    const end = svg.querySelector("rect.end");
+    maps[name] = {
+      texts, box, paths: tracks.map((p) => p.getAttribute("d")),
+      start: start && [+start.getAttribute("cx"), +start.getAttribute("cy")],
+      end: end && [+end.getAttribute("x") + 4, +end.getAttribute("y") + 4],
+    };
+  }
+  const out = document.createElement("pre");
+  out.id = "result";
+  out.textContent = JSON.stringify(maps);
+  document.body.appendChild(out);
+});
+</script></body></html>
+"""
+
+
+def _number(text: str) -> float:
+    """A tick label as a number: Unicode minus and digit separators as the report prints them."""
+    return float(text.replace("−", "-").replace(",", "").replace("\u2009", "").strip())
+
+
+def _scale(ticks: list[tuple[float, float]]) -> tuple[float, float]:
+    """Metres = a + b · pixel, fitted to (pixel, value) tick pairs."""
+    assert len(ticks) >= 2, ticks
+    pixels, values = np.array(ticks).T
+    b, a = np.polyfit(pixels, values, 1)
+    residual = np.abs(a + b * pixels - values).max()
+    assert residual < 1e-3 * (values.max() - values.min()), ticks
+    return a, b
+
+
+def _vertices(d: str) -> np.ndarray:
+    """The points of an `M x y L x y ...` path, pixels."""
+    numbers = [float(v) for v in re.findall(r"-?\d+(?:\.\d+)?", d)]
+    return np.array(numbers).reshape(-1, 2)
+
+
+@pytest.fixture(scope="module")
+def kitti00_report(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> Path:
+    """`loops run` on KITTI 00 with --axes 0,2 (γ = 6 m): its log folder."""
+    if not KITTI00.is_file():
+        pytest.skip(f"KITTI odometry not found at {KITTI00.resolve()} (not in a user's clone)")
+    out = tmp_path_factory.mktemp("kitti") / "results"
+    args = [loops_cli, "run", KITTI00, "--axes", "0,2", "--gamma", "6", "--out", out, "--quiet"]
+    subprocess.run(args, check=True, capture_output=True)
+    return out / "00"
+
+
+def test_kitti00_maps_draw_the_chosen_plane_in_chromium(kitti00_report: Path) -> None:
+    """The KITTI 00 report with --axes 0,2 draws its loops: both maps, as Chromium lays them out,
+    span both axes, are labelled x and z, and every drawn vertex, read back through the tick
+    labels, is a pose's (x, z); start and end are the first and last poses."""
+    browser = chromium()
+    check = kitti00_report / "check-maps.html"
+    check.write_text(
+        MAPS_PAGE.replace("REPORT", "report.html").replace("MAPS", json.dumps(list(MAPS)))
+    )
+    dumped = browse(
+        browser,
+        "--virtual-time-budget=15000",
+        "--window-size=1440,4200",
+        "--dump-dom",
+        check.as_uri(),
+    ).stdout
+    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
+    assert found, f"the check script did not run: {dumped[:2000]}"
+    maps = json.loads(html.unescape(found.group(1)))
+    assert set(maps) == set(MAPS), maps.keys()
+
+    rows = np.loadtxt(KITTI00)  # t, then the row-major 3x4 [R|t] of the camera
+    ground = rows[:, [4, 12]]  # x (right) and z (forward): the ground plane
+    extent = np.ptp(ground, axis=0)
+    tree = scipy_spatial().cKDTree(ground)
+    for name, drawn in maps.items():
+        labels = [t for t in drawn["texts"] if t["cls"] == "label" and t["text"].endswith("(m)")]
+        across = [t["text"] for t in labels if not t["upright"]]
+        up = [t["text"] for t in labels if t["upright"]]
+        assert (across, up) == (["x (m)"], ["z (m)"]), (name, labels)
+
+        # The rendered track spans both axes in the proportions of the x-z extents (a flat
+        # streak, as the first two columns x-y give, would not).
+        box = drawn["box"]
+        width, height = box["right"] - box["left"], box["bottom"] - box["top"]
+        assert min(width, height) > 200, (name, box)
+        assert width / height == pytest.approx(extent[0] / extent[1], rel=0.03), (name, box)
+
+        # Pixels back to metres through the tick labels; each vertex is a pose's (x, z).
+        ticks = [t for t in drawn["texts"] if t["cls"] is None and t["text"].strip()]
+        xs = _scale([(t["x"], _number(t["text"])) for t in ticks if t["anchor"] == "middle"])
+        ys = _scale([(t["y"] - 4.0, _number(t["text"])) for t in ticks if t["anchor"] == "end"])
+        points = np.vstack([_vertices(d) for d in drawn["paths"]])
+        assert len(points) > 100, name
+        metres = np.c_[xs[0] + xs[1] * points[:, 0], ys[0] + ys[1] * points[:, 1]]
+        distance, _ = tree.query(metres)
+        metres_per_pixel = abs(xs[1])
+        assert distance.max() < 0.15 * metres_per_pixel + 0.05, (name, distance.max())
+        drawn_extent = np.ptp(metres, axis=0)
+        assert np.all(drawn_extent > 0.99 * extent), (name, drawn_extent, extent)
+        for marker, pose in (("start", ground[0]), ("end", ground[-1])):
+            at = np.array(drawn[marker])
+            at = [xs[0] + xs[1] * at[0], ys[0] + ys[1] * at[1]]
+            assert np.hypot(*(np.array(at) - pose)) < 0.15 * metres_per_pixel + 0.05, (
+                name,
+                marker,
+                at,
+                pose,
+            )
+
+
+def scipy_spatial():
+    return pytest.importorskip("scipy.spatial")
