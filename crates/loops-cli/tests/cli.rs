@@ -383,14 +383,15 @@ fn se2_on_the_chosen_plane_takes_its_coordinates_and_heading() {
     let (weight, gamma) = (10.0, 1.5);
     let metric = format!("se2(rotation_weight_m_per_rad={weight})");
     let pairs = |axes: &[&str]| {
-        let mut args = vec!["components", path.to_str().unwrap(), "--gamma", "1.5", "--metric", &metric, "--json", "-"];
+        let mut args = vec!["components", path.to_str().unwrap(), "--gamma", "1.5", "--metric", &metric];
+        args.extend_from_slice(&["--no-separation", "--json", "-"]);
         args.extend_from_slice(axes);
         let output = loops(&args);
         assert!(output.status.success(), "{axes:?}: {}", stderr(&output));
         let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
         report["pair_count"].as_u64().unwrap()
     };
-    // Brute force on x-z: |Δz| + W |Δθ| ≤ γ over the full plane (x is constant).
+    // Brute force on x-z: |Δz| + W |Δθ| ≤ γ over the full plane (x is constant), the paper's S_γ.
     let expected = poses
         .iter()
         .flat_map(|a| poses.iter().map(move |b| (a, b)))
