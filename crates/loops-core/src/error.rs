@@ -161,8 +161,13 @@ pub enum Error {
         /// What is allowed.
         expected: &'static str,
     },
-    /// A quaternion whose norm is not 1 (within 1e-6 for constructors, 1e-9 for metrics).
-    #[error("quaternion of pose {index} has norm {norm}, not 1 (zero or far from unit length)")]
+    /// A quaternion whose norm is not 1 (within 1e-6 for constructors, 1e-9 for metrics). The
+    /// message names the option that accepts quaternions printed with few decimals.
+    #[error(
+        "quaternion of pose {index} has norm {norm}, not 1: zero, or farther from unit length than \
+         quaternion_tolerance (quaternions within it are normalised; 1e-3 accepts files that print \
+         4 decimals, as TUM ground truth does)"
+    )]
     NonUnitQuaternion {
         /// Pose index.
         index: usize,
