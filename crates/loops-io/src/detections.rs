@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use loops_core::{Detections, Error, Timeline};
 
+use crate::dropped::Dropped;
 use crate::error::{IoError, Result};
 use crate::text::{Delimiter, data_lines, is_header, parse_finite, read_text};
 
@@ -103,25 +104,90 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
 }
 
 impl DetectionTable {
+    /// Drops the detections with a time outside `timeline`'s time span (before its first pose
+    /// or after its last: the TUC Corridor's input ends 0.4 s after its ground truth, and 39 of
+    /// its 10,019 detections lie in those 0.4 s), and says which it dropped. Placing them
+    /// ([`to_detections`](Self::to_detections)) is an error by default; this is the lenient
+    /// option (`--drop-detections-outside-span`, `drop_outside_span=True`), and its callers say
+    /// how many it dropped.
+    ///
+    /// Time O(n).
+    ///
+    /// # Examples
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-span.txt", std::process::id()));
+    /// std::fs::write(&path, "loop 2.0 0.5 1\nloop 9.5 1.0 1\nloop 3.0 1.0 1\n")?;
+    /// let traj = loops_core::Trajectory::new(vec![0.0, 1.0, 2.0, 3.0], vec![0.0; 4], 1)?;
+    /// let mut table = loops_io::read_detections(&path)?;
+    /// assert!(table.to_detections(&traj).is_err()); // strict: 9.5 s is after the last pose
+    /// let dropped = table.drop_outside_span(&traj);
+    /// assert_eq!((dropped.count, dropped.lines.as_slice()), (1, &[2][..]));
+    /// assert_eq!(table.to_detections(&traj)?.len(), 2);
+    /// # std::fs::remove_file(&path)?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn drop_outside_span<T: Timeline + ?Sized>(&mut self, timeline: &T) -> Dropped {
+        let times = timeline.pose_times_s();
+        let mut dropped = Dropped { path: self.path.clone(), count: 0, lines: Vec::new() };
+        let (Some(&first), Some(&last)) = (times.first(), times.last()) else { return dropped };
+        // As the core places a time: inside when first ≤ t ≤ last (NaN is outside).
+        let inside = |t: f64| t >= first && t <= last;
+        let keep: Vec<bool> = self.t_s.iter().zip(&self.t_prime_s).map(|(&a, &b)| inside(a) && inside(b)).collect();
+        dropped.lines = keep.iter().zip(&self.source_lines).filter(|(k, _)| !**k).map(|(_, &line)| line).collect();
+        dropped.count = keep.iter().filter(|k| !**k).count();
+        let retain = |rows: &mut Vec<_>| {
+            let mut index = 0;
+            rows.retain(|_| {
+                index += 1;
+                keep[index - 1]
+            });
+        };
+        retain(&mut self.t_s);
+        retain(&mut self.t_prime_s);
+        if let Some(scores) = &mut self.scores {
+            retain(scores);
+        }
+        let mut index = 0;
+        self.source_lines.retain(|_| {
+            index += 1;
+            keep[index - 1]
+        });
+        dropped
+    }
+
     /// The detections, placed on `timeline` (each time snapped to the nearest pose).
     ///
     /// # Errors
     /// [`IoError::Detections`] naming the line of a detection outside the trajectory's time
     /// span (or whatever else the core rejects).
     pub fn to_detections<T: Timeline + ?Sized>(&self, timeline: &T) -> Result<Detections> {
-        let locate = |error: Error| {
-            let line = match error {
-                Error::DetectionOutsideSpan { index, .. } | Error::NonFiniteDetection { index, .. } => {
-                    self.source_lines.get(index).copied()
-                }
-                _ => None,
-            };
-            IoError::Detections { path: self.path.clone(), line, error }
-        };
-        let mut detections = Detections::new(self.t_s.clone(), self.t_prime_s.clone()).map_err(locate)?;
+        self.to_unplaced()?.locate(timeline).map_err(|error| self.locate(error))
+    }
+
+    /// The detections with their times (and scores), not placed on a trajectory.
+    ///
+    /// # Errors
+    /// [`IoError::Detections`] naming the line of a detection the core rejects (a table built
+    /// by hand with no row, or a non-finite time).
+    pub fn to_unplaced(&self) -> Result<Detections> {
+        let mut detections =
+            Detections::new(self.t_s.clone(), self.t_prime_s.clone()).map_err(|error| self.locate(error))?;
         if let Some(scores) = &self.scores {
-            detections = detections.with_scores(scores.clone()).map_err(locate)?;
+            detections = detections.with_scores(scores.clone()).map_err(|error| self.locate(error))?;
         }
-        detections.locate(timeline).map_err(locate)
+        Ok(detections)
+    }
+
+    /// A core error placed in the file: the detection index it names becomes a line.
+    fn locate(&self, error: Error) -> IoError {
+        let line = match error {
+            Error::DetectionOutsideSpan { index, .. } | Error::NonFiniteDetection { index, .. } => {
+                self.source_lines.get(index).copied()
+            }
+            _ => None,
+        };
+        IoError::Detections { path: self.path.clone(), line, error }
     }
 }

@@ -72,7 +72,8 @@ pub enum IoError {
     },
     /// Detections that the core rejects (outside the trajectory's time span, ...), located in
     /// the file.
-    #[error("{}{}: {error}", .path.display(), .line.map(|l| format!(" line {l}")).unwrap_or_default())]
+    #[error("{}{}: {error}{}", .path.display(), .line.map(|l| format!(" line {l}")).unwrap_or_default(),
+        if matches!(.error, loops_core::Error::DetectionOutsideSpan { .. }) { DROP_OUTSIDE_HINT } else { "" })]
     Detections {
         /// The file.
         path: PathBuf,
@@ -80,6 +81,16 @@ pub enum IoError {
         line: Option<usize>,
         /// What the core said, with detection indices rather than lines.
         error: loops_core::Error,
+    },
+    /// Files read as one trajectory that do not join ([`PoseTable::join`](crate::PoseTable::join)):
+    /// their times overlap (the message names both files, and the stamp and line on each side),
+    /// or their poses differ in dimension.
+    #[error("{}: {message}", .path.display())]
+    Join {
+        /// The later file of the two.
+        path: PathBuf,
+        /// What is wrong, naming the other file.
+        message: String,
     },
     /// No format was given and neither the file's extension nor its first line tells it.
     #[error("{}: {}", .path.display(), unknown_format_message(.extension.as_deref()))]
@@ -222,6 +233,7 @@ impl IoError {
             | Self::Ros1 { path, .. }
             | Self::Sqlite { path, .. }
             | Self::Bag { path, .. }
+            | Self::Join { path, .. }
             | Self::TopicNotFound { path, .. }
             | Self::NoPoseTopic { path, .. }
             | Self::AmbiguousTopic { path, .. }
@@ -382,6 +394,14 @@ fn frames_message(wanted: Option<&(String, String)>, pairs: &[FramePairInfo]) ->
     }
 }
 
+/// What a repeated timestamp's message adds: the option that drops such poses, as Python and
+/// the command line spell it.
+const DROP_DUPLICATES_HINT: &str =
+    "; drop_duplicate_stamps=True (--drop-duplicate-stamps) keeps the first pose of each stamp";
+
+/// What a detection outside the trajectory's span adds: the option that drops such detections.
+const DROP_OUTSIDE_HINT: &str = "; drop_outside_span=True (--drop-detections-outside-span) drops such detections";
+
 /// The core's message in terms of the file: lines or messages instead of pose indices.
 fn trajectory_message(
     path: &Path,
@@ -410,7 +430,8 @@ fn trajectory_message(
                 (None, Some(p)) => format!(" (line {p})"),
                 (None, None) => String::new(),
             };
-            format!("timestamps must strictly increase: {value_s} s is not after {previous_s} s{previous}")
+            let hint = if value_s == previous_s { DROP_DUPLICATES_HINT } else { "" };
+            format!("timestamps must strictly increase: {value_s} s is not after {previous_s} s{previous}{hint}")
         }
         (true, Error::NonFiniteTimestamp { value, .. }) => format!("the timestamp is not finite ({value})"),
         (true, Error::NonFiniteCoordinate { axis, value, .. }) => {

@@ -81,7 +81,9 @@ pub(crate) fn parse_kitti(path: &Path, text: &str, timing: &Timing) -> Result<Po
             12 if timing.is_given() => (f64::NAN, &values[..12]),
             12 => {
                 return Err(parse_error(
-                    "12 numbers (a 3×4 pose) and no time: give a rate or a times file for the poses' times".to_owned(),
+                    "12 numbers (a 3×4 pose) and no time: give the poses' times, a rate (rate_hz, --rate-hz) \
+                     or KITTI's times.txt (times, --times)"
+                        .to_owned(),
                 ));
             }
             _ => {

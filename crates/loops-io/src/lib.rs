@@ -9,7 +9,7 @@
 //!
 //! | format | reader | content | extensions |
 //! |---|---|---|---|
-//! | MCAP (ROS 2, Foxglove) | [`read_mcap`], [`read_mcap_files`], [`list_topics`] | one topic of [`PoseType`]: ROS 2 CDR `PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`, `Odometry`, `TFMessage`; the same in ROS 1 encoding; Foxglove `PoseInFrame`, `PosesInFrame`, `FrameTransform(s)`, `Odometry` in protobuf or JSON | `.mcap` |
+//! | MCAP (ROS 2, Foxglove) | [`read_mcap`], [`read_mcap_files`], [`list_topics`], [`list_frame_pairs`] | one topic of [`PoseType`]: ROS 2 CDR `PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`, `Odometry`, `TFMessage`; the same in ROS 1 encoding; Foxglove `PoseInFrame`, `PosesInFrame`, `FrameTransform(s)`, `Odometry` in protobuf or JSON | `.mcap` |
 //! | rosbag2 (sqlite3, MCAP) | [`read_rosbag2`], [`list_topics`] | the ROS types above; the bag's folder, `metadata.yaml` or a storage file; splits; zstd per message or per file | folder, `.db3`, `.yaml`, `.zstd` |
 //! | ROS 1 bag (format 2.0) | [`read_ros1`], [`list_topics`] | the ROS types above and `tf/tfMessage`; chunks uncompressed, bz2 or lz4 | `.bag` |
 //! | TUM RGB-D | [`read_tum`] | `timestamp tx ty tz qx qy qz qw` | `.tum`, `.txt` |
@@ -20,8 +20,9 @@
 //! | libRSF (TUC) | [`read_tuc`] | `point2 t x y ...`, `point3 t X Y Z ...` (ECEF → local ENU), `angle t yaw` | (`.txt`) |
 //!
 //! [`read_trajectory`] and [`read_trajectory_with`] pick the reader by [`Format`], or by
-//! extension and first line. Writers: [`write_tum`] for trajectories, [`write_g2o_edges`] for
-//! candidate loop-closure edges with relative-pose guesses; both atomic, and never replacing a
+//! extension and first line ([`format_of`] tells which). Writers: [`write_tum`] for
+//! trajectories, [`write_g2o_edges`] for candidate loop-closure edges with relative-pose
+//! guesses; both atomic, and never replacing a
 //! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
 //! the workspace: the CLI writes its files through it too; [`StagedFiles`] writes several files
 //! all or none (a command that fails writes nothing).
@@ -33,8 +34,13 @@
 //!
 //! What it does not do (yet): ROS 1 bags of format 1.x; compose TF trees (one
 //! parent-child pair is read as is); read the times of a `PosesInFrame` path pose by pose (all
-//! poses of a message get its stamp); normalise quaternions in a table (the trajectory
-//! constructors do); drop duplicate timestamps (they are reported, not fixed).
+//! poses of a message get its stamp). Unless asked, it does not normalise quaternions in a
+//! table (the trajectory constructors do; [`PoseTable::normalize_orientations`] with a tolerance
+//! of your choice), drop duplicate timestamps or detections outside the trajectory's span (they
+//! are errors; [`PoseTable::drop_duplicate_stamps`] and [`DetectionTable::drop_outside_span`]
+//! drop them and say how many, as [`Dropped`]). Several files read as one trajectory:
+//! [`read_mcap_files`] merges MCAP files by time, [`PoseTable::join`] joins files that follow
+//! one another.
 //!
 //! ## Quickstart
 //! ```
@@ -66,7 +72,8 @@
 #![warn(missing_docs)]
 
 // The modules in layers; each uses only modules of the layers above it (no cycles):
-// 1. vocabulary and errors: `format`, `pose_type`, `topic`, `error`; the atomic writer `atomic`;
+// 1. vocabulary and errors: `format`, `pose_type`, `topic`, `dropped`, `error`; the atomic writer
+//    `atomic`;
 // 2. plumbing: `text` (lines and numbers), `timing`, `table` (`PoseTable`), `rotation`;
 // 3. messages: `cdr`, `foxglove`, `message` (decoding), `cdr_write`;
 // 4. MCAP: `mcap_records` (the record walker), `mcap` (topics and poses), `mcap_write`;
@@ -82,6 +89,7 @@ mod compression;
 mod csv;
 mod csv_rows;
 mod detections;
+mod dropped;
 mod error;
 mod euroc;
 mod format;
@@ -111,9 +119,10 @@ mod write;
 pub use crate::csv::read_csv;
 pub use crate::mcap::{McapOptions, TimeSource, read_mcap, read_mcap_files};
 pub use atomic::{StagedFiles, write_atomically};
-pub use bag::{list_topics, read_ros1, read_rosbag2};
+pub use bag::{list_frame_pairs, list_topics, read_ros1, read_rosbag2};
 pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
 pub use detections::{DetectionTable, read_detections};
+pub use dropped::Dropped;
 pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};
 pub use euroc::read_euroc;
 pub use format::Format;
@@ -127,7 +136,7 @@ pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_m
 pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
 pub use quality::QualitySummary;
-pub use read::{ReadOptions, read_trajectory, read_trajectory_with};
+pub use read::{ReadOptions, format_of, read_trajectory, read_trajectory_with};
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};

@@ -190,11 +190,39 @@ pub(crate) struct Scan<'o> {
     pub(crate) path: PathBuf,
     buckets: Vec<Bucket>,
     index: HashMap<ChannelKey, usize>,
+    /// Decodes transform topics only, to count their frame pairs, keeping no pose.
+    frames_only: bool,
 }
+
+/// The options of a scan that counts frame pairs: every transform topic, stamps from headers.
+static FRAME_PAIR_OPTIONS: McapOptions = McapOptions { topic: None, time: TimeSource::Header, frames: None };
 
 impl<'o> Scan<'o> {
     pub(crate) fn new(options: Option<&'o McapOptions>) -> Self {
-        Self { options, file: 0, path: PathBuf::new(), buckets: Vec::new(), index: HashMap::new() }
+        Self { options, file: 0, path: PathBuf::new(), buckets: Vec::new(), index: HashMap::new(), frames_only: false }
+    }
+
+    /// A scan that decodes the transform topics (TF, `FrameTransform`) to count their frame
+    /// pairs ([`frame_pairs`](Self::frame_pairs)), and counts the messages of the others.
+    pub(crate) fn frame_pairs_only() -> Scan<'static> {
+        Scan { frames_only: true, ..Scan::new(Some(&FRAME_PAIR_OPTIONS)) }
+    }
+
+    /// The frame pairs of each transform topic with messages, sorted by topic then pair; the
+    /// first message that did not decode is an error.
+    pub(crate) fn frame_pairs(&mut self) -> Result<Vec<(String, Vec<FramePairInfo>)>> {
+        let mut topics = Vec::new();
+        for bucket in &mut self.buckets {
+            if !bucket.kind.is_some_and(|(pose_type, _)| pose_type.is_transform()) || bucket.info.message_count == 0 {
+                continue;
+            }
+            if let Some(error) = bucket.error.take() {
+                return Err(error);
+            }
+            topics.push((bucket.info.topic.clone(), pairs_of(bucket)));
+        }
+        topics.sort_by(|a, b| a.0.cmp(&b.0));
+        Ok(topics)
     }
 
     /// The poses of the topic to read, as a table (see [`read_mcap_files`]): `files` are the
@@ -311,15 +339,6 @@ fn choose_group(
     if bucket.info.message_count == 0 {
         return Err(empty());
     }
-    let pairs = || {
-        let mut pairs: Vec<FramePairInfo> = bucket
-            .groups
-            .iter()
-            .map(|group| FramePairInfo { parent: group.parent.clone(), child: group.child.clone(), count: group.count })
-            .collect();
-        pairs.sort_by(|a, b| (&a.parent, &a.child).cmp(&(&b.parent, &b.child)));
-        pairs
-    };
     let path = files[0].clone();
     let topic = bucket.info.topic.clone();
     let found = match &options.frames {
@@ -332,8 +351,19 @@ fn choose_group(
             let group = &bucket.groups[index];
             Ok((index, Some((group.parent.clone(), group.child.clone()))))
         }
-        None => Err(IoError::FramePair { path, topic, wanted: options.frames.clone(), pairs: pairs() }),
+        None => Err(IoError::FramePair { path, topic, wanted: options.frames.clone(), pairs: pairs_of(bucket) }),
     }
+}
+
+/// The frame pairs of a transform topic's bucket with their transform counts, sorted.
+fn pairs_of(bucket: &Bucket) -> Vec<FramePairInfo> {
+    let mut pairs: Vec<FramePairInfo> = bucket
+        .groups
+        .iter()
+        .map(|group| FramePairInfo { parent: group.parent.clone(), child: group.child.clone(), count: group.count })
+        .collect();
+    pairs.sort_by(|a, b| (&a.parent, &a.child).cmp(&(&b.parent, &b.child)));
+    pairs
 }
 
 impl Visitor for Scan<'_> {
@@ -347,7 +377,10 @@ impl Visitor for Scan<'_> {
         }
         let kind = PoseType::of_channel(&key.schema_name, &key.message_encoding);
         let decode = match self.options {
-            Some(options) => kind.is_some() && options.topic.as_ref().is_none_or(|topic| topic == &key.topic),
+            Some(options) => {
+                kind.is_some_and(|(pose_type, _)| !self.frames_only || pose_type.is_transform())
+                    && options.topic.as_ref().is_none_or(|topic| topic == &key.topic)
+            }
             None => false,
         };
         let index = self.buckets.len();
@@ -398,6 +431,7 @@ impl Visitor for Scan<'_> {
         };
         let transform = pose_type.is_transform();
         let wanted = options.frames.as_ref().filter(|_| transform);
+        let keep_rows = !self.frames_only;
         let groups = &mut bucket.groups;
         let result = decode_samples(pose_type, encoding, data, |sample| {
             let index = if transform {
@@ -420,7 +454,7 @@ impl Visitor for Scan<'_> {
             };
             let group = &mut groups[index];
             group.count += 1;
-            if wanted.is_none_or(|(parent, child)| parent == sample.parent && child == sample.child) {
+            if keep_rows && wanted.is_none_or(|(parent, child)| parent == sample.parent && child == sample.child) {
                 group.rows.push(Row {
                     stamp_ns: record_time.unwrap_or(sample.stamp_ns),
                     position: sample.position,

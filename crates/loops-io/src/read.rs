@@ -100,10 +100,7 @@ pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
     let path = path.as_ref();
     let format = match options.format {
         Some(format) => format,
-        None => Format::detect(path).ok_or_else(|| IoError::UnknownFormat {
-            path: path.to_path_buf(),
-            extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
-        })?,
+        None => detect(path)?,
     };
     match format {
         Format::Mcap => return read_mcap(path, &options.mcap),
@@ -112,14 +109,9 @@ pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
         _ => {}
     }
     let text = text::read_text(path)?;
-    let sniffed = match (options.format, format) {
-        (Some(_), _) => format,
-        (None, Format::Tum) if looks_like_kitti(&text) => Format::Kitti,
-        (None, Format::Tum) if looks_like_tuc(&text) => Format::Tuc,
-        (None, Format::Tum) if looks_like_graph(&text) => Format::G2o,
-        (None, Format::Csv) if looks_like_tum(&text) => Format::Tum,
-        (None, Format::Csv) if looks_like_euroc(&text) => Format::Euroc,
-        (None, format) => format,
+    let sniffed = match options.format {
+        Some(_) => format,
+        None => sniff(format, &text),
     };
     match sniffed {
         Format::Tum => parse_tum(path, &text),
@@ -129,6 +121,58 @@ pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
         Format::G2o => parse_pose_graph(path, &text, &options.timing).map(|graph| graph.vertices),
         Format::Tuc => parse_tuc(path, &text),
         Format::Mcap | Format::Rosbag2 | Format::Ros1 => unreachable!("logs with topics are read above"),
+    }
+}
+
+/// The format [`read_trajectory`] reads `path` in when none is given: from the extension
+/// ([`Format::detect`]), then, for the extensions several formats share (`.txt`, `.csv`), from
+/// the first data line as [`read_trajectory_with`] describes. What `loops info` prints.
+///
+/// Time O(file size) for a `.txt` or `.csv` file (it is read), O(1) otherwise.
+///
+/// # Errors
+/// [`IoError::UnknownFormat`] when the extension does not tell it; [`IoError::Open`] when a
+/// text file whose first line is needed cannot be read.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_io::{Format, format_of};
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-format.txt", std::process::id()));
+/// std::fs::write(&path, "0 1 0 0 0 0 1 0 0 0 0 1 0\n")?; // a time and a 3×4 pose
+/// assert_eq!(format_of(&path)?, Format::Kitti);
+/// std::fs::write(&path, "0 0 0 0 0 0 0 1\n")?;
+/// assert_eq!(format_of(&path)?, Format::Tum);
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn format_of(path: impl AsRef<Path>) -> Result<Format> {
+    let path = path.as_ref();
+    let format = detect(path)?;
+    match format {
+        Format::Tum | Format::Csv => Ok(sniff(format, &text::read_text(path)?)),
+        _ => Ok(format),
+    }
+}
+
+/// The format of `path`'s extension, or the error saying it does not tell one.
+fn detect(path: &Path) -> Result<Format> {
+    Format::detect(path).ok_or_else(|| IoError::UnknownFormat {
+        path: path.to_path_buf(),
+        extension: path.extension().map(|e| e.to_string_lossy().into_owned()),
+    })
+}
+
+/// The format the first data line of `text` tells, for a file whose extension says `format`.
+fn sniff(format: Format, text: &str) -> Format {
+    match format {
+        Format::Tum if looks_like_kitti(text) => Format::Kitti,
+        Format::Tum if looks_like_tuc(text) => Format::Tuc,
+        Format::Tum if looks_like_graph(text) => Format::G2o,
+        Format::Csv if looks_like_tum(text) => Format::Tum,
+        Format::Csv if looks_like_euroc(text) => Format::Euroc,
+        format => format,
     }
 }
 

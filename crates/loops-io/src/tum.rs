@@ -81,7 +81,12 @@ fn parse_pose(delimiter: Delimiter, line: &str) -> Result<[f64; COLUMNS], String
         count += 1;
     }
     if count != COLUMNS {
-        return Err(format!("expected {COLUMNS} columns (timestamp tx ty tz qx qy qz qw), found {count}"));
+        // KITTI lines: a 3×4 pose, after a time when there are 13 numbers.
+        let hint = match count {
+            12 | 13 => ": a KITTI pose line? read the file as kitti (format=\"kitti\", --format kitti)",
+            _ => "",
+        };
+        return Err(format!("expected {COLUMNS} columns (timestamp tx ty tz qx qy qz qw), found {count}{hint}"));
     }
     Ok(values)
 }

@@ -133,6 +133,9 @@ fn assert_poses(table: &PoseTable, poses: &[Pose], shift_ns: i64, what: &str) {
     assert_eq!(table.len(), poses.len(), "{what}");
 }
 
+/// Frame pairs by topic: `(topic, [(parent, child, transforms)])`.
+type TopicPairs<'a> = Vec<(&'a str, Vec<(&'a str, &'a str, u64)>)>;
+
 fn check_fixture(dir: &Path, fixture: &Value, poses: &[Pose], delay_ns: i64) {
     let topic = text(fixture, "topic");
     let ros1 = text(fixture, "kind") == "ros1";
@@ -174,6 +177,19 @@ fn check_fixture(dir: &Path, fixture: &Value, poses: &[Pose], delay_ns: i64) {
             let table = read_trajectory_with(&path, &read).unwrap_or_else(|e| panic!("{what} {tf}: {e}"));
             assert_poses(&table, &part, 0, &format!("{what} {tf}"));
         }
+        // The frame pairs of each transform topic: map -> odom (identity) and odom -> base_link
+        // (the pose) in every message.
+        let pairs = loops_io::list_frame_pairs(&path).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let counted: TopicPairs<'_> = pairs
+            .iter()
+            .map(|(topic, pairs)| {
+                (topic.as_str(), pairs.iter().map(|p| (p.parent.as_str(), p.child.as_str(), p.count)).collect())
+            })
+            .collect();
+        let n = part.len() as u64;
+        let expected: TopicPairs<'_> =
+            tf_topics.iter().map(|&tf| (tf, vec![("map", "odom", n), ("odom", "base_link", n)])).collect();
+        assert_eq!(counted, expected, "{what}");
         // The topic list.
         let topics = list_topics(&path).unwrap_or_else(|e| panic!("{what}: {e}"));
         let names: Vec<&str> = topics.iter().map(|t| t.topic.as_str()).collect();

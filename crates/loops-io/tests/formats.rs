@@ -85,7 +85,8 @@ mod kitti {
         let error = read_kitti(&path, &Timing::FromFile).unwrap_err();
         assert_eq!(
             after_path(&error, &path),
-            " line 1: 12 numbers (a 3×4 pose) and no time: give a rate or a times file for the poses' times"
+            " line 1: 12 numbers (a 3×4 pose) and no time: give the poses' times, a rate (rate_hz, --rate-hz) \
+             or KITTI's times.txt (times, --times)"
         );
         let table = read_kitti(&path, &Timing::RateHz(10.0)).unwrap();
         assert_eq!(table.timestamps_s, [0.0, 0.1, 0.2]);
@@ -526,7 +527,8 @@ mod real_data {
             let error = read_trajectory(&path, None).unwrap_err();
             assert!(
                 error.to_string().ends_with(
-                    "line 1: 12 numbers (a 3×4 pose) and no time: give a rate or a times file for the poses' times"
+                    "line 1: 12 numbers (a 3×4 pose) and no time: give the poses' times, a rate (rate_hz, --rate-hz) \
+                     or KITTI's times.txt (times, --times)"
                 ),
                 "{error}"
             );

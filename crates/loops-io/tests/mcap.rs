@@ -228,6 +228,57 @@ fn transform_topics_need_a_pair_when_they_have_several() {
     assert!(matches!(&error, IoError::FramePair { pairs, wanted: None, .. } if pairs.len() == 2), "{error:?}");
 }
 
+/// Frame pairs by topic: `(topic, [(parent, child, transforms)])`.
+type TopicPairs = Vec<(String, Vec<(String, String, u64)>)>;
+
+#[test]
+fn frame_pairs_are_listed_as_the_writers_wrote_them() {
+    let (dir, manifest) = fixtures_or_skip!();
+    let mut with_pairs = 0;
+    for file in manifest["files"].as_array().expect("files") {
+        let name = file["name"].as_str().expect("name");
+        let path = dir.join(name);
+        // From the manifest: each transform topic's pairs, with the transforms written.
+        let mut expected: TopicPairs = Vec::new();
+        for (topic, entry) in file["topics"].as_object().expect("topics") {
+            let schema = entry["schema"].as_str().expect("schema");
+            let encoding = entry["encoding"].as_str().expect("encoding");
+            let Some((pose_type, _)) = PoseType::of_channel(schema, encoding) else { continue };
+            if !pose_type.is_transform() {
+                continue;
+            }
+            let mut pairs: Vec<(String, String, u64)> = entry["pairs"]
+                .as_object()
+                .expect("pairs")
+                .iter()
+                .map(|(pair, poses)| {
+                    let (parent, child) = pair.split_once("->").expect("pair");
+                    (parent.to_owned(), child.to_owned(), poses.as_array().expect("poses").len() as u64)
+                })
+                .collect();
+            pairs.sort();
+            expected.push((topic.clone(), pairs));
+        }
+        expected.sort();
+        let listed: TopicPairs = loops_io::list_frame_pairs(&path)
+            .unwrap()
+            .into_iter()
+            .map(|(topic, pairs)| (topic, pairs.into_iter().map(|p| (p.parent, p.child, p.count)).collect()))
+            .collect();
+        assert_eq!(listed, expected, "{name}");
+        with_pairs += usize::from(listed.iter().any(|(_, pairs)| pairs.len() > 1));
+    }
+    assert!(with_pairs > 0, "some file has a transform topic with several pairs");
+    // The pairs a read without --frames names are the ones listed.
+    let path = dir.join("ros2_zstd.mcap");
+    let listed = loops_io::list_frame_pairs(&path).unwrap();
+    let tf = &listed.iter().find(|(topic, _)| topic == "/tf").expect("/tf").1;
+    match read_mcap(&path, &McapOptions::default().topic("/tf")).unwrap_err() {
+        IoError::FramePair { pairs, .. } => assert_eq!(&pairs, tf),
+        other => panic!("{other}"),
+    }
+}
+
 #[test]
 fn files_of_one_recording_make_one_trajectory_ordered_by_time() {
     let (dir, manifest) = fixtures_or_skip!();
@@ -266,7 +317,13 @@ fn duplicate_stamps_are_reported_at_their_messages() {
         message.starts_with(&format!("{} topic /fox/poses, message at offset {offset}: ", path.display())),
         "{message}"
     );
-    assert!(message.ends_with(&format!("(message at offset {offset})")), "{message}");
+    assert!(
+        message.ends_with(&format!(
+            "(message at offset {offset}); drop_duplicate_stamps=True (--drop-duplicate-stamps) keeps the first \
+             pose of each stamp"
+        )),
+        "{message}"
+    );
     // In a chunk, the message is placed in it.
     let path = dir.join("protobuf_lz4.mcap");
     let table = read_mcap(&path, &McapOptions::default().topic("/fox/poses")).unwrap();

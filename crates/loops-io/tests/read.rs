@@ -131,7 +131,8 @@ mod tum {
         let error = table.to_trajectory().unwrap_err();
         assert_eq!(
             after_path(&error, &file),
-            " line 5: timestamps must strictly increase: 5.2 s is not after 5.2 s (line 3)"
+            " line 5: timestamps must strictly increase: 5.2 s is not after 5.2 s (line 3)\
+             ; drop_duplicate_stamps=True (--drop-duplicate-stamps) keeps the first pose of each stamp"
         );
         match error {
             IoError::Trajectory { line, previous_line, error, .. } => {
@@ -308,7 +309,8 @@ mod csv {
         let error = read_csv(file.path()).unwrap().to_trajectory().unwrap_err();
         assert_eq!(
             after_path(&error, &file),
-            " line 4: timestamps must strictly increase: 1 s is not after 1 s (line 3)"
+            " line 4: timestamps must strictly increase: 1 s is not after 1 s (line 3)\
+             ; drop_duplicate_stamps=True (--drop-duplicate-stamps) keeps the first pose of each stamp"
         );
     }
 
@@ -556,7 +558,8 @@ mod real_data {
         assert!(
             error.to_string().ends_with(
                 "fr2_desk_groundtruth.txt line 10863: timestamps must strictly increase: \
-                 1311868229.576 s is not after 1311868229.576 s (line 10862)"
+                 1311868229.576 s is not after 1311868229.576 s (line 10862); \
+                 drop_duplicate_stamps=True (--drop-duplicate-stamps) keeps the first pose of each stamp"
             ),
             "{error}"
         );
@@ -618,7 +621,10 @@ mod real_data {
         assert!(table == loops_io::read_kitti(&path, &loops_io::Timing::FromFile).unwrap());
         let error = read_tum(&path).unwrap_err();
         assert!(
-            error.to_string().ends_with("line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 13"),
+            error.to_string().ends_with(
+                "line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 13: a KITTI pose line? \
+                 read the file as kitti (format=\"kitti\", --format kitti)"
+            ),
             "{error}"
         );
     }

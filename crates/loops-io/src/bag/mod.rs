@@ -25,7 +25,7 @@ use crate::format::Format;
 use crate::mcap::{McapOptions, Scan};
 use crate::mcap_records::Visitor;
 use crate::table::PoseTable;
-use crate::topic::TopicInfo;
+use crate::topic::{FramePairInfo, TopicInfo};
 use rosbag2::{Rosbag2, Storage, StorageFile};
 
 /// Reads the poses of one topic of a rosbag2 bag, named the way users name it: the bag's folder,
@@ -123,26 +123,57 @@ pub fn read_ros1(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTa
 /// As the reader of the kind ([`read_mcap`](crate::read_mcap), [`read_rosbag2`],
 /// [`read_ros1`]), for the structure of the files.
 pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>> {
-    let path = path.as_ref();
     let mut scan = Scan::new(None);
+    walk_any(path.as_ref(), &mut scan)?;
+    Ok(scan.topics())
+}
+
+/// The frame pairs (parent -> child, with their transform counts) of each transform topic
+/// (`tf2_msgs/TFMessage`, `tf/tfMessage`, `TransformStamped`, Foxglove `FrameTransform(s)`)
+/// with messages, of an MCAP file or a bag as [`list_topics`] reads them; sorted by topic,
+/// then by pair. These are the pairs `--frames` / [`McapOptions::frames`] choose from.
+///
+/// Time O(size of the file or bag): the transform topics' messages are decoded, the others
+/// only counted.
+///
+/// # Errors
+/// As [`list_topics`]; and [`IoError::Message`] for a transform message that does not decode.
+///
+/// # Examples
+/// ```no_run
+/// for (topic, pairs) in loops_io::list_frame_pairs("drive.bag")? {
+///     for pair in pairs {
+///         println!("{topic}: {pair}"); // /tf: odom -> base_link (1200)
+///     }
+/// }
+/// # Ok::<(), loops_io::IoError>(())
+/// ```
+pub fn list_frame_pairs(path: impl AsRef<Path>) -> Result<Vec<(String, Vec<FramePairInfo>)>> {
+    let mut scan = Scan::frame_pairs_only();
+    walk_any(path.as_ref(), &mut scan)?;
+    scan.frame_pairs()
+}
+
+/// Walks an MCAP file or a bag of the kind [`Format::detect`] tells (any other file as MCAP).
+fn walk_any(path: &Path, scan: &mut Scan<'_>) -> Result<()> {
     match Format::detect(path) {
         Some(Format::Rosbag2) => {
             for (index, file) in Rosbag2::resolve(path)?.files.iter().enumerate() {
                 scan.file = index;
                 scan.path = file.path.clone();
-                walk_storage(file, &mut scan)?;
+                walk_storage(file, scan)?;
             }
         }
         Some(Format::Ros1) => {
             scan.path = path.to_path_buf();
-            ros1::walk(path, &mut scan)?;
+            ros1::walk(path, scan)?;
         }
         _ => {
             scan.path = path.to_path_buf();
-            crate::mcap_records::walk(path, &mut scan)?;
+            crate::mcap_records::walk(path, scan)?;
         }
     }
-    Ok(scan.topics())
+    Ok(())
 }
 
 /// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole.
