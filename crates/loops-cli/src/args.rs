@@ -9,11 +9,12 @@
 //! what is wrong with it.
 
 use std::ffi::OsStr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
 use loops_core::{DEFAULT_EPSILON_S, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory};
+use loops_io::{Format, PoseTable};
 
 /// The flags that say how to read a pose file, shared by every command that reads one.
 #[derive(Debug, Args)]
@@ -36,12 +37,24 @@ pub(crate) struct InputArgs {
     /// For files without times (KITTI poses, pose graphs): pose i at i / RATE_HZ seconds.
     #[arg(long, value_name = "RATE_HZ", allow_hyphen_values = true)]
     rate_hz: Option<f64>,
+    /// For files without times (KITTI poses, pose graphs): one time a line, seconds, in FILE
+    /// (KITTI's sequences/XX/times.txt), one per pose in order.
+    #[arg(long, value_name = "FILE", conflicts_with = "rate_hz")]
+    times: Option<PathBuf>,
     /// A plane of two position axes (0 = x, 1 = y, 2 = z), e.g. 0,2 for KITTI's ground plane
     /// (x-z): euclidean measures positions in it, se2 takes its coordinates and the rotation
     /// about its normal, and the maps of `loops run` draw it (under se3 and so3, only the maps)
     /// [default: all axes; x-y for se2 and the maps].
     #[arg(long, value_delimiter = ',', value_name = "A,B")]
     axes: Option<Vec<usize>>,
+    /// Drop the poses whose timestamp repeats the one before (keeping the first of each),
+    /// saying how many on stderr; without it they are an error naming the line.
+    #[arg(long)]
+    drop_duplicate_stamps: bool,
+    /// How far from unit length a quaternion may be and still be normalised [default: 1e-3,
+    /// for files that print 4 decimals].
+    #[arg(long, value_name = "TOLERANCE", allow_hyphen_values = true)]
+    quaternion_tolerance: Option<f64>,
 }
 
 impl InputArgs {
@@ -66,27 +79,71 @@ impl InputArgs {
         if let Some(rate) = self.rate_hz {
             options = options.timing(loops_io::Timing::RateHz(rate));
         }
+        if let Some(times) = &self.times {
+            options = options.timing(loops_io::Timing::TimesFile(times.clone()));
+        }
         Ok(options)
     }
 
-    /// Reads `file` as the trajectory `spec` needs.
-    pub(crate) fn read(&self, file: &Path, spec: &MetricSpec) -> Result<Trajectory> {
-        Ok(self.read_table(file, spec)?.1)
+    /// Reads `files` as one trajectory, the one `spec` needs.
+    pub(crate) fn read(&self, files: &[PathBuf], spec: &MetricSpec) -> Result<Trajectory> {
+        Ok(self.read_table(files, spec)?.1)
     }
 
-    /// Reads `file`: the poses as read (orientations included) and the trajectory `spec` needs,
-    /// on the plane of `--axes` when the metric takes one (checked against the file for the
-    /// others, which use it for the maps only).
-    pub(crate) fn read_table(&self, file: &Path, spec: &MetricSpec) -> Result<(loops_io::PoseTable, Trajectory)> {
+    /// Reads `files` as one trajectory: the poses as read (orientations included) and the
+    /// trajectory `spec` needs, on the plane of `--axes` when the metric takes one (checked
+    /// against the file for the others, which use it for the maps only). Several MCAP files are
+    /// merged by time (a recording split in parts); other files must follow one another in
+    /// time, and are joined in time order (each checked first, so that an error names its file
+    /// and line). Each file's dropped duplicate stamps (--drop-duplicate-stamps) are one line
+    /// on stderr.
+    pub(crate) fn read_table(&self, files: &[PathBuf], spec: &MetricSpec) -> Result<(PoseTable, Trajectory)> {
         let axes = self.plane()?;
-        let table = loops_io::read_trajectory_with(file, &self.options()?)?;
-        let traj = match axes {
-            Some(axes) if !loops_io::metric_takes_plane(spec) => {
-                table.check_plane(axes)?;
-                table.to_trajectory_for(spec, None)?
+        let options = self.options()?;
+        let is_mcap = |file: &PathBuf| options.format.or_else(|| Format::detect(file)) == Some(Format::Mcap);
+        let mut tables = if files.len() > 1 && files.iter().all(is_mcap) {
+            vec![loops_io::read_mcap_files(files, &options.mcap)?]
+        } else {
+            let mut tables = Vec::with_capacity(files.len());
+            for file in files {
+                tables.push(loops_io::read_trajectory_with(file, &options)?);
             }
-            _ => table.to_trajectory_for(spec, axes)?,
+            tables
         };
+        for table in &mut tables {
+            if self.drop_duplicate_stamps {
+                let dropped = table.drop_duplicate_stamps();
+                if !dropped.is_empty() {
+                    let lines = dropped.lines_text().map_or(String::new(), |lines| format!(" ({lines})"));
+                    eprintln!(
+                        "loops: {}: --drop-duplicate-stamps dropped {} pose(s) whose timestamp repeats the one \
+                         before{lines}",
+                        dropped.path.display(),
+                        dropped.count
+                    );
+                }
+            }
+            if let Some(tolerance) = self.quaternion_tolerance {
+                table.normalize_orientations(tolerance).map_err(|error| self.hint(error))?;
+            }
+        }
+        let trajectory = |table: &PoseTable| -> Result<Trajectory> {
+            let axes = match axes {
+                Some(axes) if !loops_io::metric_takes_plane(spec) => {
+                    table.check_plane(axes)?;
+                    None
+                }
+                axes => axes,
+            };
+            table.to_trajectory_for(spec, axes).map_err(|error| self.hint(error))
+        };
+        if tables.len() > 1 {
+            for table in &tables {
+                trajectory(table)?;
+            }
+        }
+        let table = PoseTable::join(tables)?;
+        let traj = trajectory(&table)?;
         Ok((table, traj))
     }
 
@@ -98,6 +155,24 @@ impl InputArgs {
             Some(other) => bail!("--axes takes two axis indices, got {other:?}"),
         })
     }
+
+    /// An error about the poses, with the flag that changes what it refuses where the message
+    /// names only the option's Python spelling.
+    fn hint(&self, error: loops_io::IoError) -> anyhow::Error {
+        let flag = match &error {
+            loops_io::IoError::Trajectory { error: loops_core::Error::NonUnitQuaternion { .. }, .. } => {
+                "; on the command line it is --quaternion-tolerance"
+            }
+            _ => return error.into(),
+        };
+        anyhow::anyhow!("{error}{flag}")
+    }
+}
+
+/// How a command names the trajectory it read from `files`: the file, or the files joined by
+/// ` + ` (in the order given).
+pub(crate) fn source_name(files: &[PathBuf]) -> String {
+    files.iter().map(|file| file.display().to_string()).collect::<Vec<_>>().join(" + ")
 }
 
 /// The engine: γ, the metric and the thread pool.

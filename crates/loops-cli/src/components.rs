@@ -13,19 +13,25 @@ use loops_io::LoopsReport;
 use crate::args::{EngineArgs, InputArgs, JsonTo, OutputArgs, separation_line};
 use crate::guard;
 
-/// List the loop components of a pose file (MCAP, TUM, CSV, KITTI, EuRoC, TUC or g2o).
+/// List the loop components of a pose file (MCAP, TUM, CSV, KITTI, EuRoC, TUC or g2o), or of
+/// several files read as one trajectory.
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
     after_help = "Examples:\n  loops components drive.tum --gamma 40\n  \
-    loops components kitti00.txt --format tum --axes 0,2 --gamma 6 --json kitti00.json\n  \
+    loops components kitti_odometry/00.txt --axes 0,2 --gamma 6 --json kitti00.json\n  \
+    loops components poses/00.txt --times sequences/00/times.txt --axes 0,2 --gamma 6    # KITTI without times\n  \
     loops components log.csv --gamma 5 --limit 0    # every component\n  \
+    loops components monday.tum tuesday.tum --gamma 5    # one trajectory, in time order\n  \
     loops components drive.mcap --gamma 40 --json - | jq '.components | length'\n  \
-    loops components fr2_desk.tum --gamma 0.3 --metric 'se3(rotation_weight_m_per_rad=0.5)'"
+    loops components tum_rgbd/fr2_desk_groundtruth.txt --gamma 0.3 --metric 'se3(rotation_weight_m_per_rad=0.5)' \
+    --drop-duplicate-stamps"
 )]
 pub(crate) struct ComponentsArgs {
-    /// The pose file.
-    file: PathBuf,
+    /// The pose file; several files are read as one trajectory (MCAP files merged by time,
+    /// others joined in time order: their times must not overlap).
+    #[arg(required = true, value_name = "FILE")]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     input: InputArgs,
     #[command(flatten)]
@@ -35,9 +41,9 @@ pub(crate) struct ComponentsArgs {
 }
 
 pub(crate) fn components(args: ComponentsArgs) -> Result<()> {
-    let source = args.file.display().to_string();
+    let source = crate::args::source_name(&args.files);
     let spec = args.engine.spec()?;
-    let traj = args.input.read(&args.file, &spec)?;
+    let traj = args.input.read(&args.files, &spec)?;
     loops_core::check_gamma(args.engine.gamma)?;
     let separation = args.engine.separation()?;
     let (loops, seconds) =

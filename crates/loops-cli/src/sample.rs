@@ -2,7 +2,7 @@
 //! components or from clustered detections, with their quality (P1–P3).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -18,11 +18,14 @@ use crate::guard;
     allow_negative_numbers = true,
     after_help = "Examples:\n  \
     loops sample drive.tum --gamma 40 --sampler rho --budget 10000 --csv pairs.csv --g2o pairs.g2o\n  \
-    loops sample Corridor_GT.tum --gamma 1 --sampler rho --budget 500 --detections Corridor_Input.txt --epsilon-s 5"
+    loops sample tuc/SLAM/Corridor_GT.txt --gamma 1 --sampler rho --budget 500 \
+    --detections tuc/SLAM/Corridor_Input.txt --epsilon-s 5 --drop-detections-outside-span"
 )]
 pub(crate) struct SampleArgs {
-    /// The pose file.
-    file: PathBuf,
+    /// The pose file; several files are read as one trajectory (MCAP files merged by time,
+    /// others joined in time order: their times must not overlap).
+    #[arg(required = true, value_name = "FILE")]
+    files: Vec<PathBuf>,
     #[command(flatten)]
     input: InputArgs,
     #[command(flatten)]
@@ -34,6 +37,10 @@ pub(crate) struct SampleArgs {
     /// exact loop components of S_gamma.
     #[arg(long, value_name = "PATH")]
     detections: Option<PathBuf>,
+    /// Drop the detections with a time outside the trajectory's time span, saying how many on
+    /// stderr; without it they are an error naming the line.
+    #[arg(long, requires = "detections")]
+    drop_detections_outside_span: bool,
     /// Write the candidate pairs as CSV to FILE (atomically; kept unless --force).
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
@@ -54,7 +61,7 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let spec = args.engine.spec()?;
     let sampler = args.sampling.sampler()?;
     let epsilon_s = args.sampling.epsilon_s;
-    let (table, traj) = args.input.read_table(&args.file, &spec)?;
+    let (table, traj) = args.input.read_table(&args.files, &spec)?;
     let gamma = args.engine.gamma;
     loops_core::check_gamma(gamma)?;
     let separation = args.engine.separation()?;
@@ -63,7 +70,24 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         let samples = match &args.detections {
             None => spec.sample_loops(&traj, &loops, &sampler)?,
             Some(path) => {
-                let detections = loops_io::read_detections(path)?.to_detections(&traj)?;
+                let mut table = loops_io::read_detections(path)?;
+                if args.drop_detections_outside_span {
+                    let dropped = table.drop_outside_span(&traj);
+                    if !dropped.is_empty() {
+                        let lines = dropped.lines_text().map_or(String::new(), |lines| format!(" ({lines})"));
+                        let t = traj.timestamps_s();
+                        eprintln!(
+                            "loops: {}: --drop-detections-outside-span dropped {} of {} detection(s) outside \
+                             the trajectory's time span [{}, {}] s{lines}",
+                            dropped.path.display(),
+                            dropped.count,
+                            dropped.count + table.t_s.len(),
+                            t[0],
+                            t[t.len() - 1]
+                        );
+                    }
+                }
+                let detections = table.to_detections(&traj)?;
                 let clusters = cluster_detections(&detections, epsilon_s)?;
                 let mut samples = sample_clusters(&clusters, &sampler)?;
                 samples.locate(&loops)?;
@@ -82,7 +106,7 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     if args.json == Some(JsonTo::Stdout) {
         loops_io::samples_to_json(&samples, &mut stdout).context("writing the samples to stdout")?;
     } else {
-        write_summary(&mut stdout, &args.file, &traj, &loops, &samples, &quality)?;
+        write_summary(&mut stdout, &crate::args::source_name(&args.files), &traj, &loops, &samples, &quality)?;
     }
     // Every file is prepared first and written only when all could be: a command that fails
     // writes nothing.
@@ -127,14 +151,14 @@ fn json_file(json: &Option<JsonTo>) -> Option<&PathBuf> {
 
 fn write_summary(
     out: &mut impl Write,
-    file: &Path,
+    source: &str,
     traj: &Trajectory,
     loops: &Loops,
     samples: &Samples,
     quality: &SampleQuality,
 ) -> Result<()> {
     let nontrivial = loops.components().iter().filter(|c| !c.trivial).count();
-    writeln!(out, "{}", file.display())?;
+    writeln!(out, "{source}")?;
     writeln!(out, "  {}", crate::args::separation_line(loops.separation(), loops.gamma()))?;
     writeln!(
         out,

@@ -314,7 +314,7 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
     let start = Instant::now();
 
     log.stage("reading");
-    let (table, traj) = args.input.read_table(&job.path, spec)?;
+    let (table, traj) = args.input.read_table(std::slice::from_ref(&job.path), spec)?;
     seconds.read = start.elapsed().as_secs_f64();
 
     log.stage(&format!("finding loops in {} poses", traj.len()));
