@@ -39,6 +39,10 @@ ELSEWHERE = {
         "test_from_evo_se3_reorders_w_first_quaternions",
     ),
     "Detections.to_pandas": ("python/test_interop.py", "test_detections_to_pandas"),
+    "read_detections": (
+        "python/test_reading.py",
+        "test_read_detections_drops_outside_the_span_on_request",
+    ),
     "Samples.to_pandas": ("python/test_interop.py", "test_samples_to_pandas_equals_the_csv"),
     "Table.to_pandas": ("python/test_interop.py", "test_tables_to_pandas"),
     "Trajectory.plane_axes": (

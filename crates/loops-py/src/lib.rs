@@ -5,8 +5,9 @@
 //!
 //! One module per class, with the functions that return it, in the paper's order:
 //! `py_trajectory` (`Trajectory`, `urban_drive`, `read_trajectory`, `list_topics`), `py_loops`
-//! (`Loops`, `find_loops`, `path_length`), `py_separation` (`Separation`), `py_detections` (`Detections`, `draw_detections`), `py_clusters`
-//! (`DetectionClusters`, `cluster_detections`), `py_samples` (`Samples`, `sample`) and
+//! (`Loops`, `find_loops`, `path_length`), `py_separation` (`Separation`), `py_detections`
+//! (`Detections`, `draw_detections`, `read_detections`), `py_clusters` (`DetectionClusters`,
+//! `cluster_detections`), `py_samples` (`Samples`, `sample`) and
 //! `py_quality` (`SampleQuality`, `sample_quality`). Below them: `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments) and `error`
 //! (the one mapping of errors to exceptions).
@@ -57,6 +58,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_samples::Samples>()?;
     module.add_class::<py_quality::SampleQuality>()?;
     module.add_function(wrap_pyfunction!(py_detections::draw_detections, module)?)?;
+    module.add_function(wrap_pyfunction!(py_detections::read_detections, module)?)?;
     module.add_function(wrap_pyfunction!(py_clusters::cluster_detections, module)?)?;
     module.add_function(wrap_pyfunction!(py_samples::sample, module)?)?;
     module.add_function(wrap_pyfunction!(py_quality::sample_quality, module)?)?;

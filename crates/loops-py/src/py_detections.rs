@@ -11,6 +11,78 @@ use crate::error::Failure;
 use crate::py_loops::{Loops, TimelineArg};
 use loops_core::SampleSize;
 
+/// Reads detections from a file: rows of ``t, t_prime[, score]`` (commas, semicolons, tabs or
+/// spaces; a header row and ``#`` comments allowed), or the TUC datasets' ``loop t1 t2 score``
+/// lines (other keyword lines skipped).
+///
+/// Placing them on a trajectory (``trajectory_or_loops``) is strict: a detection outside its
+/// time span is an error naming the line. With ``drop_outside_span=True`` such detections are
+/// dropped, and a ``UserWarning`` says how many and on which lines (the TUC Corridor's input
+/// has 39 of its 10,019 detections 0.4 s past the end of the ground truth).
+///
+/// Args:
+///     path: the file.
+///     trajectory_or_loops: a :class:`Trajectory` (or the :class:`Loops` found on it) to place
+///         the detections on (filling :attr:`Detections.i` and :attr:`Detections.j`), or
+///         ``None`` to keep times only.
+///     drop_outside_span: drop the detections outside the trajectory's time span, with a
+///         warning saying how many (needs ``trajectory_or_loops``).
+///
+/// Raises:
+///     OSError: the file cannot be opened. LoopsIOError: a malformed row, no detection, a
+///     detection outside the trajectory's time span (naming file and line).
+///     InvalidParameterError: ``drop_outside_span`` without a trajectory.
+///
+/// Example:
+///     >>> import pathlib, tempfile, warnings, inexact_loops as il
+///     >>> path = pathlib.Path(tempfile.mkdtemp()) / "input.txt"
+///     >>> _ = path.write_text("odom2 0 0 0 0\nloop 2.5 0.5 1\nloop 9.5 1.0 0.5\n")
+///     >>> traj = il.Trajectory([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+///     >>> il.read_detections(path).t.tolist()
+///     [0.5, 1.0]
+///     >>> with warnings.catch_warnings(record=True) as caught:
+///     ...     warnings.simplefilter("always")
+///     ...     det = il.read_detections(path, traj, drop_outside_span=True)
+///     >>> det.i.tolist(), det.j.tolist(), str(caught[0].message).endswith("(line 3)")
+///     ([0], [2], True)
+#[pyfunction]
+#[pyo3(signature = (path, trajectory_or_loops=None, *, drop_outside_span=false))]
+pub(crate) fn read_detections(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    trajectory_or_loops: Option<&Bound<'_, PyAny>>,
+    drop_outside_span: bool,
+) -> PyResult<Detections> {
+    let timeline = trajectory_or_loops.map(TimelineArg::from_py).transpose()?;
+    if drop_outside_span && timeline.is_none() {
+        return Err(crate::error::invalid_parameter(
+            "drop_outside_span needs the trajectory (or loops) to place the detections on".into(),
+        ));
+    }
+    let (detections, dropped) = detached(py, move || {
+        let mut table = loops_io::read_detections(&path)?;
+        match &timeline {
+            None => {
+                let detections = table.to_unplaced()?;
+                Ok((detections, None))
+            }
+            Some(timeline) => {
+                let dropped = drop_outside_span.then(|| table.drop_outside_span(timeline.timeline()));
+                Ok((table.to_detections(timeline.timeline())?, dropped))
+            }
+        }
+    })?;
+    if let Some(dropped) = dropped {
+        crate::py_trajectory::warn_dropped(
+            py,
+            &dropped,
+            "drop_outside_span=True dropped",
+            "detection(s) outside the trajectory's time span",
+        )?;
+    }
+    Ok(Detections { inner: Arc::new(detections) })
+}
+
 /// A set of detections D: unordered pairs of times (t, t′), seconds, at which the trajectory is
 /// believed to come back to itself (place recognition), with optional scores and, once placed
 /// on a trajectory, the pose indices (i, j) of each pair.

@@ -434,9 +434,15 @@ pub(crate) fn urban_drive(
 /// compressed or not, split or not) or ROS 1 bags — by ``format``, or told from the extension
 /// and first line (a folder is a rosbag2 bag).
 ///
+/// Reading is strict: a repeated timestamp is an error naming its line. With
+/// ``drop_duplicate_stamps=True`` the later poses of a repeated stamp are dropped (the first
+/// is kept), and a ``UserWarning`` per file says how many and on which lines.
+///
 /// Args:
-///     path: the file (or a rosbag2 bag's folder or ``metadata.yaml``), or a list of MCAP files
-///         read as one trajectory in time order.
+///     path: the file (or a rosbag2 bag's folder or ``metadata.yaml``), or a list of files read
+///         as one trajectory: MCAP files merged by time (a recording split in parts), other
+///         files joined in time order (their times must not overlap: an error names both files
+///         and the stamps).
 ///     format: ``"tum"``, ``"csv"``, ``"kitti"``, ``"euroc"``, ``"tuc"``, ``"g2o"``,
 ///         ``"mcap"``, ``"rosbag2"``, ``"ros1"``, or ``None`` to tell.
 ///     axes: a plane of two position axes (0 = x, 1 = y, 2 = z), e.g. ``(0, 2)`` for KITTI's
@@ -447,23 +453,41 @@ pub(crate) fn urban_drive(
 ///     metric: the metric the trajectory is for (as in :func:`find_loops`): positions for
 ///         Euclidean (the default); positions and orientations for ``se3``; orientations for
 ///         ``so3``; x, y and yaw about z for ``se2`` (or the plane ``axes`` and the heading in
-///         it). Quaternions within 1e-3 of unit length are normalised (files often print 4
-///         decimals).
+///         it). Quaternions within ``quaternion_tolerance`` of unit length are normalised.
 ///     topic: the topic (MCAP, bags); ``None`` picks the one topic with poses (several: an error
 ///         listing them, see :func:`list_topics`).
 ///     time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
 ///     frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
 ///         topic's only pair.
 ///     rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
+///     times: for files without times (KITTI poses, pose graphs): a file of one time a line,
+///         seconds, one per pose in order (KITTI's ``sequences/XX/times.txt``).
+///     drop_duplicate_stamps: drop the poses whose timestamp repeats the one before, with a
+///         warning saying how many (default: they are an error).
+///     quaternion_tolerance: how far from unit length a quaternion may be and still be
+///         normalised (default 1e-3: files often print 4 decimals).
 ///
 /// Raises:
 ///     OSError: the file cannot be opened. LoopsIOError: a malformed line or message (the
-///     message names file, line or byte offset, topic). InvalidTrajectoryError: e.g. unsorted
-///     timestamps (names the line or message). InvalidParameterError: an unknown format or
-///     time source, a metric whose points are not poses (named), bad axes, an empty list.
+///     message names file, line or byte offset, topic); files whose times overlap.
+///     InvalidTrajectoryError: e.g. unsorted or repeated timestamps, a quaternion farther than
+///     ``quaternion_tolerance`` from unit length (names the line or message).
+///     InvalidParameterError: an unknown format or time source, a metric whose points are not
+///     poses (named), bad axes, an empty list, both ``rate_hz`` and ``times``.
 ///     TypeError: ``path`` is not a str, an ``os.PathLike`` or a list of them.
+///
+/// Example:
+///     >>> import pathlib, tempfile, warnings, inexact_loops as il
+///     >>> path = pathlib.Path(tempfile.mkdtemp()) / "desk.tum"
+///     >>> _ = path.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n1 2 0 0 0 0 0 1\n2 3 0 0 0 0 0 1\n")
+///     >>> with warnings.catch_warnings(record=True) as caught:
+///     ...     warnings.simplefilter("always")
+///     ...     traj = il.read_trajectory(path, drop_duplicate_stamps=True)
+///     >>> len(traj), str(caught[0].message).endswith("dropped 1 pose(s) whose timestamp repeats the one before (line 3)")
+///     (3, True)
 #[pyfunction]
-#[pyo3(signature = (path, *, format=None, axes=None, metric=None, topic=None, time=None, frames=None, rate_hz=None))]
+#[pyo3(signature = (path, *, format=None, axes=None, metric=None, topic=None, time=None, frames=None, rate_hz=None,
+    times=None, drop_duplicate_stamps=false, quaternion_tolerance=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn read_trajectory(
     py: Python<'_>,
@@ -475,10 +499,16 @@ pub(crate) fn read_trajectory(
     time: Option<String>,
     frames: Option<(String, String)>,
     rate_hz: Option<f64>,
+    times: Option<PathBuf>,
+    drop_duplicate_stamps: bool,
+    quaternion_tolerance: Option<f64>,
 ) -> PyResult<Trajectory> {
     let paths = paths_of(path)?;
     let spec = MetricArg::spec_from_py(metric, "read_trajectory")?;
-    let inner = detached(py, move || {
+    if rate_hz.is_some() && times.is_some() {
+        return Err(crate::error::invalid_parameter("rate_hz and times both give the poses' times: give one".into()));
+    }
+    let (inner, dropped) = detached(py, move || {
         let mut mcap = loops_io::McapOptions::default();
         if let Some(topic) = topic {
             mcap = mcap.topic(topic);
@@ -489,21 +519,66 @@ pub(crate) fn read_trajectory(
         if let Some((parent, child)) = frames {
             mcap = mcap.frames(parent, child);
         }
-        let format = format.map(|name| name.parse::<loops_io::Format>()).transpose()?;
-        let table = if let [path] = paths.as_slice() {
-            let mut options = loops_io::ReadOptions::default();
-            options.format = format;
-            options.mcap = mcap;
-            if let Some(rate) = rate_hz {
-                options.timing = loops_io::Timing::RateHz(rate);
-            }
-            loops_io::read_trajectory_with(path, &options)?
+        let mut options = loops_io::ReadOptions::default().mcap(mcap);
+        if let Some(format) = format {
+            options = options.format(format.parse()?);
+        }
+        if let Some(rate) = rate_hz {
+            options = options.timing(loops_io::Timing::RateHz(rate));
+        }
+        if let Some(times) = times {
+            options = options.timing(loops_io::Timing::TimesFile(times));
+        }
+        let is_mcap =
+            |path: &PathBuf| options.format.or_else(|| loops_io::Format::detect(path)) == Some(loops_io::Format::Mcap);
+        let mut tables = if paths.len() > 1 && paths.iter().all(is_mcap) {
+            vec![loops_io::read_mcap_files(&paths, &options.mcap)?]
         } else {
-            loops_io::read_mcap_files(&paths, &mcap)?
+            let mut tables = Vec::with_capacity(paths.len());
+            for path in paths {
+                tables.push(loops_io::read_trajectory_with(path, &options)?);
+            }
+            tables
         };
-        trajectory_for(&table, &spec, axes, Source::File)
+        let mut dropped = Vec::new();
+        for table in &mut tables {
+            if drop_duplicate_stamps {
+                dropped.push(table.drop_duplicate_stamps());
+            }
+            if let Some(tolerance) = quaternion_tolerance {
+                table.normalize_orientations(tolerance)?;
+            }
+        }
+        // Each file first, so that an error names its file and line.
+        if tables.len() > 1 {
+            for table in &tables {
+                trajectory_for(table, &spec, axes, Source::File)?;
+            }
+        }
+        let table = loops_io::PoseTable::join(tables)?;
+        Ok((trajectory_for(&table, &spec, axes, Source::File)?, dropped))
     })?;
+    for dropped in dropped {
+        warn_dropped(
+            py,
+            &dropped,
+            "drop_duplicate_stamps=True dropped",
+            "pose(s) whose timestamp repeats the one before",
+        )?;
+    }
     Ok(Trajectory { inner: Arc::new(inner), plane_axes: axes })
+}
+
+/// A `UserWarning` saying what a lenient option dropped from a file (nothing when it dropped
+/// nothing): `desk.tum: drop_duplicate_stamps=True dropped 1 pose(s) whose ... (line 10863)`.
+pub(crate) fn warn_dropped(py: Python<'_>, dropped: &loops_io::Dropped, option: &str, what: &str) -> PyResult<()> {
+    if dropped.is_empty() {
+        return Ok(());
+    }
+    let lines = dropped.lines_text().map_or(String::new(), |lines| format!(" ({lines})"));
+    let message = format!("{}: {option} {} {what}{lines}", dropped.path.display(), dropped.count);
+    let message = std::ffi::CString::new(message).unwrap_or_default();
+    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)
 }
 
 /// `read_trajectory`'s `path`: one path, or a non-empty list of them.
@@ -515,7 +590,7 @@ fn paths_of(path: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
         Ok(PyTypeError::new_err(format!("{what}, got {}", obj.get_type().name()?)))
     };
     if !(path.is_instance_of::<PyList>() || path.is_instance_of::<PyTuple>()) {
-        return Err(not_a_path("path must be a str or an os.PathLike, or a list of them (MCAP files)".into(), path)?);
+        return Err(not_a_path("path must be a str or an os.PathLike, or a list of them".into(), path)?);
     }
     let mut paths = Vec::new();
     for (index, item) in path.try_iter()?.enumerate() {
@@ -526,9 +601,7 @@ fn paths_of(path: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
         }
     }
     if paths.is_empty() {
-        return Err(crate::error::invalid_parameter(
-            "path is an empty list: give a file, or a list of MCAP files".into(),
-        ));
+        return Err(crate::error::invalid_parameter("path is an empty list: give a file, or a list of files".into()));
     }
     Ok(paths)
 }
