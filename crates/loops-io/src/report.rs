@@ -150,7 +150,8 @@ impl LoopsReport {
 /// ```
 pub fn loops_report_to_json<W: Write>(report: &LoopsReport, out: W) -> io::Result<()> {
     let mut out = BufWriter::new(out);
-    serde_json::to_writer_pretty(&mut out, report).map_err(io::Error::other)?;
+    // `From` hands back the writer's own error: a closed stdout stays `BrokenPipe`.
+    serde_json::to_writer_pretty(&mut out, report).map_err(io::Error::from)?;
     writeln!(out)?;
     out.flush()
 }
@@ -203,5 +204,32 @@ mod tests {
         assert!(keys.windows(2).all(|pair| at(pair[0]) < at(pair[1])));
         assert_eq!(value["poses"], 5);
         assert_eq!(value["span_s"], 4.5);
+    }
+
+    /// A writer whose reader has gone (`loops components --json - | head`).
+    struct ClosedPipe;
+
+    impl Write for ClosedPipe {
+        fn write(&mut self, _: &[u8]) -> io::Result<usize> {
+            Err(io::ErrorKind::BrokenPipe.into())
+        }
+
+        fn flush(&mut self) -> io::Result<()> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn a_closed_pipe_is_reported_as_one() {
+        // Poses alternating between two points 10 apart: every pair of the same parity is its
+        // own component, so the document outgrows the buffer and serde_json meets the error.
+        let n = 40;
+        let points: Vec<[f64; 1]> = (0..n).map(|i| [f64::from(i % 2) * 10.0]).collect();
+        let traj = Trajectory::from_points((0..n).map(f64::from).collect(), &points).unwrap();
+        let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
+        let report = LoopsReport::new(None, &loops).unwrap();
+        assert!(serde_json::to_string_pretty(&report).unwrap().len() > 64 * 1024);
+        let error = loops_report_to_json(&report, ClosedPipe).unwrap_err();
+        assert_eq!(error.kind(), io::ErrorKind::BrokenPipe);
     }
 }

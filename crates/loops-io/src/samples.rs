@@ -164,7 +164,8 @@ pub fn samples_to_json<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
         samples: samples.rows().iter().map(SampleRow::from).collect(),
     };
     let mut out = BufWriter::new(out);
-    serde_json::to_writer_pretty(&mut out, &document).map_err(io::Error::other)?;
+    // `From` hands back the writer's own error: a closed stdout stays `BrokenPipe`.
+    serde_json::to_writer_pretty(&mut out, &document).map_err(io::Error::from)?;
     writeln!(out)?;
     out.flush()
 }
@@ -277,5 +278,27 @@ mod tests {
         fs::remove_dir_all(&dir).unwrap();
         assert_eq!("JSON".parse::<SamplesFormat>().unwrap(), SamplesFormat::Json);
         assert!("xml".parse::<SamplesFormat>().is_err());
+    }
+
+    #[test]
+    fn a_closed_pipe_is_reported_as_one() {
+        struct ClosedPipe;
+        impl Write for ClosedPipe {
+            fn write(&mut self, _: &[u8]) -> io::Result<usize> {
+                Err(io::ErrorKind::BrokenPipe.into())
+            }
+            fn flush(&mut self) -> io::Result<()> {
+                Ok(())
+            }
+        }
+        // A robot standing still: every pair is a loop, more samples than the buffer holds.
+        let n = 60;
+        let traj = Trajectory::from_points((0..n).map(f64::from).collect(), &vec![[0.0]; n as usize]).unwrap();
+        let loops = find_loops(&traj, &Euclidean, 0.5).unwrap();
+        let all = Sampler::new(SamplerKind::Alpha, SampleSize::Rate(1.0), 0);
+        let samples = sample_loops(&traj, &Euclidean, &loops, &all).unwrap();
+        assert_eq!(samples.len(), 60 * 59 / 2);
+        let error = samples_to_json(&samples, ClosedPipe).unwrap_err();
+        assert_eq!(error.kind(), io::ErrorKind::BrokenPipe);
     }
 }
