@@ -8,7 +8,7 @@
 //! finished: whole files and whole per-log folders.
 
 use std::path::{Path, PathBuf};
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::{Mutex, MutexGuard, OnceLock, PoisonError};
 
 use anyhow::{Context, Result, bail};
 use loops_io::WriteError;
@@ -40,8 +40,13 @@ pub(crate) fn with_writes<R>(f: impl FnOnce(&mut Writes) -> R) -> R {
     f(&mut lock())
 }
 
-/// Installs the SIGINT/SIGTERM handler (once per process).
+/// Installs the SIGINT/SIGTERM handler, once per process: a second command run in the same
+/// process (the Python console script's) keeps the first handler.
 pub(crate) fn install() -> Result<()> {
+    static INSTALLED: OnceLock<()> = OnceLock::new();
+    if INSTALLED.get().is_some() {
+        return Ok(());
+    }
     ctrlc::set_handler(|| {
         let writes = lock();
         let mut removed = 0;
@@ -69,7 +74,9 @@ pub(crate) fn install() -> Result<()> {
         }
         std::process::exit(i32::from(INTERRUPTED));
     })
-    .context("installing the Ctrl-C handler")
+    .context("installing the Ctrl-C handler")?;
+    let _ = INSTALLED.set(());
+    Ok(())
 }
 
 impl Writes {

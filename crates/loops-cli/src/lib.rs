@@ -1,9 +1,14 @@
 //! `loops`: inexact-loop components of trajectories, on the command line.
 //!
-//! `main` parses, dispatches to the command's module and maps errors: one line on stderr and
+//! [`main`] parses, dispatches to the command's module and maps errors: one line on stderr and
 //! exit code 2 on error, 0 on success or a closed pipe (`loops run` also exits 1 when a log
 //! failed, 130 on Ctrl-C). Each command is a thin adapter over `loops-core` and `loops-io`:
-//! it converts its flags ([`args`] holds the groups several share), calls, and prints.
+//! it converts its flags (`args` holds the groups several share), calls, and prints.
+//!
+//! The command is a library so that two front ends run the same code: the `loops` binary of
+//! this crate (`cargo install --path crates/loops-cli`) and the `loops` console script of the
+//! Python wheel, which calls [`main`] in the Python process through `inexact_loops._core.run_cli`
+//! (one build of the workspace gives the library and the command).
 
 mod args;
 mod components;
@@ -17,7 +22,8 @@ mod run;
 mod sample;
 mod synth;
 
-use std::process::ExitCode;
+use std::ffi::OsString;
+use std::io::Write;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -41,18 +47,43 @@ enum Command {
     Synth(synth::SynthArgs),
 }
 
-fn main() -> ExitCode {
-    match run(Cli::parse()) {
-        Ok(code) => code,
-        Err(error) if is_broken_pipe(&error) => ExitCode::SUCCESS,
+/// Runs the `loops` command with `args` (the program name first, as [`std::env::args_os`]
+/// gives them) and returns its exit code: 0 on success, a closed stdout, `--help` or
+/// `--version`; 1 when `loops run` had a log fail; 2 on an error or a usage error; 130 when
+/// interrupted (SIGINT or SIGTERM, which exit the process at once after removing unfinished
+/// output). Nothing else leaves the process: clap's help, version and usage errors are printed
+/// and returned as codes, and stdout is flushed before returning.
+///
+/// It installs the SIGINT/SIGTERM handler once per process: call it from a process that runs
+/// the command and nothing else (the binary, a console script).
+pub fn main<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    let code = match Cli::try_parse_from(args) {
+        // Help and version go to stdout with code 0, usage errors to stderr with code 2, as
+        // clap's own `exit` prints them (its broken pipe swallowed too), without leaving the
+        // process.
         Err(error) => {
-            eprintln!("loops: error: {error:#}");
-            ExitCode::from(2)
+            let _ = error.print();
+            u8::try_from(error.exit_code()).unwrap_or(2)
         }
-    }
+        Ok(cli) => match run(cli) {
+            Ok(code) => code,
+            Err(error) if is_broken_pipe(&error) => 0,
+            Err(error) => {
+                eprintln!("loops: error: {error:#}");
+                2
+            }
+        },
+    };
+    // The binary's runtime flushes stdout at exit; a caller in another runtime (Python) may not.
+    let _ = std::io::stdout().flush();
+    code
 }
 
-fn run(cli: Cli) -> Result<ExitCode> {
+fn run(cli: Cli) -> Result<u8> {
     guard::install()?;
     let done = match cli.command {
         Command::Components(args) => components::components(args),
@@ -62,7 +93,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Run(args) => return run::run(args),
         Command::Synth(args) => synth::synth(args),
     };
-    done.map(|()| ExitCode::SUCCESS)
+    done.map(|()| 0)
 }
 
 fn is_broken_pipe(error: &anyhow::Error) -> bool {
