@@ -36,6 +36,7 @@ __all__ = [
     "outline_segments",
     "read_detections",
     "read_trajectory",
+    "run_cli",
     "sample",
     "sample_quality",
     "sampler_symbol",
@@ -1617,4 +1618,22 @@ def sampler_symbol(sampler: _SamplerName | str) -> str:
         >>> import inexact_loops as il
         >>> il.sampler_symbol("rho"), il.sampler_symbol("lio-sam")
         ('σ_ρ', 'LIO-SAM')
+    """
+
+def run_cli(args: list[str]) -> int:
+    """Runs the ``loops`` command in this process with ``args`` (the arguments after the program
+    name) and returns its exit code; the wheel's ``loops`` console script is this call.
+
+    The command is the one ``cargo install --path crates/loops-cli`` builds, compiled into this
+    module: the same output on stdout and stderr, ``--help`` and ``--version`` included, and the
+    same exit codes (0; 1 when a log of ``loops run`` failed; 2 on an error; 0 when stdout closes
+    early). It runs without the GIL. It installs a SIGINT/SIGTERM handler that stays for the
+    rest of the process (an interrupt removes unfinished output and exits with 130), so call it
+    from a process that runs the command and nothing else.
+
+    Args:
+        args: the command's arguments, e.g. ``["demo", "--limit", "5"]``.
+
+    Returns:
+        The exit code.
     """

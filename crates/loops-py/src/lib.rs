@@ -10,8 +10,10 @@
 //! `cluster_detections`), `py_samples` (`Samples`, `sample`) and
 //! `py_quality` (`SampleQuality`, `sample_quality`). Below them: `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments) and `error`
-//! (the one mapping of errors to exceptions).
+//! (the one mapping of errors to exceptions). Beside them, `cli` (`run_cli`): the `loops`
+//! command of `loops-cli`, for the wheel's console script.
 
+mod cli;
 mod convert;
 mod error;
 mod py_clusters;
@@ -69,5 +71,6 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_plane::chain_polylines, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::isocontour, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::sampler_symbol, module)?)?;
+    module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
     Ok(())
 }
