@@ -54,24 +54,36 @@ from ._core import (
     urban_drive,
 )
 from .errors import (
+    DiagonalBrokenWarning,
+    EmptyResultWarning,
+    EmptySampleWarning,
     InternalError,
     InvalidParameterError,
     InvalidTrajectoryError,
     LoopsError,
     LoopsIOError,
+    LoopsWarning,
+    NoLoopsWarning,
+    SampleBudgetWarning,
 )
 from .table import Table
 
 __all__ = [
     "DetectionClusters",
     "Detections",
+    "DiagonalBrokenWarning",
+    "EmptyResultWarning",
+    "EmptySampleWarning",
     "InternalError",
     "InvalidParameterError",
     "InvalidTrajectoryError",
     "Loops",
     "LoopsError",
     "LoopsIOError",
+    "LoopsWarning",
+    "NoLoopsWarning",
     "PlaneGrid",
+    "SampleBudgetWarning",
     "SampleQuality",
     "Samples",
     "Separation",

@@ -365,7 +365,10 @@ class Loops:
         """Number of lattice cells (i, j) of S_γ in the full plane, both halves and the diagonal."""
     @property
     def warnings(self) -> list[str]:
-        """Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences."""
+        """Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences;
+        :func:`find_loops` also issues each with :func:`warnings.warn`, in a category of
+        :class:`LoopsWarning`.
+        """
     @property
     def components(self) -> Table:
         """The loop components as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row
@@ -668,6 +671,12 @@ def find_loops(
     Raises:
         InvalidParameterError: gamma not positive and finite, unknown metric, a negative
             separation, threads = 0.
+
+    Warns:
+        DiagonalBrokenWarning: consecutive poses farther apart than gamma (a data gap, or gamma
+            below the step): more than one trivial component.
+        NoLoopsWarning: a separation was asked for and no pair within gamma keeps it: no
+            revisit, no component. Both also in :attr:`Loops.warnings`.
 
     Example:
         A 95% circle of radius 10 m: its ends come within 3.1 m of each other, 60 m apart along
@@ -984,7 +993,10 @@ class Samples:
         """Number of poses of the trajectory the pairs index, or ``None``."""
     @property
     def warnings(self) -> list[str]:
-        """Warnings (a budget below the number of groups, or above the candidates), as sentences."""
+        """Warnings (a budget below the number of groups, or above the candidates), as sentences;
+        :func:`sample` also issues each with :func:`warnings.warn`, in a category of
+        :class:`LoopsWarning`.
+        """
     @property
     def t(self) -> npt.NDArray[np.float64]:
         """The earlier time of each sample, seconds."""
@@ -1345,6 +1357,12 @@ def sample(
             clusters, rate and budget both or neither, a budget of 0, a rate out of range, a
             trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline.
         TypeError: ``Loops`` without ``trajectory``.
+
+    Warns:
+        EmptySampleWarning: no samples (no candidates, e.g. ``skip_trivial`` on loops whose
+            every component is trivial, or a rate that kept none).
+        SampleBudgetWarning: fewer candidates than the budget (all are returned), or a budget
+            below the number of groups (P1 cannot hold). Both also in :attr:`Samples.warnings`.
 
     Example:
         >>> import inexact_loops as il

@@ -1,11 +1,32 @@
-"""The exceptions raised by inexact_loops; every one is a :class:`LoopsError`."""
+"""The exceptions raised by inexact_loops (every one is a :class:`LoopsError`) and the warnings
+it issues (every one is a :class:`LoopsWarning`).
+
+A result that is correct but deserves a second look -- a broken diagonal of S_gamma, no revisit
+at all, a sample smaller than asked or empty -- is issued with :func:`warnings.warn`, attributed
+to the line of your code that called :func:`find_loops` or :func:`sample`, and kept on the result
+as sentences (``Loops.warnings``, ``Samples.warnings``). Filter them by category::
+
+    import warnings
+    warnings.simplefilter("error", il.LoopsWarning)          # every one raises
+    warnings.simplefilter("ignore", il.SampleBudgetWarning)  # a short sample is fine here
+
+Each warning of the engine (``loops_core::Warning``, ``loops_core::SampleWarning``) has its
+category in one table, ``crates/loops-py/src/warning.rs``; a warning the table does not name yet
+is issued as :class:`LoopsWarning` itself.
+"""
 
 __all__ = [
+    "DiagonalBrokenWarning",
+    "EmptyResultWarning",
+    "EmptySampleWarning",
     "InternalError",
     "InvalidParameterError",
     "InvalidTrajectoryError",
     "LoopsError",
     "LoopsIOError",
+    "LoopsWarning",
+    "NoLoopsWarning",
+    "SampleBudgetWarning",
 ]
 
 
@@ -31,3 +52,37 @@ class LoopsIOError(LoopsError, OSError):
 
 class InternalError(LoopsError, RuntimeError):
     """A bug in inexact_loops (a Rust panic was caught); please report it."""
+
+
+class LoopsWarning(UserWarning):
+    """Base class of every warning issued by inexact_loops."""
+
+
+class DiagonalBrokenWarning(LoopsWarning):
+    """Consecutive poses farther apart than gamma (:func:`find_loops`).
+
+    The diagonal of S_gamma breaks there, so there is more than one trivial component: usually a
+    data gap, or gamma below the step length. The message names the first such pose and the
+    largest step.
+    """
+
+
+class EmptyResultWarning(LoopsWarning):
+    """A result with nothing in it, which is rarely what was meant."""
+
+
+class NoLoopsWarning(EmptyResultWarning):
+    """:func:`find_loops` with a separation found no revisit: no pair within gamma is that far
+    apart along the trajectory, so there is no loop component. A larger gamma, a smaller
+    separation, or ``separation=None`` (the paper's S_gamma, simple loops included) finds some.
+    """
+
+
+class EmptySampleWarning(EmptyResultWarning):
+    """:func:`sample` returned no samples: no candidates (e.g. ``skip_trivial`` on loops whose
+    every component is trivial), or a rate that kept none."""
+
+
+class SampleBudgetWarning(LoopsWarning):
+    """:func:`sample` could not spend its budget as asked: fewer candidates than the budget (all
+    of them were returned), or a budget below the number of groups (P1 cannot hold)."""

@@ -15,6 +15,7 @@ import json
 import re
 import subprocess
 import sys
+import warnings
 from collections.abc import Callable
 from pathlib import Path
 
@@ -465,14 +466,124 @@ def test_find_loops_errors(traj):
 
 @covers("Loops.warnings")
 def test_warnings_name_the_broken_diagonal():
-    loops = il.find_loops(
-        il.Trajectory([0.0, 1, 2, 3], [0.0, 0, 100, 100]), gamma=1.0, separation=None
-    )
+    with pytest.warns(il.DiagonalBrokenWarning):
+        loops = il.find_loops(
+            il.Trajectory([0.0, 1, 2, 3], [0.0, 0, 100, 100]), gamma=1.0, separation=None
+        )
     assert len(loops.warnings) == 1
     assert (
         "first at index 1" in loops.warnings[0] and "farther apart than gamma" in loops.warnings[0]
     )
     assert il.find_loops(il.Trajectory(*ring()), gamma=4.0, separation=None).warnings == []
+
+
+def issued(call: Callable[[], object]) -> tuple[object, list[warnings.WarningMessage]]:
+    """What ``call`` returns and every warning it issues (none filtered out)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = call()
+    return result, caught
+
+
+@covers(
+    "LoopsWarning",
+    "DiagonalBrokenWarning",
+    "EmptyResultWarning",
+    "EmptySampleWarning",
+    "NoLoopsWarning",
+    "SampleBudgetWarning",
+)
+def test_engine_warnings_are_python_warnings_to_filter(traj, loops, clusters):
+    """Each warning of the engine is issued once, in its category, at the caller's line, with
+    the sentence the result keeps; an "error" filter makes it an exception, "ignore" silences
+    it, and a result with nothing to say issues nothing."""
+    for cls in (
+        il.DiagonalBrokenWarning,
+        il.NoLoopsWarning,
+        il.EmptySampleWarning,
+        il.SampleBudgetWarning,
+    ):
+        assert issubclass(cls, il.LoopsWarning)
+    assert issubclass(il.EmptySampleWarning, il.EmptyResultWarning)
+    assert issubclass(il.NoLoopsWarning, il.EmptyResultWarning)
+    assert issubclass(il.LoopsWarning, UserWarning) and not issubclass(
+        il.LoopsWarning, il.LoopsError
+    )
+
+    gap = il.Trajectory([0.0, 1, 2, 3], [0.0, 0, 100, 100])
+    line = sys._getframe().f_lineno + 1
+    broken, caught = issued(lambda: il.find_loops(gap, gamma=1.0, separation=None))
+    assert [w.category for w in caught] == [il.DiagonalBrokenWarning]
+    assert [str(w.message) for w in caught] == broken.warnings
+    assert (caught[0].filename, caught[0].lineno) == (__file__, line)
+
+    # No revisit: a straight line keeps no pair within gamma 4 gamma apart along the path, and
+    # a sample of those loops is empty.
+    straight = il.Trajectory(np.arange(50.0), np.arange(50.0))
+    none, caught = issued(lambda: il.find_loops(straight, gamma=3.0))
+    assert len(none.components["id"]) == 0
+    assert [w.category for w in caught] == [il.NoLoopsWarning]
+    assert [str(w.message) for w in caught] == none.warnings
+    assert "no revisit at gamma 3" in none.warnings[0]
+    samples, caught = issued(lambda: il.sample(none, "rho", budget=10, seed=0, trajectory=straight))
+    assert len(samples) == 0 and [w.category for w in caught] == [il.EmptySampleWarning]
+
+    # No budget spent as asked: fewer candidates than the budget, or fewer samples than groups.
+    pairs = (loops.pair_count - N) // 2
+    for source, sampler, budget, text in [
+        (loops, "alpha", pairs + 1, f"more than the {pairs} candidates"),
+        (loops, "one", 1, "P1 cannot hold"),
+        (clusters, "alpha", 4, "more than the 3 candidates"),
+    ]:
+        on = traj if source is loops else None
+        samples, caught = issued(
+            lambda s=source, k=sampler, b=budget, t=on: il.sample(
+                s, k, budget=b, seed=0, trajectory=t
+            )
+        )
+        assert [w.category for w in caught] == [il.SampleBudgetWarning], text
+        assert [str(w.message) for w in caught] == samples.warnings and text in samples.warnings[0]
+
+    # Empty: every component is trivial and skip_trivial leaves them out. With a budget the
+    # sampler says so itself; with a rate the bindings do, naming skip_trivial.
+    only_trivial = il.find_loops(straight, gamma=3.0, separation=None)
+    assert only_trivial.components["trivial"].tolist() == [True]
+    for size, text in [
+        ({"budget": 10}, "budget 10 is more than the 0 candidates"),
+        (
+            {"rate": 1.0},
+            "no samples: the rho sampler kept none of its 0 candidate(s) (skip_trivial",
+        ),
+    ]:
+        samples, caught = issued(
+            lambda z=size: il.sample(
+                only_trivial, "rho", seed=0, trajectory=straight, skip_trivial=True, **z
+            )
+        )
+        assert len(samples) == 0
+        assert [w.category for w in caught] == [il.EmptySampleWarning], size
+        assert str(caught[0].message).startswith(text)
+
+    # Nothing to say: nothing issued, even under "error".
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert il.find_loops(traj, gamma=4.0).warnings == []
+        assert il.sample(loops, "one", budget=2, seed=0, trajectory=traj).warnings == []
+
+    # Filters by category: an exception under "error", nothing under "ignore".
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", il.LoopsWarning)
+        with raises(il.DiagonalBrokenWarning, "first at index 1", "farther apart than gamma"):
+            il.find_loops(gap, gamma=1.0, separation=None)
+        with raises(il.NoLoopsWarning, "no revisit"):
+            il.find_loops(straight, gamma=3.0)
+        with raises(il.SampleBudgetWarning, "P1 cannot hold"):
+            il.sample(loops, "one", budget=1, seed=0, trajectory=traj)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warnings.simplefilter("ignore", il.DiagonalBrokenWarning)
+        assert len(il.find_loops(gap, gamma=1.0, separation=None).warnings) == 1
+    assert caught == []
 
 
 @covers("Loops.components", "Loops.runs")
@@ -900,7 +1011,8 @@ def test_samples_columns(traj, loops, clusters):
     assert (
         of_clusters.i is None and np.isnan(of_clusters.distance).all() and of_clusters.poses is None
     )
-    over = il.sample(loops, "one", budget=1, seed=0, trajectory=traj)
+    with pytest.warns(il.SampleBudgetWarning):
+        over = il.sample(loops, "one", budget=1, seed=0, trajectory=traj)
     assert len(over.warnings) == 1 and "budget" in over.warnings[0]
 
 

@@ -9,9 +9,10 @@
 //! (`Detections`, `draw_detections`, `read_detections`), `py_clusters` (`DetectionClusters`,
 //! `cluster_detections`), `py_samples` (`Samples`, `sample`) and
 //! `py_quality` (`SampleQuality`, `sample_quality`). Below them: `convert` (arguments to Rust
-//! buffers, results to numpy columns and tables), `py_metric` (metric arguments) and `error`
-//! (the one mapping of errors to exceptions). Beside them, `cli` (`run_cli`): the `loops`
-//! command of `loops-cli`, for the wheel's console script.
+//! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
+//! (the one mapping of errors to exceptions) and `warning` (the one mapping of the engine's
+//! warnings to Python warning categories). Beside them, `cli` (`run_cli`): the `loops` command
+//! of `loops-cli`, for the wheel's console script.
 
 mod cli;
 mod convert;
@@ -25,6 +26,7 @@ mod py_quality;
 mod py_samples;
 mod py_separation;
 mod py_trajectory;
+mod warning;
 
 use pyo3::prelude::*;
 

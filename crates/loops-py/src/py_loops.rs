@@ -43,6 +43,12 @@ use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
 ///     InvalidParameterError: gamma not positive and finite, unknown metric, a negative
 ///         separation, threads = 0.
 ///
+/// Warns:
+///     DiagonalBrokenWarning: consecutive poses farther apart than gamma (a data gap, or gamma
+///         below the step): more than one trivial component.
+///     NoLoopsWarning: a separation was asked for and no pair within gamma keeps it: no
+///         revisit, no component. Both also in :attr:`Loops.warnings`.
+///
 /// Example:
 ///     A 95% circle of radius 10 m: its ends come within 3.1 m of each other, 60 m apart along
 ///     the path.
@@ -72,6 +78,7 @@ pub(crate) fn find_loops(
         MetricRef::Spec(spec) => spec.find_loops_separated(&traj, gamma, separation),
         MetricRef::Callable(callable) => loops_core::find_loops_separated(&traj, callable, gamma, separation),
     })?;
+    crate::warning::warn_loops(py, &inner)?;
     Ok(Loops { inner: Arc::new(inner) })
 }
 
@@ -200,7 +207,9 @@ impl Loops {
         self.inner.pair_count()
     }
 
-    /// Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences.
+    /// Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences;
+    /// :func:`find_loops` also issues each with :func:`warnings.warn`, in a category of
+    /// :class:`LoopsWarning`.
     #[getter]
     fn warnings(&self) -> Vec<String> {
         self.inner.warnings().iter().map(ToString::to_string).collect()

@@ -103,6 +103,12 @@ fn loops_metric(metric: Option<&Bound<'_, PyAny>>, loops: &loops_core::Loops) ->
 ///         trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline.
 ///     TypeError: ``Loops`` without ``trajectory``.
 ///
+/// Warns:
+///     EmptySampleWarning: no samples (no candidates, e.g. ``skip_trivial`` on loops whose
+///         every component is trivial, or a rate that kept none).
+///     SampleBudgetWarning: fewer candidates than the budget (all are returned), or a budget
+///         below the number of groups (P1 cannot hold). Both also in :attr:`Samples.warnings`.
+///
 /// Example:
 ///     >>> import inexact_loops as il
 ///     >>> traj = il.urban_drive(duration_s=900.0)
@@ -169,6 +175,7 @@ pub(crate) fn sample(
             }
             (None, None) => samples,
         };
+        crate::warning::warn_samples(py, &samples, skip_trivial)?;
         return Ok(Samples { inner: Arc::new(samples) });
     }
     if let Ok(loops) = source.cast::<Loops>() {
@@ -182,6 +189,7 @@ pub(crate) fn sample(
         let metric = loops_metric(metric, &loops)?;
         let samples = metric
             .run(py, threads, move |metric| loops_core::sample_loops(&traj, metric.as_metric(), &loops, &spec))?;
+        crate::warning::warn_samples(py, &samples, skip_trivial)?;
         return Ok(Samples { inner: Arc::new(samples) });
     }
     Err(PyTypeError::new_err(format!(
@@ -233,7 +241,9 @@ impl Samples {
         self.inner.poses()
     }
 
-    /// Warnings (a budget below the number of groups, or above the candidates), as sentences.
+    /// Warnings (a budget below the number of groups, or above the candidates), as sentences;
+    /// :func:`sample` also issues each with :func:`warnings.warn`, in a category of
+    /// :class:`LoopsWarning`.
     #[getter]
     fn warnings(&self) -> Vec<String> {
         self.inner.warnings().iter().map(ToString::to_string).collect()
