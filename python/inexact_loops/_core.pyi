@@ -400,7 +400,8 @@ class Loops:
             {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
         """
     def component_of(self, i: int, j: int) -> int | None:
-        """The component id of the pair (i, j) (either order), or ``None`` when δ > γ.
+        """The component id of the pair (i, j) (either order), or ``None`` when δ > γ or, with a
+        separation, when the pair is not that far apart along the trajectory.
 
         Raises:
             IndexError: ``i`` or ``j`` is not a pose index (negative, or past the last pose).
