@@ -55,6 +55,7 @@ from ._core import (
 )
 from .errors import (
     DiagonalBrokenWarning,
+    DroppedInputWarning,
     EmptyResultWarning,
     EmptySampleWarning,
     InternalError,
@@ -72,6 +73,7 @@ __all__ = [
     "DetectionClusters",
     "Detections",
     "DiagonalBrokenWarning",
+    "DroppedInputWarning",
     "EmptyResultWarning",
     "EmptySampleWarning",
     "InternalError",

@@ -754,7 +754,7 @@ def read_trajectory(
 
     Reading is strict: a repeated timestamp is an error naming its line. With
     ``drop_duplicate_stamps=True`` the later poses of a repeated stamp are dropped (the first
-    is kept), and a ``UserWarning`` per file says how many and on which lines.
+    is kept), and a :class:`DroppedInputWarning` per file says how many and on which lines.
 
     Args:
         path: the file (or a rosbag2 bag's folder or ``metadata.yaml``), or a list of files read
@@ -1241,7 +1241,7 @@ def read_detections(
 
     Placing them on a trajectory (``trajectory_or_loops``) is strict: a detection outside its
     time span is an error naming the line. With ``drop_outside_span=True`` such detections are
-    dropped, and a ``UserWarning`` says how many and on which lines (the TUC Corridor's input
+    dropped, and a :class:`DroppedInputWarning` says how many and on which lines (the TUC Corridor's input
     has 39 of its 10,019 detections 0.4 s past the end of the ground truth).
 
     Args:

@@ -4,7 +4,8 @@ it issues (every one is a :class:`LoopsWarning`).
 A result that is correct but deserves a second look -- a broken diagonal of S_gamma, no revisit
 at all, a sample smaller than asked or empty -- is issued with :func:`warnings.warn`, attributed
 to the line of your code that called :func:`find_loops` or :func:`sample`, and kept on the result
-as sentences (``Loops.warnings``, ``Samples.warnings``). Filter them by category::
+as sentences (``Loops.warnings``, ``Samples.warnings``). Input that a lenient reading option
+dropped is issued the same way. Filter them by category::
 
     import warnings
     warnings.simplefilter("error", il.LoopsWarning)          # every one raises
@@ -17,6 +18,7 @@ is issued as :class:`LoopsWarning` itself.
 
 __all__ = [
     "DiagonalBrokenWarning",
+    "DroppedInputWarning",
     "EmptyResultWarning",
     "EmptySampleWarning",
     "InternalError",
@@ -65,6 +67,13 @@ class DiagonalBrokenWarning(LoopsWarning):
     data gap, or gamma below the step length. The message names the first such pose and the
     largest step.
     """
+
+
+class DroppedInputWarning(LoopsWarning):
+    """A lenient reading option dropped part of a file: ``drop_duplicate_stamps=True`` (poses
+    repeating the stamp before) in :func:`read_trajectory`, ``drop_outside_span=True``
+    (detections outside the trajectory's time span) in :func:`read_detections`. The message names
+    the file, the count and the lines."""
 
 
 class EmptyResultWarning(LoopsWarning):

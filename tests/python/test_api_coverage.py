@@ -492,8 +492,9 @@ def issued(call: Callable[[], object]) -> tuple[object, list[warnings.WarningMes
     "EmptySampleWarning",
     "NoLoopsWarning",
     "SampleBudgetWarning",
+    "DroppedInputWarning",
 )
-def test_engine_warnings_are_python_warnings_to_filter(traj, loops, clusters):
+def test_engine_warnings_are_python_warnings_to_filter(tmp_path, traj, loops, clusters):
     """Each warning of the engine is issued once, in its category, at the caller's line, with
     the sentence the result keeps; an "error" filter makes it an exception, "ignore" silences
     it, and a result with nothing to say issues nothing."""
@@ -502,6 +503,7 @@ def test_engine_warnings_are_python_warnings_to_filter(traj, loops, clusters):
         il.NoLoopsWarning,
         il.EmptySampleWarning,
         il.SampleBudgetWarning,
+        il.DroppedInputWarning,
     ):
         assert issubclass(cls, il.LoopsWarning)
     assert issubclass(il.EmptySampleWarning, il.EmptyResultWarning)
@@ -563,6 +565,15 @@ def test_engine_warnings_are_python_warnings_to_filter(traj, loops, clusters):
         assert len(samples) == 0
         assert [w.category for w in caught] == [il.EmptySampleWarning], size
         assert str(caught[0].message).startswith(text)
+
+    # A lenient reading option says what it dropped.
+    path = tmp_path / "twice.tum"
+    path.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n1 2 0 0 0 0 0 1\n2 3 0 0 0 0 0 1\n")
+    read, caught = issued(lambda: il.read_trajectory(path, drop_duplicate_stamps=True))
+    assert len(read) == 3 and [w.category for w in caught] == [il.DroppedInputWarning]
+    assert str(caught[0].message).endswith(
+        "dropped 1 pose(s) whose timestamp repeats the one before (line 3)"
+    )
 
     # Nothing to say: nothing issued, even under "error".
     with warnings.catch_warnings():

@@ -68,7 +68,7 @@ def test_drop_duplicate_stamps_keeps_the_first_pose_of_each_stamp(tmp_path, seed
     np.testing.assert_array_equal(traj.timestamps, stamps[first])
     np.testing.assert_array_equal(traj.positions, xyz[first])
     if lines.size:
-        assert len(messages) == 1 and messages[0][0] is UserWarning
+        assert len(messages) == 1 and messages[0][0] is il.DroppedInputWarning
         assert messages[0][1].startswith(
             f"{path}: drop_duplicate_stamps=True dropped {lines.size} pose(s) whose timestamp "
             "repeats the one before (line"
@@ -89,7 +89,7 @@ def test_fr2_desk_reads_once_its_repeated_stamp_is_dropped(data_dir):
     assert len(traj) == 20956
     assert messages == [
         (
-            UserWarning,
+            il.DroppedInputWarning,
             f"{path}: drop_duplicate_stamps=True dropped 1 pose(s) whose timestamp repeats the one "
             "before (line 10863)",
         )
@@ -213,7 +213,7 @@ def test_read_detections_drops_outside_the_span_on_request(tmp_path):
     expected = il.Detections(pairs[inside, 0], pairs[inside, 1], scores=scores[inside]).locate(traj)
     for column in ("t", "t_prime", "i", "j", "score"):
         np.testing.assert_array_equal(getattr(det, column), getattr(expected, column))
-    assert len(messages) == 1 and messages[0][0] is UserWarning
+    assert len(messages) == 1 and messages[0][0] is il.DroppedInputWarning
     assert messages[0][1].startswith(
         f"{path}: drop_outside_span=True dropped {int((~inside).sum())} detection(s) outside the "
         f"trajectory's time span (lines {first_outside}, "

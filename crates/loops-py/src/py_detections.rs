@@ -17,7 +17,7 @@ use loops_core::SampleSize;
 ///
 /// Placing them on a trajectory (``trajectory_or_loops``) is strict: a detection outside its
 /// time span is an error naming the line. With ``drop_outside_span=True`` such detections are
-/// dropped, and a ``UserWarning`` says how many and on which lines (the TUC Corridor's input
+/// dropped, and a :class:`DroppedInputWarning` says how many and on which lines (the TUC Corridor's input
 /// has 39 of its 10,019 detections 0.4 s past the end of the ground truth).
 ///
 /// Args:

@@ -436,7 +436,7 @@ pub(crate) fn urban_drive(
 ///
 /// Reading is strict: a repeated timestamp is an error naming its line. With
 /// ``drop_duplicate_stamps=True`` the later poses of a repeated stamp are dropped (the first
-/// is kept), and a ``UserWarning`` per file says how many and on which lines.
+/// is kept), and a :class:`DroppedInputWarning` per file says how many and on which lines.
 ///
 /// Args:
 ///     path: the file (or a rosbag2 bag's folder or ``metadata.yaml``), or a list of files read
@@ -569,16 +569,15 @@ pub(crate) fn read_trajectory(
     Ok(Trajectory { inner: Arc::new(inner), plane_axes: axes })
 }
 
-/// A `UserWarning` saying what a lenient option dropped from a file (nothing when it dropped
-/// nothing): `desk.tum: drop_duplicate_stamps=True dropped 1 pose(s) whose ... (line 10863)`.
+/// A `DroppedInputWarning` saying what a lenient option dropped from a file (nothing when it
+/// dropped nothing): `desk.tum: drop_duplicate_stamps=True dropped 1 pose(s) whose ... (line 10863)`.
 pub(crate) fn warn_dropped(py: Python<'_>, dropped: &loops_io::Dropped, option: &str, what: &str) -> PyResult<()> {
     if dropped.is_empty() {
         return Ok(());
     }
     let lines = dropped.lines_text().map_or(String::new(), |lines| format!(" ({lines})"));
     let message = format!("{}: {option} {} {what}{lines}", dropped.path.display(), dropped.count);
-    let message = std::ffi::CString::new(message).unwrap_or_default();
-    PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyUserWarning>(), &message, 1)
+    crate::warning::warn_dropped_input(py, &message)
 }
 
 /// `read_trajectory`'s `path`: one path, or a non-empty list of them.

@@ -2,7 +2,7 @@
 //! its category (the classes of `inexact_loops/errors.py`), and the calls that issue them.
 //!
 //! A result that is correct but deserves a second look (a broken diagonal, no revisit, a sample
-//! smaller than asked or empty) keeps its warnings as sentences (`Loops.warnings`, `Samples.warnings`) and
+//! smaller than asked or empty, input a lenient reading option dropped) keeps its warnings as sentences (`Loops.warnings`, `Samples.warnings`) and
 //! issues each with `warnings.warn` in its category, so users can filter them
 //! (`warnings.simplefilter("error", il.LoopsWarning)` makes them exceptions). The functions that
 //! issue them are compiled, so the frame on top of the stack is the caller's: stack level 1
@@ -25,6 +25,7 @@ import_exception!(inexact_loops.errors, DiagonalBrokenWarning);
 import_exception!(inexact_loops.errors, NoLoopsWarning);
 import_exception!(inexact_loops.errors, EmptySampleWarning);
 import_exception!(inexact_loops.errors, SampleBudgetWarning);
+import_exception!(inexact_loops.errors, DroppedInputWarning);
 
 /// A warning about a result, from the core or (for an empty sample) from the bindings.
 enum EngineWarning<'a> {
@@ -34,6 +35,8 @@ enum EngineWarning<'a> {
     Sample(&'a SampleWarning),
     /// A sample with no rows that no warning of the sampler explains.
     NoSamples,
+    /// Input a lenient reading option dropped (loops-io's `Dropped`).
+    Dropped,
 }
 
 /// The category of each warning: the one table.
@@ -48,6 +51,7 @@ fn category<'py>(py: Python<'py>, warning: &EngineWarning<'_>) -> Bound<'py, PyT
         E::Sample(SampleWarning::BudgetAboveAvailable { .. } | SampleWarning::BudgetBelowGroups { .. }) => {
             SampleBudgetWarning::type_object(py)
         }
+        E::Dropped => DroppedInputWarning::type_object(py),
         _ => LoopsWarning::type_object(py),
     }
 }
@@ -87,4 +91,10 @@ pub(crate) fn warn_samples(py: Python<'_>, samples: &loops_core::Samples, skip_t
         issue(py, &EngineWarning::NoSamples, &message)?;
     }
     Ok(())
+}
+
+/// Issues `message`, saying what a lenient reading option (`drop_duplicate_stamps`,
+/// `drop_outside_span`) dropped from a file.
+pub(crate) fn warn_dropped_input(py: Python<'_>, message: &str) -> PyResult<()> {
+    issue(py, &EngineWarning::Dropped, message)
 }
