@@ -219,6 +219,11 @@ pub enum Error {
         /// What would fit.
         expected: &'static str,
     },
+    /// A metric that does not measure the points of the trajectory's manifold, e.g. the
+    /// Euclidean metric on SE(3) poses (it would take a quaternion's components for
+    /// coordinates). See [`Metric::fits`](crate::Metric::fits). Boxed, so that errors stay small.
+    #[error("{0}")]
+    MetricDoesNotFit(Box<MetricMisfit>),
     /// A name (of a side, a metric, ...) that is not one of the known ones.
     #[error("unknown {kind} {name:?}: expected one of {expected}")]
     UnknownName {
@@ -339,4 +344,32 @@ pub enum Error {
         /// Poses of the loops' trajectory.
         loops_poses: usize,
     },
+}
+
+/// What [`Error::MetricDoesNotFit`] says: a metric, and the trajectory it does not fit.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MetricMisfit {
+    /// The metric, by name.
+    pub metric: String,
+    /// The trajectory, by its manifold (`an se3 trajectory`).
+    pub trajectory: &'static str,
+    /// Coordinates per point.
+    pub dim: usize,
+    /// What the columns hold.
+    pub columns: String,
+    /// The metrics that fit.
+    pub fitting: &'static str,
+    /// The trajectory's default metric, by name.
+    pub default: String,
+}
+
+impl std::fmt::Display for MetricMisfit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Self { metric, trajectory, dim, columns, fitting, default } = self;
+        write!(
+            f,
+            "metric {metric} does not fit {trajectory} ({dim} columns: {columns}): measure it with {fitting}, \
+             or give no metric for its default, {default}"
+        )
+    }
 }

@@ -11,7 +11,8 @@
 //!   [`Loops::loop_duration`], [`Loops::loop_area`], [`Loops::loop_density`].
 //! - Any [`Metric`] satisfying the triangle inequality: [`Euclidean`] on Rⁿ, [`So3`], [`Se3`],
 //!   [`Se2`], [`Torus`], [`Sphere`], [`Haversine`] (GNSS) and [`Angular`] (descriptors); by name
-//!   with [`MetricSpec`]. Validated pose constructors: [`Trajectory::se3`] and friends.
+//!   with [`MetricSpec`]. Validated pose constructors: [`Trajectory::se3`] and friends, which
+//!   record their [`Manifold`] so that its metric measures them by default and no other does.
 //! - A seeded synthetic urban drive for demos and benchmarks: [`UrbanDrive`].
 //!
 //! - Figures' data on the (t, t′) plane: the pairwise distance π_ξ on a grid of poses for any
@@ -75,7 +76,7 @@ pub use cluster::{DEFAULT_EPSILON_S, DetectionCluster, DetectionClusters, check_
 pub use component::LoopComponent;
 pub use detection::{Detection, Detections};
 pub use draw::{SampleSize, SampleWarning};
-pub use error::{Error, Result};
+pub use error::{Error, MetricMisfit, Result};
 pub use loops::{LabelledRun, Loops, Warning, find_loops, find_loops_separated};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
@@ -93,7 +94,7 @@ pub use separation::Separation;
 pub use spec::MetricSpec;
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive};
-pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Timeline, Trajectory};
+pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 
 /// The most worker threads [`with_threads`] starts: far more than any machine has cores (the
 /// engine gains nothing past one thread per core), and few enough that a mistyped count is

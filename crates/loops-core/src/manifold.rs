@@ -11,7 +11,7 @@ use std::f64::consts::{PI, TAU};
 
 use crate::error::{Error, Result};
 use crate::metric::{Metric, dim_error};
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Manifold, Trajectory};
 
 /// Tolerance on the norm of unit quaternions and unit vectors handed to a metric directly
 /// (the [`Trajectory`] constructors normalise to ~1e-16).
@@ -140,6 +140,10 @@ impl Metric for So3 {
         format!("so3(rotation={})", self.rotation.name())
     }
 
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::So3 | Manifold::Euclidean)
+    }
+
     fn check_dim(&self, dim: usize) -> Result<()> {
         if dim == 4 { Ok(()) } else { Err(dim_error(self, "4 ([qx, qy, qz, qw])", dim)) }
     }
@@ -169,6 +173,10 @@ pub struct Se3 {
 impl Metric for Se3 {
     fn name(&self) -> String {
         format!("se3(rotation_weight_m_per_rad={}, rotation={})", self.rotation_weight_m_per_rad, self.rotation.name())
+    }
+
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Se3 | Manifold::Euclidean)
     }
 
     fn check_dim(&self, dim: usize) -> Result<()> {
@@ -209,6 +217,10 @@ impl Metric for Se3Rotation {
         format!("se3_rotation(rotation={})", self.rotation.name())
     }
 
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Se3 | Manifold::Euclidean)
+    }
+
     fn check_dim(&self, dim: usize) -> Result<()> {
         if dim == 7 { Ok(()) } else { Err(dim_error(self, "7 ([x, y, z, qx, qy, qz, qw])", dim)) }
     }
@@ -235,6 +247,10 @@ pub struct Se2 {
 impl Metric for Se2 {
     fn name(&self) -> String {
         format!("se2(rotation_weight_m_per_rad={})", self.rotation_weight_m_per_rad)
+    }
+
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Se2 | Manifold::Euclidean)
     }
 
     fn check_dim(&self, dim: usize) -> Result<()> {
@@ -268,6 +284,10 @@ impl Metric for Torus {
         "torus".to_owned()
     }
 
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Torus | Manifold::Euclidean)
+    }
+
     fn check_dim(&self, dim: usize) -> Result<()> {
         if dim >= 1 { Ok(()) } else { Err(dim_error(self, "at least 1 angle", dim)) }
     }
@@ -289,6 +309,10 @@ pub struct Sphere {
 impl Metric for Sphere {
     fn name(&self) -> String {
         format!("sphere(radius={})", self.radius)
+    }
+
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Sphere | Manifold::Descriptors | Manifold::Euclidean)
     }
 
     fn check_dim(&self, dim: usize) -> Result<()> {
@@ -349,6 +373,10 @@ impl Metric for Haversine {
         format!("haversine(radius_m={})", self.radius_m)
     }
 
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Gnss | Manifold::Euclidean)
+    }
+
     fn check_dim(&self, dim: usize) -> Result<()> {
         if dim == 4 { Ok(()) } else { Err(dim_error(self, "4 ([ux, uy, uz, height_m])", dim)) }
     }
@@ -381,6 +409,10 @@ pub struct Angular;
 impl Metric for Angular {
     fn name(&self) -> String {
         "angular".to_owned()
+    }
+
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Descriptors | Manifold::Sphere | Manifold::Euclidean)
     }
 
     fn check_dim(&self, dim: usize) -> Result<()> {

@@ -1,7 +1,7 @@
 //! Distances between points: the [`Metric`] trait and the Euclidean metric.
 
 use crate::error::{Error, Result};
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Manifold, Trajectory};
 
 /// A distance δ between points of a trajectory (rows of its coordinate buffer).
 ///
@@ -18,6 +18,17 @@ pub trait Metric: Sync {
     /// # Errors
     /// [`Error::DimensionMismatch`] when they cannot.
     fn check_dim(&self, dim: usize) -> Result<()>;
+
+    /// Whether it measures the points of trajectories on `manifold` (a trajectory records the
+    /// manifold its constructor built it on, [`Trajectory::manifold`]). The engine refuses a
+    /// metric that does not fit before measuring anything, naming both. Defaults to `true`, for
+    /// metrics defined outside this crate; the crate's own metrics fit their manifold and plain
+    /// [`Euclidean`](Manifold::Euclidean) coordinates of their layout, and the Euclidean metric
+    /// fits no manifold whose coordinates are not a vector space (quaternions, angles).
+    fn fits(&self, manifold: Manifold) -> bool {
+        let _ = manifold;
+        true
+    }
 
     /// Checks the whole trajectory: its dimension, and whatever else the metric needs (unit
     /// quaternions, latitudes within ±90°, non-negative weights). The engine calls it once.
@@ -79,6 +90,12 @@ impl Metric for Euclidean {
             return Err(dim_error(self, "at least 1", dim));
         }
         Ok(())
+    }
+
+    /// Rⁿ coordinates, and unit descriptors (their chordal distance). Not quaternions, angles
+    /// or the GNSS layout, whose columns are not a vector space.
+    fn fits(&self, manifold: Manifold) -> bool {
+        matches!(manifold, Manifold::Euclidean | Manifold::Descriptors)
     }
 
     #[inline]

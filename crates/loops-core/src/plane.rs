@@ -210,7 +210,7 @@ fn pose_edges(inside: &[f64], t0: f64, [a, b]: [f64; 2]) -> Vec<f64> {
 /// ```
 pub fn distance_image<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, grid: &PlaneGrid) -> Result<Vec<f64>> {
     grid.check_poses(traj.len())?;
-    metric.validate(traj)?;
+    traj.check_metric(metric)?;
     let mut image = vec![0.0; grid.width() * grid.height()];
     image.par_chunks_mut(grid.width()).zip(grid.rows.par_iter()).for_each(|(row, &j)| {
         let x_j = traj.point(j);

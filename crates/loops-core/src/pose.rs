@@ -1,5 +1,6 @@
 //! Validated constructors of trajectories on manifolds, laying points out as the metrics in
-//! [`manifold`](crate::So3) expect.
+//! [`manifold`](crate::So3) expect and recording the [`Manifold`], so that its metric measures
+//! them by default ([`Trajectory::default_metric`]) and a metric that does not fit is refused.
 //!
 //! The only rotation algebra here is one formula (a rotation vector to a unit quaternion, with
 //! its series near 0) and the normalisation of inputs, written out rather than taken from
@@ -9,7 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::manifold::wrap_angle;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Manifold, Trajectory};
 
 /// How far from unit length a quaternion handed to a constructor may be before it is an error
 /// rather than normalised.
@@ -85,7 +86,8 @@ fn latitude_checked(index: usize, latitude_deg: f64) -> Result<f64> {
 impl Trajectory {
     /// SE(3) poses for [`Se3`](crate::Se3) and [`Se3Rotation`](crate::Se3Rotation): positions
     /// and orientations as quaternions `[qx, qy, qz, qw]` (the ROS and scipy order), normalised.
-    /// Points are `[x, y, z, qx, qy, qz, qw]`.
+    /// Points are `[x, y, z, qx, qy, qz, qw]`, on [`Manifold::Se3`]: measured by default by
+    /// `se3(rotation_weight_m_per_rad=0)`, the translation; never by [`Euclidean`](crate::Euclidean).
     ///
     /// # Errors
     /// [`Error::NonUnitQuaternion`] for a quaternion farther than 1e-6 from unit length (a zero
@@ -127,7 +129,7 @@ impl Trajectory {
             coords.extend_from_slice(p);
             coords.extend_from_slice(&unit_quaternion(index, q, tolerance)?);
         }
-        Self::new(timestamps_s, coords, 7)
+        Ok(Self::new(timestamps_s, coords, 7)?.on(Manifold::Se3))
     }
 
     /// Rotations for [`So3`](crate::So3): quaternions `[qx, qy, qz, qw]`, normalised.
@@ -147,7 +149,7 @@ impl Trajectory {
         for (index, q) in quaternions_xyzw.iter().enumerate() {
             coords.extend_from_slice(&unit_quaternion(index, q, tolerance)?);
         }
-        Self::new(timestamps_s, coords, 4)
+        Ok(Self::new(timestamps_s, coords, 4)?.on(Manifold::So3))
     }
 
     /// Rotations for [`So3`](crate::So3) from rotation vectors (axis × angle, radians; the
@@ -164,7 +166,7 @@ impl Trajectory {
             let k = if angle < 1e-8 { 0.5 - angle * angle / 48.0 } else { (0.5 * angle).sin() / angle };
             coords.extend_from_slice(&[k * v[0], k * v[1], k * v[2], (0.5 * angle).cos()]);
         }
-        Self::new(timestamps_s, coords, 4)
+        Ok(Self::new(timestamps_s, coords, 4)?.on(Manifold::So3))
     }
 
     /// Planar poses for [`Se2`](crate::Se2): `[x, y, θ]`, θ in radians, wrapped to (−π, π].
@@ -177,7 +179,7 @@ impl Trajectory {
             finite_row(index, p)?;
             coords.extend_from_slice(&[p[0], p[1], wrap_angle(p[2])]);
         }
-        Self::new(timestamps_s, coords, 3)
+        Ok(Self::new(timestamps_s, coords, 3)?.on(Manifold::Se2))
     }
 
     /// Points on the torus (S¹)^dim for [`Torus`](crate::Torus): `dim` angles per pose,
@@ -190,7 +192,7 @@ impl Trajectory {
             let dim = dim.max(1);
             return Err(Error::NonFiniteCoordinate { index: k / dim, axis: k % dim, value: angles_rad[k] });
         }
-        Self::new(timestamps_s, angles_rad.iter().map(|&a| wrap_angle(a)).collect(), dim)
+        Ok(Self::new(timestamps_s, angles_rad.iter().map(|&a| wrap_angle(a)).collect(), dim)?.on(Manifold::Torus))
     }
 
     /// Points on the sphere S² for [`Sphere`](crate::Sphere): any non-zero vectors, normalised.
@@ -202,7 +204,7 @@ impl Trajectory {
         for (index, v) in vectors.iter().enumerate() {
             coords.extend(normalised(index, v)?);
         }
-        Self::new(timestamps_s, coords, 3)
+        Ok(Self::new(timestamps_s, coords, 3)?.on(Manifold::Sphere))
     }
 
     /// Points on the sphere S² for [`Sphere`](crate::Sphere) from latitude and longitude,
@@ -217,7 +219,7 @@ impl Trajectory {
             let (lat, lon) = (latitude_checked(index, p[0])?.to_radians(), p[1].to_radians());
             coords.extend_from_slice(&[lat.cos() * lon.cos(), lat.cos() * lon.sin(), lat.sin()]);
         }
-        Self::new(timestamps_s, coords, 3)
+        Ok(Self::new(timestamps_s, coords, 3)?.on(Manifold::Sphere))
     }
 
     /// GNSS fixes for [`Haversine`](crate::Haversine): latitude and longitude in degrees, height
@@ -233,7 +235,7 @@ impl Trajectory {
             let (lat, lon) = (latitude_checked(index, p[0])?.to_radians(), p[1].to_radians());
             coords.extend_from_slice(&[lat.cos() * lon.cos(), lat.cos() * lon.sin(), lat.sin(), p[2]]);
         }
-        Self::new(timestamps_s, coords, 4)
+        Ok(Self::new(timestamps_s, coords, 4)?.on(Manifold::Gnss))
     }
 
     /// GNSS fixes as Earth-centred, Earth-fixed positions (WGS 84) relative to the first fix,
@@ -273,7 +275,7 @@ impl Trajectory {
         for (index, row) in values.chunks_exact(dim).enumerate() {
             coords.extend(normalised(index, row)?);
         }
-        Self::new(timestamps_s, coords, dim)
+        Ok(Self::new(timestamps_s, coords, dim)?.on(Manifold::Descriptors))
     }
 }
 

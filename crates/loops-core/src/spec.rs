@@ -1,10 +1,10 @@
 //! Metrics by name: [`MetricSpec`], the registry of the metrics of [`metric`](crate::Metric)
 //! and the manifolds, parsed from and printed as text (for Python and the command line).
 
-use crate::error::{Error, Result};
+use crate::error::{Error, MetricMisfit, Result};
 use crate::manifold::RotationDistance;
 use crate::metric::Metric;
-use crate::trajectory::Trajectory;
+use crate::trajectory::{Manifold, Trajectory};
 
 /// A metric chosen by name at run time (from Python or the command line), dispatched once to
 /// the statically typed engine, so the hot loops stay monomorphic.
@@ -123,13 +123,87 @@ impl MetricSpec {
         with_metric!(self, m => m.distance(a, b))
     }
 
-    /// Validates `traj` for this metric (see [`Metric::validate`]).
+    /// Checks that this metric fits `traj`'s manifold and validates the points for it (see
+    /// [`Trajectory::check_metric`]).
     ///
     /// # Errors
-    /// As the metric's `validate`.
+    /// As [`Trajectory::check_metric`].
     pub fn validate(&self, traj: &Trajectory) -> Result<()> {
-        with_metric!(self, m => m.validate(traj))
+        with_metric!(self, m => traj.check_metric(m))
     }
+}
+
+impl Manifold {
+    /// The metric that measures its points when none is chosen (see the table of
+    /// [`Manifold`]): the one every entry point uses without a metric — Python's
+    /// `find_loops(traj, gamma=...)`, `sample`, `distance_image`.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Manifold, MetricSpec};
+    /// assert_eq!(Manifold::Euclidean.default_metric(), MetricSpec::Euclidean);
+    /// assert_eq!(Manifold::So3.default_metric().to_string(), "so3(rotation=geodesic)");
+    /// assert_eq!(Manifold::Gnss.default_metric().to_string(), "haversine(radius_m=6371008.8)");
+    /// ```
+    pub fn default_metric(self) -> MetricSpec {
+        use crate::manifold::{EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, So3, Sphere};
+        match self {
+            Self::Euclidean => MetricSpec::Euclidean,
+            Self::Se3 => MetricSpec::Se3(Se3 { rotation_weight_m_per_rad: 0.0, rotation: RotationDistance::Geodesic }),
+            Self::So3 => MetricSpec::So3(So3 { rotation: RotationDistance::Geodesic }),
+            Self::Se2 => MetricSpec::Se2(Se2 { rotation_weight_m_per_rad: 0.0 }),
+            Self::Torus => MetricSpec::Torus,
+            Self::Sphere => MetricSpec::Sphere(Sphere { radius: 1.0 }),
+            Self::Gnss => MetricSpec::Haversine(Haversine { radius_m: EARTH_RADIUS_M }),
+            Self::Descriptors => MetricSpec::Angular,
+        }
+    }
+}
+
+impl Trajectory {
+    /// The metric that measures the points when none is chosen: its
+    /// [`manifold`](Trajectory::manifold)'s [`default_metric`](Manifold::default_metric).
+    pub fn default_metric(&self) -> MetricSpec {
+        self.manifold().default_metric()
+    }
+
+    /// Checks that `metric` measures these points — it fits the trajectory's manifold
+    /// ([`Metric::fits`]) — and validates them for it ([`Metric::validate`]): what the engine
+    /// checks before it measures anything.
+    ///
+    /// # Errors
+    /// [`Error::MetricDoesNotFit`], naming the metric, the manifold, its columns and the
+    /// metrics that fit; then the metric's own errors (dimension, unit quaternions, ...).
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Euclidean, Se3, RotationDistance, Trajectory};
+    /// let poses = Trajectory::se3(vec![0.0, 1.0], &[[0.0; 3], [1.0, 0.0, 0.0]], &[[0.0, 0.0, 0.0, 1.0]; 2])?;
+    /// let error = poses.check_metric(&Euclidean).unwrap_err().to_string();
+    /// assert!(error.starts_with("metric euclidean does not fit an se3 trajectory (7 columns: x y z qx qy qz qw)"));
+    /// assert!(poses.check_metric(&Se3 { rotation_weight_m_per_rad: 2.0, rotation: RotationDistance::Geodesic }).is_ok());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn check_metric<M: Metric + ?Sized>(&self, metric: &M) -> Result<()> {
+        check_fits(metric, self)?;
+        metric.validate(self)
+    }
+}
+
+/// [`Error::MetricDoesNotFit`] unless `metric` fits `traj`'s manifold (no pass over the points).
+pub(crate) fn check_fits<M: Metric + ?Sized>(metric: &M, traj: &Trajectory) -> Result<()> {
+    let manifold = traj.manifold();
+    if metric.fits(manifold) {
+        return Ok(());
+    }
+    Err(Error::MetricDoesNotFit(Box::new(MetricMisfit {
+        metric: metric.name(),
+        trajectory: manifold.a_trajectory(),
+        dim: traj.dim(),
+        columns: manifold.columns(traj.dim()),
+        fitting: manifold.metrics(),
+        default: manifold.default_metric().name(),
+    })))
 }
 
 impl std::fmt::Display for MetricSpec {

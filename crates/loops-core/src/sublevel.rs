@@ -117,7 +117,7 @@ impl SublevelSet {
     ) -> Result<Self> {
         check_gamma(gamma)?;
         separation.check()?;
-        metric.validate(traj)?;
+        traj.check_metric(metric)?;
         let n = traj.len();
         let (mut arc, balls) = rayon::join(
             || ArcLength::new(traj, metric, !separation.is_none()),
@@ -195,7 +195,7 @@ impl SublevelSet {
     ) -> Result<Self> {
         check_gamma(gamma)?;
         separation.check()?;
-        metric.validate(traj)?;
+        traj.check_metric(metric)?;
         let n = traj.len();
         let (s, t) = (path_length(traj, metric), traj.timestamps_s());
         let separated = |i: usize, j: usize| {

@@ -5,8 +5,11 @@ use crate::error::{Error, Result};
 /// A sampled trajectory ξ: timestamps in seconds, strictly increasing, and one point of a fixed
 /// dimension per timestamp, stored row-major in one flat buffer.
 ///
-/// The points are coordinates in whatever chart the [`Metric`](crate::Metric) expects (Rⁿ
-/// positions for [`Euclidean`](crate::Euclidean)). Sample `i` stands for its *time cell*
+/// The points are coordinates on the trajectory's [`Manifold`]: Rⁿ positions for
+/// [`Trajectory::new`], the layout of a manifold's metric for its constructors
+/// ([`Trajectory::se3`] and friends), which record the manifold so that the engine measures the
+/// points with a metric that fits them ([`Trajectory::default_metric`] when none is chosen).
+/// Sample `i` stands for its *time cell*
 /// `[m_{i-1}, m_i]` with `m_i = (t_i + t_{i+1}) / 2` (clipped to `[t_0, t_{n-1}]` at the ends),
 /// of width `w_i = (t_{i+1} − t_{i−1}) / 2` (half cells at the ends). The cells tile the time
 /// span exactly, so durations and areas computed from them are in seconds and s², and stay right
@@ -26,6 +29,120 @@ pub struct Trajectory {
     coords: Vec<f64>,
     dim: usize,
     cell_widths_s: Vec<f64>,
+    manifold: Manifold,
+}
+
+/// What a trajectory's points are: the manifold its constructor built them on, and so which
+/// metrics can measure them and which one does when none is chosen
+/// ([`Manifold::default_metric`]).
+///
+/// | manifold | constructor | columns | default metric |
+/// |---|---|---|---|
+/// | `Euclidean` | [`Trajectory::new`], [`gnss_ecef`](Trajectory::gnss_ecef), [`descriptors`](Trajectory::descriptors) unnormalised | Rⁿ, as given | `euclidean` |
+/// | `Se3` | [`se3`](Trajectory::se3) | `x y z qx qy qz qw` | `se3(rotation_weight_m_per_rad=0)`: the translation, metres |
+/// | `So3` | [`so3`](Trajectory::so3), [`so3_from_rotation_vectors`](Trajectory::so3_from_rotation_vectors) | `qx qy qz qw` | `so3` (geodesic angle) |
+/// | `Se2` | [`se2`](Trajectory::se2) | `x y theta` | `se2(rotation_weight_m_per_rad=0)`: the translation, metres |
+/// | `Torus` | [`torus`](Trajectory::torus) | k angles | `torus` |
+/// | `Sphere` | [`sphere`](Trajectory::sphere), [`sphere_from_lat_lon`](Trajectory::sphere_from_lat_lon) | unit `x y z` | `sphere(radius=1)` |
+/// | `Gnss` | [`gnss`](Trajectory::gnss) | `ux uy uz height_m` | `haversine` (metres) |
+/// | `Descriptors` | [`descriptors`](Trajectory::descriptors) normalised | unit vectors | `angular` |
+///
+/// SE(3) and SE(2) count no rotation by default: the weight of a radian in metres has no
+/// universal value (it is the user's choice, as in `se3(rotation_weight_m_per_rad=10)`), and
+/// loop-closure candidates of deployed SLAM systems are chosen by position. A Euclidean
+/// trajectory's coordinates may also be measured by any metric whose layout they have (checked
+/// as that metric requires); a manifold's points only by the metrics of that manifold
+/// ([`Metric::fits`](crate::Metric::fits)), so no quaternion is ever measured as a vector.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Manifold {
+    /// Rⁿ: coordinates as given (positions, raw descriptors, ECEF).
+    #[default]
+    Euclidean,
+    /// SE(3) poses `[x, y, z, qx, qy, qz, qw]`, unit quaternions.
+    Se3,
+    /// SO(3) rotations `[qx, qy, qz, qw]`, unit quaternions.
+    So3,
+    /// SE(2) poses `[x, y, θ]`, θ in radians wrapped to (−π, π].
+    Se2,
+    /// The torus (S¹)ᵏ: k angles, radians, wrapped to (−π, π].
+    Torus,
+    /// The sphere S²: unit vectors `[x, y, z]`.
+    Sphere,
+    /// GNSS fixes `[ux, uy, uz, height_m]`: the fix's direction from the Earth's centre and its
+    /// height, metres.
+    Gnss,
+    /// Descriptors normalised to unit length (place recognition).
+    Descriptors,
+}
+
+impl Manifold {
+    /// Every manifold, in the order of the table above.
+    pub const ALL: [Self; 8] =
+        [Self::Euclidean, Self::Se3, Self::So3, Self::Se2, Self::Torus, Self::Sphere, Self::Gnss, Self::Descriptors];
+
+    /// Its name, lower case: `euclidean`, `se3`, `so3`, `se2`, `torus`, `sphere`, `gnss`,
+    /// `descriptors`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Euclidean => "euclidean",
+            Self::Se3 => "se3",
+            Self::So3 => "so3",
+            Self::Se2 => "se2",
+            Self::Torus => "torus",
+            Self::Sphere => "sphere",
+            Self::Gnss => "gnss",
+            Self::Descriptors => "descriptors",
+        }
+    }
+
+    /// What the columns of its points of dimension `dim` hold, e.g. `"x y z qx qy qz qw"`.
+    pub fn columns(self, dim: usize) -> String {
+        match self {
+            Self::Euclidean => format!("{dim} coordinate{}", if dim == 1 { "" } else { "s" }),
+            Self::Se3 => "x y z qx qy qz qw".to_owned(),
+            Self::So3 => "qx qy qz qw".to_owned(),
+            Self::Se2 => "x y theta".to_owned(),
+            Self::Torus => format!("{dim} angle{}", if dim == 1 { "" } else { "s" }),
+            Self::Sphere => "unit vector x y z".to_owned(),
+            Self::Gnss => "ux uy uz height_m".to_owned(),
+            Self::Descriptors => format!("unit vector of {dim}"),
+        }
+    }
+
+    /// "a(n) … trajectory", for messages.
+    pub(crate) fn a_trajectory(self) -> &'static str {
+        match self {
+            Self::Euclidean => "a euclidean trajectory",
+            Self::Se3 => "an se3 trajectory",
+            Self::So3 => "an so3 trajectory",
+            Self::Se2 => "an se2 trajectory",
+            Self::Torus => "a torus trajectory",
+            Self::Sphere => "a sphere trajectory",
+            Self::Gnss => "a gnss trajectory",
+            Self::Descriptors => "a descriptors trajectory",
+        }
+    }
+
+    /// The metrics that measure its points, as text (for messages).
+    pub fn metrics(self) -> &'static str {
+        match self {
+            Self::Euclidean => "euclidean, or any metric whose layout the coordinates have",
+            Self::Se3 => "se3(rotation_weight_m_per_rad=W) or se3_rotation",
+            Self::So3 => "so3",
+            Self::Se2 => "se2(rotation_weight_m_per_rad=W)",
+            Self::Torus => "torus",
+            Self::Sphere => "sphere(radius=R) or angular",
+            Self::Gnss => "haversine(radius_m=R)",
+            Self::Descriptors => "angular or euclidean",
+        }
+    }
+}
+
+impl std::fmt::Display for Manifold {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 pub(crate) mod sealed {
@@ -97,7 +214,14 @@ impl Trajectory {
             return Err(Error::CoordinateTooLarge { index, axis, value, max: MAX_MAGNITUDE });
         }
         let cell_widths_s = cell_widths(&timestamps_s);
-        Ok(Self { timestamps_s, coords, dim, cell_widths_s })
+        Ok(Self { timestamps_s, coords, dim, cell_widths_s, manifold: Manifold::Euclidean })
+    }
+
+    /// The same points, declared to lie on `manifold`: for the constructors of
+    /// [`pose`](crate::Trajectory::se3), which lay the points out as the manifold's metrics expect.
+    pub(crate) fn on(mut self, manifold: Manifold) -> Self {
+        self.manifold = manifold;
+        self
     }
 
     /// A trajectory from timestamps and fixed-size points (`[x, y]`, `[x, y, z]`, ...).
@@ -117,6 +241,21 @@ impl Trajectory {
     /// Coordinates per point.
     pub fn dim(&self) -> usize {
         self.dim
+    }
+
+    /// The manifold of the points: [`Manifold::Euclidean`] for [`Trajectory::new`], the
+    /// constructor's for [`Trajectory::se3`] and friends.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Manifold, Trajectory};
+    /// let poses = Trajectory::se3(vec![0.0, 1.0], &[[0.0; 3]; 2], &[[0.0, 0.0, 0.0, 1.0]; 2])?;
+    /// assert_eq!(poses.manifold(), Manifold::Se3);
+    /// assert_eq!(poses.default_metric().to_string(), "se3(rotation_weight_m_per_rad=0, rotation=geodesic)");
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn manifold(&self) -> Manifold {
+        self.manifold
     }
 
     /// Timestamps, seconds, strictly increasing.
@@ -186,7 +325,7 @@ impl Trajectory {
             .collect()
     }
 
-    /// A copy whose points are `f(point)`: same timestamps, new dimension.
+    /// A copy whose points are `f(point)`: same timestamps, new dimension, Euclidean.
     ///
     /// # Errors
     /// As [`Trajectory::new`], for the new points (e.g. a NaN produced by `f`).

@@ -1,6 +1,7 @@
 //! Metrics on manifolds (issue 3): the metric axioms on random and adversarial points, values
 //! against formulas written here from textbooks (rotation matrices, haversine, ellipsoid radii),
-//! the engine against the brute force under every metric, bad input, and the paper's Fig. 4.
+//! the engine against the brute force under every metric, bad input, the paper's Fig. 4, and
+//! the manifold every constructor records (its default metric, and the metrics refused).
 //!
 //! Points are always built through the `Trajectory` constructors, as a user builds them.
 
@@ -9,8 +10,9 @@ mod support;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI, SQRT_2, TAU};
 
 use loops_core::{
-    Angular, EARTH_RADIUS_M, Error, Euclidean, Haversine, Loops, Metric, MetricSpec, RotationDistance, Se2, Se3,
-    Se3Rotation, Separation, So3, Sphere, SublevelSet, Torus, Trajectory, find_loops,
+    Angular, EARTH_RADIUS_M, Error, Euclidean, Haversine, Loops, Manifold, Metric, MetricSpec, PlaneGrid,
+    RotationDistance, SampleSize, Sampler, SamplerKind, Se2, Se3, Se3Rotation, Separation, So3, Sphere, SublevelSet,
+    Torus, Trajectory, distance_image, find_loops, sample_loops,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};
@@ -1659,4 +1661,357 @@ fn huge_and_tiny_vectors_are_normalised() {
         let descriptors = Trajectory::descriptors(times(2), &[[0.0, 0.0, 1.0], v].concat(), 3, true);
         assert!(descriptors.is_ok(), "{v:?}: {descriptors:?}");
     }
+}
+
+// =============================================================================================
+// 6. A trajectory knows its manifold (issue 14): every constructor's points are measured by its
+//    manifold's metric when none is chosen, and by no metric that does not fit them
+// =============================================================================================
+
+/// A small xorshift generator: the same points on every machine.
+struct Noise(u64);
+
+impl Noise {
+    /// Uniform in [−1, 1].
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// The angle between two non-zero vectors of any dimension, from their unit vectors:
+/// atan2(‖a′ − b′‖, ‖a′ + b′‖) · 2.
+fn angle_between(a: &[f64], b: &[f64]) -> f64 {
+    let (a, b) = (unit(a).unwrap(), unit(b).unwrap());
+    let minus: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x - y).collect();
+    let plus: Vec<f64> = a.iter().zip(&b).map(|(x, y)| x + y).collect();
+    2.0 * norm(&minus).atan2(norm(&plus))
+}
+
+/// ‖a − b‖.
+fn l2(a: &[f64], b: &[f64]) -> f64 {
+    norm(&a.iter().zip(b).map(|(x, y)| x - y).collect::<Vec<_>>())
+}
+
+/// One constructor: the trajectory it builds from raw input, the distance its manifold's
+/// metric gives between two raw inputs (written here from the definitions), and the name of
+/// the metric it must be measured by when none is chosen.
+struct Constructed {
+    name: &'static str,
+    traj: Trajectory,
+    raw: Vec<Vec<f64>>,
+    reference: fn(&[f64], &[f64]) -> f64,
+    manifold: Manifold,
+    default_metric: &'static str,
+}
+
+/// Every constructor on a path that goes round twice (so it comes back to itself), with noise;
+/// quaternions with random signs, angles unwrapped far beyond ±π, longitudes beyond ±180°.
+fn every_constructor(n: usize, seed: u64) -> Vec<Constructed> {
+    let mut noise = Noise(seed);
+    let u: Vec<f64> = (0..n).map(|i| 2.0 * TAU * i as f64 / n as f64 + 0.05 * noise.next()).collect();
+    let t = times(n);
+    let mut raw = |f: &mut dyn FnMut(f64, &mut Noise) -> Vec<f64>| -> Vec<Vec<f64>> {
+        u.iter().map(|&u| f(u, &mut noise)).collect()
+    };
+    let rows3 =
+        |raw: &[Vec<f64>], k: usize| -> Vec<[f64; 3]> { raw.iter().map(|p| [p[k], p[k + 1], p[k + 2]]).collect() };
+    let rows4 = |raw: &[Vec<f64>], k: usize| -> Vec<[f64; 4]> {
+        raw.iter().map(|p| [p[k], p[k + 1], p[k + 2], p[k + 3]]).collect()
+    };
+    let flat = |raw: &[Vec<f64>]| -> Vec<f64> { raw.iter().flatten().copied().collect() };
+    let rotation = |u: f64, noise: &mut Noise| -> Vec<f64> {
+        let q = quat_exp([0.6 * u.cos() + 0.1 * noise.next(), 0.6 * u.sin(), 1.3 * (2.0 * u).sin()]);
+        let sign = if noise.next() > 0.0 { 1.0 } else { -1.0 };
+        q.iter().map(|v| sign * v).collect()
+    };
+    let mut all = Vec::new();
+
+    let points = raw(&mut |u, noise| vec![10.0 * u.cos(), 10.0 * u.sin(), noise.next()]);
+    let traj = Trajectory::new(t.clone(), flat(&points), 3).unwrap();
+    all.push(Constructed {
+        name: "new",
+        traj,
+        raw: points,
+        reference: l2,
+        manifold: Manifold::Euclidean,
+        default_metric: "euclidean",
+    });
+
+    // SE(3): by default the translation only, whatever the rotations.
+    let poses = raw(&mut |u, noise| {
+        let mut p = vec![10.0 * u.cos(), 10.0 * u.sin(), 0.3 * noise.next()];
+        p.extend(rotation(u + 2.0 * noise.next(), noise));
+        p
+    });
+    let traj = Trajectory::se3(t.clone(), &rows3(&poses, 0), &rows4(&poses, 3)).unwrap();
+    all.push(Constructed {
+        name: "se3",
+        traj,
+        raw: poses,
+        reference: |a, b| l2(&a[..3], &b[..3]),
+        manifold: Manifold::Se3,
+        default_metric: "se3(rotation_weight_m_per_rad=0, rotation=geodesic)",
+    });
+
+    // SO(3): the geodesic angle, here from rotation matrices.
+    let geodesic = |a: &[f64], b: &[f64]| {
+        let (ra, rb) = (rotation_matrix([a[0], a[1], a[2], a[3]]), rotation_matrix([b[0], b[1], b[2], b[3]]));
+        // sin θ from the skew part of Raᵀ Rb, cos θ from its trace: atan2 is stable at 0 and π.
+        let m: Vec<[f64; 3]> =
+            (0..3).map(|r| [0, 1, 2].map(|c| (0..3).map(|k| ra[k][r] * rb[k][c]).sum::<f64>())).collect();
+        let sin = 0.5 * norm(&[m[2][1] - m[1][2], m[0][2] - m[2][0], m[1][0] - m[0][1]]);
+        sin.atan2(0.5 * (m[0][0] + m[1][1] + m[2][2] - 1.0))
+    };
+    let quaternions = raw(&mut |u, noise| rotation(u, noise));
+    let traj = Trajectory::so3(t.clone(), &rows4(&quaternions, 0)).unwrap();
+    all.push(Constructed {
+        name: "so3",
+        traj,
+        raw: quaternions,
+        reference: geodesic,
+        manifold: Manifold::So3,
+        default_metric: "so3(rotation=geodesic)",
+    });
+    let vectors = raw(&mut |u, noise| vec![0.6 * u.cos() + 0.1 * noise.next(), 0.6 * u.sin(), 1.3 * (2.0 * u).sin()]);
+    let traj = Trajectory::so3_from_rotation_vectors(t.clone(), &rows3(&vectors, 0)).unwrap();
+    let as_quaternions: Vec<Vec<f64>> = vectors.iter().map(|v| quat_exp([v[0], v[1], v[2]]).to_vec()).collect();
+    all.push(Constructed {
+        name: "so3_from_rotation_vectors",
+        traj,
+        raw: as_quaternions,
+        reference: geodesic,
+        manifold: Manifold::So3,
+        default_metric: "so3(rotation=geodesic)",
+    });
+
+    // SE(2): by default the translation only.
+    let poses = raw(&mut |u, noise| vec![10.0 * u.cos(), 10.0 * u.sin(), 5.0 * u + 3.0 * noise.next()]);
+    let traj = Trajectory::se2(t.clone(), &rows3(&poses, 0)).unwrap();
+    all.push(Constructed {
+        name: "se2",
+        traj,
+        raw: poses,
+        reference: |a, b| l2(&a[..2], &b[..2]),
+        manifold: Manifold::Se2,
+        default_metric: "se2(rotation_weight_m_per_rad=0)",
+    });
+
+    let angles = raw(&mut |u, noise| vec![u, 3.0 * u + 0.1 * noise.next(), -7.0 + 0.2 * noise.next()]);
+    let traj = Trajectory::torus(t.clone(), &flat(&angles), 3).unwrap();
+    all.push(Constructed {
+        name: "torus",
+        traj,
+        raw: angles,
+        reference: torus_brute_force,
+        manifold: Manifold::Torus,
+        default_metric: "torus",
+    });
+
+    let vectors = raw(&mut |u, noise| vec![5.0 * u.cos(), 5.0 * u.sin(), 2.0 + noise.next()]);
+    let traj = Trajectory::sphere(t.clone(), &rows3(&vectors, 0)).unwrap();
+    all.push(Constructed {
+        name: "sphere",
+        traj,
+        raw: vectors,
+        reference: angle_between,
+        manifold: Manifold::Sphere,
+        default_metric: "sphere(radius=1)",
+    });
+    let lat_lon = raw(&mut |u, noise| vec![30.0 + 10.0 * u.sin(), 175.0 + 10.0 * u.cos() + 0.3 * noise.next()]);
+    let rows2: Vec<[f64; 2]> = lat_lon.iter().map(|p| [p[0], p[1]]).collect();
+    let traj = Trajectory::sphere_from_lat_lon(t.clone(), &rows2).unwrap();
+    all.push(Constructed {
+        name: "sphere_from_lat_lon",
+        traj,
+        raw: lat_lon,
+        reference: |a, b| haversine_textbook_m(a[0], a[1], b[0], b[1]) / EARTH_RADIUS_M,
+        manifold: Manifold::Sphere,
+        default_metric: "sphere(radius=1)",
+    });
+
+    // GNSS: haversine (metres) combined with the height difference.
+    let fixes = raw(&mut |u, noise| vec![48.1 + 1e-3 * u.sin(), 179.999 + 1e-3 * u.cos(), 5.0 * noise.next()]);
+    let traj = Trajectory::gnss(t.clone(), &rows3(&fixes, 0)).unwrap();
+    all.push(Constructed {
+        name: "gnss",
+        traj,
+        raw: fixes.clone(),
+        reference: |a, b| haversine_textbook_m(a[0], a[1], b[0], b[1]).hypot(a[2] - b[2]),
+        manifold: Manifold::Gnss,
+        default_metric: "haversine(radius_m=6371008.8)",
+    });
+    // ECEF positions are Rⁿ: measured by the Euclidean metric on what the constructor stored.
+    let traj = Trajectory::gnss_ecef(t.clone(), &rows3(&fixes, 0)).unwrap();
+    let stored: Vec<Vec<f64>> = (0..n).map(|i| traj.point(i).to_vec()).collect();
+    all.push(Constructed {
+        name: "gnss_ecef",
+        traj,
+        raw: stored,
+        reference: l2,
+        manifold: Manifold::Euclidean,
+        default_metric: "euclidean",
+    });
+
+    let descriptors = raw(&mut |u, noise| {
+        (0..8).map(|k| (u + f64::from(k)).sin() * (2.0 + f64::from(k)) + 0.1 * noise.next()).collect()
+    });
+    let traj = Trajectory::descriptors(t.clone(), &flat(&descriptors), 8, true).unwrap();
+    all.push(Constructed {
+        name: "descriptors",
+        traj,
+        raw: descriptors.clone(),
+        reference: angle_between,
+        manifold: Manifold::Descriptors,
+        default_metric: "angular",
+    });
+    let traj = Trajectory::descriptors(t, &flat(&descriptors), 8, false).unwrap();
+    all.push(Constructed {
+        name: "descriptors(normalize=false)",
+        traj,
+        raw: descriptors,
+        reference: l2,
+        manifold: Manifold::Euclidean,
+        default_metric: "euclidean",
+    });
+    all
+}
+
+/// S_γ as a dense upper-triangular mask, from the runs.
+fn mask_of(set: &SublevelSet, n: usize) -> Vec<Vec<bool>> {
+    let mut mask = vec![vec![false; n]; n];
+    for (i, row) in mask.iter_mut().enumerate() {
+        for run in set.row(i) {
+            for cell in &mut row[run.start as usize..=run.end as usize] {
+                *cell = true;
+            }
+        }
+    }
+    mask
+}
+
+/// A γ half way between two consecutive reference distances near the given quantile, far
+/// (relative to the distances) from every one of them: the mask cannot depend on rounding.
+fn gamma_between(distances: &mut [f64], quantile: f64) -> f64 {
+    distances.sort_by(f64::total_cmp);
+    let scale = distances[distances.len() - 1];
+    let start = (quantile * distances.len() as f64) as usize;
+    let k = (start..distances.len() - 1)
+        .find(|&k| distances[k + 1] - distances[k] > 1e-9 * scale)
+        .expect("distinct distances");
+    0.5 * (distances[k] + distances[k + 1])
+}
+
+#[test]
+fn every_constructor_is_measured_by_its_manifolds_metric_by_default() {
+    let n = 160;
+    for seed in [0x5EED_0001_u64, 0x5EED_0002] {
+        for c in every_constructor(n, seed) {
+            assert_eq!(c.traj.manifold(), c.manifold, "{}", c.name);
+            let spec = c.traj.default_metric();
+            assert_eq!(spec.to_string(), c.default_metric, "{}", c.name);
+            // δ of every pair (i, j ≥ i), by the definition.
+            let reference: Vec<Vec<f64>> = (0..n)
+                .map(|i| (0..n).map(|j| if j < i { 0.0 } else { (c.reference)(&c.raw[i], &c.raw[j]) }).collect())
+                .collect();
+            let mut upper: Vec<f64> = (0..n).flat_map(|i| reference[i][i..].to_vec()).collect();
+            for quantile in [0.05, 0.3] {
+                let gamma = gamma_between(&mut upper, quantile);
+                let loops = spec.find_loops(&c.traj, gamma).unwrap();
+                assert_eq!(loops.metric_name(), c.default_metric, "{}", c.name);
+                let mask = mask_of(loops.sublevel_set(), n);
+                for i in 0..n {
+                    for j in i..n {
+                        assert_eq!(
+                            mask[i][j],
+                            reference[i][j] <= gamma,
+                            "{} (seed {seed:#x}, gamma {gamma}): pair ({i}, {j}) at {} by the definition",
+                            c.name,
+                            reference[i][j]
+                        );
+                    }
+                }
+                // Revisits (the second lap), not only the diagonal: the test sees loops.
+                let revisits = (0..n).flat_map(|i| (i + n / 3..n).map(move |j| (i, j))).filter(|&(i, j)| mask[i][j]);
+                assert!(revisits.count() > 0, "{}: no revisit at gamma {gamma}", c.name);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_metric_that_does_not_fit_the_points_is_refused_naming_both() {
+    let n = 40;
+    let euclidean = MetricSpec::Euclidean;
+    for c in every_constructor(n, 7) {
+        let fits = matches!(c.manifold, Manifold::Euclidean | Manifold::Descriptors);
+        let found = euclidean.find_loops(&c.traj, 1.0);
+        assert_eq!(found.is_ok(), fits, "euclidean on {}: {found:?}", c.name);
+        if fits {
+            continue;
+        }
+        let message = found.unwrap_err().to_string();
+        let name = c.manifold.name();
+        assert!(message.starts_with("metric euclidean does not fit a"), "{message}");
+        assert!(message.contains(&format!("{name} trajectory ({} columns: ", c.traj.dim())), "{message}");
+        assert!(message.contains(c.default_metric), "{message}");
+        // Every entry point that measures refuses it, before measuring anything.
+        let refused = |result: loops_core::Result<()>| match result {
+            Err(Error::MetricDoesNotFit(misfit)) => assert_eq!(misfit.metric, "euclidean"),
+            other => panic!("{}: expected MetricDoesNotFit, got {other:?}", c.name),
+        };
+        refused(find_loops(&c.traj, &Euclidean, 1.0).map(drop));
+        refused(SublevelSet::brute_force(&c.traj, &Euclidean, 1.0).map(drop));
+        refused(c.traj.check_metric(&Euclidean));
+        let grid = PlaneGrid::new(&c.traj, None, 8).unwrap();
+        refused(distance_image(&c.traj, &Euclidean, &grid).map(drop));
+        let loops = c.traj.default_metric().find_loops(&c.traj, 1e-3).unwrap();
+        let sampler = Sampler::new(SamplerKind::Alpha, SampleSize::Budget(3), 0);
+        refused(sample_loops(&c.traj, &Euclidean, &loops, &sampler).map(drop));
+        let mut samples = c.traj.default_metric().sample_loops(&c.traj, &loops, &sampler).unwrap();
+        refused(samples.measure(&c.traj, &Euclidean));
+        assert!(samples.measure(&c.traj, c.traj.default_metric().as_metric()).is_ok());
+    }
+    // The metrics of one manifold do not fit another's points either (an SO(3) metric on SE(2)
+    // poses would take x, y, θ for a quaternion's first three components ...).
+    let all = every_constructor(n, 7);
+    let by_name = |name: &str| &all.iter().find(|c| c.name == name).unwrap().traj;
+    for (text, on) in [
+        ("so3", "se2"),
+        ("so3", "gnss"),
+        ("se3_rotation", "torus"),
+        ("torus", "se3"),
+        ("torus", "sphere"),
+        ("sphere", "gnss"),
+        ("haversine", "so3"),
+        ("angular", "so3"),
+        ("se2(rotation_weight_m_per_rad=1)", "sphere"),
+        ("se3(rotation_weight_m_per_rad=1)", "descriptors"),
+    ] {
+        let spec: MetricSpec = text.parse().unwrap();
+        let traj = by_name(on);
+        let error = spec.find_loops(traj, 0.5).unwrap_err();
+        assert!(matches!(error, Error::MetricDoesNotFit(_)), "{text} on {on}: {error}");
+    }
+    // ... while the metrics of a manifold measure its points, and plain coordinates take any
+    // metric whose layout they have (checked as that metric requires).
+    for (text, on) in [
+        ("se3(rotation_weight_m_per_rad=10, rotation=chordal)", "se3"),
+        ("se3_rotation", "se3"),
+        ("so3(rotation=chordal)", "so3_from_rotation_vectors"),
+        ("se2(rotation_weight_m_per_rad=2)", "se2"),
+        ("sphere(radius=6371000)", "sphere_from_lat_lon"),
+        ("angular", "sphere"),
+        ("haversine(radius_m=6378137)", "gnss"),
+        ("euclidean", "descriptors"),
+        ("euclidean", "gnss_ecef"),
+    ] {
+        let spec: MetricSpec = text.parse().unwrap();
+        assert!(spec.find_loops(by_name(on), 0.5).is_ok(), "{text} on {on}");
+    }
+    let plain = Trajectory::new(times(2), [[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]; 2].concat(), 7).unwrap();
+    assert_eq!(plain.manifold(), Manifold::Euclidean);
+    assert!("se3(rotation_weight_m_per_rad=1)".parse::<MetricSpec>().unwrap().find_loops(&plain, 0.5).is_ok());
 }

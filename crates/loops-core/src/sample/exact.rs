@@ -11,7 +11,7 @@ use crate::draw::{PairSpace, draw_numbers, group_quotas};
 use crate::error::Result;
 use crate::loops::Loops;
 use crate::metric::Metric;
-use crate::spec::{MetricSpec, with_metric};
+use crate::spec::{MetricSpec, check_fits, with_metric};
 use crate::trajectory::Trajectory;
 
 impl MetricSpec {
@@ -64,6 +64,7 @@ pub fn sample_loops<M: Metric + ?Sized>(
     sampler: &Sampler,
 ) -> Result<Samples> {
     loops.check_trajectory(traj)?;
+    check_fits(metric, traj)?;
     metric.check_dim(traj.dim())?;
     let kind = sampler.kind;
     sampler.size.validate(kind)?;

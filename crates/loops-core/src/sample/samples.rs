@@ -6,6 +6,7 @@ use crate::draw::SampleWarning;
 use crate::error::{Error, Result};
 use crate::loops::Loops;
 use crate::metric::Metric;
+use crate::spec::check_fits;
 use crate::trajectory::Trajectory;
 
 /// One sampled loop: a candidate pair for the scan matcher.
@@ -107,6 +108,7 @@ impl Samples {
     /// # Errors
     /// As [`locate`](Self::locate), for `traj`; the metric's dimension error.
     pub fn measure<M: Metric + ?Sized>(&mut self, traj: &Trajectory, metric: &M) -> Result<()> {
+        check_fits(metric, traj)?;
         metric.check_dim(traj.dim())?;
         let pairs = self.pairs_on(traj.timestamps_s())?;
         for (row, pair) in self.rows.iter_mut().zip(pairs) {
