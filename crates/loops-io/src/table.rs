@@ -587,6 +587,28 @@ mod tests {
     }
 
     #[test]
+    fn each_metric_gets_points_of_its_manifold_never_quaternions_as_a_vector() {
+        use loops_core::{Manifold, MetricSpec};
+        let mut poses = table(vec![0.0, 1.0], 3);
+        poses.orientations_xyzw = Some(vec![[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0]]);
+        for (text, manifold, dim) in [
+            ("euclidean", Manifold::Euclidean, 3),
+            ("se3(rotation_weight_m_per_rad=1)", Manifold::Se3, 7),
+            ("se3_rotation", Manifold::Se3, 7),
+            ("so3", Manifold::So3, 4),
+            ("se2(rotation_weight_m_per_rad=1)", Manifold::Se2, 3),
+        ] {
+            let spec: MetricSpec = text.parse().unwrap();
+            let traj = poses.to_trajectory_for(&spec, None).unwrap();
+            assert_eq!((traj.manifold(), traj.dim()), (manifold, dim), "{text}");
+            assert!(spec.validate(&traj).is_ok(), "{text}");
+        }
+        // The default reads positions only: the file's quaternions are no coordinates.
+        let positions = poses.to_trajectory_for(&MetricSpec::default(), None).unwrap();
+        assert_eq!(positions.coords(), &[0.0, 0.0, 0.0, 1.0, 10.0, 100.0]);
+    }
+
+    #[test]
     fn plane_picks_the_axes_in_order() {
         let traj = table(vec![0.0, 1.0], 3).to_trajectory_plane([2, 0]).unwrap();
         assert_eq!(traj.point(1), &[100.0, 1.0]);
