@@ -166,8 +166,12 @@ def test_bad_manifold_input() -> None:
         il.find_loops(
             traj, gamma=1.0, metric=il.metrics.SE3(rotation_weight_m_per_rad=-1.0), separation=None
         )
-    with pytest.raises(il.InvalidParameterError, match="dimension"):
+    with pytest.raises(
+        il.InvalidParameterError, match="metric so3.* does not fit an se3 trajectory"
+    ):
         il.find_loops(traj, gamma=1.0, metric="so3", separation=None)
+    with pytest.raises(il.InvalidParameterError, match="dimension"):
+        il.find_loops(il.Trajectory(t, traj.positions), gamma=1.0, metric="so3", separation=None)
     with pytest.raises(TypeError, match="metric"):
         il.find_loops(traj, gamma=1.0, metric=3, separation=None)
 

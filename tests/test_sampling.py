@@ -374,8 +374,13 @@ def test_sampling_uses_the_loops_metric():
     angle = (Rotation.from_quat(p[i, 3:]).inv() * Rotation.from_quat(p[j, 3:])).magnitude()
     se3 = np.linalg.norm(p[i, :3] - p[j, :3], axis=1) + 10.0 * angle
     np.testing.assert_allclose(samples.distance, se3, atol=1e-9)
-    euclidean = il.sample(loops, "alpha", budget=300, seed=0, trajectory=traj, metric="euclidean")
-    np.testing.assert_allclose(euclidean.distance, np.linalg.norm(p[i] - p[j], axis=1))
+    rotation = il.sample(loops, "alpha", budget=300, seed=0, trajectory=traj, metric="se3_rotation")
+    np.testing.assert_allclose(rotation.distance, angle, atol=1e-9)
+    # The Euclidean metric would take the quaternions for coordinates: it does not fit poses.
+    with pytest.raises(
+        il.InvalidParameterError, match="metric euclidean does not fit an se3 trajectory"
+    ):
+        il.sample(loops, "alpha", budget=300, seed=0, trajectory=traj, metric="euclidean")
     # A callable has no name to parse: it must be given again.
     line = il.Trajectory(np.arange(50) * 0.1, np.c_[np.cos(np.arange(50)), np.zeros(50)])
 

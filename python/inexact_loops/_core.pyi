@@ -56,6 +56,7 @@ _SamplerName = Literal[
     "cartographer",
     "time-gap",
 ]
+_Manifold = Literal["euclidean", "se3", "so3", "se2", "torus", "sphere", "gnss", "descriptors"]
 
 class _MetricLike(Protocol):
     @property
@@ -78,6 +79,12 @@ _MetricArg = (
 @final
 class Trajectory:
     """A sampled trajectory: strictly increasing timestamps (seconds) and one point per timestamp.
+
+    A trajectory knows its manifold (:attr:`manifold`): built here, its points are Rⁿ positions,
+    measured by the Euclidean metric; built by :meth:`se3`, :meth:`so3`, :meth:`se2`,
+    :meth:`torus`, :meth:`sphere`, :meth:`gnss` or :meth:`descriptors`, they are measured by that
+    manifold's metric (:attr:`metric_name`) wherever no ``metric=`` is given, and a metric that does
+    not fit them raises, naming both.
 
     Args:
         timestamps: shape ``(n,)``, seconds, strictly increasing, finite.
@@ -115,6 +122,34 @@ class Trajectory:
             >>> import numpy as np, inexact_loops as il
             >>> il.Trajectory(np.arange(3.0), np.zeros((3, 2))).plane_axes is None
             True
+        """
+    @property
+    def manifold(self) -> _Manifold:
+        """The manifold of the points, as its constructor built them: ``"euclidean"`` (this class's
+        constructor, :meth:`gnss_ecef`, unnormalised :meth:`descriptors`), ``"se3"``, ``"so3"``,
+        ``"se2"``, ``"torus"``, ``"sphere"``, ``"gnss"`` or ``"descriptors"``.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> q = np.tile([0, 0, 0, 1.0], (2, 1))
+            >>> il.Trajectory.se3(np.array([0.0, 1.0]), np.zeros((2, 3)), q).manifold
+            'se3'
+        """
+    @property
+    def metric_name(self) -> str:
+        """The metric :func:`find_loops`, :func:`sample`, :func:`distance_image` and
+        :meth:`Samples.measure` use when no ``metric=`` is given: the one the trajectory was read
+        or converted for (:func:`read_trajectory` and :meth:`from_evo` with ``metric=``), or else
+        its manifold's — ``euclidean``; ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``
+        and ``se2(rotation_weight_m_per_rad=0)`` (the translation, metres: a radian's weight has
+        no universal value, so rotation counts only when asked for); ``so3(rotation=geodesic)``;
+        ``torus``; ``sphere(radius=1)``; ``haversine(radius_m=6371008.8)`` for :meth:`gnss`;
+        ``angular`` for normalised :meth:`descriptors`.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> il.Trajectory.so3_from_rotation_vectors(np.arange(2.0), np.zeros((2, 3))).metric_name
+            'so3(rotation=geodesic)'
         """
     @property
     def timestamps(self) -> npt.NDArray[np.float64]:
@@ -163,6 +198,12 @@ class Trajectory:
         included) raise, naming the pose. Files that print few decimals need a looser tolerance
         (:func:`read_trajectory` uses 1e-3).
 
+        Without ``metric=``, the poses are measured by
+        ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``: the distance between the
+        positions, metres; pass e.g. ``metric="se3(rotation_weight_m_per_rad=10)"`` to count
+        rotation too. The Euclidean metric does not fit them (it would measure quaternion
+        components as coordinates) and raises.
+
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> q = np.array([[0, 0, 0, 1.0], [0, 0, 1.0, 0]])
@@ -177,53 +218,56 @@ class Trajectory:
         *,
         quaternion_tolerance: float | None = None,
     ) -> Trajectory:
-        """Rotations, for the ``so3`` metric: quaternions ``(n, 4)`` in x, y, z, w order, normalised
-        as in :meth:`se3`.
+        """Rotations, for the ``so3`` metric (their default, geodesic angle in radians): quaternions
+        ``(n, 4)`` in x, y, z, w order, normalised as in :meth:`se3`.
         """
     @staticmethod
     def so3_from_rotation_vectors(
         timestamps: npt.ArrayLike, rotation_vectors: npt.ArrayLike
     ) -> Trajectory:
-        """Rotations, for the ``so3`` metric, from rotation vectors ``(n, 3)`` (axis × angle,
-        radians; ``Rotation.as_rotvec()``).
+        """Rotations, for the ``so3`` metric (their default), from rotation vectors ``(n, 3)``
+        (axis × angle, radians; ``Rotation.as_rotvec()``).
         """
     @staticmethod
     def se2(timestamps: npt.ArrayLike, poses_xy_theta: npt.ArrayLike) -> Trajectory:
         """Planar poses, for the ``se2`` metric: ``(n, 3)`` rows of x, y (metres) and heading θ
-        (radians, wrapped to (−π, π]).
+        (radians, wrapped to (−π, π]). Without ``metric=`` they are measured by
+        ``se2(rotation_weight_m_per_rad=0)``, the distance between the positions.
         """
     @staticmethod
     def torus(timestamps: npt.ArrayLike, angles_rad: npt.ArrayLike) -> Trajectory:
-        """Points on a torus S¹ × … × S¹, for the ``torus`` metric: angles ``(n, k)`` in radians
-        (wrapped to (−π, π]).
+        """Points on a torus S¹ × … × S¹, for the ``torus`` metric (their default): angles
+        ``(n, k)`` in radians (wrapped to (−π, π]).
         """
     @staticmethod
     def sphere(timestamps: npt.ArrayLike, vectors: npt.ArrayLike) -> Trajectory:
-        """Points on the sphere S², for the ``sphere`` metric: non-zero vectors ``(n, 3)``,
-        normalised.
+        """Points on the sphere S², for the ``sphere`` metric (their default is ``sphere(radius=1)``,
+        radians; ``angular`` fits too): non-zero vectors ``(n, 3)``, normalised.
         """
     @staticmethod
     def sphere_from_lat_lon(timestamps: npt.ArrayLike, lat_lon_deg: npt.ArrayLike) -> Trajectory:
-        """Points on the sphere S², for the ``sphere`` metric, from ``(n, 2)`` latitude and
-        longitude in degrees.
+        """Points on the sphere S², for the ``sphere`` metric (as :meth:`sphere`), from ``(n, 2)``
+        latitude and longitude in degrees.
         """
     @staticmethod
     def gnss(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
-        """GNSS fixes, for the ``haversine`` metric: ``(n, 3)`` latitude (degrees, within ±90),
-        longitude (degrees) and height (metres).
+        """GNSS fixes, for the ``haversine`` metric (their default, metres): ``(n, 3)`` latitude
+        (degrees, within ±90), longitude (degrees) and height (metres). The points are stored as
+        ``(n, 4)`` unit direction and height, which no other metric fits.
         """
     @staticmethod
     def gnss_ecef(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
         """GNSS fixes as WGS 84 Earth-centred positions relative to the first fix (metres), for the
-        ``euclidean`` metric; input as in :meth:`gnss`.
+        ``euclidean`` metric; input as in :meth:`gnss`. A Euclidean trajectory (:attr:`manifold`).
         """
     @staticmethod
     def descriptors(
         timestamps: npt.ArrayLike, descriptors: npt.ArrayLike, *, normalize: bool = True
     ) -> Trajectory:
-        """Descriptor vectors (place recognition) ``(n, d)``: normalised to unit length for the
-        ``angular`` metric when ``normalize``, kept as given (for ``euclidean``) otherwise. A
-        list of rows of unequal length raises ``ValueError`` naming the row.
+        """Descriptor vectors (place recognition) ``(n, d)``: normalised to unit length when
+        ``normalize`` (manifold ``"descriptors"``, measured by ``angular`` unless ``metric=``
+        says ``euclidean``), kept as given otherwise (a Euclidean trajectory). A list of rows of
+        unequal length raises ``ValueError`` naming the row.
         """
     @staticmethod
     def from_evo(
@@ -269,8 +313,9 @@ class Trajectory:
             ... )
             >>> il.Trajectory.from_evo(evo_traj).positions[-1]
             array([2., 0., 0.])
-            >>> il.Trajectory.from_evo(evo_traj, metric="se3(rotation_weight_m_per_rad=1)").dim
-            7
+            >>> poses = il.Trajectory.from_evo(evo_traj, metric="se3(rotation_weight_m_per_rad=1)")
+            >>> poses.dim, poses.manifold, poses.metric_name
+            (7, 'se3', 'se3(rotation_weight_m_per_rad=1, rotation=geodesic)')
         """
 
 @final
@@ -657,7 +702,9 @@ def find_loops(
         trajectory: a :class:`Trajectory` (for a manifold, built by the matching constructor,
             e.g. :meth:`Trajectory.se3`).
         gamma: the distance threshold γ > 0, in the metric's unit (metres for positions).
-        metric: ``None`` (Euclidean), a name such as ``"se3(rotation_weight_m_per_rad=10)"``, an
+        metric: ``None`` (the trajectory's own, :attr:`Trajectory.metric_name`: Euclidean for
+            positions, the manifold's metric for :meth:`Trajectory.se3` and friends, the one
+            given to :func:`read_trajectory`), a name such as ``"se3(rotation_weight_m_per_rad=10)"``, an
             :mod:`inexact_loops.metrics` object such as ``il.metrics.SE3(rotation_weight_m_per_rad=10)``,
             or — a slow path, one Python call per distance on one thread — any callable
             ``f(a, b) -> float`` on two points (numpy arrays) satisfying the triangle inequality.
@@ -1046,7 +1093,7 @@ class Samples:
     def measure(self, trajectory: Trajectory, *, metric: _MetricArg = None) -> Samples:
         """The same samples placed on ``trajectory`` (where not yet), with the distance
         δ(x_i, x_j) of each (:attr:`distance`) under ``metric`` (as in :func:`find_loops`;
-        ``None`` is the default metric).
+        ``None`` is the trajectory's own, :attr:`Trajectory.metric_name`).
 
         Raises:
             InvalidParameterError: the samples index another trajectory, or a time lies outside
@@ -1341,7 +1388,7 @@ def sample(
             with clusters, optional: the samples are then placed on it and their distances
             measured.
         metric: as in :func:`find_loops`; ``None`` takes the loops' own metric (for clusters,
-            the default metric).
+            the trajectory's, :attr:`Trajectory.metric_name`).
         threads: worker threads; ``None`` uses one per core. Results do not depend on it.
         skip_trivial: leave out the trivial loop components (``Loops`` with σ_1, σ_ρ or σ_α):
             their pairs are simple loops (the next poses, a stop) that odometry already ties
@@ -1494,9 +1541,9 @@ def distance_image(
     Args:
         trajectory: the :class:`Trajectory`.
         grid: a :class:`PlaneGrid` made for it.
-        metric: as :func:`find_loops`: ``None`` (Euclidean), a name such as ``"so3"``, an
-            :mod:`inexact_loops.metrics` object, or — slow, one Python call per pixel on one
-            thread — a callable ``f(a, b) -> float``.
+        metric: as :func:`find_loops`: ``None`` (the trajectory's own, :attr:`Trajectory.metric_name`),
+            a name such as ``"so3"``, an :mod:`inexact_loops.metrics` object, or — slow, one
+            Python call per pixel on one thread — a callable ``f(a, b) -> float``.
         threads: worker threads; ``None`` uses one per core.
 
     Returns:

@@ -140,7 +140,8 @@ def distance_image(
             without ``loops``.
         ax: the Axes to draw into; a new figure when ``None``.
         max_pixels: largest image side, pixels (>= 2).
-        metric: ``None`` (the metric of ``loops``, Euclidean without ``loops``), a metric
+        metric: ``None`` (the metric of ``loops``; without ``loops``, the trajectory's own,
+            :attr:`~inexact_loops.Trajectory.metric_name`), a metric
             name such as ``"so3"`` or an :mod:`inexact_loops.metrics` object, computed by the
             core for any metric; or, a slow path, a callable ``f(A, B)`` returning the
             ``(len(A), len(B))`` distances between two arrays of points (rows of
@@ -647,7 +648,8 @@ def _distance_image(
     traj: Trajectory, grid: PlaneGrid, metric: object, loops: Loops | None
 ) -> np.ndarray:
     """The image ``(height, width)``: by the core for a metric name or object (default the
-    loops' metric), or the slow path, a callable ``f(A, B)`` on the grid's points."""
+    loops' metric, else the trajectory's), or the slow path, a callable ``f(A, B)`` on the
+    grid's points."""
     if metric is None or isinstance(metric, (str, _metrics.Metric)):
         name = loops.metric_name if (metric is None and loops is not None) else metric
         try:

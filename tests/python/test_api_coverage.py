@@ -39,6 +39,13 @@ ELSEWHERE = {
         "python/test_interop.py",
         "test_from_evo_se3_reorders_w_first_quaternions",
     ),
+    **{
+        name: (
+            "python/test_trajectory_manifold.py",
+            "test_find_loops_without_metric_uses_the_manifolds_metric",
+        )
+        for name in ("Trajectory.manifold", "Trajectory.metric_name")
+    },
     "Detections.to_pandas": ("python/test_interop.py", "test_detections_to_pandas"),
     "read_detections": (
         "python/test_reading.py",

@@ -27,7 +27,9 @@ use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
 ///     trajectory: a :class:`Trajectory` (for a manifold, built by the matching constructor,
 ///         e.g. :meth:`Trajectory.se3`).
 ///     gamma: the distance threshold γ > 0, in the metric's unit (metres for positions).
-///     metric: ``None`` (Euclidean), a name such as ``"se3(rotation_weight_m_per_rad=10)"``, an
+///     metric: ``None`` (the trajectory's own, :attr:`Trajectory.metric_name`: Euclidean for
+///         positions, the manifold's metric for :meth:`Trajectory.se3` and friends, the one
+///         given to :func:`read_trajectory`), a name such as ``"se3(rotation_weight_m_per_rad=10)"``, an
 ///         :mod:`inexact_loops.metrics` object such as ``il.metrics.SE3(rotation_weight_m_per_rad=10)``,
 ///         or — a slow path, one Python call per distance on one thread — any callable
 ///         ``f(a, b) -> float`` on two points (numpy arrays) satisfying the triangle inequality.
@@ -40,8 +42,9 @@ use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
 ///     :class:`Loops`.
 ///
 /// Raises:
-///     InvalidParameterError: gamma not positive and finite, unknown metric, a negative
-///         separation, threads = 0.
+///     InvalidParameterError: gamma not positive and finite, unknown metric, a metric that does
+///         not fit the trajectory's manifold (e.g. ``"euclidean"`` on :meth:`Trajectory.se3`
+///         poses; the message names both), a negative separation, threads = 0.
 ///
 /// Warns:
 ///     DiagonalBrokenWarning: consecutive poses farther apart than gamma (a data gap, or gamma
@@ -74,10 +77,11 @@ pub(crate) fn find_loops(
 ) -> PyResult<Loops> {
     let traj = Arc::clone(&trajectory.inner);
     let separation = separation.at(gamma);
-    let inner = MetricArg::from_py(metric)?.run(py, threads, |metric| match metric {
-        MetricRef::Spec(spec) => spec.find_loops_separated(&traj, gamma, separation),
-        MetricRef::Callable(callable) => loops_core::find_loops_separated(&traj, callable, gamma, separation),
-    })?;
+    let inner =
+        MetricArg::or_default(metric, trajectory.default_metric())?.run(py, threads, |metric| match metric {
+            MetricRef::Spec(spec) => spec.find_loops_separated(&traj, gamma, separation),
+            MetricRef::Callable(callable) => loops_core::find_loops_separated(&traj, callable, gamma, separation),
+        })?;
     crate::warning::warn_loops(py, &inner)?;
     Ok(Loops { inner: Arc::new(inner) })
 }
@@ -88,7 +92,8 @@ pub(crate) fn find_loops(
 ///
 /// Args:
 ///     trajectory: a :class:`Trajectory`.
-///     metric: as in :func:`find_loops` (a name or an :mod:`inexact_loops.metrics` object).
+///     metric: as in :func:`find_loops` (a name or an :mod:`inexact_loops.metrics` object;
+///         ``None``: the trajectory's own, :attr:`Trajectory.metric_name`).
 ///
 /// Returns:
 ///     numpy.ndarray: float64, one value per pose.
@@ -105,7 +110,10 @@ pub(crate) fn path_length<'py>(
     trajectory: &Trajectory,
     metric: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let spec = MetricArg::spec_from_py(metric, "path_length")?;
+    let spec = match metric {
+        None => trajectory.default_metric(),
+        Some(_) => MetricArg::spec_from_py(metric, "path_length")?,
+    };
     let traj = Arc::clone(&trajectory.inner);
     let s = crate::detached(py, move || Ok(spec.path_length(&traj)?))?;
     Ok(PyArray1::from_vec(py, s))

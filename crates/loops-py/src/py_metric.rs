@@ -41,6 +41,16 @@ impl MetricArg {
         }
     }
 
+    /// As [`from_py`](Self::from_py), with `None` → `default`: the metric the trajectory a job
+    /// runs on is measured by (`Trajectory::default_metric`, the one it was read for or its
+    /// manifold's).
+    pub(crate) fn or_default(metric: Option<&Bound<'_, PyAny>>, default: loops_core::MetricSpec) -> PyResult<Self> {
+        match metric {
+            None => Ok(Self::Spec(default)),
+            Some(_) => Self::from_py(metric),
+        }
+    }
+
     /// A metric name or object for `function`, which builds points for it (and so cannot take
     /// a callable).
     pub(crate) fn spec_from_py(metric: Option<&Bound<'_, PyAny>>, function: &str) -> PyResult<loops_core::MetricSpec> {

@@ -30,9 +30,9 @@ use loops_core::{Border, SamplerKind};
 /// Args:
 ///     trajectory: the :class:`Trajectory`.
 ///     grid: a :class:`PlaneGrid` made for it.
-///     metric: as :func:`find_loops`: ``None`` (Euclidean), a name such as ``"so3"``, an
-///         :mod:`inexact_loops.metrics` object, or — slow, one Python call per pixel on one
-///         thread — a callable ``f(a, b) -> float``.
+///     metric: as :func:`find_loops`: ``None`` (the trajectory's own, :attr:`Trajectory.metric_name`),
+///         a name such as ``"so3"``, an :mod:`inexact_loops.metrics` object, or — slow, one
+///         Python call per pixel on one thread — a callable ``f(a, b) -> float``.
 ///     threads: worker threads; ``None`` uses one per core.
 ///
 /// Returns:
@@ -59,10 +59,11 @@ pub(crate) fn distance_image<'py>(
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (traj, plane) = (Arc::clone(&trajectory.inner), Arc::clone(&grid.inner));
-    let image = MetricArg::from_py(metric)?.run(py, threads, |metric| match metric {
-        MetricRef::Spec(spec) => spec.distance_image(&traj, &plane),
-        MetricRef::Callable(callable) => loops_core::distance_image(&traj, callable, &plane),
-    })?;
+    let image =
+        MetricArg::or_default(metric, trajectory.default_metric())?.run(py, threads, |metric| match metric {
+            MetricRef::Spec(spec) => spec.distance_image(&traj, &plane),
+            MetricRef::Callable(callable) => loops_core::distance_image(&traj, callable, &plane),
+        })?;
     to_numpy(py, image).reshape([grid.inner.height(), grid.inner.width()])
 }
 

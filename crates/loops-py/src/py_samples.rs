@@ -34,7 +34,8 @@ pub(crate) struct Samples {
     pub(crate) inner: Arc<loops_core::Samples>,
 }
 
-/// `samples` placed on `trajectory`, with their distances under `metric` (`None`: the default).
+/// `samples` placed on `trajectory`, with their distances under `metric` (`None`: the
+/// trajectory's).
 fn measured(
     py: Python<'_>,
     samples: loops_core::Samples,
@@ -42,7 +43,7 @@ fn measured(
     metric: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<loops_core::Samples> {
     let traj = Arc::clone(&trajectory.inner);
-    MetricArg::from_py(metric)?.run(py, None, move |metric| {
+    MetricArg::or_default(metric, trajectory.default_metric())?.run(py, None, move |metric| {
         let mut samples = samples;
         samples.measure(&traj, metric.as_metric())?;
         Ok(samples)
@@ -85,7 +86,7 @@ fn loops_metric(metric: Option<&Bound<'_, PyAny>>, loops: &loops_core::Loops) ->
 ///         with clusters, optional: the samples are then placed on it and their distances
 ///         measured.
 ///     metric: as in :func:`find_loops`; ``None`` takes the loops' own metric (for clusters,
-///         the default metric).
+///         the trajectory's, :attr:`Trajectory.metric_name`).
 ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
 ///     skip_trivial: leave out the trivial loop components (``Loops`` with σ_1, σ_ρ or σ_α):
 ///         their pairs are simple loops (the next poses, a stop) that odometry already ties
@@ -330,7 +331,7 @@ impl Samples {
 
     /// The same samples placed on ``trajectory`` (where not yet), with the distance
     /// δ(x_i, x_j) of each (:attr:`distance`) under ``metric`` (as in :func:`find_loops`;
-    /// ``None`` is the default metric).
+    /// ``None`` is the trajectory's own, :attr:`Trajectory.metric_name`).
     ///
     /// Raises:
     ///     InvalidParameterError: the samples index another trajectory, or a time lies outside

@@ -15,6 +15,12 @@ use crate::py_metric::MetricArg;
 
 /// A sampled trajectory: strictly increasing timestamps (seconds) and one point per timestamp.
 ///
+/// A trajectory knows its manifold (:attr:`manifold`): built here, its points are Rⁿ positions,
+/// measured by the Euclidean metric; built by :meth:`se3`, :meth:`so3`, :meth:`se2`,
+/// :meth:`torus`, :meth:`sphere`, :meth:`gnss` or :meth:`descriptors`, they are measured by that
+/// manifold's metric (:attr:`metric_name`) wherever no ``metric=`` is given, and a metric that does
+/// not fit them raises, naming both.
+///
 /// Args:
 ///     timestamps: shape ``(n,)``, seconds, strictly increasing, finite.
 ///     positions: shape ``(n, d)`` (or ``(n,)`` for d = 1), finite; any real dtype and any memory
@@ -39,6 +45,17 @@ pub(crate) struct Trajectory {
     /// The position axes of the source that the first two coordinates are, for a trajectory
     /// read on a plane (`axes=`); what the maps of `inexact_loops.plot` label.
     plane_axes: Option<(usize, usize)>,
+    /// The metric it was read or converted for (`read_trajectory(metric=...)`,
+    /// `from_evo(metric=...)`), which it is then measured by; `None`: its manifold's default.
+    pub(crate) metric: Option<loops_core::MetricSpec>,
+}
+
+impl Trajectory {
+    /// The metric it is measured by when no `metric=` is given: the one it was read for, or its
+    /// manifold's default (core's).
+    pub(crate) fn default_metric(&self) -> loops_core::MetricSpec {
+        self.metric.unwrap_or_else(|| self.inner.default_metric())
+    }
 }
 
 #[pymethods]
@@ -55,8 +72,9 @@ impl Trajectory {
 
     fn __repr__(&self) -> String {
         format!(
-            "Trajectory({} poses, dim {}, {:.3} s from t = {})",
+            "Trajectory({} poses, {}, dim {}, {:.3} s from t = {})",
             self.inner.len(),
+            self.inner.manifold(),
             self.inner.dim(),
             self.inner.span_s(),
             self.inner.timestamps_s()[0]
@@ -82,6 +100,39 @@ impl Trajectory {
     #[getter]
     fn plane_axes(&self) -> Option<(usize, usize)> {
         self.plane_axes
+    }
+
+    /// The manifold of the points, as its constructor built them: ``"euclidean"`` (this class's
+    /// constructor, :meth:`gnss_ecef`, unnormalised :meth:`descriptors`), ``"se3"``, ``"so3"``,
+    /// ``"se2"``, ``"torus"``, ``"sphere"``, ``"gnss"`` or ``"descriptors"``.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> q = np.tile([0, 0, 0, 1.0], (2, 1))
+    ///     >>> il.Trajectory.se3(np.array([0.0, 1.0]), np.zeros((2, 3)), q).manifold
+    ///     'se3'
+    #[getter]
+    fn manifold(&self) -> &'static str {
+        self.inner.manifold().name()
+    }
+
+    /// The name of the metric :func:`find_loops`, :func:`sample`, :func:`distance_image` and
+    /// :meth:`Samples.measure` use when no ``metric=`` is given (as :attr:`Loops.metric_name`
+    /// names the one the loops were found with): the one the trajectory was read
+    /// or converted for (:func:`read_trajectory` and :meth:`from_evo` with ``metric=``), or else
+    /// its manifold's — ``euclidean``; ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``
+    /// and ``se2(rotation_weight_m_per_rad=0)`` (the translation, metres: a radian's weight has
+    /// no universal value, so rotation counts only when asked for); ``so3(rotation=geodesic)``;
+    /// ``torus``; ``sphere(radius=1)``; ``haversine(radius_m=6371008.8)`` for :meth:`gnss`;
+    /// ``angular`` for normalised :meth:`descriptors`.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> il.Trajectory.so3_from_rotation_vectors(np.arange(2.0), np.zeros((2, 3))).metric_name
+    ///     'so3(rotation=geodesic)'
+    #[getter]
+    fn metric_name(&self) -> String {
+        self.default_metric().name()
     }
 
     /// Timestamps, seconds, shape ``(n,)`` (a copy).
@@ -136,6 +187,12 @@ impl Trajectory {
     /// included) raise, naming the pose. Files that print few decimals need a looser tolerance
     /// (:func:`read_trajectory` uses 1e-3).
     ///
+    /// Without ``metric=``, the poses are measured by
+    /// ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``: the distance between the
+    /// positions, metres; pass e.g. ``metric="se3(rotation_weight_m_per_rad=10)"`` to count
+    /// rotation too. The Euclidean metric does not fit them (it would measure quaternion
+    /// components as coordinates) and raises.
+    ///
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> q = np.array([[0, 0, 0, 1.0], [0, 0, 1.0, 0]])
@@ -157,8 +214,8 @@ impl Trajectory {
         wrap(py, move || loops_core::Trajectory::se3_with_tolerance(t, &p, &q, tolerance))
     }
 
-    /// Rotations, for the ``so3`` metric: quaternions ``(n, 4)`` in x, y, z, w order, normalised
-    /// as in :meth:`se3`.
+    /// Rotations, for the ``so3`` metric (their default, geodesic angle in radians): quaternions
+    /// ``(n, 4)`` in x, y, z, w order, normalised as in :meth:`se3`.
     #[staticmethod]
     #[pyo3(signature = (timestamps, quaternions_xyzw, *, quaternion_tolerance=None))]
     fn so3(
@@ -172,8 +229,8 @@ impl Trajectory {
         wrap(py, move || loops_core::Trajectory::so3_with_tolerance(t, &q, tolerance))
     }
 
-    /// Rotations, for the ``so3`` metric, from rotation vectors ``(n, 3)`` (axis × angle,
-    /// radians; ``Rotation.as_rotvec()``).
+    /// Rotations, for the ``so3`` metric (their default), from rotation vectors ``(n, 3)``
+    /// (axis × angle, radians; ``Rotation.as_rotvec()``).
     #[staticmethod]
     fn so3_from_rotation_vectors(
         py: Python<'_>,
@@ -185,31 +242,32 @@ impl Trajectory {
     }
 
     /// Planar poses, for the ``se2`` metric: ``(n, 3)`` rows of x, y (metres) and heading θ
-    /// (radians, wrapped to (−π, π]).
+    /// (radians, wrapped to (−π, π]). Without ``metric=`` they are measured by
+    /// ``se2(rotation_weight_m_per_rad=0)``, the distance between the positions.
     #[staticmethod]
     fn se2(py: Python<'_>, timestamps: &Bound<'_, PyAny>, poses_xy_theta: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, p) = timestamps_and_rows::<3>(py, timestamps, poses_xy_theta, "poses_xy_theta")?;
         wrap(py, move || loops_core::Trajectory::se2(t, &p))
     }
 
-    /// Points on a torus S¹ × … × S¹, for the ``torus`` metric: angles ``(n, k)`` in radians
-    /// (wrapped to (−π, π]).
+    /// Points on a torus S¹ × … × S¹, for the ``torus`` metric (their default): angles
+    /// ``(n, k)`` in radians (wrapped to (−π, π]).
     #[staticmethod]
     fn torus(py: Python<'_>, timestamps: &Bound<'_, PyAny>, angles_rad: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, angles, dim) = timestamps_and_points(py, timestamps, angles_rad, "angles_rad")?;
         wrap(py, move || loops_core::Trajectory::torus(t, &angles, dim))
     }
 
-    /// Points on the sphere S², for the ``sphere`` metric: non-zero vectors ``(n, 3)``,
-    /// normalised.
+    /// Points on the sphere S², for the ``sphere`` metric (their default is ``sphere(radius=1)``,
+    /// radians; ``angular`` fits too): non-zero vectors ``(n, 3)``, normalised.
     #[staticmethod]
     fn sphere(py: Python<'_>, timestamps: &Bound<'_, PyAny>, vectors: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, v) = timestamps_and_rows::<3>(py, timestamps, vectors, "vectors")?;
         wrap(py, move || loops_core::Trajectory::sphere(t, &v))
     }
 
-    /// Points on the sphere S², for the ``sphere`` metric, from ``(n, 2)`` latitude and
-    /// longitude in degrees.
+    /// Points on the sphere S², for the ``sphere`` metric (as :meth:`sphere`), from ``(n, 2)``
+    /// latitude and longitude in degrees.
     #[staticmethod]
     fn sphere_from_lat_lon(
         py: Python<'_>,
@@ -220,8 +278,9 @@ impl Trajectory {
         wrap(py, move || loops_core::Trajectory::sphere_from_lat_lon(t, &p))
     }
 
-    /// GNSS fixes, for the ``haversine`` metric: ``(n, 3)`` latitude (degrees, within ±90),
-    /// longitude (degrees) and height (metres).
+    /// GNSS fixes, for the ``haversine`` metric (their default, metres): ``(n, 3)`` latitude
+    /// (degrees, within ±90), longitude (degrees) and height (metres). The points are stored as
+    /// ``(n, 4)`` unit direction and height, which no other metric fits.
     #[staticmethod]
     fn gnss(py: Python<'_>, timestamps: &Bound<'_, PyAny>, lat_lon_height: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, p) = timestamps_and_rows::<3>(py, timestamps, lat_lon_height, "lat_lon_height")?;
@@ -229,16 +288,17 @@ impl Trajectory {
     }
 
     /// GNSS fixes as WGS 84 Earth-centred positions relative to the first fix (metres), for the
-    /// ``euclidean`` metric; input as in :meth:`gnss`.
+    /// ``euclidean`` metric; input as in :meth:`gnss`. A Euclidean trajectory (:attr:`manifold`).
     #[staticmethod]
     fn gnss_ecef(py: Python<'_>, timestamps: &Bound<'_, PyAny>, lat_lon_height: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, p) = timestamps_and_rows::<3>(py, timestamps, lat_lon_height, "lat_lon_height")?;
         wrap(py, move || loops_core::Trajectory::gnss_ecef(t, &p))
     }
 
-    /// Descriptor vectors (place recognition) ``(n, d)``: normalised to unit length for the
-    /// ``angular`` metric when ``normalize``, kept as given (for ``euclidean``) otherwise. A
-    /// list of rows of unequal length raises ``ValueError`` naming the row.
+    /// Descriptor vectors (place recognition) ``(n, d)``: normalised to unit length when
+    /// ``normalize`` (manifold ``"descriptors"``, measured by ``angular`` unless ``metric=``
+    /// says ``euclidean``), kept as given otherwise (a Euclidean trajectory). A list of rows of
+    /// unequal length raises ``ValueError`` naming the row.
     #[staticmethod]
     #[pyo3(signature = (timestamps, descriptors, *, normalize=true))]
     fn descriptors(
@@ -262,6 +322,8 @@ impl Trajectory {
     /// orientations for ``se3`` / ``se3_rotation`` (as :meth:`se3`); orientations for ``so3``;
     /// x, y and yaw for ``se2`` (or the plane ``axes`` and the heading in it). Quaternions within
     /// 1e-3 of unit length are normalised.
+    /// The trajectory keeps ``metric`` (:attr:`metric_name`): :func:`find_loops` without
+    /// ``metric=`` measures it so.
     ///
     /// Args:
     ///     trajectory: an ``evo.core.trajectory.PoseTrajectory3D``.
@@ -289,8 +351,9 @@ impl Trajectory {
     ///     ... )
     ///     >>> il.Trajectory.from_evo(evo_traj).positions[-1]
     ///     array([2., 0., 0.])
-    ///     >>> il.Trajectory.from_evo(evo_traj, metric="se3(rotation_weight_m_per_rad=1)").dim
-    ///     7
+    ///     >>> poses = il.Trajectory.from_evo(evo_traj, metric="se3(rotation_weight_m_per_rad=1)")
+    ///     >>> poses.dim, poses.manifold, poses.metric_name
+    ///     (7, 'se3', 'se3(rotation_weight_m_per_rad=1, rotation=geodesic)')
     #[staticmethod]
     #[pyo3(signature = (trajectory, *, metric=None, axes=None))]
     fn from_evo(
@@ -332,13 +395,13 @@ impl Trajectory {
         };
         // The table's own conversion picks what the metric needs, as for a file.
         let inner = detached(py, move || trajectory_for(&table, &spec, axes, Source::Memory))?;
-        Ok(Self { inner: Arc::new(inner), plane_axes: axes })
+        Ok(Self { inner: Arc::new(inner), plane_axes: axes, metric: metric.is_some().then_some(spec) })
     }
 }
 
 fn wrap(py: Python<'_>, f: impl FnOnce() -> loops_core::Result<loops_core::Trajectory> + Send) -> PyResult<Trajectory> {
     let inner = detached(py, || Ok(f()?))?;
-    Ok(Trajectory { inner: Arc::new(inner), plane_axes: None })
+    Ok(Trajectory { inner: Arc::new(inner), plane_axes: None, metric: None })
 }
 
 /// Where a pose table came from: errors name the file, or only poses.
@@ -454,6 +517,8 @@ pub(crate) fn urban_drive(
 ///         Euclidean (the default); positions and orientations for ``se3``; orientations for
 ///         ``so3``; x, y and yaw about z for ``se2`` (or the plane ``axes`` and the heading in
 ///         it). Quaternions within ``quaternion_tolerance`` of unit length are normalised.
+///         The trajectory keeps it (:attr:`Trajectory.metric_name`): :func:`find_loops` without
+///         ``metric=`` measures it so.
 ///     topic: the topic (MCAP, bags); ``None`` picks the one topic with poses (several: an error
 ///         listing them, see :func:`list_topics`).
 ///     time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
@@ -566,7 +631,7 @@ pub(crate) fn read_trajectory(
             "pose(s) whose timestamp repeats the one before",
         )?;
     }
-    Ok(Trajectory { inner: Arc::new(inner), plane_axes: axes })
+    Ok(Trajectory { inner: Arc::new(inner), plane_axes: axes, metric: metric.is_some().then_some(spec) })
 }
 
 /// A `DroppedInputWarning` saying what a lenient option dropped from a file (nothing when it
