@@ -13,7 +13,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use loops_core::{DEFAULT_EPSILON_S, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory};
+use loops_core::{DEFAULT_EPSILON_S, Manifold, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory};
 use loops_io::{Format, PoseTable};
 
 /// The flags that say how to read a pose file, shared by every command that reads one.
@@ -85,11 +85,6 @@ impl InputArgs {
         Ok(options)
     }
 
-    /// Reads `files` as one trajectory, the one `spec` needs.
-    pub(crate) fn read(&self, files: &[PathBuf], spec: &MetricSpec) -> Result<Trajectory> {
-        Ok(self.read_table(files, spec)?.1)
-    }
-
     /// Reads `files` as one trajectory: the poses as read (orientations included) and the
     /// trajectory `spec` needs, on the plane of `--axes` when the metric takes one (checked
     /// against the file for the others, which use it for the maps only). Several MCAP files are
@@ -156,6 +151,32 @@ impl InputArgs {
         })
     }
 
+    /// What the metric measures of a pose file, for the headers and the report: the positions
+    /// (saying so when the file's orientations are left out), or the poses on their manifold.
+    pub(crate) fn measured(&self, table: &PoseTable, traj: &Trajectory) -> String {
+        let plane = self.plane().ok().flatten();
+        let axes = |axes: &[usize]| -> String {
+            axes.iter().map(|&axis| ["x", "y", "z"].get(axis).copied().unwrap_or("?")).collect::<Vec<_>>().join(", ")
+        };
+        match (traj.manifold(), plane) {
+            (Manifold::Euclidean, _) => {
+                let positions = match plane {
+                    Some(plane) => format!("positions {} (--axes)", axes(&plane)),
+                    None => format!("positions {}", axes(&[0, 1, 2][..table.dim.min(3)])),
+                };
+                if table.orientations_xyzw.is_some() {
+                    format!("{positions}; orientations not measured ({ORIENTATION_METRICS} measure them)")
+                } else {
+                    positions
+                }
+            }
+            (Manifold::Se2, Some(plane)) => {
+                format!("se2 points (positions {} and the heading in that plane)", axes(&plane))
+            }
+            (manifold, _) => format!("{manifold} points ({})", manifold.columns(traj.dim())),
+        }
+    }
+
     /// An error about the poses, with the flag that changes what it refuses where the message
     /// names only the option's Python spelling.
     fn hint(&self, error: loops_io::IoError) -> anyhow::Error {
@@ -175,6 +196,9 @@ pub(crate) fn source_name(files: &[PathBuf]) -> String {
     files.iter().map(|file| file.display().to_string()).collect::<Vec<_>>().join(" + ")
 }
 
+/// The metrics that measure a pose file's orientations, as `--metric` takes them.
+const ORIENTATION_METRICS: &str = "--metric se3(rotation_weight_m_per_rad=W), se3_rotation, so3 or se2";
+
 /// The engine: γ, the metric and the thread pool.
 #[derive(Debug, Args)]
 pub(crate) struct EngineArgs {
@@ -185,7 +209,9 @@ pub(crate) struct EngineArgs {
     pub(crate) gamma: f64,
     /// The metric: euclidean, se3(rotation_weight_m_per_rad=W[, rotation=geodesic|chordal]),
     /// se3_rotation, so3, se2(rotation_weight_m_per_rad=W), torus, sphere(radius=R),
-    /// haversine(radius_m=R), angular. SE(3), SO(3) and SE(2) use the file's orientations.
+    /// haversine(radius_m=R), angular. euclidean (the default) measures the positions only (x,
+    /// y, z, or the --axes pair), never a quaternion; se3, se3_rotation, so3 and se2 measure
+    /// the file's orientations too. The output's `measured:` line and the report say which.
     #[arg(long, default_value_t = MetricSpec::default().name())]
     pub(crate) metric: String,
     /// Revisits only: pairs at least this path length apart along the trajectory, in the

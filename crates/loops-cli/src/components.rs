@@ -43,13 +43,14 @@ pub(crate) struct ComponentsArgs {
 pub(crate) fn components(args: ComponentsArgs) -> Result<()> {
     let source = crate::args::source_name(&args.files);
     let spec = args.engine.spec()?;
-    let traj = args.input.read(&args.files, &spec)?;
+    let (table, traj) = args.input.read_table(&args.files, &spec)?;
+    let measured = args.input.measured(&table, &traj);
     loops_core::check_gamma(args.engine.gamma)?;
     let separation = args.engine.separation()?;
     let (loops, seconds) =
         timed(args.engine.threads, || spec.find_loops_separated(&traj, args.engine.gamma, separation))
             .with_context(|| format!("finding loops in {source}"))?;
-    print(&source, &traj, &loops, seconds, &args.output)
+    print(&source, &measured, &traj, &loops, seconds, &args.output)
 }
 
 /// Runs `find` on `threads` threads: its loops and the seconds it took.
@@ -63,8 +64,15 @@ pub(crate) fn timed(
 }
 
 /// Prints the warnings (stderr) and the table (stdout), and writes the JSON report if asked;
-/// with `--json -` the report is all stdout holds.
-pub(crate) fn print(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64, out: &OutputArgs) -> Result<()> {
+/// with `--json -` the report is all stdout holds. `measured` says what the metric measured.
+pub(crate) fn print(
+    source: &str,
+    measured: &str,
+    traj: &Trajectory,
+    loops: &Loops,
+    seconds: f64,
+    out: &OutputArgs,
+) -> Result<()> {
     for warning in loops.warnings() {
         eprintln!("loops: warning: {warning}");
     }
@@ -74,7 +82,7 @@ pub(crate) fn print(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64
         loops_io::loops_report_to_json(&report()?, &mut stdout)?;
         return Ok(stdout.flush()?);
     }
-    write_table(&mut stdout, source, traj, loops, seconds, out.limit)?;
+    write_table(&mut stdout, source, measured, traj, loops, seconds, out.limit)?;
     stdout.flush()?;
     if let Some(JsonTo::File(path)) = &out.json {
         let report = report()?;
@@ -90,6 +98,7 @@ pub(crate) fn print(source: &str, traj: &Trajectory, loops: &Loops, seconds: f64
 fn write_table(
     out: &mut impl Write,
     source: &str,
+    measured: &str,
     traj: &Trajectory,
     loops: &Loops,
     seconds: f64,
@@ -105,6 +114,7 @@ fn write_table(
         Scale::Seconds,
     )?;
     writeln!(out, "{source}")?;
+    writeln!(out, "  measured: {measured}")?;
     writeln!(out, "  {}", separation_line(loops.separation(), loops.gamma()))?;
     let t0 = traj.timestamps_s()[0];
     writeln!(

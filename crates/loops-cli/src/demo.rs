@@ -43,5 +43,5 @@ pub(crate) fn demo(args: DemoArgs) -> Result<()> {
     let (loops, seconds) = components::timed(args.threads, || {
         MetricSpec::Euclidean.find_loops_separated(&drive.trajectory, args.gamma, separation)
     })?;
-    components::print(&source, &drive.trajectory, &loops, seconds, &args.output)
+    components::print(&source, "positions x, y, z", &drive.trajectory, &loops, seconds, &args.output)
 }

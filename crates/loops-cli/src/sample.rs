@@ -106,7 +106,16 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     if args.json == Some(JsonTo::Stdout) {
         loops_io::samples_to_json(&samples, &mut stdout).context("writing the samples to stdout")?;
     } else {
-        write_summary(&mut stdout, &crate::args::source_name(&args.files), &traj, &loops, &samples, &quality)?;
+        let measured = args.input.measured(&table, &traj);
+        write_summary(
+            &mut stdout,
+            &crate::args::source_name(&args.files),
+            &measured,
+            &traj,
+            &loops,
+            &samples,
+            &quality,
+        )?;
     }
     // Every file is prepared first and written only when all could be: a command that fails
     // writes nothing.
@@ -152,6 +161,7 @@ fn json_file(json: &Option<JsonTo>) -> Option<&PathBuf> {
 fn write_summary(
     out: &mut impl Write,
     source: &str,
+    measured: &str,
     traj: &Trajectory,
     loops: &Loops,
     samples: &Samples,
@@ -159,6 +169,7 @@ fn write_summary(
 ) -> Result<()> {
     let nontrivial = loops.components().iter().filter(|c| !c.trivial).count();
     writeln!(out, "{source}")?;
+    writeln!(out, "  measured: {measured}")?;
     writeln!(out, "  {}", crate::args::separation_line(loops.separation(), loops.gamma()))?;
     writeln!(
         out,

@@ -61,6 +61,8 @@ pub(crate) struct ReportInput<'a> {
     pub traj: &'a Trajectory,
     /// The metric, for the downsampled pairwise-distance image.
     pub metric: &'a MetricSpec,
+    /// What the metric measures of the file (`InputArgs::measured`).
+    pub measured: &'a str,
     /// The loop components.
     pub loops: &'a Loops,
     /// Loop duration τ(t_i) of every pose, seconds (Side::Both, Selection::All).
@@ -201,6 +203,7 @@ mod tests {
                 plane: [0, 1],
                 traj: &self.traj,
                 metric: &self.metric,
+                measured: "positions x, y, z",
                 loops: &self.loops,
                 loop_duration_s: &self.tau,
                 samples: &self.samples,

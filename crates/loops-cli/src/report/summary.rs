@@ -27,7 +27,8 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                 dl {
                     dt { "poses" } dd { (thousands(traj.len() as u64)) }
                     dt { "time span" } dd { (duration_text(span_s)) }
-                    dt { "metric" } dd { code { (input.metric.name()) } }
+                    dt { "metric" } dd { code { (loops.metric_name()) } }
+                    dt { "measured" } dd { (input.measured) }
                     dt { "map plane" } dd { (super::trajectory::plane_name(input.plane)) }
                     dt { "γ" } dd { (loops.gamma()) }
                     dt { "separation" }

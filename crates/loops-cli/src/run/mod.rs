@@ -375,6 +375,7 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         plane: args.input.plane()?.unwrap_or([0, 1]),
         traj: &traj,
         metric: spec,
+        measured: &args.input.measured(&table, &traj),
         loops: &loops,
         loop_duration_s: &loop_duration_s,
         samples: &samples,
