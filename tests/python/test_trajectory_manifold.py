@@ -332,7 +332,10 @@ def test_the_issue_as_reported() -> None:
     assert il.find_loops(gnss, gamma=3.0).metric_name == "haversine(radius_m=6371008.8)"
 
     drive = il.urban_drive(duration_s=60.0, se3=True)
-    assert (drive.manifold, il.find_loops(drive, gamma=40.0).metric_name) == ("se3", poses.metric_name)
+    assert (drive.manifold, il.find_loops(drive, gamma=40.0).metric_name) == (
+        "se3",
+        poses.metric_name,
+    )
 
 
 def test_read_trajectory_keeps_the_metric_it_was_read_for(tmp_path: Path) -> None:
@@ -345,7 +348,11 @@ def test_read_trajectory_keeps_the_metric_it_was_read_for(tmp_path: Path) -> Non
     path = tmp_path / "loop.tum"
     path.write_text("\n".join(rows) + "\n")
     positions = il.read_trajectory(path)
-    assert (positions.manifold, positions.metric_name, positions.dim) == ("euclidean", "euclidean", 3)
+    assert (positions.manifold, positions.metric_name, positions.dim) == (
+        "euclidean",
+        "euclidean",
+        3,
+    )
     poses = il.read_trajectory(path, metric="se3(rotation_weight_m_per_rad=2)")
     assert (poses.manifold, poses.metric_name) == (
         "se3",
