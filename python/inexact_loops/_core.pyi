@@ -137,8 +137,9 @@ class Trajectory:
         """
     @property
     def metric_name(self) -> str:
-        """The metric :func:`find_loops`, :func:`sample`, :func:`distance_image` and
-        :meth:`Samples.measure` use when no ``metric=`` is given: the one the trajectory was read
+        """The name of the metric :func:`find_loops`, :func:`sample`, :func:`distance_image` and
+        :meth:`Samples.measure` use when no ``metric=`` is given (as :attr:`Loops.metric_name`
+        names the one the loops were found with): the one the trajectory was read
         or converted for (:func:`read_trajectory` and :meth:`from_evo` with ``metric=``), or else
         its manifold's — ``euclidean``; ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``
         and ``se2(rotation_weight_m_per_rad=0)`` (the translation, metres: a radian's weight has
@@ -286,6 +287,8 @@ class Trajectory:
         orientations for ``se3`` / ``se3_rotation`` (as :meth:`se3`); orientations for ``so3``;
         x, y and yaw for ``se2`` (or the plane ``axes`` and the heading in it). Quaternions within
         1e-3 of unit length are normalised.
+        The trajectory keeps ``metric`` (:attr:`metric_name`): :func:`find_loops` without
+        ``metric=`` measures it so.
 
         Args:
             trajectory: an ``evo.core.trajectory.PoseTrajectory3D``.
@@ -371,7 +374,8 @@ def path_length(
 
     Args:
         trajectory: a :class:`Trajectory`.
-        metric: as in :func:`find_loops` (a name or an :mod:`inexact_loops.metrics` object).
+        metric: as in :func:`find_loops` (a name or an :mod:`inexact_loops.metrics` object;
+            ``None``: the trajectory's own, :attr:`Trajectory.metric_name`).
 
     Returns:
         numpy.ndarray: float64, one value per pose.
@@ -717,8 +721,9 @@ def find_loops(
         :class:`Loops`.
 
     Raises:
-        InvalidParameterError: gamma not positive and finite, unknown metric, a negative
-            separation, threads = 0.
+        InvalidParameterError: gamma not positive and finite, unknown metric, a metric that does
+            not fit the trajectory's manifold (e.g. ``"euclidean"`` on :meth:`Trajectory.se3`
+            poses; the message names both), a negative separation, threads = 0.
 
     Warns:
         DiagonalBrokenWarning: consecutive poses farther apart than gamma (a data gap, or gamma
@@ -819,6 +824,8 @@ def read_trajectory(
             Euclidean (the default); positions and orientations for ``se3``; orientations for
             ``so3``; x, y and yaw about z for ``se2`` (or the plane ``axes`` and the heading in
             it). Quaternions within ``quaternion_tolerance`` of unit length are normalised.
+            The trajectory keeps it (:attr:`Trajectory.metric_name`): :func:`find_loops` without
+            ``metric=`` measures it so.
         topic: the topic (MCAP, bags); ``None`` picks the one topic with poses (several: an error
             listing them, see :func:`list_topics`).
         time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
