@@ -37,6 +37,16 @@ pub(crate) struct Leaf {
     pub inside: bool,
 }
 
+/// A node of the hierarchy that a spatial index holds ([`BallTree::chunks`]): poses up to `hi`
+/// (exclusive) within `radius` of pose `centre`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Chunk {
+    pub node: u32,
+    pub hi: u32,
+    pub centre: u32,
+    pub radius: f64,
+}
+
 /// The ball hierarchy over a trajectory's poses; leaves hold `leaf_size` consecutive poses.
 #[derive(Debug, Clone)]
 pub(crate) struct BallTree {
@@ -62,6 +72,96 @@ impl BallTree {
         tree.build(0, 0, traj.len(), traj, metric, leaf_size.max(1));
         tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
         tree
+    }
+
+    /// The hierarchy over a fleet's concatenated sessions (`starts`: the first pose of each
+    /// session, the first being 0): its top levels split the sessions in halves, so every node
+    /// below them, and every leaf, holds poses of one session only. A single session (`starts`
+    /// = `[0]`) gives exactly [`new`](Self::new)'s hierarchy.
+    pub(crate) fn with_sessions<M: Metric + ?Sized>(
+        traj: &Trajectory,
+        metric: &M,
+        leaf_size: usize,
+        starts: &[usize],
+    ) -> Self {
+        let mut tree = Self {
+            nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size) + 2 * starts.len()),
+            centres: Vec::new(),
+            dim: traj.dim(),
+        };
+        let mut bounds = starts.to_vec();
+        bounds.push(traj.len());
+        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF });
+        tree.build_sessions(0, &bounds, traj, metric, leaf_size.max(1));
+        tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
+        tree
+    }
+
+    /// Builds the node at `slot` over the sessions between `bounds[0]` and `bounds[last]`.
+    fn build_sessions<M: Metric + ?Sized>(
+        &mut self,
+        slot: usize,
+        bounds: &[usize],
+        traj: &Trajectory,
+        metric: &M,
+        leaf_size: usize,
+    ) {
+        let (lo, hi) = (bounds[0], bounds[bounds.len() - 1]);
+        if bounds.len() <= 2 {
+            self.build(slot, lo, hi, traj, metric, leaf_size);
+            return;
+        }
+        let left = self.nodes.len();
+        let placeholder = self.nodes[slot];
+        self.nodes.push(placeholder);
+        self.nodes.push(placeholder);
+        let middle = (bounds.len() - 1) / 2;
+        self.build_sessions(left, &bounds[..=middle], traj, metric, leaf_size);
+        self.build_sessions(left + 1, &bounds[middle..], traj, metric, leaf_size);
+        let centre = lo + (hi - lo) / 2;
+        let x_c = traj.point(centre);
+        let radius = [self.nodes[left], self.nodes[left + 1]]
+            .iter()
+            .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
+            .fold(0.0, f64::max);
+        self.nodes[slot] = Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32 };
+    }
+
+    /// The chunks a spatial index holds: the largest nodes that lie in one session (`starts` as
+    /// for [`with_sessions`](Self::with_sessions)) with a radius of at most `max_radius`, and
+    /// the leaves whose radius is larger. Each pose is in exactly one chunk; a parked session
+    /// is one chunk.
+    pub(crate) fn chunks(&self, starts: &[usize], max_radius: f64) -> Vec<Chunk> {
+        let session_of = |pose: u32| starts.partition_point(|&s| s <= pose as usize);
+        let mut chunks = Vec::new();
+        let mut stack = vec![0_u32];
+        while let Some(index) = stack.pop() {
+            let node = self.nodes[index as usize];
+            let one_session = session_of(node.lo) == session_of(node.hi - 1);
+            if node.left == LEAF || (one_session && node.radius <= max_radius) {
+                chunks.push(Chunk { node: index, hi: node.hi, centre: node.centre, radius: node.radius });
+            } else {
+                stack.push(node.left + 1);
+                stack.push(node.left);
+            }
+        }
+        chunks
+    }
+
+    /// [`near_spans`](Self::near_spans) under the node `root` only, appended to `out` (not
+    /// cleared, not merged with what `out` holds).
+    pub(crate) fn near_spans_under<M: Metric + ?Sized>(
+        &self,
+        root: u32,
+        metric: &M,
+        x: &[f64],
+        from: usize,
+        reach: (f64, f64),
+        out: &mut Vec<Leaf>,
+    ) {
+        self.walk_from(root, metric, x, from, reach, |node, inside| {
+            out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside });
+        });
     }
 
     fn build<M: Metric + ?Sized>(
@@ -199,11 +299,24 @@ impl BallTree {
         metric: &M,
         x: &[f64],
         from: usize,
+        reach: (f64, f64),
+        visit: impl FnMut(&Node, bool),
+    ) {
+        self.walk_from(0, metric, x, from, reach, visit);
+    }
+
+    /// [`walk`](Self::walk) of the subtree under `root`.
+    fn walk_from<M: Metric + ?Sized>(
+        &self,
+        root: u32,
+        metric: &M,
+        x: &[f64],
+        from: usize,
         (reach, inside_reach): (f64, f64),
         mut visit: impl FnMut(&Node, bool),
     ) {
         let mut stack: Vec<u32> = Vec::with_capacity(64);
-        stack.push(0);
+        stack.push(root);
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
             if (node.hi as usize) <= from {

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::metric::Metric;
 use crate::sublevel::{Run, SublevelSet};
-use crate::trajectory::{Trajectory, prefix_sums};
+use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
 
 /// One loop component Ω.
@@ -75,7 +75,7 @@ struct Tally {
 pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: &SublevelSet) -> Labelling {
     let (labels, count) = label_runs(set, ROWS_PER_LABEL_TASK);
     let widths = traj.cell_widths_s();
-    let prefix = prefix_sums(widths);
+    let prefix = prefix_sums_by_session(widths, set.breaks());
 
     let mut tallies = vec![
         Tally {
@@ -97,7 +97,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
             let (a, b) = (run.start as usize, run.end as usize);
             tally.runs += 1;
             tally.pairs += run.len() as u64;
-            tally.area_s2 += w_i * (prefix[b + 1] - prefix[a]);
+            tally.area_s2 += w_i * ((prefix[b] + widths[b]) - prefix[a]);
             tally.rows = [tally.rows[0].min(i), tally.rows[1].max(i)];
             tally.columns = [tally.columns[0].min(a), tally.columns[1].max(b)];
             if a == i {
@@ -190,6 +190,10 @@ fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, u32) {
 /// for the rows i in `upper_rows`, in order.
 fn for_each_overlap(set: &SublevelSet, upper_rows: Range<usize>, mut f: impl FnMut(usize, usize)) {
     for i in upper_rows {
+        if set.breaks_after(i) {
+            // The last row of one session and the first of the next are not adjacent.
+            continue;
+        }
         let (upper, lower) = (set.row(i), set.row(i + 1));
         let (base_upper, base_lower) = (set.row_offset(i), set.row_offset(i + 1));
         let (mut p, mut q) = (0, 0);

@@ -8,6 +8,25 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
+    /// A fleet without sessions.
+    #[error("a fleet needs at least one session")]
+    EmptyFleet,
+    /// Two sessions of a fleet with the same name.
+    #[error("two sessions are named {name:?}: session names must be unique")]
+    DuplicateSession {
+        /// The name.
+        name: String,
+    },
+    /// A session that does not fit the fleet's first session.
+    #[error("session {session:?} {problem}: every session of a fleet must have the first session's {what}")]
+    SessionMismatch {
+        /// The session's name.
+        session: String,
+        /// What differs, with both values (e.g. "has 3 coordinates, the first has 2").
+        problem: String,
+        /// The property ("dimension", "manifold").
+        what: &'static str,
+    },
     /// A trajectory with fewer than two poses: time cells (and so durations and areas) need two.
     #[error("a trajectory needs at least 2 poses, got {count}")]
     TooFewPoses {

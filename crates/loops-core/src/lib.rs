@@ -56,6 +56,7 @@ mod component;
 mod detection;
 mod draw;
 mod error;
+mod fleet;
 mod loops;
 mod manifold;
 mod measure;
@@ -65,6 +66,7 @@ mod pose;
 mod quality;
 mod sample;
 mod separation;
+mod spatial;
 mod spec;
 mod sublevel;
 mod synth;
@@ -77,6 +79,10 @@ pub use component::LoopComponent;
 pub use detection::{Detection, Detections};
 pub use draw::{SampleSize, SampleWarning};
 pub use error::{Error, MetricMisfit, Result};
+pub use fleet::{
+    FLEET_CLOCK_GAP_S, Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SessionPair,
+    find_fleet_loops, sample_fleet,
+};
 pub use loops::{LabelledRun, Loops, Warning, find_loops, find_loops_separated};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,

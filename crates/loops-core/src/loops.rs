@@ -205,7 +205,9 @@ impl Loops {
         // A separated set has no diagonal to break.
         let separation = set.separation();
         let gaps: Vec<usize> = if separation.is_none() {
-            (0..n - 1).filter(|&i| set.row(i).first().is_none_or(|r| (r.end as usize) <= i)).collect()
+            (0..n - 1)
+                .filter(|&i| !set.breaks_after(i) && set.row(i).first().is_none_or(|r| (r.end as usize) <= i))
+                .collect()
         } else {
             Vec::new()
         };
@@ -382,7 +384,8 @@ impl Loops {
     pub fn loop_duration(&self, selection: Selection<'_>, side: Side, scale: Scale) -> Result<Vec<f64>> {
         let keep = self.selection_mask(selection)?;
         let rows = (0..self.len()).map(|i| (i, self.set.row(i)));
-        let mut tau = loop_duration_s(&self.cell_widths_s, rows, |r| keep(self.labels[r] as usize), side);
+        let mut tau =
+            loop_duration_s(&self.cell_widths_s, self.set.breaks(), rows, |r| keep(self.labels[r] as usize), side);
         if scale == Scale::Normalized {
             let span = self.span_s();
             tau.iter_mut().for_each(|t| *t /= span);

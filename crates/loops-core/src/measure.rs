@@ -60,15 +60,20 @@ pub enum Selection<'a> {
 /// Each upper-half run (row r, columns a..=b) adds its time width to τ(r), and by symmetry adds
 /// w_r to τ(j) for every column j > r. The diagonal cell (r, r) counts half to `Begin` and half to
 /// `End`, so `Begin + End = Both`.
+///
+/// A fleet's sessions (`breaks`: their starts after the first, sorted) are summed apart: no
+/// run crosses a session start, and each session's τ is bit for bit that of the session alone.
 pub(crate) fn loop_duration_s<'r>(
     cell_widths_s: &[f64],
+    breaks: &[u32],
     rows: impl Iterator<Item = (usize, &'r [crate::sublevel::Run])>,
     keep: impl Fn(usize) -> bool,
     side: Side,
 ) -> Vec<f64> {
     let n = cell_widths_s.len();
-    let prefix = crate::trajectory::prefix_sums(cell_widths_s);
-    let width = |a: usize, b: usize| if a > b { 0.0 } else { prefix[b + 1] - prefix[a] };
+    let prefix = crate::trajectory::prefix_sums_by_session(cell_widths_s, breaks);
+    let width = |a: usize, b: usize| if a > b { 0.0 } else { (prefix[b] + cell_widths_s[b]) - prefix[a] };
+    let is_break = |k: usize| breaks.binary_search(&(k as u32)).is_ok();
     let mut tau = vec![0.0; n];
     // Column contributions as a difference array over j.
     let mut column_diff = vec![0.0; n + 1];
@@ -97,12 +102,18 @@ pub(crate) fn loop_duration_s<'r>(
             };
             if side != Side::Begin && off_start <= b {
                 column_diff[off_start] += w_r;
-                column_diff[b + 1] -= w_r;
+                // At a session start the running sum restarts instead.
+                if breaks.is_empty() || !is_break(b + 1) {
+                    column_diff[b + 1] -= w_r;
+                }
             }
         }
     }
     let mut running = 0.0;
-    for (t, diff) in tau.iter_mut().zip(&column_diff) {
+    for (k, (t, diff)) in tau.iter_mut().zip(&column_diff).enumerate() {
+        if !breaks.is_empty() && is_break(k) {
+            running = 0.0;
+        }
         running += diff;
         *t += running;
     }

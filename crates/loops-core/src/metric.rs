@@ -50,6 +50,12 @@ pub trait Metric: Sync {
         traj.coords().iter().fold(0.0_f64, |m, c| m.max(c.abs()))
     }
 
+    /// Whether δ is the Euclidean distance of the coordinates: then a KD-tree over points
+    /// prunes for it (a fleet's spatial index). Defaults to `false`.
+    fn is_coordinate_euclidean(&self) -> bool {
+        false
+    }
+
     /// Any strictly increasing function of δ(a, b), for comparisons only (the Euclidean metric
     /// skips the square root). Defaults to δ itself.
     fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
@@ -104,6 +110,10 @@ impl Metric for Euclidean {
     }
 
     #[inline]
+    fn is_coordinate_euclidean(&self) -> bool {
+        true
+    }
+
     fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
         squared_l2(a, b)
     }

@@ -7,6 +7,7 @@ use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::metric::Metric;
 use crate::separation::Separation;
+use crate::spatial::ChunkIndex;
 use crate::trajectory::Trajectory;
 
 /// Checks a distance threshold γ: positive and finite. Front ends call it to refuse a bad γ
@@ -64,6 +65,9 @@ pub struct SublevelSet {
     row_offsets: Vec<usize>,
     runs: Vec<Run>,
     closest: Vec<u32>,
+    /// A fleet's session starts after the first (rows of different sessions are not
+    /// 4-adjacent); empty for one trajectory.
+    breaks: Vec<u32>,
 }
 
 /// Rows handed to one rayon task at a time.
@@ -118,23 +122,45 @@ impl SublevelSet {
         check_gamma(gamma)?;
         separation.check()?;
         traj.check_metric(metric)?;
-        let n = traj.len();
         let (mut arc, balls) = rayon::join(
             || ArcLength::new(traj, metric, !separation.is_none()),
             || BallTree::new(traj, metric, LEAF_SIZE),
         );
         let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s());
         arc.plain = Vec::new();
-        let scanner = RowScanner { traj, metric, arc: &arc, balls: &balls, gamma, first_columns: &first_columns };
-        let scan_batch = |blocks: std::ops::Range<usize>| -> Vec<Block> {
+        Ok(Self::scan(traj, metric, gamma, separation, &arc, Pruner::Hierarchy(&balls), &first_columns, &[0]))
+    }
+
+    /// The scan of [`compute_separated`](Self::compute_separated), over the sessions starting at
+    /// `starts` (`[0]` for one trajectory): row blocks never span two sessions, runs are cut
+    /// where a session starts, and rows of different sessions are not 4-adjacent.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn scan<M: Metric + ?Sized>(
+        traj: &Trajectory,
+        metric: &M,
+        gamma: f64,
+        separation: Separation,
+        arc: &ArcLength,
+        pruner: Pruner<'_>,
+        first_columns: &[u32],
+        starts: &[usize],
+    ) -> Self {
+        let n = traj.len();
+        let scanner = RowScanner { traj, metric, arc, pruner, gamma, first_columns, starts };
+        // Blocks of rows, cut where a session starts.
+        let mut block_rows: Vec<std::ops::Range<usize>> = Vec::with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len());
+        for (k, &start) in starts.iter().enumerate() {
+            let end = starts.get(k + 1).copied().unwrap_or(n);
+            block_rows.extend((start..end).step_by(ROWS_PER_TASK).map(|a| a..(a + ROWS_PER_TASK).min(end)));
+        }
+        let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Vec<Block> {
             blocks
-                .into_par_iter()
-                .map(|b| {
-                    let rows = b * ROWS_PER_TASK..((b + 1) * ROWS_PER_TASK).min(n);
+                .par_iter()
+                .map(|rows| {
                     let mut block = Block::default();
                     let mut candidates = Vec::new();
                     scanner.candidates_for(rows.clone(), &mut candidates);
-                    for i in rows {
+                    for i in rows.clone() {
                         scanner.scan_row(i, &candidates, &mut block);
                         block.row_lengths.push(block.runs.len());
                     }
@@ -142,26 +168,31 @@ impl SublevelSet {
                 })
                 .collect()
         };
-        let mut set =
-            Self { gamma, separation, row_offsets: Vec::with_capacity(n + 1), runs: Vec::new(), closest: Vec::new() };
+        let breaks = if starts.len() > 1 { starts[1..].iter().map(|&s| s as u32).collect() } else { Vec::new() };
+        let mut set = Self {
+            gamma,
+            separation,
+            row_offsets: Vec::with_capacity(n + 1),
+            runs: Vec::new(),
+            closest: Vec::new(),
+            breaks,
+        };
         set.row_offsets.push(0);
         // Blocks are scanned in parallel a batch at a time, and each batch is moved into the
         // result while the next one is scanned (the copy, and the page faults of a result that
         // grows to hundreds of MB, would otherwise leave every other thread idle), so the
         // per-block buffers never hold more than two batches of runs.
-        let blocks = n.div_ceil(ROWS_PER_TASK);
         let mut scanned = Vec::new();
-        for batch in (0..blocks).step_by(BLOCKS_PER_BATCH) {
+        for batch in block_rows.chunks(BLOCKS_PER_BATCH) {
             let previous = std::mem::take(&mut scanned);
             // The copy first: on one thread the order of work and allocation is that of a
             // plain loop; on more, the others start on the scan meanwhile.
-            scanned =
-                rayon::join(|| set.append(previous), || scan_batch(batch..(batch + BLOCKS_PER_BATCH).min(blocks))).1;
+            scanned = rayon::join(|| set.append(previous), || scan_batch(batch)).1;
         }
         set.append(scanned);
         set.runs.shrink_to_fit();
         set.closest.shrink_to_fit();
-        Ok(set)
+        set
     }
 
     /// Appends the rows of scanned blocks, in order.
@@ -201,7 +232,8 @@ impl SublevelSet {
         let separated = |i: usize, j: usize| {
             separation.is_none() || (j > i && s[j] - s[i] >= separation.path && t[j] - t[i] >= separation.time_s)
         };
-        let mut set = Self { gamma, separation, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new() };
+        let mut set =
+            Self { gamma, separation, row_offsets: vec![0], runs: Vec::new(), closest: Vec::new(), breaks: Vec::new() };
         for i in 0..n {
             let mut open: Option<(usize, usize)> = None;
             for j in i..=n {
@@ -257,6 +289,17 @@ impl SublevelSet {
     /// Index of the first run of row `i` in [`runs`](Self::runs).
     pub(crate) fn row_offset(&self, i: usize) -> usize {
         self.row_offsets[i]
+    }
+
+    /// A fleet's session starts after the first (empty for one trajectory).
+    pub(crate) fn breaks(&self) -> &[u32] {
+        &self.breaks
+    }
+
+    /// Whether rows `i` and `i + 1` belong to different sessions of a fleet.
+    #[inline]
+    pub(crate) fn breaks_after(&self, i: usize) -> bool {
+        !self.breaks.is_empty() && self.breaks.binary_search(&((i + 1) as u32)).is_ok()
     }
 
     /// All runs, row after row.
@@ -320,15 +363,15 @@ pub fn path_length<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Vec<f64
 }
 
 /// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
-struct ArcLength {
+pub(crate) struct ArcLength {
     s: Vec<f64>,
     margin: f64,
     /// The plain sums ([`path_length`]) when asked for, from the same steps; else empty.
-    plain: Vec<f64>,
+    pub(crate) plain: Vec<f64>,
 }
 
 impl ArcLength {
-    fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, with_plain: bool) -> Self {
+    pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, with_plain: bool) -> Self {
         let n = traj.len();
         let mut s = Vec::with_capacity(n);
         let mut plain = Vec::with_capacity(if with_plain { n } else { 0 });
@@ -398,14 +441,25 @@ impl ArcLength {
     }
 }
 
+/// Where a row scan finds the stretches of the path that may come within γ.
+#[derive(Clone, Copy)]
+pub(crate) enum Pruner<'a> {
+    /// A walk of the ball hierarchy (every metric).
+    Hierarchy(&'a BallTree),
+    /// The chunks of the hierarchy near the row, by KD-tree (Euclidean coordinates).
+    Chunks(&'a BallTree, &'a ChunkIndex),
+}
+
 struct RowScanner<'a, M: ?Sized> {
     traj: &'a Trajectory,
     metric: &'a M,
     arc: &'a ArcLength,
-    balls: &'a BallTree,
+    pruner: Pruner<'a>,
     gamma: f64,
     /// The first column each row keeps ([`Separation::first_columns`]).
     first_columns: &'a [u32],
+    /// The first pose of each session (`[0]` for one trajectory): runs are cut there.
+    starts: &'a [usize],
 }
 
 impl<M: Metric + ?Sized> RowScanner<'_, M> {
@@ -420,7 +474,11 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         // rounding of the three distances of the triangle inequality.
         let reach = (self.gamma + radius + 2.0 * margin, self.gamma - radius - 3.0 * margin);
         // The first columns grow with the row, so the block's first row has the smallest.
-        self.balls.near_spans(self.metric, centre, self.first_columns[rows.start] as usize, reach, out);
+        let from = self.first_columns[rows.start] as usize;
+        match self.pruner {
+            Pruner::Hierarchy(balls) => balls.near_spans(self.metric, centre, from, reach, out),
+            Pruner::Chunks(balls, index) => index.near_spans(balls, self.metric, centre, from, reach, out),
+        }
     }
 
     fn scan_row(&self, i: usize, candidates: &[Leaf], out: &mut Block) {
@@ -498,10 +556,26 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
     /// Records the run `a..=b` of row `i` with its closest column (row i's own cell when the run
     /// starts on the diagonal).
     fn close_run(&self, i: usize, a: usize, b: usize, runs: &mut Vec<Run>, closest: &mut Vec<u32>) {
+        // A run reaching into the next session is cut where that session starts.
+        let mut a = a;
+        let mut k = self.starts.partition_point(|&s| s <= a);
+        while k < self.starts.len() && self.starts[k] <= b {
+            self.close_part(i, a, self.starts[k] - 1, runs, closest);
+            a = self.starts[k];
+            k += 1;
+        }
+        self.close_part(i, a, b, runs, closest);
+    }
+
+    /// Records the run `a..=b`, within one session's columns, with its closest column.
+    fn close_part(&self, i: usize, a: usize, b: usize, runs: &mut Vec<Run>, closest: &mut Vec<u32>) {
+        let balls = match self.pruner {
+            Pruner::Hierarchy(balls) | Pruner::Chunks(balls, _) => balls,
+        };
         let column = if a == i {
             i
         } else if b - a + 1 >= TREE_CLOSEST_LEN {
-            self.balls.closest_in_range(self.metric, self.traj, self.traj.point(i), (a, b), 2.0 * self.arc.margin)
+            balls.closest_in_range(self.metric, self.traj, self.traj.point(i), (a, b), 2.0 * self.arc.margin)
         } else {
             let dim = self.traj.dim();
             a + self.metric.closest_in(self.traj.point(i), &self.traj.coords()[a * dim..(b + 1) * dim])

@@ -217,6 +217,36 @@ impl Trajectory {
         Ok(Self { timestamps_s, coords, dim, cell_widths_s, manifold: Manifold::Euclidean })
     }
 
+    /// Checked trajectories one after another, on one clock (each shifted to start `gap_s`
+    /// after the previous one ends), each keeping its own time cells (half cells at its ends):
+    /// a fleet's sessions as one trajectory. Returns it with each part's clock offset (time on
+    /// the joint clock − time on the part's clock). The parts share a dimension and manifold.
+    pub(crate) fn concatenate(parts: &[&Trajectory], gap_s: f64) -> Result<(Self, Vec<f64>)> {
+        let poses: usize = parts.iter().map(|p| p.len()).sum();
+        if poses > MAX_POSES {
+            return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
+        }
+        let first = parts[0];
+        let mut joint = Self {
+            timestamps_s: Vec::with_capacity(poses),
+            coords: Vec::with_capacity(poses * first.dim),
+            dim: first.dim,
+            cell_widths_s: Vec::with_capacity(poses),
+            manifold: first.manifold,
+        };
+        let mut offsets = Vec::with_capacity(parts.len());
+        let mut next_start = 0.0;
+        for part in parts {
+            let offset = next_start - part.timestamps_s[0];
+            offsets.push(offset);
+            joint.timestamps_s.extend(part.timestamps_s.iter().map(|t| t + offset));
+            joint.coords.extend_from_slice(&part.coords);
+            joint.cell_widths_s.extend_from_slice(&part.cell_widths_s);
+            next_start = joint.timestamps_s[joint.timestamps_s.len() - 1] + gap_s;
+        }
+        Ok((joint, offsets))
+    }
+
     /// The same points, declared to lie on `manifold`: for the constructors of
     /// [`pose`](crate::Trajectory::se3), which lay the points out as the manifold's metrics expect.
     pub(crate) fn on(mut self, manifold: Manifold) -> Self {
@@ -374,13 +404,22 @@ pub(crate) fn cell_of(timestamps_s: &[f64], i: usize) -> (f64, f64) {
     (start, end)
 }
 
-/// Running sums `[0, w_0, w_0 + w_1, …]` of cell widths: the time width of cells `a..=b` is
-/// `prefix[b + 1] − prefix[a]`.
-pub(crate) fn prefix_sums(cell_widths_s: &[f64]) -> Vec<f64> {
+/// Running sums `P = [0, w_0, w_0 + w_1, …]` of cell widths, restarting at 0 at each session
+/// start in `breaks` (sorted; empty for one trajectory): `P[k]` sums the
+/// widths from the start of k's session to k − 1. The width of cells `a..=b` of one session is
+/// `(P[b] + w_b) − P[a]`, bit for bit what the session alone would give (and, without breaks,
+/// `P[b + 1] − P[a]`).
+pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> Vec<f64> {
     let mut prefix = Vec::with_capacity(cell_widths_s.len() + 1);
     prefix.push(0.0);
     let mut acc = 0.0;
-    for w in cell_widths_s {
+    let mut next_break = breaks.iter().peekable();
+    for (k, w) in cell_widths_s.iter().enumerate() {
+        if next_break.peek().is_some_and(|&&b| b as usize == k) {
+            next_break.next();
+            acc = 0.0;
+            *prefix.last_mut().expect("pushed") = 0.0;
+        }
         acc += w;
         prefix.push(acc);
     }

@@ -63,6 +63,18 @@ pub fn sample_loops<M: Metric + ?Sized>(
     loops: &Loops,
     sampler: &Sampler,
 ) -> Result<Samples> {
+    sample_loops_where(traj, metric, loops, sampler, &|_| true)
+}
+
+/// [`sample_loops`] over the components `keep` accepts only (a fleet's components between
+/// sessions); the baselines ignore it.
+pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    metric: &M,
+    loops: &Loops,
+    sampler: &Sampler,
+    keep: &(dyn Fn(usize) -> bool + Sync),
+) -> Result<Samples> {
     loops.check_trajectory(traj)?;
     check_fits(metric, traj)?;
     metric.check_dim(traj.dim())?;
@@ -72,7 +84,7 @@ pub fn sample_loops<M: Metric + ?Sized>(
     let mut warnings = Vec::new();
     sampler.check_applicable()?;
     let components = loops.components();
-    let wanted = |c: usize| !(sampler.skip_trivial && components[c].trivial);
+    let wanted = |c: usize| keep(c) && !(sampler.skip_trivial && components[c].trivial);
     let (pairs, groups, available): (Vec<Picked>, usize, u64) = match (kind, kind.baseline(&sampler.baseline)) {
         (_, Some(baseline)) => {
             let (pairs, proposed, rule_warnings) =

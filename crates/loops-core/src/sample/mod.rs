@@ -19,6 +19,7 @@ use rand_chacha::ChaCha8Rng;
 
 pub use clusters::sample_clusters;
 pub use exact::sample_loops;
+pub(crate) use exact::sample_loops_where;
 pub use kind::{Sampler, SamplerKind};
 pub use samples::{Sample, Samples};
 
