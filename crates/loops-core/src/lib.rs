@@ -99,7 +99,7 @@ pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_
 pub use separation::Separation;
 pub use spec::MetricSpec;
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
-pub use synth::{Districts, SyntheticDrive, UrbanDrive};
+pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 
 /// The most worker threads [`with_threads`] starts: far more than any machine has cores (the

@@ -49,6 +49,10 @@ pub struct UrbanDrive {
     /// Work the city one district at a time instead of roaming all of it: `None` (the default)
     /// is a random walk over the whole city.
     pub districts: Option<Districts>,
+    /// With districts, the district worked first, counted in their snake order (wrapping
+    /// around): vehicles of a fleet that start at different districts work different parts of
+    /// the city at any time. 0 by default.
+    pub first_district: usize,
 }
 
 /// A drive that works one square district at a time, like a delivery or mapping vehicle: it
@@ -115,10 +119,17 @@ impl Districts {
 
     /// The nodes (inclusive ranges along x and y) of the district the drive works at time
     /// `t_s`, in a city of `blocks` blocks a side.
+    #[cfg(test)]
     fn area(&self, t_s: f64, blocks: i64, block_m: f64) -> [[i64; 2]; 2] {
+        self.area_from(0, t_s, blocks, block_m)
+    }
+
+    /// [`area`](Self::area) of a drive that starts at the district `first` (snake order).
+    fn area_from(&self, first: usize, t_s: f64, blocks: i64, block_m: f64) -> [[i64; 2]; 2] {
         let side = ((self.side_m / block_m).round() as i64).clamp(1, blocks.max(1));
         let per_row = (blocks + side - 1) / side;
-        let index = ((t_s / self.dwell_s).floor() as i64).rem_euclid(per_row * per_row);
+        let count = per_row * per_row;
+        let index = ((t_s / self.dwell_s).floor() as i64 + (first as i64).rem_euclid(count)).rem_euclid(count);
         let (row, mut col) = (index / per_row, index % per_row);
         if row % 2 == 1 {
             col = per_row - 1 - col;
@@ -144,7 +155,105 @@ impl Default for UrbanDrive {
             lateral_noise_m: 0.1,
             seed: 0,
             districts: None,
+            first_district: 0,
         }
+    }
+}
+
+/// A fleet of vehicles in one city, over one or more days: every session an [`UrbanDrive`] of
+/// the template `drive` (its city, duration, rate and districts) with its own seed, start time
+/// and, with districts, its own first district, so that vehicles meet only where their paths
+/// cross. Sessions are named `car{v}-day{d}` (numbers zero-padded to the same width), in order
+/// of day, then vehicle; their clocks are seconds since the first day's midnight.
+///
+/// # Examples
+/// ```
+/// use loops_core::{UrbanDrive, UrbanFleet};
+/// let spec = UrbanFleet {
+///     vehicles: 3,
+///     days: 2,
+///     drive: UrbanDrive { duration_s: 120.0, seed: 7, ..UrbanDrive::default() },
+///     ..UrbanFleet::default()
+/// };
+/// let fleet = spec.generate()?;
+/// assert_eq!(fleet.len(), 6);
+/// assert_eq!(fleet.names()[4], "car1-day1");
+/// assert!(fleet.session(4).timestamps_s()[0] >= 86_400.0);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct UrbanFleet {
+    /// Vehicles, at least one.
+    pub vehicles: usize,
+    /// Days, at least one: each vehicle drives once a day.
+    pub days: usize,
+    /// Each session's drive; its `seed` is the fleet's seed, from which every session's own
+    /// seed, start and first district are drawn.
+    pub drive: UrbanDrive,
+    /// Sessions start at a time drawn uniformly within this many seconds of midnight.
+    pub start_spread_s: f64,
+}
+
+impl Default for UrbanFleet {
+    /// 10 vehicles, one day, 10-minute drives in the default 1 km² city, starts spread over an
+    /// hour.
+    fn default() -> Self {
+        Self {
+            vehicles: 10,
+            days: 1,
+            drive: UrbanDrive { duration_s: 600.0, ..UrbanDrive::default() },
+            start_spread_s: 3600.0,
+        }
+    }
+}
+
+impl UrbanFleet {
+    /// Generates the sessions (in parallel; the same seed gives the same fleet on any number
+    /// of threads).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for no vehicles or days, a negative or non-finite spread, or
+    /// more sessions than 2³²; the drive's own errors; [`Fleet::new`](crate::Fleet::new)'s.
+    pub fn generate(&self) -> Result<crate::fleet::Fleet> {
+        use rayon::prelude::*;
+        for (name, value) in [("vehicles", self.vehicles), ("days", self.days)] {
+            if value == 0 {
+                return Err(Error::InvalidParameter { name, value: 0.0, expected: "at least 1" });
+            }
+        }
+        if !(self.start_spread_s >= 0.0 && self.start_spread_s.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "start_spread_s",
+                value: self.start_spread_s,
+                expected: "a finite number of seconds, at least 0",
+            });
+        }
+        let sessions = self.vehicles.checked_mul(self.days).filter(|&n| n <= u32::MAX as usize).ok_or(
+            Error::InvalidParameter {
+                name: "vehicles * days",
+                value: self.vehicles as f64 * self.days as f64,
+                expected: "at most 2³² sessions",
+            },
+        )?;
+        self.drive.validate()?;
+        let width = |n: usize| (n - 1).max(1).ilog10() as usize + 1;
+        let (vw, dw) = (width(self.vehicles), width(self.days));
+        let drives: Vec<(String, Trajectory)> = (0..sessions)
+            .into_par_iter()
+            .map(|k| {
+                let (day, vehicle) = (k / self.vehicles, k % self.vehicles);
+                // Each session's own stream of the fleet seed.
+                let mut rng = ChaCha8Rng::seed_from_u64(self.drive.seed);
+                rng.set_stream(1 + k as u64);
+                let start = day as f64 * 86_400.0 + rng.random::<f64>() * self.start_spread_s;
+                let spec = UrbanDrive { seed: rng.random(), first_district: vehicle, ..self.drive.clone() };
+                let drive = spec.generate()?;
+                let times = drive.trajectory.timestamps_s().iter().map(|t| t + start).collect();
+                let traj = Trajectory::new(times, drive.trajectory.coords().to_vec(), drive.trajectory.dim())?;
+                Ok((format!("car{vehicle:0vw$}-day{day:0dw$}"), traj))
+            })
+            .collect::<Result<_>>()?;
+        crate::fleet::Fleet::new(drives)
     }
 }
 
@@ -206,7 +315,8 @@ impl UrbanDrive {
         }
         // The box of nodes the walk keeps to at a time: the whole city, or the current district.
         let area = |t: f64| -> [[i64; 2]; 2] {
-            self.districts.map_or([[0, blocks], [0, blocks]], |d| d.area(t, blocks, self.block_m))
+            self.districts
+                .map_or([[0, blocks], [0, blocks]], |d| d.area_from(self.first_district, t, blocks, self.block_m))
         };
         let start = area(0.0);
         let mut node = [rng.random_range(start[0][0]..=start[0][1]), rng.random_range(start[1][0]..=start[1][1])];
@@ -494,5 +604,34 @@ mod tests {
         }
         let bad = UrbanDrive { duration_s: 0.1, ..UrbanDrive::default() };
         assert!(bad.generate().is_err());
+    }
+
+    #[test]
+    fn fleet_vehicles_start_in_their_own_districts_and_reproduce() {
+        let spec = UrbanFleet {
+            vehicles: 4,
+            days: 1,
+            drive: UrbanDrive {
+                duration_s: 60.0,
+                city_size_m: 2000.0,
+                districts: Some(Districts { side_m: 1000.0, dwell_s: 600.0 }),
+                seed: 3,
+                ..UrbanDrive::default()
+            },
+            start_spread_s: 10.0,
+        };
+        let fleet = spec.generate().unwrap();
+        // Snake order over 2 × 2 districts: (0, 0), (1, 0), (1, 1), (0, 1).
+        let corners = [[0.0, 0.0], [1000.0, 0.0], [1000.0, 1000.0], [0.0, 1000.0]];
+        for (v, corner) in corners.iter().enumerate() {
+            let traj = fleet.session(v);
+            let p = traj.point(0);
+            assert!((0..2).all(|k| p[k] >= corner[k] - 5.0 && p[k] <= corner[k] + 1005.0), "car {v} at {p:?}");
+            assert!((0.0..10.0).contains(&traj.timestamps_s()[0]));
+        }
+        assert_eq!(fleet.names(), ["car0-day0", "car1-day0", "car2-day0", "car3-day0"]);
+        let again = spec.generate().unwrap();
+        assert!((0..4).all(|v| again.session(v) == fleet.session(v)), "seeded");
+        assert!(UrbanFleet { vehicles: 0, ..spec.clone() }.generate().is_err());
     }
 }

@@ -485,6 +485,7 @@ pub(crate) fn urban_drive(
         lateral_noise_m: lateral_noise_m.unwrap_or(d.lateral_noise_m),
         seed: seed.unwrap_or(d.seed),
         districts,
+        first_district: d.first_district,
     };
     wrap(py, move || {
         let drive = spec.generate()?;
