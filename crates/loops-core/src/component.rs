@@ -148,7 +148,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
 }
 
 /// Rows whose runs are joined by one rayon task before the joins across tasks.
-const ROWS_PER_LABEL_TASK: usize = 1 << 14;
+pub(crate) const ROWS_PER_LABEL_TASK: usize = 1 << 14;
 
 /// The component id of every run, ids numbered by first appearance (row-major), and the number
 /// of components.
@@ -159,7 +159,7 @@ const ROWS_PER_LABEL_TASK: usize = 1 << 14;
 /// stretch only touches its own slice of the parent array), then the pairs of rows across
 /// stretches. The result does not depend on the stretches or the thread count. O(runs · log)
 /// worst case, near-linear in practice; 4 bytes a run.
-fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, u32) {
+pub(crate) fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, u32) {
     let run_count = set.runs().len();
     debug_assert!(run_count <= u32::MAX as usize, "run ids are u32");
     let mut parent: Vec<u32> = (0..run_count as u32).into_par_iter().collect();
@@ -188,7 +188,7 @@ fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, u32) {
 
 /// Calls `f(a, b)` for every pair of runs `a` (row i) and `b` (row i + 1) that share a column,
 /// for the rows i in `upper_rows`, in order.
-fn for_each_overlap(set: &SublevelSet, upper_rows: Range<usize>, mut f: impl FnMut(usize, usize)) {
+pub(crate) fn for_each_overlap(set: &SublevelSet, upper_rows: Range<usize>, mut f: impl FnMut(usize, usize)) {
     for i in upper_rows {
         if set.breaks_after(i) {
             // The last row of one session and the first of the next are not adjacent.

@@ -342,7 +342,8 @@ pub fn find_fleet_loops<M: Metric + ?Sized>(
         Some(index) => Pruner::Chunks(&balls, index),
         None => Pruner::Hierarchy(&balls),
     };
-    let set = SublevelSet::scan(joint, metric, gamma, separation, &arc, pruner, &first_columns, &fleet.starts);
+    let set =
+        SublevelSet::scan(joint, metric, gamma, separation, &arc, pruner, &first_columns, &fleet.starts, joint.len());
     drop(index);
     let loops = Loops::from_set(joint, metric, set);
     let blocks =

@@ -70,6 +70,7 @@ mod spatial;
 mod spec;
 mod sublevel;
 mod synth;
+mod tile;
 mod trajectory;
 mod union_find;
 
@@ -100,6 +101,7 @@ pub use separation::Separation;
 pub use spec::MetricSpec;
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
+pub use tile::{EdgeRun, Tile, TileComponent, TileSummary, merge_tiles, plan_tiles, scan_tile};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 
 /// The most worker threads [`with_threads`] starts: far more than any machine has cores (the

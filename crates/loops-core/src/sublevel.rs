@@ -128,12 +128,14 @@ impl SublevelSet {
         );
         let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s());
         arc.plain = Vec::new();
-        Ok(Self::scan(traj, metric, gamma, separation, &arc, Pruner::Hierarchy(&balls), &first_columns, &[0]))
+        let pruner = Pruner::Hierarchy(&balls);
+        Ok(Self::scan(traj, metric, gamma, separation, &arc, pruner, &first_columns, &[0], traj.len()))
     }
 
     /// The scan of [`compute_separated`](Self::compute_separated), over the sessions starting at
     /// `starts` (`[0]` for one trajectory): row blocks never span two sessions, runs are cut
-    /// where a session starts, and rows of different sessions are not 4-adjacent.
+    /// where a session starts, and rows of different sessions are not 4-adjacent. Only the rows
+    /// before `scan_rows` are scanned (a tile's rows); the others are left empty.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn scan<M: Metric + ?Sized>(
         traj: &Trajectory,
@@ -144,13 +146,14 @@ impl SublevelSet {
         pruner: Pruner<'_>,
         first_columns: &[u32],
         starts: &[usize],
+        scan_rows: usize,
     ) -> Self {
         let n = traj.len();
         let scanner = RowScanner { traj, metric, arc, pruner, gamma, first_columns, starts };
-        // Blocks of rows, cut where a session starts.
+        // Blocks of rows, cut where a session starts; rows from `scan_rows` on are left empty.
         let mut block_rows: Vec<std::ops::Range<usize>> = Vec::with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len());
         for (k, &start) in starts.iter().enumerate() {
-            let end = starts.get(k + 1).copied().unwrap_or(n);
+            let end = starts.get(k + 1).copied().unwrap_or(n).min(scan_rows);
             block_rows.extend((start..end).step_by(ROWS_PER_TASK).map(|a| a..(a + ROWS_PER_TASK).min(end)));
         }
         let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Vec<Block> {
@@ -190,6 +193,8 @@ impl SublevelSet {
             scanned = rayon::join(|| set.append(previous), || scan_batch(batch)).1;
         }
         set.append(scanned);
+        let last = set.runs.len();
+        set.row_offsets.resize(n + 1, last);
         set.runs.shrink_to_fit();
         set.closest.shrink_to_fit();
         set

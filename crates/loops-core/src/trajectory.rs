@@ -247,6 +247,18 @@ impl Trajectory {
         Ok((joint, offsets))
     }
 
+    /// The poses `range` with their own time cells (not half cells at the cut): a piece of a
+    /// session for a tile. May hold a single pose.
+    pub(crate) fn piece(&self, range: std::ops::Range<usize>) -> Self {
+        Self {
+            timestamps_s: self.timestamps_s[range.clone()].to_vec(),
+            coords: self.coords[range.start * self.dim..range.end * self.dim].to_vec(),
+            dim: self.dim,
+            cell_widths_s: self.cell_widths_s[range].to_vec(),
+            manifold: self.manifold,
+        }
+    }
+
     /// The same points, declared to lie on `manifold`: for the constructors of
     /// [`pose`](crate::Trajectory::se3), which lay the points out as the manifold's metrics expect.
     pub(crate) fn on(mut self, manifold: Manifold) -> Self {

@@ -9,7 +9,7 @@ use std::collections::{HashMap, VecDeque};
 
 use loops_core::{
     Euclidean, Fleet, FleetOptions, Metric, Pruning, SampleSize, Sampler, SamplerKind, Separation, Trajectory,
-    find_fleet_loops, find_loops, find_loops_separated, sample_fleet,
+    find_fleet_loops, find_loops, find_loops_separated, merge_tiles, plan_tiles, sample_fleet, scan_tile,
 };
 use proptest::prelude::*;
 
@@ -208,8 +208,67 @@ fn planar(traj: &Trajectory, shift: [f64; 2]) -> Trajectory {
     Trajectory::from_points(traj.timestamps_s().to_vec(), &points).unwrap()
 }
 
+/// Tiles of every size, scanned apart and merged, give the fleet's components.
+fn check_tiles(sessions: &[Trajectory], gamma: f64, separation: Separation) -> Result<(), String> {
+    let named: Vec<(String, Trajectory)> =
+        sessions.iter().enumerate().map(|(k, t)| (format!("s{k}"), t.clone())).collect();
+    let fleet = Fleet::new(named).map_err(|e| e.to_string())?;
+    let options = FleetOptions { separation, ..FleetOptions::default() };
+    let whole = find_fleet_loops(&fleet, &Euclidean, gamma, &options).map_err(|e| e.to_string())?;
+    let expected = whole.loops().components();
+    let longest = sessions.iter().map(Trajectory::len).max().unwrap_or(1);
+    for per_session in [1, 2, 7, longest] {
+        let block = longest.div_ceil(per_session).max(1);
+        let tiles = plan_tiles(&fleet, &Euclidean, gamma, block).map_err(|e| e.to_string())?;
+        let mut summaries = Vec::new();
+        // Any order: the reversed order of the plan.
+        for tile in tiles.iter().rev() {
+            summaries.push(scan_tile(&fleet, &Euclidean, gamma, separation, tile).map_err(|e| e.to_string())?);
+        }
+        let merged = merge_tiles(&summaries).map_err(|e| e.to_string())?;
+        if merged.len() != expected.len() {
+            return Err(format!("block {block}: {} components, the fleet {}", merged.len(), expected.len()));
+        }
+        for (m, e) in merged.iter().zip(expected) {
+            let exact = |c: &loops_core::LoopComponent| {
+                (
+                    c.id,
+                    c.trivial,
+                    c.pair_count,
+                    c.run_count,
+                    c.holes,
+                    c.i_range,
+                    c.j_range,
+                    c.closest_pair,
+                    c.closest_distance,
+                )
+            };
+            if exact(m) != exact(e) || (m.area_s2 - e.area_s2).abs() > 1e-10 * (e.area_s2 + 1.0) {
+                return Err(format!("block {block} ({} tiles): {m:?} != {e:?}", tiles.len()));
+            }
+        }
+    }
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(support::config(96, 0xF1EE7))]
+
+    #[test]
+    fn tiles_merge_to_the_fleet_result(
+        cases in prop::collection::vec(support::any_case(50), 1..4),
+        shifts in prop::collection::vec((-2.0..2.0f64, -2.0..2.0f64), 4),
+        separated in any::<bool>(),
+    ) {
+        let gamma = cases[0].gamma;
+        let sessions: Vec<Trajectory> = cases
+            .iter()
+            .zip(&shifts)
+            .map(|(c, &(x, y))| planar(&c.traj, [x * gamma, y * gamma]))
+            .collect();
+        let separation = if separated { Separation { path: 2.0 * gamma, time_s: 0.0 } } else { Separation::NONE };
+        check_tiles(&sessions, gamma, separation).map_err(TestCaseError::fail)?;
+    }
 
     #[test]
     fn random_fleets_match_the_references(
@@ -252,6 +311,8 @@ fn adversarial_fleets_match_the_references() {
         for separation in [Separation::NONE, Separation::path(3.0 * gamma)] {
             let sessions = [a.clone(), a.clone(), reversed.clone(), parked.clone(), parked_far.clone(), far.clone()];
             check_fleet(&sessions, gamma, separation).unwrap_or_else(|e| panic!("γ = {gamma}, {separation}: {e}"));
+            check_tiles(&sessions, gamma, separation)
+                .unwrap_or_else(|e| panic!("tiles, γ = {gamma}, {separation}: {e}"));
         }
     }
 }
