@@ -26,7 +26,7 @@
 //! `trajectory` (ξ, time cells, [`Timeline`]) → `metric` (δ) → `manifold` and `pose` (metrics
 //! and points on manifolds) → `spec` ([`MetricSpec`]) → `sublevel` (S_γ, [`check_gamma`]) →
 //! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → `plane` (π_ξ and ∂Ω on a
-//! [`PlaneGrid`]) → `draw` ([`SampleSize`],
+//! [`PlaneGrid`]) → `verdict` (where given pairs fall: [`Loops::pair_verdicts`]) → `draw` ([`SampleSize`],
 //! uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph, [`check_epsilon_s`]) →
 //! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `synth`,
 //! `ball_tree` and `union_find` are helpers. Every public item is re-exported here.
@@ -73,6 +73,7 @@ mod synth;
 mod tile;
 mod trajectory;
 mod union_find;
+mod verdict;
 
 pub use baseline::{Baseline, BaselineParams, Cartographer, HdlGraphSlam, LioSam, TimeGap};
 pub use cluster::{DEFAULT_EPSILON_S, DetectionCluster, DetectionClusters, check_epsilon_s, cluster_detections};
@@ -103,6 +104,7 @@ pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
 pub use tile::{EdgeRun, Tile, TileComponent, TileSummary, merge_tiles, plan_tiles, scan_tile};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
+pub use verdict::{PairVerdict, Verdict};
 
 /// The most worker threads [`with_threads`] starts: far more than any machine has cores (the
 /// engine gains nothing past one thread per core), and few enough that a mistyped count is
