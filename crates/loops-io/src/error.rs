@@ -214,6 +214,16 @@ pub enum IoError {
         /// What is wrong.
         message: String,
     },
+    /// A pose graph that gives no trajectory as asked: edges but no vertices (unless its
+    /// odometry edges are chained, `chain_edges`), or odometry edges with a gap (naming the
+    /// vertex no edge reaches).
+    #[error("{}: {message}", .path.display())]
+    PoseGraph {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, and what would do.
+        message: String,
+    },
     /// A file could not be written: it exists and overwriting was not asked for, or the system
     /// refused.
     #[error(transparent)]
@@ -233,6 +243,7 @@ impl IoError {
             | Self::Ros1 { path, .. }
             | Self::Sqlite { path, .. }
             | Self::Bag { path, .. }
+            | Self::PoseGraph { path, .. }
             | Self::Join { path, .. }
             | Self::TopicNotFound { path, .. }
             | Self::NoPoseTopic { path, .. }

@@ -1,8 +1,13 @@
 //! Pose graphs in g2o and TORO text: vertices (the poses) and edges (the constraints between
 //! them, among which the loop closures).
 
+mod chain;
+
 use std::collections::HashMap;
 use std::path::Path;
+
+pub use chain::EdgeChain;
+use chain::{chain_odometry, no_vertices};
 
 use crate::error::{IoError, Result};
 use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw};
@@ -20,10 +25,15 @@ pub struct PoseGraph {
     pub vertex_ids: Vec<u64>,
     /// The edges between pose vertices, in file order.
     pub edges: Vec<GraphEdge>,
+    /// For a file without vertices read with `chain_edges`
+    /// ([`read_pose_graph_with`](crate::read_pose_graph_with)): how its vertices were chained
+    /// from its odometry edges (dead reckoning). `None` when the file gave its vertices.
+    pub chain: Option<EdgeChain>,
 }
 
-/// An edge of a [`PoseGraph`]: a measured relative pose from vertex `from` to vertex `to`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+/// An edge of a [`PoseGraph`]: a measured relative pose from vertex `from` to vertex `to`, and
+/// how much it is trusted (its information matrix).
+#[derive(Debug, Clone, PartialEq)]
 pub struct GraphEdge {
     /// The id of the first vertex.
     pub from: u64,
@@ -31,9 +41,80 @@ pub struct GraphEdge {
     pub to: u64,
     /// The 1-based line of the edge in the file.
     pub line: usize,
+    /// The measured pose of vertex `to` in the frame of vertex `from`.
+    pub measurement: RelativePose,
+    /// The upper triangle of the information matrix, row by row, in g2o's order: 6 values for a
+    /// 2-D edge (rows and columns x, y, θ: `xx xy xθ yy yθ θθ`), 21 for a 3-D one (x, y, z and
+    /// the rotation: qx, qy, qz for `EDGE_SE3:QUAT`, roll, pitch, yaw for `EDGE3`). TORO's
+    /// `EDGE2` lines write theirs as `xx xy yy θθ xθ yθ`; they are reordered. Empty when the
+    /// line ends after the measurement.
+    pub information: Vec<f64>,
+}
+
+/// The measurement of a [`GraphEdge`]: the pose of its second vertex in the frame of its first.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RelativePose {
+    /// A 2-D edge (`EDGE_SE2`, `EDGE2`): `dx dy dθ` as written, metres and radians.
+    Se2 {
+        /// `[dx, dy]`.
+        translation: [f64; 2],
+        /// `dθ`, radians, as written (not wrapped).
+        rotation_rad: f64,
+    },
+    /// A 3-D edge (`EDGE_SE3:QUAT`, `EDGE3`): translation and rotation.
+    Se3 {
+        /// `[x, y, z]`.
+        translation: [f64; 3],
+        /// The rotation as a quaternion `[qx, qy, qz, qw]`: as written for `EDGE_SE3:QUAT` (not
+        /// normalised), from roll, pitch and yaw (`R = Rz(yaw) Ry(pitch) Rx(roll)`) for `EDGE3`.
+        rotation_xyzw: [f64; 4],
+    },
 }
 
 impl GraphEdge {
+    /// The edge of a line tagged `tag` (`word` as written): its ids, the numbers after them
+    /// (`values`) and the fields that follow (the information matrix, from column `column + 1`).
+    fn read<'a>(
+        tag: Tag,
+        word: &str,
+        ids: [u64; 2],
+        values: &[f64; 7],
+        rest: impl Iterator<Item = &'a str>,
+        column: usize,
+        line: usize,
+    ) -> std::result::Result<Self, String> {
+        let v = values;
+        let (measurement, count) = match tag {
+            Tag::Edge2 => (RelativePose::Se2 { translation: [v[0], v[1]], rotation_rad: v[2] }, 6),
+            Tag::Edge3Quat => {
+                (RelativePose::Se3 { translation: [v[0], v[1], v[2]], rotation_xyzw: [v[3], v[4], v[5], v[6]] }, 21)
+            }
+            Tag::Edge3Euler => {
+                let rotation_xyzw = quaternion_from_roll_pitch_yaw(v[3], v[4], v[5]);
+                (RelativePose::Se3 { translation: [v[0], v[1], v[2]], rotation_xyzw }, 21)
+            }
+            Tag::Vertex2 | Tag::Vertex3Quat | Tag::Vertex3Euler => unreachable!("a vertex is not an edge"),
+        };
+        let fields: Vec<&str> = rest.collect();
+        if !fields.is_empty() && fields.len() != count {
+            return Err(format!(
+                "{word} has {} number(s) after the measurement; the information matrix is {count} \
+                 (its upper triangle), or none",
+                fields.len()
+            ));
+        }
+        let mut information = Vec::with_capacity(fields.len());
+        for (k, field) in fields.into_iter().enumerate() {
+            information.push(text::parse_finite(field, column + 1 + k)?);
+        }
+        if word == "EDGE2" && !information.is_empty() {
+            // TORO: xx xy yy θθ xθ yθ.
+            let t = &information;
+            information = vec![t[0], t[1], t[4], t[2], t[5], t[3]];
+        }
+        Ok(Self { from: ids[0], to: ids[1], line, measurement, information })
+    }
+
     /// Whether the edge joins vertices more than one id apart: a loop closure in graphs whose
     /// odometry edges join consecutive ids (all the classic data sets).
     pub fn is_loop_closure(&self) -> bool {
@@ -50,6 +131,25 @@ impl PoseGraph {
     /// The row of `vertices` holding vertex `id`, if there is one. Time O(log n).
     pub fn vertex_index(&self, id: u64) -> Option<usize> {
         self.vertex_ids.binary_search(&id).ok()
+    }
+
+    /// The rows of `vertices` (pose indices of the trajectory) that `edge` joins: `[from, to]`,
+    /// in the edge's order. Every edge of a graph read from a file has both (an edge to a
+    /// missing vertex is an error); `None` for an edge of another graph. Time O(log n).
+    ///
+    /// # Examples
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-rows.g2o", std::process::id()));
+    /// std::fs::write(&path, "VERTEX_SE2 10 0 0 0\nVERTEX_SE2 20 1 0 0\nEDGE_SE2 20 10 -1 0 0\n")?;
+    /// let graph = loops_io::read_pose_graph(&path, &Default::default())?;
+    /// assert_eq!(graph.edge_rows(&graph.edges[0]), Some([1, 0]));
+    /// # std::fs::remove_file(&path)?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn edge_rows(&self, edge: &GraphEdge) -> Option<[usize; 2]> {
+        Some([self.vertex_index(edge.from)?, self.vertex_index(edge.to)?])
     }
 }
 
@@ -98,8 +198,9 @@ impl Tag {
 
 /// Reads a pose graph in g2o or TORO text: `VERTEX_SE2 id x y θ` / `VERTEX2`,
 /// `VERTEX_SE3:QUAT id x y z qx qy qz qw`, `VERTEX3 id x y z roll pitch yaw`, and the edges
-/// `EDGE_SE2 i j ...` / `EDGE2`, `EDGE_SE3:QUAT i j ...`, `EDGE3 i j ...` (the measurement must
-/// be there; the information matrix after it is not read).
+/// `EDGE_SE2 i j ...` / `EDGE2`, `EDGE_SE3:QUAT i j ...`, `EDGE3 i j ...`: the measurement
+/// ([`GraphEdge::measurement`]), then the upper triangle of the information matrix or nothing
+/// ([`GraphEdge::information`]).
 ///
 /// Vertices are sorted by id; each vertex's time is its id in seconds, or `id / rate` or a times
 /// file by `timing` ([`Timing`]; a times file gives one time per vertex in id order). 2-D
@@ -116,7 +217,9 @@ impl Tag {
 /// - [`IoError::Parse`] for a vertex or edge line with too few columns, an id that is not a
 ///   non-negative integer, a field that is not a finite number, 2-D and 3-D poses in one
 ///   file, an id given twice, or an edge to a vertex the file does not have, naming the line;
-/// - [`IoError::Empty`] without pose vertices;
+/// - [`IoError::PoseGraph`] for a file of edges without vertices, saying that
+///   [`read_pose_graph_with`](crate::read_pose_graph_with) with `chain_edges` chains them;
+/// - [`IoError::Empty`] without vertices or edges;
 /// - as [`Timing`] for a bad rate or times file.
 ///
 /// # Examples
@@ -135,7 +238,7 @@ impl Tag {
 /// ```
 pub fn read_pose_graph(path: impl AsRef<Path>, timing: &Timing) -> Result<PoseGraph> {
     let path = path.as_ref();
-    parse_pose_graph(path, &text::read_text(path)?, timing)
+    parse_pose_graph(path, &text::read_text(path)?, timing, false)
 }
 
 /// One vertex as read.
@@ -147,8 +250,9 @@ struct Vertex {
     line: usize,
 }
 
-/// The pose graph in `text`, the contents of `path`.
-pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing) -> Result<PoseGraph> {
+/// The pose graph in `text`, the contents of `path`; a file without vertices is chained from
+/// its odometry edges when `chain_edges` ([`chain_odometry`]).
+pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing, chain_edges: bool) -> Result<PoseGraph> {
     let mut vertices = Vec::new();
     let mut edges = Vec::new();
     let mut dim: Option<(usize, usize)> = None;
@@ -166,7 +270,7 @@ pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing) -> Resu
                 parse_error(format!("column {count} ({field:?}) is not a vertex id (a non-negative integer)"))
             })?;
         }
-        for (value, field) in values.iter_mut().zip(fields).take(value_count) {
+        for (value, field) in values.iter_mut().zip(fields.by_ref()).take(value_count) {
             count += 1;
             *value = text::parse_finite(field, count).map_err(parse_error)?;
         }
@@ -185,7 +289,10 @@ pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing) -> Resu
             None => dim = Some((tag_dim, line)),
         }
         match tag {
-            Tag::Edge2 | Tag::Edge3Quat | Tag::Edge3Euler => edges.push(GraphEdge { from: ids[0], to: ids[1], line }),
+            Tag::Edge2 | Tag::Edge3Quat | Tag::Edge3Euler => {
+                let word = content.split_ascii_whitespace().next().unwrap_or_default();
+                edges.push(GraphEdge::read(tag, word, ids, &values, fields, count, line).map_err(parse_error)?);
+            }
             Tag::Vertex2 => vertices.push(Vertex {
                 id: ids[0],
                 position: [values[0], values[1], 0.0],
@@ -206,9 +313,24 @@ pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing) -> Resu
             }),
         }
     }
-    if vertices.is_empty() {
-        return Err(IoError::Empty { path: path.to_path_buf() });
-    }
+    let chain = match (vertices.is_empty(), edges.first()) {
+        (true, Some(_)) if !chain_edges => return Err(no_vertices(path, &edges)),
+        (true, Some(_)) => {
+            let (poses, chain) = chain_odometry(path, &edges)?;
+            vertices = poses
+                .into_iter()
+                .map(|pose| Vertex {
+                    id: pose.id,
+                    position: pose.position,
+                    orientation: pose.orientation_xyzw,
+                    line: pose.line,
+                })
+                .collect();
+            Some(chain)
+        }
+        (true, None) => return Err(IoError::Empty { path: path.to_path_buf() }),
+        (false, _) => None,
+    };
     vertices.sort_by_key(|vertex| vertex.id);
     if let Some(pair) = vertices.windows(2).find(|pair| pair[0].id == pair[1].id) {
         let (first, second) = if pair[0].line < pair[1].line { (pair[0], pair[1]) } else { (pair[1], pair[0]) };
@@ -235,7 +357,7 @@ pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing) -> Resu
     table.positions = vertices.iter().map(|vertex| vertex.position).collect();
     table.orientations_xyzw = Some(vertices.iter().map(|vertex| vertex.orientation).collect());
     table.source_lines = vertices.iter().map(|vertex| vertex.line).collect();
-    Ok(PoseGraph { vertices: table, vertex_ids: vertices.iter().map(|vertex| vertex.id).collect(), edges })
+    Ok(PoseGraph { vertices: table, vertex_ids: vertices.iter().map(|vertex| vertex.id).collect(), edges, chain })
 }
 
 /// Whether the first data line is a g2o or TORO vertex or edge.

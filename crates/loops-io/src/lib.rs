@@ -79,7 +79,7 @@
 // 4. MCAP: `mcap_records` (the record walker), `mcap` (topics and poses), `mcap_write`;
 // 5. readers: `csv`, `euroc`, `graph`, `kitti`, `tuc`, `tum`, `detections`; `read` picks one;
 // 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
-//    `loop_duration`, `report`, `quality`, `samples`; and `write` (TUM, g2o).
+//    `loop_duration`, `report`, `quality`, `samples`, `edge_verdicts`; and `write` (TUM, g2o).
 mod atomic;
 mod bag;
 mod cdr;
@@ -90,6 +90,7 @@ mod csv;
 mod csv_rows;
 mod detections;
 mod dropped;
+mod edge_verdicts;
 mod error;
 mod euroc;
 mod format;
@@ -123,10 +124,11 @@ pub use bag::{list_frame_pairs, list_topics, read_ros1, read_rosbag2};
 pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
 pub use detections::{DetectionTable, read_detections};
 pub use dropped::Dropped;
+pub use edge_verdicts::{EDGE_VERDICT_COLUMNS, EdgeVerdictRow, EdgeVerdicts, VerdictCounts};
 pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};
 pub use euroc::read_euroc;
 pub use format::Format;
-pub use graph::{GraphEdge, PoseGraph, read_pose_graph};
+pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, read_pose_graph};
 pub use kitti::read_kitti;
 pub use loop_duration::{
     LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
@@ -136,7 +138,9 @@ pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_m
 pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
 pub use quality::QualitySummary;
-pub use read::{ReadOptions, format_of, read_trajectory, read_trajectory_with};
+pub use read::{
+    ReadOptions, format_of, read_pose_graph_with, read_trajectory, read_trajectory_chaining, read_trajectory_with,
+};
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};

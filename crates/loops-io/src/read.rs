@@ -7,7 +7,7 @@ use crate::csv::parse_csv;
 use crate::error::{IoError, Result};
 use crate::euroc::{looks_like_euroc, parse_euroc};
 use crate::format::Format;
-use crate::graph::{looks_like_graph, parse_pose_graph};
+use crate::graph::{EdgeChain, PoseGraph, looks_like_graph, parse_pose_graph};
 use crate::kitti::parse_kitti;
 use crate::mcap::{McapOptions, read_mcap};
 use crate::table::PoseTable;
@@ -36,6 +36,11 @@ pub struct ReadOptions {
     pub mcap: McapOptions,
     /// For KITTI and pose graphs: a rate or a times file instead of the file's times.
     pub timing: Timing,
+    /// For pose graphs without vertices (a list of edges): chain the odometry edges (vertex
+    /// `k` to `k + 1`) into a trajectory, from the first vertex at the origin. That trajectory
+    /// is dead reckoning; [`read_pose_graph_with`] says whether a file was chained
+    /// ([`PoseGraph::chain`]). Without it such a file is an error that names this option.
+    pub chain_edges: bool,
 }
 
 impl ReadOptions {
@@ -56,6 +61,84 @@ impl ReadOptions {
         self.timing = timing;
         self
     }
+
+    /// Chains the odometry edges of a pose graph without vertices ([`chain_edges`](Self::chain_edges)).
+    pub fn chain_edges(mut self, chain_edges: bool) -> Self {
+        self.chain_edges = chain_edges;
+        self
+    }
+}
+
+/// Reads a pose graph as [`read_pose_graph`](crate::read_pose_graph) does, with the times of
+/// `options.timing` and, with `options.chain_edges`, a file of edges without vertices chained
+/// from its odometry edges ([`PoseGraph::chain`] says how; the format and MCAP options are not
+/// used).
+///
+/// # Errors
+/// As [`read_pose_graph`](crate::read_pose_graph); with `chain_edges`, [`IoError::PoseGraph`]
+/// naming the first vertex that no odometry edge reaches, and [`IoError::Parse`] for an edge
+/// whose quaternion is zero.
+///
+/// # Examples
+/// An `EDGE2` list (TORO): one step forward, a quarter turn, one step forward.
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_io::{ReadOptions, read_pose_graph_with};
+/// let path = std::env::temp_dir().join(format!("loops-io-doc-{}-chain.graph", std::process::id()));
+/// std::fs::write(&path, "EDGE2 0 1 1 0 1.5707963267948966\nEDGE2 1 2 1 0 0\nEDGE2 2 0 -1 1 -1.5707963267948966\n")?;
+/// assert!(read_pose_graph_with(&path, &ReadOptions::default()).is_err()); // no vertex
+/// let graph = read_pose_graph_with(&path, &ReadOptions::default().chain_edges(true))?;
+/// let last = graph.vertices.positions[2];
+/// assert!((last[0] - 1.0).abs() < 1e-12 && (last[1] - 1.0).abs() < 1e-12);
+/// assert_eq!(graph.chain.map(|chain| chain.poses()), Some(3));
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_pose_graph_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<PoseGraph> {
+    let path = path.as_ref();
+    parse_pose_graph(path, &text::read_text(path)?, &options.timing, options.chain_edges)
+}
+
+/// Reads a pose file as [`read_trajectory_with`], and says how a pose graph's poses were chained
+/// from its edges when `options.chain_edges` chained them (`None` otherwise): what the caller
+/// warns about, as dead reckoning.
+///
+/// # Errors
+/// As [`read_trajectory_with`].
+pub fn read_trajectory_chaining(
+    path: impl AsRef<Path>,
+    options: &ReadOptions,
+) -> Result<(PoseTable, Option<EdgeChain>)> {
+    let path = path.as_ref();
+    let format = match options.format {
+        Some(format) => format,
+        None => detect(path)?,
+    };
+    match format {
+        Format::Mcap => return Ok((read_mcap(path, &options.mcap)?, None)),
+        Format::Rosbag2 => return Ok((read_rosbag2(path, &options.mcap)?, None)),
+        Format::Ros1 => return Ok((read_ros1(path, &options.mcap)?, None)),
+        _ => {}
+    }
+    let text = text::read_text(path)?;
+    let sniffed = match options.format {
+        Some(_) => format,
+        None => sniff(format, &text),
+    };
+    let table = match sniffed {
+        Format::Tum => parse_tum(path, &text),
+        Format::Csv => parse_csv(path, &text),
+        Format::Kitti => parse_kitti(path, &text, &options.timing),
+        Format::Euroc => parse_euroc(path, &text),
+        Format::G2o => {
+            let graph = parse_pose_graph(path, &text, &options.timing, options.chain_edges)?;
+            return Ok((graph.vertices, graph.chain));
+        }
+        Format::Tuc => parse_tuc(path, &text),
+        Format::Mcap | Format::Rosbag2 | Format::Ros1 => unreachable!("logs with topics are read above"),
+    }?;
+    Ok((table, None))
 }
 
 /// Reads a pose file in `format`, or when `None` in the format its extension and first line
@@ -93,35 +176,14 @@ pub fn read_trajectory(path: impl AsRef<Path>, format: Option<Format>) -> Result
 /// comma-separated numbers starting with a nanosecond integer is EuRoC. A pose graph gives its
 /// vertices ([`read_pose_graph`](crate::read_pose_graph) gives the edges too).
 ///
+/// A pose graph without vertices is chained from its odometry edges with `options.chain_edges`
+/// (dead reckoning, which [`read_trajectory_chaining`] reports), and an error without.
+///
 /// # Errors
 /// [`IoError::UnknownFormat`] when `format` is `None` and the extension does not tell it;
 /// otherwise as the format's reader.
 pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<PoseTable> {
-    let path = path.as_ref();
-    let format = match options.format {
-        Some(format) => format,
-        None => detect(path)?,
-    };
-    match format {
-        Format::Mcap => return read_mcap(path, &options.mcap),
-        Format::Rosbag2 => return read_rosbag2(path, &options.mcap),
-        Format::Ros1 => return read_ros1(path, &options.mcap),
-        _ => {}
-    }
-    let text = text::read_text(path)?;
-    let sniffed = match options.format {
-        Some(_) => format,
-        None => sniff(format, &text),
-    };
-    match sniffed {
-        Format::Tum => parse_tum(path, &text),
-        Format::Csv => parse_csv(path, &text),
-        Format::Kitti => parse_kitti(path, &text, &options.timing),
-        Format::Euroc => parse_euroc(path, &text),
-        Format::G2o => parse_pose_graph(path, &text, &options.timing).map(|graph| graph.vertices),
-        Format::Tuc => parse_tuc(path, &text),
-        Format::Mcap | Format::Rosbag2 | Format::Ros1 => unreachable!("logs with topics are read above"),
-    }
+    read_trajectory_chaining(path, options).map(|(table, _)| table)
 }
 
 /// The format [`read_trajectory`] reads `path` in when none is given: from the extension
