@@ -120,7 +120,7 @@ mod write;
 pub use crate::csv::read_csv;
 pub use crate::mcap::{McapOptions, TimeSource, read_mcap, read_mcap_files};
 pub use atomic::{StagedFiles, write_atomically};
-pub use bag::{list_frame_pairs, list_topics, read_ros1, read_rosbag2};
+pub use bag::{list_frame_pairs, list_topics, log_name, read_ros1, read_rosbag2};
 pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
 pub use detections::{DetectionTable, read_detections};
 pub use dropped::Dropped;

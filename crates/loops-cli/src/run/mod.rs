@@ -82,7 +82,7 @@ pub(crate) struct RunArgs {
 #[derive(Debug)]
 struct Job {
     path: PathBuf,
-    /// The log's folder name in --out: its file stem, made unique in the batch.
+    /// The log's folder name in --out: its name (a bag's folder name), made unique in the batch.
     name: String,
 }
 
@@ -255,7 +255,8 @@ pub(crate) fn run(args: RunArgs) -> Result<u8> {
     Ok(if failed == 0 { 0 } else { 1 })
 }
 
-/// A folder name per log: the file stem, with `-2`, `-3`, ... for repeated stems. Logs inside
+/// A folder name per log: its name ([`loops_io::log_name`]: the file stem, or a rosbag2 bag's
+/// folder name however the bag is given), with `-2`, `-3`, ... for repeated names. Logs inside
 /// --out are refused (results must never land on inputs), with links resolved on both sides.
 fn jobs(logs: &[PathBuf], out: &Path) -> Result<Vec<Job>> {
     let out_abs = resolved(out)?;
@@ -266,7 +267,7 @@ fn jobs(logs: &[PathBuf], out: &Path) -> Result<Vec<Job>> {
         if abs.starts_with(&out_abs) {
             bail!("{} lies inside --out {}; write the results elsewhere", path.display(), out.display());
         }
-        let stem = path.file_stem().map_or_else(|| "log".to_owned(), |s| s.to_string_lossy().into_owned());
+        let stem = loops_io::log_name(path);
         let stem: String =
             stem.chars().map(|c| if c.is_control() || c == '/' || c == '\\' { '_' } else { c }).collect();
         let stem = if stem.starts_with('.') || stem.is_empty() { format!("log{stem}") } else { stem };

@@ -84,6 +84,51 @@ pub fn read_rosbag2(path: impl AsRef<Path>, options: &McapOptions) -> Result<Pos
     scan.into_table(files, options)
 }
 
+/// A short name for the log at `path`, for a folder of results or a row of a table: a rosbag2
+/// bag's folder name, however the bag is named (its folder, its `metadata.yaml`, or one of its
+/// storage files; a storage file of a bag of several splits adds its own name,
+/// `drive-drive_1`); otherwise the file name without its storage and compression extensions
+/// (`drive.mcap`, `drive.db3.zstd` and `drive.bag` are all `drive`). Not made unique: two bags
+/// in folders of the same name have the same name.
+///
+/// Time O(1), or the reading of a bag's `metadata.yaml` for one of its storage files.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_io::log_name;
+/// let bag = std::env::temp_dir().join(format!("loops-io-doc-{}-drive_2024", std::process::id()));
+/// std::fs::create_dir_all(&bag)?;
+/// std::fs::write(bag.join("metadata.yaml"), "rosbag2_bagfile_information:\n  relative_file_paths: [drive_0.db3]\n")?;
+/// std::fs::write(bag.join("drive_0.db3"), "")?;
+/// let name = bag.file_name().unwrap().to_string_lossy().into_owned();
+/// for given in [bag.clone(), bag.join("metadata.yaml"), bag.join("drive_0.db3")] {
+///     assert_eq!(log_name(&given), name);
+/// }
+/// assert_eq!(log_name("logs/monday.db3.zstd"), "monday");
+/// assert_eq!(log_name("logs/monday.tum"), "monday");
+/// # std::fs::remove_dir_all(&bag)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn log_name(path: impl AsRef<Path>) -> String {
+    let path = path.as_ref();
+    let full =
+        std::fs::canonicalize(path).or_else(|_| std::path::absolute(path)).unwrap_or_else(|_| path.to_path_buf());
+    let name_of = |p: &Path| p.file_name().map(|name| name.to_string_lossy().into_owned());
+    let folder = full.parent().filter(|_| !full.is_dir());
+    let stem = rosbag2::log_stem(&full);
+    let bag_folder = match folder {
+        None => return name_of(&full).unwrap_or(stem),
+        Some(folder) if rosbag2::is_yaml(&full) => folder,
+        Some(folder) if rosbag2::is_storage(&full) && folder.join("metadata.yaml").is_file() => folder,
+        Some(_) => return stem,
+    };
+    let Some(bag) = name_of(bag_folder) else { return stem };
+    let splits = Rosbag2::resolve(bag_folder).map_or(1, |bag| bag.files.len());
+    if rosbag2::is_storage(&full) && splits > 1 { format!("{bag}-{stem}") } else { bag }
+}
+
 /// Reads the poses of one topic of a ROS 1 bag (format 2.0; chunks uncompressed, bz2 or lz4):
 /// `geometry_msgs/PoseStamped`, `PoseWithCovarianceStamped`, `TransformStamped`,
 /// `nav_msgs/Odometry`, `tf/tfMessage` and `tf2_msgs/TFMessage` (one frame pair).

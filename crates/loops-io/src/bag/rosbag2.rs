@@ -82,6 +82,29 @@ fn storage_of_name(path: &Path) -> Option<(Storage, Option<Frame>)> {
     Some((storage, compression))
 }
 
+/// Whether `path` names a YAML file (a bag's `metadata.yaml`).
+pub(crate) fn is_yaml(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"))
+}
+
+/// Whether `path` names a storage file (`.db3`, `.mcap`, compressed or not).
+pub(crate) fn is_storage(path: &Path) -> bool {
+    storage_of_name(path).is_some()
+}
+
+/// The file name of `path` without its extension, and without a storage extension under a
+/// compression one: `drive.db3.zstd` is `drive`, `drive.tum` is `drive`.
+pub(crate) fn log_stem(path: &Path) -> String {
+    let inner = match Frame::of_name(path) {
+        Some(_) => path.file_stem().map_or(path, Path::new),
+        None => path,
+    };
+    let stem = if inner != path && storage_of_name(path).is_none() { inner.file_name() } else { inner.file_stem() };
+    stem.map_or_else(String::new, |stem| stem.to_string_lossy().into_owned())
+}
+
 impl Rosbag2 {
     /// The bag at `path`: a folder (with or without `metadata.yaml`), a `metadata.yaml` (or any
     /// `.yaml` file of a bag), or one storage file (that file alone).
