@@ -55,6 +55,11 @@ pub(crate) struct InputArgs {
     /// for files that print 4 decimals].
     #[arg(long, value_name = "TOLERANCE", allow_hyphen_values = true)]
     quaternion_tolerance: Option<f64>,
+    /// For a pose graph without vertices (a list of edges): chain its odometry edges (vertex i
+    /// to i+1) into a trajectory from the first vertex at the origin. That is dead reckoning,
+    /// and the command says so; a gap in the chain is an error naming the vertex.
+    #[arg(long)]
+    chain_edges: bool,
 }
 
 impl InputArgs {
@@ -82,7 +87,7 @@ impl InputArgs {
         if let Some(times) = &self.times {
             options = options.timing(loops_io::Timing::TimesFile(times.clone()));
         }
-        Ok(options)
+        Ok(options.chain_edges(self.chain_edges))
     }
 
     /// Reads `files` as one trajectory: the poses as read (orientations included) and the
@@ -91,7 +96,7 @@ impl InputArgs {
     /// merged by time (a recording split in parts); other files must follow one another in
     /// time, and are joined in time order (each checked first, so that an error names its file
     /// and line). Each file's dropped duplicate stamps (--drop-duplicate-stamps) are one line
-    /// on stderr.
+    /// on stderr, as is each pose graph chained from its edges (--chain-edges: dead reckoning).
     pub(crate) fn read_table(&self, files: &[PathBuf], spec: &MetricSpec) -> Result<(PoseTable, Trajectory)> {
         let axes = self.plane()?;
         let options = self.options()?;
@@ -101,7 +106,11 @@ impl InputArgs {
         } else {
             let mut tables = Vec::with_capacity(files.len());
             for file in files {
-                tables.push(loops_io::read_trajectory_with(file, &options)?);
+                let (table, chain) = loops_io::read_trajectory_chaining(file, &options)?;
+                if let Some(chain) = chain {
+                    eprintln!("loops: warning: {chain}");
+                }
+                tables.push(table);
             }
             tables
         };

@@ -62,7 +62,7 @@ fn describe(out: &mut impl Write, file: &Path, options: &ReadOptions) -> Result<
     let options = options.clone().format(format);
     let (table, graph) = match format {
         Format::G2o => {
-            let graph = loops_io::read_pose_graph(file, &options.timing)?;
+            let graph = loops_io::read_pose_graph_with(file, &options)?;
             (graph.vertices.clone(), Some(graph))
         }
         _ => (loops_io::read_trajectory_with(file, &options)?, None),
@@ -85,6 +85,14 @@ fn describe(out: &mut impl Write, file: &Path, options: &ReadOptions) -> Result<
             graph.edges.len(),
             graph.loop_closures().count()
         )?;
+        if let Some(chain) = &graph.chain {
+            writeln!(
+                out,
+                "  no vertices: the poses are its {} odometry edges chained from vertex {} (--chain-edges): dead \
+                 reckoning",
+                chain.odometry_edges, chain.first_id
+            )?;
+        }
     }
     Ok(())
 }
