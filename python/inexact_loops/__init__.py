@@ -31,6 +31,7 @@ from ._core import (
     Detections,
     Loops,
     PlaneGrid,
+    PoseGraph,
     SampleQuality,
     Samples,
     Separation,
@@ -47,6 +48,7 @@ from ._core import (
     outline_segments,
     path_length,
     read_detections,
+    read_pose_graph,
     read_trajectory,
     sample,
     sample_quality,
@@ -54,6 +56,7 @@ from ._core import (
     urban_drive,
 )
 from .errors import (
+    DeadReckoningWarning,
     DiagonalBrokenWarning,
     DroppedInputWarning,
     EmptyResultWarning,
@@ -70,6 +73,7 @@ from .errors import (
 from .table import Table
 
 __all__ = [
+    "DeadReckoningWarning",
     "DetectionClusters",
     "Detections",
     "DiagonalBrokenWarning",
@@ -85,6 +89,7 @@ __all__ = [
     "LoopsWarning",
     "NoLoopsWarning",
     "PlaneGrid",
+    "PoseGraph",
     "SampleBudgetWarning",
     "SampleQuality",
     "Samples",
@@ -104,6 +109,7 @@ __all__ = [
     "outline_segments",
     "path_length",
     "read_detections",
+    "read_pose_graph",
     "read_trajectory",
     "sample",
     "sample_quality",

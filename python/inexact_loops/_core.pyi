@@ -22,6 +22,7 @@ __all__ = [
     "Detections",
     "Loops",
     "PlaneGrid",
+    "PoseGraph",
     "SampleQuality",
     "Samples",
     "Trajectory",
@@ -35,6 +36,7 @@ __all__ = [
     "isocontour",
     "outline_segments",
     "read_detections",
+    "read_pose_graph",
     "read_trajectory",
     "run_cli",
     "sample",
@@ -541,6 +543,54 @@ class Loops:
             >>> loops.pair_counts_per_component([3, 0, 0, 1], [0, 3, 1, 2]).tolist()
             [0, 2, 1, 0]
         """
+    def pair_verdicts(
+        self,
+        i: npt.ArrayLike,
+        j: npt.ArrayLike,
+        trajectory: Trajectory,
+        *,
+        metric: str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None = None,
+    ) -> Table:
+        """Where each pair ``(i[k], j[k])`` (either order) falls, with δ: in a loop component, in a
+        trivial one, within γ but not a revisit, or outside S_γ — for the loop-closure edges of a
+        pose graph (:meth:`PoseGraph.edge_verdicts`), the detections of a place recognizer, any
+        pairs.
+
+        The verdicts (column ``verdict``):
+
+        - ``"component"``: in a non-trivial loop component (``component`` its id): a revisit;
+        - ``"trivial"``: in a trivial component, a simple loop (only with ``separation=None``);
+        - ``"not-separated"``: δ ≤ γ, but the two poses are closer along the trajectory than the
+          loops' :class:`Separation` (path length or time, checked as the engine checks it): not
+          a revisit, in no component (only with a separation);
+        - ``"outside"``: δ > γ, outside S_γ.
+
+        Args:
+            i, j: integer pose indices, shape ``(m,)``.
+            trajectory: the :class:`Trajectory` the loops were found on.
+            metric: the metric they were found with; ``None`` takes it from the loops (pass the
+                same callable for loops found with one).
+
+        Returns:
+            :class:`~inexact_loops.Table`: ``i``, ``j`` (int64, as given), ``distance``
+            (float64, δ in the metric's unit), ``verdict`` (str) and ``component`` (int64, −1 in
+            none).
+
+        Raises:
+            IndexError: a pose index past the last pose (or negative).
+            ValueError: ``i`` and ``j`` of different lengths.
+            InvalidParameterError: another trajectory, or another metric, than the loops'.
+
+        Example:
+            Out along a line and back: the way back revisits the way out, 3 m of path later.
+
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(7.0), np.array([0.0, 1, 2, 3, 2, 1, 0]))
+            >>> loops = il.find_loops(traj, gamma=0.5, separation=il.Separation(path=3.0))
+            >>> table = loops.pair_verdicts([0, 2, 0], [6, 4, 3], traj)
+            >>> table["verdict"].tolist(), table["component"].tolist(), table["distance"].tolist()
+            (['component', 'not-separated', 'outside'], [0, -1, -1], [0.0, 0.0, 3.0])
+        """
     def loop_duration(
         self,
         *,
@@ -798,6 +848,7 @@ def read_trajectory(
     times: str | PathLike[str] | None = None,
     drop_duplicate_stamps: bool = False,
     quaternion_tolerance: float | None = None,
+    chain_edges: bool = False,
 ) -> Trajectory:
     """Reads a trajectory file: TUM, CSV, KITTI, EuRoC, TUC, g2o/TORO pose graphs, MCAP logs
     (ROS 2 and Foxglove pose, odometry and transform messages), rosbag2 bags (sqlite3 or MCAP,
@@ -838,6 +889,9 @@ def read_trajectory(
             warning saying how many (default: they are an error).
         quaternion_tolerance: how far from unit length a quaternion may be and still be
             normalised (default 1e-3: files often print 4 decimals).
+        chain_edges: for a pose graph without vertices (a list of edges), chain its odometry
+            edges into a trajectory, with a :class:`DeadReckoningWarning` (see
+            :func:`read_pose_graph`); without it such a file is an error naming this option.
 
     Raises:
         OSError: the file cannot be opened. LoopsIOError: a malformed line or message (the
@@ -1709,4 +1763,169 @@ def run_cli(args: list[str]) -> int:
 
     Returns:
         The exit code.
+    """
+
+@final
+class PoseGraph:
+    """A pose graph read from a g2o or TORO file (:func:`read_pose_graph`): its vertices as a
+    :class:`Trajectory` and a :class:`~inexact_loops.Table`, and its edges — odometry and loop
+    closures, with their relative poses and information matrices — as a table.
+
+    Row k of :attr:`vertices` is pose k of :attr:`trajectory` (vertices sorted by id); the
+    edges' ``i`` and ``j`` are those pose indices. The vertex values of the classic data sets
+    are odometry guesses, not ground truth.
+
+    Example:
+        >>> import pathlib, tempfile, inexact_loops as il
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "square.g2o"
+        >>> _ = path.write_text(
+        ...     "VERTEX_SE2 0 0 0 0\\nVERTEX_SE2 1 1 0 1.5708\\nVERTEX_SE2 2 1 1 3.1416\\n"
+        ...     "EDGE_SE2 0 1 1 0 1.5708 10 0 0 10 0 100\\nEDGE_SE2 1 2 1 0 1.5708 10 0 0 10 0 100\\n"
+        ...     "EDGE_SE2 2 0 1 1 -3.1416 5 0 0 5 0 50\\n")
+        >>> graph = il.read_pose_graph(path)
+        >>> graph
+        PoseGraph(3 vertices, 3 edges, 1 loop closures, 2-D)
+        >>> edges = graph.edges
+        >>> edges["i"].tolist(), edges["j"].tolist(), edges["loop_closure"].tolist()
+        ([0, 1, 2], [1, 2, 0], [False, False, True])
+        >>> edges["dtheta"].tolist(), edges["info_22"].tolist()
+        ([1.5708, 1.5708, -3.1416], [100.0, 100.0, 50.0])
+    """
+
+    def __repr__(self) -> str: ...
+    @property
+    def trajectory(self) -> Trajectory:
+        """The vertices as a :class:`Trajectory`, built for the ``metric`` and ``axes`` given to
+        :func:`read_pose_graph` (positions by default); pose k is vertex ``vertex_ids[k]``.
+        """
+    @property
+    def vertex_ids(self) -> npt.NDArray[np.int64]:
+        """The vertex ids, increasing: int64, one per pose."""
+    @property
+    def dim(self) -> int:
+        """2 or 3: the dimension of the graph's poses."""
+    @property
+    def chained(self) -> bool:
+        """Whether the file had no vertices and they were chained from its odometry edges
+        (``chain_edges=True``): dead reckoning.
+        """
+    @property
+    def vertices(self) -> Table:
+        """The vertices as a :class:`~inexact_loops.Table`, one row per pose of :attr:`trajectory`:
+        ``id`` (int64), ``t`` (float64, seconds: the id, or as ``rate_hz`` / ``times`` say),
+        ``x``, ``y``, then ``theta`` (2-D: the heading, radians in (−π, π]) or ``z``, ``qx``,
+        ``qy``, ``qz``, ``qw`` (3-D), and ``line`` (int64: the vertex's line in the file; for a
+        chained graph, the line of the edge that placed it).
+
+        Example:
+            >>> import pathlib, tempfile, inexact_loops as il
+            >>> path = pathlib.Path(tempfile.mkdtemp()) / "two.graph"
+            >>> _ = path.write_text("VERTEX2 7 1.5 2 0.25\\nVERTEX2 3 0 0 0\\n")
+            >>> vertices = il.read_pose_graph(path).vertices
+            >>> list(vertices), vertices["id"].tolist(), vertices["theta"].tolist()
+            (['id', 't', 'x', 'y', 'theta', 'line'], [3, 7], [0.0, 0.25])
+        """
+    @property
+    def edges(self) -> Table:
+        """The edges as a :class:`~inexact_loops.Table`, one row per edge in file order: ``line``,
+        ``from_id``, ``to_id`` (int64), ``i``, ``j`` (int64: the pose indices of the two
+        vertices in :attr:`trajectory`), ``loop_closure`` (bool: the vertices are more than one
+        id apart), the measured pose of ``to_id`` in the frame of ``from_id`` — ``dx``, ``dy``,
+        ``dtheta`` (2-D, as written) or ``dx``, ``dy``, ``dz``, ``qx``, ``qy``, ``qz``, ``qw``
+        (3-D; TORO's roll, pitch, yaw as a quaternion) — and the information matrix's upper
+        triangle ``info_ab`` (float64, rows and columns x, y, θ in 2-D; x, y, z and the three
+        rotation parameters in 3-D; g2o's order, TORO's ``EDGE2`` reordered; NaN where the line
+        gives none).
+
+        The full matrices, shape ``(edges, 3, 3)`` in 2-D::
+
+            info = np.zeros((edges.num_rows, 3, 3))
+            for a in range(3):
+                for b in range(a, 3):
+                    info[:, a, b] = info[:, b, a] = edges[f"info_{a}{b}"]
+        """
+    def edge_verdicts(
+        self,
+        loops: Loops,
+        *,
+        metric: str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None = None,
+    ) -> Table:
+        """Where each loop-closure edge (vertices more than one id apart) falls against ``loops``,
+        found on :attr:`trajectory`: a :class:`~inexact_loops.Table` with the rows and columns of
+        ``loops components --edges-csv`` — ``line``, ``from_id``, ``to_id``, ``i``, ``j``,
+        ``t_s``, ``t_prime_s``, ``distance`` (δ under the loops' metric), ``verdict`` (str) and
+        ``component`` (int64, −1 in none). The verdicts are those of :meth:`Loops.pair_verdicts`:
+        ``"component"``, ``"trivial"``, ``"not-separated"``, ``"outside"``.
+
+        Args:
+            loops: :class:`Loops` found on :attr:`trajectory`.
+            metric: the metric the loops were found with; ``None`` takes it from the loops (pass
+                the same callable for loops found with one).
+
+        Raises:
+            InvalidParameterError: loops of another trajectory or metric.
+
+        Example:
+            >>> import pathlib, tempfile, inexact_loops as il
+            >>> path = pathlib.Path(tempfile.mkdtemp()) / "back.g2o"
+            >>> xs = [0, 1, 2, 3, 2, 1, 0.1]
+            >>> text = "".join(f"VERTEX_SE2 {k} {x} 0 0\\n" for k, x in enumerate(xs))
+            >>> _ = path.write_text(text + "EDGE_SE2 6 0 0 0 0\\nEDGE_SE2 4 2 0 0 0\\nEDGE_SE2 3 0 0 0 0\\n")
+            >>> graph = il.read_pose_graph(path)
+            >>> loops = il.find_loops(graph.trajectory, gamma=0.5, separation=il.Separation(path=3.0))
+            >>> graph.edge_verdicts(loops)["verdict"].tolist()
+            ['component', 'not-separated', 'outside']
+        """
+
+def read_pose_graph(
+    path: str | PathLike[str],
+    *,
+    metric: str | _MetricLike | None = None,
+    axes: tuple[int, int] | None = None,
+    rate_hz: float | None = None,
+    times: str | PathLike[str] | None = None,
+    chain_edges: bool = False,
+    quaternion_tolerance: float | None = None,
+) -> PoseGraph:
+    """Reads a pose graph in g2o or TORO text (``VERTEX_SE2`` / ``VERTEX2``, ``VERTEX_SE3:QUAT``,
+    ``VERTEX3`` and their ``EDGE`` lines): its vertices as a trajectory and a table, and its
+    edges — relative pose and information matrix — as a table (:class:`PoseGraph`).
+
+    A file of edges without vertices (an ``EDGE3`` list, ``EDGE2`` odometry and loop closures)
+    is an error, unless ``chain_edges=True``: then its odometry edges (vertex k to k + 1) are
+    composed from the first vertex at the origin, and a :class:`DeadReckoningWarning` says that
+    the poses are dead reckoning, whose error grows along the path. A gap in the chain is an
+    error naming the vertex no edge reaches.
+
+    Args:
+        path: the file (``.g2o``, ``.graph``, or a ``.txt`` whose first line is a vertex or edge).
+        metric, axes: the trajectory's points, as in :func:`read_trajectory` (positions by
+            default; ``"se2(rotation_weight_m_per_rad=W)"`` for x, y and the heading).
+        rate_hz: vertex id k at k / rate_hz seconds (default: the id in seconds).
+        times: a file of one time a line, one per vertex in id order.
+        chain_edges: chain the odometry edges of a file without vertices (dead reckoning).
+        quaternion_tolerance: as in :func:`read_trajectory`.
+
+    Returns:
+        :class:`PoseGraph`.
+
+    Raises:
+        OSError: the file cannot be opened. LoopsIOError: a malformed line (naming it), edges
+        without vertices (naming ``chain_edges``), a gap in the odometry chain.
+        InvalidParameterError: both ``rate_hz`` and ``times``; a metric whose points are not
+        poses.
+
+    Warns:
+        DeadReckoningWarning: the vertices were chained from the edges (``chain_edges=True`` on
+            a file without vertices).
+
+    Example:
+        >>> import pathlib, tempfile, warnings, inexact_loops as il
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "edges.graph"
+        >>> _ = path.write_text("EDGE2 0 1 1 0 1.5707963267948966\\nEDGE2 1 2 1 0 0\\nEDGE2 2 0 -1 1 -1.5707963267948966\\n")
+        >>> with warnings.catch_warnings(record=True) as caught:
+        ...     warnings.simplefilter("always")
+        ...     graph = il.read_pose_graph(path, chain_edges=True)
+        >>> graph.trajectory.positions.round(12).tolist(), caught[0].category.__name__
+        ([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], 'DeadReckoningWarning')
     """

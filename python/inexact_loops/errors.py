@@ -17,6 +17,7 @@ is issued as :class:`LoopsWarning` itself.
 """
 
 __all__ = [
+    "DeadReckoningWarning",
     "DiagonalBrokenWarning",
     "DroppedInputWarning",
     "EmptyResultWarning",
@@ -74,6 +75,14 @@ class DroppedInputWarning(LoopsWarning):
     repeating the stamp before) in :func:`read_trajectory`, ``drop_outside_span=True``
     (detections outside the trajectory's time span) in :func:`read_detections`. The message names
     the file, the count and the lines."""
+
+
+class DeadReckoningWarning(LoopsWarning):
+    """A pose graph without vertices was read with ``chain_edges=True``
+    (:func:`read_pose_graph`, :func:`read_trajectory`): its poses are its odometry edges composed
+    from the first vertex, dead reckoning, whose error grows along the path; loops that its
+    loop-closure edges close may not close in it. The message names the file and the vertices
+    chained."""
 
 
 class EmptyResultWarning(LoopsWarning):

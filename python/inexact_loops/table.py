@@ -2,6 +2,9 @@
 
 The tabular results (:attr:`Loops.components <inexact_loops.Loops.components>`,
 :meth:`Loops.runs <inexact_loops.Loops.runs>`,
+:meth:`Loops.pair_verdicts <inexact_loops.Loops.pair_verdicts>`,
+:attr:`PoseGraph.vertices <inexact_loops.PoseGraph.vertices>`,
+:attr:`PoseGraph.edges <inexact_loops.PoseGraph.edges>`,
 :attr:`DetectionClusters.clusters <inexact_loops.DetectionClusters.clusters>`,
 :attr:`SampleQuality.missed <inexact_loops.SampleQuality.missed>`) are :class:`Table` objects:
 plain ``dict`` s of plain numpy arrays, so ``table["area_s2"]``, ``table.items()`` and
@@ -30,7 +33,8 @@ _PANDAS_MISSING = (
 class Table(dict[str, npt.NDArray[Any]]):
     """Columns of a result: a ``dict`` from column name to a 1-D numpy array, all of the same
     length (one row per item), in a fixed column order. Each result documents its columns and
-    their dtypes (``int64``, ``float64`` or ``bool``).
+    their dtypes (``int64``, ``float64``, ``bool``, or ``str`` for names such as a pair's
+    verdict).
 
     Example:
         >>> import numpy as np, inexact_loops as il

@@ -92,6 +92,30 @@ ELSEWHERE = {
     "chain_polylines": ("python/test_plane.py", "test_chain_polylines_use_every_edge_once"),
     "isocontour": ("python/test_plane.py", "test_isocontour_crosses_between_pixel_centres"),
     "sampler_symbol": ("python/test_plane.py", "test_sampler_symbols_come_from_the_core"),
+    **{
+        name: ("python/test_pose_graphs.py", "test_tables_of_a_3d_graph")
+        for name in (
+            "read_pose_graph",
+            "PoseGraph",
+            "PoseGraph.trajectory",
+            "PoseGraph.vertex_ids",
+            "PoseGraph.dim",
+            "PoseGraph.vertices",
+            "PoseGraph.edges",
+        )
+    },
+    **{
+        name: ("python/test_pose_graphs.py", "test_chained_se3_quat_edges_give_back_the_vertices")
+        for name in ("PoseGraph.chained", "DeadReckoningWarning")
+    },
+    "PoseGraph.edge_verdicts": (
+        "python/test_pose_graphs.py",
+        "test_edge_verdicts_are_the_brute_forces",
+    ),
+    "Loops.pair_verdicts": (
+        "python/test_pose_graphs.py",
+        "test_verdicts_refuse_another_trajectory_or_metric",
+    ),
 }
 
 

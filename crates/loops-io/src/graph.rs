@@ -10,7 +10,7 @@ pub use chain::EdgeChain;
 use chain::{chain_odometry, no_vertices};
 
 use crate::error::{IoError, Result};
-use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw};
+use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw, yaw_of};
 use crate::table::PoseTable;
 use crate::text;
 use crate::timing::Timing;
@@ -150,6 +150,13 @@ impl PoseGraph {
     /// ```
     pub fn edge_rows(&self, edge: &GraphEdge) -> Option<[usize; 2]> {
         Some([self.vertex_index(edge.from)?, self.vertex_index(edge.to)?])
+    }
+
+    /// For a 2-D graph, the heading θ of each vertex (radians in (−π, π], as the rotation about
+    /// z its orientation holds: the file's θ, wrapped); `None` for a 3-D graph.
+    pub fn headings_rad(&self) -> Option<Vec<f64>> {
+        let orientations = self.vertices.orientations_xyzw.as_ref()?;
+        (self.vertices.dim == 2).then(|| orientations.iter().map(|&q| yaw_of(q)).collect())
     }
 }
 

@@ -214,6 +214,19 @@ pub(crate) fn bool_column<'py, R>(py: Python<'py>, rows: &[R], value: impl Fn(&R
     to_numpy(py, rows.iter().map(value).collect()).into_any()
 }
 
+/// A table column of names as a numpy array of `str` (dtype `<U…`; `<U1` when empty).
+pub(crate) fn str_column<'py>(
+    py: Python<'py>,
+    values: impl Iterator<Item = &'static str>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let list = pyo3::types::PyList::new(py, values)?;
+    let numpy = py.import("numpy")?;
+    if list.is_empty() {
+        return numpy.call_method1("array", (list, "<U1"));
+    }
+    numpy.call_method1("array", (list,))
+}
+
 /// The Python class of tabular results (`inexact_loops/table.py`: a `dict` of numpy columns with
 /// `to_pandas()`), imported once.
 static TABLE: PyOnceLock<Py<PyType>> = PyOnceLock::new();

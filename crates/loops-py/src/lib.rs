@@ -8,7 +8,8 @@
 //! (`Loops`, `find_loops`, `path_length`), `py_separation` (`Separation`), `py_detections`
 //! (`Detections`, `draw_detections`, `read_detections`), `py_clusters` (`DetectionClusters`,
 //! `cluster_detections`), `py_samples` (`Samples`, `sample`) and
-//! `py_quality` (`SampleQuality`, `sample_quality`). Below them: `convert` (arguments to Rust
+//! `py_quality` (`SampleQuality`, `sample_quality`); `py_graph` (`PoseGraph`, `read_pose_graph`).
+//! Below them: `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
 //! (the one mapping of errors to exceptions) and `warning` (the one mapping of the engine's
 //! warnings to Python warning categories). Beside them, `cli` (`run_cli`): the `loops` command
@@ -19,6 +20,7 @@ mod convert;
 mod error;
 mod py_clusters;
 mod py_detections;
+mod py_graph;
 mod py_loops;
 mod py_metric;
 mod py_plane;
@@ -74,5 +76,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_plane::isocontour, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::sampler_symbol, module)?)?;
     module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
+    module.add_class::<py_graph::PoseGraph>()?;
+    module.add_function(wrap_pyfunction!(py_graph::read_pose_graph, module)?)?;
     Ok(())
 }

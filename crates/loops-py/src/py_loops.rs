@@ -7,13 +7,15 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
-use crate::convert::{bool_column, float64_column, index_column, int64_column, pose_index, table, to_numpy};
+use crate::convert::{
+    bool_column, float64_column, id_column, index_column, int64_column, pose_index, str_column, table, to_numpy,
+};
 use crate::detached;
 use crate::error::{Failure, value_error};
-use crate::py_metric::{MetricArg, MetricRef};
+use crate::py_metric::{MetricArg, MetricRef, loops_metric};
 use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::Trajectory;
-use loops_core::{LabelledRun, Scale, Selection, Side, Timeline};
+use loops_core::{LabelledRun, PairVerdict, Scale, Selection, Side, Timeline};
 
 /// Finds every inexact loop of ``trajectory`` at threshold ``gamma`` exactly (every pair
 /// (t, t′) with δ ≤ γ, nothing subsampled) and partitions them into loop components.
@@ -400,6 +402,71 @@ impl Loops {
         j: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, numpy::PyArray1<i64>>> {
         pair_counts_per_component(py, &self.inner, i, j)
+    }
+
+    /// Where each pair ``(i[k], j[k])`` (either order) falls, with δ: in a loop component, in a
+    /// trivial one, within γ but not a revisit, or outside S_γ — for the loop-closure edges of a
+    /// pose graph (:meth:`PoseGraph.edge_verdicts`), the detections of a place recognizer, any
+    /// pairs.
+    ///
+    /// The verdicts (column ``verdict``):
+    ///
+    /// - ``"component"``: in a non-trivial loop component (``component`` its id): a revisit;
+    /// - ``"trivial"``: in a trivial component, a simple loop (only with ``separation=None``);
+    /// - ``"not-separated"``: δ ≤ γ, but the two poses are closer along the trajectory than the
+    ///   loops' :class:`Separation` (path length or time, checked as the engine checks it): not
+    ///   a revisit, in no component (only with a separation);
+    /// - ``"outside"``: δ > γ, outside S_γ.
+    ///
+    /// Args:
+    ///     i, j: integer pose indices, shape ``(m,)``.
+    ///     trajectory: the :class:`Trajectory` the loops were found on.
+    ///     metric: the metric they were found with; ``None`` takes it from the loops (pass the
+    ///         same callable for loops found with one).
+    ///
+    /// Returns:
+    ///     :class:`~inexact_loops.Table`: ``i``, ``j`` (int64, as given), ``distance``
+    ///     (float64, δ in the metric's unit), ``verdict`` (str) and ``component`` (int64, −1 in
+    ///     none).
+    ///
+    /// Raises:
+    ///     IndexError: a pose index past the last pose (or negative).
+    ///     ValueError: ``i`` and ``j`` of different lengths.
+    ///     InvalidParameterError: another trajectory, or another metric, than the loops'.
+    ///
+    /// Example:
+    ///     Out along a line and back: the way back revisits the way out, 3 m of path later.
+    ///
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(7.0), np.array([0.0, 1, 2, 3, 2, 1, 0]))
+    ///     >>> loops = il.find_loops(traj, gamma=0.5, separation=il.Separation(path=3.0))
+    ///     >>> table = loops.pair_verdicts([0, 2, 0], [6, 4, 3], traj)
+    ///     >>> table["verdict"].tolist(), table["component"].tolist(), table["distance"].tolist()
+    ///     (['component', 'not-separated', 'outside'], [0, -1, -1], [0.0, 0.0, 3.0])
+    #[pyo3(signature = (i, j, trajectory, *, metric=None))]
+    fn pair_verdicts<'py>(
+        &self,
+        py: Python<'py>,
+        i: &Bound<'_, PyAny>,
+        j: &Bound<'_, PyAny>,
+        trajectory: &Trajectory,
+        metric: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let metric = loops_metric(metric, &self.inner)?;
+        let (pairs, inner, traj) = (pairs(py, i, j)?, Arc::clone(&self.inner), Arc::clone(&trajectory.inner));
+        let verdicts: Vec<PairVerdict> =
+            metric.run(py, None, move |m| inner.pair_verdicts(&traj, m.as_metric(), &pairs))?;
+        let v = &verdicts;
+        table(
+            py,
+            [
+                ("i", int64_column(py, v, |p| p.pair[0])),
+                ("j", int64_column(py, v, |p| p.pair[1])),
+                ("distance", float64_column(py, v, |p| p.distance)),
+                ("verdict", str_column(py, v.iter().map(|p| p.verdict.name()))?),
+                ("component", id_column(py, v.iter().map(|p| p.verdict.component())).into_any()),
+            ],
+        )
     }
 
     /// Loop duration τ(t_i) for every sample: how long the trajectory stays within γ of

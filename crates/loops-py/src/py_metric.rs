@@ -63,6 +63,21 @@ impl MetricArg {
     }
 }
 
+/// The metric to sample or classify pairs of `loops` under: the one given, or the one the
+/// loops were found with.
+pub(crate) fn loops_metric(metric: Option<&Bound<'_, PyAny>>, loops: &loops_core::Loops) -> PyResult<MetricArg> {
+    if metric.is_some() {
+        return MetricArg::from_py(metric);
+    }
+    match loops.metric_name().parse::<loops_core::MetricSpec>() {
+        Ok(spec) => Ok(MetricArg::Spec(spec)),
+        Err(_) => Err(crate::error::invalid_parameter(format!(
+            "the loops were found with the metric {:?}, which is not a metric name: pass metric= (the same callable)",
+            loops.metric_name()
+        ))),
+    }
+}
+
 /// The metric a job runs under, as [`MetricArg::run`] hands it over.
 pub(crate) enum MetricRef<'a> {
     /// A core metric: jobs that have a `MetricSpec` method keep the engine's loops monomorphic.

@@ -9,14 +9,12 @@ use pyo3::prelude::*;
 
 use crate::convert::{data_frame, id_column, optional_column, to_numpy};
 use crate::detached;
-use crate::error::{Failure, invalid_parameter};
+use crate::error::Failure;
 use crate::py_clusters::DetectionClusters;
 use crate::py_loops::Loops;
-use crate::py_metric::MetricArg;
+use crate::py_metric::{MetricArg, loops_metric};
 use crate::py_trajectory::Trajectory;
-use loops_core::{
-    BaselineParams, Cartographer, HdlGraphSlam, LioSam, MetricSpec, SampleSize, Sampler, SamplerKind, TimeGap,
-};
+use loops_core::{BaselineParams, Cartographer, HdlGraphSlam, LioSam, SampleSize, Sampler, SamplerKind, TimeGap};
 
 /// The samples a sampler chose — candidate pairs for the scan matcher — in order of (t, t′),
 /// as numpy columns. Returned by :func:`sample`.
@@ -48,20 +46,6 @@ fn measured(
         samples.measure(&traj, metric.as_metric())?;
         Ok(samples)
     })
-}
-
-/// The metric to sample `loops` under: the one given, or the one the loops were found with.
-fn loops_metric(metric: Option<&Bound<'_, PyAny>>, loops: &loops_core::Loops) -> PyResult<MetricArg> {
-    if metric.is_some() {
-        return MetricArg::from_py(metric);
-    }
-    match loops.metric_name().parse::<MetricSpec>() {
-        Ok(spec) => Ok(MetricArg::Spec(spec)),
-        Err(_) => Err(invalid_parameter(format!(
-            "the loops were found with the metric {:?}, which is not a metric name: pass metric= (the same callable)",
-            loops.metric_name()
-        ))),
-    }
 }
 
 /// Samples inexact loops (paper, Sec. 5): from detection clusters, or straight from the exact

@@ -51,6 +51,15 @@ pub(crate) struct Trajectory {
 }
 
 impl Trajectory {
+    /// A trajectory read from a file on the plane `plane_axes`, for `metric` when one was given.
+    pub(crate) fn read(
+        inner: loops_core::Trajectory,
+        plane_axes: Option<(usize, usize)>,
+        metric: Option<loops_core::MetricSpec>,
+    ) -> Self {
+        Self { inner: Arc::new(inner), plane_axes, metric }
+    }
+
     /// The metric it is measured by when no `metric=` is given: the one it was read for, or its
     /// manifold's default (core's).
     pub(crate) fn default_metric(&self) -> loops_core::MetricSpec {
@@ -406,14 +415,14 @@ fn wrap(py: Python<'_>, f: impl FnOnce() -> loops_core::Result<loops_core::Traje
 
 /// Where a pose table came from: errors name the file, or only poses.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Source {
+pub(crate) enum Source {
     File,
     Memory,
 }
 
 /// The trajectory `spec` needs from `table` ([`loops_io::PoseTable::to_trajectory_for`]); errors
 /// name the file when there is one.
-fn trajectory_for(
+pub(crate) fn trajectory_for(
     table: &loops_io::PoseTable,
     spec: &loops_core::MetricSpec,
     axes: Option<(usize, usize)>,
@@ -532,6 +541,9 @@ pub(crate) fn urban_drive(
 ///         warning saying how many (default: they are an error).
 ///     quaternion_tolerance: how far from unit length a quaternion may be and still be
 ///         normalised (default 1e-3: files often print 4 decimals).
+///     chain_edges: for a pose graph without vertices (a list of edges), chain its odometry
+///         edges into a trajectory, with a :class:`DeadReckoningWarning` (see
+///         :func:`read_pose_graph`); without it such a file is an error naming this option.
 ///
 /// Raises:
 ///     OSError: the file cannot be opened. LoopsIOError: a malformed line or message (the
@@ -553,7 +565,7 @@ pub(crate) fn urban_drive(
 ///     (3, True)
 #[pyfunction]
 #[pyo3(signature = (path, *, format=None, axes=None, metric=None, topic=None, time=None, frames=None, rate_hz=None,
-    times=None, drop_duplicate_stamps=false, quaternion_tolerance=None))]
+    times=None, drop_duplicate_stamps=false, quaternion_tolerance=None, chain_edges=false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn read_trajectory(
     py: Python<'_>,
@@ -568,13 +580,14 @@ pub(crate) fn read_trajectory(
     times: Option<PathBuf>,
     drop_duplicate_stamps: bool,
     quaternion_tolerance: Option<f64>,
+    chain_edges: bool,
 ) -> PyResult<Trajectory> {
     let paths = paths_of(path)?;
     let spec = MetricArg::spec_from_py(metric, "read_trajectory")?;
     if rate_hz.is_some() && times.is_some() {
         return Err(crate::error::invalid_parameter("rate_hz and times both give the poses' times: give one".into()));
     }
-    let (inner, dropped) = detached(py, move || {
+    let (inner, dropped, chains) = detached(py, move || {
         let mut mcap = loops_io::McapOptions::default();
         if let Some(topic) = topic {
             mcap = mcap.topic(topic);
@@ -595,6 +608,8 @@ pub(crate) fn read_trajectory(
         if let Some(times) = times {
             options = options.timing(loops_io::Timing::TimesFile(times));
         }
+        options = options.chain_edges(chain_edges);
+        let mut chains = Vec::new();
         let is_mcap =
             |path: &PathBuf| options.format.or_else(|| loops_io::Format::detect(path)) == Some(loops_io::Format::Mcap);
         let mut tables = if paths.len() > 1 && paths.iter().all(is_mcap) {
@@ -602,7 +617,9 @@ pub(crate) fn read_trajectory(
         } else {
             let mut tables = Vec::with_capacity(paths.len());
             for path in paths {
-                tables.push(loops_io::read_trajectory_with(path, &options)?);
+                let (table, chain) = loops_io::read_trajectory_chaining(path, &options)?;
+                chains.extend(chain);
+                tables.push(table);
             }
             tables
         };
@@ -622,8 +639,11 @@ pub(crate) fn read_trajectory(
             }
         }
         let table = loops_io::PoseTable::join(tables)?;
-        Ok((trajectory_for(&table, &spec, axes, Source::File)?, dropped))
+        Ok((trajectory_for(&table, &spec, axes, Source::File)?, dropped, chains))
     })?;
+    for chain in chains {
+        crate::warning::warn_dead_reckoning(py, &chain.to_string())?;
+    }
     for dropped in dropped {
         warn_dropped(
             py,

@@ -26,6 +26,7 @@ import_exception!(inexact_loops.errors, NoLoopsWarning);
 import_exception!(inexact_loops.errors, EmptySampleWarning);
 import_exception!(inexact_loops.errors, SampleBudgetWarning);
 import_exception!(inexact_loops.errors, DroppedInputWarning);
+import_exception!(inexact_loops.errors, DeadReckoningWarning);
 
 /// A warning about a result, from the core or (for an empty sample) from the bindings.
 enum EngineWarning<'a> {
@@ -37,6 +38,8 @@ enum EngineWarning<'a> {
     NoSamples,
     /// Input a lenient reading option dropped (loops-io's `Dropped`).
     Dropped,
+    /// Poses chained from a pose graph's odometry edges (loops-io's `EdgeChain`).
+    DeadReckoning,
 }
 
 /// The category of each warning: the one table.
@@ -52,6 +55,7 @@ fn category<'py>(py: Python<'py>, warning: &EngineWarning<'_>) -> Bound<'py, PyT
             SampleBudgetWarning::type_object(py)
         }
         E::Dropped => DroppedInputWarning::type_object(py),
+        E::DeadReckoning => DeadReckoningWarning::type_object(py),
         _ => LoopsWarning::type_object(py),
     }
 }
@@ -97,4 +101,10 @@ pub(crate) fn warn_samples(py: Python<'_>, samples: &loops_core::Samples, skip_t
 /// `drop_outside_span`) dropped from a file.
 pub(crate) fn warn_dropped_input(py: Python<'_>, message: &str) -> PyResult<()> {
     issue(py, &EngineWarning::Dropped, message)
+}
+
+/// Issues `message`, saying that a pose graph's poses were chained from its odometry edges
+/// (`chain_edges=True`): dead reckoning.
+pub(crate) fn warn_dead_reckoning(py: Python<'_>, message: &str) -> PyResult<()> {
+    issue(py, &EngineWarning::DeadReckoning, message)
 }
