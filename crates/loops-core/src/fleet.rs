@@ -491,12 +491,13 @@ impl Fleet {
             .filter_map(|s| s.pair.map(|pair| (s, pair)))
             .map(|(s, [i, j])| {
                 let ((a, pi), (b, pj)) = (self.locate(i)?, self.locate(j)?);
-                let time =
-                    |session: usize, index: usize| self.joint.timestamps_s()[index] - self.clock_offsets[session];
+                // The session's own timestamp, not the fleet clock's minus the offset (which
+                // rounds).
+                let time = |session: usize, pose: usize| self.sessions[session].timestamps_s()[pose];
                 Ok(FleetSample {
                     sessions: [a, b],
                     poses: [pi, pj],
-                    times_s: [time(a, i), time(b, j)],
+                    times_s: [time(a, pi), time(b, pj)],
                     component: s.component,
                     distance: s.distance,
                 })
