@@ -23,12 +23,19 @@ Example:
     >>> tau = loops.loop_duration()
     >>> tau.shape == (len(traj),)
     True
+
+Several sessions (vehicles, days, robots) in one frame form a :class:`Fleet`;
+:func:`find_fleet_loops` finds the loops within each session and between every two, and
+:meth:`FleetLoops.overlap_matrix` says how much each two sessions overlap.
 """
 
 from . import metrics
 from ._core import (
     DetectionClusters,
     Detections,
+    Fleet,
+    FleetLoops,
+    FleetSamples,
     Loops,
     PlaneGrid,
     PoseGraph,
@@ -42,6 +49,7 @@ from ._core import (
     component_outlines,
     distance_image,
     draw_detections,
+    find_fleet_loops,
     find_loops,
     isocontour,
     list_topics,
@@ -51,9 +59,11 @@ from ._core import (
     read_pose_graph,
     read_trajectory,
     sample,
+    sample_fleet,
     sample_quality,
     sampler_symbol,
     urban_drive,
+    urban_fleet,
 )
 from .errors import (
     DeadReckoningWarning,
@@ -80,6 +90,9 @@ __all__ = [
     "DroppedInputWarning",
     "EmptyResultWarning",
     "EmptySampleWarning",
+    "Fleet",
+    "FleetLoops",
+    "FleetSamples",
     "InternalError",
     "InvalidParameterError",
     "InvalidTrajectoryError",
@@ -102,6 +115,7 @@ __all__ = [
     "component_outlines",
     "distance_image",
     "draw_detections",
+    "find_fleet_loops",
     "find_loops",
     "isocontour",
     "list_topics",
@@ -112,9 +126,11 @@ __all__ = [
     "read_pose_graph",
     "read_trajectory",
     "sample",
+    "sample_fleet",
     "sample_quality",
     "sampler_symbol",
     "urban_drive",
+    "urban_fleet",
 ]
 
 

@@ -6,7 +6,7 @@ them in ``crates/loops-py``, not here.
 
 from collections.abc import Callable
 from os import PathLike
-from typing import ClassVar, Literal, Protocol, final
+from typing import Any, ClassVar, Literal, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -43,6 +43,12 @@ __all__ = [
     "sample_quality",
     "sampler_symbol",
     "urban_drive",
+    "Fleet",
+    "FleetLoops",
+    "FleetSamples",
+    "find_fleet_loops",
+    "sample_fleet",
+    "urban_fleet",
 ]
 
 __version__: str
@@ -1745,6 +1751,413 @@ def sampler_symbol(sampler: _SamplerName | str) -> str:
         >>> import inexact_loops as il
         >>> il.sampler_symbol("rho"), il.sampler_symbol("lio-sam")
         ('σ_ρ', 'LIO-SAM')
+    """
+
+_SessionSource = Trajectory | str | PathLike[str] | list[str | PathLike[str]]
+_SessionKey = str | int
+
+@final
+class Fleet:
+    """Sessions — vehicles, days, robots — in one frame, each a :class:`Trajectory` with a name and
+    its own clock: the input of :func:`find_fleet_loops`.
+
+    The sessions keep the order given, which orders the blocks of the fleet's plane (rows of
+    session a, columns of session b, a ≤ b). All must have the same dimension and manifold.
+
+    Args:
+        sessions: a dict ``{name: session}``, a list of ``(name, session)`` pairs, or a list of
+            paths; a session is a :class:`Trajectory` or a path read by :func:`read_trajectory`
+            (in a dict or a pair, also a list of paths read as one trajectory). A path given
+            alone is named by its file stem (``logs/monday.tum``: ``"monday"``; a rosbag2 bag's
+            ``metadata.yaml``: its folder's name).
+        format, axes, metric, topic, time, frames, rate_hz, drop_duplicate_stamps,
+            quaternion_tolerance: how the paths are read, as in :func:`read_trajectory` (each
+            path with the same options). ``metric`` is then each session's metric
+            (:attr:`Trajectory.metric_name`).
+
+    Raises:
+        InvalidParameterError: no session; two sessions of the same name (for paths named by
+            their stem, the message names both paths); sessions of different dimensions or
+            manifolds (names the session); more poses in all than one trajectory may hold.
+        TypeError: ``sessions`` (or one of its items) of another type.
+        OSError, LoopsIOError, InvalidTrajectoryError: a path that cannot be read, as
+            :func:`read_trajectory` (the message names the file).
+
+    Warns:
+        DroppedInputWarning: as :func:`read_trajectory`, per file.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> monday = il.Trajectory([0.0, 1.0, 2.0], [[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])
+        >>> tuesday = il.Trajectory([100.0, 101.0], [[10.0, 0.5], [0.0, 0.5]])
+        >>> fleet = il.Fleet({"monday": monday, "tuesday": tuesday})
+        >>> fleet.names, len(fleet), fleet.starts.tolist(), fleet.locate(3)
+        (['monday', 'tuesday'], 2, [0, 3], (1, 0))
+        >>> fleet.session("tuesday").timestamps.tolist()
+        [100.0, 101.0]
+    """
+
+    def __new__(
+        cls,
+        sessions: dict[str, _SessionSource]
+        | list[tuple[str, _SessionSource]]
+        | list[str | PathLike[str]]
+        | list[tuple[str, _SessionSource] | str | PathLike[str]],
+        *,
+        format: str | None = None,
+        axes: tuple[int, int] | None = None,
+        metric: str | _MetricLike | None = None,
+        topic: str | None = None,
+        time: Literal["header", "log", "publish"] | str | None = None,
+        frames: tuple[str, str] | None = None,
+        rate_hz: float | None = None,
+        drop_duplicate_stamps: bool = False,
+        quaternion_tolerance: float | None = None,
+    ) -> Fleet: ...
+    def __len__(self) -> int: ...
+    @property
+    def names(self) -> list[str]:
+        """The sessions' names, in order."""
+    @property
+    def poses(self) -> int:
+        """Number of poses in all sessions."""
+    @property
+    def starts(self) -> npt.NDArray[np.int64]:
+        """The first *fleet index* of each session, int64, shape ``(len(fleet),)``: the sessions'
+        poses numbered one session after another, as :attr:`FleetLoops.loops` and
+        :attr:`FleetSamples.samples` index them.
+        """
+    @property
+    def clock_offsets(self) -> npt.NDArray[np.float64]:
+        """Fleet clock minus session clock, seconds, per session (float64): the *fleet clock* runs
+        the sessions one after another, each starting an hour after the previous one ends, as
+        :attr:`joint` and :attr:`FleetLoops.loops` time them.
+        """
+    @property
+    def joint(self) -> Trajectory:
+        """The sessions one after another as one :class:`Trajectory` on the fleet clock (each
+        session keeps its own time cells): the trajectory of :attr:`FleetLoops.loops` (a copy).
+        """
+    def session(self, session: _SessionKey) -> Trajectory:
+        """A session's :class:`Trajectory`, on its own clock (a copy).
+
+        Args:
+            session: its name or its index.
+
+        Raises:
+            KeyError: no session of that name. IndexError: an index out of range.
+        """
+    def locate(self, index: int) -> tuple[int, int]:
+        """The ``(session, pose)`` indices of a fleet index.
+
+        Raises:
+            IndexError: a negative index or one past the last pose.
+        """
+    def index(self, session: _SessionKey, pose: int) -> int:
+        """The fleet index of pose ``pose`` of ``session`` (its name or index).
+
+        Raises:
+            KeyError: no session of that name. IndexError: a session or pose out of range.
+        """
+
+@final
+class FleetLoops:
+    """The loops of a fleet at one γ: every block's loop components, the sessions' overlap (α per
+    session pair) and the loop duration split into own and other sessions. Returned by
+    :func:`find_fleet_loops`.
+
+    Times in its tables are on each session's own clock; :attr:`loops` is the result over the
+    joint trajectory (:attr:`Fleet.joint`: fleet indices, fleet clock), for everything
+    :class:`Loops` does.
+    """
+
+    @property
+    def fleet(self) -> Fleet:
+        """The :class:`Fleet` the loops were found on."""
+    @property
+    def names(self) -> list[str]:
+        """The sessions' names, in order (as :attr:`Fleet.names`)."""
+    @property
+    def gamma(self) -> float:
+        """The threshold γ."""
+    @property
+    def separation(self) -> Separation:
+        """The separation the pairs within a session keep (:class:`Separation`)."""
+    @property
+    def metric_name(self) -> str:
+        """The name of the metric the loops were found with (as :attr:`Loops.metric_name`)."""
+    @property
+    def pruning(self) -> Literal["hierarchy", "kd-tree"]:
+        """The far-field pruning the scan used: ``"hierarchy"`` or ``"kd-tree"`` (``"auto"``
+        resolved).
+        """
+    @property
+    def warnings(self) -> list[str]:
+        """Warnings about the result, as sentences (as :attr:`Loops.warnings`)."""
+    @property
+    def loops(self) -> Loops:
+        """The result over the joint trajectory (:attr:`Fleet.joint`) as :class:`Loops`: fleet
+        indices (:attr:`Fleet.starts`), fleet clock; component ids are those of
+        :attr:`components`. Made on first use (a copy of the runs), then kept.
+        """
+    @property
+    def components(self) -> Table:
+        """The loop components of every block as a :class:`~inexact_loops.Table`, one row a
+        component, by id (the ids of :attr:`loops`): ``id`` (int64); ``session_a``,
+        ``session_b`` (int64, a ≤ b) and ``name_a``, ``name_b`` (str): the block, rows in session
+        a, columns in session b; ``trivial`` (bool, a = b only); ``area_s2`` (float64, s², each
+        session's own time cells: within a session, the half t ≤ t′ of a non-trivial
+        component, as :attr:`Loops.components`); ``pair_count``, ``holes`` (int64); ``i_min``,
+        ``i_max`` (poses of session a), ``j_min``, ``j_max`` (poses of session b), int64;
+        ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds, each
+        on its session's clock); ``closest_i``, ``closest_j`` (int64, poses of sessions a and
+        b) and ``closest_distance`` (float64, the metric's unit).
+        """
+    def between_sessions(self) -> npt.NDArray[np.int64]:
+        """The ids of the components between two different sessions, int64, increasing."""
+    def session_pairs(self) -> Table:
+        """The sparse overlap matrix as a :class:`~inexact_loops.Table`, one row per session pair
+        (a, b), a ≤ b, with at least one loop component, in order of (a, b): ``session_a``,
+        ``session_b`` (int64), ``name_a``, ``name_b`` (str), ``components`` (int64, in the
+        block), ``pair_count`` (int64, lattice cells), ``area_s2`` (float64: the loop area α of
+        the block, s²) and ``density`` (float64: ρ = α / (T_a T_b), T the sessions' spans: the
+        share of the block within γ). For a = b the block is the session's whole square (both
+        halves, the diagonal once), so ``area_s2`` is ∫τ over the session alone.
+        """
+    def overlap_matrix(self, *, sparse: bool = False) -> npt.NDArray[np.float64] | Any:
+        """The overlap matrix: α between every two sessions, s², symmetric, rows and columns in
+        the order of :attr:`names`; the diagonal is each session's α alone (``area_s2`` of
+        :meth:`session_pairs`), 0 where two sessions never come within γ.
+
+        Args:
+            sparse: return a ``scipy.sparse.csr_array`` holding only the pairs that overlap
+                (both triangles) instead of a dense numpy array: for large fleets, where the
+                dense matrix takes 8 bytes per session pair.
+
+        Returns:
+            float64 array of shape ``(len(fleet), len(fleet))``, or a ``scipy.sparse.csr_array``.
+
+        Raises:
+            ImportError: ``sparse=True`` without scipy.
+        """
+    def loop_duration(self, session: _SessionKey | None = None) -> Table:
+        """Loop duration τ per pose, split: ``own_s``, τ within the pose's session (that session's
+        :meth:`Loops.loop_duration` alone), and ``other_s``, τ with the poses of every other
+        session; seconds. A :class:`~inexact_loops.Table` of one row per pose, sessions in
+        order: ``session`` (int64), ``pose`` (int64, in its session), ``t_s`` (float64, the
+        session's clock), ``own_s`` and ``other_s`` (float64). Per session: ∫ own_s dt is the
+        session's α alone; summed over the fleet, ∫ other_s dt is twice the α of all blocks
+        between sessions (each block counts for the poses of both).
+
+        Args:
+            session: only this session's poses (its name or index); ``None``: every pose.
+
+        Raises:
+            KeyError: no session of that name. IndexError: an index out of range.
+        """
+
+@final
+class FleetSamples:
+    """The samples of a fleet's loops, each naming both its sessions (name, pose, time on the
+    session's clock). Returned by :func:`sample_fleet`.
+    """
+
+    def __len__(self) -> int: ...
+    @property
+    def samples(self) -> Samples:
+        """The same samples as :class:`Samples` on the joint trajectory (:attr:`Fleet.joint`:
+        fleet indices ``i``, ``j`` and the fleet clock), e.g. for :func:`sample_quality` against
+        :attr:`FleetLoops.loops`.
+        """
+    @property
+    def fleet(self) -> Fleet:
+        """The :class:`Fleet` sampled."""
+    @property
+    def sampler(self) -> str:
+        """The sampler's name."""
+    @property
+    def groups(self) -> int:
+        """Number of groups sampled from (components with a pair; 0 for σ_α and the baselines)."""
+    @property
+    def available(self) -> int:
+        """Number of candidates the sampler chose from."""
+    @property
+    def warnings(self) -> list[str]:
+        """Warnings, as sentences (as :attr:`Samples.warnings`)."""
+    @property
+    def table(self) -> Table:
+        """The samples as a :class:`~inexact_loops.Table`, one row a sample in order of the fleet
+        index of the earlier pose: ``session_a`` (int64), ``name_a`` (str), ``i`` (int64, the
+        pose in session a), ``t_s`` (float64, seconds on session a's clock), then ``session_b``,
+        ``name_b``, ``j``, ``t_prime_s`` for the other pose (a ≤ b; a = b within a session), then
+        ``component`` (int64, the component id of :attr:`FleetLoops.components`, −1 for a
+        baseline's pair outside S_γ) and ``distance`` (float64, δ between the poses).
+        """
+    def to_pandas(self) -> pandas.DataFrame:
+        """:attr:`table` as a ``pandas.DataFrame``.
+
+        Raises:
+            ImportError: pandas is not installed (it is not a dependency of the library).
+        """
+
+def find_fleet_loops(
+    fleet: Fleet,
+    *,
+    gamma: float,
+    metric: _MetricArg = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    pruning: Literal["auto", "hierarchy", "kd-tree"] | str = "auto",
+    chunk_radius: float | None = None,
+    threads: int | None = None,
+) -> FleetLoops:
+    """Finds every inexact loop of a fleet at threshold ``gamma`` exactly: for every pair of
+    sessions (a, b), a ≤ b, the pairs (t_a, t′_b) within γ — a *block* of the fleet's plane —
+    grouped into loop components, 4-connected on each block's own lattice, never across
+    sessions. A block (a, a) is session a alone (with the revisit separation, component for
+    component :func:`find_loops` of that session); a block (a, b), a < b, has no diagonal and
+    no separation, and each of its components is one place where the two sessions overlap.
+
+    The same engine as :func:`find_loops`, on the sessions laid one after another; with
+    Euclidean positions of 1 to 3 coordinates the far field is pruned by a KD-tree over chunks of
+    the paths, so that session pairs that never come within γ cost no distance evaluation.
+
+    Args:
+        fleet: a :class:`Fleet`.
+        gamma: the distance threshold γ > 0, in the metric's unit.
+        metric: as in :func:`find_loops`; ``None`` takes the sessions' own
+            (:attr:`Trajectory.metric_name`; they must agree).
+        separation: within each session, as in :func:`find_loops` (``"auto"``: 4 γ of path;
+            ``None``: the paper's S_γ). Pairs of different sessions are always kept.
+        pruning: ``"auto"`` (the KD-tree where it applies, else the hierarchy), ``"hierarchy"``
+            (the time-ordered ball hierarchy, any metric) or ``"kd-tree"`` (Euclidean positions
+            of 1 to 3 coordinates). The result does not depend on it.
+        chunk_radius: the largest radius of a chunk of path in the KD-tree, in the metric's
+            unit; ``None``: γ. The result does not depend on it.
+        threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+
+    Returns:
+        :class:`FleetLoops`.
+
+    Raises:
+        InvalidParameterError: as :func:`find_loops`; an unknown pruning; ``"kd-tree"`` with a
+            metric it does not serve; sessions measured by different metrics and no ``metric=``.
+
+    Warns:
+        DiagonalBrokenWarning, NoLoopsWarning: as :func:`find_loops`, for the fleet's sessions.
+
+    Example:
+        Monday drives out along a street; Tuesday drives back along it, half a metre aside: one
+        place where the two sessions overlap.
+
+        >>> import numpy as np, inexact_loops as il
+        >>> x = np.arange(21) * 0.5
+        >>> monday = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+        >>> tuesday = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+        >>> fleet = il.Fleet({"monday": monday, "tuesday": tuesday})
+        >>> loops = il.find_fleet_loops(fleet, gamma=1.0, separation=None)
+        >>> c = loops.components
+        >>> between = c["session_a"] != c["session_b"]
+        >>> c["name_a"][between].tolist(), c["name_b"][between].tolist(), c["pair_count"][between].tolist()
+        (['monday'], ['tuesday'], [61])
+        >>> loops.overlap_matrix()
+        array([[93.5, 57.5],
+               [57.5, 93.5]])
+    """
+
+def sample_fleet(
+    loops: FleetLoops,
+    sampler: _SamplerName | str,
+    *,
+    rate: float | None = None,
+    budget: int | None = None,
+    seed: int,
+    between_only: bool = False,
+    metric: _MetricArg = None,
+    threads: int | None = None,
+    skip_trivial: bool = False,
+    lio_sam_keyframe_step: float | None = None,
+    lio_sam_period_s: float | None = None,
+    lio_sam_min_age_s: float | None = None,
+    hdl_keyframe_step: float | None = None,
+    hdl_min_travel: float | None = None,
+    hdl_edge_spacing: float | None = None,
+    cartographer_min_gap_s: float | None = None,
+    time_gap_s: float | None = None,
+) -> FleetSamples:
+    """Samples the loops of a fleet (paper, Sec. 5) with one budget over all components of all
+    blocks, as :func:`sample` samples the components of one trajectory: P1–P3 hold across the
+    fleet. With ``between_only``, only the components between different sessions are sampled:
+    the pairs that tie sessions together (map merging, multi-session SLAM).
+
+    Args:
+        loops: :class:`FleetLoops` (from :func:`find_fleet_loops`).
+        sampler, rate, budget, seed, metric, threads, skip_trivial: as in :func:`sample` (a
+            baseline rule runs over the joint trajectory, :attr:`Fleet.joint`).
+        between_only: sample only the components between two different sessions (not with a
+            baseline, whose rule knows no components).
+        lio_sam_keyframe_step, lio_sam_period_s, lio_sam_min_age_s, hdl_keyframe_step,
+            hdl_min_travel, hdl_edge_spacing, cartographer_min_gap_s, time_gap_s: as in
+            :func:`sample`.
+
+    Returns:
+        :class:`FleetSamples`.
+
+    Raises:
+        InvalidParameterError: as :func:`sample`; ``between_only`` with a baseline.
+
+    Warns:
+        EmptySampleWarning, SampleBudgetWarning: as :func:`sample`.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> fleet = il.urban_fleet(vehicles=3, duration_s=300.0, seed=1)
+        >>> loops = il.find_fleet_loops(fleet, gamma=20.0)
+        >>> samples = il.sample_fleet(loops, "one", budget=50, seed=0, between_only=True)
+        >>> rows = samples.table
+        >>> bool((rows["session_a"] != rows["session_b"]).all()), len(samples)
+        (True, 50)
+    """
+
+def urban_fleet(
+    *,
+    vehicles: int | None = None,
+    days: int | None = None,
+    start_spread_s: float | None = None,
+    duration_s: float | None = None,
+    rate_hz: float | None = None,
+    city_size_m: float | None = None,
+    block_m: float | None = None,
+    min_speed_mps: float | None = None,
+    max_speed_mps: float | None = None,
+    stop_probability: float | None = None,
+    min_stop_s: float | None = None,
+    max_stop_s: float | None = None,
+    lane_offset_m: float | None = None,
+    lateral_noise_m: float | None = None,
+    seed: int | None = None,
+    district_m: float | None = None,
+    district_dwell_s: float | None = None,
+) -> Fleet:
+    """A seeded synthetic fleet: ``vehicles`` cars driving every one of ``days`` days in one city
+    (:func:`urban_drive`'s), each session with its own seed, start time (within
+    ``start_spread_s`` of midnight, day d starting at d × 86,400 s) and, with districts, its own
+    first district. Sessions are named ``car<v>-day<d>`` (zero-padded), vehicles first within a
+    day. The same seed gives the same fleet on any number of threads.
+
+    Every argument left as ``None`` takes the library default: 10 vehicles, one day, 10-minute
+    drives (``duration_s=600``) in :func:`urban_drive`'s 1 km² city, starts spread over an hour.
+    The other keywords are :func:`urban_drive`'s, for every session's drive; ``seed`` is the
+    fleet's, from which each session's own is drawn.
+
+    Raises:
+        InvalidParameterError: no vehicles or days, a negative spread, or a drive parameter out
+            of range (named).
+
+    Example:
+        >>> import inexact_loops as il
+        >>> fleet = il.urban_fleet(vehicles=3, days=2, duration_s=120.0, seed=7)
+        >>> len(fleet), fleet.names[4], bool(fleet.session(4).timestamps[0] >= 86_400.0)
+        (6, 'car1-day1', True)
     """
 
 def run_cli(args: list[str]) -> int:

@@ -7,9 +7,10 @@
 //! `py_trajectory` (`Trajectory`, `urban_drive`, `read_trajectory`, `list_topics`), `py_loops`
 //! (`Loops`, `find_loops`, `path_length`), `py_separation` (`Separation`), `py_detections`
 //! (`Detections`, `draw_detections`, `read_detections`), `py_clusters` (`DetectionClusters`,
-//! `cluster_detections`), `py_samples` (`Samples`, `sample`) and
-//! `py_quality` (`SampleQuality`, `sample_quality`); `py_graph` (`PoseGraph`, `read_pose_graph`).
-//! Below them: `convert` (arguments to Rust
+//! `cluster_detections`), `py_samples` (`Samples`, `sample`), `py_quality` (`SampleQuality`,
+//! `sample_quality`), `py_graph` (`PoseGraph`, `read_pose_graph`) and `py_fleet` (`Fleet`,
+//! `FleetLoops`, `FleetSamples`, `find_fleet_loops`, `sample_fleet`, `urban_fleet`). Below them:
+//! `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
 //! (the one mapping of errors to exceptions) and `warning` (the one mapping of the engine's
 //! warnings to Python warning categories). Beside them, `cli` (`run_cli`): the `loops` command
@@ -20,6 +21,7 @@ mod convert;
 mod error;
 mod py_clusters;
 mod py_detections;
+mod py_fleet;
 mod py_graph;
 mod py_loops;
 mod py_metric;
@@ -75,6 +77,12 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_plane::chain_polylines, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::isocontour, module)?)?;
     module.add_function(wrap_pyfunction!(py_plane::sampler_symbol, module)?)?;
+    module.add_class::<py_fleet::Fleet>()?;
+    module.add_class::<py_fleet::FleetLoops>()?;
+    module.add_class::<py_fleet::FleetSamples>()?;
+    module.add_function(wrap_pyfunction!(py_fleet::find_fleet_loops, module)?)?;
+    module.add_function(wrap_pyfunction!(py_fleet::sample_fleet, module)?)?;
+    module.add_function(wrap_pyfunction!(py_fleet::urban_fleet, module)?)?;
     module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
     module.add_class::<py_graph::PoseGraph>()?;
     module.add_function(wrap_pyfunction!(py_graph::read_pose_graph, module)?)?;

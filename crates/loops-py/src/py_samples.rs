@@ -48,6 +48,36 @@ fn measured(
     })
 }
 
+/// The baselines' parameters from the keywords of `sample` (and `sample_fleet`): each `None`
+/// takes the library default.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn baseline_params(
+    lio_sam_keyframe_step: Option<f64>,
+    lio_sam_period_s: Option<f64>,
+    lio_sam_min_age_s: Option<f64>,
+    hdl_keyframe_step: Option<f64>,
+    hdl_min_travel: Option<f64>,
+    hdl_edge_spacing: Option<f64>,
+    cartographer_min_gap_s: Option<f64>,
+    time_gap_s: Option<f64>,
+) -> BaselineParams {
+    let d = BaselineParams::default();
+    BaselineParams {
+        lio_sam: LioSam {
+            keyframe_step: lio_sam_keyframe_step.unwrap_or(d.lio_sam.keyframe_step),
+            period_s: lio_sam_period_s.unwrap_or(d.lio_sam.period_s),
+            min_age_s: lio_sam_min_age_s.unwrap_or(d.lio_sam.min_age_s),
+        },
+        hdl_graph_slam: HdlGraphSlam {
+            keyframe_step: hdl_keyframe_step.unwrap_or(d.hdl_graph_slam.keyframe_step),
+            min_travel: hdl_min_travel.or(d.hdl_graph_slam.min_travel),
+            edge_spacing: hdl_edge_spacing.or(d.hdl_graph_slam.edge_spacing),
+        },
+        cartographer: Cartographer { min_gap_s: cartographer_min_gap_s.unwrap_or(d.cartographer.min_gap_s) },
+        time_gap: TimeGap { gap_s: time_gap_s.unwrap_or(d.time_gap.gap_s) },
+    }
+}
+
 /// Samples inexact loops (paper, Sec. 5): from detection clusters, or straight from the exact
 /// loop components of S_γ.
 ///
@@ -133,21 +163,16 @@ pub(crate) fn sample(
 ) -> PyResult<Samples> {
     let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
     let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
-    let d = BaselineParams::default();
-    let baseline = BaselineParams {
-        lio_sam: LioSam {
-            keyframe_step: lio_sam_keyframe_step.unwrap_or(d.lio_sam.keyframe_step),
-            period_s: lio_sam_period_s.unwrap_or(d.lio_sam.period_s),
-            min_age_s: lio_sam_min_age_s.unwrap_or(d.lio_sam.min_age_s),
-        },
-        hdl_graph_slam: HdlGraphSlam {
-            keyframe_step: hdl_keyframe_step.unwrap_or(d.hdl_graph_slam.keyframe_step),
-            min_travel: hdl_min_travel.or(d.hdl_graph_slam.min_travel),
-            edge_spacing: hdl_edge_spacing.or(d.hdl_graph_slam.edge_spacing),
-        },
-        cartographer: Cartographer { min_gap_s: cartographer_min_gap_s.unwrap_or(d.cartographer.min_gap_s) },
-        time_gap: TimeGap { gap_s: time_gap_s.unwrap_or(d.time_gap.gap_s) },
-    };
+    let baseline = baseline_params(
+        lio_sam_keyframe_step,
+        lio_sam_period_s,
+        lio_sam_min_age_s,
+        hdl_keyframe_step,
+        hdl_min_travel,
+        hdl_edge_spacing,
+        cartographer_min_gap_s,
+        time_gap_s,
+    );
     let spec = Sampler { kind, size, seed, baseline, skip_trivial };
     if let Ok(clusters) = source.cast::<DetectionClusters>() {
         let clusters = Arc::clone(&clusters.get().inner);

@@ -44,7 +44,7 @@ pub(crate) struct Trajectory {
     pub(crate) inner: Arc<loops_core::Trajectory>,
     /// The position axes of the source that the first two coordinates are, for a trajectory
     /// read on a plane (`axes=`); what the maps of `inexact_loops.plot` label.
-    plane_axes: Option<(usize, usize)>,
+    pub(crate) plane_axes: Option<(usize, usize)>,
     /// The metric it was read or converted for (`read_trajectory(metric=...)`,
     /// `from_evo(metric=...)`), which it is then measured by; `None`: its manifold's default.
     pub(crate) metric: Option<loops_core::MetricSpec>,
@@ -434,6 +434,54 @@ pub(crate) fn trajectory_for(
     })
 }
 
+/// The keywords of a synthetic drive (`urban_drive`, `urban_fleet`): each `None` takes the value
+/// of the defaults it is applied to.
+pub(crate) struct DriveOptions {
+    pub(crate) duration_s: Option<f64>,
+    pub(crate) rate_hz: Option<f64>,
+    pub(crate) city_size_m: Option<f64>,
+    pub(crate) block_m: Option<f64>,
+    pub(crate) min_speed_mps: Option<f64>,
+    pub(crate) max_speed_mps: Option<f64>,
+    pub(crate) stop_probability: Option<f64>,
+    pub(crate) min_stop_s: Option<f64>,
+    pub(crate) max_stop_s: Option<f64>,
+    pub(crate) lane_offset_m: Option<f64>,
+    pub(crate) lateral_noise_m: Option<f64>,
+    pub(crate) seed: Option<u64>,
+    pub(crate) district_m: Option<f64>,
+    pub(crate) district_dwell_s: Option<f64>,
+}
+
+impl DriveOptions {
+    /// The drive `d` with the options given.
+    ///
+    /// # Errors
+    /// `district_dwell_s` without `district_m`.
+    pub(crate) fn drive(self, d: loops_core::UrbanDrive) -> PyResult<loops_core::UrbanDrive> {
+        let districts = match (self.district_m, self.district_dwell_s) {
+            (None, None) => d.districts,
+            (side, dwell) => loops_core::Districts::from_options(side, dwell).map_err(Failure::Core)?,
+        };
+        Ok(loops_core::UrbanDrive {
+            duration_s: self.duration_s.unwrap_or(d.duration_s),
+            rate_hz: self.rate_hz.unwrap_or(d.rate_hz),
+            city_size_m: self.city_size_m.unwrap_or(d.city_size_m),
+            block_m: self.block_m.unwrap_or(d.block_m),
+            min_speed_mps: self.min_speed_mps.unwrap_or(d.min_speed_mps),
+            max_speed_mps: self.max_speed_mps.unwrap_or(d.max_speed_mps),
+            stop_probability: self.stop_probability.unwrap_or(d.stop_probability),
+            min_stop_s: self.min_stop_s.unwrap_or(d.min_stop_s),
+            max_stop_s: self.max_stop_s.unwrap_or(d.max_stop_s),
+            lane_offset_m: self.lane_offset_m.unwrap_or(d.lane_offset_m),
+            lateral_noise_m: self.lateral_noise_m.unwrap_or(d.lateral_noise_m),
+            seed: self.seed.unwrap_or(d.seed),
+            districts,
+            first_district: d.first_district,
+        })
+    }
+}
+
 /// A seeded synthetic drive on a Manhattan grid (x, y, z in metres, 10 Hz by default).
 ///
 /// Every argument left as ``None`` takes the library default: a 1 km² city of 100 m blocks,
@@ -477,25 +525,23 @@ pub(crate) fn urban_drive(
     district_dwell_s: Option<f64>,
     se3: bool,
 ) -> PyResult<Trajectory> {
-    let d = loops_core::UrbanDrive::default();
-    let districts =
-        loops_core::Districts::from_options(district_m, district_dwell_s).map_err(|e| PyErr::from(Failure::Core(e)))?;
-    let spec = loops_core::UrbanDrive {
-        duration_s: duration_s.unwrap_or(d.duration_s),
-        rate_hz: rate_hz.unwrap_or(d.rate_hz),
-        city_size_m: city_size_m.unwrap_or(d.city_size_m),
-        block_m: block_m.unwrap_or(d.block_m),
-        min_speed_mps: min_speed_mps.unwrap_or(d.min_speed_mps),
-        max_speed_mps: max_speed_mps.unwrap_or(d.max_speed_mps),
-        stop_probability: stop_probability.unwrap_or(d.stop_probability),
-        min_stop_s: min_stop_s.unwrap_or(d.min_stop_s),
-        max_stop_s: max_stop_s.unwrap_or(d.max_stop_s),
-        lane_offset_m: lane_offset_m.unwrap_or(d.lane_offset_m),
-        lateral_noise_m: lateral_noise_m.unwrap_or(d.lateral_noise_m),
-        seed: seed.unwrap_or(d.seed),
-        districts,
-        first_district: d.first_district,
+    let options = DriveOptions {
+        duration_s,
+        rate_hz,
+        city_size_m,
+        block_m,
+        min_speed_mps,
+        max_speed_mps,
+        stop_probability,
+        min_stop_s,
+        max_stop_s,
+        lane_offset_m,
+        lateral_noise_m,
+        seed,
+        district_m,
+        district_dwell_s,
     };
+    let spec = options.drive(loops_core::UrbanDrive::default())?;
     wrap(py, move || {
         let drive = spec.generate()?;
         if se3 { drive.se3_trajectory() } else { Ok(drive.trajectory) }
