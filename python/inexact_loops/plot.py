@@ -9,6 +9,10 @@ import it, ``inexact_loops.plot`` (or ``import inexact_loops.plot``) does.
 - :func:`sample_pairs`: sampled loops drawn as lines between trajectory points (Fig. 6a-c).
 - :func:`samples_per_component`: samples per loop component, components sorted by area,
   as a percentage and cumulatively (Fig. 8).
+- :func:`overlap_matrix`: a fleet's overlap matrix, alpha between every two sessions, as a heat
+  map with the session names on the axes.
+- :func:`fleet_trajectories`: a fleet's sessions overlaid, coloured by session, with the places
+  where two sessions overlap marked at their closest pairs.
 
 Every function draws into ``ax`` (a new figure when ``None``) and returns the Axes. Times are
 seconds from the trajectory's first timestamp.
@@ -60,7 +64,7 @@ except ImportError as err:  # pragma: no cover - exercised only without matplotl
     ) from err
 
 from . import metrics as _metrics
-from ._core import Loops, PlaneGrid, Trajectory, outline_segments, sampler_symbol
+from ._core import Fleet, FleetLoops, Loops, PlaneGrid, Trajectory, outline_segments, sampler_symbol
 from ._core import distance_image as _core_distance_image
 from .errors import InvalidParameterError
 
@@ -70,6 +74,8 @@ if TYPE_CHECKING:
 __all__ = [
     "PAPER_SAMPLERS",
     "distance_image",
+    "fleet_trajectories",
+    "overlap_matrix",
     "sample_pairs",
     "samples_per_component",
     "trajectory_by_duration",
@@ -586,6 +592,205 @@ def samples_per_component(
         a.grid(True, which="major", alpha=0.3)
         a.set_xlim(0.5, len(order) + 0.5)
     return top, bottom
+
+
+def overlap_matrix(
+    loops: FleetLoops,
+    *,
+    ax: Axes | None = None,
+    cmap: str = "magma_r",
+    log_scale: bool = True,
+    diagonal: bool = True,
+    colorbar: bool = True,
+    max_labels: int = 40,
+) -> Axes:
+    """A fleet's overlap matrix as a heat map: the loop area alpha(a, b) between every two
+    sessions (:meth:`~inexact_loops.FleetLoops.overlap_matrix`, s²), session names on both
+    axes in the fleet's order. Session pairs that never come within gamma are left blank.
+
+    Args:
+        loops: the result of :func:`~inexact_loops.find_fleet_loops`.
+        ax: the Axes to draw into; a new figure when ``None``.
+        cmap: the colormap of alpha.
+        log_scale: colour by log alpha (overlaps span orders of magnitude).
+        diagonal: show each session's alpha alone on the diagonal; ``False`` leaves it blank
+            (it often dwarfs the overlaps between sessions).
+        colorbar: add a colorbar of alpha.
+        max_labels: name every session on the axes when there are at most this many;
+            otherwise ticks are thinned to about this many.
+
+    Returns:
+        The Axes: one image, row a and column b the sessions' alpha (symmetric).
+
+    Raises:
+        TypeError: ``loops`` not a FleetLoops.
+
+    Example:
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import inexact_loops as il
+        >>> from inexact_loops.plot import overlap_matrix
+        >>> fleet = il.urban_fleet(vehicles=4, duration_s=300.0, seed=2)
+        >>> ax = overlap_matrix(il.find_fleet_loops(fleet, gamma=20.0))
+        >>> [label.get_text() for label in ax.get_xticklabels()][:2]
+        ['car0-day0', 'car1-day0']
+        >>> import matplotlib.pyplot as plt; plt.close("all")
+    """
+    if not isinstance(loops, FleetLoops):
+        raise TypeError(f"loops must be an inexact_loops.FleetLoops, got {type(loops).__name__}")
+    names = loops.names
+    n = len(names)
+    alpha = np.asarray(loops.overlap_matrix(), dtype=float)
+    blank = alpha <= 0
+    if not diagonal:
+        blank |= np.eye(n, dtype=bool)
+    shown = np.ma.masked_array(alpha, mask=blank)
+
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import LogNorm, Normalize
+
+    ax = _axes(ax)
+    values = alpha[~blank]
+    if log_scale and len(values):
+        norm: Normalize = LogNorm(vmin=float(values.min()), vmax=float(values.max()))
+    else:
+        norm = Normalize(vmin=0.0, vmax=float(values.max()) if len(values) else 1.0)
+    colormap = plt.get_cmap(cmap).with_extremes(bad="white")
+    image = ax.imshow(shown, cmap=colormap, norm=norm, interpolation="nearest", origin="upper")
+    step = max(1, int(np.ceil(n / max(int(max_labels), 1))))
+    ticks = np.arange(0, n, step)
+    ax.set_xticks(ticks, [names[k] for k in ticks], rotation=90, fontsize="small")
+    ax.set_yticks(ticks, [names[k] for k in ticks], fontsize="small")
+    ax.set_xlabel("session b")
+    ax.set_ylabel("session a")
+    if colorbar:
+        plt.colorbar(image, ax=ax, label="overlap α (s²)", shrink=0.85)
+    return ax
+
+
+def fleet_trajectories(
+    fleet: Fleet,
+    loops: FleetLoops | None = None,
+    *,
+    ax: Axes | None = None,
+    axes: tuple[int, int] | None = None,
+    cmap: str | None = None,
+    linewidth: float = 1.0,
+    marker_color: str = "black",
+    marker_size: float = 36.0,
+    legend: bool | None = None,
+    position_unit: str = "m",
+) -> Axes:
+    """A fleet's sessions overlaid in one plane, each in its own colour; with ``loops``, every
+    loop component between two sessions marked at its closest pair: a cross midway between
+    the two poses and a line joining them.
+
+    Args:
+        fleet: the :class:`~inexact_loops.Fleet`.
+        loops: the result of :func:`~inexact_loops.find_fleet_loops` on ``fleet``, or ``None``
+            for the paths alone.
+        ax: the Axes to draw into; a new figure when ``None``.
+        axes: the plane drawn, as in :func:`trajectory_by_duration` (default: the plane the
+            sessions were read on, else x-y).
+        cmap: the colormap the sessions' colours are drawn from; default ``"tab10"`` up to 10
+            sessions, ``"tab20"`` up to 20, else ``"turbo"``.
+        linewidth: width of the paths, points.
+        marker_color: colour of the marks of the components between sessions.
+        marker_size: size of those marks, points².
+        legend: name the sessions (and the marks) in a legend; default when there are at most
+            12 sessions.
+        position_unit: unit of the coordinates, for the axis labels.
+
+    Returns:
+        The Axes: one line per session, then (with ``loops``) a LineCollection of closest
+        pairs and the marks.
+
+    Raises:
+        TypeError: ``fleet`` or ``loops`` of the wrong type.
+        ValueError: ``loops`` of another fleet; ``axes`` not two axes the sessions hold.
+
+    Example:
+        >>> import matplotlib
+        >>> matplotlib.use("Agg")
+        >>> import inexact_loops as il
+        >>> from inexact_loops.plot import fleet_trajectories
+        >>> fleet = il.urban_fleet(vehicles=3, duration_s=300.0, seed=2)
+        >>> ax = fleet_trajectories(fleet, il.find_fleet_loops(fleet, gamma=20.0))
+        >>> len(ax.lines), ax.get_legend().get_texts()[0].get_text()
+        (3, 'car0-day0')
+        >>> import matplotlib.pyplot as plt; plt.close("all")
+    """
+    if not isinstance(fleet, Fleet):
+        raise TypeError(f"fleet must be an inexact_loops.Fleet, got {type(fleet).__name__}")
+    if loops is not None:
+        if not isinstance(loops, FleetLoops):
+            raise TypeError(
+                f"loops must be an inexact_loops.FleetLoops, got {type(loops).__name__}"
+            )
+        if loops.names != fleet.names or loops.fleet.poses != fleet.poses:
+            raise ValueError(
+                "loops were found on another fleet: "
+                "pass the result of find_fleet_loops on this fleet"
+            )
+    n = len(fleet)
+    planes = [_plane(fleet.session(a), axes) for a in range(n)]
+    names = planes[0][1]
+
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+    from matplotlib.lines import Line2D
+
+    if cmap is None:
+        cmap = "tab10" if n <= 10 else "tab20" if n <= 20 else "turbo"
+    colormap = plt.get_cmap(cmap)
+    qualitative = getattr(colormap, "N", 256) <= 20
+    colors = [
+        colormap(a % colormap.N) if qualitative else colormap(a / max(n - 1, 1)) for a in range(n)
+    ]
+
+    ax = _axes(ax)
+    for a, (xy, _) in enumerate(planes):
+        ax.plot(xy[:, 0], xy[:, 1], color=colors[a], lw=linewidth, label=fleet.names[a], zorder=1)
+    handles: list[Any] = []
+    if loops is not None:
+        table = loops.components
+        between = table["session_a"] != table["session_b"]
+        a, b = table["session_a"][between], table["session_b"][between]
+        i, j = table["closest_i"][between], table["closest_j"][between]
+        first = np.array([planes[s][0][p] for s, p in zip(a, i, strict=True)]).reshape(-1, 2)
+        second = np.array([planes[s][0][p] for s, p in zip(b, j, strict=True)]).reshape(-1, 2)
+        ax.add_collection(
+            LineCollection(
+                np.stack([first, second], axis=1), colors=marker_color, linewidths=1.0, zorder=3
+            )
+        )
+        middle = (first + second) / 2
+        ax.scatter(
+            middle[:, 0],
+            middle[:, 1],
+            s=marker_size,
+            marker="x",
+            color=marker_color,
+            linewidths=1.2,
+            zorder=4,
+        )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=marker_color,
+                marker="x",
+                ls="none",
+                label=f"between sessions ({len(middle)} components, γ = {loops.gamma:g})",
+            )
+        )
+    _frame(ax, np.concatenate([xy for xy, _ in planes]), names, position_unit)
+    if legend is None:
+        legend = n <= 12
+    if legend:
+        lines, _ = ax.get_legend_handles_labels()
+        _legend_above(ax, handles=[*lines, *handles])
+    return ax
 
 
 # --------------------------------------------------------------------------------------------
