@@ -116,6 +116,72 @@ ELSEWHERE = {
         "python/test_pose_graphs.py",
         "test_verdicts_refuse_another_trajectory_or_metric",
     ),
+    **{
+        name: ("python/test_fleet.py", "test_fleet_from_trajectories_pairs_and_paths")
+        for name in (
+            "Fleet",
+            "Fleet.names",
+            "Fleet.poses",
+            "Fleet.starts",
+            "Fleet.clock_offsets",
+            "Fleet.joint",
+            "Fleet.session",
+            "Fleet.locate",
+            "Fleet.index",
+        )
+    },
+    **{
+        name: ("python/test_fleet.py", "test_find_fleet_loops_options_and_errors")
+        for name in (
+            "find_fleet_loops",
+            "FleetLoops",
+            "FleetLoops.names",
+            "FleetLoops.gamma",
+            "FleetLoops.separation",
+            "FleetLoops.metric_name",
+            "FleetLoops.pruning",
+            "FleetLoops.warnings",
+            "FleetLoops.loops",
+            "FleetLoops.components",
+        )
+    },
+    **{
+        name: ("python/test_fleet.py", "test_random_fleets_equal_scipy_labelling_per_session_pair")
+        for name in (
+            "FleetLoops.fleet",
+            "FleetLoops.session_pairs",
+            "FleetLoops.overlap_matrix",
+            "FleetLoops.loop_duration",
+        )
+    },
+    **{
+        name: (
+            "python/test_fleet.py",
+            "test_samples_between_sessions_name_both_and_cover_every_overlap",
+        )
+        for name in (
+            "sample_fleet",
+            "FleetLoops.between_sessions",
+            "FleetSamples",
+            "FleetSamples.samples",
+            "FleetSamples.sampler",
+            "FleetSamples.groups",
+            "FleetSamples.table",
+        )
+    },
+    **{
+        name: ("python/test_fleet.py", "test_samples_over_the_whole_fleet_and_baselines")
+        for name in (
+            "FleetSamples.fleet",
+            "FleetSamples.available",
+            "FleetSamples.warnings",
+            "FleetSamples.to_pandas",
+        )
+    },
+    "urban_fleet": (
+        "python/test_fleet.py",
+        "test_urban_fleet_is_seeded_and_names_vehicles_and_days",
+    ),
 }
 
 
