@@ -79,9 +79,9 @@ impl SampleQuality {
 /// nearest poses). O(runs + samples log samples).
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] unless `epsilon_s` is positive and finite;
-/// [`Error::TrajectoryMismatch`] when the samples index another trajectory;
-/// [`Error::DetectionOutsideSpan`] for a sample time outside it.
+/// [`Error::InvalidParameter`](crate::Error::InvalidParameter) unless `epsilon_s` is positive and finite;
+/// [`Error::TrajectoryMismatch`](crate::Error::TrajectoryMismatch) when the samples index another trajectory;
+/// [`Error::DetectionOutsideSpan`](crate::Error::DetectionOutsideSpan) for a sample time outside it.
 ///
 /// # Examples
 /// ```

@@ -14,8 +14,8 @@ use crate::convert::{bool_column, float64_column, int64_column, pose_index, tabl
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_loops::Loops;
-use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_metric::loops_metric;
+use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_samples::{Samples, baseline_params};
 use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::{DriveOptions, Trajectory};

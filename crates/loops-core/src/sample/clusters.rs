@@ -20,7 +20,7 @@ use crate::error::{Error, Result};
 /// count nor (without duplicates) the order of the detections. O(n log n).
 ///
 /// # Errors
-/// [`Error::UnknownName`] for a baseline (they need the trajectory: [`sample_loops`]);
+/// [`Error::UnknownName`] for a baseline (they need the trajectory: [`sample_loops`](crate::sample_loops));
 /// [`Error::InvalidParameter`] for a budget of 0 or a rate out of range;
 /// [`Error::NotApplicable`] for [`Sampler::skip_trivial`] (clusters do not know the trivial
 /// components).

@@ -17,8 +17,8 @@ use crate::error::{Error, Result};
 /// | `alpha` | σ_α ∈ O(α): uniform over all detections (or pairs of S_γ), no groups |
 /// | `lio-sam`, `hdl-graph-slam`, `cartographer`, `time-gap` | baselines of deployed systems, see [`BaselineParams`] |
 ///
-/// A *group* is a detection cluster ([`sample_clusters`]) or an exact loop component
-/// ([`sample_loops`]).
+/// A *group* is a detection cluster ([`sample_clusters`](crate::sample_clusters)) or an exact loop component
+/// ([`sample_loops`](crate::sample_loops)).
 ///
 /// # Examples
 /// ```
@@ -183,7 +183,7 @@ pub struct Sampler {
     pub seed: u64,
     /// Parameters of the baselines (ignored by σ_1, σ_ρ, σ_α).
     pub baseline: BaselineParams,
-    /// Leave out the trivial loop components ([`sample_loops`] with σ_1, σ_ρ and σ_α). A
+    /// Leave out the trivial loop components ([`sample_loops`](crate::sample_loops) with σ_1, σ_ρ and σ_α). A
     /// trivial component holds the diagonal: its pairs are simple loops (the trajectory stayed
     /// within γ between t and t′, e.g. the next poses, or a stop), which odometry already ties
     /// together. σ_ρ on S_γ gives it a weight equal to all the rows of the drive, so it would
@@ -203,7 +203,7 @@ impl Sampler {
     }
 
     /// Checks that its options apply to its kind, before any input is seen: front ends call it
-    /// to refuse a bad combination up front; [`sample_loops`] calls it too.
+    /// to refuse a bad combination up front; [`sample_loops`](crate::sample_loops) calls it too.
     ///
     /// # Errors
     /// [`Error::NotApplicable`] for [`Sampler::skip_trivial`] with a baseline, which keeps its

@@ -12,8 +12,8 @@ use crate::trajectory::Trajectory;
 /// One sampled loop: a candidate pair for the scan matcher.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
-    /// Pose indices (i, j), i ≤ j, when known (always from [`sample_loops`]; from
-    /// [`sample_clusters`] when the detections are placed on a trajectory).
+    /// Pose indices (i, j), i ≤ j, when known (always from [`sample_loops`](crate::sample_loops); from
+    /// [`sample_clusters`](crate::sample_clusters) when the detections are placed on a trajectory).
     pub pair: Option<[usize; 2]>,
     /// The earlier time, seconds (the detection's own time for detections).
     pub t_s: f64,
