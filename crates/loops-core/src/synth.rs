@@ -212,9 +212,20 @@ impl UrbanFleet {
     /// of threads).
     ///
     /// # Errors
-    /// [`Error::InvalidParameter`] for no vehicles or days, a negative or non-finite spread, or
-    /// more sessions than 2³²; the drive's own errors; [`Fleet::new`](crate::Fleet::new)'s.
+    /// As [`drives`](Self::drives); [`Fleet::new`](crate::Fleet::new)'s.
     pub fn generate(&self) -> Result<crate::fleet::Fleet> {
+        let drives = self.drives()?;
+        crate::fleet::Fleet::new(drives.into_iter().map(|(name, drive)| (name, drive.trajectory)).collect())
+    }
+
+    /// Each session's name and drive, in fleet order, its trajectory on the session's clock
+    /// (seconds since the first day's midnight) and with its headings: the sessions of
+    /// [`generate`](Self::generate), for writing them as pose logs with orientations.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for no vehicles or days, a negative or non-finite spread, or
+    /// more sessions than 2³²; the drive's own errors.
+    pub fn drives(&self) -> Result<Vec<(String, SyntheticDrive)>> {
         use rayon::prelude::*;
         for (name, value) in [("vehicles", self.vehicles), ("days", self.days)] {
             if value == 0 {
@@ -238,7 +249,7 @@ impl UrbanFleet {
         self.drive.validate()?;
         let width = |n: usize| (n - 1).max(1).ilog10() as usize + 1;
         let (vw, dw) = (width(self.vehicles), width(self.days));
-        let drives: Vec<(String, Trajectory)> = (0..sessions)
+        (0..sessions)
             .into_par_iter()
             .map(|k| {
                 let (day, vehicle) = (k / self.vehicles, k % self.vehicles);
@@ -249,11 +260,10 @@ impl UrbanFleet {
                 let spec = UrbanDrive { seed: rng.random(), first_district: vehicle, ..self.drive.clone() };
                 let drive = spec.generate()?;
                 let times = drive.trajectory.timestamps_s().iter().map(|t| t + start).collect();
-                let traj = Trajectory::new(times, drive.trajectory.coords().to_vec(), drive.trajectory.dim())?;
-                Ok((format!("car{vehicle:0vw$}-day{day:0dw$}"), traj))
+                let trajectory = Trajectory::new(times, drive.trajectory.coords().to_vec(), drive.trajectory.dim())?;
+                Ok((format!("car{vehicle:0vw$}-day{day:0dw$}"), SyntheticDrive { trajectory, ..drive }))
             })
-            .collect::<Result<_>>()?;
-        crate::fleet::Fleet::new(drives)
+            .collect()
     }
 }
 
@@ -633,5 +643,12 @@ mod tests {
         let again = spec.generate().unwrap();
         assert!((0..4).all(|v| again.session(v) == fleet.session(v)), "seeded");
         assert!(UrbanFleet { vehicles: 0, ..spec.clone() }.generate().is_err());
+        // The drives are the sessions, with a heading per pose.
+        let drives = spec.drives().unwrap();
+        assert_eq!(drives.len(), fleet.len());
+        for (k, (name, drive)) in drives.iter().enumerate() {
+            assert_eq!((name, &drive.trajectory), (&fleet.names()[k], fleet.session(k)));
+            assert_eq!(drive.yaw_rad.len(), drive.trajectory.len());
+        }
     }
 }
