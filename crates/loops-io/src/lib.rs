@@ -22,7 +22,9 @@
 //! [`read_trajectory`] and [`read_trajectory_with`] pick the reader by [`Format`], or by
 //! extension and first line ([`format_of`] tells which). Writers: [`write_tum`] for
 //! trajectories, [`write_g2o_edges`] for candidate loop-closure edges with relative-pose
-//! guesses; both atomic, and never replacing a
+//! guesses (and [`write_fleet_g2o_edges`] for a fleet's, keyed by [`gtsam_symbol_key`]); a
+//! fleet's tables: [`write_fleet_components`], [`write_session_pairs`], [`write_fleet_samples`];
+//! all atomic, and never replacing a
 //! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
 //! the workspace: the CLI writes its files through it too; [`StagedFiles`] writes several files
 //! all or none (a command that fails writes nothing).
@@ -79,7 +81,8 @@
 // 4. MCAP: `mcap_records` (the record walker), `mcap` (topics and poses), `mcap_write`;
 // 5. readers: `csv`, `euroc`, `graph`, `kitti`, `tuc`, `tum`, `detections`; `read` picks one;
 // 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
-//    `loop_duration`, `report`, `quality`, `samples`, `edge_verdicts`; and `write` (TUM, g2o).
+//    `loop_duration`, `report`, `quality`, `samples`, `edge_verdicts`; and `write` (TUM, g2o);
+//    `fleet` (a fleet's tables and g2o edges).
 mod atomic;
 mod bag;
 mod cdr;
@@ -93,6 +96,7 @@ mod dropped;
 mod edge_verdicts;
 mod error;
 mod euroc;
+mod fleet;
 mod format;
 mod foxglove;
 mod graph;
@@ -127,6 +131,12 @@ pub use dropped::Dropped;
 pub use edge_verdicts::{EDGE_VERDICT_COLUMNS, EdgeVerdictRow, EdgeVerdicts, VerdictCounts};
 pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError};
 pub use euroc::read_euroc;
+pub use fleet::{
+    FLEET_COMPONENT_COLUMNS, FLEET_SAMPLE_COLUMNS, FleetComponentRow, FleetSampleRow, GTSAM_ROBOT_LETTERS,
+    SESSION_PAIR_COLUMNS, SessionPairRow, fleet_component_rows, fleet_components_to_csv, fleet_g2o_edges_text,
+    fleet_sample_rows, fleet_samples_to_csv, fleet_samples_to_json, gtsam_symbol_key, session_pair_rows,
+    session_pairs_to_csv, write_fleet_components, write_fleet_g2o_edges, write_fleet_samples, write_session_pairs,
+};
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, read_pose_graph};
 pub use kitti::read_kitti;

@@ -166,48 +166,62 @@ pub fn g2o_edges_text(table: &PoseTable, pairs: &[(usize, usize)], options: &G2o
     if let Some(&index) = pairs.iter().flat_map(|(i, j)| [i, j]).find(|&&index| index >= len) {
         return Err(table.locate(Error::IndexOutOfRange { index, len }));
     }
-    let identity = [0.0, 0.0, 0.0, 1.0];
-    let pose = |index: usize| -> Result<([f64; 3], [f64; 4])> {
-        let q = table.orientations_xyzw.as_ref().map_or(identity, |q| q[index]);
-        let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let q = normalized(q).ok_or_else(|| table.locate(Error::NonUnitQuaternion { index, norm }))?;
-        Ok((table.positions[index], q))
-    };
+    let pose = |index: usize| pose_of(table, index);
     let kind = options.kind.unwrap_or(if table.dim == 2 { EdgeKind::Se2 } else { EdgeKind::Se3 });
     let mut lines = String::new();
     if options.with_vertices {
         for index in 0..len {
-            let ([x, y, z], q) = pose(index)?;
-            lines += &match kind {
-                EdgeKind::Se2 => format!("VERTEX_SE2 {index} {x} {y} {}\n", yaw_of(q)),
-                EdgeKind::Se3 => format!("VERTEX_SE3:QUAT {index} {x} {y} {z} {} {} {} {}\n", q[0], q[1], q[2], q[3]),
-            };
+            lines += &vertex_line(kind, index as u64, pose(index)?);
         }
     }
     for &(i, j) in pairs {
-        let (a, b) = (pose(i)?, pose(j)?);
-        lines += &match kind {
-            EdgeKind::Se2 => {
-                let (theta_i, theta_j) = (yaw_of(a.1), yaw_of(b.1));
-                let (s, c) = theta_i.sin_cos();
-                let (dx, dy) = (b.0[0] - a.0[0], b.0[1] - a.0[1]);
-                // Wrapped into (-π, π] here until loops-core makes its angle wrap public (issue 13,
-                // the core's part): then this calls it, and the copy goes.
-                let mut dtheta = theta_j - theta_i;
-                if dtheta > std::f64::consts::PI {
-                    dtheta -= std::f64::consts::TAU;
-                } else if dtheta <= -std::f64::consts::PI {
-                    dtheta += std::f64::consts::TAU;
-                }
-                format!("EDGE_SE2 {i} {j} {} {} {dtheta} 1 0 0 1 0 1\n", c * dx + s * dy, -s * dx + c * dy)
-            }
-            EdgeKind::Se3 => {
-                let ([x, y, z], [qx, qy, qz, qw]) = relative_pose(a, b);
-                format!(
-                    "EDGE_SE3:QUAT {i} {j} {x} {y} {z} {qx} {qy} {qz} {qw} 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n"
-                )
-            }
-        };
+        lines += &edge_line(kind, [i as u64, j as u64], pose(i)?, pose(j)?);
     }
     Ok(lines)
+}
+
+/// A pose of a table for g2o: its position and its unit quaternion (normalised; the identity
+/// for a table without orientations).
+///
+/// # Errors
+/// [`IoError::Trajectory`] holding [`Error::NonUnitQuaternion`] for a zero or non-finite
+/// quaternion. `index` must be a row of the table.
+pub(crate) fn pose_of(table: &PoseTable, index: usize) -> Result<([f64; 3], [f64; 4])> {
+    let q = table.orientations_xyzw.as_ref().map_or([0.0, 0.0, 0.0, 1.0], |q| q[index]);
+    let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let q = normalized(q).ok_or_else(|| table.locate(Error::NonUnitQuaternion { index, norm }))?;
+    Ok((table.positions[index], q))
+}
+
+/// A g2o vertex line of `kind` with id `id` at `pose`.
+pub(crate) fn vertex_line(kind: EdgeKind, id: u64, ([x, y, z], q): ([f64; 3], [f64; 4])) -> String {
+    match kind {
+        EdgeKind::Se2 => format!("VERTEX_SE2 {id} {x} {y} {}\n", yaw_of(q)),
+        EdgeKind::Se3 => format!("VERTEX_SE3:QUAT {id} {x} {y} {z} {} {} {} {}\n", q[0], q[1], q[2], q[3]),
+    }
+}
+
+/// A g2o edge line of `kind` between the vertices `[i, j]`, measuring the pose `b` in the frame
+/// of the pose `a`, with an identity information matrix.
+pub(crate) fn edge_line(kind: EdgeKind, [i, j]: [u64; 2], a: ([f64; 3], [f64; 4]), b: ([f64; 3], [f64; 4])) -> String {
+    match kind {
+        EdgeKind::Se2 => {
+            let (theta_i, theta_j) = (yaw_of(a.1), yaw_of(b.1));
+            let (s, c) = theta_i.sin_cos();
+            let (dx, dy) = (b.0[0] - a.0[0], b.0[1] - a.0[1]);
+            // Wrapped into (-π, π] here until loops-core makes its angle wrap public (issue 13,
+            // the core's part): then this calls it, and the copy goes.
+            let mut dtheta = theta_j - theta_i;
+            if dtheta > std::f64::consts::PI {
+                dtheta -= std::f64::consts::TAU;
+            } else if dtheta <= -std::f64::consts::PI {
+                dtheta += std::f64::consts::TAU;
+            }
+            format!("EDGE_SE2 {i} {j} {} {} {dtheta} 1 0 0 1 0 1\n", c * dx + s * dy, -s * dx + c * dy)
+        }
+        EdgeKind::Se3 => {
+            let ([x, y, z], [qx, qy, qz, qw]) = relative_pose(a, b);
+            format!("EDGE_SE3:QUAT {i} {j} {x} {y} {z} {qx} {qy} {qz} {qw} 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n")
+        }
+    }
 }
