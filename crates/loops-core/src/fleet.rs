@@ -572,6 +572,29 @@ mod tests {
     }
 
     #[test]
+    fn samples_have_their_poses_own_times() {
+        // The second session's clock (from 1000 s) lies higher on the fleet clock (from 3620 s),
+        // where an f64 keeps fewer bits: there t + offset − offset is not always t again.
+        let times = |start: f64| (0..200).map(|k| start + 0.1 * f64::from(k)).collect::<Vec<_>>();
+        let points: Vec<[f64; 1]> = (0..200).map(|k| [f64::from(k % 10)]).collect();
+        let sessions = [0.0, 1000.123_456_789]
+            .iter()
+            .enumerate()
+            .map(|(k, &t0)| (format!("s{k}"), Trajectory::from_points(times(t0), &points).unwrap()))
+            .collect();
+        let fleet = Fleet::new(sessions).unwrap();
+        let loops = find_fleet_loops(&fleet, &Euclidean, 0.5, &FleetOptions::default()).unwrap();
+        let all = Sampler::new(crate::SamplerKind::Alpha, crate::SampleSize::Rate(1.0), 0);
+        let samples = fleet.localize(&sample_fleet(&fleet, &Euclidean, &loops, &all, false).unwrap()).unwrap();
+        assert!(samples.len() > 100);
+        for s in &samples {
+            for k in 0..2 {
+                assert_eq!(s.times_s[k], fleet.session(s.sessions[k]).timestamps_s()[s.poses[k]], "{s:?}");
+            }
+        }
+    }
+
+    #[test]
     fn runs_are_cut_and_rows_not_joined_across_sessions() {
         // Two identical sessions: the intra blocks are each session's own, and the inter block
         // is the full square of one session against itself, without a diagonal.
