@@ -577,7 +577,7 @@ mod tests {
         // where an f64 keeps fewer bits: there t + offset − offset is not always t again.
         let times = |start: f64| (0..200).map(|k| start + 0.1 * f64::from(k)).collect::<Vec<_>>();
         let points: Vec<[f64; 1]> = (0..200).map(|k| [f64::from(k % 10)]).collect();
-        let sessions = [0.0, 1000.123_456_789]
+        let sessions = [0.0, 1_000.123_456_789]
             .iter()
             .enumerate()
             .map(|(k, &t0)| (format!("s{k}"), Trajectory::from_points(times(t0), &points).unwrap()))
