@@ -119,10 +119,10 @@ impl Writes {
     }
 
     /// Renames the staging folder `staged` to `dir`. An existing `dir` is replaced only with
-    /// `force`, and only when it is a folder `loops run` wrote (`owned`): never a file or folder
-    /// of the user's. The staging folder is removed when it cannot be renamed.
-    pub(crate) fn commit(&mut self, staged: &Path, dir: &Path, force: bool, owned: bool) -> Result<()> {
-        let committed = self.rename(staged, dir, force, owned);
+    /// `force`, and only when it is a folder `command` (`loops run`) wrote (`owned`): never a
+    /// file or folder of the user's. The staging folder is removed when it cannot be renamed.
+    pub(crate) fn commit(&mut self, staged: &Path, dir: &Path, force: bool, owned: bool, command: &str) -> Result<()> {
+        let committed = self.rename(staged, dir, force, owned, command);
         if committed.is_err() {
             let _ = std::fs::remove_dir_all(staged);
         }
@@ -130,13 +130,13 @@ impl Writes {
         committed
     }
 
-    fn rename(&self, staged: &Path, dir: &Path, force: bool, owned: bool) -> Result<()> {
+    fn rename(&self, staged: &Path, dir: &Path, force: bool, owned: bool, command: &str) -> Result<()> {
         if dir.exists() || dir.is_symlink() {
             if !force {
                 bail!("{} exists; pass --force to replace it", dir.display());
             }
             if !dir.is_dir() || dir.is_symlink() || !owned {
-                bail!("{} exists and is not an output of `loops run`; not replacing it", dir.display());
+                bail!("{} exists and is not an output of `{command}`; not replacing it", dir.display());
             }
             let old = dir.with_file_name(format!(
                 ".{}.old-{}",

@@ -2,8 +2,9 @@
 //!
 //! [`main`] parses, dispatches to the command's module and maps errors: one line on stderr and
 //! exit code 2 on error, 0 on success or a closed pipe (`loops run` also exits 1 when a log
-//! failed, 130 on Ctrl-C). Each command is a thin adapter over `loops-core` and `loops-io`:
-//! it converts its flags (`args` holds the groups several share), calls, and prints.
+//! failed, `loops fleet` when a session's folder failed; 130 on Ctrl-C). Each command is a thin
+//! adapter over `loops-core` and `loops-io`: it converts its flags (`args` holds the groups
+//! several share), calls, and prints.
 //!
 //! The command is a library so that two front ends run the same code: the `loops` binary of
 //! this crate (`cargo install --path crates/loops-cli`) and the `loops` console script of the
@@ -13,6 +14,7 @@
 mod args;
 mod components;
 mod demo;
+mod fleet;
 mod guard;
 mod info;
 mod out_dir;
@@ -44,15 +46,17 @@ enum Command {
     Info(info::InfoArgs),
     Demo(demo::DemoArgs),
     Run(run::RunArgs),
+    Fleet(fleet::FleetArgs),
     Synth(synth::SynthArgs),
 }
 
 /// Runs the `loops` command with `args` (the program name first, as [`std::env::args_os`]
 /// gives them) and returns its exit code: 0 on success, a closed stdout, `--help` or
-/// `--version`; 1 when `loops run` had a log fail; 2 on an error or a usage error; 130 when
-/// interrupted (SIGINT or SIGTERM, which exit the process at once after removing unfinished
-/// output). Nothing else leaves the process: clap's help, version and usage errors are printed
-/// and returned as codes, and stdout is flushed before returning.
+/// `--version`; 1 when `loops run` had a log fail (`loops fleet`: a session's folder); 2 on an
+/// error or a usage error; 130 when interrupted (SIGINT or SIGTERM, which exit the process at
+/// once after removing unfinished output). Nothing else leaves the process: clap's help,
+/// version and usage errors are printed and returned as codes, and stdout is flushed before
+/// returning.
 ///
 /// It installs the SIGINT/SIGTERM handler once per process: call it from a process that runs
 /// the command and nothing else (the binary, a console script).
@@ -91,6 +95,7 @@ fn run(cli: Cli) -> Result<u8> {
         Command::Info(args) => info::info(args),
         Command::Demo(args) => demo::demo(args),
         Command::Run(args) => return run::run(args),
+        Command::Fleet(args) => return fleet::fleet(args),
         Command::Synth(args) => synth::synth(args),
     };
     done.map(|()| 0)

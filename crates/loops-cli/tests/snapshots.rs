@@ -121,9 +121,23 @@ fn run() {
 }
 
 #[test]
+fn fleet() {
+    let dir = workspace("fleet");
+    let synth = ["synth", "cars", "--vehicles", "2", "--days", "2", "--duration-s", "300"];
+    snapshot!("fleet_synth", transcript(&dir, &synth));
+    let sessions = ["cars/car0-day0.mcap", "cars/car1-day0.mcap", "cars/car0-day1.mcap", "cars/car1-day1.mcap"];
+    let args = ["--gamma", "40", "--budget", "100", "--out", "fleet-results", "--threads", "1"];
+    snapshot!("fleet_run", transcript(&dir, &[&["fleet"][..], &sessions, &args].concat()));
+    snapshot!(
+        "fleet_duplicate",
+        transcript(&dir, &["fleet", "out-and-back.tum", "./out-and-back.tum", "--gamma", "1", "--out", "x"])
+    );
+}
+
+#[test]
 fn help() {
     let dir = std::env::temp_dir();
-    for command in ["components", "sample", "info", "demo", "run", "synth"] {
+    for command in ["components", "sample", "info", "demo", "run", "fleet", "synth"] {
         snapshot!(format!("help_{command}"), transcript(&dir, &[command, "--help"]));
     }
     snapshot!("help", transcript(&dir, &["--help"]));

@@ -1,5 +1,6 @@
 //! `report.html`: one self-contained page per log (no network; figures inline as SVG or PNG).
-//! The batch's `index.html` belongs to `loops run` (`run/index.rs`).
+//! The batch's `index.html` belongs to `loops run` (`run/index.rs`); the fleet's `index.html`
+//! of `loops fleet` is [`fleet`], drawn with the same plotting layer.
 //!
 //! The page has a summary (trajectory, loops, samples and their P1–P3; [`summary`]), then four
 //! figures and the components table:
@@ -28,6 +29,7 @@
 //! markers in [`palette`], number formats in [`numbers`].
 
 mod distance;
+pub(crate) mod fleet;
 mod numbers;
 mod palette;
 mod per_component;

@@ -31,6 +31,44 @@ const SAMPLER_COLOURS: [Rgb; 8] = [
     [0x7f, 0x7f, 0x7f],
 ];
 
+/// Session colours for a fleet of at most ten sessions (Tableau 10).
+const SESSION_COLOURS: [Rgb; 10] = [
+    [0x4e, 0x79, 0xa7],
+    [0xf2, 0x8e, 0x2b],
+    [0xe1, 0x57, 0x59],
+    [0x76, 0xb7, 0xb2],
+    [0x59, 0xa1, 0x4f],
+    [0xed, 0xc9, 0x48],
+    [0xb0, 0x7a, 0xa1],
+    [0xff, 0x9d, 0xa7],
+    [0x9c, 0x75, 0x5f],
+    [0xba, 0xb0, 0xac],
+];
+
+/// The colour of session `k` of a fleet of `n`: Tableau 10 up to ten sessions, beyond that hues
+/// a golden angle apart (neighbours in fleet order far apart on the colour wheel).
+pub(super) fn session_colour(k: usize, n: usize) -> Rgb {
+    if n <= SESSION_COLOURS.len() {
+        return SESSION_COLOURS[k % SESSION_COLOURS.len()];
+    }
+    let hue = (k as f64 * 0.618_033_988_749_895).fract() * 6.0;
+    // HSL with saturation 0.65 and lightness 0.45, to RGB.
+    let (lightness, saturation) = (0.45, 0.65);
+    let chroma = (1.0 - (2.0 * lightness - 1.0_f64).abs()) * saturation;
+    let x = chroma * (1.0 - (hue % 2.0 - 1.0).abs());
+    let (r, g, b) = match hue as u32 {
+        0 => (chroma, x, 0.0),
+        1 => (x, chroma, 0.0),
+        2 => (0.0, chroma, x),
+        3 => (0.0, x, chroma),
+        4 => (x, 0.0, chroma),
+        _ => (chroma, 0.0, x),
+    };
+    let m = lightness - chroma / 2.0;
+    let byte = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
+    [byte(r), byte(g), byte(b)]
+}
+
 /// The colour of trivial components.
 const TRIVIAL_COLOUR: Rgb = [0xc8, 0xd0, 0xdc];
 

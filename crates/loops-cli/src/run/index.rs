@@ -11,7 +11,7 @@ const STYLE: &str = include_str!("index.css");
 
 /// What a folder name keeps in a relative URL path segment: letters, digits and `-._~` (RFC 3986
 /// unreserved); everything else is percent-encoded.
-const SEGMENT: &AsciiSet = &NON_ALPHANUMERIC.remove(b'-').remove(b'.').remove(b'_').remove(b'~');
+pub(crate) const SEGMENT: &AsciiSet = &NON_ALPHANUMERIC.remove(b'-').remove(b'.').remove(b'_').remove(b'~');
 
 /// The page, as one HTML string (inline CSS, no script, no link but to the logs' reports).
 pub(crate) fn render(batch: &BatchSummary<'_>) -> String {

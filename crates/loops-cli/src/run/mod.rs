@@ -10,6 +10,8 @@
 
 mod index;
 
+pub(crate) use index::SEGMENT;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -20,13 +22,13 @@ use loops_core::{
     Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Scale, Selection, Separation, Side, Trajectory,
     sample_quality,
 };
-use loops_io::{QualitySummary, SamplesFormat, SeparationReport, WriteError};
+use loops_io::{PoseTable, QualitySummary, SamplesFormat, SeparationReport, WriteError};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
 use crate::guard;
-use crate::out_dir::OutDir;
+use crate::out_dir::{self, OutDir};
 use crate::progress::{self, Batch};
 use crate::report::{self, ReportInput};
 
@@ -153,14 +155,19 @@ pub(crate) struct BatchSummary<'a> {
     pub(crate) results: &'a [LogOutcome],
 }
 
-/// The settings every log of the batch shares.
+/// The settings every log of the batch shares (every session's page of `loops fleet`).
 #[derive(Debug)]
-struct Settings<'a> {
-    args: &'a RunArgs,
-    spec: MetricSpec,
-    sampler: Sampler,
-    separation: Separation,
-    out: &'a OutDir,
+pub(crate) struct Settings<'a> {
+    pub(crate) input: &'a InputArgs,
+    pub(crate) gamma: f64,
+    pub(crate) epsilon_s: f64,
+    pub(crate) spec: MetricSpec,
+    pub(crate) sampler: Sampler,
+    pub(crate) separation: Separation,
+    /// --out, and whether --force was given.
+    pub(crate) out_path: &'a Path,
+    pub(crate) force: bool,
+    pub(crate) out: &'a OutDir,
 }
 
 pub(crate) fn run(args: RunArgs) -> Result<u8> {
@@ -183,9 +190,19 @@ pub(crate) fn run(args: RunArgs) -> Result<u8> {
     }
     let jobs = jobs(&args.logs, &args.out)?;
     guard::with_writes(|writes| writes.create_dir(&args.out))?;
-    let out = OutDir::take(&args.out, args.force)?;
+    let out = OutDir::take(&args.out, args.force, out_dir::RUN)?;
 
-    let settings = Settings { args: &args, spec, sampler, separation, out: &out };
+    let settings = Settings {
+        input: &args.input,
+        gamma: args.engine.gamma,
+        epsilon_s: args.sampling.epsilon_s,
+        spec,
+        sampler,
+        separation,
+        out_path: &args.out,
+        force: args.force,
+        out: &out,
+    };
     let batch = Batch::new(progress::Mode::detect(args.quiet), jobs.len());
     batch.println(&format!(
         "loops: {} log(s), gamma {} ({}), sampler {} ({}), results to {}",
@@ -201,18 +218,8 @@ pub(crate) fn run(args: RunArgs) -> Result<u8> {
         jobs.par_iter()
             .map(|job| {
                 let log = batch.start(&job.name);
-                let source = job.path.display().to_string();
-                match process(job, &settings, &log) {
-                    Ok(summary) => {
-                        log.finish(true, &outcome_line(&summary));
-                        LogOutcome { name: job.name.clone(), source, ok: true, error: None, summary: Some(summary) }
-                    }
-                    Err(error) => {
-                        let message = format!("{error:#}");
-                        log.finish(false, &message);
-                        LogOutcome { name: job.name.clone(), source, ok: false, error: Some(message), summary: None }
-                    }
-                }
+                let done = process(job, &settings, &log);
+                outcome(&job.name, &job.path.display().to_string(), done, log)
             })
             .collect()
     })?;
@@ -285,7 +292,7 @@ fn jobs(logs: &[PathBuf], out: &Path) -> Result<Vec<Job>> {
 
 /// `path` with every link resolved ([`std::fs::canonicalize`]), also when it does not exist yet:
 /// its longest existing ancestor resolved, and the rest appended.
-fn resolved(path: &Path) -> Result<PathBuf> {
+pub(crate) fn resolved(path: &Path) -> Result<PathBuf> {
     let absolute = std::path::absolute(path).with_context(|| format!("resolving {}", path.display()))?;
     let mut existing = absolute.as_path();
     let mut rest = Vec::new();
@@ -305,31 +312,44 @@ fn resolved(path: &Path) -> Result<PathBuf> {
 
 /// Reads, finds, samples and writes one log.
 fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Result<LogSummary> {
-    let args = settings.args;
-    let spec = &settings.spec;
-    let gamma = args.engine.gamma;
-    let epsilon_s = args.sampling.epsilon_s;
-    let source = job.path.display().to_string();
-    let mut seconds = Seconds::default();
     let start = Instant::now();
-
     log.stage("reading");
-    let (table, traj) = args.input.read_table(std::slice::from_ref(&job.path), spec)?;
-    seconds.read = start.elapsed().as_secs_f64();
+    let (table, traj) = settings.input.read_table(std::slice::from_ref(&job.path), &settings.spec)?;
+    let read_s = start.elapsed().as_secs_f64();
+    analyse(&job.name, &job.path.display().to_string(), &table, &traj, read_s, settings, log)
+}
+
+/// Finds, samples and writes one trajectory already read (`table` as read, `traj` for the
+/// engine; reading took `read_s` seconds): the folder `name` of --out, with the files and the
+/// report of one log, and its summary. `source` names the file(s) it was read from.
+pub(crate) fn analyse(
+    name: &str,
+    source: &str,
+    table: &PoseTable,
+    traj: &Trajectory,
+    read_s: f64,
+    settings: &Settings<'_>,
+    log: &progress::Log<'_>,
+) -> Result<LogSummary> {
+    let spec = &settings.spec;
+    let gamma = settings.gamma;
+    let epsilon_s = settings.epsilon_s;
+    let mut seconds = Seconds { read: read_s, ..Seconds::default() };
+    let start = Instant::now();
 
     log.stage(&format!("finding loops in {} poses", traj.len()));
     let clock = Instant::now();
     let loops = spec
-        .find_loops_separated(&traj, gamma, settings.separation)
+        .find_loops_separated(traj, gamma, settings.separation)
         .with_context(|| format!("finding loops in {source}"))?;
     seconds.find_loops = clock.elapsed().as_secs_f64();
     let loop_duration_s = loops.loop_duration(Selection::All, Side::Both, Scale::Seconds)?;
 
     log.stage("sampling");
     let clock = Instant::now();
-    let samples = spec.sample_loops(&traj, &loops, &settings.sampler)?;
+    let samples = spec.sample_loops(traj, &loops, &settings.sampler)?;
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
-    let comparison = compare_samplers(spec, &traj, &loops, &settings.sampler, samples.len(), epsilon_s)?;
+    let comparison = compare_samplers(spec, traj, &loops, &settings.sampler, samples.len(), epsilon_s)?;
     seconds.sample = clock.elapsed().as_secs_f64();
 
     log.stage("writing");
@@ -338,8 +358,8 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
     let (a, b) = (t[0], t[t.len() - 1]);
     let components = loops.components();
     let mut summary = LogSummary {
-        name: job.name.clone(),
-        source: source.clone(),
+        name: name.to_owned(),
+        source: source.to_owned(),
         poses: traj.len(),
         t0_s: a,
         span_s: traj.span_s(),
@@ -370,13 +390,13 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         files: ["components.csv", "samples.csv", "loop_duration.csv", "summary.json", "report.html"],
     };
     let html = report::render(&ReportInput {
-        name: &job.name,
-        source: &source,
-        table: &table,
-        plane: args.input.plane()?.unwrap_or([0, 1]),
-        traj: &traj,
+        name,
+        source,
+        table,
+        plane: settings.input.plane()?.unwrap_or([0, 1]),
+        traj,
         metric: spec,
-        measured: &args.input.measured(&table, &traj),
+        measured: &settings.input.measured(table, traj),
         loops: &loops,
         loop_duration_s: &loop_duration_s,
         samples: &samples,
@@ -387,13 +407,13 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         seconds: seconds.find_loops,
     });
     seconds.write = clock.elapsed().as_secs_f64();
-    seconds.total = start.elapsed().as_secs_f64();
+    seconds.total = read_s + start.elapsed().as_secs_f64();
     summary.seconds = seconds;
     for warning in &summary.warnings {
         log.warn(warning);
     }
     let json = serde_json::to_string_pretty(&summary)? + "\n";
-    write_folder(settings, &job.name, |dir| {
+    write_folder(settings, name, |dir| {
         let file = |name: &str| dir.join(name);
         let per_component = Some(quality.per_component.as_slice());
         written(|| loops_io::write_components(file("components.csv"), &loops, per_component, false))?;
@@ -406,6 +426,22 @@ fn process(job: &Job, settings: &Settings<'_>, log: &progress::Log<'_>) -> Resul
         write_file(&file(LOG_SUMMARY), json.as_bytes(), false)
     })?;
     Ok(summary)
+}
+
+/// The outcome of one log (`done`), said on its progress line `log`.
+pub(crate) fn outcome(name: &str, source: &str, done: Result<LogSummary>, log: progress::Log<'_>) -> LogOutcome {
+    let (name, source) = (name.to_owned(), source.to_owned());
+    match done {
+        Ok(summary) => {
+            log.finish(true, &outcome_line(&summary));
+            LogOutcome { name, source, ok: true, error: None, summary: Some(summary) }
+        }
+        Err(error) => {
+            let message = format!("{error:#}");
+            log.finish(false, &message);
+            LogOutcome { name, source, ok: false, error: Some(message), summary: None }
+        }
+    }
 }
 
 /// Every compared sampler at the run's sample count and seed: the samples-per-component figure.
@@ -434,7 +470,7 @@ fn compare_samplers(
 /// Writes one log's files into a staging folder (`write`), then lists `name` in the marker of
 /// --out and renames the folder to `out/name`. The staging folder is removed when anything fails.
 fn write_folder(settings: &Settings<'_>, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let (out, force) = (&settings.args.out, settings.args.force);
+    let (out, force) = (settings.out_path, settings.force);
     let staged = out.join(format!(".{name}.partial-{}", std::process::id()));
     guard::with_writes(|writes| writes.stage(&staged))?;
     let written = write(&staged);
@@ -445,7 +481,7 @@ fn write_folder(settings: &Settings<'_>, name: &str, write: impl FnOnce(&Path) -
             // Listed before it is moved in place: what is ours is never unlisted.
             let claimed = if target.exists() && !(force && owned) { Ok(()) } else { settings.out.claim(writes, name) };
             match claimed {
-                Ok(()) => writes.commit(&staged, &target, force, owned),
+                Ok(()) => writes.commit(&staged, &target, force, owned, settings.out.command()),
                 Err(error) => {
                     writes.discard(&staged);
                     Err(error)
@@ -461,7 +497,7 @@ fn write_folder(settings: &Settings<'_>, name: &str, write: impl FnOnce(&Path) -
 
 /// Writes `bytes` to `path` atomically ([`loops_io::write_atomically`]), under the write lock of
 /// [`guard`]; an existing file is replaced only with `force`.
-fn write_file(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
+pub(crate) fn write_file(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
     written(|| loops_io::write_atomically(path, force, |file| file.write_all(bytes)))
 }
 
@@ -470,7 +506,7 @@ fn written(write: impl FnOnce() -> Result<(), WriteError>) -> Result<()> {
     guard::with_writes(|_| write()).map_err(guard::write_error)
 }
 
-fn size_text(size: SampleSize) -> String {
+pub(crate) fn size_text(size: SampleSize) -> String {
     match size {
         SampleSize::Budget(b) => format!("budget {b}"),
         SampleSize::Rate(r) => format!("rate {r}"),

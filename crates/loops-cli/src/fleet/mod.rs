@@ -1,0 +1,571 @@
+//! `loops fleet`: several pose logs as one fleet (vehicles, days, robots in one frame): the loops
+//! within each session and between every two, the sparse session-overlap matrix, one sampling
+//! over all of them, and one report, beside a folder per session as `loops run` writes it.
+//!
+//! A command of its own rather than `loops run --fleet`: a batch runs its logs independently
+//! (one that fails is reported and the others go on, exit code 1), where a fleet is one
+//! computation over all of them (a session that cannot be read stops it, exit code 2); its
+//! results are the fleet's own files at the top of `--out`, and its flags (`--session`,
+//! `--between-only`, `--pruning`) would mean nothing to a batch. What the two share they share
+//! in code: the reading, engine and sampling flags (`args`), the output folder's lock and
+//! marker (`out_dir`, with the marker `loops-fleet.json`), and each session's folder, which is
+//! exactly what `loops run` writes for that log alone (`run::analyse`).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use loops_core::{
+    Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SampleQuality, Samples, Trajectory,
+    sample_quality,
+};
+use loops_io::{G2oOptions, PoseTable, QualitySummary, SeparationReport};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs, source_name};
+use crate::guard;
+use crate::out_dir::{self, OutDir, Tool};
+use crate::progress::{self, Batch};
+use crate::report::fleet::{FleetReportInput, render};
+use crate::run::{LogOutcome, Settings};
+
+/// The fleet's files at the top of --out.
+const FILES: [&str; 6] =
+    ["index.html", "components.csv", "session_pairs.csv", "samples.csv", "samples.g2o", "summary.json"];
+
+/// `loops fleet` in its output folder: its marker, and the files it writes at the top.
+pub(crate) const TOOL: Tool = Tool { command: "loops fleet", marker: "loops-fleet.json", top_files: &FILES };
+
+/// Find the loops of several pose logs as one fleet: within each session and between every two
+/// (where vehicles, days or robots overlap), the session-overlap matrix, one sampling over all,
+/// and one report, with a folder per session as `loops run` writes it.
+#[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
+    loops synth fleet --vehicles 3 --days 2 --duration-s 900\n  \
+    loops fleet fleet/*.mcap --gamma 40 --out fleet-results\n  \
+    loops fleet fleet/*.mcap --gamma 40 --between-only --budget 500 --out merge --force\n  \
+    loops fleet --session monday=mon_0.mcap,mon_1.mcap --session tuesday=tue.mcap --gamma 40 --out results\n\n\
+    In --out: index.html (the fleet's report), components.csv (every component, both sessions\n\
+    by name and index, times on each session's clock), session_pairs.csv (the sparse overlap\n\
+    matrix), samples.csv, samples.g2o (GTSAM Symbol keys: robot letter a, b, ... per session, up\n\
+    to 26 sessions), summary.json, and a folder per session with what `loops run` writes for it\n\
+    alone. Separation applies within a session; pairs of two sessions are all kept."
+)]
+pub(crate) struct FleetArgs {
+    /// The pose logs, one session each, named by the file's stem (a bag folder by its name);
+    /// names must be unique.
+    #[arg(value_name = "LOG", required_unless_present = "sessions")]
+    logs: Vec<PathBuf>,
+    /// A session of several files, or a name of your choice: NAME=FILE[,FILE...]. The files are
+    /// read as one trajectory, as `loops components A B` reads them (MCAP parts merged by time,
+    /// other files joined in time order). Repeat for more; these sessions follow the LOGs.
+    #[arg(long = "session", value_name = "NAME=FILE[,FILE...]")]
+    sessions: Vec<String>,
+    #[command(flatten)]
+    input: InputArgs,
+    #[command(flatten)]
+    engine: EngineArgs,
+    #[command(flatten)]
+    sampling: SamplingArgs,
+    /// Sample only pairs of two different sessions (map merging): the budget goes to the places
+    /// where sessions overlap (one, rho, rho-dispersed, alpha).
+    #[arg(long)]
+    between_only: bool,
+    /// Far-field pruning: auto, hierarchy or kd-tree (auto: a KD-tree over chunk balls for
+    /// euclidean positions of 1 to 3 coordinates, else the ball hierarchy). Results do not depend
+    /// on it.
+    #[arg(long, default_value_t = Pruning::default().name().to_owned())]
+    pruning: String,
+    /// The folder for the results: the fleet's files and a folder per session.
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Replace the results of an earlier `loops fleet` in --out (only what it wrote there).
+    #[arg(long)]
+    force: bool,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    quiet: bool,
+    /// Also write the fleet's summary (summary.json of --out) to FILE; `-` prints it on stdout
+    /// instead of the table.
+    #[arg(long, value_name = "FILE")]
+    json: Option<JsonTo>,
+}
+
+/// A session as given: its name and its file(s).
+#[derive(Debug)]
+struct SessionSpec {
+    name: String,
+    files: Vec<PathBuf>,
+    /// How it was given, for messages: the file, or `--session NAME=...`.
+    given: String,
+}
+
+/// One session in summary.json.
+#[derive(Debug, Serialize)]
+pub(crate) struct SessionSummary {
+    pub(crate) name: String,
+    pub(crate) source: String,
+    pub(crate) poses: usize,
+    pub(crate) t0_s: f64,
+    pub(crate) span_s: f64,
+    /// Loop components within the session (its own).
+    pub(crate) within_components: usize,
+    /// Loop components between it and another session.
+    pub(crate) between_components: usize,
+    /// The fleet's samples with a pose in it.
+    pub(crate) samples: usize,
+}
+
+#[derive(Debug, Default, Serialize)]
+pub(crate) struct FleetSeconds {
+    pub(crate) read: f64,
+    pub(crate) find_loops: f64,
+    pub(crate) sample: f64,
+    pub(crate) write: f64,
+    pub(crate) pages: f64,
+    pub(crate) total: f64,
+}
+
+/// summary.json of the fleet.
+#[derive(Debug, Serialize)]
+pub(crate) struct FleetSummary<'a> {
+    pub(crate) out: String,
+    pub(crate) poses: usize,
+    pub(crate) gamma: f64,
+    pub(crate) metric: String,
+    pub(crate) separation: SeparationReport,
+    pub(crate) pruning: &'static str,
+    pub(crate) components: usize,
+    pub(crate) within_components: usize,
+    pub(crate) between_components: usize,
+    /// Pairs of two different sessions with at least one component between them.
+    pub(crate) overlapping_session_pairs: usize,
+    pub(crate) sampler: &'static str,
+    pub(crate) sample_size: String,
+    pub(crate) seed: u64,
+    pub(crate) skip_trivial: bool,
+    pub(crate) between_only: bool,
+    pub(crate) epsilon_s: f64,
+    pub(crate) samples: usize,
+    pub(crate) between_samples: usize,
+    /// P1–P3 of the samples against every component of the fleet.
+    pub(crate) quality: QualitySummary,
+    /// Components between sessions holding a sample (P1 between sessions).
+    pub(crate) between_covered: usize,
+    pub(crate) sessions: Vec<SessionSummary>,
+    pub(crate) warnings: Vec<String>,
+    pub(crate) seconds: FleetSeconds,
+    pub(crate) files: Vec<&'static str>,
+    /// Each session's folder: `loops run`'s summary of the session alone.
+    pub(crate) pages: &'a [LogOutcome],
+}
+
+pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
+    let start = Instant::now();
+    let spec = args.engine.spec()?;
+    let sampler = args.sampling.sampler()?;
+    loops_core::check_gamma(args.engine.gamma)?;
+    let separation = args.engine.separation()?;
+    loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
+    args.engine.threads.map(loops_core::check_threads).transpose()?;
+    let pruning: Pruning = args.pruning.parse()?;
+    if args.between_only && sampler.kind.is_baseline() {
+        bail!(
+            "--between-only does not apply to the {} baseline: its rule knows no components; use --sampler one, \
+             rho, rho-dispersed or alpha",
+            sampler.kind
+        );
+    }
+    if args.out.exists() && !args.out.is_dir() {
+        bail!("--out {} exists and is not a folder", args.out.display());
+    }
+    if let Some(JsonTo::File(path)) = &args.json
+        && path.exists()
+        && !args.force
+    {
+        bail!("--json {} exists; pass --force to replace it", path.display());
+    }
+    let specs = sessions(&args)?;
+    out_dir::refuse_non_empty(&args.out, args.force, TOOL)?;
+
+    let batch = Batch::new(progress::Mode::detect(args.quiet), specs.len() + 1);
+    let mut seconds = FleetSeconds::default();
+    let result = loops_core::with_threads(args.engine.threads, || -> Result<u8> {
+        // The sessions are read, and fit one fleet, before anything is written or printed: a
+        // fleet that cannot be made is one line on stderr, and no --out.
+        let log = batch.start("fleet");
+        log.stage(&format!("reading {} sessions", specs.len()));
+        let clock = Instant::now();
+        let read: Vec<(PoseTable, Trajectory)> = specs
+            .par_iter()
+            .map(|s| args.input.read_table(&s.files, &spec))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<_>>()?;
+        seconds.read = clock.elapsed().as_secs_f64();
+        let sources: Vec<String> = specs.iter().map(|s| source_name(&s.files)).collect();
+        let (tables, trajectories): (Vec<PoseTable>, Vec<Trajectory>) = read.into_iter().unzip();
+        let fleet = Fleet::new(specs.iter().map(|s| s.name.clone()).zip(trajectories).collect())
+            .map_err(|error| mismatch(error, &specs, &sources))?;
+
+        guard::with_writes(|writes| writes.create_dir(&args.out))?;
+        let out = OutDir::take(&args.out, args.force, TOOL)?;
+        batch.println(&format!(
+            "loops: fleet of {} session(s), {} poses, gamma {} ({}), sampler {} ({}{}), results to {}",
+            fleet.len(),
+            fleet.poses(),
+            args.engine.gamma,
+            spec.name(),
+            sampler.kind,
+            crate::run::size_text(sampler.size),
+            if args.between_only { ", between sessions only" } else { "" },
+            args.out.display()
+        ));
+        batch.println(&format!(
+            "loops: {} within a session; pairs of two sessions are all kept",
+            crate::args::separation_line(separation, args.engine.gamma)
+        ));
+
+        log.stage(&format!("finding loops in {} poses", fleet.poses()));
+        let clock = Instant::now();
+        let options = FleetOptions { separation, pruning, chunk_radius: None };
+        let loops = spec.find_fleet_loops(&fleet, args.engine.gamma, &options)?;
+        seconds.find_loops = clock.elapsed().as_secs_f64();
+        batch.println(&format!(
+            "loops: pruning {}{}",
+            loops.pruning().name(),
+            if pruning == Pruning::Auto { " (auto; --pruning to choose)" } else { "" }
+        ));
+
+        log.stage("sampling");
+        let clock = Instant::now();
+        let samples = spec.sample_fleet(&fleet, &loops, &sampler, args.between_only)?;
+        let quality = sample_quality(&samples, loops.loops(), args.sampling.epsilon_s)?;
+        let localized = fleet.localize(&samples)?;
+        seconds.sample = clock.elapsed().as_secs_f64();
+
+        log.stage("writing");
+        let clock = Instant::now();
+        let components = loops.components();
+        let pairs = loops.session_pairs();
+        let g2o = write_fleet_files(&out, &args.out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
+        seconds.write = clock.elapsed().as_secs_f64();
+        let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
+        let between_covered = components
+            .iter()
+            .filter(|c| c.sessions[0] != c.sessions[1] && quality.per_component.get(c.id).is_some_and(|&k| k > 0))
+            .count();
+        let between_samples = localized.iter().filter(|s| s.sessions[0] != s.sessions[1]).count();
+        log.finish(
+            true,
+            &format!(
+                "{} poses, {} components within sessions, {between} between sessions, {} samples, P1 {between_covered}/{between} between sessions, {:.2} s",
+                fleet.poses(),
+                components.len() - between,
+                samples.len(),
+                start.elapsed().as_secs_f64()
+            ),
+        );
+        for warning in warnings(&loops, &samples) {
+            batch.println(&format!("loops: warning: fleet: {warning}"));
+        }
+
+        // Each session's folder: `loops run` on the session alone.
+        let clock = Instant::now();
+        let settings = Settings {
+            input: &args.input,
+            gamma: args.engine.gamma,
+            epsilon_s: args.sampling.epsilon_s,
+            spec,
+            sampler: sampler.clone(),
+            separation,
+            out_path: &args.out,
+            force: args.force,
+            out: &out,
+        };
+        let pages: Vec<LogOutcome> = (0..fleet.len())
+            .into_par_iter()
+            .map(|a| {
+                let name = &fleet.names()[a];
+                let log = batch.start(name);
+                let analysed =
+                    crate::run::analyse(name, &sources[a], &tables[a], fleet.session(a), 0.0, &settings, &log);
+                crate::run::outcome(name, &sources[a], analysed, log)
+            })
+            .collect();
+        seconds.pages = clock.elapsed().as_secs_f64();
+        batch.finish();
+
+        let sessions = session_summaries(&fleet, &sources, &components, &localized);
+        let failed = pages.iter().filter(|p| !p.ok).count();
+        let mut summary = FleetSummary {
+            out: args.out.display().to_string(),
+            poses: fleet.poses(),
+            gamma: args.engine.gamma,
+            metric: spec.name(),
+            separation: separation.into(),
+            pruning: loops.pruning().name(),
+            components: components.len(),
+            within_components: components.len() - between,
+            between_components: between,
+            overlapping_session_pairs: pairs.iter().filter(|p| p.sessions[0] != p.sessions[1]).count(),
+            sampler: samples.sampler().name(),
+            sample_size: crate::run::size_text(sampler.size),
+            seed: sampler.seed,
+            skip_trivial: sampler.skip_trivial,
+            between_only: args.between_only,
+            epsilon_s: args.sampling.epsilon_s,
+            samples: samples.len(),
+            between_samples,
+            quality: QualitySummary::new(samples.sampler(), &quality),
+            between_covered,
+            sessions,
+            warnings: warnings(&loops, &samples),
+            seconds: FleetSeconds::default(),
+            files: FILES.iter().copied().filter(|&f| f != "samples.g2o" || g2o).collect(),
+            pages: &pages,
+        };
+        let html = render(&FleetReportInput {
+            fleet: &fleet,
+            tables: &tables,
+            plane: args.input.plane()?.unwrap_or([0, 1]),
+            components: &components,
+            pairs: &pairs,
+            sampler: samples.sampler(),
+            quality: &quality,
+            summary: &summary,
+        });
+        seconds.total = start.elapsed().as_secs_f64();
+        summary.seconds = seconds;
+        let json = serde_json::to_string_pretty(&summary)? + "\n";
+        for (name, bytes) in [("summary.json", json.as_bytes()), ("index.html", html.as_bytes())] {
+            guard::with_writes(|writes| out.claim(writes, name))?;
+            crate::run::write_file(&args.out.join(name), bytes, true)?;
+        }
+        if let Some(JsonTo::File(path)) = &args.json {
+            crate::run::write_file(path, json.as_bytes(), args.force)?;
+        }
+        let mut stdout = std::io::stdout().lock();
+        if args.json == Some(JsonTo::Stdout) {
+            stdout.write_all(json.as_bytes())?;
+        } else if !args.quiet {
+            write_table(&mut stdout, &summary)?;
+        }
+        stdout.flush()?;
+        Ok(if failed == 0 { 0 } else { 1 })
+    });
+    let result = result.map_err(anyhow::Error::from).and_then(|code| code);
+    if result.is_err() {
+        batch.finish();
+    }
+    result
+}
+
+/// The sessions as given: each LOG, then each --session, with unique names that can name a
+/// folder of --out, and no file inside --out.
+fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
+    let mut specs: Vec<SessionSpec> = Vec::new();
+    for path in &args.logs {
+        let given = path.display().to_string();
+        specs.push(SessionSpec { name: session_name(path), files: vec![path.clone()], given });
+    }
+    for text in &args.sessions {
+        let Some((name, files)) = text.split_once('=') else {
+            bail!("--session {text}: expected NAME=FILE[,FILE...]");
+        };
+        let files: Vec<PathBuf> = files.split(',').filter(|f| !f.is_empty()).map(PathBuf::from).collect();
+        if files.is_empty() {
+            bail!("--session {text}: no file given for session {name:?}");
+        }
+        specs.push(SessionSpec { name: name.to_owned(), files, given: format!("--session {text}") });
+    }
+    let out_abs = crate::run::resolved(&args.out)?;
+    for (k, spec) in specs.iter().enumerate() {
+        if let Some(first) = specs[..k].iter().find(|s| s.name == spec.name) {
+            bail!(
+                "two sessions are named {:?} ({} and {}): session names must be unique; name them with --session \
+                 NAME=FILE",
+                spec.name,
+                first.given,
+                spec.given
+            );
+        }
+        let reserved = FILES.contains(&spec.name.as_str()) || spec.name == TOOL.marker || spec.name == out_dir::MARKER;
+        if spec.name.is_empty()
+            || spec.name.starts_with('.')
+            || spec.name.contains(['/', '\\'])
+            || spec.name.chars().any(char::is_control)
+            || reserved
+        {
+            bail!(
+                "session name {:?} ({}) cannot name the session's folder in --out (empty, hidden, a path, or a file \
+                 of the fleet's); name it with --session NAME=FILE",
+                spec.name,
+                spec.given
+            );
+        }
+        for file in &spec.files {
+            if crate::run::resolved(file)?.starts_with(&out_abs) {
+                bail!("{} lies inside --out {}; write the results elsewhere", file.display(), args.out.display());
+            }
+        }
+    }
+    Ok(specs)
+}
+
+/// A session's name from its log: a folder's name (a bag), or the file's name without its
+/// extension.
+fn session_name(path: &Path) -> String {
+    let name = if path.is_dir() { path.file_name() } else { path.file_stem() };
+    name.map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// The core's refusal of a session that does not fit the first, with both sessions' files.
+fn mismatch(error: loops_core::Error, specs: &[SessionSpec], sources: &[String]) -> anyhow::Error {
+    let loops_core::Error::SessionMismatch { session, what, .. } = &error else { return error.into() };
+    let source = specs.iter().position(|s| &s.name == session).map_or("?", |k| sources[k].as_str());
+    let hint = if *what == "dimension" { "; --axes A,B measures every session in one plane" } else { "" };
+    anyhow!("{error} ({session}: {source}; the first: {}){hint}", sources[0])
+}
+
+/// Writes the fleet's files into --out (each listed in the marker first, then replaced
+/// atomically); samples.g2o only for at most 26 sessions (the letters of its keys), otherwise
+/// an earlier one of ours is removed and a line on stderr says why. Returns whether the g2o
+/// file was written.
+#[allow(clippy::too_many_arguments)]
+fn write_fleet_files(
+    out: &OutDir,
+    dir: &Path,
+    fleet: &Fleet,
+    loops: &FleetLoops,
+    samples: &Samples,
+    quality: &SampleQuality,
+    tables: &[PoseTable],
+    localized: &[FleetSample],
+) -> Result<bool> {
+    let write = |name: &str, fill: &dyn Fn(&mut std::fs::File) -> std::io::Result<()>| -> Result<()> {
+        guard::with_writes(|writes| out.claim(writes, name))?;
+        guard::with_writes(|_| loops_io::write_atomically(dir.join(name), true, fill)).map_err(guard::write_error)
+    };
+    let per_component = Some(quality.per_component.as_slice());
+    write("components.csv", &|file| loops_io::fleet_components_to_csv(fleet, loops, per_component, file))?;
+    write("session_pairs.csv", &|file| loops_io::session_pairs_to_csv(fleet, loops, file))?;
+    write("samples.csv", &|file| loops_io::fleet_samples_to_csv(fleet, samples, file))?;
+    if fleet.len() <= loops_io::GTSAM_ROBOT_LETTERS.len() {
+        let refs: Vec<&PoseTable> = tables.iter().collect();
+        let text = loops_io::fleet_g2o_edges_text(&refs, localized, &G2oOptions::default())?;
+        write("samples.g2o", &|file| file.write_all(text.as_bytes()))?;
+        Ok(true)
+    } else {
+        let stale = dir.join("samples.g2o");
+        if out.owns("samples.g2o") && stale.is_file() {
+            guard::with_writes(|_| std::fs::remove_file(&stale))
+                .with_context(|| format!("removing the earlier {}", stale.display()))?;
+        }
+        eprintln!(
+            "loops: warning: samples.g2o not written: its GTSAM Symbol keys have one robot letter per session (a-z), for at \
+             most {} sessions, and the fleet has {}",
+            loops_io::GTSAM_ROBOT_LETTERS.len(),
+            fleet.len()
+        );
+        Ok(false)
+    }
+}
+
+/// The warnings of the fleet's result and of its sampling, as sentences.
+fn warnings(loops: &FleetLoops, samples: &Samples) -> Vec<String> {
+    loops
+        .loops()
+        .warnings()
+        .iter()
+        .map(ToString::to_string)
+        .chain(samples.warnings().iter().map(ToString::to_string))
+        .collect()
+}
+
+/// Per session: its poses, span, components within and between, and the samples touching it.
+fn session_summaries(
+    fleet: &Fleet,
+    sources: &[String],
+    components: &[FleetComponent],
+    samples: &[FleetSample],
+) -> Vec<SessionSummary> {
+    let n = fleet.len();
+    let (mut within, mut between, mut sampled) = (vec![0; n], vec![0; n], vec![0; n]);
+    for c in components {
+        let [a, b] = c.sessions;
+        if a == b {
+            within[a] += 1;
+        } else {
+            between[a] += 1;
+            between[b] += 1;
+        }
+    }
+    for s in samples {
+        let [a, b] = s.sessions;
+        sampled[a] += 1;
+        if b != a {
+            sampled[b] += 1;
+        }
+    }
+    (0..n)
+        .map(|a| {
+            let traj = fleet.session(a);
+            SessionSummary {
+                name: fleet.names()[a].clone(),
+                source: sources[a].clone(),
+                poses: traj.len(),
+                t0_s: traj.timestamps_s()[0],
+                span_s: traj.span_s(),
+                within_components: within[a],
+                between_components: between[a],
+                samples: sampled[a],
+            }
+        })
+        .collect()
+}
+
+/// The fleet's table on stdout.
+fn write_table(out: &mut impl Write, s: &FleetSummary<'_>) -> Result<()> {
+    writeln!(
+        out,
+        "{} session(s), {} poses: {} components within sessions, {} between sessions in {} session pair(s); {} \
+         samples{}, P1 {}/{} between sessions; in {:.2} s; results in {}",
+        s.sessions.len(),
+        s.poses,
+        s.within_components,
+        s.between_components,
+        s.overlapping_session_pairs,
+        s.samples,
+        if s.between_only { " (between sessions only)" } else { "" },
+        s.between_covered,
+        s.between_components,
+        s.seconds.total,
+        s.out
+    )?;
+    let width = s.sessions.iter().map(|r| r.name.chars().count()).max().unwrap_or(7).max(7);
+    writeln!(
+        out,
+        "{:<width$}  {:>9}  {:>9}  {:>7}  {:>8}  {:>8}  page",
+        "session", "poses", "span (s)", "within", "between", "samples"
+    )?;
+    for (r, page) in s.sessions.iter().zip(s.pages) {
+        let status = if page.ok {
+            "ok".to_owned()
+        } else {
+            format!("failed: {}", page.error.as_deref().unwrap_or("unknown error"))
+        };
+        writeln!(
+            out,
+            "{:<width$}  {:>9}  {:>9.1}  {:>7}  {:>8}  {:>8}  {status}",
+            r.name, r.poses, r.span_s, r.within_components, r.between_components, r.samples
+        )?;
+    }
+    writeln!(out, "wrote {}", Path::new(&s.out).join("index.html").display())?;
+    Ok(())
+}
