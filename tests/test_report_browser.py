@@ -2,7 +2,9 @@
 and drawn, the components table matches components.csv, and nothing is fetched from the network.
 A screenshot of the rendered page is kept as a test artifact. KITTI 00 run with `--axes 0,2`
 (from ../shared/data; skipped without it) draws its maps in x-z: the rendered tracks span both
-axes, are labelled x and z, and every drawn vertex is a pose's (x, z).
+axes, are labelled x and z, and every drawn vertex is a pose's (x, z). The fleet's report of
+`loops fleet` renders too: both figures drawn, the components between sessions as in
+components.csv, every session linking its own page.
 
 Chromium is Debian's `chromium` package (`.ci/run` installs it); where it is missing the test
 is skipped with a message saying so.
@@ -18,6 +20,7 @@ import re
 import shutil
 import subprocess
 from pathlib import Path
+from urllib.parse import unquote, urlparse
 
 import numpy as np
 import pytest
@@ -320,3 +323,152 @@ def test_kitti00_maps_draw_the_chosen_plane_in_chromium(kitti00_report: Path) ->
 
 def scipy_spatial():
     return pytest.importorskip("scipy.spatial")
+
+
+# --------------------------------------------------------------------------------------------
+# The fleet's report (index.html of `loops fleet`).
+# --------------------------------------------------------------------------------------------
+
+# Loads the fleet's page in a same-folder iframe and writes what the browser laid out into the
+# page, for --dump-dom to print.
+FLEET_FIGURES = {"overlap-matrix", "fleet-map"}
+
+FLEET_CHECK_PAGE = """<!DOCTYPE html><html><body>
+<iframe id="report" src="index.html" style="width:1400px;height:4000px"></iframe>
+<script>
+document.getElementById("report").addEventListener("load", () => {
+  const doc = document.getElementById("report").contentDocument;
+  const size = (e) => { const r = e.getBoundingClientRect(); return [r.width, r.height]; };
+  const figures = [...doc.querySelectorAll(".figure")].map((f) => ({
+    name: f.dataset.figure,
+    size: size(f),
+    svgs: [...f.querySelectorAll("svg")].map((s) => ({
+      size: size(s),
+      marks: s.querySelectorAll("path, rect, circle").length,
+      cells: s.querySelectorAll("rect.cell").length })),
+  }));
+  const text = (c) => c.textContent.trim();
+  const table = (id) => {
+    const t = doc.getElementById(id);
+    if (!t) return null;
+    const rows = [...t.querySelectorAll("tbody tr")].map((r) => [...r.cells].map(text));
+    return { header: [...t.querySelectorAll("thead th")].map(text), rows };
+  };
+  const links = [...doc.querySelectorAll("#sessions a")].map((a) => [text(a), a.href]);
+  const out = document.createElement("pre");
+  out.id = "result";
+  out.textContent = JSON.stringify({
+    title: doc.title, figures, between: table("between"), pairs: table("session-pairs"),
+    sessions: table("sessions"), links });
+  document.body.appendChild(out);
+});
+</script></body></html>
+"""
+
+ODD = "night <&> shift"  # a session name that needs escaping, in HTML and in a link
+
+
+@pytest.fixture(scope="module")
+def fleet_out(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> Path:
+    """A synthetic fleet (3 vehicles, 2 days, 10 min each) through `loops fleet`: --out."""
+    root = tmp_path_factory.mktemp("fleet")
+    logs = root / "logs"
+    synth = [loops_cli, "synth", logs, "--vehicles", "3", "--days", "2", "--duration-s", "600"]
+    subprocess.run(synth, check=True, capture_output=True)
+    files = sorted(logs.glob("*.mcap"))
+    out = root / "results"
+    args = [loops_cli, "fleet", *files[:-1], "--session", f"{ODD}={files[-1]}"]
+    args += ["--gamma", "40", "--budget", "400", "--out", out, "--quiet"]
+    subprocess.run(args, check=True, capture_output=True)
+    return out
+
+
+def test_fleet_report_is_self_contained(fleet_out: Path) -> None:
+    page = (fleet_out / "index.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    fetched = re.findall(r"""(?:src|href)\s*=\s*["']?\s*(?:https?:)?//""", page)
+    assert not fetched, "the report must not load anything from the network"
+    assert "@import" not in page and "<link" not in page and "<script" not in page
+    assert "night &lt;&amp;&gt; shift" in page and ODD not in page
+
+
+def test_fleet_report_renders_in_chromium(fleet_out: Path) -> None:
+    browser = chromium()
+    check = fleet_out / "check.html"
+    check.write_text(FLEET_CHECK_PAGE)
+    dumped = browse(
+        browser,
+        "--virtual-time-budget=15000",
+        "--window-size=1440,4200",
+        "--dump-dom",
+        check.as_uri(),
+    ).stdout
+    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
+    assert found, f"the check script did not run: {dumped[:2000]}"
+    page = json.loads(html.unescape(found.group(1)))
+    assert "Fleet of 6 sessions" in page["title"]
+    summary = json.loads((fleet_out / "summary.json").read_text())
+
+    figures = {f["name"]: f for f in page["figures"]}
+    assert set(figures) == FLEET_FIGURES, figures.keys()
+    for name, figure in figures.items():
+        width, height = figure["size"]
+        assert width > 200 and height > 150, (name, figure["size"])
+        assert max(min(svg["size"]) for svg in figure["svgs"]) > 150, (name, figure)
+        assert sum(svg["marks"] for svg in figure["svgs"]) > 10, name
+    # The heat map: a cell per session pair that meets (both halves), one per session alone.
+    matrix = figures["overlap-matrix"]["svgs"][0]
+    with (fleet_out / "session_pairs.csv").open(newline="") as f:
+        pairs = list(csv.DictReader(f))
+    own = sum(p["a"] == p["b"] for p in pairs)
+    assert matrix["cells"] == own + 2 * (len(pairs) - own)
+    assert len(page["pairs"]["rows"]) == len(pairs)
+
+    # The components between sessions: the rows of components.csv with a != b, same numbers.
+    with (fleet_out / "components.csv").open(newline="") as f:
+        between = {int(r["id"]): r for r in csv.DictReader(f) if r["a"] != r["b"]}
+    table = page["between"]
+    assert len(table["rows"]) == len(between) == summary["between_components"] > 0
+    column = {name: table["header"].index(name) for name in table["header"]}
+    for row in table["rows"]:
+        want = between[int(row[column["id"]])]
+        assert row[column["session_a"]] == want["session_a"]
+        assert row[column["session_b"]] == want["session_b"]
+        assert int(row[column["pair_count"]]) == int(want["pair_count"])
+        assert int(row[column["samples"]]) == int(want["samples"])
+        assert float(row[column["area_s2"]]) == pytest.approx(float(want["area_s2"]), abs=0.06)
+        start = float(row[column["t_prime_min_s"]])
+        assert start == pytest.approx(float(want["t_prime_min_s"]), abs=0.06)
+    areas = [float(r[column["area_s2"]]) for r in table["rows"]]
+    assert areas == sorted(areas, reverse=True), "largest first"
+
+    # Every session is listed and links its own page, which is there.
+    names = [s["name"] for s in summary["sessions"]]
+    assert [r[0] for r in page["sessions"]["rows"]] == names
+    assert ODD in names
+    assert [name for name, _ in page["links"]] == names
+    for name, href in page["links"]:
+        target = Path(unquote(urlparse(href).path))
+        assert target == fleet_out / name / "report.html", (name, href)
+        assert 'data-figure="loop-duration"' in target.read_text()
+
+
+def test_fleet_report_screenshot_is_kept_and_not_blank(fleet_out: Path) -> None:
+    browser = chromium()
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    shot = ARTIFACTS / "fleet-report.png"
+    shot.unlink(missing_ok=True)
+    browse(
+        browser,
+        "--virtual-time-budget=15000",
+        "--window-size=1440,2400",
+        f"--screenshot={shot}",
+        (fleet_out / "index.html").as_uri(),
+    )
+    assert shot.exists(), "Chromium wrote no screenshot"
+    image = pytest.importorskip("matplotlib.image").imread(shot)
+    pixels = np.asarray(image)[..., :3]
+    ink = (pixels.max(axis=2) - pixels.min(axis=2) > 0.1) | (pixels.mean(axis=2) < 0.6)
+    assert ink.mean() > 0.02, "the rendered page is nearly blank"
+    colourful = pixels.max(axis=2) - pixels.min(axis=2) > 0.25
+    assert colourful.mean() > 0.005, "the heat map and the sessions' colours"

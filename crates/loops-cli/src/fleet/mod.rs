@@ -489,7 +489,7 @@ fn warnings(loops: &FleetLoops, samples: &Samples) -> Vec<String> {
 }
 
 /// Per session: its poses, span, components within and between, and the samples touching it.
-fn session_summaries(
+pub(crate) fn session_summaries(
     fleet: &Fleet,
     sources: &[String],
     components: &[FleetComponent],

@@ -579,3 +579,167 @@ fn sessions_section(input: &FleetReportInput<'_>) -> Markup {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use loops_core::{
+        DEFAULT_EPSILON_S, Euclidean, FleetOptions, SampleSize, Sampler, Separation, Trajectory, UrbanDrive,
+        UrbanFleet, find_fleet_loops, sample_fleet, sample_quality,
+    };
+    use loops_io::{PoseTable, QualitySummary};
+
+    use super::*;
+    use crate::fleet::{FleetSeconds, session_summaries};
+
+    /// A pose table of a trajectory's first three coordinates.
+    fn table(traj: &Trajectory) -> PoseTable {
+        let positions = traj
+            .coords()
+            .chunks_exact(traj.dim())
+            .map(|p| [p[0], p.get(1).copied().unwrap_or(0.0), p.get(2).copied().unwrap_or(0.0)])
+            .collect();
+        PoseTable {
+            path: "session.tum".into(),
+            timestamps_s: traj.timestamps_s().to_vec(),
+            timestamps_ns: None,
+            positions,
+            orientations_xyzw: None,
+            dim: traj.dim(),
+            source_lines: (1..=traj.len()).collect(),
+            messages: None,
+        }
+    }
+
+    /// The page of a fleet of `sessions` at `gamma` (no session pages written).
+    fn page_of(sessions: Vec<(String, Trajectory)>, gamma: f64, budget: usize) -> (String, usize) {
+        let fleet = Fleet::new(sessions).unwrap();
+        let options = FleetOptions { separation: Separation::for_gamma(gamma), ..FleetOptions::default() };
+        let loops = find_fleet_loops(&fleet, &Euclidean, gamma, &options).unwrap();
+        let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(budget), 0);
+        let samples = sample_fleet(&fleet, &Euclidean, &loops, &sampler, false).unwrap();
+        let quality = sample_quality(&samples, loops.loops(), DEFAULT_EPSILON_S).unwrap();
+        let localized = fleet.localize(&samples).unwrap();
+        let components = loops.components();
+        let pairs = loops.session_pairs();
+        let tables: Vec<PoseTable> = (0..fleet.len()).map(|a| table(fleet.session(a))).collect();
+        let sources: Vec<String> = fleet.names().iter().map(|n| format!("logs/{n} <&>.tum")).collect();
+        let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
+        let summary = FleetSummary {
+            out: "results".into(),
+            poses: fleet.poses(),
+            gamma,
+            metric: "euclidean".into(),
+            separation: options.separation.into(),
+            pruning: loops.pruning().name(),
+            components: components.len(),
+            within_components: components.len() - between,
+            between_components: between,
+            overlapping_session_pairs: pairs.iter().filter(|p| p.sessions[0] != p.sessions[1]).count(),
+            sampler: "rho",
+            sample_size: format!("budget {budget}"),
+            seed: 0,
+            skip_trivial: false,
+            between_only: false,
+            epsilon_s: DEFAULT_EPSILON_S,
+            samples: samples.len(),
+            between_samples: localized.iter().filter(|s| s.sessions[0] != s.sessions[1]).count(),
+            quality: QualitySummary::new(SamplerKind::Rho, &quality),
+            between_covered: 0,
+            sessions: session_summaries(&fleet, &sources, &components, &localized),
+            warnings: vec!["a warning <b>".into()],
+            seconds: FleetSeconds::default(),
+            files: vec!["index.html"],
+            pages: &[],
+        };
+        let html = render(&FleetReportInput {
+            fleet: &fleet,
+            tables: &tables,
+            plane: [0, 1],
+            components: &components,
+            pairs: &pairs,
+            sampler: SamplerKind::Rho,
+            quality: &quality,
+            summary: &summary,
+        });
+        (html, between)
+    }
+
+    fn assert_well_formed(html: &str) {
+        assert!(html.starts_with("<!DOCTYPE html>") && html.trim_end().ends_with("</html>"));
+        for name in ["overlap-matrix", "fleet-map"] {
+            assert_eq!(html.matches(&format!("class=\"figure\" data-figure=\"{name}\"")).count(), 1, "{name}");
+        }
+        for table in ["between", "session-pairs", "sessions"] {
+            assert_eq!(html.matches(&format!(" id=\"{table}\"")).count(), 1, "{table}");
+        }
+        assert!(!html.contains("http:") && !html.contains("https:"), "no network references");
+        assert!(!html.contains("<script") && !html.contains("<link"));
+        for bad in ["NaN", ">inf", "\"inf", " inf", "-inf"] {
+            assert!(!html.contains(bad), "no non-finite numbers: {bad}");
+        }
+        assert!(!html.contains("<&>") && !html.contains("a warning <b>"), "text is escaped");
+        assert!(html.contains("a warning &lt;b&gt;") && html.contains("&lt;&amp;&gt;.tum"));
+    }
+
+    /// The rows of a table's body.
+    fn rows<'a>(html: &'a str, id: &str) -> Vec<&'a str> {
+        let start = html.find(&format!(" id=\"{id}\"")).expect("the table");
+        let body = &html[start..];
+        let body = &body[body.find("<tbody>").unwrap()..body.find("</tbody>").unwrap()];
+        body.split("<tr").skip(1).collect()
+    }
+
+    #[test]
+    fn a_fleet_gives_both_figures_and_a_row_per_overlap() {
+        let spec = UrbanFleet {
+            vehicles: 3,
+            days: 1,
+            drive: UrbanDrive { duration_s: 300.0, seed: 2, ..UrbanDrive::default() },
+            ..UrbanFleet::default()
+        };
+        let fleet = spec.generate().unwrap();
+        let sessions = (0..fleet.len()).map(|a| (fleet.names()[a].clone(), fleet.session(a).clone())).collect();
+        let (html, between) = page_of(sessions, 40.0, 200);
+        assert_well_formed(&html);
+        assert!(between > 0);
+        assert_eq!(rows(&html, "between").len(), between);
+        assert_eq!(rows(&html, "sessions").len(), 3);
+        assert!(html.contains("car0-day0 × car1-day0") || html.contains("car0-day0 × car2-day0"));
+        assert!(html.len() < 1_000_000, "{} bytes", html.len());
+    }
+
+    #[test]
+    fn one_session_and_no_overlap_render() {
+        let points: Vec<[f64; 2]> = (0..30).map(|i| [10.0 * f64::from(i), 0.0]).collect();
+        let line = Trajectory::from_points((0..30).map(f64::from).collect(), &points).unwrap();
+        let (html, between) = page_of(vec![("alone".into(), line.clone())], 1.0, 5);
+        assert_well_formed(&html);
+        assert_eq!((between, rows(&html, "between").len()), (0, 0));
+        // Every pose at one place, in two sessions: each pair of them meets.
+        let still = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[3.0, -2.0]; 3]).unwrap();
+        let later = Trajectory::from_points(vec![50.0, 51.0], &[[3.0, -2.0]; 2]).unwrap();
+        let (html, between) = page_of(vec![("still".into(), still), ("later".into(), later)], 1.0, 5);
+        assert_well_formed(&html);
+        assert_eq!(between, 1);
+    }
+
+    #[test]
+    fn many_sessions_are_binned_and_bounded() {
+        let n = 2 * MAX_BINS + 30;
+        let sessions: Vec<(String, Trajectory)> = (0..n)
+            .map(|k| {
+                let t0 = 10.0 * k as f64;
+                let x = (k % 7) as f64;
+                (format!("s{k}"), Trajectory::from_points(vec![t0, t0 + 1.0], &[[x, 0.0], [x + 0.5, 0.0]]).unwrap())
+            })
+            .collect();
+        let (html, between) = page_of(sessions, 1.0, 50);
+        assert_well_formed(&html);
+        assert!(between > MAX_ROWS / 2);
+        assert!(html.contains("are grouped into 100 bins"));
+        let cells = html.matches("class=\"cell").count();
+        assert!(cells <= MAX_BINS * MAX_BINS, "{cells} cells");
+        assert!(rows(&html, "between").len() <= MAX_ROWS);
+        assert!(html.len() < 5_000_000, "{} bytes", html.len());
+    }
+}
