@@ -54,8 +54,15 @@ pub(crate) const MARKER: &str = "loops-run.json";
 /// The top-level files of a run.
 pub(crate) const TOP_FILES: [&str; 2] = ["index.html", "summary.json"];
 
+/// `loops fleet`: `loops-fleet.json` and the fleet's files.
+pub(crate) const FLEET: Tool = Tool { command: "loops fleet", marker: "loops-fleet.json", top_files: &FLEET_FILES };
+
+/// The top-level files of `loops fleet`.
+pub(crate) const FLEET_FILES: [&str; 6] =
+    ["index.html", "components.csv", "session_pairs.csv", "samples.csv", "samples.g2o", "summary.json"];
+
 /// The tools that lock an output folder, for naming the holder of a lock.
-const TOOLS: [&Tool; 2] = [&RUN, &crate::fleet::TOOL];
+const TOOLS: [&Tool; 2] = [&RUN, &FLEET];
 
 /// `loops-run.json` (`loops-fleet.json`, ...).
 #[derive(Debug, Clone, Serialize, Deserialize)]

@@ -2,7 +2,8 @@
 //! `../shared/data` (`kitti_odometry/00.txt`, `tum_rgbd/fr2_desk_groundtruth.txt`, ...) runs
 //! through `sh`, in a folder that holds the data under those names, and must succeed; the
 //! output the README shows under it (every line but `...`) must be in what it prints. Skipped,
-//! saying so, when the data is absent.
+//! saying so, when the data is absent. The fleet example needs no data (it writes its own
+//! logs): it always runs.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -54,6 +55,77 @@ fn readme_examples() -> Vec<Example> {
         }
     }
     examples
+}
+
+/// The commands of the README's "Fleets" section, "### Command line" (its console blocks, in
+/// order), with the lines shown under each: a sequence that runs in one folder.
+fn fleet_examples() -> Vec<Example> {
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).expect("README");
+    let (mut in_fleets, mut in_command_line, mut in_console) = (false, false, false);
+    let mut examples: Vec<Example> = Vec::new();
+    for (index, line) in readme.lines().enumerate() {
+        if line.starts_with("## ") {
+            in_fleets = line == "## Fleets";
+            in_command_line = false;
+        } else if line.starts_with("### ") {
+            in_command_line = in_fleets && line == "### Command line";
+        }
+        if line.starts_with("```") {
+            in_console = in_command_line && line == "```console";
+            continue;
+        }
+        if !in_console {
+            continue;
+        }
+        if let Some(command) = line.strip_prefix("$ ") {
+            let source = format!("README.md line {}", index + 1);
+            examples.push(Example { command: command.to_owned(), source, shown: Vec::new() });
+        } else if let Some(example) = examples.last_mut() {
+            example.shown.push(line.to_owned());
+        }
+    }
+    examples
+}
+
+/// The README's fleet example (synthetic logs, no shared data) runs as shown: its commands in
+/// order in one folder, each succeeding and printing every line shown under it but `...`.
+#[test]
+fn the_fleet_example_runs_as_shown() {
+    let examples = fleet_examples();
+    assert!(examples.iter().any(|e| e.command.starts_with("loops synth")), "{examples:#?}");
+    assert!(examples.iter().any(|e| e.command.starts_with("loops fleet")), "{examples:#?}");
+    let dir = std::env::temp_dir().join(format!("loops-documented-fleet-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_loops"));
+    let path = format!("{}:{}", bin.parent().expect("bin folder").display(), std::env::var("PATH").unwrap_or_default());
+    let mut failures = Vec::new();
+    for example in &examples {
+        let output = Command::new("sh")
+            .arg("-c")
+            .arg(&example.command)
+            .current_dir(&dir)
+            .env("PATH", &path)
+            .env("NO_COLOR", "1")
+            .output()
+            .expect("sh runs");
+        let printed = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+        if !output.status.success() {
+            failures.push(format!("{} ({}): {}\n{printed}", example.command, example.source, output.status));
+            continue;
+        }
+        for line in example.shown.iter().filter(|line| line.trim() != "...") {
+            if !printed.lines().any(|printed_line| printed_line == line) {
+                failures.push(format!(
+                    "{} ({}): the README shows {line:?}, which it does not print:\n{printed}",
+                    example.command, example.source
+                ));
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
 
 /// The lines after `Examples:` in `loops --help` and each command's `--help`.

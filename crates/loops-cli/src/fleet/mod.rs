@@ -27,17 +27,18 @@ use serde::Serialize;
 
 use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs, source_name};
 use crate::guard;
-use crate::out_dir::{self, OutDir, Tool};
+use crate::out_dir::{self, OutDir};
 use crate::progress::{self, Batch};
-use crate::report::fleet::{FleetReportInput, render};
 use crate::run::{LogOutcome, Settings};
+use page::{FleetReportInput, render};
 
-/// The fleet's files at the top of --out.
-const FILES: [&str; 6] =
-    ["index.html", "components.csv", "session_pairs.csv", "samples.csv", "samples.g2o", "summary.json"];
+mod page;
 
 /// `loops fleet` in its output folder: its marker, and the files it writes at the top.
-pub(crate) const TOOL: Tool = Tool { command: "loops fleet", marker: "loops-fleet.json", top_files: &FILES };
+const TOOL: out_dir::Tool = out_dir::FLEET;
+
+/// The fleet's files at the top of --out.
+const FILES: [&str; 6] = out_dir::FLEET_FILES;
 
 /// Find the loops of several pose logs as one fleet: within each session and between every two
 /// (where vehicles, days or robots overlap), the session-overlap matrix, one sampling over all,

@@ -1,6 +1,6 @@
 //! `report.html`: one self-contained page per log (no network; figures inline as SVG or PNG).
 //! The batch's `index.html` belongs to `loops run` (`run/index.rs`); the fleet's `index.html`
-//! of `loops fleet` is [`fleet`], drawn with the same plotting layer.
+//! to `loops fleet` (`fleet/page.rs`), drawn with the same plotting layer.
 //!
 //! The page has a summary (trajectory, loops, samples and their P1–P3; [`summary`]), then four
 //! figures and the components table:
@@ -29,24 +29,28 @@
 //! markers in [`palette`], number formats in [`numbers`].
 
 mod distance;
-pub(crate) mod fleet;
-mod numbers;
-mod palette;
+pub(crate) mod numbers;
+pub(crate) mod palette;
 mod per_component;
 mod png;
 mod summary;
-mod svg;
+pub(crate) mod svg;
 mod table;
-mod trajectory;
+pub(crate) mod trajectory;
 
 use loops_core::{Loops, MetricSpec, SampleQuality, SamplerKind, Samples, Trajectory};
 use maud::{DOCTYPE, Markup, PreEscaped, html};
+use percent_encoding::{AsciiSet, NON_ALPHANUMERIC};
 
 use numbers::plural;
 use palette::{component_colour, sampler_colour, sampler_marker, sampler_name, swatch_class};
 
+/// What a folder name keeps in a relative URL path segment (a link to a log's or a session's
+/// page): letters, digits and `-._~` (RFC 3986 unreserved); everything else is percent-encoded.
+pub(crate) const SEGMENT: &AsciiSet = &NON_ALPHANUMERIC.remove(b'-').remove(b'.').remove(b'_').remove(b'~');
+
 /// The page's style sheet.
-const STYLE: &str = include_str!("report.css");
+pub(crate) const STYLE: &str = include_str!("report.css");
 
 /// Everything one log's report shows. Built by `loops run` after the log is processed.
 #[derive(Debug)]
@@ -136,7 +140,7 @@ pub(crate) fn page(title: Markup, style: Markup, body: Markup) -> String {
 /// A figure element the page's tests can find: `class="figure"`, `data-figure="name"`, around
 /// an `svg` element and a caption (markup: the figures' modules build it from numbers and fixed
 /// text).
-fn figure(name: &str, svg: &str, caption: Markup) -> Markup {
+pub(crate) fn figure(name: &str, svg: &str, caption: Markup) -> Markup {
     html! {
         figure.figure data-figure=(name) {
             (PreEscaped(svg))

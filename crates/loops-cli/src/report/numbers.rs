@@ -1,7 +1,7 @@
 //! How numbers read on the page: thousands separators, percentages, durations, plurals.
 
 /// `7560.0 s (2 h 06 min)`.
-pub(super) fn duration_text(seconds: f64) -> String {
+pub(crate) fn duration_text(seconds: f64) -> String {
     if !(seconds.is_finite() && seconds >= 60.0) {
         return format!("{seconds:.1} s");
     }
@@ -14,12 +14,12 @@ pub(super) fn duration_text(seconds: f64) -> String {
 }
 
 /// `1 pair`, `2 pairs`.
-pub(super) fn plural(count: usize, one: &str, many: &str) -> String {
+pub(crate) fn plural(count: usize, one: &str, many: &str) -> String {
     format!("{count} {}", if count == 1 { one } else { many })
 }
 
 /// `65,431,618`.
-pub(super) fn thousands(count: impl Into<u64>) -> String {
+pub(crate) fn thousands(count: impl Into<u64>) -> String {
     let digits = count.into().to_string();
     let mut out = String::with_capacity(digits.len() + digits.len() / 3);
     for (k, c) in digits.chars().enumerate() {
@@ -32,7 +32,7 @@ pub(super) fn thousands(count: impl Into<u64>) -> String {
 }
 
 /// `12.5 %` of `whole`, or `—` when `whole` is 0.
-pub(super) fn percent(part: usize, whole: usize) -> String {
+pub(crate) fn percent(part: usize, whole: usize) -> String {
     if whole == 0 { "—".to_owned() } else { format!("{:.1} %", 100.0 * part as f64 / whole as f64) }
 }
 

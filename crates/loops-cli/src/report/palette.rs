@@ -47,7 +47,7 @@ const SESSION_COLOURS: [Rgb; 10] = [
 
 /// The colour of session `k` of a fleet of `n`: Tableau 10 up to ten sessions, beyond that hues
 /// a golden angle apart (neighbours in fleet order far apart on the colour wheel).
-pub(super) fn session_colour(k: usize, n: usize) -> Rgb {
+pub(crate) fn session_colour(k: usize, n: usize) -> Rgb {
     if n <= SESSION_COLOURS.len() {
         return SESSION_COLOURS[k % SESSION_COLOURS.len()];
     }
@@ -73,7 +73,7 @@ pub(super) fn session_colour(k: usize, n: usize) -> Rgb {
 const TRIVIAL_COLOUR: Rgb = [0xc8, 0xd0, 0xdc];
 
 /// The sampler's name as HTML: its symbol in the paper, and the name `--sampler` takes.
-pub(super) fn sampler_name(kind: SamplerKind) -> Markup {
+pub(crate) fn sampler_name(kind: SamplerKind) -> Markup {
     // Fixed markup (subscripts), not text: nothing here comes from the input.
     let symbol = match kind {
         SamplerKind::One => "σ<sub>1</sub>",

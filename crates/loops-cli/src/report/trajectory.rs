@@ -13,7 +13,7 @@ use maud::{Markup, PreEscaped};
 use super::{ReportInput, figure, plural, sampler_colour, sampler_name};
 
 /// The most path segments a figure draws.
-pub(super) const MAX_SEGMENTS: usize = 4000;
+pub(crate) const MAX_SEGMENTS: usize = 4000;
 
 /// The most sampled pairs the sampled-pairs figure draws.
 pub(super) const MAX_PAIRS_DRAWN: usize = 2000;
@@ -25,9 +25,9 @@ const COLOUR_LEVELS: usize = 48;
 const AREA_WIDTH: f64 = 520.0;
 
 /// The plot of positions in a plane, equal scales on both axes, with the positions as pixels.
-pub(super) struct MapPlot {
-    pub(super) plot: Plot,
-    pub(super) pixels: Vec<(f64, f64)>,
+pub(crate) struct MapPlot {
+    pub(crate) plot: Plot,
+    pub(crate) pixels: Vec<(f64, f64)>,
 }
 
 /// The name of a position axis (0, 1, 2: x, y, z), as the axis labels and captions print it.
@@ -36,18 +36,18 @@ fn axis_name(axis: usize) -> String {
 }
 
 /// The plane's name, `x–z`.
-pub(super) fn plane_name([a, b]: [usize; 2]) -> String {
+pub(crate) fn plane_name([a, b]: [usize; 2]) -> String {
     format!("{}–{}", axis_name(a), axis_name(b))
 }
 
 /// Labels the axes of a map of `plane` with the axes' names, in metres.
-pub(super) fn map_axes(plot: &mut Plot, [a, b]: [usize; 2]) {
+pub(crate) fn map_axes(plot: &mut Plot, [a, b]: [usize; 2]) {
     plot.axes(&format!("{} (m)", axis_name(a)), &format!("{} (m)", axis_name(b)), 6, 6);
 }
 
 /// An equal-aspect plot of `positions` in `plane` (axis `plane[0]` across, `plane[1]` up),
 /// `right` pixels of margin right of the area (for a colour bar).
-pub(super) fn map_plot(id: &str, positions: &[[f64; 3]], [a, b]: [usize; 2], right: f64) -> MapPlot {
+pub(crate) fn map_plot(id: &str, positions: &[[f64; 3]], [a, b]: [usize; 2], right: f64) -> MapPlot {
     let coordinate = |p: &[f64; 3], axis: usize| p.get(axis).copied().unwrap_or(f64::NAN);
     let in_plane = |p: &[f64; 3]| (coordinate(p, a), coordinate(p, b));
     // Non-finite coordinates (a table never validated) are drawn at the previous finite pose.
@@ -120,7 +120,7 @@ fn level_of(fraction: f64, levels: usize) -> u16 {
 /// Indices of the points kept to draw the polyline `pixels` within `tolerance` pixels; the
 /// first and last points are kept, and every `i` with `breaks(i)` (a change of colour) at least
 /// `tolerance` from the point kept before it (a change within a pixel cannot be seen).
-pub(super) fn simplify(pixels: &[(f64, f64)], breaks: impl Fn(usize) -> bool, tolerance: f64) -> Vec<usize> {
+pub(crate) fn simplify(pixels: &[(f64, f64)], breaks: impl Fn(usize) -> bool, tolerance: f64) -> Vec<usize> {
     let n = pixels.len();
     if n < 2 {
         return (0..n).collect();
@@ -175,7 +175,7 @@ pub(super) fn simplify(pixels: &[(f64, f64)], breaks: impl Fn(usize) -> bool, to
 }
 
 /// At most `max + 1` of `kept` (first and last included), evenly spread.
-pub(super) fn thin(kept: Vec<usize>, max: usize) -> Vec<usize> {
+pub(crate) fn thin(kept: Vec<usize>, max: usize) -> Vec<usize> {
     if kept.len() <= max + 1 {
         return kept;
     }
@@ -216,7 +216,7 @@ fn coloured_segments(pixels: &[(f64, f64)], fractions: &[f64]) -> (Vec<(usize, u
 
 /// The colour scale of τ, onto [0, 1]: logarithmic when τ spans more than a decade (the poses of
 /// a long stop dwarf those of a passage), else linear from 0.
-pub(super) fn tau_scale(tau: &[f64]) -> Scale {
+pub(crate) fn tau_scale(tau: &[f64]) -> Scale {
     let positive = tau.iter().copied().filter(|t| t.is_finite() && *t > 0.0);
     let (lo, hi) = positive.fold((f64::INFINITY, 0.0_f64), |(lo, hi), t| (lo.min(t), hi.max(t)));
     if hi <= 0.0 {

@@ -1,17 +1,13 @@
 //! `index.html`: the batch of `loops run` at a glance, a row per log linking to its report.
 
 use maud::{PreEscaped, html};
-use percent_encoding::{AsciiSet, NON_ALPHANUMERIC, utf8_percent_encode};
+use percent_encoding::utf8_percent_encode;
 
 use super::BatchSummary;
-use crate::report::page;
+use crate::report::{SEGMENT, page};
 
 /// The page's style sheet.
 const STYLE: &str = include_str!("index.css");
-
-/// What a folder name keeps in a relative URL path segment: letters, digits and `-._~` (RFC 3986
-/// unreserved); everything else is percent-encoded.
-pub(crate) const SEGMENT: &AsciiSet = &NON_ALPHANUMERIC.remove(b'-').remove(b'.').remove(b'_').remove(b'~');
 
 /// The page, as one HTML string (inline CSS, no script, no link but to the logs' reports).
 pub(crate) fn render(batch: &BatchSummary<'_>) -> String {

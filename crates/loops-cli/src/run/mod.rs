@@ -10,8 +10,6 @@
 
 mod index;
 
-pub(crate) use index::SEGMENT;
-
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

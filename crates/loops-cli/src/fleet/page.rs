@@ -1,6 +1,6 @@
 //! The fleet's report, `index.html` of `loops fleet`: one self-contained page (no network, no
-//! script) for all sessions, linking each session's own page (`<session>/report.html`, the page
-//! of [`render`](super::render)).
+//! script) for all sessions, linking each session's own page (`<session>/report.html`, the
+//! per-log page of [`crate::report`]), drawn with the report's plotting layer.
 //!
 //! Summary cards, then two figures and three tables:
 //!
@@ -23,15 +23,15 @@ use loops_core::{Fleet, FleetComponent, SampleQuality, SamplerKind, SessionPair}
 use maud::{Markup, PreEscaped, html};
 use percent_encoding::utf8_percent_encode;
 
-use super::numbers::{duration_text, percent, plural, thousands};
-use super::palette::{sampler_name, session_colour};
-use super::svg::{self, PathData, Plot, Rect, Scale, VIRIDIS};
-use super::trajectory::{MAX_SEGMENTS, MapPlot, map_axes, map_plot, plane_name, simplify, tau_scale, thin};
-use super::{STYLE, figure, page};
-use crate::fleet::FleetSummary;
+use super::FleetSummary;
+use crate::report::numbers::{duration_text, percent, plural, thousands};
+use crate::report::palette::{sampler_name, session_colour};
+use crate::report::svg::{self, PathData, Plot, Rect, Scale, VIRIDIS};
+use crate::report::trajectory::{MAX_SEGMENTS, MapPlot, map_axes, map_plot, plane_name, simplify, tau_scale, thin};
+use crate::report::{SEGMENT, STYLE, figure, page};
 
 /// The page's own style, after the per-log report's.
-const FLEET_STYLE: &str = include_str!("fleet.css");
+const FLEET_STYLE: &str = include_str!("page.css");
 
 /// Rows (and columns) of the overlap matrix at most: a larger fleet's sessions are grouped into
 /// this many bins of consecutive sessions.
@@ -558,7 +558,7 @@ fn sessions_section(input: &FleetReportInput<'_>) -> Markup {
                                 td.name {
                                     i.swatch style={ "background: " (svg::hex(session_colour(k, s.sessions.len()))) } {}
                                     @if ok {
-                                        a href={ (utf8_percent_encode(&r.name, crate::run::SEGMENT)) "/report.html" } { (r.name) }
+                                        a href={ (utf8_percent_encode(&r.name, SEGMENT)) "/report.html" } { (r.name) }
                                     } @else {
                                         (r.name)
                                     }
