@@ -58,8 +58,8 @@ const FILES: [&str; 6] = out_dir::FLEET_FILES;
     alone. Separation applies within a session; pairs of two sessions are all kept."
 )]
 pub(crate) struct FleetArgs {
-    /// The pose logs, one session each, named by the file's stem (a bag folder by its name);
-    /// names must be unique.
+    /// The pose logs, one session each, named by the file's stem (a rosbag2 bag by its folder's
+    /// name); names must be unique.
     #[arg(value_name = "LOG", required_unless_present = "sessions")]
     logs: Vec<PathBuf>,
     /// A session of several files, or a name of your choice: NAME=FILE[,FILE...]. The files are
@@ -419,11 +419,10 @@ fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
     Ok(specs)
 }
 
-/// A session's name from its log: a folder's name (a bag), or the file's name without its
-/// extension.
+/// A session's name from its log: [`loops_io::log_name`], the file's stem, or a rosbag2 bag's
+/// folder name however the bag is given (its folder, its metadata.yaml or a storage file).
 fn session_name(path: &Path) -> String {
-    let name = if path.is_dir() { path.file_name() } else { path.file_stem() };
-    name.map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+    loops_io::log_name(path)
 }
 
 /// The core's refusal of a session that does not fit the first, with both sessions' files.
