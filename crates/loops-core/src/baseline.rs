@@ -10,6 +10,7 @@ use rand::Rng;
 use crate::ball_tree::BallTree;
 use crate::draw::{PairSpace, SampleSize, SampleWarning, draw_numbers};
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::loops::Loops;
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
@@ -164,19 +165,20 @@ pub(crate) fn baseline_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
     baseline.validate()?;
     let gamma = loops.gamma();
     let mut warnings = Vec::new();
+    let interrupt = Interrupt::current();
     let (space, rule) = match baseline {
-        Baseline::Cartographer(p) => (PairSpace::of_loops(loops, p.min_gap_s), None),
-        Baseline::TimeGap(p) => (PairSpace::of_loops(loops, p.gap_s), None),
+        Baseline::Cartographer(p) => (PairSpace::of_loops(loops, p.min_gap_s, &interrupt)?, None),
+        Baseline::TimeGap(p) => (PairSpace::of_loops(loops, p.gap_s, &interrupt)?, None),
         Baseline::LioSam(p) => (PairSpace::default(), Some(lio_sam(traj, metric, gamma, p))),
         Baseline::HdlGraphSlam(p) => (PairSpace::default(), Some(hdl_graph_slam(traj, metric, gamma, p))),
     };
     Ok(match rule {
         None => {
-            let indices = draw_numbers(space.len(), size, rng, &mut warnings);
-            (space.pairs_at(&indices), space.len(), warnings)
+            let indices = draw_numbers(space.len(), size, rng, &mut warnings)?;
+            (space.pairs_at(&indices)?, space.len(), warnings)
         }
         Some(rule) => {
-            let indices = draw_numbers(rule.len() as u64, size, rng, &mut warnings);
+            let indices = draw_numbers(rule.len() as u64, size, rng, &mut warnings)?;
             (indices.into_iter().map(|k| rule[k as usize]).collect(), rule.len() as u64, warnings)
         }
     })

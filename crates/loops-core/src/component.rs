@@ -4,6 +4,9 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
+use crate::error::Result;
+use crate::interrupt::Interrupt;
+use crate::memory::{try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::sublevel::{Run, SublevelSet};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
@@ -15,6 +18,7 @@ use crate::union_find::{MinRootForest, number_sets};
 /// with t ≤ t′, and its area and pair count are that half's. A *trivial* component contains
 /// diagonal cells (i, i) and is its own mirror; it is reported whole (both halves, diagonal
 /// once). So the area of S_γ is Σ area over trivial components + 2 Σ area over the others.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct LoopComponent {
     /// Index in [`Loops::components`](crate::Loops::components): components are numbered in
@@ -72,21 +76,31 @@ struct Tally {
 /// Time near-linear in runs plus one δ per run, memory O(runs). Holes come from the Euler number:
 /// for the upper half, χ = #runs − #(overlapping run pairs in consecutive rows); a trivial
 /// component adds its mirror, χ_full = 2χ − #diagonal cells + #diagonal links (i, i+1).
-pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: &SublevelSet) -> Labelling {
-    let (labels, count) = label_runs(set, ROWS_PER_LABEL_TASK);
+///
+/// The labels, tallies and components are allocated fallibly ([`Error::OutOfMemory`]), and
+/// `interrupt` is checked every 4096 rows ([`Error::Interrupted`]).
+///
+/// [`Error::OutOfMemory`]: crate::Error::OutOfMemory
+/// [`Error::Interrupted`]: crate::Error::Interrupted
+pub(crate) fn label_components<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    metric: &M,
+    set: &SublevelSet,
+    interrupt: &Interrupt,
+) -> Result<Labelling> {
+    let (labels, count) = try_label_runs(set, ROWS_PER_LABEL_TASK, interrupt)?;
     let widths = traj.cell_widths_s();
     let prefix = prefix_sums_by_session(widths, set.breaks());
 
-    let mut tallies = vec![
-        Tally {
-            rows: [usize::MAX, 0],
-            columns: [usize::MAX, 0],
-            closest: (f64::INFINITY, [0, 0]),
-            ..Tally::default()
-        };
-        count as usize
-    ];
+    let mut tallies = try_filled(
+        count as usize,
+        Tally { rows: [usize::MAX, 0], columns: [usize::MAX, 0], closest: (f64::INFINITY, [0, 0]), ..Tally::default() },
+        "the loop components",
+    )?;
     for (i, &w_i) in widths.iter().enumerate() {
+        if i.is_multiple_of(4096) {
+            interrupt.check()?;
+        }
         if i + 1 < widths.len() {
             for_each_overlap(set, i..i + 1, |a, _| tallies[labels[a] as usize].overlaps += 1);
         }
@@ -116,35 +130,32 @@ pub(crate) fn label_components<M: Metric + ?Sized>(traj: &Trajectory, metric: &M
         }
     }
 
-    let components = tallies
-        .into_iter()
-        .enumerate()
-        .map(|(id, t)| {
-            let euler_half = t.runs as i64 - t.overlaps as i64;
-            let (area_s2, pairs, euler, rows, columns) = if t.trivial {
-                // Whole: the half, its mirror, the diagonal counted once.
-                let euler = 2 * euler_half - t.diagonal_cells as i64 + t.diagonal_links as i64;
-                let extent = [t.rows[0], t.columns[1]];
-                (2.0 * t.area_s2 - t.diagonal_area_s2, 2 * t.pairs - t.diagonal_cells, euler, extent, extent)
-            } else {
-                (t.area_s2, t.pairs, euler_half, t.rows, t.columns)
-            };
-            debug_assert!(euler <= 1, "a connected set has Euler number ≤ 1");
-            LoopComponent {
-                id,
-                trivial: t.trivial,
-                area_s2,
-                pair_count: pairs,
-                run_count: t.runs,
-                holes: (1 - euler) as u64,
-                i_range: rows,
-                j_range: columns,
-                closest_pair: t.closest.1,
-                closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
-            }
-        })
-        .collect();
-    Labelling { labels, components }
+    let mut components = try_with_capacity(tallies.len(), "the loop components")?;
+    components.extend(tallies.into_iter().enumerate().map(|(id, t)| {
+        let euler_half = t.runs as i64 - t.overlaps as i64;
+        let (area_s2, pairs, euler, rows, columns) = if t.trivial {
+            // Whole: the half, its mirror, the diagonal counted once.
+            let euler = 2 * euler_half - t.diagonal_cells as i64 + t.diagonal_links as i64;
+            let extent = [t.rows[0], t.columns[1]];
+            (2.0 * t.area_s2 - t.diagonal_area_s2, 2 * t.pairs - t.diagonal_cells, euler, extent, extent)
+        } else {
+            (t.area_s2, t.pairs, euler_half, t.rows, t.columns)
+        };
+        debug_assert!(euler <= 1, "a connected set has Euler number ≤ 1");
+        LoopComponent {
+            id,
+            trivial: t.trivial,
+            area_s2,
+            pair_count: pairs,
+            run_count: t.runs,
+            holes: (1 - euler) as u64,
+            i_range: rows,
+            j_range: columns,
+            closest_pair: t.closest.1,
+            closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
+        }
+    }));
+    Ok(Labelling { labels, components })
 }
 
 /// Rows whose runs are joined by one rayon task before the joins across tasks.
@@ -159,10 +170,21 @@ pub(crate) const ROWS_PER_LABEL_TASK: usize = 1 << 14;
 /// stretch only touches its own slice of the parent array), then the pairs of rows across
 /// stretches. The result does not depend on the stretches or the thread count. O(runs · log)
 /// worst case, near-linear in practice; 4 bytes a run.
+///
+/// # Panics
+/// When memory for the labels runs out ([`try_label_runs`] returns the error instead).
 pub(crate) fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, u32) {
+    try_label_runs(set, rows_per_task, &Interrupt::new()).unwrap_or_else(|error| panic!("{error}"))
+}
+
+/// [`label_runs`], with the labels allocated fallibly and `interrupt` checked between
+/// stretches.
+fn try_label_runs(set: &SublevelSet, rows_per_task: usize, interrupt: &Interrupt) -> Result<(Vec<u32>, u32)> {
     let run_count = set.runs().len();
     debug_assert!(run_count <= u32::MAX as usize, "run ids are u32");
-    let mut parent: Vec<u32> = (0..run_count as u32).into_par_iter().collect();
+    let mut parent: Vec<u32> = Vec::new();
+    try_reserve(&mut parent, run_count, "the component labels of the runs")?;
+    parent.par_extend(0..run_count as u32);
     let rows = set.rows();
     let starts: Vec<usize> = (0..rows).step_by(rows_per_task.max(1)).collect();
     // Each stretch of rows with its own slice of the parent array.
@@ -175,15 +197,19 @@ pub(crate) fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, 
         rest = tail;
     }
     stretches.into_par_iter().for_each(|(stretch, slice)| {
+        if interrupt.is_interrupted() {
+            return;
+        }
         let mut forest = MinRootForest::new(slice, set.row_offset(stretch.start));
         for_each_overlap(set, stretch.start..stretch.end - 1, |a, b| forest.union(a, b));
     });
+    interrupt.check()?;
     let mut forest = MinRootForest::new(&mut parent, 0);
     for &start in starts.iter().skip(1) {
         for_each_overlap(set, start - 1..start, |a, b| forest.union(a, b));
     }
     let count = number_sets(&mut parent);
-    (parent, count)
+    Ok((parent, count))
 }
 
 /// Calls `f(a, b)` for every pair of runs `a` (row i) and `b` (row i + 1) that share a column,
@@ -269,7 +295,7 @@ mod tests {
         let expected = reference_labels(&set);
         assert!(expected.iter().max().is_some_and(|&m| m > 3), "the walk should make several components");
         for rows_per_task in [1, 2, 3, 7, 64, 699, 700, 10_000] {
-            let (labels, count) = label_runs(&set, rows_per_task);
+            let (labels, count) = try_label_runs(&set, rows_per_task, &Interrupt::new()).unwrap();
             assert_eq!(labels, expected, "{rows_per_task} rows a task");
             assert_eq!(Some(count), expected.iter().max().map(|m| m + 1));
         }

@@ -5,8 +5,9 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::draw::{PairSpace, SampleSize};
+use crate::draw::{DETECTION_BYTES, PairSpace, SampleSize, check_count};
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::loops::Loops;
 use crate::trajectory::{Timeline, nearest_pose};
 
@@ -33,6 +34,7 @@ pub struct Detection {
     pub score: Option<f64>,
 }
 
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 struct Located {
     pairs: Vec<[u32; 2]>,
@@ -62,6 +64,7 @@ struct Located {
 /// assert_eq!((det.get(0).t_s, det.get(0).t_prime_s), (0.0, 3.0));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "DetectionsState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Detections {
     t_s: Vec<f64>,
@@ -174,7 +177,9 @@ impl Detections {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for a rate outside (0, 1], a budget of 0 or more than the
-    /// pairs available; [`Error::NoDetections`] when the draw comes out empty.
+    /// pairs available; [`Error::NoDetections`] when the draw comes out empty;
+    /// [`Error::TooManySamples`] for more than [`MAX_SAMPLES`](crate::MAX_SAMPLES) detections
+    /// (the expected count for a rate), before any is drawn.
     ///
     /// # Examples
     /// ```
@@ -187,7 +192,7 @@ impl Detections {
     /// # Ok::<(), loops_core::Error>(())
     /// ```
     pub fn draw(loops: &Loops, size: SampleSize, seed: u64) -> Result<Self> {
-        let space = PairSpace::of_loops(loops, 0.0);
+        let space = PairSpace::of_loops(loops, 0.0, &Interrupt::current())?;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let indices = match size {
             SampleSize::Rate(rate) => {
@@ -198,6 +203,7 @@ impl Detections {
                         expected: "a probability in (0, 1]",
                     });
                 }
+                check_count("detections", size, rate * space.len() as f64, DETECTION_BYTES)?;
                 space.bernoulli(rate, &mut rng)
             }
             SampleSize::Budget(count) => {
@@ -208,13 +214,14 @@ impl Detections {
                         expected: "at least 1 and at most the off-diagonal pairs of S_gamma",
                     });
                 }
+                check_count("detections", size, count as f64, DETECTION_BYTES)?;
                 space.choose(count as u64, &mut rng)
             }
         };
         if indices.is_empty() {
             return Err(Error::NoDetections);
         }
-        Ok(Self::from_pairs(loops.timestamps_s(), space.pairs_at(&indices)))
+        Ok(Self::from_pairs(loops.timestamps_s(), space.pairs_at(&indices)?))
     }
 
     /// Number of detections (at least 1).
@@ -268,6 +275,47 @@ impl Detections {
     /// Every detection, in order.
     pub fn iter(&self) -> impl ExactSizeIterator<Item = Detection> + '_ {
         (0..self.len()).map(|k| self.get(k))
+    }
+}
+
+/// What a serialised [`Detections`] holds.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct DetectionsState {
+    t_s: Vec<f64>,
+    t_prime_s: Vec<f64>,
+    located: Option<Located>,
+    scores: Option<Vec<f64>>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<DetectionsState> for Detections {
+    type Error = Error;
+
+    /// Validated as [`Detections::new`] and [`Detections::with_scores`]; pairs (i ≤ j) within
+    /// their trajectory, one per detection.
+    fn try_from(state: DetectionsState) -> Result<Self> {
+        let mut detections = Self::new(state.t_s, state.t_prime_s)?;
+        if let Some(scores) = state.scores {
+            detections = detections.with_scores(scores)?;
+        }
+        if let Some(located) = &state.located {
+            let bad = located.pairs.iter().position(|&[i, j]| i > j || j as usize >= located.poses);
+            if located.pairs.len() != detections.len() || bad.is_some() {
+                return Err(Error::InvalidState {
+                    what: "Detections",
+                    reason: format!(
+                        "{} pairs for {} detections on {} poses (first bad pair: {:?})",
+                        located.pairs.len(),
+                        detections.len(),
+                        located.poses,
+                        bad.map(|k| located.pairs[k])
+                    ),
+                });
+            }
+        }
+        detections.located = state.located;
+        Ok(detections)
     }
 }
 

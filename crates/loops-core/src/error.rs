@@ -349,6 +349,37 @@ pub enum Error {
         /// Number of poses.
         poses: usize,
     },
+    /// Memory for a result could not be had: the allocator refused a buffer of `bytes` bytes
+    /// for `what` (the answer is too big for this machine, or for a limit such as `ulimit -v`).
+    /// Nothing is left half-built; the inputs are untouched.
+    #[error(
+        "out of memory: {what} need {} ({bytes} bytes), more than could be allocated; a smaller answer \
+         (a smaller gamma, a separation, fewer poses, a smaller budget or image) needs less",
+        size_text(*bytes)
+    )]
+    OutOfMemory {
+        /// What the memory was for (`the runs of S_gamma`, `the samples`, ...).
+        what: &'static str,
+        /// The size of the buffer that could not be allocated, bytes.
+        bytes: u64,
+    },
+    /// A sample (or a draw of detections) larger than one call returns
+    /// ([`MAX_SAMPLES`](crate::MAX_SAMPLES)), refused before anything is drawn. Boxed, so that
+    /// errors stay small.
+    #[error("{0}")]
+    TooManySamples(Box<TooManySamples>),
+    /// The computation was stopped by an [`Interrupt`](crate::Interrupt) (Ctrl-C in Python)
+    /// before it finished; nothing was returned.
+    #[error("interrupted")]
+    Interrupted,
+    /// A saved (deserialised) result whose parts do not fit together: corrupt, or made by hand.
+    #[error("invalid saved {what}: {reason}")]
+    InvalidState {
+        /// The type (`Loops`, `Samples`, ...).
+        what: &'static str,
+        /// What does not fit, naming the index.
+        reason: String,
+    },
     /// Inputs that must come from one trajectory come from two (pose counts or timestamps differ).
     #[error(
         "the {what} and the loops come from different trajectories ({poses} and {loops_poses} poses; first difference at pose {index})"
@@ -363,6 +394,56 @@ pub enum Error {
         /// Poses of the loops' trajectory.
         loops_poses: usize,
     },
+}
+
+/// A size in bytes for a message: `812 bytes`, `3.1 MiB`, `7.4 GiB`.
+pub(crate) fn size_text(bytes: u64) -> String {
+    const UNITS: [&str; 6] = ["KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    if bytes < 1024 {
+        return format!("{bytes} bytes");
+    }
+    let mut value = bytes as f64 / 1024.0;
+    let mut unit = 0;
+    while value >= 1024.0 && unit + 1 < UNITS.len() {
+        value /= 1024.0;
+        unit += 1;
+    }
+    format!("{value:.1} {}", UNITS[unit])
+}
+
+/// What [`Error::TooManySamples`] says: what was asked for, how many that makes, what it would
+/// cost.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TooManySamples {
+    /// `samples` or `detections`.
+    pub what: &'static str,
+    /// The budget asked for, if a budget was.
+    pub budget: Option<usize>,
+    /// The rate asked for, if a rate was.
+    pub rate: Option<f64>,
+    /// How many that makes (the expected count for a rate).
+    pub count: u64,
+    /// The memory they would take, bytes (an estimate).
+    pub bytes: u64,
+    /// The most one call returns ([`MAX_SAMPLES`](crate::MAX_SAMPLES)).
+    pub max: usize,
+}
+
+impl std::fmt::Display for TooManySamples {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let Self { what, budget, rate, count, bytes, max } = self;
+        match (budget, rate) {
+            (Some(budget), _) => write!(f, "budget {budget}")?,
+            (None, Some(rate)) => write!(f, "rate {rate}")?,
+            (None, None) => write!(f, "the sample")?,
+        }
+        write!(
+            f,
+            " asks for {count} {what} (about {} of memory); one call returns at most {max} \
+             (loops_core::MAX_SAMPLES): give a budget of at most {max}, or a smaller rate",
+            size_text(*bytes)
+        )
+    }
 }
 
 /// What [`Error::MetricDoesNotFit`] says: a metric, and the trajectory it does not fit.

@@ -343,9 +343,9 @@ pub fn find_fleet_loops<M: Metric + ?Sized>(
         None => Pruner::Hierarchy(&balls),
     };
     let set =
-        SublevelSet::scan(joint, metric, gamma, separation, &arc, pruner, &first_columns, &fleet.starts, joint.len());
+        SublevelSet::scan(joint, metric, gamma, separation, &arc, pruner, &first_columns, &fleet.starts, joint.len())?;
     drop(index);
-    let loops = Loops::from_set(joint, metric, set);
+    let loops = Loops::try_from_set(joint, metric, set)?;
     let blocks =
         loops.components().iter().map(|c| [fleet.session_of(c.i_range[0]), fleet.session_of(c.j_range[0])]).collect();
     let spans_s = fleet.sessions.iter().map(Trajectory::span_s).collect();

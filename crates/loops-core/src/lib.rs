@@ -29,7 +29,8 @@
 //! [`PlaneGrid`]) → `verdict` (where given pairs fall: [`Loops::pair_verdicts`]) → `draw` ([`SampleSize`],
 //! uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph, [`check_epsilon_s`]) →
 //! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `synth`,
-//! `ball_tree` and `union_find` are helpers. Every public item is re-exported here.
+//! `ball_tree`, `union_find`, `memory` (fallible allocation of the big buffers) and
+//! `interrupt` ([`Interrupt`]) are helpers. Every public item is re-exported here.
 //!
 //! ## Quickstart
 //! ```
@@ -57,9 +58,11 @@ mod detection;
 mod draw;
 mod error;
 mod fleet;
+mod interrupt;
 mod loops;
 mod manifold;
 mod measure;
+mod memory;
 mod metric;
 mod plane;
 mod pose;
@@ -79,12 +82,13 @@ pub use baseline::{Baseline, BaselineParams, Cartographer, HdlGraphSlam, LioSam,
 pub use cluster::{DEFAULT_EPSILON_S, DetectionCluster, DetectionClusters, check_epsilon_s, cluster_detections};
 pub use component::LoopComponent;
 pub use detection::{Detection, Detections};
-pub use draw::{SampleSize, SampleWarning};
-pub use error::{Error, MetricMisfit, Result};
+pub use draw::{MAX_SAMPLES, SampleSize, SampleWarning};
+pub use error::{Error, MetricMisfit, Result, TooManySamples};
 pub use fleet::{
     FLEET_CLOCK_GAP_S, Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SessionPair,
     find_fleet_loops, sample_fleet,
 };
+pub use interrupt::Interrupt;
 pub use loops::{LabelledRun, Loops, Warning, find_loops, find_loops_separated};
 pub use manifold::{
     Angular, EARTH_RADIUS_M, Haversine, RotationDistance, Se2, Se3, Se3Rotation, So3, Sphere, Torus, UNIT_TOLERANCE,
@@ -127,7 +131,8 @@ pub fn check_threads(threads: usize) -> Result<()> {
 
 /// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).
 ///
-/// Results of this crate do not depend on the thread count.
+/// Results of this crate do not depend on the thread count. An [`Interrupt`] installed on the
+/// calling thread applies inside `f` too.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] when `threads` is 0 or more than [`MAX_THREADS`]
@@ -146,7 +151,11 @@ pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Sen
             check_threads(count)?;
             let pool = rayon::ThreadPoolBuilder::new().num_threads(count).build();
             match (count, pool) {
-                (1.., Ok(pool)) => Ok(pool.install(f)),
+                (1.., Ok(pool)) => {
+                    // The pool's threads see the caller's interrupt token.
+                    let interrupt = Interrupt::current();
+                    Ok(pool.install(|| interrupt.run(f)))
+                }
                 _ => Err(Error::InvalidParameter {
                     name: "threads",
                     value: count as f64,

@@ -4,7 +4,9 @@ use std::fmt;
 
 use crate::component::{LoopComponent, label_components};
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
+use crate::memory::try_copy;
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
@@ -12,6 +14,7 @@ use crate::sublevel::SublevelSet;
 use crate::trajectory::{Timeline, Trajectory, cell_of, sealed};
 
 /// Something worth telling the user about a result that is still correct.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum Warning {
@@ -83,12 +86,14 @@ impl LabelledRun {
 /// Inexact loops of a trajectory at one γ: S_γ as runs, its loop components, and the measures.
 ///
 /// Memory is proportional to the number of runs, never to the number of pairs.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "LoopsState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Loops {
     gamma: f64,
     separation: Separation,
     metric: String,
     timestamps_s: Vec<f64>,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     cell_widths_s: Vec<f64>,
     set: SublevelSet,
     labels: Vec<u32>,
@@ -104,7 +109,9 @@ pub struct Loops {
 /// path passes near itself, times a logarithm, plus the number of runs; memory O(runs).
 ///
 /// # Errors
-/// [`Error::InvalidGamma`] unless `gamma` is positive and finite; the metric's dimension error.
+/// [`Error::InvalidGamma`] unless `gamma` is positive and finite; the metric's dimension error;
+/// [`Error::OutOfMemory`] when the answer does not fit in memory (naming the size it needs);
+/// [`Error::Interrupted`] when an [`Interrupt`] installed on this thread is interrupted.
 ///
 /// # Examples
 /// A 95% circle of radius 10 m: its ends come within 3.1 m of each other.
@@ -153,7 +160,7 @@ pub fn find_loops_separated<M: Metric + ?Sized>(
     separation: Separation,
 ) -> Result<Loops> {
     let set = SublevelSet::compute_separated(traj, metric, gamma, separation)?;
-    Ok(Loops::from_set(traj, metric, set))
+    Loops::try_from_set(traj, metric, set)
 }
 
 impl sealed::Sealed for Loops {}
@@ -195,10 +202,23 @@ impl Loops {
     /// Labels and measures an already computed sublevel set of `traj` under `metric`.
     ///
     /// # Panics
-    /// If `set` has a different number of rows than `traj` has poses.
+    /// If `set` has a different number of rows than `traj` has poses; where
+    /// [`try_from_set`](Self::try_from_set) returns an error.
     pub fn from_set<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: SublevelSet) -> Self {
+        Self::try_from_set(traj, metric, set).unwrap_or_else(|error| panic!("{error}"))
+    }
+
+    /// [`from_set`](Self::from_set), with the components and copies allocated fallibly and an
+    /// [`Interrupt`] installed on this thread watched.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`], [`Error::Interrupted`].
+    ///
+    /// # Panics
+    /// If `set` has a different number of rows than `traj` has poses.
+    pub fn try_from_set<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: SublevelSet) -> Result<Self> {
         assert_eq!(set.rows(), traj.len(), "sublevel set and trajectory differ in length");
-        let labelling = label_components(traj, metric, &set);
+        let labelling = label_components(traj, metric, &set, &Interrupt::current())?;
         let n = traj.len();
         // A row whose first run does not reach column i + 1 breaks the diagonal (a metric that
         // breaks δ(x, x) = 0 may even leave the diagonal cell out).
@@ -223,17 +243,17 @@ impl Loops {
         if !separation.is_none() && labelling.components.is_empty() {
             warnings.push(Warning::NoLoops { gamma: set.gamma(), separation });
         }
-        Self {
+        Ok(Self {
             gamma: set.gamma(),
             separation,
             metric: metric.name(),
-            timestamps_s: traj.timestamps_s().to_vec(),
-            cell_widths_s: traj.cell_widths_s().to_vec(),
+            timestamps_s: try_copy(traj.timestamps_s(), "the timestamps of the loops")?,
+            cell_widths_s: try_copy(traj.cell_widths_s(), "the time cells of the loops")?,
             labels: labelling.labels,
             components: labelling.components,
             set,
             warnings,
-        }
+        })
     }
 
     /// The threshold γ.
@@ -439,5 +459,60 @@ impl Loops {
             }
         };
         Ok(move |c: usize| mask[c])
+    }
+}
+
+/// What a serialised [`Loops`] holds (the time cells are derived again).
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct LoopsState {
+    gamma: f64,
+    separation: Separation,
+    metric: String,
+    timestamps_s: Vec<f64>,
+    set: SublevelSet,
+    labels: Vec<u32>,
+    components: Vec<LoopComponent>,
+    warnings: Vec<Warning>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<LoopsState> for Loops {
+    type Error = Error;
+
+    /// Checks the timestamps (as a trajectory's), the sublevel set, and that every run's label
+    /// names a component and every component's indices are pose indices.
+    fn try_from(state: LoopsState) -> Result<Self> {
+        let invalid = |reason: String| Error::InvalidState { what: "Loops", reason };
+        let n = state.timestamps_s.len();
+        crate::trajectory::validate_timestamps(&state.timestamps_s)?;
+        if n != state.set.rows() {
+            return Err(invalid(format!("{n} timestamps but {} rows of S_gamma", state.set.rows())));
+        }
+        if state.gamma != state.set.gamma() || state.separation != state.set.separation() {
+            return Err(invalid(format!(
+                "gamma {} and separation {} differ from its S_gamma's",
+                state.gamma, state.separation
+            )));
+        }
+        if state.labels.len() != state.set.runs().len() {
+            return Err(invalid(format!("{} labels for {} runs", state.labels.len(), state.set.runs().len())));
+        }
+        let count = state.components.len();
+        if let Some(r) = state.labels.iter().position(|&c| c as usize >= count) {
+            return Err(invalid(format!("run {r} belongs to component {}, of {count}", state.labels[r])));
+        }
+        for (k, c) in state.components.iter().enumerate() {
+            let indices = c.i_range.iter().chain(&c.j_range).chain(&c.closest_pair);
+            if c.id != k || indices.clone().any(|&i| i >= n) {
+                return Err(invalid(format!(
+                    "component {k} has id {}, rows {:?}, columns {:?} and closest pair {:?}, of {n} poses",
+                    c.id, c.i_range, c.j_range, c.closest_pair
+                )));
+            }
+        }
+        let cell_widths_s = crate::trajectory::cell_widths(&state.timestamps_s);
+        let LoopsState { gamma, separation, metric, timestamps_s, set, labels, components, warnings } = state;
+        Ok(Self { gamma, separation, metric, timestamps_s, cell_widths_s, set, labels, components, warnings })
     }
 }

@@ -20,7 +20,9 @@ use std::collections::BTreeMap;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::loops::Loops;
+use crate::memory::try_filled;
 use crate::metric::Metric;
 use crate::spec::{MetricSpec, with_metric};
 use crate::trajectory::{Timeline, Trajectory};
@@ -52,6 +54,7 @@ use crate::trajectory::{Timeline, Trajectory};
 /// assert_eq!(zoom.column_edges_s(), &[1.5, 2.5, 3.5, 4.5]);
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "PlaneGridState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlaneGrid {
     columns: Vec<usize>,
@@ -197,7 +200,9 @@ fn pose_edges(inside: &[f64], t0: f64, [a, b]: [f64; 2]) -> Vec<f64> {
 ///
 /// # Errors
 /// [`Error::PlaneGridMismatch`] when `grid` was made for another number of poses; the metric's
-/// validation error (dimension, unit quaternions, ...).
+/// validation error (dimension, unit quaternions, ...); [`Error::OutOfMemory`] for an image too
+/// big for memory; [`Error::Interrupted`] (checked every row) when an
+/// [`Interrupt`] installed on this thread is interrupted.
 ///
 /// # Examples
 /// ```
@@ -211,13 +216,16 @@ fn pose_edges(inside: &[f64], t0: f64, [a, b]: [f64; 2]) -> Vec<f64> {
 pub fn distance_image<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, grid: &PlaneGrid) -> Result<Vec<f64>> {
     grid.check_poses(traj.len())?;
     traj.check_metric(metric)?;
-    let mut image = vec![0.0; grid.width() * grid.height()];
-    image.par_chunks_mut(grid.width()).zip(grid.rows.par_iter()).for_each(|(row, &j)| {
+    let mut image = try_filled(grid.width() * grid.height(), 0.0, "the distance image")?;
+    let interrupt = Interrupt::current();
+    image.par_chunks_mut(grid.width()).zip(grid.rows.par_iter()).try_for_each(|(row, &j)| {
+        interrupt.check()?;
         let x_j = traj.point(j);
         for (value, &i) in row.iter_mut().zip(&grid.columns) {
             *value = metric.distance(traj.point(i), x_j);
         }
-    });
+        Ok(())
+    })?;
     Ok(image)
 }
 
@@ -252,7 +260,8 @@ impl Loops {
     /// O(pixels · log runs of a row), rows in parallel; memory 8 bytes a pixel.
     ///
     /// # Errors
-    /// [`Error::PlaneGridMismatch`] when `grid` was made for another number of poses.
+    /// [`Error::PlaneGridMismatch`] when `grid` was made for another number of poses;
+    /// [`Error::OutOfMemory`], [`Error::Interrupted`] as [`distance_image`].
     ///
     /// # Examples
     /// ```
@@ -270,12 +279,15 @@ impl Loops {
     pub fn label_image(&self, grid: &PlaneGrid) -> Result<Vec<Option<u32>>> {
         grid.check_poses(self.len())?;
         let (set, components) = (self.sublevel_set(), self.run_components());
-        let mut labels = vec![None; grid.width() * grid.height()];
-        labels.par_chunks_mut(grid.width()).zip(grid.rows.par_iter()).for_each(|(row, &j)| {
+        let mut labels = try_filled(grid.width() * grid.height(), None, "the label image")?;
+        let interrupt = Interrupt::current();
+        labels.par_chunks_mut(grid.width()).zip(grid.rows.par_iter()).try_for_each(|(row, &j)| {
+            interrupt.check()?;
             for (label, &i) in row.iter_mut().zip(&grid.columns) {
                 *label = set.run_index(i, j).map(|r| components[r]);
             }
-        });
+            Ok::<(), Error>(())
+        })?;
         Ok(labels)
     }
 
@@ -582,6 +594,43 @@ pub fn isocontour(values: &[f64], width: usize, height: usize, level: f64) -> Re
         if vertical { [x, y + f] } else { [x + f, y] }
     };
     Ok(chain_polylines(&segments).into_iter().map(|line| line.into_iter().map(point).collect()).collect())
+}
+
+/// What a serialised [`PlaneGrid`] holds.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct PlaneGridState {
+    columns: Vec<usize>,
+    rows: Vec<usize>,
+    column_edges_s: Vec<f64>,
+    row_edges_s: Vec<f64>,
+    poses: usize,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<PlaneGridState> for PlaneGrid {
+    type Error = Error;
+
+    /// Checks that every pixel is a pose and has its two edges.
+    fn try_from(state: PlaneGridState) -> Result<Self> {
+        let PlaneGridState { columns, rows, column_edges_s, row_edges_s, poses } = state;
+        let fits = |axis: &[usize], edges: &[f64]| {
+            !axis.is_empty() && axis.iter().all(|&i| i < poses) && edges.len() == axis.len() + 1
+        };
+        if !(fits(&columns, &column_edges_s) && fits(&rows, &row_edges_s)) {
+            return Err(Error::InvalidState {
+                what: "PlaneGrid",
+                reason: format!(
+                    "{} columns with {} edges and {} rows with {} edges do not index {poses} poses",
+                    columns.len(),
+                    column_edges_s.len(),
+                    rows.len(),
+                    row_edges_s.len()
+                ),
+            });
+        }
+        Ok(Self { columns, rows, column_edges_s, row_edges_s, poses })
+    }
 }
 
 #[cfg(test)]

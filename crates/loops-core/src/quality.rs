@@ -7,6 +7,7 @@ use crate::loops::Loops;
 use crate::sample::Samples;
 
 /// A loop component without a sample (a P1 failure: a revisit the back end never hears of).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct MissedComponent {
     /// Component id in [`Loops::components`].
@@ -23,6 +24,7 @@ pub struct MissedComponent {
 ///
 /// Components count when they hold at least one pair (i, j) with i < j (a component made of a
 /// lone diagonal cell cannot be sampled).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct SampleQuality {
     /// Number of samples.

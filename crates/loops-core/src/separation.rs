@@ -33,6 +33,7 @@ use crate::error::{Error, Result};
 /// assert_eq!(revisits.components()[0].closest_pair, [0, 10]);
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Separation {
     /// Minimum path length between the poses, in the metric's unit: `s_j − s_i ≥ path`.

@@ -5,6 +5,8 @@ use rayon::prelude::*;
 
 use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
+use crate::memory::{try_extend, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
@@ -26,6 +28,7 @@ pub fn check_gamma(gamma: f64) -> Result<()> {
 }
 
 /// A maximal interval of columns `start..=end` of one row `i` of S_γ, with `i ≤ start`.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Run {
     /// First column (pose index j), inclusive.
@@ -58,6 +61,7 @@ impl Run {
 /// the trajectory (no diagonal cell then).
 ///
 /// Memory is 12 bytes a run plus 8 bytes a row.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "SublevelSetState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct SublevelSet {
     gamma: f64,
@@ -112,7 +116,9 @@ impl SublevelSet {
     /// measure. With [`Separation::NONE`], exactly [`compute`](Self::compute).
     ///
     /// # Errors
-    /// As [`compute`](Self::compute); [`Error::InvalidSeparation`].
+    /// As [`compute`](Self::compute); [`Error::InvalidSeparation`]; [`Error::OutOfMemory`] when
+    /// the runs do not fit in memory; [`Error::Interrupted`] when an [`Interrupt`] installed on
+    /// this thread is interrupted (checked every row).
     pub fn compute_separated<M: Metric + ?Sized>(
         traj: &Trajectory,
         metric: &M,
@@ -129,13 +135,17 @@ impl SublevelSet {
         let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s());
         arc.plain = Vec::new();
         let pruner = Pruner::Hierarchy(&balls);
-        Ok(Self::scan(traj, metric, gamma, separation, &arc, pruner, &first_columns, &[0], traj.len()))
+        Self::scan(traj, metric, gamma, separation, &arc, pruner, &first_columns, &[0], traj.len())
     }
 
     /// The scan of [`compute_separated`](Self::compute_separated), over the sessions starting at
     /// `starts` (`[0]` for one trajectory): row blocks never span two sessions, runs are cut
     /// where a session starts, and rows of different sessions are not 4-adjacent. Only the rows
     /// before `scan_rows` are scanned (a tile's rows); the others are left empty.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`] when the runs do not fit in memory; [`Error::Interrupted`] when
+    /// the [`Interrupt`] installed on this thread is interrupted (checked every row).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn scan<M: Metric + ?Sized>(
         traj: &Trajectory,
@@ -147,8 +157,9 @@ impl SublevelSet {
         first_columns: &[u32],
         starts: &[usize],
         scan_rows: usize,
-    ) -> Self {
+    ) -> Result<Self> {
         let n = traj.len();
+        let interrupt = Interrupt::current();
         let scanner = RowScanner { traj, metric, arc, pruner, gamma, first_columns, starts };
         // Blocks of rows, cut where a session starts; rows from `scan_rows` on are left empty.
         let mut block_rows: Vec<std::ops::Range<usize>> = Vec::with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len());
@@ -156,7 +167,7 @@ impl SublevelSet {
             let end = starts.get(k + 1).copied().unwrap_or(n).min(scan_rows);
             block_rows.extend((start..end).step_by(ROWS_PER_TASK).map(|a| a..(a + ROWS_PER_TASK).min(end)));
         }
-        let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Vec<Block> {
+        let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Result<Vec<Block>> {
             blocks
                 .par_iter()
                 .map(|rows| {
@@ -164,22 +175,18 @@ impl SublevelSet {
                     let mut candidates = Vec::new();
                     scanner.candidates_for(rows.clone(), &mut candidates);
                     for i in rows.clone() {
+                        interrupt.check()?;
+                        block.make_room()?;
                         scanner.scan_row(i, &candidates, &mut block);
                         block.row_lengths.push(block.runs.len());
                     }
-                    block
+                    Ok(block)
                 })
                 .collect()
         };
         let breaks = if starts.len() > 1 { starts[1..].iter().map(|&s| s as u32).collect() } else { Vec::new() };
-        let mut set = Self {
-            gamma,
-            separation,
-            row_offsets: Vec::with_capacity(n + 1),
-            runs: Vec::new(),
-            closest: Vec::new(),
-            breaks,
-        };
+        let row_offsets = try_with_capacity(n + 1, "the row offsets of S_gamma")?;
+        let mut set = Self { gamma, separation, row_offsets, runs: Vec::new(), closest: Vec::new(), breaks };
         set.row_offsets.push(0);
         // Blocks are scanned in parallel a batch at a time, and each batch is moved into the
         // result while the next one is scanned (the copy, and the page faults of a result that
@@ -190,24 +197,27 @@ impl SublevelSet {
             let previous = std::mem::take(&mut scanned);
             // The copy first: on one thread the order of work and allocation is that of a
             // plain loop; on more, the others start on the scan meanwhile.
-            scanned = rayon::join(|| set.append(previous), || scan_batch(batch)).1;
+            let (appended, batch) = rayon::join(|| set.append(previous), || scan_batch(batch));
+            appended?;
+            scanned = batch?;
         }
-        set.append(scanned);
+        set.append(scanned)?;
         let last = set.runs.len();
         set.row_offsets.resize(n + 1, last);
         set.runs.shrink_to_fit();
         set.closest.shrink_to_fit();
-        set
+        Ok(set)
     }
 
-    /// Appends the rows of scanned blocks, in order.
-    fn append(&mut self, blocks: Vec<Block>) {
+    /// Appends the rows of scanned blocks, in order, growing the result fallibly.
+    fn append(&mut self, blocks: Vec<Block>) -> Result<()> {
         for block in blocks {
             let base = self.runs.len();
             self.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
-            self.runs.extend_from_slice(&block.runs);
-            self.closest.extend_from_slice(&block.closest);
+            try_extend(&mut self.runs, &block.runs, "the runs of S_gamma")?;
+            try_extend(&mut self.closest, &block.closest, "the closest columns of S_gamma")?;
         }
+        Ok(())
     }
 
     /// Builds the set by measuring every pair: O(n²) time, for tests and tiny inputs.
@@ -346,6 +356,17 @@ struct Block {
     runs: Vec<Run>,
     closest: Vec<u32>,
     row_lengths: Vec<usize>,
+}
+
+impl Block {
+    /// Before a row: room for as many runs again as the block holds (at least 64), allocated
+    /// fallibly, so that the row's pushes do not have to grow the buffers.
+    fn make_room(&mut self) -> Result<()> {
+        let room = self.runs.len().max(64);
+        try_reserve(&mut self.runs, room, "the runs of S_gamma")?;
+        try_reserve(&mut self.closest, room, "the closest columns of S_gamma")?;
+        try_reserve(&mut self.row_lengths, ROWS_PER_TASK, "the row offsets of S_gamma")
+    }
 }
 
 /// Runs at least this long find their closest column through the ball hierarchy; shorter ones
@@ -587,6 +608,72 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         };
         runs.push(Run { start: a as u32, end: b as u32 });
         closest.push(column as u32);
+    }
+}
+
+/// What a serialised [`SublevelSet`] holds.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct SublevelSetState {
+    gamma: f64,
+    separation: Separation,
+    row_offsets: Vec<usize>,
+    runs: Vec<Run>,
+    closest: Vec<u32>,
+    breaks: Vec<u32>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<SublevelSetState> for SublevelSet {
+    type Error = Error;
+
+    /// Checks γ, the separation, the session starts (increasing, inside), and that the runs are
+    /// runs of an upper half: per row in increasing column order, apart, within `row..rows`,
+    /// each closest column inside its run.
+    fn try_from(state: SublevelSetState) -> Result<Self> {
+        check_gamma(state.gamma)?;
+        state.separation.check()?;
+        let invalid = |reason: String| Error::InvalidState { what: "SublevelSet", reason };
+        let SublevelSetState { row_offsets, runs, closest, breaks, .. } = &state;
+        let rows = row_offsets.len().saturating_sub(1);
+        if rows < 2 || row_offsets[0] != 0 || row_offsets[rows] != runs.len() || closest.len() != runs.len() {
+            return Err(invalid(format!(
+                "{} row offsets from {:?} to {:?} for {} runs and {} closest columns",
+                row_offsets.len(),
+                row_offsets.first(),
+                row_offsets.last(),
+                runs.len(),
+                closest.len()
+            )));
+        }
+        let mut previous_break = 0;
+        for &start in breaks {
+            if start <= previous_break || start as usize >= rows {
+                return Err(invalid(format!(
+                    "session start {start} does not follow {previous_break} within {rows} rows"
+                )));
+            }
+            previous_break = start;
+        }
+        for i in 0..rows {
+            let (a, b) = (row_offsets[i], row_offsets[i + 1]);
+            if b < a || b > runs.len() {
+                return Err(invalid(format!("the runs of row {i} are {a}..{b}, of {} runs", runs.len())));
+            }
+            let mut previous_end: Option<u64> = None;
+            for (k, (run, &column)) in runs[a..b].iter().zip(&closest[a..b]).enumerate() {
+                let (start, end) = (run.start as usize, run.end as usize);
+                let apart = previous_end.is_none_or(|e| u64::from(run.start) > e + 1);
+                if start < i || start > end || end >= rows || !apart || !(run.start..=run.end).contains(&column) {
+                    return Err(invalid(format!(
+                        "run {k} of row {i} ({start}..={end}, closest column {column}) is not a run of {rows} rows"
+                    )));
+                }
+                previous_end = Some(u64::from(run.end));
+            }
+        }
+        let SublevelSetState { gamma, separation, row_offsets, runs, closest, breaks } = state;
+        Ok(Self { gamma, separation, row_offsets, runs, closest, breaks })
     }
 }
 

@@ -225,7 +225,7 @@ pub fn scan_tile<M: Metric + ?Sized>(
         &first_columns,
         &starts,
         rows,
-    );
+    )?;
     Ok(summarise(tile, &piece, metric, &set, &starts, rows, &*to_fleet))
 }
 

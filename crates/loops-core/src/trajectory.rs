@@ -23,11 +23,13 @@ use crate::error::{Error, Result};
 /// assert_eq!(traj.cell_widths_s(), &[0.5, 1.5, 1.0]);
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "TrajectoryState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Trajectory {
     timestamps_s: Vec<f64>,
     coords: Vec<f64>,
     dim: usize,
+    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     cell_widths_s: Vec<f64>,
     manifold: Manifold,
 }
@@ -53,6 +55,7 @@ pub struct Trajectory {
 /// trajectory's coordinates may also be measured by any metric whose layout they have (checked
 /// as that metric requires); a manifold's points only by the metrics of that manifold
 /// ([`Metric::fits`](crate::Metric::fits)), so no quaternion is ever measured as a vector.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Manifold {
@@ -380,7 +383,7 @@ impl Trajectory {
     }
 }
 
-fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {
+pub(crate) fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {
     if let Some(index) = timestamps_s.iter().position(|t| !t.is_finite()) {
         return Err(Error::NonFiniteTimestamp { index, value: timestamps_s[index] });
     }
@@ -440,7 +443,7 @@ pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> V
 
 /// Widths `(t_{i+1} − t_{i−1}) / 2` (half cells at the ends), from differences of neighbouring
 /// timestamps, which are exact even on an epoch clock (differences of midpoints are not).
-fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
+pub(crate) fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
     let n = timestamps_s.len();
     (0..n)
         .map(|i| {
@@ -449,6 +452,29 @@ fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
             0.5 * (before + after)
         })
         .collect()
+}
+
+/// What a serialised [`Trajectory`] holds (the time cells are derived again).
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct TrajectoryState {
+    timestamps_s: Vec<f64>,
+    coords: Vec<f64>,
+    dim: usize,
+    manifold: Manifold,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<TrajectoryState> for Trajectory {
+    type Error = Error;
+
+    /// Validated as [`Trajectory::new`] and, for a manifold, as its default metric validates
+    /// its points (unit quaternions, latitudes, ...).
+    fn try_from(state: TrajectoryState) -> Result<Self> {
+        let traj = Self::new(state.timestamps_s, state.coords, state.dim)?.on(state.manifold);
+        traj.default_metric().validate(&traj)?;
+        Ok(traj)
+    }
 }
 
 #[cfg(test)]

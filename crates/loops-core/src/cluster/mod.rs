@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::detection::Detections;
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::union_find::MinRootForest;
 
 mod grid;
@@ -36,6 +37,7 @@ pub fn check_epsilon_s(epsilon_s: f64) -> Result<()> {
 }
 
 /// One connected component of the ε graph of detections: an approximation of a loop component.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct DetectionCluster {
     /// Index in [`DetectionClusters::clusters`]. Clusters are numbered in lexicographic order
@@ -60,6 +62,7 @@ pub struct DetectionCluster {
 /// The connected components of the ε graph of a detection set, with the detections.
 ///
 /// Build with [`cluster_detections`].
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "DetectionClustersState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct DetectionClusters {
     epsilon_s: f64,
@@ -158,7 +161,9 @@ const MAX_CELLS_PER_SIDE: f64 = (1u64 << 49) as f64;
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] unless `epsilon_s` is positive and finite, or when ε is below the
-/// floating-point resolution of the detections' time range (range / ε > 2⁴⁸).
+/// floating-point resolution of the detections' time range (range / ε > 2⁴⁸);
+/// [`Error::Interrupted`] when an [`Interrupt`] installed on this thread is interrupted (checked
+/// between its phases).
 ///
 /// # Examples
 /// ```
@@ -187,17 +192,22 @@ pub fn cluster_detections(detections: &Detections, epsilon_s: f64) -> Result<Det
     }
     let epsilon2 = epsilon_s * epsilon_s;
 
-    let components = || {
+    // Checked between the phases (each O(n log n)).
+    let interrupt = Interrupt::current();
+    let components = || -> Result<_> {
         let sorted = SortedPoints::new(xs, ys, [x_min, y_min], [x_max, y_max], side);
+        interrupt.check()?;
         let (grid, node_roots) = link(&sorted, epsilon2);
-        number_clusters(&sorted, &grid, &node_roots, side)
+        interrupt.check()?;
+        Ok(number_clusters(&sorted, &grid, &node_roots, side))
     };
     // The copy of the detections that the result owns is made while the clusters are computed.
-    let (detections, (labels, clusters)) = if xs.len() <= SMALL {
+    let (detections, components) = if xs.len() <= SMALL {
         (detections.clone(), components())
     } else {
         rayon::join(|| detections.clone(), components)
     };
+    let (labels, clusters) = components?;
     Ok(DetectionClusters { epsilon_s, cell_side_s: side, detections, labels, clusters })
 }
 
@@ -293,6 +303,45 @@ fn link(sorted: &SortedPoints, epsilon2: f64) -> (Grid, Vec<u32>) {
 /// Up to this many points, all work is done on the calling thread, and cell keys that do not
 /// go to the counting sort are sorted by comparison.
 pub(super) const SMALL: usize = 1 << 12;
+
+/// What a serialised [`DetectionClusters`] holds.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct DetectionClustersState {
+    epsilon_s: f64,
+    cell_side_s: f64,
+    detections: Detections,
+    labels: Vec<u32>,
+    clusters: Vec<DetectionCluster>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<DetectionClustersState> for DetectionClusters {
+    type Error = Error;
+
+    /// Checks ε, one label per detection naming a cluster, and the clusters' ids and anchors.
+    fn try_from(state: DetectionClustersState) -> Result<Self> {
+        check_epsilon_s(state.epsilon_s)?;
+        let invalid = |reason: String| Error::InvalidState { what: "DetectionClusters", reason };
+        let (n, count) = (state.detections.len(), state.clusters.len());
+        if !(state.cell_side_s.is_finite() && state.cell_side_s > 0.0) || state.labels.len() != n {
+            return Err(invalid(format!(
+                "cell side {} s and {} labels for {n} detections",
+                state.cell_side_s,
+                state.labels.len()
+            )));
+        }
+        if let Some(k) = state.labels.iter().position(|&c| c as usize >= count) {
+            return Err(invalid(format!("detection {k} is in cluster {}, of {count}", state.labels[k])));
+        }
+        if let Some(k) = state.clusters.iter().enumerate().position(|(k, c)| c.id != k || c.anchor >= n) {
+            let c = &state.clusters[k];
+            return Err(invalid(format!("cluster {k} has id {} and anchor {}, of {n} detections", c.id, c.anchor)));
+        }
+        let DetectionClustersState { epsilon_s, cell_side_s, detections, labels, clusters } = state;
+        Ok(Self { epsilon_s, cell_side_s, detections, labels, clusters })
+    }
+}
 
 #[cfg(test)]
 mod tests {

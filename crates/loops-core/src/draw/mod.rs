@@ -10,10 +10,49 @@ use std::fmt;
 
 use rand::{Rng, RngExt};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, TooManySamples};
+use crate::interrupt::Interrupt;
 
 pub(crate) use pair_space::PairSpace;
 pub(crate) use quota::group_quotas;
+
+/// The most samples one call of a sampler returns, and the most detections one draw of
+/// detections returns: 5 million, 500 times the paper's budget of 10⁴ and more pairs than a scan
+/// matcher at a millisecond a pair gets through in an hour.
+///
+/// A larger request (a budget such as `u64::MAX` meant as "all of them" on hours of driving, or
+/// a rate that keeps tens of millions of pairs) is refused before anything is drawn with
+/// [`Error::TooManySamples`], which says how many samples it would make and how much memory they
+/// would take: its answer would cost gigabytes (a sample is about 250 bytes while it is built)
+/// and minutes, and could exhaust memory. Ask for fewer, or split the work (by component, or by
+/// stretch of the trajectory).
+pub const MAX_SAMPLES: usize = 5_000_000;
+
+/// Bytes one sample takes while a sampler builds it, for the estimate of
+/// [`Error::TooManySamples`]: the row (128 bytes), half of it again for the sort, the drawn
+/// number, the pair and the index draw's scratch.
+pub(crate) const SAMPLE_BYTES: u64 = 256;
+
+/// Bytes one drawn detection takes while it is drawn: t and t′, the pair, the drawn number.
+pub(crate) const DETECTION_BYTES: u64 = 40;
+
+/// Refuses a request that makes more than [`MAX_SAMPLES`] items (`count`: the number it makes,
+/// or the expected number for a rate).
+///
+/// # Errors
+/// [`Error::TooManySamples`].
+pub(crate) fn check_count(what: &'static str, size: SampleSize, count: f64, bytes_each: u64) -> Result<()> {
+    if count <= MAX_SAMPLES as f64 {
+        return Ok(());
+    }
+    let count = count.ceil().min(u64::MAX as f64) as u64;
+    let (budget, rate) = match size {
+        SampleSize::Budget(budget) => (Some(budget), None),
+        SampleSize::Rate(rate) => (None, Some(rate)),
+    };
+    let bytes = count.saturating_mul(bytes_each);
+    Err(Error::TooManySamples(Box::new(TooManySamples { what, budget, rate, count, bytes, max: MAX_SAMPLES })))
+}
 
 /// How many samples.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -68,6 +107,7 @@ impl SampleSize {
 }
 
 /// Something to know about a sample that is still valid.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum SampleWarning {
@@ -135,14 +175,24 @@ pub(crate) fn choose_indices<R: Rng + ?Sized>(len: u64, count: u64, rng: &mut R)
     out
 }
 
-/// Numbers of the items kept out of `len` (σ_α): each with probability p, or exactly `budget`.
+/// Numbers of the items kept out of `len` (σ_α, the baselines): each with probability p, or
+/// exactly `budget`.
+///
+/// # Errors
+/// [`Error::TooManySamples`] when that makes more than [`MAX_SAMPLES`] samples, before any is
+/// drawn.
 pub(crate) fn draw_numbers<R: Rng + ?Sized>(
     len: u64,
     size: SampleSize,
     rng: &mut R,
     warnings: &mut Vec<SampleWarning>,
-) -> Vec<u64> {
-    match size {
+) -> Result<Vec<u64>> {
+    let count = match size {
+        SampleSize::Rate(rate) => rate * len as f64,
+        SampleSize::Budget(budget) => (budget as u64).min(len) as f64,
+    };
+    check_count("samples", size, count, SAMPLE_BYTES)?;
+    Ok(match size {
         SampleSize::Rate(rate) => bernoulli_indices(len, rate, rng),
         SampleSize::Budget(budget) => {
             if budget as u64 > len {
@@ -150,7 +200,12 @@ pub(crate) fn draw_numbers<R: Rng + ?Sized>(
             }
             choose_indices(len, (budget as u64).min(len), rng)
         }
-    }
+    })
+}
+
+/// Checks `interrupt` every 65,536 items of a long loop (`k`: the item's number).
+pub(crate) fn check_every(interrupt: &Interrupt, k: usize) -> Result<()> {
+    if k.is_multiple_of(65_536) { interrupt.check() } else { Ok(()) }
 }
 
 #[cfg(test)]

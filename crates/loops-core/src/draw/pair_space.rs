@@ -2,8 +2,11 @@
 
 use rand::Rng;
 
-use super::{bernoulli_indices, choose_indices};
+use super::{bernoulli_indices, check_every, choose_indices};
+use crate::error::Result;
+use crate::interrupt::Interrupt;
 use crate::loops::Loops;
+use crate::memory::{try_reserve, try_with_capacity};
 
 /// A stretch `start..=end` of columns of one row: pairs (row, j).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -25,23 +28,33 @@ pub(crate) struct PairSpace {
 
 impl PairSpace {
     /// The off-diagonal pairs (i < j) of S_γ with `t_j − t_i ≥ min_gap_s`, row-major.
-    pub(crate) fn of_loops(loops: &Loops, min_gap_s: f64) -> Self {
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory), [`Error::Interrupted`](crate::Error::Interrupted).
+    pub(crate) fn of_loops(loops: &Loops, min_gap_s: f64, interrupt: &Interrupt) -> Result<Self> {
         let mut space = Self::default();
         let first = FirstColumn::new(loops.timestamps_s(), min_gap_s);
-        for run in loops.runs() {
-            space.push(run.row, run.start, run.end, first.of_row(run.row));
+        for (k, run) in loops.runs().enumerate() {
+            check_every(interrupt, k)?;
+            space.push(run.row, run.start, run.end, first.of_row(run.row))?;
         }
-        space
+        Ok(space)
     }
 
-    /// Adds the columns `start..=end` of row `i` that are ≥ `first_column`.
-    pub(crate) fn push(&mut self, i: usize, start: usize, end: usize, first_column: usize) {
+    /// Adds the columns `start..=end` of row `i` that are ≥ `first_column`, growing fallibly.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory).
+    pub(crate) fn push(&mut self, i: usize, start: usize, end: usize, first_column: usize) -> Result<()> {
         let start = start.max(first_column);
         if start <= end {
             let total = self.len() + (end - start + 1) as u64;
+            try_reserve(&mut self.segments, 1, "the pairs to draw from")?;
+            try_reserve(&mut self.ends, 1, "the pairs to draw from")?;
             self.segments.push(Segment { row: i as u32, start: start as u32, end: end as u32 });
             self.ends.push(total);
         }
+        Ok(())
     }
 
     /// Number of pairs.
@@ -64,8 +77,11 @@ impl PairSpace {
     }
 
     /// The pairs at increasing numbers, by one walk over the segments. O(segments + k).
-    pub(crate) fn pairs_at(&self, sorted: &[u64]) -> Vec<[u32; 2]> {
-        let mut out = Vec::with_capacity(sorted.len());
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory).
+    pub(crate) fn pairs_at(&self, sorted: &[u64]) -> Result<Vec<[u32; 2]>> {
+        let mut out = try_with_capacity(sorted.len(), "the drawn pairs")?;
         let mut s = 0;
         for &k in sorted {
             while self.ends[s] <= k {
@@ -74,7 +90,7 @@ impl PairSpace {
             let before = if s == 0 { 0 } else { self.ends[s - 1] };
             out.push([self.segments[s].row, self.segments[s].start + (k - before) as u32]);
         }
-        out
+        Ok(out)
     }
 
     /// Every number independently with probability `rate` in (0, 1], increasing: geometric
@@ -125,7 +141,7 @@ mod tests {
     fn pair_space_numbers_every_pair_once() {
         let traj = line();
         let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
-        let space = PairSpace::of_loops(&loops, 0.0);
+        let space = PairSpace::of_loops(&loops, 0.0, &Interrupt::new()).unwrap();
         let all: Vec<[u32; 2]> = (0..space.len()).map(|k| space.pair(k)).collect();
         let mut brute = Vec::new();
         for i in 0..5 {
@@ -137,9 +153,9 @@ mod tests {
         }
         assert_eq!(all, brute);
         let indices: Vec<u64> = (0..space.len()).collect();
-        assert_eq!(space.pairs_at(&indices), brute);
+        assert_eq!(space.pairs_at(&indices).unwrap(), brute);
         // With a gap of 2 s only pairs at least two poses apart remain.
-        let gapped = PairSpace::of_loops(&loops, 2.0);
+        let gapped = PairSpace::of_loops(&loops, 2.0, &Interrupt::new()).unwrap();
         let kept: Vec<[u32; 2]> = (0..gapped.len()).map(|k| gapped.pair(k)).collect();
         assert_eq!(kept, brute.iter().copied().filter(|p| p[1] - p[0] >= 2).collect::<Vec<_>>());
     }

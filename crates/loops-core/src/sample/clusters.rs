@@ -5,10 +5,13 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::disperse::disperse_detections;
+use super::exact::concat;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::cluster::DetectionClusters;
-use crate::draw::{choose_indices, draw_numbers, group_quotas};
+use crate::draw::{SAMPLE_BYTES, check_count, choose_indices, draw_numbers, group_quotas};
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
+use crate::memory::try_collect;
 
 /// Samples detections, grouped by their ε-graph clusters (paper, Sec. 5.3–5.5): σ_1, σ_ρ, the
 /// dispersed σ_ρ, or σ_α. "Trajectory points" of a cluster (σ_ρ) are its distinct times t.
@@ -23,7 +26,9 @@ use crate::error::{Error, Result};
 /// [`Error::UnknownName`] for a baseline (they need the trajectory: [`sample_loops`](crate::sample_loops));
 /// [`Error::InvalidParameter`] for a budget of 0 or a rate out of range;
 /// [`Error::NotApplicable`] for [`Sampler::skip_trivial`] (clusters do not know the trivial
-/// components).
+/// components); [`Error::TooManySamples`] for a size that makes more than
+/// [`MAX_SAMPLES`](crate::MAX_SAMPLES) samples, before any is drawn; [`Error::OutOfMemory`];
+/// [`Error::Interrupted`] when an [`Interrupt`] installed on this thread is interrupted.
 ///
 /// # Examples
 /// ```
@@ -73,7 +78,7 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
     let mut warnings = Vec::new();
     let (chosen, groups): (Vec<u32>, usize) = if kind == SamplerKind::Alpha {
         let n = det.len() as u64;
-        let positions = draw_numbers(n, sampler.size, &mut rng, &mut warnings);
+        let positions = draw_numbers(n, sampler.size, &mut rng, &mut warnings)?;
         (positions.into_iter().map(|p| order[p as usize]).collect(), 0)
     } else {
         let members: Vec<&[u32]> = (0..clusters.len()).map(|g| &order[offsets[g]..offsets[g + 1]]).collect();
@@ -84,41 +89,41 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
         };
         let caps: Vec<u64> = members.iter().map(|m| m.len() as u64).collect();
         let quotas = group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings);
+        check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
+        let interrupt = Interrupt::current();
         let scores = det.scores();
         let picks: Vec<Vec<u32>> = members
             .par_iter()
             .zip(&quotas)
             .enumerate()
             .map(|(g, (m, &q))| {
+                interrupt.check()?;
                 let mut rng = group_rng(sampler.seed, g);
-                if kind == SamplerKind::RhoDispersed {
+                Ok(if kind == SamplerKind::RhoDispersed {
                     disperse_detections(m, q, xs, scores, &mut rng)
                 } else {
                     choose_indices(m.len() as u64, q, &mut rng).into_iter().map(|p| m[p as usize]).collect()
-                }
+                })
             })
-            .collect();
-        (picks.concat(), clusters.len())
+            .collect::<Result<_>>()?;
+        (concat(picks)?, clusters.len())
     };
     let pairs = det.pairs();
-    let rows = chosen
-        .iter()
-        .map(|&k| {
-            let k = k as usize;
-            Sample {
-                pair: pairs.map(|p| [p[k][0] as usize, p[k][1] as usize]),
-                t_s: xs[k],
-                t_prime_s: ys[k],
-                component: None,
-                cluster: Some(labels[k] as usize),
-                detection: Some(k),
-                distance: None,
-                score: det.scores().map(|s| s[k]),
-                sampler: kind,
-            }
-        })
-        .collect();
-    let mut samples = Samples::new(kind, rows, groups, det.len() as u64, det.poses());
+    let rows = chosen.iter().map(|&k| {
+        let k = k as usize;
+        Sample {
+            pair: pairs.map(|p| [p[k][0] as usize, p[k][1] as usize]),
+            t_s: xs[k],
+            t_prime_s: ys[k],
+            component: None,
+            cluster: Some(labels[k] as usize),
+            detection: Some(k),
+            distance: None,
+            score: det.scores().map(|s| s[k]),
+            sampler: kind,
+        }
+    });
+    let mut samples = Samples::new(kind, try_collect(rows, "the samples")?, groups, det.len() as u64, det.poses());
     samples.warnings = warnings;
     Ok(samples)
 }

@@ -6,6 +6,7 @@ use std::collections::BTreeSet;
 use rand::{Rng, RngExt};
 
 use crate::draw::PairSpace;
+use crate::error::Result;
 use crate::loops::Loops;
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
@@ -90,7 +91,7 @@ pub(super) fn disperse_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
     metric: &M,
     loops: &Loops,
     rng: &mut R,
-) -> Vec<[u32; 2]> {
+) -> Result<Vec<[u32; 2]>> {
     let segments = space.segments();
     let mut rows = vec![0usize];
     rows.extend((1..segments.len()).filter(|&s| segments[s].row != segments[s - 1].row));

@@ -7,9 +7,11 @@ use rayon::prelude::*;
 use super::disperse::disperse_pairs;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::baseline::baseline_pairs;
-use crate::draw::{PairSpace, draw_numbers, group_quotas};
+use crate::draw::{PairSpace, SAMPLE_BYTES, check_count, check_every, draw_numbers, group_quotas};
 use crate::error::Result;
+use crate::interrupt::Interrupt;
 use crate::loops::Loops;
+use crate::memory::{try_collect, try_with_capacity};
 use crate::metric::Metric;
 use crate::spec::{MetricSpec, check_fits, with_metric};
 use crate::trajectory::Trajectory;
@@ -42,7 +44,9 @@ impl MetricSpec {
 /// # Errors
 /// [`Error::TrajectoryMismatch`](crate::Error::TrajectoryMismatch) unless `loops` was found on `traj`; [`Error::InvalidParameter`](crate::Error::InvalidParameter)
 /// for a budget of 0, a rate out of range or a bad baseline parameter; [`Error::NotApplicable`](crate::Error::NotApplicable)
-/// for `skip_trivial` with a baseline.
+/// for `skip_trivial` with a baseline; [`Error::TooManySamples`](crate::Error::TooManySamples) for a size that makes more than
+/// [`MAX_SAMPLES`](crate::MAX_SAMPLES) samples, before any is drawn; [`Error::OutOfMemory`](crate::Error::OutOfMemory);
+/// [`Error::Interrupted`](crate::Error::Interrupted) when an [`Interrupt`] installed on this thread is interrupted.
 ///
 /// # Examples
 /// ```
@@ -83,6 +87,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
     let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
     let mut warnings = Vec::new();
     sampler.check_applicable()?;
+    let interrupt = Interrupt::current();
     let components = loops.components();
     let wanted = |c: usize| keep(c) && !(sampler.skip_trivial && components[c].trivial);
     let (pairs, groups, available): (Vec<Picked>, usize, u64) = match (kind, kind.baseline(&sampler.baseline)) {
@@ -95,16 +100,19 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
         (SamplerKind::Alpha, None) => {
             // The off-diagonal pairs (j > i) of the wanted components.
             let mut space = PairSpace::default();
-            for run in loops.runs().filter(|run| wanted(run.component)) {
-                space.push(run.row, run.start, run.end, run.row + 1);
+            for (k, run) in loops.runs().filter(|run| wanted(run.component)).enumerate() {
+                check_every(&interrupt, k)?;
+                space.push(run.row, run.start, run.end, run.row + 1)?;
             }
-            let numbers = draw_numbers(space.len(), sampler.size, &mut rng, &mut warnings);
-            (space.pairs_at(&numbers).into_iter().map(|p| (p, None)).collect(), 0, space.len())
+            let numbers = draw_numbers(space.len(), sampler.size, &mut rng, &mut warnings)?;
+            let pairs = space.pairs_at(&numbers)?;
+            (try_collect(pairs.into_iter().map(|p| (p, None)), "the samples")?, 0, space.len())
         }
         (_, None) => {
             let mut spaces = vec![PairSpace::default(); loops.components().len()];
-            for run in loops.runs().filter(|run| wanted(run.component)) {
-                spaces[run.component].push(run.row, run.start, run.end, run.row + 1);
+            for (k, run) in loops.runs().filter(|run| wanted(run.component)).enumerate() {
+                check_every(&interrupt, k)?;
+                spaces[run.component].push(run.row, run.start, run.end, run.row + 1)?;
             }
             let ids: Vec<usize> = (0..spaces.len()).filter(|&c| spaces[c].len() > 0).collect();
             let spaces: Vec<PairSpace> = ids.iter().map(|&c| std::mem::take(&mut spaces[c])).collect();
@@ -115,45 +123,53 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
             };
             let caps: Vec<u64> = spaces.iter().map(PairSpace::len).collect();
             let quotas = group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings);
+            check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
             let picks: Vec<Vec<Picked>> = spaces
                 .par_iter()
                 .zip(&quotas)
                 .zip(&ids)
                 .map(|((space, &q), &c)| {
+                    interrupt.check()?;
                     let mut rng = group_rng(sampler.seed, c);
                     let pairs = if kind == SamplerKind::RhoDispersed {
-                        disperse_pairs(space, q, traj, metric, loops, &mut rng)
+                        disperse_pairs(space, q, traj, metric, loops, &mut rng)?
                     } else {
-                        space.pairs_at(&space.choose(q, &mut rng))
+                        space.pairs_at(&space.choose(q, &mut rng))?
                     };
-                    pairs.into_iter().map(|p| (p, Some(c))).collect()
+                    try_collect(pairs.into_iter().map(|p| (p, Some(c))), "the samples")
                 })
-                .collect();
-            (picks.concat(), ids.len(), caps.iter().sum())
+                .collect::<Result<_>>()?;
+            (concat(picks)?, ids.len(), caps.iter().sum())
         }
     };
     let times = traj.timestamps_s();
-    let rows = pairs
-        .into_iter()
-        .map(|([i, j], component)| {
-            let (i, j) = (i as usize, j as usize);
-            Sample {
-                pair: Some([i, j]),
-                t_s: times[i],
-                t_prime_s: times[j],
-                component: component.or_else(|| loops.component_of(i, j)),
-                cluster: None,
-                detection: None,
-                distance: Some(metric.distance(traj.point(i), traj.point(j))),
-                score: None,
-                sampler: kind,
-            }
-        })
-        .collect();
-    let mut samples = Samples::new(kind, rows, groups, available, Some(traj.len()));
+    let rows = pairs.into_iter().map(|([i, j], component)| {
+        let (i, j) = (i as usize, j as usize);
+        Sample {
+            pair: Some([i, j]),
+            t_s: times[i],
+            t_prime_s: times[j],
+            component: component.or_else(|| loops.component_of(i, j)),
+            cluster: None,
+            detection: None,
+            distance: Some(metric.distance(traj.point(i), traj.point(j))),
+            score: None,
+            sampler: kind,
+        }
+    });
+    let mut samples = Samples::new(kind, try_collect(rows, "the samples")?, groups, available, Some(traj.len()));
     samples.warnings = warnings;
     Ok(samples)
 }
 
 /// A pair (i, j) and its component, when the sampler knows it.
 type Picked = ([u32; 2], Option<usize>);
+
+/// The groups' picks in one buffer, allocated fallibly.
+pub(super) fn concat<T: Clone>(parts: Vec<Vec<T>>) -> Result<Vec<T>> {
+    let mut all = try_with_capacity(parts.iter().map(Vec::len).sum(), "the samples")?;
+    for part in parts {
+        all.extend(part);
+    }
+    Ok(all)
+}

@@ -30,6 +30,7 @@ use crate::error::{Error, Result};
 /// assert!(err.to_string().contains("one, rho, rho-dispersed, alpha"));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum SamplerKind {
     /// σ_1: a constant number per group.

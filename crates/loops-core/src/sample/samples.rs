@@ -10,6 +10,7 @@ use crate::spec::check_fits;
 use crate::trajectory::Trajectory;
 
 /// One sampled loop: a candidate pair for the scan matcher.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     /// Pose indices (i, j), i ≤ j, when known (always from [`sample_loops`](crate::sample_loops); from
@@ -34,6 +35,7 @@ pub struct Sample {
 }
 
 /// The samples a sampler chose, in order of (t, t′), with what it knew.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "SamplesState"))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct Samples {
     sampler: SamplerKind,
@@ -152,5 +154,38 @@ impl Samples {
             a.t_s.total_cmp(&b.t_s).then(a.t_prime_s.total_cmp(&b.t_prime_s)).then(a.detection.cmp(&b.detection))
         });
         Self { sampler, rows, groups, available, poses, warnings: Vec::new() }
+    }
+}
+
+/// What a serialised [`Samples`] holds.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct SamplesState {
+    sampler: SamplerKind,
+    rows: Vec<Sample>,
+    groups: usize,
+    available: u64,
+    poses: Option<usize>,
+    warnings: Vec<SampleWarning>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<SamplesState> for Samples {
+    type Error = Error;
+
+    /// Checks that every pair (i ≤ j) is a pair of poses of the samples' trajectory.
+    fn try_from(state: SamplesState) -> Result<Self> {
+        let bad = state
+            .rows
+            .iter()
+            .position(|row| row.pair.is_some_and(|[i, j]| i > j || state.poses.is_none_or(|poses| j >= poses)));
+        if let Some(k) = bad {
+            return Err(Error::InvalidState {
+                what: "Samples",
+                reason: format!("sample {k} has the pair {:?}, on {:?} poses", state.rows[k].pair, state.poses),
+            });
+        }
+        let SamplesState { sampler, rows, groups, available, poses, warnings } = state;
+        Ok(Self { sampler, rows, groups, available, poses, warnings })
     }
 }
