@@ -78,6 +78,7 @@ from .errors import (
     LoopsIOError,
     LoopsWarning,
     NoLoopsWarning,
+    OutOfMemoryError,
     SampleBudgetWarning,
 )
 from .table import Table
@@ -101,6 +102,7 @@ __all__ = [
     "LoopsIOError",
     "LoopsWarning",
     "NoLoopsWarning",
+    "OutOfMemoryError",
     "PlaneGrid",
     "PoseGraph",
     "SampleBudgetWarning",

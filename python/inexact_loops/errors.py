@@ -29,6 +29,7 @@ __all__ = [
     "LoopsIOError",
     "LoopsWarning",
     "NoLoopsWarning",
+    "OutOfMemoryError",
     "SampleBudgetWarning",
 ]
 
@@ -51,6 +52,16 @@ class InvalidParameterError(LoopsError, ValueError):
 
 class LoopsIOError(LoopsError, OSError):
     """A file could not be read or parsed; the message names the file and line."""
+
+
+class OutOfMemoryError(LoopsError, MemoryError):
+    """The answer does not fit in memory (or under a limit such as ``ulimit -v``).
+
+    Raised instead of letting the process abort: the message names what the memory was for and
+    the size that could not be allocated (``out of memory: the runs of S_gamma need 3.1 GiB
+    ...``). The interpreter and its data are untouched; a smaller gamma, a separation, fewer
+    poses, a smaller budget or image needs less.
+    """
 
 
 class InternalError(LoopsError, RuntimeError):

@@ -47,6 +47,10 @@ ELSEWHERE = {
         for name in ("Trajectory.manifold", "Trajectory.metric_name")
     },
     "Detections.to_pandas": ("python/test_interop.py", "test_detections_to_pandas"),
+    "OutOfMemoryError": (
+        "python/test_nothing_aborted.py",
+        "test_an_answer_too_big_for_memory_raises_memory_error_and_the_interpreter_survives",
+    ),
     "read_detections": (
         "python/test_reading.py",
         "test_read_detections_drops_outside_the_span_on_request",

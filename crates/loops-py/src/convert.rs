@@ -175,6 +175,23 @@ pub(crate) fn to_numpy<'py, T: numpy::Element>(py: Python<'py>, values: Vec<T>) 
     PyArray1::from_vec(py, values)
 }
 
+/// A numpy column of the first `len` of `values`, allocated fallibly: a column too big for
+/// memory is an `OutOfMemoryError` naming `what` and its size, not an abort.
+pub(crate) fn try_column<'py, T: numpy::Element>(
+    py: Python<'py>,
+    len: usize,
+    values: impl Iterator<Item = T>,
+    what: &'static str,
+) -> PyResult<Bound<'py, PyArray1<T>>> {
+    let mut column = Vec::new();
+    if column.try_reserve_exact(len).is_err() {
+        let bytes = (len as u128 * size_of::<T>() as u128).min(u64::MAX as u128) as u64;
+        return Err(crate::error::Failure::from(loops_core::Error::OutOfMemory { what, bytes }).into());
+    }
+    column.extend(values.take(len));
+    Ok(to_numpy(py, column))
+}
+
 /// An optional column as a numpy array, `None` when no row has a value.
 pub(crate) fn optional_column<'py, T: numpy::Element + Copy>(
     py: Python<'py>,

@@ -1,8 +1,8 @@
 //! The Python exception hierarchy and the one place core errors become Python exceptions.
 
 use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyIndexError, PyIsADirectoryError, PyNotADirectoryError, PyOSError,
-    PyPermissionError, PyValueError,
+    PyFileExistsError, PyFileNotFoundError, PyIndexError, PyIsADirectoryError, PyKeyboardInterrupt,
+    PyNotADirectoryError, PyOSError, PyPermissionError, PyValueError,
 };
 use pyo3::{PyErr, import_exception};
 
@@ -12,6 +12,7 @@ import_exception!(inexact_loops.errors, InvalidTrajectoryError);
 import_exception!(inexact_loops.errors, InvalidParameterError);
 import_exception!(inexact_loops.errors, LoopsIOError);
 import_exception!(inexact_loops.errors, InternalError);
+import_exception!(inexact_loops.errors, OutOfMemoryError);
 
 /// Any error of the Rust layers, on its way to Python. Reader errors are boxed: they carry a
 /// path, a line and the core's error, and errors travel through every `Result` of the bindings.
@@ -83,7 +84,8 @@ impl From<Failure> for PyErr {
     }
 }
 
-/// The Python class of a core error: bad trajectories apart from bad parameters.
+/// The Python class of a core error: bad trajectories apart from bad parameters; memory that
+/// could not be had as `MemoryError`.
 fn core_error(error: &loops_core::Error, message: String) -> PyErr {
     use loops_core::Error as E;
     match error {
@@ -102,6 +104,9 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
         | E::NonUnitVector { .. }
         | E::LatitudeOutOfRange { .. } => InvalidTrajectoryError::new_err(message),
         E::IndexOutOfRange { .. } | E::PoseIndexOutOfRange { .. } => PyIndexError::new_err(message),
+        E::OutOfMemory { .. } => OutOfMemoryError::new_err(message),
+        // Only when Python did not raise first (see `detached`): an interrupt without a signal.
+        E::Interrupted => PyKeyboardInterrupt::new_err(message),
         _ => InvalidParameterError::new_err(message),
     }
 }

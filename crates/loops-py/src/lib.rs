@@ -19,6 +19,7 @@
 mod cli;
 mod convert;
 mod error;
+mod pickling;
 mod py_clusters;
 mod py_detections;
 mod py_fleet;
@@ -32,22 +33,85 @@ mod py_separation;
 mod py_trajectory;
 mod warning;
 
+use std::sync::{Condvar, Mutex, PoisonError};
+use std::time::Duration;
+
 use pyo3::prelude::*;
+
+/// How often the calling thread looks for Python signals (Ctrl-C) while Rust computes.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
 /// Runs `f` without the GIL and turns its error, or a panic, into a Python exception: the one
 /// way bindings call into Rust.
+///
+/// `f` runs on a worker thread under a [`loops_core::Interrupt`] while the calling thread waits
+/// without the GIL and, every 50 ms, lets Python run its signal handlers
+/// (`PyErr_CheckSignals`). When a handler raises (Ctrl-C: `KeyboardInterrupt`), the token is
+/// interrupted, the engine stops at its next check (within a block of rows), and the handler's
+/// exception is raised. A Python metric callable run by `f` takes the GIL from the worker thread.
 pub(crate) fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, error::Failure> + Send) -> PyResult<T> {
-    py.detach(|| {
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).unwrap_or_else(|payload| {
-            let message = payload
-                .downcast_ref::<&str>()
-                .map(|s| (*s).to_owned())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "a panic without a message".to_owned());
-            Err(error::Failure::Panic(message))
-        })
+    let interrupt = loops_core::Interrupt::new();
+    let done = Done::default();
+    std::thread::scope(|scope| {
+        let work = {
+            let (interrupt, done) = (&interrupt, &done);
+            move || {
+                let result = interrupt.run(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)));
+                done.finish();
+                result.unwrap_or_else(|payload| Err(error::Failure::Panic(panic_message(payload.as_ref()))))
+            }
+        };
+        let worker = std::thread::Builder::new()
+            .name("inexact-loops".to_owned())
+            .spawn_scoped(scope, work)
+            .map_err(|e| error::Failure::Panic(format!("could not start a worker thread: {e}")))?;
+        let mut signal = Ok(());
+        while !py.detach(|| done.wait(SIGNAL_POLL)) {
+            if let Err(raised) = py.check_signals() {
+                interrupt.interrupt();
+                signal = Err(raised);
+                break;
+            }
+        }
+        // After an interrupt the engine stops at its next check; its result is dropped.
+        let result = py.detach(|| worker.join());
+        let result = result.unwrap_or_else(|payload| Err(error::Failure::Panic(panic_message(payload.as_ref()))));
+        signal?;
+        result.map_err(PyErr::from)
     })
-    .map_err(PyErr::from)
+}
+
+/// Whether the worker of [`detached`] has finished, and a way to wait for it.
+#[derive(Default)]
+struct Done {
+    finished: Mutex<bool>,
+    changed: Condvar,
+}
+
+impl Done {
+    fn finish(&self) {
+        *self.finished.lock().unwrap_or_else(PoisonError::into_inner) = true;
+        self.changed.notify_all();
+    }
+
+    /// Waits up to `timeout` for the worker; whether it has finished.
+    fn wait(&self, timeout: Duration) -> bool {
+        let finished = self.finished.lock().unwrap_or_else(PoisonError::into_inner);
+        let (finished, _) = self
+            .changed
+            .wait_timeout_while(finished, timeout, |finished| !*finished)
+            .unwrap_or_else(PoisonError::into_inner);
+        *finished
+    }
+}
+
+/// The text of a panic's payload.
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".to_owned())
 }
 
 #[pymodule]

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{float64_column, int64_column, table, to_numpy};
 use crate::detached;
@@ -65,6 +66,30 @@ pub(crate) fn cluster_detections(
 
 #[pymethods]
 impl DetectionClusters {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "DetectionClusters", &*this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::DetectionClusters = crate::pickling::restore(cls.py(), "DetectionClusters", state)?;
+        let detections = Arc::new(value.detections().clone());
+        Ok(Self { inner: Arc::new(value), detections })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[
+            self.inner.len() as u64,
+            self.inner.epsilon_s().to_bits(),
+            self.inner.detections().len() as u64,
+        ])
+    }
+
     /// Number of clusters.
     fn __len__(&self) -> usize {
         self.inner.len()

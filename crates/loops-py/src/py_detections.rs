@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{data_frame, index_column, real_column, to_numpy};
 use crate::detached;
@@ -134,6 +135,25 @@ fn with_scores(
 
 #[pymethods]
 impl Detections {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "Detections", &*this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::Detections = crate::pickling::restore(cls.py(), "Detections", state)?;
+        Ok(Self { inner: Arc::new(value) })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.inner.len() as u64, self.inner.t_s()[0].to_bits()])
+    }
+
     #[new]
     #[pyo3(signature = (t, t_prime, scores=None))]
     fn new(
@@ -286,7 +306,8 @@ impl Detections {
 ///
 /// Raises:
 ///     InvalidParameterError: rate and budget both or neither, a rate outside (0, 1], a
-///         budget of 0 or above the pairs available, an empty draw.
+///         budget of 0 or above the pairs available, an empty draw, more than 5,000,000
+///         detections (refused before anything is drawn).
 ///
 /// Example:
 ///     >>> import inexact_loops as il

@@ -6,9 +6,11 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{
     bool_column, float64_column, id_column, index_column, int64_column, pose_index, str_column, table, to_numpy,
+    try_column,
 };
 use crate::detached;
 use crate::error::{Failure, value_error};
@@ -47,6 +49,8 @@ use loops_core::{LabelledRun, PairVerdict, Scale, Selection, Side, Timeline};
 ///     InvalidParameterError: gamma not positive and finite, unknown metric, a metric that does
 ///         not fit the trajectory's manifold (e.g. ``"euclidean"`` on :meth:`Trajectory.se3`
 ///         poses; the message names both), a negative separation, threads = 0.
+///     OutOfMemoryError: the answer does not fit in memory (a ``MemoryError``; the message
+///         names the size it needs). Ctrl-C raises ``KeyboardInterrupt`` within a row.
 ///
 /// Warns:
 ///     DiagonalBrokenWarning: consecutive poses farther apart than gamma (a data gap, or gamma
@@ -168,6 +172,29 @@ fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
 
 #[pymethods]
 impl Loops {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "Loops", &*this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::Loops = crate::pickling::restore(cls.py(), "Loops", state)?;
+        Ok(Self { inner: Arc::new(value) })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[
+            self.inner.len() as u64,
+            self.inner.gamma().to_bits(),
+            self.inner.sublevel_set().runs().len() as u64,
+        ])
+    }
+
     fn __len__(&self) -> usize {
         self.inner.len()
     }
@@ -279,14 +306,17 @@ impl Loops {
     ///     >>> {name: column.tolist() for name, column in runs.items()}
     ///     {'row': [0, 0, 1, 2, 3], 'start': [0, 3, 1, 2, 3], 'end': [0, 3, 2, 2, 3], 'component': [0, 1, 2, 2, 3]}
     fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let runs: Vec<LabelledRun> = self.inner.runs().collect();
+        let len = self.inner.sublevel_set().runs().len();
+        let column = |value: fn(LabelledRun) -> usize| {
+            try_column(py, len, self.inner.runs().map(|run| value(run) as i64), "the runs table").map(Bound::into_any)
+        };
         table(
             py,
             [
-                ("row", int64_column(py, &runs, |run| run.row)),
-                ("start", int64_column(py, &runs, |run| run.start)),
-                ("end", int64_column(py, &runs, |run| run.end)),
-                ("component", int64_column(py, &runs, |run| run.component)),
+                ("row", column(|run| run.row)?),
+                ("start", column(|run| run.start)?),
+                ("end", column(|run| run.end)?),
+                ("component", column(|run| run.component)?),
             ],
         )
     }
@@ -724,6 +754,25 @@ pub(crate) struct PlaneGrid {
 
 #[pymethods]
 impl PlaneGrid {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "PlaneGrid", &*this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::PlaneGrid = crate::pickling::restore(cls.py(), "PlaneGrid", state)?;
+        Ok(Self { inner: Arc::new(value) })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.inner.poses() as u64, self.inner.width() as u64, self.inner.height() as u64])
+    }
+
     #[new]
     #[pyo3(signature = (trajectory_or_loops, max_pixels, *, window_s=None))]
     fn new(
@@ -798,7 +847,7 @@ pub(crate) fn label_image<'py>(
 ) -> PyResult<Bound<'py, PyArray2<i64>>> {
     let (loops, plane) = (Arc::clone(loops), Arc::clone(&grid.inner));
     let labels = detached(py, move || Ok(loops.label_image(&plane)?))?;
-    to_numpy(py, labels.into_iter().map(|c| c.map_or(-1, i64::from)).collect())
+    try_column(py, labels.len(), labels.into_iter().map(|c| c.map_or(-1, i64::from)), "the label image")?
         .reshape([grid.inner.height(), grid.inner.width()])
 }
 

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{bool_column, float64_column, id_column, int64_column, table, to_numpy};
 use crate::detached;
@@ -71,6 +72,25 @@ pub(crate) fn sample_quality(
 
 #[pymethods]
 impl SampleQuality {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "SampleQuality", &this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::SampleQuality = crate::pickling::restore(cls.py(), "SampleQuality", state)?;
+        Ok(Self { inner: value })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.inner.samples as u64, self.inner.covered as u64, self.inner.components as u64])
+    }
+
     fn __repr__(&self) -> String {
         let q = &self.inner;
         let optional = |v: Option<f64>| v.map_or("None".to_owned(), |v| format!("{v:.3}"));

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use numpy::PyArray1;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{data_frame, id_column, optional_column, to_numpy};
 use crate::detached;
@@ -115,7 +116,10 @@ pub(crate) fn baseline_params(
 /// Raises:
 ///     InvalidParameterError: an unknown sampler (the message lists the names), a baseline on
 ///         clusters, rate and budget both or neither, a budget of 0, a rate out of range, a
-///         trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline.
+///         trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline; a
+///         budget or rate that makes more than 5,000,000 samples (the message says how many
+///         and how much memory they would take), refused before anything is drawn.
+///     OutOfMemoryError: the samples do not fit in memory.
 ///     TypeError: ``Loops`` without ``trajectory``.
 ///
 /// Warns:
@@ -210,6 +214,25 @@ pub(crate) fn sample(
 
 #[pymethods]
 impl Samples {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "Samples", &*this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::Samples = crate::pickling::restore(cls.py(), "Samples", state)?;
+        Ok(Self { inner: Arc::new(value) })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.inner.len() as u64, self.inner.available()])
+    }
+
     fn __len__(&self) -> usize {
         self.inner.len()
     }

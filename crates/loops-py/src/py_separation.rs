@@ -4,6 +4,7 @@
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
+use pyo3::types::{PyBytes, PyType};
 
 use crate::error::Failure;
 
@@ -33,6 +34,18 @@ pub(crate) struct Separation {
 
 #[pymethods]
 impl Separation {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(slf.as_any(), "Separation", &this.inner)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: loops_core::Separation = crate::pickling::restore(cls.py(), "Separation", state)?;
+        value.check().map_err(Failure::from)?;
+        Ok(Self { inner: value })
+    }
+
     #[new]
     #[pyo3(signature = (*, path=0.0, time_s=0.0))]
     fn new(path: f64, time_s: f64) -> PyResult<Self> {

@@ -6,6 +6,7 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
 use pyo3::types::{PyList, PyTuple};
 
 use crate::convert::{check_rows_equal_length, real_column, timestamps_and_points, timestamps_and_rows, to_numpy};
@@ -69,6 +70,43 @@ impl Trajectory {
 
 #[pymethods]
 impl Trajectory {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        crate::pickling::reduce(
+            slf.as_any(),
+            "Trajectory",
+            &(&*this.inner, this.plane_axes, this.metric.map(|m| m.to_string())),
+        )
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let value: (loops_core::Trajectory, Option<(usize, usize)>, Option<String>) =
+            crate::pickling::restore(cls.py(), "Trajectory", state)?;
+        let (inner, plane_axes, metric) = value;
+        let metric = match metric {
+            None => None,
+            Some(text) => {
+                let spec: loops_core::MetricSpec = text.parse().map_err(Failure::from)?;
+                spec.validate(&inner).map_err(Failure::from)?;
+                Some(spec)
+            }
+        };
+        Ok(Self { inner: Arc::new(inner), plane_axes, metric })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner && self.plane_axes == other.plane_axes && self.metric == other.metric
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[
+            self.inner.len() as u64,
+            self.inner.dim() as u64,
+            self.inner.timestamps_s()[0].to_bits(),
+        ])
+    }
+
     #[new]
     fn new(py: Python<'_>, timestamps: &Bound<'_, PyAny>, positions: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, coords, dim) = timestamps_and_points(py, timestamps, positions, "positions")?;

