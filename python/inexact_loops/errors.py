@@ -58,9 +58,9 @@ class OutOfMemoryError(LoopsError, MemoryError):
     """The answer does not fit in memory (or under a limit such as ``ulimit -v``).
 
     Raised instead of letting the process abort: the message names what the memory was for and
-    the size that could not be allocated (``out of memory: the runs of S_gamma need 3.1 GiB
-    ...``). The interpreter and its data are untouched; a smaller gamma, a separation, fewer
-    poses, a smaller budget or image needs less.
+    the size that could not be allocated (``out of memory: 3.1 GiB (3328599040 bytes) for the
+    runs of S_gamma could not be allocated; ...``). The interpreter and its data are untouched;
+    a smaller gamma, a separation, fewer poses, a smaller budget or image needs less.
     """
 
 

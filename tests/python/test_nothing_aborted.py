@@ -130,6 +130,14 @@ try:
 except il.OutOfMemoryError as error:
     assert isinstance(error, MemoryError) and isinstance(error, il.LoopsError)
     print("raised:", error)
+# Images too: 10^5 x 10^5 pixels.
+grid = il.PlaneGrid(traj, 100_000)
+line = il.find_loops(il.Trajectory(t, t), gamma=0.4, separation=None)  # no revisit: cheap
+for image in (lambda: il.distance_image(traj, grid), lambda: line.label_image(grid)):
+    try:
+        image()
+    except il.OutOfMemoryError as error:
+        print("image:", error)
 # The interpreter goes on: a small answer still computes.
 small = il.find_loops(il.Trajectory(t[:1000], x[:1000]), gamma=0.4, separation=None)
 print("after:", len(small.components))
@@ -137,9 +145,12 @@ print("after:", len(small.components))
     )
     assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
-    assert lines[0].startswith("raised: out of memory: the "), lines
-    assert " need " in lines[0] and "bytes), more than could be allocated" in lines[0], lines
-    assert lines[1].startswith("after: "), lines
+    assert lines[0].startswith("raised: out of memory: "), lines
+    assert "bytes) for the runs of S_gamma could not be allocated" in lines[0], lines
+    image = "image: out of memory: 74.5 GiB (80000000000 bytes) for the distance image could"
+    assert lines[1].startswith(image), lines
+    assert lines[2].startswith("image: out of memory: "), lines
+    assert lines[3].startswith("after: "), lines
 
 
 def test_the_command_line_exits_2_with_one_line_when_memory_runs_out(tmp_path: Path):
@@ -164,10 +175,8 @@ sys.exit(main())
     )
     assert done.returncode == 2, (done.returncode, done.stderr[-2000:])
     assert done.stderr.count("\n") == 1, done.stderr
-    assert (
-        "out of memory: the " in done.stderr
-        and "bytes), more than could be allocated" in done.stderr
-    )
+    assert "out of memory: " in done.stderr
+    assert "bytes) for the runs of S_gamma could not be allocated" in done.stderr
 
 
 # --- item 18: Ctrl-C during a long computation -----------------------------------------------

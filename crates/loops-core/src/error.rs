@@ -353,8 +353,8 @@ pub enum Error {
     /// for `what` (the answer is too big for this machine, or for a limit such as `ulimit -v`).
     /// Nothing is left half-built; the inputs are untouched.
     #[error(
-        "out of memory: {what} need {} ({bytes} bytes), more than could be allocated; a smaller answer \
-         (a smaller gamma, a separation, fewer poses, a smaller budget or image) needs less",
+        "out of memory: {} ({bytes} bytes) for {what} could not be allocated; a smaller answer (a \
+         smaller gamma, a separation, fewer poses, a smaller budget or image) needs less",
         size_text(*bytes)
     )]
     OutOfMemory {

@@ -87,7 +87,8 @@ mod tests {
         // Half the address space: refused by the allocator without touching memory.
         let error = try_with_capacity::<u64>(usize::MAX / 16, "the test buffer").unwrap_err();
         assert_eq!(error, Error::OutOfMemory { what: "the test buffer", bytes: (usize::MAX / 16 * 8) as u64 });
-        assert!(error.to_string().starts_with("out of memory: the test buffer need "), "{error}");
+        assert!(error.to_string().starts_with("out of memory: 8.0 EiB ("), "{error}");
+        assert!(error.to_string().contains(" bytes) for the test buffer could not be allocated;"), "{error}");
         let mut vec = vec![1_u8];
         assert!(try_reserve(&mut vec, usize::MAX, "more").is_err());
         assert_eq!(vec, [1]);
