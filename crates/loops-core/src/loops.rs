@@ -93,7 +93,6 @@ pub struct Loops {
     separation: Separation,
     metric: String,
     timestamps_s: Vec<f64>,
-    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     cell_widths_s: Vec<f64>,
     set: SublevelSet,
     labels: Vec<u32>,
@@ -462,7 +461,7 @@ impl Loops {
     }
 }
 
-/// What a serialised [`Loops`] holds (the time cells are derived again).
+/// What a serialised [`Loops`] holds.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
 struct LoopsState {
@@ -470,6 +469,7 @@ struct LoopsState {
     separation: Separation,
     metric: String,
     timestamps_s: Vec<f64>,
+    cell_widths_s: Vec<f64>,
     set: SublevelSet,
     labels: Vec<u32>,
     components: Vec<LoopComponent>,
@@ -480,7 +480,7 @@ struct LoopsState {
 impl TryFrom<LoopsState> for Loops {
     type Error = Error;
 
-    /// Checks the timestamps (as a trajectory's), the sublevel set, and that every run's label
+    /// Checks the timestamps (as a trajectory's) and time cells, the sublevel set, and that every run's label
     /// names a component and every component's indices are pose indices.
     fn try_from(state: LoopsState) -> Result<Self> {
         let invalid = |reason: String| Error::InvalidState { what: "Loops", reason };
@@ -511,8 +511,9 @@ impl TryFrom<LoopsState> for Loops {
                 )));
             }
         }
-        let cell_widths_s = crate::trajectory::cell_widths(&state.timestamps_s);
-        let LoopsState { gamma, separation, metric, timestamps_s, set, labels, components, warnings } = state;
+        let LoopsState { gamma, separation, metric, timestamps_s, cell_widths_s, set, labels, components, warnings } =
+            state;
+        let cell_widths_s = crate::trajectory::checked_cell_widths("Loops", cell_widths_s, n)?;
         Ok(Self { gamma, separation, metric, timestamps_s, cell_widths_s, set, labels, components, warnings })
     }
 }

@@ -29,7 +29,6 @@ pub struct Trajectory {
     timestamps_s: Vec<f64>,
     coords: Vec<f64>,
     dim: usize,
-    #[cfg_attr(feature = "serde", serde(skip_serializing))]
     cell_widths_s: Vec<f64>,
     manifold: Manifold,
 }
@@ -443,7 +442,7 @@ pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> V
 
 /// Widths `(t_{i+1} − t_{i−1}) / 2` (half cells at the ends), from differences of neighbouring
 /// timestamps, which are exact even on an epoch clock (differences of midpoints are not).
-pub(crate) fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
+fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
     let n = timestamps_s.len();
     (0..n)
         .map(|i| {
@@ -454,13 +453,15 @@ pub(crate) fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// What a serialised [`Trajectory`] holds (the time cells are derived again).
+/// What a serialised [`Trajectory`] holds. The time cells are kept, not derived again: a
+/// fleet's joint trajectory has half cells at every session's ends.
 #[cfg(feature = "serde")]
 #[derive(serde::Deserialize)]
 struct TrajectoryState {
     timestamps_s: Vec<f64>,
     coords: Vec<f64>,
     dim: usize,
+    cell_widths_s: Vec<f64>,
     manifold: Manifold,
 }
 
@@ -469,12 +470,24 @@ impl TryFrom<TrajectoryState> for Trajectory {
     type Error = Error;
 
     /// Validated as [`Trajectory::new`] and, for a manifold, as its default metric validates
-    /// its points (unit quaternions, latitudes, ...).
+    /// its points (unit quaternions, latitudes, ...); one finite time cell of at least 0 s a pose.
     fn try_from(state: TrajectoryState) -> Result<Self> {
-        let traj = Self::new(state.timestamps_s, state.coords, state.dim)?.on(state.manifold);
+        let mut traj = Self::new(state.timestamps_s, state.coords, state.dim)?.on(state.manifold);
         traj.default_metric().validate(&traj)?;
+        traj.cell_widths_s = checked_cell_widths("Trajectory", state.cell_widths_s, traj.len())?;
         Ok(traj)
     }
+}
+
+/// Time cells read from a saved `what`: one a pose, each finite and at least 0 s.
+#[cfg(feature = "serde")]
+pub(crate) fn checked_cell_widths(what: &'static str, widths: Vec<f64>, poses: usize) -> Result<Vec<f64>> {
+    let bad = widths.iter().position(|w| !(w.is_finite() && *w >= 0.0));
+    if widths.len() != poses || bad.is_some() {
+        let reason = format!("{} time cells for {poses} poses (first bad one: {bad:?})", widths.len());
+        return Err(Error::InvalidState { what, reason });
+    }
+    Ok(widths)
 }
 
 #[cfg(test)]

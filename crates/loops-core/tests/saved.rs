@@ -62,6 +62,13 @@ fn every_result_reads_back_equal() {
     let quality: SampleQuality = sample_quality(&samples, &loops, 30.0).unwrap();
     round_trip(&quality);
     round_trip(&PlaneGrid::new(&traj, None, 64).unwrap());
+    // A fleet: the joint trajectory's time cells end at every session, and its S_gamma breaks.
+    let later = UrbanDrive { duration_s: 300.0, seed: 5, ..UrbanDrive::default() }.generate().unwrap();
+    let fleet = loops_core::Fleet::new(vec![("a".into(), traj), ("b".into(), later.trajectory)]).unwrap();
+    let fleet_loops =
+        loops_core::find_fleet_loops(&fleet, &Euclidean, 40.0, &loops_core::FleetOptions::default()).unwrap();
+    round_trip(fleet.joint());
+    round_trip(fleet_loops.loops());
 }
 
 #[test]
