@@ -1,30 +1,46 @@
 //! Walking the records of an MCAP file: schemas, channels and messages, at the top level and in
-//! chunks, each with its byte offset.
+//! chunks, each with its byte offset; and the checks that nothing was lost on the way.
 //!
-//! The top level is walked by hand, next to the `mcap` crate, for three reasons:
-//! - every error names the byte offset of the record at fault and what is wrong with it (`the
-//!   chunk record is 4096 bytes long, but the file has 100 bytes left: it is truncated`), and a
-//!   message's offset is kept for the errors the core raises later (duplicate timestamps at a
-//!   message); the crate's readers report `UnexpectedEof` or a parse error without the offset;
-//! - records not needed (attachments, metadata, message indexes, the summary section) are
-//!   skipped by seeking, never read: the crate's sans-I/O `LinearReader` has no skip and
-//!   buffers each record whole before handing it over, and `MessageStream` / `Summary` want
-//!   the whole file in memory or mapped;
-//! - memory stays bounded: a chunk is read once, its buffers bounded by its declared size (and
-//!   1 GiB), so a corrupt length cannot make the reader allocate without limit.
+//! The file is read from the start to the closing magic, by hand, every record parsed by the
+//! small parsers below. Why not the `mcap` crate's readers:
+//! - every error names the byte offset of the record at fault and what is wrong with it, in one
+//!   line (`the chunk record is 4096 bytes long, but the file has 100 bytes left: it is
+//!   truncated`); the crate's errors carry no offset, and its parse errors (binrw) print a
+//!   colored multi-line backtrace with the crate's source paths;
+//! - every length field is checked against the bytes its record has left before anything is
+//!   read or allocated: the crate's record parser allocates what a string's length declares
+//!   (a schema name "of 4 GiB" in a 101-byte file);
+//! - memory stays bounded whatever the file declares: a chunk is decompressed as a stream and
+//!   its records read one at a time from the decompressor, the messages of topics not decoded
+//!   are skipped without being held, and a record that is kept is at most
+//!   [`MAX_MESSAGE_BYTES`] (messages) or [`MAX_STRING_BYTES`] (names). The crate's
+//!   `LinearReader` holds each record whole (up to its length limit).
 //!
-//! The records themselves are parsed by the crate (`mcap::parse_record`), and the contents of a
-//! chunk (decompression with zstd or lz4, CRC, the records inside) go through the crate's
-//! `LinearReader`, one chunk at a time.
+//! What is checked, beyond each record's structure:
+//! - a chunk decompresses to exactly its declared `uncompressed_size`, at most
+//!   [`MAX_CHUNK_BYTES`], and to its declared CRC (0: not computed);
+//! - the data section's CRC (in the data end record) and the summary section's (in the footer),
+//!   where the writer computed them;
+//! - the closing magic, and no byte after it;
+//! - a record of an unknown opcode is skipped (the format reserves opcodes for extensions),
+//!   unless its bytes are a chunk's (a chunk whose opcode byte is corrupt), which is an error;
+//!   inside a chunk, which holds only schema, channel and message records, any other record is
+//!   an error;
+//! - nothing lost against the file's own indexes: the message index records after a chunk
+//!   count its messages per channel; the summary's chunk indexes list the chunks; its
+//!   statistics record counts the chunks and the messages of each channel. A count that the
+//!   walk does not meet is an error naming the offset and how many messages are missing.
+//!
+//! The same visitor takes the records of the bag walkers (rosbag2 sqlite3, ROS 1).
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::{self, BufReader, Read};
 use std::path::Path;
 
-use mcap::records::{Record, op};
-use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
+use mcap::records::op;
 
+use crate::compression::MAX_MESSAGE_BYTES;
 use crate::error::{IoError, Result};
 
 /// A channel's identity across files: topics with the same name, schema and encodings are one.
@@ -47,7 +63,6 @@ pub(crate) struct At {
 /// A message record's header.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct MessageHeader {
-    pub(crate) channel_id: u16,
     pub(crate) log_time: u64,
     pub(crate) publish_time: u64,
 }
@@ -88,23 +103,24 @@ fn record_name(opcode: u8) -> &'static str {
     }
 }
 
-/// An `mcap` error with its causes, for a message.
-fn describe(error: &mcap::McapError) -> String {
-    let mut text = error.to_string();
-    let mut source = std::error::Error::source(error);
-    while let Some(cause) = source {
-        text += &format!(": {cause}");
-        source = cause.source();
-    }
-    text
-}
+/// Largest chunk, decompressed: 4 GiB. Chunks are decompressed as a stream, so memory does not
+/// grow with this size (only the time to decompress does); writers make chunks of about 1 MiB,
+/// larger only to hold one large message. A chunk declaring more is refused before any of it
+/// is decompressed, and no chunk decompresses past what it declares.
+pub(crate) const MAX_CHUNK_BYTES: u64 = 4 << 30;
 
-/// Largest record in a chunk, and largest buffer for one: bounds what a corrupt length can make
-/// the reader allocate.
-const MAX_CHUNK_BUFFER: u64 = 1 << 30;
+/// Largest string read (a schema name or encoding, a topic, a compression name): 1 MiB.
+pub(crate) const MAX_STRING_BYTES: u64 = 1 << 20;
 
 /// The bytes between records: opcode and length.
 const RECORD_HEADER: u64 = 9;
+
+/// The fixed fields of a chunk header before its compression string: start and end times,
+/// uncompressed size, CRC, the compression string's length.
+const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
+
+/// The unknown records remembered, to name them when an index points at one.
+const MAX_UNKNOWN_KEPT: usize = 4096;
 
 /// The file at `path` opened for a record walk (MCAP or ROS 1 bag): a buffered reader and the
 /// file's length in bytes, which bounds every record length read from it.
@@ -118,8 +134,175 @@ pub(crate) fn open_records(path: &Path) -> Result<(BufReader<File>, u64)> {
 /// Walks the records of the MCAP file at `path`, reporting channels and messages to `visitor`.
 pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
     let (reader, len) = open_records(path)?;
-    let mut walker = Walker { path, reader, len, schemas: HashMap::new(), channels: HashMap::new(), body: Vec::new() };
+    let source = Source { reader, pos: 0, crc: crc32fast::Hasher::new(), summary_crc: None };
+    let mut walker = Walker { path, source, len, state: State::default() };
     walker.run(visitor)
+}
+
+/// The file, read forward, with the CRCs of what was read: of everything from the start (the
+/// data section's CRC), and from the end of the data end record (the summary section's).
+#[derive(Debug)]
+struct Source {
+    reader: BufReader<File>,
+    /// Bytes read so far: the offset of the next byte.
+    pos: u64,
+    crc: crc32fast::Hasher,
+    summary_crc: Option<crc32fast::Hasher>,
+}
+
+impl Read for Source {
+    fn read(&mut self, buffer: &mut [u8]) -> io::Result<usize> {
+        let n = self.reader.read(buffer)?;
+        self.crc.update(&buffer[..n]);
+        if let Some(summary) = &mut self.summary_crc {
+            summary.update(&buffer[..n]);
+        }
+        self.pos += n as u64;
+        Ok(n)
+    }
+}
+
+/// Reads `n` bytes of `reader` and drops them; fails if it ends before.
+fn skip(reader: &mut impl Read, n: u64) -> io::Result<()> {
+    let copied = io::copy(&mut reader.take(n), &mut io::sink())?;
+    if copied < n {
+        return Err(io::Error::new(io::ErrorKind::UnexpectedEof, format!("{copied} of {n} bytes")));
+    }
+    Ok(())
+}
+
+/// What a record parser says is wrong, as the end of a message.
+type Fault = String;
+
+/// How an I/O error reading the bytes of a record reads in a message.
+#[derive(Debug, Clone, Copy)]
+enum Context {
+    /// The file itself: the record's length was checked against the file's, so only the
+    /// operating system can fail.
+    File,
+    /// A chunk's decompressed records.
+    Chunk { compression: &'static str },
+}
+
+impl Context {
+    fn describe(self, error: &io::Error) -> Fault {
+        match self {
+            Context::File => format!("cannot read the file: {}", one_line(error)),
+            Context::Chunk { compression: "" } => format!("the chunk's records cannot be read: {}", one_line(error)),
+            Context::Chunk { compression } if error.kind() == io::ErrorKind::UnexpectedEof => {
+                format!("the {compression} chunk's data ends before its records do: the chunk is corrupt")
+            }
+            Context::Chunk { compression } => {
+                format!("the {compression} chunk does not decompress: {}", one_line(error))
+            }
+        }
+    }
+}
+
+/// An error's message on one line (a codec's message could hold line breaks).
+fn one_line(error: &dyn std::fmt::Display) -> String {
+    error.to_string().split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The fields of one record, read in order from a stream, never past the record's end: every
+/// length a field declares is checked against the bytes the record has left before anything is
+/// read or allocated.
+struct Fields<'r, R> {
+    reader: &'r mut R,
+    /// Bytes of the record not read yet.
+    left: u64,
+    /// The record's kind, for messages (`schema`).
+    record: &'static str,
+    context: Context,
+}
+
+impl<'r, R: Read> Fields<'r, R> {
+    fn new(reader: &'r mut R, len: u64, opcode: u8, context: Context) -> Self {
+        Self { reader, left: len, record: record_name(opcode), context }
+    }
+
+    fn array<const N: usize>(&mut self, what: &str) -> std::result::Result<[u8; N], Fault> {
+        if self.left < N as u64 {
+            return Err(format!(
+                "the {} record is too short: it ends in the middle of its {what} ({} bytes left, {N} needed)",
+                self.record, self.left
+            ));
+        }
+        let mut bytes = [0u8; N];
+        self.reader.read_exact(&mut bytes).map_err(|e| self.context.describe(&e))?;
+        self.left -= N as u64;
+        Ok(bytes)
+    }
+
+    fn u16(&mut self, what: &str) -> std::result::Result<u16, Fault> {
+        self.array(what).map(u16::from_le_bytes)
+    }
+
+    fn u32(&mut self, what: &str) -> std::result::Result<u32, Fault> {
+        self.array(what).map(u32::from_le_bytes)
+    }
+
+    fn u64(&mut self, what: &str) -> std::result::Result<u64, Fault> {
+        self.array(what).map(u64::from_le_bytes)
+    }
+
+    /// A length that `what` declares, checked against what the record has left.
+    fn check_length(&self, len: u64, what: &str) -> std::result::Result<u64, Fault> {
+        if len > self.left {
+            return Err(format!(
+                "its {what} is declared {len} bytes long, but the {} record has {} bytes left",
+                self.record, self.left
+            ));
+        }
+        Ok(len)
+    }
+
+    /// A `u32`-length-prefixed UTF-8 string of at most [`MAX_STRING_BYTES`].
+    fn string(&mut self, what: &str) -> std::result::Result<String, Fault> {
+        let len = self.u32(&format!("{what}'s length"))?;
+        let len = self.check_length(u64::from(len), what)?;
+        if len > MAX_STRING_BYTES {
+            return Err(format!(
+                "its {what} is declared {len} bytes long, over the limit of {} MiB for a name",
+                MAX_STRING_BYTES >> 20
+            ));
+        }
+        let mut bytes = vec![0u8; len as usize];
+        self.reader.read_exact(&mut bytes).map_err(|e| self.context.describe(&e))?;
+        self.left -= len;
+        String::from_utf8(bytes).map_err(|error| {
+            format!("its {what} is not UTF-8 (invalid byte at byte {} of it)", error.utf8_error().valid_up_to())
+        })
+    }
+
+    /// `n` bytes, dropped.
+    fn skip(&mut self, n: u64, what: &str) -> std::result::Result<(), Fault> {
+        let n = self.check_length(n, what)?;
+        skip(self.reader, n).map_err(|e| self.context.describe(&e))?;
+        self.left -= n;
+        Ok(())
+    }
+
+    /// A `u32`-byte-length-prefixed field (a map, an array), dropped.
+    fn skip_prefixed(&mut self, what: &str) -> std::result::Result<(), Fault> {
+        let len = self.u32(&format!("{what}'s length"))?;
+        self.skip(u64::from(len), what)
+    }
+
+    /// The rest of the record, dropped (fields a later version of the format may add).
+    fn skip_rest(&mut self) -> std::result::Result<(), Fault> {
+        let left = self.left;
+        self.skip(left, "rest")
+    }
+
+    /// The rest of the record into `buffer` (cleared first).
+    fn rest_into(&mut self, buffer: &mut Vec<u8>) -> std::result::Result<(), Fault> {
+        buffer.clear();
+        buffer.resize(self.left as usize, 0);
+        self.reader.read_exact(buffer).map_err(|e| self.context.describe(&e))?;
+        self.left = 0;
+        Ok(())
+    }
 }
 
 /// A schema as a channel needs it.
@@ -129,17 +312,66 @@ struct SchemaInfo {
     encoding: String,
 }
 
+/// What the walk has seen so far, in one file.
+#[derive(Debug, Default)]
+struct State {
+    schemas: HashMap<u16, SchemaInfo>,
+    /// MCAP channel id to the visitor's index, and the topic (for messages).
+    channels: HashMap<u16, (usize, String)>,
+    /// Messages read per MCAP channel id, in the whole file.
+    counts: HashMap<u16, u64>,
+    /// Reused buffer for message data.
+    data: Vec<u8>,
+    /// The last chunk walked and the messages read in it per channel, until its message index
+    /// records have been checked.
+    chunk: Option<ChunkCount>,
+    /// The offsets and lengths (whole record) of the chunks walked, in file order.
+    chunks: Vec<(u64, u64)>,
+    /// Offsets and opcodes of the first unknown records of the data section.
+    unknown: Vec<(u64, u8)>,
+    /// The chunks the summary indexes: offset and length, with the offset of the index record.
+    chunk_indexes: Vec<ChunkIndex>,
+    /// The summary's statistics record, and its offset.
+    statistics: Option<(u64, Statistics)>,
+}
+
+/// The messages read in one chunk, per channel, and what its message indexes declare.
+#[derive(Debug)]
+struct ChunkCount {
+    offset: u64,
+    read: HashMap<u16, u64>,
+    /// Per channel: the count its message index record declares, and the record's offset.
+    indexed: HashMap<u16, (u64, u64)>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct ChunkIndex {
+    at: u64,
+    chunk_offset: u64,
+    chunk_length: u64,
+}
+
+#[derive(Debug, Default)]
+struct Statistics {
+    message_count: u64,
+    chunk_count: u32,
+    channel_message_counts: HashMap<u16, u64>,
+}
+
 #[derive(Debug)]
 struct Walker<'p> {
     path: &'p Path,
-    reader: BufReader<File>,
+    source: Source,
     /// The file's length in bytes.
     len: u64,
-    schemas: HashMap<u16, SchemaInfo>,
-    /// MCAP channel id to the visitor's index.
-    channels: HashMap<u16, usize>,
-    /// Reused buffer for record bodies.
-    body: Vec<u8>,
+    state: State,
+}
+
+/// Where the walk is in the file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Section {
+    Data,
+    Summary,
 }
 
 impl Walker<'_> {
@@ -147,13 +379,9 @@ impl Walker<'_> {
         IoError::mcap(self.path, offset, message)
     }
 
-    fn read_error(&self, offset: u64, error: std::io::Error) -> IoError {
-        self.error(offset, format!("cannot read the file: {error}"))
-    }
-
     fn run(&mut self, visitor: &mut impl Visitor) -> Result<()> {
         let mut magic = [0u8; 8];
-        let start = self.reader.read_exact(&mut magic);
+        let start = self.source.read_exact(&mut magic);
         if self.len < 8 || start.is_err() || magic != mcap::MAGIC {
             return Err(self.error(
                 0,
@@ -164,15 +392,17 @@ impl Walker<'_> {
                 ),
             ));
         }
-        let mut pos = 8u64;
-        let mut in_summary = false;
+        let mut section = Section::Data;
         loop {
+            let pos = self.source.pos;
             if self.len - pos < RECORD_HEADER {
                 let what = if pos == self.len { "ends" } else { "ends in the middle of a record header" };
                 return Err(self.error(pos, format!("the file {what} before its footer: it is truncated")));
             }
+            // The data section's CRC covers every byte before the data end record.
+            let crc_before = self.source.crc.clone();
             let mut head = [0u8; 9];
-            self.reader.read_exact(&mut head).map_err(|e| self.read_error(pos, e))?;
+            self.source.read_exact(&mut head).map_err(|e| self.error(pos, Context::File.describe(&e)))?;
             let opcode = head[0];
             let body_len = u64::from_le_bytes(head[1..].try_into().expect("8 bytes"));
             let body_start = pos + RECORD_HEADER;
@@ -186,184 +416,590 @@ impl Walker<'_> {
                     ),
                 ));
             }
-            match opcode {
-                op::FOOTER => return self.finish(body_start, body_len),
-                op::DATA_END => in_summary = true,
-                _ => {}
+            if opcode != op::MESSAGE_INDEX {
+                self.check_chunk_messages()?;
             }
-            match opcode {
-                op::SCHEMA | op::CHANNEL | op::MESSAGE if !in_summary => {
-                    self.read_body(body_start, body_len)?;
-                    let body = std::mem::take(&mut self.body);
-                    let result = self.record(opcode, &body, At { offset: pos, in_chunk: None }, visitor);
-                    self.body = body;
-                    result?;
+            if opcode == op::FOOTER {
+                return self.finish(pos, body_len, section);
+            }
+            let at = At { offset: pos, in_chunk: None };
+            let mut fields = Fields::new(&mut self.source, body_len, opcode, Context::File);
+            let result = match (opcode, section) {
+                (op::DATA_END, Section::Data) => {
+                    let result = data_end(&mut fields, crc_before.finalize());
+                    section = Section::Summary;
+                    result
                 }
-                op::CHUNK if !in_summary => self.chunk(pos, body_len, visitor)?,
-                _ => self.reader.seek_relative(body_len as i64).map_err(|e| self.read_error(pos, e))?,
+                (op::SCHEMA | op::CHANNEL | op::MESSAGE, Section::Data) => {
+                    self.state.record(opcode, &mut fields, at, visitor)
+                }
+                (op::CHUNK, Section::Data) => {
+                    let result = chunk(&mut self.state, &mut fields, pos, visitor);
+                    self.state.chunks.push((pos, RECORD_HEADER + body_len));
+                    result
+                }
+                (op::MESSAGE_INDEX, Section::Data) => {
+                    self.state.message_index(&mut fields, pos).map_err(Failure::Fault)
+                }
+                (op::CHUNK_INDEX, Section::Summary) => self.state.chunk_index(&mut fields, pos).map_err(Failure::Fault),
+                (op::STATISTICS, Section::Summary) => self.state.statistics(&mut fields, pos).map_err(Failure::Fault),
+                (op::HEADER..=op::DATA_END, _) => Ok(()),
+                (_, Section::Data) => self.state.unknown(&mut fields, pos, opcode).map_err(Failure::Fault),
+                (_, Section::Summary) => Ok(()),
+            };
+            let result = result.and_then(|()| fields.skip_rest().map_err(Failure::Fault));
+            match result {
+                Ok(()) => {}
+                Err(Failure::Fault(fault)) => {
+                    return Err(self.error(pos, located(fault, None)));
+                }
+                Err(Failure::Error(error)) => return Err(error),
             }
-            pos = body_start + body_len;
+            if section == Section::Summary && self.source.summary_crc.is_none() {
+                self.source.summary_crc = Some(crc32fast::Hasher::new());
+            }
+            debug_assert_eq!(self.source.pos, body_start + body_len);
         }
     }
 
-    /// After the footer: the closing magic, and nothing after it.
-    fn finish(&mut self, body_start: u64, body_len: u64) -> Result<()> {
-        let magic_at = body_start + body_len;
-        if self.len - magic_at < 8 {
-            return Err(self.error(magic_at, "the file ends before the closing MCAP magic bytes: it is truncated"));
+    /// The message index records after the last chunk, checked against its messages: called at
+    /// the first record that is not a message index.
+    fn check_chunk_messages(&mut self) -> Result<()> {
+        let Some(chunk) = self.state.chunk.take() else { return Ok(()) };
+        if chunk.indexed.is_empty() {
+            // No message index: the writer did not index this chunk.
+            return Ok(());
         }
-        self.reader.seek_relative(body_len as i64).map_err(|e| self.read_error(magic_at, e))?;
-        let mut magic = [0u8; 8];
-        self.reader.read_exact(&mut magic).map_err(|e| self.read_error(magic_at, e))?;
-        if magic != mcap::MAGIC {
-            return Err(self.error(magic_at, "bad magic: the footer is not followed by the MCAP magic bytes"));
+        let mut channels: Vec<u16> = chunk.read.keys().chain(chunk.indexed.keys()).copied().collect();
+        channels.sort_unstable();
+        channels.dedup();
+        for channel in channels {
+            let read = chunk.read.get(&channel).copied().unwrap_or(0);
+            let (declared, index_at) = chunk.indexed.get(&channel).copied().unwrap_or((0, chunk.offset));
+            if read != declared {
+                let lost = if declared > read {
+                    format!(": {} messages lost (a record in the chunk is corrupt)", declared - read)
+                } else {
+                    String::new()
+                };
+                return Err(self.error(
+                    chunk.offset,
+                    format!(
+                        "the chunk holds {read} messages on channel {channel}{}, but its message index (the record \
+                         at offset {index_at}) lists {declared}{lost}",
+                        self.state.topic_of(channel)
+                    ),
+                ));
+            }
         }
         Ok(())
     }
 
-    fn read_body(&mut self, offset: u64, len: u64) -> Result<()> {
-        self.body.clear();
-        self.body.resize(len as usize, 0);
-        let Self { reader, body, .. } = self;
-        reader.read_exact(body).map_err(|e| IoError::mcap(self.path, offset, format!("cannot read the file: {e}")))
+    /// After the footer: its summary CRC, the closing magic, nothing after it, and the counts of
+    /// the summary against what was read.
+    fn finish(&mut self, footer_at: u64, body_len: u64, section: Section) -> Result<()> {
+        let mut fields = Fields::new(&mut self.source, body_len, op::FOOTER, Context::File);
+        let parsed = (|| {
+            let summary_start = fields.u64("summary start")?;
+            let _summary_offset_start = fields.u64("summary offset start")?;
+            // The summary CRC covers the summary up to and including the field before it.
+            let calculated = fields.reader.summary_crc.take().map(crc32fast::Hasher::finalize);
+            let summary_crc = fields.u32("summary CRC")?;
+            fields.skip_rest()?;
+            Ok::<_, Fault>((summary_start, calculated, summary_crc))
+        })();
+        let (summary_start, calculated, summary_crc) = parsed.map_err(|fault| self.error(footer_at, fault))?;
+        if section == Section::Data {
+            return Err(self.error(
+                footer_at,
+                "the footer comes before any data end record, which ends the data section: the file is corrupt",
+            ));
+        }
+        if let Some(calculated) = calculated.filter(|_| summary_crc != 0)
+            && calculated != summary_crc
+        {
+            return Err(self.error(
+                footer_at,
+                format!(
+                    "the summary section is corrupt: its CRC is {calculated:#010x}, but the footer declares \
+                     {summary_crc:#010x} (summary from offset {summary_start})"
+                ),
+            ));
+        }
+        let magic_at = footer_at + RECORD_HEADER + body_len;
+        if self.len - magic_at < 8 {
+            return Err(self.error(magic_at, "the file ends before the closing MCAP magic bytes: it is truncated"));
+        }
+        let mut magic = [0u8; 8];
+        self.source.read_exact(&mut magic).map_err(|e| self.error(magic_at, Context::File.describe(&e)))?;
+        if magic != mcap::MAGIC {
+            return Err(self.error(magic_at, "bad magic: the footer is not followed by the MCAP magic bytes"));
+        }
+        let end = magic_at + 8;
+        if self.len > end {
+            return Err(self.error(
+                end,
+                format!(
+                    "{} bytes follow the closing MCAP magic bytes, which end the file: the file is corrupt (or two \
+                     files joined)",
+                    self.len - end
+                ),
+            ));
+        }
+        self.check_summary()
     }
 
-    /// A schema, channel or message record, at the top level or in a chunk.
-    fn record(&mut self, opcode: u8, body: &[u8], at: At, visitor: &mut impl Visitor) -> Result<()> {
-        let located = |message: String| match at.in_chunk {
-            Some(inner) => format!("in the record at byte {inner} of this chunk: {message}"),
-            None => message,
+    /// The summary's chunk indexes and statistics against what the walk read.
+    fn check_summary(&self) -> Result<()> {
+        let state = &self.state;
+        for index in &state.chunk_indexes {
+            let found = state.chunks.binary_search_by_key(&index.chunk_offset, |chunk| chunk.0);
+            match found {
+                Ok(i) if state.chunks[i].1 == index.chunk_length => {}
+                Ok(i) => {
+                    return Err(self.error(
+                        index.chunk_offset,
+                        format!(
+                            "the chunk here is {} bytes long, but the summary's chunk index (the record at offset {}) \
+                             says {}: the file is corrupt",
+                            state.chunks[i].1, index.at, index.chunk_length
+                        ),
+                    ));
+                }
+                Err(_) => {
+                    let what = match state.unknown.iter().find(|(offset, _)| *offset == index.chunk_offset) {
+                        Some((_, opcode)) => format!(
+                            "the record here has the unknown opcode {opcode:#04x}: the chunk's opcode is corrupt, and \
+                             its messages would be lost"
+                        ),
+                        None => "no chunk record starts here: the file is corrupt".to_owned(),
+                    };
+                    return Err(self.error(
+                        index.chunk_offset,
+                        format!(
+                            "the summary's chunk index (the record at offset {}) lists a chunk of {} bytes here, but \
+                             {what}",
+                            index.at, index.chunk_length
+                        ),
+                    ));
+                }
+            }
+        }
+        let Some((at, statistics)) = &state.statistics else { return Ok(()) };
+        let lost = |declared: u64, read: u64| {
+            if declared > read {
+                format!(": {} messages lost (a record is corrupt)", declared - read)
+            } else {
+                String::new()
+            }
         };
+        let mut channels: Vec<u16> =
+            statistics.channel_message_counts.keys().chain(state.counts.keys()).copied().collect();
+        channels.sort_unstable();
+        channels.dedup();
+        if !statistics.channel_message_counts.is_empty() {
+            for channel in channels {
+                let declared = statistics.channel_message_counts.get(&channel).copied().unwrap_or(0);
+                let read = state.counts.get(&channel).copied().unwrap_or(0);
+                if declared != read {
+                    return Err(self.error(
+                        *at,
+                        format!(
+                            "the summary's statistics record counts {declared} messages on channel {channel}{}, but \
+                             the data section holds {read}{}",
+                            state.topic_of(channel),
+                            lost(declared, read)
+                        ),
+                    ));
+                }
+            }
+        }
+        let read: u64 = state.counts.values().sum();
+        if statistics.message_count != read {
+            return Err(self.error(
+                *at,
+                format!(
+                    "the summary's statistics record counts {} messages, but the data section holds {read}{}",
+                    statistics.message_count,
+                    lost(statistics.message_count, read)
+                ),
+            ));
+        }
+        if u64::from(statistics.chunk_count) != state.chunks.len() as u64 {
+            return Err(self.error(
+                *at,
+                format!(
+                    "the summary's statistics record counts {} chunks, but the data section holds {}",
+                    statistics.chunk_count,
+                    state.chunks.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why a record failed: what is wrong with it (the caller names the record's offset), or an
+/// error already complete (a message the visitor could not decode).
+#[derive(Debug)]
+enum Failure {
+    Fault(Fault),
+    Error(IoError),
+}
+
+impl From<Fault> for Failure {
+    fn from(fault: Fault) -> Self {
+        Failure::Fault(fault)
+    }
+}
+
+/// `fault`, located in a chunk at `inner` when it is in one.
+fn located(fault: Fault, inner: Option<u64>) -> String {
+    match inner {
+        Some(inner) => format!("in the record at byte {inner} of this chunk: {fault}"),
+        None => fault,
+    }
+}
+
+/// A data end record: its CRC of the data section against `calculated` (0: not computed).
+fn data_end(fields: &mut Fields<'_, Source>, calculated: u32) -> std::result::Result<(), Failure> {
+    let declared = fields.u32("data section CRC")?;
+    if declared != 0 && declared != calculated {
+        return Err(Failure::Fault(format!(
+            "the data section is corrupt: its CRC is {calculated:#010x}, but the data end record declares \
+             {declared:#010x}"
+        )));
+    }
+    Ok(())
+}
+
+/// A chunk record at `offset`, its header fields not read yet: its records, decompressed as a
+/// stream and read one at a time.
+fn chunk(
+    state: &mut State,
+    fields: &mut Fields<'_, Source>,
+    offset: u64,
+    visitor: &mut impl Visitor,
+) -> std::result::Result<(), Failure> {
+    let _start = fields.u64("message start time")?;
+    let _end = fields.u64("message end time")?;
+    let uncompressed_size = fields.u64("uncompressed size")?;
+    let crc = fields.u32("uncompressed CRC")?;
+    let compression = fields.string("compression")?;
+    let compressed_size = fields.u64("records' length")?;
+    let compressed_size = fields.check_length(compressed_size, "records")?;
+    let compression: &'static str = match compression.as_str() {
+        "" => "",
+        "zstd" => "zstd",
+        "lz4" => "lz4",
+        other => {
+            return Err(Failure::Fault(format!(
+                "the chunk is compressed with {other:?}, which this reader does not read (it reads zstd, lz4 and \
+                 none)"
+            )));
+        }
+    };
+    if uncompressed_size > MAX_CHUNK_BYTES {
+        return Err(Failure::Fault(format!(
+            "the chunk declares {uncompressed_size} bytes decompressed, over the limit of {} GiB for one chunk",
+            MAX_CHUNK_BYTES >> 30
+        )));
+    }
+    if compression.is_empty() && compressed_size != uncompressed_size {
+        return Err(Failure::Fault(format!(
+            "the uncompressed chunk holds {compressed_size} bytes of records but declares {uncompressed_size}"
+        )));
+    }
+    let context = Context::Chunk { compression };
+    let mut compressed = (&mut *fields.reader).take(compressed_size);
+    let decoder: Box<dyn Read + '_> = match compression {
+        "zstd" => Box::new(
+            zstd::stream::read::Decoder::new(&mut compressed).map_err(|e| Failure::Fault(context.describe(&e)))?,
+        ),
+        "lz4" => Box::new(lz4_flex::frame::FrameDecoder::new(&mut compressed)),
+        _ => Box::new(&mut compressed),
+    };
+    let mut records = Decompressed { inner: decoder, crc: crc32fast::Hasher::new() };
+    state.chunk = Some(ChunkCount { offset, read: HashMap::new(), indexed: HashMap::new() });
+    let mut inner = 0u64;
+    while inner < uncompressed_size {
+        let left = uncompressed_size - inner;
+        if left < RECORD_HEADER {
+            return Err(Failure::Fault(format!(
+                "the chunk's records end in the middle of a record header at byte {inner} of this chunk ({left} \
+                 bytes left of the {uncompressed_size} it declares)"
+            )));
+        }
+        let mut head = [0u8; 9];
+        records.read_exact(&mut head).map_err(|e| located(context.describe(&e), Some(inner)))?;
+        let opcode = head[0];
+        let len = u64::from_le_bytes(head[1..].try_into().expect("8 bytes"));
+        if len > left - RECORD_HEADER {
+            return Err(Failure::Fault(located(
+                format!(
+                    "the {} record is {len} bytes long, but the chunk has {} bytes left of the {uncompressed_size} it \
+                     declares",
+                    record_name(opcode),
+                    left - RECORD_HEADER
+                ),
+                Some(inner),
+            )));
+        }
+        if !matches!(opcode, op::SCHEMA | op::CHANNEL | op::MESSAGE) {
+            return Err(Failure::Fault(located(
+                format!(
+                    "a record of opcode {opcode:#04x} ({}) in a chunk, which holds only schema, channel and message \
+                     records: the chunk is corrupt",
+                    record_name(opcode)
+                ),
+                Some(inner),
+            )));
+        }
+        let at = At { offset, in_chunk: Some(inner) };
+        let mut record = Fields::new(&mut records, len, opcode, context);
+        state
+            .record(opcode, &mut record, at, visitor)
+            .and_then(|()| record.skip_rest().map_err(Failure::Fault))
+            .map_err(|failure| match failure {
+                Failure::Fault(fault) => Failure::Fault(located(fault, Some(inner))),
+                error => error,
+            })?;
+        inner += RECORD_HEADER + len;
+    }
+    // Nothing after the declared size.
+    let mut extra = [0u8; 1];
+    match records.read(&mut extra) {
+        Ok(0) => {}
+        Ok(_) => {
+            return Err(Failure::Fault(format!(
+                "the chunk decompresses to more than the {uncompressed_size} bytes it declares"
+            )));
+        }
+        Err(e) => return Err(Failure::Fault(context.describe(&e))),
+    }
+    let calculated = records.crc.clone().finalize();
+    drop(records);
+    if crc != 0 && calculated != crc {
+        return Err(Failure::Fault(format!(
+            "the chunk is corrupt: the CRC of its records is {calculated:#010x}, but the chunk declares {crc:#010x}"
+        )));
+    }
+    // What the decompressor left of the compressed bytes (padding), then the rest of the record.
+    let padding = compressed.limit();
+    fields.left -= compressed_size - padding;
+    fields.skip(padding, "padding")?;
+    Ok(())
+}
+
+/// A chunk's decompressed records, with their CRC.
+struct Decompressed<R> {
+    inner: R,
+    crc: crc32fast::Hasher,
+}
+
+impl<R: Read> Read for Decompressed<R> {
+    fn read(&mut self, buffer: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buffer)?;
+        self.crc.update(&buffer[..n]);
+        Ok(n)
+    }
+}
+
+impl State {
+    /// The topic of MCAP channel `id`, for messages: ` (/odom)`, or nothing.
+    fn topic_of(&self, id: u16) -> String {
+        match self.channels.get(&id) {
+            Some((_, topic)) => format!(" ({topic})"),
+            None => " (a channel no record defines)".to_owned(),
+        }
+    }
+
+    /// A schema, channel or message record, at the top level or in a chunk, its fields not read
+    /// yet.
+    fn record<R: Read>(
+        &mut self,
+        opcode: u8,
+        fields: &mut Fields<'_, R>,
+        at: At,
+        visitor: &mut impl Visitor,
+    ) -> std::result::Result<(), Failure> {
         match opcode {
             op::MESSAGE => {
-                let Some((head, data)) = body.split_first_chunk::<22>() else {
-                    return Err(self.error(
-                        at.offset,
-                        located(format!(
-                            "the message record is {} bytes long, shorter than its 22-byte header",
-                            body.len()
-                        )),
-                    ));
+                let channel_id = fields.u16("channel id")?;
+                let _sequence = fields.u32("sequence")?;
+                let log_time = fields.u64("log time")?;
+                let publish_time = fields.u64("publish time")?;
+                let header = MessageHeader { log_time, publish_time };
+                let Some(&(channel, _)) = self.channels.get(&channel_id) else {
+                    return Err(Failure::Fault(format!(
+                        "a message on channel {channel_id}, which no earlier channel record defines"
+                    )));
                 };
-                let header = MessageHeader {
-                    channel_id: u16::from_le_bytes([head[0], head[1]]),
-                    log_time: u64::from_le_bytes(head[6..14].try_into().expect("8 bytes")),
-                    publish_time: u64::from_le_bytes(head[14..22].try_into().expect("8 bytes")),
-                };
-                let Some(&channel) = self.channels.get(&header.channel_id) else {
-                    return Err(self.error(
-                        at.offset,
-                        located(format!(
-                            "a message on channel {}, which no earlier channel record defines",
-                            header.channel_id
-                        )),
-                    ));
-                };
-                visitor.message(channel, header, data, at)
+                *self.counts.entry(channel_id).or_default() += 1;
+                if let Some(chunk) = &mut self.chunk
+                    && at.in_chunk.is_some()
+                {
+                    *chunk.read.entry(channel_id).or_default() += 1;
+                }
+                let mut data = std::mem::take(&mut self.data);
+                data.clear();
+                if visitor.decodes(channel) {
+                    if fields.left > MAX_MESSAGE_BYTES {
+                        return Err(Failure::Fault(format!(
+                            "the message on channel {channel_id} is {} bytes long, over the limit of {} MiB for a \
+                             pose message",
+                            fields.left,
+                            MAX_MESSAGE_BYTES >> 20
+                        )));
+                    }
+                    fields.rest_into(&mut data)?;
+                } else {
+                    fields.skip_rest()?;
+                }
+                let result = visitor.message(channel, header, &data, at);
+                self.data = data;
+                result.map_err(Failure::Error)
             }
             op::SCHEMA => {
-                match mcap::parse_record(opcode, body) {
-                    Ok(Record::Schema { header, .. }) => {
-                        self.schemas
-                            .entry(header.id)
-                            .or_insert(SchemaInfo { name: header.name, encoding: header.encoding });
-                        Ok(())
-                    }
-                    Ok(_) => unreachable!("a schema opcode parses as a schema"),
-                    Err(error) => Err(self
-                        .error(at.offset, located(format!("the schema record does not parse: {}", describe(&error))))),
-                }
+                let id = fields.u16("id")?;
+                let name = fields.string("name")?;
+                let encoding = fields.string("encoding")?;
+                fields.skip_prefixed("data")?;
+                self.schemas.entry(id).or_insert(SchemaInfo { name, encoding });
+                Ok(())
             }
             op::CHANNEL => {
-                match mcap::parse_record(opcode, body) {
-                    Ok(Record::Channel(channel)) => {
-                        if self.channels.contains_key(&channel.id) {
-                            return Ok(());
-                        }
-                        let schema = match channel.schema_id {
-                            0 => SchemaInfo { name: String::new(), encoding: String::new() },
-                            id => match self.schemas.get(&id) {
-                                Some(schema) => schema.clone(),
-                                None => {
-                                    return Err(self.error(
-                                    at.offset,
-                                    located(format!(
-                                        "channel {} ({:?}) refers to schema {id}, which no earlier schema record defines",
-                                        channel.id, channel.topic
-                                    )),
-                                ));
-                                }
-                            },
-                        };
-                        let key = ChannelKey {
-                            topic: channel.topic,
-                            schema_name: schema.name,
-                            schema_encoding: schema.encoding,
-                            message_encoding: channel.message_encoding,
-                        };
-                        let index = visitor.channel(key, at);
-                        self.channels.insert(channel.id, index);
-                        Ok(())
-                    }
-                    Ok(_) => unreachable!("a channel opcode parses as a channel"),
-                    Err(error) => Err(self
-                        .error(at.offset, located(format!("the channel record does not parse: {}", describe(&error))))),
+                let id = fields.u16("id")?;
+                let schema_id = fields.u16("schema id")?;
+                let topic = fields.string("topic")?;
+                let message_encoding = fields.string("message encoding")?;
+                fields.skip_prefixed("metadata")?;
+                if self.channels.contains_key(&id) {
+                    return Ok(());
                 }
+                let schema = match schema_id {
+                    0 => SchemaInfo { name: String::new(), encoding: String::new() },
+                    schema_id => match self.schemas.get(&schema_id) {
+                        Some(schema) => schema.clone(),
+                        None => {
+                            return Err(Failure::Fault(format!(
+                                "channel {id} ({topic:?}) refers to schema {schema_id}, which no earlier schema \
+                                 record defines"
+                            )));
+                        }
+                    },
+                };
+                let key = ChannelKey {
+                    topic: topic.clone(),
+                    schema_name: schema.name,
+                    schema_encoding: schema.encoding,
+                    message_encoding,
+                };
+                let index = visitor.channel(key, at);
+                self.channels.insert(id, (index, topic));
+                Ok(())
             }
             _ => Ok(()),
         }
     }
 
-    /// A chunk record at `offset`: decompressed (and its CRC checked) by the `mcap` crate's
-    /// reader, one record at a time.
-    fn chunk(&mut self, offset: u64, body_len: u64, visitor: &mut impl Visitor) -> Result<()> {
-        let total = (RECORD_HEADER + body_len) as usize;
-        self.read_body(offset + RECORD_HEADER, body_len)?;
-        // The declared uncompressed size, to bound the buffers (bytes 16..24 of the header).
-        let declared = self.body.get(16..24).map_or(0, |b| u64::from_le_bytes(b.try_into().expect("8 bytes")));
-        let limit = declared.max(body_len).min(MAX_CHUNK_BUFFER) as usize;
-        let mut reader = LinearReader::new_with_options(
-            LinearReaderOptions::default()
-                .with_skip_start_magic(true)
-                .with_skip_end_magic(true)
-                .with_validate_chunk_crcs(true)
-                .with_record_length_limit(limit),
-        );
-        let buffer = reader.insert(total);
-        buffer[0] = op::CHUNK;
-        buffer[1..9].copy_from_slice(&body_len.to_le_bytes());
-        buffer[9..].copy_from_slice(&self.body);
-        reader.notify_read(total);
-        let mut inner = 0u64;
-        let mut at_end = false;
-        loop {
-            match reader.next_event() {
-                None => return Ok(()),
-                Some(Ok(LinearReadEvent::ReadRequest(_))) if !at_end => {
-                    // The whole chunk is in: asking for more means it ended cleanly (the next
-                    // record would start here) or it is inconsistent, which EOF tells apart.
-                    at_end = true;
-                    reader.notify_read(0);
+    /// A message index record after a chunk: how many messages of one channel the chunk holds.
+    fn message_index(&mut self, fields: &mut Fields<'_, Source>, at: u64) -> std::result::Result<(), Fault> {
+        let channel = fields.u16("channel id")?;
+        let len = fields.u32("records' length")?;
+        let len = fields.check_length(u64::from(len), "records")?;
+        if len % 16 != 0 {
+            return Err(format!("its records are {len} bytes long, not a multiple of their 16 bytes"));
+        }
+        fields.skip(len, "records")?;
+        match &mut self.chunk {
+            Some(chunk) => {
+                if chunk.indexed.insert(channel, (len / 16, at)).is_some() {
+                    return Err(format!("a second message index for channel {channel} after the same chunk"));
                 }
-                Some(Ok(LinearReadEvent::ReadRequest(_))) => {
-                    return Err(self.error(offset, "the chunk's records do not fit its length"));
-                }
-                Some(Ok(LinearReadEvent::Record { opcode, data })) => {
-                    let at = At { offset, in_chunk: Some(inner) };
-                    inner += RECORD_HEADER + data.len() as u64;
-                    self.record(opcode, data, at, visitor)?;
-                }
-                Some(Err(error)) => {
-                    let what = match error {
-                        mcap::McapError::BadChunkCrc { .. } => "the chunk is corrupt",
-                        mcap::McapError::UnexpectedEof | mcap::McapError::UnexpectedEoc => {
-                            "the chunk ends in the middle of a record"
-                        }
-                        _ => "the chunk does not decode",
-                    };
-                    return Err(self.error(offset, format!("{what}: {}", describe(&error))));
-                }
+                Ok(())
+            }
+            // A message index that follows no chunk indexes nothing the walk reads.
+            None => Ok(()),
+        }
+    }
+
+    /// A chunk index record of the summary.
+    fn chunk_index(&mut self, fields: &mut Fields<'_, Source>, at: u64) -> std::result::Result<(), Fault> {
+        let _start = fields.u64("message start time")?;
+        let _end = fields.u64("message end time")?;
+        let chunk_offset = fields.u64("chunk start offset")?;
+        let chunk_length = fields.u64("chunk length")?;
+        self.chunk_indexes.push(ChunkIndex { at, chunk_offset, chunk_length });
+        Ok(())
+    }
+
+    /// The statistics record of the summary.
+    fn statistics(&mut self, fields: &mut Fields<'_, Source>, at: u64) -> std::result::Result<(), Fault> {
+        let message_count = fields.u64("message count")?;
+        let _schema_count = fields.u16("schema count")?;
+        let _channel_count = fields.u32("channel count")?;
+        let _attachment_count = fields.u32("attachment count")?;
+        let _metadata_count = fields.u32("metadata count")?;
+        let chunk_count = fields.u32("chunk count")?;
+        let _start = fields.u64("message start time")?;
+        let _end = fields.u64("message end time")?;
+        let len = fields.u32("channel message counts' length")?;
+        let len = fields.check_length(u64::from(len), "channel message counts")?;
+        if len % 10 != 0 {
+            return Err(format!("its channel message counts are {len} bytes long, not a multiple of their 10 bytes"));
+        }
+        let mut channel_message_counts = HashMap::new();
+        for _ in 0..len / 10 {
+            let channel = fields.u16("channel id")?;
+            let count = fields.u64("message count")?;
+            if channel_message_counts.insert(channel, count).is_some() {
+                return Err(format!("its channel message counts name channel {channel} twice"));
             }
         }
+        self.statistics = Some((at, Statistics { message_count, chunk_count, channel_message_counts }));
+        Ok(())
+    }
+
+    /// A record of an unknown opcode in the data section: skipped (the format reserves opcodes
+    /// for extensions), unless it holds a chunk's bytes.
+    fn unknown(&mut self, fields: &mut Fields<'_, Source>, at: u64, opcode: u8) -> std::result::Result<(), Fault> {
+        if self.unknown.len() < MAX_UNKNOWN_KEPT {
+            self.unknown.push((at, opcode));
+        }
+        if fields.left < CHUNK_FIXED + 8 {
+            return Ok(());
+        }
+        let start = fields.u64("")?;
+        let end = fields.u64("")?;
+        let uncompressed_size = fields.u64("")?;
+        let _crc = fields.u32("")?;
+        let compression_len = u64::from(fields.u32("")?);
+        if compression_len > 8 || fields.left < compression_len + 8 {
+            return Ok(());
+        }
+        let mut compression = [0u8; 8];
+        let compression = &mut compression[..compression_len as usize];
+        fields.reader.read_exact(compression).map_err(|e| fields.context.describe(&e))?;
+        fields.left -= compression_len;
+        let compressed_size = fields.u64("")?;
+        let known = matches!(&*compression, b"" | b"zstd" | b"lz4");
+        if known
+            && start <= end
+            && compressed_size == fields.left
+            && (!compression.is_empty() || compressed_size == uncompressed_size)
+        {
+            return Err(format!(
+                "a record of unknown opcode {opcode:#04x} holds a chunk ({} compression, {compressed_size} bytes of \
+                 records, {uncompressed_size} decompressed): the chunk's opcode is corrupt, and its messages would be \
+                 lost",
+                if compression.is_empty() {
+                    "no".to_owned()
+                } else {
+                    String::from_utf8_lossy(compression).into_owned()
+                }
+            ));
+        }
+        Ok(())
     }
 }

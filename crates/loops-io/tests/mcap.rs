@@ -410,7 +410,7 @@ fn a_chunk_with_a_wrong_crc_is_named_by_its_offset() {
         let error = read_broken(dir, name, &broken);
         assert_eq!(error.offset(), Some(chunk as u64), "{error}");
         assert!(
-            error.to_string().contains(&format!(" offset {chunk}: the chunk is corrupt: Chunk CRC failed")),
+            error.to_string().contains(&format!(" offset {chunk}: the chunk is corrupt: the CRC of its records is ")),
             "{error}"
         );
         // A flipped byte in the records themselves: caught by the CRC or the decompressor.

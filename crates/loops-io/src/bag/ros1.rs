@@ -438,7 +438,7 @@ impl Walker<'_> {
             let Some(time_ns) = fields.time_ns else {
                 return Err(fail("the message data record has no time field".into()));
             };
-            let header = MessageHeader { channel_id: 0, log_time: time_ns, publish_time: time_ns };
+            let header = MessageHeader { log_time: time_ns, publish_time: time_ns };
             return visitor.message(channel, header, data, at);
         }
         if self.connections.contains_key(&conn) {

@@ -166,7 +166,7 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
             }
             Err(e) => return Err(error(Some(id), format!("cannot read the message's data: {e}"))),
         };
-        let header = MessageHeader { channel_id: 0, log_time: timestamp, publish_time: timestamp };
+        let header = MessageHeader { log_time: timestamp, publish_time: timestamp };
         visitor.message(channel, header, data, At { offset: id as u64, in_chunk: None })?;
     }
 }
