@@ -1,10 +1,11 @@
 //! Delimited position tables: `t,x,y` or `t,x,y,z`, with or without a header row.
 
+use std::io::BufRead;
 use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::table::PoseTable;
-use crate::text::{self, Delimiter};
+use crate::text::{self, Delimiter, Lines};
 
 /// Reads positions from a delimited text file: `t,x,y` (2-D) or `t,x,y,z` (3-D) a line, time
 /// in seconds.
@@ -43,7 +44,7 @@ use crate::text::{self, Delimiter};
 /// ```
 pub fn read_csv(path: impl AsRef<Path>) -> Result<PoseTable> {
     let path = path.as_ref();
-    parse_csv(path, &text::read_text(path)?)
+    parse_csv(path, &mut text::open_lines(path)?)
 }
 
 /// Which field holds what, and how many fields a line has.
@@ -68,26 +69,25 @@ impl Layout {
     }
 }
 
-/// The positions in `text`, the contents of `path`.
-pub(crate) fn parse_csv(path: &Path, text: &str) -> Result<PoseTable> {
-    let mut lines = text::data_lines(text).peekable();
-    let Some(&(first_line, first)) = lines.peek() else {
+/// The positions in `lines`, the data lines of `path`.
+pub(crate) fn parse_csv(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<PoseTable> {
+    let Some((first_line, first)) = lines.peek()? else {
         return Err(IoError::Empty { path: path.to_path_buf() });
     };
     let delimiter = delimiter_of(first);
-    let mut fields: Vec<&str> = delimiter.split(first).collect();
+    let fields: Vec<&str> = delimiter.split(first).collect();
     let layout = if text::is_header(fields.iter().copied()) {
-        lines.next();
-        layout_of_header(&fields)
+        let layout = layout_of_header(&fields);
+        lines.next_data()?;
+        layout
     } else {
         Layout::in_order(fields.len()).ok_or_else(|| unexplained_columns(fields.len(), delimiter))
     }
     .map_err(|message| IoError::parse(path, first_line, message))?;
 
     let mut table = PoseTable::empty(path, if layout.z.is_some() { 3 } else { 2 });
-    for (line, content) in lines {
-        fields.clear();
-        fields.extend(delimiter.split(content));
+    while let Some((line, content)) = lines.next_data()? {
+        let fields: Vec<&str> = delimiter.split(content).collect();
         let (t, position) =
             parse_row(&layout, &fields, first_line).map_err(|message| IoError::parse(path, line, message))?;
         table.timestamps_s.push(t);
@@ -180,7 +180,7 @@ mod tests {
     use super::*;
 
     fn parse(text: &str) -> Result<PoseTable> {
-        parse_csv(Path::new("drive.csv"), text)
+        parse_csv(Path::new("drive.csv"), &mut Lines::new(Path::new("drive.csv"), text.as_bytes()))
     }
 
     #[test]

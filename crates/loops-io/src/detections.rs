@@ -7,7 +7,7 @@ use loops_core::{Detections, Error, Timeline};
 
 use crate::dropped::Dropped;
 use crate::error::{IoError, Result};
-use crate::text::{Delimiter, data_lines, is_header, parse_finite, read_text};
+use crate::text::{Delimiter, is_header, open_lines, parse_finite};
 
 /// Detections as read: times of the two poses of each detected loop, seconds, an optional
 /// score (higher is more confident), and the file line of each.
@@ -47,7 +47,7 @@ pub struct DetectionTable {
 /// ```
 pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    let mut lines = open_lines(path)?;
     let mut table = DetectionTable {
         path: path.to_path_buf(),
         t_s: Vec::new(),
@@ -58,7 +58,7 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
     let mut scores = Vec::new();
     let mut all_scored = true;
     let parse_error = |line: usize, message: String| IoError::Parse { path: path.to_path_buf(), line, message };
-    for (number, line) in data_lines(&text) {
+    while let Some((number, line)) = lines.next_data()? {
         let delimiter =
             [',', ';', '\t'].into_iter().find(|c| line.contains(*c)).map_or(Delimiter::Whitespace, Delimiter::Char);
         let mut fields: Vec<&str> = delimiter.split(line).collect();

@@ -1,10 +1,11 @@
 //! EuRoC MAV ground truth: `timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z, ...`.
 
+use std::io::BufRead;
 use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::table::{PoseTable, seconds_of_ns};
-use crate::text::{self, Delimiter};
+use crate::text::{self, Delimiter, Lines};
 
 /// The columns a EuRoC line needs: time, position, quaternion.
 const COLUMNS: usize = 8;
@@ -39,17 +40,18 @@ const COLUMNS: usize = 8;
 /// ```
 pub fn read_euroc(path: impl AsRef<Path>) -> Result<PoseTable> {
     let path = path.as_ref();
-    parse_euroc(path, &text::read_text(path)?)
+    parse_euroc(path, &mut text::open_lines(path)?)
 }
 
-/// The EuRoC poses in `text`, the contents of `path`.
-pub(crate) fn parse_euroc(path: &Path, text: &str) -> Result<PoseTable> {
+/// The EuRoC poses in `lines`, the data lines of `path`.
+pub(crate) fn parse_euroc(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<PoseTable> {
     let mut table = PoseTable::empty(path, 3);
     let mut stamps_ns = Vec::new();
     let mut orientations = Vec::new();
     let delimiter = Delimiter::Char(',');
-    for (index, (line, content)) in text::data_lines(text).enumerate() {
-        if index == 0 && text::is_header(delimiter.split(content)) {
+    let mut first = true;
+    while let Some((line, content)) = lines.next_data()? {
+        if std::mem::take(&mut first) && text::is_header(delimiter.split(content)) {
             continue;
         }
         let parse_error = |message: String| IoError::parse(path, line, message);
@@ -86,14 +88,12 @@ pub(crate) fn parse_euroc(path: &Path, text: &str) -> Result<PoseTable> {
 
 /// Whether `text` looks like EuRoC: a first data line of at least 8 comma-separated numbers, the
 /// first an integer of 16 digits or more (nanoseconds since 1970).
-pub(crate) fn looks_like_euroc(text: &str) -> bool {
-    text::data_lines(text).find(|(_, line)| !text::is_header(Delimiter::Char(',').split(line))).is_some_and(
-        |(_, line)| {
-            let fields: Vec<&str> = Delimiter::Char(',').split(line).collect();
-            fields.len() >= COLUMNS
-                && fields[0].len() >= 16
-                && fields[0].bytes().all(|b| b.is_ascii_digit())
-                && fields.iter().all(|field| text::is_number(field))
-        },
-    )
+pub(crate) fn looks_like_euroc(first_lines: &[String]) -> bool {
+    first_lines.iter().find(|line| !text::is_header(Delimiter::Char(',').split(line))).is_some_and(|line| {
+        let fields: Vec<&str> = Delimiter::Char(',').split(line).collect();
+        fields.len() >= COLUMNS
+            && fields[0].len() >= 16
+            && fields[0].bytes().all(|b| b.is_ascii_digit())
+            && fields.iter().all(|field| text::is_number(field))
+    })
 }

@@ -4,6 +4,7 @@
 mod chain;
 
 use std::collections::HashMap;
+use std::io::BufRead;
 use std::path::Path;
 
 pub use chain::EdgeChain;
@@ -12,7 +13,7 @@ use chain::{chain_odometry, no_vertices};
 use crate::error::{IoError, Result};
 use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw, yaw_of};
 use crate::table::PoseTable;
-use crate::text;
+use crate::text::{self, Lines};
 use crate::timing::Timing;
 
 /// A pose graph: its pose vertices as a table, and its edges between them.
@@ -245,7 +246,7 @@ impl Tag {
 /// ```
 pub fn read_pose_graph(path: impl AsRef<Path>, timing: &Timing) -> Result<PoseGraph> {
     let path = path.as_ref();
-    parse_pose_graph(path, &text::read_text(path)?, timing, false)
+    parse_pose_graph(path, &mut text::open_lines(path)?, timing, false)
 }
 
 /// One vertex as read.
@@ -257,13 +258,18 @@ struct Vertex {
     line: usize,
 }
 
-/// The pose graph in `text`, the contents of `path`; a file without vertices is chained from
-/// its odometry edges when `chain_edges` ([`chain_odometry`]).
-pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing, chain_edges: bool) -> Result<PoseGraph> {
+/// The pose graph in `lines`, the data lines of `path`; a file without vertices is chained
+/// from its odometry edges when `chain_edges` ([`chain_odometry`]).
+pub(crate) fn parse_pose_graph(
+    path: &Path,
+    lines: &mut Lines<impl BufRead>,
+    timing: &Timing,
+    chain_edges: bool,
+) -> Result<PoseGraph> {
     let mut vertices = Vec::new();
     let mut edges = Vec::new();
     let mut dim: Option<(usize, usize)> = None;
-    for (line, content) in text::data_lines(text) {
+    while let Some((line, content)) = lines.next_data()? {
         let mut fields = content.split_ascii_whitespace();
         let Some(tag) = fields.next().and_then(Tag::of) else { continue };
         let parse_error = |message: String| IoError::parse(path, line, message);
@@ -368,8 +374,8 @@ pub(crate) fn parse_pose_graph(path: &Path, text: &str, timing: &Timing, chain_e
 }
 
 /// Whether the first data line is a g2o or TORO vertex or edge.
-pub(crate) fn looks_like_graph(text: &str) -> bool {
-    text::data_lines(text).next().is_some_and(|(_, line)| {
+pub(crate) fn looks_like_graph(first_lines: &[String]) -> bool {
+    first_lines.first().is_some_and(|line| {
         let word = line.split_ascii_whitespace().next().unwrap_or_default();
         word.starts_with("VERTEX") || word.starts_with("EDGE")
     })

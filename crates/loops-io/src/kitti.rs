@@ -1,11 +1,12 @@
 //! KITTI odometry poses: a row-major 3×4 `[R|t]` a line, with or without a leading time.
 
+use std::io::BufRead;
 use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::rotation::quaternion_from_matrix;
 use crate::table::PoseTable;
-use crate::text;
+use crate::text::{self, Lines};
 use crate::timing::Timing;
 
 /// Reads KITTI poses: each line the 12 numbers of a row-major 3×4 matrix `[R|t]` (the pose of
@@ -51,16 +52,16 @@ use crate::timing::Timing;
 /// ```
 pub fn read_kitti(path: impl AsRef<Path>, timing: &Timing) -> Result<PoseTable> {
     let path = path.as_ref();
-    parse_kitti(path, &text::read_text(path)?, timing)
+    parse_kitti(path, &mut text::open_lines(path)?, timing)
 }
 
-/// The KITTI poses in `text`, the contents of `path`.
-pub(crate) fn parse_kitti(path: &Path, text: &str, timing: &Timing) -> Result<PoseTable> {
+/// The KITTI poses in `lines`, the data lines of `path`.
+pub(crate) fn parse_kitti(path: &Path, lines: &mut Lines<impl BufRead>, timing: &Timing) -> Result<PoseTable> {
     let mut table = PoseTable::empty(path, 3);
     let mut orientations = Vec::new();
     let mut width = None;
     let mut values = [0.0; 13];
-    for (line, content) in text::data_lines(text) {
+    while let Some((line, content)) = lines.next_data()? {
         let parse_error = |message: String| IoError::parse(path, line, message);
         let mut count = 0;
         for field in content.split_ascii_whitespace() {

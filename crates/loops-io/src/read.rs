@@ -97,7 +97,7 @@ impl ReadOptions {
 /// ```
 pub fn read_pose_graph_with(path: impl AsRef<Path>, options: &ReadOptions) -> Result<PoseGraph> {
     let path = path.as_ref();
-    parse_pose_graph(path, &text::read_text(path)?, &options.timing, options.chain_edges)
+    parse_pose_graph(path, &mut text::open_lines(path)?, &options.timing, options.chain_edges)
 }
 
 /// Reads a pose file as [`read_trajectory_with`], and says how a pose graph's poses were chained
@@ -121,21 +121,21 @@ pub fn read_trajectory_chaining(
         Format::Ros1 => return Ok((read_ros1(path, &options.mcap)?, None)),
         _ => {}
     }
-    let text = text::read_text(path)?;
     let sniffed = match options.format {
         Some(_) => format,
-        None => sniff(format, &text),
+        None => sniff(format, &text::first_data_lines(path, SNIFFED_LINES)?),
     };
+    let lines = &mut text::open_lines(path)?;
     let table = match sniffed {
-        Format::Tum => parse_tum(path, &text),
-        Format::Csv => parse_csv(path, &text),
-        Format::Kitti => parse_kitti(path, &text, &options.timing),
-        Format::Euroc => parse_euroc(path, &text),
+        Format::Tum => parse_tum(path, lines),
+        Format::Csv => parse_csv(path, lines),
+        Format::Kitti => parse_kitti(path, lines, &options.timing),
+        Format::Euroc => parse_euroc(path, lines),
         Format::G2o => {
-            let graph = parse_pose_graph(path, &text, &options.timing, options.chain_edges)?;
+            let graph = parse_pose_graph(path, lines, &options.timing, options.chain_edges)?;
             return Ok((graph.vertices, graph.chain));
         }
-        Format::Tuc => parse_tuc(path, &text),
+        Format::Tuc => parse_tuc(path, lines),
         Format::Mcap | Format::Rosbag2 | Format::Ros1 => unreachable!("logs with topics are read above"),
     }?;
     Ok((table, None))
@@ -190,7 +190,7 @@ pub fn read_trajectory_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
 /// ([`Format::detect`]), then, for the extensions several formats share (`.txt`, `.csv`), from
 /// the first data line as [`read_trajectory_with`] describes. What `loops info` prints.
 ///
-/// Time O(file size) for a `.txt` or `.csv` file (it is read), O(1) otherwise.
+/// Time O(1): at most the first two data lines of a `.txt` or `.csv` file are read.
 ///
 /// # Errors
 /// [`IoError::UnknownFormat`] when the extension does not tell it; [`IoError::Open`] when a
@@ -213,7 +213,7 @@ pub fn format_of(path: impl AsRef<Path>) -> Result<Format> {
     let path = path.as_ref();
     let format = detect(path)?;
     match format {
-        Format::Tum | Format::Csv => Ok(sniff(format, &text::read_text(path)?)),
+        Format::Tum | Format::Csv => Ok(sniff(format, &text::first_data_lines(path, SNIFFED_LINES)?)),
         _ => Ok(format),
     }
 }
@@ -226,8 +226,11 @@ fn detect(path: &Path) -> Result<Format> {
     })
 }
 
-/// The format the first data line of `text` tells, for a file whose extension says `format`.
-fn sniff(format: Format, text: &str) -> Format {
+/// The data lines the format sniffing looks at: the first, or the second after a header row.
+const SNIFFED_LINES: usize = 2;
+
+/// The format the first data lines of a file tell, for a file whose extension says `format`.
+fn sniff(format: Format, text: &[String]) -> Format {
     match format {
         Format::Tum if looks_like_kitti(text) => Format::Kitti,
         Format::Tum if looks_like_tuc(text) => Format::Tuc,
@@ -239,8 +242,8 @@ fn sniff(format: Format, text: &str) -> Format {
 }
 
 /// Whether the first data line is 8 space-separated numbers with no CSV delimiter.
-fn looks_like_tum(text: &str) -> bool {
-    text::data_lines(text).next().is_some_and(|(_, line)| {
+fn looks_like_tum(first_lines: &[String]) -> bool {
+    first_lines.first().is_some_and(|line| {
         !line.contains([',', ';', '\t'])
             && Delimiter::Whitespace.split(line).count() == 8
             && Delimiter::Whitespace.split(line).all(text::is_number)
@@ -248,8 +251,8 @@ fn looks_like_tum(text: &str) -> bool {
 }
 
 /// Whether the first data line is 12 or 13 space-separated numbers.
-fn looks_like_kitti(text: &str) -> bool {
-    text::data_lines(text).next().is_some_and(|(_, line)| {
+fn looks_like_kitti(first_lines: &[String]) -> bool {
+    first_lines.first().is_some_and(|line| {
         let fields = || line.split_ascii_whitespace();
         matches!(fields().count(), 12 | 13) && fields().all(text::is_number)
     })
@@ -259,18 +262,28 @@ fn looks_like_kitti(text: &str) -> bool {
 mod tests {
     use super::*;
 
+    /// The first data lines of `text`, as the sniffing sees them.
+    fn first(text: &str) -> Vec<String> {
+        let mut lines = text::Lines::new(Path::new("t.txt"), text.as_bytes());
+        let mut out = Vec::new();
+        while let Some((_, line)) = lines.next_data().unwrap().filter(|_| out.len() < SNIFFED_LINES) {
+            out.push(line.to_owned());
+        }
+        out
+    }
+
     #[test]
     fn kitti_is_recognised() {
-        assert!(looks_like_kitti("# c\n0 1 0 0 0 0 1 0 0 0 0 1 0\n"));
-        assert!(looks_like_kitti("1 0 0 0 0 1 0 0 0 0 1 0\n"));
-        assert!(!looks_like_kitti("1 0 0 0 0 0 0 1\n"));
+        assert!(looks_like_kitti(&first("# c\n0 1 0 0 0 0 1 0 0 0 0 1 0\n")));
+        assert!(looks_like_kitti(&first("1 0 0 0 0 1 0 0 0 0 1 0\n")));
+        assert!(!looks_like_kitti(&first("1 0 0 0 0 0 0 1\n")));
     }
 
     #[test]
     fn tum_in_a_csv_is_recognised() {
-        assert!(looks_like_tum("# c\n1 0 0 0 0 0 -0 1\n"));
-        assert!(!looks_like_tum("1,0,0,0,0,0,0,1\n"));
-        assert!(!looks_like_tum("1 0 0\n"));
-        assert!(!looks_like_tum("t x y z qx qy qz qw\n1 0 0 0 0 0 0 1\n"));
+        assert!(looks_like_tum(&first("# c\n1 0 0 0 0 0 -0 1\n")));
+        assert!(!looks_like_tum(&first("1,0,0,0,0,0,0,1\n")));
+        assert!(!looks_like_tum(&first("1 0 0\n")));
+        assert!(!looks_like_tum(&first("t x y z qx qy qz qw\n1 0 0 0 0 0 0 1\n")));
     }
 }

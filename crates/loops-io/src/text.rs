@@ -1,32 +1,135 @@
 //! Text files as numbered data lines and fields: what the line-based readers share.
+//!
+//! A file is read as a stream, one line at a time ([`Lines`]): memory holds one line, never the
+//! file, and a line longer than [`MAX_LINE_BYTES`] is an error naming it, so a file with no line
+//! breaks (`/dev/zero`, a binary file named as text) fails after 1 MiB instead of filling the
+//! memory.
 
-use std::path::Path;
+use std::fs::File;
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
 use std::str::SplitAsciiWhitespace;
 
 use crate::error::{IoError, Result};
 
-/// The whole file as text, read at once (pose files are at most tens of MB).
+/// Longest line a text reader takes: 1 MiB. Pose, graph and detection lines are a few hundred
+/// bytes (a g2o 3-D edge with its information matrix, ~500); a longer line means the file is
+/// not text of a format read here.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
+
+/// The data lines of a text file, read one at a time: each with its 1-based line number,
+/// trimmed; blank lines and `#` comment lines left out. `\n` and `\r\n` both end a line.
 ///
 /// Bytes that are not UTF-8 become U+FFFD instead of failing the whole file: in a comment they
 /// do no harm, and in a data line they fail that line's number parsing with its line number.
 /// A leading byte-order mark is dropped.
-pub(crate) fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
-    let mut text =
-        String::from_utf8(bytes).unwrap_or_else(|error| String::from_utf8_lossy(error.as_bytes()).into_owned());
-    if text.starts_with('\u{feff}') {
-        text.drain(..'\u{feff}'.len_utf8());
-    }
-    Ok(text)
+#[derive(Debug)]
+pub(crate) struct Lines<R> {
+    path: PathBuf,
+    reader: R,
+    /// The number of the last line read.
+    number: usize,
+    bytes: Vec<u8>,
+    line: String,
+    /// Whether the last data line read is to be returned again (see [`Lines::peek`]).
+    pending: bool,
 }
 
-/// The data lines of `text` with their 1-based line numbers, trimmed; blank lines and `#`
-/// comment lines left out. `\n` and `\r\n` both end a line.
-pub(crate) fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
-    text.lines()
-        .enumerate()
-        .map(|(index, line)| (index + 1, line.trim()))
-        .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'))
+/// The data lines of the file at `path`.
+///
+/// # Errors
+/// [`IoError::Open`] when the file cannot be opened.
+pub(crate) fn open_lines(path: &Path) -> Result<Lines<BufReader<File>>> {
+    let file = File::open(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
+    Ok(Lines::new(path, BufReader::with_capacity(1 << 16, file)))
+}
+
+impl<R: BufRead> Lines<R> {
+    /// The data lines `reader` holds, as the contents of `path`.
+    pub(crate) fn new(path: &Path, reader: R) -> Self {
+        Self { path: path.to_path_buf(), reader, number: 0, bytes: Vec::new(), line: String::new(), pending: false }
+    }
+
+    /// The next data line and its number, or `None` at the end of the file.
+    ///
+    /// # Errors
+    /// [`IoError::Open`] when the file cannot be read; [`IoError::Parse`] for a line longer
+    /// than [`MAX_LINE_BYTES`].
+    pub(crate) fn next_data(&mut self) -> Result<Option<(usize, &str)>> {
+        if self.pending {
+            self.pending = false;
+            return Ok(Some((self.number, self.line.trim())));
+        }
+        loop {
+            self.bytes.clear();
+            let limit = MAX_LINE_BYTES as u64 + 2;
+            let read = (&mut self.reader)
+                .take(limit)
+                .read_until(b'\n', &mut self.bytes)
+                .map_err(|error| IoError::Open { path: self.path.clone(), error })?;
+            if read == 0 {
+                return Ok(None);
+            }
+            self.number += 1;
+            if self.bytes.last() == Some(&b'\n') {
+                self.bytes.pop();
+            }
+            if self.bytes.last() == Some(&b'\r') {
+                self.bytes.pop();
+            }
+            if self.bytes.len() > MAX_LINE_BYTES {
+                return Err(IoError::parse(
+                    &self.path,
+                    self.number,
+                    format!(
+                        "the line is longer than {} MiB, the limit for one line: the file is not text of this format",
+                        MAX_LINE_BYTES >> 20
+                    ),
+                ));
+            }
+            self.line.clear();
+            match std::str::from_utf8(&self.bytes) {
+                Ok(text) => self.line.push_str(text),
+                Err(_) => self.line.push_str(&String::from_utf8_lossy(&self.bytes)),
+            }
+            if self.number == 1 && self.line.starts_with('\u{feff}') {
+                self.line.drain(..'\u{feff}'.len_utf8());
+            }
+            let trimmed = self.line.trim();
+            if !trimmed.is_empty() && !trimmed.starts_with('#') {
+                return Ok(Some((self.number, self.line.trim())));
+            }
+        }
+    }
+
+    /// The next data line, which the next call to [`next_data`](Self::next_data) returns again.
+    ///
+    /// # Errors
+    /// As [`next_data`](Self::next_data).
+    pub(crate) fn peek(&mut self) -> Result<Option<(usize, &str)>> {
+        if !self.pending && self.next_data()?.is_none() {
+            return Ok(None);
+        }
+        self.pending = true;
+        Ok(Some((self.number, self.line.trim())))
+    }
+}
+
+/// The first `count` data lines of the file at `path` (fewer if it has fewer): what the
+/// format sniffing looks at.
+///
+/// # Errors
+/// As [`Lines::next_data`].
+pub(crate) fn first_data_lines(path: &Path, count: usize) -> Result<Vec<String>> {
+    let mut lines = open_lines(path)?;
+    let mut out = Vec::new();
+    while out.len() < count {
+        match lines.next_data()? {
+            Some((_, line)) => out.push(line.to_owned()),
+            None => break,
+        }
+    }
+    Ok(out)
 }
 
 /// How the fields of a line are separated.
@@ -106,11 +209,49 @@ fn quoted(field: &str) -> String {
 mod tests {
     use super::*;
 
+    /// Every data line of `text`.
+    fn data_lines(text: &str) -> Vec<(usize, String)> {
+        let mut lines = Lines::new(Path::new("t.txt"), text.as_bytes());
+        let mut out = Vec::new();
+        while let Some((number, line)) = lines.next_data().unwrap() {
+            out.push((number, line.to_owned()));
+        }
+        out
+    }
+
     #[test]
     fn data_lines_are_numbered_from_one_and_skip_comments_and_blanks() {
-        let text = "# header\r\n1 2\r\n\r\n  \t\n  # indented comment\n3 4";
-        let lines: Vec<_> = data_lines(text).collect();
-        assert_eq!(lines, [(2, "1 2"), (6, "3 4")]);
+        let text = "\u{feff}# header\r\n1 2\r\n\r\n  \t\n  # indented comment\n3 4";
+        assert_eq!(data_lines(text), [(2, "1 2".to_owned()), (6, "3 4".to_owned())]);
+        assert_eq!(data_lines("\u{feff}5 6\n"), [(1, "5 6".to_owned())]);
+        let mut lines = Lines::new(Path::new("t.txt"), &b"a\0b\xff"[..]);
+        assert_eq!(lines.next_data().unwrap(), Some((1, "a\u{0}b\u{fffd}")));
+        let mut lines = Lines::new(Path::new("t.txt"), &b"# c\n1\n2\n"[..]);
+        assert_eq!(lines.peek().unwrap(), Some((2, "1")));
+        assert_eq!(lines.peek().unwrap(), Some((2, "1")));
+        assert_eq!(lines.next_data().unwrap(), Some((2, "1")));
+        assert_eq!(lines.next_data().unwrap(), Some((3, "2")));
+        assert_eq!(lines.peek().unwrap(), None);
+        assert_eq!(lines.next_data().unwrap(), None);
+    }
+
+    #[test]
+    fn a_line_longer_than_the_limit_is_an_error_naming_it() {
+        let mut text = "1 2\n".to_owned();
+        text.push_str(&"7".repeat(MAX_LINE_BYTES));
+        text.push_str("\r\n3 4\n");
+        assert_eq!(data_lines(&text).len(), 3, "a line of exactly the limit reads");
+        text.insert(5, '7');
+        let mut lines = Lines::new(Path::new("t.txt"), text.as_bytes());
+        assert!(lines.next_data().unwrap().is_some());
+        let error = lines.next_data().unwrap_err();
+        assert_eq!(
+            error.to_string(),
+            "t.txt line 2: the line is longer than 1 MiB, the limit for one line: the file is not text of this format"
+        );
+        let zeros = std::io::repeat(0).take(1 << 40);
+        let error = Lines::new(Path::new("zero"), BufReader::new(zeros)).next_data().unwrap_err();
+        assert_eq!(error.line(), Some(1));
     }
 
     #[test]

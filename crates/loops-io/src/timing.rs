@@ -45,9 +45,9 @@ impl Timing {
                 Ok(Some(indices.iter().map(|i| i / rate_hz).collect()))
             }
             Self::TimesFile(path) => {
-                let contents = text::read_text(path)?;
+                let mut lines = text::open_lines(path)?;
                 let mut times = Vec::new();
-                for (line, content) in text::data_lines(&contents) {
+                while let Some((line, content)) = lines.next_data()? {
                     let mut fields = content.split_ascii_whitespace();
                     let (Some(field), None) = (fields.next(), fields.next()) else {
                         return Err(IoError::parse(path, line, "expected one time in seconds a line"));

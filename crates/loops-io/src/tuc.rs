@@ -2,12 +2,13 @@
 //! `angle t yaw ...` lines.
 
 use std::collections::HashMap;
+use std::io::BufRead;
 use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::rotation::{ecef_to_enu, quaternion_from_yaw};
 use crate::table::PoseTable;
-use crate::text;
+use crate::text::{self, Lines};
 
 /// Reads a libRSF ground-truth file (the TUC SLAM, Chemnitz City and smartLoc data sets): lines
 /// tagged by their first word.
@@ -44,29 +45,29 @@ use crate::text;
 /// ```
 pub fn read_tuc(path: impl AsRef<Path>) -> Result<PoseTable> {
     let path = path.as_ref();
-    parse_tuc(path, &text::read_text(path)?)
+    parse_tuc(path, &mut text::open_lines(path)?)
 }
 
-/// The columns each tag needs, with their names for messages.
-fn columns_of(tag: &str) -> Option<(usize, &'static str)> {
+/// The tag, the columns it needs, and their names for messages.
+fn columns_of(tag: &str) -> Option<(&'static str, usize, &'static str)> {
     match tag {
-        "point2" => Some((4, "point2 t x y")),
-        "point3" => Some((5, "point3 t X Y Z")),
-        "angle" => Some((3, "angle t yaw")),
+        "point2" => Some(("point2", 4, "point2 t x y")),
+        "point3" => Some(("point3", 5, "point3 t X Y Z")),
+        "angle" => Some(("angle", 3, "angle t yaw")),
         _ => None,
     }
 }
 
-/// The TUC poses in `text`, the contents of `path`.
-pub(crate) fn parse_tuc(path: &Path, text: &str) -> Result<PoseTable> {
+/// The TUC poses in `lines`, the data lines of `path`.
+pub(crate) fn parse_tuc(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<PoseTable> {
     let mut table = PoseTable::empty(path, 2);
-    let mut kind: Option<(&str, usize)> = None;
+    let mut kind: Option<(&'static str, usize)> = None;
     // Heading by the bits of its time: point2 and angle lines of one instant share the text.
     let mut yaw_at: HashMap<u64, f64> = HashMap::new();
-    for (line, content) in text::data_lines(text) {
+    while let Some((line, content)) = lines.next_data()? {
         let mut fields = content.split_ascii_whitespace();
-        let Some(tag) = fields.next() else { continue };
-        let Some((needed, layout)) = columns_of(tag) else { continue };
+        let Some(word) = fields.next() else { continue };
+        let Some((tag, needed, layout)) = columns_of(word) else { continue };
         let parse_error = |message: String| IoError::parse(path, line, message);
         let mut values = [0.0; 4];
         let mut count = 1;
@@ -123,8 +124,8 @@ pub(crate) fn parse_tuc(path: &Path, text: &str) -> Result<PoseTable> {
 }
 
 /// Whether the first data line starts with a libRSF tag this reader knows.
-pub(crate) fn looks_like_tuc(text: &str) -> bool {
-    text::data_lines(text)
-        .next()
-        .is_some_and(|(_, line)| line.split_ascii_whitespace().next().is_some_and(|tag| columns_of(tag).is_some()))
+pub(crate) fn looks_like_tuc(first_lines: &[String]) -> bool {
+    first_lines
+        .first()
+        .is_some_and(|line| line.split_ascii_whitespace().next().is_some_and(|tag| columns_of(tag).is_some()))
 }

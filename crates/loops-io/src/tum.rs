@@ -1,10 +1,11 @@
 //! The TUM RGB-D trajectory format: `timestamp tx ty tz qx qy qz qw` a line.
 
+use std::io::BufRead;
 use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::table::PoseTable;
-use crate::text::{self, Delimiter};
+use crate::text::{self, Delimiter, Lines};
 
 /// The columns of a TUM line, in order.
 const COLUMNS: usize = 8;
@@ -39,16 +40,17 @@ const COLUMNS: usize = 8;
 /// ```
 pub fn read_tum(path: impl AsRef<Path>) -> Result<PoseTable> {
     let path = path.as_ref();
-    parse_tum(path, &text::read_text(path)?)
+    parse_tum(path, &mut text::open_lines(path)?)
 }
 
-/// The TUM poses in `text`, the contents of `path`.
-pub(crate) fn parse_tum(path: &Path, text: &str) -> Result<PoseTable> {
+/// The TUM poses in `lines`, the data lines of `path`.
+pub(crate) fn parse_tum(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<PoseTable> {
     let mut table = PoseTable::empty(path, 3);
     let mut orientations_xyzw = Vec::new();
-    for (index, (line, content)) in text::data_lines(text).enumerate() {
+    let mut first = true;
+    while let Some((line, content)) = lines.next_data()? {
         let delimiter = delimiter_of(content);
-        if index == 0 && text::is_header(delimiter.split(content)) {
+        if std::mem::take(&mut first) && text::is_header(delimiter.split(content)) {
             continue;
         }
         let [t, x, y, z, qx, qy, qz, qw] =
@@ -96,7 +98,7 @@ mod tests {
     use super::*;
 
     fn parse(text: &str) -> Result<PoseTable> {
-        parse_tum(Path::new("drive.tum"), text)
+        parse_tum(Path::new("drive.tum"), &mut Lines::new(Path::new("drive.tum"), text.as_bytes()))
     }
 
     #[test]
