@@ -204,6 +204,103 @@ impl Tag {
     }
 }
 
+/// The tags of the g2o and TORO formats that are not pose vertices or edges between them, and
+/// are skipped: every type g2o registers (landmarks, parameters, calibration, projections),
+/// g2o's `FIX` command, TORO's `EQUIV`, and the switchable and max-mixture constraints of
+/// Vertigo (robust back ends' data sets). Any other tag is an error: a misspelled vertex would
+/// otherwise vanish without a word.
+const OTHER_TAGS: &[&str] = &[
+    "FIX",
+    "EQUIV",
+    "CACHE_CAMERA",
+    "CACHE_SE2_OFFSET",
+    "CACHE_SE3_OFFSET",
+    "EDGE_BEARING_SE2_XY",
+    "EDGE_CAM",
+    "EDGE_LINE2D",
+    "EDGE_LINE2D_POINTXY",
+    "EDGE_PLANE",
+    "EDGE_POINTXY",
+    "EDGE_POINTXYZ",
+    "EDGE_POINTXYZ_PRIOR",
+    "EDGE_PRIOR_SE2",
+    "EDGE_PRIOR_SE2_XY",
+    "EDGE_PRIOR_XY",
+    "EDGE_PROJECT_DEPTH",
+    "EDGE_PROJECT_DISPARITY",
+    "EDGE_PROJECT_INVERSE_SIM3_XYZ:EXPMAP",
+    "EDGE_PROJECT_P2MC",
+    "EDGE_PROJECT_P2SC",
+    "EDGE_PROJECT_SIM3_XYZ:EXPMAP",
+    "EDGE_PROJECT_XYZ2UV:EXPMAP",
+    "EDGE_PROJECT_XYZ2UVU:EXPMAP",
+    "EDGE_SCALE",
+    "EDGE_SE2_CALIB",
+    "EDGE_SE2_LINE2D",
+    "EDGE_SE2_LOTSOFXY",
+    "EDGE_SE2_ODOM_DIFFERENTIAL_CALIB",
+    "EDGE_SE2_OFFSET",
+    "EDGE_SE2_POINTXY_OFFSET",
+    "EDGE_SE2_SEGMENT2D",
+    "EDGE_SE2_SEGMENT2D_LINE",
+    "EDGE_SE2_SEGMENT2D_POINTLINE",
+    "EDGE_SE2_TWOPOINTSXY",
+    "EDGE_SE2_XY",
+    "EDGE_SE2_XY_CALIB",
+    "EDGE_SE3:EXPMAP",
+    "EDGE_SE3_CALIB",
+    "EDGE_SE3_LINE3D",
+    "EDGE_SE3_LOTSOF_XYZ",
+    "EDGE_SE3_OFFSET",
+    "EDGE_SE3_PLANE_CALIB",
+    "EDGE_SE3_PRIOR",
+    "EDGE_SE3_PROJECT_XYZ:EXPMAP",
+    "EDGE_SE3_PROJECT_XYZONLYPOSE:EXPMAP",
+    "EDGE_SE3_TRACKXYZ",
+    "EDGE_SE3_XYZ_PRIOR",
+    "EDGE_SIM3:EXPMAP",
+    "EDGE_STEREO_SE3_PROJECT_XYZ:EXPMAP",
+    "EDGE_STEREO_SE3_PROJECT_XYZONLYPOSE:EXPMAP",
+    "EDGE_V_V_GICP",
+    "PARAMS_CAMERACALIB",
+    "PARAMS_CAMERAPARAMETERS",
+    "PARAMS_SE2OFFSET",
+    "PARAMS_SE3OFFSET",
+    "PARAMS_STEREOCAMERACALIB",
+    "ROBOTLASER1",
+    "VERTEX_CAM",
+    "VERTEX_ELLIPSE",
+    "VERTEX_INTRINSICS",
+    "VERTEX_LINE2D",
+    "VERTEX_LINE3D",
+    "VERTEX_ODOM_DIFFERENTIAL",
+    "VERTEX_PLANE",
+    "VERTEX_SE3:EXPMAP",
+    "VERTEX_SEGMENT2D",
+    "VERTEX_SIM3:EXPMAP",
+    "VERTEX_TAG",
+    "VERTEX_TRACKXYZ",
+    "VERTEX_XY",
+    "VERTEX_SWITCH",
+    "EDGE_SWITCH_PRIOR",
+    "EDGE_SE2_SWITCHABLE",
+    "EDGE_SE3_SWITCHABLE",
+    "EDGE_SE2_MAXMIX",
+    "EDGE_SE3_MAXMIX",
+];
+
+/// The message for a line whose first word is no tag of the formats.
+fn unknown_tag(word: &str) -> String {
+    const SHOWN_CHARS: usize = 40;
+    let shown: String = word.chars().take(SHOWN_CHARS).collect();
+    let cut = if word.chars().count() > SHOWN_CHARS { "…" } else { "" };
+    format!(
+        "unknown tag {shown:?}{cut}: expected a g2o or TORO record (VERTEX_SE2, VERTEX2, VERTEX_SE3:QUAT, VERTEX3, \
+         EDGE_SE2, EDGE2, EDGE_SE3:QUAT, EDGE3, or another type of g2o, such as FIX, VERTEX_XY, EDGE_SE2_XY, which are \
+         skipped)"
+    )
+}
+
 /// Reads a pose graph in g2o or TORO text: `VERTEX_SE2 id x y θ` / `VERTEX2`,
 /// `VERTEX_SE3:QUAT id x y z qx qy qz qw`, `VERTEX3 id x y z roll pitch yaw`, and the edges
 /// `EDGE_SE2 i j ...` / `EDGE2`, `EDGE_SE3:QUAT i j ...`, `EDGE3 i j ...`: the measurement
@@ -213,8 +310,9 @@ impl Tag {
 /// Vertices are sorted by id; each vertex's time is its id in seconds, or `id / rate` or a times
 /// file by `timing` ([`Timing`]; a times file gives one time per vertex in id order). 2-D
 /// graphs give a 2-D table with headings as rotations about z; 3-D ones a 3-D table. Lines of
-/// other types (landmarks `VERTEX_XY`, `EDGE_SE2_XY`, `FIX`, parameters) are skipped, as are
-/// blank lines and `#` comments. The vertex values of the classic data sets are odometry
+/// the other types g2o defines (landmarks `VERTEX_XY`, `EDGE_SE2_XY`, `FIX`, parameters, ...),
+/// TORO's `EQUIV` and Vertigo's switchable constraints are skipped, as are blank lines and `#`
+/// comments; a line of any other tag (a misspelled `VERTX2`) is an error. The vertex values of the classic data sets are odometry
 /// guesses, not ground truth; their edges with `|i − j| > 1` are the loop closures
 /// ([`PoseGraph::loop_closures`]).
 ///
@@ -222,7 +320,8 @@ impl Tag {
 ///
 /// # Errors
 /// - [`IoError::Open`] when a file cannot be read;
-/// - [`IoError::Parse`] for a vertex or edge line with too few columns, an id that is not a
+/// - [`IoError::Parse`] for a line whose tag is none of the formats' (naming it), a vertex or
+///   edge line with too few columns, an id that is not a
 ///   non-negative integer, a field that is not a finite number, 2-D and 3-D poses in one
 ///   file, an id given twice, or an edge to a vertex the file does not have, naming the line;
 /// - [`IoError::PoseGraph`] for a file of edges without vertices, saying that
@@ -271,8 +370,14 @@ pub(crate) fn parse_pose_graph(
     let mut dim: Option<(usize, usize)> = None;
     while let Some((line, content)) = lines.next_data()? {
         let mut fields = content.split_ascii_whitespace();
-        let Some(tag) = fields.next().and_then(Tag::of) else { continue };
         let parse_error = |message: String| IoError::parse(path, line, message);
+        let word = fields.next().unwrap_or_default();
+        let Some(tag) = Tag::of(word) else {
+            if OTHER_TAGS.contains(&word) {
+                continue;
+            }
+            return Err(parse_error(unknown_tag(word)));
+        };
         let (id_count, value_count, tag_dim, layout) = tag.layout();
         let mut ids = [0u64; 2];
         let mut values = [0.0; 7];
