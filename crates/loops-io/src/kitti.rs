@@ -3,6 +3,8 @@
 use std::io::BufRead;
 use std::path::Path;
 
+use loops_core::FILE_QUATERNION_TOLERANCE;
+
 use crate::error::{IoError, Result};
 use crate::rotation::quaternion_from_matrix;
 use crate::table::PoseTable;
@@ -17,7 +19,8 @@ use crate::timing::Timing;
 ///   or a times file, and [`Timing::FromFile`] is an error. A given rate or times file also
 ///   replaces a time column.
 /// - Orientations are the unit quaternions of the rotations (normalised: printed matrices are
-///   not quite orthonormal). The table is 3-D; KITTI's camera frame has y down and the ground
+///   not quite orthonormal). A block that is no rotation within [`ROTATION_MATRIX_TOLERANCE`] (zero,
+///   a reflection, not orthonormal) is an error. The table is 3-D; KITTI's camera frame has y down and the ground
 ///   in the x-z plane, so plane axes `[0, 2]` give the map.
 /// - Blank lines and `#` comments are skipped; numbers are separated by spaces or tabs; every
 ///   line has the count of the first.
@@ -28,7 +31,8 @@ use crate::timing::Timing;
 /// - [`IoError::Open`] when a file cannot be read;
 /// - [`IoError::Parse`] for a line with other than 12 or 13 numbers, or another count than the
 ///   first line, or a field that is not a finite number, naming line and column; for 12
-///   numbers without a rate or times file;
+///   numbers without a rate or times file; for a rotation block that is not a rotation,
+///   saying how;
 /// - [`IoError::Empty`] without data lines;
 /// - [`IoError::Trajectory`] holding [`loops_core::Error::InvalidParameter`] for a rate that is
 ///   not positive and finite, or [`loops_core::Error::LengthMismatch`] for a times file with
@@ -95,6 +99,7 @@ pub(crate) fn parse_kitti(path: &Path, lines: &mut Lines<impl BufRead>, timing: 
         };
         let m = |row: usize, column: usize| matrix[4 * row + column];
         let rotation = [[m(0, 0), m(0, 1), m(0, 2)], [m(1, 0), m(1, 1), m(1, 2)], [m(2, 0), m(2, 1), m(2, 2)]];
+        check_rotation(&rotation).map_err(parse_error)?;
         table.timestamps_s.push(time);
         table.positions.push([m(0, 3), m(1, 3), m(2, 3)]);
         orientations.push(quaternion_from_matrix(rotation));
@@ -109,4 +114,38 @@ pub(crate) fn parse_kitti(path: &Path, lines: &mut Lines<impl BufRead>, timing: 
     }
     table.orientations_xyzw = Some(orientations);
     Ok(table)
+}
+
+/// How far a rotation block read from a file may be from orthonormal: the largest entry of
+/// `RᵀR − I`, as [`FILE_QUATERNION_TOLERANCE`] bounds a quaternion's norm (KITTI's files print 7
+/// digits, `%f` prints 6: their blocks are ~1e-6 from orthonormal).
+pub const ROTATION_MATRIX_TOLERANCE: f64 = FILE_QUATERNION_TOLERANCE;
+
+/// Whether `r` (rows) is a rotation within [`ROTATION_MATRIX_TOLERANCE`]: orthonormal, determinant
+/// +1; or what is wrong with it. A zero block or a reflection would otherwise become some
+/// quaternion (the identity, a rotation by π), and the pose a wrong one.
+fn check_rotation(r: &[[f64; 3]; 3]) -> Result<(), String> {
+    const WHAT: &str = "the rotation block (columns 1-3, 5-7, 9-11 of the pose)";
+    if r.iter().flatten().all(|&v| v == 0.0) {
+        return Err(format!("{WHAT} is zero, not a rotation"));
+    }
+    let mut off = 0.0f64;
+    for i in 0..3 {
+        for j in 0..3 {
+            let dot: f64 = (0..3).map(|k| r[k][i] * r[k][j]).sum();
+            off = off.max((dot - if i == j { 1.0 } else { 0.0 }).abs());
+        }
+    }
+    if off.is_nan() || off > ROTATION_MATRIX_TOLERANCE {
+        return Err(format!(
+            "{WHAT} is not orthonormal: RᵀR differs from the identity by up to {off:.3e} (at most \
+             {ROTATION_MATRIX_TOLERANCE:e} allowed), not a rotation"
+        ));
+    }
+    let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+        + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+    if det < 0.0 {
+        return Err(format!("{WHAT} is a reflection (determinant {det:.6}), not a rotation"));
+    }
+    Ok(())
 }

@@ -139,7 +139,7 @@ pub use fleet::{
 };
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, read_pose_graph};
-pub use kitti::read_kitti;
+pub use kitti::{ROTATION_MATRIX_TOLERANCE, read_kitti};
 pub use loop_duration::{
     LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
     write_loop_duration,
@@ -154,6 +154,7 @@ pub use read::{
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
+pub use text::MAX_LINE_BYTES;
 pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::read_tuc;
