@@ -106,6 +106,7 @@ impl<'a> Cdr<'a> {
     fn stamp_ns(&mut self, field_sec: &str, field_nanosec: &str) -> Result<i64, String> {
         let sec = self.i32(field_sec)?;
         let nanosec = self.u32(field_nanosec)?;
+        crate::pose_type::check_nanoseconds(field_nanosec, i64::from(nanosec))?;
         Ok(i64::from(sec) * 1_000_000_000 + i64::from(nanosec))
     }
 

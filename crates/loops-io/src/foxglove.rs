@@ -116,6 +116,7 @@ const IDENTITY: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
 
 fn stamp_ns(timestamp: Option<Timestamp>) -> Result<i64, String> {
     let Timestamp { seconds, nanos } = timestamp.unwrap_or_default();
+    crate::pose_type::check_nanoseconds("timestamp.nanos", i64::from(nanos))?;
     seconds
         .checked_mul(1_000_000_000)
         .and_then(|ns| ns.checked_add(i64::from(nanos)))
@@ -245,6 +246,7 @@ struct JsonMessage {
 impl JsonMessage {
     fn stamp_ns(&self) -> Result<i64, String> {
         let JsonTime { sec, nsec } = self.timestamp.unwrap_or_default();
+        crate::pose_type::check_nanoseconds("timestamp.nsec", nsec)?;
         sec.checked_mul(1_000_000_000)
             .and_then(|ns| ns.checked_add(nsec))
             .ok_or_else(|| format!("timestamp {sec} s {nsec} ns is out of range"))

@@ -177,6 +177,22 @@ pub(crate) struct Sample<'a> {
     pub(crate) orientation: [f64; 4],
 }
 
+/// The nanoseconds of a time stamp (`builtin_interfaces/Time.nanosec`, ROS 1 `nsecs`,
+/// `google.protobuf.Timestamp.nanos`, a record's time), which every format keeps in
+/// `0..10⁹`: a larger value is a corrupt stamp, not a time one more second on.
+///
+/// # Errors
+/// What is wrong, naming `field`.
+pub(crate) fn check_nanoseconds(field: &str, nanoseconds: i64) -> Result<(), String> {
+    if (0..1_000_000_000).contains(&nanoseconds) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{field} is {nanoseconds} ns, outside 0 to 999999999 (a second's nanoseconds): the stamp is corrupt"
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -66,6 +66,7 @@ impl<'a> Ros1<'a> {
         self.u32("header.seq")?;
         let sec = self.u32("header.stamp.secs")?;
         let nsec = self.u32("header.stamp.nsecs")?;
+        crate::pose_type::check_nanoseconds("header.stamp.nsecs", i64::from(nsec))?;
         let frame_id = self.string("header.frame_id")?;
         Ok((i64::from(sec) * 1_000_000_000 + i64::from(nsec), frame_id))
     }
