@@ -21,23 +21,27 @@
 //! around those, and gives errors of the same shape as the MCAP reader's.
 //!
 //! Every length is checked against what is left of its container (the file, or the
-//! decompressed chunk) before anything is read or allocated; a chunk may not declare more than
-//! 1 GiB decompressed, and its output may not exceed what it declares.
+//! decompressed chunk) before anything is read or allocated. A chunk is decompressed as a
+//! stream and its records read one at a time: memory holds one record header (at most
+//! [`MAX_HEADER_BYTES`]) and one message of a topic decoded (at most 64 MiB), never the chunk,
+//! whatever size it declares (a `u32`: at most 4 GiB); the messages of other topics are skipped.
+//! A chunk must decompress to exactly the size it declares.
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::{BufReader, Read};
+use std::io::{self, BufReader, Read};
 use std::path::Path;
 
-use crate::compression::{ChunkCompression, decompress_chunk};
+use crate::compression::{ChunkCompression, MAX_MESSAGE_BYTES, chunk_decoder};
 use crate::error::{IoError, Result};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor, open_records};
 
 /// The first line of a bag of format 2.0.
 const VERSION: &[u8; 13] = b"#ROSBAG V2.0\n";
 
-/// Largest chunk read, compressed or not: 1 GiB (rosbag writes chunks of 768 kB).
-const MAX_CHUNK_BYTES: u64 = 1 << 30;
+/// Largest record header read: 1 MiB (a header holds a few short fields: op, conn, time,
+/// topic, compression, size).
+const MAX_HEADER_BYTES: u64 = 1 << 20;
 
 /// Record kinds (`op`).
 mod op {
@@ -131,6 +135,7 @@ fn parse_header(bytes: &[u8]) -> std::result::Result<Fields, String> {
                 let time: [u8; 8] = fixed(name, value)?;
                 let sec = u32::from_le_bytes(time[..4].try_into().expect("4 bytes"));
                 let nsec = u32::from_le_bytes(time[4..].try_into().expect("4 bytes"));
+                crate::pose_type::check_nanoseconds("the field time", i64::from(nsec))?;
                 out.time_ns = Some(u64::from(sec) * 1_000_000_000 + u64::from(nsec));
             }
             "compression" => {
@@ -158,59 +163,61 @@ fn parse_header(bytes: &[u8]) -> std::result::Result<Fields, String> {
 pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
     let (reader, len) = open_records(path)?;
     let mut walker = Walker {
-        path,
         reader,
         len,
-        connections: HashMap::new(),
-        header: Vec::new(),
-        raw: Vec::new(),
-        chunk: Vec::new(),
+        records: Records { path, connections: HashMap::new(), header: Vec::new(), data: Vec::new() },
     };
     walker.run(visitor)
 }
 
 #[derive(Debug)]
 struct Walker<'p> {
-    path: &'p Path,
     reader: BufReader<File>,
     /// The file's length in bytes.
     len: u64,
+    records: Records<'p>,
+}
+
+/// What the records need, apart from the file: the connections seen, and reused buffers for a
+/// record's header and data.
+#[derive(Debug)]
+struct Records<'p> {
+    path: &'p Path,
     /// Connection id to the visitor's channel.
     connections: HashMap<u32, usize>,
-    /// Reused buffers: a record header, a record's data, a decompressed chunk.
     header: Vec<u8>,
-    raw: Vec<u8>,
-    chunk: Vec<u8>,
+    data: Vec<u8>,
+}
+
+/// `len` bytes of `reader` into `buffer` (cleared first).
+fn read_into(reader: &mut impl Read, buffer: &mut Vec<u8>, len: u64) -> io::Result<()> {
+    buffer.clear();
+    buffer.resize(len as usize, 0);
+    reader.read_exact(buffer)
+}
+
+/// `len` bytes of `reader`, dropped.
+fn skip(reader: &mut impl Read, len: u64) -> io::Result<()> {
+    let copied = io::copy(&mut reader.take(len), &mut io::sink())?;
+    if copied < len {
+        return Err(io::Error::new(io::ErrorKind::UnexpectedEof, format!("{copied} of {len} bytes")));
+    }
+    Ok(())
+}
+
+fn read_u32(reader: &mut impl Read) -> io::Result<u32> {
+    let mut bytes = [0u8; 4];
+    reader.read_exact(&mut bytes)?;
+    Ok(u32::from_le_bytes(bytes))
 }
 
 impl Walker<'_> {
     fn error(&self, offset: u64, message: impl Into<String>) -> IoError {
-        IoError::Ros1 { path: self.path.to_path_buf(), offset, message: message.into() }
+        self.records.error(offset, message)
     }
 
-    fn read_into(&mut self, buffer: Buffer, offset: u64, len: u64) -> Result<()> {
-        let Self { reader, header, raw, path, .. } = self;
-        let target = match buffer {
-            Buffer::Header => header,
-            Buffer::Raw => raw,
-        };
-        target.clear();
-        target.resize(len as usize, 0);
-        reader.read_exact(target).map_err(|e| IoError::Ros1 {
-            path: path.to_path_buf(),
-            offset,
-            message: format!("cannot read the file: {e}"),
-        })
-    }
-
-    fn read_u32(&mut self, offset: u64) -> Result<u32> {
-        let mut bytes = [0u8; 4];
-        self.reader.read_exact(&mut bytes).map_err(|e| self.error(offset, format!("cannot read the file: {e}")))?;
-        Ok(u32::from_le_bytes(bytes))
-    }
-
-    fn skip(&mut self, offset: u64, len: u64) -> Result<()> {
-        self.reader.seek_relative(len as i64).map_err(|e| self.error(offset, format!("cannot read the file: {e}")))
+    fn read_error(&self, offset: u64, error: &io::Error) -> IoError {
+        self.error(offset, format!("cannot read the file: {error}"))
     }
 
     fn run(&mut self, visitor: &mut impl Visitor) -> Result<()> {
@@ -237,7 +244,7 @@ impl Walker<'_> {
             if left < 4 {
                 return Err(self.error(at, "the file ends in the middle of a record's header length: it is truncated"));
             }
-            let header_len = u64::from(self.read_u32(at)?);
+            let header_len = u64::from(read_u32(&mut self.reader).map_err(|e| self.read_error(at, &e))?);
             if header_len > left - 4 {
                 return Err(self.error(
                     at,
@@ -247,8 +254,18 @@ impl Walker<'_> {
                     ),
                 ));
             }
-            self.read_into(Buffer::Header, at, header_len)?;
-            let fields = parse_header(&self.header)
+            if header_len > MAX_HEADER_BYTES {
+                return Err(self.error(
+                    at,
+                    format!(
+                        "the record header is {header_len} bytes long, over the limit of {} MiB for a header: the \
+                         file is corrupt",
+                        MAX_HEADER_BYTES >> 20
+                    ),
+                ));
+            }
+            read_into(&mut self.reader, &mut self.records.header, header_len).map_err(|e| self.read_error(at, &e))?;
+            let fields = parse_header(&self.records.header)
                 .map_err(|message| self.error(at, format!("the record header does not parse: {message}")))?;
             let Some(op) = fields.op else {
                 return Err(self.error(at, "the record header has no op field"));
@@ -260,7 +277,7 @@ impl Walker<'_> {
                     format!("the file ends before the data length of the {} record: it is truncated", record_name(op)),
                 ));
             }
-            let data_len = u64::from(self.read_u32(at)?);
+            let data_len = u64::from(read_u32(&mut self.reader).map_err(|e| self.read_error(at, &e))?);
             if data_len > left - 4 {
                 return Err(self.error(
                     at,
@@ -281,7 +298,7 @@ impl Walker<'_> {
                     return Err(self.error(at, "the bag header has no index_pos field"));
                 };
                 index_pos = Some(declared);
-                self.skip(at, data_len)?;
+                skip(&mut self.reader, data_len).map_err(|e| self.read_error(at, &e))?;
                 pos = at + 8 + header_len + data_len;
                 continue;
             }
@@ -291,15 +308,10 @@ impl Walker<'_> {
             match op {
                 op::CHUNK => self.chunk(at, &fields, data_len, visitor)?,
                 op::CONNECTION | op::MESSAGE_DATA => {
-                    if data_len > MAX_CHUNK_BYTES {
-                        return Err(self.error(at, format!("the {} record is over 1 GiB", record_name(op))));
-                    }
-                    self.read_into(Buffer::Raw, at, data_len)?;
-                    let header = std::mem::take(&mut self.header);
-                    let data = std::mem::take(&mut self.raw);
-                    let result = self.record(op, &fields, &header, &data, At { offset: at, in_chunk: None }, visitor);
-                    (self.header, self.raw) = (header, data);
-                    result?;
+                    let at = At { offset: at, in_chunk: None };
+                    self.records.record(op, &fields, &mut self.reader, data_len, at, visitor).map_err(|failure| {
+                        failure.into_error(&self.records, at, |e| format!("cannot read the file: {e}"))
+                    })?;
                 }
                 op::INDEX_DATA | op::CHUNK_INFO => {
                     let (entry, what) =
@@ -320,7 +332,7 @@ impl Walker<'_> {
                             ),
                         ));
                     }
-                    self.skip(at, data_len)?;
+                    skip(&mut self.reader, data_len).map_err(|e| self.read_error(at, &e))?;
                 }
                 op::BAG_HEADER => return Err(self.error(at, "a second bag header")),
                 other => return Err(self.error(at, format!("a record of unknown kind (op 0x{other:02x})"))),
@@ -343,126 +355,212 @@ impl Walker<'_> {
         }
     }
 
-    /// A chunk record at `at`: its data decompressed, then its records walked.
+    /// A chunk record at `at`, its data not read yet: decompressed as a stream, its records read
+    /// one at a time.
     fn chunk(&mut self, at: u64, fields: &Fields, data_len: u64, visitor: &mut impl Visitor) -> Result<()> {
         let (Some(compression), Some(size)) = (fields.compression, fields.size) else {
             return Err(self.error(at, "the chunk record lacks its compression or size field"));
         };
         let size = u64::from(size);
-        if data_len > MAX_CHUNK_BYTES || size > MAX_CHUNK_BYTES {
-            return Err(self.error(
-                at,
-                format!("the chunk is {data_len} bytes, {size} decompressed; this reader takes chunks up to 1 GiB"),
-            ));
+        if compression == ChunkCompression::None && data_len != size {
+            return Err(self.error(at, format!("the uncompressed chunk holds {data_len} bytes but declares {size}")));
         }
-        self.read_into(Buffer::Raw, at, data_len)?;
-        let mut chunk = std::mem::take(&mut self.chunk);
-        let result = decompress_chunk(compression, &self.raw, size, &mut chunk)
-            .map_err(|message| self.error(at, message))
-            .and_then(|()| self.chunk_records(at, &chunk, visitor));
-        self.chunk = chunk;
-        result
-    }
-
-    /// The records of the decompressed chunk at `at`.
-    fn chunk_records(&mut self, at: u64, chunk: &[u8], visitor: &mut impl Visitor) -> Result<()> {
-        let mut pos = 0usize;
-        while pos < chunk.len() {
+        let name = compression.name();
+        let describe = |error: &io::Error| match error.kind() {
+            io::ErrorKind::UnexpectedEof => {
+                format!("the {name} chunk decompresses to fewer bytes than the {size} it declares")
+            }
+            _ => format!("the {name} chunk does not decompress: {error}"),
+        };
+        let mut compressed = (&mut self.reader).take(data_len);
+        let mut chunk = chunk_decoder(compression, &mut compressed);
+        let records = &mut self.records;
+        let path = records.path;
+        let mut pos = 0u64;
+        while pos < size {
             let inner = pos;
-            let fail =
-                |message: String| self.error(at, format!("in the record at byte {inner} of this chunk: {message}"));
-            let length = |pos: usize, what: &str| -> Result<usize> {
-                let bytes = chunk
-                    .get(pos..pos + 4)
-                    .ok_or_else(|| fail(format!("the chunk ends in the middle of the record's {what} length")))?;
-                Ok(u32::from_le_bytes(bytes.try_into().expect("4 bytes")) as usize)
+            let fail = |message: String| IoError::Ros1 {
+                path: path.to_path_buf(),
+                offset: at,
+                message: format!("in the record at byte {inner} of this chunk: {message}"),
             };
-            let header_len = length(pos, "header")?;
-            let header_start = pos + 4;
-            let header =
-                header_start.checked_add(header_len).and_then(|end| chunk.get(header_start..end)).ok_or_else(|| {
-                    fail(format!(
-                        "the record header is {header_len} bytes long, past the end of the chunk ({} bytes)",
-                        chunk.len()
-                    ))
-                })?;
-            let fields =
-                parse_header(header).map_err(|message| fail(format!("the record header does not parse: {message}")))?;
+            let left = size - pos;
+            if left < 4 {
+                return Err(fail("the chunk ends in the middle of the record's header length".into()));
+            }
+            let header_len = u64::from(read_u32(&mut chunk).map_err(|e| fail(describe(&e)))?);
+            if header_len > left - 4 {
+                return Err(fail(format!(
+                    "the record header is {header_len} bytes long, past the end of the chunk ({size} bytes)"
+                )));
+            }
+            if header_len > MAX_HEADER_BYTES {
+                return Err(fail(format!(
+                    "the record header is {header_len} bytes long, over the limit of {} MiB for a header",
+                    MAX_HEADER_BYTES >> 20
+                )));
+            }
+            read_into(&mut chunk, &mut records.header, header_len).map_err(|e| fail(describe(&e)))?;
+            let fields = parse_header(&records.header)
+                .map_err(|message| fail(format!("the record header does not parse: {message}")))?;
             let op = fields.op.ok_or_else(|| fail("the record header has no op field".into()))?;
-            let data_at = header_start + header_len;
-            let data_len = length(data_at, "data")?;
-            let data_start = data_at + 4;
-            let data =
-                data_start.checked_add(data_len).and_then(|end| chunk.get(data_start..end)).ok_or_else(|| {
-                    fail(format!(
-                        "the {} record's data is {data_len} bytes long, past the end of the chunk ({} bytes)",
-                        record_name(op),
-                        chunk.len()
-                    ))
-                })?;
+            let left = left - 4 - header_len;
+            if left < 4 {
+                return Err(fail("the chunk ends in the middle of the record's data length".into()));
+            }
+            let data_len = u64::from(read_u32(&mut chunk).map_err(|e| fail(describe(&e)))?);
+            if data_len > left - 4 {
+                return Err(fail(format!(
+                    "the {} record's data is {data_len} bytes long, past the end of the chunk ({size} bytes)",
+                    record_name(op)
+                )));
+            }
             if !matches!(op, op::CONNECTION | op::MESSAGE_DATA) {
                 return Err(fail(format!("a {} record inside a chunk", record_name(op))));
             }
-            self.record(op, &fields, header, data, At { offset: at, in_chunk: Some(inner as u64) }, visitor)?;
-            pos = data_start + data_len;
+            let record_at = At { offset: at, in_chunk: Some(inner) };
+            records
+                .record(op, &fields, &mut chunk, data_len, record_at, visitor)
+                .map_err(|failure| failure.into_error(records, record_at, describe))?;
+            pos += 8 + header_len + data_len;
         }
-        Ok(())
+        let mut extra = [0u8; 1];
+        match chunk.read(&mut extra) {
+            Ok(0) => {}
+            Ok(_) => {
+                return Err(records
+                    .error(at, format!("the {name} chunk decompresses to more bytes than the {size} it declares")));
+            }
+            Err(e) => return Err(records.error(at, describe(&e))),
+        }
+        drop(chunk);
+        // What the decompressor did not read of the chunk's data.
+        let unread = compressed.limit();
+        skip(&mut self.reader, unread).map_err(|e| self.read_error(at, &e))
+    }
+}
+
+/// Why a record failed: what is wrong with it, an I/O error reading its data, or an error
+/// already complete (from the visitor).
+#[derive(Debug)]
+enum Failure {
+    Fault(String),
+    Read(io::Error),
+    Error(IoError),
+}
+
+impl Failure {
+    /// The error, located at `at`; `describe` says what a read error means where it happened.
+    fn into_error(self, records: &Records<'_>, at: At, describe: impl Fn(&io::Error) -> String) -> IoError {
+        let message = match self {
+            Failure::Error(error) => return error,
+            Failure::Fault(message) => message,
+            Failure::Read(error) => describe(&error),
+        };
+        let message = match at.in_chunk {
+            Some(inner) => format!("in the record at byte {inner} of this chunk: {message}"),
+            None => message,
+        };
+        records.error(at.offset, message)
+    }
+}
+
+impl Records<'_> {
+    fn error(&self, offset: u64, message: impl Into<String>) -> IoError {
+        IoError::Ros1 { path: self.path.to_path_buf(), offset, message: message.into() }
     }
 
-    /// A connection or message data record, at the top level or in a chunk.
+    /// A connection or message data record, at the top level or in a chunk, whose header
+    /// `fields` are parsed (from `self.header`) and whose `data_len` bytes of data `reader` is
+    /// at: read when needed (a connection, a message of a topic the visitor decodes), else
+    /// skipped.
     fn record(
         &mut self,
         op: u8,
         fields: &Fields,
-        header: &[u8],
-        data: &[u8],
+        reader: &mut impl Read,
+        data_len: u64,
         at: At,
         visitor: &mut impl Visitor,
-    ) -> Result<()> {
-        let fail = |message: String| {
-            let message = match at.in_chunk {
-                Some(inner) => format!("in the record at byte {inner} of this chunk: {message}"),
-                None => message,
-            };
-            self.error(at.offset, message)
-        };
+    ) -> std::result::Result<(), Failure> {
         let Some(conn) = fields.conn else {
-            return Err(fail(format!("the {} record has no conn field", record_name(op))));
+            return Err(Failure::Fault(format!("the {} record has no conn field", record_name(op))));
         };
         if op == op::MESSAGE_DATA {
             let Some(&channel) = self.connections.get(&conn) else {
-                return Err(fail(format!(
+                return Err(Failure::Fault(format!(
                     "a message on connection {conn}, which no earlier connection record defines"
                 )));
             };
             let Some(time_ns) = fields.time_ns else {
-                return Err(fail("the message data record has no time field".into()));
+                return Err(Failure::Fault("the message data record has no time field".into()));
             };
             let header = MessageHeader { log_time: time_ns, publish_time: time_ns };
-            return visitor.message(channel, header, data, at);
+            let mut data = std::mem::take(&mut self.data);
+            data.clear();
+            if visitor.decodes(channel) {
+                if data_len > MAX_MESSAGE_BYTES {
+                    return Err(Failure::Fault(format!(
+                        "the message on connection {conn} is {data_len} bytes long, over the limit of {} MiB for a \
+                         pose message",
+                        MAX_MESSAGE_BYTES >> 20
+                    )));
+                }
+                read_into(reader, &mut data, data_len).map_err(Failure::Read)?;
+            } else {
+                skip(reader, data_len).map_err(Failure::Read)?;
+            }
+            let result = visitor.message(channel, header, &data, at);
+            self.data = data;
+            return result.map_err(Failure::Error);
         }
+        if data_len > MAX_MESSAGE_BYTES {
+            return Err(Failure::Fault(format!(
+                "the connection record's data is {data_len} bytes long, over the limit of {} MiB",
+                MAX_MESSAGE_BYTES >> 20
+            )));
+        }
+        let mut data = std::mem::take(&mut self.data);
+        let result = read_into(reader, &mut data, data_len)
+            .map_err(Failure::Read)
+            .and_then(|()| self.connection(conn, fields, &data, at, visitor));
+        self.data = data;
+        result
+    }
+
+    /// A connection record: its topic (from the record header) and type (from its data).
+    fn connection(
+        &mut self,
+        conn: u32,
+        fields: &Fields,
+        data: &[u8],
+        at: At,
+        visitor: &mut impl Visitor,
+    ) -> std::result::Result<(), Failure> {
         if self.connections.contains_key(&conn) {
             return Ok(());
         }
         let topic = match fields.topic {
-            Some((start, end)) => std::str::from_utf8(&header[start..end])
-                .map_err(|_| fail(format!("the topic of connection {conn} is not UTF-8")))?,
-            None => return Err(fail(format!("connection {conn} has no topic field"))),
+            Some((start, end)) => std::str::from_utf8(&self.header[start..end])
+                .map_err(|_| Failure::Fault(format!("the topic of connection {conn} is not UTF-8")))?,
+            None => return Err(Failure::Fault(format!("connection {conn} has no topic field"))),
         };
         let mut schema_name = None;
         for field in header_fields(data) {
             let (name, _, value) =
-                field.map_err(|message| fail(format!("the connection header does not parse: {message}")))?;
+                field.map_err(|message| Failure::Fault(format!("the connection header does not parse: {message}")))?;
             if name == "type" {
                 schema_name = Some(
                     std::str::from_utf8(value)
-                        .map_err(|_| fail(format!("the type of connection {conn} is not UTF-8")))?
+                        .map_err(|_| Failure::Fault(format!("the type of connection {conn} is not UTF-8")))?
                         .to_owned(),
                 );
             }
         }
         let Some(schema_name) = schema_name else {
-            return Err(fail(format!("the connection header of connection {conn} ({topic}) has no type field")));
+            return Err(Failure::Fault(format!(
+                "the connection header of connection {conn} ({topic}) has no type field"
+            )));
         };
         let key = ChannelKey {
             topic: topic.to_owned(),
@@ -474,13 +572,6 @@ impl Walker<'_> {
         self.connections.insert(conn, channel);
         Ok(())
     }
-}
-
-/// Which reused buffer a read fills.
-#[derive(Debug, Clone, Copy)]
-enum Buffer {
-    Header,
-    Raw,
 }
 
 #[cfg(test)]
