@@ -6,8 +6,9 @@
 //! (LZ4 frame format, pure Rust; ROS 1's `roslz4` writes standard LZ4 frames) and `bzip2` (with
 //! its pure-Rust `libbz2-rs-sys` back end). Only the limits are ours: no output grows past what
 //! its container declares (a ROS 1 chunk's `size`), or past [`MAX_MESSAGE_BYTES`] for one
-//! message and [`MAX_FILE_BYTES`] for a decompressed storage file, whatever the input claims;
-//! buffers grow with the output actually produced, never from a declared length alone.
+//! message and [`file_limit`] for a decompressed storage file, whatever the input claims;
+//! buffers grow with the output actually produced, never from a declared length alone, and
+//! chunks are read as streams.
 
 use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
@@ -56,9 +57,22 @@ impl Frame {
 /// thousand transforms is about 100 kB), so a larger one is corrupt.
 pub(crate) const MAX_MESSAGE_BYTES: u64 = 64 << 20;
 
-/// Largest decompressed storage file (`.db3.zstd`, `.mcap.zstd`): 32 GiB, written to a
-/// temporary file in the system's temporary folder (`TMPDIR`) and removed after reading.
-pub(crate) const MAX_FILE_BYTES: u64 = 32 << 30;
+/// How many times its compressed size a storage file (`.db3.zstd`, `.mcap.zstd`) may
+/// decompress to: 1000. zstd compresses logs of poses and sensor data 2 to 20 times, a
+/// database's empty pages more; a thousandfold takes long runs of one byte, which is what a
+/// compression bomb is made of (33 kB of zstd holding 1 GiB of zeros is 32,000 times).
+pub(crate) const MAX_FILE_RATIO: u64 = 1000;
+
+/// The least a storage file may decompress to, whatever its compressed size: 64 MiB.
+pub(crate) const MIN_FILE_LIMIT: u64 = 64 << 20;
+
+/// The most a storage file of `compressed` bytes may decompress to: [`MAX_FILE_RATIO`] times
+/// its size, and at least [`MIN_FILE_LIMIT`]. The decompressed file goes to a temporary file in
+/// the system's temporary folder (`TMPDIR`), removed after reading; a full disk is an error
+/// naming the file.
+pub(crate) fn file_limit(compressed: u64) -> u64 {
+    compressed.saturating_mul(MAX_FILE_RATIO).max(MIN_FILE_LIMIT)
+}
 
 /// How a CDR message from a rosbag2 bag with `compression_mode: message` is compressed, if it
 /// is: a CDR message starts with `00`, a compressed one with its frame's magic.
@@ -121,29 +135,46 @@ fn too_large(frame: Frame, size: u64) -> String {
 }
 
 /// Decompresses the storage file at `path` (`.db3.zstd`, `.mcap.zstd`) into a temporary file,
-/// at most [`MAX_FILE_BYTES`]; the file is removed when the handle drops.
+/// at most [`file_limit`] of its size; the file is removed when the handle drops.
 ///
 /// # Errors
 /// [`IoError::Open`] when the file cannot be read; [`IoError::Bag`] naming the file when it is
 /// not in `frame`'s format, does not decompress (with the number of bytes decompressed before
-/// the fault), is larger than the limit, or the temporary file cannot be written.
+/// the fault), declares (zstd) or reaches a size over the limit (naming both), or the temporary
+/// file cannot be written.
 pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::NamedTempFile> {
     let bag_error = |message: String| IoError::Bag { path: path.to_path_buf(), message };
-    let mut input = BufReader::with_capacity(
-        1 << 20,
-        File::open(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?,
-    );
-    let mut magic = [0u8; 4];
-    let got = read_up_to(&mut input, &mut magic).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
-    if Frame::of(&magic[..got]) != Some(frame) {
+    let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
+    let file = File::open(path).map_err(open_error)?;
+    let compressed = file.metadata().map_err(open_error)?.len();
+    let limit = file_limit(compressed);
+    let mut input = BufReader::with_capacity(1 << 20, file);
+    // The magic, and for zstd the frame header with the size it may declare (at most 18 bytes).
+    let mut head = [0u8; 18];
+    let got = read_up_to(&mut input, &mut head).map_err(open_error)?;
+    let head = &head[..got];
+    if Frame::of(head) != Some(frame) {
         return Err(bag_error(format!(
             "not a {} file: it starts with {:02x?}, not the {} magic number",
             frame.name(),
-            &magic[..got],
+            &head[..got.min(4)],
             frame.name()
         )));
     }
-    let input = io::Cursor::new(magic).chain(input);
+    let over_limit = |size: String| {
+        bag_error(format!(
+            "it {size}, over the limit of {limit} bytes for this file ({MAX_FILE_RATIO} times its {compressed} \
+             compressed bytes, and at least {} MiB): a compression bomb, or a corrupt file",
+            MIN_FILE_LIMIT >> 20
+        ))
+    };
+    if frame == Frame::Zstd
+        && let Ok(Some(declared)) = zstd::zstd_safe::get_frame_content_size(head)
+        && declared > limit
+    {
+        return Err(over_limit(format!("declares {declared} bytes decompressed")));
+    }
+    let input = io::Cursor::new(head.to_vec()).chain(input);
     let temp = tempfile::Builder::new()
         .prefix("loops-bag-")
         .tempfile()
@@ -151,8 +182,8 @@ pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::Nam
     let mut output = Counting { inner: BufWriter::with_capacity(1 << 20, temp.as_file()), written: 0 };
     let copied = match frame {
         Frame::Zstd => zstd::stream::read::Decoder::new(input)
-            .and_then(|decoder| io::copy(&mut decoder.take(MAX_FILE_BYTES + 1), &mut output)),
-        Frame::Lz4 => io::copy(&mut lz4_flex::frame::FrameDecoder::new(input).take(MAX_FILE_BYTES + 1), &mut output),
+            .and_then(|decoder| io::copy(&mut decoder.take(limit + 1), &mut output)),
+        Frame::Lz4 => io::copy(&mut lz4_flex::frame::FrameDecoder::new(input).take(limit + 1), &mut output),
     };
     let written = output.written;
     let flushed = copied.and_then(|_| output.inner.flush());
@@ -165,11 +196,8 @@ pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::Nam
         };
         bag_error(format!("{what} ({} after {written} decompressed bytes): {e}", frame.name()))
     })?;
-    if written > MAX_FILE_BYTES {
-        return Err(bag_error(format!(
-            "it decompresses to more than {} GiB, the limit for one storage file",
-            MAX_FILE_BYTES >> 30
-        )));
+    if written > limit {
+        return Err(over_limit("decompresses to more".to_owned()));
     }
     Ok(temp)
 }
@@ -213,35 +241,26 @@ pub(crate) enum ChunkCompression {
     Lz4,
 }
 
-/// Decompresses a ROS 1 chunk's data into `out` (cleared first), which must come to exactly
-/// `size` bytes, the size the chunk declares.
-///
-/// # Errors
-/// What the codec says, or that the output is shorter or longer than declared.
-pub(crate) fn decompress_chunk(
-    compression: ChunkCompression,
-    data: &[u8],
-    size: u64,
-    out: &mut Vec<u8>,
-) -> std::result::Result<(), String> {
-    out.clear();
-    let (name, read) = match compression {
-        ChunkCompression::None => {
-            if data.len() as u64 != size {
-                return Err(format!("the uncompressed chunk holds {} bytes but declares {size}", data.len()));
-            }
-            out.extend_from_slice(data);
-            return Ok(());
+impl ChunkCompression {
+    /// The name the bag gives it.
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            ChunkCompression::None => "uncompressed",
+            ChunkCompression::Bz2 => "bz2",
+            ChunkCompression::Lz4 => "lz4",
         }
-        ChunkCompression::Bz2 => ("bz2", bzip2::read::BzDecoder::new(data).take(size + 1).read_to_end(out)),
-        ChunkCompression::Lz4 => ("lz4", lz4_flex::frame::FrameDecoder::new(data).take(size + 1).read_to_end(out)),
-    };
-    read.map_err(|e| format!("the {name} chunk does not decompress: {e}"))?;
-    if out.len() as u64 != size {
-        let what = if out.len() as u64 > size { "more" } else { "fewer" };
-        return Err(format!("the {name} chunk decompresses to {what} bytes than the {size} it declares"));
     }
-    Ok(())
+}
+
+/// A ROS 1 chunk's records, decompressed as a stream from `data` (the chunk's data, bounded by
+/// the caller). The caller reads no more than the size the chunk declares, and checks that the
+/// stream then ends.
+pub(crate) fn chunk_decoder<'a>(compression: ChunkCompression, data: impl Read + 'a) -> Box<dyn Read + 'a> {
+    match compression {
+        ChunkCompression::None => Box::new(data),
+        ChunkCompression::Bz2 => Box::new(bzip2::read::BzDecoder::new(data)),
+        ChunkCompression::Lz4 => Box::new(lz4_flex::frame::FrameDecoder::new(data)),
+    }
 }
 
 #[cfg(test)]
@@ -277,19 +296,17 @@ mod tests {
     }
 
     #[test]
-    fn chunks_must_have_their_declared_size() {
+    fn chunks_decompress_as_streams() {
         let plain = b"hello chunk hello chunk hello chunk".to_vec();
-        let mut out = Vec::new();
-        decompress_chunk(ChunkCompression::None, &plain, plain.len() as u64, &mut out).unwrap();
-        assert_eq!(out, plain);
+        let read = |compression, data: &[u8]| {
+            let mut out = Vec::new();
+            chunk_decoder(compression, data).read_to_end(&mut out).map(|_| out)
+        };
+        assert_eq!(read(ChunkCompression::None, &plain).unwrap(), plain);
         let mut bz2 = Vec::new();
         bzip2::read::BzEncoder::new(&plain[..], bzip2::Compression::best()).read_to_end(&mut bz2).unwrap();
-        decompress_chunk(ChunkCompression::Bz2, &bz2, plain.len() as u64, &mut out).unwrap();
-        assert_eq!(out, plain);
-        let error = decompress_chunk(ChunkCompression::Bz2, &bz2, 5, &mut out).unwrap_err();
-        assert!(error.contains("more bytes than the 5"), "{error}");
-        let error = decompress_chunk(ChunkCompression::Bz2, &bz2, 500, &mut out).unwrap_err();
-        assert!(error.contains("fewer bytes than the 500"), "{error}");
-        assert!(decompress_chunk(ChunkCompression::Lz4, &bz2, 5, &mut out).is_err());
+        assert_eq!(read(ChunkCompression::Bz2, &bz2).unwrap(), plain);
+        assert!(read(ChunkCompression::Lz4, &bz2).is_err());
+        assert!(read(ChunkCompression::Bz2, &bz2[..bz2.len() - 3]).is_err());
     }
 }

@@ -40,8 +40,9 @@ use rosbag2::{Rosbag2, Storage, StorageFile};
 /// - Compression: `compression_mode: message` (each CDR message a zstd frame, recognised by its
 ///   magic number whether or not `metadata.yaml` says so; an lz4 frame too), and `compression_mode:
 ///   file` (each storage file compressed whole, `*.db3.zstd`, `*.mcap.zstd`; decompressed to a
-///   temporary file in `TMPDIR`, at most 32 GiB, removed after reading). One message may
-///   decompress to at most 64 MiB.
+///   temporary file in `TMPDIR`, removed after reading; at most 1000 times the compressed file,
+///   and at least 64 MiB, so that a compression bomb is an error, not a full disk). One
+///   message may decompress to at most 64 MiB.
 /// - Topic, time and frame pair as `options` say, as for [`read_mcap`](crate::read_mcap). A
 ///   sqlite3 file records one time per message, so [`TimeSource::Log`](crate::TimeSource::Log)
 ///   and [`TimeSource::Publish`](crate::TimeSource::Publish) both take it.

@@ -18,6 +18,7 @@ use std::path::Path;
 use rusqlite::types::ValueRef;
 use rusqlite::{Connection, OpenFlags};
 
+use crate::compression::MAX_MESSAGE_BYTES;
 use crate::error::{IoError, Result};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
 
@@ -118,10 +119,12 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
         }
     }
 
-    // The data column only for the topics decoded; NULL (never read from disk) for the others.
+    // The data column only for the topics decoded, and only up to the size of a message (its
+    // length instead); NULL (never read from disk) for the others.
     let wanted = decoded.iter().map(i64::to_string).collect::<Vec<_>>().join(",");
     let query = format!(
-        "SELECT id, topic_id, timestamp, CASE WHEN topic_id IN ({wanted}) THEN data END FROM messages ORDER BY id"
+        "SELECT id, topic_id, timestamp, CASE WHEN topic_id IN ({wanted}) THEN \
+         CASE WHEN length(data) <= {MAX_MESSAGE_BYTES} THEN data ELSE length(data) END END FROM messages ORDER BY id"
     );
     let mut statement =
         db.prepare(&query).map_err(sql(None, "not a rosbag2 sqlite3 file: cannot read its messages table"))?;
@@ -161,6 +164,15 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
         let data = match row.get_ref(3) {
             Ok(ValueRef::Blob(data)) => data,
             Ok(ValueRef::Null) if !decoded.contains(&topic_id) => &[],
+            Ok(ValueRef::Integer(len)) if decoded.contains(&topic_id) => {
+                return Err(error(
+                    Some(id),
+                    format!(
+                        "the message is {len} bytes long, over the limit of {} MiB for a pose message",
+                        MAX_MESSAGE_BYTES >> 20
+                    ),
+                ));
+            }
             Ok(other) => {
                 return Err(error(Some(id), format!("the message's data is {:?}, not a blob", other.data_type())));
             }
