@@ -8,6 +8,7 @@ use loops_core::{Detections, Error, Timeline};
 use crate::dropped::Dropped;
 use crate::error::{IoError, Result};
 use crate::text::{Delimiter, is_header, open_lines, parse_finite};
+use crate::tuc::{LIBRSF_TAGS, unknown_tag};
 
 /// Detections as read: times of the two poses of each detected loop, seconds, an optional
 /// score (higher is more confident), and the file line of each.
@@ -27,11 +28,13 @@ pub struct DetectionTable {
 
 /// Reads detections: rows of `t, t_prime[, score]` separated by commas, semicolons, tabs or
 /// spaces, a header row allowed, `#` comments skipped; or lines `loop t1 t2 score ...` as in the
-/// TUC SLAM datasets (other keyword lines, e.g. `odom2`, are skipped).
+/// TUC SLAM datasets (the other libRSF record types, e.g. `odom2`, are skipped; a line of a
+/// keyword that is none of them is an error).
 ///
 /// # Errors
 /// [`IoError::Open`]; [`IoError::Parse`] naming line and column for a row with fewer than two
-/// numbers or a non-finite value; [`IoError::Empty`] without any detection.
+/// numbers or a non-finite value, or naming an unknown keyword; [`IoError::Empty`] without any
+/// detection.
 ///
 /// # Examples
 /// ```
@@ -71,7 +74,11 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
                     && fields.len() > 1
                     && !is_header(fields.iter().copied()) =>
             {
-                continue; // another record type of a keyword-led file (odom2, point2, ...)
+                // Another record type of a keyword-led file (odom2, point2, ...), or a typo.
+                if LIBRSF_TAGS.contains(word) {
+                    continue;
+                }
+                return Err(parse_error(number, unknown_tag(word)));
             }
             _ => {}
         }

@@ -157,6 +157,6 @@ pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, secon
 pub use text::MAX_LINE_BYTES;
 pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};
-pub use tuc::read_tuc;
+pub use tuc::{LIBRSF_TAGS, read_tuc};
 pub use tum::read_tum;
 pub use write::{EdgeKind, G2oOptions, g2o_edges_text, write_g2o_edges, write_tum};

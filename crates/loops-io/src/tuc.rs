@@ -20,15 +20,17 @@ use crate::text::{self, Lines};
 ///   table holds it in the east-north-up frame at the first fix: the first position is
 ///   `[0, 0, 0]`, x points east, y north, z up. That is a rotation of ECEF minus the first fix,
 ///   so every distance is kept, and the plane axes `[0, 1]` are the horizontal.
-/// - Other tags (`odom2`, `loop`, ...) are skipped; a file has `point2` or `point3` lines, not
-///   both.
+/// - The other record types of libRSF (`odom2`, `loop`, ... [`LIBRSF_TAGS`]) are skipped; a
+///   line of any other tag (a misspelled `poitn2`) is an error. A file has `point2` or `point3`
+///   lines, not both.
 ///
 /// Time O(file size).
 ///
 /// # Errors
 /// - [`IoError::Open`] when the file cannot be read;
-/// - [`IoError::Parse`] for a `point2`, `point3` or `angle` line with too few columns, a field
-///   that is not a finite number, or `point2` and `point3` in one file;
+/// - [`IoError::Parse`] for a line whose tag is not libRSF's, a `point2`, `point3` or `angle`
+///   line with too few columns, a field that is not a finite number, or `point2` and `point3`
+///   in one file;
 /// - [`IoError::Empty`] without `point2` or `point3` lines.
 ///
 /// # Examples
@@ -46,6 +48,72 @@ use crate::text::{self, Lines};
 pub fn read_tuc(path: impl AsRef<Path>) -> Result<PoseTable> {
     let path = path.as_ref();
     parse_tuc(path, &mut text::open_lines(path)?)
+}
+
+/// The record types of libRSF's text files (its `DataType` names): the lines a libRSF file may
+/// hold. The TUC reader reads `point2`, `point3` and `angle`, the detection reader `loop`.
+pub const LIBRSF_TAGS: &[&str] = &[
+    "point1",
+    "point2",
+    "point3",
+    "angle",
+    "quaternion",
+    "unit_circle",
+    "pose2",
+    "pose3",
+    "pose_between2",
+    "pose_between3",
+    "point_id2",
+    "point_conf_id2",
+    "bounding_box_3",
+    "clock",
+    "clock_drift",
+    "imu_bias",
+    "switch",
+    "cov1",
+    "cov2",
+    "gmm1",
+    "gmm2",
+    "odom2",
+    "odom2diff",
+    "odom3",
+    "odom3radar",
+    "odom3laser",
+    "odom3vio",
+    "imu",
+    "pseudorange2",
+    "pseudorange3",
+    "range2",
+    "range3",
+    "range_lm2",
+    "range_lm3",
+    "point2radar",
+    "point1set",
+    "point2set",
+    "point3set",
+    "point2setradar",
+    "bearing_range_id_2",
+    "pressure",
+    "pressure_diff",
+    "loop",
+    "error1",
+    "error2",
+    "error3",
+    "error6",
+    "cost",
+    "cost_gradient1",
+    "cost_gradient2",
+    "cost_gradient3",
+    "solver_summary",
+    "val1",
+];
+
+/// The message for a line whose first word is no libRSF record type.
+pub(crate) fn unknown_tag(word: &str) -> String {
+    const SHOWN_CHARS: usize = 40;
+    let shown: String = word.chars().take(SHOWN_CHARS).collect();
+    let cut = if word.chars().count() > SHOWN_CHARS { "…" } else { "" };
+    format!("unknown record type {shown:?}{cut}: expected a libRSF record (point2, point3, angle, loop, odom2, ...)")
 }
 
 /// The tag, the columns it needs, and their names for messages.
@@ -67,8 +135,13 @@ pub(crate) fn parse_tuc(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<
     while let Some((line, content)) = lines.next_data()? {
         let mut fields = content.split_ascii_whitespace();
         let Some(word) = fields.next() else { continue };
-        let Some((tag, needed, layout)) = columns_of(word) else { continue };
         let parse_error = |message: String| IoError::parse(path, line, message);
+        let Some((tag, needed, layout)) = columns_of(word) else {
+            if LIBRSF_TAGS.contains(&word) {
+                continue;
+            }
+            return Err(parse_error(unknown_tag(word)));
+        };
         let mut values = [0.0; 4];
         let mut count = 1;
         for (value, field) in values.iter_mut().zip(fields).take(needed - 1) {

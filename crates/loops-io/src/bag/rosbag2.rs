@@ -145,8 +145,7 @@ impl Rosbag2 {
 
     fn from_metadata(metadata_path: &Path) -> Result<Rosbag2> {
         let bag_error = |message: String| IoError::Bag { path: metadata_path.to_path_buf(), message };
-        let text = std::fs::read_to_string(metadata_path)
-            .map_err(|error| IoError::Open { path: metadata_path.to_path_buf(), error })?;
+        let text = read_metadata(metadata_path)?;
         let file: MetadataFile = serde_yaml_ng::from_str(&text).map_err(|error| {
             let line = error.location().map_or(1, |location| location.line());
             IoError::parse(metadata_path, line, format!("not a rosbag2 metadata.yaml: {error}"))
@@ -252,6 +251,26 @@ fn split_key(path: &Path) -> (String, u64, String) {
         }
         _ => (stem.to_owned(), 0, name),
     }
+}
+
+/// Largest `metadata.yaml` read: 16 MiB (a bag of a thousand splits and topics has ~1 MB).
+const MAX_METADATA_BYTES: u64 = 16 << 20;
+
+/// The text of a `metadata.yaml`, at most [`MAX_METADATA_BYTES`].
+fn read_metadata(path: &Path) -> Result<String> {
+    use std::io::Read;
+    let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .and_then(|file| file.take(MAX_METADATA_BYTES + 1).read_to_string(&mut text))
+        .map_err(open_error)?;
+    if text.len() as u64 > MAX_METADATA_BYTES {
+        return Err(IoError::Bag {
+            path: path.to_path_buf(),
+            message: format!("the file is larger than {} MiB: not a rosbag2 metadata.yaml", MAX_METADATA_BYTES >> 20),
+        });
+    }
+    Ok(text)
 }
 
 #[cfg(test)]
