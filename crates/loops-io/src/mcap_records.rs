@@ -586,9 +586,18 @@ impl Walker<'_> {
             }
         }
         let Some((at, statistics)) = &state.statistics else { return Ok(()) };
+        let suspects = match state.unknown.first() {
+            Some((offset, opcode)) => format!(
+                "; the data section holds {} record{} of unknown opcodes, the first at offset {offset} (opcode \
+                 {opcode:#04x})",
+                state.unknown.len(),
+                if state.unknown.len() == 1 { "" } else { "s" }
+            ),
+            None => String::new(),
+        };
         let lost = |declared: u64, read: u64| {
             if declared > read {
-                format!(": {} messages lost (a record is corrupt)", declared - read)
+                format!(": {} messages lost (a record is corrupt){suspects}", declared - read)
             } else {
                 String::new()
             }

@@ -2,6 +2,8 @@
 //! fixture builder of the bag and MCAP tests, and the real-data folder.
 #![allow(dead_code)] // each test crate uses a different part
 
+pub mod logs;
+
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::Command;
