@@ -139,6 +139,23 @@ fn item6_messages_lost_inside_a_chunk_are_counted_by_its_message_index() {
     assert!(error.to_string().contains("a record of opcode 0x85 (unknown) in a chunk"), "{error}");
 }
 
+#[test]
+fn item6_a_ros1_message_moved_to_another_connection_is_counted_by_the_index() {
+    let bag = logs::ros1_bag(12, "none", 4);
+    let data = logs::ros1_pose_stamped(6);
+    let at = bag.windows(data.len()).position(|window| window == data).expect("pose 6");
+    let conn = bag[..at].windows(5).rposition(|window| window == b"conn=").expect("its conn field") + 5;
+    let mut moved = bag.clone();
+    moved[conn] = 1;
+    let path = write("moved.bag", &moved);
+    let error = read_ros1(&path, &pose_options()).unwrap_err();
+    assert_one_line(&error.to_string(), &path);
+    let chunk = bag[..at].windows(13).rposition(|window| window == b"compression=n").expect("its chunk") - 16;
+    assert_eq!(error.offset(), Some(chunk as u64), "{error}");
+    assert!(error.to_string().contains("the chunk holds 3 messages on connection 0, but its index data"), "{error}");
+    assert!(error.to_string().ends_with("lists 4: 1 messages lost (a record in the chunk is corrupt)"), "{error}");
+}
+
 // ---- item 7: unknown g2o / TORO tags ----------------------------------------------------------
 
 #[test]

@@ -165,7 +165,7 @@ pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
     let mut walker = Walker {
         reader,
         len,
-        records: Records { path, connections: HashMap::new(), header: Vec::new(), data: Vec::new() },
+        records: Records { path, connections: HashMap::new(), header: Vec::new(), data: Vec::new(), chunk: None },
     };
     walker.run(visitor)
 }
@@ -187,6 +187,18 @@ struct Records<'p> {
     connections: HashMap<u32, usize>,
     header: Vec<u8>,
     data: Vec<u8>,
+    /// The last chunk walked and its messages per connection, until its index data records
+    /// have been checked.
+    chunk: Option<ChunkCount>,
+}
+
+/// The messages read in one chunk, per connection, and what its index data records declare.
+#[derive(Debug)]
+struct ChunkCount {
+    offset: u64,
+    read: HashMap<u32, u64>,
+    /// Per connection: the count its index data record declares, and the record's offset.
+    indexed: HashMap<u32, (u64, u64)>,
 }
 
 /// `len` bytes of `reader` into `buffer` (cleared first).
@@ -305,6 +317,9 @@ impl Walker<'_> {
             if Some(at) == index_pos {
                 index_found = true;
             }
+            if op != op::INDEX_DATA {
+                self.check_chunk_messages()?;
+            }
             match op {
                 op::CHUNK => self.chunk(at, &fields, data_len, visitor)?,
                 op::CONNECTION | op::MESSAGE_DATA => {
@@ -333,12 +348,22 @@ impl Walker<'_> {
                         ));
                     }
                     skip(&mut self.reader, data_len).map_err(|e| self.read_error(at, &e))?;
+                    if op == op::INDEX_DATA
+                        && let (Some(chunk), Some(conn)) = (&mut self.records.chunk, fields.conn)
+                        && chunk.indexed.insert(conn, (u64::from(count), at)).is_some()
+                    {
+                        return Err(self.error(
+                            at,
+                            format!("a second index data record for connection {conn} after the same chunk"),
+                        ));
+                    }
                 }
                 op::BAG_HEADER => return Err(self.error(at, "a second bag header")),
                 other => return Err(self.error(at, format!("a record of unknown kind (op 0x{other:02x})"))),
             }
             pos = at + 8 + header_len + data_len;
         }
+        self.check_chunk_messages()?;
         match index_pos {
             None => Err(self.error(pos, "the file ends before its bag header: it is truncated")),
             Some(declared) if declared != 0 && declared >= self.len => Err(self.error(
@@ -353,6 +378,39 @@ impl Walker<'_> {
             )),
             Some(_) => Ok(()),
         }
+    }
+
+    /// The index data records after the last chunk, checked against its messages: called at the
+    /// first record that is not one, and at the end of the file. A message whose record is
+    /// corrupt (its connection changed) would otherwise leave its topic without a word.
+    fn check_chunk_messages(&mut self) -> Result<()> {
+        let Some(chunk) = self.records.chunk.take() else { return Ok(()) };
+        if chunk.indexed.is_empty() {
+            // No index data: the recording stopped before writing it.
+            return Ok(());
+        }
+        let mut connections: Vec<u32> = chunk.read.keys().chain(chunk.indexed.keys()).copied().collect();
+        connections.sort_unstable();
+        connections.dedup();
+        for conn in connections {
+            let read = chunk.read.get(&conn).copied().unwrap_or(0);
+            let (declared, index_at) = chunk.indexed.get(&conn).copied().unwrap_or((0, chunk.offset));
+            if read != declared {
+                let lost = if declared > read {
+                    format!(": {} messages lost (a record in the chunk is corrupt)", declared - read)
+                } else {
+                    String::new()
+                };
+                return Err(self.error(
+                    chunk.offset,
+                    format!(
+                        "the chunk holds {read} messages on connection {conn}, but its index data (the record at \
+                         offset {index_at}) lists {declared}{lost}"
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// A chunk record at `at`, its data not read yet: decompressed as a stream, its records read
@@ -372,6 +430,7 @@ impl Walker<'_> {
             }
             _ => format!("the {name} chunk does not decompress: {error}"),
         };
+        self.records.chunk = Some(ChunkCount { offset: at, read: HashMap::new(), indexed: HashMap::new() });
         let mut compressed = (&mut self.reader).take(data_len);
         let mut chunk = chunk_decoder(compression, &mut compressed);
         let records = &mut self.records;
@@ -496,6 +555,11 @@ impl Records<'_> {
                 return Err(Failure::Fault("the message data record has no time field".into()));
             };
             let header = MessageHeader { log_time: time_ns, publish_time: time_ns };
+            if let Some(chunk) = &mut self.chunk
+                && at.in_chunk.is_some()
+            {
+                *chunk.read.entry(conn).or_default() += 1;
+            }
             let mut data = std::mem::take(&mut self.data);
             data.clear();
             if visitor.decodes(channel) {

@@ -295,27 +295,33 @@ pub fn ros1_compress(compression: &str, plain: &[u8]) -> Vec<u8> {
 
 /// A ROS 1 bag of `n` `PoseStamped` on [`TOPIC`] (connection 0) and as many strings on
 /// `/chatter` (connection 1), in chunks of `per_chunk` poses compressed as `compression`, each
-/// followed by its index data records; connection and chunk info records at the end. `extra`
-/// is appended to the records of the first chunk (a large message, for a bomb).
+/// followed by its index data records; connection and chunk info records at the end. `extra`,
+/// one message record on `/chatter` (a large one, for a bomb) or nothing, goes first in the
+/// first chunk, indexed.
 pub fn ros1_bag_with(n: usize, compression: &str, per_chunk: usize, extra: &[u8]) -> Vec<u8> {
     let mut body = Vec::new();
     let mut infos = Vec::new();
     for (index, chunk) in (0..n).collect::<Vec<_>>().chunks(per_chunk.max(1)).enumerate() {
         let mut plain = Vec::new();
+        // Per connection: the stamp and offset of each message.
+        let mut offsets = [Vec::new(), Vec::new()];
         if index == 0 {
             plain.extend(ros1_connection(0, TOPIC, "geometry_msgs/PoseStamped"));
             plain.extend(ros1_connection(1, "/chatter", "std_msgs/String"));
-            plain.extend(extra);
+            if !extra.is_empty() {
+                offsets[1].push(((0, 0), plain.len() as u32));
+                plain.extend(extra);
+            }
         }
-        let mut offsets = Vec::new();
         for &i in chunk {
-            offsets.push((stamp(i), plain.len() as u32));
+            offsets[0].push((stamp(i), plain.len() as u32));
             let time = ros1_time(i);
             ros1_record(
                 &mut plain,
                 &[ros1_field("op", &[2]), ros1_field("conn", &0u32.to_le_bytes()), ros1_field("time", &time)],
                 &ros1_pose_stamped(i),
             );
+            offsets[1].push((stamp(i), plain.len() as u32));
             ros1_record(
                 &mut plain,
                 &[ros1_field("op", &[2]), ros1_field("conn", &1u32.to_le_bytes()), ros1_field("time", &time)],
@@ -333,7 +339,8 @@ pub fn ros1_bag_with(n: usize, compression: &str, per_chunk: usize, extra: &[u8]
             ],
             &data,
         );
-        for conn in [0u32, 1] {
+        for (conn, offsets) in offsets.iter().enumerate() {
+            let conn = conn as u32;
             let entries: Vec<u8> = offsets
                 .iter()
                 .flat_map(|((sec, nsec), offset)| {
