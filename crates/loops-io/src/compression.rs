@@ -14,7 +14,7 @@ use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
 use std::path::Path;
 
-use crate::error::{IoError, Result};
+use crate::error::{IoError, Result, one_line};
 
 /// A compressed frame, by its magic number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -91,8 +91,9 @@ thread_local! {
 /// # Errors
 /// What the codec says, or that the message decompresses to more than the limit.
 pub(crate) fn decompress_message(frame: Frame, data: &[u8]) -> std::result::Result<Vec<u8>, String> {
-    let failed =
-        |error: &dyn std::fmt::Display| format!("the {} compressed message does not decompress: {error}", frame.name());
+    let failed = |error: &dyn std::fmt::Display| {
+        format!("the {} compressed message does not decompress: {}", frame.name(), one_line(error))
+    };
     if frame == Frame::Zstd {
         // A frame that declares its size (rosbag2's do) decompresses in one call.
         if let Ok(Some(size)) = zstd::zstd_safe::get_frame_content_size(data) {
@@ -178,7 +179,7 @@ pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::Nam
     let temp = tempfile::Builder::new()
         .prefix("loops-bag-")
         .tempfile()
-        .map_err(|e| bag_error(format!("cannot create a temporary file to decompress into: {e}")))?;
+        .map_err(|e| bag_error(format!("cannot create a temporary file to decompress into: {}", one_line(&e))))?;
     let mut output = Counting { inner: BufWriter::with_capacity(1 << 20, temp.as_file()), written: 0 };
     let copied = match frame {
         Frame::Zstd => zstd::stream::read::Decoder::new(input)
@@ -194,7 +195,7 @@ pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::Nam
         } else {
             "decompressing it failed"
         };
-        bag_error(format!("{what} ({} after {written} decompressed bytes): {e}", frame.name()))
+        bag_error(format!("{what} ({} after {written} decompressed bytes): {}", frame.name(), one_line(&e)))
     })?;
     if written > limit {
         return Err(over_limit("decompresses to more".to_owned()));

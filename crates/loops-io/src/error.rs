@@ -150,7 +150,7 @@ pub enum IoError {
     /// The topic asked for has a type this crate cannot read poses from (an unknown schema, or a
     /// known schema in an unknown encoding).
     #[error("{}: topic {} has type {:?} in encoding {:?}, which this crate does not read poses from; it reads {}",
-        .path.display(), .topic.topic, .topic.schema_name, .topic.message_encoding, SUPPORTED_TYPES)]
+        .path.display(), printable(&.topic.topic), .topic.schema_name, .topic.message_encoding, SUPPORTED_TYPES)]
     UnsupportedTopic {
         /// The (first) file.
         path: PathBuf,
@@ -159,7 +159,7 @@ pub enum IoError {
     },
     /// The topic has a channel but no message, or messages without poses.
     #[error("{} topic {}: no poses ({} message{}; {})",
-        .path.display(), .topic.topic, .topic.message_count, if .topic.message_count == 1 { "" } else { "s" },
+        .path.display(), printable(&.topic.topic), .topic.message_count, if .topic.message_count == 1 { "" } else { "s" },
         channel_place(.path, *.channel_offset))]
     EmptyTopic {
         /// The file of the topic's first channel record.
@@ -171,7 +171,7 @@ pub enum IoError {
     },
     /// A transform topic (TF, `FrameTransform`) whose frame pair is ambiguous or missing: no
     /// pair was asked for and the topic has several, or the pair asked for is not on it.
-    #[error("{} topic {topic}: {}", .path.display(), frames_message(.wanted.as_ref(), .pairs))]
+    #[error("{} topic {}: {}", .path.display(), printable(.topic), frames_message(.wanted.as_ref(), .pairs))]
     FramePair {
         /// The (first) file.
         path: PathBuf,
@@ -376,7 +376,7 @@ impl MessageLocation {
 
 impl fmt::Display for MessageLocation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} topic {}, {}", self.path.display(), self.topic, self.place())
+        write!(f, "{} topic {}, {}", self.path.display(), printable(&self.topic), self.place())
     }
 }
 
@@ -472,6 +472,30 @@ fn unknown_format_message(extension: Option<&str>) -> String {
         known.join(", "),
         names.join(", ")
     )
+}
+
+/// `text` with its control characters escaped (`\n`, `\u{1b}`): names read from a file (topics,
+/// frames, schema names) go into one-line messages and onto terminals as they are otherwise.
+pub(crate) fn printable(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(char::is_control) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// A library's message (SQLite, a YAML parser, a codec) on one line: its line breaks and runs
+/// of white space become one space, its other control characters are escaped.
+pub(crate) fn one_line(message: &dyn fmt::Display) -> String {
+    let text = message.to_string();
+    printable(&text.split_whitespace().collect::<Vec<_>>().join(" ")).into_owned()
 }
 
 /// Whether `path` names a rosbag2 sqlite3 file (`*.db3`, or compressed `*.db3.zstd`,

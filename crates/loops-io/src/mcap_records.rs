@@ -41,7 +41,7 @@ use std::path::Path;
 use mcap::records::op;
 
 use crate::compression::MAX_MESSAGE_BYTES;
-use crate::error::{IoError, Result};
+use crate::error::{IoError, Result, one_line, printable};
 
 /// A channel's identity across files: topics with the same name, schema and encodings are one.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -197,11 +197,6 @@ impl Context {
             }
         }
     }
-}
-
-/// An error's message on one line (a codec's message could hold line breaks).
-fn one_line(error: &dyn std::fmt::Display) -> String {
-    error.to_string().split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 /// The fields of one record, read in order from a stream, never past the record's end: every
@@ -818,7 +813,7 @@ impl State {
     /// The topic of MCAP channel `id`, for messages: ` (/odom)`, or nothing.
     fn topic_of(&self, id: u16) -> String {
         match self.channels.get(&id) {
-            Some((_, topic)) => format!(" ({topic})"),
+            Some((_, topic)) => format!(" ({})", printable(topic)),
             None => " (a channel no record defines)".to_owned(),
         }
     }

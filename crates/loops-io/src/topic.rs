@@ -3,6 +3,7 @@
 
 use std::fmt;
 
+use crate::error::printable;
 use crate::pose_type::PoseType;
 
 /// One topic of an MCAP file or a bag (or of several files, counted together), as
@@ -32,7 +33,14 @@ impl fmt::Display for TopicInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let schema = if self.schema_name.is_empty() { "no schema" } else { &self.schema_name };
         let plural = if self.message_count == 1 { "" } else { "s" };
-        write!(f, "{} ({schema}, {}, {} message{plural})", self.topic, self.message_encoding, self.message_count)
+        write!(
+            f,
+            "{} ({}, {}, {} message{plural})",
+            printable(&self.topic),
+            printable(schema),
+            printable(&self.message_encoding),
+            self.message_count
+        )
     }
 }
 
@@ -51,6 +59,6 @@ pub struct FramePairInfo {
 
 impl fmt::Display for FramePairInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} -> {} ({})", self.parent, self.child, self.count)
+        write!(f, "{} -> {} ({})", printable(&self.parent), printable(&self.child), self.count)
     }
 }

@@ -19,51 +19,8 @@ use loops_io::{
 use serde_json::Value;
 
 mod support;
-use support::python_fixtures;
 
-/// One pose: stamp (ns), position, orientation.
-type Pose = (i64, [f64; 3], [f64; 4]);
-
-/// Writes the fixtures of `poses` (once per script version and poses, cached in the target
-/// folder) and returns the folder and manifest, or `None` when Python cannot write them here.
-fn make_fixtures(name: &str, poses: &[Pose]) -> Option<(PathBuf, Value)> {
-    use std::hash::{DefaultHasher, Hash, Hasher};
-
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_bag_fixtures.py");
-    let source = std::fs::read(&script).expect("the fixture script");
-    let lines: String = poses
-        .iter()
-        .map(|(ns, p, q)| {
-            format!("{ns} {:?} {:?} {:?} {:?} {:?} {:?} {:?}\n", p[0], p[1], p[2], q[0], q[1], q[2], q[3])
-        })
-        .collect();
-    let mut hasher = DefaultHasher::new();
-    source.hash(&mut hasher);
-    lines.hash(&mut hasher);
-    let root = Path::new(env!("CARGO_TARGET_TMPDIR"));
-    let dir = root.join(format!("bag-fixtures-{name}-{:016x}", hasher.finish()));
-    let poses_file = root.join(format!("bag-poses-{name}-{}.txt", std::process::id()));
-    let fixtures = python_fixtures("the bag tests", &script, dir, || {
-        std::fs::write(&poses_file, lines).expect("poses file");
-        vec![poses_file.clone().into()]
-    });
-    let _ = std::fs::remove_file(&poses_file);
-    fixtures
-}
-
-/// 60 poses with awkward numbers: negative zero, tiny and huge values, stamps near the end of
-/// ROS 2's `int32` seconds.
-fn small_poses() -> Vec<Pose> {
-    (0..60)
-        .map(|i| {
-            let f = i as f64;
-            let ns = 2_000_000_000_000_000_000 + i * 100_000_007;
-            let p = [f * 0.1 + 1e-300, -0.0 - f * 1e-7, 1e12 / (f + 3.0)];
-            let angle = f * 0.05;
-            (ns, p, [0.0, -0.0, (angle / 2.0).sin(), (angle / 2.0).cos()])
-        })
-        .collect()
-}
+use support::{BagPose as Pose, bag_fixtures as make_fixtures, small_bag_poses as small_poses};
 
 fn small() -> Option<&'static (PathBuf, Value, Vec<Pose>)> {
     static FIXTURES: OnceLock<Option<(PathBuf, Value, Vec<Pose>)>> = OnceLock::new();

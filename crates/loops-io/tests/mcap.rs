@@ -10,7 +10,6 @@ use loops_io::{IoError, McapOptions, PoseType, TimeSource, list_topics, read_mca
 use serde_json::Value;
 
 mod support;
-use support::python_fixtures;
 
 /// The fixture folder and its manifest, made once per script version (cached in the target
 /// folder), or `None` when Python cannot make them here.
@@ -20,14 +19,7 @@ fn fixtures() -> Option<&'static (PathBuf, Value)> {
 }
 
 fn make_fixtures() -> Option<(PathBuf, Value)> {
-    use std::hash::{DefaultHasher, Hash, Hasher};
-
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_mcap_fixtures.py");
-    let source = std::fs::read(&script).expect("the fixture script");
-    let mut hasher = DefaultHasher::new();
-    source.hash(&mut hasher);
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("mcap-fixtures-{:016x}", hasher.finish()));
-    python_fixtures("the MCAP tests", &script, dir, Vec::new)
+    support::mcap_fixtures()
 }
 
 /// The fixture folder and manifest, or return from the test (after the message printed once).

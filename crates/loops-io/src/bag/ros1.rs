@@ -33,7 +33,7 @@ use std::io::{self, BufReader, Read};
 use std::path::Path;
 
 use crate::compression::{ChunkCompression, MAX_MESSAGE_BYTES, chunk_decoder};
-use crate::error::{IoError, Result};
+use crate::error::{IoError, Result, one_line};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor, open_records};
 
 /// The first line of a bag of format 2.0.
@@ -229,7 +229,7 @@ impl Walker<'_> {
     }
 
     fn read_error(&self, offset: u64, error: &io::Error) -> IoError {
-        self.error(offset, format!("cannot read the file: {error}"))
+        self.error(offset, format!("cannot read the file: {}", one_line(error)))
     }
 
     fn run(&mut self, visitor: &mut impl Visitor) -> Result<()> {
@@ -325,7 +325,7 @@ impl Walker<'_> {
                 op::CONNECTION | op::MESSAGE_DATA => {
                     let at = At { offset: at, in_chunk: None };
                     self.records.record(op, &fields, &mut self.reader, data_len, at, visitor).map_err(|failure| {
-                        failure.into_error(&self.records, at, |e| format!("cannot read the file: {e}"))
+                        failure.into_error(&self.records, at, |e| format!("cannot read the file: {}", one_line(e)))
                     })?;
                 }
                 op::INDEX_DATA | op::CHUNK_INFO => {
@@ -428,7 +428,7 @@ impl Walker<'_> {
             io::ErrorKind::UnexpectedEof => {
                 format!("the {name} chunk decompresses to fewer bytes than the {size} it declares")
             }
-            _ => format!("the {name} chunk does not decompress: {error}"),
+            _ => format!("the {name} chunk does not decompress: {}", one_line(error)),
         };
         self.records.chunk = Some(ChunkCount { offset: at, read: HashMap::new(), indexed: HashMap::new() });
         let mut compressed = (&mut self.reader).take(data_len);

@@ -148,7 +148,11 @@ impl Rosbag2 {
         let text = read_metadata(metadata_path)?;
         let file: MetadataFile = serde_yaml_ng::from_str(&text).map_err(|error| {
             let line = error.location().map_or(1, |location| location.line());
-            IoError::parse(metadata_path, line, format!("not a rosbag2 metadata.yaml: {error}"))
+            IoError::parse(
+                metadata_path,
+                line,
+                format!("not a rosbag2 metadata.yaml: {}", crate::error::one_line(&error)),
+            )
         })?;
         let metadata = file.rosbag2_bagfile_information;
         let folder = metadata_path.parent().unwrap_or(Path::new("."));

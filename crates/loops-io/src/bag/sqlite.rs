@@ -19,7 +19,7 @@ use rusqlite::types::ValueRef;
 use rusqlite::{Connection, OpenFlags};
 
 use crate::compression::MAX_MESSAGE_BYTES;
-use crate::error::{IoError, Result};
+use crate::error::{IoError, Result, one_line};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
 
 /// The first 16 bytes of every SQLite 3 database.
@@ -73,7 +73,9 @@ fn check_header(file: &Path, shown: &Path) -> Result<()> {
 pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Result<()> {
     let error = |row: Option<i64>, message: String| IoError::Sqlite { path: shown.to_path_buf(), row, message };
     check_header(file, shown)?;
-    let sql = |row: Option<i64>, what: &'static str| move |e: rusqlite::Error| error(row, format!("{what}: {e}"));
+    let sql = |row: Option<i64>, what: &'static str| {
+        move |e: rusqlite::Error| error(row, format!("{what}: {}", one_line(&e)))
+    };
     let db = Connection::open_with_flags(file, OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX)
         .map_err(sql(None, "SQLite cannot open the database"))?;
 
@@ -93,7 +95,7 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
                     Ok(other) => {
                         Err(error(None, format!("the topics table's {column} is {:?}, not text", other.data_type())))
                     }
-                    Err(e) => Err(error(None, format!("cannot read the topics table's {column}: {e}"))),
+                    Err(e) => Err(error(None, format!("cannot read the topics table's {column}: {}", one_line(&e)))),
                 }
             };
             let id = match row.get_ref(0) {
@@ -136,7 +138,7 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
             Ok(None) => return Ok(()),
             Err(e) => {
                 let after = last_row.map_or(String::new(), |row| format!(" after row {row}"));
-                return Err(error(last_row, format!("cannot read the messages table{after}: {e}")));
+                return Err(error(last_row, format!("cannot read the messages table{after}: {}", one_line(&e))));
             }
         };
         let integer = |index: usize| match row.get_ref(index) {
@@ -176,7 +178,7 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
             Ok(other) => {
                 return Err(error(Some(id), format!("the message's data is {:?}, not a blob", other.data_type())));
             }
-            Err(e) => return Err(error(Some(id), format!("cannot read the message's data: {e}"))),
+            Err(e) => return Err(error(Some(id), format!("cannot read the message's data: {}", one_line(&e)))),
         };
         let header = MessageHeader { log_time: timestamp, publish_time: timestamp };
         visitor.message(channel, header, data, At { offset: id as u64, in_chunk: None })?;

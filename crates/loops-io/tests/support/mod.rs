@@ -120,6 +120,65 @@ pub fn python_fixtures(
     Some((dir, serde_json::from_str(&manifest).expect("manifest JSON")))
 }
 
+/// The MCAP files of the official Python writers (`make_mcap_fixtures.py`), made once per
+/// script version (cached in the target folder), and their manifest; `None` when Python
+/// cannot make them here.
+pub fn mcap_fixtures() -> Option<(PathBuf, Value)> {
+    use std::hash::{DefaultHasher, Hash, Hasher};
+
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_mcap_fixtures.py");
+    let source = std::fs::read(&script).expect("the fixture script");
+    let mut hasher = DefaultHasher::new();
+    source.hash(&mut hasher);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("mcap-fixtures-{:016x}", hasher.finish()));
+    python_fixtures("the MCAP tests", &script, dir, Vec::new)
+}
+
+/// One pose of the bag fixtures: stamp (ns), position, orientation.
+pub type BagPose = (i64, [f64; 3], [f64; 4]);
+
+/// The bags of `poses` written by Python (`make_bag_fixtures.py`: rosbag2 sqlite3 and MCAP in
+/// every compression, split, and ROS 1), once per script version and poses (cached in the
+/// target folder), and their manifest; `None` when Python cannot write them here.
+pub fn bag_fixtures(name: &str, poses: &[BagPose]) -> Option<(PathBuf, Value)> {
+    use std::hash::{DefaultHasher, Hash, Hasher};
+
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/make_bag_fixtures.py");
+    let source = std::fs::read(&script).expect("the fixture script");
+    let lines: String = poses
+        .iter()
+        .map(|(ns, p, q)| {
+            format!("{ns} {:?} {:?} {:?} {:?} {:?} {:?} {:?}\n", p[0], p[1], p[2], q[0], q[1], q[2], q[3])
+        })
+        .collect();
+    let mut hasher = DefaultHasher::new();
+    source.hash(&mut hasher);
+    lines.hash(&mut hasher);
+    let root = Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let dir = root.join(format!("bag-fixtures-{name}-{:016x}", hasher.finish()));
+    let poses_file = root.join(format!("bag-poses-{name}-{}.txt", std::process::id()));
+    let fixtures = python_fixtures("the bag tests", &script, dir, || {
+        std::fs::write(&poses_file, lines).expect("poses file");
+        vec![poses_file.clone().into()]
+    });
+    let _ = std::fs::remove_file(&poses_file);
+    fixtures
+}
+
+/// 60 poses with awkward numbers: negative zero, tiny and huge values, stamps near the end of
+/// ROS 2's `int32` seconds.
+pub fn small_bag_poses() -> Vec<BagPose> {
+    (0..60)
+        .map(|i| {
+            let f = i as f64;
+            let ns = 2_000_000_000_000_000_000 + i * 100_000_007;
+            let p = [f * 0.1 + 1e-300, -0.0 - f * 1e-7, 1e12 / (f + 3.0)];
+            let angle = f * 0.05;
+            (ns, p, [0.0, -0.0, (angle / 2.0).sin(), (angle / 2.0).cos()])
+        })
+        .collect()
+}
+
 /// `shared/data` beside the checkout, or `None` (with a message) when it is absent.
 pub fn real_data_dir() -> Option<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
