@@ -112,6 +112,9 @@ pub(crate) const MAX_CHUNK_BYTES: u64 = 4 << 30;
 /// Largest string read (a schema name or encoding, a topic, a compression name): 1 MiB.
 pub(crate) const MAX_STRING_BYTES: u64 = 1 << 20;
 
+/// The buffer of a chunk's decompressed records: 64 KiB.
+const DECOMPRESSED_BUFFER: usize = 64 << 10;
+
 /// The bytes between records: opcode and length.
 const RECORD_HEADER: u64 = 9;
 
@@ -723,7 +726,12 @@ fn chunk(
         "lz4" => Box::new(lz4_flex::frame::FrameDecoder::new(&mut compressed)),
         _ => Box::new(&mut compressed),
     };
-    let mut records = Decompressed { inner: decoder, crc: crc32fast::Hasher::new() };
+    // Buffered: the fields are read a few bytes at a time, and a decoder call per field would
+    // cost more than the decompression.
+    let mut records = BufReader::with_capacity(
+        DECOMPRESSED_BUFFER.min(uncompressed_size as usize + 1),
+        Decompressed { inner: decoder, crc: crc32fast::Hasher::new() },
+    );
     state.chunk = Some(ChunkCount { offset, read: HashMap::new(), indexed: HashMap::new() });
     let mut inner = 0u64;
     while inner < uncompressed_size {
@@ -781,7 +789,7 @@ fn chunk(
         }
         Err(e) => return Err(Failure::Fault(context.describe(&e))),
     }
-    let calculated = records.crc.clone().finalize();
+    let calculated = records.get_ref().crc.clone().finalize();
     drop(records);
     if crc != 0 && calculated != crc {
         return Err(Failure::Fault(format!(

@@ -432,7 +432,8 @@ impl Walker<'_> {
         };
         self.records.chunk = Some(ChunkCount { offset: at, read: HashMap::new(), indexed: HashMap::new() });
         let mut compressed = (&mut self.reader).take(data_len);
-        let mut chunk = chunk_decoder(compression, &mut compressed);
+        // Buffered: headers and lengths are read a few bytes at a time.
+        let mut chunk = BufReader::with_capacity(64 << 10, chunk_decoder(compression, &mut compressed));
         let records = &mut self.records;
         let path = records.path;
         let mut pos = 0u64;
