@@ -1,11 +1,13 @@
 //! MCAP files (ROS 2 and Foxglove logs): the poses of one topic, and the list of topics.
 //!
 //! The file is walked record by record from the start (`mcap_records`), so every record has a
-//! byte offset to name in errors; chunks are decompressed (zstd, lz4, or none) and their CRCs
-//! checked by the `mcap` crate's sans-I/O reader, one chunk at a time, so memory stays at one
-//! chunk plus the poses. The summary section is not needed and only checked to be there, up to
-//! the footer and the closing magic: a file cut short is an error, not a silently shorter
-//! trajectory. This module sorts the channels into topics and keeps the poses of the topic read.
+//! byte offset to name in errors; chunks are decompressed (zstd, lz4, or none) as streams and
+//! their CRCs checked, so memory stays at one record plus the poses, whatever a corrupt length
+//! declares. The walk goes to the closing magic and checks what the file says of itself: the
+//! data and summary CRCs, the message counts of the message indexes and of the summary's
+//! statistics, the chunks of its chunk indexes. A file cut short or missing messages is an
+//! error naming the offset, not a silently shorter trajectory. This module sorts the channels
+//! into topics and keeps the poses of the topic read.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -125,9 +127,14 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTa
 /// # Errors
 /// - [`IoError::Open`] when a file cannot be read;
 /// - [`IoError::Mcap`] naming the byte offset for a file that is not MCAP (bad magic), is cut
-///   short, has a chunk whose CRC or decompression fails, or a record that does not parse;
+///   short or has bytes after its closing magic, has a chunk whose CRC or decompression fails
+///   (or that declares more than 4 GiB), a record that does not parse (a length past its
+///   record's end, a name that is not UTF-8), a data or summary CRC that does not match, or
+///   fewer (or more) messages than its message indexes or statistics count, or a chunk its
+///   chunk index lists missing (a chunk whose opcode is corrupt);
 /// - [`IoError::Message`] naming the file, topic and offset for a message of the topic read
-///   that does not decode (shorter than its type, ...);
+///   that does not decode (shorter than its type, a stamp's nanoseconds of 10⁹ or more, over
+///   64 MiB, ...);
 /// - [`IoError::TopicNotFound`], [`IoError::UnsupportedTopic`] (a type this crate does not
 ///   read), [`IoError::EmptyTopic`] for the topic named; [`IoError::NoPoseTopic`] and
 ///   [`IoError::AmbiguousTopic`] when none is named;

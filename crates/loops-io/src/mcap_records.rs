@@ -451,7 +451,7 @@ impl Walker<'_> {
                 Err(Failure::Fault(fault)) => {
                     return Err(self.error(pos, located(fault, None)));
                 }
-                Err(Failure::Error(error)) => return Err(error),
+                Err(Failure::Error(error)) => return Err(*error),
             }
             if section == Section::Summary && self.source.summary_crc.is_none() {
                 self.source.summary_crc = Some(crc32fast::Hasher::new());
@@ -651,7 +651,7 @@ impl Walker<'_> {
 #[derive(Debug)]
 enum Failure {
     Fault(Fault),
-    Error(IoError),
+    Error(Box<IoError>),
 }
 
 impl From<Fault> for Failure {
@@ -870,7 +870,7 @@ impl State {
                 }
                 let result = visitor.message(channel, header, &data, at);
                 self.data = data;
-                result.map_err(Failure::Error)
+                result.map_err(|error| Failure::Error(Box::new(error)))
             }
             op::SCHEMA => {
                 let id = fields.u16("id")?;

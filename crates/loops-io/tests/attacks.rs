@@ -5,6 +5,9 @@
 //! naming the file, the place and the defect, or reads it within bounded memory (counted by a
 //! global allocator, `support/peak.rs`).
 
+// The readers' errors (`IoError`) are returned as they are, through the measuring closures.
+#![allow(clippy::result_large_err)]
+
 use std::path::{Path, PathBuf};
 
 use loops_io::{
@@ -125,7 +128,7 @@ fn item6_messages_lost_inside_a_chunk_are_counted_by_its_message_index() {
     // is flipped, is found by the chunk's message indexes and its record kinds.
     let bytes = mcap(60, McapLayout { crcs: false, ..McapLayout::CHUNKED });
     let message = message_of_pose(&bytes, 20);
-    let chunk = offsets(&bytes, 0x06).into_iter().filter(|&c| c < message).last().expect("its chunk");
+    let chunk = offsets(&bytes, 0x06).into_iter().rev().find(|&c| c < message).expect("its chunk");
     let other = bytes[message + 9] + 1;
     let mut moved = bytes.clone();
     moved[message + 9] = other;
@@ -424,7 +427,8 @@ fn item16_a_line_longer_than_1_mib_is_an_error_naming_it_in_every_text_reader() 
     text.extend(std::iter::repeat_n(b'7', 3 << 20));
     let path = write("long-line.txt", &text);
     let times = write("long-times.txt", &text);
-    let readers: Vec<(&str, Box<dyn Fn() -> Result<usize, IoError>>)> = vec![
+    type Reader<'a> = Box<dyn Fn() -> Result<usize, IoError> + 'a>;
+    let readers: Vec<(&str, Reader)> = vec![
         ("tum", Box::new(|| read_tum(&path).map(|t| t.len()))),
         ("kitti", Box::new(|| read_kitti(&path, &Timing::FromFile).map(|t| t.len()))),
         ("euroc", Box::new(|| read_euroc(&path).map(|t| t.len()))),

@@ -506,14 +506,14 @@ impl Walker<'_> {
 enum Failure {
     Fault(String),
     Read(io::Error),
-    Error(IoError),
+    Error(Box<IoError>),
 }
 
 impl Failure {
     /// The error, located at `at`; `describe` says what a read error means where it happened.
     fn into_error(self, records: &Records<'_>, at: At, describe: impl Fn(&io::Error) -> String) -> IoError {
         let message = match self {
-            Failure::Error(error) => return error,
+            Failure::Error(error) => return *error,
             Failure::Fault(message) => message,
             Failure::Read(error) => describe(&error),
         };
@@ -577,7 +577,7 @@ impl Records<'_> {
             }
             let result = visitor.message(channel, header, &data, at);
             self.data = data;
-            return result.map_err(Failure::Error);
+            return result.map_err(|error| Failure::Error(Box::new(error)));
         }
         if data_len > MAX_MESSAGE_BYTES {
             return Err(Failure::Fault(format!(
