@@ -32,7 +32,12 @@
 //! Every error is an [`IoError`] whose message starts with the file and the line, or the topic
 //! and byte offset: `drive.tum line 12: column 3 ("abc") is not a number`, `drive.mcap topic
 //! /odom, message at byte 96 of the chunk at offset 4242: the CDR message ends at byte 60, but
-//! nav_msgs/msg/Odometry needs ...`. No input makes a reader panic.
+//! nav_msgs/msg/Odometry needs ...`. No input makes a reader panic or allocate what a corrupt
+//! length or a compression bomb declares: text files are read a line at a time (a line holds at
+//! most [`MAX_LINE_BYTES`]), logs as streams. Nothing is dropped without an error: a line of an
+//! unknown record type is an error, and a log is checked against its own CRCs, indexes and
+//! counts, so that messages it says it holds and does not deliver are an error. `tests/attack_sweep.rs` holds the seeded
+//! attack sweep that keeps it so (figures in `tests/FUZZ.md`).
 //!
 //! What it does not do (yet): ROS 1 bags of format 1.x; compose TF trees (one
 //! parent-child pair is read as is); read the times of a `PosesInFrame` path pose by pose (all
