@@ -125,6 +125,9 @@ const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
 /// The unknown records remembered, to name them when an index points at one.
 const MAX_UNKNOWN_KEPT: usize = 4096;
 
+/// The summary records remembered, for the summary offsets that point at them.
+const MAX_SUMMARY_KEPT: usize = 1 << 20;
+
 /// The file at `path` opened for a record walk (MCAP or ROS 1 bag): a buffered reader and the
 /// file's length in bytes, which bounds every record length read from it.
 pub(crate) fn open_records(path: &Path) -> Result<(BufReader<File>, u64)> {
@@ -331,6 +334,13 @@ struct State {
     chunk_indexes: Vec<ChunkIndex>,
     /// The summary's statistics record, and its offset.
     statistics: Option<(u64, Statistics)>,
+    /// Where the summary section starts: the end of the data end record.
+    summary_begin: Option<u64>,
+    /// The offsets and opcodes of the summary's records (the first [`MAX_SUMMARY_KEPT`]).
+    summary_records: Vec<(u64, u8)>,
+    /// The summary offset records: their offset, and the opcode and offset of the group each
+    /// points at.
+    summary_offsets: Vec<(u64, u8, u64)>,
 }
 
 /// The messages read in one chunk, per channel, and what its message indexes declare.
@@ -420,6 +430,16 @@ impl Walker<'_> {
             if opcode == op::FOOTER {
                 return self.finish(pos, body_len, section);
             }
+            if opcode == op::HEADER && pos != mcap::MAGIC.len() as u64 {
+                return Err(self.error(
+                    pos,
+                    "a header record after the first record: the file is corrupt (a record whose opcode is \
+                     corrupt?)",
+                ));
+            }
+            if section == Section::Summary && self.state.summary_records.len() < MAX_SUMMARY_KEPT {
+                self.state.summary_records.push((pos, opcode));
+            }
             let at = At { offset: pos, in_chunk: None };
             let mut fields = Fields::new(&mut self.source, body_len, opcode, Context::File);
             let result = match (opcode, section) {
@@ -441,6 +461,9 @@ impl Walker<'_> {
                 }
                 (op::CHUNK_INDEX, Section::Summary) => self.state.chunk_index(&mut fields, pos).map_err(Failure::Fault),
                 (op::STATISTICS, Section::Summary) => self.state.statistics(&mut fields, pos).map_err(Failure::Fault),
+                (op::SUMMARY_OFFSET, Section::Summary) => {
+                    self.state.summary_offset(&mut fields, pos).map_err(Failure::Fault)
+                }
                 (op::HEADER..=op::DATA_END, _) => Ok(()),
                 (_, Section::Data) => self.state.unknown(&mut fields, pos, opcode).map_err(Failure::Fault),
                 (_, Section::Summary) => Ok(()),
@@ -455,6 +478,7 @@ impl Walker<'_> {
             }
             if section == Section::Summary && self.source.summary_crc.is_none() {
                 self.source.summary_crc = Some(crc32fast::Hasher::new());
+                self.state.summary_begin = Some(body_start + body_len);
             }
             debug_assert_eq!(self.source.pos, body_start + body_len);
         }
@@ -499,14 +523,15 @@ impl Walker<'_> {
         let mut fields = Fields::new(&mut self.source, body_len, op::FOOTER, Context::File);
         let parsed = (|| {
             let summary_start = fields.u64("summary start")?;
-            let _summary_offset_start = fields.u64("summary offset start")?;
+            let summary_offset_start = fields.u64("summary offset start")?;
             // The summary CRC covers the summary up to and including the field before it.
             let calculated = fields.reader.summary_crc.take().map(crc32fast::Hasher::finalize);
             let summary_crc = fields.u32("summary CRC")?;
             fields.skip_rest()?;
-            Ok::<_, Fault>((summary_start, calculated, summary_crc))
+            Ok::<_, Fault>((summary_start, summary_offset_start, calculated, summary_crc))
         })();
-        let (summary_start, calculated, summary_crc) = parsed.map_err(|fault| self.error(footer_at, fault))?;
+        let (summary_start, summary_offset_start, calculated, summary_crc) =
+            parsed.map_err(|fault| self.error(footer_at, fault))?;
         if section == Section::Data {
             return Err(self.error(
                 footer_at,
@@ -544,7 +569,63 @@ impl Walker<'_> {
                 ),
             ));
         }
+        self.check_summary_offsets(footer_at, summary_start, summary_offset_start)?;
         self.check_summary()
+    }
+
+    /// The footer's and the summary offset records' pointers against the summary's records: a
+    /// record the summary says it holds (its statistics) must be there, with its opcode.
+    fn check_summary_offsets(&self, footer_at: u64, summary_start: u64, summary_offset_start: u64) -> Result<()> {
+        let state = &self.state;
+        if state.summary_records.len() >= MAX_SUMMARY_KEPT {
+            return Ok(());
+        }
+        let begin = state.summary_begin.unwrap_or(footer_at);
+        if summary_start != 0 && summary_start != begin {
+            return Err(self.error(
+                footer_at,
+                format!(
+                    "the footer says the summary starts at offset {summary_start}, but the data end record ends at \
+                     {begin}: the file is corrupt"
+                ),
+            ));
+        }
+        let opcode_at = |offset: u64| {
+            state
+                .summary_records
+                .binary_search_by_key(&offset, |record| record.0)
+                .ok()
+                .map(|i| state.summary_records[i].1)
+        };
+        let wrong = |what: String, offset: u64, wanted: u8| {
+            let there = match opcode_at(offset) {
+                Some(opcode) => format!("the record there has opcode {opcode:#04x} ({})", record_name(opcode)),
+                None => "no summary record starts there".to_owned(),
+            };
+            format!(
+                "{what} at offset {offset} holds {} records, but {there}: the summary is corrupt",
+                record_name(wanted)
+            )
+        };
+        if summary_offset_start != 0
+            && summary_offset_start != footer_at
+            && opcode_at(summary_offset_start) != Some(op::SUMMARY_OFFSET)
+        {
+            return Err(self.error(
+                footer_at,
+                wrong(
+                    "the footer says the summary offset section".to_owned(),
+                    summary_offset_start,
+                    op::SUMMARY_OFFSET,
+                ),
+            ));
+        }
+        for &(at, group, start) in &state.summary_offsets {
+            if opcode_at(start) != Some(group) {
+                return Err(self.error(at, wrong("this summary offset record says the group".to_owned(), start, group)));
+            }
+        }
+        Ok(())
     }
 
     /// The summary's chunk indexes and statistics against what the walk read.
@@ -943,6 +1024,18 @@ impl State {
         let chunk_offset = fields.u64("chunk start offset")?;
         let chunk_length = fields.u64("chunk length")?;
         self.chunk_indexes.push(ChunkIndex { at, chunk_offset, chunk_length });
+        Ok(())
+    }
+
+    /// A summary offset record: where a group of summary records of one opcode starts.
+    fn summary_offset(&mut self, fields: &mut Fields<'_, Source>, at: u64) -> std::result::Result<(), Fault> {
+        let [group] = fields.array::<1>("group opcode")?;
+        let start = fields.u64("group start")?;
+        let length = fields.u64("group length")?;
+        // Writers list empty groups too (length 0, no record at their start).
+        if length > 0 && self.summary_offsets.len() < MAX_SUMMARY_KEPT {
+            self.summary_offsets.push((at, group, start));
+        }
         Ok(())
     }
 

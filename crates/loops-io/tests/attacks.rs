@@ -123,6 +123,33 @@ fn item6_a_message_lost_at_the_top_level_is_counted_by_the_statistics() {
 }
 
 #[test]
+fn item6_a_statistics_record_lost_with_a_message_is_noticed_by_the_summary_offsets() {
+    // Found by the long sweep: without CRCs, a message whose opcode is corrupt and a statistics
+    // record whose opcode is corrupt too left nothing to count the loss against.
+    let bytes = mcap(30, McapLayout { crcs: false, ..McapLayout::UNCHUNKED });
+    let statistics = offsets(&bytes, 0x0b)[0];
+    let mut broken = bytes.clone();
+    broken[message_of_pose(&bytes, 9)] = 0x34;
+    broken[statistics] = 0xa3;
+    let error = mcap_error("lost-statistics.mcap", &broken);
+    let text = error.to_string();
+    assert!(
+        text.contains(&format!(
+            "group at offset {statistics} holds statistics records, but the record there has opcode 0xa3 (unknown)"
+        )),
+        "{text}"
+    );
+    // A message turned into a header record is a second header: an error where it stands.
+    let message = message_of_pose(&bytes, 4);
+    let mut broken = bytes.clone();
+    broken[message] = 0x01;
+    broken[statistics] = 0xa3;
+    let error = mcap_error("second-header.mcap", &broken);
+    assert_eq!(error.offset(), Some(message as u64), "{error}");
+    assert!(error.to_string().contains("a header record after the first record"), "{error}");
+}
+
+#[test]
 fn item6_messages_lost_inside_a_chunk_are_counted_by_its_message_index() {
     // An uncompressed chunk without CRCs: a message moved to another channel, or whose opcode
     // is flipped, is found by the chunk's message indexes and its record kinds.
