@@ -65,9 +65,12 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
         let delimiter =
             [',', ';', '\t'].into_iter().find(|c| line.contains(*c)).map_or(Delimiter::Whitespace, Delimiter::Char);
         let mut fields: Vec<&str> = delimiter.split(line).collect();
+        // A `loop` line is a detection, never a header row: a corrupt one is an error.
+        let mut keyword = false;
         match fields.first() {
             Some(&"loop") => {
                 fields.remove(0);
+                keyword = true;
             }
             Some(word)
                 if word.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
@@ -82,7 +85,7 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
             }
             _ => {}
         }
-        if table.t_s.is_empty() && is_header(fields.iter().copied()) {
+        if !keyword && table.t_s.is_empty() && is_header(fields.iter().copied()) {
             continue;
         }
         if fields.len() < 2 {

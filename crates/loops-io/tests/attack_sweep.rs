@@ -123,9 +123,14 @@ struct Tally {
 }
 
 impl Tally {
-    fn fail(&mut self, what: String) {
+    /// A failure: shown (the first few), and its input kept beside the scratch files
+    /// (`failed-N-NAME`) to replay.
+    fn fail(&mut self, what: String, base: &Base, bytes: &[u8]) {
         if self.failures.len() < SHOWN_FAILURES {
-            self.failures.push(what);
+            let name = base.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let kept = base.path.with_file_name(format!("failed-{}-{name}", self.failures.len()));
+            let _ = std::fs::write(&kept, bytes);
+            self.failures.push(format!("{what} (input kept as {})", kept.display()));
         }
     }
 
@@ -144,14 +149,14 @@ impl Tally {
                     .map(String::as_str)
                     .or_else(|| panic.downcast_ref::<&str>().copied())
                     .unwrap_or("?");
-                self.fail(format!("panic: {} {label}: {message}", base.name));
+                self.fail(format!("panic: {} {label}: {message}", base.name), base, bytes);
                 return;
             }
         };
         self.max_peak = self.max_peak.max(peak);
         if peak > ABORT_BYTES {
             self.aborts += 1;
-            self.fail(format!("abort: {} {label}: {peak} bytes allocated", base.name));
+            self.fail(format!("abort: {} {label}: {peak} bytes allocated", base.name), base, bytes);
         }
         match result {
             Ok(count) => {
@@ -160,7 +165,7 @@ impl Tally {
                     && count < holds
                 {
                     self.losses += 1;
-                    self.fail(format!("silent loss: {} {label}: {count} read of {holds}", base.name));
+                    self.fail(format!("silent loss: {} {label}: {count} read of {holds}", base.name), base, bytes);
                 }
             }
             Err(error) => {
@@ -176,7 +181,7 @@ impl Tally {
                     || !(message.starts_with(&named) || (message.starts_with(&parent) && path.starts_with(&parent)))
                 {
                     self.bad_messages += 1;
-                    self.fail(format!("bad message: {} {label}: {message:?}", base.name));
+                    self.fail(format!("bad message: {} {label}: {message:?}", base.name), base, bytes);
                 }
             }
         }
@@ -699,16 +704,24 @@ fn bomb_from(base: &Base) -> Base {
 
 /// The poses a text file holds by its format's rules (see the module's "silent loss").
 fn text_holds(format: &str, text: &str) -> usize {
+    // A byte-order mark that starts the file is not text (the readers drop it).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let lines: Vec<&str> =
         text.split('\n').map(|line| line.trim()).filter(|line| !line.is_empty() && !line.starts_with('#')).collect();
-    let is_number = |field: &str| field.trim().trim_matches('"').trim().parse::<f64>().is_ok();
+    let is_number = |field: &str| field.parse::<f64>().is_ok();
+    // The fields as the readers split them: a delimited field trimmed and unquoted (one pair of
+    // quotes), a white-space separated one as it is.
+    let unquote = |field: &str| -> String {
+        let field = field.trim();
+        field.strip_prefix('"').and_then(|inner| inner.strip_suffix('"')).unwrap_or(field).to_owned()
+    };
     let fields = |line: &str| -> Vec<String> {
         let delimiter = [',', ';', '\t'].into_iter().find(|c| line.contains(*c));
         match (format, delimiter) {
-            ("tum", _) if line.contains(',') => line.split(',').map(str::to_owned).collect(),
+            ("tum", _) if line.contains(',') => line.split(',').map(unquote).collect(),
             ("tum" | "kitti" | "tuc" | "g2o", _) => line.split_ascii_whitespace().map(str::to_owned).collect(),
-            ("euroc", _) => line.split(',').map(str::to_owned).collect(),
-            (_, Some(c)) => line.split(c).map(str::to_owned).collect(),
+            ("euroc", _) => line.split(',').map(unquote).collect(),
+            (_, Some(c)) => line.split(c).map(unquote).collect(),
             (_, None) => line.split_ascii_whitespace().map(str::to_owned).collect(),
         }
     };
@@ -739,11 +752,12 @@ fn text_holds(format: &str, text: &str) -> usize {
             // A row is a detection, but a header row before the first detection, or another
             // libRSF record type (`odom2 ...`).
             for line in &lines {
-                let mut fields = fields(line);
-                let word = fields.first().map(|f| f.trim().to_owned()).unwrap_or_default();
+                let fields = fields(line);
+                let word = fields.first().cloned().unwrap_or_default();
                 let all_words = !fields.iter().any(|f| is_number(f));
                 if word == "loop" {
-                    fields.remove(0);
+                    holds += 1;
+                    continue;
                 } else if word.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
                     && fields.len() > 1
                     && !all_words

@@ -218,6 +218,10 @@ fn item7_unknown_librsf_record_types_are_errors_too() {
     let path = write("lop.txt", b"odom2 0 0 0 0\nloop 5 1 1\nlop 6 2 1\n");
     let error = read_detections(&path).unwrap_err();
     assert_eq!(error.line(), Some(3), "{error}");
+    // Found by the sweep: a first `loop` line whose numbers are corrupt was taken for a header.
+    let path = write("loop-header.txt", b"odom2 0 0 0 0\nloop 2.2\x0b 0.25x\nloop 3 1 1\n");
+    let error = read_detections(&path).unwrap_err();
+    assert_eq!(error.line(), Some(2), "{error}");
 }
 
 // ---- item 8: KITTI rotation blocks that are no rotations ------------------------------------
