@@ -59,6 +59,7 @@ _SamplerName = Literal[
     "rho",
     "rho-dispersed",
     "alpha",
+    "closest-first",
     "lio-sam",
     "hdl-graph-slam",
     "cartographer",
@@ -1486,12 +1487,15 @@ def sample(
         sampler: ``"one"`` (σ_1: c per group), ``"rho"`` (σ_ρ: r per group per trajectory
             point), ``"rho-dispersed"`` (σ_ρ's counts spread evenly along each group, each the
             row's closest pair, or best-scored detection), ``"alpha"`` (σ_α: uniform over all
-            detections or pairs), or a baseline of a deployed SLAM system (``Loops`` only):
-            ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``, ``"time-gap"``.
+            detections or pairs), ``"closest-first"`` (each group's closest pair, or best-scored
+            detection, first; the rest as ``"rho-dispersed"``), or a baseline of a deployed SLAM
+            system (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
+            ``"time-gap"``.
         rate: the sampler's own rate (c, r, or a probability in (0, 1] for σ_α and the
             baselines); or
-        budget: exactly this many samples (fewer only when fewer exist, with a warning); σ_1 and
-            σ_ρ keep at least one per group whenever the budget allows it (P1). Give one.
+        budget: exactly this many samples (fewer only when fewer exist, with a warning); every
+            sampler but σ_α and the baselines keeps at least one per group whenever the budget
+            allows it (P1). Give one.
         seed: the seed (ChaCha8): the same samples on every machine and thread count.
         trajectory: the :class:`Trajectory` the loops were found on (required for ``Loops``);
             with clusters, optional: the samples are then placed on it and their distances
@@ -1499,7 +1503,7 @@ def sample(
         metric: as in :func:`find_loops`; ``None`` takes the loops' own metric (for clusters,
             the trajectory's, :attr:`Trajectory.metric_name`).
         threads: worker threads; ``None`` uses one per core. Results do not depend on it.
-        skip_trivial: leave out the trivial loop components (``Loops`` with σ_1, σ_ρ or σ_α):
+        skip_trivial: leave out the trivial loop components (``Loops``, not with a baseline):
             their pairs are simple loops (the next poses, a stop) that odometry already ties
             together, and σ_ρ would otherwise spend a large share of the budget on them.
         lio_sam_keyframe_step, lio_sam_period_s, lio_sam_min_age_s, hdl_keyframe_step,

@@ -1070,7 +1070,7 @@ def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
     trivial = set(table["id"][table["trivial"]].tolist())
     nontrivial = set(table["id"][~table["trivial"]].tolist())
     assert trivial and len(nontrivial) > 5
-    for sampler in ["one", "rho", "rho-dispersed", "alpha"]:
+    for sampler in ["one", "rho", "rho-dispersed", "alpha", "closest-first"]:
         plain = il.sample(found, sampler, budget=300, seed=3, trajectory=drive)
         only = il.sample(found, sampler, budget=300, seed=3, trajectory=drive, skip_trivial=True)
         assert set(plain.component.tolist()) & trivial, sampler

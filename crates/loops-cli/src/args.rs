@@ -277,8 +277,9 @@ pub(crate) fn separation_line(separation: Separation, gamma: f64) -> String {
 /// How to sample: the flags `loops sample` and `loops run` share, with the core's defaults.
 #[derive(Debug, Args)]
 pub(crate) struct SamplingArgs {
-    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), or a SLAM baseline:
-    /// lio-sam, hdl-graph-slam, cartographer, time-gap.
+    /// The sampler: one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α), closest-first (each
+    /// component's closest pair, then as rho-dispersed), or a SLAM baseline: lio-sam,
+    /// hdl-graph-slam, cartographer, time-gap.
     #[arg(long, default_value_t = SamplerKind::default().name().to_owned())]
     pub(crate) sampler: String,
     /// Exactly this many samples (at least one per component when it allows) [default: 1000
@@ -301,7 +302,7 @@ pub(crate) struct SamplingArgs {
     )]
     pub(crate) epsilon_s: f64,
     /// Leave out the trivial loop components (simple loops: the next poses, stops), which
-    /// odometry already ties together (one, rho, rho-dispersed, alpha; not with --detections).
+    /// odometry already ties together (not with a baseline or --detections).
     #[arg(long)]
     pub(crate) skip_trivial: bool,
 }

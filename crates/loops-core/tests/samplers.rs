@@ -1,4 +1,4 @@
-//! Samplers σ_1, σ_ρ (random and dispersed), σ_α and the baselines, from detection clusters and
+//! Samplers σ_1, σ_ρ (random and dispersed), σ_α, closest-first and the baselines, from detection clusters and
 //! from the exact components: exact budgets, P1, reproducibility across runs and thread counts,
 //! and `sample_quality` on hand-made cases whose answer is known.
 
@@ -10,7 +10,8 @@ use loops_core::{
     with_threads,
 };
 
-const SIGMAS: [SamplerKind; 4] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha];
+const SIGMAS: [SamplerKind; 5] =
+    [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha, SamplerKind::ClosestFirst];
 const BASELINES: [SamplerKind; 4] =
     [SamplerKind::LioSam, SamplerKind::HdlGraphSlam, SamplerKind::Cartographer, SamplerKind::TimeGap];
 
@@ -167,6 +168,85 @@ fn dispersed_rho_spreads_over_rows_and_takes_closest_pairs() {
     for (c, rows) in &rows_per_component {
         let distinct: BTreeSet<usize> = rows.iter().copied().collect();
         assert_eq!(distinct.len(), rows.len(), "component {c}: two samples in one row");
+    }
+}
+
+/// Closest-first: every component's closest pair first (P1 with the likeliest match), then the
+/// rest as the dispersed σ_ρ, one per row while the budget is below the rows; P3 as σ_ρ's.
+#[test]
+fn closest_first_takes_every_closest_pair_then_disperses() {
+    let s = setup();
+    let components = s.loops.components();
+    let groups = samplable(&s.loops);
+    let closest = |c: usize| -> [usize; 2] {
+        let [i, j] = components[c].closest_pair;
+        [i.min(j), i.max(j)]
+    };
+    for budget in [groups.len(), groups.len() + 5, 3 * groups.len(), 1500] {
+        let sampler = Sampler::new(SamplerKind::ClosestFirst, SampleSize::Budget(budget), 6);
+        let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+        assert_eq!(samples.len(), budget);
+        assert!(samples.warnings().is_empty(), "{:?}", samples.warnings());
+        let pairs: BTreeSet<[usize; 2]> = samples.rows().iter().map(|r| r.pair.unwrap()).collect();
+        assert_eq!(pairs.len(), budget, "a pair twice");
+        for &c in groups.iter().filter(|&&c| !components[c].trivial) {
+            assert!(pairs.contains(&closest(c)), "budget {budget}: component {c} without its closest pair");
+        }
+        if budget == groups.len() {
+            // One each: the trivial component's is its closest pair off the diagonal.
+            let trivial: Vec<_> = samples.rows().iter().filter(|r| components[r.component.unwrap()].trivial).collect();
+            assert_eq!(trivial.len(), groups.iter().filter(|&&c| components[c].trivial).count());
+        }
+        let quality = sample_quality(&samples, &s.loops, 30.0).unwrap();
+        assert_eq!(quality.covered, groups.len(), "budget {budget}: P1 fails");
+    }
+    // The rest grows with the rows (P3) like σ_ρ's: the same budget, the same slope within noise.
+    let budget = 4 * groups.len();
+    let slope = |kind| {
+        let samples =
+            sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler::new(kind, SampleSize::Budget(budget), 1)).unwrap();
+        sample_quality(&samples, &s.loops, 30.0).unwrap().p3_slope.unwrap()
+    };
+    let (first, rho, one) = (slope(SamplerKind::ClosestFirst), slope(SamplerKind::Rho), slope(SamplerKind::One));
+    assert!(one < first && (first - rho).abs() < 0.25, "slopes: closest-first {first}, rho {rho}, one {one}");
+    // A budget below the components: one closest pair each for that many, with the warning.
+    let sampler = Sampler::new(SamplerKind::ClosestFirst, SampleSize::Budget(groups.len() / 2), 0);
+    let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+    assert_eq!(samples.len(), groups.len() / 2);
+    assert!(matches!(samples.warnings(), [SampleWarning::BudgetBelowGroups { .. }]));
+    for row in samples.rows().iter().filter(|r| !components[r.component.unwrap()].trivial) {
+        assert_eq!(row.pair.unwrap(), closest(row.component.unwrap()));
+    }
+}
+
+/// On detection clusters, closest-first takes each cluster's best-scored detection first.
+#[test]
+fn closest_first_on_clusters_takes_the_best_score_first() {
+    let s = setup();
+    let det = s.clusters.detections().clone();
+    // Scores that peak somewhere inside each cluster, away from its first and last detection.
+    let scores: Vec<f64> = (0..det.len()).map(|k| ((k * 7919) % 1000) as f64).collect();
+    let scored = cluster_detections(&det.with_scores(scores.clone()).unwrap(), 10.0).unwrap();
+    let labels = scored.labels();
+    let mut best = vec![None::<usize>; scored.len()];
+    for k in 0..labels.len() {
+        let g = labels[k] as usize;
+        if best[g].is_none_or(|b| scores[k] > scores[b]) {
+            best[g] = Some(k);
+        }
+    }
+    for budget in [scored.len(), 2 * scored.len() + 1] {
+        let sampler = Sampler::new(SamplerKind::ClosestFirst, SampleSize::Budget(budget), 3);
+        let samples = sample_clusters(&scored, &sampler).unwrap();
+        assert_eq!(samples.len(), budget);
+        let picked: BTreeSet<usize> = samples.rows().iter().map(|r| r.detection.unwrap()).collect();
+        assert_eq!(picked.len(), budget);
+        for (g, b) in best.iter().enumerate() {
+            let b = b.unwrap();
+            // Equal scores: the first in (t, t′) order is taken, which has the same score.
+            let has_best = samples.rows().iter().any(|r| r.cluster == Some(g) && r.score == Some(scores[b]));
+            assert!(has_best, "budget {budget}: cluster {g} without its best-scored detection");
+        }
     }
 }
 

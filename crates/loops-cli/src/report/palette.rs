@@ -20,11 +20,12 @@ const OUTLINE_COLOURS: [Rgb; 6] = [
 ];
 
 /// One colour per sampler (as `SamplerKind::ALL`): the four samplers of the paper far apart.
-const SAMPLER_COLOURS: [Rgb; 8] = [
+const SAMPLER_COLOURS: [Rgb; 9] = [
     [0x4e, 0x79, 0xa7],
     [0xf2, 0x8e, 0x2b],
     [0x9c, 0x75, 0x5f],
     [0xe1, 0x57, 0x59],
+    [0xed, 0xc9, 0x48],
     [0x59, 0xa1, 0x4f],
     [0xb0, 0x7a, 0xa1],
     [0x76, 0xb7, 0xb2],
@@ -80,6 +81,7 @@ pub(crate) fn sampler_name(kind: SamplerKind) -> Markup {
         SamplerKind::Rho => "σ<sub>ρ</sub>",
         SamplerKind::RhoDispersed => "σ<sub>ρ</sub> dispersed",
         SamplerKind::Alpha => "σ<sub>α</sub>",
+        SamplerKind::ClosestFirst => "closest-first σ<sub>ρ</sub>",
         SamplerKind::LioSam => "LIO-SAM",
         SamplerKind::HdlGraphSlam => "hdl_graph_slam",
         SamplerKind::Cartographer => "Cartographer",

@@ -53,6 +53,53 @@ pub(crate) fn group_quotas<R: Rng + ?Sized>(
     }
 }
 
+/// Samples per group for the closest-first sampler: one per group first (its closest pair),
+/// then the rest in proportion to `weights` (the rows, as σ_ρ): `q_g = 1 + clamp(s · w_g, 0,
+/// cap_g − 1)`, rounded at random as [`group_quotas`] does. Every cap is at least 1.
+///
+/// Rate mode: `1 + r · w_g` rounded at random, at most the cap. Budget mode: the rest, `B −
+/// #groups`, is shared without a floor (every group has its one already); a budget below the
+/// number of groups gives one sample to that many groups, chosen ∝ their weight, with a warning;
+/// a budget above every cap gives all of them, with a warning.
+pub(crate) fn first_then_quotas<R: Rng + ?Sized>(
+    weights: &[f64],
+    caps: &[u64],
+    size: SampleSize,
+    rng: &mut R,
+    warnings: &mut Vec<SampleWarning>,
+) -> Vec<u64> {
+    debug_assert!(caps.iter().all(|&cap| cap >= 1));
+    match size {
+        SampleSize::Rate(rate) => weights
+            .iter()
+            .zip(caps)
+            .map(|(&w, &cap)| {
+                let q = rate * w;
+                let up = rng.random::<f64>() < q - q.floor();
+                (1 + q.floor() as u64 + u64::from(up)).min(cap)
+            })
+            .collect(),
+        SampleSize::Budget(budget) => {
+            let available: u64 = caps.iter().sum();
+            if budget as u64 >= available {
+                if budget as u64 > available {
+                    warnings.push(SampleWarning::BudgetAboveAvailable { budget, available });
+                }
+                return caps.to_vec();
+            }
+            if budget < weights.len() {
+                return group_quotas(weights, &vec![1; weights.len()], size, rng, warnings);
+            }
+            let rest: Vec<u64> = caps.iter().map(|&cap| cap - 1).collect();
+            let extra = (budget - weights.len()) as u64;
+            let scale = solve_scale(weights, &rest, 0.0, extra as f64);
+            let quotas: Vec<f64> =
+                weights.iter().zip(&rest).map(|(&w, &cap)| (scale * w).clamp(0.0, cap as f64)).collect();
+            round_to_total(&quotas, &rest, extra, rng).into_iter().map(|k| k + 1).collect()
+        }
+    }
+}
+
 /// The s ≥ 0 with Σ clamp(s · w_g, lo, cap_g) = total, for lo · #groups ≤ total < Σ cap.
 fn solve_scale(weights: &[f64], caps: &[u64], lo: f64, total: f64) -> f64 {
     // F(s) = constant + slope · s between breakpoints: a group enters the linear part at lo / w
@@ -157,6 +204,43 @@ mod tests {
         let q = group_quotas(&weights, &caps, SampleSize::Budget(5000), &mut rng, &mut warnings);
         assert_eq!(q, caps);
         assert!(matches!(warnings[..], [SampleWarning::BudgetAboveAvailable { budget: 5000, available: 3825 }]));
+    }
+
+    #[test]
+    fn first_then_quotas_give_one_each_then_follow_weights() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let weights = [1.0, 2.0, 3.5, 100.0];
+        let caps = [1, 1000, 1000, 1000];
+        for budget in [4, 5, 17, 300] {
+            let mut warnings = Vec::new();
+            let q = first_then_quotas(&weights, &caps, SampleSize::Budget(budget), &mut rng, &mut warnings);
+            assert_eq!(q.iter().sum::<u64>(), budget as u64);
+            assert!(q.iter().zip(&caps).all(|(&k, &cap)| k >= 1 && k <= cap), "{q:?}");
+            assert!(warnings.is_empty());
+        }
+        // The rest follows the weights with no floor: 1 + 13 · w / Σw for the three open groups.
+        let mut mean = [0.0; 3];
+        for _ in 0..2000 {
+            let q = first_then_quotas(&[1.0, 2.0, 3.5], &[1000; 3], SampleSize::Budget(16), &mut rng, &mut Vec::new());
+            assert_eq!(q.iter().sum::<u64>(), 16);
+            (0..3).for_each(|g| mean[g] += q[g] as f64 / 2000.0);
+        }
+        for (g, expected) in [3.0, 5.0, 8.0].iter().enumerate() {
+            assert!((mean[g] - expected).abs() < 0.05, "{mean:?}");
+        }
+        let mut warnings = Vec::new();
+        let q = first_then_quotas(&weights, &caps, SampleSize::Budget(2), &mut rng, &mut warnings);
+        assert_eq!(q.iter().sum::<u64>(), 2);
+        assert!(q.iter().all(|&k| k <= 1));
+        assert!(matches!(warnings[..], [SampleWarning::BudgetBelowGroups { budget: 2, groups: 4 }]));
+        let mut warnings = Vec::new();
+        let q = first_then_quotas(&weights, &caps, SampleSize::Budget(5000), &mut rng, &mut warnings);
+        assert_eq!(q, caps);
+        assert!(matches!(warnings[..], [SampleWarning::BudgetAboveAvailable { budget: 5000, available: 3001 }]));
+        // Rate mode: one, plus r · w rounded at random, capped.
+        let q = first_then_quotas(&[0.1, 10.0, 4.0], &[5, 5, 2], SampleSize::Rate(0.5), &mut rng, &mut Vec::new());
+        assert!(q[0] == 1 || q[0] == 2, "{q:?}");
+        assert_eq!(q[1..], [5, 2]);
     }
 
     #[test]

@@ -8,13 +8,15 @@ use super::disperse::disperse_detections;
 use super::exact::concat;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::cluster::DetectionClusters;
-use crate::draw::{SAMPLE_BYTES, check_count, choose_indices, draw_numbers, group_quotas};
+use crate::draw::{SAMPLE_BYTES, check_count, choose_indices, draw_numbers, first_then_quotas, group_quotas};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::memory::try_collect;
 
 /// Samples detections, grouped by their ε-graph clusters (paper, Sec. 5.3–5.5): σ_1, σ_ρ, the
-/// dispersed σ_ρ, or σ_α. "Trajectory points" of a cluster (σ_ρ) are its distinct times t.
+/// dispersed σ_ρ, σ_α, or closest-first (each cluster's best-scored detection first, the middle
+/// one of its middle row without scores; the rest as the dispersed σ_ρ). "Trajectory points" of
+/// a cluster (σ_ρ) are its distinct times t.
 ///
 /// Within a group, picks are uniform without replacement (σ_1, σ_ρ) or spread evenly over the
 /// group's rows in time order (dispersed σ_ρ: the best-scored detection of a row, or its middle
@@ -88,7 +90,11 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
             _ => members.par_iter().map(|m| rows_of(m) as f64).collect(),
         };
         let caps: Vec<u64> = members.iter().map(|m| m.len() as u64).collect();
-        let quotas = group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings);
+        let quotas = if kind == SamplerKind::ClosestFirst {
+            first_then_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
+        } else {
+            group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
+        };
         check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
         let interrupt = Interrupt::current();
         let scores = det.scores();
@@ -99,8 +105,8 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
             .map(|(g, (m, &q))| {
                 interrupt.check()?;
                 let mut rng = group_rng(sampler.seed, g);
-                Ok(if kind == SamplerKind::RhoDispersed {
-                    disperse_detections(m, q, xs, scores, &mut rng)
+                Ok(if matches!(kind, SamplerKind::RhoDispersed | SamplerKind::ClosestFirst) {
+                    disperse_detections(m, q, xs, scores, kind == SamplerKind::ClosestFirst, &mut rng)
                 } else {
                     choose_indices(m.len() as u64, q, &mut rng).into_iter().map(|p| m[p as usize]).collect()
                 })

@@ -1,5 +1,6 @@
 //! The dispersed σ_ρ: a group's samples spread evenly over its rows, each the row's preferred
-//! item (its closest pair, or its best-scored detection).
+//! item (its closest pair, or its best-scored detection); and the closest-first sampler, which
+//! takes the group's best item first and spreads the rest the same way.
 
 use std::collections::BTreeSet;
 
@@ -19,6 +20,7 @@ pub(super) fn disperse_detections<R: Rng + ?Sized>(
     q: u64,
     xs: &[f64],
     scores: Option<&[f64]>,
+    first: bool,
     rng: &mut R,
 ) -> Vec<u32> {
     let mut rows = vec![0usize];
@@ -34,8 +36,43 @@ pub(super) fn disperse_detections<R: Rng + ?Sized>(
             None => a + (b - a - 1) / 2,
         }
     };
-    let positions = spread(row_count, members.len(), q, preferred, rng);
+    let positions = if first {
+        // The best-scored detection of the cluster (the first of equals), or without scores
+        // the middle one of the middle row.
+        let best = match scores {
+            Some(s) => (0..row_count).fold(0, |best, r| {
+                if s[members[preferred(r)] as usize] > s[members[preferred(best)] as usize] { r } else { best }
+            }),
+            None => row_count / 2,
+        };
+        first_then_spread(row_count, members.len(), q, best, preferred, rng)
+    } else {
+        spread(row_count, members.len(), q, preferred, rng)
+    };
     positions.into_iter().map(|p| members[p as usize]).collect()
+}
+
+/// `q` of `total` items, the `first` row's preferred item among them: with `q` at most the rows,
+/// that item and `q − 1` others stratified over the other rows (as [`spread`]); beyond, as
+/// [`spread`] (every row's preferred item, then the rest evenly).
+fn first_then_spread<R: Rng + ?Sized>(
+    rows: usize,
+    total: usize,
+    q: u64,
+    first: usize,
+    preferred: impl Fn(usize) -> usize,
+    rng: &mut R,
+) -> Vec<u64> {
+    if q == 0 {
+        return Vec::new();
+    }
+    if q as usize > rows {
+        return spread(rows, total, q, preferred, rng);
+    }
+    let others: Vec<usize> = (0..rows).filter(|&r| r != first).collect();
+    let mut picked = spread(others.len(), total, q - 1, |k| preferred(others[k]), rng);
+    picked.push(preferred(first) as u64);
+    picked
 }
 
 /// `q` of `total` items: stratified over `rows` rows (the `preferred` item of each picked row),
@@ -83,13 +120,16 @@ fn return_column<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, i: usize, st
     start + back as u32
 }
 
-/// The dispersed σ_ρ on one exact component: rows evenly spaced, each its closest pair.
+/// The dispersed σ_ρ on one exact component: rows evenly spaced, each its closest pair. With
+/// `first` (the closest-first sampler), the component's closest pair (the closest of its rows'
+/// closest pairs, the first of equals in (i, j) order) is always one of them.
 pub(super) fn disperse_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
     space: &PairSpace,
     q: u64,
     traj: &Trajectory,
     metric: &M,
     loops: &Loops,
+    first: bool,
     rng: &mut R,
 ) -> Result<Vec<[u32; 2]>> {
     let segments = space.segments();
@@ -104,7 +144,8 @@ pub(super) fn disperse_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
     for segment in segments {
         numbers.push(numbers[numbers.len() - 1] + (segment.end - segment.start) as u64 + 1);
     }
-    let preferred = |r: usize| -> usize {
+    // The closest pair of row r of the component: (δ, its number in `space`).
+    let closest_of_row = |r: usize| -> (f64, u64) {
         let mut best: Option<(f64, usize, u64)> = None;
         for s in rows[r]..rows[r + 1] {
             let segment = segments[s];
@@ -119,10 +160,18 @@ pub(super) fn disperse_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
                 best = Some((d, column as usize, number));
             }
         }
-        best.map_or(numbers[rows[r]] as usize, |(_, _, number)| number as usize)
+        best.map_or((f64::INFINITY, numbers[rows[r]]), |(d, _, number)| (d, number))
     };
+    let preferred = |r: usize| closest_of_row(r).1 as usize;
     let total = space.len() as usize;
-    let mut picked = spread(rows.len() - 1, total, q, preferred, rng);
+    let row_count = rows.len() - 1;
+    let mut picked = if first {
+        let closest: Vec<(f64, u64)> = (0..row_count).map(closest_of_row).collect();
+        let best = (0..row_count).fold(0, |best, r| if closest[r] < closest[best] { r } else { best });
+        first_then_spread(row_count, total, q, best, |r| closest[r].1 as usize, rng)
+    } else {
+        spread(row_count, total, q, preferred, rng)
+    };
     picked.sort_unstable();
     space.pairs_at(&picked)
 }
@@ -133,6 +182,24 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
+
+    #[test]
+    fn first_then_spread_keeps_the_first() {
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        for q in 0..=12 {
+            let picks = first_then_spread(10, 40, q, 7, |r| 4 * r + 1, &mut rng);
+            assert_eq!(picks.len(), q as usize, "{picks:?}");
+            let distinct: BTreeSet<u64> = picks.iter().copied().collect();
+            assert_eq!(distinct.len(), picks.len(), "{picks:?}");
+            if q > 0 {
+                assert!(picks.contains(&29), "q {q}: {picks:?}");
+            }
+            if (1..=10).contains(&q) {
+                // One per row at most: every pick is a row's preferred item.
+                assert!(picks.iter().all(|p| p % 4 == 1), "{picks:?}");
+            }
+        }
+    }
 
     #[test]
     fn spread_is_even() {

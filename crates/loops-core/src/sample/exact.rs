@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::disperse::disperse_pairs;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::baseline::baseline_pairs;
-use crate::draw::{PairSpace, SAMPLE_BYTES, check_count, check_every, draw_numbers, group_quotas};
+use crate::draw::{PairSpace, SAMPLE_BYTES, check_count, check_every, draw_numbers, first_then_quotas, group_quotas};
 use crate::error::Result;
 use crate::interrupt::Interrupt;
 use crate::loops::Loops;
@@ -36,8 +36,11 @@ impl MetricSpec {
 /// (runs weighted by length, then a column); the dispersed σ_ρ takes evenly spaced rows and the
 /// closest pair of each (from the runs' closest columns; in a run on the diagonal, whose closest
 /// pair is the pose itself, the closest column after the run's farthest point: a return along
-/// the same way, or the run's last column). σ_α and the gap rules draw over the runs of all of
-/// S_γ. With [`Sampler::skip_trivial`], σ_1, σ_ρ and σ_α leave out the trivial components.
+/// the same way, or the run's last column). The closest-first sampler takes each component's
+/// closest pair (the closest of those row pairs) first, one per component, and shares the rest
+/// of the budget as the dispersed σ_ρ does. σ_α and the gap rules draw over the runs of all of
+/// S_γ. With [`Sampler::skip_trivial`], the samplers other than the baselines leave out the
+/// trivial components.
 /// Never a list of all pairs: memory O(runs + samples); time O(runs + samples · log runs),
 /// plus the baselines' neighbour searches.
 ///
@@ -122,7 +125,11 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
                 _ => spaces.iter().map(|s| rows_of(s) as f64).collect(),
             };
             let caps: Vec<u64> = spaces.iter().map(PairSpace::len).collect();
-            let quotas = group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings);
+            let quotas = if kind == SamplerKind::ClosestFirst {
+                first_then_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
+            } else {
+                group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
+            };
             check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
             let picks: Vec<Vec<Picked>> = spaces
                 .par_iter()
@@ -131,8 +138,9 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
                 .map(|((space, &q), &c)| {
                     interrupt.check()?;
                     let mut rng = group_rng(sampler.seed, c);
-                    let pairs = if kind == SamplerKind::RhoDispersed {
-                        disperse_pairs(space, q, traj, metric, loops, &mut rng)?
+                    let pairs = if matches!(kind, SamplerKind::RhoDispersed | SamplerKind::ClosestFirst) {
+                        let first = kind == SamplerKind::ClosestFirst;
+                        disperse_pairs(space, q, traj, metric, loops, first, &mut rng)?
                     } else {
                         space.pairs_at(&space.choose(q, &mut rng))?
                     };

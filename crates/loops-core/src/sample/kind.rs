@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 /// | `rho` | σ_ρ ∈ O(ρ): r samples per group per trajectory point (row of the group), uniform within it |
 /// | `rho-dispersed` | σ_ρ's counts, spread evenly along each group (stratified over its rows), each the row's closest pair (best score for detections) |
 /// | `alpha` | σ_α ∈ O(α): uniform over all detections (or pairs of S_γ), no groups |
+/// | `closest-first` | one sample per group first, its closest pair (best score for detections: the likeliest match); the rest as `rho-dispersed` |
 /// | `lio-sam`, `hdl-graph-slam`, `cartographer`, `time-gap` | baselines of deployed systems, see [`BaselineParams`] |
 ///
 /// A *group* is a detection cluster ([`sample_clusters`](crate::sample_clusters)) or an exact loop component
@@ -43,6 +44,10 @@ pub enum SamplerKind {
     RhoDispersed,
     /// σ_α: uniform over detections (or over S_γ).
     Alpha,
+    /// Every group first with its closest pair (the likeliest match; for detections the
+    /// best-scored one), then the rest of the budget as [`RhoDispersed`](Self::RhoDispersed):
+    /// in proportion to the rows, spread along each group, each the row's closest pair.
+    ClosestFirst,
     /// LIO-SAM: nearest keyframe within γ older than a time gap, searched at 1 Hz.
     LioSam,
     /// hdl_graph_slam: a keyframe within γ after a minimum travel, one per stretch of travel.
@@ -55,11 +60,12 @@ pub enum SamplerKind {
 
 impl SamplerKind {
     /// Every sampler, in the order of [`NAMES`](Self::NAMES).
-    pub const ALL: [Self; 8] = [
+    pub const ALL: [Self; 9] = [
         Self::One,
         Self::Rho,
         Self::RhoDispersed,
         Self::Alpha,
+        Self::ClosestFirst,
         Self::LioSam,
         Self::HdlGraphSlam,
         Self::Cartographer,
@@ -67,10 +73,11 @@ impl SamplerKind {
     ];
 
     /// The accepted names.
-    pub const NAMES: &'static str = "one, rho, rho-dispersed, alpha, lio-sam, hdl-graph-slam, cartographer, time-gap";
+    pub const NAMES: &'static str =
+        "one, rho, rho-dispersed, alpha, closest-first, lio-sam, hdl-graph-slam, cartographer, time-gap";
 
     /// The samplers that work on detection clusters.
-    pub const CLUSTER_NAMES: &'static str = "one, rho, rho-dispersed, alpha";
+    pub const CLUSTER_NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first";
 
     /// The name, as parsed.
     pub fn name(self) -> &'static str {
@@ -79,6 +86,7 @@ impl SamplerKind {
             Self::Rho => "rho",
             Self::RhoDispersed => "rho-dispersed",
             Self::Alpha => "alpha",
+            Self::ClosestFirst => "closest-first",
             Self::LioSam => "lio-sam",
             Self::HdlGraphSlam => "hdl-graph-slam",
             Self::Cartographer => "cartographer",
@@ -101,6 +109,7 @@ impl SamplerKind {
             Self::Rho => "σ_ρ",
             Self::RhoDispersed => "σ_ρ dispersed",
             Self::Alpha => "σ_α",
+            Self::ClosestFirst => "closest-first σ_ρ",
             Self::LioSam => "LIO-SAM",
             Self::HdlGraphSlam => "hdl_graph_slam",
             Self::Cartographer => "Cartographer",
@@ -114,10 +123,10 @@ impl SamplerKind {
     }
 
     /// The baseline rule this sampler runs, with its parameters taken from `params`; `None` for
-    /// σ_1, σ_ρ, the dispersed σ_ρ and σ_α.
+    /// σ_1, σ_ρ, the dispersed σ_ρ, σ_α and the closest-first sampler.
     pub fn baseline(self, params: &BaselineParams) -> Option<Baseline> {
         match self {
-            Self::One | Self::Rho | Self::RhoDispersed | Self::Alpha => None,
+            Self::One | Self::Rho | Self::RhoDispersed | Self::Alpha | Self::ClosestFirst => None,
             Self::LioSam => Some(Baseline::LioSam(params.lio_sam)),
             Self::HdlGraphSlam => Some(Baseline::HdlGraphSlam(params.hdl_graph_slam)),
             Self::Cartographer => Some(Baseline::Cartographer(params.cartographer)),
@@ -155,7 +164,7 @@ impl SampleSize {
             Self::Rate(rate) => {
                 let (ok, expected) = match kind {
                     SamplerKind::One => (rate > 0.0, "a positive number of samples per group"),
-                    SamplerKind::Rho | SamplerKind::RhoDispersed => {
+                    SamplerKind::Rho | SamplerKind::RhoDispersed | SamplerKind::ClosestFirst => {
                         (rate > 0.0, "a positive number of samples per group per trajectory point")
                     }
                     _ => (rate > 0.0 && rate <= 1.0, "a probability in (0, 1]"),
@@ -224,7 +233,7 @@ impl Sampler {
                 option: "skip_trivial",
                 to: format!("the {} baseline", self.kind),
                 reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
-                         rho-dispersed or alpha",
+                         rho-dispersed, alpha or closest-first",
             });
         }
         Ok(())
@@ -243,7 +252,8 @@ mod tests {
         let err = "sigma_rho".parse::<SamplerKind>().unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown sampler \"sigma_rho\": expected one of one, rho, rho-dispersed, alpha, lio-sam, hdl-graph-slam, cartographer, time-gap"
+            "unknown sampler \"sigma_rho\": expected one of one, rho, rho-dispersed, alpha, closest-first, lio-sam, \
+             hdl-graph-slam, cartographer, time-gap"
         );
     }
 }
