@@ -137,14 +137,15 @@ __all__ = [
 
 
 def __getattr__(name: str) -> object:
-    """``inexact_loops.plot`` on first use: matplotlib is imported only when plots are drawn
-    (it is the optional extra ``inexact-loops[plot]``)."""
-    if name == "plot":
+    """``inexact_loops.plot`` and ``inexact_loops.evaluate`` on first use: matplotlib is
+    imported only when plots are drawn (the optional extra ``inexact-loops[plot]``), GTSAM only
+    when a pose graph is optimised (``inexact-loops[maps]``)."""
+    if name in ("plot", "evaluate"):
         import importlib
 
-        return importlib.import_module(f"{__name__}.plot")
+        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), "plot"])
+    return sorted([*globals(), "plot", "evaluate"])
