@@ -1324,6 +1324,43 @@ def evaluate_one(
     return optimize(odometry, matches, backend), matches, (i, j)
 
 
+def _grid(
+    outlier_rates: Sequence[float],
+    on: Sequence[Literal["reference", "estimate"]],
+    separations: Sequence[bool],
+    sources: Sequence[Literal["exact", "detections"]],
+    samplers: Sequence[str],
+    detection_samplers: Sequence[str],
+    budgets: Sequence[int],
+    **rule: Any,
+) -> Iterable[tuple[float, CandidateRule]]:
+    """The runs of :func:`evaluate`, in its order: detections only for ``detection_samplers``
+    (never a baseline); LIO-SAM's and hdl_graph_slam's rules, which do not look at the
+    separation, only with it."""
+    for outlier_rate in outlier_rates:
+        for where in on:
+            for separation in separations:
+                for source in sources:
+                    for name in samplers:
+                        baseline = name in BASELINES
+                        if source == "detections" and (baseline or name not in detection_samplers):
+                            continue
+                        if not separation and name in ("lio-sam", "hdl-graph-slam"):
+                            continue
+                        for budget in budgets:
+                            yield (
+                                outlier_rate,
+                                CandidateRule(
+                                    name,
+                                    int(budget),
+                                    separation=bool(separation),
+                                    source=source,
+                                    on=where,
+                                    **rule,
+                                ),
+                            )
+
+
 def evaluate(
     reference: Poses,
     *,
@@ -1427,63 +1464,47 @@ def evaluate(
             results.rows.append(row)
             if progress:
                 progress(row)
-        for outlier_rate in outlier_rates:
-            v = dataclasses.replace(verifier, outlier_rate=outlier_rate)
-            for where in on:
-                for separation in separations:
-                    for source in sources:
-                        for name in samplers:
-                            baseline = name in BASELINES
-                            if source == "detections" and (
-                                baseline or name not in detection_samplers
-                            ):
-                                continue
-                            if (
-                                baseline
-                                and not separation
-                                and name in ("lio-sam", "hdl-graph-slam")
-                            ):
-                                continue  # their rules do not look at the separation
-                            for budget in budgets:
-                                rule = CandidateRule(
-                                    name,
-                                    int(budget),
-                                    gamma,
-                                    separation=separation,
-                                    source=source,
-                                    on=where,
-                                    gamma_inflation=gamma_inflation,
-                                    detection_rate=detection_rate,
-                                    epsilon_s=epsilon_s,
-                                )
-                                start = time.perf_counter()
-                                estimate, matches, pairs = evaluate_one(
-                                    reference,
-                                    odo,
-                                    rule,
-                                    seed=int(seed),
-                                    verifier=v,
-                                    backend=backend,
-                                )
-                                ate_m, rpe_m = errors(estimate)
-                                assert matches is not None
-                                row = base | {
-                                    "sampler": name,
-                                    "source": source,
-                                    "on": where,
-                                    "separation": bool(separation),
-                                    "outlier_rate": float(outlier_rate),
-                                    "budget": int(budget),
-                                    "candidates": len(pairs[0]),
-                                    "matches": len(matches),
-                                    "wrong": int(matches.wrong.sum()),
-                                    "ate_m": ate_m,
-                                    "rpe_m": rpe_m,
-                                    "seconds": time.perf_counter() - start,
-                                }
-                                results.rows.append(row)
-                                if progress:
-                                    progress(row)
+        for outlier_rate, rule in _grid(
+            outlier_rates,
+            on,
+            separations,
+            sources,
+            samplers,
+            detection_samplers,
+            budgets,
+            gamma=gamma,
+            gamma_inflation=gamma_inflation,
+            detection_rate=detection_rate,
+            epsilon_s=epsilon_s,
+        ):
+            start = time.perf_counter()
+            estimate, matches, pairs = evaluate_one(
+                reference,
+                odo,
+                rule,
+                seed=int(seed),
+                verifier=dataclasses.replace(verifier, outlier_rate=outlier_rate),
+                backend=backend,
+            )
+            ate_m, rpe_m = errors(estimate)
+            assert matches is not None
+            row = base | {
+                "sampler": rule.sampler,
+                "source": rule.source,
+                "on": rule.on,
+                "separation": rule.separation,
+                "outlier_rate": float(outlier_rate),
+                "budget": rule.budget,
+                "candidates": len(pairs[0]),
+                "matches": len(matches),
+                "wrong": int(matches.wrong.sum()),
+                "ate_m": ate_m,
+                "rpe_m": rpe_m,
+                "seconds": time.perf_counter() - start,
+            }
+            results.rows.append(row)
+            if progress:
+                progress(row)
     return results
 
 
@@ -1568,7 +1589,10 @@ def plot_error_vs_matches(
         and ("dataset" not in select or r["dataset"] == select["dataset"])
     ]
     if odometry:
-        ax.axhline(float(np.median(odometry)), color="k", ls=":", lw=1, label="odometry alone")
+        level = float(np.median(odometry))
+        ax.axhline(level, color="k", ls=":", lw=1, label="odometry alone")
+        low, high = ax.get_ylim()
+        ax.set_ylim(low, max(high, 1.5 * level))
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("matches tried (budget)")
@@ -1586,34 +1610,36 @@ def plot_error_vs_matches(
 
 
 def _plot_panels(results: Results, path: str, *, title: str) -> None:
-    """One panel of :func:`plot_error_vs_matches` per (on, separation, outlier rate) run."""
+    """:func:`plot_error_vs_matches` per run condition: a row per (on, separation), a column per
+    outlier rate."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    runs = sorted(
-        {
-            (r["on"], r["separation"], r["outlier_rate"])
-            for r in results.rows
-            if r["sampler"] != "odometry"
-        },
-        key=lambda k: (k[0], not k[1], k[2]),
+    runs = [r for r in results.rows if r["sampler"] != "odometry"]
+    rows = sorted(
+        {(r["on"], r["separation"]) for r in runs}, key=lambda k: (k[0] != "reference", not k[1])
     )
+    columns = sorted({r["outlier_rate"] for r in runs})
     fig, axes = plt.subplots(
-        1, max(len(runs), 1), figsize=(6.4 * max(len(runs), 1), 4.2), squeeze=False
+        max(len(rows), 1),
+        max(len(columns), 1),
+        figsize=(6.4 * max(len(columns), 1), 4.2 * max(len(rows), 1)),
+        squeeze=False,
     )
-    for ax, (on, separation, outlier_rate) in zip(axes[0], runs, strict=False):
-        plot_error_vs_matches(
-            results,
-            ax=ax,
-            select={"on": on, "separation": separation, "outlier_rate": outlier_rate},
-            title=f"{title}: candidates on the {on}, "
-            + ("revisits" if separation else "S_gamma")
-            + f", {outlier_rate:.0%} wrong matches",
-        )
+    for a, (on, separation) in enumerate(rows):
+        for b, outlier_rate in enumerate(columns):
+            plot_error_vs_matches(
+                results,
+                ax=axes[a][b],
+                select={"on": on, "separation": separation, "outlier_rate": outlier_rate},
+                title=f"{title}: candidates on the {on}, "
+                + ("revisits" if separation else "S_gamma")
+                + f", {outlier_rate:.0%} wrong matches",
+            )
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
