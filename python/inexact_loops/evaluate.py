@@ -1533,11 +1533,14 @@ def plot_error_vs_matches(
     select: Mapping[str, Any] | None = None,
     metric: Literal["ate", "rpe"] = "ate",
     title: str | None = None,
+    legend: bool = True,
 ) -> Any:
     """The error against the number of matches (the budget, log scale), one curve per sampler
-    (and per source when both were run): the median over seeds, the band from the smallest to
-    the largest; the odometry alone as a dashed line. ``select`` keeps the rows whose columns
-    have these values (e.g. ``{"separation": True, "outlier_rate": 0.0}``). Needs matplotlib.
+    (dashed: on detections): the median over the seeds, and for ATE a band over the middle half
+    of them (first to third quartile); the odometry alone as a dotted line. ``select`` keeps the
+    rows whose columns have these values (e.g. ``{"separation": True, "outlier_rate": 0.0}``).
+    ``legend=False`` leaves the legend to the caller (``ax.get_legend_handles_labels()``).
+    Needs matplotlib.
     """
     import matplotlib.pyplot as plt
 
@@ -1550,7 +1553,6 @@ def plot_error_vs_matches(
         if s["sampler"] != "odometry" and all(s.get(k) == v for k, v in select.items())
     ]
     column = "ate" if metric == "ate" else "rpe"
-    sources = {s["source"] for s in summary}
     curves: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for s in summary:
         curves.setdefault((s["sampler"], s["source"]), []).append(s)
@@ -1561,7 +1563,7 @@ def plot_error_vs_matches(
         points.sort(key=lambda s: s["budget"])
         x = [s["budget"] for s in points]
         y = [s[f"{column}_median_m"] for s in points]
-        label = sampler_symbol(name) + (f" ({source})" if len(sources) > 1 else "")
+        label = sampler_symbol(name) + (" (detections)" if source == "detections" else "")
         style = "--" if source == "detections" else "-"
         colour = COLOURS.get(name)
         ax.plot(
@@ -1577,10 +1579,10 @@ def plot_error_vs_matches(
         if column == "ate":
             ax.fill_between(
                 x,
-                [s["ate_min_m"] for s in points],
-                [s["ate_max_m"] for s in points],
+                [s["ate_q25_m"] for s in points],
+                [s["ate_q75_m"] for s in points],
                 color=colour,
-                alpha=0.08,
+                alpha=0.1,
             )
     odometry = [
         r[f"{column}_m"]
@@ -1588,19 +1590,20 @@ def plot_error_vs_matches(
         if r["sampler"] == "odometry"
         and ("dataset" not in select or r["dataset"] == select["dataset"])
     ]
-    if odometry:
-        level = float(np.median(odometry))
-        ax.axhline(level, color="k", ls=":", lw=1, label="odometry alone")
-        low, high = ax.get_ylim()
-        ax.set_ylim(low, max(high, 1.5 * level))
     ax.set_xscale("log")
     ax.set_yscale("log")
+    if odometry:
+        level = float(np.median(odometry))
+        low, high = ax.get_ylim()
+        ax.axhline(level, color="k", ls=":", lw=1, label="odometry alone")
+        ax.set_ylim(low, max(high, 1.5 * level))
     ax.set_xlabel("matches tried (budget)")
     ax.set_ylabel("ATE (m)" if column == "ate" else "RPE (m)")
     if title:
         ax.set_title(title, fontsize=9)
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    ax.legend(fontsize=7, ncol=2)
+    if legend:
+        ax.legend(fontsize=7, ncol=2)
     return ax
 
 
