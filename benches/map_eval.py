@@ -196,6 +196,10 @@ def condition_title(on: str, separation: bool, outlier_rate: float) -> str:
     )
 
 
+def upper_first(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
 def datasets_of(results: ev.Results) -> list[str]:
     return [n for n in DATASETS if any(r["dataset"] == n for r in results.rows)]
 
@@ -255,7 +259,7 @@ def tables(results: ev.Results, budgets: list[int]) -> str:
     for condition in CONDITIONS:
         rows = table(results, summary, condition, budgets, spread=True)
         if rows:
-            lines += ["", f"**{condition_title(*condition).capitalize()}**", "", *rows]
+            lines += ["", f"**{upper_first(condition_title(*condition))}**", "", *rows]
     return "\n".join(lines) + "\n"
 
 
@@ -389,7 +393,8 @@ def section(results: ev.Results, budgets: list[int], command: str) -> str:
         "",
         *machine_facts(("numpy", "gtsam", "evo")),
         f"- {len(runs)} runs over {len(seeds)} seed(s) ({', '.join(map(str, seeds))}); "
-        f"{hours:.1f} h of runs on the shared machine (`nice -n 15`, load 5–15); {nodes}.",
+        f"{hours:.1f} h of runs on a 2-core machine shared with other jobs (`nice -n 15`); "
+        f"{nodes}.",
         "- Each run: the seed's simulated odometry (`DriftModel()`), a sampler's candidates at a "
         "budget (matches tried), the default `Verifier` (10 % wrong matches where said), the "
         "default `BackEnd` (GTSAM Levenberg–Marquardt, Cauchy kernel); ATE as `evo_ape -a` "
@@ -404,7 +409,7 @@ def section(results: ev.Results, budgets: list[int], command: str) -> str:
         "",
     ]
     for condition in [("reference", True, 0.0), ("reference", True, 0.1)]:
-        lines += [f"**{condition_title(*condition).capitalize()}**", ""]
+        lines += [f"**{upper_first(condition_title(*condition))}**", ""]
         lines += table(results, summary, condition, budgets, spread=True) + [""]
     lines += [
         "**How far from the best**: per sampler, the geometric mean over the datasets of its "
@@ -456,7 +461,9 @@ def report(args: argparse.Namespace) -> None:
     with open(out / "summary.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(summary[0]))
         writer.writeheader()
-        writer.writerows(summary)
+        writer.writerows(
+            {k: round(v, 4) if isinstance(v, float) else v for k, v in s.items()} for s in summary
+        )
     figure(results, ROOT / "docs" / "map_eval.png")
     body = section(results, budgets, "nice -n 15 python benches/map_eval.py")
     if args.no_write:
