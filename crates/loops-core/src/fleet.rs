@@ -526,7 +526,7 @@ pub fn sample_fleet<M: Metric + ?Sized>(
         return Err(Error::NotApplicable {
             option: "sampling between sessions only",
             to: format!("the {} baseline", sampler.kind.name()),
-            reason: "a baseline's rule knows no components; use one, rho, rho-dispersed or alpha",
+            reason: "a baseline's rule knows no components; use one, rho, rho-dispersed, alpha or closest-first",
         });
     }
     let blocks = &loops.blocks;
