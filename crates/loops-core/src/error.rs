@@ -8,6 +8,13 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
+    /// Tile summaries or partial merges that do not fit together (a tile merged twice, a
+    /// label without a component, counts a cut cannot explain).
+    #[error("tile summaries do not fit together: {problem}")]
+    InconsistentTiles {
+        /// What does not fit, naming the tile or label.
+        problem: String,
+    },
     /// A fleet without sessions.
     #[error("a fleet needs at least one session")]
     EmptyFleet,

@@ -402,46 +402,14 @@ impl FleetLoops {
         self.loops.components().iter().zip(&self.blocks).map(|(c, &sessions)| self.localize(c, sessions)).collect()
     }
 
-    fn localize(&self, c: &LoopComponent, [a, b]: [usize; 2]) -> FleetComponent {
-        let (sa, sb) = (self.starts[a], self.starts[b]);
-        FleetComponent {
-            id: c.id,
-            sessions: [a, b],
-            trivial: c.trivial,
-            area_s2: c.area_s2,
-            pair_count: c.pair_count,
-            holes: c.holes,
-            poses: [[c.i_range[0] - sa, c.i_range[1] - sa], [c.j_range[0] - sb, c.j_range[1] - sb]],
-            closest_pair: [c.closest_pair[0] - sa, c.closest_pair[1] - sb],
-            closest_distance: c.closest_distance,
-        }
+    fn localize(&self, c: &LoopComponent, sessions: [usize; 2]) -> FleetComponent {
+        localize(c, sessions, &self.starts)
     }
 
     /// The sparse overlap matrix: every session pair (a, b), a ≤ b, with at least one loop
     /// component, in order of (a, b). α(b, a) = α(a, b).
     pub fn session_pairs(&self) -> Vec<SessionPair> {
-        let mut pairs: std::collections::BTreeMap<[usize; 2], SessionPair> = std::collections::BTreeMap::new();
-        for (c, &sessions) in self.loops.components().iter().zip(&self.blocks) {
-            let entry = pairs.entry(sessions).or_insert(SessionPair {
-                sessions,
-                components: 0,
-                pair_count: 0,
-                area_s2: 0.0,
-                density: 0.0,
-            });
-            // Within a session, a non-trivial component is one half of its mirror pair.
-            let mirrored = if sessions[0] == sessions[1] && !c.trivial { 2 } else { 1 };
-            entry.components += 1;
-            entry.pair_count += mirrored * c.pair_count;
-            entry.area_s2 += mirrored as f64 * c.area_s2;
-        }
-        pairs
-            .into_values()
-            .map(|mut p| {
-                p.density = p.area_s2 / (self.spans_s[p.sessions[0]] * self.spans_s[p.sessions[1]]);
-                p
-            })
-            .collect()
+        session_pairs_of(self.loops.components().iter().zip(self.blocks.iter().copied()), &self.spans_s)
     }
 
     /// Loop duration τ per fleet index, split: `own`, within the pose's session (that session's
@@ -462,6 +430,53 @@ impl FleetLoops {
     pub fn between_sessions(&self) -> Vec<usize> {
         (0..self.blocks.len()).filter(|&c| self.blocks[c][0] != self.blocks[c][1]).collect()
     }
+}
+
+/// A component of the joint result in its sessions' poses; `starts`: the sessions' first fleet
+/// indices.
+pub(crate) fn localize(c: &LoopComponent, [a, b]: [usize; 2], starts: &[usize]) -> FleetComponent {
+    let (sa, sb) = (starts[a], starts[b]);
+    FleetComponent {
+        id: c.id,
+        sessions: [a, b],
+        trivial: c.trivial,
+        area_s2: c.area_s2,
+        pair_count: c.pair_count,
+        holes: c.holes,
+        poses: [[c.i_range[0] - sa, c.i_range[1] - sa], [c.j_range[0] - sb, c.j_range[1] - sb]],
+        closest_pair: [c.closest_pair[0] - sa, c.closest_pair[1] - sb],
+        closest_distance: c.closest_distance,
+    }
+}
+
+/// The sparse overlap matrix of components with their blocks (in id order), the sessions'
+/// spans giving ρ: one entry per block with a component, in order of (a, b).
+pub(crate) fn session_pairs_of<'a>(
+    components: impl Iterator<Item = (&'a LoopComponent, [usize; 2])>,
+    spans_s: &[f64],
+) -> Vec<SessionPair> {
+    let mut pairs: std::collections::BTreeMap<[usize; 2], SessionPair> = std::collections::BTreeMap::new();
+    for (c, sessions) in components {
+        let entry = pairs.entry(sessions).or_insert(SessionPair {
+            sessions,
+            components: 0,
+            pair_count: 0,
+            area_s2: 0.0,
+            density: 0.0,
+        });
+        // Within a session, a non-trivial component is one half of its mirror pair.
+        let mirrored = if sessions[0] == sessions[1] && !c.trivial { 2 } else { 1 };
+        entry.components += 1;
+        entry.pair_count = entry.pair_count.saturating_add(c.pair_count.saturating_mul(mirrored));
+        entry.area_s2 += mirrored as f64 * c.area_s2;
+    }
+    pairs
+        .into_values()
+        .map(|mut p| {
+            p.density = p.area_s2 / (spans_s[p.sessions[0]] * spans_s[p.sessions[1]]);
+            p
+        })
+        .collect()
 }
 
 /// A sampled pair of a fleet: which sessions, which poses, when on each session's clock.

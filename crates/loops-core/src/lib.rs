@@ -106,7 +106,10 @@ pub use separation::Separation;
 pub use spec::MetricSpec;
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
-pub use tile::{EdgeRun, Tile, TileComponent, TileSummary, merge_tiles, plan_tiles, scan_tile};
+pub use tile::{
+    EdgeRun, MergedComponent, MergedLoops, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileComponent, TileMerge,
+    TileSummary, merge_tiles, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
+};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 pub use verdict::{PairVerdict, Verdict};
 

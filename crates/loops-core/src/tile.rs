@@ -3,46 +3,94 @@
 //!
 //! A tile is scanned by the same engine as the whole fleet, on the tile's poses only, and
 //! returns a [`TileSummary`]: the statistics of each of its provisional components (cells, area,
-//! runs, overlapping run pairs, diagonal cells and links, extents, closest pair, first cell) and
-//! only the runs on its edges (its first and last rows, its first and last columns), with their
-//! provisional labels. [`merge_tiles`] joins provisional components whose edge runs touch: a run
-//! of a tile's last row that shares a column with a run of the first row of the tile below, and
-//! the two halves of a run cut by a column boundary (the run in row i ending at the boundary and
-//! the one starting there). Statistics add up, with three corrections for what a cut counts
-//! twice or not at all: a run cut in two is one run; two cut runs in consecutive rows overlap
-//! once, not once on each side of the cut; and a diagonal run cut right after its diagonal cell
-//! still links (i, i + 1). Holes then follow from the Euler number as for one trajectory.
+//! runs, overlapping run pairs, diagonal cells and links, extents and their times, closest pair,
+//! first cell) and only the runs on its edges (its first and last rows, its first and last
+//! columns), with their provisional labels. The merge joins provisional components whose edge
+//! runs touch: a run of a tile's last row that shares a column with a run of the first row of
+//! the tile below, and the two halves of a run cut by a column boundary (the run in row i ending
+//! at the boundary and the one starting there). Statistics add up, with three corrections for
+//! what a cut counts twice or not at all: a run cut in two is one run; two cut runs in
+//! consecutive rows overlap once, not once on each side of the cut; and a diagonal run cut right
+//! after its diagonal cell still links (i, i + 1). Holes then follow from the Euler number as for
+//! one trajectory.
+//!
+//! For a cluster, every step has a form that needs no [`Fleet`]:
+//! - **Plan** from what each session's reader learns alone: [`SessionBlocks`] (pose count, span,
+//!   the bounding balls of its blocks), then [`plan_session_tiles`]. [`plan_tiles`] is the same
+//!   plan from a fleet in memory.
+//! - **Scan** a tile from its two sessions' trajectories and their first fleet indices:
+//!   [`scan_session_tile`]. [`scan_tile`] is the same scan of a fleet in memory.
+//! - **Merge** in a tree: a [`TileMerge`] is a partial merge of any set of tiles (one tile's
+//!   summary, or a merge of merges), keeping the statistics of its components with the joins
+//!   made so far and only the edge runs that face a tile it does not hold yet; merging merges
+//!   joins across them. The order and grouping do not matter. [`TileMerge::finish`] gives the
+//!   fleet's components with their session pairs ([`MergedLoops`]: the overlap matrix, the
+//!   components in session poses); [`merge_tiles`] is the one-step merge of summaries.
+//! - **Ship** as bytes: [`TileSummary::to_bytes`], [`TileMerge::to_bytes`] and
+//!   [`SessionBlocks::to_bytes`], with the `serde` feature (MessagePack, as the Python bindings
+//!   pickle results, after a 4-byte tag and a format version; decoding checks the tag, the
+//!   version, that every byte is used and that labels and tiles refer to what exists, and says
+//!   which of these failed).
 //!
 //! Exactness: the components, their cells, runs, holes, extents, closest pairs and first cells
-//! are those of [`find_fleet_loops`](crate::find_fleet_loops) for any tiling. Areas are sums of
-//! floating-point products taken in another order (and over runs cut in pieces), so they agree
-//! to rounding (a relative 10⁻¹², checked by the tests), not bit for bit.
+//! are those of [`find_fleet_loops`](crate::find_fleet_loops) for any tiling and any merge tree.
+//! Areas are sums of floating-point products taken in another order (and over runs cut in
+//! pieces), so they agree to rounding (a relative 10⁻¹², checked by the tests), not bit for bit.
+//!
+//! # Examples
+//! ```
+//! use loops_core::{Euclidean, Separation, SessionBlocks, TileMerge, Trajectory};
+//! use loops_core::{plan_session_tiles, scan_session_tile};
+//! let out = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
+//! let back = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
+//! // Each reader describes its session; the plan needs nothing else.
+//! let blocks = [SessionBlocks::new(&out, &Euclidean, 2)?, SessionBlocks::new(&back, &Euclidean, 2)?];
+//! let tiles = plan_session_tiles(&blocks, &Euclidean, 1.0)?;
+//! let sessions = [&out, &back];
+//! let starts = [0, 3]; // the sessions' first fleet indices: 3 poses, then 2
+//! let mut parts = Vec::new();
+//! for tile in &tiles {
+//!     let [a, b] = tile.sessions;
+//!     let summary =
+//!         scan_session_tile([sessions[a], sessions[b]], [starts[a], starts[b]], &Euclidean, 1.0, Separation::NONE, tile)?;
+//!     // What a worker ships back, and the merge reads.
+//!     parts.push(TileMerge::new(loops_core::TileSummary::from_bytes(&summary.to_bytes())?)?);
+//! }
+//! let merged = TileMerge::merge(parts)?.finish()?;
+//! let between: Vec<_> = merged.components().iter().filter(|c| c.sessions == [0, 1]).collect();
+//! assert_eq!(between.len(), 2); // Tuesday passes Monday's poses twice
+//! let overlap = merged.session_pairs(&[2.0, 1.0])?;
+//! assert_eq!(overlap.iter().map(|p| p.sessions).collect::<Vec<_>>(), [[0, 0], [0, 1], [1, 1]]);
+//! # Ok::<(), loops_core::Error>(())
+//! ```
 
 use std::collections::HashMap;
 
 use crate::ball_tree::BallTree;
 use crate::component::{LoopComponent, ROWS_PER_LABEL_TASK, for_each_overlap, label_runs};
 use crate::error::{Error, Result};
-use crate::fleet::Fleet;
+use crate::fleet::{Fleet, FleetComponent, SessionPair, localize, session_pairs_of};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, path_length};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
-use crate::union_find::MinRootForest;
+use crate::union_find::{MinRootForest, number_sets};
 
-/// Maps an index of a tile's piece to its fleet index.
-type ToFleet<'a> = Box<dyn Fn(usize) -> usize + 'a>;
-
-/// The rows of the runs cut at each column boundary of a session pair, with a global label.
-type CutRows = HashMap<([usize; 2], usize), Vec<(usize, usize)>>;
+/// Maps an index of a tile's piece to its fleet index, or to its time on its session's clock.
+type FromPiece<'a, T> = Box<dyn Fn(usize) -> T + 'a>;
 
 /// Poses per leaf of a tile's ball hierarchy.
 const LEAF_SIZE: usize = 16;
+
+/// The version of the byte format of [`TileSummary::to_bytes`], [`TileMerge::to_bytes`] and
+/// [`SessionBlocks::to_bytes`]; bytes of another version are refused.
+pub const TILE_FORMAT_VERSION: u16 = 1;
 
 /// Rows `rows` of session `sessions[0]` against columns `columns` of session `sessions[1]`,
 /// both ranges of fleet indices within their sessions; `sessions[0] ≤ sessions[1]`, and within
 /// one session the tile lies on or above the diagonal (`columns.end > rows.start`).
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Tile {
     /// The session pair (a, b), a ≤ b.
     pub sessions: [usize; 2],
@@ -52,37 +100,171 @@ pub struct Tile {
     pub columns: std::ops::Range<usize>,
 }
 
+impl Tile {
+    /// Non-empty ranges, a ≤ b, on or above the diagonal within one session.
+    fn is_well_formed(&self) -> bool {
+        let [a, b] = self.sessions;
+        a <= b
+            && self.rows.start < self.rows.end
+            && self.columns.start < self.columns.end
+            && (a != b || self.columns.end > self.rows.start)
+    }
+}
+
+/// What planning tiles needs of one session, learnt by whoever reads it: its pose count, its
+/// span and the bounding balls of its blocks of `block` consecutive poses (from its first pose).
+/// A ball is centred on the block's middle pose, with the largest distance from it to a pose of
+/// the block as radius.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SessionBlocks {
+    /// Number of poses.
+    pub poses: usize,
+    /// t_{n−1} − t_0, seconds (the span that [`SessionPair::density`] divides by).
+    pub span_s: f64,
+    /// Poses per block (the last block may hold fewer).
+    pub block: usize,
+    /// Coordinates per pose.
+    pub dim: usize,
+    /// The centre pose of each block, `dim` coordinates per block.
+    pub centres: Vec<f64>,
+    /// The radius of each block's ball, in the metric's unit.
+    pub radii: Vec<f64>,
+}
+
+impl SessionBlocks {
+    /// The blocks of `session` under `metric`: O(poses) distance evaluations.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a block of 0 poses.
+    pub fn new<M: Metric + ?Sized>(session: &Trajectory, metric: &M, block: usize) -> Result<Self> {
+        if block == 0 {
+            return Err(Error::InvalidParameter { name: "block", value: 0.0, expected: "at least 1 pose" });
+        }
+        let (mut centres, mut radii) = (Vec::new(), Vec::new());
+        for lo in (0..session.len()).step_by(block) {
+            let hi = (lo + block).min(session.len());
+            let centre = lo + (hi - lo) / 2;
+            let radius = (lo..hi).map(|k| metric.distance(session.point(centre), session.point(k))).fold(0.0, f64::max);
+            centres.extend_from_slice(session.point(centre));
+            radii.push(radius);
+        }
+        Ok(Self { poses: session.len(), span_s: session.span_s(), block, dim: session.dim(), centres, radii })
+    }
+
+    /// Number of blocks.
+    pub fn len(&self) -> usize {
+        self.radii.len()
+    }
+
+    /// No blocks (a session of no poses; never one made by [`new`](Self::new)).
+    pub fn is_empty(&self) -> bool {
+        self.radii.is_empty()
+    }
+
+    /// The fields agree with each other.
+    fn check(&self) -> std::result::Result<(), String> {
+        if self.block == 0 || self.dim == 0 {
+            return Err(format!("block {} and dimension {} must be at least 1", self.block, self.dim));
+        }
+        if self.radii.len() != self.poses.div_ceil(self.block) || self.centres.len() != self.radii.len() * self.dim {
+            return Err(format!(
+                "{} poses in blocks of {} make {} blocks, but there are {} radii and {} centre coordinates \
+                 (dimension {})",
+                self.poses,
+                self.block,
+                self.poses.div_ceil(self.block),
+                self.radii.len(),
+                self.centres.len(),
+                self.dim
+            ));
+        }
+        if let Some(k) = self.radii.iter().position(|r| !(r.is_finite() && *r >= 0.0)) {
+            return Err(format!("radius {} of block {k} is not a finite distance ≥ 0", self.radii[k]));
+        }
+        Ok(())
+    }
+
+    /// The blocks as bytes: a 4-byte tag, [`TILE_FORMAT_VERSION`], then MessagePack.
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        encode(*b"ILsb", self)
+    }
+
+    /// The blocks from [`to_bytes`](Self::to_bytes).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`]: other bytes, another version, or fields that disagree.
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let blocks: Self = decode(*b"ILsb", "session blocks", bytes)?;
+        blocks.check().map_err(|problem| Error::InvalidState { what: "session blocks", reason: problem })?;
+        Ok(blocks)
+    }
+}
+
 /// The tiles of a fleet cut into blocks of at most `block` poses per session (from each
 /// session's first pose), keeping only the block pairs whose bounding balls come within γ:
 /// a tile whose row block and column block cannot hold a pair within γ is not made. For a
-/// session with itself, only the blocks on or above the diagonal.
+/// session with itself, only the blocks on or above the diagonal. The same plan as
+/// [`plan_session_tiles`] of each session's [`SessionBlocks`].
 ///
 /// # Errors
 /// [`Error::InvalidGamma`]; [`Error::InvalidParameter`] for a block of 0 poses.
 pub fn plan_tiles<M: Metric + ?Sized>(fleet: &Fleet, metric: &M, gamma: f64, block: usize) -> Result<Vec<Tile>> {
     check_gamma(gamma)?;
-    if block == 0 {
-        return Err(Error::InvalidParameter { name: "block", value: 0.0, expected: "at least 1 pose" });
+    let sessions =
+        (0..fleet.len()).map(|a| SessionBlocks::new(fleet.session(a), metric, block)).collect::<Result<Vec<_>>>()?;
+    plan_session_tiles(&sessions, metric, gamma)
+}
+
+/// The tiles of the fleet whose sessions, in fleet order, have these blocks (see
+/// [`plan_tiles`]): fleet indices number the sessions' poses one session after another.
+/// O(blocks²) distance evaluations.
+///
+/// # Errors
+/// [`Error::InvalidGamma`]; [`Error::InvalidParameter`] for no sessions, or sessions cut into
+/// blocks of different sizes or of points of different dimensions; [`Error::InconsistentTiles`]
+/// for blocks whose fields disagree.
+pub fn plan_session_tiles<M: Metric + ?Sized>(sessions: &[SessionBlocks], metric: &M, gamma: f64) -> Result<Vec<Tile>> {
+    check_gamma(gamma)?;
+    let Some(first) = sessions.first() else {
+        return Err(Error::InvalidParameter { name: "sessions", value: 0.0, expected: "at least one session" });
+    };
+    for s in sessions {
+        s.check().map_err(|problem| Error::InconsistentTiles { problem: format!("session blocks: {problem}") })?;
+        if s.block != first.block {
+            return Err(Error::InvalidParameter {
+                name: "block",
+                value: s.block as f64,
+                expected: "the same block size for every session",
+            });
+        }
+        if s.dim != first.dim {
+            return Err(Error::InvalidParameter {
+                name: "dimension",
+                value: s.dim as f64,
+                expected: "the same dimension for every session",
+            });
+        }
     }
-    let joint = fleet.joint();
     // (session, range, centre, radius) of every block.
     let mut blocks = Vec::new();
-    for a in 0..fleet.len() {
-        let start = fleet.starts()[a];
-        let end = start + fleet.session(a).len();
-        for lo in (start..end).step_by(block) {
-            let hi = (lo + block).min(end);
-            let centre = lo + (hi - lo) / 2;
-            let radius = (lo..hi).map(|k| metric.distance(joint.point(centre), joint.point(k))).fold(0.0, f64::max);
-            blocks.push((a, lo..hi, centre, radius));
+    let mut start = 0;
+    for (a, s) in sessions.iter().enumerate() {
+        for (k, radius) in s.radii.iter().enumerate() {
+            let lo = start + k * s.block;
+            let hi = (lo + s.block).min(start + s.poses);
+            blocks.push((a, lo..hi, &s.centres[k * s.dim..(k + 1) * s.dim], *radius));
         }
+        start += s.poses;
     }
     let mut tiles = Vec::new();
     for (p, (a, rows, c_r, r_r)) in blocks.iter().enumerate() {
         for (b, columns, c_c, r_c) in &blocks[p..] {
             let reach = gamma + r_r + r_c;
             // The rounding of three distances: a relative 10⁻⁹ is far above it.
-            if metric.distance(joint.point(*c_r), joint.point(*c_c)) <= reach * (1.0 + 1e-9) + 1e-9 {
+            if metric.distance(c_r, c_c) <= reach * (1.0 + 1e-9) + 1e-9 {
                 tiles.push(Tile { sessions: [*a, *b], rows: rows.clone(), columns: columns.clone() });
             }
         }
@@ -92,6 +274,7 @@ pub fn plan_tiles<M: Metric + ?Sized>(fleet: &Fleet, metric: &M, gamma: f64, blo
 
 /// A provisional component of one tile: the sums and extremes that merge.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TileComponent {
     /// Holds a diagonal cell.
     pub trivial: bool,
@@ -113,6 +296,9 @@ pub struct TileComponent {
     pub rows: [usize; 2],
     /// First and last column (fleet indices).
     pub columns: [usize; 2],
+    /// The times of the first and last row, and of the first and last column, seconds, each on
+    /// its session's own clock.
+    pub times_s: [[f64; 2]; 2],
     /// The closest pair (fleet indices), its rank and distance.
     pub closest: [usize; 2],
     /// The metric's rank of the closest pair.
@@ -123,8 +309,44 @@ pub struct TileComponent {
     pub first: [usize; 2],
 }
 
+impl TileComponent {
+    /// Adds the statistics of `other`, a provisional component of the same final component.
+    fn absorb(&mut self, other: &Self) {
+        self.trivial |= other.trivial;
+        // Saturating: only counts decoded from corrupt bytes come near 2⁶⁴.
+        self.runs = self.runs.saturating_add(other.runs);
+        self.overlaps = self.overlaps.saturating_add(other.overlaps);
+        self.pairs = self.pairs.saturating_add(other.pairs);
+        self.area_s2 += other.area_s2;
+        self.diagonal_cells = self.diagonal_cells.saturating_add(other.diagonal_cells);
+        self.diagonal_links = self.diagonal_links.saturating_add(other.diagonal_links);
+        self.diagonal_area_s2 += other.diagonal_area_s2;
+        // Within a session, times grow with the index: each extreme keeps its time.
+        for (axis, (mine, theirs)) in
+            [(&mut self.rows, other.rows), (&mut self.columns, other.columns)].into_iter().enumerate()
+        {
+            if theirs[0] < mine[0] {
+                mine[0] = theirs[0];
+                self.times_s[axis][0] = other.times_s[axis][0];
+            }
+            if theirs[1] > mine[1] {
+                mine[1] = theirs[1];
+                self.times_s[axis][1] = other.times_s[axis][1];
+            }
+        }
+        let (mine, theirs) = ((self.closest_rank, self.closest), (other.closest_rank, other.closest));
+        if theirs.0 < mine.0 || (theirs.0 == mine.0 && theirs.1 < mine.1) {
+            self.closest_rank = other.closest_rank;
+            self.closest = other.closest;
+            self.closest_distance = other.closest_distance;
+        }
+        self.first = self.first.min(other.first);
+    }
+}
+
 /// A run on a tile's edge, with its provisional component.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct EdgeRun {
     /// Fleet index of the row.
     pub row: usize,
@@ -138,6 +360,7 @@ pub struct EdgeRun {
 
 /// What a tile returns: its provisional components and the runs on its edges.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TileSummary {
     /// The tile.
     pub tile: Tile,
@@ -147,10 +370,81 @@ pub struct TileSummary {
     pub edges: Vec<EdgeRun>,
 }
 
+impl TileSummary {
+    /// The summary as bytes, to ship from the machine that scanned the tile: a 4-byte tag,
+    /// [`TILE_FORMAT_VERSION`] (2 bytes, little-endian), then the fields in MessagePack (structs
+    /// as arrays, integers in as few bytes as they need, floats bit for bit). About 150 bytes
+    /// per component and 10 per edge run.
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        encode(*b"ILts", self)
+    }
+
+    /// The summary from [`to_bytes`](Self::to_bytes).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`]: bytes of something else (the message names what the tag
+    /// says), of another format version, cut short or too long, or whose tile, runs or labels
+    /// do not fit together.
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let summary: Self = decode(*b"ILts", "tile summary", bytes)?;
+        summary.check().map_err(|problem| Error::InvalidState { what: "tile summary", reason: problem })?;
+        Ok(summary)
+    }
+
+    /// The tile is well formed, every edge run lies in it and every label names a component.
+    fn check(&self) -> std::result::Result<(), String> {
+        let tile = &self.tile;
+        if !tile.is_well_formed() {
+            return Err(format!("tile {tile:?} is empty, below the diagonal or has sessions a > b"));
+        }
+        let within = |r: &std::ops::Range<usize>, x: [usize; 2]| r.contains(&x[0]) && r.contains(&x[1]) && x[0] <= x[1];
+        let area = (tile.rows.len() as u128) * (tile.columns.len() as u128);
+        for (k, c) in self.components.iter().enumerate() {
+            let fits = within(&tile.rows, c.rows)
+                && within(&tile.columns, c.columns)
+                && tile.rows.contains(&c.first[0])
+                && tile.columns.contains(&c.first[1])
+                && tile.rows.contains(&c.closest[0])
+                && tile.columns.contains(&c.closest[1]);
+            let counts = c.runs >= 1
+                && c.pairs >= c.runs
+                && u128::from(c.pairs) <= area
+                && c.diagonal_cells <= c.pairs
+                && c.diagonal_links <= c.diagonal_cells;
+            if !(fits && counts && c.area_s2.is_finite() && c.area_s2 >= 0.0) {
+                return Err(format!("component {k} does not fit tile {tile:?}: {c:?}"));
+            }
+        }
+        for (k, e) in self.edges.iter().enumerate() {
+            if e.label as usize >= self.components.len() {
+                return Err(format!(
+                    "edge run {k} has label {}, but there are {} components",
+                    e.label,
+                    self.components.len()
+                ));
+            }
+            if !tile.rows.contains(&e.row)
+                || !tile.columns.contains(&e.start)
+                || !tile.columns.contains(&e.end)
+                || e.start > e.end
+            {
+                return Err(format!(
+                    "edge run {k} (row {}, columns {}..={}) lies outside tile {tile:?}",
+                    e.row, e.start, e.end
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Scans one tile of `fleet`: the same cells as [`find_fleet_loops`](crate::find_fleet_loops)
 /// gives in the tile's rows and columns, summarised (see the module docs). Reads only the
 /// tile's poses, plus the row session's path length and clock when a separation is given
-/// (so that separated columns are those of the whole session, whatever the tiling).
+/// (so that separated columns are those of the whole session, whatever the tiling). The same
+/// scan as [`scan_session_tile`] of the tile's sessions.
 ///
 /// # Errors
 /// [`Error::InvalidGamma`]; [`Error::InvalidSeparation`]; [`Error::InvalidParameter`] for a
@@ -162,39 +456,100 @@ pub fn scan_tile<M: Metric + ?Sized>(
     separation: Separation,
     tile: &Tile,
 ) -> Result<TileSummary> {
+    let [a, b] = tile.sessions;
+    if a > b || b >= fleet.len() {
+        return Err(bad_tile(tile));
+    }
+    let starts = [fleet.starts()[a], fleet.starts()[b]];
+    scan_session_tile([fleet.session(a), fleet.session(b)], starts, metric, gamma, separation, tile)
+}
+
+/// The error of a tile that does not lie in its sessions.
+fn bad_tile(tile: &Tile) -> Error {
+    Error::InvalidParameter {
+        name: "tile",
+        value: tile.rows.start as f64,
+        expected: "rows and columns within their sessions (a ≤ b), on or above the diagonal",
+    }
+}
+
+/// Scans one tile from its two sessions alone: `sessions` are the trajectories of sessions a
+/// and b of `tile.sessions` (for a tile within one session, that session twice), `starts` their
+/// first fleet indices (the poses of the sessions before them in the fleet). What a worker that
+/// read only those two sessions needs; the result is [`scan_tile`]'s on the whole fleet.
+///
+/// Time O(the tile's runs and its poses' passes near each other), as the fleet engine; memory
+/// O(the tile's poses and runs); rows in parallel.
+///
+/// # Errors
+/// [`Error::InvalidGamma`]; [`Error::InvalidSeparation`]; [`Error::InvalidParameter`] for a
+/// tile that does not lie in its sessions, or below the diagonal, or sessions whose fleet
+/// indices overlap; [`Error::SessionMismatch`] for sessions of different dimensions or
+/// manifolds; the metric's errors on the tile's poses.
+pub fn scan_session_tile<M: Metric + ?Sized>(
+    sessions: [&Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    tile: &Tile,
+) -> Result<TileSummary> {
     check_gamma(gamma)?;
     separation.check()?;
     let [a, b] = tile.sessions;
-    let within = |s: usize, r: &std::ops::Range<usize>| {
-        s < fleet.len()
-            && r.start < r.end
-            && r.start >= fleet.starts()[s]
-            && r.end <= fleet.starts()[s] + fleet.session(s).len()
-    };
-    if a > b || !within(a, &tile.rows) || !within(b, &tile.columns) || (a == b && tile.columns.end <= tile.rows.start) {
-        return Err(Error::InvalidParameter {
-            name: "tile",
-            value: tile.rows.start as f64,
-            expected: "rows and columns within their sessions (a ≤ b), on or above the diagonal",
-        });
+    let [session_a, session_b] = sessions;
+    let within = |start: usize, len: usize, r: &std::ops::Range<usize>| r.start >= start && r.end <= start + len;
+    let apart = if a == b { starts[0] == starts[1] } else { starts[0] + session_a.len() <= starts[1] };
+    if !tile.is_well_formed()
+        || !apart
+        || !within(starts[0], session_a.len(), &tile.rows)
+        || !within(starts[1], session_b.len(), &tile.columns)
+    {
+        return Err(bad_tile(tile));
     }
-    let session_a = fleet.session(a);
-    let start_a = fleet.starts()[a];
+    if a != b {
+        let mismatch = |problem: String, what| Error::SessionMismatch { session: format!("{b}"), problem, what };
+        if session_b.dim() != session_a.dim() {
+            let problem = format!("has {} coordinates, session {a} has {}", session_b.dim(), session_a.dim());
+            return Err(mismatch(problem, "dimension"));
+        }
+        if session_b.manifold() != session_a.manifold() {
+            let problem =
+                format!("lies on {}, session {a} on {}", session_b.manifold().name(), session_a.manifold().name());
+            return Err(mismatch(problem, "manifold"));
+        }
+    }
+    let start_a = starts[0];
     let (r0, r1) = (tile.rows.start - start_a, tile.rows.end - start_a);
     let rows = r1 - r0;
     // The tile's poses as one small trajectory: the rows, then the columns (a ≠ b), or the
     // stretch of the session from the first row to the last column (a = b).
-    let (piece, starts, to_fleet): (Trajectory, Vec<usize>, ToFleet<'_>) = if a == b {
+    #[allow(clippy::type_complexity)]
+    let (piece, piece_starts, to_fleet, to_time): (
+        Trajectory,
+        Vec<usize>,
+        FromPiece<'_, usize>,
+        FromPiece<'_, f64>,
+    ) = if a == b {
         let c1 = tile.columns.end - start_a;
-        (session_a.piece(r0..c1), vec![0], Box::new(move |k| tile.rows.start + k))
+        let times = session_a.timestamps_s();
+        (session_a.piece(r0..c1), vec![0], Box::new(move |k| tile.rows.start + k), Box::new(move |k| times[r0 + k]))
     } else {
-        let start_b = fleet.starts()[b];
-        let (c0, c1) = (tile.columns.start - start_b, tile.columns.end - start_b);
-        let parts = [session_a.piece(r0..r1), fleet.session(b).piece(c0..c1)];
+        let (c0, c1) = (tile.columns.start - starts[1], tile.columns.end - starts[1]);
+        let parts = [session_a.piece(r0..r1), session_b.piece(c0..c1)];
         let (joint, _) = Trajectory::concatenate(&[&parts[0], &parts[1]], 1.0)?;
         let columns_start = tile.columns.start;
-        (joint, vec![0, rows], Box::new(move |k| if k < rows { tile.rows.start + k } else { columns_start + k - rows }))
+        let (times_a, times_b) = (session_a.timestamps_s(), session_b.timestamps_s());
+        (
+            joint,
+            vec![0, rows],
+            Box::new(move |k| if k < rows { tile.rows.start + k } else { columns_start + k - rows }),
+            Box::new(move |k| if k < rows { times_a[r0 + k] } else { times_b[c0 + k - rows] }),
+        )
     };
+    // The metric's checks on the tile's poses only (a whole session per tile would cost more
+    // than a small tile's scan).
+    piece.check_metric(metric)?;
     let first_columns: Vec<u32> = if a == b {
         let local_c0 = tile.columns.start - tile.rows.start;
         let separated = if separation.is_none() {
@@ -213,7 +568,7 @@ pub fn scan_tile<M: Metric + ?Sized>(
     };
     let (arc, balls) = rayon::join(
         || ArcLength::new(&piece, metric, false),
-        || BallTree::with_sessions(&piece, metric, LEAF_SIZE, &starts),
+        || BallTree::with_sessions(&piece, metric, LEAF_SIZE, &piece_starts),
     );
     let set = SublevelSet::scan(
         &piece,
@@ -223,10 +578,20 @@ pub fn scan_tile<M: Metric + ?Sized>(
         &arc,
         Pruner::Hierarchy(&balls),
         &first_columns,
-        &starts,
+        &piece_starts,
         rows,
     )?;
-    Ok(summarise(tile, &piece, metric, &set, &starts, rows, &*to_fleet))
+    let to_piece = |f: usize| {
+        if a == b || tile.rows.contains(&f) { f - tile.rows.start } else { rows + f - tile.columns.start }
+    };
+    let mut summary = summarise(tile, &piece, metric, &set, &piece_starts, rows, &*to_fleet);
+    for c in &mut summary.components {
+        c.times_s = [
+            [to_time(to_piece(c.rows[0])), to_time(to_piece(c.rows[1]))],
+            [to_time(to_piece(c.columns[0])), to_time(to_piece(c.columns[1]))],
+        ];
+    }
+    Ok(summary)
 }
 
 /// The provisional components of a tile's set and its edge runs.
@@ -255,6 +620,7 @@ fn summarise<M: Metric + ?Sized>(
             diagonal_area_s2: 0.0,
             rows: [usize::MAX, 0],
             columns: [usize::MAX, 0],
+            times_s: [[0.0; 2]; 2],
             closest: [0, 0],
             closest_rank: f64::INFINITY,
             closest_distance: f64::INFINITY,
@@ -307,151 +673,541 @@ fn summarise<M: Metric + ?Sized>(
     TileSummary { tile: tile.clone(), components, edges }
 }
 
+/// A component of a partial merge: its session pair and the statistics of its pieces, with the
+/// joins made so far folded in.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+struct MergeComponent {
+    sessions: [usize; 2],
+    stats: TileComponent,
+}
+
+/// An edge run still open in a partial merge: its tile (an index in [`TileMerge::tiles`]) and
+/// the run, labelled by the merge's component.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+struct OpenEdge {
+    tile: u32,
+    run: EdgeRun,
+}
+
+/// A run cut by a column boundary and joined, in the first or last row of its tiles: kept while
+/// the row next to it across the tiles' row boundary may still be cut there and joined, because
+/// two cut runs in consecutive rows overlap once, not once on each side of the cut.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+struct Cut {
+    /// The tile left of the boundary.
+    tile: u32,
+    row: usize,
+    label: u32,
+}
+
+/// A partial merge of tiles: the statistics of the components of the tiles it holds, with every
+/// join between them made, and only the edge runs that face a tile it does not hold (plus the
+/// few cut runs a later join still needs). Merging partial merges of disjoint sets of tiles, in
+/// any grouping and order, then [`finish`](Self::finish)ing the merge of all the tiles of a
+/// plan, gives the fleet's components: a tree of reductions, each step O(its components + open
+/// edge runs + tiles).
+///
+/// The tiles must come from one plan ([`plan_tiles`] or [`plan_session_tiles`]); a tile the plan
+/// leaves out holds no pair within γ, so nothing waits for it.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, Fleet, Separation, TileMerge, Trajectory, merge_tiles, plan_tiles, scan_tile};
+/// let xs: Vec<[f64; 2]> = (0..40).map(|k| [(k as f64 * 0.3).sin() * 3.0, (k as f64 * 0.2).cos() * 3.0]).collect();
+/// let fleet = Fleet::new(vec![("a".into(), Trajectory::from_points((0..40).map(f64::from).collect(), &xs)?)])?;
+/// let tiles = plan_tiles(&fleet, &Euclidean, 1.0, 7)?;
+/// let summaries: Vec<_> =
+///     tiles.iter().map(|t| scan_tile(&fleet, &Euclidean, 1.0, Separation::NONE, t)).collect::<Result<_, _>>()?;
+/// // Merge pairs of tiles, then pairs of those merges, and so on.
+/// let mut level: Vec<TileMerge> = summaries.iter().cloned().map(TileMerge::new).collect::<Result<_, _>>()?;
+/// while level.len() > 1 {
+///     let mut next = Vec::new();
+///     let mut parts = level.into_iter();
+///     while let Some(first) = parts.next() {
+///         next.push(TileMerge::merge([first].into_iter().chain(parts.next()).collect())?);
+///     }
+///     level = next;
+/// }
+/// let tree = level.remove(0).finish()?;
+/// let flat = merge_tiles(&summaries)?;
+/// assert_eq!(tree.components().len(), flat.len());
+/// assert!(tree.components().iter().zip(&flat).all(|(t, f)| t.component.pair_count == f.pair_count));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct TileMerge {
+    tiles: Vec<Tile>,
+    components: Vec<MergeComponent>,
+    edges: Vec<OpenEdge>,
+    cuts: Vec<Cut>,
+}
+
+/// The cuts at each column boundary of each session pair: (row, the part that made the cut or
+/// `None` for the merge under way, label).
+type CutsAt = HashMap<([usize; 2], usize), Vec<(usize, Option<usize>, u32)>>;
+
+/// Tiles by (sessions, a row bound, a column bound).
+type TileKey = ([usize; 2], usize, usize);
+
+/// `count + delta`, which must not go below 0.
+fn corrected(count: u64, delta: i64, what: &str, first: [usize; 2]) -> Result<u64> {
+    u64::try_from(count as i128 + i128::from(delta)).map_err(|_| Error::InconsistentTiles {
+        problem: format!("the component with first cell {first:?} would have {count} {delta:+} {what}"),
+    })
+}
+
+impl TileMerge {
+    /// The merge of one tile: its summary, every edge run open.
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for a summary whose tile is not well formed, or whose edge
+    /// runs lie outside it or name no component.
+    pub fn new(summary: TileSummary) -> Result<Self> {
+        summary.check().map_err(|problem| Error::InconsistentTiles { problem })?;
+        let sessions = summary.tile.sessions;
+        Ok(Self {
+            edges: summary.edges.into_iter().map(|run| OpenEdge { tile: 0, run }).collect(),
+            components: summary.components.into_iter().map(|stats| MergeComponent { sessions, stats }).collect(),
+            tiles: vec![summary.tile],
+            cuts: Vec::new(),
+        })
+    }
+
+    /// The tiles merged.
+    pub fn tiles(&self) -> &[Tile] {
+        &self.tiles
+    }
+
+    /// Number of components (final ones and those that may still grow).
+    pub fn component_count(&self) -> usize {
+        self.components.len()
+    }
+
+    /// Number of edge runs still open: those facing a tile not merged yet.
+    pub fn open_edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Indices and labels refer to what exists.
+    fn check(&self) -> std::result::Result<(), String> {
+        let (tiles, labels) = (self.tiles.len(), self.components.len());
+        if let Some(t) = self.tiles.iter().position(|t| !t.is_well_formed()) {
+            return Err(format!("tile {:?} is empty, below the diagonal or has sessions a > b", self.tiles[t]));
+        }
+        if let Some(c) = self.components.iter().find(|c| c.sessions[0] > c.sessions[1]) {
+            return Err(format!("a component has sessions {:?}, a > b", c.sessions));
+        }
+        for e in &self.edges {
+            let Some(tile) = self.tiles.get(e.tile as usize) else {
+                return Err(format!("an edge run names tile {}, but there are {tiles}", e.tile));
+            };
+            let r = &e.run;
+            if r.label as usize >= labels {
+                return Err(format!("an edge run has label {}, but there are {labels} components", r.label));
+            }
+            if !tile.rows.contains(&r.row) || !tile.columns.contains(&r.start) || !tile.columns.contains(&r.end) {
+                return Err(format!(
+                    "edge run (row {}, columns {}..={}) lies outside tile {tile:?}",
+                    r.row, r.start, r.end
+                ));
+            }
+        }
+        for c in &self.cuts {
+            if c.tile as usize >= tiles || c.label as usize >= labels {
+                return Err(format!(
+                    "a cut names tile {} and label {} of {tiles} tiles, {labels} components",
+                    c.tile, c.label
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Merges partial merges of disjoint sets of tiles of one plan: joins the components whose
+    /// open edge runs touch across the parts (see the module docs), adds their statistics and
+    /// keeps the edge runs that still face a tile none of the parts holds. Components are
+    /// renumbered; the result does not depend on the order of the parts.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a tile in two parts; [`Error::InconsistentTiles`] for
+    /// parts whose labels or tiles do not fit, or whose counts a join would make negative.
+    pub fn merge(parts: Vec<Self>) -> Result<Self> {
+        let inconsistent = |problem: String| Error::InconsistentTiles { problem };
+        let (mut tiles, mut origin, mut components) = (Vec::new(), Vec::new(), Vec::new());
+        let mut edges = Vec::new();
+        // Cuts with the part that made them (None: this merge).
+        let mut cuts: Vec<(Cut, Option<usize>)> = Vec::new();
+        for (p, part) in parts.into_iter().enumerate() {
+            part.check().map_err(|problem| inconsistent(format!("part {p}: {problem}")))?;
+            let (tile_base, label_base) = (tiles.len(), components.len());
+            if tile_base + part.tiles.len() > u32::MAX as usize
+                || label_base + part.components.len() > u32::MAX as usize
+            {
+                return Err(inconsistent("more than 2³² tiles or components in one merge".to_owned()));
+            }
+            let (tb, lb) = (tile_base as u32, label_base as u32);
+            origin.extend(std::iter::repeat_n(p, part.tiles.len()));
+            tiles.extend(part.tiles);
+            components.extend(part.components);
+            edges.extend(
+                part.edges
+                    .into_iter()
+                    .map(|e| OpenEdge { tile: e.tile + tb, run: EdgeRun { label: e.run.label + lb, ..e.run } }),
+            );
+            cuts.extend(
+                part.cuts.into_iter().map(|c| (Cut { tile: c.tile + tb, row: c.row, label: c.label + lb }, Some(p))),
+            );
+        }
+        let mut by_start: HashMap<TileKey, usize> = HashMap::with_capacity(tiles.len());
+        let mut by_rows_end: HashMap<TileKey, usize> = HashMap::with_capacity(tiles.len());
+        let mut by_columns_end: HashMap<TileKey, usize> = HashMap::with_capacity(tiles.len());
+        for (t, tile) in tiles.iter().enumerate() {
+            if by_start.insert((tile.sessions, tile.rows.start, tile.columns.start), t).is_some() {
+                return Err(Error::InvalidParameter {
+                    name: "tile",
+                    value: tile.rows.start as f64,
+                    expected: "each tile summarised once",
+                });
+            }
+            by_rows_end.insert((tile.sessions, tile.rows.end, tile.columns.start), t);
+            by_columns_end.insert((tile.sessions, tile.rows.start, tile.columns.end), t);
+        }
+        let below = |t: usize| by_start.get(&(tiles[t].sessions, tiles[t].rows.end, tiles[t].columns.start)).copied();
+        let right = |t: usize| by_start.get(&(tiles[t].sessions, tiles[t].rows.start, tiles[t].columns.end)).copied();
+        let above =
+            |t: usize| by_rows_end.get(&(tiles[t].sessions, tiles[t].rows.start, tiles[t].columns.start)).copied();
+        let left =
+            |t: usize| by_columns_end.get(&(tiles[t].sessions, tiles[t].rows.start, tiles[t].columns.start)).copied();
+        let mut of_tile: Vec<Vec<EdgeRun>> = vec![Vec::new(); tiles.len()];
+        for e in edges {
+            of_tile[e.tile as usize].push(e.run);
+        }
+        for runs in &mut of_tile {
+            runs.sort_unstable_by_key(|r| (r.row, r.start));
+        }
+        let mut parent: Vec<u32> = (0..components.len() as u32).collect();
+        // Corrections: (label, Δruns, Δoverlaps, Δlinks), added to the sets' sums after the joins.
+        let mut deltas: Vec<(u32, i64, i64, i64)> = Vec::new();
+        {
+            let mut forest = MinRootForest::new(&mut parent, 0);
+            for t in 0..tiles.len() {
+                // The tile below, from another part: its first row against this tile's last.
+                if let Some(u) = below(t).filter(|&u| origin[u] != origin[t]) {
+                    let last: Vec<&EdgeRun> = of_tile[t].iter().filter(|e| e.row + 1 == tiles[t].rows.end).collect();
+                    let first: Vec<&EdgeRun> = of_tile[u].iter().filter(|e| e.row == tiles[u].rows.start).collect();
+                    let (mut p, mut q) = (0, 0);
+                    while p < last.len() && q < first.len() {
+                        let (x, y) = (last[p], first[q]);
+                        if x.start.max(y.start) <= x.end.min(y.end) {
+                            forest.union(x.label as usize, y.label as usize);
+                            deltas.push((x.label, 0, 1, 0));
+                        }
+                        if x.end <= y.end {
+                            p += 1;
+                        }
+                        if y.end <= x.end {
+                            q += 1;
+                        }
+                    }
+                }
+                // The tile to the right, from another part: the runs cut at the boundary.
+                if let Some(r) = right(t).filter(|&r| origin[r] != origin[t]) {
+                    let boundary = tiles[t].columns.end;
+                    let ending: HashMap<usize, &EdgeRun> =
+                        of_tile[t].iter().filter(|e| e.end + 1 == boundary).map(|e| (e.row, e)).collect();
+                    for y in of_tile[r].iter().filter(|e| e.start == boundary) {
+                        if let Some(x) = ending.get(&y.row) {
+                            forest.union(x.label as usize, y.label as usize);
+                            // One run, not two; a diagonal cell followed by the cut still links.
+                            let link = i64::from(x.start == x.row && boundary == x.row + 1);
+                            deltas.push((x.label, -1, 0, link));
+                            cuts.push((Cut { tile: t as u32, row: y.row, label: x.label }, None));
+                        }
+                    }
+                }
+            }
+        }
+        // Cut runs in consecutive rows overlap once in the plane, but once on each side of the
+        // cut in the tiles: counted when both cuts first meet (made here, or in different parts).
+        let mut at_boundary: CutsAt = HashMap::new();
+        for (c, from) in &cuts {
+            let tile = &tiles[c.tile as usize];
+            at_boundary.entry((tile.sessions, tile.columns.end)).or_default().push((c.row, *from, c.label));
+        }
+        for rows in at_boundary.values_mut() {
+            rows.sort_unstable_by_key(|&(row, ..)| row);
+            for w in rows.windows(2) {
+                let ((r0, o0, label), (r1, o1, _)) = (w[0], w[1]);
+                if r1 == r0 + 1 && !(o0.is_some() && o0 == o1) {
+                    deltas.push((label, 0, -1, 0));
+                }
+            }
+        }
+        // One component per set, numbered by its smallest label.
+        let count = number_sets(&mut parent) as usize;
+        let mut merged: Vec<Option<MergeComponent>> = vec![None; count];
+        for (k, c) in components.into_iter().enumerate() {
+            match &mut merged[parent[k] as usize] {
+                slot @ None => *slot = Some(c),
+                Some(m) if m.sessions == c.sessions => m.stats.absorb(&c.stats),
+                Some(m) => {
+                    return Err(inconsistent(format!(
+                        "a run of sessions {:?} touches a run of sessions {:?}",
+                        m.sessions, c.sessions
+                    )));
+                }
+            }
+        }
+        let mut sums = vec![(0_i64, 0_i64, 0_i64); count];
+        for (label, runs, overlaps, links) in deltas {
+            let s = &mut sums[parent[label as usize] as usize];
+            (s.0, s.1, s.2) = (s.0 + runs, s.1 + overlaps, s.2 + links);
+        }
+        let components = merged
+            .into_iter()
+            .zip(sums)
+            .map(|(m, (runs, overlaps, links))| {
+                let mut m = m.expect("every set has a member");
+                let c = &mut m.stats;
+                c.runs = corrected(c.runs, runs, "runs", c.first)?;
+                c.overlaps = corrected(c.overlaps, overlaps, "overlaps", c.first)?;
+                c.diagonal_links = corrected(c.diagonal_links, links, "diagonal links", c.first)?;
+                Ok(m)
+            })
+            .collect::<Result<Vec<_>>>()?;
+        // The edge runs that still face a tile no part holds.
+        let mut open = Vec::new();
+        for (t, runs) in of_tile.into_iter().enumerate() {
+            let tile = &tiles[t];
+            let sides = [above(t).is_none(), below(t).is_none(), left(t).is_none(), right(t).is_none()];
+            for run in runs {
+                let faces = [
+                    run.row == tile.rows.start,
+                    run.row + 1 == tile.rows.end,
+                    run.start == tile.columns.start,
+                    run.end + 1 == tile.columns.end,
+                ];
+                if sides.iter().zip(faces).any(|(&side, face)| side && face) {
+                    open.push(OpenEdge { tile: t as u32, run: EdgeRun { label: parent[run.label as usize], ..run } });
+                }
+            }
+        }
+        // The cuts in a tile's first (last) row, while the tiles above (below) both sides of the
+        // boundary are not both merged: a cut in the next row may still come.
+        let kept = cuts
+            .into_iter()
+            .filter_map(|(c, _)| {
+                let t = c.tile as usize;
+                let tile = &tiles[t];
+                let pair = right(t);
+                let both = |near: &dyn Fn(usize) -> Option<usize>| near(t).is_some() && pair.and_then(near).is_some();
+                let keep = (c.row == tile.rows.start && !both(&above)) || (c.row + 1 == tile.rows.end && !both(&below));
+                keep.then(|| Cut { label: parent[c.label as usize], ..c })
+            })
+            .collect();
+        Ok(Self { tiles, components, edges: open, cuts: kept })
+    }
+
+    /// The fleet's components from the merge of every tile of a plan, numbered as
+    /// [`find_fleet_loops`](crate::find_fleet_loops) numbers them (by first cell, row-major),
+    /// with their session pairs. Edge runs still open (facing tiles the plan left out) are
+    /// ignored. O(components log components).
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for counts no set of cells has (an Euler number above 1:
+    /// summaries that do not belong together).
+    pub fn finish(&self) -> Result<MergedLoops> {
+        let mut order: Vec<&MergeComponent> = self.components.iter().collect();
+        order.sort_unstable_by_key(|c| c.stats.first);
+        let components = order
+            .into_iter()
+            .enumerate()
+            .map(|(id, m)| {
+                let c = &m.stats;
+                let inconsistent = |what: &str| Error::InconsistentTiles {
+                    problem: format!("the component with first cell {:?} has {what}", c.first),
+                };
+                let euler_half = i128::from(c.runs) - i128::from(c.overlaps);
+                let (area_s2, pairs, euler, rows, columns, times_s) = if c.trivial {
+                    let euler = 2 * euler_half - i128::from(c.diagonal_cells) + i128::from(c.diagonal_links);
+                    let extent = [c.rows[0], c.columns[1]];
+                    let times = [c.times_s[0][0], c.times_s[1][1]];
+                    let pairs = c
+                        .pairs
+                        .checked_mul(2)
+                        .and_then(|p| p.checked_sub(c.diagonal_cells))
+                        .ok_or_else(|| inconsistent("more diagonal cells than cells, or more than 2⁶³ cells"))?;
+                    (2.0 * c.area_s2 - c.diagonal_area_s2, pairs, euler, extent, extent, [times, times])
+                } else {
+                    (c.area_s2, c.pairs, euler_half, c.rows, c.columns, c.times_s)
+                };
+                if euler > 1 {
+                    return Err(inconsistent(&format!("Euler number {euler}, above the 1 of a connected set")));
+                }
+                let component = LoopComponent {
+                    id,
+                    trivial: c.trivial,
+                    area_s2,
+                    pair_count: pairs,
+                    run_count: c.runs as usize,
+                    holes: (1 - euler) as u64,
+                    i_range: rows,
+                    j_range: columns,
+                    closest_pair: c.closest,
+                    closest_distance: c.closest_distance,
+                };
+                Ok(MergedComponent { component, sessions: m.sessions, times_s })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(MergedLoops { components })
+    }
+
+    /// The partial merge as bytes (as [`TileSummary::to_bytes`], another tag).
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        encode(*b"ILtm", self)
+    }
+
+    /// The partial merge from [`to_bytes`](Self::to_bytes).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`], as [`TileSummary::from_bytes`].
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let merge: Self = decode(*b"ILtm", "tile merge", bytes)?;
+        merge.check().map_err(|problem| Error::InvalidState { what: "tile merge", reason: problem })?;
+        Ok(merge)
+    }
+}
+
+/// A fleet's loop component from merged tiles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MergedComponent {
+    /// The component in fleet indices: the component of
+    /// [`FleetLoops::loops`](crate::FleetLoops::loops) with this id.
+    pub component: LoopComponent,
+    /// Its block (a, b), a ≤ b.
+    pub sessions: [usize; 2],
+    /// The times of its extents: `[[t(i_range[0]), t(i_range[1])], [t′(j_range[0]),
+    /// t′(j_range[1])]]`, seconds, each on its session's own clock.
+    pub times_s: [[f64; 2]; 2],
+}
+
+/// The fleet's loop components from merged tiles ([`TileMerge::finish`]), by id.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MergedLoops {
+    components: Vec<MergedComponent>,
+}
+
+impl MergedLoops {
+    /// The components, by id.
+    pub fn components(&self) -> &[MergedComponent] {
+        &self.components
+    }
+
+    /// The components in the poses of their sessions, as [`FleetLoops::components`](crate::FleetLoops::components)
+    /// gives them; `starts` are the sessions' first fleet indices.
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for a component of a session `starts` does not reach.
+    pub fn fleet_components(&self, starts: &[usize]) -> Result<Vec<FleetComponent>> {
+        self.components
+            .iter()
+            .map(|m| {
+                let [a, b] = m.sessions;
+                let c = &m.component;
+                let fits = b < starts.len()
+                    && starts[a] <= c.i_range[0].min(c.i_range[1]).min(c.closest_pair[0])
+                    && starts[b] <= c.j_range[0].min(c.j_range[1]).min(c.closest_pair[1]);
+                if !fits {
+                    return Err(Error::InconsistentTiles {
+                        problem: format!(
+                            "component {} of sessions {:?} does not lie at the starts given",
+                            c.id, m.sessions
+                        ),
+                    });
+                }
+                Ok(localize(c, m.sessions, starts))
+            })
+            .collect()
+    }
+
+    /// The sparse overlap matrix, as [`FleetLoops::session_pairs`](crate::FleetLoops::session_pairs)
+    /// gives it; `spans_s` are the sessions' spans ([`SessionBlocks::span_s`]).
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for a component of a session beyond `spans_s`.
+    pub fn session_pairs(&self, spans_s: &[f64]) -> Result<Vec<SessionPair>> {
+        if let Some(m) = self.components.iter().find(|m| m.sessions[1] >= spans_s.len()) {
+            return Err(Error::InconsistentTiles {
+                problem: format!("a component of sessions {:?}, but {} spans", m.sessions, spans_s.len()),
+            });
+        }
+        Ok(session_pairs_of(self.components.iter().map(|m| (&m.component, m.sessions)), spans_s))
+    }
+}
+
 /// Merges the summaries of tiles that cover a fleet's plane (every tile [`plan_tiles`] makes,
 /// scanned by [`scan_tile`], in any order) into the fleet's loop components, numbered as
-/// [`find_fleet_loops`](crate::find_fleet_loops) numbers them (by first cell, row-major).
+/// [`find_fleet_loops`](crate::find_fleet_loops) numbers them (by first cell, row-major): the
+/// merge of all of them in one [`TileMerge::merge`].
 ///
 /// The merge is a union-find over the provisional components, O(components + edge runs).
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] for two summaries of one tile.
+/// [`Error::InvalidParameter`] for two summaries of one tile; [`Error::InconsistentTiles`] as
+/// [`TileMerge::merge`].
 pub fn merge_tiles(summaries: &[TileSummary]) -> Result<Vec<LoopComponent>> {
-    let mut base = Vec::with_capacity(summaries.len());
-    let mut total = 0_usize;
-    let mut by_corner: HashMap<([usize; 2], usize, usize), usize> = HashMap::new();
-    for (t, s) in summaries.iter().enumerate() {
-        base.push(total);
-        total += s.components.len();
-        if by_corner.insert((s.tile.sessions, s.tile.rows.start, s.tile.columns.start), t).is_some() {
-            return Err(Error::InvalidParameter {
-                name: "tile",
-                value: s.tile.rows.start as f64,
-                expected: "each tile summarised once",
-            });
-        }
+    let parts = summaries.iter().cloned().map(TileMerge::new).collect::<Result<Vec<_>>>()?;
+    Ok(TileMerge::merge(parts)?.finish()?.components.into_iter().map(|m| m.component).collect())
+}
+
+/// The tags of the byte formats, and what each holds.
+#[cfg(feature = "serde")]
+const TAGS: [([u8; 4], &str); 3] = [(*b"ILsb", "session blocks"), (*b"ILts", "tile summary"), (*b"ILtm", "tile merge")];
+
+/// `value` after its tag and the format version.
+#[cfg(feature = "serde")]
+fn encode<T: serde::Serialize>(tag: [u8; 4], value: &T) -> Vec<u8> {
+    let mut bytes = tag.to_vec();
+    bytes.extend_from_slice(&TILE_FORMAT_VERSION.to_le_bytes());
+    let body = rmp_serde::to_vec(value).expect("MessagePack writes the tile types to a Vec");
+    bytes.extend_from_slice(&body);
+    bytes
+}
+
+/// The value of [`encode`]'s bytes, checking the tag, the version and that every byte is used.
+#[cfg(feature = "serde")]
+fn decode<T: serde::de::DeserializeOwned>(tag: [u8; 4], what: &'static str, bytes: &[u8]) -> Result<T> {
+    let corrupt = |reason: String| Error::InvalidState { what, reason };
+    if bytes.len() < 6 {
+        return Err(corrupt(format!("{} bytes, fewer than the 6 of its tag and version", bytes.len())));
     }
-    let mut parent: Vec<u32> = (0..total as u32).collect();
-    let mut forest = MinRootForest::new(&mut parent, 0);
-    // Corrections: (global label, Δruns, Δoverlaps, Δlinks), applied to roots after the joins.
-    let mut corrections: Vec<(usize, i64, i64, i64)> = Vec::new();
-    // The rows (and a global label) of the runs cut at each column boundary of a session pair.
-    let mut cut_rows: CutRows = HashMap::new();
-    for (t, s) in summaries.iter().enumerate() {
-        let tile = &s.tile;
-        // The tile below: its first row after this tile's last, same columns.
-        if let Some(&u) = by_corner.get(&(tile.sessions, tile.rows.end, tile.columns.start)) {
-            let below = &summaries[u];
-            let last: Vec<&EdgeRun> = s.edges.iter().filter(|e| e.row + 1 == tile.rows.end).collect();
-            let first: Vec<&EdgeRun> = below.edges.iter().filter(|e| e.row == below.tile.rows.start).collect();
-            let (mut p, mut q) = (0, 0);
-            while p < last.len() && q < first.len() {
-                let (x, y) = (last[p], first[q]);
-                if x.start.max(y.start) <= x.end.min(y.end) {
-                    let (gx, gy) = (base[t] + x.label as usize, base[u] + y.label as usize);
-                    forest.union(gx, gy);
-                    corrections.push((gx, 0, 1, 0));
-                }
-                if x.end <= y.end {
-                    p += 1;
-                }
-                if y.end <= x.end {
-                    q += 1;
-                }
-            }
-        }
-        // The tile to the right: same rows, its first column after this tile's last.
-        if let Some(&u) = by_corner.get(&(tile.sessions, tile.rows.start, tile.columns.end)) {
-            let right = &summaries[u];
-            let boundary = tile.columns.end;
-            let ending: HashMap<usize, &EdgeRun> =
-                s.edges.iter().filter(|e| e.end + 1 == boundary).map(|e| (e.row, e)).collect();
-            for y in right.edges.iter().filter(|e| e.start == boundary) {
-                if let Some(x) = ending.get(&y.row) {
-                    let (gx, gy) = (base[t] + x.label as usize, base[u] + y.label as usize);
-                    forest.union(gx, gy);
-                    // One run, not two; a diagonal cell followed by the cut still links.
-                    let link = i64::from(x.start == x.row && boundary == x.row + 1);
-                    corrections.push((gx, -1, 0, link));
-                    cut_rows.entry((tile.sessions, boundary)).or_default().push((y.row, gx));
-                }
-            }
-        }
+    if bytes[..4] != tag {
+        let problem = match TAGS.iter().find(|(t, _)| bytes[..4] == *t) {
+            Some((_, other)) => format!("these are the bytes of a {other}"),
+            None => format!(
+                "the bytes start with {:?}, not the tag {:?}",
+                String::from_utf8_lossy(&bytes[..4]),
+                String::from_utf8_lossy(&tag)
+            ),
+        };
+        return Err(corrupt(problem));
     }
-    // Cut runs in consecutive rows (of one tile or of two tiles one above the other) overlap
-    // once in the plane, but once on each side of the cut in the tiles.
-    for rows in cut_rows.values_mut() {
-        rows.sort_unstable();
-        for w in rows.windows(2) {
-            if w[1].0 == w[0].0 + 1 {
-                corrections.push((w[0].1, 0, -1, 0));
-            }
-        }
+    let version = u16::from_le_bytes([bytes[4], bytes[5]]);
+    if version != TILE_FORMAT_VERSION {
+        return Err(corrupt(format!("format version {version}; this build reads version {TILE_FORMAT_VERSION}")));
     }
-    // Roots, numbered later by first cell; statistics added to each root.
-    let mut merged: HashMap<usize, (TileComponent, i64, i64, i64)> = HashMap::new();
-    for (t, s) in summaries.iter().enumerate() {
-        for (k, c) in s.components.iter().enumerate() {
-            let root = forest.find(base[t] + k);
-            merged
-                .entry(root)
-                .and_modify(|(m, _, _, _)| {
-                    m.trivial |= c.trivial;
-                    m.runs += c.runs;
-                    m.overlaps += c.overlaps;
-                    m.pairs += c.pairs;
-                    m.area_s2 += c.area_s2;
-                    m.diagonal_cells += c.diagonal_cells;
-                    m.diagonal_links += c.diagonal_links;
-                    m.diagonal_area_s2 += c.diagonal_area_s2;
-                    m.rows = [m.rows[0].min(c.rows[0]), m.rows[1].max(c.rows[1])];
-                    m.columns = [m.columns[0].min(c.columns[0]), m.columns[1].max(c.columns[1])];
-                    let (mine, theirs) = ((m.closest_rank, m.closest), (c.closest_rank, c.closest));
-                    if theirs.0 < mine.0 || (theirs.0 == mine.0 && theirs.1 < mine.1) {
-                        m.closest_rank = c.closest_rank;
-                        m.closest = c.closest;
-                        m.closest_distance = c.closest_distance;
-                    }
-                    m.first = m.first.min(c.first);
-                })
-                .or_insert((c.clone(), 0, 0, 0));
-        }
+    let body = &bytes[6..];
+    let mut reader = std::io::Cursor::new(body);
+    let value: T = rmp_serde::from_read(&mut reader).map_err(|e| corrupt(format!("{e} (in {} bytes)", bytes.len())))?;
+    let used = reader.position() as usize;
+    if used != body.len() {
+        return Err(corrupt(format!("{} bytes left over after the {} it holds", body.len() - used, used + 6)));
     }
-    for (label, runs, overlaps, links) in corrections {
-        let root = forest.find(label);
-        let entry = merged.get_mut(&root).expect("every label has a root");
-        entry.1 += runs;
-        entry.2 += overlaps;
-        entry.3 += links;
-    }
-    let mut components: Vec<(TileComponent, i64, i64, i64)> = merged.into_values().collect();
-    components.sort_unstable_by_key(|(c, ..)| c.first);
-    Ok(components
-        .into_iter()
-        .enumerate()
-        .map(|(id, (c, d_runs, d_overlaps, d_links))| {
-            let runs = c.runs as i64 + d_runs;
-            let euler_half = runs - (c.overlaps as i64 + d_overlaps);
-            let links = c.diagonal_links as i64 + d_links;
-            let (area_s2, pairs, euler, rows, columns): (f64, u64, i64, [usize; 2], [usize; 2]) = if c.trivial {
-                let euler = 2 * euler_half - c.diagonal_cells as i64 + links;
-                let extent = [c.rows[0], c.columns[1]];
-                (2.0 * c.area_s2 - c.diagonal_area_s2, 2 * c.pairs - c.diagonal_cells, euler, extent, extent)
-            } else {
-                (c.area_s2, c.pairs, euler_half, c.rows, c.columns)
-            };
-            debug_assert!(euler <= 1, "a connected set has Euler number ≤ 1");
-            LoopComponent {
-                id,
-                trivial: c.trivial,
-                area_s2,
-                pair_count: pairs,
-                run_count: runs as usize,
-                holes: (1 - euler) as u64,
-                i_range: rows,
-                j_range: columns,
-                closest_pair: c.closest,
-                closest_distance: c.closest_distance,
-            }
-        })
-        .collect())
+    Ok(value)
 }

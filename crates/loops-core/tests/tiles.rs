@@ -1,0 +1,309 @@
+//! Tiles for a cluster: plans from each session's blocks alone cover every pair within γ, scans
+//! from two sessions' trajectories alone equal the scans of the fleet, merges in any tree of
+//! any grouping and order equal the fleet's result (components, their sessions, times and
+//! poses, the overlap matrix), and the bytes a worker ships decode to the same summary or fail
+//! with a clear error.
+
+mod support;
+
+use loops_core::{
+    Error, Euclidean, Fleet, FleetOptions, Metric, Separation, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileMerge,
+    TileSummary, Trajectory, find_fleet_loops, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
+};
+use proptest::prelude::*;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// A session in the plane from a generated case (its first two coordinates, or (x, 0)).
+fn planar(traj: &Trajectory, shift: [f64; 2]) -> Trajectory {
+    let points: Vec<[f64; 2]> = (0..traj.len())
+        .map(|i| {
+            let p = traj.point(i);
+            [p[0] + shift[0], p.get(1).copied().unwrap_or(0.0) + shift[1]]
+        })
+        .collect();
+    Trajectory::from_points(traj.timestamps_s().to_vec(), &points).unwrap()
+}
+
+/// A figure-eight-ish loop in the plane, `n` poses, starting at time `t0`.
+fn tour(n: usize, t0: f64, offset: [f64; 2]) -> Trajectory {
+    let points: Vec<[f64; 2]> = (0..n)
+        .map(|k| {
+            let s = k as f64 / n as f64 * std::f64::consts::TAU * 1.5;
+            [offset[0] + 10.0 * s.cos(), offset[1] + 6.0 * (2.0 * s).sin()]
+        })
+        .collect();
+    Trajectory::from_points((0..n).map(|k| t0 + 0.5 * k as f64).collect(), &points).unwrap()
+}
+
+/// Every pair within γ of the fleet's plane (a ≤ b, j ≥ i within a session) lies in a tile:
+/// checked pair by pair.
+fn check_cover(sessions: &[Trajectory], starts: &[usize], tiles: &[Tile], gamma: f64) -> Result<(), String> {
+    for (a, sa) in sessions.iter().enumerate() {
+        for (b, sb) in sessions.iter().enumerate().skip(a) {
+            for i in 0..sa.len() {
+                let j0 = if a == b { i } else { 0 };
+                for j in j0..sb.len() {
+                    if Euclidean.distance(sa.point(i), sb.point(j)) > gamma {
+                        continue;
+                    }
+                    let (fi, fj) = (starts[a] + i, starts[b] + j);
+                    if !tiles.iter().any(|t| t.sessions == [a, b] && t.rows.contains(&fi) && t.columns.contains(&fj)) {
+                        return Err(format!("pair ({fi}, {fj}) of sessions ({a}, {b}) is within γ but in no tile"));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Merges `parts` in a random tree: random groups of 1 to 4 consecutive parts of a shuffled
+/// list, each merge shipped through its bytes, until one is left.
+fn random_tree(mut parts: Vec<TileMerge>, rng: &mut ChaCha8Rng) -> Result<TileMerge, String> {
+    for k in (1..parts.len()).rev() {
+        parts.swap(k, rng.random_range(0..=k));
+    }
+    while parts.len() > 1 {
+        let mut next = Vec::new();
+        let mut rest = parts.into_iter().peekable();
+        while rest.peek().is_some() {
+            let group: Vec<TileMerge> = rest.by_ref().take(rng.random_range(1..=4)).collect();
+            let merged = TileMerge::merge(group).map_err(|e| e.to_string())?;
+            next.push(TileMerge::from_bytes(&merged.to_bytes()).map_err(|e| e.to_string())?);
+        }
+        parts = next;
+    }
+    Ok(parts.pop().expect("at least one tile"))
+}
+
+/// Plans from blocks, scans from sessions, random merge trees and bytes: the fleet's result.
+fn check_tree(sessions: &[Trajectory], gamma: f64, separation: Separation, seed: u64) -> Result<(), String> {
+    let named: Vec<(String, Trajectory)> =
+        sessions.iter().enumerate().map(|(k, t)| (format!("s{k}"), t.clone())).collect();
+    let fleet = Fleet::new(named).map_err(|e| e.to_string())?;
+    let options = FleetOptions { separation, ..FleetOptions::default() };
+    let whole = find_fleet_loops(&fleet, &Euclidean, gamma, &options).map_err(|e| e.to_string())?;
+    let expected = whole.components();
+    let expected_pairs = whole.session_pairs();
+    let starts = fleet.starts().to_vec();
+    let spans: Vec<f64> = sessions.iter().map(Trajectory::span_s).collect();
+    let longest = sessions.iter().map(Trajectory::len).max().unwrap_or(1);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for per_session in [1, 2, 7, longest] {
+        let block = longest.div_ceil(per_session).max(1);
+        let blocks: Vec<SessionBlocks> = sessions
+            .iter()
+            .map(|s| SessionBlocks::from_bytes(&SessionBlocks::new(s, &Euclidean, block)?.to_bytes()))
+            .collect::<Result<_, _>>()
+            .map_err(|e| e.to_string())?;
+        let tiles = plan_session_tiles(&blocks, &Euclidean, gamma).map_err(|e| e.to_string())?;
+        if tiles != plan_tiles(&fleet, &Euclidean, gamma, block).map_err(|e| e.to_string())? {
+            return Err(format!("block {block}: the plan from blocks differs from the fleet's"));
+        }
+        check_cover(sessions, &starts, &tiles, gamma)?;
+        let mut parts = Vec::new();
+        for tile in &tiles {
+            let [a, b] = tile.sessions;
+            // The worker's view: its own copies of the two sessions, nothing else.
+            let (own_a, own_b) = (sessions[a].clone(), sessions[b].clone());
+            let summary =
+                scan_session_tile([&own_a, &own_b], [starts[a], starts[b]], &Euclidean, gamma, separation, tile)
+                    .map_err(|e| e.to_string())?;
+            let of_fleet = scan_tile(&fleet, &Euclidean, gamma, separation, tile).map_err(|e| e.to_string())?;
+            if summary != of_fleet {
+                return Err(format!("tile {tile:?}: the scan from sessions differs from the fleet's"));
+            }
+            let shipped = TileSummary::from_bytes(&summary.to_bytes()).map_err(|e| e.to_string())?;
+            if shipped != summary {
+                return Err(format!("tile {tile:?}: the summary changed through its bytes"));
+            }
+            parts.push(TileMerge::new(shipped).map_err(|e| e.to_string())?);
+        }
+        let merged = random_tree(parts, &mut rng)?.finish().map_err(|e| e.to_string())?;
+        let got = merged.fleet_components(&starts).map_err(|e| e.to_string())?;
+        if got.len() != expected.len() {
+            return Err(format!("block {block}: {} components, the fleet {}", got.len(), expected.len()));
+        }
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-10 * (y.abs() + 1.0);
+        for ((m, g), e) in merged.components().iter().zip(&got).zip(&expected) {
+            let exact = |c: &loops_core::FleetComponent| {
+                (c.id, c.sessions, c.trivial, c.pair_count, c.holes, c.poses, c.closest_pair, c.closest_distance)
+            };
+            if exact(g) != exact(e) || !close(g.area_s2, e.area_s2) {
+                return Err(format!("block {block} ({} tiles): {g:?} != {e:?}", tiles.len()));
+            }
+            let joint = &whole.loops().components()[e.id];
+            if m.component.run_count != joint.run_count || m.component.i_range != joint.i_range {
+                return Err(format!("block {block}: {:?} != {joint:?}", m.component));
+            }
+            let [a, b] = e.sessions;
+            let time = |s: usize, pose: usize| sessions[s].timestamps_s()[pose];
+            let times =
+                [[time(a, e.poses[0][0]), time(a, e.poses[0][1])], [time(b, e.poses[1][0]), time(b, e.poses[1][1])]];
+            if m.times_s != times {
+                return Err(format!("block {block}: component {} has times {:?}, not {times:?}", e.id, m.times_s));
+            }
+        }
+        let pairs = merged.session_pairs(&spans).map_err(|e| e.to_string())?;
+        if pairs.len() != expected_pairs.len() {
+            return Err(format!("block {block}: {} session pairs, the fleet {}", pairs.len(), expected_pairs.len()));
+        }
+        for (p, e) in pairs.iter().zip(&expected_pairs) {
+            let ok = p.sessions == e.sessions
+                && p.components == e.components
+                && p.pair_count == e.pair_count
+                && close(p.area_s2, e.area_s2)
+                && close(p.density, e.density);
+            if !ok {
+                return Err(format!("block {block}: session pair {p:?} != {e:?}"));
+            }
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(support::config(64, 0x7EE5))]
+
+    #[test]
+    fn merge_trees_give_the_fleet_result(
+        cases in prop::collection::vec(support::any_case(40), 1..4),
+        shifts in prop::collection::vec((-2.0..2.0f64, -2.0..2.0f64), 4),
+        separated in any::<bool>(),
+        seed in any::<u64>(),
+    ) {
+        let gamma = cases[0].gamma;
+        let sessions: Vec<Trajectory> = cases
+            .iter()
+            .zip(&shifts)
+            .map(|(c, &(x, y))| planar(&c.traj, [x * gamma, y * gamma]))
+            .collect();
+        let separation = if separated { Separation { path: 2.0 * gamma, time_s: 0.0 } } else { Separation::NONE };
+        check_tree(&sessions, gamma, separation, seed).map_err(TestCaseError::fail)?;
+    }
+}
+
+#[test]
+fn adversarial_fleets_merge_in_trees() {
+    let a = tour(90, 0.0, [0.0, 0.0]);
+    // The same path backwards in time.
+    let points: Vec<[f64; 2]> = (0..a.len()).rev().map(|k| [a.point(k)[0], a.point(k)[1]]).collect();
+    let reversed = Trajectory::from_points((0..a.len()).map(|k| 1e9 + k as f64).collect(), &points).unwrap();
+    let parked = Trajectory::from_points((0..60).map(|k| k as f64 * 0.1).collect(), &vec![[10.0, 0.0]; 60]).unwrap();
+    let parked_far = Trajectory::from_points((0..40).map(|k| k as f64).collect(), &vec![[1e4, 1e4]; 40]).unwrap();
+    let far = tour(70, 7.0, [5e3, -5e3]);
+    for (k, gamma) in [0.5, 1.5, 4.0].into_iter().enumerate() {
+        for separation in [Separation::NONE, Separation::path(3.0 * gamma)] {
+            let sessions = [a.clone(), a.clone(), reversed.clone(), parked.clone(), parked_far.clone(), far.clone()];
+            check_tree(&sessions, gamma, separation, k as u64)
+                .unwrap_or_else(|e| panic!("γ = {gamma}, {separation}: {e}"));
+        }
+    }
+}
+
+/// A small summary with components and edge runs, for the byte tests.
+fn some_summary() -> TileSummary {
+    let fleet =
+        Fleet::new(vec![("a".into(), tour(60, 0.0, [0.0, 0.0])), ("b".into(), tour(50, 3.0, [0.5, 0.0]))]).unwrap();
+    let tiles = plan_tiles(&fleet, &Euclidean, 1.5, 20).unwrap();
+    let tile = tiles.iter().find(|t| t.sessions == [0, 1]).unwrap();
+    let summary = scan_tile(&fleet, &Euclidean, 1.5, Separation::NONE, tile).unwrap();
+    assert!(!summary.components.is_empty() && !summary.edges.is_empty());
+    summary
+}
+
+fn corrupt_message(result: Result<TileSummary, Error>) -> String {
+    match result {
+        Err(e @ Error::InvalidState { .. }) => e.to_string(),
+        other => panic!("expected InvalidState, got {other:?}"),
+    }
+}
+
+#[test]
+fn bytes_round_trip_and_fail_clearly() {
+    let summary = some_summary();
+    let bytes = summary.to_bytes();
+    assert_eq!(&bytes[..4], b"ILts");
+    assert_eq!(u16::from_le_bytes([bytes[4], bytes[5]]), TILE_FORMAT_VERSION);
+    assert_eq!(TileSummary::from_bytes(&bytes).unwrap(), summary);
+    // Cut short anywhere.
+    for len in 0..bytes.len() {
+        let message = corrupt_message(TileSummary::from_bytes(&bytes[..len]));
+        assert!(message.starts_with("invalid saved tile summary: "), "{message}");
+    }
+    // A byte too many.
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(corrupt_message(TileSummary::from_bytes(&longer)).contains("1 bytes left over"));
+    // Another kind, another version, something else.
+    let merge = TileMerge::new(summary.clone()).unwrap().to_bytes();
+    assert!(corrupt_message(TileSummary::from_bytes(&merge)).contains("these are the bytes of a tile merge"));
+    assert_eq!(TileMerge::from_bytes(&merge).unwrap(), TileMerge::new(summary.clone()).unwrap());
+    let mut newer = bytes.clone();
+    newer[4..6].copy_from_slice(&(TILE_FORMAT_VERSION + 1).to_le_bytes());
+    let message = corrupt_message(TileSummary::from_bytes(&newer));
+    assert!(message.contains(&format!("format version {}; this build reads version 1", TILE_FORMAT_VERSION + 1)));
+    assert!(corrupt_message(TileSummary::from_bytes(b"PK\x03\x04rest")).contains("start with \"PK\\u{3}\\u{4}\""));
+    // A label that names no component, and a run outside its tile.
+    let mut bad = summary.clone();
+    bad.edges[0].label = bad.components.len() as u32;
+    assert!(corrupt_message(TileSummary::from_bytes(&bad.to_bytes())).contains("label"));
+    assert!(matches!(TileMerge::new(bad), Err(Error::InconsistentTiles { .. })));
+    let mut outside = summary.clone();
+    outside.edges[0].row = outside.tile.rows.end;
+    assert!(corrupt_message(TileSummary::from_bytes(&outside.to_bytes())).contains("outside tile"));
+}
+
+#[test]
+fn flipped_bytes_never_panic() {
+    let summary = some_summary();
+    let bytes = summary.to_bytes();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for _ in 0..2000 {
+        let mut flipped = bytes.clone();
+        for _ in 0..rng.random_range(1..4) {
+            let k = rng.random_range(6..flipped.len());
+            flipped[k] ^= 1 << rng.random_range(0..8);
+        }
+        // Either refused, or a summary that merges and finishes (to anything) without a panic.
+        if let Ok(s) = TileSummary::from_bytes(&flipped) {
+            let merged = TileMerge::merge(vec![TileMerge::new(s).unwrap(), TileMerge::new(summary.clone()).unwrap()]);
+            if let Ok(m) = merged
+                && let Ok(loops) = m.finish()
+            {
+                let _ = loops.session_pairs(&[1.0, 1.0]);
+                let _ = loops.fleet_components(&[0, 60]);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_tile_merged_twice_is_refused() {
+    let summary = some_summary();
+    let once = TileMerge::new(summary.clone()).unwrap();
+    let err = TileMerge::merge(vec![once.clone(), once]).unwrap_err();
+    assert!(err.to_string().contains("each tile summarised once"), "{err}");
+}
+
+#[test]
+fn session_tiles_check_their_sessions() {
+    let (a, b) = (tour(30, 0.0, [0.0, 0.0]), tour(20, 0.0, [0.0, 0.0]));
+    let tile = Tile { sessions: [0, 1], rows: 0..10, columns: 30..40 };
+    let scan =
+        |starts: [usize; 2], tile: &Tile| scan_session_tile([&a, &b], starts, &Euclidean, 1.0, Separation::NONE, tile);
+    assert!(scan([0, 30], &tile).is_ok());
+    // Columns beyond session b, and session b's indices inside session a's.
+    assert!(matches!(scan([0, 25], &tile), Err(Error::InvalidParameter { name: "tile", .. })));
+    assert!(matches!(scan([0, 20], &Tile { columns: 20..30, ..tile.clone() }), Err(Error::InvalidParameter { .. })));
+    let flat = Trajectory::new((0..20).map(f64::from).collect(), (0..20).map(f64::from).collect(), 1).unwrap();
+    let err = scan_session_tile([&a, &flat], [0, 30], &Euclidean, 1.0, Separation::NONE, &tile).unwrap_err();
+    assert!(err.to_string().contains("has 1 coordinates, session 0 has 2"), "{err}");
+    // Within one session: one start, tiles on or above the diagonal.
+    let own = Tile { sessions: [0, 0], rows: 10..20, columns: 0..10 };
+    assert!(scan_session_tile([&a, &a], [0, 0], &Euclidean, 1.0, Separation::NONE, &own).is_err());
+    let blocks = [SessionBlocks::new(&a, &Euclidean, 8).unwrap(), SessionBlocks::new(&b, &Euclidean, 9).unwrap()];
+    assert!(plan_session_tiles(&blocks, &Euclidean, 1.0).unwrap_err().to_string().contains("same block size"));
+    assert!(SessionBlocks::new(&a, &Euclidean, 0).is_err());
+}
