@@ -72,6 +72,7 @@ use crate::error::{Error, Result};
 use crate::fleet::{Fleet, FleetComponent, SessionPair, localize, session_pairs_of};
 use crate::metric::Metric;
 use crate::separation::Separation;
+use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, path_length};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
@@ -270,6 +271,39 @@ pub fn plan_session_tiles<M: Metric + ?Sized>(sessions: &[SessionBlocks], metric
         }
     }
     Ok(tiles)
+}
+
+impl MetricSpec {
+    /// [`SessionBlocks::new`] under this metric.
+    ///
+    /// # Errors
+    /// As [`SessionBlocks::new`].
+    pub fn session_blocks(&self, session: &Trajectory, block: usize) -> Result<SessionBlocks> {
+        with_metric!(self, m => SessionBlocks::new(session, m, block))
+    }
+
+    /// [`plan_session_tiles`] under this metric.
+    ///
+    /// # Errors
+    /// As [`plan_session_tiles`].
+    pub fn plan_session_tiles(&self, sessions: &[SessionBlocks], gamma: f64) -> Result<Vec<Tile>> {
+        with_metric!(self, m => plan_session_tiles(sessions, m, gamma))
+    }
+
+    /// [`scan_session_tile`] under this metric.
+    ///
+    /// # Errors
+    /// As [`scan_session_tile`].
+    pub fn scan_session_tile(
+        &self,
+        sessions: [&Trajectory; 2],
+        starts: [usize; 2],
+        gamma: f64,
+        separation: Separation,
+        tile: &Tile,
+    ) -> Result<TileSummary> {
+        with_metric!(self, m => scan_session_tile(sessions, starts, m, gamma, separation, tile))
+    }
 }
 
 /// A provisional component of one tile: the sums and extremes that merge.
