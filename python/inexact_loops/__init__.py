@@ -26,7 +26,9 @@ Example:
 
 Several sessions (vehicles, days, robots) in one frame form a :class:`Fleet`;
 :func:`find_fleet_loops` finds the loops within each session and between every two, and
-:meth:`FleetLoops.overlap_matrix` says how much each two sessions overlap.
+:meth:`FleetLoops.overlap_matrix` says how much each two sessions overlap. For fleets beyond one
+machine, :func:`inexact_loops.dask.find_fleet_loops_dask` gives the same answer from tiles
+(:func:`plan_tiles`, :func:`scan_tile`, :func:`merge_tiles`) scanned on a Dask cluster.
 """
 
 from . import metrics
@@ -42,6 +44,11 @@ from ._core import (
     SampleQuality,
     Samples,
     Separation,
+    SessionBlocks,
+    Tile,
+    TiledFleetLoops,
+    TileMerge,
+    TileSummary,
     Trajectory,
     __version__,
     chain_polylines,
@@ -53,8 +60,10 @@ from ._core import (
     find_loops,
     isocontour,
     list_topics,
+    merge_tiles,
     outline_segments,
     path_length,
+    plan_tiles,
     read_detections,
     read_pose_graph,
     read_trajectory,
@@ -62,6 +71,8 @@ from ._core import (
     sample_fleet,
     sample_quality,
     sampler_symbol,
+    scan_tile,
+    session_blocks,
     urban_drive,
     urban_fleet,
 )
@@ -109,7 +120,12 @@ __all__ = [
     "SampleQuality",
     "Samples",
     "Separation",
+    "SessionBlocks",
     "Table",
+    "Tile",
+    "TileMerge",
+    "TileSummary",
+    "TiledFleetLoops",
     "Trajectory",
     "__version__",
     "chain_polylines",
@@ -121,9 +137,11 @@ __all__ = [
     "find_loops",
     "isocontour",
     "list_topics",
+    "merge_tiles",
     "metrics",
     "outline_segments",
     "path_length",
+    "plan_tiles",
     "read_detections",
     "read_pose_graph",
     "read_trajectory",
@@ -131,6 +149,8 @@ __all__ = [
     "sample_fleet",
     "sample_quality",
     "sampler_symbol",
+    "scan_tile",
+    "session_blocks",
     "urban_drive",
     "urban_fleet",
 ]

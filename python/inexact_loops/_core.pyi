@@ -49,6 +49,15 @@ __all__ = [
     "find_fleet_loops",
     "sample_fleet",
     "urban_fleet",
+    "SessionBlocks",
+    "Tile",
+    "TileMerge",
+    "TileSummary",
+    "TiledFleetLoops",
+    "merge_tiles",
+    "plan_tiles",
+    "scan_tile",
+    "session_blocks",
 ]
 
 __version__: str
@@ -2214,6 +2223,272 @@ def urban_fleet(
         >>> len(fleet), fleet.names[4], bool(fleet.session(4).timestamps[0] >= 86_400.0)
         (6, 'car1-day1', True)
     """
+
+_MetricName = str | _MetricLike | None
+
+@final
+class SessionBlocks:
+    """What planning tiles needs of one session, learnt by whoever reads it: its pose count, its
+    span, and the bounding balls of its blocks of ``block`` consecutive poses under the metric
+    it was measured with. Made by :func:`session_blocks`; :func:`plan_tiles` takes one per
+    session. Pickles (as :meth:`to_bytes` and the metric's name).
+    """
+
+    def __new__(cls, data: bytes, metric: str) -> SessionBlocks: ...
+    def __len__(self) -> int: ...
+    def __reduce__(self) -> tuple[type[SessionBlocks], tuple[bytes, str]]: ...
+    @property
+    def poses(self) -> int:
+        """Number of poses of the session."""
+    @property
+    def span_s(self) -> float:
+        """The session's span t_{n−1} − t_0, seconds."""
+    @property
+    def block(self) -> int:
+        """Poses per block."""
+    @property
+    def metric_name(self) -> str:
+        """The name of the metric the balls' radii are measured with."""
+    def to_bytes(self) -> bytes:
+        """The blocks as bytes (a tag, a format version, then the fields)."""
+
+def session_blocks(session: Trajectory, *, block: int, metric: _MetricName = None) -> SessionBlocks:
+    """Cuts a session into blocks of ``block`` consecutive poses and bounds each by a ball: what
+    :func:`plan_tiles` needs of the session, without its poses. O(poses) distances.
+
+    Args:
+        session: a :class:`Trajectory`.
+        block: poses per block (the tiles' side), at least 1.
+        metric: a metric name or an ``inexact_loops.metrics`` object (not a callable);
+            ``None``: the session's own (:attr:`Trajectory.metric_name`).
+
+    Returns:
+        :class:`SessionBlocks`.
+
+    Raises:
+        InvalidParameterError: a block of 0 poses; an unknown metric.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
+        >>> blocks = il.session_blocks(drive, block=4)
+        >>> blocks.poses, len(blocks), blocks.span_s, blocks.metric_name
+        (10, 3, 9.0, 'euclidean')
+    """
+
+@final
+class Tile:
+    """A tile of a fleet's plane: rows ``rows`` of session ``sessions[0]`` against columns
+    ``columns`` of session ``sessions[1]``, each a half-open range ``(start, end)`` of *fleet
+    indices* (the sessions' poses numbered one session after another, as :attr:`Fleet.starts`).
+    Made by :func:`plan_tiles`; pickles; equal tiles are equal and hash alike.
+    """
+
+    def __new__(
+        cls, sessions: tuple[int, int], rows: tuple[int, int], columns: tuple[int, int]
+    ) -> Tile: ...
+    def __reduce__(
+        self,
+    ) -> tuple[type[Tile], tuple[tuple[int, int], tuple[int, int], tuple[int, int]]]: ...
+    def __eq__(self, other: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    @property
+    def sessions(self) -> tuple[int, int]:
+        """The session pair ``(a, b)``, a ≤ b."""
+    @property
+    def rows(self) -> tuple[int, int]:
+        """The rows' fleet indices, ``(start, end)``, end excluded (poses of session a)."""
+    @property
+    def columns(self) -> tuple[int, int]:
+        """The columns' fleet indices, ``(start, end)``, end excluded (poses of session b)."""
+
+def plan_tiles(
+    sessions: list[SessionBlocks], *, gamma: float, metric: _MetricName = None
+) -> list[Tile]:
+    """The tiles of a fleet whose sessions (in fleet order) have these blocks: every pair of a
+    row block and a column block (a ≤ b; on or above the diagonal within a session) whose balls
+    come within γ. Every pair of poses within γ lies in one of them; tiles left out hold none.
+
+    Args:
+        sessions: one :class:`SessionBlocks` per session, in fleet order, cut into blocks of one
+            size.
+        gamma: the distance threshold γ > 0.
+        metric: ``None``: the metric the blocks were measured with (they must agree); or a name
+            or metric object, which must be that metric.
+
+    Returns:
+        list of :class:`Tile`, by session pair, then row block, then column block.
+
+    Raises:
+        InvalidParameterError: no sessions; blocks of different sizes, dimensions or metrics;
+            an invalid γ.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> out = il.Trajectory(np.arange(6.0), np.c_[np.arange(6.0), np.zeros(6)])
+        >>> far = il.Trajectory(np.arange(4.0), np.c_[np.arange(4.0), np.full(4, 100.0)])
+        >>> blocks = [il.session_blocks(s, block=3) for s in (out, far)]
+        >>> [t.sessions for t in il.plan_tiles(blocks, gamma=1.0)]  # far meets no one
+        [(0, 0), (0, 0), (0, 0), (1, 1), (1, 1), (1, 1)]
+    """
+
+@final
+class TileSummary:
+    """What scanning one tile returns: the statistics of the tile's provisional components and the
+    runs on its edges, a few hundred bytes to a few kilobytes. Made by :func:`scan_tile`; merged
+    by :func:`merge_tiles`. Pickles as :meth:`to_bytes`.
+    """
+
+    def __new__(cls, data: bytes) -> TileSummary: ...
+    def __reduce__(self) -> tuple[type[TileSummary], tuple[bytes]]: ...
+    @staticmethod
+    def from_bytes(data: bytes) -> TileSummary:
+        """The summary from :meth:`to_bytes`; as the constructor."""
+    def to_bytes(self) -> bytes:
+        """The summary as bytes: a 4-byte tag, the format version, then the fields (MessagePack)."""
+    @property
+    def tile(self) -> Tile:
+        """The tile."""
+    @property
+    def component_count(self) -> int:
+        """Number of provisional components."""
+    @property
+    def edge_count(self) -> int:
+        """Number of runs on the tile's edges."""
+
+def scan_tile(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+) -> TileSummary:
+    """Scans one tile from its two sessions alone — what a worker that read only those sessions
+    can do — without the GIL: the same cells as :func:`find_fleet_loops` finds in the tile,
+    summarised for :func:`merge_tiles`.
+
+    Args:
+        tile: a :class:`Tile` of :func:`plan_tiles`.
+        session_a: the :class:`Trajectory` of session ``tile.sessions[0]``.
+        session_b: that of session ``tile.sessions[1]``; ``None`` for a tile within one session.
+        starts: the two sessions' first fleet indices ``(start_a, start_b)``: the poses of the
+            sessions before each in the fleet (the same twice within one session).
+        gamma: the distance threshold γ > 0.
+        metric: a metric name or an ``inexact_loops.metrics`` object (not a callable); ``None``:
+            ``session_a``'s own.
+        separation: within a session, as in :func:`find_fleet_loops` (``"auto"``: 4 γ of path;
+            ``None``: none), measured over the whole session.
+        threads: worker threads; ``None``: one per core.
+
+    Returns:
+        :class:`TileSummary`.
+
+    Raises:
+        InvalidParameterError: a tile outside its sessions or below the diagonal, sessions of
+            different dimensions or manifolds, an invalid γ or separation, a metric that does
+            not fit the poses.
+    """
+
+@final
+class TileMerge:
+    """A partial merge of tiles: the components of the tiles it holds with every join between them
+    made, and only the edge runs that face tiles it does not hold yet. Merges of disjoint sets
+    of tiles merge again (:func:`merge_tiles`), in any grouping and order; the merge of every
+    tile of a plan :meth:`finish`\\ es into the fleet's components. Pickles as :meth:`to_bytes`.
+    """
+
+    def __new__(cls, data: bytes) -> TileMerge: ...
+    def __reduce__(self) -> tuple[type[TileMerge], tuple[bytes]]: ...
+    @staticmethod
+    def from_bytes(data: bytes) -> TileMerge:
+        """The merge from :meth:`to_bytes`; as the constructor."""
+    def to_bytes(self) -> bytes:
+        """The merge as bytes (as :meth:`TileSummary.to_bytes`, another tag)."""
+    @property
+    def tile_count(self) -> int:
+        """Number of tiles merged."""
+    @property
+    def component_count(self) -> int:
+        """Number of components (final ones and those that may still grow)."""
+    @property
+    def open_edge_count(self) -> int:
+        """Number of edge runs still open (facing tiles not merged yet)."""
+    def finish(self, sessions: list[SessionBlocks], *, names: list[str]) -> TiledFleetLoops:
+        """The fleet's loop components from the merge of every tile of a plan: numbered, and with
+        the same tables, as :func:`find_fleet_loops` gives them (areas to rounding).
+
+        Args:
+            sessions: the :class:`SessionBlocks` the plan was made from, in fleet order (their
+                pose counts give the fleet indices, their spans the densities).
+            names: the sessions' names, in fleet order.
+
+        Returns:
+            :class:`TiledFleetLoops`.
+
+        Raises:
+            InvalidParameterError: as many names as sessions are needed; a merge whose
+                components do not lie in these sessions, or whose counts do not fit together.
+        """
+
+def merge_tiles(parts: list[TileSummary | TileMerge]) -> TileMerge:
+    """Merges tile summaries and partial merges of disjoint sets of tiles into one partial merge,
+    without the GIL: O(their components + open edge runs + tiles). See :class:`TileMerge`.
+
+    Args:
+        parts: :class:`TileSummary` and :class:`TileMerge` objects, in any order.
+
+    Returns:
+        :class:`TileMerge`.
+
+    Raises:
+        InvalidParameterError: a tile in two parts; parts that do not fit together.
+        TypeError: a part of another type.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> s = 0.2 * np.arange(40)  # a circle and a third, the second lap over the first
+        >>> drive = il.Trajectory(s, np.c_[np.cos(s), np.sin(s)])
+        >>> blocks = [il.session_blocks(drive, block=8)]
+        >>> tiles = il.plan_tiles(blocks, gamma=0.5)
+        >>> parts = [il.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
+        >>> merged = il.merge_tiles([il.merge_tiles(parts[:2]), *parts[2:]])
+        >>> loops = merged.finish(blocks, names=["drive"])
+        >>> fleet = il.find_fleet_loops(il.Fleet({"drive": drive}), gamma=0.5, separation=None)
+        >>> loops.components["pair_count"].tolist() == fleet.components["pair_count"].tolist()
+        True
+    """
+
+@final
+class TiledFleetLoops:
+    """The loops of a fleet merged from tiles (:meth:`TileMerge.finish`): the tables of
+    :class:`FleetLoops` that the tiles give — components, the session pairs and the overlap
+    matrix — equal to :func:`find_fleet_loops`' (areas to rounding). Not the runs themselves:
+    they stayed on the machines that scanned the tiles.
+    """
+
+    @property
+    def names(self) -> list[str]:
+        """The sessions' names, in order."""
+    @property
+    def components(self) -> Table:
+        """The loop components, as :attr:`FleetLoops.components` (the same columns)."""
+    def between_sessions(self) -> npt.NDArray[np.int64]:
+        """The ids of the components between two different sessions, int64, increasing."""
+    def session_pairs(self) -> Table:
+        """The sparse overlap matrix as a table, as :meth:`FleetLoops.session_pairs`."""
+    def overlap_matrix(self, *, sparse: bool = False) -> npt.NDArray[np.float64] | Any:
+        """The overlap matrix, as :meth:`FleetLoops.overlap_matrix`.
+
+        Args:
+            sparse: a ``scipy.sparse.csr_array`` instead of a dense numpy array.
+
+        Raises:
+            ImportError: ``sparse=True`` without scipy.
+        """
 
 def run_cli(args: list[str]) -> int:
     """Runs the ``loops`` command in this process with ``args`` (the arguments after the program

@@ -35,6 +35,49 @@ COVERED: dict[str, list[str]] = {}
 
 #: Public names tested in other files: name -> (file, test function).
 ELSEWHERE = {
+    **{
+        name: ("python/test_dask.py", "test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail")
+        for name in (
+            "SessionBlocks",
+            "SessionBlocks.block",
+            "SessionBlocks.metric_name",
+            "SessionBlocks.poses",
+            "SessionBlocks.span_s",
+            "SessionBlocks.to_bytes",
+            "Tile",
+            "Tile.columns",
+            "Tile.rows",
+            "Tile.sessions",
+            "TileMerge",
+            "TileMerge.component_count",
+            "TileMerge.from_bytes",
+            "TileMerge.open_edge_count",
+            "TileMerge.tile_count",
+            "TileMerge.to_bytes",
+            "TileSummary",
+            "TileSummary.component_count",
+            "TileSummary.edge_count",
+            "TileSummary.from_bytes",
+            "TileSummary.tile",
+            "TileSummary.to_bytes",
+            "merge_tiles",
+            "plan_tiles",
+            "scan_tile",
+            "session_blocks",
+        )
+    },
+    **{
+        name: ("python/test_dask.py", "test_in_process_equals_the_fleet")
+        for name in (
+            "TileMerge.finish",
+            "TiledFleetLoops",
+            "TiledFleetLoops.between_sessions",
+            "TiledFleetLoops.components",
+            "TiledFleetLoops.names",
+            "TiledFleetLoops.overlap_matrix",
+            "TiledFleetLoops.session_pairs",
+        )
+    },
     "Trajectory.from_evo": (
         "python/test_interop.py",
         "test_from_evo_se3_reorders_w_first_quaternions",

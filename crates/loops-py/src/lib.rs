@@ -9,7 +9,9 @@
 //! (`Detections`, `draw_detections`, `read_detections`), `py_clusters` (`DetectionClusters`,
 //! `cluster_detections`), `py_samples` (`Samples`, `sample`), `py_quality` (`SampleQuality`,
 //! `sample_quality`), `py_graph` (`PoseGraph`, `read_pose_graph`) and `py_fleet` (`Fleet`,
-//! `FleetLoops`, `FleetSamples`, `find_fleet_loops`, `sample_fleet`, `urban_fleet`). Below them:
+//! `FleetLoops`, `FleetSamples`, `find_fleet_loops`, `sample_fleet`, `urban_fleet`) and `py_tile`
+//! (`SessionBlocks`, `Tile`, `TileSummary`, `TileMerge`, `TiledFleetLoops`: a fleet's tiles for a
+//! cluster). Below them:
 //! `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
 //! (the one mapping of errors to exceptions) and `warning` (the one mapping of the engine's
@@ -30,6 +32,7 @@ mod py_plane;
 mod py_quality;
 mod py_samples;
 mod py_separation;
+mod py_tile;
 mod py_trajectory;
 mod warning;
 
@@ -147,6 +150,15 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_fleet::find_fleet_loops, module)?)?;
     module.add_function(wrap_pyfunction!(py_fleet::sample_fleet, module)?)?;
     module.add_function(wrap_pyfunction!(py_fleet::urban_fleet, module)?)?;
+    module.add_class::<py_tile::SessionBlocks>()?;
+    module.add_class::<py_tile::Tile>()?;
+    module.add_class::<py_tile::TileSummary>()?;
+    module.add_class::<py_tile::TileMerge>()?;
+    module.add_class::<py_tile::TiledFleetLoops>()?;
+    module.add_function(wrap_pyfunction!(py_tile::session_blocks, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile::plan_tiles, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile::scan_tile, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile::merge_tiles, module)?)?;
     module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
     module.add_class::<py_graph::PoseGraph>()?;
     module.add_function(wrap_pyfunction!(py_graph::read_pose_graph, module)?)?;

@@ -555,33 +555,15 @@ impl FleetLoops {
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let fleet = &self.fleet_ref().inner;
         let cs = self.inner.components();
-        let names = fleet.names();
         let time = |a: usize, pose: usize| fleet.session(a).timestamps_s()[pose];
-        table(
-            py,
-            [
-                ("id", int64_column(py, &cs, |c| c.id)),
-                ("session_a", int64_column(py, &cs, |c| c.sessions[0])),
-                ("session_b", int64_column(py, &cs, |c| c.sessions[1])),
-                ("name_a", str_column(py, cs.iter().map(|c| names[c.sessions[0]].as_str()).collect())?),
-                ("name_b", str_column(py, cs.iter().map(|c| names[c.sessions[1]].as_str()).collect())?),
-                ("trivial", bool_column(py, &cs, |c| c.trivial)),
-                ("area_s2", float64_column(py, &cs, |c| c.area_s2)),
-                ("pair_count", int64_column(py, &cs, |c| c.pair_count as usize)),
-                ("holes", int64_column(py, &cs, |c| c.holes as usize)),
-                ("i_min", int64_column(py, &cs, |c| c.poses[0][0])),
-                ("i_max", int64_column(py, &cs, |c| c.poses[0][1])),
-                ("j_min", int64_column(py, &cs, |c| c.poses[1][0])),
-                ("j_max", int64_column(py, &cs, |c| c.poses[1][1])),
-                ("t_min_s", float64_column(py, &cs, |c| time(c.sessions[0], c.poses[0][0]))),
-                ("t_max_s", float64_column(py, &cs, |c| time(c.sessions[0], c.poses[0][1]))),
-                ("t_prime_min_s", float64_column(py, &cs, |c| time(c.sessions[1], c.poses[1][0]))),
-                ("t_prime_max_s", float64_column(py, &cs, |c| time(c.sessions[1], c.poses[1][1]))),
-                ("closest_i", int64_column(py, &cs, |c| c.closest_pair[0])),
-                ("closest_j", int64_column(py, &cs, |c| c.closest_pair[1])),
-                ("closest_distance", float64_column(py, &cs, |c| c.closest_distance)),
-            ],
-        )
+        let times: Vec<[[f64; 2]; 2]> = cs
+            .iter()
+            .map(|c| {
+                let [a, b] = c.sessions;
+                [[time(a, c.poses[0][0]), time(a, c.poses[0][1])], [time(b, c.poses[1][0]), time(b, c.poses[1][1])]]
+            })
+            .collect();
+        components_table(py, &cs, fleet.names(), &times)
     }
 
     /// The ids of the components between two different sessions, int64, increasing.
@@ -597,21 +579,7 @@ impl FleetLoops {
     /// share of the block within γ). For a = b the block is the session's whole square (both
     /// halves, the diagonal once), so ``area_s2`` is ∫τ over the session alone.
     fn session_pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let names = self.fleet_ref().inner.names();
-        let ps = self.inner.session_pairs();
-        table(
-            py,
-            [
-                ("session_a", int64_column(py, &ps, |p| p.sessions[0])),
-                ("session_b", int64_column(py, &ps, |p| p.sessions[1])),
-                ("name_a", str_column(py, ps.iter().map(|p| names[p.sessions[0]].as_str()).collect())?),
-                ("name_b", str_column(py, ps.iter().map(|p| names[p.sessions[1]].as_str()).collect())?),
-                ("components", int64_column(py, &ps, |p| p.components)),
-                ("pair_count", int64_column(py, &ps, |p| p.pair_count as usize)),
-                ("area_s2", float64_column(py, &ps, |p| p.area_s2)),
-                ("density", float64_column(py, &ps, |p| p.density)),
-            ],
-        )
+        session_pairs_table(py, &self.inner.session_pairs(), self.fleet_ref().inner.names())
     }
 
     /// The overlap matrix: α between every two sessions, s², symmetric, rows and columns in
@@ -630,39 +598,7 @@ impl FleetLoops {
     ///     ImportError: ``sparse=True`` without scipy.
     #[pyo3(signature = (*, sparse=false))]
     fn overlap_matrix<'py>(&self, py: Python<'py>, sparse: bool) -> PyResult<Bound<'py, PyAny>> {
-        let n = self.inner.sessions();
-        let pairs = self.inner.session_pairs();
-        if sparse {
-            let scipy = py.import("scipy.sparse").map_err(|error| {
-                pyo3::exceptions::PyImportError::new_err(format!(
-                    "overlap_matrix(sparse=True) needs scipy, which is not installed ({error}): `pip install scipy`, \
-                     or use the dense matrix"
-                ))
-            })?;
-            let (mut rows, mut cols, mut values) = (Vec::new(), Vec::new(), Vec::new());
-            for p in &pairs {
-                let [a, b] = p.sessions;
-                rows.push(a as i64);
-                cols.push(b as i64);
-                values.push(p.area_s2);
-                if a != b {
-                    rows.push(b as i64);
-                    cols.push(a as i64);
-                    values.push(p.area_s2);
-                }
-            }
-            let coordinates = (to_numpy(py, rows), to_numpy(py, cols));
-            let kwargs = [("shape", (n, n))].into_py_dict(py)?;
-            return scipy.call_method("csr_array", ((to_numpy(py, values), coordinates),), Some(&kwargs));
-        }
-        let mut dense = vec![0.0; n * n];
-        for p in &pairs {
-            let [a, b] = p.sessions;
-            dense[a * n + b] = p.area_s2;
-            dense[b * n + a] = p.area_s2;
-        }
-        let matrix: Bound<'py, PyArray2<f64>> = to_numpy(py, dense).reshape([n, n])?;
-        Ok(matrix.into_any())
+        overlap_matrix(py, self.inner.sessions(), &self.inner.session_pairs(), sparse)
     }
 
     /// Loop duration τ per pose, split: ``own_s``, τ within the pose's session (that session's
@@ -708,6 +644,102 @@ impl FleetLoops {
             ],
         )
     }
+}
+
+/// The table of :attr:`FleetLoops.components` (see there) of fleet components with the times
+/// of their extents on their sessions' clocks (`[[t_min, t_max], [t′_min, t′_max]]`).
+pub(crate) fn components_table<'py>(
+    py: Python<'py>,
+    cs: &[loops_core::FleetComponent],
+    names: &[String],
+    times: &[[[f64; 2]; 2]],
+) -> PyResult<Bound<'py, PyAny>> {
+    table(
+        py,
+        [
+            ("id", int64_column(py, cs, |c| c.id)),
+            ("session_a", int64_column(py, cs, |c| c.sessions[0])),
+            ("session_b", int64_column(py, cs, |c| c.sessions[1])),
+            ("name_a", str_column(py, cs.iter().map(|c| names[c.sessions[0]].as_str()).collect())?),
+            ("name_b", str_column(py, cs.iter().map(|c| names[c.sessions[1]].as_str()).collect())?),
+            ("trivial", bool_column(py, cs, |c| c.trivial)),
+            ("area_s2", float64_column(py, cs, |c| c.area_s2)),
+            ("pair_count", int64_column(py, cs, |c| c.pair_count as usize)),
+            ("holes", int64_column(py, cs, |c| c.holes as usize)),
+            ("i_min", int64_column(py, cs, |c| c.poses[0][0])),
+            ("i_max", int64_column(py, cs, |c| c.poses[0][1])),
+            ("j_min", int64_column(py, cs, |c| c.poses[1][0])),
+            ("j_max", int64_column(py, cs, |c| c.poses[1][1])),
+            ("t_min_s", float64_column(py, times, |t| t[0][0])),
+            ("t_max_s", float64_column(py, times, |t| t[0][1])),
+            ("t_prime_min_s", float64_column(py, times, |t| t[1][0])),
+            ("t_prime_max_s", float64_column(py, times, |t| t[1][1])),
+            ("closest_i", int64_column(py, cs, |c| c.closest_pair[0])),
+            ("closest_j", int64_column(py, cs, |c| c.closest_pair[1])),
+            ("closest_distance", float64_column(py, cs, |c| c.closest_distance)),
+        ],
+    )
+}
+
+/// The table of :meth:`FleetLoops.session_pairs` (see there).
+pub(crate) fn session_pairs_table<'py>(
+    py: Python<'py>,
+    ps: &[loops_core::SessionPair],
+    names: &[String],
+) -> PyResult<Bound<'py, PyAny>> {
+    table(
+        py,
+        [
+            ("session_a", int64_column(py, ps, |p| p.sessions[0])),
+            ("session_b", int64_column(py, ps, |p| p.sessions[1])),
+            ("name_a", str_column(py, ps.iter().map(|p| names[p.sessions[0]].as_str()).collect())?),
+            ("name_b", str_column(py, ps.iter().map(|p| names[p.sessions[1]].as_str()).collect())?),
+            ("components", int64_column(py, ps, |p| p.components)),
+            ("pair_count", int64_column(py, ps, |p| p.pair_count as usize)),
+            ("area_s2", float64_column(py, ps, |p| p.area_s2)),
+            ("density", float64_column(py, ps, |p| p.density)),
+        ],
+    )
+}
+
+/// The matrix of :meth:`FleetLoops.overlap_matrix` (see there) of `n` sessions.
+pub(crate) fn overlap_matrix<'py>(
+    py: Python<'py>,
+    n: usize,
+    pairs: &[loops_core::SessionPair],
+    sparse: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    if sparse {
+        let scipy = py.import("scipy.sparse").map_err(|error| {
+            pyo3::exceptions::PyImportError::new_err(format!(
+                "overlap_matrix(sparse=True) needs scipy, which is not installed ({error}): `pip install scipy`, \
+                     or use the dense matrix"
+            ))
+        })?;
+        let (mut rows, mut cols, mut values) = (Vec::new(), Vec::new(), Vec::new());
+        for p in pairs {
+            let [a, b] = p.sessions;
+            rows.push(a as i64);
+            cols.push(b as i64);
+            values.push(p.area_s2);
+            if a != b {
+                rows.push(b as i64);
+                cols.push(a as i64);
+                values.push(p.area_s2);
+            }
+        }
+        let coordinates = (to_numpy(py, rows), to_numpy(py, cols));
+        let kwargs = [("shape", (n, n))].into_py_dict(py)?;
+        return scipy.call_method("csr_array", ((to_numpy(py, values), coordinates),), Some(&kwargs));
+    }
+    let mut dense = vec![0.0; n * n];
+    for p in pairs {
+        let [a, b] = p.sessions;
+        dense[a * n + b] = p.area_s2;
+        dense[b * n + a] = p.area_s2;
+    }
+    let matrix: Bound<'py, PyArray2<f64>> = to_numpy(py, dense).reshape([n, n])?;
+    Ok(matrix.into_any())
 }
 
 /// Samples the loops of a fleet (paper, Sec. 5) with one budget over all components of all
