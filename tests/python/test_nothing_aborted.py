@@ -184,7 +184,8 @@ sys.exit(main())
 
 def interrupt_child(setup: str, call: str) -> tuple[float, str]:
     """Runs `call` in a child after `setup`; sends SIGINT one second into it. Returns the
-    seconds from the signal to the child's exit, and its output."""
+    seconds from the signal to the KeyboardInterrupt in the child (its own clock: neither the
+    interpreter's exit nor the call after it count), and its output."""
     code = (
         setup
         + f"""
@@ -209,6 +210,7 @@ except KeyboardInterrupt:
     )
     assert child.stdout is not None
     assert child.stdout.readline() == "started\n"
+    started = time.monotonic()
     time.sleep(1.0)
     sent = time.monotonic()
     child.send_signal(signal.SIGINT)
@@ -218,6 +220,10 @@ except KeyboardInterrupt:
         child.kill()
         raise
     assert child.returncode == 0, err[-2000:]
+    first = out.split()
+    if first[:1] == ["interrupted"]:
+        # The call started right after "started" and the signal came `sent - started` later.
+        return float(first[1]) - (sent - started), out
     return time.monotonic() - sent, out
 
 
@@ -238,8 +244,8 @@ def test_ctrl_c_stops_a_long_find_loops_at_once():
     assert lines[0].startswith("interrupted "), out
     assert lines[1].startswith("after "), out
     # The full scan takes minutes; the interrupt arrives within a fraction of a second (a
-    # generous bound for a loaded machine).
-    assert seconds < 5, seconds
+    # generous bound for a loaded machine: 10 s).
+    assert seconds < 10, seconds
 
 
 def test_ctrl_c_stops_a_python_metric_callable():
@@ -252,7 +258,7 @@ traj = il.urban_drive(duration_s=7200.0)
         "il.find_loops(traj, gamma=40.0, metric=lambda a, b: float(np.linalg.norm(a - b)))",
     )
     assert out.startswith("interrupted "), out
-    assert seconds < 5, seconds
+    assert seconds < 10, seconds
 
 
 def test_ctrl_c_stops_a_long_distance_image():
@@ -266,4 +272,4 @@ traj = il.Trajectory(np.arange(6_000) * 0.1, rng.normal(size=(6_000, 2_048)))
 """
     seconds, out = interrupt_child(setup, "il.distance_image(traj, il.PlaneGrid(traj, 6_000))")
     assert out.startswith("interrupted "), out
-    assert seconds < 5, seconds
+    assert seconds < 10, seconds

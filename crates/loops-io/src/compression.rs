@@ -14,7 +14,8 @@ use std::fs::File;
 use std::io::{self, BufReader, BufWriter, Read, Write};
 use std::path::Path;
 
-use crate::error::{IoError, Result, one_line};
+use crate::error::{IoError, Result};
+use crate::printable::one_line;
 
 /// A compressed frame, by its magic number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use crate::format::Format;
 use crate::pose_type::SUPPORTED_TYPES;
+use crate::printable::printable;
 use crate::topic::{FramePairInfo, TopicInfo};
 
 /// `Result` with [`IoError`] as the default error type.
@@ -472,30 +473,6 @@ fn unknown_format_message(extension: Option<&str>) -> String {
         known.join(", "),
         names.join(", ")
     )
-}
-
-/// `text` with its control characters escaped (`\n`, `\u{1b}`): names read from a file (topics,
-/// frames, schema names) go into one-line messages and onto terminals as they are otherwise.
-pub(crate) fn printable(text: &str) -> std::borrow::Cow<'_, str> {
-    if !text.chars().any(char::is_control) {
-        return std::borrow::Cow::Borrowed(text);
-    }
-    let mut out = String::with_capacity(text.len() + 8);
-    for c in text.chars() {
-        if c.is_control() {
-            out.extend(c.escape_default());
-        } else {
-            out.push(c);
-        }
-    }
-    std::borrow::Cow::Owned(out)
-}
-
-/// A library's message (SQLite, a YAML parser, a codec) on one line: its line breaks and runs
-/// of white space become one space, its other control characters are escaped.
-pub(crate) fn one_line(message: &dyn fmt::Display) -> String {
-    let text = message.to_string();
-    printable(&text.split_whitespace().collect::<Vec<_>>().join(" ")).into_owned()
 }
 
 /// Whether `path` names a rosbag2 sqlite3 file (`*.db3`, or compressed `*.db3.zstd`,

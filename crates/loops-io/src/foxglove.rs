@@ -143,7 +143,7 @@ pub(crate) fn decode_protobuf(
     mut emit: impl FnMut(Sample<'_>),
 ) -> Result<(), String> {
     let invalid =
-        |error: prost::DecodeError| format!("invalid protobuf for {pose_type}: {}", crate::error::one_line(&error));
+        |error: prost::DecodeError| format!("invalid protobuf for {pose_type}: {}", crate::printable::one_line(&error));
     match pose_type {
         PoseType::FoxglovePoseInFrame => {
             let m = PoseInFrame::decode(data).map_err(invalid)?;
@@ -272,7 +272,7 @@ fn json_pose(pose: Option<&JsonPose>) -> ([f64; 3], [f64; 4]) {
 /// Decodes a JSON message of a Foxglove type, calling `emit` for each pose.
 pub(crate) fn decode_json(pose_type: PoseType, data: &[u8], mut emit: impl FnMut(Sample<'_>)) -> Result<(), String> {
     let m: JsonMessage = serde_json::from_slice(data)
-        .map_err(|error| format!("invalid JSON for {pose_type}: {}", crate::error::one_line(&error)))?;
+        .map_err(|error| format!("invalid JSON for {pose_type}: {}", crate::printable::one_line(&error)))?;
     match pose_type {
         PoseType::FoxglovePoseInFrame => {
             let (position, orientation) = json_pose(m.pose.as_ref());

@@ -112,6 +112,7 @@ mod mcap_records;
 mod mcap_write;
 mod message;
 mod pose_type;
+mod printable;
 mod quality;
 mod read;
 mod report;

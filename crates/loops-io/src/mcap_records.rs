@@ -41,7 +41,8 @@ use std::path::Path;
 use mcap::records::op;
 
 use crate::compression::MAX_MESSAGE_BYTES;
-use crate::error::{IoError, Result, one_line, printable};
+use crate::error::{IoError, Result};
+use crate::printable::{one_line, printable};
 
 /// A channel's identity across files: topics with the same name, schema and encodings are one.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]

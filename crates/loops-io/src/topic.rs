@@ -3,8 +3,8 @@
 
 use std::fmt;
 
-use crate::error::printable;
 use crate::pose_type::PoseType;
+use crate::printable::printable;
 
 /// One topic of an MCAP file or a bag (or of several files, counted together), as
 /// [`list_topics`](crate::list_topics) reports it and as errors list them.

@@ -33,8 +33,9 @@ use std::io::{self, BufReader, Read};
 use std::path::Path;
 
 use crate::compression::{ChunkCompression, MAX_MESSAGE_BYTES, chunk_decoder};
-use crate::error::{IoError, Result, one_line};
+use crate::error::{IoError, Result};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor, open_records};
+use crate::printable::one_line;
 
 /// The first line of a bag of format 2.0.
 const VERSION: &[u8; 13] = b"#ROSBAG V2.0\n";

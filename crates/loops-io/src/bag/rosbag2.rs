@@ -151,7 +151,7 @@ impl Rosbag2 {
             IoError::parse(
                 metadata_path,
                 line,
-                format!("not a rosbag2 metadata.yaml: {}", crate::error::one_line(&error)),
+                format!("not a rosbag2 metadata.yaml: {}", crate::printable::one_line(&error)),
             )
         })?;
         let metadata = file.rosbag2_bagfile_information;

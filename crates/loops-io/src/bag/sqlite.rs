@@ -19,8 +19,9 @@ use rusqlite::types::ValueRef;
 use rusqlite::{Connection, OpenFlags};
 
 use crate::compression::MAX_MESSAGE_BYTES;
-use crate::error::{IoError, Result, one_line};
+use crate::error::{IoError, Result};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
+use crate::printable::one_line;
 
 /// The first 16 bytes of every SQLite 3 database.
 const MAGIC: &[u8; 16] = b"SQLite format 3\0";
