@@ -122,7 +122,7 @@ for round in range(int(sys.argv[2])):
                 counts["panics"] += 1
             else:
                 counts["foreign"] += 1
-            bad.append(f"{name}{tuple(map(type, args))}: {type(error).__name__}: {str(error)[:200]}")
+            bad.append(f"{name}: {type(error).__name__}: {str(error)[:200]}")
 print(json.dumps({"counts": counts, "bad": bad[:20], "names": len(names)}))
 """
 
@@ -145,14 +145,18 @@ def test_wrong_types_and_values_through_the_whole_api_raise_one_line_errors(tmp_
     assert report["names"] > 60, report["names"]
     assert counts["calls"] == counts["ok"] + counts["raised"] + counts["panics"] + counts["foreign"]
     assert counts["raised"] > counts["calls"] // 2, counts  # the wrong values did reach the checks
-    assert counts["panics"] == 0 and counts["foreign"] == 0 and counts["multi_line"] == 0, report["bad"]
+    assert counts["panics"] == 0 and counts["foreign"] == 0 and counts["multi_line"] == 0, report[
+        "bad"
+    ]
 
 
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> list[Path]:
     root = tmp_path_factory.mktemp("sweep-logs")
     subprocess.run(
-        [loops_cli, "synth", root, "--count", "4", "--duration-s", "900"], check=True, capture_output=True
+        [loops_cli, "synth", root, "--count", "4", "--duration-s", "900"],
+        check=True,
+        capture_output=True,
     )
     found = sorted(root.glob("*.mcap"))
     assert len(found) == 4
@@ -160,8 +164,21 @@ def logs(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> list[Path
 
 
 def run_args(loops_cli: Path, logs: list[Path], out: Path, *extra: str) -> list[str]:
-    return [str(loops_cli), "run", *map(str, logs), "--gamma", "40", "--budget", "200", "--seed", "3",
-            "--out", str(out), "--quiet", *extra]
+    return [
+        str(loops_cli),
+        "run",
+        *map(str, logs),
+        "--gamma",
+        "40",
+        "--budget",
+        "200",
+        "--seed",
+        "3",
+        "--out",
+        str(out),
+        "--quiet",
+        *extra,
+    ]
 
 
 def complete_results(out: Path, logs: list[Path]) -> dict[str, bytes]:
@@ -169,14 +186,18 @@ def complete_results(out: Path, logs: list[Path]) -> dict[str, bytes]:
     Returns the per-log CSV files' contents."""
     contents = {}
     for folder in sorted(p for p in out.iterdir() if p.is_dir() and not p.name.startswith(".")):
-        assert {p.name for p in folder.iterdir()} == FILES, f"{folder}: {sorted(os.listdir(folder))}"
+        assert {p.name for p in folder.iterdir()} == FILES, (
+            f"{folder}: {sorted(os.listdir(folder))}"
+        )
         json.loads((folder / "summary.json").read_text())
         for name in ("components.csv", "samples.csv", "loop_duration.csv"):
             contents[f"{folder.name}/{name}"] = (folder / name).read_bytes()
     return contents
 
 
-def test_loops_run_killed_at_seeded_moments_loses_nothing(tmp_path: Path, loops_cli: Path, logs) -> None:
+def test_loops_run_killed_at_seeded_moments_loses_nothing(
+    tmp_path: Path, loops_cli: Path, logs
+) -> None:
     rng = random.Random(SEED)
     reference = tmp_path / "reference"
     start = time.monotonic()
@@ -196,19 +217,29 @@ def test_loops_run_killed_at_seeded_moments_loses_nothing(tmp_path: Path, loops_
         time.sleep(rng.uniform(0.0, full_s))
         child.send_signal(signal.SIGKILL)
         child.wait()
-        assert (out / "notes.txt").read_text() == "mine" and (out / ".hidden-notes").read_text() == "mine too"
+        assert (out / "notes.txt").read_text() == "mine" and (
+            out / ".hidden-notes"
+        ).read_text() == "mine too"
         partial = complete_results(out, logs)
         # What is there equals the uninterrupted run's, file for file.
         for name, data in partial.items():
             assert data == expected[name], name
         done = len(partial) // 3
-        kills["before_any_log" if done == 0 else "after_all" if done == len(logs) else "partial"] += 1
+        kills[
+            "before_any_log" if done == 0 else "after_all" if done == len(logs) else "partial"
+        ] += 1
         # The next run into the folder finishes, removes the leftovers and keeps the user's files.
-        again = subprocess.run(run_args(loops_cli, logs, out, "--force"), capture_output=True, text=True)
+        again = subprocess.run(
+            run_args(loops_cli, logs, out, "--force"), capture_output=True, text=True
+        )
         assert again.returncode == 0, again.stderr
         assert complete_results(out, logs) == expected
-        assert (out / "notes.txt").read_text() == "mine" and (out / ".hidden-notes").read_text() == "mine too"
-        leftovers = [p.name for p in out.iterdir() if p.name.startswith(".") and p.name != ".hidden-notes"]
+        assert (out / "notes.txt").read_text() == "mine" and (
+            out / ".hidden-notes"
+        ).read_text() == "mine too"
+        leftovers = [
+            p.name for p in out.iterdir() if p.name.startswith(".") and p.name != ".hidden-notes"
+        ]
         assert leftovers == [], leftovers
     print(f"{ROUNDS} kills over a {full_s:.1f} s run: {kills}")
 
@@ -216,7 +247,10 @@ def test_loops_run_killed_at_seeded_moments_loses_nothing(tmp_path: Path, loops_
 def test_runs_at_the_same_time(tmp_path: Path, loops_cli: Path, logs) -> None:
     # Into different folders: all finish, with the same results.
     outs = [tmp_path / f"apart-{k}" for k in range(3)]
-    children = [subprocess.Popen(run_args(loops_cli, logs, out), stderr=subprocess.PIPE, text=True) for out in outs]
+    children = [
+        subprocess.Popen(run_args(loops_cli, logs, out), stderr=subprocess.PIPE, text=True)
+        for out in outs
+    ]
     for child in children:
         _, err = child.communicate(timeout=600)
         assert child.returncode == 0, err
@@ -227,7 +261,9 @@ def test_runs_at_the_same_time(tmp_path: Path, loops_cli: Path, logs) -> None:
     # holds at the end is one whole run's results, never a mix.
     shared = tmp_path / "shared"
     children = [
-        subprocess.Popen(run_args(loops_cli, logs, shared, "--force"), stderr=subprocess.PIPE, text=True)
+        subprocess.Popen(
+            run_args(loops_cli, logs, shared, "--force"), stderr=subprocess.PIPE, text=True
+        )
         for _ in range(3)
     ]
     codes = []
