@@ -33,7 +33,8 @@
 //! build). With `LOOPS_FUZZ_SECONDS` set, each runs rounds of cases (the seed advancing each
 //! round) for that long and prints its figures; run one target at a time, in release:
 //! `LOOPS_FUZZ_SECONDS=1800 nice -n 19 cargo test --release -p loops-io --test attack_sweep mcap --
-//! --exact --nocapture`. The figures of the long runs are in `tests/FUZZ.md`.
+//! --exact --nocapture`; `LOOPS_FUZZ_FORMAT=tum` (kitti, euroc, tuc, g2o, csv, detections) limits
+//! the `text` target to one reader. The figures of the long runs are in `tests/FUZZ.md`.
 
 // The readers' errors (`IoError`) are returned as they are, through the measuring closures.
 #![allow(clippy::result_large_err)]
@@ -898,6 +899,11 @@ fn text() {
             records: Vec::new(),
         },
     ));
+    // `LOOPS_FUZZ_FORMAT=tum` (or kitti, euroc, tuc, g2o, csv, detections) sweeps one reader.
+    if let Ok(only) = std::env::var("LOOPS_FUZZ_FORMAT") {
+        bases.retain(|(format, _)| *format == only);
+        assert!(!bases.is_empty(), "LOOPS_FUZZ_FORMAT={only}: no such text format");
+    }
     sweep("text", 0x007E_4715, |rng, tally| {
         for _ in 0..3000 {
             let (format, base) = rng.pick(&bases);

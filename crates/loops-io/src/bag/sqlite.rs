@@ -149,6 +149,16 @@ pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Res
         let Some(id) = integer(0).filter(|&id| id >= 0) else {
             return Err(error(last_row, "a message row whose id is not a non-negative integer".to_owned()));
         };
+        // Ids are the table's rowid: a valid database gives them in increasing order. Out of order,
+        // its b-tree is corrupt, and SQLite's walk of it may pass over rows without a word.
+        if let Some(last) = last_row.filter(|&last| id <= last) {
+            return Err(error(
+                Some(id),
+                format!(
+                    "the messages table gives row {id} after row {last}: its b-tree is corrupt (rows out of order)"
+                ),
+            ));
+        }
         last_row = Some(id);
         let Some(topic_id) = integer(1) else {
             return Err(error(Some(id), "the message's topic_id is not an integer".to_owned()));
