@@ -64,6 +64,7 @@ mod manifold;
 mod measure;
 mod memory;
 mod metric;
+mod online;
 mod plane;
 mod pose;
 mod quality;
@@ -96,6 +97,10 @@ pub use manifold::{
 };
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric};
+pub use online::{
+    Candidate, Cap, ComponentId, Merge, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, RowRun,
+    Update,
+};
 pub use plane::{
     Border, PixelEdge, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments,
 };

@@ -261,6 +261,26 @@ impl Trajectory {
         }
     }
 
+    /// No pose yet, `dim` coordinates a point on `manifold`: the online engine's trajectory,
+    /// grown by [`push_pose`](Self::push_pose). Not a valid public trajectory before its second
+    /// pose.
+    pub(crate) fn growing(dim: usize, manifold: Manifold) -> Self {
+        Self { timestamps_s: Vec::new(), coords: Vec::new(), dim, cell_widths_s: Vec::new(), manifold }
+    }
+
+    /// Appends a pose already checked (time after the last, `dim` finite coordinates): the last
+    /// cell becomes whole and the new one is a half cell, as [`new`](Self::new) makes them.
+    pub(crate) fn push_pose(&mut self, t_s: f64, point: &[f64]) {
+        debug_assert_eq!(point.len(), self.dim);
+        self.timestamps_s.push(t_s);
+        self.coords.extend_from_slice(point);
+        let n = self.timestamps_s.len();
+        if n >= 2 {
+            self.cell_widths_s[n - 2] = cell_width(&self.timestamps_s, n - 2);
+        }
+        self.cell_widths_s.push(cell_width(&self.timestamps_s, n - 1));
+    }
+
     /// The same points, declared to lie on `manifold`: for the constructors of
     /// [`pose`](crate::Trajectory::se3), which lay the points out as the manifold's metrics expect.
     pub(crate) fn on(mut self, manifold: Manifold) -> Self {
@@ -443,14 +463,15 @@ pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> V
 /// Widths `(t_{i+1} − t_{i−1}) / 2` (half cells at the ends), from differences of neighbouring
 /// timestamps, which are exact even on an epoch clock (differences of midpoints are not).
 fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
+    (0..timestamps_s.len()).map(|i| cell_width(timestamps_s, i)).collect()
+}
+
+/// The width of cell `i` of [`cell_widths`] (a half cell when `i` is the last).
+pub(crate) fn cell_width(timestamps_s: &[f64], i: usize) -> f64 {
     let n = timestamps_s.len();
-    (0..n)
-        .map(|i| {
-            let before = if i == 0 { 0.0 } else { timestamps_s[i] - timestamps_s[i - 1] };
-            let after = if i + 1 == n { 0.0 } else { timestamps_s[i + 1] - timestamps_s[i] };
-            0.5 * (before + after)
-        })
-        .collect()
+    let before = if i == 0 { 0.0 } else { timestamps_s[i] - timestamps_s[i - 1] };
+    let after = if i + 1 == n { 0.0 } else { timestamps_s[i + 1] - timestamps_s[i] };
+    0.5 * (before + after)
 }
 
 /// What a serialised [`Trajectory`] holds. The time cells are kept, not derived again: a
