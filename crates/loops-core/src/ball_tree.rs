@@ -5,6 +5,11 @@
 //! pose. A row scan asks for the stretches that may hold a pose within `reach` of `x_i`; a ball
 //! with `δ(x_i, centre) − radius > reach` holds none (triangle inequality), and neither do its
 //! children. Only δ and the triangle inequality are used, so every [`Metric`] gets it.
+//!
+//! Built whole, it is one tree. Grown leaf by leaf ([`BallTree::push_leaf`], for the online
+//! engine), it is a forest of perfect binary trees like the digits of a binary counter: a new
+//! leaf joins the last tree when they are the same size, and so on up, so a pose costs O(1)
+//! amortised metric evaluations and the forest has at most log₂(n / leaf) + 1 trees.
 
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
@@ -21,8 +26,17 @@ struct Node {
     centre: u32,
     /// Upper bound of δ(centre, x_k) over the stretch.
     radius: f64,
-    /// Index of the left child (the right one follows it), or `LEAF`.
+    /// Index of the left child, or `LEAF`.
     left: u32,
+    /// Index of the right child (when `left` is not `LEAF`).
+    right: u32,
+}
+
+impl Node {
+    /// A node over poses `lo..hi` whose children are `left` and `left + 1`.
+    fn inner(lo: usize, hi: usize, centre: usize, radius: f64, left: usize) -> Self {
+        Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32, right: left as u32 + 1 }
+    }
 }
 
 /// A stretch of the path that a query could not rule out: poses `lo..hi` within `radius` of pose
@@ -56,6 +70,8 @@ pub(crate) struct BallTree {
     /// matters once the trajectory outgrows the caches.
     centres: Vec<f64>,
     dim: usize,
+    /// The roots of its trees, in pose order: one for a hierarchy built whole.
+    roots: Vec<u32>,
 }
 
 impl BallTree {
@@ -67,11 +83,61 @@ impl BallTree {
             nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size)),
             centres: Vec::new(),
             dim: traj.dim(),
+            roots: vec![0],
         };
-        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF });
+        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF });
         tree.build(0, 0, traj.len(), traj, metric, leaf_size.max(1));
         tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
         tree
+    }
+
+    /// An empty hierarchy over points of `dim` coordinates, to grow by
+    /// [`push_leaf`](Self::push_leaf).
+    pub(crate) fn growing(dim: usize) -> Self {
+        Self { nodes: Vec::new(), centres: Vec::new(), dim, roots: Vec::new() }
+    }
+
+    /// Poses `0..covered()` are in its trees (all of them for a hierarchy built whole).
+    pub(crate) fn covered(&self) -> usize {
+        self.roots.last().map_or(0, |&root| self.nodes[root as usize].hi as usize)
+    }
+
+    /// Adds the leaf of poses `covered()..hi` of `traj` (the poses after the last leaf) and joins
+    /// it with the last tree while the two are the same size, as a binary counter carries: the
+    /// joined node is the one [`new`](Self::new) builds over the same poses (centre at the middle
+    /// pose, radius bounded from the children's). O(1) metric evaluations amortised per pose.
+    pub(crate) fn push_leaf<M: Metric + ?Sized>(&mut self, traj: &Trajectory, metric: &M, hi: usize) {
+        let lo = self.covered();
+        debug_assert!(lo < hi && hi <= traj.len());
+        let centre = lo + (hi - lo) / 2;
+        let x_c = traj.point(centre);
+        let radius = (lo..hi).map(|k| metric.distance(x_c, traj.point(k))).fold(0.0, f64::max);
+        self.push_node(
+            traj,
+            Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF, right: LEAF },
+        );
+        while let [.., left, right] = self.roots[..] {
+            let (a, b) = (self.nodes[left as usize], self.nodes[right as usize]);
+            if a.hi - a.lo != b.hi - b.lo {
+                break;
+            }
+            let (lo, hi) = (a.lo as usize, b.hi as usize);
+            let centre = lo + (hi - lo) / 2;
+            let x_c = traj.point(centre);
+            let radius = [a, b]
+                .iter()
+                .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
+                .fold(0.0, f64::max);
+            self.roots.truncate(self.roots.len() - 2);
+            self.push_node(traj, Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left, right });
+        }
+    }
+
+    /// Appends `node` as the last root, with its centre's coordinates.
+    fn push_node(&mut self, traj: &Trajectory, node: Node) {
+        self.roots.push(self.nodes.len() as u32);
+        self.centres.extend_from_slice(traj.point(node.centre as usize));
+        self.nodes.push(node);
     }
 
     /// The hierarchy over a fleet's concatenated sessions (`starts`: the first pose of each
@@ -88,10 +154,11 @@ impl BallTree {
             nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size) + 2 * starts.len()),
             centres: Vec::new(),
             dim: traj.dim(),
+            roots: vec![0],
         };
         let mut bounds = starts.to_vec();
         bounds.push(traj.len());
-        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF });
+        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF });
         tree.build_sessions(0, &bounds, traj, metric, leaf_size.max(1));
         tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
         tree
@@ -124,7 +191,7 @@ impl BallTree {
             .iter()
             .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
             .fold(0.0, f64::max);
-        self.nodes[slot] = Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32 };
+        self.nodes[slot] = Node::inner(lo, hi, centre, radius, left);
     }
 
     /// The chunks a spatial index holds: the largest nodes that lie in one session (`starts` as
@@ -134,14 +201,14 @@ impl BallTree {
     pub(crate) fn chunks(&self, starts: &[usize], max_radius: f64) -> Vec<Chunk> {
         let session_of = |pose: u32| starts.partition_point(|&s| s <= pose as usize);
         let mut chunks = Vec::new();
-        let mut stack = vec![0_u32];
+        let mut stack: Vec<u32> = self.roots.iter().rev().copied().collect();
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
             let one_session = session_of(node.lo) == session_of(node.hi - 1);
             if node.left == LEAF || (one_session && node.radius <= max_radius) {
                 chunks.push(Chunk { node: index, hi: node.hi, centre: node.centre, radius: node.radius });
             } else {
-                stack.push(node.left + 1);
+                stack.push(node.right);
                 stack.push(node.left);
             }
         }
@@ -177,7 +244,8 @@ impl BallTree {
         let x_c = traj.point(centre);
         if hi - lo <= leaf_size {
             let radius = (lo..hi).map(|k| metric.distance(x_c, traj.point(k))).fold(0.0, f64::max);
-            self.nodes[slot] = Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF };
+            self.nodes[slot] =
+                Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF, right: LEAF };
             return;
         }
         let left = self.nodes.len();
@@ -191,7 +259,7 @@ impl BallTree {
             .iter()
             .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
             .fold(0.0, f64::max);
-        self.nodes[slot] = Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32 };
+        self.nodes[slot] = Node::inner(lo, hi, centre, radius, left);
     }
 
     /// The stretches, in increasing order, that end after `from` and whose ball reaches within
@@ -233,7 +301,7 @@ impl BallTree {
         // (rank, distance, pose) of the best so far.
         let mut best = (f64::INFINITY, f64::INFINITY, lo);
         let mut stack: Vec<u32> = Vec::with_capacity(64);
-        stack.push(0);
+        stack.extend(self.roots.iter().rev());
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
             let (a, b) = ((node.lo as usize).max(lo), (node.hi as usize).min(hi + 1));
@@ -244,7 +312,7 @@ impl BallTree {
                 continue;
             }
             if node.left != LEAF {
-                stack.push(node.left + 1);
+                stack.push(node.right);
                 stack.push(node.left);
                 continue;
             }
@@ -253,8 +321,16 @@ impl BallTree {
             if rank < best.0 {
                 best = (rank, metric.distance(x, traj.point(k)), k);
                 if rank <= 0.0 {
-                    break;
+                    return k;
                 }
+            }
+        }
+        // A growing forest's last poses, not yet in a leaf, come last in index order.
+        let a = lo.max(self.covered());
+        if a <= hi {
+            let k = a + metric.closest_in(x, &traj.coords()[a * dim..(hi + 1) * dim]);
+            if metric.distance_rank(x, traj.point(k)) < best.0 {
+                return k;
             }
         }
         best.2
@@ -300,9 +376,11 @@ impl BallTree {
         x: &[f64],
         from: usize,
         reach: (f64, f64),
-        visit: impl FnMut(&Node, bool),
+        mut visit: impl FnMut(&Node, bool),
     ) {
-        self.walk_from(0, metric, x, from, reach, visit);
+        for &root in &self.roots {
+            self.walk_from(root, metric, x, from, reach, &mut visit);
+        }
     }
 
     /// [`walk`](Self::walk) of the subtree under `root`.
@@ -330,7 +408,7 @@ impl BallTree {
             if inside || node.left == LEAF {
                 visit(&node, inside);
             } else {
-                stack.push(node.left + 1);
+                stack.push(node.right);
                 stack.push(node.left);
             }
         }
@@ -366,6 +444,38 @@ mod tests {
                     let expected = lo + Euclidean.closest_in(x, &traj.coords()[2 * lo..2 * (hi + 1)]);
                     let found = tree.closest_in_range(&Euclidean, &traj, x, (lo, hi), 1e-12);
                     assert_eq!(found, expected, "seed {seed}, range {lo}..={hi}, x {x:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_growing_forest_answers_as_the_linear_scan() {
+        let traj = tied_trajectory(1000, 3);
+        let mut forest = BallTree::growing(2);
+        let mut spans = Vec::new();
+        for n in 1..=traj.len() {
+            if n - forest.covered() == 16 {
+                forest.push_leaf(&traj, &Euclidean, n);
+            }
+            // A binary counter: at most one tree per size, largest first.
+            let sizes: Vec<u32> =
+                forest.roots.iter().map(|&r| forest.nodes[r as usize].hi - forest.nodes[r as usize].lo).collect();
+            assert!(sizes.windows(2).all(|w| w[0] > w[1]), "{sizes:?}");
+            assert_eq!(sizes.iter().sum::<u32>() as usize, forest.covered());
+            if n % 61 != 0 {
+                continue;
+            }
+            let x = traj.point((n * 7) % traj.len());
+            let (lo, hi) = (n / 5, n - 1);
+            let expected = lo + Euclidean.closest_in(x, &traj.coords()[2 * lo..2 * n]);
+            assert_eq!(forest.closest_in_range(&Euclidean, &traj, x, (lo, hi), 1e-12), expected, "{n} poses");
+            forest.near_spans(&Euclidean, x, 0, (1.0, 0.5), &mut spans);
+            for k in 0..forest.covered() {
+                match spans.iter().find(|s| (s.lo as usize..s.hi as usize).contains(&k)) {
+                    Some(span) if span.inside => assert!(Euclidean.distance(x, traj.point(k)) <= 0.5),
+                    Some(_) => {}
+                    None => assert!(Euclidean.distance(x, traj.point(k)) > 1.0, "pose {k} pruned but near"),
                 }
             }
         }

@@ -81,7 +81,7 @@ const ROWS_PER_TASK: usize = 32;
 const BLOCKS_PER_BATCH: usize = 1024;
 
 /// Poses per leaf of the far-field ball hierarchy.
-const LEAF_SIZE: usize = 16;
+pub(crate) const LEAF_SIZE: usize = 16;
 
 impl SublevelSet {
     /// Computes S_γ by arc-length skipping (DESIGN §4.1) within the stretches of the path that a
@@ -207,6 +207,13 @@ impl SublevelSet {
         set.runs.shrink_to_fit();
         set.closest.shrink_to_fit();
         Ok(set)
+    }
+
+    /// The set of one trajectory (no sessions) from its rows: `row_offsets` (rows + 1 of them,
+    /// from 0), the runs and their closest columns, as [`compute`](Self::compute) leaves them.
+    pub(crate) fn from_rows(gamma: f64, row_offsets: Vec<usize>, runs: Vec<Run>, closest: Vec<u32>) -> Self {
+        debug_assert!(row_offsets.last() == Some(&runs.len()) && closest.len() == runs.len());
+        Self { gamma, separation: Separation::NONE, row_offsets, runs, closest, breaks: Vec::new() }
     }
 
     /// Appends the rows of scanned blocks, in order, growing the result fallibly.
@@ -351,10 +358,11 @@ impl SublevelSet {
     }
 }
 
+/// The runs of scanned rows, with their closest columns.
 #[derive(Default)]
-struct Block {
-    runs: Vec<Run>,
-    closest: Vec<u32>,
+pub(crate) struct Block {
+    pub(crate) runs: Vec<Run>,
+    pub(crate) closest: Vec<u32>,
     row_lengths: Vec<usize>,
 }
 
@@ -389,11 +397,13 @@ pub fn path_length<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Vec<f64
 }
 
 /// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
+#[derive(Debug, Clone, Default)]
 pub(crate) struct ArcLength {
     s: Vec<f64>,
-    margin: f64,
+    pub(crate) margin: f64,
     /// The plain sums ([`path_length`]) when asked for, from the same steps; else empty.
     pub(crate) plain: Vec<f64>,
+    largest_step: f64,
 }
 
 impl ArcLength {
@@ -420,10 +430,26 @@ impl ArcLength {
                 plain.push(plain_total);
             }
         }
-        // Rounding of δ (relative to the metric's scale: coordinates, or the radius an angle is
-        // multiplied by) and of differences of s: 64 ulps of the largest magnitude in play.
-        let margin = 64.0 * f64::EPSILON * (total + largest_step + scale + 1.0);
-        Self { s, margin, plain }
+        let margin = rounding_margin(total, largest_step, scale);
+        Self { s, margin, plain, largest_step }
+    }
+
+    /// Appends a pose `step` = δ(x_{k−1}, x_k) after the last (the step of the first pose is
+    /// ignored), with the plain sums, as [`new`](Self::new) sums them; `scale` is the metric's
+    /// rounding scale of the poses so far. For the online engine.
+    pub(crate) fn push(&mut self, step: f64, scale: f64) {
+        match (self.s.last(), self.plain.last()) {
+            (Some(&total), Some(&plain_total)) => {
+                self.largest_step = self.largest_step.max(step);
+                self.s.push((total + step).next_up());
+                self.plain.push(plain_total + step);
+            }
+            _ => {
+                self.s.push(0.0);
+                self.plain.push(0.0);
+            }
+        }
+        self.margin = rounding_margin(self.s[self.s.len() - 1], self.largest_step, scale);
     }
 
     /// Largest k ≥ j with s_k ≤ s_j + budget (k = j when the budget is below zero).
@@ -467,6 +493,12 @@ impl ArcLength {
     }
 }
 
+/// Rounding of δ (relative to the metric's scale: coordinates, or the radius an angle is
+/// multiplied by) and of differences of s: 64 ulps of the largest magnitude in play.
+fn rounding_margin(total: f64, largest_step: f64, scale: f64) -> f64 {
+    64.0 * f64::EPSILON * (total + largest_step + scale + 1.0)
+}
+
 /// Where a row scan finds the stretches of the path that may come within γ.
 #[derive(Clone, Copy)]
 pub(crate) enum Pruner<'a> {
@@ -476,23 +508,32 @@ pub(crate) enum Pruner<'a> {
     Chunks(&'a BallTree, &'a ChunkIndex),
 }
 
-struct RowScanner<'a, M: ?Sized> {
-    traj: &'a Trajectory,
-    metric: &'a M,
-    arc: &'a ArcLength,
-    pruner: Pruner<'a>,
-    gamma: f64,
-    /// The first column each row keeps ([`Separation::first_columns`]).
-    first_columns: &'a [u32],
+/// Scans rows of S_γ: the batch's rows i (columns j ≥ i), or the online engine's rows n
+/// (columns j ≤ n, under the metric with its arguments swapped so that δ is measured as the
+/// batch measures it).
+pub(crate) struct RowScanner<'a, M: ?Sized> {
+    pub(crate) traj: &'a Trajectory,
+    pub(crate) metric: &'a M,
+    pub(crate) arc: &'a ArcLength,
+    pub(crate) pruner: Pruner<'a>,
+    pub(crate) gamma: f64,
+    /// The first column each row keeps ([`Separation::first_columns`]); rows past its end (the
+    /// online engine's) start at column 0.
+    pub(crate) first_columns: &'a [u32],
     /// The first pose of each session (`[0]` for one trajectory): runs are cut there.
-    starts: &'a [usize],
+    pub(crate) starts: &'a [usize],
 }
 
 impl<M: Metric + ?Sized> RowScanner<'_, M> {
+    /// The first column row `i` keeps.
+    fn first_column(&self, i: usize) -> usize {
+        self.first_columns.get(i).map_or(0, |&c| c as usize)
+    }
+
     /// The stretches of the path that may hold a pose within γ of any row in `rows`: one walk of
     /// the hierarchy per block with the block's own bounding ball, instead of one per row.
     /// Stretches that lie within γ of every row of the block come whole, marked `inside`.
-    fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) {
+    pub(crate) fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) {
         let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
         let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
         let margin = self.arc.margin;
@@ -500,20 +541,20 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         // rounding of the three distances of the triangle inequality.
         let reach = (self.gamma + radius + 2.0 * margin, self.gamma - radius - 3.0 * margin);
         // The first columns grow with the row, so the block's first row has the smallest.
-        let from = self.first_columns[rows.start] as usize;
+        let from = self.first_column(rows.start);
         match self.pruner {
             Pruner::Hierarchy(balls) => balls.near_spans(self.metric, centre, from, reach, out),
             Pruner::Chunks(balls, index) => index.near_spans(balls, self.metric, centre, from, reach, out),
         }
     }
 
-    fn scan_row(&self, i: usize, candidates: &[Leaf], out: &mut Block) {
+    pub(crate) fn scan_row(&self, i: usize, candidates: &[Leaf], out: &mut Block) {
         let x_i = self.traj.point(i);
         let margin = self.arc.margin;
         let reach = self.gamma + margin;
         let mut open: Option<(usize, usize)> = None;
         // Next column to examine; columns before it are decided (or not separated from i).
-        let first = self.first_columns[i] as usize;
+        let first = self.first_column(i);
         let mut j = first;
         let mut next = 0;
         while next < candidates.len() {
@@ -598,16 +639,30 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         let balls = match self.pruner {
             Pruner::Hierarchy(balls) | Pruner::Chunks(balls, _) => balls,
         };
-        let column = if a == i {
-            i
-        } else if b - a + 1 >= TREE_CLOSEST_LEN {
-            balls.closest_in_range(self.metric, self.traj, self.traj.point(i), (a, b), 2.0 * self.arc.margin)
-        } else {
-            let dim = self.traj.dim();
-            a + self.metric.closest_in(self.traj.point(i), &self.traj.coords()[a * dim..(b + 1) * dim])
-        };
+        let column = closest_column(self.metric, self.traj, balls, self.arc.margin, i, (a, b));
         runs.push(Run { start: a as u32, end: b as u32 });
         closest.push(column as u32);
+    }
+}
+
+/// The closest column of the run `a..=b` of row `i`: `i` itself when the run starts on the
+/// diagonal, else the argmin of the metric's rank from pose `i` over the run (the earliest on
+/// ties), by the ball hierarchy for long runs and one pass over the cells for short ones.
+pub(crate) fn closest_column<M: Metric + ?Sized>(
+    metric: &M,
+    traj: &Trajectory,
+    balls: &BallTree,
+    margin: f64,
+    i: usize,
+    (a, b): (usize, usize),
+) -> usize {
+    if a == i {
+        i
+    } else if b - a + 1 >= TREE_CLOSEST_LEN {
+        balls.closest_in_range(metric, traj, traj.point(i), (a, b), 2.0 * margin)
+    } else {
+        let dim = traj.dim();
+        a + metric.closest_in(traj.point(i), &traj.coords()[a * dim..(b + 1) * dim])
     }
 }
 
