@@ -727,6 +727,16 @@ impl OnlineLoops {
         (self.len() >= 2).then_some(&self.traj)
     }
 
+    /// The poses so far, even fewer than two.
+    pub(crate) fn poses(&self) -> &Trajectory {
+        &self.traj
+    }
+
+    /// The path length of every pose so far, as [`path_length`](crate::path_length) sums it.
+    pub(crate) fn path_length(&self) -> &[f64] {
+        &self.arc.plain
+    }
+
     /// How many times the engine was [rebuilt](Self::rebuild) or [cleared](Self::clear): ids of
     /// an earlier count mean nothing now.
     pub fn rebuild_count(&self) -> u64 {

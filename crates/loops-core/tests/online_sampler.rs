@@ -1,0 +1,340 @@
+//! The online sampler (issue 19): the same candidates whether poses come one at a time or in
+//! batches; every candidate a pair of its component within γ; P1 online (a component's first
+//! candidate in the first row where it has a pair to offer); the cap and the separation hold;
+//! σ_ρ's rate and uniformity, by counts against their expectations with fixed seeds.
+
+mod support;
+
+use loops_core::{
+    Candidate, Cap, ComponentId, Euclidean, MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation,
+    Trajectory, Update, UrbanDrive, path_length,
+};
+use proptest::prelude::*;
+use support::{any_case, config};
+
+/// Pushes `traj` in chunks of the sizes in `chunks` (cycled), offering every update.
+fn run(
+    traj: &Trajectory,
+    gamma: f64,
+    options: OnlineSamplerOptions,
+    chunks: &[usize],
+) -> (OnlineLoops, Vec<Candidate>, Vec<Update>) {
+    let dim = traj.dim();
+    let mut online = OnlineLoops::new(MetricSpec::Euclidean, dim, gamma).unwrap();
+    let mut sampler = OnlineSampler::new(options).unwrap();
+    let (mut candidates, mut updates) = (Vec::new(), Vec::new());
+    let mut pushed = 0;
+    for &size in chunks.iter().cycle() {
+        if pushed == traj.len() {
+            break;
+        }
+        let end = (pushed + size.max(1)).min(traj.len());
+        let update =
+            online.push_many(&traj.timestamps_s()[pushed..end], &traj.coords()[pushed * dim..end * dim]).unwrap();
+        candidates.extend(sampler.offer(&online, &update));
+        updates.push(update);
+        pushed = end;
+    }
+    (online, candidates, updates)
+}
+
+fn drive(duration_s: f64, seed: u64) -> Trajectory {
+    UrbanDrive { duration_s, seed, ..UrbanDrive::default() }.generate().unwrap().trajectory
+}
+
+/// The pairs (j, n) a row offers, by component (as of the row): `(row, component, runs of the
+/// kept columns)`, from single-pose updates, with the separation measured independently.
+fn offers(traj: &Trajectory, updates: &[Update], separation: Separation) -> Vec<(usize, ComponentId, Vec<[usize; 2]>)> {
+    let s = path_length(traj, &Euclidean);
+    let t = traj.timestamps_s();
+    let mut out: Vec<(usize, ComponentId, Vec<[usize; 2]>)> = Vec::new();
+    for run in updates.iter().flat_map(|u| &u.runs) {
+        let n = run.row;
+        let kept: Vec<usize> = (run.run.start as usize..=run.run.end as usize)
+            .filter(|&j| j < n && s[n] - s[j] >= separation.path && t[n] - t[j] >= separation.time_s)
+            .collect();
+        let Some((&a, &b)) = kept.first().zip(kept.last()) else { continue };
+        match out.iter_mut().find(|(row, c, _)| *row == n && *c == run.component) {
+            Some((_, _, spans)) => spans.push([a, b]),
+            None => out.push((n, run.component, vec![[a, b]])),
+        }
+    }
+    // By row, then component: the order of the candidates.
+    out.sort_by_key(|&(n, c, _)| (n, c));
+    out
+}
+
+fn options_strategy() -> impl Strategy<Value = OnlineSamplerOptions> {
+    (
+        prop_oneof![Just(0.0), 0.0..3.0f64, Just(1.0)],
+        prop_oneof![Just(Cap::None), (0.5..30.0f64).prop_map(Cap::PerMinute), (0.01..2.0f64).prop_map(Cap::PerMetre)],
+        any::<bool>(),
+        prop_oneof![
+            Just(Separation::NONE),
+            (0.0..4.0f64, 0.0..3.0f64).prop_map(|(p, t)| Separation { path: p, time_s: t })
+        ],
+        any::<u64>(),
+    )
+        .prop_map(|(rate, cap, first_on_appearance, separation, seed)| OnlineSamplerOptions {
+            rate,
+            cap,
+            first_on_appearance,
+            separation,
+            seed,
+        })
+}
+
+/// Candidates by emitted component, in order.
+fn by_component(candidates: &[Candidate]) -> std::collections::BTreeMap<ComponentId, Vec<&Candidate>> {
+    let mut map: std::collections::BTreeMap<ComponentId, Vec<&Candidate>> = Default::default();
+    for c in candidates {
+        map.entry(c.component).or_default().push(c);
+    }
+    map
+}
+
+/// Every candidate's pair is within γ, in a run of its row with its component, kept by the
+/// separation; the cap's bucket bound holds for every component; P1 online holds.
+fn check_candidates(
+    traj: &Trajectory,
+    gamma: f64,
+    options: &OnlineSamplerOptions,
+    candidates: &[Candidate],
+    updates: &[Update],
+) -> Result<(), TestCaseError> {
+    let s = path_length(traj, &Euclidean);
+    let t = traj.timestamps_s();
+    let offered = offers(traj, updates, options.separation);
+    for c in candidates {
+        let [j, n] = c.pair;
+        prop_assert!(j < n && n == c.keyframe);
+        prop_assert_eq!(c.distance, MetricSpec::Euclidean.distance(traj.point(j), traj.point(n)));
+        prop_assert!(c.distance <= gamma);
+        let spans = offered.iter().find(|(row, id, _)| *row == n && *id == c.component);
+        prop_assert!(spans.is_some_and(|(_, _, spans)| spans.iter().any(|&[a, b]| (a..=b).contains(&j))), "{:?}", c);
+        prop_assert!(s[n] - s[j] >= options.separation.path && t[n] - t[j] >= options.separation.time_s);
+    }
+    // Pairs are distinct within a (keyframe, component).
+    let mut keys: Vec<(usize, ComponentId, usize)> =
+        candidates.iter().map(|c| (c.keyframe, c.component, c.pair[0])).collect();
+    keys.sort_unstable();
+    prop_assert!(keys.windows(2).all(|w| w[0] != w[1]));
+    // The cap: a token bucket of max(1, c) refilled at c per unit, per component.
+    let bound = match options.cap {
+        Cap::None => None,
+        Cap::PerMinute(c) => Some((c, 60.0, false)),
+        Cap::PerMetre(c) => Some((c, 1.0, true)),
+    };
+    if let Some((c, unit, by_path)) = bound {
+        let clock = |n: usize| if by_path { s[n] } else { t[n] };
+        for list in by_component(candidates).values() {
+            for k in 0..list.len() {
+                for l in k..list.len() {
+                    let allowed = c.max(1.0) + c * (clock(list[l].keyframe) - clock(list[k].keyframe)) / unit;
+                    prop_assert!(
+                        (l - k + 1) as f64 <= allowed + 1e-9,
+                        "cap broken: {} candidates in {:?}",
+                        l - k + 1,
+                        list
+                    );
+                }
+            }
+        }
+    }
+    // P1 online: the first row where a component (with all merged into it) offers a pair gives
+    // it a `first` candidate, its closest offered pair; no other row does.
+    let mut lineage: Vec<u32> = Vec::new();
+    let mut served: Vec<bool> = Vec::new();
+    fn root(lineage: &mut [u32], mut id: u32) -> u32 {
+        while lineage[id as usize] != id {
+            id = lineage[id as usize];
+        }
+        id
+    }
+    let mut merges = updates.iter().flat_map(|u| &u.merged).peekable();
+    let mut k = 0;
+    for (n, id, spans) in &offered {
+        let grow = |lineage: &mut Vec<u32>, served: &mut Vec<bool>, id: u32| {
+            while lineage.len() <= id as usize {
+                lineage.push(lineage.len() as u32);
+                served.push(false);
+            }
+        };
+        grow(&mut lineage, &mut served, *id);
+        while let Some(m) = merges.next_if(|m| m.pose <= *n) {
+            grow(&mut lineage, &mut served, m.retired);
+            let (a, b) = (root(&mut lineage, m.retired), root(&mut lineage, m.survivor));
+            lineage[a as usize] = b;
+            served[b as usize] |= served[a as usize];
+        }
+        while k < candidates.len() && (candidates[k].keyframe, candidates[k].component) < (*n, *id) {
+            k += 1;
+        }
+        let here: Vec<&Candidate> =
+            candidates[k..].iter().take_while(|c| (c.keyframe, c.component) == (*n, *id)).collect();
+        let r = root(&mut lineage, *id);
+        let firsts: Vec<&&Candidate> = here.iter().filter(|c| c.first).collect();
+        if options.first_on_appearance && !served[r as usize] {
+            prop_assert_eq!(firsts.len(), 1, "row {} component {}: no first candidate", n, id);
+            // The closest offered pair (earliest on ties).
+            let rank = |j: usize| MetricSpec::Euclidean.distance(traj.point(j), traj.point(*n));
+            let best = spans.iter().flat_map(|&[a, b]| a..=b).min_by(|&x, &y| rank(x).total_cmp(&rank(y))).unwrap();
+            prop_assert_eq!(rank(firsts[0].pair[0]), rank(best));
+        } else {
+            prop_assert!(firsts.is_empty(), "row {} component {}: a second first", n, id);
+        }
+        served[r as usize] |= !here.is_empty();
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(config(96, 0x0419_0002))]
+
+    #[test]
+    fn batches_give_the_same_candidates_and_every_rule_holds(
+        case in any_case(160),
+        options in options_strategy(),
+        chunks in prop::collection::vec(1..30usize, 1..6),
+    ) {
+        let (_, single, updates) = run(&case.traj, case.gamma, options, &[1]);
+        let (_, batched, _) = run(&case.traj, case.gamma, options, &chunks);
+        prop_assert_eq!(&single, &batched);
+        check_candidates(&case.traj, case.gamma, &options, &single, &updates)?;
+    }
+}
+
+#[test]
+fn the_urban_drive_with_every_rule() {
+    let traj = drive(1200.0, 5);
+    let gamma = 20.0;
+    for options in [
+        OnlineSamplerOptions { rate: 0.2, ..OnlineSamplerOptions::default() },
+        OnlineSamplerOptions {
+            rate: 2.0,
+            cap: Cap::PerMinute(3.0),
+            separation: Separation::for_gamma(gamma),
+            seed: 9,
+            ..OnlineSamplerOptions::default()
+        },
+        OnlineSamplerOptions {
+            rate: 1.0,
+            cap: Cap::PerMetre(0.05),
+            separation: Separation::time_s(30.0),
+            seed: 4,
+            ..OnlineSamplerOptions::default()
+        },
+    ] {
+        let (online, single, updates) = run(&traj, gamma, options, &[1]);
+        let (_, batched, _) = run(&traj, gamma, options, &[1, 10, 100]);
+        assert_eq!(single, batched);
+        check_candidates(&traj, gamma, &options, &single, &updates).unwrap();
+        // P1 on the final components: every component that offers a pair has a candidate.
+        let loops = online.to_loops().unwrap();
+        let offered = offers(&traj, &updates, options.separation);
+        let mut covered = vec![false; loops.components().len()];
+        for c in &single {
+            covered[loops.component_of(c.pair[0], c.pair[1]).unwrap()] = true;
+        }
+        for (n, _, spans) in &offered {
+            let k = loops.component_of(spans[0][0], *n).unwrap();
+            assert!(covered[k], "component {k} offers pairs but has no candidate");
+        }
+        // The cap binds: fewer candidates than the rate alone would give.
+        if options.cap != Cap::None {
+            let uncapped = run(&traj, gamma, OnlineSamplerOptions { cap: Cap::None, ..options }, &[50]).1;
+            assert!(single.len() * 2 < uncapped.len(), "{} capped, {} not", single.len(), uncapped.len());
+        }
+    }
+}
+
+/// σ_ρ's counts and uniformity against their expectations: per (row, component) offering m
+/// pairs, min(K, m) distinct draws with K = ⌊r⌋ + Bernoulli(r − ⌊r⌋), uniform over the m pairs.
+#[test]
+fn the_rate_and_the_spread_are_sigma_rho() {
+    let traj = drive(1800.0, 11);
+    let gamma = 30.0;
+    for rate in [0.37, 2.5] {
+        let options =
+            OnlineSamplerOptions { rate, first_on_appearance: false, seed: 2, ..OnlineSamplerOptions::default() };
+        let (_, candidates, updates) = run(&traj, gamma, options, &[1]);
+        let offered = offers(&traj, &updates, Separation::NONE);
+        let (low, p) = (rate.floor(), rate.fract());
+        let (mut expected, mut variance) = (0.0, 0.0);
+        let mut bins_expected = [0.0; 10];
+        let mut bins_found = [0.0; 10];
+        let mut k = 0;
+        for (n, id, spans) in &offered {
+            let m: usize = spans.iter().map(|[a, b]| b - a + 1).sum();
+            let (a, b) = ((low as usize).min(m) as f64, ((low as usize) + 1).min(m) as f64);
+            let mean = (1.0 - p) * a + p * b;
+            expected += mean;
+            variance += (1.0 - p) * a * a + p * b * b - mean * mean;
+            while k < candidates.len() && (candidates[k].keyframe, candidates[k].component) < (*n, *id) {
+                k += 1;
+            }
+            if m >= 10 {
+                // Each pair is drawn with probability mean / m; bins by its place among the m.
+                let place = |j: usize| {
+                    let mut before = 0;
+                    for &[a, b] in spans {
+                        if j <= b {
+                            return before + j - a;
+                        }
+                        before += b - a + 1;
+                    }
+                    unreachable!()
+                };
+                for q in 0..m {
+                    bins_expected[10 * q / m] += mean / m as f64;
+                }
+                for c in candidates[k..].iter().take_while(|c| (c.keyframe, c.component) == (*n, *id)) {
+                    bins_found[10 * place(c.pair[0]) / m] += 1.0;
+                }
+            }
+        }
+        let z = (candidates.len() as f64 - expected) / variance.sqrt();
+        let chi2: f64 = bins_found.iter().zip(&bins_expected).map(|(f, e)| (f - e) * (f - e) / e).sum();
+        eprintln!(
+            "rate {rate}: {} candidates, {expected:.1} ± {:.1} expected (z = {z:.2}); χ² = {chi2:.1}",
+            candidates.len(),
+            variance.sqrt()
+        );
+        assert!(
+            z.abs() < 5.0,
+            "rate {rate}: {} candidates, {expected:.0} ± {:.0} expected",
+            candidates.len(),
+            variance.sqrt()
+        );
+        // Not vacuous: thousands of draws, a standard deviation under 2% of them.
+        assert!(expected > 3000.0 && variance.sqrt() < 0.02 * expected, "{expected} ± {}", variance.sqrt());
+        assert!(bins_expected.iter().all(|&e| e > 200.0), "{bins_expected:?}");
+        // The 99.9% point of χ² with 9 degrees of freedom.
+        assert!(chi2 < 27.88, "rate {rate}: χ² = {chi2:.1} over {bins_found:?} against {bins_expected:?}");
+    }
+}
+
+#[test]
+fn seeds_matter_and_a_rebuild_starts_the_sampler_again() {
+    let traj = drive(600.0, 2);
+    let options = OnlineSamplerOptions { rate: 0.5, ..OnlineSamplerOptions::default() };
+    let a = run(&traj, 20.0, options, &[1]).1;
+    let b = run(&traj, 20.0, OnlineSamplerOptions { seed: 1, ..options }, &[1]).1;
+    assert_ne!(a, b);
+    assert_eq!(a.iter().filter(|c| c.first).count(), b.iter().filter(|c| c.first).count());
+    // After a rebuild every component is new to the sampler: the next pose of each component
+    // that offers a pair gets a first candidate again.
+    let mut online = OnlineLoops::new(MetricSpec::Euclidean, 3, 20.0).unwrap();
+    let mut sampler = OnlineSampler::new(options).unwrap();
+    let half = traj.len() / 2;
+    let update = online.push_many(&traj.timestamps_s()[..half], &traj.coords()[..3 * half]).unwrap();
+    assert!(sampler.offer(&online, &update).iter().any(|c| c.first));
+    let part = Trajectory::new(traj.timestamps_s()[..half].to_vec(), traj.coords()[..3 * half].to_vec(), 3).unwrap();
+    online.rebuild(&part).unwrap();
+    let update = online.push(traj.timestamps_s()[half], traj.point(half)).unwrap();
+    let after = sampler.offer(&online, &update);
+    assert!(after.iter().any(|c| c.first), "{after:?}");
+    assert!(OnlineSampler::new(OnlineSamplerOptions { rate: -1.0, ..options }).is_err());
+    assert!(OnlineSampler::new(OnlineSamplerOptions { cap: Cap::PerMinute(0.0), ..options }).is_err());
+    assert!(OnlineSampler::new(OnlineSamplerOptions { separation: Separation::path(f64::NAN), ..options }).is_err());
+}
