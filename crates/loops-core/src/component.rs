@@ -53,19 +53,61 @@ pub(crate) struct Labelling {
     pub components: Vec<LoopComponent>,
 }
 
-#[derive(Debug, Clone, Default)]
-struct Tally {
-    trivial: bool,
-    runs: usize,
-    overlaps: u64,
-    pairs: u64,
-    area_s2: f64,
-    diagonal_cells: u64,
-    diagonal_links: u64,
-    diagonal_area_s2: f64,
-    rows: [usize; 2],
-    columns: [usize; 2],
-    closest: (f64, [usize; 2]),
+/// What a component's statistics are summed from, over the runs of its upper half (rows for the
+/// batch, columns for the online engine: the Euler number and everything else is the same).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Tally {
+    pub(crate) trivial: bool,
+    pub(crate) runs: usize,
+    /// Pairs of runs of consecutive rows (or columns) that share a column (or row).
+    pub(crate) overlaps: u64,
+    pub(crate) pairs: u64,
+    pub(crate) area_s2: f64,
+    pub(crate) diagonal_cells: u64,
+    /// Pairs (i, i), (i, i + 1) both in the component.
+    pub(crate) diagonal_links: u64,
+    pub(crate) diagonal_area_s2: f64,
+    pub(crate) rows: [usize; 2],
+    pub(crate) columns: [usize; 2],
+    /// The metric's rank of the closest pair, and the pair.
+    pub(crate) closest: (f64, [usize; 2]),
+}
+
+/// A component's area, pair count, Euler number and extents ([`Tally::fold`]).
+pub(crate) struct Folded {
+    pub(crate) area_s2: f64,
+    pub(crate) pair_count: u64,
+    pub(crate) euler: i64,
+    pub(crate) i_range: [usize; 2],
+    pub(crate) j_range: [usize; 2],
+}
+
+impl Tally {
+    /// The reported statistics from the upper half's tallies: a trivial component whole (the
+    /// half, its mirror, the diagonal counted once), another as its half.
+    pub(crate) fn fold(&self) -> Folded {
+        let euler_half = self.runs as i64 - self.overlaps as i64;
+        let folded = if self.trivial {
+            let extent = [self.rows[0], self.columns[1]];
+            Folded {
+                area_s2: 2.0 * self.area_s2 - self.diagonal_area_s2,
+                pair_count: 2 * self.pairs - self.diagonal_cells,
+                euler: 2 * euler_half - self.diagonal_cells as i64 + self.diagonal_links as i64,
+                i_range: extent,
+                j_range: extent,
+            }
+        } else {
+            Folded {
+                area_s2: self.area_s2,
+                pair_count: self.pairs,
+                euler: euler_half,
+                i_range: self.rows,
+                j_range: self.columns,
+            }
+        };
+        debug_assert!(folded.euler <= 1, "a connected set has Euler number ≤ 1");
+        folded
+    }
 }
 
 /// Labels the runs of `set` by union-find over 4-adjacent runs of consecutive rows (a
@@ -132,25 +174,16 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
 
     let mut components = try_with_capacity(tallies.len(), "the loop components")?;
     components.extend(tallies.into_iter().enumerate().map(|(id, t)| {
-        let euler_half = t.runs as i64 - t.overlaps as i64;
-        let (area_s2, pairs, euler, rows, columns) = if t.trivial {
-            // Whole: the half, its mirror, the diagonal counted once.
-            let euler = 2 * euler_half - t.diagonal_cells as i64 + t.diagonal_links as i64;
-            let extent = [t.rows[0], t.columns[1]];
-            (2.0 * t.area_s2 - t.diagonal_area_s2, 2 * t.pairs - t.diagonal_cells, euler, extent, extent)
-        } else {
-            (t.area_s2, t.pairs, euler_half, t.rows, t.columns)
-        };
-        debug_assert!(euler <= 1, "a connected set has Euler number ≤ 1");
+        let Folded { area_s2, pair_count, euler, i_range, j_range } = t.fold();
         LoopComponent {
             id,
             trivial: t.trivial,
             area_s2,
-            pair_count: pairs,
+            pair_count,
             run_count: t.runs,
             holes: (1 - euler) as u64,
-            i_range: rows,
-            j_range: columns,
+            i_range,
+            j_range,
             closest_pair: t.closest.1,
             closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
         }

@@ -14,6 +14,9 @@
 //!   with [`MetricSpec`]. Validated pose constructors: [`Trajectory::se3`] and friends, which
 //!   record their [`Manifold`] so that its metric measures them by default and no other does.
 //! - A seeded synthetic urban drive for demos and benchmarks: [`UrbanDrive`].
+//! - Online, while the robot drives: S_γ, its components and τ updated pose by pose at a cost
+//!   that follows the answer ([`OnlineLoops`], equal to the batch), and loop-closure candidates
+//!   per keyframe with σ_ρ, a cap, P1 online and the revisit separation ([`OnlineSampler`]).
 //!
 //! - Figures' data on the (t, t′) plane: the pairwise distance π_ξ on a grid of poses for any
 //!   metric, the component of every pixel, the outlines ∂Ω and isocontours: [`PlaneGrid`],
@@ -28,7 +31,8 @@
 //! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → `plane` (π_ξ and ∂Ω on a
 //! [`PlaneGrid`]) → `verdict` (where given pairs fall: [`Loops::pair_verdicts`]) → `draw` ([`SampleSize`],
 //! uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph, [`check_epsilon_s`]) →
-//! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `synth`,
+//! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `online`
+//! ([`OnlineLoops`] and [`OnlineSampler`], after `loops` and `draw`); `synth`,
 //! `ball_tree`, `union_find`, `memory` (fallible allocation of the big buffers) and
 //! `interrupt` ([`Interrupt`]) are helpers. Every public item is re-exported here.
 //!

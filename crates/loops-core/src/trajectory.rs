@@ -208,13 +208,7 @@ impl Trajectory {
             return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
         }
         validate_timestamps(&timestamps_s)?;
-        if let Some(k) = coords.iter().position(|c| !c.is_finite()) {
-            return Err(Error::NonFiniteCoordinate { index: k / dim, axis: k % dim, value: coords[k] });
-        }
-        if let Some(k) = coords.iter().position(|c| c.abs() > MAX_MAGNITUDE) {
-            let (index, axis, value) = (k / dim, k % dim, coords[k]);
-            return Err(Error::CoordinateTooLarge { index, axis, value, max: MAX_MAGNITUDE });
-        }
+        validate_coordinates(&coords, dim, 0)?;
         let cell_widths_s = cell_widths(&timestamps_s);
         Ok(Self { timestamps_s, coords, dim, cell_widths_s, manifold: Manifold::Euclidean })
     }
@@ -400,6 +394,19 @@ impl Trajectory {
         }
         Self::new(self.timestamps_s.clone(), coords, dim)
     }
+}
+
+/// Checks points of `dim` coordinates, the first being pose `first`: finite, within
+/// [`MAX_MAGNITUDE`].
+pub(crate) fn validate_coordinates(coords: &[f64], dim: usize, first: usize) -> Result<()> {
+    if let Some(k) = coords.iter().position(|c| !c.is_finite()) {
+        return Err(Error::NonFiniteCoordinate { index: first + k / dim, axis: k % dim, value: coords[k] });
+    }
+    if let Some(k) = coords.iter().position(|c| c.abs() > MAX_MAGNITUDE) {
+        let (index, axis, value) = (first + k / dim, k % dim, coords[k]);
+        return Err(Error::CoordinateTooLarge { index, axis, value, max: MAX_MAGNITUDE });
+    }
+    Ok(())
 }
 
 pub(crate) fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {

@@ -1,6 +1,7 @@
 //! [`OnlineLoops`]: the incremental engine.
 
 use crate::ball_tree::{BallTree, Leaf};
+use crate::component;
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::loops::Loops;
@@ -8,7 +9,7 @@ use crate::memory::{try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::{ArcLength, Block, LEAF_SIZE, Pruner, RowScanner, Run, SublevelSet, check_gamma, closest_column};
-use crate::trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Trajectory, validate_timestamps};
+use crate::trajectory::{MAX_POSES, Manifold, Trajectory, validate_coordinates, validate_timestamps};
 use crate::union_find::MinRootForest;
 
 /// A loop component's id in an [`OnlineLoops`]: ids are given in order of creation, from 0, and
@@ -142,27 +143,14 @@ pub struct OnlineComponent {
 /// column (the online rows) instead of by row.
 #[derive(Debug, Clone, PartialEq)]
 struct Tally {
-    /// Runs of the online rows (columns of the upper half), and the pairs of them in
-    /// consecutive rows that share a column: the Euler number of the upper half is their
-    /// difference, as the batch's from its rows.
-    column_runs: u64,
-    overlaps: u64,
-    pairs: u64,
-    /// Runs of the batch's rows: cells (i, n) whose left neighbour (i, n − 1) is not in the set.
+    /// Over the runs of the online rows (the columns of the upper half), whose Euler number is
+    /// the rows', and the cells of settled rows (the last row's area is pending: its time cell
+    /// is a half cell until the next pose).
+    half: component::Tally,
+    /// Runs of the batch's rows: cells (i, n) whose left neighbour (i, n − 1) is outside.
     row_runs: u64,
-    diagonal_cells: u64,
-    /// Pairs (i, i), (i, i + 1) both in it.
-    diagonal_links: u64,
-    /// First and last i, and j, of its cells (i ≤ j).
-    rows: [usize; 2],
-    columns: [usize; 2],
-    /// Σ w_i w_j over the cells of settled rows, and of the last row (its time cell a half cell).
-    area_s2: f64,
     pending_area_s2: f64,
-    diagonal_area_s2: f64,
     pending_diagonal_area_s2: f64,
-    /// The metric's rank of the closest pair.
-    closest_rank: f64,
 }
 
 impl OnlineComponent {
@@ -182,69 +170,56 @@ impl OnlineComponent {
             first_pose: n,
             last_pose: n,
             tally: Tally {
-                column_runs: 0,
-                overlaps: 0,
-                pairs: 0,
+                half: component::Tally {
+                    rows: [usize::MAX, 0],
+                    columns: [n, n],
+                    closest: (f64::INFINITY, [usize::MAX; 2]),
+                    ..component::Tally::default()
+                },
                 row_runs: 0,
-                diagonal_cells: 0,
-                diagonal_links: 0,
-                rows: [usize::MAX, 0],
-                columns: [n, n],
-                area_s2: 0.0,
                 pending_area_s2: 0.0,
-                diagonal_area_s2: 0.0,
                 pending_diagonal_area_s2: 0.0,
-                closest_rank: f64::INFINITY,
             },
         }
     }
 
     /// Adds the statistics of `other`, merged into this one.
     fn absorb(&mut self, other: &Self) {
-        let (t, o) = (&mut self.tally, &other.tally);
-        t.column_runs += o.column_runs;
+        let (t, o) = (&mut self.tally.half, &other.tally.half);
+        t.trivial |= o.trivial;
+        t.runs += o.runs;
         t.overlaps += o.overlaps;
         t.pairs += o.pairs;
-        t.row_runs += o.row_runs;
         t.diagonal_cells += o.diagonal_cells;
         t.diagonal_links += o.diagonal_links;
         t.rows = [t.rows[0].min(o.rows[0]), t.rows[1].max(o.rows[1])];
         t.columns = [t.columns[0].min(o.columns[0]), t.columns[1].max(o.columns[1])];
         t.area_s2 += o.area_s2;
-        t.pending_area_s2 += o.pending_area_s2;
         t.diagonal_area_s2 += o.diagonal_area_s2;
-        t.pending_diagonal_area_s2 += o.pending_diagonal_area_s2;
-        if (o.closest_rank, other.closest_pair) < (t.closest_rank, self.closest_pair) {
-            t.closest_rank = o.closest_rank;
-            self.closest_pair = other.closest_pair;
+        if o.closest < t.closest {
+            t.closest = o.closest;
             self.closest_distance = other.closest_distance;
         }
+        self.tally.row_runs += other.tally.row_runs;
+        self.tally.pending_area_s2 += other.tally.pending_area_s2;
+        self.tally.pending_diagonal_area_s2 += other.tally.pending_diagonal_area_s2;
         self.first_pose = self.first_pose.min(other.first_pose);
         self.last_pose = self.last_pose.max(other.last_pose);
     }
 
-    /// The reported statistics from the tallies, as the batch's labeller derives them: a
-    /// trivial component whole (its half, the mirror, the diagonal once), another as its half.
+    /// The reported statistics from the tallies, folded as the batch folds them.
     fn refresh(&mut self) {
-        let t = &self.tally;
-        let half_area_s2 = t.area_s2 + t.pending_area_s2;
-        let euler_half = t.column_runs as i64 - t.overlaps as i64;
-        self.trivial = t.diagonal_cells > 0;
-        let euler = if self.trivial {
-            let extent = [t.rows[0], t.columns[1]];
-            self.area_s2 = 2.0 * half_area_s2 - (t.diagonal_area_s2 + t.pending_diagonal_area_s2);
-            self.pair_count = 2 * t.pairs - t.diagonal_cells;
-            (self.i_range, self.j_range) = (extent, extent);
-            2 * euler_half - t.diagonal_cells as i64 + t.diagonal_links as i64
-        } else {
-            self.area_s2 = half_area_s2;
-            self.pair_count = t.pairs;
-            (self.i_range, self.j_range) = (t.rows, t.columns);
-            euler_half
-        };
-        debug_assert!(euler <= 1, "a connected set has Euler number ≤ 1");
-        self.holes = (1 - euler) as u64;
-        self.run_count = t.row_runs as usize;
+        let mut whole = self.tally.half.clone();
+        whole.area_s2 += self.tally.pending_area_s2;
+        whole.diagonal_area_s2 += self.tally.pending_diagonal_area_s2;
+        let folded = whole.fold();
+        self.trivial = whole.trivial;
+        self.area_s2 = folded.area_s2;
+        self.pair_count = folded.pair_count;
+        self.holes = (1 - folded.euler) as u64;
+        (self.i_range, self.j_range) = (folded.i_range, folded.j_range);
+        self.run_count = self.tally.row_runs as usize;
+        self.closest_pair = whole.closest.1;
     }
 }
 
@@ -389,13 +364,7 @@ impl OnlineLoops {
                 return Err(Error::TimestampsNotIncreasing { index: first, previous_s, value_s });
             }
         }
-        if let Some(k) = coords.iter().position(|c| !c.is_finite()) {
-            return Err(Error::NonFiniteCoordinate { index: first + k / dim, axis: k % dim, value: coords[k] });
-        }
-        if let Some(k) = coords.iter().position(|c| c.abs() > MAX_MAGNITUDE) {
-            let (index, axis, value) = (first + k / dim, k % dim, coords[k]);
-            return Err(Error::CoordinateTooLarge { index, axis, value, max: MAX_MAGNITUDE });
-        }
+        validate_coordinates(coords, dim, first)?;
         if poses == 0 {
             return Ok(());
         }
@@ -452,10 +421,10 @@ impl OnlineLoops {
             own_s += width_s;
             let id = self.find(self.run_components[k]);
             let tally = &mut self.components[id as usize].tally;
-            tally.area_s2 += w_r * width_s;
+            tally.half.area_s2 += w_r * width_s;
             tally.pending_area_s2 = 0.0;
             if b == r {
-                tally.diagonal_area_s2 += w_r * w_r;
+                tally.half.diagonal_area_s2 += w_r * w_r;
                 tally.pending_diagonal_area_s2 = 0.0;
             }
             if a < r {
@@ -549,21 +518,22 @@ impl OnlineLoops {
             let rank = metric.distance_rank(x_j, x_n);
             let component = &mut self.components[id as usize];
             let tally = &mut component.tally;
-            tally.column_runs += 1;
-            tally.overlaps += overlaps;
-            tally.pairs += run.len() as u64;
+            let half = &mut tally.half;
+            half.runs += 1;
+            half.overlaps += overlaps;
+            half.pairs += run.len() as u64;
+            half.rows = [half.rows[0].min(a), half.rows[1].max(b)];
+            half.columns[1] = n;
             tally.row_runs += run.len() as u64 - shared_cells;
-            tally.rows = [tally.rows[0].min(a), tally.rows[1].max(b)];
-            tally.columns[1] = n;
             tally.pending_area_s2 += w_n * width_s;
             if b == n {
-                tally.diagonal_cells += 1;
+                half.trivial = true;
+                half.diagonal_cells += 1;
                 tally.pending_diagonal_area_s2 = w_n * w_n;
             }
             // The smallest rank, then the earliest pair in the batch's row order.
-            if (rank, [j, n]) < (tally.closest_rank, component.closest_pair) {
-                tally.closest_rank = rank;
-                component.closest_pair = [j, n];
+            if (rank, [j, n]) < half.closest {
+                half.closest = (rank, [j, n]);
                 component.closest_distance = metric.distance(x_j, x_n);
             }
             component.last_pose = n;
@@ -579,7 +549,7 @@ impl OnlineLoops {
         let link = runs.iter().position(|r| diagonal_before && (r.start as usize..=r.end as usize).contains(&(n - 1)));
         if let Some(k) = link {
             let id = self.find(self.run_components[first_new + k]);
-            self.components[id as usize].tally.diagonal_links += 1;
+            self.components[id as usize].tally.half.diagonal_links += 1;
         }
         self.row_offsets.push(self.runs.len());
         self.own_tau_s[n] = own_s;
