@@ -2,7 +2,7 @@
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 
-.PHONY: demo test test-rust test-python python lint bench compare fmt stubs
+.PHONY: demo test test-rust test-cpp test-python python lint bench compare fmt stubs
 
 ## Build the CLI and run it on the built-in 2.1 h urban drive; then a batch over three
 ## synthetic MCAP logs, with reports in demo/results/index.html.
@@ -16,11 +16,26 @@ demo:
 
 ## Every test: Rust (unit, property, doc) and Python (pytest, doctests, stubs). The Python
 ## packages go in first: the Rust MCAP tests write their fixtures with the official Python writers.
-test: python test-rust test-python
+test: python test-rust test-cpp test-python
 
 test-rust:
 	cargo test --workspace --all-targets
 	cargo test --workspace --doc
+
+## The C ABI from C++: build the static library (crates/loops-capi), compile
+## examples/cpp/online_replay.cpp against it with the system compiler, and check that it prints
+## the candidates of the Python API (tests/python/test_capi.py, which runs the binary built here).
+ifeq ($(origin CXX),default)
+CXX := c++
+endif
+CARGO_TARGET_DIR ?= target
+ONLINE_REPLAY := $(CARGO_TARGET_DIR)/cpp/online_replay
+test-cpp: python
+	cargo build -p loops-capi
+	mkdir -p $(CARGO_TARGET_DIR)/cpp
+	$(CXX) -std=c++17 -O2 -Wall -Wextra -Werror -Icrates/loops-capi/include examples/cpp/online_replay.cpp \
+		$(CARGO_TARGET_DIR)/debug/libinexact_loops.a -lpthread -ldl -lm -o $(ONLINE_REPLAY)
+	ONLINE_REPLAY=$(ONLINE_REPLAY) $(PYTHON) -m pytest -q tests/python/test_capi.py
 
 ## Build and install the Python package (release build) with its test dependencies.
 python:

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, OnceLock, PoisonError};
 
 use anyhow::{Context, Result, bail};
+use loops_core::Interrupt;
 use loops_io::WriteError;
 
 /// Exit code after an interrupt (128 + SIGINT), as shells report it.
@@ -40,6 +41,28 @@ pub(crate) fn with_writes<R>(f: impl FnOnce(&mut Writes) -> R) -> R {
     f(&mut lock())
 }
 
+/// The computation Ctrl-C stops instead of exiting the process, if any (see
+/// [`stop_on_interrupt`]).
+static STOP: Mutex<Option<Interrupt>> = Mutex::new(None);
+
+/// While the returned guard lives, the first SIGINT/SIGTERM interrupts `stop` instead of
+/// exiting: a command that ends cleanly on its own when interrupted (`loops replay` prints
+/// its figures so far and exits with [`INTERRUPTED`]). A second one exits as usual.
+pub(crate) fn stop_on_interrupt(stop: Interrupt) -> StopGuard {
+    *STOP.lock().unwrap_or_else(PoisonError::into_inner) = Some(stop);
+    StopGuard(())
+}
+
+/// Ends [`stop_on_interrupt`] when dropped.
+#[derive(Debug)]
+pub(crate) struct StopGuard(());
+
+impl Drop for StopGuard {
+    fn drop(&mut self) {
+        *STOP.lock().unwrap_or_else(PoisonError::into_inner) = None;
+    }
+}
+
 /// Installs the SIGINT/SIGTERM handler, once per process: a second command run in the same
 /// process (the Python console script's) keeps the first handler.
 pub(crate) fn install() -> Result<()> {
@@ -48,6 +71,14 @@ pub(crate) fn install() -> Result<()> {
         return Ok(());
     }
     ctrlc::set_handler(|| {
+        // A computation that stops by itself (`loops replay`) is asked to, the first time.
+        let stop = STOP.lock().unwrap_or_else(PoisonError::into_inner).clone();
+        if let Some(stop) = stop
+            && !stop.is_interrupted()
+        {
+            stop.interrupt();
+            return;
+        }
         let writes = lock();
         let mut removed = 0;
         for dir in &writes.staged {

@@ -19,6 +19,7 @@ mod guard;
 mod info;
 mod out_dir;
 mod progress;
+mod replay;
 mod report;
 mod run;
 mod sample;
@@ -48,13 +49,15 @@ enum Command {
     Run(run::RunArgs),
     Fleet(fleet::FleetArgs),
     Synth(synth::SynthArgs),
+    Replay(replay::ReplayArgs),
 }
 
 /// Runs the `loops` command with `args` (the program name first, as [`std::env::args_os`]
 /// gives them) and returns its exit code: 0 on success, a closed stdout, `--help` or
 /// `--version`; 1 when `loops run` had a log fail (`loops fleet`: a session's folder); 2 on an
 /// error or a usage error; 130 when interrupted (SIGINT or SIGTERM, which exit the process at
-/// once after removing unfinished output). Nothing else leaves the process: clap's help,
+/// once after removing unfinished output; `loops replay` stops after its keyframe in progress,
+/// prints its figures and returns 130). Nothing else leaves the process: clap's help,
 /// version and usage errors are printed and returned as codes, and stdout is flushed before
 /// returning.
 ///
@@ -97,6 +100,7 @@ fn run(cli: Cli) -> Result<u8> {
         Command::Run(args) => return run::run(args),
         Command::Fleet(args) => return fleet::fleet(args),
         Command::Synth(args) => synth::synth(args),
+        Command::Replay(args) => return replay::replay(args),
     };
     done.map(|()| 0)
 }

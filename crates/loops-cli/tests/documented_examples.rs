@@ -131,7 +131,7 @@ fn the_fleet_example_runs_as_shown() {
 /// The lines after `Examples:` in `loops --help` and each command's `--help`.
 fn help_examples() -> Vec<Example> {
     let mut examples = Vec::new();
-    for command in ["", "components", "sample", "info", "demo", "run", "fleet", "synth"] {
+    for command in ["", "components", "sample", "info", "demo", "run", "fleet", "synth", "replay"] {
         let args: Vec<&str> = [command, "--help"].into_iter().filter(|a| !a.is_empty()).collect();
         let output = Command::new(env!("CARGO_BIN_EXE_loops")).args(&args).output().expect("loops runs");
         assert!(output.status.success());

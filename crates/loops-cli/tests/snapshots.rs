@@ -137,7 +137,7 @@ fn fleet() {
 #[test]
 fn help() {
     let dir = std::env::temp_dir();
-    for command in ["components", "sample", "info", "demo", "run", "fleet", "synth"] {
+    for command in ["components", "sample", "info", "demo", "run", "fleet", "synth", "replay"] {
         snapshot!(format!("help_{command}"), transcript(&dir, &[command, "--help"]));
     }
     snapshot!("help", transcript(&dir, &["--help"]));

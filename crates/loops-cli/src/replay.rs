@@ -1,0 +1,321 @@
+//! `loops replay`: a pose log fed to the online engine pose by pose, as a SLAM front end would
+//! feed it, streaming what the front end would get at each keyframe (one JSON line: its
+//! loop-closure candidates, the components created and merged, the time the push took) and
+//! printing latency figures at the end.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use loops_core::{Cap, Candidate, Interrupt, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Trajectory, Update};
+use serde::Serialize;
+
+use crate::args::{EngineArgs, InputArgs};
+use crate::guard;
+
+/// Replay a pose log through the online engine, pose by pose, as a SLAM front end would: one
+/// JSON line per keyframe on stdout (its loop-closure candidates, the components created and
+/// merged, the push's latency), latency figures on stderr at the end.
+#[derive(Debug, Args)]
+#[command(
+    allow_negative_numbers = true,
+    after_help = "Examples:\n  \
+    loops replay drive.tum --gamma 40 --rate 0.05 --cap-per-minute 2\n  \
+    loops replay drive.mcap --gamma 40 --every-s 1 | jq -c 'select(.candidates != [])'\n  \
+    loops replay kitti_odometry/00.txt --axes 0,2 --gamma 6 --rate 0.02 --quiet    # latency only\n\n\
+    Each line: {\"pose\": last pose pushed, \"t_s\", \"poses\": poses pushed at this keyframe,\n\
+    \"latency_us\": push + offer, \"loop_duration_s\": tau of the pose so far, \"candidates\":\n\
+    [{\"keyframe\", \"j\", \"component\", \"distance\", \"first\"}], \"created\": [ids],\n\
+    \"merged\": [{\"pose\", \"retired\", \"survivor\"}], \"extended_count\"}.\n\
+    Ctrl-C stops after the keyframe in progress and prints the figures so far (exit code 130)."
+)]
+pub(crate) struct ReplayArgs {
+    /// The pose log; several files are read as one trajectory (MCAP files merged by time,
+    /// others joined in time order).
+    #[arg(required = true, value_name = "LOG")]
+    files: Vec<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
+    #[command(flatten)]
+    engine: EngineArgs,
+    #[command(flatten)]
+    sampler: OnlineSamplerArgs,
+    /// A keyframe every this many seconds: the poses in between are pushed together with the
+    /// keyframe, in one batch (the candidates are the same) [default: 0, every pose is a
+    /// keyframe].
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true)]
+    every_s: Option<f64>,
+    /// No JSON lines: only the figures on stderr.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// The online sampler's flags, with the core's defaults.
+#[derive(Debug, Args)]
+struct OnlineSamplerArgs {
+    /// σ_ρ: the expected number of candidates per component per pose (0: only each component's
+    /// first candidate).
+    #[arg(long, default_value_t = OnlineSamplerOptions::default().rate, allow_hyphen_values = true)]
+    rate: f64,
+    /// At most this many candidates per minute per component (a token bucket).
+    #[arg(long, value_name = "COUNT", allow_hyphen_values = true, conflicts_with = "cap_per_metre")]
+    cap_per_minute: Option<f64>,
+    /// At most this many candidates per metre of travel (the metric's unit) per component.
+    #[arg(long, value_name = "COUNT", allow_hyphen_values = true)]
+    cap_per_metre: Option<f64>,
+    /// No candidate at a component's first appearance (P1 online): only the drawn ones.
+    #[arg(long)]
+    no_first: bool,
+    /// Seed of the random choices.
+    #[arg(long, default_value_t = OnlineSamplerOptions::default().seed)]
+    seed: u64,
+}
+
+impl OnlineSamplerArgs {
+    fn options(&self, separation: loops_core::Separation) -> OnlineSamplerOptions {
+        let cap = match (self.cap_per_minute, self.cap_per_metre) {
+            (Some(c), _) => Cap::PerMinute(c),
+            (None, Some(c)) => Cap::PerMetre(c),
+            (None, None) => Cap::None,
+        };
+        OnlineSamplerOptions { rate: self.rate, cap, first_on_appearance: !self.no_first, separation, seed: self.seed }
+    }
+}
+
+/// One keyframe's line.
+#[derive(Debug, Serialize)]
+struct KeyframeLine<'a> {
+    pose: usize,
+    t_s: f64,
+    poses: usize,
+    latency_us: f64,
+    loop_duration_s: f64,
+    candidates: Vec<CandidateJson>,
+    created: &'a [u32],
+    merged: Vec<MergeJson>,
+    extended_count: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct CandidateJson {
+    keyframe: usize,
+    j: usize,
+    component: u32,
+    distance: f64,
+    first: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct MergeJson {
+    pose: usize,
+    retired: u32,
+    survivor: u32,
+}
+
+impl KeyframeLine<'_> {
+    fn new<'a>(update: &'a Update, t_s: f64, latency: Duration, candidates: &[Candidate]) -> KeyframeLine<'a> {
+        KeyframeLine {
+            pose: update.pose,
+            t_s,
+            poses: update.pose + 1 - update.first_pose,
+            latency_us: latency.as_secs_f64() * 1e6,
+            loop_duration_s: update.loop_duration_s,
+            candidates: candidates
+                .iter()
+                .map(|c| CandidateJson {
+                    keyframe: c.keyframe,
+                    j: c.pair[0],
+                    component: c.component,
+                    distance: c.distance,
+                    first: c.first,
+                })
+                .collect(),
+            created: &update.created,
+            merged: update
+                .merged
+                .iter()
+                .map(|m| MergeJson { pose: m.pose, retired: m.retired, survivor: m.survivor })
+                .collect(),
+            extended_count: update.extended.len(),
+        }
+    }
+}
+
+/// The keyframes of `times` for a keyframe every `every_s` seconds: the last pose of each batch
+/// to push. The first pose is one; then the first pose at least `every_s` after the last
+/// keyframe; the last pose ends the last batch.
+fn keyframes(times: &[f64], every_s: f64) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut last: Option<f64> = None;
+    for (k, &t) in times.iter().enumerate() {
+        if last.is_none_or(|last| t - last >= every_s) {
+            out.push(k);
+            last = Some(t);
+        }
+    }
+    if let (Some(&end), Some(n)) = (out.last(), times.len().checked_sub(1))
+        && end != n
+    {
+        out.push(n);
+    }
+    out
+}
+
+pub(crate) fn replay(args: ReplayArgs) -> Result<u8> {
+    let spec = args.engine.spec()?;
+    loops_core::check_gamma(args.engine.gamma)?;
+    let every_s = args.every_s.unwrap_or(0.0);
+    if !(every_s.is_finite() && every_s >= 0.0) {
+        bail!("--every-s takes a finite number of seconds >= 0, got {every_s}");
+    }
+    let separation = args.engine.separation()?;
+    let mut sampler = OnlineSampler::new(args.sampler.options(separation))?;
+    let source = crate::args::source_name(&args.files);
+    let (_, traj) = args.input.read_table(&args.files, &spec)?;
+    let mut engine = OnlineLoops::new(spec, traj.dim(), args.engine.gamma)?;
+    let stop = Interrupt::new();
+    let _stop_guard = guard::stop_on_interrupt(stop.clone());
+    let figures = loops_core::with_threads(args.engine.threads, || {
+        run(&traj, &mut engine, &mut sampler, every_s, args.quiet, &stop)
+    })
+    .map_err(anyhow::Error::from)
+    .and_then(|replayed| replayed)
+    .with_context(|| format!("replaying {source}"))?;
+    figures.print(&source, &engine);
+    Ok(if figures.interrupted { guard::INTERRUPTED } else { 0 })
+}
+
+/// What the replay measured.
+#[derive(Debug)]
+struct Figures {
+    /// Latency of each keyframe (push + offer).
+    latencies: Vec<Duration>,
+    poses: usize,
+    candidates: usize,
+    first_candidates: usize,
+    wall: Duration,
+    interrupted: bool,
+}
+
+/// Pushes the poses of `traj` keyframe by keyframe, offering each update to `sampler` and
+/// printing its line (unless `quiet`), until the end or `stop`.
+fn run(
+    traj: &Trajectory,
+    engine: &mut OnlineLoops,
+    sampler: &mut OnlineSampler,
+    every_s: f64,
+    quiet: bool,
+    stop: &Interrupt,
+) -> Result<Figures> {
+    let times = traj.timestamps_s();
+    let dim = traj.dim();
+    let batches = keyframes(times, every_s);
+    let mut figures = Figures {
+        latencies: Vec::with_capacity(batches.len()),
+        poses: 0,
+        candidates: 0,
+        first_candidates: 0,
+        wall: Duration::ZERO,
+        interrupted: false,
+    };
+    let mut stdout = std::io::stdout().lock();
+    let start = Instant::now();
+    let mut next = 0;
+    for &keyframe in &batches {
+        if stop.is_interrupted() {
+            figures.interrupted = true;
+            break;
+        }
+        let coords = &traj.coords()[next * dim..(keyframe + 1) * dim];
+        let began = Instant::now();
+        let update = engine.push_many(&times[next..=keyframe], coords)?;
+        let candidates = sampler.offer(engine, &update);
+        let latency = began.elapsed();
+        figures.latencies.push(latency);
+        figures.poses = keyframe + 1;
+        figures.candidates += candidates.len();
+        figures.first_candidates += candidates.iter().filter(|c| c.first).count();
+        if !quiet {
+            let line = KeyframeLine::new(&update, times[keyframe], latency, &candidates);
+            serde_json::to_writer(&mut stdout, &line)?;
+            stdout.write_all(b"\n")?;
+        }
+        next = keyframe + 1;
+    }
+    stdout.flush()?;
+    figures.wall = start.elapsed();
+    Ok(figures)
+}
+
+impl Figures {
+    /// The figures on stderr.
+    fn print(&self, source: &str, engine: &OnlineLoops) {
+        let mut sorted = self.latencies.clone();
+        sorted.sort_unstable();
+        let percentile = |p: f64| -> Duration {
+            if sorted.is_empty() {
+                return Duration::ZERO;
+            }
+            // Nearest rank.
+            let rank = ((p / 100.0) * sorted.len() as f64).ceil().max(1.0) as usize;
+            sorted[rank.min(sorted.len()) - 1]
+        };
+        let busy: Duration = self.latencies.iter().sum();
+        let rate = if busy.is_zero() { 0.0 } else { self.poses as f64 / busy.as_secs_f64() };
+        let (components, runs) =
+            engine.components().fold((0_usize, 0_usize), |(n, runs), (_, c)| (n + 1, runs + c.run_count));
+        let how = if self.interrupted { "interrupted after" } else { "replayed" };
+        eprintln!(
+            "loops replay: {how} {} poses of {source} in {} keyframes: {} candidates ({} at a component's first \
+             appearance), {components} live components, {runs} runs",
+            self.poses,
+            self.latencies.len(),
+            self.candidates,
+            self.first_candidates,
+        );
+        eprintln!(
+            "latency per keyframe (push + offer): p50 {}, p99 {}, max {}; {} poses/s pushed ({:.3} s busy, {:.3} s \
+             with output)",
+            micros(percentile(50.0)),
+            micros(percentile(99.0)),
+            micros(sorted.last().copied().unwrap_or_default()),
+            rate.round(),
+            busy.as_secs_f64(),
+            self.wall.as_secs_f64(),
+        );
+        if let Some(peak) = peak_resident_mb() {
+            eprintln!("peak resident memory of the process: {peak:.1} MB (the log read in, and the engine)");
+        }
+    }
+}
+
+/// A duration in µs, or ms above 10 ms.
+fn micros(duration: Duration) -> String {
+    let us = duration.as_secs_f64() * 1e6;
+    if us >= 10_000.0 { format!("{:.1} ms", us / 1e3) } else { format!("{us:.1} µs") }
+}
+
+/// The process's peak resident set (Linux `VmHWM`), MB; `None` elsewhere.
+fn peak_resident_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|line| line.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::keyframes;
+
+    #[test]
+    fn keyframes_every_second_end_with_the_last_pose() {
+        let times = [0.0, 0.4, 0.9, 1.0, 1.5, 2.2, 2.3];
+        assert_eq!(keyframes(&times, 0.0), vec![0, 1, 2, 3, 4, 5, 6]);
+        assert_eq!(keyframes(&times, 1.0), vec![0, 3, 6]);
+        assert_eq!(keyframes(&times, 10.0), vec![0, 6]);
+        assert_eq!(keyframes(&[], 1.0), Vec::<usize>::new());
+        assert_eq!(keyframes(&[5.0], 1.0), vec![0]);
+    }
+}
