@@ -144,13 +144,26 @@ int main(int argc, char** argv) {
         std::string line;
         for (size_t line_number = 1; std::getline(file, line); ++line_number) {
             if (line.empty() || line[0] == '#') continue;
+            // Eight numbers (strtod also reads nan and inf, which the library then refuses).
             std::istringstream fields(line);
-            double t = 0.0;
-            double v[7];
-            if (!(fields >> t >> v[0] >> v[1] >> v[2] >> v[3] >> v[4] >> v[5] >> v[6])) {
+            std::string field;
+            double row[8];
+            int numbers = 0;
+            while (fields >> field) {
+                char* end = nullptr;
+                double value = std::strtod(field.c_str(), &end);
+                if (numbers == 8 || end == field.c_str() || *end != '\0') {
+                    numbers = -1;
+                    break;
+                }
+                row[numbers++] = value;
+            }
+            if (numbers != 8) {
                 throw std::runtime_error(options.path + ":" + std::to_string(line_number) +
                                          ": expected 8 numbers: t x y z qx qy qz qw");
             }
+            double t = row[0];
+            double* v = row + 1;
             if (poses) {
                 double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
                 for (int q = 3; q < 7; ++q) v[q] /= norm;

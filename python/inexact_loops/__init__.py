@@ -29,6 +29,9 @@ Several sessions (vehicles, days, robots) in one frame form a :class:`Fleet`;
 :meth:`FleetLoops.overlap_matrix` says how much each two sessions overlap. For fleets beyond one
 machine, :func:`inexact_loops.dask.find_fleet_loops_dask` gives the same answer from tiles
 (:func:`plan_tiles`, :func:`scan_tile`, :func:`merge_tiles`) scanned on a Dask cluster.
+
+While the robot drives, :class:`OnlineLoops` keeps the loop components up to date pose by pose
+and :class:`OnlineSampler` picks loop-closure candidates at each keyframe.
 """
 
 from . import metrics
@@ -38,7 +41,10 @@ from ._core import (
     Fleet,
     FleetLoops,
     FleetSamples,
+    Candidate,
     Loops,
+    OnlineLoops,
+    OnlineSampler,
     PlaneGrid,
     PoseGraph,
     SampleQuality,
@@ -50,6 +56,7 @@ from ._core import (
     TileMerge,
     TileSummary,
     Trajectory,
+    Update,
     __version__,
     chain_polylines,
     cluster_detections,
@@ -95,6 +102,7 @@ from .errors import (
 from .table import Table
 
 __all__ = [
+    "Candidate",
     "DeadReckoningWarning",
     "DetectionClusters",
     "Detections",
@@ -113,6 +121,8 @@ __all__ = [
     "LoopsIOError",
     "LoopsWarning",
     "NoLoopsWarning",
+    "OnlineLoops",
+    "OnlineSampler",
     "OutOfMemoryError",
     "PlaneGrid",
     "PoseGraph",
@@ -127,6 +137,7 @@ __all__ = [
     "TileSummary",
     "TiledFleetLoops",
     "Trajectory",
+    "Update",
     "__version__",
     "chain_polylines",
     "cluster_detections",

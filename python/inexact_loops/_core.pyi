@@ -58,6 +58,10 @@ __all__ = [
     "plan_tiles",
     "scan_tile",
     "session_blocks",
+    "OnlineLoops",
+    "Update",
+    "OnlineSampler",
+    "Candidate",
 ]
 
 __version__: str
@@ -2672,3 +2676,143 @@ def read_pose_graph(
         >>> graph.trajectory.positions.round(12).tolist(), caught[0].category.__name__
         ([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], 'DeadReckoningWarning')
     """
+
+@final
+class OnlineLoops:
+    """..."""
+
+    def __new__(cls, *, gamma: float, dim: int, metric: str | _MetricLike | None = None) -> OnlineLoops: ...
+    def __reduce__(self) -> tuple[Callable[[bytes], OnlineLoops], tuple[bytes]]: ...
+    @classmethod
+    def _from_state(cls, state: bytes) -> OnlineLoops: ...
+    def __len__(self) -> int: ...
+    def push(self, t: float, point: npt.ArrayLike) -> Update:
+        """..."""
+    def push_many(self, timestamps: npt.ArrayLike, points: npt.ArrayLike) -> Update:
+        """..."""
+    def rebuild(self, trajectory: Trajectory) -> None:
+        """..."""
+    def clear(self) -> None:
+        """..."""
+    def to_loops(self) -> Loops:
+        """..."""
+    def loop_duration(self, pose: int) -> float:
+        """..."""
+    def resolve(self, id: int) -> int:
+        """..."""
+    @property
+    def gamma(self) -> float:
+        """..."""
+    @property
+    def dim(self) -> int:
+        """..."""
+    @property
+    def metric_name(self) -> str:
+        """..."""
+    @property
+    def rebuild_count(self) -> int:
+        """..."""
+    @property
+    def timestamps(self) -> npt.NDArray[np.float64]:
+        """..."""
+    @property
+    def trajectory(self) -> Trajectory | None:
+        """..."""
+    @property
+    def components(self) -> Table:
+        """..."""
+
+@final
+class Update:
+    """..."""
+
+    def __reduce__(self) -> tuple[Callable[[bytes], Update], tuple[bytes]]: ...
+    @classmethod
+    def _from_state(cls, state: bytes) -> Update: ...
+    def __eq__(self, other: object, /) -> bool: ...
+    def __ne__(self, other: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    @property
+    def first_pose(self) -> int:
+        """..."""
+    @property
+    def pose(self) -> int:
+        """..."""
+    @property
+    def loop_duration_s(self) -> float:
+        """..."""
+    @property
+    def created(self) -> npt.NDArray[np.int64]:
+        """..."""
+    @property
+    def extended(self) -> npt.NDArray[np.int64]:
+        """..."""
+    @property
+    def merged(self) -> Table:
+        """..."""
+    @property
+    def runs(self) -> Table:
+        """..."""
+
+@final
+class OnlineSampler:
+    """..."""
+
+    def __new__(
+        cls,
+        *,
+        rate: float = 1.0,
+        cap_per_minute: float | None = None,
+        cap_per_metre: float | None = None,
+        first_on_appearance: bool = True,
+        separation: Separation | float | Literal["none"] | None = None,
+        seed: int = 0,
+    ) -> OnlineSampler: ...
+    def offer(self, online: OnlineLoops, update: Update) -> list[Candidate]:
+        """..."""
+    @property
+    def rate(self) -> float:
+        """..."""
+    @property
+    def cap_per_minute(self) -> float | None:
+        """..."""
+    @property
+    def cap_per_metre(self) -> float | None:
+        """..."""
+    @property
+    def first_on_appearance(self) -> bool:
+        """..."""
+    @property
+    def separation(self) -> Separation:
+        """..."""
+    @property
+    def seed(self) -> int:
+        """..."""
+
+@final
+class Candidate:
+    """..."""
+
+    def __new__(cls, *, keyframe: int, j: int, component: int, distance: float, first: bool) -> Candidate: ...
+    def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
+    def __eq__(self, other: object, /) -> bool: ...
+    def __ne__(self, other: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+    @property
+    def keyframe(self) -> int:
+        """..."""
+    @property
+    def j(self) -> int:
+        """..."""
+    @property
+    def pair(self) -> tuple[int, int]:
+        """..."""
+    @property
+    def component(self) -> int:
+        """..."""
+    @property
+    def distance(self) -> float:
+        """..."""
+    @property
+    def first(self) -> bool:
+        """..."""

@@ -11,7 +11,9 @@
 //! `sample_quality`), `py_graph` (`PoseGraph`, `read_pose_graph`) and `py_fleet` (`Fleet`,
 //! `FleetLoops`, `FleetSamples`, `find_fleet_loops`, `sample_fleet`, `urban_fleet`) and `py_tile`
 //! (`SessionBlocks`, `Tile`, `TileSummary`, `TileMerge`, `TiledFleetLoops`: a fleet's tiles for a
-//! cluster). Below them:
+//! cluster), `py_online` (`OnlineLoops`, `Update`: loops while poses arrive) and
+//! `py_online_sampler` (`OnlineSampler`, `Candidate`: loop-closure candidates per keyframe).
+//! Below them:
 //! `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
 //! (the one mapping of errors to exceptions) and `warning` (the one mapping of the engine's
@@ -28,6 +30,8 @@ mod py_fleet;
 mod py_graph;
 mod py_loops;
 mod py_metric;
+mod py_online;
+mod py_online_sampler;
 mod py_plane;
 mod py_quality;
 mod py_samples;
@@ -109,7 +113,7 @@ impl Done {
 }
 
 /// The text of a panic's payload.
-fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| (*s).to_owned())
@@ -162,5 +166,9 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
     module.add_class::<py_graph::PoseGraph>()?;
     module.add_function(wrap_pyfunction!(py_graph::read_pose_graph, module)?)?;
+    module.add_class::<py_online::OnlineLoops>()?;
+    module.add_class::<py_online::Update>()?;
+    module.add_class::<py_online_sampler::OnlineSampler>()?;
+    module.add_class::<py_online_sampler::Candidate>()?;
     Ok(())
 }

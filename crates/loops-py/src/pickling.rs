@@ -58,7 +58,8 @@ pub(crate) fn restore<T: DeserializeOwned>(py: Python<'_>, class: &str, state: &
 
 static UNPICKLING_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
-fn unpickling_error(py: Python<'_>, message: String) -> PyErr {
+/// `pickle.UnpicklingError` with `message`.
+pub(crate) fn unpickling_error(py: Python<'_>, message: String) -> PyErr {
     match UNPICKLING_ERROR.import(py, "pickle", "UnpicklingError") {
         Ok(class) => PyErr::from_type(class.clone(), message),
         Err(error) => error,

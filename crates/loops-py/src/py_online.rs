@@ -1,0 +1,586 @@
+//! `OnlineLoops` (the loops of a trajectory that grows pose by pose) and `Update` (what a push
+//! changed). The candidate sampler is in `py_online_sampler`.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyType};
+use serde::{Deserialize, Serialize};
+
+use crate::convert::{bool_column, float64_column, int64_column, real_array, table, timestamps_and_points, to_numpy};
+use crate::detached;
+use crate::error::{Failure, value_error};
+use crate::py_loops::Loops;
+use crate::py_metric::MetricArg;
+use crate::py_trajectory::Trajectory;
+use loops_core::ComponentId;
+
+/// Gives every `OnlineLoops` a number of its own, so that an `Update` names the engine it came
+/// from.
+static SERIALS: AtomicU64 = AtomicU64::new(0);
+
+/// Runs `f` with the GIL held (a push takes microseconds: releasing the GIL would cost more),
+/// turning a panic into `InternalError`.
+fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
+        .map_err(PyErr::from)
+}
+
+/// The loops of a trajectory that grows pose by pose, as a SLAM front end sees it: S_γ, its
+/// loop components with their statistics, and the loop duration τ, kept up to date as poses
+/// are pushed one at a time (:meth:`push`) or in batches (:meth:`push_many`), at a cost that
+/// follows the answer (the runs near the new pose), not the length of the trajectory.
+///
+/// After every push, the components equal those of :func:`find_loops` on the poses so far
+/// with ``separation=None`` (the paper's S_γ; :meth:`to_loops` gives exactly that result).
+/// Component ids are stable: given in creation order from 0; when two components merge, the
+/// survivor keeps the smaller id and the other is retired (:attr:`Update.merged`,
+/// :meth:`resolve`). When the back end corrects the trajectory, :meth:`rebuild` restarts from
+/// it in one batch computation. An :class:`OnlineSampler` picks loop-closure candidates from
+/// each :class:`Update`.
+///
+/// Args:
+///     gamma: the distance threshold γ > 0, in the metric's unit.
+///     dim: coordinates per pose (3 for positions, 7 for SE(3) poses ``x y z qx qy qz qw``).
+///     metric: as in :func:`find_loops`, a name or an :mod:`inexact_loops.metrics` object
+///         (not a callable); ``None`` is ``"euclidean"``.
+///
+/// Raises:
+///     InvalidParameterError: gamma not positive and finite, an unknown metric, a metric that
+///         does not take ``dim`` coordinates.
+///
+/// Example:
+///     Out along a line and back: the way back revisits the way out.
+///
+///     >>> import inexact_loops as il
+///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+///     >>> for t, x in enumerate([0.0, 1.0, 2.0, 3.0, 2.0, 1.0]):
+///     ...     update = online.push(float(t), [x])
+///     >>> update.pose, len(online), online.components["pair_count"].tolist()
+///     (5, 6, [6, 4])
+///     >>> online.to_loops() == il.find_loops(online.trajectory, gamma=0.5, separation=None)
+///     True
+#[pyclass(module = "inexact_loops._core")]
+#[derive(Debug)]
+pub(crate) struct OnlineLoops {
+    pub(crate) inner: loops_core::OnlineLoops,
+    /// This engine's number (see [`SERIALS`]).
+    pub(crate) serial: u64,
+    /// Pushes so far (an `Update` is the last one's when its count is this).
+    pub(crate) pushes: u64,
+    /// The number of poses the last rebuild started from (0: none, or cleared): a pickle
+    /// replays the same rebuild and pushes.
+    rebuilt_len: usize,
+}
+
+/// What a push changed. Returned by :meth:`OnlineLoops.push` and :meth:`OnlineLoops.push_many`;
+/// hand it to :meth:`OnlineSampler.offer` for its loop-closure candidates.
+///
+/// Example:
+///     >>> import inexact_loops as il
+///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+///     >>> update = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+///     >>> update.first_pose, update.pose, update.created.tolist()
+///     (0, 3, [0, 1, 2])
+///     >>> update.runs["row"].tolist(), update.runs["start"].tolist(), update.runs["component"].tolist()
+///     ([0, 1, 2, 3, 3], [0, 1, 1, 0, 3], [0, 1, 1, 2, 3])
+#[pyclass(frozen, module = "inexact_loops._core")]
+#[derive(Debug)]
+pub(crate) struct Update {
+    pub(crate) inner: Arc<loops_core::Update>,
+    /// The engine it came from ([`OnlineLoops::serial`]), its rebuild count and push count then.
+    pub(crate) origin: (u64, u64, u64),
+}
+
+/// What a pickled `OnlineLoops` holds: enough to replay it exactly.
+#[derive(Serialize, Deserialize)]
+struct OnlineState {
+    metric: String,
+    dim: usize,
+    gamma: f64,
+    rebuilt_len: usize,
+    timestamps_s: Vec<f64>,
+    coords: Vec<f64>,
+}
+
+/// A pickled `Update`: the fields of the core's.
+#[derive(Serialize, Deserialize)]
+struct UpdateState {
+    first_pose: usize,
+    pose: usize,
+    /// (row, start, end, component, closest) of each run.
+    runs: Vec<(usize, u32, u32, ComponentId, usize)>,
+    created: Vec<ComponentId>,
+    extended: Vec<ComponentId>,
+    /// (pose, retired, survivor) of each merge.
+    merged: Vec<(usize, ComponentId, ComponentId)>,
+    loop_duration_s: f64,
+}
+
+impl OnlineLoops {
+    fn update(&mut self, update: loops_core::Update) -> Update {
+        self.pushes += 1;
+        Update { inner: Arc::new(update), origin: (self.serial, self.inner.rebuild_count(), self.pushes) }
+    }
+
+    /// `point` as `dim` coordinates.
+    fn point(&self, py: Python<'_>, point: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        let array = real_array(py, point, "point")?;
+        let dim = self.inner.dim();
+        if array.shape.len() > 1 || array.values.len() != dim {
+            return Err(value_error(format!(
+                "point must have the engine's {dim} coordinate(s), shape ({dim},), got shape {:?}",
+                array.shape
+            )));
+        }
+        Ok(array.values)
+    }
+}
+
+#[pymethods]
+impl OnlineLoops {
+    #[new]
+    #[pyo3(signature = (*, gamma, dim, metric=None))]
+    fn new(gamma: f64, dim: usize, metric: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let spec = MetricArg::spec_from_py(metric, "OnlineLoops")?;
+        let inner = loops_core::OnlineLoops::new(spec, dim, gamma).map_err(Failure::from)?;
+        Ok(Self { inner, serial: SERIALS.fetch_add(1, Ordering::Relaxed), pushes: 0, rebuilt_len: 0 })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.borrow();
+        let state = OnlineState {
+            metric: this.inner.metric().to_string(),
+            dim: this.inner.dim(),
+            gamma: this.inner.gamma(),
+            rebuilt_len: this.rebuilt_len,
+            timestamps_s: this.inner.timestamps_s().to_vec(),
+            coords: this.inner.trajectory().map_or_else(Vec::new, |traj| traj.coords().to_vec()),
+        };
+        crate::pickling::reduce(slf.as_any(), "OnlineLoops", &state)
+    }
+
+    /// Unpickles by replaying: the same rebuild (if any), then the same poses in one batch,
+    /// which gives the same components and ids (the engine is deterministic).
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let py = cls.py();
+        let state: OnlineState = crate::pickling::restore(py, "OnlineLoops", state)?;
+        let fail = |error: loops_core::Error| {
+            crate::pickling::unpickling_error(py, format!("cannot unpickle OnlineLoops: {error}"))
+        };
+        let spec: loops_core::MetricSpec = state.metric.parse().map_err(fail)?;
+        let mut this = Self {
+            inner: loops_core::OnlineLoops::new(spec, state.dim, state.gamma).map_err(fail)?,
+            serial: SERIALS.fetch_add(1, Ordering::Relaxed),
+            pushes: 0,
+            rebuilt_len: state.rebuilt_len,
+        };
+        let (rebuilt, dim) = (state.rebuilt_len, state.dim);
+        let corrupt = |what: String| crate::pickling::unpickling_error(py, format!("cannot unpickle OnlineLoops: {what}"));
+        if Some(state.coords.len()) != state.timestamps_s.len().checked_mul(dim) || rebuilt > state.timestamps_s.len() {
+            return Err(corrupt("its poses do not fit together".to_owned()));
+        }
+        let inner = &mut this.inner;
+        detached(py, move || {
+            if rebuilt > 0 {
+                let traj = loops_core::Trajectory::new(
+                    state.timestamps_s[..rebuilt].to_vec(),
+                    state.coords[..rebuilt * dim].to_vec(),
+                    dim,
+                )?;
+                inner.rebuild(&traj)?;
+            }
+            inner.push_many(&state.timestamps_s[rebuilt..], &state.coords[rebuilt * dim..])?;
+            Ok(())
+        })
+        .map_err(|error| corrupt(error.to_string()))?;
+        Ok(this)
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "OnlineLoops(gamma={}, metric={}, dim={}, {} poses, {} components)",
+            self.inner.gamma(),
+            self.inner.metric(),
+            self.inner.dim(),
+            self.inner.len(),
+            self.inner.components().count()
+        )
+    }
+
+    /// Adds the pose at time ``t`` (seconds, after the last pose's) with ``point`` (``dim``
+    /// coordinates): row n of the plane, its pairs with every earlier pose. Takes microseconds;
+    /// the GIL is held.
+    ///
+    /// Args:
+    ///     t: its time, seconds.
+    ///     point: its coordinates, shape ``(dim,)`` (a list or numpy array).
+    ///
+    /// Returns:
+    ///     :class:`Update`.
+    ///
+    /// Raises:
+    ///     InvalidTrajectoryError: a time or coordinate NaN or infinite, a time not after the
+    ///         last pose's, a quaternion that is not unit (for the se3 metrics); the message
+    ///         names the pose's index. Nothing changes then.
+    ///     ValueError: a point of another number of coordinates.
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=1.0, dim=2)
+    ///     >>> online.push(0.0, [0.0, 0.0]).created.tolist(), online.push(1.0, [0.5, 0.0]).pose
+    ///     ([0], 1)
+    fn push(&mut self, py: Python<'_>, t: f64, point: &Bound<'_, PyAny>) -> PyResult<Update> {
+        let point = self.point(py, point)?;
+        let update = attached(|| Ok(self.inner.push(t, &point)?))?;
+        Ok(self.update(update))
+    }
+
+    /// Adds several poses at once, as that many :meth:`push` es, with one :class:`Update`
+    /// covering all of them (an :class:`OnlineSampler` gives the same candidates either way).
+    /// All or nothing: on an error none is added. The GIL is released.
+    ///
+    /// Args:
+    ///     timestamps: seconds, shape ``(n,)``, increasing, after the last pose's.
+    ///     points: shape ``(n, dim)`` (or ``(n,)`` when ``dim`` is 1).
+    ///
+    /// Returns:
+    ///     :class:`Update`.
+    ///
+    /// Raises:
+    ///     InvalidTrajectoryError: as :meth:`push`, for the first bad pose, named by its index in
+    ///         the whole trajectory.
+    ///     ValueError: shapes that do not fit (rows, or columns other than ``dim``).
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=1.0, dim=2)
+    ///     >>> update = online.push_many(np.arange(3.0), np.zeros((3, 2)))
+    ///     >>> update.first_pose, update.pose, len(online)
+    ///     (0, 2, 3)
+    fn push_many(&mut self, py: Python<'_>, timestamps: &Bound<'_, PyAny>, points: &Bound<'_, PyAny>) -> PyResult<Update> {
+        let (t, coords, dim) = timestamps_and_points(py, timestamps, points, "points")?;
+        let expected = self.inner.dim();
+        if dim != expected && !t.is_empty() {
+            return Err(value_error(format!(
+                "points must have the engine's {expected} coordinate(s) per row, got {dim}"
+            )));
+        }
+        let inner = &mut self.inner;
+        let update = detached(py, move || Ok(inner.push_many(&t, &coords)?))?;
+        Ok(self.update(update))
+    }
+
+    /// Restarts from ``trajectory``, the poses so far as the back end corrected them after a
+    /// loop closure, with one batch computation (threads as :func:`find_loops`, GIL released);
+    /// later pushes continue after its last pose. Component ids restart from 0 (in order of
+    /// each component's first pose); :class:`OnlineSampler` s reset themselves at their next
+    /// offer, and updates from before cannot be offered.
+    ///
+    /// Args:
+    ///     trajectory: a :class:`Trajectory` of ``dim`` coordinates.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a metric that does not fit the trajectory.
+    ///     InvalidTrajectoryError: points the metric refuses.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+    ///     >>> _ = online.push_many(np.arange(4.0), [0.0, 1.0, 1.0, 0.0])
+    ///     >>> online.rebuild(il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 2.0, 3.0])))
+    ///     >>> online.components["id"].tolist(), online.rebuild_count
+    ///     ([0, 1, 2, 3], 1)
+    fn rebuild(&mut self, py: Python<'_>, trajectory: &Trajectory) -> PyResult<()> {
+        let traj = Arc::clone(&trajectory.inner);
+        let inner = &mut self.inner;
+        detached(py, move || Ok(inner.rebuild(&traj)?))?;
+        self.rebuilt_len = trajectory.inner.len();
+        Ok(())
+    }
+
+    /// Forgets every pose: as new (ids restart too; :attr:`rebuild_count` goes up).
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=1.0, dim=1)
+    ///     >>> _ = online.push(0.0, [0.0])
+    ///     >>> online.clear()
+    ///     >>> len(online), online.rebuild_count
+    ///     (0, 1)
+    fn clear(&mut self) {
+        self.inner.clear();
+        self.rebuilt_len = 0;
+    }
+
+    /// The loops of the poses so far as :func:`find_loops` gives them with ``separation=None``
+    /// (the same :class:`Loops`, components numbered in the batch's order, not by online id).
+    ///
+    /// Raises:
+    ///     InvalidTrajectoryError: fewer than two poses.
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+    ///     >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+    ///     >>> online.to_loops().components["pair_count"].tolist()
+    ///     [1, 1, 3, 1]
+    fn to_loops(&self, py: Python<'_>) -> PyResult<Loops> {
+        let inner = &self.inner;
+        let loops = detached(py, move || Ok(inner.to_loops()?))?;
+        Ok(Loops { inner: Arc::new(loops) })
+    }
+
+    /// The loop duration τ of pose ``pose`` so far (paper, Eq. 6), seconds: how long the
+    /// trajectory has stayed within γ of it. :meth:`Loops.loop_duration` of :meth:`to_loops`
+    /// gives it for every pose.
+    ///
+    /// Raises:
+    ///     IndexError: not a pose index.
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+    ///     >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+    ///     >>> online.loop_duration(0), online.loop_duration(1)
+    ///     (1.0, 2.0)
+    fn loop_duration(&self, pose: i64) -> PyResult<f64> {
+        let pose = crate::convert::pose_index(pose, "pose")?;
+        Ok(self.inner.loop_duration_s(pose).map_err(Failure::from)?)
+    }
+
+    /// The live id that component ``id`` now belongs to, following merges (``id`` itself for a
+    /// live id).
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+    ///     >>> update = online.push_many([0.0, 1.0, 2.0, 3.0, 4.0], [0.0, 1.0, 0.0, 1.0, 0.0])
+    ///     >>> [online.resolve(m) for m in update.merged["retired"].tolist()] == update.merged["survivor"].tolist()
+    ///     True
+    fn resolve(&self, id: ComponentId) -> ComponentId {
+        self.inner.resolve(id)
+    }
+
+    /// The threshold γ.
+    #[getter]
+    fn gamma(&self) -> f64 {
+        self.inner.gamma()
+    }
+
+    /// Coordinates per pose.
+    #[getter]
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+
+    /// The metric's name (its spec, e.g. ``"euclidean"``).
+    #[getter]
+    fn metric_name(&self) -> String {
+        self.inner.metric().to_string()
+    }
+
+    /// How many times the engine was rebuilt or cleared: ids from before mean nothing now.
+    #[getter]
+    fn rebuild_count(&self) -> u64 {
+        self.inner.rebuild_count()
+    }
+
+    /// The times of the poses pushed, seconds (a copy).
+    #[getter]
+    fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        to_numpy(py, self.inner.timestamps_s().to_vec())
+    }
+
+    /// The poses pushed so far as a :class:`Trajectory` (a copy), or ``None`` before the second.
+    #[getter]
+    fn trajectory(&self) -> Option<Trajectory> {
+        self.inner.trajectory().map(|traj| Trajectory::read(traj.clone(), None, Some(self.inner.metric())))
+    }
+
+    /// The live loop components so far as a :class:`~inexact_loops.Table`, one row a component,
+    /// by id: the columns of :attr:`Loops.components` (``id`` is the online id; the half i ≤ j
+    /// for a non-trivial component, the whole set for a trivial one) and ``first_pose`` (the
+    /// pose whose row created it, the earliest of merged parts) and ``last_pose`` (the last pose
+    /// whose row extended it), int64.
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+    ///     >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+    ///     >>> table = online.components
+    ///     >>> table["id"].tolist(), table["trivial"].tolist(), table["first_pose"].tolist()
+    ///     ([0, 1, 2], [True, True, False], [0, 1, 3])
+    #[getter]
+    fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let cs: Vec<&loops_core::OnlineComponent> = self.inner.components().map(|(_, c)| c).collect();
+        let t = self.inner.timestamps_s();
+        table(
+            py,
+            [
+                ("id", int64_column(py, &cs, |c| c.id as usize)),
+                ("trivial", bool_column(py, &cs, |c| c.trivial)),
+                ("area_s2", float64_column(py, &cs, |c| c.area_s2)),
+                ("pair_count", int64_column(py, &cs, |c| c.pair_count as usize)),
+                ("run_count", int64_column(py, &cs, |c| c.run_count)),
+                ("holes", int64_column(py, &cs, |c| c.holes as usize)),
+                ("t_min_s", float64_column(py, &cs, |c| t[c.i_range[0]])),
+                ("t_max_s", float64_column(py, &cs, |c| t[c.i_range[1]])),
+                ("t_prime_min_s", float64_column(py, &cs, |c| t[c.j_range[0]])),
+                ("t_prime_max_s", float64_column(py, &cs, |c| t[c.j_range[1]])),
+                ("i_min", int64_column(py, &cs, |c| c.i_range[0])),
+                ("i_max", int64_column(py, &cs, |c| c.i_range[1])),
+                ("j_min", int64_column(py, &cs, |c| c.j_range[0])),
+                ("j_max", int64_column(py, &cs, |c| c.j_range[1])),
+                ("closest_i", int64_column(py, &cs, |c| c.closest_pair[0])),
+                ("closest_j", int64_column(py, &cs, |c| c.closest_pair[1])),
+                ("closest_distance", float64_column(py, &cs, |c| c.closest_distance)),
+                ("first_pose", int64_column(py, &cs, |c| c.first_pose)),
+                ("last_pose", int64_column(py, &cs, |c| c.last_pose)),
+            ],
+        )
+    }
+}
+
+#[pymethods]
+impl Update {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let u = &slf.get().inner;
+        let state = UpdateState {
+            first_pose: u.first_pose,
+            pose: u.pose,
+            runs: u.runs.iter().map(|r| (r.row, r.run.start, r.run.end, r.component, r.closest)).collect(),
+            created: u.created.clone(),
+            extended: u.extended.clone(),
+            merged: u.merged.iter().map(|m| (m.pose, m.retired, m.survivor)).collect(),
+            loop_duration_s: u.loop_duration_s,
+        };
+        crate::pickling::reduce(slf.as_any(), "Update", &state)
+    }
+
+    /// An unpickled update is data only: it names no engine, so it cannot be offered.
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let s: UpdateState = crate::pickling::restore(cls.py(), "Update", state)?;
+        let inner = loops_core::Update {
+            first_pose: s.first_pose,
+            pose: s.pose,
+            runs: s
+                .runs
+                .into_iter()
+                .map(|(row, start, end, component, closest)| loops_core::RowRun {
+                    row,
+                    run: loops_core::Run { start, end },
+                    component,
+                    closest,
+                })
+                .collect(),
+            created: s.created,
+            extended: s.extended,
+            merged: s
+                .merged
+                .into_iter()
+                .map(|(pose, retired, survivor)| loops_core::Merge { pose, retired, survivor })
+                .collect(),
+            loop_duration_s: s.loop_duration_s,
+        };
+        Ok(Self { inner: Arc::new(inner), origin: (u64::MAX, 0, 0) })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.inner.first_pose as u64, self.inner.pose as u64, self.inner.runs.len() as u64])
+    }
+
+    fn __repr__(&self) -> String {
+        let u = &self.inner;
+        format!(
+            "Update(poses {}..={}, {} runs, created {:?}, extended {:?}, {} merge(s), loop_duration_s={})",
+            u.first_pose,
+            u.pose,
+            u.runs.len(),
+            u.created,
+            u.extended,
+            u.merged.len(),
+            u.loop_duration_s
+        )
+    }
+
+    /// Index of the first pose the push added.
+    #[getter]
+    fn first_pose(&self) -> usize {
+        self.inner.first_pose
+    }
+
+    /// Index of the last pose pushed: the keyframe.
+    #[getter]
+    fn pose(&self) -> usize {
+        self.inner.pose
+    }
+
+    /// The loop duration τ of the last pose so far, seconds.
+    #[getter]
+    fn loop_duration_s(&self) -> f64 {
+        self.inner.loop_duration_s
+    }
+
+    /// Ids of the components the push created, in order (int64).
+    #[getter]
+    fn created<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        to_numpy(py, self.inner.created.iter().map(|&id| i64::from(id)).collect())
+    }
+
+    /// Ids (after the push) of the components that existed before it and gained pairs,
+    /// increasing (int64).
+    #[getter]
+    fn extended<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        to_numpy(py, self.inner.extended.iter().map(|&id| i64::from(id)).collect())
+    }
+
+    /// The merges, in the order they happened, as a :class:`~inexact_loops.Table` of int64
+    /// columns: ``pose`` (the row whose runs joined them), ``retired`` and ``survivor`` (the
+    /// smaller id, which lives on).
+    #[getter]
+    fn merged<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let m = &self.inner.merged;
+        table(
+            py,
+            [
+                ("pose", int64_column(py, m, |m| m.pose)),
+                ("retired", int64_column(py, m, |m| m.retired as usize)),
+                ("survivor", int64_column(py, m, |m| m.survivor as usize)),
+            ],
+        )
+    }
+
+    /// The new rows' runs, row by row, columns increasing, as a :class:`~inexact_loops.Table`
+    /// of int64 columns: ``row`` (the pose pushed), ``start`` and ``end`` (its earlier poses
+    /// within γ, inclusive; the pose itself when the run reaches the diagonal), ``component``
+    /// (its id once the row was added; a later row of the same batch may merge it) and
+    /// ``closest`` (the run's pose closest to ``row``).
+    #[getter]
+    fn runs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let r = &self.inner.runs;
+        table(
+            py,
+            [
+                ("row", int64_column(py, r, |r| r.row)),
+                ("start", int64_column(py, r, |r| r.run.start as usize)),
+                ("end", int64_column(py, r, |r| r.run.end as usize)),
+                ("component", int64_column(py, r, |r| r.component as usize)),
+                ("closest", int64_column(py, r, |r| r.closest)),
+            ],
+        )
+    }
+}

@@ -1,0 +1,293 @@
+//! `OnlineSampler` (loop-closure candidates per keyframe) and `Candidate`.
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use crate::error::{Failure, invalid_parameter};
+use crate::py_online::{OnlineLoops, Update};
+use crate::py_separation::{Separation, SeparationArg};
+use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
+
+/// Picks loop-closure candidates from each :class:`Update` of an :class:`OnlineLoops`, as a
+/// front end needs them while the robot drives: σ_ρ online (each component's pairs in the new
+/// row drawn at ``rate`` per component per pose), a cap per component (per minute or per metre
+/// of travel), a candidate the first time a component appears (P1 online) and the revisit
+/// separation. Every random choice is keyed by (seed, pose, component): pushing poses one at a
+/// time or in batches gives the same candidates, on every machine.
+///
+/// Args:
+///     rate: σ_ρ, the expected number of candidates per component per pose (0: only the
+///         first-appearance candidates); fractions are rounded randomly.
+///     cap_per_minute: at most this many candidates per minute per component (a token bucket,
+///         full at first); or
+///     cap_per_metre: at most this many per metre of travel (the metric's unit) per component.
+///         Give at most one.
+///     first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
+///         component has a pair to offer.
+///     separation: only pairs this far apart along the trajectory: ``None`` (every pair), a path
+///         length, or a :class:`Separation` (e.g. ``Separation.for_gamma(gamma)``, the
+///         revisits of :func:`find_loops`' default).
+///     seed: the seed.
+///
+/// Raises:
+///     InvalidParameterError: a rate negative or not finite, a cap not positive and finite,
+///         both caps, a negative separation, ``separation="auto"`` (it needs γ: pass
+///         ``Separation.for_gamma(gamma)``).
+///
+/// Example:
+///     >>> import numpy as np, inexact_loops as il
+///     >>> online = il.OnlineLoops(gamma=1.0, dim=2)
+///     >>> sampler = il.OnlineSampler(rate=0.0, separation=il.Separation(path=3.0))
+///     >>> angle = np.linspace(0.0, 2.2 * np.pi, 60)
+///     >>> for k, a in enumerate(angle):
+///     ...     update = online.push(float(k), [2.0 * np.cos(a), 2.0 * np.sin(a)])
+///     ...     for c in sampler.offer(online, update):
+///     ...         print(c.keyframe, c.j, c.first)
+///     55 0 True
+#[pyclass(module = "inexact_loops._core")]
+#[derive(Debug)]
+pub(crate) struct OnlineSampler {
+    inner: loops_core::OnlineSampler,
+    /// The update offered last: (engine, rebuild count, push count), as [`Update::origin`].
+    offered: Option<(u64, u64, u64)>,
+}
+
+/// A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
+/// Returned by :meth:`OnlineSampler.offer`.
+///
+/// Args:
+///     keyframe: the pose whose push made it possible (the later pose).
+///     j: the earlier pose.
+///     component: its component's id at the keyframe.
+///     distance: δ(x_j, x_keyframe), the metric's unit.
+///     first: emitted by the first-appearance rule rather than drawn.
+///
+/// Example:
+///     >>> import inexact_loops as il
+///     >>> c = il.Candidate(keyframe=12, j=3, component=1, distance=0.25, first=True)
+///     >>> c.pair, c
+///     ((3, 12), Candidate(keyframe=12, j=3, component=1, distance=0.25, first=True))
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Candidate {
+    inner: loops_core::Candidate,
+}
+
+#[pymethods]
+impl OnlineSampler {
+    #[new]
+    #[pyo3(signature = (*, rate=OnlineSamplerOptions::default().rate, cap_per_minute=None, cap_per_metre=None,
+        first_on_appearance=OnlineSamplerOptions::default().first_on_appearance, separation=None,
+        seed=OnlineSamplerOptions::default().seed))]
+    #[pyo3(text_signature = "(*, rate=1.0, cap_per_minute=None, cap_per_metre=None, first_on_appearance=True, \
+        separation=None, seed=0)")]
+    fn new(
+        rate: f64,
+        cap_per_minute: Option<f64>,
+        cap_per_metre: Option<f64>,
+        first_on_appearance: bool,
+        separation: Option<SeparationArg>,
+        seed: u64,
+    ) -> PyResult<Self> {
+        let cap = match (cap_per_minute, cap_per_metre) {
+            (None, None) => Cap::None,
+            (Some(c), None) => Cap::PerMinute(c),
+            (None, Some(c)) => Cap::PerMetre(c),
+            (Some(_), Some(_)) => {
+                return Err(invalid_parameter("give cap_per_minute or cap_per_metre, not both".to_owned()));
+            }
+        };
+        let separation = match separation {
+            None => loops_core::Separation::NONE,
+            Some(SeparationArg::Given(separation)) => separation,
+            Some(SeparationArg::Auto) => {
+                return Err(invalid_parameter(
+                    "separation=\"auto\" needs gamma, which the sampler does not know: pass \
+                     il.Separation.for_gamma(gamma)"
+                        .to_owned(),
+                ));
+            }
+        };
+        let options = OnlineSamplerOptions { rate, cap, first_on_appearance, separation, seed };
+        let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
+        Ok(Self { inner, offered: None })
+    }
+
+    fn __repr__(&self) -> String {
+        let o = self.inner.options();
+        let cap = match o.cap {
+            Cap::None => String::new(),
+            Cap::PerMinute(c) => format!(", cap_per_minute={c}"),
+            Cap::PerMetre(c) => format!(", cap_per_metre={c}"),
+        };
+        format!(
+            "OnlineSampler(rate={}{cap}, first_on_appearance={}, separation=Separation(path={:?}, time_s={:?}), \
+             seed={})",
+            o.rate,
+            if o.first_on_appearance { "True" } else { "False" },
+            o.separation.path,
+            o.separation.time_s,
+            o.seed
+        )
+    }
+
+    /// The loop-closure candidates that ``update`` made possible, by keyframe, component and
+    /// pose. Offer every update of ``online``, in order, once each (a sampler follows one
+    /// engine); after a rebuild it starts afresh.
+    ///
+    /// Args:
+    ///     online: the :class:`OnlineLoops` that returned ``update``.
+    ///     update: its last push's :class:`Update`.
+    ///
+    /// Returns:
+    ///     list of :class:`Candidate`.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: ``update`` is not ``online``'s last (an older one, another
+    ///         engine's, one from before a rebuild, or an unpickled one), or was offered already.
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> online, sampler = il.OnlineLoops(gamma=0.5, dim=1), il.OnlineSampler()
+    ///     >>> update = online.push_many([0.0, 1.0, 2.0], [0.0, 0.1, 0.0])
+    ///     >>> [c.pair for c in sampler.offer(online, update) if c.first]
+    ///     [(0, 1)]
+    fn offer(&mut self, online: PyRef<'_, OnlineLoops>, update: PyRef<'_, Update>) -> PyResult<Vec<Candidate>> {
+        let latest = (online.serial, online.inner.rebuild_count(), online.pushes);
+        if update.origin != latest {
+            return Err(invalid_parameter(format!(
+                "this update (poses {}..={}) is not the last push of this OnlineLoops: offer each push's update \
+                 once, in order",
+                update.inner.first_pose, update.inner.pose
+            )));
+        }
+        if self.offered == Some(latest) {
+            return Err(invalid_parameter(format!(
+                "this update (poses {}..={}) was already offered to this sampler",
+                update.inner.first_pose, update.inner.pose
+            )));
+        }
+        let candidates = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            self.inner.offer(&online.inner, &update.inner)
+        }))
+        .map_err(|payload| PyErr::from(Failure::Panic(crate::panic_message(payload.as_ref()))))?;
+        self.offered = Some(latest);
+        Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
+    }
+
+    /// σ_ρ's rate: candidates per component per pose.
+    #[getter]
+    fn rate(&self) -> f64 {
+        self.inner.options().rate
+    }
+
+    /// The cap per minute per component, or ``None``.
+    #[getter]
+    fn cap_per_minute(&self) -> Option<f64> {
+        match self.inner.options().cap {
+            Cap::PerMinute(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// The cap per metre of travel per component, or ``None``.
+    #[getter]
+    fn cap_per_metre(&self) -> Option<f64> {
+        match self.inner.options().cap {
+            Cap::PerMetre(c) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// Whether a component's first appearance brings a candidate (P1 online).
+    #[getter]
+    fn first_on_appearance(&self) -> bool {
+        self.inner.options().first_on_appearance
+    }
+
+    /// The separation the candidates keep (:class:`Separation`).
+    #[getter]
+    fn separation(&self) -> Separation {
+        Separation { inner: self.inner.options().separation }
+    }
+
+    /// The seed.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.options().seed
+    }
+}
+
+#[pymethods]
+impl Candidate {
+    #[new]
+    #[pyo3(signature = (*, keyframe, j, component, distance, first))]
+    fn new(keyframe: usize, j: usize, component: ComponentId, distance: f64, first: bool) -> Self {
+        Self { inner: loops_core::Candidate { keyframe, pair: [j, keyframe], component, distance, first } }
+    }
+
+    /// Pickles as its constructor's keywords.
+    fn __getnewargs_ex__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyTuple>, Bound<'py, PyDict>)> {
+        let c = &self.inner;
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("keyframe", c.keyframe)?;
+        kwargs.set_item("j", c.pair[0])?;
+        kwargs.set_item("component", c.component)?;
+        kwargs.set_item("distance", c.distance)?;
+        kwargs.set_item("first", c.first)?;
+        Ok((PyTuple::empty(py), kwargs))
+    }
+
+    fn __hash__(&self) -> u64 {
+        let c = &self.inner;
+        crate::pickling::hash_of(&[c.keyframe as u64, c.pair[0] as u64, u64::from(c.component), c.distance.to_bits()])
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        format!(
+            "Candidate(keyframe={}, j={}, component={}, distance={:?}, first={})",
+            c.keyframe,
+            c.pair[0],
+            c.component,
+            c.distance,
+            if c.first { "True" } else { "False" }
+        )
+    }
+
+    /// The pose whose push made it possible: the later pose of the pair.
+    #[getter]
+    fn keyframe(&self) -> usize {
+        self.inner.keyframe
+    }
+
+    /// The earlier pose of the pair.
+    #[getter]
+    fn j(&self) -> usize {
+        self.inner.pair[0]
+    }
+
+    /// The pair ``(j, keyframe)``.
+    #[getter]
+    fn pair(&self) -> (usize, usize) {
+        (self.inner.pair[0], self.inner.keyframe)
+    }
+
+    /// Its component's id at the keyframe.
+    #[getter]
+    fn component(&self) -> ComponentId {
+        self.inner.component
+    }
+
+    /// δ(x_j, x_keyframe), the metric's unit.
+    #[getter]
+    fn distance(&self) -> f64 {
+        self.inner.distance
+    }
+
+    /// Whether the first-appearance rule (P1 online) emitted it, rather than a draw.
+    #[getter]
+    fn first(&self) -> bool {
+        self.inner.first
+    }
+}
