@@ -208,13 +208,16 @@ fn c_candidates(options: &LoopsSamplerOptions, capacity: usize) -> Vec<LoopsCand
         let status = unsafe { loops_sampler_offer(s, o, buffer.as_mut_ptr(), capacity, &mut count) };
         assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
         all.extend_from_slice(&buffer[..count.min(capacity)]);
+        // The rest, read from the sampler in chunks (of one when the buffer holds none).
         let mut offset = capacity;
+        let mut chunk = vec![LoopsCandidate::default(); capacity.max(1)];
         while offset < count {
             let mut written = 0;
-            let status = unsafe { loops_sampler_candidates(s, offset, buffer.as_mut_ptr(), capacity, &mut written) };
+            let status =
+                unsafe { loops_sampler_candidates(s, offset, chunk.as_mut_ptr(), chunk.len(), &mut written) };
             assert_eq!(status, LoopsStatus::Ok);
             assert!(written > 0);
-            all.extend_from_slice(&buffer[..written]);
+            all.extend_from_slice(&chunk[..written]);
             offset += written;
         }
         // An update is offered once.
