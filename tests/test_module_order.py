@@ -144,7 +144,7 @@ def listing(crate: str) -> str:
     return "\n".join(lines)
 
 
-ALL_CRATES = ("loops-core", "loops-io", "loops-py", "loops-cli")
+ALL_CRATES = ("loops-core", "loops-io", "loops-py", "loops-cli", "loops-capi")
 
 
 @pytest.mark.parametrize("crate", ALL_CRATES)

@@ -36,12 +36,12 @@ and :class:`OnlineSampler` picks loop-closure candidates at each keyframe.
 
 from . import metrics
 from ._core import (
+    Candidate,
     DetectionClusters,
     Detections,
     Fleet,
     FleetLoops,
     FleetSamples,
-    Candidate,
     Loops,
     OnlineLoops,
     OnlineSampler,

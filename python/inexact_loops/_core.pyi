@@ -584,7 +584,10 @@ class Loops:
         j: npt.ArrayLike,
         trajectory: Trajectory,
         *,
-        metric: str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None = None,
+        metric: str
+        | _MetricLike
+        | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float]
+        | None = None,
     ) -> Table:
         """Where each pair ``(i[k], j[k])`` (either order) falls, with δ: in a loop component, in a
         trivial one, within γ but not a revisit, or outside S_γ — for the loop-closure edges of a
@@ -2595,7 +2598,10 @@ class PoseGraph:
         self,
         loops: Loops,
         *,
-        metric: str | _MetricLike | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float] | None = None,
+        metric: str
+        | _MetricLike
+        | Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], float]
+        | None = None,
     ) -> Table:
         """Where each loop-closure edge (vertices more than one id apart) falls against ``loops``,
         found on :attr:`trajectory`: a :class:`~inexact_loops.Table` with the rows and columns of
@@ -2679,52 +2685,222 @@ def read_pose_graph(
 
 @final
 class OnlineLoops:
-    """..."""
+    """The loops of a trajectory that grows pose by pose, as a SLAM front end sees it: S_γ, its
+    loop components with their statistics, and the loop duration τ, kept up to date as poses
+    are pushed one at a time (:meth:`push`) or in batches (:meth:`push_many`), at a cost that
+    follows the answer (the runs near the new pose), not the length of the trajectory.
 
-    def __new__(cls, *, gamma: float, dim: int, metric: str | _MetricLike | None = None) -> OnlineLoops: ...
+    After every push, the components equal those of :func:`find_loops` on the poses so far
+    with ``separation=None`` (the paper's S_γ; :meth:`to_loops` gives exactly that result).
+    Component ids are stable: given in creation order from 0; when two components merge, the
+    survivor keeps the smaller id and the other is retired (:attr:`Update.merged`,
+    :meth:`resolve`). When the back end corrects the trajectory, :meth:`rebuild` restarts from
+    it in one batch computation. An :class:`OnlineSampler` picks loop-closure candidates from
+    each :class:`Update`.
+
+    Args:
+        gamma: the distance threshold γ > 0, in the metric's unit.
+        dim: coordinates per pose (3 for positions, 7 for SE(3) poses ``x y z qx qy qz qw``).
+        metric: as in :func:`find_loops`, a name or an :mod:`inexact_loops.metrics` object
+            (not a callable); ``None`` is ``"euclidean"``.
+
+    Raises:
+        InvalidParameterError: gamma not positive and finite, an unknown metric, a metric that
+            does not take ``dim`` coordinates.
+
+    Example:
+        A 95% circle of radius 10 m, pushed pose by pose: its ends come within γ of each other.
+
+        >>> import numpy as np, inexact_loops as il
+        >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+        >>> points = 10 * np.c_[np.cos(angle), np.sin(angle)]
+        >>> online = il.OnlineLoops(gamma=4.0, dim=2)
+        >>> for k in range(200):
+        ...     update = online.push(0.1 * k, points[k])
+        >>> online.components["trivial"].tolist(), online.components["first_pose"].tolist()
+        ([True, False], [0, 197])
+        >>> online.to_loops() == il.find_loops(online.trajectory, gamma=4.0, separation=None)
+        True
+    """
+
+    def __new__(
+        cls, *, gamma: float, dim: int, metric: str | _MetricLike | None = None
+    ) -> OnlineLoops: ...
     def __reduce__(self) -> tuple[Callable[[bytes], OnlineLoops], tuple[bytes]]: ...
     @classmethod
     def _from_state(cls, state: bytes) -> OnlineLoops: ...
     def __len__(self) -> int: ...
     def push(self, t: float, point: npt.ArrayLike) -> Update:
-        """..."""
+        """Adds the pose at time ``t`` (seconds, after the last pose's) with ``point`` (``dim``
+        coordinates): row n of the plane, its pairs with every earlier pose. Takes microseconds;
+        the GIL is held.
+
+        Args:
+            t: its time, seconds.
+            point: its coordinates, shape ``(dim,)`` (a list or numpy array).
+
+        Returns:
+            :class:`Update`.
+
+        Raises:
+            InvalidTrajectoryError: a time or coordinate NaN or infinite, a time not after the
+                last pose's, a quaternion that is not unit (for the se3 metrics); the message
+                names the pose's index. Nothing changes then.
+            ValueError: a point of another number of coordinates.
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=1.0, dim=2)
+            >>> online.push(0.0, [0.0, 0.0]).created.tolist(), online.push(1.0, [0.5, 0.0]).pose
+            ([0], 1)
+        """
     def push_many(self, timestamps: npt.ArrayLike, points: npt.ArrayLike) -> Update:
-        """..."""
+        """Adds several poses at once, as that many :meth:`push` es, with one :class:`Update`
+        covering all of them (an :class:`OnlineSampler` gives the same candidates either way).
+        All or nothing: on an error none is added. The GIL is released.
+
+        Args:
+            timestamps: seconds, shape ``(n,)``, increasing, after the last pose's.
+            points: shape ``(n, dim)`` (or ``(n,)`` when ``dim`` is 1).
+
+        Returns:
+            :class:`Update`.
+
+        Raises:
+            InvalidTrajectoryError: as :meth:`push`, for the first bad pose, named by its index in
+                the whole trajectory.
+            ValueError: shapes that do not fit (rows, or columns other than ``dim``).
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=1.0, dim=2)
+            >>> update = online.push_many(np.arange(3.0), np.zeros((3, 2)))
+            >>> update.first_pose, update.pose, len(online)
+            (0, 2, 3)
+        """
     def rebuild(self, trajectory: Trajectory) -> None:
-        """..."""
+        """Restarts from ``trajectory``, the poses so far as the back end corrected them after a
+        loop closure, with one batch computation (threads as :func:`find_loops`, GIL released);
+        later pushes continue after its last pose. Component ids restart from 0 (in order of
+        each component's first pose); :class:`OnlineSampler` s reset themselves at their next
+        offer, and updates from before cannot be offered.
+
+        Args:
+            trajectory: a :class:`Trajectory` of ``dim`` coordinates.
+
+        Raises:
+            InvalidParameterError: a metric that does not fit the trajectory.
+            InvalidTrajectoryError: points the metric refuses.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+            >>> _ = online.push_many(np.arange(4.0), [0.0, 1.0, 1.0, 0.0])
+            >>> online.rebuild(il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 2.0, 3.0])))
+            >>> online.components["id"].tolist(), online.rebuild_count
+            ([0, 1, 2, 3], 1)
+        """
     def clear(self) -> None:
-        """..."""
+        """Forgets every pose: as new (ids restart too; :attr:`rebuild_count` goes up).
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=1.0, dim=1)
+            >>> _ = online.push(0.0, [0.0])
+            >>> online.clear()
+            >>> len(online), online.rebuild_count
+            (0, 1)
+        """
     def to_loops(self) -> Loops:
-        """..."""
+        """The loops of the poses so far as :func:`find_loops` gives them with ``separation=None``
+        (the same :class:`Loops`, components numbered in the batch's order, not by online id;
+        its warnings are in :attr:`Loops.warnings`, not issued).
+
+        Raises:
+            InvalidTrajectoryError: fewer than two poses.
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+            >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+            >>> online.to_loops().components["pair_count"].tolist()
+            [1, 1, 4, 1]
+        """
     def loop_duration(self, pose: int) -> float:
-        """..."""
+        """The loop duration τ of pose ``pose`` so far (paper, Eq. 6), seconds: how long the
+        trajectory has stayed within γ of it. :meth:`Loops.loop_duration` of :meth:`to_loops`
+        gives it for every pose.
+
+        Raises:
+            IndexError: not a pose index.
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+            >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+            >>> online.loop_duration(0), online.loop_duration(1)
+            (1.0, 2.0)
+        """
     def resolve(self, id: int) -> int:
-        """..."""
+        """The live id that component ``id`` now belongs to, following merges (``id`` itself for a
+        live id).
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+            >>> update = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 0.8, 0.0, 0.4])
+            >>> update.merged["retired"].tolist(), update.merged["survivor"].tolist(), online.resolve(3)
+            ([3], [2], 2)
+        """
     @property
     def gamma(self) -> float:
-        """..."""
+        """The threshold γ."""
     @property
     def dim(self) -> int:
-        """..."""
+        """Coordinates per pose."""
     @property
     def metric_name(self) -> str:
-        """..."""
+        """The metric's name (its spec, e.g. ``"euclidean"``)."""
     @property
     def rebuild_count(self) -> int:
-        """..."""
+        """How many times the engine was rebuilt or cleared: ids from before mean nothing now."""
     @property
     def timestamps(self) -> npt.NDArray[np.float64]:
-        """..."""
+        """The times of the poses pushed, seconds (a copy)."""
     @property
     def trajectory(self) -> Trajectory | None:
-        """..."""
+        """The poses pushed so far as a :class:`Trajectory` (a copy), or ``None`` before the second."""
     @property
     def components(self) -> Table:
-        """..."""
+        """The live loop components so far as a :class:`~inexact_loops.Table`, one row a component,
+        by id: the columns of :attr:`Loops.components` (``id`` is the online id; the half i ≤ j
+        for a non-trivial component, the whole set for a trivial one) and ``first_pose`` (the
+        pose whose row created it, the earliest of merged parts) and ``last_pose`` (the last pose
+        whose row extended it), int64.
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+            >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+            >>> table = online.components
+            >>> table["id"].tolist(), table["trivial"].tolist(), table["first_pose"].tolist()
+            ([0, 1, 2, 3], [True, True, False, True], [0, 1, 3, 3])
+        """
 
 @final
 class Update:
-    """..."""
+    """What a push changed. Returned by :meth:`OnlineLoops.push` and :meth:`OnlineLoops.push_many`;
+    hand it to :meth:`OnlineSampler.offer` for its loop-closure candidates.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> online = il.OnlineLoops(gamma=0.5, dim=1)
+        >>> update = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
+        >>> update.first_pose, update.pose, update.created.tolist()
+        (0, 3, [0, 1, 2, 3])
+        >>> update.runs["row"].tolist(), update.runs["start"].tolist(), update.runs["component"].tolist()
+        ([0, 1, 2, 3, 3], [0, 1, 1, 0, 3], [0, 1, 1, 2, 3])
+    """
 
     def __reduce__(self) -> tuple[Callable[[bytes], Update], tuple[bytes]]: ...
     @classmethod
@@ -2734,29 +2910,75 @@ class Update:
     def __hash__(self) -> int: ...
     @property
     def first_pose(self) -> int:
-        """..."""
+        """Index of the first pose the push added."""
     @property
     def pose(self) -> int:
-        """..."""
+        """Index of the last pose pushed: the keyframe."""
     @property
     def loop_duration_s(self) -> float:
-        """..."""
+        """The loop duration τ of the last pose so far, seconds."""
     @property
     def created(self) -> npt.NDArray[np.int64]:
-        """..."""
+        """Ids of the components the push created, in order (int64)."""
     @property
     def extended(self) -> npt.NDArray[np.int64]:
-        """..."""
+        """Ids (after the push) of the components that existed before it and gained pairs,
+        increasing (int64).
+        """
     @property
     def merged(self) -> Table:
-        """..."""
+        """The merges, in the order they happened, as a :class:`~inexact_loops.Table` of int64
+        columns: ``pose`` (the row whose runs joined them), ``retired`` and ``survivor`` (the
+        smaller id, which lives on).
+        """
     @property
     def runs(self) -> Table:
-        """..."""
+        """The new rows' runs, row by row, columns increasing, as a :class:`~inexact_loops.Table`
+        of int64 columns: ``row`` (the pose pushed), ``start`` and ``end`` (its earlier poses
+        within γ, inclusive; the pose itself when the run reaches the diagonal), ``component``
+        (its id once the row was added; a later row of the same batch may merge it) and
+        ``closest`` (the run's pose closest to ``row``).
+        """
 
 @final
 class OnlineSampler:
-    """..."""
+    """Picks loop-closure candidates from each :class:`Update` of an :class:`OnlineLoops`, as a
+    front end needs them while the robot drives: σ_ρ online (each component's pairs in the new
+    row drawn at ``rate`` per component per pose), a cap per component (per minute or per metre
+    of travel), a candidate the first time a component appears (P1 online) and the revisit
+    separation. Every random choice is keyed by (seed, pose, component): pushing poses one at a
+    time or in batches gives the same candidates, on every machine.
+
+    Args:
+        rate: σ_ρ, the expected number of candidates per component per pose (0: only the
+            first-appearance candidates); fractions are rounded randomly.
+        cap_per_minute: at most this many candidates per minute per component (a token bucket,
+            full at first); or
+        cap_per_metre: at most this many per metre of travel (the metric's unit) per component.
+            Give at most one.
+        first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
+            component has a pair to offer.
+        separation: only pairs this far apart along the trajectory: ``None`` (every pair), a path
+            length, or a :class:`Separation` (e.g. ``Separation.for_gamma(gamma)``, the
+            revisits of :func:`find_loops`' default).
+        seed: the seed.
+
+    Raises:
+        InvalidParameterError: a rate negative or not finite, a cap not positive and finite,
+            both caps, a negative separation, ``separation="auto"`` (it needs γ: pass
+            ``Separation.for_gamma(gamma)``).
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> online = il.OnlineLoops(gamma=1.0, dim=2)
+        >>> sampler = il.OnlineSampler(rate=0.0, separation=il.Separation(path=3.0))
+        >>> angle = np.linspace(0.0, 2.2 * np.pi, 60)
+        >>> for k, a in enumerate(angle):
+        ...     update = online.push(float(k), [2.0 * np.cos(a), 2.0 * np.sin(a)])
+        ...     for c in sampler.offer(online, update):
+        ...         print(c.keyframe, c.j, c.first)
+        50 0 True
+    """
 
     def __new__(
         cls,
@@ -2769,50 +2991,88 @@ class OnlineSampler:
         seed: int = 0,
     ) -> OnlineSampler: ...
     def offer(self, online: OnlineLoops, update: Update) -> list[Candidate]:
-        """..."""
+        """The loop-closure candidates that ``update`` made possible, by keyframe, component and
+        pose. Offer every update of ``online``, in order, once each (a sampler follows one
+        engine); after a rebuild it starts afresh.
+
+        Args:
+            online: the :class:`OnlineLoops` that returned ``update``.
+            update: its last push's :class:`Update`.
+
+        Returns:
+            list of :class:`Candidate`.
+
+        Raises:
+            InvalidParameterError: ``update`` is not ``online``'s last (an older one, another
+                engine's, one from before a rebuild, or an unpickled one), or was offered already.
+
+        Example:
+            >>> import inexact_loops as il
+            >>> online, sampler = il.OnlineLoops(gamma=0.5, dim=1), il.OnlineSampler()
+            >>> update = online.push_many([0.0, 1.0, 2.0], [0.0, 0.1, 0.0])
+            >>> [c.pair for c in sampler.offer(online, update) if c.first]
+            [(0, 1)]
+        """
     @property
     def rate(self) -> float:
-        """..."""
+        """σ_ρ's rate: candidates per component per pose."""
     @property
     def cap_per_minute(self) -> float | None:
-        """..."""
+        """The cap per minute per component, or ``None``."""
     @property
     def cap_per_metre(self) -> float | None:
-        """..."""
+        """The cap per metre of travel per component, or ``None``."""
     @property
     def first_on_appearance(self) -> bool:
-        """..."""
+        """Whether a component's first appearance brings a candidate (P1 online)."""
     @property
     def separation(self) -> Separation:
-        """..."""
+        """The separation the candidates keep (:class:`Separation`)."""
     @property
     def seed(self) -> int:
-        """..."""
+        """The seed."""
 
 @final
 class Candidate:
-    """..."""
+    """A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
+    Returned by :meth:`OnlineSampler.offer`.
 
-    def __new__(cls, *, keyframe: int, j: int, component: int, distance: float, first: bool) -> Candidate: ...
+    Args:
+        keyframe: the pose whose push made it possible (the later pose).
+        j: the earlier pose.
+        component: its component's id at the keyframe.
+        distance: δ(x_j, x_keyframe), the metric's unit.
+        first: emitted by the first-appearance rule rather than drawn.
+
+    Example:
+        >>> import inexact_loops as il
+        >>> c = il.Candidate(keyframe=12, j=3, component=1, distance=0.25, first=True)
+        >>> c.pair, c
+        ((3, 12), Candidate(keyframe=12, j=3, component=1, distance=0.25, first=True))
+    """
+
+    def __new__(
+        cls, *, keyframe: int, j: int, component: int, distance: float, first: bool
+    ) -> Candidate: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     def __eq__(self, other: object, /) -> bool: ...
     def __ne__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
     @property
     def keyframe(self) -> int:
-        """..."""
+        """The pose whose push made it possible: the later pose of the pair."""
     @property
     def j(self) -> int:
-        """..."""
+        """The earlier pose of the pair."""
     @property
     def pair(self) -> tuple[int, int]:
-        """..."""
+        """The pair ``(j, keyframe)``."""
     @property
     def component(self) -> int:
-        """..."""
+        """Its component's id at the keyframe."""
     @property
     def distance(self) -> float:
-        """..."""
+        """δ(x_j, x_keyframe), the metric's unit."""
     @property
     def first(self) -> bool:
-        """..."""
+        """Whether the first-appearance rule (P1 online) emitted it, rather than a draw."""

@@ -36,6 +36,61 @@ COVERED: dict[str, list[str]] = {}
 #: Public names tested in other files: name -> (file, test function).
 ELSEWHERE = {
     **{
+        name: ("python/test_online.py", test)
+        for test, names in {
+            "test_after_every_push_the_live_components_equal_find_loops": (
+                "OnlineLoops",
+                "OnlineLoops.push",
+                "OnlineLoops.components",
+                "OnlineLoops.to_loops",
+                "OnlineLoops.loop_duration",
+            ),
+            "test_push_many_equals_push_one_at_a_time": (
+                "OnlineLoops.push_many",
+                "OnlineSampler",
+                "OnlineSampler.offer",
+                "Update",
+                "Update.first_pose",
+                "Update.pose",
+                "Candidate",
+            ),
+            "test_an_update_reports_the_new_rows_runs_created_and_merged_components": (
+                "Update.runs",
+                "Update.created",
+                "Update.extended",
+                "Update.merged",
+                "Update.loop_duration_s",
+                "OnlineLoops.resolve",
+            ),
+            "test_rebuild_then_push_equals_the_batch_of_the_corrected_trajectory": (
+                "OnlineLoops.rebuild",
+                "OnlineLoops.rebuild_count",
+            ),
+            "test_the_getters_say_what_was_given": (
+                "OnlineLoops.gamma",
+                "OnlineLoops.dim",
+                "OnlineLoops.metric_name",
+                "OnlineLoops.timestamps",
+                "OnlineLoops.trajectory",
+                "OnlineSampler.rate",
+                "OnlineSampler.cap_per_minute",
+                "OnlineSampler.cap_per_metre",
+                "OnlineSampler.first_on_appearance",
+                "OnlineSampler.separation",
+                "OnlineSampler.seed",
+            ),
+            "test_p1_online_every_component_gets_its_closest_pair_when_it_appears": (
+                "Candidate.keyframe",
+                "Candidate.j",
+                "Candidate.pair",
+                "Candidate.component",
+                "Candidate.distance",
+                "Candidate.first",
+            ),
+        }.items()
+        for name in names
+    },
+    **{
         name: ("python/test_dask.py", "test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail")
         for name in (
             "SessionBlocks",

@@ -49,10 +49,23 @@ def online_replay(tmp_path_factory: pytest.TempPathFactory) -> Path:
         return path if path.is_absolute() else REPO / path
     cxx = find_compiler(os.environ.get("CXX", ""), "c++", "g++", "clang++")
     if cxx is None:
-        pytest.skip("no C++ compiler (c++, g++ or clang++) on PATH: the C++ example of the C ABI is not built")
+        pytest.skip(
+            "no C++ compiler (c++, g++ or clang++) on PATH: the C ABI's C++ example is not built"
+        )
     binary = tmp_path_factory.mktemp("cpp") / "online_replay"
-    command = [cxx, "-std=c++17", "-O2", "-Wall", "-Wextra", "-Werror", f"-I{HEADER_DIR}", str(EXAMPLE)]
-    subprocess.run([*command, str(static_library()), "-lpthread", "-ldl", "-lm", "-o", str(binary)], check=True)
+    command = [
+        cxx,
+        "-std=c++17",
+        "-O2",
+        "-Wall",
+        "-Wextra",
+        "-Werror",
+        f"-I{HEADER_DIR}",
+        str(EXAMPLE),
+    ]
+    subprocess.run(
+        [*command, str(static_library()), "-lpthread", "-ldl", "-lm", "-o", str(binary)], check=True
+    )
     return binary
 
 
@@ -64,10 +77,16 @@ def drive_tum(tmp_path_factory: pytest.TempPathFactory) -> Path:
     positions = traj.positions
     heading = np.arctan2(np.gradient(positions[:, 1]), np.gradient(positions[:, 0]))
     rows = np.c_[
-        traj.timestamps, positions, np.zeros((len(traj), 2)), np.sin(heading / 2), np.cos(heading / 2)
+        traj.timestamps,
+        positions,
+        np.zeros((len(traj), 2)),
+        np.sin(heading / 2),
+        np.cos(heading / 2),
     ]
     path = tmp_path_factory.mktemp("tum") / "drive.tum"
-    lines = ["# timestamp tx ty tz qx qy qz qw"] + [" ".join(repr(float(v)) for v in row) for row in rows]
+    lines = ["# timestamp tx ty tz qx qy qz qw"] + [
+        " ".join(repr(float(v)) for v in row) for row in rows
+    ]
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -86,13 +105,17 @@ def printed(binary: Path, *args: str) -> list[tuple[int, int, int, float]]:
     return out
 
 
-def python_candidates(path: Path, gamma: float, metric: str, **options) -> list[tuple[int, int, int, float]]:
+def python_candidates(
+    path: Path, gamma: float, metric: str, **options
+) -> list[tuple[int, int, int, float]]:
     """The same replay through the Python API: the file read as the example reads it."""
     rows = np.loadtxt(path, ndmin=2)
     t, values = rows[:, 0], rows[:, 1:].copy()
     if metric.startswith("se3"):
         q = values[:, 3:7]
-        norm = np.sqrt(q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3])
+        norm = np.sqrt(
+            q[:, 0] * q[:, 0] + q[:, 1] * q[:, 1] + q[:, 2] * q[:, 2] + q[:, 3] * q[:, 3]
+        )
         values[:, 3:7] = q / norm[:, None]
     else:
         values = values[:, :3]
@@ -113,7 +136,15 @@ CASES = [
         {"rate": 0.05, "cap_per_minute": 2.0, "separation": il.Separation(path=160.0)},
     ),
     (
-        ["--gamma", "30", "--metric", "se3(rotation_weight_m_per_rad=5)", "--rate", "0.02", "--no-first"]
+        [
+            "--gamma",
+            "30",
+            "--metric",
+            "se3(rotation_weight_m_per_rad=5)",
+            "--rate",
+            "0.02",
+            "--no-first",
+        ]
         + ["--cap-per-metre", "0.05", "--separation-time", "60", "--seed", "11"],
         30.0,
         "se3(rotation_weight_m_per_rad=5)",
@@ -143,15 +174,21 @@ def test_bad_lines_options_and_poses_are_one_line_errors(online_replay, tmp_path
     path.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n2 nan 0 0 0 0 0 1\n")
     result = run(online_replay, str(path), "--gamma", "1")
     assert result.returncode == 2
-    assert result.stderr.count("\n") == 1 and f"{path}:3:" in result.stderr and "NaN" in result.stderr, result.stderr
+    assert (
+        result.stderr.count("\n") == 1 and f"{path}:3:" in result.stderr and "NaN" in result.stderr
+    ), result.stderr
     path.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n0.5 2 0 0 0 0 0 1\n")
     result = run(online_replay, str(path), "--gamma", "1")
-    assert result.returncode == 2 and f"{path}:3:" in result.stderr and "0.5" in result.stderr, result.stderr
+    assert result.returncode == 2 and f"{path}:3:" in result.stderr and "0.5" in result.stderr, (
+        result.stderr
+    )
     path.write_text("0 0 0 0\n")
     result = run(online_replay, str(path), "--gamma", "1")
     assert result.returncode == 2 and "expected 8 numbers" in result.stderr, result.stderr
     result = run(online_replay, str(path), "--gamma", "-1")
-    assert result.returncode == 2 and "loops_online_new" in result.stderr and "-1" in result.stderr, result.stderr
+    assert (
+        result.returncode == 2 and "loops_online_new" in result.stderr and "-1" in result.stderr
+    ), result.stderr
     result = run(online_replay, str(path), "--gamma", "1", "--rate", "-2")
     assert result.returncode == 2 and "rate" in result.stderr, result.stderr
 
@@ -172,4 +209,18 @@ def test_the_header_is_valid_c(tmp_path):
         "    return options.first_on_appearance ? 0 : 1;\n"
         "}\n"
     )
-    subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Werror", f"-I{HEADER_DIR}", "-c", str(source), "-o", str(tmp_path / "use.o")], check=True)
+    subprocess.run(
+        [
+            cc,
+            "-std=c99",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            f"-I{HEADER_DIR}",
+            "-c",
+            str(source),
+            "-o",
+            str(tmp_path / "use.o"),
+        ],
+        check=True,
+    )

@@ -123,7 +123,10 @@ fn null_pointers_are_refused_and_free_of_null_does_nothing() {
     let mut count = 0;
     let mut buffer = [LoopsComponent::default(); 2];
     assert_eq!(unsafe { loops_online_components(o, ptr::null_mut(), 4, &mut count) }, LoopsStatus::NullPointer);
-    assert_eq!(unsafe { loops_online_components(o, buffer.as_mut_ptr(), 2, ptr::null_mut()) }, LoopsStatus::NullPointer);
+    assert_eq!(
+        unsafe { loops_online_components(o, buffer.as_mut_ptr(), 2, ptr::null_mut()) },
+        LoopsStatus::NullPointer
+    );
     assert_eq!(unsafe { loops_online_len(ptr::null()) }, 0);
     assert_eq!(unsafe { loops_online_component_count(ptr::null()) }, 0);
     let s = sampler(&default_options());
@@ -167,10 +170,7 @@ fn bad_poses_name_their_index_and_change_nothing() {
     assert!(last_error().contains("1.5"), "{}", last_error());
     // Wrong dimension.
     let wide = [3.0, 0.0, 0.0];
-    assert_eq!(
-        unsafe { loops_online_push(o, 3.0, wide.as_ptr(), 3, ptr::null_mut()) },
-        LoopsStatus::InvalidParameter
-    );
+    assert_eq!(unsafe { loops_online_push(o, 3.0, wide.as_ptr(), 3, ptr::null_mut()) }, LoopsStatus::InvalidParameter);
     assert!(last_error().contains("3 coordinates"), "{}", last_error());
     // A batch with a bad pose in the middle adds none of its poses.
     let times = [3.0, 4.0, 4.0];
@@ -184,10 +184,7 @@ fn bad_poses_name_their_index_and_change_nothing() {
     let mut tau = 0.0;
     assert_eq!(unsafe { loops_online_loop_duration(o, 7, &mut tau) }, LoopsStatus::IndexOutOfRange);
     // A rebuild needs two poses.
-    assert_eq!(
-        unsafe { loops_online_rebuild(o, times.as_ptr(), coords.as_ptr(), 1) },
-        LoopsStatus::InvalidTrajectory
-    );
+    assert_eq!(unsafe { loops_online_rebuild(o, times.as_ptr(), coords.as_ptr(), 1) }, LoopsStatus::InvalidTrajectory);
     assert_eq!(unsafe { loops_online_len(o) }, 3);
     unsafe { loops_online_free(o) };
 }
@@ -213,8 +210,7 @@ fn c_candidates(options: &LoopsSamplerOptions, capacity: usize) -> Vec<LoopsCand
         let mut chunk = vec![LoopsCandidate::default(); capacity.max(1)];
         while offset < count {
             let mut written = 0;
-            let status =
-                unsafe { loops_sampler_candidates(s, offset, chunk.as_mut_ptr(), chunk.len(), &mut written) };
+            let status = unsafe { loops_sampler_candidates(s, offset, chunk.as_mut_ptr(), chunk.len(), &mut written) };
             assert_eq!(status, LoopsStatus::Ok);
             assert!(written > 0);
             all.extend_from_slice(&chunk[..written]);
@@ -235,8 +231,13 @@ fn c_candidates(options: &LoopsSamplerOptions, capacity: usize) -> Vec<LoopsCand
 
 #[test]
 fn candidates_equal_the_rust_apis_whatever_the_buffer() {
-    let options =
-        LoopsSamplerOptions { rate: 0.3, cap_kind: LoopsCapKind::PerMinute, cap_value: 4.0, seed: 7, ..default_options() };
+    let options = LoopsSamplerOptions {
+        rate: 0.3,
+        cap_kind: LoopsCapKind::PerMinute,
+        cap_value: 4.0,
+        seed: 7,
+        ..default_options()
+    };
     let (times, coords) = laps();
     let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 3, 2.5).unwrap();
     let mut rust = OnlineSampler::new(OnlineSamplerOptions {
@@ -268,8 +269,7 @@ fn candidates_equal_the_rust_apis_whatever_the_buffer() {
 fn components_and_rebuild() {
     let (times, coords) = laps();
     let o = online("euclidean", 3, 2.5);
-    let status =
-        unsafe { loops_online_push_many(o, times.as_ptr(), coords.as_ptr(), times.len(), 3, ptr::null_mut()) };
+    let status = unsafe { loops_online_push_many(o, times.as_ptr(), coords.as_ptr(), times.len(), 3, ptr::null_mut()) };
     assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
     let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 3, 2.5).unwrap();
     engine.push_many(&times, &coords).unwrap();
@@ -281,7 +281,10 @@ fn components_and_rebuild() {
     let mut buffer = vec![LoopsComponent::default(); n];
     assert_eq!(unsafe { loops_online_components(o, buffer.as_mut_ptr(), n, &mut count) }, LoopsStatus::Ok);
     for (c, (id, core)) in buffer.iter().zip(engine.components()) {
-        assert_eq!((c.id, c.pair_count, c.area_s2, c.closest_distance), (id, core.pair_count, core.area_s2, core.closest_distance));
+        assert_eq!(
+            (c.id, c.pair_count, c.area_s2, c.closest_distance),
+            (id, core.pair_count, core.area_s2, core.closest_distance)
+        );
     }
     // Rebuild from the first half, then push the rest: the same components.
     let half = times.len() / 2;
@@ -289,7 +292,14 @@ fn components_and_rebuild() {
     assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
     assert_eq!(unsafe { loops_online_len(o) }, half);
     let status = unsafe {
-        loops_online_push_many(o, times[half..].as_ptr(), coords[3 * half..].as_ptr(), times.len() - half, 3, ptr::null_mut())
+        loops_online_push_many(
+            o,
+            times[half..].as_ptr(),
+            coords[3 * half..].as_ptr(),
+            times.len() - half,
+            3,
+            ptr::null_mut(),
+        )
     };
     assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
     assert_eq!(unsafe { loops_online_component_count(o) }, n);

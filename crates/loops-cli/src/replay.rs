@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use loops_core::{Cap, Candidate, Interrupt, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Trajectory, Update};
+use loops_core::{Candidate, Cap, Interrupt, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Trajectory, Update};
 use serde::Serialize;
 
 use crate::args::{EngineArgs, InputArgs};

@@ -34,7 +34,11 @@ fn loops(dir: &Path, args: &[&str]) -> Output {
 }
 
 /// The candidates of the Rust API on the same poses: (keyframe, j, component, distance, first).
-fn rust_candidates(times: &[f64], points: &[[f64; 3]], options: OnlineSamplerOptions) -> Vec<(u64, u64, u64, f64, bool)> {
+fn rust_candidates(
+    times: &[f64],
+    points: &[[f64; 3]],
+    options: OnlineSamplerOptions,
+) -> Vec<(u64, u64, u64, f64, bool)> {
     let mut online = OnlineLoops::new(loops_core::MetricSpec::Euclidean, 3, 40.0).unwrap();
     let mut sampler = OnlineSampler::new(options).unwrap();
     let mut out = Vec::new();
@@ -120,7 +124,10 @@ fn each_keyframes_line_parses_and_its_candidates_are_the_rust_apis() {
     assert_same(&candidates(&every), &expected);
 
     // The paper's S_gamma, no first-appearance candidates.
-    let plain = lines(&loops(&dir, &["replay", "drive.tum", "--gamma", "40", "--rate", "0.01", "--no-first", "--no-separation"]));
+    let plain = lines(&loops(
+        &dir,
+        &["replay", "drive.tum", "--gamma", "40", "--rate", "0.01", "--no-first", "--no-separation"],
+    ));
     let options = OnlineSamplerOptions { rate: 0.01, first_on_appearance: false, ..OnlineSamplerOptions::default() };
     assert_same(&candidates(&plain), &rust_candidates(&times, &points, options));
 

@@ -53,15 +53,17 @@ fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
 ///         does not take ``dim`` coordinates.
 ///
 /// Example:
-///     Out along a line and back: the way back revisits the way out.
+///     A 95% circle of radius 10 m, pushed pose by pose: its ends come within γ of each other.
 ///
-///     >>> import inexact_loops as il
-///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
-///     >>> for t, x in enumerate([0.0, 1.0, 2.0, 3.0, 2.0, 1.0]):
-///     ...     update = online.push(float(t), [x])
-///     >>> update.pose, len(online), online.components["pair_count"].tolist()
-///     (5, 6, [6, 4])
-///     >>> online.to_loops() == il.find_loops(online.trajectory, gamma=0.5, separation=None)
+///     >>> import numpy as np, inexact_loops as il
+///     >>> angle = np.linspace(0, 0.95 * 2 * np.pi, 200)
+///     >>> points = 10 * np.c_[np.cos(angle), np.sin(angle)]
+///     >>> online = il.OnlineLoops(gamma=4.0, dim=2)
+///     >>> for k in range(200):
+///     ...     update = online.push(0.1 * k, points[k])
+///     >>> online.components["trivial"].tolist(), online.components["first_pose"].tolist()
+///     ([True, False], [0, 197])
+///     >>> online.to_loops() == il.find_loops(online.trajectory, gamma=4.0, separation=None)
 ///     True
 #[pyclass(module = "inexact_loops._core")]
 #[derive(Debug)]
@@ -84,7 +86,7 @@ pub(crate) struct OnlineLoops {
 ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
 ///     >>> update = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
 ///     >>> update.first_pose, update.pose, update.created.tolist()
-///     (0, 3, [0, 1, 2])
+///     (0, 3, [0, 1, 2, 3])
 ///     >>> update.runs["row"].tolist(), update.runs["start"].tolist(), update.runs["component"].tolist()
 ///     ([0, 1, 2, 3, 3], [0, 1, 1, 0, 3], [0, 1, 1, 2, 3])
 #[pyclass(frozen, module = "inexact_loops._core")]
@@ -131,9 +133,10 @@ impl OnlineLoops {
         let array = real_array(py, point, "point")?;
         let dim = self.inner.dim();
         if array.shape.len() > 1 || array.values.len() != dim {
+            let shape: Vec<String> = array.shape.iter().map(ToString::to_string).collect();
+            let shape = if shape.len() == 1 { format!("({},)", shape[0]) } else { format!("({})", shape.join(", ")) };
             return Err(value_error(format!(
-                "point must have the engine's {dim} coordinate(s), shape ({dim},), got shape {:?}",
-                array.shape
+                "point must have the engine's {dim} coordinate(s), shape ({dim},), got shape {shape}"
             )));
         }
         Ok(array.values)
@@ -180,7 +183,8 @@ impl OnlineLoops {
             rebuilt_len: state.rebuilt_len,
         };
         let (rebuilt, dim) = (state.rebuilt_len, state.dim);
-        let corrupt = |what: String| crate::pickling::unpickling_error(py, format!("cannot unpickle OnlineLoops: {what}"));
+        let corrupt =
+            |what: String| crate::pickling::unpickling_error(py, format!("cannot unpickle OnlineLoops: {what}"));
         if Some(state.coords.len()) != state.timestamps_s.len().checked_mul(dim) || rebuilt > state.timestamps_s.len() {
             return Err(corrupt("its poses do not fit together".to_owned()));
         }
@@ -266,7 +270,12 @@ impl OnlineLoops {
     ///     >>> update = online.push_many(np.arange(3.0), np.zeros((3, 2)))
     ///     >>> update.first_pose, update.pose, len(online)
     ///     (0, 2, 3)
-    fn push_many(&mut self, py: Python<'_>, timestamps: &Bound<'_, PyAny>, points: &Bound<'_, PyAny>) -> PyResult<Update> {
+    fn push_many(
+        &mut self,
+        py: Python<'_>,
+        timestamps: &Bound<'_, PyAny>,
+        points: &Bound<'_, PyAny>,
+    ) -> PyResult<Update> {
         let (t, coords, dim) = timestamps_and_points(py, timestamps, points, "points")?;
         let expected = self.inner.dim();
         if dim != expected && !t.is_empty() {
@@ -322,7 +331,8 @@ impl OnlineLoops {
     }
 
     /// The loops of the poses so far as :func:`find_loops` gives them with ``separation=None``
-    /// (the same :class:`Loops`, components numbered in the batch's order, not by online id).
+    /// (the same :class:`Loops`, components numbered in the batch's order, not by online id;
+    /// its warnings are in :attr:`Loops.warnings`, not issued).
     ///
     /// Raises:
     ///     InvalidTrajectoryError: fewer than two poses.
@@ -332,7 +342,7 @@ impl OnlineLoops {
     ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
     ///     >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
     ///     >>> online.to_loops().components["pair_count"].tolist()
-    ///     [1, 1, 3, 1]
+    ///     [1, 1, 4, 1]
     fn to_loops(&self, py: Python<'_>) -> PyResult<Loops> {
         let inner = &self.inner;
         let loops = detached(py, move || Ok(inner.to_loops()?))?;
@@ -363,9 +373,9 @@ impl OnlineLoops {
     /// Example:
     ///     >>> import inexact_loops as il
     ///     >>> online = il.OnlineLoops(gamma=0.5, dim=1)
-    ///     >>> update = online.push_many([0.0, 1.0, 2.0, 3.0, 4.0], [0.0, 1.0, 0.0, 1.0, 0.0])
-    ///     >>> [online.resolve(m) for m in update.merged["retired"].tolist()] == update.merged["survivor"].tolist()
-    ///     True
+    ///     >>> update = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 0.8, 0.0, 0.4])
+    ///     >>> update.merged["retired"].tolist(), update.merged["survivor"].tolist(), online.resolve(3)
+    ///     ([3], [2], 2)
     fn resolve(&self, id: ComponentId) -> ComponentId {
         self.inner.resolve(id)
     }
@@ -403,7 +413,9 @@ impl OnlineLoops {
     /// The poses pushed so far as a :class:`Trajectory` (a copy), or ``None`` before the second.
     #[getter]
     fn trajectory(&self) -> Option<Trajectory> {
-        self.inner.trajectory().map(|traj| Trajectory::read(traj.clone(), None, Some(self.inner.metric())))
+        // The metric is named only where it is not the trajectory's own default.
+        let metric = Some(self.inner.metric()).filter(|&metric| metric != loops_core::MetricSpec::default());
+        self.inner.trajectory().map(|traj| Trajectory::read(traj.clone(), None, metric))
     }
 
     /// The live loop components so far as a :class:`~inexact_loops.Table`, one row a component,
@@ -418,7 +430,7 @@ impl OnlineLoops {
     ///     >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
     ///     >>> table = online.components
     ///     >>> table["id"].tolist(), table["trivial"].tolist(), table["first_pose"].tolist()
-    ///     ([0, 1, 2], [True, True, False], [0, 1, 3])
+    ///     ([0, 1, 2, 3], [True, True, False, True], [0, 1, 3, 3])
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let cs: Vec<&loops_core::OnlineComponent> = self.inner.components().map(|(_, c)| c).collect();

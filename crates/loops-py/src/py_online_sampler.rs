@@ -43,7 +43,7 @@ use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 ///     ...     update = online.push(float(k), [2.0 * np.cos(a), 2.0 * np.sin(a)])
 ///     ...     for c in sampler.offer(online, update):
 ///     ...         print(c.keyframe, c.j, c.first)
-///     55 0 True
+///     50 0 True
 #[pyclass(module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct OnlineSampler {
@@ -167,10 +167,9 @@ impl OnlineSampler {
                 update.inner.first_pose, update.inner.pose
             )));
         }
-        let candidates = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            self.inner.offer(&online.inner, &update.inner)
-        }))
-        .map_err(|payload| PyErr::from(Failure::Panic(crate::panic_message(payload.as_ref()))))?;
+        let candidates =
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.inner.offer(&online.inner, &update.inner)))
+                .map_err(|payload| PyErr::from(Failure::Panic(crate::panic_message(payload.as_ref()))))?;
         self.offered = Some(latest);
         Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
     }
