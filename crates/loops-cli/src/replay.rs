@@ -313,7 +313,7 @@ mod tests {
     fn keyframes_every_second_end_with_the_last_pose() {
         let times = [0.0, 0.4, 0.9, 1.0, 1.5, 2.2, 2.3];
         assert_eq!(keyframes(&times, 0.0), vec![0, 1, 2, 3, 4, 5, 6]);
-        assert_eq!(keyframes(&times, 1.0), vec![0, 3, 6]);
+        assert_eq!(keyframes(&times, 1.0), vec![0, 3, 5, 6]);
         assert_eq!(keyframes(&times, 10.0), vec![0, 6]);
         assert_eq!(keyframes(&[], 1.0), Vec::<usize>::new());
         assert_eq!(keyframes(&[5.0], 1.0), vec![0]);

@@ -165,3 +165,40 @@ fn bad_flags_and_bad_poses_are_one_line_errors() {
     assert!(stderr.contains("back.tum") && stderr.contains("line 3"), "{stderr}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn ctrl_c_stops_after_the_keyframe_in_progress_and_prints_the_figures() {
+    use std::io::{BufRead, BufReader};
+    let dir = std::env::temp_dir().join(format!("loops-replay-interrupt-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let synth = loops(&dir, &["synth", "long.tum", "--duration-s", "7200", "--seed", "2"]);
+    assert!(synth.status.success(), "{}", String::from_utf8_lossy(&synth.stderr));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_loops"))
+        .args(["replay", "long.tum", "--gamma", "40"])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("loops runs");
+    // Once the first keyframe's line is out, the replay is under way: interrupt it.
+    let mut stdout = BufReader::new(child.stdout.take().expect("stdout"));
+    let mut first = String::new();
+    stdout.read_line(&mut first).expect("a line");
+    assert!(first.starts_with("{\"pose\":0,"), "{first}");
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().expect("kill runs");
+    assert!(status.success());
+    let rest: Vec<String> = stdout.lines().map(|line| line.expect("a line")).collect();
+    let output = child.wait_with_output().expect("it ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("interrupted after") && stderr.contains("p99"), "{stderr}");
+    // Every line printed is whole, and the figures count exactly the poses printed.
+    let poses = 1 + rest.len();
+    for line in &rest {
+        serde_json::from_str::<Value>(line).expect("a whole JSON line");
+    }
+    assert!(stderr.contains(&format!("interrupted after {poses} poses")), "{poses}: {stderr}");
+    assert!(poses < 72_000, "the replay ran to the end before the interrupt");
+    let _ = std::fs::remove_dir_all(&dir);
+}
