@@ -9,7 +9,7 @@
 #include <stdint.h>
 
 /**
- * What a call of this library did: [`Ok`](Self::Ok), or why it did nothing (the message is
+ * What a call of this library did: `Ok` (`LOOPS_STATUS_OK` in C), or why it did nothing (the message is
  * [`loops_last_error`]).
  */
 typedef enum LoopsStatus {

@@ -40,7 +40,7 @@ use loops_core::{
     Trajectory, Update,
 };
 
-/// What a call of this library did: [`Ok`](Self::Ok), or why it did nothing (the message is
+/// What a call of this library did: `Ok` (`LOOPS_STATUS_OK` in C), or why it did nothing (the message is
 /// [`loops_last_error`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
