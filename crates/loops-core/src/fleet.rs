@@ -56,7 +56,7 @@ const LEAF_SIZE: usize = 16;
 /// assert_eq!(between[0].poses, [[0, 0], [1, 1]]); // Monday's pose 0 with Tuesday's pose 1
 /// # Ok::<(), loops_core::Error>(())
 /// ```
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Fleet {
     names: Vec<String>,
     sessions: Vec<Trajectory>,
@@ -234,6 +234,7 @@ impl Default for FleetOptions {
 }
 
 /// A loop component of a fleet: within one session, or where two sessions overlap.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, PartialEq)]
 pub struct FleetComponent {
     /// Index in [`FleetLoops::components`] (and in the joint [`Loops::components`]).
@@ -258,6 +259,7 @@ pub struct FleetComponent {
 
 /// What two sessions share (or one session alone, a = b): one entry of the sparse overlap
 /// matrix.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SessionPair {
     /// The sessions, a ≤ b.
@@ -275,7 +277,7 @@ pub struct SessionPair {
 }
 
 /// S_γ over a fleet, its loop components per block, and the measures per session pair.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FleetLoops {
     loops: Loops,
     starts: Vec<usize>,
@@ -429,6 +431,60 @@ impl FleetLoops {
     /// The component ids between two different sessions.
     pub fn between_sessions(&self) -> Vec<usize> {
         (0..self.blocks.len()).filter(|&c| self.blocks[c][0] != self.blocks[c][1]).collect()
+    }
+
+    /// The fleet result of `loops`, found over `fleet`'s joint trajectory by
+    /// [`find_fleet_loops`] with `pruning` (as [`FleetLoops::pruning`] gives it): what a
+    /// [`FleetLoops`] saved as its [`Loops`] (with the `serde` feature) and its fleet reads back
+    /// as. O(poses + runs).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] when they do not fit together: loops of another trajectory
+    /// (pose count or times), a component or a run that spans two sessions, a component's
+    /// closest pair outside its block, or [`Pruning::Auto`] (never the pruning of a scan).
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Euclidean, Fleet, FleetLoops, FleetOptions, Trajectory, find_fleet_loops};
+    /// let out = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
+    /// let back = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
+    /// let fleet = Fleet::new(vec![("monday".into(), out), ("tuesday".into(), back)])?;
+    /// let found = find_fleet_loops(&fleet, &Euclidean, 1.0, &FleetOptions::default())?;
+    /// let again = FleetLoops::from_loops(&fleet, found.loops().clone(), found.pruning())?;
+    /// assert_eq!(again, found);
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn from_loops(fleet: &Fleet, loops: Loops, pruning: Pruning) -> Result<Self> {
+        let invalid = |reason: String| Error::InvalidState { what: "FleetLoops", reason };
+        if pruning == Pruning::Auto {
+            return Err(invalid("its pruning is auto, which no scan leaves unresolved".to_owned()));
+        }
+        loops.check_trajectory(fleet.joint()).map_err(|e| invalid(e.to_string()))?;
+        let session = |index: usize| fleet.session_of(index);
+        let mut blocks = Vec::with_capacity(loops.components().len());
+        for c in loops.components() {
+            let [a, b] = [session(c.i_range[0]), session(c.j_range[0])];
+            let fits = a <= b
+                && session(c.i_range[1]) == a
+                && session(c.j_range[1]) == b
+                && session(c.closest_pair[0]) == a
+                && session(c.closest_pair[1]) == b;
+            if !fits {
+                return Err(invalid(format!(
+                    "component {} (rows {:?}, columns {:?}, closest pair {:?}) does not lie in one block of sessions",
+                    c.id, c.i_range, c.j_range, c.closest_pair
+                )));
+            }
+            blocks.push([a, b]);
+        }
+        if let Some(run) = loops.runs().find(|r| session(r.start) != session(r.end)) {
+            return Err(invalid(format!(
+                "the run of row {} from column {} to {} spans two sessions",
+                run.row, run.start, run.end
+            )));
+        }
+        let spans_s = fleet.sessions.iter().map(Trajectory::span_s).collect();
+        Ok(Self { loops, starts: fleet.starts.clone(), spans_s, blocks, pruning })
     }
 }
 
