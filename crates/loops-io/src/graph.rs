@@ -17,7 +17,10 @@ use crate::text::{self, Lines};
 use crate::timing::Timing;
 
 /// A pose graph: its pose vertices as a table, and its edges between them.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// It serialises with serde (the Python bindings pickle it); one read back, or built by hand,
+/// is not checked: its fields are public.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoseGraph {
     /// The pose vertices, sorted by id: positions, orientations, the line of each, and times
     /// from the ids (see [`read_pose_graph`]).
@@ -34,7 +37,7 @@ pub struct PoseGraph {
 
 /// An edge of a [`PoseGraph`]: a measured relative pose from vertex `from` to vertex `to`, and
 /// how much it is trusted (its information matrix).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GraphEdge {
     /// The id of the first vertex.
     pub from: u64,
@@ -53,7 +56,7 @@ pub struct GraphEdge {
 }
 
 /// The measurement of a [`GraphEdge`]: the pose of its second vertex in the frame of its first.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum RelativePose {
     /// A 2-D edge (`EDGE_SE2`, `EDGE2`): `dx dy dθ` as written, metres and radians.
     Se2 {

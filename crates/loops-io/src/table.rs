@@ -13,7 +13,7 @@ use crate::error::{IoError, MessageLocation, Result, TrajectoryMessages};
 /// All vectors have one entry per pose. Positions are in the file's units (metres for TUM).
 /// Poses come from lines of a text file ([`source_lines`](Self::source_lines)) or from messages
 /// of MCAP files ([`messages`](Self::messages)).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoseTable {
     /// The file read (the first one, for several MCAP files).
     pub path: PathBuf,
@@ -59,7 +59,7 @@ pub(crate) fn exact_seconds(ns: i64) -> String {
 }
 
 /// Where the poses of a [`PoseTable`] read from MCAP files came from.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct MessageSources {
     /// The files read, in the order given.
     pub files: Vec<PathBuf>,
@@ -75,7 +75,7 @@ pub struct MessageSources {
 }
 
 /// One message in one of the files of [`MessageSources`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct MessageRef {
     /// Index into [`MessageSources::files`].
     pub file: usize,

@@ -15,7 +15,7 @@ use crate::rotation::{normalized, quaternion_from_yaw};
 /// How the vertices of an edge-only pose graph were made: by composing its odometry edges from
 /// the first vertex at the origin. Such a trajectory is dead reckoning: its error grows along
 /// the path, and loops that the loop-closure edges close may not close in it.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct EdgeChain {
     /// The file.
     pub path: PathBuf,
