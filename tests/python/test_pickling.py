@@ -1,6 +1,8 @@
 """Every class of the package pickles and unpickles to an equal object, in every pickle protocol
-and across processes (multiprocessing with the spawn start method); a corrupt or forged state
-raises ``pickle.UnpicklingError`` naming what is wrong, never a crash."""
+and across processes (multiprocessing and concurrent.futures with the spawn start method); a
+corrupt or forged state raises ``pickle.UnpicklingError`` naming what is wrong, never a crash.
+Fleet results and pose graphs travel with their fleet or trajectory, which pickle writes once
+for all the objects pickled together."""
 
 from __future__ import annotations
 
@@ -164,3 +166,225 @@ def test_a_forged_state_that_does_not_fit_together_names_the_part(results):
         pickle.UnpicklingError, match=r"invalid saved Samples: sample \d+ has the pair"
     ):
         restore(forged)
+
+
+# ---------------------------------------------------------------------------------------------
+# Fleets, tiled fleet loops and pose graphs
+# ---------------------------------------------------------------------------------------------
+
+
+def write_tum(path: Path, t: np.ndarray, xyz: np.ndarray) -> Path:
+    q = np.c_[np.zeros((len(t), 3)), np.ones(len(t))]
+    np.savetxt(path, np.c_[t, xyz, q])
+    return path
+
+
+@pytest.fixture(scope="module")
+def fleet_results(tmp_path_factory) -> dict[str, object]:
+    from inexact_loops.dask import find_fleet_loops_dask
+
+    fleet = il.urban_fleet(vehicles=3, duration_s=300.0, seed=2)
+    loops = il.find_fleet_loops(fleet, gamma=30.0)
+    folder = tmp_path_factory.mktemp("fleet")
+    # Two sessions read from files, for a metric and on a plane: what a Fleet keeps beside poses.
+    x = np.linspace(0.0, 40.0, 81)
+    paths = {
+        "monday": write_tum(folder / "monday.tum", np.arange(81.0), np.c_[x, 0 * x, 0 * x]),
+        "tuesda": write_tum(
+            folder / "tuesda.tum", 500 + np.arange(81.0), np.c_[x[::-1], 1 + 0 * x, 0 * x]
+        ),
+    }
+    read = il.Fleet(paths, metric="se3(rotation_weight_m_per_rad=10)")
+    planar = il.Fleet(paths, axes=(0, 1))
+    sessions = {name: fleet.session(name) for name in fleet.names}
+    graph_path = folder / "square.g2o"
+    graph_path.write_text(
+        "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 1.5708\nVERTEX_SE2 2 1 1 3.1416\n"
+        "EDGE_SE2 0 1 1 0 1.5708 10 0 0 10 0 100\nEDGE_SE2 1 2 1 0 1.5708 10 0 0 10 0 100\n"
+        "EDGE_SE2 2 0 1 1 -3.1416 5 0 0 5 0 50\n"
+    )
+    graph3_path = folder / "two.g2o"
+    graph3_path.write_text(
+        "VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nVERTEX_SE3:QUAT 1 1 0 0 0 0 0 1\n"
+        "EDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1\n"
+    )
+    chain_path = folder / "edges.graph"
+    chain_path.write_text(
+        "EDGE2 0 1 1 0 1.5707963267948966\nEDGE2 1 2 1 0 0\nEDGE2 2 0 -1 1 -1.5\n"
+    )
+    with pytest.warns(il.DeadReckoningWarning):
+        chained = il.read_pose_graph(chain_path, chain_edges=True)
+    return {
+        "fleet": fleet,
+        "read fleet": read,
+        "planar fleet": planar,
+        "fleet loops": loops,
+        "paper fleet loops": il.find_fleet_loops(fleet, gamma=30.0, separation=None),
+        "read fleet loops": il.find_fleet_loops(read, gamma=2.0),
+        "fleet samples": il.sample_fleet(loops, "closest-first", budget=80, seed=1),
+        "between samples": il.sample_fleet(loops, "one", budget=40, seed=2, between_only=True),
+        "baseline fleet samples": il.sample_fleet(loops, "lio-sam", budget=40, seed=3),
+        "tiled fleet loops": find_fleet_loops_dask(sessions, 30.0, block=500),
+        "pose graph": il.read_pose_graph(graph_path, metric="se2(rotation_weight_m_per_rad=2)"),
+        "3-D pose graph": il.read_pose_graph(graph3_path),
+        "chained pose graph": chained,
+    }
+
+
+@pytest.mark.parametrize("protocol", range(2, pickle.HIGHEST_PROTOCOL + 1))
+def test_fleet_classes_and_pose_graphs_round_trip_to_equal_objects(fleet_results, protocol):
+    for name, value in fleet_results.items():
+        back = pickle.loads(pickle.dumps(value, protocol=protocol))
+        assert type(back) is type(value), name
+        assert back == value, name
+        assert hash(back) == hash(value), name
+        assert copy.deepcopy(value) == value, name
+        assert repr(back) == repr(value), name
+
+
+def test_fleet_equality_compares_the_whole_value(fleet_results):
+    r = fleet_results
+    assert r["fleet"] != r["read fleet"] and r["read fleet"] != r["planar fleet"]
+    assert r["fleet loops"] != r["paper fleet loops"]
+    assert r["fleet samples"] != r["between samples"]
+    assert r["fleet"] != r["fleet"].joint and r["fleet loops"] != r["fleet loops"].loops
+    assert r["pose graph"] != r["3-D pose graph"]
+    again = il.urban_fleet(vehicles=3, duration_s=300.0, seed=2)
+    assert again == r["fleet"] and hash(again) == hash(r["fleet"])
+    assert il.find_fleet_loops(again, gamma=30.0) == r["fleet loops"]
+
+
+def test_objects_pickled_together_share_their_fleet_again(fleet_results):
+    r = fleet_results
+    fleet, loops, samples = pickle.loads(
+        pickle.dumps([r["fleet"], r["fleet loops"], r["fleet samples"]])
+    )
+    assert loops.fleet is fleet and samples.fleet is fleet
+    graph = pickle.loads(pickle.dumps(r["pose graph"]))
+    assert graph.trajectory == r["pose graph"].trajectory
+    assert graph.trajectory.metric_name == r["pose graph"].trajectory.metric_name
+
+
+def test_unpickled_fleet_results_work_as_the_originals(fleet_results):
+    r = fleet_results
+    fleet = pickle.loads(pickle.dumps(r["read fleet"]))
+    assert fleet.names == ["monday", "tuesda"]
+    assert fleet.session("tuesda").metric_name == r["read fleet"].session("tuesda").metric_name
+    assert il.find_fleet_loops(fleet, gamma=2.0) == r["read fleet loops"]
+    loops = pickle.loads(pickle.dumps(r["fleet loops"]))
+    for key, column in r["fleet loops"].components.items():
+        np.testing.assert_array_equal(loops.components[key], column, err_msg=key)
+    np.testing.assert_array_equal(loops.overlap_matrix(), r["fleet loops"].overlap_matrix())
+    assert loops.pruning == r["fleet loops"].pruning and loops.loops == r["fleet loops"].loops
+    again = il.sample_fleet(loops, "closest-first", budget=80, seed=1)
+    assert again == r["fleet samples"]
+    samples = pickle.loads(pickle.dumps(r["between samples"]))
+    for key, column in r["between samples"].table.items():
+        np.testing.assert_array_equal(samples.table[key], column, err_msg=key)
+    tiled = pickle.loads(pickle.dumps(r["tiled fleet loops"]))
+    for key, column in r["tiled fleet loops"].components.items():
+        np.testing.assert_array_equal(tiled.components[key], column, err_msg=key)
+    np.testing.assert_array_equal(tiled.overlap_matrix(), r["tiled fleet loops"].overlap_matrix())
+    graph = pickle.loads(pickle.dumps(r["pose graph"]))
+    for key, column in r["pose graph"].edges.items():
+        np.testing.assert_array_equal(graph.edges[key], column, err_msg=key)
+    found = il.find_loops(graph.trajectory, gamma=5.0, separation=None)
+    assert graph.edge_verdicts(found) == graph.edge_verdicts(found)
+    assert graph.chained is False and pickle.loads(pickle.dumps(r["chained pose graph"])).chained
+
+
+def test_fleet_results_cross_process_boundaries():
+    from concurrent.futures import ProcessPoolExecutor
+
+    fleets = [il.urban_fleet(vehicles=2, duration_s=200.0, seed=s) for s in (4, 5)]
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(2, mp_context=context) as pool:
+        found = list(pool.map(functools.partial(il.find_fleet_loops, gamma=30.0), fleets))
+        samples = list(
+            pool.map(functools.partial(il.sample_fleet, sampler="rho", budget=30, seed=0), found)
+        )
+    assert found == [il.find_fleet_loops(f, gamma=30.0) for f in fleets]
+    assert samples == [il.sample_fleet(f, "rho", budget=30, seed=0) for f in found]
+    assert [s.fleet for s in samples] == fleets
+
+
+def test_fleet_results_echo_through_a_spawned_pool(fleet_results):
+    values = list(fleet_results.values())
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        echoed = pool.map(copy.copy, values)
+    assert echoed == values
+
+
+def test_corrupt_and_forged_fleet_states_are_clear_errors(fleet_results):
+    r = fleet_results
+    restore, fleet_state = state_of(r["read fleet"])
+    assert restore(fleet_state) == r["read fleet"]
+    forged_names = fleet_state.replace(b"\xa6tuesda", b"\xa6monday", 1)
+    forged_metric = fleet_state.replace(b"se3(rotation", b"so3(rotation", 1)
+    assert forged_names != fleet_state and forged_metric != fleet_state
+    cases = {
+        fleet_state[: len(fleet_state) // 2]: "cannot unpickle Fleet: ",
+        forged_names: "cannot unpickle Fleet: ",
+        forged_metric: "cannot unpickle Fleet: session ",
+        fleet_state[:15] + b"\x02" + fleet_state[16:]: "it was pickled in state format 2",
+        state_of(r["fleet"].joint)[1]: "cannot unpickle Fleet: the state is of a Trajectory",
+    }
+    for forged, message in cases.items():
+        with pytest.raises(pickle.UnpicklingError) as error:
+            restore(forged)
+        assert message in str(error.value)
+        assert "\n" not in str(error.value)
+
+    # States that come with the wrong object, or with another fleet's.
+    restore, (state, fleet) = r["fleet loops"].__reduce__()
+    assert restore(state, fleet) == r["fleet loops"]
+    with pytest.raises(pickle.UnpicklingError, match="its fleet is a Trajectory, not a Fleet"):
+        restore(state, r["fleet"].joint)
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle FleetLoops: invalid saved"):
+        restore(state, r["read fleet"])
+    restore, (state, fleet) = r["fleet samples"].__reduce__()
+    assert restore(state, fleet) == r["fleet samples"]
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle FleetSamples: the samples"):
+        restore(state, r["read fleet"])
+    with pytest.raises(pickle.UnpicklingError, match="the state is of a FleetLoops"):
+        restore(r["fleet loops"].__reduce__()[1][0], fleet)
+    restore, (state, trajectory) = r["pose graph"].__reduce__()
+    assert restore(state, trajectory) == r["pose graph"]
+    with pytest.raises(pickle.UnpicklingError, match="its trajectory has 2 poses"):
+        restore(state, r["3-D pose graph"].trajectory)
+    with pytest.raises(pickle.UnpicklingError, match="its trajectory is a Fleet, not a Trajectory"):
+        restore(state, r["fleet"])
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle PoseGraph: "):
+        restore(state[:-3], trajectory)
+
+
+@pytest.mark.parametrize(
+    "name", ["read fleet", "fleet loops", "fleet samples", "tiled fleet loops", "pose graph"]
+)
+def test_flipped_bytes_of_fleet_states_give_an_equal_object_a_valid_one_or_an_error(
+    fleet_results, name
+):
+    value = fleet_results[name]
+    restore, args = value.__reduce__()
+    state, companions = args[0], args[1:]
+    rng = np.random.default_rng(20)
+    outcomes = {"error": 0, "object": 0}
+    positions, values = rng.integers(16, len(state), 300), rng.integers(0, 256, 300)
+    for position, byte in zip(positions, values, strict=True):
+        forged = state[:position] + bytes([byte]) + state[position + 1 :]
+        try:
+            back = restore(forged, *companions)
+        except pickle.UnpicklingError as error:
+            assert str(error).startswith(f"cannot unpickle {type(value).__name__}: "), error
+            assert "\n" not in str(error)
+            outcomes["error"] += 1
+        else:
+            # A change the checks cannot see (a time, a distance) reads back as a valid object,
+            # whose tables and repr work.
+            assert type(back) is type(value)
+            repr(back)
+            for table in ("components", "table", "edges", "vertices"):
+                if hasattr(back, table):
+                    getattr(back, table)
+            outcomes["object"] += 1
+    assert outcomes["error"] > 0, outcomes

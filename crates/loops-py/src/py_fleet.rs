@@ -8,11 +8,12 @@ use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
-use pyo3::types::{IntoPyDict, PyBool, PyDict, PyList, PyString, PyTuple};
+use pyo3::types::{IntoPyDict, PyBool, PyBytes, PyDict, PyList, PyString, PyTuple, PyType};
 
 use crate::convert::{bool_column, float64_column, int64_column, pose_index, table, to_numpy};
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
+use crate::pickling::ReducedWith;
 use crate::py_loops::Loops;
 use crate::py_metric::loops_metric;
 use crate::py_metric::{MetricArg, MetricRef};
@@ -193,6 +194,13 @@ impl Fleet {
         )))
     }
 
+    /// Whether two fleets hold the same sessions, read on the same planes for the same metrics.
+    pub(crate) fn same(&self, other: &Self) -> bool {
+        (Arc::ptr_eq(&self.inner, &other.inner) || self.inner == other.inner)
+            && self.plane_axes == other.plane_axes
+            && self.metrics == other.metrics
+    }
+
     /// The `Trajectory` of session `a`, with the plane and metric it came with.
     fn session_trajectory(&self, a: usize) -> Trajectory {
         Trajectory {
@@ -227,6 +235,53 @@ impl Fleet {
 
 #[pymethods]
 impl Fleet {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        let fleet = &this.inner;
+        let sessions: Vec<(&str, &loops_core::Trajectory)> =
+            fleet.names().iter().enumerate().map(|(a, name)| (name.as_str(), fleet.session(a))).collect();
+        let metrics: Vec<Option<String>> = this.metrics.iter().map(|m| m.map(|m| m.to_string())).collect();
+        crate::pickling::reduce(slf.as_any(), "Fleet", &(sessions, &this.plane_axes, metrics))
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        let py = cls.py();
+        type State = (Vec<(String, loops_core::Trajectory)>, Vec<Option<(usize, usize)>>, Vec<Option<String>>);
+        let (sessions, plane_axes, metrics): State = crate::pickling::restore(py, "Fleet", state)?;
+        let invalid = |reason: String| crate::pickling::invalid(py, "Fleet", reason);
+        if plane_axes.len() != sessions.len() || metrics.len() != sessions.len() {
+            return Err(invalid(format!(
+                "{} sessions but {} planes and {} metrics",
+                sessions.len(),
+                plane_axes.len(),
+                metrics.len()
+            )));
+        }
+        let mut specs = Vec::with_capacity(metrics.len());
+        for ((name, traj), metric) in sessions.iter().zip(metrics) {
+            let Some(text) = metric else {
+                specs.push(None);
+                continue;
+            };
+            let spec: MetricSpec =
+                text.parse().map_err(|e: loops_core::Error| invalid(format!("session {name:?}: {e}")))?;
+            spec.validate(traj).map_err(|e| invalid(format!("session {name:?}: {e}")))?;
+            specs.push(Some(spec));
+        }
+        let inner = py.detach(move || loops_core::Fleet::new(sessions)).map_err(|e| invalid(e.to_string()))?;
+        Ok(Self { inner: Arc::new(inner), plane_axes, metrics: specs })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.same(&other)
+    }
+
+    fn __hash__(&self) -> u64 {
+        let first = self.inner.joint().timestamps_s()[0];
+        crate::pickling::hash_of(&[self.inner.len() as u64, self.inner.poses() as u64, first.to_bits()])
+    }
+
     #[new]
     #[pyo3(signature = (sessions, *, format=None, axes=None, metric=None, topic=None, time=None, frames=None,
         rate_hz=None, drop_duplicate_stamps=false, quaternion_tolerance=None))]
@@ -473,6 +528,39 @@ impl FleetLoops {
 
 #[pymethods]
 impl FleetLoops {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<ReducedWith<'py, Fleet>> {
+        let this = slf.get();
+        let value = (this.inner.loops(), this.inner.pruning().name());
+        crate::pickling::reduce_with(slf.as_any(), "FleetLoops", &value, this.fleet.clone_ref(slf.py()))
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8], fleet: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let py = cls.py();
+        let fleet = crate::pickling::companion::<Fleet>(fleet, "FleetLoops", "fleet")?;
+        let (loops, pruning): (loops_core::Loops, String) = crate::pickling::restore(py, "FleetLoops", state)?;
+        let invalid = |e: loops_core::Error| crate::pickling::invalid(py, "FleetLoops", e);
+        let pruning = pruning.parse().map_err(invalid)?;
+        let inner_fleet = Arc::clone(&fleet.get().inner);
+        let inner =
+            py.detach(move || loops_core::FleetLoops::from_loops(&inner_fleet, loops, pruning)).map_err(invalid)?;
+        Ok(Self { inner: Arc::new(inner), fleet: fleet.clone().unbind(), loops: PyOnceLock::new() })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.inner == other.inner && self.fleet_ref().same(other.fleet_ref())
+    }
+
+    fn __hash__(&self) -> u64 {
+        let loops = self.inner.loops();
+        crate::pickling::hash_of(&[
+            loops.len() as u64,
+            loops.gamma().to_bits(),
+            loops.sublevel_set().runs().len() as u64,
+            self.inner.sessions() as u64,
+        ])
+    }
+
     fn __repr__(&self) -> String {
         let between = self.inner.between_sessions().len();
         format!(
@@ -837,6 +925,45 @@ pub(crate) struct FleetSamples {
 
 #[pymethods]
 impl FleetSamples {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<ReducedWith<'py, Fleet>> {
+        let this = slf.get();
+        let py = slf.py();
+        let samples = &this.samples.bind(py).get().inner;
+        crate::pickling::reduce_with(slf.as_any(), "FleetSamples", &**samples, this.fleet.clone_ref(py))
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8], fleet: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let py = cls.py();
+        let fleet = crate::pickling::companion::<Fleet>(fleet, "FleetSamples", "fleet")?;
+        let samples: loops_core::Samples = crate::pickling::restore(py, "FleetSamples", state)?;
+        let poses = fleet.get().inner.poses();
+        if samples.poses() != Some(poses) {
+            return Err(crate::pickling::invalid(
+                py,
+                "FleetSamples",
+                match samples.poses() {
+                    Some(count) => format!("the samples are of {count} poses, its fleet has {poses}"),
+                    None => format!("the samples are of no trajectory, its fleet has {poses} poses"),
+                },
+            ));
+        }
+        let located =
+            fleet.get().inner.localize(&samples).map_err(|e| crate::pickling::invalid(py, "FleetSamples", e))?;
+        let samples = Py::new(py, Samples { inner: Arc::new(samples) })?;
+        Ok(Self { samples, located, fleet: fleet.clone().unbind() })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>, py: Python<'_>) -> bool {
+        self.samples.bind(py).get().inner == other.samples.bind(py).get().inner
+            && self.fleet.get().same(other.fleet.get())
+    }
+
+    fn __hash__(&self, py: Python<'_>) -> u64 {
+        let inner = &self.samples.bind(py).get().inner;
+        crate::pickling::hash_of(&[inner.len() as u64, inner.available(), self.fleet.get().inner.poses() as u64])
+    }
+
     fn __len__(&self) -> usize {
         self.located.len()
     }

@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
+use pyo3::types::PyType;
 
 use crate::convert::{bool_column, float64_column, id_column, int64_column, str_column, table, to_numpy};
 use crate::detached;
@@ -54,8 +55,79 @@ pub(crate) struct PoseGraph {
     trajectory: Py<Trajectory>,
 }
 
+/// Checks that the parts of a graph read back from a state fit together and fit `traj`, its
+/// trajectory: every table column one entry per vertex, ids increasing, every edge between two
+/// of its vertices with a measurement and information of the graph's dimension.
+fn check_graph(graph: &loops_io::PoseGraph, traj: &loops_core::Trajectory) -> Result<(), String> {
+    let v = &graph.vertices;
+    let n = graph.vertex_ids.len();
+    if v.dim != 2 && v.dim != 3 {
+        return Err(format!("its vertices have {} coordinates (2 or 3)", v.dim));
+    }
+    let lengths = [
+        ("times", v.timestamps_s.len()),
+        ("positions", v.positions.len()),
+        ("orientations", v.orientations_xyzw.as_ref().map_or(n, Vec::len)),
+        ("integer times", v.timestamps_ns.as_ref().map_or(n, Vec::len)),
+        ("lines", if v.source_lines.is_empty() { n } else { v.source_lines.len() }),
+    ];
+    if let Some((what, len)) = lengths.into_iter().find(|&(_, len)| len != n) {
+        return Err(format!("{n} vertex ids but {len} {what}"));
+    }
+    if let Some(k) = graph.vertex_ids.windows(2).position(|w| w[0] >= w[1]) {
+        return Err(format!(
+            "vertex id {} follows {}: ids must increase",
+            graph.vertex_ids[k + 1],
+            graph.vertex_ids[k]
+        ));
+    }
+    let information = if v.dim == 2 { 6 } else { 21 };
+    for (k, edge) in graph.edges.iter().enumerate() {
+        let dim = match edge.measurement {
+            RelativePose::Se2 { .. } => 2,
+            RelativePose::Se3 { .. } => 3,
+        };
+        let joins = graph.edge_rows(edge).is_some();
+        let sized = edge.information.is_empty() || edge.information.len() == information;
+        if !joins || dim != v.dim || !sized {
+            return Err(format!(
+                "edge {k} (line {}, {} -> {}) does not fit a {}-D graph of its vertices",
+                edge.line, edge.from, edge.to, v.dim
+            ));
+        }
+    }
+    if traj.timestamps_s() != v.timestamps_s.as_slice() {
+        return Err(format!("its trajectory has {} poses, not its {n} vertices' times", traj.len()));
+    }
+    Ok(())
+}
+
 #[pymethods]
 impl PoseGraph {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<crate::pickling::ReducedWith<'py, Trajectory>> {
+        let this = slf.get();
+        crate::pickling::reduce_with(slf.as_any(), "PoseGraph", &*this.graph, this.trajectory.clone_ref(slf.py()))
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8], trajectory: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let py = cls.py();
+        let trajectory = crate::pickling::companion::<Trajectory>(trajectory, "PoseGraph", "trajectory")?;
+        let graph: loops_io::PoseGraph = crate::pickling::restore(py, "PoseGraph", state)?;
+        check_graph(&graph, &trajectory.get().inner)
+            .map_err(|reason| crate::pickling::invalid(py, "PoseGraph", reason))?;
+        Ok(Self { graph: Arc::new(graph), trajectory: trajectory.clone().unbind() })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        let (a, b) = (self.trajectory.get(), other.trajectory.get());
+        self.graph == other.graph && a.inner == b.inner && a.plane_axes == b.plane_axes && a.metric == b.metric
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.graph.vertex_ids.len() as u64, self.graph.edges.len() as u64])
+    }
+
     fn __repr__(&self) -> String {
         let g = &self.graph;
         let chained = if g.chain.is_some() { ", chained from its edges" } else { "" };

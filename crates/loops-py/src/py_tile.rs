@@ -1,6 +1,7 @@
 //! Tiles of a fleet's plane, for a cluster: `SessionBlocks` (`session_blocks`), `Tile`
 //! (`plan_tiles`), `TileSummary` (`scan_tile`), `TileMerge` (`merge_tiles`) and
-//! `TiledFleetLoops` (`TileMerge.finish`). Summaries and merges pickle as their bytes.
+//! `TiledFleetLoops` (`TileMerge.finish`). Summaries and merges pickle as their bytes;
+//! `TiledFleetLoops` as the other results do (`pickling`).
 
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -542,8 +543,47 @@ pub(crate) struct TiledFleetLoops {
     pairs: Vec<loops_core::SessionPair>,
 }
 
+/// What a pickled `TiledFleetLoops` holds: names, components, their times, session pairs.
+type TiledState = (Vec<String>, Vec<loops_core::FleetComponent>, Vec<[[f64; 2]; 2]>, Vec<loops_core::SessionPair>);
+
 #[pymethods]
 impl TiledFleetLoops {
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get();
+        let value = (&this.names, &this.components, &this.times, &this.pairs);
+        crate::pickling::reduce(slf.as_any(), "TiledFleetLoops", &value)
+    }
+
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, pyo3::types::PyType>, state: &[u8]) -> PyResult<Self> {
+        let py = cls.py();
+        let (names, components, times, pairs): TiledState = crate::pickling::restore(py, "TiledFleetLoops", state)?;
+        let invalid = |reason: String| crate::pickling::invalid(py, "TiledFleetLoops", reason);
+        let n = names.len();
+        let fits = |[a, b]: [usize; 2]| a <= b && b < n;
+        if times.len() != components.len() {
+            return Err(invalid(format!("{} components but {} time extents", components.len(), times.len())));
+        }
+        if let Some((k, c)) = components.iter().enumerate().find(|(k, c)| c.id != *k || !fits(c.sessions)) {
+            return Err(invalid(format!("component {k} has id {} and sessions {:?}, of {n}", c.id, c.sessions)));
+        }
+        if let Some((k, p)) = pairs.iter().enumerate().find(|(_, p)| !fits(p.sessions)) {
+            return Err(invalid(format!("session pair {k} has sessions {:?}, of {n}", p.sessions)));
+        }
+        Ok(Self { names, components, times, pairs })
+    }
+
+    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
+        self.names == other.names
+            && self.components == other.components
+            && self.times == other.times
+            && self.pairs == other.pairs
+    }
+
+    fn __hash__(&self) -> u64 {
+        crate::pickling::hash_of(&[self.names.len() as u64, self.components.len() as u64, self.pairs.len() as u64])
+    }
+
     fn __repr__(&self) -> String {
         let between = self.components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
         format!(
