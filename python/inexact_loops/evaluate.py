@@ -24,6 +24,13 @@ documented, so that you can see on your own data which sampler and which budget 
 plot of the error against the number of matches (:func:`plot_error_vs_matches`). The command
 ``loops-eval`` runs it on a pose file (``loops-eval --help``).
 
+The fleet case -- several sessions in one frame, each with its own odometry and an unknown
+start, candidates from :func:`~inexact_loops.sample_fleet` (within and between sessions, or
+between only), a multi-session GTSAM graph, the joint and inter-session errors -- is
+:func:`evaluate_fleet` (``loops-eval --fleet``), with :func:`evaluate_fleet_one`,
+:func:`optimize_fleet`, :func:`fleet_errors` and :func:`plot_fleet_error_vs_matches`; its
+method is in :mod:`inexact_loops._fleet_evaluate`.
+
 Needs GTSAM for the back end: ``pip install 'inexact-loops[maps]'`` (the simulation, the
 verifier and the errors work without it); matplotlib for the plot.
 
@@ -50,7 +57,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -68,12 +75,36 @@ from ._core import (
 from .errors import InvalidParameterError
 from .table import Table
 
+if TYPE_CHECKING:
+    from ._fleet_evaluate import (
+        FLEET_COLUMNS,
+        SESSION_COLUMNS,
+        FleetErrors,
+        FleetResults,
+        FleetRule,
+        choose_fleet_candidates,
+        evaluate_fleet,
+        evaluate_fleet_one,
+        fleet_errors,
+        fleet_references,
+        optimize_fleet,
+        place_sessions,
+        plot_fleet_error_vs_matches,
+        session_key,
+        simulate_fleet_odometry,
+    )
+
 __all__ = [
     "BASELINES",
+    "FLEET_COLUMNS",
     "SAMPLERS",
+    "SESSION_COLUMNS",
     "BackEnd",
     "CandidateRule",
     "DriftModel",
+    "FleetErrors",
+    "FleetResults",
+    "FleetRule",
     "Matches",
     "Odometry",
     "Poses",
@@ -82,12 +113,22 @@ __all__ = [
     "ape_errors",
     "ate",
     "choose_candidates",
+    "choose_fleet_candidates",
     "evaluate",
+    "evaluate_fleet",
+    "evaluate_fleet_one",
     "evaluate_one",
+    "fleet_errors",
+    "fleet_references",
     "optimize",
+    "optimize_fleet",
+    "place_sessions",
     "plot_error_vs_matches",
+    "plot_fleet_error_vs_matches",
     "rpe",
     "rpe_errors",
+    "session_key",
+    "simulate_fleet_odometry",
     "umeyama",
 ]
 
@@ -1608,6 +1649,41 @@ def plot_error_vs_matches(
 
 
 # ---------------------------------------------------------------------------------------------
+# The fleet case (its own module, which builds on this one; its names are served from here)
+# ---------------------------------------------------------------------------------------------
+
+_FLEET_NAMES = frozenset(
+    {
+        "FLEET_COLUMNS",
+        "SESSION_COLUMNS",
+        "FleetErrors",
+        "FleetResults",
+        "FleetRule",
+        "choose_fleet_candidates",
+        "evaluate_fleet",
+        "evaluate_fleet_one",
+        "fleet_errors",
+        "fleet_references",
+        "optimize_fleet",
+        "place_sessions",
+        "plot_fleet_error_vs_matches",
+        "session_key",
+        "simulate_fleet_odometry",
+    }
+)
+
+
+def __getattr__(name: str) -> Any:
+    """The fleet case's names, from :mod:`inexact_loops._fleet_evaluate` (imported on first
+    use: it imports this module)."""
+    if name in _FLEET_NAMES:
+        from . import _fleet_evaluate
+
+        return getattr(_fleet_evaluate, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+# ---------------------------------------------------------------------------------------------
 # The command line: loops-eval
 # ---------------------------------------------------------------------------------------------
 
@@ -1651,8 +1727,9 @@ def _csv_list(text: str, kind: Callable[[str], Any]) -> list[Any]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``loops-eval``: runs :func:`evaluate` on a pose file; writes ``results.csv``,
-    ``results.json`` and ``error_vs_matches.png`` to ``--out``."""
+    """``loops-eval``: runs :func:`evaluate` on a pose file (:func:`evaluate_fleet` on several,
+    one a session, with ``--fleet``); writes ``results.csv``, ``results.json`` and
+    ``error_vs_matches.png`` to ``--out`` (and ``sessions.csv`` for a fleet)."""
     import argparse
     import os
     import sys
@@ -1720,7 +1797,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--outliers", default="0", help="comma-separated outlier rates")
     parser.add_argument("--kernel", default="cauchy", choices=["cauchy", "huber", "gauss", "gnc"])
     parser.add_argument("--force", action="store_true", help="write into an existing --out")
+    fleet = parser.add_argument_group(
+        "fleets",
+        "--fleet reads each pose file as a session of one fleet (NAME=FILE names it; a file "
+        "alone is named by its stem), all in one world frame, and evaluates the multi-session "
+        "map: each session's odometry starts in its own frame, only the anchor's start is known, "
+        "candidates come from sample_fleet; it writes results.csv, sessions.csv (each session's "
+        "own ATE per run), results.json and error_vs_matches.png (joint ATE and inter-session "
+        "error). Not with --odometry, --on estimate or --source detections.",
+    )
+    fleet.add_argument("--fleet", action="store_true", help="the pose files are a fleet's sessions")
+    fleet.add_argument(
+        "--between-only",
+        default="both",
+        choices=["on", "off", "both"],
+        help="sample the components between sessions only (on), every component (off), or both",
+    )
+    fleet.add_argument("--anchor", help="the session whose start is known (default: the first)")
+    fleet.add_argument(
+        "--overlap-m",
+        type=float,
+        help="radius of the pose pairs of the inter-session error (default: gamma)",
+    )
     args = parser.parse_args(argv)
+    if args.fleet:
+        from ._fleet_evaluate import main_fleet
+
+        return main_fleet(args)
 
     def both(value: str, yes: Any, no: Any) -> list[Any]:
         return [yes, no] if value == "both" else [yes if value in ("on", yes) else no]

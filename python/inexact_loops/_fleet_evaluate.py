@@ -1,0 +1,1203 @@
+"""The fleet case of :mod:`inexact_loops.evaluate`: several sessions, one map.
+
+Re-exported by :mod:`inexact_loops.evaluate`; read its docstring first. A fleet's sessions --
+vehicles, days, robots -- are each a reference (:class:`~inexact_loops.evaluate.Poses`) in one
+world frame. What a fleet adds to the single trajectory:
+
+1. **Unknown starts.** Each session's odometry is simulated from its own reference with its own
+   seed (:func:`simulate_fleet_odometry`), and -- as a robot's odometry does -- starts at the
+   identity of its own frame: the back end does not know where a session starts, except for the
+   *anchor* (the first session unless told), whose start is the reference's and fixes the map's
+   frame. Nothing else ties the sessions together: every other session's first pose has only a
+   weak prior at its initial guess (1 km and pi rad by default), which fixes the gauge of a
+   session that no match ties to the others and is negligible against a match.
+2. **Candidates between sessions.** :func:`choose_fleet_candidates` samples the fleet's loops
+   (:func:`~inexact_loops.find_fleet_loops` on the references' positions, then
+   :func:`~inexact_loops.sample_fleet`): over all components within and between sessions, or
+   with ``between_only`` over the components between sessions only. Candidates are chosen on
+   the references: between sessions the estimates share no frame before the first match (that
+   is place recognition's job), so "candidates on the estimate" has no fleet counterpart here.
+3. **The same verifier** (:class:`~inexact_loops.evaluate.Verifier`), on the pair's true
+   relative pose, whichever sessions the poses belong to.
+4. **A multi-robot pose graph** (:func:`optimize_fleet`, GTSAM): pose j of the s-th session is
+   ``gtsam.Symbol(c, j)`` with c = ``a``, ``b``, ... (``A``... after ``z``): the keys of the
+   ``samples.g2o`` that ``loops fleet`` writes. Its initial guess places each session by its
+   matches to the sessions already placed (from the anchor outwards, the placement most matches
+   agree with), so that Levenberg-Marquardt starts near the answer, as a multi-robot back end
+   does after its first inter-robot loop closure; a session with no match keeps its own frame.
+5. **Errors per session and joint** (:func:`fleet_errors`): each session's ATE after its own
+   alignment (its shape), the joint ATE after one alignment of all sessions together (the map:
+   misplaced sessions count), and the **inter-session relative error**, evo's RPE over pose
+   pairs of two sessions that lie within ``overlap_m`` of each other in the references: where a
+   map built from several sessions shows a doubled wall when they are misplaced, which is what
+   the loops between sessions fix.
+
+:func:`evaluate_fleet` runs the grid and returns :class:`FleetResults`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import time
+import warnings
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from os import PathLike
+from typing import Any, Literal
+
+import numpy as np
+
+from ._core import Fleet, FleetLoops, Separation, find_fleet_loops, sample_fleet, sampler_symbol
+from .errors import InvalidParameterError, LoopsWarning
+from .evaluate import (
+    BASELINES,
+    COLOURS,
+    SAMPLERS,
+    BackEnd,
+    DriftModel,
+    Matches,
+    Odometry,
+    Poses,
+    Verifier,
+    _gtsam,
+    _inverse,
+    _json_default,
+    _noise,
+    _pose_value,
+    ape_errors,
+)
+from .table import Table
+
+__all__ = [
+    "FLEET_COLUMNS",
+    "SESSION_COLUMNS",
+    "FleetErrors",
+    "FleetResults",
+    "FleetRule",
+    "choose_fleet_candidates",
+    "evaluate_fleet",
+    "evaluate_fleet_one",
+    "fleet_errors",
+    "fleet_references",
+    "optimize_fleet",
+    "place_sessions",
+    "plot_fleet_error_vs_matches",
+    "session_key",
+    "simulate_fleet_odometry",
+]
+
+Sessions = Mapping[str, Poses]
+
+
+def _checked(references: Sessions) -> list[tuple[str, Poses]]:
+    items = list(references.items())
+    if not items:
+        raise InvalidParameterError("a fleet evaluation needs at least one session")
+    dims = {p.dim for _, p in items}
+    if len(dims) != 1:
+        raise InvalidParameterError(
+            "the sessions mix SE(2) and SE(3) poses: "
+            + ", ".join(f"{n}: SE({p.dim})" for n, p in items)
+        )
+    return items
+
+
+def _anchor_index(names: Sequence[str], anchor: str | None) -> int:
+    if anchor is None:
+        return 0
+    if anchor not in names:
+        raise InvalidParameterError(
+            f"anchor {anchor!r} is not a session; the sessions are {list(names)}"
+        )
+    return list(names).index(anchor)
+
+
+def _starts(items: Sequence[tuple[str, Poses]]) -> np.ndarray:
+    return np.r_[0, np.cumsum([len(p) for _, p in items])].astype(np.int64)
+
+
+def _joint(items: Sequence[tuple[str, Poses]]) -> Poses:
+    """The sessions' poses one after another (fleet indices), on a clock of one second a pose
+    (only the verifier reads it, by index)."""
+    matrices = np.concatenate([p.matrices for _, p in items])
+    return Poses(np.arange(len(matrices), dtype=float), matrices)
+
+
+def fleet_references(
+    fleet: Fleet | Mapping[str, Poses], *, keyframe_m: float = 0.0
+) -> dict[str, Poses]:
+    """The sessions of ``fleet`` as references: an :class:`~inexact_loops.Fleet`'s sessions by
+    :meth:`Poses.from_trajectory` (SE(2) and SE(3) ones as they are, positions in a plane
+    headed along the motion; Euclidean positions of 3 coordinates, as
+    :func:`~inexact_loops.urban_fleet` makes them, by their x and y), or ``{name: Poses}`` as
+    given; keyframed every ``keyframe_m`` metres (:meth:`Poses.keyframes`; 0 keeps every
+    pose)."""
+    if isinstance(fleet, Fleet):
+        sessions = {}
+        for name in fleet.names:
+            traj = fleet.session(name)
+            if traj.manifold == "euclidean" and traj.dim == 3:
+                sessions[name] = Poses.from_positions(traj.timestamps, traj.positions[:, :2])
+            else:
+                sessions[name] = Poses.from_trajectory(traj)
+    else:
+        sessions = dict(fleet)
+    return {n: p.take(p.keyframes(keyframe_m)) for n, p in sessions.items()}
+
+
+def session_key(session: int, pose: int) -> int:
+    """The GTSAM key of pose ``pose`` of the ``session``-th session: ``gtsam.Symbol(c, pose)``,
+    c = ``a`` for the first session ... ``z`` for the 26th, then ``A`` ... ``Z`` (52 sessions
+    at most): ``(ord(c) << 56) | pose``, GTSAM's ``Symbol::key()``.
+
+    Raises:
+        InvalidParameterError: a 53rd session.
+    """
+    if not 0 <= session < 52:
+        raise InvalidParameterError(
+            f"session {session}: the pose graph names sessions a-z, A-Z (52 at most)"
+        )
+    letter = ord("a") + session if session < 26 else ord("A") + session - 26
+    return (letter << 56) | int(pose)
+
+
+# ---------------------------------------------------------------------------------------------
+# Odometry and candidates
+# ---------------------------------------------------------------------------------------------
+
+
+def simulate_fleet_odometry(
+    references: Sessions,
+    *,
+    seed: int,
+    drift: DriftModel | None = None,
+    anchor: str | None = None,
+) -> dict[str, Odometry]:
+    """Each session's odometry simulated by ``drift`` (the default :class:`DriftModel`) with its
+    own seed (drawn from ``seed`` and the session's index), starting at the identity of its own
+    frame -- except the anchor's (the first session unless named), which starts at its
+    reference's first pose."""
+    items = _checked(references)
+    drift = drift or DriftModel()
+    a = _anchor_index([n for n, _ in items], anchor)
+    out = {}
+    for s, (name, poses) in enumerate(items):
+        session_seed = int(np.random.SeedSequence([int(seed), s]).generate_state(1)[0])
+        odometry = drift.simulate(poses, seed=session_seed)
+        if s != a:
+            odometry = dataclasses.replace(odometry, start=np.eye(poses.dim + 1))
+        out[name] = odometry
+    return out
+
+
+@dataclass(frozen=True)
+class FleetRule:
+    """How a fleet's candidates are chosen.
+
+    Attributes:
+        sampler: a name :func:`~inexact_loops.sample_fleet` takes (:data:`SAMPLERS`; a
+            baseline of :data:`BASELINES` runs over the joint trajectory, never with
+            ``between_only``).
+        budget: the number of candidates (scan matches to try), over the whole fleet.
+        gamma: gamma of the loops, metres.
+        separation: the revisit separation within each session (4 gamma of path), as the
+            samplers do by default; pairs of two sessions are always kept.
+        between_only: spend the budget on the components between sessions only (map merging);
+            otherwise one sampling covers every component, within and between sessions.
+    """
+
+    sampler: str
+    budget: int
+    gamma: float
+    separation: bool = True
+    between_only: bool = False
+
+    def __post_init__(self) -> None:
+        if self.sampler not in SAMPLERS + BASELINES:
+            raise InvalidParameterError(
+                f"FleetRule: unknown sampler {self.sampler!r}: expected one of "
+                + ", ".join(SAMPLERS + BASELINES)
+            )
+        if self.between_only and self.sampler in BASELINES:
+            raise InvalidParameterError(
+                f"FleetRule: {self.sampler} is a baseline, whose rule knows no components: "
+                "not with between_only"
+            )
+        if self.budget < 1:
+            raise InvalidParameterError(f"FleetRule: budget = {self.budget} must be >= 1")
+        if not (math.isfinite(self.gamma) and self.gamma > 0):
+            raise InvalidParameterError(f"FleetRule: gamma = {self.gamma} must be > 0")
+
+
+def _fleet_loops(references: Sessions, gamma: float, separation: bool) -> FleetLoops:
+    fleet = Fleet({n: p.to_trajectory() for n, p in references.items()})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LoopsWarning)
+        return find_fleet_loops(
+            fleet, gamma=gamma, separation=Separation.for_gamma(gamma) if separation else None
+        )
+
+
+def choose_fleet_candidates(
+    references: Sessions, rule: FleetRule, *, seed: int, loops: FleetLoops | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate pairs ``(i, j)``, i < j, in *fleet indices* (the sessions' poses one after
+    another, in the order of ``references``), chosen by ``rule`` on the references' positions.
+
+    ``loops``: the references' :func:`~inexact_loops.find_fleet_loops` at ``rule.gamma`` and
+    separation, when already found (it does not depend on the sampler, budget or seed).
+    Warnings of the samplers are kept quiet: the returned count says it.
+    """
+    _checked(references)
+    if loops is None:
+        loops = _fleet_loops(references, rule.gamma, rule.separation)
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    if loops.loops.pair_count == 0:
+        return empty
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LoopsWarning)
+        samples = sample_fleet(
+            loops, rule.sampler, budget=rule.budget, seed=seed, between_only=rule.between_only
+        ).samples
+    i, j = samples.i, samples.j
+    if i is None or j is None:  # pragma: no cover - fleet samples always have pairs
+        raise RuntimeError("fleet samples without pose indices")
+    return np.minimum(i, j), np.maximum(i, j)
+
+
+# ---------------------------------------------------------------------------------------------
+# The back end
+# ---------------------------------------------------------------------------------------------
+
+
+def _rotation_angle(r: np.ndarray) -> np.ndarray:
+    """The angle of rotation matrices (..., d, d), radians."""
+    if r.shape[-1] == 2:
+        return np.abs(np.arctan2(r[..., 1, 0], r[..., 0, 0]))
+    cos = (np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2.0
+    return np.arccos(np.clip(cos, -1.0, 1.0))
+
+
+def place_sessions(
+    estimates: Sequence[Poses],
+    matches: Matches | None,
+    *,
+    anchor: int = 0,
+    tolerance_m: float = 10.0,
+    tolerance_rad: float = 0.2,
+) -> tuple[list[np.ndarray], list[bool]]:
+    """The initial guess of a multi-session pose graph: per session, the rigid motion ``O``
+    (world from its own frame) that places its estimate, ``O @ estimate``, and whether a match
+    placed it.
+
+    The anchor stays where it is (``O`` = identity). Then, again and again, the unplaced
+    session with the most matches to the placed ones is placed: every such match proposes
+    ``O_b = O_a E_a[i] T E_b[j]^-1`` (E the estimates, T the measured pose of j in the frame of
+    i), and the proposal that the most others agree with -- they move the session's centroid
+    by less than ``tolerance_m`` and turn it by less than ``tolerance_rad`` -- is taken, so that
+    a few wrong matches do not decide. A session with no match to a placed one keeps its own
+    frame (identity). ``matches`` are in fleet indices (the estimates one after another).
+    """
+    n = len(estimates)
+    offsets = [np.eye(estimates[0].dim + 1) for _ in range(n)]
+    placed = [False] * n
+    placed[anchor] = True
+    if matches is None or len(matches) == 0 or n == 1:
+        return offsets, placed
+    starts = np.r_[0, np.cumsum([len(e) for e in estimates])]
+    session_i = np.searchsorted(starts, matches.i, side="right") - 1
+    session_j = np.searchsorted(starts, matches.j, side="right") - 1
+    d = estimates[0].dim
+    while True:
+        best: tuple[int, list[np.ndarray]] | None = None
+        for b in range(n):
+            if placed[b]:
+                continue
+            proposals = []
+            for k in np.flatnonzero(
+                ((session_j == b) & np.isin(session_i, np.flatnonzero(placed)))
+                | ((session_i == b) & np.isin(session_j, np.flatnonzero(placed)))
+            ):
+                si, sj = int(session_i[k]), int(session_j[k])
+                ei = estimates[si].matrices[matches.i[k] - starts[si]]
+                ej = estimates[sj].matrices[matches.j[k] - starts[sj]]
+                t = matches.relative[k]
+                if sj == b:  # pose j of session b in the frame of placed pose i
+                    proposals.append(offsets[si] @ ei @ t @ _inverse(ej))
+                else:  # pose i of session b: the inverse measurement
+                    proposals.append(offsets[sj] @ ej @ _inverse(t) @ _inverse(ei))
+            if proposals and (best is None or len(proposals) > len(best[1])):
+                best = (b, proposals)
+        if best is None:
+            return offsets, placed
+        b, proposals = best
+        stack = np.asarray(proposals)
+        centroid = np.r_[estimates[b].positions.mean(axis=0), 1.0]
+        moved = stack @ centroid
+        shift = np.linalg.norm(moved[:, None, :d] - moved[None, :, :d], axis=-1)
+        turn = _rotation_angle(np.swapaxes(stack[:, None, :d, :d], -1, -2) @ stack[None, :, :d, :d])
+        support = ((shift < tolerance_m) & (turn < tolerance_rad)).sum(axis=1)
+        offsets[b] = stack[int(np.argmax(support))]
+        placed[b] = True
+
+
+def optimize_fleet(
+    odometries: Sequence[Odometry],
+    matches: Matches | None = None,
+    backend: BackEnd | None = None,
+    *,
+    anchor: int = 0,
+    start_sigma_m: float = 1000.0,
+    start_sigma_rad: float = math.pi,
+) -> list[Poses]:
+    """The multi-session pose graph of ``odometries`` (one per session) and ``matches`` (in
+    fleet indices: the sessions' poses one after another) optimised by ``backend`` (GTSAM).
+
+    Pose j of the s-th session is :func:`session_key` (s, j). The anchor's first pose has a
+    tight prior at its odometry's start (the map's frame); every other session's first pose a
+    weak one (``start_sigma_m`` per axis, ``start_sigma_rad``) at its initial guess, which
+    :func:`place_sessions` makes from the matches. Odometry factors are Gaussian; the loop
+    factors -- within and between sessions -- take the back end's robust kernel (GNC: odometry
+    and priors known to be right).
+
+    Returns:
+        the optimised poses of each session, in order.
+
+    Raises:
+        ImportError: GTSAM is not installed (``pip install 'inexact-loops[maps]'``).
+        InvalidParameterError: no session, sessions of different dimensions, more than 52
+            sessions, an anchor out of range.
+    """
+    gtsam = _gtsam()
+    backend = backend or BackEnd()
+    if not odometries:
+        raise InvalidParameterError("optimize_fleet: no session")
+    dim = odometries[0].dim
+    if any(o.dim != dim for o in odometries):
+        raise InvalidParameterError("optimize_fleet: sessions of different dimensions")
+    if not 0 <= anchor < len(odometries):
+        raise InvalidParameterError(
+            f"optimize_fleet: anchor {anchor} out of range ({len(odometries)} sessions)"
+        )
+    between = gtsam.BetweenFactorPose2 if dim == 2 else gtsam.BetweenFactorPose3
+    prior = gtsam.PriorFactorPose2 if dim == 2 else gtsam.PriorFactorPose3
+    estimates = [o.estimate for o in odometries]
+    offsets, _ = place_sessions(estimates, matches, anchor=anchor)
+    graph = gtsam.NonlinearFactorGraph()
+    initial = gtsam.Values()
+    starts = np.r_[0, np.cumsum([len(e) for e in estimates])]
+    keys: list[int] = []
+    for s, (odometry, estimate) in enumerate(zip(odometries, estimates, strict=True)):
+        session_keys = [session_key(s, k) for k in range(len(estimate))]
+        keys.extend(session_keys)
+        guess = offsets[s] @ estimate.matrices
+        if s == anchor:
+            noise = _noise(gtsam, dim, 1e-4, 1e-5)
+            graph.add(prior(session_keys[0], _pose_value(gtsam, odometry.start), noise))
+        else:
+            noise = _noise(gtsam, dim, start_sigma_m, start_sigma_rad)
+            graph.add(prior(session_keys[0], _pose_value(gtsam, guess[0]), noise))
+        for k, step in enumerate(odometry.steps):
+            noise = _noise(
+                gtsam, dim, odometry.translation_sigma_m[k], odometry.rotation_sigma_rad[k]
+            )
+            graph.add(
+                between(session_keys[k], session_keys[k + 1], _pose_value(gtsam, step), noise)
+            )
+        for key, m in zip(session_keys, guess, strict=True):
+            initial.insert(key, _pose_value(gtsam, m))
+    known = list(range(graph.size()))
+    if matches is not None and len(matches):
+        if matches.i.max(initial=0) >= starts[-1] or matches.j.max(initial=0) >= starts[-1]:
+            raise InvalidParameterError(
+                f"optimize_fleet: a match past the last pose ({starts[-1]} poses in all)"
+            )
+        robust = {
+            "cauchy": lambda: gtsam.noiseModel.mEstimator.Cauchy.Create(backend.kernel_width),
+            "huber": lambda: gtsam.noiseModel.mEstimator.Huber.Create(backend.kernel_width),
+        }.get(backend.kernel)
+        for a, b, rel, ts, rs in zip(
+            matches.i.tolist(),
+            matches.j.tolist(),
+            matches.relative,
+            matches.translation_sigma_m.tolist(),
+            matches.rotation_sigma_rad.tolist(),
+            strict=True,
+        ):
+            noise = _noise(gtsam, dim, ts, rs)
+            if robust is not None:
+                noise = gtsam.noiseModel.Robust.Create(robust(), noise)
+            graph.add(between(keys[a], keys[b], _pose_value(gtsam, rel), noise))
+    if backend.kernel == "gnc":
+        lm = gtsam.LevenbergMarquardtParams()
+        lm.setMaxIterations(backend.max_iterations)
+        lm.setRelativeErrorTol(backend.relative_error_tol)
+        params = gtsam.GncLMParams(lm)
+        params.setKnownInliers(known)
+        result = gtsam.GncLMOptimizer(graph, initial, params).optimize()
+    else:
+        params = gtsam.LevenbergMarquardtParams()
+        params.setMaxIterations(backend.max_iterations)
+        params.setRelativeErrorTol(backend.relative_error_tol)
+        result = gtsam.LevenbergMarquardtOptimizer(graph, initial, params).optimize()
+    # GTSAM extracts the poses in the order of their keys; put them back in fleet order.
+    order = np.argsort(np.asarray(keys, dtype=np.uint64), kind="stable")
+    if dim == 2:
+        flat = np.empty((len(keys), 3))
+        flat[order] = gtsam.utilities.extractPose2(result)
+        matrices = Poses.se2(np.arange(len(keys), dtype=float), flat).matrices
+    else:
+        raw = gtsam.utilities.extractPose3(result)
+        matrices = np.tile(np.eye(4), (len(keys), 1, 1))
+        matrices[order, :3, :3] = raw[:, :9].reshape(-1, 3, 3)
+        matrices[order, :3, 3] = raw[:, 9:]
+    return [
+        Poses(odometry.timestamps, matrices[starts[s] : starts[s + 1]])
+        for s, odometry in enumerate(odometries)
+    ]
+
+
+# ---------------------------------------------------------------------------------------------
+# Errors
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FleetErrors:
+    """The errors of a fleet's estimate against its references.
+
+    Attributes:
+        ate_m: the joint ATE: the RMSE of the translation errors of every pose of every session
+            after one rigid alignment of all of them together (Umeyama, no scale): the map.
+        session_ate_m: per session, its ATE after its own alignment: its shape alone.
+        inter_m: the inter-session relative error: the RMSE, over the pose pairs of
+            :attr:`inter_pairs`, of the translation of ``(Q_i^-1 Q_j)^-1 (P_i^-1 P_j)`` (Q
+            references, P estimates), evo's RPE across two sessions; NaN without such pairs.
+        inter_pairs: how many pairs: for every two sessions a < b, every pose of a whose
+            nearest pose of b lies within ``overlap_m`` in the references, with that pose.
+    """
+
+    ate_m: float
+    session_ate_m: dict[str, float]
+    inter_m: float
+    inter_pairs: int
+
+    @property
+    def session_rms_m(self) -> float:
+        """The sessions' own ATEs pooled: their root mean square over the sessions."""
+        v = np.array(list(self.session_ate_m.values()))
+        return float(np.sqrt(np.mean(v**2)))
+
+
+def _inter_pairs(
+    items: Sequence[tuple[str, Poses]], overlap_m: float
+) -> tuple[np.ndarray, np.ndarray]:
+    starts = _starts(items)
+    ii: list[np.ndarray] = []
+    jj: list[np.ndarray] = []
+    for a in range(len(items)):
+        pa = items[a][1].positions
+        for b in range(a + 1, len(items)):
+            pb = items[b][1].positions
+            lo, hi = pb.min(axis=0) - overlap_m, pb.max(axis=0) + overlap_m
+            near_box = np.flatnonzero(((pa >= lo) & (pa <= hi)).all(axis=1))
+            for chunk in np.array_split(near_box, max(1, len(near_box) // 512)):
+                if len(chunk) == 0:
+                    continue
+                d2 = ((pa[chunk, None, :] - pb[None, :, :]) ** 2).sum(axis=-1)
+                nearest = d2.argmin(axis=1)
+                keep = d2[np.arange(len(chunk)), nearest] <= overlap_m**2
+                ii.append(starts[a] + chunk[keep])
+                jj.append(starts[b] + nearest[keep])
+    if not ii:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(ii).astype(np.int64), np.concatenate(jj).astype(np.int64)
+
+
+def fleet_errors(
+    references: Sessions,
+    estimates: Mapping[str, Poses] | Sequence[Poses],
+    *,
+    overlap_m: float,
+    pairs: tuple[np.ndarray, np.ndarray] | None = None,
+) -> FleetErrors:
+    """The joint ATE, each session's ATE and the inter-session relative error (see
+    :class:`FleetErrors`) of ``estimates`` (one per session, in the order of ``references``)
+    against ``references``. ``pairs``: the inter-session pairs in fleet indices, when already
+    found for these references and ``overlap_m``."""
+    items = _checked(references)
+    est = list(estimates.values()) if isinstance(estimates, Mapping) else list(estimates)
+    if len(est) != len(items):
+        raise InvalidParameterError(f"fleet_errors: {len(est)} estimates for {len(items)} sessions")
+    per = {
+        n: float(np.sqrt(np.mean(ape_errors(p, e) ** 2)))
+        for (n, p), e in zip(items, est, strict=True)
+    }
+    ref_joint = _joint(items)
+    est_joint = Poses(ref_joint.timestamps, np.concatenate([e.matrices for e in est]))
+    joint = float(np.sqrt(np.mean(ape_errors(ref_joint, est_joint) ** 2)))
+    i, j = pairs if pairs is not None else _inter_pairs(items, overlap_m)
+    if len(i):
+        e = _inverse(ref_joint.relative(i, j)) @ est_joint.relative(i, j)
+        d = ref_joint.dim
+        inter = float(np.sqrt(np.mean(np.linalg.norm(e[:, :d, d], axis=1) ** 2)))
+    else:
+        inter = math.nan
+    return FleetErrors(joint, per, inter, len(i))
+
+
+# ---------------------------------------------------------------------------------------------
+# The evaluation
+# ---------------------------------------------------------------------------------------------
+
+#: Columns of :class:`FleetResults`, in order.
+FLEET_COLUMNS: tuple[str, ...] = (
+    "dataset",
+    "sampler",
+    "between_only",
+    "separation",
+    "outlier_rate",
+    "budget",
+    "seed",
+    "candidates",
+    "between_candidates",
+    "matches",
+    "between_matches",
+    "wrong",
+    "placed",
+    "ate_m",
+    "session_ate_m",
+    "inter_m",
+    "odometry_ate_m",
+    "odometry_inter_m",
+    "seconds",
+)
+
+#: Columns of :attr:`FleetResults.sessions`, in order.
+SESSION_COLUMNS: tuple[str, ...] = ("run", "session", "poses", "ate_m")
+
+
+@dataclass
+class FleetResults:
+    """Rows of a fleet evaluation, one per run, and per run and session.
+
+    Columns (:data:`FLEET_COLUMNS`): ``dataset``; ``sampler`` (``"odometry"`` for the odometry
+    alone); ``between_only`` and ``separation`` (bool); ``outlier_rate``; ``budget``; ``seed``;
+    ``candidates`` and ``between_candidates`` (pairs the sampler returned, of them between two
+    sessions); ``matches`` and ``between_matches`` (accepted by the verifier); ``wrong`` (of the
+    matches); ``placed`` (sessions that matches placed in the initial guess, the anchor
+    included); ``ate_m`` (joint ATE); ``session_ate_m`` (the sessions' own ATEs, RMS over the
+    sessions); ``inter_m`` (the inter-session relative error); ``odometry_ate_m`` and
+    ``odometry_inter_m`` (the same seed's odometry alone); ``seconds``.
+
+    :attr:`sessions` has a row per run and session (:data:`SESSION_COLUMNS`): ``run`` (the row's
+    index in :attr:`rows`), ``session``, ``poses``, ``ate_m`` (its own ATE).
+    """
+
+    rows: list[dict[str, Any]] = field(default_factory=list)
+    sessions: list[dict[str, Any]] = field(default_factory=list)
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    def table(self) -> Table:
+        """The rows as an :class:`~inexact_loops.Table` of numpy columns."""
+        return Table({c: np.asarray([r[c] for r in self.rows]) for c in FLEET_COLUMNS})
+
+    def summary(self) -> list[dict[str, Any]]:
+        """Per (dataset, sampler, between_only, separation, outlier_rate, budget): the number of
+        seeds, the median joint ATE with its spread (quartiles, min, max), the median
+        inter-session error with its quartiles, the median of the sessions' own ATEs, and the
+        median candidates and matches (all and between sessions)."""
+        keys = ("dataset", "sampler", "between_only", "separation", "outlier_rate", "budget")
+        groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
+        for r in self.rows:
+            groups.setdefault(tuple(r[k] for k in keys), []).append(r)
+        out = []
+        for key, rows in groups.items():
+            ate_m = np.array([r["ate_m"] for r in rows])
+            inter = np.array([r["inter_m"] for r in rows])
+            finite = inter[np.isfinite(inter)]
+            q = {
+                p: float(np.quantile(finite, p)) if finite.size else math.nan
+                for p in (0.25, 0.5, 0.75)
+            }
+            out.append(
+                dict(zip(keys, key, strict=True))
+                | {
+                    "seeds": len(rows),
+                    "ate_median_m": float(np.median(ate_m)),
+                    "ate_q25_m": float(np.quantile(ate_m, 0.25)),
+                    "ate_q75_m": float(np.quantile(ate_m, 0.75)),
+                    "ate_min_m": float(ate_m.min()),
+                    "ate_max_m": float(ate_m.max()),
+                    "inter_median_m": q[0.5],
+                    "inter_q25_m": q[0.25],
+                    "inter_q75_m": q[0.75],
+                    "session_ate_median_m": float(np.median([r["session_ate_m"] for r in rows])),
+                    "candidates": float(np.median([r["candidates"] for r in rows])),
+                    "between_candidates": float(np.median([r["between_candidates"] for r in rows])),
+                    "matches": float(np.median([r["matches"] for r in rows])),
+                    "between_matches": float(np.median([r["between_matches"] for r in rows])),
+                    "wrong": float(np.median([r["wrong"] for r in rows])),
+                    "odometry_ate_m": float(np.median([r["odometry_ate_m"] for r in rows])),
+                }
+            )
+        return out
+
+    def to_csv(
+        self, path: str | PathLike[str], sessions_path: str | PathLike[str] | None = None
+    ) -> None:
+        """Writes the rows as CSV (a header of :data:`FLEET_COLUMNS`), and the per-session rows
+        to ``sessions_path`` when given."""
+        import csv
+
+        with open(path, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=list(FLEET_COLUMNS))
+            writer.writeheader()
+            for r in self.rows:
+                writer.writerow({c: r[c] for c in FLEET_COLUMNS})
+        if sessions_path is not None:
+            with open(sessions_path, "w", newline="") as f:
+                writer = csv.DictWriter(f, fieldnames=list(SESSION_COLUMNS))
+                writer.writeheader()
+                for r in self.sessions:
+                    writer.writerow({c: r[c] for c in SESSION_COLUMNS})
+
+    def to_json(self, path: str | PathLike[str]) -> None:
+        """Writes ``{"settings", "summary", "rows", "sessions"}`` as JSON (NaN as null)."""
+        document = {
+            "settings": self.settings,
+            "summary": self.summary(),
+            "rows": self.rows,
+            "sessions": self.sessions,
+        }
+        with open(path, "w") as f:
+            json.dump(_nan_to_none(document), f, indent=1, default=_json_default)
+            f.write("\n")
+
+    @classmethod
+    def from_csv(cls, path: str | PathLike[str]) -> FleetResults:
+        """Reads rows written by :meth:`to_csv` (not the per-session rows)."""
+        import csv
+
+        ints = {"budget", "seed", "candidates", "between_candidates", "matches"}
+        ints |= {"between_matches", "wrong", "placed"}
+        bools = {"between_only", "separation"}
+        rows = []
+        with open(path, newline="") as f:
+            for raw in csv.DictReader(f):
+                row: dict[str, Any] = {}
+                for c in FLEET_COLUMNS:
+                    v = raw[c]
+                    if c in ints:
+                        row[c] = int(v)
+                    elif c in bools:
+                        row[c] = v == "True"
+                    elif c in ("dataset", "sampler"):
+                        row[c] = v
+                    else:
+                        row[c] = float(v)
+                rows.append(row)
+        return cls(rows)
+
+    def extend(self, other: FleetResults) -> None:
+        """Adds the rows of ``other`` (its per-session rows renumbered)."""
+        shift = len(self.rows)
+        self.rows.extend(other.rows)
+        self.sessions.extend(r | {"run": r["run"] + shift} for r in other.sessions)
+
+
+def _nan_to_none(value: Any) -> Any:
+    if isinstance(value, float) and math.isnan(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _nan_to_none(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_nan_to_none(v) for v in value]
+    return value
+
+
+def evaluate_fleet_one(
+    references: Sessions,
+    odometries: Mapping[str, Odometry],
+    rule: FleetRule | None,
+    *,
+    seed: int,
+    verifier: Verifier | None = None,
+    backend: BackEnd | None = None,
+    anchor: str | None = None,
+    loops: FleetLoops | None = None,
+) -> tuple[list[Poses], Matches | None, tuple[np.ndarray, np.ndarray], int]:
+    """One fleet run: candidates by ``rule`` (``None``: the odometry alone) on the references,
+    verified against them, and the multi-session pose graph optimised.
+
+    Returns the optimised poses of each session (in the order of ``references``), the matches
+    and the candidate pairs (fleet indices), and the number of sessions placed by matches (the
+    anchor included).
+    """
+    items = _checked(references)
+    names = [n for n, _ in items]
+    missing = [n for n in names if n not in odometries]
+    if missing:
+        raise InvalidParameterError(f"evaluate_fleet_one: no odometry for session(s) {missing}")
+    odos = [odometries[n] for n in names]
+    for (name, poses), odometry in zip(items, odos, strict=True):
+        if len(odometry.timestamps) != len(poses):
+            raise InvalidParameterError(
+                f"evaluate_fleet_one: session {name!r}: {len(odometry.timestamps)} odometry "
+                f"poses for {len(poses)} reference poses"
+            )
+    a = _anchor_index(names, anchor)
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    if rule is None:
+        return optimize_fleet(odos, None, backend, anchor=a), None, empty, 1
+    verifier = verifier or Verifier()
+    i, j = choose_fleet_candidates(references, rule, seed=seed, loops=loops)
+    matches = verifier.verify(_joint(items), i, j, seed=seed)
+    _, placed = place_sessions([o.estimate for o in odos], matches, anchor=a)
+    return optimize_fleet(odos, matches, backend, anchor=a), matches, (i, j), int(sum(placed))
+
+
+def _fleet_grid(
+    outlier_rates: Sequence[float],
+    separations: Sequence[bool],
+    between_only: Sequence[bool],
+    samplers: Sequence[str],
+    budgets: Sequence[int],
+    gamma: float,
+) -> Iterable[tuple[float, FleetRule]]:
+    for outlier_rate in outlier_rates:
+        for separation in separations:
+            for between in between_only:
+                for name in samplers:
+                    if between and name in BASELINES:
+                        continue
+                    for budget in budgets:
+                        yield (
+                            outlier_rate,
+                            FleetRule(name, int(budget), gamma, bool(separation), bool(between)),
+                        )
+
+
+def evaluate_fleet(
+    references: Fleet | Mapping[str, Poses],
+    *,
+    gamma: float,
+    odometry: Mapping[str, Odometry] | DriftModel | None = None,
+    samplers: Sequence[str] = SAMPLERS,
+    budgets: Sequence[int] = (100, 1000),
+    seeds: Iterable[int] = range(5),
+    between_only: Sequence[bool] = (False, True),
+    separations: Sequence[bool] = (True,),
+    outlier_rates: Sequence[float] = (0.0,),
+    verifier: Verifier | None = None,
+    backend: BackEnd | None = None,
+    anchor: str | None = None,
+    overlap_m: float | None = None,
+    keyframe_m: float = 0.0,
+    dataset: str = "",
+    include_odometry: bool = True,
+    progress: Callable[[dict[str, Any]], None] | None = None,
+) -> FleetResults:
+    """Runs every sampler at every budget with every seed (both with ``between_only`` and
+    without, and every other option given), and the odometry alone per seed, on a fleet.
+
+    Args:
+        references: the sessions' reference poses ``{name: Poses}`` in one world frame, or an
+            :class:`~inexact_loops.Fleet` (:func:`fleet_references`).
+        gamma: the loops' gamma, metres.
+        odometry: your odometry per session ``{name: Odometry}`` (the same for every seed; its
+            starts are yours: the anchor's is the map's frame, the others' the guesses the
+            weak priors hold), or a :class:`DriftModel` simulated per seed and session with
+            unknown starts (:func:`simulate_fleet_odometry`; the default model when ``None``).
+        samplers: names from :data:`SAMPLERS` (and :data:`BASELINES`, run without
+            ``between_only`` only).
+        budgets: candidates per run, over the whole fleet.
+        seeds: one run per seed: the seed drives the odometry, the sampler and the verifier.
+        between_only: ``False`` (one sampling over every component), ``True`` (the components
+            between sessions only), or both.
+        separations: the revisit separation within sessions: ``True``, ``False`` or both.
+        outlier_rates: the verifier's ``outlier_rate`` values to run.
+        verifier, backend: as in :func:`evaluate`.
+        anchor: the session whose start is known (default: the first).
+        overlap_m: the radius of the inter-session pairs of :class:`FleetErrors` (default:
+            gamma).
+        keyframe_m: keep a pose every this many metres of each reference
+            (:meth:`Poses.keyframes`), and the same poses of a given odometry
+            (:meth:`Odometry.take`); 0 keeps every pose.
+        dataset: a name for the rows.
+        include_odometry: add a row per seed for the odometry alone (sampler ``"odometry"``).
+        progress: called with each row as it is done.
+
+    Returns:
+        :class:`FleetResults`.
+    """
+    full = fleet_references(references)
+    keep = {n: p.keyframes(keyframe_m) for n, p in full.items()}
+    refs = {n: p.take(keep[n]) for n, p in full.items()}
+    items = _checked(refs)
+    names = [n for n, _ in items]
+    verifier = verifier or Verifier()
+    backend = backend or BackEnd()
+    overlap = float(gamma if overlap_m is None else overlap_m)
+    drift = (
+        odometry
+        if isinstance(odometry, DriftModel)
+        else (DriftModel() if odometry is None else None)
+    )
+    a = _anchor_index(names, anchor)
+    pairs = _inter_pairs(items, overlap)
+    starts = _starts(items)
+    results = FleetResults(
+        settings={
+            "dataset": dataset,
+            "sessions": {n: len(p) for n, p in items},
+            "anchor": names[a],
+            "dim": items[0][1].dim,
+            "gamma": gamma,
+            "overlap_m": overlap,
+            "inter_pairs": len(pairs[0]),
+            "odometry": dataclasses.asdict(drift) if drift else "given",
+            "verifier": dataclasses.asdict(verifier),
+            "backend": dataclasses.asdict(backend),
+        }
+    )
+    loops_cache: dict[bool, FleetLoops] = {}
+
+    def loops_for(separation: bool) -> FleetLoops:
+        if separation not in loops_cache:
+            loops_cache[separation] = _fleet_loops(refs, gamma, separation)
+        return loops_cache[separation]
+
+    def record(row: dict[str, Any], errors: FleetErrors) -> None:
+        run = len(results.rows)
+        results.rows.append(row)
+        for name, poses in items:
+            results.sessions.append(
+                {
+                    "run": run,
+                    "session": name,
+                    "poses": len(poses),
+                    "ate_m": errors.session_ate_m[name],
+                }
+            )
+        if progress:
+            progress(row)
+
+    def between_count(i: np.ndarray, j: np.ndarray) -> int:
+        return int(
+            (
+                np.searchsorted(starts, i, side="right") != np.searchsorted(starts, j, side="right")
+            ).sum()
+        )
+
+    for seed in seeds:
+        if drift is not None:
+            odos = simulate_fleet_odometry(refs, seed=int(seed), drift=drift, anchor=names[a])
+        else:
+            assert isinstance(odometry, Mapping)
+            odos = dict(odometry)
+            if keyframe_m > 0:
+                odos = {n: o.take(keep[n]) if n in keep else o for n, o in odos.items()}
+        start = time.perf_counter()
+        alone, _, _, _ = evaluate_fleet_one(
+            refs, odos, None, seed=int(seed), backend=backend, anchor=names[a]
+        )
+        odo_errors = fleet_errors(refs, alone, overlap_m=overlap, pairs=pairs)
+        base = {
+            "dataset": dataset,
+            "seed": int(seed),
+            "odometry_ate_m": odo_errors.ate_m,
+            "odometry_inter_m": odo_errors.inter_m,
+        }
+        if include_odometry:
+            record(
+                base
+                | {
+                    "sampler": "odometry",
+                    "between_only": False,
+                    "separation": False,
+                    "outlier_rate": 0.0,
+                    "budget": 0,
+                    "candidates": 0,
+                    "between_candidates": 0,
+                    "matches": 0,
+                    "between_matches": 0,
+                    "wrong": 0,
+                    "placed": 1,
+                    "ate_m": odo_errors.ate_m,
+                    "session_ate_m": odo_errors.session_rms_m,
+                    "inter_m": odo_errors.inter_m,
+                    "seconds": time.perf_counter() - start,
+                },
+                odo_errors,
+            )
+        for outlier_rate, rule in _fleet_grid(
+            outlier_rates, separations, between_only, samplers, budgets, gamma
+        ):
+            start = time.perf_counter()
+            estimates, matches, (i, j), placed = evaluate_fleet_one(
+                refs,
+                odos,
+                rule,
+                seed=int(seed),
+                verifier=dataclasses.replace(verifier, outlier_rate=outlier_rate),
+                backend=backend,
+                anchor=names[a],
+                loops=loops_for(rule.separation),
+            )
+            assert matches is not None
+            errors = fleet_errors(refs, estimates, overlap_m=overlap, pairs=pairs)
+            record(
+                base
+                | {
+                    "sampler": rule.sampler,
+                    "between_only": rule.between_only,
+                    "separation": rule.separation,
+                    "outlier_rate": float(outlier_rate),
+                    "budget": rule.budget,
+                    "candidates": len(i),
+                    "between_candidates": between_count(i, j),
+                    "matches": len(matches),
+                    "between_matches": between_count(matches.i, matches.j),
+                    "wrong": int(matches.wrong.sum()),
+                    "placed": placed,
+                    "ate_m": errors.ate_m,
+                    "session_ate_m": errors.session_rms_m,
+                    "inter_m": errors.inter_m,
+                    "seconds": time.perf_counter() - start,
+                },
+                errors,
+            )
+    return results
+
+
+# ---------------------------------------------------------------------------------------------
+# The plot
+# ---------------------------------------------------------------------------------------------
+
+
+def plot_fleet_error_vs_matches(
+    results: FleetResults,
+    *,
+    ax: Any = None,
+    select: Mapping[str, Any] | None = None,
+    metric: Literal["ate", "inter", "session_ate"] = "ate",
+    title: str | None = None,
+    legend: bool = True,
+) -> Any:
+    """The fleet's error against the number of matches (the budget, log scale), one curve per
+    sampler: solid over every component, dashed between sessions only; the median over the
+    seeds with a band over the middle half (joint ATE and inter-session error); the odometry
+    alone as a dotted line. ``metric``: ``"ate"`` (joint ATE), ``"inter"`` (the inter-session
+    relative error) or ``"session_ate"`` (the sessions' own ATEs). ``select`` keeps the rows
+    whose columns have these values. Needs matplotlib.
+    """
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 4.2))
+    select = dict(select or {})
+    summary = [
+        s
+        for s in results.summary()
+        if s["sampler"] != "odometry" and all(s.get(k) == v for k, v in select.items())
+    ]
+    column = {"ate": "ate", "inter": "inter", "session_ate": "session_ate"}[metric]
+    curves: dict[tuple[str, bool], list[dict[str, Any]]] = {}
+    for s in summary:
+        curves.setdefault((s["sampler"], s["between_only"]), []).append(s)
+    order = {name: k for k, name in enumerate(SAMPLERS + BASELINES)}
+    for (name, between), points in sorted(
+        curves.items(), key=lambda kv: (order.get(kv[0][0], 99), kv[0][1])
+    ):
+        points.sort(key=lambda s: s["budget"])
+        x = [s["budget"] for s in points]
+        y = [s[f"{column}_median_m"] for s in points]
+        colour = COLOURS.get(name)
+        label = sampler_symbol(name) + (" (between sessions only)" if between else "")
+        ax.plot(x, y, "--" if between else "-", marker="o", ms=3, color=colour, label=label)
+        if column in ("ate", "inter"):
+            ax.fill_between(
+                x,
+                [s[f"{column}_q25_m"] for s in points],
+                [s[f"{column}_q75_m"] for s in points],
+                color=colour,
+                alpha=0.08,
+            )
+    odometry_column = {"ate": "ate_m", "inter": "inter_m", "session_ate": "session_ate_m"}[metric]
+    odometry = [
+        r[odometry_column]
+        for r in results.rows
+        if r["sampler"] == "odometry"
+        and ("dataset" not in select or r["dataset"] == select["dataset"])
+        and np.isfinite(r[odometry_column])
+    ]
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    if odometry:
+        level = float(np.median(odometry))
+        low, high = ax.get_ylim()
+        ax.axhline(level, color="k", ls=":", lw=1, label="odometry alone")
+        ax.set_ylim(low, max(high, 1.5 * level))
+    ax.set_xlabel("matches tried (budget)")
+    ax.set_ylabel(
+        {
+            "ate": "joint ATE (m)",
+            "inter": "inter-session error (m)",
+            "session_ate": "session ATE (m)",
+        }[metric]
+    )
+    if title:
+        ax.set_title(title, fontsize=9)
+    ax.grid(True, which="both", lw=0.3, alpha=0.5)
+    if legend:
+        ax.legend(fontsize=7, ncol=2)
+    return ax
+
+
+# ---------------------------------------------------------------------------------------------
+# The command line: loops-eval --fleet
+# ---------------------------------------------------------------------------------------------
+
+
+def _plot_fleet_panels(results: FleetResults, path: str, *, title: str) -> None:
+    """:func:`plot_fleet_error_vs_matches`: a row per error (joint ATE, inter-session) and
+    separation, a column per outlier rate."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = [r for r in results.rows if r["sampler"] != "odometry"]
+    separations = sorted({r["separation"] for r in runs}, reverse=True)
+    columns = sorted({r["outlier_rate"] for r in runs})
+    panels = [(m, sep) for m in ("ate", "inter") for sep in separations]
+    fig, axes = plt.subplots(
+        max(len(panels), 1),
+        max(len(columns), 1),
+        figsize=(6.4 * max(len(columns), 1), 4.2 * max(len(panels), 1)),
+        squeeze=False,
+    )
+    for a, (metric, separation) in enumerate(panels):
+        for b, outlier_rate in enumerate(columns):
+            plot_fleet_error_vs_matches(
+                results,
+                ax=axes[a][b],
+                metric=metric,  # type: ignore[arg-type]
+                select={"separation": separation, "outlier_rate": outlier_rate},
+                title=f"{title}: "
+                + ("joint ATE" if metric == "ate" else "inter-session error")
+                + (", revisits" if separation else ", S_gamma")
+                + f", {outlier_rate:.0%} wrong matches",
+            )
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def _session_sources(paths: Sequence[str]) -> list[tuple[str, str]]:
+    import os
+
+    out: list[tuple[str, str]] = []
+    for text in paths:
+        name, sep, path = text.partition("=")
+        if not sep or os.path.exists(text):
+            name, path = os.path.splitext(os.path.basename(text))[0], text
+        if any(n == name for n, _ in out):
+            raise InvalidParameterError(
+                f"two sessions are named {name!r}: name them with NAME=FILE"
+            )
+        out.append((name, path))
+    return out
+
+
+def main_fleet(args: Any) -> int:
+    """``loops-eval --fleet``: :func:`evaluate_fleet` on the pose files given, one a session
+    (``args`` parsed by :func:`inexact_loops.evaluate.main`)."""
+    import os
+    import sys
+
+    from .evaluate import _csv_list
+
+    def both(value: str) -> list[bool]:
+        return [False, True] if value == "both" else [value == "on"]
+
+    try:
+        if args.odometry:
+            raise InvalidParameterError("--fleet takes no --odometry: each session's is simulated")
+        if args.on != "reference" or args.source != "exact":
+            raise InvalidParameterError(
+                "--fleet chooses candidates on the references' exact components: not with --on "
+                "estimate or --source detections (between sessions, the estimates share no frame "
+                "before the first match)"
+            )
+        if os.path.exists(args.out) and os.listdir(args.out) and not args.force:
+            raise InvalidParameterError(
+                f"{args.out} exists and is not empty (--force to write into it)"
+            )
+        options: dict[str, Any] = {}
+        if args.rate_hz is not None:
+            options["rate_hz"] = args.rate_hz
+        if args.times:
+            options["times"] = args.times
+        if args.format:
+            options["format"] = args.format
+        axes: tuple[int, int] | None = None
+        if args.axes:
+            pair = _csv_list(args.axes, int)
+            if len(pair) != 2:
+                raise InvalidParameterError(f"--axes {args.axes}: two axes, e.g. 0,2")
+            axes = (pair[0], pair[1])
+        dim = 3 if args.se3 else 2
+        references = {
+            name: Poses.read(path, dim=dim, axes=axes, **options)  # type: ignore[arg-type]
+            for name, path in _session_sources(args.poses)
+        }
+        label = "+".join(references)
+        results = evaluate_fleet(
+            references,
+            gamma=args.gamma,
+            samplers=_csv_list(args.samplers, str),
+            budgets=_csv_list(args.budgets, int),
+            seeds=range(args.seeds),
+            between_only=both(args.between_only),
+            separations=[True, False] if args.separation == "both" else [args.separation == "on"],
+            outlier_rates=_csv_list(args.outliers, float),
+            backend=BackEnd(kernel=args.kernel),
+            anchor=args.anchor,
+            overlap_m=args.overlap_m,
+            keyframe_m=args.keyframe_m,
+            dataset=label,
+            progress=lambda r: print(
+                f"loops-eval: seed {r['seed']} {r['sampler']:>15} "
+                f"{'between' if r['between_only'] else 'all':>7} budget {r['budget']:>6}: "
+                f"{r['matches']:>5} matches ({r['between_matches']} between sessions, "
+                f"{r['wrong']} wrong), joint ATE {r['ate_m']:.3f} m, inter {r['inter_m']:.3f} m",
+                file=sys.stderr,
+            ),
+        )
+        os.makedirs(args.out, exist_ok=True)
+        results.to_csv(
+            os.path.join(args.out, "results.csv"), os.path.join(args.out, "sessions.csv")
+        )
+        results.to_json(os.path.join(args.out, "results.json"))
+        try:
+            _plot_fleet_panels(results, os.path.join(args.out, "error_vs_matches.png"), title=label)
+        except ImportError:
+            print("loops-eval: matplotlib is not installed: no plot", file=sys.stderr)
+        for s in results.summary():
+            if s["sampler"] != "odometry":
+                print(
+                    f"{s['sampler']:>15} {'between' if s['between_only'] else 'all':>7} "
+                    f"sep={int(s['separation'])} out={s['outlier_rate']:.2f} "
+                    f"budget {s['budget']:>6}: joint ATE {s['ate_median_m']:.3f} m "
+                    f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}], "
+                    f"inter {s['inter_median_m']:.3f} m"
+                )
+        print(f"loops-eval: results in {args.out}", file=sys.stderr)
+        return 0
+    except (InvalidParameterError, OSError, ValueError, ImportError) as err:
+        print(f"loops-eval: error: {err}", file=sys.stderr)
+        return 2

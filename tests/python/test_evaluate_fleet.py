@@ -1,0 +1,462 @@
+"""``inexact_loops.evaluate``, the fleet case: several sessions, one map.
+
+With exact odometry and exact matches the multi-session pose graph returns the references,
+whatever the sessions' unknown starts; without a match between sessions they stay apart (each
+where its own odometry frame puts it); true matches between sessions lower the joint error and
+the inter-session error; the errors follow their definitions (checked on displacements whose
+errors are known exactly); the initial placement follows the majority of the matches; and
+``loops-eval --fleet`` writes its tables and plot. The back-end tests skip, saying why, when
+GTSAM is not installed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import inexact_loops as il
+from inexact_loops import _fleet_evaluate
+from inexact_loops import evaluate as ev
+
+try:
+    import gtsam
+
+    HAVE_GTSAM = True
+except ImportError:  # pragma: no cover - CI installs the [test] extra, which has gtsam
+    HAVE_GTSAM = False
+
+needs_gtsam = pytest.mark.skipif(
+    not HAVE_GTSAM,
+    reason="GTSAM is not installed: pip install 'inexact-loops[maps]' to test the pose-graph "
+    "back end",
+)
+
+EXACT = ev.DriftModel(
+    translation_sigma_m_per_sqrt_m=0.0,
+    rotation_sigma_rad_per_sqrt_m=0.0,
+    heading_bias_rad_per_m=0.0,
+)
+
+
+def circuit(
+    centre: tuple[float, float],
+    phase: float,
+    *,
+    laps: float = 1.5,
+    n: int = 300,
+    radius: float = 40.0,
+) -> ev.Poses:
+    """``laps`` times round a circle, starting at angle ``phase``, a pose a second."""
+    angle = phase + np.linspace(0.0, laps * 2 * np.pi, n)
+    xy = np.asarray(centre) + radius * np.c_[np.cos(angle), np.sin(angle)]
+    return ev.Poses.from_positions(np.arange(n, dtype=float), xy)
+
+
+def three_sessions(dim: int = 2) -> dict[str, ev.Poses]:
+    """Three sessions round overlapping circles, far from the origin and from each other's
+    starts: what each session's own odometry frame (its start at the origin) gets wrong."""
+    sessions = {
+        "north": circuit((300.0, 200.0), 0.0),
+        "east": circuit((330.0, 190.0), 2.0),
+        "south": circuit((310.0, 160.0), 4.0),
+    }
+    if dim == 3:
+        sessions = {n: ev.Poses(p.timestamps, ev._lift3(p.matrices)) for n, p in sessions.items()}
+    return sessions
+
+
+def joint_pairs(references: dict[str, ev.Poses], rule: ev.FleetRule, seed: int = 0):
+    return ev.choose_fleet_candidates(references, rule, seed=seed)
+
+
+def starts_of(references: dict[str, ev.Poses]) -> np.ndarray:
+    return np.r_[0, np.cumsum([len(p) for p in references.values()])]
+
+
+def split(i: np.ndarray, j: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which pairs are within a session, which between two."""
+    between = np.searchsorted(starts, i, side="right") != np.searchsorted(starts, j, side="right")
+    return ~between, between
+
+
+def joint_poses(references: dict[str, ev.Poses]) -> ev.Poses:
+    m = np.concatenate([p.matrices for p in references.values()])
+    return ev.Poses(np.arange(len(m), dtype=float), m)
+
+
+def subset(matches: ev.Matches, keep: np.ndarray) -> ev.Matches:
+    return ev.Matches(
+        matches.i[keep],
+        matches.j[keep],
+        matches.relative[keep],
+        matches.translation_sigma_m[keep],
+        matches.rotation_sigma_rad[keep],
+        matches.wrong[keep],
+        int(keep.sum()),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Keys, errors and placement
+# ---------------------------------------------------------------------------------------------
+
+
+@needs_gtsam
+def test_session_keys_are_gtsams_symbols_as_loops_fleet_writes_them():
+    assert ev.session_key(0, 5) == gtsam.symbol("a", 5) == 6989586621679009797
+    assert ev.session_key(25, 7) == gtsam.symbol("z", 7)
+    assert ev.session_key(26, 3) == gtsam.symbol("A", 3)
+    assert ev.session_key(51, 0) == gtsam.symbol("Z", 0)
+    with pytest.raises(il.InvalidParameterError, match="52 at most"):
+        ev.session_key(52, 0)
+
+
+def test_fleet_errors_follow_their_definitions():
+    refs = three_sessions()
+    exact = list(refs.values())
+    errors = ev.fleet_errors(refs, exact, overlap_m=5.0)
+    assert errors.ate_m == pytest.approx(0.0, abs=1e-9)
+    assert errors.inter_m == pytest.approx(0.0, abs=1e-9) and errors.inter_pairs > 20
+    # "east" shifted by 3 m along x: its own shape is right (session ATE 0), the relative pose
+    # of every pair of it with another session is 3 m off, and the joint ATE is not 0.
+    shifted = exact[1].matrices.copy()
+    shifted[:, 0, 2] += 3.0
+    moved = [exact[0], ev.Poses(exact[1].timestamps, shifted), exact[2]]
+    errors = ev.fleet_errors(refs, moved, overlap_m=5.0)
+    assert errors.session_ate_m["east"] == pytest.approx(0.0, abs=1e-9)
+    assert errors.session_rms_m == pytest.approx(0.0, abs=1e-9)
+    assert 0.5 < errors.ate_m < 3.0
+    # Pairs involving east: error exactly 3 m; pairs of north with south: 0.
+    i, j = _fleet_evaluate._inter_pairs(list(refs.items()), 5.0)
+    starts = starts_of(refs)
+    east = (np.searchsorted(starts, i, side="right") == 2) | (
+        np.searchsorted(starts, j, side="right") == 2
+    )
+    expected = math.sqrt(9.0 * east.mean())
+    assert errors.inter_m == pytest.approx(expected, rel=1e-9)
+    # The joint ATE is the single-trajectory ATE of the sessions one after another.
+    assert errors.ate_m == pytest.approx(
+        ev.ate(joint_poses(refs), joint_poses(dict(zip(refs, moved, strict=True)))), rel=1e-12
+    )
+    # Pairs: every pose of a with its nearest pose of b, when within the radius (brute force).
+    from scipy.spatial.distance import cdist
+
+    count = 0
+    names = list(refs)
+    for a in range(3):
+        for b in range(a + 1, 3):
+            d = cdist(refs[names[a]].positions, refs[names[b]].positions)
+            count += int((d.min(axis=1) <= 5.0).sum())
+    assert count == errors.inter_pairs
+
+
+def test_place_sessions_follows_the_majority_of_matches():
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(refs, seed=0, drift=EXACT)
+    estimates = [o.estimate for o in odos.values()]
+    joint = joint_poses(refs)
+    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 60, 5.0, between_only=True))
+    right = ev.Matches.exact(joint, i, j)
+    # Four wrong matches, each claiming another place (identity relative pose).
+    k = np.arange(4)
+    wrong = ev.Matches(
+        np.r_[right.i, i[k]],
+        np.r_[right.j, j[k] + 40],
+        np.r_[right.relative, np.tile(np.eye(3), (4, 1, 1))],
+        np.r_[right.translation_sigma_m, [0.05] * 4],
+        np.r_[right.rotation_sigma_rad, [0.005] * 4],
+        np.r_[right.wrong, [True] * 4],
+        len(i) + 4,
+    )
+    offsets, placed = ev.place_sessions(estimates, wrong)
+    assert placed == [True, True, True]
+    for offset, estimate, ref in zip(offsets, estimates, refs.values(), strict=True):
+        np.testing.assert_allclose(offset @ estimate.matrices, ref.matrices, atol=1e-6)
+    # Without matches between sessions, every session keeps its own frame.
+    within, _ = split(i, j, starts_of(refs))
+    offsets, placed = ev.place_sessions(estimates, subset(right, within))
+    assert placed == [True, False, False]
+    assert all(np.array_equal(o, np.eye(3)) for o in offsets)
+
+
+def test_simulated_sessions_start_in_their_own_frames_but_the_anchor():
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(refs, seed=3, anchor="east")
+    np.testing.assert_array_equal(odos["east"].start, refs["east"].matrices[0])
+    for name in ("north", "south"):
+        np.testing.assert_array_equal(odos[name].start, np.eye(3))
+    # Each session its own seed: the same model gives the sessions different noise.
+    steps = [np.diff(o.estimate.positions, axis=0)[:20] for o in odos.values()]
+    assert not np.allclose(steps[0], steps[1])
+    with pytest.raises(il.InvalidParameterError, match="anchor 'west' is not a session"):
+        ev.simulate_fleet_odometry(refs, seed=0, anchor="west")
+
+
+# ---------------------------------------------------------------------------------------------
+# The multi-session pose graph
+# ---------------------------------------------------------------------------------------------
+
+
+@needs_gtsam
+@pytest.mark.parametrize("dim", [2, 3])
+def test_exact_odometry_and_matches_return_the_references(dim):
+    refs = three_sessions(dim)
+    odos = ev.simulate_fleet_odometry(refs, seed=0, drift=EXACT)
+    # The sessions but the anchor start at the origin of their own frames: far off.
+    assert ev.fleet_errors(refs, [o.estimate for o in odos.values()], overlap_m=5.0).ate_m > 50
+    rule = ev.FleetRule("closest-first", 80, 5.0)
+    verifier = ev.Verifier(
+        success_max=1.0,
+        translation_sigma_m=1e-4,
+        translation_sigma_per_m=0.0,
+        rotation_sigma_rad=1e-5,
+        rotation_sigma_rad_per_m=0.0,
+    )
+    for kernel in ("cauchy", "gnc"):
+        estimates, matches, (i, j), placed = ev.evaluate_fleet_one(
+            refs, odos, rule, seed=0, verifier=verifier, backend=ev.BackEnd(kernel=kernel)
+        )
+        assert matches is not None and placed == 3
+        assert split(matches.i, matches.j, starts_of(refs))[1].sum() > 5
+        errors = ev.fleet_errors(refs, estimates, overlap_m=5.0)
+        assert errors.ate_m < 1e-3 and errors.inter_m < 1e-3, errors
+        for ref, est in zip(refs.values(), estimates, strict=True):
+            assert ev.ate(ref, est, align=False) < 1e-3
+
+
+@needs_gtsam
+def test_without_a_match_between_sessions_the_sessions_stay_apart():
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(
+        refs, seed=1, drift=ev.DriftModel(heading_bias_rad_per_m=5e-4)
+    )
+    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 150, 5.0))
+    matches = ev.Matches.exact(joint_poses(refs), i, j)
+    within, between = split(i, j, starts_of(refs))
+    assert within.sum() > 10 and between.sum() > 10
+    alone = ev.fleet_errors(refs, ev.optimize_fleet(list(odos.values())), overlap_m=5.0)
+    inside = ev.fleet_errors(
+        refs, ev.optimize_fleet(list(odos.values()), subset(matches, within)), overlap_m=5.0
+    )
+    # Closures within the sessions fix each session's shape, not where it lies: the sessions
+    # but the anchor stay in their own frames, hundreds of metres off.
+    assert inside.session_rms_m < 0.3 * alone.session_rms_m
+    assert inside.inter_m > 100 and alone.inter_m > 100
+    assert inside.ate_m > 50
+    estimates = ev.optimize_fleet(list(odos.values()), subset(matches, within))
+    for name, estimate in zip(list(refs)[1:], estimates[1:], strict=True):
+        # Its first pose stays near where its own odometry frame starts, the origin (the weak
+        # prior holds it there; closures within the session reshape it by a metre or so), far
+        # from its true start.
+        assert np.linalg.norm(estimate.positions[0]) < 5.0, name
+        assert np.linalg.norm(refs[name].positions[0]) > 300.0, name
+
+
+@needs_gtsam
+@pytest.mark.parametrize("dim", [2, 3])
+def test_true_matches_between_sessions_lower_the_joint_error(dim):
+    refs = three_sessions(dim)
+    odos = ev.simulate_fleet_odometry(
+        refs, seed=2, drift=ev.DriftModel(heading_bias_rad_per_m=5e-4)
+    )
+    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 150, 5.0))
+    matches = ev.Matches.exact(joint_poses(refs), i, j)
+    within, between = split(i, j, starts_of(refs))
+    sessions = list(odos.values())
+    inside = ev.fleet_errors(
+        refs, ev.optimize_fleet(sessions, subset(matches, within)), overlap_m=5.0
+    )
+    few = ev.fleet_errors(
+        refs,
+        ev.optimize_fleet(
+            sessions, subset(matches, within | (between & (np.cumsum(between) <= 3)))
+        ),
+        overlap_m=5.0,
+    )
+    every = ev.fleet_errors(refs, ev.optimize_fleet(sessions, matches), overlap_m=5.0)
+    assert every.ate_m < 0.01 * inside.ate_m, (every, inside)
+    assert every.inter_m < 0.01 * inside.inter_m
+    assert every.inter_m < few.inter_m < inside.inter_m
+    assert every.ate_m < 0.5
+
+
+@needs_gtsam
+def test_a_wrong_match_between_sessions_is_down_weighted():
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(
+        refs, seed=4, drift=ev.DriftModel(heading_bias_rad_per_m=2e-4)
+    )
+    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 120, 5.0))
+    right = ev.Matches.exact(joint_poses(refs), i, j, sigma_m=0.05, sigma_rad=0.005)
+    _, between = split(i, j, starts_of(refs))
+    k = np.flatnonzero(between)[:3]
+    claim = np.tile(np.eye(3), (3, 1, 1))
+    claim[:, 0, 2] = 15.0  # 15 m off
+    wrong = ev.Matches(
+        np.r_[right.i, i[k]],
+        np.r_[right.j, j[k]],
+        np.r_[right.relative, claim],
+        np.r_[right.translation_sigma_m, [0.05] * 3],
+        np.r_[right.rotation_sigma_rad, [0.005] * 3],
+        np.r_[right.wrong, [True] * 3],
+        len(i) + 3,
+    )
+    sessions = list(odos.values())
+    clean = ev.fleet_errors(refs, ev.optimize_fleet(sessions, right), overlap_m=5.0)
+    gauss = ev.fleet_errors(
+        refs, ev.optimize_fleet(sessions, wrong, ev.BackEnd(kernel="gauss")), overlap_m=5.0
+    )
+    robust = ev.fleet_errors(refs, ev.optimize_fleet(sessions, wrong), overlap_m=5.0)
+    assert gauss.inter_m > 0.5
+    assert robust.inter_m < 0.2 * gauss.inter_m, (robust, gauss)
+    assert robust.inter_m < clean.inter_m + 0.1
+
+
+@needs_gtsam
+def test_evaluate_fleet_grid_and_its_files(tmp_path):
+    fleet = il.urban_fleet(vehicles=3, duration_s=240.0, seed=5)
+    results = ev.evaluate_fleet(
+        fleet,
+        gamma=20.0,
+        samplers=["closest-first", "one", "lio-sam"],
+        budgets=[10, 60],
+        seeds=[0, 1],
+        outlier_rates=(0.0, 0.2),
+        keyframe_m=10.0,
+        dataset="fleet",
+    )
+    rows = results.rows
+    # Per seed: the odometry row; per outlier rate: 2 samplers x 2 between_only + lio-sam (all
+    # components only), at 2 budgets.
+    assert len(rows) == 2 * (1 + 2 * (2 * 2 + 1) * 2)
+    assert len(results.sessions) == 3 * len(rows)
+    assert all(r["candidates"] <= r["budget"] for r in rows if r["sampler"] != "odometry")
+    assert all(r["between_candidates"] == r["candidates"] for r in rows if r["between_only"])
+    assert all(r["wrong"] == 0 for r in rows if r["outlier_rate"] == 0.0)
+    odometry = {r["seed"]: r["ate_m"] for r in rows if r["sampler"] == "odometry"}
+    assert all(r["odometry_ate_m"] == odometry[r["seed"]] for r in rows)
+    summary = results.summary()
+    cf = [
+        s
+        for s in summary
+        if s["sampler"] == "closest-first"
+        and s["between_only"]
+        and s["budget"] == 60
+        and s["outlier_rate"] == 0.0
+    ]
+    assert len(cf) == 1 and cf[0]["seeds"] == 2
+    assert cf[0]["ate_median_m"] < 0.1 * cf[0]["odometry_ate_m"]
+    assert cf[0]["inter_q25_m"] <= cf[0]["inter_median_m"] <= cf[0]["inter_q75_m"]
+    results.to_csv(tmp_path / "rows.csv", tmp_path / "sessions.csv")
+    again = ev.FleetResults.from_csv(tmp_path / "rows.csv")
+    assert again.rows == [{k: r[k] for k in ev.FLEET_COLUMNS} for r in rows]
+    assert len((tmp_path / "sessions.csv").read_text().splitlines()) == 1 + len(results.sessions)
+    results.to_json(tmp_path / "rows.json")
+    document = json.loads((tmp_path / "rows.json").read_text())
+    assert document["settings"]["sessions"] == {
+        n: len(p) for n, p in ev.fleet_references(fleet, keyframe_m=10.0).items()
+    }
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    for metric in ("ate", "inter", "session_ate"):
+        ax = ev.plot_fleet_error_vs_matches(results, metric=metric, select={"outlier_rate": 0.0})
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert "odometry alone" in labels and any("between sessions only" in t for t in labels)
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_fleet_rules_and_inputs_are_checked():
+    with pytest.raises(il.InvalidParameterError, match="not with between_only"):
+        ev.FleetRule("lio-sam", 10, 5.0, between_only=True)
+    with pytest.raises(il.InvalidParameterError, match="unknown sampler"):
+        ev.FleetRule("nearest", 10, 5.0)
+    refs = three_sessions()
+    mixed = refs | {"up": three_sessions(3)["north"]}
+    with pytest.raises(il.InvalidParameterError, match="mix SE\\(2\\) and SE\\(3\\)"):
+        ev.simulate_fleet_odometry(mixed, seed=0)
+    odos = ev.simulate_fleet_odometry(refs, seed=0)
+    with pytest.raises(il.InvalidParameterError, match="no odometry for session"):
+        ev.evaluate_fleet_one(refs, {"north": odos["north"]}, None, seed=0)
+
+
+@needs_gtsam
+def test_loops_eval_fleet_command(tmp_path):
+    files = []
+    for name, poses in three_sessions().items():
+        path = tmp_path / f"{name}.tum"
+        poses.to_tum(path)
+        files.append(str(path))
+    out = tmp_path / "eval"
+    cmd = [
+        sys.executable,
+        "-m",
+        "inexact_loops.evaluate",
+        "--fleet",
+        *files,
+        "--gamma",
+        "5",
+        "--budgets",
+        "10,40",
+        "--seeds",
+        "2",
+        "--samplers",
+        "closest-first,rho",
+        "--anchor",
+        "east",
+        "--out",
+        str(out),
+    ]
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    rows = ev.FleetResults.from_csv(out / "results.csv").rows
+    assert {r["sampler"] for r in rows} == {"odometry", "closest-first", "rho"}
+    assert len(rows) == 2 * (1 + 2 * 2 * 2)
+    assert {r["between_only"] for r in rows} == {False, True}
+    document = json.loads((out / "results.json").read_text())
+    assert document["settings"]["anchor"] == "east"
+    assert (out / "sessions.csv").exists() and (out / "error_vs_matches.png").stat().st_size > 1000
+    assert "closest-first" in done.stdout and "inter" in done.stdout
+    # Options a fleet does not take: one line, exit code 2.
+    for extra, message in (
+        (["--on", "estimate"], "--fleet chooses candidates on the references"),
+        (["--odometry", files[0]], "--fleet takes no --odometry"),
+    ):
+        bad = subprocess.run(
+            [*cmd[:-1], str(tmp_path / "x"), *extra], capture_output=True, text=True, check=False
+        )
+        assert bad.returncode == 2 and message in bad.stderr
+        assert len(bad.stderr.strip().splitlines()) == 1
+    same = subprocess.run(
+        [*cmd[:4], files[0], files[0], *cmd[4 + len(files) : -1], str(tmp_path / "y")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert same.returncode == 2 and "two sessions are named 'north'" in same.stderr
+
+
+@needs_gtsam
+def test_mulran_kaist_drives_as_a_fleet(data_dir):
+    folder = data_dir / "mulran_kaist"
+    paths = {
+        "kaist01": folder / "kaist01_localization_poses01_seq02asmap.txt",
+        "kaist02": folder / "kaist02_localization_poses02_seq02asmap.txt",
+    }
+    refs = {n: ev.Poses.read(p, rate_hz=10.0) for n, p in paths.items()}
+    refs = {n: p.take(p.keyframes(10.0)) for n, p in refs.items()}
+    odos = ev.simulate_fleet_odometry(refs, seed=0)
+    rule = ev.FleetRule("closest-first", 100, 15.0, between_only=True)
+    estimates, matches, (i, j), placed = ev.evaluate_fleet_one(refs, odos, rule, seed=0)
+    assert placed == 2 and matches is not None and len(matches) > 50
+    alone = ev.fleet_errors(refs, [o.estimate for o in odos.values()], overlap_m=15.0)
+    merged = ev.fleet_errors(refs, estimates, overlap_m=15.0)
+    # The two drives cover the same campus: hundreds of keyframe pairs between them.
+    assert merged.inter_pairs > 300
+    assert merged.ate_m < 0.1 * alone.ate_m and merged.inter_m < 0.1 * alone.inter_m
