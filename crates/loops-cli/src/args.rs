@@ -1,6 +1,6 @@
 //! The argument groups several commands share: how to read a pose file ([`InputArgs`]), the
-//! engine ([`EngineArgs`]), how to sample ([`SamplingArgs`]) and what to print or write
-//! ([`OutputArgs`]).
+//! engine ([`EngineArgs`]), how to sample ([`SamplingArgs`]), the three together
+//! ([`AnalysisArgs`]) and what to print or write ([`OutputArgs`]).
 //!
 //! Each group converts its flags into the type of `loops-core` or `loops-io` that says the same
 //! thing, once; defaults come from those types (`default_value_t = ...::default()`), and values
@@ -321,6 +321,40 @@ impl SamplingArgs {
             other => other.into(),
         })?;
         Ok(sampler)
+    }
+}
+
+/// The flags of the commands that find loops and sample them (`sample`, `run`, `fleet`): how to
+/// read, the engine, how to sample.
+#[derive(Debug, Args)]
+pub(crate) struct AnalysisArgs {
+    #[command(flatten)]
+    pub(crate) input: InputArgs,
+    #[command(flatten)]
+    pub(crate) engine: EngineArgs,
+    #[command(flatten)]
+    pub(crate) sampling: SamplingArgs,
+}
+
+/// What [`AnalysisArgs`] ask for, checked.
+#[derive(Debug)]
+pub(crate) struct Analysis {
+    pub(crate) spec: MetricSpec,
+    pub(crate) sampler: Sampler,
+    pub(crate) separation: Separation,
+}
+
+impl AnalysisArgs {
+    /// The metric, the sampler and the separation the flags ask for, with γ, ε and the thread
+    /// count checked by the core: refused once, before any file is read.
+    pub(crate) fn checked(&self) -> Result<Analysis> {
+        let spec = self.engine.spec()?;
+        let sampler = self.sampling.sampler()?;
+        loops_core::check_gamma(self.engine.gamma)?;
+        let separation = self.engine.separation()?;
+        loops_core::check_epsilon_s(self.sampling.epsilon_s)?;
+        self.engine.threads.map(loops_core::check_threads).transpose()?;
+        Ok(Analysis { spec, sampler, separation })
     }
 }
 

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use loops_core::{Loops, SampleQuality, Samples, Trajectory, cluster_detections, sample_clusters, sample_quality};
 
-use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
+use crate::args::{Analysis, AnalysisArgs, JsonTo};
 use crate::guard;
 
 /// Candidate loop-closure pairs for a scan matcher, from the exact loop components or from
@@ -27,11 +27,7 @@ pub(crate) struct SampleArgs {
     #[arg(required = true, value_name = "FILE")]
     files: Vec<PathBuf>,
     #[command(flatten)]
-    input: InputArgs,
-    #[command(flatten)]
-    engine: EngineArgs,
-    #[command(flatten)]
-    sampling: SamplingArgs,
+    analysis: AnalysisArgs,
     /// Sample from these detections (`t,t_prime[,score]` rows, or TUC `loop t1 t2 score`
     /// lines), clustered in the (t, t') plane with --epsilon-s; without it, sample from the
     /// exact loop components of S_gamma.
@@ -58,14 +54,11 @@ pub(crate) struct SampleArgs {
 }
 
 pub(crate) fn sample(args: SampleArgs) -> Result<()> {
-    let spec = args.engine.spec()?;
-    let sampler = args.sampling.sampler()?;
-    let epsilon_s = args.sampling.epsilon_s;
-    let (table, traj) = args.input.read_table(&args.files, &spec)?;
-    let gamma = args.engine.gamma;
-    loops_core::check_gamma(gamma)?;
-    let separation = args.engine.separation()?;
-    let (loops, samples) = loops_core::with_threads(args.engine.threads, || -> Result<(Loops, Samples)> {
+    let Analysis { spec, sampler, separation } = args.analysis.checked()?;
+    let AnalysisArgs { input, engine, sampling } = &args.analysis;
+    let (gamma, epsilon_s) = (engine.gamma, sampling.epsilon_s);
+    let (table, traj) = input.read_table(&args.files, &spec)?;
+    let (loops, samples) = loops_core::with_threads(engine.threads, || -> Result<(Loops, Samples)> {
         let loops = spec.find_loops_separated(&traj, gamma, separation)?;
         let samples = match &args.detections {
             None => spec.sample_loops(&traj, &loops, &sampler)?,
@@ -97,16 +90,14 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         Ok((loops, samples))
     })??;
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
-    for warning in
-        loops.warnings().iter().map(ToString::to_string).chain(samples.warnings().iter().map(ToString::to_string))
-    {
+    for warning in crate::run::warnings(&loops, &samples) {
         eprintln!("loops: warning: {warning}");
     }
     let mut stdout = std::io::stdout().lock();
     if args.json == Some(JsonTo::Stdout) {
         loops_io::samples_to_json(&samples, &mut stdout).context("writing the samples to stdout")?;
     } else {
-        let measured = args.input.measured(&table, &traj);
+        let measured = input.measured(&table, &traj);
         write_summary(
             &mut stdout,
             &crate::args::source_name(&args.files),

@@ -21,15 +21,15 @@ use loops_core::{
     Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SampleQuality, Samples, Trajectory,
     sample_quality,
 };
-use loops_io::{G2oOptions, PoseTable, QualitySummary, SeparationReport};
+use loops_io::{G2oOptions, PoseTable, QualitySummary};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs, source_name};
+use crate::args::{AnalysisArgs, source_name};
 use crate::guard;
 use crate::out_dir::{self, OutDir};
 use crate::progress::{self, Batch};
-use crate::run::{LogOutcome, Settings};
+use crate::run::{LogOutcome, ResultsArgs, Seconds, Settings, SettingsSummary};
 use page::{FleetReportInput, render};
 
 mod page;
@@ -46,6 +46,13 @@ const FILES: [&str; 6] = out_dir::FLEET_FILES;
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
+    mut_arg("out", |arg| arg.help("The folder for the results: the fleet's files and a folder per session")),
+    mut_arg("force", |arg| arg.help(
+        "Replace the results of an earlier `loops fleet` in --out (only what it wrote there)"
+    )),
+    mut_arg("json", |arg| arg.help(
+        "Also write the fleet's summary (summary.json of --out) to FILE; `-` prints it on stdout instead of the table"
+    )),
     after_help = "Examples:\n  \
     loops synth fleet --vehicles 3 --days 2 --duration-s 900\n  \
     loops fleet fleet/*.mcap --gamma 40 --out fleet-results\n  \
@@ -68,11 +75,7 @@ pub(crate) struct FleetArgs {
     #[arg(long = "session", value_name = "NAME=FILE[,FILE...]")]
     sessions: Vec<String>,
     #[command(flatten)]
-    input: InputArgs,
-    #[command(flatten)]
-    engine: EngineArgs,
-    #[command(flatten)]
-    sampling: SamplingArgs,
+    analysis: AnalysisArgs,
     /// Sample only pairs of two different sessions (map merging): the budget goes to the places
     /// where sessions overlap (one, rho, rho-dispersed, alpha, closest-first).
     #[arg(long)]
@@ -82,19 +85,8 @@ pub(crate) struct FleetArgs {
     /// on it.
     #[arg(long, default_value_t = Pruning::default().name().to_owned())]
     pruning: String,
-    /// The folder for the results: the fleet's files and a folder per session.
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
-    /// Replace the results of an earlier `loops fleet` in --out (only what it wrote there).
-    #[arg(long)]
-    force: bool,
-    /// Print nothing but errors.
-    #[arg(long, short)]
-    quiet: bool,
-    /// Also write the fleet's summary (summary.json of --out) to FILE; `-` prints it on stdout
-    /// instead of the table.
-    #[arg(long, value_name = "FILE")]
-    json: Option<JsonTo>,
+    #[command(flatten)]
+    results: ResultsArgs,
 }
 
 /// A session as given: its name and its file(s).
@@ -122,14 +114,12 @@ pub(crate) struct SessionSummary {
     pub(crate) samples: usize,
 }
 
+/// Where the fleet's time went, seconds: the stages of a log's, and the sessions' pages.
 #[derive(Debug, Default, Serialize)]
 pub(crate) struct FleetSeconds {
-    pub(crate) read: f64,
-    pub(crate) find_loops: f64,
-    pub(crate) sample: f64,
-    pub(crate) write: f64,
+    #[serde(flatten)]
+    pub(crate) stages: Seconds,
     pub(crate) pages: f64,
-    pub(crate) total: f64,
 }
 
 /// summary.json of the fleet.
@@ -137,21 +127,15 @@ pub(crate) struct FleetSeconds {
 pub(crate) struct FleetSummary<'a> {
     pub(crate) out: String,
     pub(crate) poses: usize,
-    pub(crate) gamma: f64,
-    pub(crate) metric: String,
-    pub(crate) separation: SeparationReport,
+    #[serde(flatten)]
+    pub(crate) settings: SettingsSummary,
     pub(crate) pruning: &'static str,
     pub(crate) components: usize,
     pub(crate) within_components: usize,
     pub(crate) between_components: usize,
     /// Pairs of two different sessions with at least one component between them.
     pub(crate) overlapping_session_pairs: usize,
-    pub(crate) sampler: &'static str,
-    pub(crate) sample_size: String,
-    pub(crate) seed: u64,
-    pub(crate) skip_trivial: bool,
     pub(crate) between_only: bool,
-    pub(crate) epsilon_s: f64,
     pub(crate) samples: usize,
     pub(crate) between_samples: usize,
     /// P1–P3 of the samples against every component of the fleet.
@@ -168,12 +152,9 @@ pub(crate) struct FleetSummary<'a> {
 
 pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
     let start = Instant::now();
-    let spec = args.engine.spec()?;
-    let sampler = args.sampling.sampler()?;
-    loops_core::check_gamma(args.engine.gamma)?;
-    let separation = args.engine.separation()?;
-    loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
-    args.engine.threads.map(loops_core::check_threads).transpose()?;
+    let checked = args.analysis.checked()?;
+    let (spec, sampler, separation) = (checked.spec, checked.sampler.clone(), checked.separation);
+    let (input, gamma) = (&args.analysis.input, args.analysis.engine.gamma);
     let pruning: Pruning = args.pruning.parse()?;
     if args.between_only && sampler.kind.is_baseline() {
         bail!(
@@ -182,21 +163,14 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
             sampler.kind
         );
     }
-    if args.out.exists() && !args.out.is_dir() {
-        bail!("--out {} exists and is not a folder", args.out.display());
-    }
-    if let Some(JsonTo::File(path)) = &args.json
-        && path.exists()
-        && !args.force
-    {
-        bail!("--json {} exists; pass --force to replace it", path.display());
-    }
+    let results = &args.results;
+    results.check()?;
     let specs = sessions(&args)?;
-    out_dir::refuse_non_empty(&args.out, args.force, TOOL)?;
+    out_dir::refuse_non_empty(&results.out, results.force, TOOL)?;
 
-    let batch = Batch::new(progress::Mode::detect(args.quiet), specs.len() + 1);
+    let batch = Batch::new(progress::Mode::detect(results.quiet), specs.len() + 1);
     let mut seconds = FleetSeconds::default();
-    let result = loops_core::with_threads(args.engine.threads, || -> Result<u8> {
+    let result = loops_core::with_threads(args.analysis.engine.threads, || -> Result<u8> {
         // The sessions are read, and fit one fleet, before anything is written or printed: a
         // fleet that cannot be made is one line on stderr, and no --out.
         let log = batch.start("fleet");
@@ -204,39 +178,39 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         let clock = Instant::now();
         let read: Vec<(PoseTable, Trajectory)> = specs
             .par_iter()
-            .map(|s| args.input.read_table(&s.files, &spec))
+            .map(|s| input.read_table(&s.files, &spec))
             .collect::<Vec<_>>()
             .into_iter()
             .collect::<Result<_>>()?;
-        seconds.read = clock.elapsed().as_secs_f64();
+        seconds.stages.read = clock.elapsed().as_secs_f64();
         let sources: Vec<String> = specs.iter().map(|s| source_name(&s.files)).collect();
         let (tables, trajectories): (Vec<PoseTable>, Vec<Trajectory>) = read.into_iter().unzip();
         let fleet = Fleet::new(specs.iter().map(|s| s.name.clone()).zip(trajectories).collect())
             .map_err(|error| mismatch(error, &specs, &sources))?;
 
-        guard::with_writes(|writes| writes.create_dir(&args.out))?;
-        let out = OutDir::take(&args.out, args.force, TOOL)?;
+        guard::with_writes(|writes| writes.create_dir(&results.out))?;
+        let out = OutDir::take(&results.out, results.force, TOOL)?;
         batch.println(&format!(
             "loops: fleet of {} session(s), {} poses, gamma {} ({}), sampler {} ({}{}), results to {}",
             fleet.len(),
             fleet.poses(),
-            args.engine.gamma,
+            gamma,
             spec.name(),
             sampler.kind,
             crate::run::size_text(sampler.size),
             if args.between_only { ", between sessions only" } else { "" },
-            args.out.display()
+            results.out.display()
         ));
         batch.println(&format!(
             "loops: {} within a session; pairs of two sessions are all kept",
-            crate::args::separation_line(separation, args.engine.gamma)
+            crate::args::separation_line(separation, gamma)
         ));
 
         log.stage(&format!("finding loops in {} poses", fleet.poses()));
         let clock = Instant::now();
         let options = FleetOptions { separation, pruning, chunk_radius: None };
-        let loops = spec.find_fleet_loops(&fleet, args.engine.gamma, &options)?;
-        seconds.find_loops = clock.elapsed().as_secs_f64();
+        let loops = spec.find_fleet_loops(&fleet, gamma, &options)?;
+        seconds.stages.find_loops = clock.elapsed().as_secs_f64();
         batch.println(&format!(
             "loops: pruning {}{}",
             loops.pruning().name(),
@@ -246,16 +220,16 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         log.stage("sampling");
         let clock = Instant::now();
         let samples = spec.sample_fleet(&fleet, &loops, &sampler, args.between_only)?;
-        let quality = sample_quality(&samples, loops.loops(), args.sampling.epsilon_s)?;
+        let quality = sample_quality(&samples, loops.loops(), args.analysis.sampling.epsilon_s)?;
         let localized = fleet.localize(&samples)?;
-        seconds.sample = clock.elapsed().as_secs_f64();
+        seconds.stages.sample = clock.elapsed().as_secs_f64();
 
         log.stage("writing");
         let clock = Instant::now();
         let components = loops.components();
         let pairs = loops.session_pairs();
-        let g2o = write_fleet_files(&out, &args.out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
-        seconds.write = clock.elapsed().as_secs_f64();
+        let g2o = write_fleet_files(&out, &results.out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
+        seconds.stages.write = clock.elapsed().as_secs_f64();
         let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
         let between_covered = components
             .iter()
@@ -272,23 +246,14 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
                 start.elapsed().as_secs_f64()
             ),
         );
-        for warning in warnings(&loops, &samples) {
+        let warnings = crate::run::warnings(loops.loops(), &samples);
+        for warning in &warnings {
             batch.println(&format!("loops: warning: fleet: {warning}"));
         }
 
         // Each session's folder: `loops run` on the session alone.
         let clock = Instant::now();
-        let settings = Settings {
-            input: &args.input,
-            gamma: args.engine.gamma,
-            epsilon_s: args.sampling.epsilon_s,
-            spec,
-            sampler: sampler.clone(),
-            separation,
-            out_path: &args.out,
-            force: args.force,
-            out: &out,
-        };
+        let settings = Settings::new(&args.analysis, checked, results, &out);
         let pages: Vec<LogOutcome> = (0..fleet.len())
             .into_par_iter()
             .map(|a| {
@@ -305,28 +270,21 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         let sessions = session_summaries(&fleet, &sources, &components, &localized);
         let failed = pages.iter().filter(|p| !p.ok).count();
         let mut summary = FleetSummary {
-            out: args.out.display().to_string(),
+            out: results.out.display().to_string(),
             poses: fleet.poses(),
-            gamma: args.engine.gamma,
-            metric: spec.name(),
-            separation: separation.into(),
+            settings: settings.summary(spec.name(), separation),
             pruning: loops.pruning().name(),
             components: components.len(),
             within_components: components.len() - between,
             between_components: between,
             overlapping_session_pairs: pairs.iter().filter(|p| p.sessions[0] != p.sessions[1]).count(),
-            sampler: samples.sampler().name(),
-            sample_size: crate::run::size_text(sampler.size),
-            seed: sampler.seed,
-            skip_trivial: sampler.skip_trivial,
             between_only: args.between_only,
-            epsilon_s: args.sampling.epsilon_s,
             samples: samples.len(),
             between_samples,
             quality: QualitySummary::new(samples.sampler(), &quality),
             between_covered,
             sessions,
-            warnings: warnings(&loops, &samples),
+            warnings,
             seconds: FleetSeconds::default(),
             files: FILES.iter().copied().filter(|&f| f != "samples.g2o" || g2o).collect(),
             pages: &pages,
@@ -334,30 +292,17 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         let html = render(&FleetReportInput {
             fleet: &fleet,
             tables: &tables,
-            plane: args.input.plane()?.unwrap_or([0, 1]),
+            plane: input.plane()?.unwrap_or([0, 1]),
             components: &components,
             pairs: &pairs,
             sampler: samples.sampler(),
             quality: &quality,
             summary: &summary,
         });
-        seconds.total = start.elapsed().as_secs_f64();
+        seconds.stages.total = start.elapsed().as_secs_f64();
         summary.seconds = seconds;
         let json = serde_json::to_string_pretty(&summary)? + "\n";
-        for (name, bytes) in [("summary.json", json.as_bytes()), ("index.html", html.as_bytes())] {
-            guard::with_writes(|writes| out.claim(writes, name))?;
-            crate::run::write_file(&args.out.join(name), bytes, true)?;
-        }
-        if let Some(JsonTo::File(path)) = &args.json {
-            crate::run::write_file(path, json.as_bytes(), args.force)?;
-        }
-        let mut stdout = std::io::stdout().lock();
-        if args.json == Some(JsonTo::Stdout) {
-            stdout.write_all(json.as_bytes())?;
-        } else if !args.quiet {
-            write_table(&mut stdout, &summary)?;
-        }
-        stdout.flush()?;
+        results.write(&out, &json, &html, |stdout| write_table(stdout, &summary))?;
         Ok(if failed == 0 { 0 } else { 1 })
     });
     let result = result.map_err(anyhow::Error::from).and_then(|code| code);
@@ -385,7 +330,7 @@ fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
         }
         specs.push(SessionSpec { name: name.to_owned(), files, given: format!("--session {text}") });
     }
-    let out_abs = crate::run::resolved(&args.out)?;
+    let out_abs = crate::run::resolved(&args.results.out)?;
     for (k, spec) in specs.iter().enumerate() {
         if let Some(first) = specs[..k].iter().find(|s| s.name == spec.name) {
             bail!(
@@ -412,7 +357,11 @@ fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
         }
         for file in &spec.files {
             if crate::run::resolved(file)?.starts_with(&out_abs) {
-                bail!("{} lies inside --out {}; write the results elsewhere", file.display(), args.out.display());
+                bail!(
+                    "{} lies inside --out {}; write the results elsewhere",
+                    file.display(),
+                    args.results.out.display()
+                );
             }
         }
     }
@@ -477,17 +426,6 @@ fn write_fleet_files(
     }
 }
 
-/// The warnings of the fleet's result and of its sampling, as sentences.
-fn warnings(loops: &FleetLoops, samples: &Samples) -> Vec<String> {
-    loops
-        .loops()
-        .warnings()
-        .iter()
-        .map(ToString::to_string)
-        .chain(samples.warnings().iter().map(ToString::to_string))
-        .collect()
-}
-
 /// Per session: its poses, span, components within and between, and the samples touching it.
 pub(crate) fn session_summaries(
     fleet: &Fleet,
@@ -545,7 +483,7 @@ fn write_table(out: &mut impl Write, s: &FleetSummary<'_>) -> Result<()> {
         if s.between_only { " (between sessions only)" } else { "" },
         s.between_covered,
         s.between_components,
-        s.seconds.total,
+        s.seconds.stages.total,
         s.out
     )?;
     let width = s.sessions.iter().map(|r| r.name.chars().count()).max().unwrap_or(7).max(7);

@@ -82,7 +82,7 @@ pub(crate) fn render(input: &FleetReportInput<'_>) -> String {
             header {
                 h1 { "Fleet: " (plural(n, "session", "sessions")) }
                 p.source {
-                    "γ = " (s.gamma) " (" (s.metric) ") · " (thousands(s.poses as u64)) " poses · results in " (s.out)
+                    "γ = " (s.settings.gamma) " (" (s.settings.metric) ") · " (thousands(s.poses as u64)) " poses · results in " (s.out)
                 }
             }
             (cards(input))
@@ -119,11 +119,11 @@ fn cards(input: &FleetReportInput<'_>) -> Markup {
                     dt { "sessions" } dd { (n) }
                     dt { "poses" } dd { (thousands(s.poses as u64)) }
                     dt { "time, all sessions" } dd { (duration_text(total_s)) }
-                    dt { "metric" } dd { code { (s.metric) } }
-                    dt { "γ" } dd { (s.gamma) }
+                    dt { "metric" } dd { code { (s.settings.metric) } }
+                    dt { "γ" } dd { (s.settings.gamma) }
                     dt { "separation" }
                     dd {
-                        @if s.separation.path == 0.0 && s.separation.time_s == 0.0 {
+                        @if s.settings.separation.path == 0.0 && s.settings.separation.time_s == 0.0 {
                             "none " span.muted { "(trivial components included)" }
                         } @else {
                             (separation_text(s)) span.muted { " within a session; pairs of two sessions all kept" }
@@ -150,7 +150,7 @@ fn cards(input: &FleetReportInput<'_>) -> Markup {
                     dt { "sampler" } dd { (sampler_name(input.sampler)) }
                     dt { "samples" }
                     dd {
-                        (thousands(s.samples as u64)) " (" (s.sample_size) ", seed " (s.seed) ")"
+                        (thousands(s.samples as u64)) " (" (s.settings.sample_size) ", seed " (s.settings.seed) ")"
                         @if s.between_only { span.muted { " between sessions only" } }
                     }
                     dt { "between sessions" } dd { (thousands(s.between_samples as u64)) }
@@ -158,7 +158,7 @@ fn cards(input: &FleetReportInput<'_>) -> Markup {
                     dd { b { (s.between_covered) " / " (s.between_components) } span.muted { " components hold a sample" } }
                     dt { "P1 all non-trivial" }
                     dd { (input.quality.nontrivial_covered) " / " (input.quality.nontrivial_components) }
-                    dt { "P2 redundant" } dd { (s.quality.redundant) span.muted { " (within ε = " (s.epsilon_s) " s of another)" } }
+                    dt { "P2 redundant" } dd { (s.quality.redundant) span.muted { " (within ε = " (s.settings.epsilon_s) " s of another)" } }
                     dt { "files" }
                     dd { @for f in &s.files { code { (f) } " " } }
                 }
@@ -170,11 +170,11 @@ fn cards(input: &FleetReportInput<'_>) -> Markup {
 /// The separation within a session, as the cards print it (`pairs ≥ 160 apart along the path`).
 fn separation_text(s: &FleetSummary<'_>) -> String {
     let mut parts = Vec::new();
-    if s.separation.path > 0.0 {
-        parts.push(format!("≥ {} apart along the path", s.separation.path));
+    if s.settings.separation.path > 0.0 {
+        parts.push(format!("≥ {} apart along the path", s.settings.separation.path));
     }
-    if s.separation.time_s > 0.0 {
-        parts.push(format!("≥ {} s apart", s.separation.time_s));
+    if s.settings.separation.time_s > 0.0 {
+        parts.push(format!("≥ {} s apart", s.settings.separation.time_s));
     }
     format!("pairs {}", parts.join(" and "))
 }
@@ -321,7 +321,7 @@ fn overlap_figure(input: &FleetReportInput<'_>) -> Markup {
     let caption = html! {
         b { "Session-overlap matrix." }
         " Cell (a, b) is the loop area α of the block a × b: the time area, in s², of the pairs (t in session a, t′ in \
-        session b) within γ = " (input.summary.gamma) ". Off the diagonal: where two sessions overlap, symmetric; on \
+        session b) within γ = " (input.summary.settings.gamma) ". Off the diagonal: where two sessions overlap, symmetric; on \
         it (outlined): each session alone, its own revisits. Blank: never within γ. "
         (input.summary.overlapping_session_pairs) " of " (possible) " session pairs meet. Colour scale "
         @if scale.kind() == svg::ScaleKind::Log { "logarithmic" } @else { "linear" } "."
@@ -590,6 +590,7 @@ mod tests {
 
     use super::*;
     use crate::fleet::{FleetSeconds, session_summaries};
+    use crate::run::SettingsSummary;
 
     /// A pose table of a trajectory's first three coordinates.
     fn table(traj: &Trajectory) -> PoseTable {
@@ -627,20 +628,13 @@ mod tests {
         let summary = FleetSummary {
             out: "results".into(),
             poses: fleet.poses(),
-            gamma,
-            metric: "euclidean".into(),
-            separation: options.separation.into(),
+            settings: SettingsSummary::new("euclidean".into(), gamma, options.separation, &sampler, DEFAULT_EPSILON_S),
             pruning: loops.pruning().name(),
             components: components.len(),
             within_components: components.len() - between,
             between_components: between,
             overlapping_session_pairs: pairs.iter().filter(|p| p.sessions[0] != p.sessions[1]).count(),
-            sampler: "rho",
-            sample_size: format!("budget {budget}"),
-            seed: 0,
-            skip_trivial: false,
             between_only: false,
-            epsilon_s: DEFAULT_EPSILON_S,
             samples: samples.len(),
             between_samples: localized.iter().filter(|s| s.sessions[0] != s.sessions[1]).count(),
             quality: QualitySummary::new(SamplerKind::Rho, &quality),

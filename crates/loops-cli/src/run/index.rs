@@ -15,9 +15,9 @@ pub(crate) fn render(batch: &BatchSummary<'_>) -> String {
     let body = html! {
         h1 { "Inexact loops: " (batch.logs) " logs" }
         p {
-            "γ = " (batch.gamma) " (" (batch.metric) "); sampler " (batch.sampler) " (" (batch.sample_size)
-            ", seed " (batch.seed) @if batch.skip_trivial { ", trivial components skipped" } "); ε = "
-            (batch.epsilon_s) " s. " (batch.succeeded) " done, " (batch.failed) " failed, in "
+            "γ = " (batch.settings.gamma) " (" (batch.settings.metric) "); sampler " (batch.settings.sampler) " (" (batch.settings.sample_size)
+            ", seed " (batch.settings.seed) @if batch.settings.skip_trivial { ", trivial components skipped" } "); ε = "
+            (batch.settings.epsilon_s) " s. " (batch.succeeded) " done, " (batch.failed) " failed, in "
             (format!("{:.1}", batch.seconds)) " s."
         }
         table #logs {

@@ -9,6 +9,7 @@
 //! [`crate::out_dir`]). The files themselves are loops-io's.
 
 mod index;
+mod summary;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -20,11 +21,12 @@ use loops_core::{
     Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Scale, Selection, Separation, Side, Trajectory,
     sample_quality,
 };
-use loops_io::{PoseTable, QualitySummary, SamplesFormat, SeparationReport, WriteError};
+use loops_io::{PoseTable, QualitySummary, SamplesFormat, WriteError};
 use rayon::prelude::*;
-use serde::Serialize;
 
-use crate::args::{EngineArgs, InputArgs, JsonTo, SamplingArgs};
+pub(crate) use summary::{BatchSummary, LogOutcome, LogSummary, Seconds, SettingsSummary, size_text, warnings};
+
+use crate::args::{Analysis, AnalysisArgs, InputArgs, JsonTo};
 use crate::guard;
 use crate::out_dir::{self, OutDir};
 use crate::progress::{self, Batch};
@@ -43,6 +45,16 @@ const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerK
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
+    mut_arg("out", |arg| arg.help(
+        "The folder for the results: a folder per log (components.csv, samples.csv, loop_duration.csv, summary.json, \
+         report.html), index.html and summary.json"
+    )),
+    mut_arg("force", |arg| arg.help(
+        "Replace the results of an earlier run in --out (only folders and files `loops run` wrote)"
+    )),
+    mut_arg("json", |arg| arg.help(
+        "Also write the batch summary (summary.json of --out) to FILE; `-` prints it on stdout instead of the table"
+    )),
     after_help = "Examples:\n  \
     loops run logs/*.mcap --gamma 40 --out results\n  \
     loops run logs/*.mcap --gamma 40 --sampler rho --budget 2000 --out results --force\n  \
@@ -57,25 +69,9 @@ pub(crate) struct RunArgs {
     #[arg(required = true, value_name = "LOG")]
     logs: Vec<PathBuf>,
     #[command(flatten)]
-    input: InputArgs,
+    analysis: AnalysisArgs,
     #[command(flatten)]
-    engine: EngineArgs,
-    #[command(flatten)]
-    sampling: SamplingArgs,
-    /// The folder for the results: a folder per log (components.csv, samples.csv,
-    /// loop_duration.csv, summary.json, report.html), index.html and summary.json.
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
-    /// Replace the results of an earlier run in --out (only folders and files `loops run` wrote).
-    #[arg(long)]
-    force: bool,
-    /// Print nothing but errors.
-    #[arg(long, short)]
-    quiet: bool,
-    /// Also write the batch summary (summary.json of --out) to FILE; `-` prints it on stdout
-    /// instead of the table.
-    #[arg(long, value_name = "FILE")]
-    json: Option<JsonTo>,
+    results: ResultsArgs,
 }
 
 /// One log of the batch and the folder its results go to.
@@ -84,73 +80,6 @@ struct Job {
     path: PathBuf,
     /// The log's folder name in --out: its name (a bag's folder name), made unique in the batch.
     name: String,
-}
-
-/// What `loops run` knows after one log: summary.json of its folder.
-#[derive(Debug, Serialize)]
-pub(crate) struct LogSummary {
-    pub(crate) name: String,
-    pub(crate) source: String,
-    pub(crate) poses: usize,
-    pub(crate) t0_s: f64,
-    pub(crate) span_s: f64,
-    pub(crate) metric: String,
-    pub(crate) gamma: f64,
-    pub(crate) separation: SeparationReport,
-    pub(crate) components: usize,
-    pub(crate) nontrivial_components: usize,
-    pub(crate) holes: u64,
-    pub(crate) pair_count: u64,
-    pub(crate) loop_area_s2: f64,
-    pub(crate) loop_density_s: f64,
-    pub(crate) sampler: String,
-    pub(crate) sample_size: String,
-    pub(crate) seed: u64,
-    pub(crate) skip_trivial: bool,
-    pub(crate) epsilon_s: f64,
-    pub(crate) samples: usize,
-    pub(crate) quality: QualitySummary,
-    pub(crate) comparison: Vec<QualitySummary>,
-    pub(crate) seconds: Seconds,
-    pub(crate) warnings: Vec<String>,
-    pub(crate) files: [&'static str; 5],
-}
-
-#[derive(Debug, Default, Serialize)]
-pub(crate) struct Seconds {
-    pub(crate) read: f64,
-    pub(crate) find_loops: f64,
-    pub(crate) sample: f64,
-    pub(crate) write: f64,
-    pub(crate) total: f64,
-}
-
-/// One line of the batch summary.
-#[derive(Debug, Serialize)]
-pub(crate) struct LogOutcome {
-    pub(crate) name: String,
-    pub(crate) source: String,
-    pub(crate) ok: bool,
-    pub(crate) error: Option<String>,
-    pub(crate) summary: Option<LogSummary>,
-}
-
-#[derive(Debug, Serialize)]
-pub(crate) struct BatchSummary<'a> {
-    pub(crate) out: String,
-    pub(crate) gamma: f64,
-    pub(crate) metric: String,
-    pub(crate) separation: SeparationReport,
-    pub(crate) sampler: &'a str,
-    pub(crate) sample_size: String,
-    pub(crate) seed: u64,
-    pub(crate) skip_trivial: bool,
-    pub(crate) epsilon_s: f64,
-    pub(crate) logs: usize,
-    pub(crate) succeeded: usize,
-    pub(crate) failed: usize,
-    pub(crate) seconds: f64,
-    pub(crate) results: &'a [LogOutcome],
 }
 
 /// The settings every log of the batch shares (every session's page of `loops fleet`).
@@ -168,51 +97,53 @@ pub(crate) struct Settings<'a> {
     pub(crate) out: &'a OutDir,
 }
 
+impl<'a> Settings<'a> {
+    /// The settings of the flags `args`, as `checked`, with the results going to `out`.
+    pub(crate) fn new(args: &'a AnalysisArgs, checked: Analysis, results: &'a ResultsArgs, out: &'a OutDir) -> Self {
+        let Analysis { spec, sampler, separation } = checked;
+        Self {
+            input: &args.input,
+            gamma: args.engine.gamma,
+            epsilon_s: args.sampling.epsilon_s,
+            spec,
+            sampler,
+            separation,
+            out_path: &results.out,
+            force: results.force,
+            out,
+        }
+    }
+
+    /// The settings as summary.json states them, for a result under the metric named `metric`
+    /// with `separation`.
+    pub(crate) fn summary(&self, metric: String, separation: Separation) -> SettingsSummary {
+        SettingsSummary::new(metric, self.gamma, separation, &self.sampler, self.epsilon_s)
+    }
+}
+
 pub(crate) fn run(args: RunArgs) -> Result<u8> {
     let start = Instant::now();
-    let spec = args.engine.spec()?;
-    let sampler = args.sampling.sampler()?;
     // Refused once, before any log is read, rather than once per log.
-    loops_core::check_gamma(args.engine.gamma)?;
-    let separation = args.engine.separation()?;
-    loops_core::check_epsilon_s(args.sampling.epsilon_s)?;
-    args.engine.threads.map(loops_core::check_threads).transpose()?;
-    if args.out.exists() && !args.out.is_dir() {
-        bail!("--out {} exists and is not a folder", args.out.display());
-    }
-    if let Some(JsonTo::File(path)) = &args.json
-        && path.exists()
-        && !args.force
-    {
-        bail!("--json {} exists; pass --force to replace it", path.display());
-    }
-    let jobs = jobs(&args.logs, &args.out)?;
-    guard::with_writes(|writes| writes.create_dir(&args.out))?;
-    let out = OutDir::take(&args.out, args.force, out_dir::RUN)?;
+    let checked = args.analysis.checked()?;
+    let results = &args.results;
+    results.check()?;
+    let jobs = jobs(&args.logs, &results.out)?;
+    guard::with_writes(|writes| writes.create_dir(&results.out))?;
+    let out = OutDir::take(&results.out, results.force, out_dir::RUN)?;
 
-    let settings = Settings {
-        input: &args.input,
-        gamma: args.engine.gamma,
-        epsilon_s: args.sampling.epsilon_s,
-        spec,
-        sampler,
-        separation,
-        out_path: &args.out,
-        force: args.force,
-        out: &out,
-    };
-    let batch = Batch::new(progress::Mode::detect(args.quiet), jobs.len());
+    let settings = Settings::new(&args.analysis, checked, results, &out);
+    let batch = Batch::new(progress::Mode::detect(results.quiet), jobs.len());
     batch.println(&format!(
         "loops: {} log(s), gamma {} ({}), sampler {} ({}), results to {}",
         jobs.len(),
-        args.engine.gamma,
+        settings.gamma,
         settings.spec.name(),
         settings.sampler.kind,
         size_text(settings.sampler.size),
-        args.out.display()
+        results.out.display()
     ));
-    batch.println(&format!("loops: {}", crate::args::separation_line(separation, args.engine.gamma)));
-    let outcomes: Vec<LogOutcome> = loops_core::with_threads(args.engine.threads, || {
+    batch.println(&format!("loops: {}", crate::args::separation_line(settings.separation, settings.gamma)));
+    let outcomes: Vec<LogOutcome> = loops_core::with_threads(args.analysis.engine.threads, || {
         jobs.par_iter()
             .map(|job| {
                 let log = batch.start(&job.name);
@@ -225,15 +156,8 @@ pub(crate) fn run(args: RunArgs) -> Result<u8> {
 
     let failed = outcomes.iter().filter(|o| !o.ok).count();
     let summary = BatchSummary {
-        out: args.out.display().to_string(),
-        gamma: args.engine.gamma,
-        metric: settings.spec.name(),
-        separation: separation.into(),
-        sampler: settings.sampler.kind.name(),
-        sample_size: size_text(settings.sampler.size),
-        seed: settings.sampler.seed,
-        skip_trivial: settings.sampler.skip_trivial,
-        epsilon_s: args.sampling.epsilon_s,
+        out: results.out.display().to_string(),
+        settings: settings.summary(settings.spec.name(), settings.separation),
         logs: outcomes.len(),
         succeeded: outcomes.len() - failed,
         failed,
@@ -241,23 +165,73 @@ pub(crate) fn run(args: RunArgs) -> Result<u8> {
         results: &outcomes,
     };
     let json = serde_json::to_string_pretty(&summary)? + "\n";
-    let index = index::render(&summary);
-    // Both are ours (OutDir::take refused a user's): listed, then replaced.
-    for (name, bytes) in [("summary.json", json.as_bytes()), ("index.html", index.as_bytes())] {
-        guard::with_writes(|writes| out.claim(writes, name))?;
-        write_file(&args.out.join(name), bytes, true)?;
-    }
-    if let Some(JsonTo::File(path)) = &args.json {
-        write_file(path, json.as_bytes(), args.force)?;
-    }
-    let mut stdout = std::io::stdout().lock();
-    if args.json == Some(JsonTo::Stdout) {
-        stdout.write_all(json.as_bytes())?;
-    } else if !args.quiet {
-        write_table(&mut stdout, &summary)?;
-    }
-    stdout.flush()?;
+    results.write(&out, &json, &index::render(&summary), |stdout| write_table(stdout, &summary))?;
     Ok(if failed == 0 { 0 } else { 1 })
+}
+
+/// The flags of `loops run` and `loops fleet` about their results: the folder, `--force`,
+/// `--quiet` and `--json`. Each command words the help of `--out`, `--force` and `--json` for
+/// itself (`mut_arg`); the words here are what they share.
+#[derive(Debug, Args)]
+pub(crate) struct ResultsArgs {
+    /// The folder for the results.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// Replace the results of an earlier run in --out (only what it wrote there).
+    #[arg(long)]
+    pub(crate) force: bool,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub(crate) quiet: bool,
+    /// Also write the summary (summary.json of --out) to FILE; `-` prints it on stdout instead of
+    /// the table.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) json: Option<JsonTo>,
+}
+
+impl ResultsArgs {
+    /// Refuses, before anything is read: an --out that is a file, a `--json FILE` that exists
+    /// without --force.
+    pub(crate) fn check(&self) -> Result<()> {
+        if self.out.exists() && !self.out.is_dir() {
+            bail!("--out {} exists and is not a folder", self.out.display());
+        }
+        if let Some(JsonTo::File(path)) = &self.json
+            && path.exists()
+            && !self.force
+        {
+            bail!("--json {} exists; pass --force to replace it", path.display());
+        }
+        Ok(())
+    }
+
+    /// Writes the command's `summary.json` (`json`) and `index.html` (`html`) at the top of
+    /// --out, the `--json FILE` copy, and on stdout the JSON (`--json -`) or, unless --quiet, the
+    /// command's table (`table`).
+    pub(crate) fn write(
+        &self,
+        out: &OutDir,
+        json: &str,
+        html: &str,
+        table: impl FnOnce(&mut std::io::StdoutLock<'static>) -> Result<()>,
+    ) -> Result<()> {
+        // Both are ours (OutDir::take refused a user's): listed, then replaced.
+        for (name, bytes) in [("summary.json", json.as_bytes()), ("index.html", html.as_bytes())] {
+            guard::with_writes(|writes| out.claim(writes, name))?;
+            write_file(&self.out.join(name), bytes, true)?;
+        }
+        if let Some(JsonTo::File(path)) = &self.json {
+            write_file(path, json.as_bytes(), self.force)?;
+        }
+        let mut stdout = std::io::stdout().lock();
+        if self.json == Some(JsonTo::Stdout) {
+            stdout.write_all(json.as_bytes())?;
+        } else if !self.quiet {
+            table(&mut stdout)?;
+        }
+        stdout.flush()?;
+        Ok(())
+    }
 }
 
 /// A folder name per log: its name ([`loops_io::log_name`]: the file stem, or a rosbag2 bag's
@@ -361,30 +335,18 @@ pub(crate) fn analyse(
         poses: traj.len(),
         t0_s: a,
         span_s: traj.span_s(),
-        metric: loops.metric_name().to_owned(),
-        gamma,
-        separation: loops.separation().into(),
+        settings: settings.summary(loops.metric_name().to_owned(), loops.separation()),
         components: components.len(),
         nontrivial_components: components.iter().filter(|c| !c.trivial).count(),
         holes: components.iter().map(|c| c.holes).sum(),
         pair_count: loops.pair_count(),
         loop_area_s2: loops.loop_area(a, b, Selection::All, Side::Both, Scale::Seconds)?,
         loop_density_s: loops.loop_density(a, b, Selection::All, Side::Both, Scale::Seconds)?,
-        sampler: samples.sampler().name().to_owned(),
-        sample_size: size_text(settings.sampler.size),
-        seed: settings.sampler.seed,
-        skip_trivial: settings.sampler.skip_trivial,
-        epsilon_s,
         samples: samples.len(),
         quality: QualitySummary::new(samples.sampler(), &quality),
         comparison: comparison.iter().map(|(kind, q)| QualitySummary::new(*kind, q)).collect(),
         seconds: Seconds::default(),
-        warnings: loops
-            .warnings()
-            .iter()
-            .map(ToString::to_string)
-            .chain(samples.warnings().iter().map(ToString::to_string))
-            .collect(),
+        warnings: warnings(&loops, &samples),
         files: ["components.csv", "samples.csv", "loop_duration.csv", "summary.json", "report.html"],
     };
     let html = report::render(&ReportInput {
@@ -502,13 +464,6 @@ pub(crate) fn write_file(path: &Path, bytes: &[u8], force: bool) -> Result<()> {
 /// Runs one write of loops-io under the write lock of [`guard`], in the CLI's words.
 fn written(write: impl FnOnce() -> Result<(), WriteError>) -> Result<()> {
     guard::with_writes(|_| write()).map_err(guard::write_error)
-}
-
-pub(crate) fn size_text(size: SampleSize) -> String {
-    match size {
-        SampleSize::Budget(b) => format!("budget {b}"),
-        SampleSize::Rate(r) => format!("rate {r}"),
-    }
 }
 
 fn outcome_line(s: &LogSummary) -> String {
