@@ -590,26 +590,8 @@ mod tests {
 
     use super::*;
     use crate::fleet::{FleetSeconds, session_summaries};
+    use crate::report::table_of;
     use crate::run::SettingsSummary;
-
-    /// A pose table of a trajectory's first three coordinates.
-    fn table(traj: &Trajectory) -> PoseTable {
-        let positions = traj
-            .coords()
-            .chunks_exact(traj.dim())
-            .map(|p| [p[0], p.get(1).copied().unwrap_or(0.0), p.get(2).copied().unwrap_or(0.0)])
-            .collect();
-        PoseTable {
-            path: "session.tum".into(),
-            timestamps_s: traj.timestamps_s().to_vec(),
-            timestamps_ns: None,
-            positions,
-            orientations_xyzw: None,
-            dim: traj.dim(),
-            source_lines: (1..=traj.len()).collect(),
-            messages: None,
-        }
-    }
 
     /// The page of a fleet of `sessions` at `gamma` (no session pages written).
     fn page_of(sessions: Vec<(String, Trajectory)>, gamma: f64, budget: usize) -> (String, usize) {
@@ -622,7 +604,7 @@ mod tests {
         let localized = fleet.localize(&samples).unwrap();
         let components = loops.components();
         let pairs = loops.session_pairs();
-        let tables: Vec<PoseTable> = (0..fleet.len()).map(|a| table(fleet.session(a))).collect();
+        let tables: Vec<PoseTable> = (0..fleet.len()).map(|a| table_of(fleet.session(a), "session.tum")).collect();
         let sources: Vec<String> = fleet.names().iter().map(|n| format!("logs/{n} <&>.tum")).collect();
         let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
         let summary = FleetSummary {

@@ -149,6 +149,26 @@ pub(crate) fn figure(name: &str, svg: &str, caption: Markup) -> Markup {
     }
 }
 
+/// A pose table of `traj`'s first three coordinates as if read from `path`, for the pages' tests.
+#[cfg(test)]
+pub(crate) fn table_of(traj: &Trajectory, path: &str) -> loops_io::PoseTable {
+    let positions = traj
+        .coords()
+        .chunks_exact(traj.dim())
+        .map(|p| [p[0], p.get(1).copied().unwrap_or(0.0), p.get(2).copied().unwrap_or(0.0)])
+        .collect();
+    loops_io::PoseTable {
+        path: path.into(),
+        timestamps_s: traj.timestamps_s().to_vec(),
+        timestamps_ns: None,
+        positions,
+        orientations_xyzw: None,
+        dim: traj.dim(),
+        source_lines: (1..=traj.len()).collect(),
+        messages: None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use loops_core::{DEFAULT_EPSILON_S, SampleSize, Sampler, Scale, Selection, Side, UrbanDrive, sample_quality};
@@ -183,21 +203,7 @@ mod tests {
                 .into_iter()
                 .map(|k| (k, sample(k).1))
                 .collect();
-            let positions = traj
-                .coords()
-                .chunks_exact(traj.dim())
-                .map(|p| [p[0], p.get(1).copied().unwrap_or(0.0), p.get(2).copied().unwrap_or(0.0)])
-                .collect();
-            let table = loops_io::PoseTable {
-                path: "drive <1> & co.tum".into(),
-                timestamps_s: traj.timestamps_s().to_vec(),
-                timestamps_ns: None,
-                positions,
-                orientations_xyzw: None,
-                dim: traj.dim(),
-                source_lines: (1..=traj.len()).collect(),
-                messages: None,
-            };
+            let table = table_of(&traj, "drive <1> & co.tum");
             Self { table, traj, metric, loops, tau, samples, quality, comparison }
         }
 
