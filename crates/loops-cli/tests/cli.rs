@@ -1,41 +1,18 @@
 //! The `loops` binary end to end: output, exit codes, one-line errors, atomic JSON.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-fn loops(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
+mod support;
+use support::{assert_one_line_error, loops, square_lap, stderr, temp_dir, write_in};
 
 /// A TUM file of an out-and-back drive along x (0 → 20 m → 0) at 1 m/s.
 fn out_and_back(dir: &Path) -> PathBuf {
-    let path = dir.join("drive.tum");
     let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
     for i in 0..=40 {
         let x = if i <= 20 { i } else { 40 - i };
         text += &format!("{i}.0 {x}.0 0.0 0.0 0 0 0 1\n");
     }
-    std::fs::write(&path, text).expect("write");
-    path
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn assert_one_line_error(output: &Output, needle: &str) {
-    assert_eq!(output.status.code(), Some(2), "stderr: {}", stderr(output));
-    let err = stderr(output);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line expected: {err}");
-    assert!(err.starts_with("loops: error: "), "{err}");
-    assert!(err.contains(needle), "{err:?} should mention {needle:?}");
+    write_in(dir, "drive.tum", text)
 }
 
 #[test]
@@ -114,36 +91,34 @@ fn bad_input_is_one_line_and_exit_2() {
     let dir = temp_dir("bad");
     let file = out_and_back(&dir);
     let file = file.to_str().unwrap();
-    assert_one_line_error(&loops(&["components", file, "--gamma", "0"]), "gamma must be a positive");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "-3"]), "gamma must be a positive");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "NaN"]), "gamma must be a positive");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--metric", "manhattan"]), "unknown metric");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--format", "rosbag"]), "unknown file format");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--threads", "0"]), "threads");
-    assert_one_line_error(&loops(&["components", file, "--gamma", "1", "--axes", "0,7"]), "axis");
+    let flags: [(&[&str], &str); 7] = [
+        (&["--gamma", "0"], "gamma must be a positive"),
+        (&["--gamma", "-3"], "gamma must be a positive"),
+        (&["--gamma", "NaN"], "gamma must be a positive"),
+        (&["--gamma", "1", "--metric", "manhattan"], "unknown metric"),
+        (&["--gamma", "1", "--format", "rosbag"], "unknown file format"),
+        (&["--gamma", "1", "--threads", "0"], "threads"),
+        (&["--gamma", "1", "--axes", "0,7"], "axis"),
+    ];
+    for (flags, needle) in flags {
+        assert_one_line_error(&loops(&[&["components", file][..], flags].concat()), needle);
+    }
 
     let missing = dir.join("missing.tum");
     assert_one_line_error(&loops(&["components", missing.to_str().unwrap(), "--gamma", "1"]), "missing.tum");
 
-    let malformed = dir.join("malformed.tum");
-    std::fs::write(&malformed, "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n2 2 0 abc 0 0 0 1\n").unwrap();
-    assert_one_line_error(&loops(&["components", malformed.to_str().unwrap(), "--gamma", "1"]), "line 3");
-
-    let nan = dir.join("nan.tum");
-    std::fs::write(&nan, "0 0 0 0 0 0 0 1\n1 nan 0 0 0 0 0 1\n").unwrap();
-    assert_one_line_error(&loops(&["components", nan.to_str().unwrap(), "--gamma", "1"]), "line 2");
-
-    let unsorted = dir.join("unsorted.tum");
-    std::fs::write(&unsorted, "0 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n1 2 0 0 0 0 0 1\n").unwrap();
-    assert_one_line_error(&loops(&["components", unsorted.to_str().unwrap(), "--gamma", "1"]), "line 3");
-
-    let single = dir.join("single.csv");
-    std::fs::write(&single, "t,x,y\n0,1,2\n").unwrap();
-    assert_one_line_error(&loops(&["components", single.to_str().unwrap(), "--gamma", "1"]), "at least 2 poses");
-
-    let empty = dir.join("empty.csv");
-    std::fs::write(&empty, "").unwrap();
-    assert_one_line_error(&loops(&["components", empty.to_str().unwrap(), "--gamma", "1"]), "no poses");
+    // Files of bad content, and what the error names.
+    let files = [
+        ("malformed.tum", "0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\n2 2 0 abc 0 0 0 1\n", "line 3"),
+        ("nan.tum", "0 0 0 0 0 0 0 1\n1 nan 0 0 0 0 0 1\n", "line 2"),
+        ("unsorted.tum", "0 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n1 2 0 0 0 0 0 1\n", "line 3"),
+        ("single.csv", "t,x,y\n0,1,2\n", "at least 2 poses"),
+        ("empty.csv", "", "no poses"),
+    ];
+    for (name, text, needle) in files {
+        let path = write_in(&dir, name, text);
+        assert_one_line_error(&loops(&["components", path.to_str().unwrap(), "--gamma", "1"]), needle);
+    }
 }
 
 #[test]
@@ -176,13 +151,12 @@ fn help_has_examples() {
 fn se3_metric_uses_the_file_orientations() {
     let dir = temp_dir("se3");
     // Out along x facing +x, back facing −x (yaw π: quaternion [0, 0, 1, 0]).
-    let path = dir.join("turn.tum");
     let mut text = String::new();
     for i in 0..=40 {
         let (x, q) = if i <= 20 { (i, "0 0 0 1") } else { (40 - i, "0 0 1 0") };
         text += &format!("{i}.0 {x}.0 0.0 0.0 {q}\n");
     }
-    std::fs::write(&path, text).unwrap();
+    let path = write_in(&dir, "turn.tum", text);
     let pairs = |metric: &str| {
         let json = dir.join(format!("{}.json", metric.len()));
         let output = loops(&[
@@ -217,20 +191,12 @@ fn se3_metric_uses_the_file_orientations() {
 
 /// Three laps of a 40 m square at 1 m/s: revisits one and two laps apart.
 fn laps(dir: &Path) -> PathBuf {
-    let path = dir.join("laps.csv");
     let mut text = String::from("t,x,y\n");
     for k in 0..480 {
-        let s = f64::from(k % 160) * 0.25; // position along the lap, 0..40 m of each side
-        let (x, y) = match k % 160 / 40 {
-            0 => (s, 0.0),
-            1 => (10.0, s - 10.0),
-            2 => (30.0 - s, 10.0),
-            _ => (0.0, 40.0 - s),
-        };
+        let (x, y) = square_lap(k);
         text += &format!("{k},{x},{y}\n");
     }
-    std::fs::write(&path, text).unwrap();
-    path
+    write_in(dir, "laps.csv", text)
 }
 
 #[test]
@@ -363,7 +329,6 @@ fn info_describes_a_text_file() {
 /// A TUM file in KITTI's camera frame (y down, the ground in x-z): out along z facing +z, then
 /// back facing −z (a half turn about y), 1 m per pose.
 fn out_and_back_on_the_ground(dir: &Path) -> (PathBuf, Vec<(f64, f64)>) {
-    let path = dir.join("ground.tum");
     let mut text = String::new();
     let mut poses = Vec::new();
     for i in 0..=40 {
@@ -372,8 +337,7 @@ fn out_and_back_on_the_ground(dir: &Path) -> (PathBuf, Vec<(f64, f64)>) {
         text += &format!("{i}.0 0.5 1.5 {z}.0 {q}\n");
         poses.push((f64::from(z), heading));
     }
-    std::fs::write(&path, text).unwrap();
-    (path, poses)
+    (write_in(dir, "ground.tum", text), poses)
 }
 
 #[test]

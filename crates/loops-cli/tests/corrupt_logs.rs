@@ -3,18 +3,15 @@
 //! a file without line breaks fails at once instead of filling the memory.
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn loops(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
-}
+mod support;
+use support::{loops, write_in};
 
 fn temp_file(name: &str, bytes: &[u8]) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("loops-cli-corrupt-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(name);
-    std::fs::write(&path, bytes).expect("temp file");
-    path
+    write_in(&dir, name, bytes)
 }
 
 /// An MCAP record: opcode, length, body.

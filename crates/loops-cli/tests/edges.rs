@@ -6,31 +6,14 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn loops(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
-}
+mod support;
+use support::{loops, one_line_error, stderr, stdout, temp_dir, write_in};
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-cli-edges-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
+/// Exit code 2 and one line on stderr, mentioning each of `needles`.
 fn assert_one_line_error(output: &Output, needles: &[&str]) {
-    assert_eq!(output.status.code(), Some(2), "stderr: {}", stderr(output));
-    let err = stderr(output);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line expected: {err}");
+    let err = one_line_error(output);
     for needle in needles {
         assert!(err.contains(needle), "{err:?} should mention {needle:?}");
     }
@@ -245,9 +228,7 @@ fn edge_only(dir: &Path, gap_at: Option<usize>) -> PathBuf {
         writeln!(text, "EDGE2 {k} {} {dx:?} {dy:?} 0 1 0 1 1 0 0", k + 1).unwrap();
     }
     writeln!(text, "EDGE2 80 2 0 0 0 1 0 1 1 0 0").unwrap();
-    let path = dir.join(format!("edges-{gap_at:?}.graph"));
-    std::fs::write(&path, text).unwrap();
-    path
+    write_in(dir, &format!("edges-{gap_at:?}.graph"), text)
 }
 
 #[test]

@@ -4,39 +4,12 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use loops_core::{Euclidean, Fleet, FleetOptions, Metric, Separation, find_fleet_loops};
 
-fn loops(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-cli-fleet-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn assert_one_line_error(output: &Output, needle: &str) {
-    assert_eq!(output.status.code(), Some(2), "stderr: {}", stderr(output));
-    let err = stderr(output);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line expected: {err}");
-    assert!(err.starts_with("loops: error: "), "{err}");
-    assert!(err.contains(needle), "{err:?} should mention {needle:?}");
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    names
-}
+mod support;
+use support::{assert_one_line_error, laps_tum, loops, names, stderr, temp_dir, write_in};
 
 /// A CSV file as a header and rows of fields by column name (no quoted fields in these files).
 fn read_csv(path: &Path) -> (Vec<String>, Vec<BTreeMap<String, String>>) {
@@ -249,22 +222,6 @@ fn fleet_files_agree_with_the_core() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Two laps of a 40 m square at 1 m/s, shifted by `dx`, as TUM, starting at `t0`.
-fn laps(path: &Path, t0: u32, dx: f64) {
-    let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
-    for k in 0..320 {
-        let s = f64::from(k % 160) * 0.25;
-        let (x, y) = match k % 160 / 40 {
-            0 => (s, 0.0),
-            1 => (10.0, s - 10.0),
-            2 => (30.0 - s, 10.0),
-            _ => (0.0, 40.0 - s),
-        };
-        text += &format!("{}.0 {} {y} 0 0 0 0 1\n", t0 + k, x + dx);
-    }
-    std::fs::write(path, text).unwrap();
-}
-
 fn fleet(logs: &[&Path], out: &Path, extra: &[&str]) -> Output {
     let mut args: Vec<&str> = vec!["fleet"];
     args.extend(logs.iter().map(|l| l.to_str().unwrap()));
@@ -276,8 +233,8 @@ fn fleet(logs: &[&Path], out: &Path, extra: &[&str]) -> Output {
 fn force_replaces_only_what_loops_fleet_wrote() {
     let dir = temp_dir("force");
     let (a, b) = (dir.join("a.tum"), dir.join("b.tum"));
-    laps(&a, 0, 0.0);
-    laps(&b, 1000, 0.5);
+    laps_tum(&a, 0, 0.0);
+    laps_tum(&b, 1000, 0.5);
     let logs = [a.as_path(), b.as_path()];
     // A user's file with the name of one of the fleet's is never replaced, even with --force.
     for name in ["index.html", "components.csv", "samples.g2o"] {
@@ -319,7 +276,7 @@ fn force_replaces_only_what_loops_fleet_wrote() {
     assert!(stderr(&output).contains("which `loops run` did not write"), "{}", stderr(&output));
     // A log inside --out is refused before anything is written.
     let inside = out.join("b.tum");
-    laps(&inside, 2000, 0.0);
+    laps_tum(&inside, 2000, 0.0);
     assert_one_line_error(&fleet(&[a.as_path(), inside.as_path()], &out, &["--force"]), "lies inside --out");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -330,8 +287,8 @@ fn bad_fleets_are_one_line_errors() {
     std::fs::create_dir_all(dir.join("x")).unwrap();
     std::fs::create_dir_all(dir.join("y")).unwrap();
     let (a, b) = (dir.join("x/drive.tum"), dir.join("y/drive.tum"));
-    laps(&a, 0, 0.0);
-    laps(&b, 1000, 0.5);
+    laps_tum(&a, 0, 0.0);
+    laps_tum(&b, 1000, 0.5);
     let out = dir.join("out");
     // Two sessions of one name: both named, and how to rename them.
     let output = fleet(&[a.as_path(), b.as_path()], &out, &[]);
@@ -340,7 +297,7 @@ fn bad_fleets_are_one_line_errors() {
     assert!(!out.exists(), "refused before anything is written");
     // Renamed with --session, they make a fleet; a session of two files is one trajectory.
     let c = dir.join("c.tum");
-    laps(&c, 5000, 0.0);
+    laps_tum(&c, 5000, 0.0);
     let sessions = [
         "--session".to_owned(),
         format!("first={}", a.display()),
@@ -392,11 +349,7 @@ fn bad_fleets_are_one_line_errors() {
 fn more_sessions_than_robot_letters_have_no_g2o() {
     let dir = temp_dir("letters");
     let logs: Vec<PathBuf> = (0..27)
-        .map(|k| {
-            let path = dir.join(format!("s{k:02}.tum"));
-            std::fs::write(&path, format!("{k}.0 0 0 0 0 0 0 1\n{k}.5 1 0 0 0 0 0 1\n")).unwrap();
-            path
-        })
+        .map(|k| write_in(&dir, &format!("s{k:02}.tum"), format!("{k}.0 0 0 0 0 0 0 1\n{k}.5 1 0 0 0 0 0 1\n")))
         .collect();
     let refs: Vec<&Path> = logs.iter().map(PathBuf::as_path).collect();
     let out = dir.join("out");

@@ -2,51 +2,21 @@
 //! reproduces what the attack sweep did, and fails on the code before the fix.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn loops(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
-}
+mod support;
+use support::{laps_tum, loops, names, stderr, temp_dir};
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-cli-lost-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-/// Two laps of a 40 m square at 1 m/s, as TUM.
+/// Two laps of a 40 m square at 1 m/s, as TUM, in `dir`.
 fn laps(dir: &Path, name: &str) -> PathBuf {
     let path = dir.join(name);
-    let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
-    for k in 0..320 {
-        let s = f64::from(k % 160) * 0.25;
-        let (x, y) = match k % 160 / 40 {
-            0 => (s, 0.0),
-            1 => (10.0, s - 10.0),
-            2 => (30.0 - s, 10.0),
-            _ => (0.0, 40.0 - s),
-        };
-        text += &format!("{k}.0 {x} {y} 0 0 0 0 1\n");
-    }
-    std::fs::write(&path, text).unwrap();
+    laps_tum(&path, 0, 0.0);
     path
 }
 
 fn run(log: &Path, out: &Path, extra: &[&str]) -> Output {
     let args = ["run", log.to_str().unwrap(), "--gamma", "2", "--budget", "20", "--out", out.to_str().unwrap()];
     loops(&[&args[..], extra].concat())
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> =
-        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    names.sort();
-    names
 }
 
 /// Item 1: `--force` never replaces a user's `index.html` or `summary.json` in --out.

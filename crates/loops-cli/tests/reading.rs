@@ -3,37 +3,11 @@
 //! stderr each), quaternions printed with few decimals, and `loops info` telling all it
 //! promises (format, timestamp order, a graph's edges and loop closures, /tf frame pairs).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Command;
 
-fn loops(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-cli-reading-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
-}
-
-fn stdout(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stdout).into_owned()
-}
-
-fn stderr(output: &Output) -> String {
-    String::from_utf8_lossy(&output.stderr).into_owned()
-}
-
-fn assert_one_line_error(output: &Output, needles: &[&str]) {
-    assert_eq!(output.status.code(), Some(2), "stderr: {}", stderr(output));
-    let err = stderr(output);
-    assert_eq!(err.trim_end().lines().count(), 1, "one line expected: {err}");
-    assert!(err.starts_with("loops: error: "), "{err}");
-    for needle in needles {
-        assert!(err.contains(needle), "{err:?} should mention {needle:?}");
-    }
-}
+mod support;
+use support::{assert_one_line_error, loops, stderr, stdout, temp_dir};
 
 /// A square lap of 40 m driven `laps` times at 1 m/s from time `t0`, one pose a second, as TUM
 /// lines (`x` and `y` in metres, identity orientation).
