@@ -98,34 +98,44 @@ fn the_fleet_example_runs_as_shown() {
     let dir = std::env::temp_dir().join(format!("loops-documented-fleet-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_loops"));
-    let path = format!("{}:{}", bin.parent().expect("bin folder").display(), std::env::var("PATH").unwrap_or_default());
     let mut failures = Vec::new();
     for example in &examples {
-        let output = Command::new("sh")
-            .arg("-c")
-            .arg(&example.command)
-            .current_dir(&dir)
-            .env("PATH", &path)
-            .env("NO_COLOR", "1")
-            .output()
-            .expect("sh runs");
-        let printed = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
-        if !output.status.success() {
-            failures.push(format!("{} ({}): {}\n{printed}", example.command, example.source, output.status));
-            continue;
-        }
-        for line in example.shown.iter().filter(|line| line.trim() != "...") {
-            if !printed.lines().any(|printed_line| printed_line == line) {
-                failures.push(format!(
-                    "{} ({}): the README shows {line:?}, which it does not print:\n{printed}",
-                    example.command, example.source
-                ));
-            }
-        }
+        failures.extend(run_example(example, &dir).1);
     }
     let _ = std::fs::remove_dir_all(&dir);
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
+}
+
+/// Runs `example` in `dir` with the `loops` binary first on the path: its exit status, and what
+/// failed (it failed, or it does not print a line shown under it, `...` aside).
+fn run_example(example: &Example, dir: &Path) -> (std::process::ExitStatus, Vec<String>) {
+    let bin = PathBuf::from(env!("CARGO_BIN_EXE_loops"));
+    let path = format!("{}:{}", bin.parent().expect("bin folder").display(), std::env::var("PATH").unwrap_or_default());
+    let output = Command::new("sh")
+        .arg("-c")
+        .arg(&example.command)
+        .current_dir(dir)
+        .env("PATH", &path)
+        .env("NO_COLOR", "1")
+        .output()
+        .expect("sh runs");
+    let printed = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+    if !output.status.success() {
+        let failure = format!("{} ({}): {}\n{printed}", example.command, example.source, output.status);
+        return (output.status, vec![failure]);
+    }
+    let failures = example
+        .shown
+        .iter()
+        .filter(|line| line.trim() != "..." && !printed.lines().any(|printed_line| printed_line == *line))
+        .map(|line| {
+            format!(
+                "{} ({}): the README shows {line:?}, which it does not print:\n{printed}",
+                example.command, example.source
+            )
+        })
+        .collect();
+    (output.status, failures)
 }
 
 /// The lines after `Examples:` in `loops --help` and each command's `--help`.
@@ -179,9 +189,6 @@ fn every_documented_command_on_the_shared_data_runs() {
         }
         dir
     };
-    let bin = PathBuf::from(env!("CARGO_BIN_EXE_loops"));
-    let path = format!("{}:{}", bin.parent().expect("bin folder").display(), std::env::var("PATH").unwrap_or_default());
-
     // The CLI's own commands (`loops-eval` and other Python console scripts are tested in
     // tests/python).
     let examples: Vec<Example> = readme_examples()
@@ -191,28 +198,9 @@ fn every_documented_command_on_the_shared_data_runs() {
         .collect();
     let mut failures = Vec::new();
     for (index, example) in examples.iter().enumerate() {
-        let output = Command::new("sh")
-            .arg("-c")
-            .arg(&example.command)
-            .current_dir(folder(index))
-            .env("PATH", &path)
-            .env("NO_COLOR", "1")
-            .output()
-            .expect("sh runs");
-        let printed = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
-        eprintln!("{} ({}): {}", example.command, example.source, output.status);
-        if !output.status.success() {
-            failures.push(format!("{} ({}): {}\n{printed}", example.command, example.source, output.status));
-            continue;
-        }
-        for line in example.shown.iter().filter(|line| line.trim() != "...") {
-            if !printed.lines().any(|printed_line| printed_line == line) {
-                failures.push(format!(
-                    "{} ({}): the README shows {line:?}, which it does not print:\n{printed}",
-                    example.command, example.source
-                ));
-            }
-        }
+        let (status, failed) = run_example(example, &folder(index));
+        eprintln!("{} ({}): {status}", example.command, example.source);
+        failures.extend(failed);
     }
     let _ = std::fs::remove_dir_all(&root);
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
