@@ -2,7 +2,7 @@
 //! each edge's two poses fall ([`loops_core::Verdict`]), as CSV or JSON, with the counts per
 //! verdict.
 
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use loops_core::{Loops, PairVerdict, Verdict};
@@ -11,6 +11,7 @@ use crate::atomic::write_atomically;
 use crate::csv_rows::write_csv;
 use crate::error::WriteError;
 use crate::graph::{GraphEdge, PoseGraph};
+use crate::json::write_json;
 use crate::report::SeparationReport;
 
 /// The columns of the edge verdicts CSV ([`EdgeVerdictRow`]).
@@ -215,10 +216,7 @@ impl EdgeVerdicts {
     /// # Errors
     /// What `out` returns.
     pub fn to_json<W: Write>(&self, out: W) -> io::Result<()> {
-        let mut out = BufWriter::new(out);
-        serde_json::to_writer_pretty(&mut out, self).map_err(io::Error::from)?;
-        writeln!(out)?;
-        out.flush()
+        write_json(self, out)
     }
 
     /// Writes the CSV ([`to_csv`](Self::to_csv)) to the file `path`, atomically

@@ -9,7 +9,7 @@
 //! their column names with the single-trajectory files (`components.csv`, `samples.csv`) where
 //! the meaning is the same, and go through the same CSV rows and atomic writer.
 
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use loops_core::{Error, Fleet, FleetLoops, FleetSample, Samples};
@@ -17,6 +17,7 @@ use loops_core::{Error, Fleet, FleetLoops, FleetSample, Samples};
 use crate::atomic::write_atomically;
 use crate::csv_rows::write_csv;
 use crate::error::{IoError, Result, WriteError};
+use crate::json::write_json;
 use crate::samples::SamplesFormat;
 use crate::table::PoseTable;
 use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
@@ -425,10 +426,7 @@ pub fn fleet_samples_to_json<W: Write>(fleet: &Fleet, samples: &Samples, out: W)
         warnings: samples.warnings().iter().map(ToString::to_string).collect(),
         samples: fleet_sample_rows(fleet, samples).map_err(invalid)?,
     };
-    let mut out = BufWriter::new(out);
-    serde_json::to_writer_pretty(&mut out, &document).map_err(io::Error::from)?;
-    writeln!(out)?;
-    out.flush()
+    write_json(&document, out)
 }
 
 /// Writes a fleet's samples to the file `path` in `format` ([`fleet_samples_to_csv`],

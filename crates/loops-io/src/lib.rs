@@ -105,6 +105,7 @@ mod fleet;
 mod format;
 mod foxglove;
 mod graph;
+mod json;
 mod kitti;
 mod loop_duration;
 mod mcap;

@@ -1,13 +1,14 @@
 //! The loops report in JSON (`loops components --json`): the result's facts and every
 //! component ([`LoopsReport`]).
 
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side};
 
 use crate::atomic::write_atomically;
 use crate::error::WriteError;
+use crate::json::write_json;
 
 /// What [`find_loops`](loops_core::find_loops) found on a trajectory, as a JSON document.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -149,11 +150,7 @@ impl LoopsReport {
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn loops_report_to_json<W: Write>(report: &LoopsReport, out: W) -> io::Result<()> {
-    let mut out = BufWriter::new(out);
-    // `From` hands back the writer's own error: a closed stdout stays `BrokenPipe`.
-    serde_json::to_writer_pretty(&mut out, report).map_err(io::Error::from)?;
-    writeln!(out)?;
-    out.flush()
+    write_json(report, out)
 }
 
 /// Writes `report` ([`loops_report_to_json`]) to the file `path`, atomically
@@ -172,6 +169,7 @@ mod tests {
     use loops_core::{Euclidean, Trajectory, find_loops};
 
     use super::*;
+    use crate::json::ClosedPipe;
 
     #[test]
     fn the_document_is_what_serde_json_prints() {
@@ -204,19 +202,6 @@ mod tests {
         assert!(keys.windows(2).all(|pair| at(pair[0]) < at(pair[1])));
         assert_eq!(value["poses"], 5);
         assert_eq!(value["span_s"], 4.5);
-    }
-
-    /// A writer whose reader has gone (`loops components --json - | head`).
-    struct ClosedPipe;
-
-    impl Write for ClosedPipe {
-        fn write(&mut self, _: &[u8]) -> io::Result<usize> {
-            Err(io::ErrorKind::BrokenPipe.into())
-        }
-
-        fn flush(&mut self) -> io::Result<()> {
-            Ok(())
-        }
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! for a SLAM back end, with timestamps, pose indices, component, distance and sampler.
 
 use std::fmt;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, Write};
 use std::path::Path;
 use std::str::FromStr;
 
@@ -11,6 +11,7 @@ use loops_core::{Sample, Samples};
 use crate::atomic::write_atomically;
 use crate::csv_rows::write_csv;
 use crate::error::WriteError;
+use crate::json::write_json;
 
 /// A file format for samples.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -163,11 +164,7 @@ pub fn samples_to_json<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
         warnings: samples.warnings().iter().map(ToString::to_string).collect(),
         samples: samples.rows().iter().map(SampleRow::from).collect(),
     };
-    let mut out = BufWriter::new(out);
-    // `From` hands back the writer's own error: a closed stdout stays `BrokenPipe`.
-    serde_json::to_writer_pretty(&mut out, &document).map_err(io::Error::from)?;
-    writeln!(out)?;
-    out.flush()
+    write_json(&document, out)
 }
 
 /// Writes `samples` to the file `path` in `format`, atomically ([`write_atomically`]): into a
@@ -205,6 +202,7 @@ pub fn write_samples(path: &Path, samples: &Samples, format: SamplesFormat, over
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::json::ClosedPipe;
     use std::fs;
 
     use loops_core::{
@@ -282,15 +280,6 @@ mod tests {
 
     #[test]
     fn a_closed_pipe_is_reported_as_one() {
-        struct ClosedPipe;
-        impl Write for ClosedPipe {
-            fn write(&mut self, _: &[u8]) -> io::Result<usize> {
-                Err(io::ErrorKind::BrokenPipe.into())
-            }
-            fn flush(&mut self) -> io::Result<()> {
-                Ok(())
-            }
-        }
         // A robot standing still: every pair is a loop, more samples than the buffer holds.
         let n = 60;
         let traj = Trajectory::from_points((0..n).map(f64::from).collect(), &vec![[0.0]; n as usize]).unwrap();
