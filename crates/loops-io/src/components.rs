@@ -10,14 +10,14 @@ use crate::csv_rows::write_csv;
 use crate::error::WriteError;
 
 /// The columns of `components.csv`, without the optional `samples`: the names of the Python
-/// API's `Loops.components` columns.
-pub const COMPONENT_COLUMNS: [&str; 17] = [
-    "id",
-    "trivial",
-    "area_s2",
-    "pair_count",
-    "run_count",
-    "holes",
+/// API's `Loops.components` columns. `id`, then [`MEASURE_COLUMNS`] and [`EXTENT_COLUMNS`].
+pub const COMPONENT_COLUMNS: [&str; 17] = columns(&[&["id"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
+
+/// The columns of a [`ComponentMeasures`], as every component table names them.
+pub const MEASURE_COLUMNS: [&str; 5] = ["trivial", "area_s2", "pair_count", "run_count", "holes"];
+
+/// The columns of a [`ComponentExtent`], as `components.csv` and a fleet's name them.
+pub const EXTENT_COLUMNS: [&str; 11] = [
     "i_min",
     "i_max",
     "j_min",
@@ -31,15 +31,73 @@ pub const COMPONENT_COLUMNS: [&str; 17] = [
     "closest_distance",
 ];
 
+/// The column groups `parts`, one after the other, as one table's columns (`N` of them).
+///
+/// # Panics
+/// At compile time, when the groups do not hold `N` columns.
+pub(crate) const fn columns<const N: usize>(parts: &[&[&'static str]]) -> [&'static str; N] {
+    let mut out = [""; N];
+    let mut k = 0;
+    let mut part = 0;
+    while part < parts.len() {
+        let mut i = 0;
+        while i < parts[part].len() {
+            out[k] = parts[part][i];
+            k += 1;
+            i += 1;
+        }
+        part += 1;
+    }
+    assert!(k == N, "the column groups hold another number of columns");
+    out
+}
+
 /// One row of `components.csv`: a [`LoopComponent`] with the times of its index ranges.
 ///
 /// `i` indexes poses by t, `j` by t′ (`i_min..=i_max` and `j_min..=j_max` are the component's
-/// index ranges); times are the poses' own timestamps, seconds.
+/// index ranges); times are the poses' own timestamps, seconds. With the columns `B` of its
+/// block after its id, a row of another table: a fleet's
+/// ([`FleetComponentRow`](crate::FleetComponentRow), whose block is its two sessions).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
-pub struct ComponentRow {
+pub struct ComponentRow<B = ()> {
     /// The component's id: its index in [`Loops::components`].
     pub id: usize,
+    /// Its block's columns (none for a trajectory's).
+    #[serde(flatten)]
+    pub block: B,
+    /// Its measures.
+    #[serde(flatten)]
+    pub measures: ComponentMeasures,
+    /// Its index ranges with their times, and its closest pair.
+    #[serde(flatten)]
+    pub extent: ComponentExtent,
+    /// Samples drawn from the component, when a sampling is written with it (the column is
+    /// left out otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub samples: Option<u64>,
+}
+
+impl ComponentRow<()> {
+    /// The row of `component`, with the times of `timestamps_s` (the trajectory the loops
+    /// were found on) and, optionally, its number of samples.
+    ///
+    /// # Panics
+    /// When the component's indices are outside `timestamps_s` (loops of another trajectory).
+    pub fn new(component: &LoopComponent, timestamps_s: &[f64], samples: Option<u64>) -> Self {
+        let c = component;
+        let extent =
+            ComponentExtent::new([c.i_range, c.j_range], c.closest_pair, c.closest_distance, [timestamps_s; 2]);
+        Self { id: c.id, block: (), measures: ComponentMeasures::new(c), extent, samples }
+    }
+}
+
+/// A component's measures, the columns every component table shares (`components.csv`, a
+/// fleet's, the JSON report's components): [`LoopComponent`]'s fields of the same names, copied
+/// on purpose into a serde row, so that the core's type stays free of a file's layout.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ComponentMeasures {
     /// Whether the component is trivial (touches the diagonal t = t′ only).
     pub trivial: bool,
     /// Its area in the (t, t′) plane, s².
@@ -50,6 +108,27 @@ pub struct ComponentRow {
     pub run_count: usize,
     /// Its number of holes.
     pub holes: u64,
+}
+
+impl ComponentMeasures {
+    /// The measures of `component`.
+    pub fn new(component: &LoopComponent) -> Self {
+        let c = component;
+        Self {
+            trivial: c.trivial,
+            area_s2: c.area_s2,
+            pair_count: c.pair_count,
+            run_count: c.run_count,
+            holes: c.holes,
+        }
+    }
+}
+
+/// Where a component lies, the columns `components.csv` and a fleet's share: its first and last
+/// pose by t (`i`, the rows) and by t′ (`j`, the columns), their times, and its closest pair.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ComponentExtent {
     /// First pose index by t.
     pub i_min: usize,
     /// Last pose index by t.
@@ -72,39 +151,35 @@ pub struct ComponentRow {
     pub closest_j: usize,
     /// δ of that pair, in the metric's unit.
     pub closest_distance: f64,
-    /// Samples drawn from the component, when a sampling is written with it (the column is
-    /// left out otherwise).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub samples: Option<u64>,
 }
 
-impl ComponentRow {
-    /// The row of `component`, with the times of `timestamps_s` (the trajectory the loops
-    /// were found on) and, optionally, its number of samples.
+impl ComponentExtent {
+    /// The extent of a component with the index ranges `[[i_min, i_max], [j_min, j_max]]`, its
+    /// closest pair `[i, j]` at δ `closest_distance`, and the timestamps of the poses `i` index
+    /// and of those `j` index (the same trajectory's twice, or two sessions').
     ///
     /// # Panics
-    /// When the component's indices are outside `timestamps_s` (loops of another trajectory).
-    pub fn new(component: &LoopComponent, timestamps_s: &[f64], samples: Option<u64>) -> Self {
-        let c = component;
+    /// When an index is outside its timestamps.
+    pub fn new(
+        ranges: [[usize; 2]; 2],
+        closest_pair: [usize; 2],
+        closest_distance: f64,
+        timestamps_s: [&[f64]; 2],
+    ) -> Self {
+        let [[i_min, i_max], [j_min, j_max]] = ranges;
+        let [t, t_prime] = timestamps_s;
         Self {
-            id: c.id,
-            trivial: c.trivial,
-            area_s2: c.area_s2,
-            pair_count: c.pair_count,
-            run_count: c.run_count,
-            holes: c.holes,
-            i_min: c.i_range[0],
-            i_max: c.i_range[1],
-            j_min: c.j_range[0],
-            j_max: c.j_range[1],
-            t_min_s: timestamps_s[c.i_range[0]],
-            t_max_s: timestamps_s[c.i_range[1]],
-            t_prime_min_s: timestamps_s[c.j_range[0]],
-            t_prime_max_s: timestamps_s[c.j_range[1]],
-            closest_i: c.closest_pair[0],
-            closest_j: c.closest_pair[1],
-            closest_distance: c.closest_distance,
-            samples,
+            i_min,
+            i_max,
+            j_min,
+            j_max,
+            t_min_s: t[i_min],
+            t_max_s: t[i_max],
+            t_prime_min_s: t_prime[j_min],
+            t_prime_max_s: t_prime[j_max],
+            closest_i: closest_pair[0],
+            closest_j: closest_pair[1],
+            closest_distance,
         }
     }
 }

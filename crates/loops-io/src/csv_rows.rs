@@ -7,11 +7,13 @@
 //! `10000000000000000`), and their readers and tests compare those bytes. [`write_csv`] passes
 //! each row through a serializer adaptor that hands floats to the `csv` crate as that text and
 //! everything else unchanged, so a row type stays a plain `#[derive(Serialize)]` struct of `f64`
-//! that serialises to JSON as usual.
+//! that serialises to JSON as usual. A row may have parts flattened into it
+//! (`#[serde(flatten)]`: the columns several tables share); serde serialises it as a map, which
+//! the adaptor writes as the struct of its values.
 
 use std::io::{self, Write};
 
-use serde::ser::{Serialize, SerializeStruct, Serializer};
+use serde::ser::{Serialize, SerializeMap, SerializeStruct, Serializer};
 
 /// Writes a header line with `columns`, then one line per row of `rows` (structs of numbers,
 /// booleans, strings and options: `None` is an empty field), through the `csv` crate with
@@ -45,10 +47,11 @@ impl<T: Serialize + ?Sized> Serialize for DisplayFloats<'_, T> {
 /// options are wrapped again, so floats inside them are printed so too.
 struct Adaptor<S>(S);
 
+/// Methods of [`Serializer`] that hand their arguments to `S` unchanged.
 macro_rules! forward {
-    ($($method:ident($type:ty)),* $(,)?) => {
-        $(fn $method(self, value: $type) -> Result<S::Ok, S::Error> {
-            self.0.$method(value)
+    ($($method:ident($($arg:ident: $type:ty),*) -> $ok:ty;)*) => {
+        $(fn $method(self, $($arg: $type),*) -> Result<$ok, S::Error> {
+            self.0.$method($($arg),*)
         })*
     };
 }
@@ -60,25 +63,37 @@ impl<S: Serializer> Serializer for Adaptor<S> {
     type SerializeTuple = S::SerializeTuple;
     type SerializeTupleStruct = S::SerializeTupleStruct;
     type SerializeTupleVariant = S::SerializeTupleVariant;
-    type SerializeMap = S::SerializeMap;
+    type SerializeMap = MapFields<S::SerializeStruct>;
     type SerializeStruct = Fields<S::SerializeStruct>;
     type SerializeStructVariant = S::SerializeStructVariant;
 
-    forward!(
-        serialize_bool(bool),
-        serialize_i8(i8),
-        serialize_i16(i16),
-        serialize_i32(i32),
-        serialize_i64(i64),
-        serialize_u8(u8),
-        serialize_u16(u16),
-        serialize_u32(u32),
-        serialize_u64(u64),
-        serialize_char(char),
-        serialize_str(&str),
-        serialize_bytes(&[u8]),
-        serialize_unit_struct(&'static str),
-    );
+    forward! {
+        serialize_bool(value: bool) -> S::Ok;
+        serialize_i8(value: i8) -> S::Ok;
+        serialize_i16(value: i16) -> S::Ok;
+        serialize_i32(value: i32) -> S::Ok;
+        serialize_i64(value: i64) -> S::Ok;
+        serialize_u8(value: u8) -> S::Ok;
+        serialize_u16(value: u16) -> S::Ok;
+        serialize_u32(value: u32) -> S::Ok;
+        serialize_u64(value: u64) -> S::Ok;
+        serialize_char(value: char) -> S::Ok;
+        serialize_str(value: &str) -> S::Ok;
+        serialize_bytes(value: &[u8]) -> S::Ok;
+        serialize_none() -> S::Ok;
+        serialize_unit() -> S::Ok;
+        serialize_unit_struct(name: &'static str) -> S::Ok;
+        serialize_unit_variant(name: &'static str, index: u32, variant: &'static str) -> S::Ok;
+        serialize_seq(len: Option<usize>) -> S::SerializeSeq;
+        serialize_tuple(len: usize) -> S::SerializeTuple;
+        serialize_tuple_struct(name: &'static str, len: usize) -> S::SerializeTupleStruct;
+        serialize_tuple_variant(
+            name: &'static str, index: u32, variant: &'static str, len: usize
+        ) -> S::SerializeTupleVariant;
+        serialize_struct_variant(
+            name: &'static str, index: u32, variant: &'static str, len: usize
+        ) -> S::SerializeStructVariant;
+    }
 
     fn serialize_f32(self, value: f32) -> Result<S::Ok, S::Error> {
         self.0.collect_str(&value)
@@ -88,20 +103,8 @@ impl<S: Serializer> Serializer for Adaptor<S> {
         self.0.collect_str(&value)
     }
 
-    fn serialize_none(self) -> Result<S::Ok, S::Error> {
-        self.0.serialize_none()
-    }
-
     fn serialize_some<T: Serialize + ?Sized>(self, value: &T) -> Result<S::Ok, S::Error> {
         self.0.serialize_some(&DisplayFloats(value))
-    }
-
-    fn serialize_unit(self) -> Result<S::Ok, S::Error> {
-        self.0.serialize_unit()
-    }
-
-    fn serialize_unit_variant(self, name: &'static str, index: u32, variant: &'static str) -> Result<S::Ok, S::Error> {
-        self.0.serialize_unit_variant(name, index, variant)
     }
 
     fn serialize_newtype_struct<T: Serialize + ?Sized>(self, name: &'static str, value: &T) -> Result<S::Ok, S::Error> {
@@ -118,44 +121,14 @@ impl<S: Serializer> Serializer for Adaptor<S> {
         self.0.serialize_newtype_variant(name, index, variant, &DisplayFloats(value))
     }
 
-    fn serialize_seq(self, len: Option<usize>) -> Result<S::SerializeSeq, S::Error> {
-        self.0.serialize_seq(len)
-    }
-
-    fn serialize_tuple(self, len: usize) -> Result<S::SerializeTuple, S::Error> {
-        self.0.serialize_tuple(len)
-    }
-
-    fn serialize_tuple_struct(self, name: &'static str, len: usize) -> Result<S::SerializeTupleStruct, S::Error> {
-        self.0.serialize_tuple_struct(name, len)
-    }
-
-    fn serialize_tuple_variant(
-        self,
-        name: &'static str,
-        index: u32,
-        variant: &'static str,
-        len: usize,
-    ) -> Result<S::SerializeTupleVariant, S::Error> {
-        self.0.serialize_tuple_variant(name, index, variant, len)
-    }
-
-    fn serialize_map(self, len: Option<usize>) -> Result<S::SerializeMap, S::Error> {
-        self.0.serialize_map(len)
+    fn serialize_map(self, len: Option<usize>) -> Result<Self::SerializeMap, S::Error> {
+        // A row with a part flattened into it (`#[serde(flatten)]`) serialises as a map: it is
+        // written as the struct of its values, in order (the `csv` crate writes no maps).
+        self.0.serialize_struct("row", len.unwrap_or(0)).map(MapFields)
     }
 
     fn serialize_struct(self, name: &'static str, len: usize) -> Result<Self::SerializeStruct, S::Error> {
         self.0.serialize_struct(name, len).map(Fields)
-    }
-
-    fn serialize_struct_variant(
-        self,
-        name: &'static str,
-        index: u32,
-        variant: &'static str,
-        len: usize,
-    ) -> Result<S::SerializeStructVariant, S::Error> {
-        self.0.serialize_struct_variant(name, index, variant, len)
     }
 }
 
@@ -179,14 +152,56 @@ impl<S: SerializeStruct> SerializeStruct for Fields<S> {
     }
 }
 
-/// The column names the `csv` crate gives a row of type `R` (its serialised field names), for
-/// tests that check a header constant against its row type.
+/// The entries of a map, each value through [`Adaptor`], written as the fields of a struct: the
+/// header names the columns, so the keys are not written.
+struct MapFields<S>(S);
+
+impl<S: SerializeStruct> SerializeMap for MapFields<S> {
+    type Ok = S::Ok;
+    type Error = S::Error;
+
+    fn serialize_key<T: Serialize + ?Sized>(&mut self, _key: &T) -> Result<(), S::Error> {
+        Ok(())
+    }
+
+    fn serialize_value<T: Serialize + ?Sized>(&mut self, value: &T) -> Result<(), S::Error> {
+        self.0.serialize_field("", &DisplayFloats(value))
+    }
+
+    fn end(self) -> Result<S::Ok, S::Error> {
+        self.0.end()
+    }
+}
+
+/// The column names of a row of type `R`: its serialised field names in order (as a JSON
+/// object's keys, flattened parts included), for tests that check a header constant against its
+/// row type.
 #[cfg(test)]
 pub(crate) fn inferred_columns<R: Serialize>(row: &R) -> Vec<String> {
-    let mut writer = ::csv::WriterBuilder::new().has_headers(true).from_writer(Vec::new());
-    writer.serialize(DisplayFloats(row)).expect("a flat row");
-    let text = String::from_utf8(writer.into_inner().expect("a Vec")).expect("UTF-8");
-    text.lines().next().unwrap_or_default().split(',').map(str::to_owned).collect()
+    /// The keys of a JSON object, in order.
+    struct Keys(Vec<String>);
+
+    impl<'de> serde::Deserialize<'de> for Keys {
+        fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+            struct Visitor;
+            impl<'de> serde::de::Visitor<'de> for Visitor {
+                type Value = Keys;
+                fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                    f.write_str("a row as a JSON object")
+                }
+                fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Keys, A::Error> {
+                    let mut keys = Vec::new();
+                    while let Some((key, serde::de::IgnoredAny)) = map.next_entry::<String, serde::de::IgnoredAny>()? {
+                        keys.push(key);
+                    }
+                    Ok(Keys(keys))
+                }
+            }
+            deserializer.deserialize_map(Visitor)
+        }
+    }
+    let json = serde_json::to_string(row).expect("a row");
+    serde_json::from_str::<Keys>(&json).expect("a JSON object").0
 }
 
 #[cfg(test)]
@@ -201,6 +216,21 @@ mod tests {
         name: &'static str,
         #[serde(skip_serializing_if = "Option::is_none")]
         extra: Option<u64>,
+    }
+
+    /// A row with parts flattened into it (a map to serde).
+    #[derive(serde::Serialize)]
+    struct Flattened {
+        id: usize,
+        #[serde(flatten)]
+        row: Row,
+        #[serde(flatten)]
+        more: More,
+    }
+
+    #[derive(serde::Serialize)]
+    struct More {
+        z: f64,
     }
 
     fn csv(rows: &[Row]) -> String {
@@ -223,6 +253,17 @@ mod tests {
         assert_eq!(text, format!("x,y,n,name\n{}\n", expected.join("\n")));
         let row = Row { x: 2.5, y: Some(3.0), n: 7, name: "with, comma", extra: Some(4) };
         assert_eq!(csv(&[row]), "x,y,n,name,extra\n2.5,3,7,\"with, comma\",4\n");
+    }
+
+    #[test]
+    fn flattened_parts_are_columns_in_order() {
+        let row =
+            |extra| Flattened { id: 4, row: Row { x: 0.5, y: None, n: 2, name: "a,b", extra }, more: More { z: 1e-7 } };
+        let mut out = Vec::new();
+        write_csv(&mut out, &["id", "x", "y", "n", "name", "z"], [row(None)]).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), "id,x,y,n,name,z\n4,0.5,,2,\"a,b\",0.0000001\n");
+        assert_eq!(inferred_columns(&row(None)), ["id", "x", "y", "n", "name", "z"]);
+        assert_eq!(inferred_columns(&row(Some(1))), ["id", "x", "y", "n", "name", "extra", "z"]);
     }
 
     #[test]

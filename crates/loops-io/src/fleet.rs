@@ -15,6 +15,7 @@ use std::path::Path;
 use loops_core::{Error, Fleet, FleetLoops, FleetSample, Samples};
 
 use crate::atomic::write_atomically;
+use crate::components::{ComponentExtent, ComponentMeasures, ComponentRow, EXTENT_COLUMNS, MEASURE_COLUMNS, columns};
 use crate::csv_rows::write_csv;
 use crate::error::{IoError, Result, WriteError};
 use crate::json::write_json;
@@ -26,37 +27,20 @@ use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
 /// sessions by name and index), then the columns of `components.csv` but `id` (see
 /// [`COMPONENT_COLUMNS`](crate::COMPONENT_COLUMNS)), with `i` indexing poses of session `a` and
 /// `j` poses of session `b`.
-pub const FLEET_COMPONENT_COLUMNS: [&str; 21] = [
-    "id",
-    "session_a",
-    "session_b",
-    "a",
-    "b",
-    "trivial",
-    "area_s2",
-    "pair_count",
-    "run_count",
-    "holes",
-    "i_min",
-    "i_max",
-    "j_min",
-    "j_max",
-    "t_min_s",
-    "t_max_s",
-    "t_prime_min_s",
-    "t_prime_max_s",
-    "closest_i",
-    "closest_j",
-    "closest_distance",
-];
+pub const FLEET_COMPONENT_COLUMNS: [&str; 21] =
+    columns(&[&["id", "session_a", "session_b", "a", "b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
 
 /// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::FleetComponent) with
-/// the names of its sessions and the times of its pose ranges, each on its session's clock.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+/// the names of its sessions and the times of its pose ranges, each on its session's clock: in
+/// its [`extent`](ComponentRow::extent), `i` indexes the poses of session `a` (the rows, t) and
+/// `j` those of session `b` (the columns, t′); its [`measures`](ComponentRow::measures) are the
+/// block's (trivial: it holds diagonal cells, within one session only).
+pub type FleetComponentRow = ComponentRow<SessionBlock>;
+
+/// The block of a fleet's component: its two sessions, by name and index.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 #[non_exhaustive]
-pub struct FleetComponentRow {
-    /// The component's id: its index in [`FleetLoops::components`].
-    pub id: usize,
+pub struct SessionBlock {
     /// The name of session `a` (the rows, t).
     pub session_a: String,
     /// The name of session `b` (the columns, t′).
@@ -65,42 +49,6 @@ pub struct FleetComponentRow {
     pub a: usize,
     /// Session `b`'s index in the fleet (`a ≤ b`; `a = b` within one session).
     pub b: usize,
-    /// Whether the component holds diagonal cells (within one session only).
-    pub trivial: bool,
-    /// Its area in the block, s².
-    pub area_s2: f64,
-    /// Its number of pose pairs.
-    pub pair_count: u64,
-    /// Its number of runs (row intervals).
-    pub run_count: usize,
-    /// Its number of holes.
-    pub holes: u64,
-    /// First pose of session `a`.
-    pub i_min: usize,
-    /// Last pose of session `a`.
-    pub i_max: usize,
-    /// First pose of session `b`.
-    pub j_min: usize,
-    /// Last pose of session `b`.
-    pub j_max: usize,
-    /// Time of pose `i_min`, seconds on session `a`'s clock.
-    pub t_min_s: f64,
-    /// Time of pose `i_max`, seconds on session `a`'s clock.
-    pub t_max_s: f64,
-    /// Time of pose `j_min`, seconds on session `b`'s clock.
-    pub t_prime_min_s: f64,
-    /// Time of pose `j_max`, seconds on session `b`'s clock.
-    pub t_prime_max_s: f64,
-    /// The closest pair: pose of session `a`.
-    pub closest_i: usize,
-    /// The closest pair: pose of session `b`.
-    pub closest_j: usize,
-    /// δ of that pair, in the metric's unit.
-    pub closest_distance: f64,
-    /// Samples drawn from the component, when a sampling is written with it (the column is
-    /// left out otherwise).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub samples: Option<u64>,
 }
 
 /// The rows of a fleet's `components.csv`: one per component of `loops` (found on `fleet`), in
@@ -121,30 +69,15 @@ pub fn fleet_component_rows(
         .into_iter()
         .map(|c| {
             let [a, b] = c.sessions;
-            let (ta, tb) = (fleet.session(a).timestamps_s(), fleet.session(b).timestamps_s());
-            let [[i_min, i_max], [j_min, j_max]] = c.poses;
+            let times = [fleet.session(a).timestamps_s(), fleet.session(b).timestamps_s()];
+            let (session_a, session_b) = (fleet.names()[a].clone(), fleet.names()[b].clone());
             FleetComponentRow {
                 id: c.id,
-                session_a: fleet.names()[a].clone(),
-                session_b: fleet.names()[b].clone(),
-                a,
-                b,
-                trivial: c.trivial,
-                area_s2: c.area_s2,
-                pair_count: c.pair_count,
-                run_count: joint[c.id].run_count,
-                holes: c.holes,
-                i_min,
-                i_max,
-                j_min,
-                j_max,
-                t_min_s: ta[i_min],
-                t_max_s: ta[i_max],
-                t_prime_min_s: tb[j_min],
-                t_prime_max_s: tb[j_max],
-                closest_i: c.closest_pair[0],
-                closest_j: c.closest_pair[1],
-                closest_distance: c.closest_distance,
+                block: SessionBlock { session_a, session_b, a, b },
+                // The joint component's measures are the block's (a fleet component is the joint
+                // one in its sessions' poses).
+                measures: ComponentMeasures::new(&joint[c.id]),
+                extent: ComponentExtent::new(c.poses, c.closest_pair, c.closest_distance, times),
                 samples: samples_per_component.map(|s| s.get(c.id).copied().unwrap_or(0)),
             }
         })
@@ -651,21 +584,25 @@ mod tests {
         assert_eq!(rows.len(), loops.loops().components().len());
         for row in &rows {
             let c = &loops.components()[row.id];
-            assert_eq!([row.a, row.b], c.sessions);
-            assert_eq!([&row.session_a, &row.session_b], [&fleet.names()[row.a], &fleet.names()[row.b]]);
-            assert_eq!(row.t_min_s, fleet.session(row.a).timestamps_s()[row.i_min]);
-            assert_eq!(row.t_prime_max_s, fleet.session(row.b).timestamps_s()[row.j_max]);
-            assert_eq!(row.run_count, loops.loops().components()[row.id].run_count);
+            let block = &row.block;
+            assert_eq!([block.a, block.b], c.sessions);
+            assert_eq!([&block.session_a, &block.session_b], [&fleet.names()[block.a], &fleet.names()[block.b]]);
+            assert_eq!(row.extent.t_min_s, fleet.session(block.a).timestamps_s()[row.extent.i_min]);
+            assert_eq!(row.extent.t_prime_max_s, fleet.session(block.b).timestamps_s()[row.extent.j_max]);
+            assert_eq!(row.measures.run_count, loops.loops().components()[row.id].run_count);
         }
         // The way back meets the way out in one band: every pair within γ, every pose of the
         // way back, on its own clock from 500 s.
-        let between: Vec<_> = rows.iter().filter(|r| r.a != r.b).collect();
+        let between: Vec<_> = rows.iter().filter(|r| r.block.a != r.block.b).collect();
         assert_eq!(between.len(), 1);
         let pairs = cross_pairs(&fleet);
-        assert_eq!((between[0].a, between[0].b, between[0].pair_count), (0, 1, pairs.len() as u64));
-        assert_eq!((between[0].t_prime_min_s, between[0].t_prime_max_s), (500.0, 512.0));
+        assert_eq!(
+            (between[0].block.a, between[0].block.b, between[0].measures.pair_count),
+            (0, 1, pairs.len() as u64)
+        );
+        assert_eq!((between[0].extent.t_prime_min_s, between[0].extent.t_prime_max_s), (500.0, 512.0));
         let i_max = pairs.iter().map(|p| p[0]).max().unwrap();
-        assert_eq!((between[0].i_max, between[0].t_max_s), (i_max, i_max as f64));
+        assert_eq!((between[0].extent.i_max, between[0].extent.t_max_s), (i_max, i_max as f64));
         let mut text = Vec::new();
         fleet_components_to_csv(&fleet, &loops, None, &mut text).unwrap();
         let text = String::from_utf8(text).unwrap();

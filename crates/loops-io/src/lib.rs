@@ -132,7 +132,10 @@ pub use crate::csv::read_csv;
 pub use crate::mcap::{McapOptions, TimeSource, read_mcap, read_mcap_files};
 pub use atomic::{StagedFiles, write_atomically};
 pub use bag::{list_frame_pairs, list_topics, log_name, read_ros1, read_rosbag2};
-pub use components::{COMPONENT_COLUMNS, ComponentRow, component_rows, components_to_csv, write_components};
+pub use components::{
+    COMPONENT_COLUMNS, ComponentExtent, ComponentMeasures, ComponentRow, EXTENT_COLUMNS, MEASURE_COLUMNS,
+    component_rows, components_to_csv, write_components,
+};
 pub use detections::{DetectionTable, read_detections};
 pub use dropped::Dropped;
 pub use edge_verdicts::{EDGE_VERDICT_COLUMNS, EdgeVerdictRow, EdgeVerdicts, VerdictCounts};
@@ -140,9 +143,10 @@ pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError
 pub use euroc::read_euroc;
 pub use fleet::{
     FLEET_COMPONENT_COLUMNS, FLEET_SAMPLE_COLUMNS, FleetComponentRow, FleetSampleRow, GTSAM_ROBOT_LETTERS,
-    SESSION_PAIR_COLUMNS, SessionPairRow, fleet_component_rows, fleet_components_to_csv, fleet_g2o_edges_text,
-    fleet_sample_rows, fleet_samples_to_csv, fleet_samples_to_json, gtsam_symbol_key, session_pair_rows,
-    session_pairs_to_csv, write_fleet_components, write_fleet_g2o_edges, write_fleet_samples, write_session_pairs,
+    SESSION_PAIR_COLUMNS, SessionBlock, SessionPairRow, fleet_component_rows, fleet_components_to_csv,
+    fleet_g2o_edges_text, fleet_sample_rows, fleet_samples_to_csv, fleet_samples_to_json, gtsam_symbol_key,
+    session_pair_rows, session_pairs_to_csv, write_fleet_components, write_fleet_g2o_edges, write_fleet_samples,
+    write_session_pairs,
 };
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, read_pose_graph};

@@ -7,6 +7,7 @@ use std::path::Path;
 use loops_core::{LoopComponent, Loops, Scale, Selection, Side};
 
 use crate::atomic::write_atomically;
+use crate::components::ComponentMeasures;
 use crate::error::WriteError;
 use crate::json::write_json;
 
@@ -52,22 +53,17 @@ impl From<loops_core::Separation> for SeparationReport {
 }
 
 /// One component of a [`LoopsReport`]: ranges as `[first, last]`, times in seconds (the poses'
-/// own timestamps).
+/// own timestamps). Its measures are `components.csv`'s; where the component lies is spelled as
+/// ranges, the JSON report's layout, where `components.csv` has a column each
+/// ([`ComponentExtent`](crate::ComponentExtent)).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct ComponentReport {
     /// The component's id.
     pub id: usize,
-    /// Whether it is trivial (touches the diagonal t = t′ only).
-    pub trivial: bool,
-    /// Its area in the (t, t′) plane, s².
-    pub area_s2: f64,
-    /// Its number of pose pairs.
-    pub pair_count: u64,
-    /// Its number of runs (row intervals).
-    pub run_count: usize,
-    /// Its number of holes.
-    pub holes: u64,
+    /// Its measures.
+    #[serde(flatten)]
+    pub measures: ComponentMeasures,
     /// The times of its first and last pose by t, seconds.
     pub t_range_s: [f64; 2],
     /// The times of its first and last pose by t′, seconds.
@@ -92,11 +88,7 @@ impl ComponentReport {
         let (c, t) = (component, timestamps_s);
         Self {
             id: c.id,
-            trivial: c.trivial,
-            area_s2: c.area_s2,
-            pair_count: c.pair_count,
-            run_count: c.run_count,
-            holes: c.holes,
+            measures: ComponentMeasures::new(c),
             t_range_s: [t[c.i_range[0]], t[c.i_range[1]]],
             t_prime_range_s: [t[c.j_range[0]], t[c.j_range[1]]],
             i_range: c.i_range,
