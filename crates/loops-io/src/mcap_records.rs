@@ -326,7 +326,7 @@ struct State {
     data: Vec<u8>,
     /// The last chunk walked and the messages read in it per channel, until its message index
     /// records have been checked.
-    chunk: Option<ChunkCount>,
+    chunk: Option<ChunkCount<u16>>,
     /// The offsets and lengths (whole record) of the chunks walked, in file order.
     chunks: Vec<(u64, u64)>,
     /// Offsets and opcodes of the first unknown records of the data section.
@@ -344,13 +344,60 @@ struct State {
     summary_offsets: Vec<(u64, u8, u64)>,
 }
 
-/// The messages read in one chunk, per channel, and what its message indexes declare.
+/// The messages read in one chunk per key (an MCAP channel id, a ROS 1 connection), and what
+/// the index records after the chunk declare (MCAP message indexes, ROS 1 index data).
 #[derive(Debug)]
-struct ChunkCount {
-    offset: u64,
-    read: HashMap<u16, u64>,
-    /// Per channel: the count its message index record declares, and the record's offset.
-    indexed: HashMap<u16, (u64, u64)>,
+pub(crate) struct ChunkCount<K> {
+    /// The chunk record's offset.
+    pub(crate) offset: u64,
+    pub(crate) read: HashMap<K, u64>,
+    /// Per key: the count its index record declares, and the record's offset.
+    pub(crate) indexed: HashMap<K, (u64, u64)>,
+}
+
+/// A key whose messages read in a chunk differ from the count its index record declares.
+#[derive(Debug)]
+pub(crate) struct CountMismatch<K> {
+    pub(crate) key: K,
+    pub(crate) read: u64,
+    pub(crate) declared: u64,
+    /// The index record's offset (the chunk's, for a key no index record lists).
+    pub(crate) index_at: u64,
+}
+
+impl<K: Copy + Ord + std::hash::Hash> ChunkCount<K> {
+    /// The chunk at `offset`, nothing read yet.
+    pub(crate) fn new(offset: u64) -> Self {
+        Self { offset, read: HashMap::new(), indexed: HashMap::new() }
+    }
+
+    /// The first key (in order) whose messages read differ from its index's count; none when
+    /// the chunk has no index records (its writer did not index it, or stopped before).
+    pub(crate) fn mismatch(&self) -> Option<CountMismatch<K>> {
+        if self.indexed.is_empty() {
+            return None;
+        }
+        let mut keys: Vec<K> = self.read.keys().chain(self.indexed.keys()).copied().collect();
+        keys.sort_unstable();
+        keys.dedup();
+        keys.into_iter().find_map(|key| {
+            let read = self.read.get(&key).copied().unwrap_or(0);
+            let (declared, index_at) = self.indexed.get(&key).copied().unwrap_or((0, self.offset));
+            (read != declared).then_some(CountMismatch { key, read, declared, index_at })
+        })
+    }
+}
+
+impl<K> CountMismatch<K> {
+    /// `: N messages lost (a record in the chunk is corrupt)` when fewer were read than declared;
+    /// nothing otherwise.
+    pub(crate) fn lost(&self) -> String {
+        if self.declared > self.read {
+            format!(": {} messages lost (a record in the chunk is corrupt)", self.declared - self.read)
+        } else {
+            String::new()
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -489,33 +536,20 @@ impl Walker<'_> {
     /// the first record that is not a message index.
     fn check_chunk_messages(&mut self) -> Result<()> {
         let Some(chunk) = self.state.chunk.take() else { return Ok(()) };
-        if chunk.indexed.is_empty() {
-            // No message index: the writer did not index this chunk.
-            return Ok(());
-        }
-        let mut channels: Vec<u16> = chunk.read.keys().chain(chunk.indexed.keys()).copied().collect();
-        channels.sort_unstable();
-        channels.dedup();
-        for channel in channels {
-            let read = chunk.read.get(&channel).copied().unwrap_or(0);
-            let (declared, index_at) = chunk.indexed.get(&channel).copied().unwrap_or((0, chunk.offset));
-            if read != declared {
-                let lost = if declared > read {
-                    format!(": {} messages lost (a record in the chunk is corrupt)", declared - read)
-                } else {
-                    String::new()
-                };
-                return Err(self.error(
-                    chunk.offset,
-                    format!(
-                        "the chunk holds {read} messages on channel {channel}{}, but its message index (the record \
-                         at offset {index_at}) lists {declared}{lost}",
-                        self.state.topic_of(channel)
-                    ),
-                ));
-            }
-        }
-        Ok(())
+        let Some(m) = chunk.mismatch() else { return Ok(()) };
+        Err(self.error(
+            chunk.offset,
+            format!(
+                "the chunk holds {} messages on channel {}{}, but its message index (the record at offset {}) lists \
+                 {}{}",
+                m.read,
+                m.key,
+                self.state.topic_of(m.key),
+                m.index_at,
+                m.declared,
+                m.lost()
+            ),
+        ))
     }
 
     /// After the footer: its summary CRC, the closing magic, nothing after it, and the counts of
@@ -814,7 +848,7 @@ fn chunk(
         DECOMPRESSED_BUFFER.min(uncompressed_size as usize + 1),
         Decompressed { inner: decoder, crc: crc32fast::Hasher::new() },
     );
-    state.chunk = Some(ChunkCount { offset, read: HashMap::new(), indexed: HashMap::new() });
+    state.chunk = Some(ChunkCount::new(offset));
     let mut inner = 0u64;
     while inner < uncompressed_size {
         let left = uncompressed_size - inner;

@@ -34,7 +34,7 @@ use std::path::Path;
 
 use crate::compression::{ChunkCompression, MAX_MESSAGE_BYTES, chunk_decoder};
 use crate::error::{IoError, Result};
-use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor, open_records};
+use crate::mcap_records::{At, ChannelKey, ChunkCount, MessageHeader, Visitor, open_records};
 use crate::printable::one_line;
 
 /// The first line of a bag of format 2.0.
@@ -190,16 +190,7 @@ struct Records<'p> {
     data: Vec<u8>,
     /// The last chunk walked and its messages per connection, until its index data records
     /// have been checked.
-    chunk: Option<ChunkCount>,
-}
-
-/// The messages read in one chunk, per connection, and what its index data records declare.
-#[derive(Debug)]
-struct ChunkCount {
-    offset: u64,
-    read: HashMap<u32, u64>,
-    /// Per connection: the count its index data record declares, and the record's offset.
-    indexed: HashMap<u32, (u64, u64)>,
+    chunk: Option<ChunkCount<u32>>,
 }
 
 /// `len` bytes of `reader` into `buffer` (cleared first).
@@ -386,32 +377,19 @@ impl Walker<'_> {
     /// corrupt (its connection changed) would otherwise leave its topic without a word.
     fn check_chunk_messages(&mut self) -> Result<()> {
         let Some(chunk) = self.records.chunk.take() else { return Ok(()) };
-        if chunk.indexed.is_empty() {
-            // No index data: the recording stopped before writing it.
-            return Ok(());
-        }
-        let mut connections: Vec<u32> = chunk.read.keys().chain(chunk.indexed.keys()).copied().collect();
-        connections.sort_unstable();
-        connections.dedup();
-        for conn in connections {
-            let read = chunk.read.get(&conn).copied().unwrap_or(0);
-            let (declared, index_at) = chunk.indexed.get(&conn).copied().unwrap_or((0, chunk.offset));
-            if read != declared {
-                let lost = if declared > read {
-                    format!(": {} messages lost (a record in the chunk is corrupt)", declared - read)
-                } else {
-                    String::new()
-                };
-                return Err(self.error(
-                    chunk.offset,
-                    format!(
-                        "the chunk holds {read} messages on connection {conn}, but its index data (the record at \
-                         offset {index_at}) lists {declared}{lost}"
-                    ),
-                ));
-            }
-        }
-        Ok(())
+        // None without index data: the recording stopped before writing it.
+        let Some(m) = chunk.mismatch() else { return Ok(()) };
+        Err(self.error(
+            chunk.offset,
+            format!(
+                "the chunk holds {} messages on connection {}, but its index data (the record at offset {}) lists {}{}",
+                m.read,
+                m.key,
+                m.index_at,
+                m.declared,
+                m.lost()
+            ),
+        ))
     }
 
     /// A chunk record at `at`, its data not read yet: decompressed as a stream, its records read
@@ -431,7 +409,7 @@ impl Walker<'_> {
             }
             _ => format!("the {name} chunk does not decompress: {}", one_line(error)),
         };
-        self.records.chunk = Some(ChunkCount { offset: at, read: HashMap::new(), indexed: HashMap::new() });
+        self.records.chunk = Some(ChunkCount::new(at));
         let mut compressed = (&mut self.reader).take(data_len);
         // Buffered: headers and lengths are read a few bytes at a time.
         let mut chunk = BufReader::with_capacity(64 << 10, chunk_decoder(compression, &mut compressed));
