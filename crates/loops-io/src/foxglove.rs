@@ -33,7 +33,8 @@ struct Vector3 {
     z: f64,
 }
 
-/// `foxglove.Quaternion`.
+/// `foxglove.Quaternion`. Its `x`, `y`, `z` are [`Vector3`]'s, tags included, as in the schemas:
+/// two messages, each decoding its own fields only.
 #[derive(Clone, Copy, PartialEq, prost::Message)]
 struct Quaternion {
     #[prost(double, tag = "1")]
@@ -114,90 +115,11 @@ struct Odometry {
 
 const IDENTITY: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
 
-fn stamp_ns(timestamp: Option<Timestamp>) -> Result<i64, String> {
-    let Timestamp { seconds, nanos } = timestamp.unwrap_or_default();
-    crate::pose_type::check_nanoseconds("timestamp.nanos", i64::from(nanos))?;
-    seconds
-        .checked_mul(1_000_000_000)
-        .and_then(|ns| ns.checked_add(i64::from(nanos)))
-        .ok_or_else(|| format!("timestamp {seconds} s {nanos} ns is out of range"))
-}
-
-fn position(v: Option<Vector3>) -> [f64; 3] {
-    v.map_or([0.0; 3], |v| [v.x, v.y, v.z])
-}
-
-fn orientation(q: Option<Quaternion>) -> [f64; 4] {
-    q.map_or(IDENTITY, |q| [q.x, q.y, q.z, q.w])
-}
-
-fn pose_parts(pose: Option<Pose>) -> ([f64; 3], [f64; 4]) {
-    let pose = pose.unwrap_or(Pose { position: None, orientation: None });
-    (position(pose.position), orientation(pose.orientation))
-}
-
-/// Decodes a protobuf message of a Foxglove type, calling `emit` for each pose.
-pub(crate) fn decode_protobuf(
-    pose_type: PoseType,
-    data: &[u8],
-    mut emit: impl FnMut(Sample<'_>),
-) -> Result<(), String> {
-    let invalid =
-        |error: prost::DecodeError| format!("invalid protobuf for {pose_type}: {}", crate::printable::one_line(&error));
-    match pose_type {
-        PoseType::FoxglovePoseInFrame => {
-            let m = PoseInFrame::decode(data).map_err(invalid)?;
-            let (position, orientation) = pose_parts(m.pose);
-            emit(Sample { stamp_ns: stamp_ns(m.timestamp)?, parent: &m.frame_id, child: "", position, orientation });
-        }
-        PoseType::FoxglovePosesInFrame => {
-            let m = PosesInFrame::decode(data).map_err(invalid)?;
-            let stamp_ns = stamp_ns(m.timestamp)?;
-            for pose in m.poses {
-                let (position, orientation) = pose_parts(Some(pose));
-                emit(Sample { stamp_ns, parent: &m.frame_id, child: "", position, orientation });
-            }
-        }
-        PoseType::FoxgloveFrameTransform => {
-            let m = FrameTransform::decode(data).map_err(invalid)?;
-            emit(frame_transform_sample(&m)?);
-        }
-        PoseType::FoxgloveFrameTransforms => {
-            let m = FrameTransforms::decode(data).map_err(invalid)?;
-            for (index, transform) in m.transforms.iter().enumerate() {
-                emit(frame_transform_sample(transform).map_err(|error| format!("transform {index}: {error}"))?);
-            }
-        }
-        PoseType::FoxgloveOdometry => {
-            let m = Odometry::decode(data).map_err(invalid)?;
-            let (position, orientation) = pose_parts(m.pose);
-            emit(Sample {
-                stamp_ns: stamp_ns(m.timestamp)?,
-                parent: &m.frame_id,
-                child: &m.body_frame_id,
-                position,
-                orientation,
-            });
-        }
-        other => return Err(format!("{other} is not a Foxglove type")),
-    }
-    Ok(())
-}
-
-fn frame_transform_sample(m: &FrameTransform) -> Result<Sample<'_>, String> {
-    Ok(Sample {
-        stamp_ns: stamp_ns(m.timestamp)?,
-        parent: &m.parent_frame_id,
-        child: &m.child_frame_id,
-        position: position(m.translation),
-        orientation: orientation(m.rotation),
-    })
-}
-
-/// A JSON timestamp: `{"sec", "nsec"}`, or `{"seconds", "nanos"}`.
+/// A timestamp: `{"sec", "nsec"}` or `{"seconds", "nanos"}` in JSON, a
+/// `google.protobuf.Timestamp` converted.
 #[derive(Debug, Default, Clone, Copy, Deserialize)]
 #[serde(default)]
-struct JsonTime {
+struct Time {
     #[serde(alias = "seconds")]
     sec: i64,
     #[serde(alias = "nanos", alias = "nanosec")]
@@ -206,7 +128,7 @@ struct JsonTime {
 
 #[derive(Debug, Default, Deserialize)]
 #[serde(default)]
-struct JsonVector3 {
+struct Vec3 {
     x: f64,
     y: f64,
     z: f64,
@@ -214,7 +136,7 @@ struct JsonVector3 {
 
 #[derive(Debug, Default, Deserialize)]
 #[serde(default)]
-struct JsonQuaternion {
+struct Quat {
     x: f64,
     y: f64,
     z: f64,
@@ -223,78 +145,159 @@ struct JsonQuaternion {
 
 #[derive(Debug, Default, Deserialize)]
 #[serde(default)]
-struct JsonPose {
-    position: Option<JsonVector3>,
-    orientation: Option<JsonQuaternion>,
+struct PoseFields {
+    position: Option<Vec3>,
+    orientation: Option<Quat>,
 }
 
-/// The fields of every Foxglove pose type, all optional: one struct reads them all.
+/// The fields of every Foxglove pose type, all optional: one struct reads them all from JSON,
+/// and holds a protobuf message converted, so that both encodings give their poses in one place
+/// ([`emit_poses`]).
 #[derive(Debug, Default, Deserialize)]
 #[serde(default)]
-struct JsonMessage {
-    timestamp: Option<JsonTime>,
+struct Message {
+    timestamp: Option<Time>,
     frame_id: String,
     parent_frame_id: String,
     child_frame_id: String,
     body_frame_id: String,
-    pose: Option<JsonPose>,
-    poses: Vec<JsonPose>,
-    translation: Option<JsonVector3>,
-    rotation: Option<JsonQuaternion>,
-    transforms: Vec<JsonMessage>,
+    pose: Option<PoseFields>,
+    poses: Vec<PoseFields>,
+    translation: Option<Vec3>,
+    rotation: Option<Quat>,
+    transforms: Vec<Message>,
 }
 
-impl JsonMessage {
-    fn stamp_ns(&self) -> Result<i64, String> {
-        let JsonTime { sec, nsec } = self.timestamp.unwrap_or_default();
-        crate::pose_type::check_nanoseconds("timestamp.nsec", nsec)?;
+impl From<Timestamp> for Time {
+    fn from(t: Timestamp) -> Self {
+        Self { sec: t.seconds, nsec: i64::from(t.nanos) }
+    }
+}
+
+impl From<Vector3> for Vec3 {
+    fn from(v: Vector3) -> Self {
+        Self { x: v.x, y: v.y, z: v.z }
+    }
+}
+
+impl From<Quaternion> for Quat {
+    fn from(q: Quaternion) -> Self {
+        Self { x: q.x, y: q.y, z: q.z, w: q.w }
+    }
+}
+
+impl From<Pose> for PoseFields {
+    fn from(pose: Pose) -> Self {
+        Self { position: pose.position.map(Into::into), orientation: pose.orientation.map(Into::into) }
+    }
+}
+
+impl From<FrameTransform> for Message {
+    fn from(m: FrameTransform) -> Self {
+        Self {
+            timestamp: m.timestamp.map(Into::into),
+            parent_frame_id: m.parent_frame_id,
+            child_frame_id: m.child_frame_id,
+            translation: m.translation.map(Into::into),
+            rotation: m.rotation.map(Into::into),
+            ..Self::default()
+        }
+    }
+}
+
+impl Message {
+    /// The stamp in nanoseconds; `nanos` names the nanoseconds' field in messages.
+    fn stamp_ns(&self, nanos: &str) -> Result<i64, String> {
+        let Time { sec, nsec } = self.timestamp.unwrap_or_default();
+        crate::pose_type::check_nanoseconds(nanos, nsec)?;
         sec.checked_mul(1_000_000_000)
             .and_then(|ns| ns.checked_add(nsec))
             .ok_or_else(|| format!("timestamp {sec} s {nsec} ns is out of range"))
     }
 }
 
-fn json_position(v: Option<&JsonVector3>) -> [f64; 3] {
+fn position(v: Option<&Vec3>) -> [f64; 3] {
     v.map_or([0.0; 3], |v| [v.x, v.y, v.z])
 }
 
-fn json_orientation(q: Option<&JsonQuaternion>) -> [f64; 4] {
+fn orientation(q: Option<&Quat>) -> [f64; 4] {
     q.map_or(IDENTITY, |q| [q.x, q.y, q.z, q.w])
 }
 
-fn json_pose(pose: Option<&JsonPose>) -> ([f64; 3], [f64; 4]) {
+fn pose_parts(pose: Option<&PoseFields>) -> ([f64; 3], [f64; 4]) {
     match pose {
-        Some(pose) => (json_position(pose.position.as_ref()), json_orientation(pose.orientation.as_ref())),
+        Some(pose) => (position(pose.position.as_ref()), orientation(pose.orientation.as_ref())),
         None => ([0.0; 3], IDENTITY),
     }
 }
 
-/// Decodes a JSON message of a Foxglove type, calling `emit` for each pose.
-pub(crate) fn decode_json(pose_type: PoseType, data: &[u8], mut emit: impl FnMut(Sample<'_>)) -> Result<(), String> {
-    let m: JsonMessage = serde_json::from_slice(data)
-        .map_err(|error| format!("invalid JSON for {pose_type}: {}", crate::printable::one_line(&error)))?;
-    match pose_type {
+/// Decodes a protobuf message of a Foxglove type, calling `emit` for each pose.
+pub(crate) fn decode_protobuf(pose_type: PoseType, data: &[u8], emit: impl FnMut(Sample<'_>)) -> Result<(), String> {
+    let invalid =
+        |error: prost::DecodeError| format!("invalid protobuf for {pose_type}: {}", crate::printable::one_line(&error));
+    let m = match pose_type {
         PoseType::FoxglovePoseInFrame => {
-            let (position, orientation) = json_pose(m.pose.as_ref());
-            emit(Sample { stamp_ns: m.stamp_ns()?, parent: &m.frame_id, child: "", position, orientation });
+            let m = PoseInFrame::decode(data).map_err(invalid)?;
+            let pose = m.pose.map(Into::into);
+            Message { timestamp: m.timestamp.map(Into::into), frame_id: m.frame_id, pose, ..Message::default() }
         }
         PoseType::FoxglovePosesInFrame => {
-            let stamp_ns = m.stamp_ns()?;
+            let m = PosesInFrame::decode(data).map_err(invalid)?;
+            let poses = m.poses.into_iter().map(Into::into).collect();
+            Message { timestamp: m.timestamp.map(Into::into), frame_id: m.frame_id, poses, ..Message::default() }
+        }
+        PoseType::FoxgloveFrameTransform => FrameTransform::decode(data).map_err(invalid)?.into(),
+        PoseType::FoxgloveFrameTransforms => {
+            let m = FrameTransforms::decode(data).map_err(invalid)?;
+            Message { transforms: m.transforms.into_iter().map(Into::into).collect(), ..Message::default() }
+        }
+        PoseType::FoxgloveOdometry => {
+            let m = Odometry::decode(data).map_err(invalid)?;
+            Message {
+                timestamp: m.timestamp.map(Into::into),
+                frame_id: m.frame_id,
+                body_frame_id: m.body_frame_id,
+                pose: m.pose.map(Into::into),
+                ..Message::default()
+            }
+        }
+        other => return Err(format!("{other} is not a Foxglove type")),
+    };
+    emit_poses(pose_type, &m, "timestamp.nanos", emit)
+}
+
+/// Decodes a JSON message of a Foxglove type, calling `emit` for each pose.
+pub(crate) fn decode_json(pose_type: PoseType, data: &[u8], emit: impl FnMut(Sample<'_>)) -> Result<(), String> {
+    let m: Message = serde_json::from_slice(data)
+        .map_err(|error| format!("invalid JSON for {pose_type}: {}", crate::printable::one_line(&error)))?;
+    emit_poses(pose_type, &m, "timestamp.nsec", emit)
+}
+
+/// Calls `emit` for each pose of `m`, a message of `pose_type` (`nanos`: the name of its stamps'
+/// nanoseconds field, for errors).
+fn emit_poses(pose_type: PoseType, m: &Message, nanos: &str, mut emit: impl FnMut(Sample<'_>)) -> Result<(), String> {
+    match pose_type {
+        PoseType::FoxglovePoseInFrame => {
+            let (position, orientation) = pose_parts(m.pose.as_ref());
+            emit(Sample { stamp_ns: m.stamp_ns(nanos)?, parent: &m.frame_id, child: "", position, orientation });
+        }
+        PoseType::FoxglovePosesInFrame => {
+            let stamp_ns = m.stamp_ns(nanos)?;
             for pose in &m.poses {
-                let (position, orientation) = json_pose(Some(pose));
+                let (position, orientation) = pose_parts(Some(pose));
                 emit(Sample { stamp_ns, parent: &m.frame_id, child: "", position, orientation });
             }
         }
-        PoseType::FoxgloveFrameTransform => emit(json_transform(&m)?),
+        PoseType::FoxgloveFrameTransform => emit(transform(m, nanos)?),
         PoseType::FoxgloveFrameTransforms => {
-            for (index, transform) in m.transforms.iter().enumerate() {
-                emit(json_transform(transform).map_err(|error| format!("transform {index}: {error}"))?);
+            for (index, m) in m.transforms.iter().enumerate() {
+                emit(transform(m, nanos).map_err(|error| format!("transform {index}: {error}"))?);
             }
         }
         PoseType::FoxgloveOdometry => {
-            let (position, orientation) = json_pose(m.pose.as_ref());
+            let (position, orientation) = pose_parts(m.pose.as_ref());
             emit(Sample {
-                stamp_ns: m.stamp_ns()?,
+                stamp_ns: m.stamp_ns(nanos)?,
                 parent: &m.frame_id,
                 child: &m.body_frame_id,
                 position,
@@ -306,13 +309,13 @@ pub(crate) fn decode_json(pose_type: PoseType, data: &[u8], mut emit: impl FnMut
     Ok(())
 }
 
-fn json_transform(m: &JsonMessage) -> Result<Sample<'_>, String> {
+fn transform<'a>(m: &'a Message, nanos: &str) -> Result<Sample<'a>, String> {
     Ok(Sample {
-        stamp_ns: m.stamp_ns()?,
+        stamp_ns: m.stamp_ns(nanos)?,
         parent: &m.parent_frame_id,
         child: &m.child_frame_id,
-        position: json_position(m.translation.as_ref()),
-        orientation: json_orientation(m.rotation.as_ref()),
+        position: position(m.translation.as_ref()),
+        orientation: orientation(m.rotation.as_ref()),
     })
 }
 
