@@ -557,15 +557,7 @@ fn ros1() {
         if std::mem::take(&mut first) {
             // A chunk of 64 MiB in 260 kB of lz4, on the topic not read: bounded memory.
             let mut extra = Vec::new();
-            logs::ros1_record(
-                &mut extra,
-                &[
-                    logs::ros1_field("op", &[2]),
-                    logs::ros1_field("conn", &1u32.to_le_bytes()),
-                    logs::ros1_field("time", &[0; 8]),
-                ],
-                &vec![0u8; 64 << 20],
-            );
+            logs::ros1_message_record(&mut extra, 1, (0, 0), &vec![0u8; 64 << 20]);
             let bomb = logs::ros1_bag_with(3, "lz4", 3, &extra);
             drop(extra);
             tally.case(&bases[0], &bomb, Some(3), "lz4 chunk of 64 MiB");

@@ -412,15 +412,7 @@ fn item12_an_mcap_zstd_bomb_is_read_in_bounded_memory() {
 fn item12_a_ros1_chunk_bomb_is_read_in_bounded_memory() {
     let size = 64usize << 20;
     let mut extra = Vec::new();
-    logs::ros1_record(
-        &mut extra,
-        &[
-            logs::ros1_field("op", &[2]),
-            logs::ros1_field("conn", &1u32.to_le_bytes()),
-            logs::ros1_field("time", &[0; 8]),
-        ],
-        &vec![0u8; size],
-    );
+    logs::ros1_message_record(&mut extra, 1, (0, 0), &vec![0u8; size]);
     let bag = logs::ros1_bag_with(5, "lz4", 5, &extra);
     drop(extra);
     assert!(bag.len() < size / 100, "{} bytes", bag.len());

@@ -1,8 +1,7 @@
 //! KITTI, EuRoC, libRSF (TUC) and pose-graph readers, the writers, and the real files of these
 //! formats in `shared/data`.
 
-use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::path::Path;
 
 use loops_io::{
     EdgeKind, Format, G2oOptions, IoError, PoseTable, ReadOptions, Timing, WriteError, read_euroc, read_kitti,
@@ -10,32 +9,7 @@ use loops_io::{
 };
 
 mod support;
-use support::real_data_dir;
-
-/// A fresh folder in the temp folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new() -> Self {
-        static COUNT: AtomicUsize = AtomicUsize::new(0);
-        let count = COUNT.fetch_add(1, Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!("loops-io-formats-{}-{count}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp folder");
-        Self(dir)
-    }
-
-    fn file(&self, name: &str, contents: &str) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::write(&path, contents).expect("temp file");
-        path
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+use support::{TempDir, real_data_dir};
 
 /// The message after the file's path.
 fn after_path(error: &IoError, path: &Path) -> String {

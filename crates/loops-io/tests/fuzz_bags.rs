@@ -10,7 +10,7 @@
 //! `LOOPS_FUZZ_SECONDS=600 cargo test --release -p loops-io --test fuzz_bags ros1_bags -- --nocapture`.
 //! The figures of the last long runs are in `tests/FUZZ.md`.
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -22,6 +22,7 @@ use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestCaseError, TestRng, TestRunner};
 
 mod support;
+use support::logs::{self, PoseStamped as Pose};
 use support::{ROS_TYPES, mutate, mutation, mutations};
 
 /// Runs `test` on values of `strategy`: 256 cases from `seed`, or rounds of them for
@@ -60,14 +61,6 @@ fn scratch(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-#[derive(Debug, Clone, PartialEq)]
-struct Pose {
-    stamp: (u32, u32),
-    frame: String,
-    position: [f64; 3],
-    orientation: [f64; 4],
-}
-
 fn pose() -> impl Strategy<Value = Pose> {
     (
         (0u32..i32::MAX as u32, 0u32..1_000_000_000),
@@ -75,7 +68,7 @@ fn pose() -> impl Strategy<Value = Pose> {
         proptest::array::uniform3(any::<f64>()),
         proptest::array::uniform4(any::<f64>()),
     )
-        .prop_map(|(stamp, frame, position, orientation)| Pose { stamp, frame, position, orientation })
+        .prop_map(|(stamp, frame, position, orientation)| Pose { seq: 3, stamp, frame, position, orientation })
 }
 
 fn stamp_ns(pose: &Pose) -> i64 {
@@ -97,42 +90,11 @@ fn check_error(result: loops_io::Result<impl Sized>, path: &Path) -> Result<(), 
 
 // ---- ROS 1 messages, and CDR messages compressed by rosbag2 ----------------------------------
 
-/// A ROS 1 `PoseStamped` (independent of the crate's reader).
-fn ros1_pose_stamped(pose: &Pose, seq: u32) -> Vec<u8> {
-    let mut out = Vec::new();
-    out.extend(seq.to_le_bytes());
-    out.extend(pose.stamp.0.to_le_bytes());
-    out.extend(pose.stamp.1.to_le_bytes());
-    out.extend((pose.frame.len() as u32).to_le_bytes());
-    out.extend(pose.frame.as_bytes());
-    for v in pose.position.iter().chain(&pose.orientation) {
-        out.extend(v.to_le_bytes());
-    }
-    out
-}
-
-/// A little-endian CDR `PoseStamped`.
-fn cdr_pose_stamped(pose: &Pose) -> Vec<u8> {
-    let mut out = vec![0, 1, 0, 0];
-    out.extend(pose.stamp.0.to_le_bytes());
-    out.extend(pose.stamp.1.to_le_bytes());
-    out.extend((pose.frame.len() as u32 + 1).to_le_bytes());
-    out.extend(pose.frame.as_bytes());
-    out.push(0);
-    while !(out.len() - 4).is_multiple_of(8) {
-        out.push(0);
-    }
-    for v in pose.position.iter().chain(&pose.orientation) {
-        out.extend(v.to_le_bytes());
-    }
-    out
-}
-
 #[test]
 fn messages() {
     let strategy = (pose(), mutations(), proptest::collection::vec(any::<u8>(), 0..300), any::<bool>());
     fuzz("ROS 1 and compressed CDR messages", 0x0051, strategy, |(pose, mutations, random, lz4)| {
-        let ros1 = ros1_pose_stamped(&pose, 3);
+        let ros1 = pose.ros1();
         let got = decode_poses(PoseType::PoseStamped, MessageEncoding::Ros1, &ros1)
             .map_err(|e| TestCaseError::fail(e.to_string()))?;
         prop_assert_eq!(got.len(), 1);
@@ -143,7 +105,7 @@ fn messages() {
         for cut in 0..ros1.len() {
             prop_assert!(decode_poses(PoseType::PoseStamped, MessageEncoding::Ros1, &ros1[..cut]).is_err());
         }
-        let cdr = cdr_pose_stamped(&pose);
+        let cdr = pose.cdr();
         let compressed = if lz4 {
             let mut encoder = lz4_flex::frame::FrameEncoder::new(Vec::new());
             encoder.write_all(&cdr).expect("lz4");
@@ -168,136 +130,10 @@ fn messages() {
 
 // ---- ROS 1 bags -----------------------------------------------------------------------------
 
-fn field(name: &str, value: &[u8]) -> Vec<u8> {
-    let mut out = ((name.len() + 1 + value.len()) as u32).to_le_bytes().to_vec();
-    out.extend(name.as_bytes());
-    out.push(b'=');
-    out.extend(value);
-    out
-}
-
-fn record(out: &mut Vec<u8>, header: &[Vec<u8>], data: &[u8]) {
-    let header: Vec<u8> = header.concat();
-    out.extend((header.len() as u32).to_le_bytes());
-    out.extend(&header);
-    out.extend((data.len() as u32).to_le_bytes());
-    out.extend(data);
-}
-
-fn time(pose: &Pose) -> Vec<u8> {
-    let mut out = pose.stamp.0.to_le_bytes().to_vec();
-    out.extend(pose.stamp.1.to_le_bytes());
-    out
-}
-
-/// A ROS 1 bag of `PoseStamped` on /pose (connection 0) and a string topic (connection 1), in
-/// chunks of `per_chunk` messages compressed by `compression`, with index data records after
-/// each chunk and connection and chunk info records at the end (independent of the crate's
-/// reader).
+/// A ROS 1 bag of `poses` ([`logs::ros1_bag_of`], independent of the crate's reader).
 fn ros1_bag(poses: &[Pose], compression: &str, per_chunk: usize) -> Vec<u8> {
-    let connection = |conn: u32, topic: &str, kind: &str| {
-        let mut out = Vec::new();
-        let data = [field("topic", topic.as_bytes()), field("type", kind.as_bytes()), field("md5sum", b"*")].concat();
-        record(
-            &mut out,
-            &[field("op", &[7]), field("conn", &conn.to_le_bytes()), field("topic", topic.as_bytes())],
-            &data,
-        );
-        out
-    };
-    let mut body = Vec::new();
-    let mut infos = Vec::new();
-    for (index, chunk_poses) in poses.chunks(per_chunk.max(1)).enumerate() {
-        let mut plain = Vec::new();
-        if index == 0 {
-            plain.extend(connection(0, "/pose", "geometry_msgs/PoseStamped"));
-            plain.extend(connection(1, "/chatter", "std_msgs/String"));
-        }
-        let mut offsets = Vec::new();
-        for (i, pose) in chunk_poses.iter().enumerate() {
-            offsets.push((pose.stamp, plain.len() as u32));
-            record(
-                &mut plain,
-                &[field("op", &[2]), field("conn", &0u32.to_le_bytes()), field("time", &time(pose))],
-                &ros1_pose_stamped(pose, i as u32),
-            );
-            record(
-                &mut plain,
-                &[field("op", &[2]), field("conn", &1u32.to_le_bytes()), field("time", &time(pose))],
-                b"\x02\0\0\0hi",
-            );
-        }
-        let data = match compression {
-            "bz2" => {
-                let mut out = Vec::new();
-                bzip2::read::BzEncoder::new(&plain[..], bzip2::Compression::fast()).read_to_end(&mut out).expect("bz2");
-                out
-            }
-            "lz4" => {
-                let mut encoder = lz4_flex::frame::FrameEncoder::new(Vec::new());
-                encoder.write_all(&plain).expect("lz4");
-                encoder.finish().expect("lz4")
-            }
-            _ => plain.clone(),
-        };
-        let chunk_pos = (13 + 4096 + body.len()) as u64;
-        record(
-            &mut body,
-            &[
-                field("op", &[5]),
-                field("compression", compression.as_bytes()),
-                field("size", &(plain.len() as u32).to_le_bytes()),
-            ],
-            &data,
-        );
-        for conn in [0u32, 1] {
-            let entries: Vec<u8> = offsets
-                .iter()
-                .flat_map(|((sec, nsec), offset)| {
-                    [sec.to_le_bytes(), nsec.to_le_bytes(), offset.to_le_bytes()].concat()
-                })
-                .collect();
-            record(
-                &mut body,
-                &[
-                    field("op", &[4]),
-                    field("ver", &1u32.to_le_bytes()),
-                    field("conn", &conn.to_le_bytes()),
-                    field("count", &(offsets.len() as u32).to_le_bytes()),
-                ],
-                &entries,
-            );
-        }
-        infos.push((chunk_pos, chunk_poses.len() as u32));
-    }
-    let index_pos = (13 + 4096 + body.len()) as u64;
-    body.extend(connection(0, "/pose", "geometry_msgs/PoseStamped"));
-    body.extend(connection(1, "/chatter", "std_msgs/String"));
-    for (chunk_pos, count) in &infos {
-        let data = [0u32.to_le_bytes(), count.to_le_bytes(), 1u32.to_le_bytes(), count.to_le_bytes()].concat();
-        record(
-            &mut body,
-            &[
-                field("op", &[6]),
-                field("ver", &1u32.to_le_bytes()),
-                field("chunk_pos", &chunk_pos.to_le_bytes()),
-                field("count", &2u32.to_le_bytes()),
-            ],
-            &data,
-        );
-    }
-    let mut out = b"#ROSBAG V2.0\n".to_vec();
-    let header = [
-        field("op", &[3]),
-        field("index_pos", &index_pos.to_le_bytes()),
-        field("conn_count", &2u32.to_le_bytes()),
-        field("chunk_count", &(infos.len() as u32).to_le_bytes()),
-    ];
-    let header_len: usize = header.iter().map(Vec::len).sum();
-    record(&mut out, &header, &vec![b' '; 4096 - 8 - header_len]);
-    assert_eq!(out.len(), 13 + 4096);
-    out.extend(body);
-    out
+    let poses: Vec<((u32, u32), Vec<u8>)> = poses.iter().map(|pose| (pose.stamp, pose.ros1())).collect();
+    logs::ros1_bag_of(&poses, compression, per_chunk, &[])
 }
 
 #[test]
@@ -335,38 +171,10 @@ fn ros1_bags() {
 
 // ---- rosbag2 sqlite3 files ------------------------------------------------------------------
 
-/// A rosbag2 sqlite3 file (the tables rosbag2 writes), of `PoseStamped` on /pose, compressed per
-/// message or not, and strings on /chatter.
+/// A rosbag2 sqlite3 file of `poses` at the times 0, 1, 2, ... ns ([`logs::sqlite_bag_of`]).
 fn sqlite_bag(path: &Path, poses: &[Pose], compress: bool) {
-    let _ = std::fs::remove_file(path);
-    let db = rusqlite::Connection::open(path).expect("sqlite");
-    db.execute_batch(
-        "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
-         CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
-             serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
-         CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL,
-             data BLOB NOT NULL);
-         CREATE INDEX timestamp_idx ON messages (timestamp ASC);
-         INSERT INTO topics VALUES (1, '/pose', 'geometry_msgs/msg/PoseStamped', 'cdr', ''),
-             (2, '/chatter', 'std_msgs/msg/String', 'cdr', '');",
-    )
-    .expect("tables");
-    for (i, pose) in poses.iter().enumerate() {
-        let mut data = cdr_pose_stamped(pose);
-        if compress {
-            data = zstd::bulk::compress(&data, 1).expect("zstd");
-        }
-        db.execute(
-            "INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?1, ?2)",
-            rusqlite::params![i as i64, data],
-        )
-        .expect("insert");
-        db.execute(
-            "INSERT INTO messages (topic_id, timestamp, data) VALUES (2, ?1, x'0001000003000000686900')",
-            [i as i64],
-        )
-        .expect("insert");
-    }
+    let poses: Vec<(i64, Vec<u8>)> = poses.iter().enumerate().map(|(i, pose)| (i as i64, pose.cdr())).collect();
+    logs::sqlite_bag_of(path, &poses, compress);
 }
 
 #[test]

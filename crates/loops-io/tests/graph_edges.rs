@@ -3,35 +3,11 @@
 //! vertices whose relative poses were written as edges with hand-written algebra.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use loops_io::{IoError, ReadOptions, RelativePose, Timing, read_pose_graph, read_pose_graph_with};
 
-/// A fresh folder in the temp folder, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new() -> Self {
-        static COUNT: AtomicUsize = AtomicUsize::new(0);
-        let count = COUNT.fetch_add(1, Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!("loops-io-graph-edges-{}-{count}", std::process::id()));
-        std::fs::create_dir_all(&dir).expect("temp folder");
-        Self(dir)
-    }
-
-    fn file(&self, name: &str, contents: &str) -> PathBuf {
-        let path = self.0.join(name);
-        std::fs::write(&path, contents).expect("temp file");
-        path
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
+mod support;
+use support::TempDir;
 
 /// A seeded xorshift generator of numbers in [0, 1).
 struct Rng(u64);
@@ -266,8 +242,6 @@ fn chained_se3_edges_give_back_the_vertices() {
         assert!((dot.abs() - 1.0).abs() < 1e-9, "pose {k}: {:?} {q:?}", orientations[k]);
     }
 }
-
-mod support;
 
 /// The six real pose graphs: every edge has a positive semi-definite 3 × 3 information matrix
 /// in g2o's order (TORO's reordered; read as written, the TORO matrices are not), and their

@@ -10,6 +10,7 @@ use loops_io::{IoError, McapOptions, PoseType, TimeSource, list_topics, read_mca
 use serde_json::Value;
 
 mod support;
+use support::logs;
 
 /// The fixture folder and its manifest, made once per script version (cached in the target
 /// folder), or `None` when Python cannot make them here.
@@ -324,21 +325,6 @@ fn duplicate_stamps_are_reported_at_their_messages() {
     assert!(message.contains(" of the chunk at offset "), "{message}");
 }
 
-/// The byte offsets of the top-level records: `(offset, opcode, body length)`.
-fn records(bytes: &[u8]) -> Vec<(usize, u8, usize)> {
-    let mut out = Vec::new();
-    let mut pos = 8;
-    while pos + 9 <= bytes.len() {
-        let len = u64::from_le_bytes(bytes[pos + 1..pos + 9].try_into().unwrap()) as usize;
-        out.push((pos, bytes[pos], len));
-        if bytes[pos] == 0x02 {
-            break;
-        }
-        pos += 9 + len;
-    }
-    out
-}
-
 /// Writes `bytes` as a new file beside the fixtures and reads it with the default options and
 /// as a topic list: both fail, and `read`'s error is returned.
 fn read_broken(dir: &Path, name: &str, bytes: &[u8]) -> IoError {
@@ -367,7 +353,10 @@ fn truncated_files_are_errors_at_an_offset() {
         let error = read_broken(dir, name, &bytes[..bytes.len() / 2]);
         let offset = error.offset().unwrap();
         assert!(offset < bytes.len() as u64 / 2, "{error}");
-        assert!(records(&bytes).iter().any(|&(pos, _, _)| pos as u64 == offset), "{error}: not a record's offset");
+        assert!(
+            logs::mcap_records(&bytes).iter().any(|&(pos, _, _)| pos as u64 == offset),
+            "{error}: not a record's offset"
+        );
     }
 }
 
@@ -393,7 +382,7 @@ fn a_chunk_with_a_wrong_crc_is_named_by_its_offset() {
     let (dir, _) = fixtures_or_skip!();
     for name in ["ros2_zstd.mcap", "ros2_lz4.mcap", "ros2_chunked.mcap", "json_zstd.mcap"] {
         let bytes = std::fs::read(dir.join(name)).unwrap();
-        let chunks: Vec<usize> = records(&bytes).iter().filter(|r| r.1 == 0x06).map(|r| r.0).collect();
+        let chunks: Vec<usize> = logs::mcap_records(&bytes).iter().filter(|r| r.1 == 0x06).map(|r| r.0).collect();
         assert!(chunks.len() > 3, "{name}: many small chunks");
         let chunk = chunks[2];
         // Chunk body: start, end (u64 each), uncompressed size (u64), then the CRC (u32).
@@ -406,7 +395,7 @@ fn a_chunk_with_a_wrong_crc_is_named_by_its_offset() {
             "{error}"
         );
         // A flipped byte in the records themselves: caught by the CRC or the decompressor.
-        let (_, _, len) = records(&bytes).into_iter().find(|r| r.0 == chunk).unwrap();
+        let (_, _, len) = logs::mcap_records(&bytes).into_iter().find(|r| r.0 == chunk).unwrap();
         let mut broken = bytes.clone();
         broken[chunk + 9 + len - 5] ^= 0x10;
         let error = read_broken(dir, name, &broken);
@@ -493,7 +482,7 @@ fn a_cdr_message_shorter_than_its_type() {
         if !chunked {
             let error = read_mcap(&path, &McapOptions::default()).unwrap_err();
             let message_offsets: Vec<u64> =
-                records(&bytes).iter().filter(|r| r.1 == 0x05).map(|r| r.0 as u64).collect();
+                logs::mcap_records(&bytes).iter().filter(|r| r.1 == 0x05).map(|r| r.0 as u64).collect();
             assert_eq!(error.offset(), Some(message_offsets[3]));
         }
     }

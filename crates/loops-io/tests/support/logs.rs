@@ -21,36 +21,70 @@ pub fn stamp(i: usize) -> (u32, u32) {
     (1_700_000_000 + i as u32, 250_000_000)
 }
 
+/// A `geometry_msgs/PoseStamped`, for the encoders below.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseStamped {
+    /// The ROS 1 header's sequence number (CDR has none).
+    pub seq: u32,
+    /// Seconds and nanoseconds.
+    pub stamp: (u32, u32),
+    pub frame: String,
+    pub position: [f64; 3],
+    pub orientation: [f64; 4],
+}
+
+impl PoseStamped {
+    /// Pose `i` of the logs here: frame `map`, identity orientation.
+    pub fn of(i: usize) -> Self {
+        let (position, orientation) = (position(i), [0.0, 0.0, 0.0, 1.0]);
+        Self { seq: i as u32, stamp: stamp(i), frame: "map".into(), position, orientation }
+    }
+
+    /// The message in little-endian CDR (after its 4-byte encapsulation header).
+    pub fn cdr(&self) -> Vec<u8> {
+        let mut out = vec![0, 1, 0, 0];
+        out.extend(self.stamp.0.to_le_bytes());
+        out.extend(self.stamp.1.to_le_bytes());
+        out.extend((self.frame.len() as u32 + 1).to_le_bytes());
+        out.extend(self.frame.as_bytes());
+        out.push(0);
+        while !(out.len() - 4).is_multiple_of(8) {
+            out.push(0);
+        }
+        for v in self.position.iter().chain(&self.orientation) {
+            out.extend(v.to_le_bytes());
+        }
+        out
+    }
+
+    /// The message in ROS 1's serialisation.
+    pub fn ros1(&self) -> Vec<u8> {
+        let mut out = self.seq.to_le_bytes().to_vec();
+        out.extend(self.stamp.0.to_le_bytes());
+        out.extend(self.stamp.1.to_le_bytes());
+        out.extend((self.frame.len() as u32).to_le_bytes());
+        out.extend(self.frame.as_bytes());
+        for v in self.position.iter().chain(&self.orientation) {
+            out.extend(v.to_le_bytes());
+        }
+        out
+    }
+}
+
 /// A little-endian CDR `geometry_msgs/PoseStamped` of pose `i` (frame `map`) with the stamp's
 /// nanoseconds `nanosec`.
 pub fn cdr_pose_stamped_with(i: usize, nanosec: u32) -> Vec<u8> {
-    let mut out = vec![0, 1, 0, 0];
-    out.extend(stamp(i).0.to_le_bytes());
-    out.extend(nanosec.to_le_bytes());
-    out.extend(4u32.to_le_bytes());
-    out.extend(b"map\0");
-    for v in position(i).iter().chain(&[0.0, 0.0, 0.0, 1.0]) {
-        out.extend(v.to_le_bytes());
-    }
-    out
+    PoseStamped { stamp: (stamp(i).0, nanosec), ..PoseStamped::of(i) }.cdr()
 }
 
 /// A little-endian CDR `geometry_msgs/PoseStamped` of pose `i`.
 pub fn cdr_pose_stamped(i: usize) -> Vec<u8> {
-    cdr_pose_stamped_with(i, stamp(i).1)
+    PoseStamped::of(i).cdr()
 }
 
 /// A ROS 1 `geometry_msgs/PoseStamped` of pose `i`.
 pub fn ros1_pose_stamped(i: usize) -> Vec<u8> {
-    let mut out = (i as u32).to_le_bytes().to_vec();
-    out.extend(stamp(i).0.to_le_bytes());
-    out.extend(stamp(i).1.to_le_bytes());
-    out.extend(3u32.to_le_bytes());
-    out.extend(b"map");
-    for v in position(i).iter().chain(&[0.0, 0.0, 0.0, 1.0]) {
-        out.extend(v.to_le_bytes());
-    }
-    out
+    PoseStamped::of(i).ros1()
 }
 
 /// How an MCAP file of the `mcap` crate's writer is laid out.
@@ -259,9 +293,14 @@ pub fn ros1_record(out: &mut Vec<u8>, header: &[Vec<u8>], data: &[u8]) {
     out.extend(data);
 }
 
-fn ros1_time(i: usize) -> Vec<u8> {
-    let (sec, nsec) = stamp(i);
-    [sec.to_le_bytes(), nsec.to_le_bytes()].concat()
+/// A ROS 1 message record (op 2) on connection `conn` at `time` (seconds, nanoseconds).
+pub fn ros1_message_record(out: &mut Vec<u8>, conn: u32, (sec, nsec): (u32, u32), data: &[u8]) {
+    let time = [sec.to_le_bytes(), nsec.to_le_bytes()].concat();
+    ros1_record(
+        out,
+        &[ros1_field("op", &[2]), ros1_field("conn", &conn.to_le_bytes()), ros1_field("time", &time)],
+        data,
+    );
 }
 
 fn ros1_connection(conn: u32, topic: &str, kind: &str) -> Vec<u8> {
@@ -299,9 +338,16 @@ pub fn ros1_compress(compression: &str, plain: &[u8]) -> Vec<u8> {
 /// one message record on `/chatter` (a large one, for a bomb) or nothing, goes first in the
 /// first chunk, indexed.
 pub fn ros1_bag_with(n: usize, compression: &str, per_chunk: usize, extra: &[u8]) -> Vec<u8> {
+    let poses: Vec<((u32, u32), Vec<u8>)> = (0..n).map(|i| (stamp(i), ros1_pose_stamped(i))).collect();
+    ros1_bag_of(&poses, compression, per_chunk, extra)
+}
+
+/// A ROS 1 bag as [`ros1_bag_with`] of the `PoseStamped` messages `poses`: each its stamp and
+/// its ROS 1 bytes (a string on `/chatter` at the same time after each).
+pub fn ros1_bag_of(poses: &[((u32, u32), Vec<u8>)], compression: &str, per_chunk: usize, extra: &[u8]) -> Vec<u8> {
     let mut body = Vec::new();
     let mut infos = Vec::new();
-    for (index, chunk) in (0..n).collect::<Vec<_>>().chunks(per_chunk.max(1)).enumerate() {
+    for (index, chunk) in poses.chunks(per_chunk.max(1)).enumerate() {
         let mut plain = Vec::new();
         // Per connection: the stamp and offset of each message.
         let mut offsets = [Vec::new(), Vec::new()];
@@ -313,20 +359,11 @@ pub fn ros1_bag_with(n: usize, compression: &str, per_chunk: usize, extra: &[u8]
                 plain.extend(extra);
             }
         }
-        for &i in chunk {
-            offsets[0].push((stamp(i), plain.len() as u32));
-            let time = ros1_time(i);
-            ros1_record(
-                &mut plain,
-                &[ros1_field("op", &[2]), ros1_field("conn", &0u32.to_le_bytes()), ros1_field("time", &time)],
-                &ros1_pose_stamped(i),
-            );
-            offsets[1].push((stamp(i), plain.len() as u32));
-            ros1_record(
-                &mut plain,
-                &[ros1_field("op", &[2]), ros1_field("conn", &1u32.to_le_bytes()), ros1_field("time", &time)],
-                b"\x02\0\0\0hi",
-            );
+        for (stamp, message) in chunk {
+            offsets[0].push((*stamp, plain.len() as u32));
+            ros1_message_record(&mut plain, 0, *stamp, message);
+            offsets[1].push((*stamp, plain.len() as u32));
+            ros1_message_record(&mut plain, 1, *stamp, b"\x02\0\0\0hi");
         }
         let data = ros1_compress(compression, &plain);
         let chunk_pos = (13 + 4096 + body.len()) as u64;
@@ -385,6 +422,7 @@ pub fn ros1_bag_with(n: usize, compression: &str, per_chunk: usize, extra: &[u8]
     ];
     let header_len: usize = header.iter().map(Vec::len).sum();
     ros1_record(&mut out, &header, &vec![b' '; 4096 - 8 - header_len]);
+    assert_eq!(out.len(), 13 + 4096);
     out.extend(body);
     out
 }
@@ -397,6 +435,14 @@ pub fn ros1_bag(n: usize, compression: &str, per_chunk: usize) -> Vec<u8> {
 /// A rosbag2 sqlite3 file at `path` (the tables rosbag2 writes): `n` poses on [`TOPIC`],
 /// compressed per message (zstd) or not, and strings on `/chatter`.
 pub fn sqlite_bag(path: &Path, n: usize, compress: bool) {
+    let poses: Vec<(i64, Vec<u8>)> =
+        (0..n).map(|i| (i64::from(stamp(i).0) * 1_000_000_000, cdr_pose_stamped(i))).collect();
+    sqlite_bag_of(path, &poses, compress);
+}
+
+/// A rosbag2 sqlite3 file as [`sqlite_bag`] of the `PoseStamped` messages `poses`: each its
+/// timestamp (ns) and its CDR bytes (a string on `/chatter` at the same time after each).
+pub fn sqlite_bag_of(path: &Path, poses: &[(i64, Vec<u8>)], compress: bool) {
     let _ = std::fs::remove_file(path);
     let db = rusqlite::Connection::open(path).expect("sqlite");
     db.execute_batch(
@@ -410,12 +456,8 @@ pub fn sqlite_bag(path: &Path, n: usize, compress: bool) {
              (2, '/chatter', 'std_msgs/msg/String', 'cdr', '');",
     )
     .expect("tables");
-    for i in 0..n {
-        let mut data = cdr_pose_stamped(i);
-        if compress {
-            data = zstd::bulk::compress(&data, 1).expect("zstd");
-        }
-        let time = i64::from(stamp(i).0) * 1_000_000_000;
+    for (time, data) in poses {
+        let data = if compress { zstd::bulk::compress(data, 1).expect("zstd") } else { data.clone() };
         db.execute(
             "INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?1, ?2)",
             rusqlite::params![time, data],

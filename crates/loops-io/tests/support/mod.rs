@@ -1,5 +1,5 @@
 //! Shared by the integration tests: byte-string mutations for the fuzz targets, the Python
-//! fixture builder of the bag and MCAP tests, and the real-data folder.
+//! fixture builder of the bag and MCAP tests, the real-data folder, and temp folders.
 #![allow(dead_code)] // each test crate uses a different part
 
 pub mod logs;
@@ -7,6 +7,7 @@ pub mod logs;
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use loops_io::PoseType;
 use proptest::prelude::*;
@@ -20,6 +21,10 @@ pub const ROS_TYPES: [PoseType; 5] = [
     PoseType::Odometry,
     PoseType::TfMessage,
 ];
+
+/// How the error of a KITTI file read as TUM ends: it says what the file looks like.
+pub const KITTI_READ_AS_TUM: &str = "line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 13: a KITTI pose \
+                                     line? read the file as kitti (format=\"kitti\", --format kitti)";
 
 /// A mutation of a byte string: truncate, flip a byte, overwrite 4 bytes, insert, remove.
 #[derive(Debug, Clone)]
@@ -187,5 +192,32 @@ pub fn real_data_dir() -> Option<PathBuf> {
     } else {
         eprintln!("skipping: no real data at {} (it lives beside the checkout in CI)", dir.display());
         None
+    }
+}
+
+/// A fresh folder in the temp folder, named after the test crate, removed when dropped.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    pub fn new() -> Self {
+        static COUNT: AtomicUsize = AtomicUsize::new(0);
+        let count = COUNT.fetch_add(1, Ordering::Relaxed);
+        let name = format!("loops-io-{}-{}-{count}", env!("CARGO_CRATE_NAME"), std::process::id());
+        let dir = std::env::temp_dir().join(name);
+        std::fs::create_dir_all(&dir).expect("temp folder");
+        Self(dir)
+    }
+
+    /// Writes the file `name` with `contents` in the folder.
+    pub fn file(&self, name: &str, contents: &str) -> PathBuf {
+        let path = self.0.join(name);
+        std::fs::write(&path, contents).expect("temp file");
+        path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
     }
 }
