@@ -12,6 +12,7 @@ use loops_core::{
     find_fleet_loops, find_loops, find_loops_separated, merge_tiles, plan_tiles, sample_fleet, scan_tile,
 };
 use proptest::prelude::*;
+use support::fleets::{adversarial_fleet, random_fleet, tour};
 
 /// The components of the dense cross mask of sessions `a` × `b` (rows × columns): labels per
 /// cell (u32::MAX outside), by breadth-first search over 4-neighbours.
@@ -197,17 +198,6 @@ fn check_fleet(sessions: &[Trajectory], gamma: f64, separation: Separation) -> R
     Ok(())
 }
 
-/// A session in the plane from a generated case (its first two coordinates, or (x, 0)).
-fn planar(traj: &Trajectory, shift: [f64; 2]) -> Trajectory {
-    let points: Vec<[f64; 2]> = (0..traj.len())
-        .map(|i| {
-            let p = traj.point(i);
-            [p[0] + shift[0], p.get(1).copied().unwrap_or(0.0) + shift[1]]
-        })
-        .collect();
-    Trajectory::from_points(traj.timestamps_s().to_vec(), &points).unwrap()
-}
-
 /// Tiles of every size, scanned apart and merged, give the fleet's components.
 fn check_tiles(sessions: &[Trajectory], gamma: f64, separation: Separation) -> Result<(), String> {
     let named: Vec<(String, Trajectory)> =
@@ -255,61 +245,21 @@ proptest! {
     #![proptest_config(support::config(96, 0xF1EE7))]
 
     #[test]
-    fn tiles_merge_to_the_fleet_result(
-        cases in prop::collection::vec(support::any_case(50), 1..4),
-        shifts in prop::collection::vec((-2.0..2.0f64, -2.0..2.0f64), 4),
-        separated in any::<bool>(),
-    ) {
-        let gamma = cases[0].gamma;
-        let sessions: Vec<Trajectory> = cases
-            .iter()
-            .zip(&shifts)
-            .map(|(c, &(x, y))| planar(&c.traj, [x * gamma, y * gamma]))
-            .collect();
-        let separation = if separated { Separation { path: 2.0 * gamma, time_s: 0.0 } } else { Separation::NONE };
-        check_tiles(&sessions, gamma, separation).map_err(TestCaseError::fail)?;
+    fn tiles_merge_to_the_fleet_result(fleet in random_fleet(50, 1..4, 2.0)) {
+        check_tiles(&fleet.sessions(), fleet.gamma(), fleet.separation()).map_err(TestCaseError::fail)?;
     }
 
     #[test]
-    fn random_fleets_match_the_references(
-        cases in prop::collection::vec(support::any_case(60), 2..5),
-        shifts in prop::collection::vec((-3.0..3.0f64, -3.0..3.0f64), 5),
-        separated in any::<bool>(),
-    ) {
-        let gamma = cases[0].gamma;
-        let sessions: Vec<Trajectory> = cases
-            .iter()
-            .zip(&shifts)
-            .map(|(c, &(x, y))| planar(&c.traj, [x * gamma, y * gamma]))
-            .collect();
-        let separation = if separated { Separation { path: 2.0 * gamma, time_s: 0.0 } } else { Separation::NONE };
-        check_fleet(&sessions, gamma, separation).map_err(TestCaseError::fail)?;
+    fn random_fleets_match_the_references(fleet in random_fleet(60, 2..5, 3.0)) {
+        check_fleet(&fleet.sessions(), fleet.gamma(), fleet.separation()).map_err(TestCaseError::fail)?;
     }
-}
-
-/// A figure-eight-ish loop in the plane, `n` poses, starting at time `t0`.
-fn tour(n: usize, t0: f64, offset: [f64; 2]) -> Trajectory {
-    let points: Vec<[f64; 2]> = (0..n)
-        .map(|k| {
-            let s = k as f64 / n as f64 * std::f64::consts::TAU * 1.5;
-            [offset[0] + 10.0 * s.cos(), offset[1] + 6.0 * (2.0 * s).sin()]
-        })
-        .collect();
-    Trajectory::from_points((0..n).map(|k| t0 + 0.5 * k as f64).collect(), &points).unwrap()
 }
 
 #[test]
 fn adversarial_fleets_match_the_references() {
-    let a = tour(120, 0.0, [0.0, 0.0]);
-    // The same path backwards in time.
-    let points: Vec<[f64; 2]> = (0..a.len()).rev().map(|k| [a.point(k)[0], a.point(k)[1]]).collect();
-    let reversed = Trajectory::from_points((0..a.len()).map(|k| 1e9 + k as f64).collect(), &points).unwrap();
-    let parked = Trajectory::from_points((0..80).map(|k| k as f64 * 0.1).collect(), &vec![[10.0, 0.0]; 80]).unwrap();
-    let parked_far = Trajectory::from_points((0..50).map(|k| k as f64).collect(), &vec![[1e4, 1e4]; 50]).unwrap();
-    let far = tour(90, 7.0, [5e3, -5e3]);
+    let sessions = adversarial_fleet(120, 80, 50, 90);
     for gamma in [0.5, 1.5, 4.0] {
         for separation in [Separation::NONE, Separation::path(3.0 * gamma)] {
-            let sessions = [a.clone(), a.clone(), reversed.clone(), parked.clone(), parked_far.clone(), far.clone()];
             check_fleet(&sessions, gamma, separation).unwrap_or_else(|e| panic!("γ = {gamma}, {separation}: {e}"));
             check_tiles(&sessions, gamma, separation)
                 .unwrap_or_else(|e| panic!("tiles, γ = {gamma}, {separation}: {e}"));

@@ -13,28 +13,7 @@ use loops_core::{
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-/// A session in the plane from a generated case (its first two coordinates, or (x, 0)).
-fn planar(traj: &Trajectory, shift: [f64; 2]) -> Trajectory {
-    let points: Vec<[f64; 2]> = (0..traj.len())
-        .map(|i| {
-            let p = traj.point(i);
-            [p[0] + shift[0], p.get(1).copied().unwrap_or(0.0) + shift[1]]
-        })
-        .collect();
-    Trajectory::from_points(traj.timestamps_s().to_vec(), &points).unwrap()
-}
-
-/// A figure-eight-ish loop in the plane, `n` poses, starting at time `t0`.
-fn tour(n: usize, t0: f64, offset: [f64; 2]) -> Trajectory {
-    let points: Vec<[f64; 2]> = (0..n)
-        .map(|k| {
-            let s = k as f64 / n as f64 * std::f64::consts::TAU * 1.5;
-            [offset[0] + 10.0 * s.cos(), offset[1] + 6.0 * (2.0 * s).sin()]
-        })
-        .collect();
-    Trajectory::from_points((0..n).map(|k| t0 + 0.5 * k as f64).collect(), &points).unwrap()
-}
+use support::fleets::{adversarial_fleet, random_fleet, tour};
 
 /// Every pair within γ of the fleet's plane (a ≤ b, j ≥ i within a session) lies in a tile:
 /// checked pair by pair.
@@ -167,35 +146,16 @@ proptest! {
     #![proptest_config(support::config(64, 0x7EE5))]
 
     #[test]
-    fn merge_trees_give_the_fleet_result(
-        cases in prop::collection::vec(support::any_case(40), 1..4),
-        shifts in prop::collection::vec((-2.0..2.0f64, -2.0..2.0f64), 4),
-        separated in any::<bool>(),
-        seed in any::<u64>(),
-    ) {
-        let gamma = cases[0].gamma;
-        let sessions: Vec<Trajectory> = cases
-            .iter()
-            .zip(&shifts)
-            .map(|(c, &(x, y))| planar(&c.traj, [x * gamma, y * gamma]))
-            .collect();
-        let separation = if separated { Separation { path: 2.0 * gamma, time_s: 0.0 } } else { Separation::NONE };
-        check_tree(&sessions, gamma, separation, seed).map_err(TestCaseError::fail)?;
+    fn merge_trees_give_the_fleet_result(fleet in random_fleet(40, 1..4, 2.0), seed in any::<u64>()) {
+        check_tree(&fleet.sessions(), fleet.gamma(), fleet.separation(), seed).map_err(TestCaseError::fail)?;
     }
 }
 
 #[test]
 fn adversarial_fleets_merge_in_trees() {
-    let a = tour(90, 0.0, [0.0, 0.0]);
-    // The same path backwards in time.
-    let points: Vec<[f64; 2]> = (0..a.len()).rev().map(|k| [a.point(k)[0], a.point(k)[1]]).collect();
-    let reversed = Trajectory::from_points((0..a.len()).map(|k| 1e9 + k as f64).collect(), &points).unwrap();
-    let parked = Trajectory::from_points((0..60).map(|k| k as f64 * 0.1).collect(), &vec![[10.0, 0.0]; 60]).unwrap();
-    let parked_far = Trajectory::from_points((0..40).map(|k| k as f64).collect(), &vec![[1e4, 1e4]; 40]).unwrap();
-    let far = tour(70, 7.0, [5e3, -5e3]);
+    let sessions = adversarial_fleet(90, 60, 40, 70);
     for (k, gamma) in [0.5, 1.5, 4.0].into_iter().enumerate() {
         for separation in [Separation::NONE, Separation::path(3.0 * gamma)] {
-            let sessions = [a.clone(), a.clone(), reversed.clone(), parked.clone(), parked_far.clone(), far.clone()];
             check_tree(&sessions, gamma, separation, k as u64)
                 .unwrap_or_else(|e| panic!("γ = {gamma}, {separation}: {e}"));
         }

@@ -8,6 +8,8 @@
 //! every pair within ε (a plain union-find over all n² pairs; the engine never looks at pairs).
 #![allow(dead_code)] // each test crate uses a different part
 
+pub mod fleets;
+
 use std::cmp::Ordering;
 use std::collections::VecDeque;
 use std::fmt;
