@@ -91,7 +91,9 @@ def main(argv: list[str]) -> int:
             f"{cell(peer, status_peer)} | {rate(peer)} | {ratio} |"
         )
         print(rows[-1], file=sys.stderr)
-    body = "\n".join(
+    harness.publish_section(
+        args.output,
+        "bag_compare",
         [
             "## Reading rosbag2 and ROS 1 bags",
             "",
@@ -107,10 +109,8 @@ def main(argv: list[str]) -> int:
             "",
             *harness.machine_facts(("numpy", "rosbags")),
             "",
-        ]
+        ],
     )
-    print(body)
-    harness.write_section(args.output, "bag_compare", body)
     return 0
 
 

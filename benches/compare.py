@@ -41,17 +41,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from harness import (
-    add_contender_options,
-    build_stamp,
-    cap_address_space,
-    load_average,
-    machine_facts,
-    measure,
-    run_process,
-    table_digest,
-    write_head,
-)
+import harness
 
 REPO = Path(__file__).resolve().parent.parent
 GAMMA_M = 40.0
@@ -146,12 +136,8 @@ def check_lattice(traj, gamma_m: float, keys, labels, count: int, pair_count: in
     """Whether the lattice partition equals ours; run after the measurements."""
     import numpy as np
 
-    import inexact_loops as il
-
     n = len(traj)
-    loops = il.find_loops(traj, gamma=gamma_m, separation=None)
-    runs = loops.runs()
-    ours_count = len(loops.components["id"])
+    loops, runs, ours_count = harness.reference_loops(traj, gamma_m)
     ours_pairs = (loops.pair_count - n) // 2
     problems = []
     if pair_count != ours_pairs:
@@ -188,13 +174,8 @@ def check_lattice(traj, gamma_m: float, keys, labels, count: int, pair_count: in
     return {"components": int(count), "cells": len(keys), "problems": problems}
 
 
-def digest(loops, components) -> str:
-    """A fingerprint of the runs and the component table (compares thread counts)."""
-    return table_digest(loops.runs(), components)
-
-
 def worker(args: argparse.Namespace) -> None:
-    cap_address_space(args.mem_limit_gb)
+    harness.cap_address_space(args.mem_limit_gb)
     import numpy as np  # noqa: F401  (imported before the baseline, like the contenders' own)
     import scipy.sparse.csgraph  # noqa: F401
     import scipy.spatial  # noqa: F401
@@ -227,20 +208,13 @@ def worker(args: argparse.Namespace) -> None:
     # One call on a 1 min drive first, so that one-time costs (lazy imports, first use of the
     # numpy C API, thread pools) count in no contender's time or memory.
     run(warm_up)
-    result, measured = measure(lambda: run(traj))
+    result, measured = harness.measure(lambda: run(traj))
     report: dict = {"status": "ok", "poses": len(traj)}
     report.update((key, measured[key]) for key in ("time_s", "peak_above_baseline_mb"))
     report.update((key, measured[key]) for key in ("baseline_mb", "peak_reset"))
     if args.worker.startswith("ours"):
         loops, components, _ = result
-        report.update(
-            pairs_upper=(loops.pair_count - len(traj)) // 2,
-            cells_upper=(loops.pair_count + len(traj)) // 2,
-            components=len(components["id"]),
-            nontrivial=int((~components["trivial"]).sum()),
-            runs=len(loops.runs()["row"]),
-            digest=digest(loops, components),
-        )
+        report.update(harness.result_facts(loops, components, len(traj)))
     elif args.worker == "query-pairs":
         report.update(pairs_upper=len(result))
     else:
@@ -275,23 +249,14 @@ def run_worker(
     contender: str, duration_s: float | None, args: argparse.Namespace, *, first: bool
 ) -> Outcome:
     """One repetition of `contender` in a fresh subprocess."""
-    command = [
-        sys.executable,
-        str(Path(__file__).resolve()),
+    options = [
         "--worker",
         contender,
         "--duration-s",
         str(-1.0 if duration_s is None else duration_s),
-        "--gamma-m",
-        str(args.gamma_m),
-        "--mem-limit-gb",
-        str(args.mem_limit_gb),
-        *([] if first else ["--skip-check"]),
     ]
-    print(f"  {CONTENDERS[contender]} ...", end=" ", flush=True, file=sys.stderr)
-    status, report, stderr = run_process(
-        command, timeout_s=args.timeout_s, mem_limit_gb=args.mem_limit_gb
-    )
+    options += ["--gamma-m", str(args.gamma_m), *([] if first else ["--skip-check"])]
+    status, report, stderr = harness.run_worker(__file__, CONTENDERS[contender], options, args)
     if status != "ok":
         if status.startswith("failed"):
             sys.stderr.write("failed\n" + stderr)
@@ -456,7 +421,7 @@ def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str
         f"(this run: `{' '.join(['python', 'benches/compare.py', *sys.argv[1:]])}`); "
         "do not edit by hand, rerun the script.",
         "",
-        *machine_facts(),
+        *harness.machine_facts(),
         "",
         "## Method",
         "",
@@ -511,7 +476,7 @@ def parse_args() -> argparse.Namespace:
     parser.add_argument(
         "--quick", action="store_true", help="only the 30 min drive, one repetition (a smoke test)"
     )
-    add_contender_options(
+    harness.add_contender_options(
         parser,
         repeat_help="repetitions per contender; the best counts (default 3)",
         output_help="where to write the report (default: BENCHMARKS.md at the repo root)",
@@ -533,12 +498,14 @@ def parse_args() -> argparse.Namespace:
 
 
 def main() -> int:
-    args = parse_args()
-    if args.worker:
-        worker(args)
-        return 0
-    load_at_start = load_average()
-    build_at_start = build_stamp()
+    return harness.run_script(parse_args(), worker, drive)
+
+
+def drive(args: argparse.Namespace) -> int:
+    """Runs the contenders on each scenario in workers, checks their results against each other and
+    writes the head of the report."""
+    load_at_start = harness.load_average()
+    build_at_start = harness.build_stamp()
     scenarios = (
         [] if args.quick else [Scenario("Urban drive, 2.1 h (reference scenario)", FULL_DURATION_S)]
     )
@@ -547,17 +514,12 @@ def main() -> int:
     for scenario in scenarios:
         run_scenario(scenario, contenders, args)
         check(scenario)
-    text = report(scenarios, args, (load_at_start, load_average()))
+    text = report(scenarios, args, (load_at_start, harness.load_average()))
     print(text)
     problems = [f"{s.title}: {problem}" for s in scenarios for problem in s.problems]
-    if build_stamp() != build_at_start:
-        problems.append(f"{build_at_start[0]} was rebuilt during the run; rerun")
-    if problems:
-        print("RESULTS DIFFER; not writing " + str(args.output), file=sys.stderr)
-        for problem in problems:
-            print("  " + problem, file=sys.stderr)
+    if harness.refused(problems + harness.rebuild_problems(build_at_start), args.output):
         return 1
-    write_head(args.output, text)
+    harness.write_head(args.output, text)
     print(f"wrote {args.output} (the text before its first <!-- ... --> marker)", file=sys.stderr)
     return 0
 

@@ -1,10 +1,14 @@
-"""Shared pieces of the benchmark harnesses (``compare.py``, ``scale.py``).
+"""Shared pieces of the benchmark harnesses (``compare.py``, ``scale.py``, ``cluster_compare.py``,
+``bag_compare.py``, ``mcap_compare.py``, ...).
 
 - Worker side: the memory cap (``RLIMIT_AS``), the resident-set readings from
-  ``/proc/self/status`` and the reset of the peak through ``/proc/self/clear_refs``, and
-  :func:`measure`, which times one call and reports its peak resident set above the baseline.
+  ``/proc/self/status`` and the reset of the peak through ``/proc/self/clear_refs``,
+  :func:`measure`, which times one call and reports its peak resident set above the baseline,
+  and what the drivers compare of our result (:func:`result_facts`, :func:`reference_loops`).
 - Driver side: :func:`run_process` runs one worker under a timeout and classifies how it ended
-  (finished, out of memory, timed out, failed).
+  (finished, out of memory, timed out, failed); :func:`run_worker` runs one of the calling
+  script's workers so; :func:`refused` stops a report whose results differ or whose compiled
+  module was rebuilt during the run (:func:`rebuild_problems`).
 - The report: the machine's facts, and the marker convention of ``BENCHMARKS.md``. A line
   ``<!-- name -->`` starts the section that the script ``name`` owns, up to the next marker line
   or the end of the file. :func:`write_head` replaces the text before the first marker (the
@@ -123,6 +127,30 @@ def table_digest(*tables: dict) -> str:
     return hasher.hexdigest()
 
 
+def result_facts(loops, components: dict, poses: int) -> dict:
+    """What the drivers compare of our result on `poses` poses: the pairs and cells of S_γ's
+    upper half, its components and the non-trivial ones, its runs, and a digest of the runs and
+    the component table (the same for every thread count)."""
+    runs = loops.runs()
+    return {
+        "pairs_upper": (loops.pair_count - poses) // 2,
+        "cells_upper": (loops.pair_count + poses) // 2,
+        "components": len(components["id"]),
+        "nontrivial": int((~components["trivial"]).sum()),
+        "runs": len(runs["row"]),
+        "digest": table_digest(runs, components),
+    }
+
+
+def reference_loops(traj, gamma_m: float) -> tuple[object, dict, int]:
+    """Our S_γ of `traj` without a separation (the paper's), its runs and its number of
+    components: what a peer's partition is checked against."""
+    import inexact_loops as il
+
+    loops = il.find_loops(traj, gamma=gamma_m, separation=None)
+    return loops, loops.runs(), len(loops.components["id"])
+
+
 # --------------------------------------------------------------------------------------------
 # Driver side.
 # --------------------------------------------------------------------------------------------
@@ -206,6 +234,50 @@ def run_process(
             return f"crashed ({name})", None, done.stderr
         return f"failed (exit status {done.returncode})", None, done.stderr
     return "ok", report, done.stderr
+
+
+def run_script(
+    args: argparse.Namespace,
+    worker: Callable[[argparse.Namespace], None],
+    driver: Callable[[argparse.Namespace], int],
+) -> int:
+    """The entry of a script that is a driver and its own workers: `worker(args)` in a worker
+    process (``--worker`` given; exit status 0), else `driver(args)` and its exit status."""
+    if args.worker:
+        worker(args)
+        return 0
+    return driver(args)
+
+
+def run_worker(
+    script: str, label: str, options: list[str], args: argparse.Namespace
+) -> tuple[str, dict | None, str]:
+    """Runs `script` (the calling driver) as a worker in a fresh process, with `options` and
+    ``--mem-limit-gb``, under the ``--timeout-s`` and ``--mem-limit-gb`` of `args`, after
+    ``label ...`` on stderr; returns what :func:`run_process` returns."""
+    command = [sys.executable, str(Path(script).resolve()), *options]
+    command += ["--mem-limit-gb", str(args.mem_limit_gb)]
+    print(f"  {label} ...", end=" ", flush=True, file=sys.stderr)
+    return run_process(command, timeout_s=args.timeout_s, mem_limit_gb=args.mem_limit_gb)
+
+
+def rebuild_problems(build_at_start: tuple[str, float]) -> list[str]:
+    """A problem when the compiled module was rebuilt since `build_at_start` (its
+    :func:`build_stamp` then): the run measured two builds."""
+    if build_stamp() == build_at_start:
+        return []
+    return [f"{build_at_start[0]} was rebuilt during the run; rerun"]
+
+
+def refused(problems: list[str], output: Path) -> bool:
+    """Whether the report must not be written to `output` because of `problems` (results that
+    differ, a rebuild), which are then printed on stderr."""
+    if not problems:
+        return False
+    print(f"RESULTS DIFFER; not writing {output}", file=sys.stderr)
+    for problem in problems:
+        print("  " + problem, file=sys.stderr)
+    return True
 
 
 def load_average() -> str:
@@ -341,3 +413,10 @@ def write_head(path: Path, head: str) -> None:
 def write_section(path: Path, name: str, body: str, *, first: bool = False) -> None:
     """Replaces (or adds) the section of marker `name` in `path`; keeps everything else."""
     update_file(path, lambda existing: replace_section(existing, name, body, first=first))
+
+
+def publish_section(path: Path, name: str, lines: list[str]) -> None:
+    """Prints the section of `lines` and writes it as the section of marker `name` in `path`."""
+    body = "\n".join(lines)
+    print(body)
+    write_section(path, name, body)

@@ -70,7 +70,9 @@ def main(argv: list[str]) -> int:
         f"| `mcap` + `mcap-ros2-support` (one run) | {peer:.1f} | {count / peer:,.0f} | "
         f"{peer / ours:.0f}× |",
     ]
-    body = "\n".join(
+    harness.publish_section(
+        args.output,
+        "mcap_compare",
         [
             "## Reading MCAP logs",
             "",
@@ -80,10 +82,8 @@ def main(argv: list[str]) -> int:
             "",
             *rows,
             "",
-        ]
+        ],
     )
-    print(body)
-    harness.write_section(args.output, "mcap_compare", body)
     return 0
 
 
