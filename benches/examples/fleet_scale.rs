@@ -19,17 +19,10 @@
 
 use std::time::Instant;
 
+use loops_benches::peak_rss_mb;
 use loops_core::{
     Districts, Euclidean, FleetOptions, Pruning, UrbanDrive, UrbanFleet, find_fleet_loops, find_loops, with_threads,
 };
-
-fn peak_rss_mb() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(str::to_owned))
-        .and_then(|l| l.split_whitespace().nth(1).and_then(|kb| kb.parse::<f64>().ok()))
-        .map_or(f64::NAN, |kb| kb / 1024.0)
-}
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -1,4 +1,4 @@
-//! Shared, seeded inputs of the inexact-loops benchmarks.
+//! Shared, seeded inputs of the inexact-loops benchmarks, and what the examples measure.
 
 use loops_core::{Districts, Trajectory, UrbanDrive};
 
@@ -29,4 +29,14 @@ pub fn district_drive_1e6() -> Trajectory {
     .generate()
     .expect("valid district drive parameters")
     .trajectory
+}
+
+/// The peak resident set of this process so far (`VmHWM` of `/proc/self/status`), MB; NaN where
+/// it cannot be read.
+pub fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(str::to_owned))
+        .and_then(|l| l.split_whitespace().nth(1).and_then(|kb| kb.parse::<f64>().ok()))
+        .map_or(f64::NAN, |kb| kb / 1024.0)
 }
