@@ -5,6 +5,8 @@ use loops_core::{SampleQuality, SamplerKind};
 
 /// The counts and measures of a [`SampleQuality`] (P1, P2, P3), named for the sampler, as
 /// `summary.json` holds them; the per-component and per-sample lists are left out.
+/// Its fields copy [`SampleQuality`]'s on purpose: the core's serde form holds those lists too,
+/// and `summary.json` keeps this layout whatever the core adds.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct QualitySummary {
