@@ -79,6 +79,7 @@ mod spec;
 mod sublevel;
 mod synth;
 mod tile;
+mod tile_draw;
 mod trajectory;
 mod union_find;
 mod verdict;
@@ -110,7 +111,10 @@ pub use plane::{
 };
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
 pub use quality::{MissedComponent, SampleQuality, sample_quality};
-pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
+pub use sample::{
+    ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, DrawStats, DrawnPair, KeyedDraw, Sample, Sampler,
+    SamplerKind, Samples, draw_stats, pair_key, sample_clusters, sample_loops,
+};
 pub use separation::Separation;
 pub use spec::MetricSpec;
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
@@ -118,6 +122,9 @@ pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
 pub use tile::{
     EdgeRun, MergedComponent, MergedLoops, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileComponent, TileMerge,
     TileSummary, merge_tiles, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
+};
+pub use tile_draw::{
+    TileDuration, draw_session_tile, scan_session_tile_with_duration, session_loop_duration, tile_requests,
 };
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 pub use verdict::{PairVerdict, Verdict};

@@ -71,6 +71,7 @@ use crate::component::{LoopComponent, ROWS_PER_LABEL_TASK, for_each_overlap, lab
 use crate::error::{Error, Result};
 use crate::fleet::{Fleet, FleetComponent, SessionPair, localize, session_pairs_of};
 use crate::metric::Metric;
+use crate::sample::DrawStats;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, path_length};
@@ -78,14 +79,14 @@ use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
 
 /// Maps an index of a tile's piece to its fleet index, or to its time on its session's clock.
-type FromPiece<'a, T> = Box<dyn Fn(usize) -> T + 'a>;
+type FromPiece<'a, T> = Box<dyn Fn(usize) -> T + Sync + 'a>;
 
 /// Poses per leaf of a tile's ball hierarchy.
 const LEAF_SIZE: usize = 16;
 
 /// The version of the byte format of [`TileSummary::to_bytes`], [`TileMerge::to_bytes`] and
 /// [`SessionBlocks::to_bytes`]; bytes of another version are refused.
-pub const TILE_FORMAT_VERSION: u16 = 1;
+pub const TILE_FORMAT_VERSION: u16 = 2;
 
 /// Rows `rows` of session `sessions[0]` against columns `columns` of session `sessions[1]`,
 /// both ranges of fleet indices within their sessions; `sessions[0] ≤ sessions[1]`, and within
@@ -528,6 +529,49 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
     separation: Separation,
     tile: &Tile,
 ) -> Result<TileSummary> {
+    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
+    Ok(summary_of(&scanned, metric, tile))
+}
+
+/// The summary of a scanned tile.
+pub(crate) fn summary_of<M: Metric + ?Sized>(scanned: &ScannedTile<'_>, metric: &M, tile: &Tile) -> TileSummary {
+    let ScannedTile { piece, piece_starts, rows, set, to_fleet, to_time } = scanned;
+    let rows = *rows;
+    let [a, b] = tile.sessions;
+    let to_piece = |f: usize| {
+        if a == b || tile.rows.contains(&f) { f - tile.rows.start } else { rows + f - tile.columns.start }
+    };
+    let mut summary = summarise(tile, piece, metric, set, piece_starts, rows, &**to_fleet);
+    for c in &mut summary.components {
+        c.times_s = [
+            [to_time(to_piece(c.rows[0])), to_time(to_piece(c.rows[1]))],
+            [to_time(to_piece(c.columns[0])), to_time(to_piece(c.columns[1]))],
+        ];
+    }
+    summary
+}
+
+/// A tile's poses as one small trajectory (the rows, then the columns; or, within one session,
+/// the stretch from its first row to its last column) and its cells of S_γ, with the maps from
+/// the piece's indices to fleet indices and to session times.
+pub(crate) struct ScannedTile<'a> {
+    pub(crate) piece: Trajectory,
+    pub(crate) piece_starts: Vec<usize>,
+    pub(crate) rows: usize,
+    pub(crate) set: SublevelSet,
+    pub(crate) to_fleet: FromPiece<'a, usize>,
+    pub(crate) to_time: FromPiece<'a, f64>,
+}
+
+/// Checks a tile against its sessions and scans its cells (see [`scan_session_tile`]).
+pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
+    sessions: [&'a Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    tile: &'a Tile,
+) -> Result<ScannedTile<'a>> {
     check_gamma(gamma)?;
     separation.check()?;
     let [a, b] = tile.sessions;
@@ -615,17 +659,7 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
         &piece_starts,
         rows,
     )?;
-    let to_piece = |f: usize| {
-        if a == b || tile.rows.contains(&f) { f - tile.rows.start } else { rows + f - tile.columns.start }
-    };
-    let mut summary = summarise(tile, &piece, metric, &set, &piece_starts, rows, &*to_fleet);
-    for c in &mut summary.components {
-        c.times_s = [
-            [to_time(to_piece(c.rows[0])), to_time(to_piece(c.rows[1]))],
-            [to_time(to_piece(c.columns[0])), to_time(to_piece(c.columns[1]))],
-        ];
-    }
-    Ok(summary)
+    Ok(ScannedTile { piece, piece_starts, rows, set, to_fleet, to_time })
 }
 
 /// The provisional components of a tile's set and its edge runs.
@@ -775,6 +809,8 @@ struct Cut {
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TileMerge {
     tiles: Vec<Tile>,
+    /// Per tile, the merge's component of each of its provisional components.
+    labels: Vec<Vec<u32>>,
     components: Vec<MergeComponent>,
     edges: Vec<OpenEdge>,
     cuts: Vec<Cut>,
@@ -804,6 +840,7 @@ impl TileMerge {
         summary.check().map_err(|problem| Error::InconsistentTiles { problem })?;
         let sessions = summary.tile.sessions;
         Ok(Self {
+            labels: vec![(0..summary.components.len() as u32).collect()],
             edges: summary.edges.into_iter().map(|run| OpenEdge { tile: 0, run }).collect(),
             components: summary.components.into_iter().map(|stats| MergeComponent { sessions, stats }).collect(),
             tiles: vec![summary.tile],
@@ -829,6 +866,9 @@ impl TileMerge {
     /// Indices and labels refer to what exists.
     fn check(&self) -> std::result::Result<(), String> {
         let (tiles, labels) = (self.tiles.len(), self.components.len());
+        if self.labels.len() != tiles || self.labels.iter().flatten().any(|&l| l as usize >= labels) {
+            return Err(format!("the labels of {} tiles name {labels} components", self.labels.len()));
+        }
         if let Some(t) = self.tiles.iter().position(|t| !t.is_well_formed()) {
             return Err(format!("tile {:?} is empty, below the diagonal or has sessions a > b", self.tiles[t]));
         }
@@ -872,6 +912,7 @@ impl TileMerge {
     pub fn merge(parts: Vec<Self>) -> Result<Self> {
         let inconsistent = |problem: String| Error::InconsistentTiles { problem };
         let (mut tiles, mut origin, mut components) = (Vec::new(), Vec::new(), Vec::new());
+        let mut tile_labels: Vec<Vec<u32>> = Vec::new();
         let mut edges = Vec::new();
         // Cuts with the part that made them (None: this merge).
         let mut cuts: Vec<(Cut, Option<usize>)> = Vec::new();
@@ -886,6 +927,7 @@ impl TileMerge {
             let (tb, lb) = (tile_base as u32, label_base as u32);
             origin.extend(std::iter::repeat_n(p, part.tiles.len()));
             tiles.extend(part.tiles);
+            tile_labels.extend(part.labels.into_iter().map(|map| map.into_iter().map(|l| l + lb).collect()));
             components.extend(part.components);
             edges.extend(
                 part.edges
@@ -1043,7 +1085,10 @@ impl TileMerge {
                 keep.then(|| Cut { label: parent[c.label as usize], ..c })
             })
             .collect();
-        Ok(Self { tiles, components, edges: open, cuts: kept })
+        for map in &mut tile_labels {
+            map.iter_mut().for_each(|l| *l = parent[*l as usize]);
+        }
+        Ok(Self { tiles, labels: tile_labels, components, edges: open, cuts: kept })
     }
 
     /// The fleet's components from the merge of every tile of a plan, numbered as
@@ -1055,10 +1100,15 @@ impl TileMerge {
     /// [`Error::InconsistentTiles`] for counts no set of cells has (an Euler number above 1:
     /// summaries that do not belong together).
     pub fn finish(&self) -> Result<MergedLoops> {
-        let mut order: Vec<&MergeComponent> = self.components.iter().collect();
-        order.sort_unstable_by_key(|c| c.stats.first);
+        let mut order: Vec<usize> = (0..self.components.len()).collect();
+        order.sort_unstable_by_key(|&k| self.components[k].stats.first);
+        let mut ids = vec![0u32; order.len()];
+        for (id, &k) in order.iter().enumerate() {
+            ids[k] = id as u32;
+        }
         let components = order
             .into_iter()
+            .map(|k| &self.components[k])
             .enumerate()
             .map(|(id, m)| {
                 let c = &m.stats;
@@ -1094,10 +1144,17 @@ impl TileMerge {
                     closest_pair: c.closest,
                     closest_distance: c.closest_distance,
                 };
-                Ok(MergedComponent { component, sessions: m.sessions, times_s })
+                let draw = DrawStats {
+                    trivial: c.trivial,
+                    rows: c.rows,
+                    pairs: c.pairs.saturating_sub(c.diagonal_cells),
+                    closest_pair: c.closest,
+                };
+                Ok(MergedComponent { component, sessions: m.sessions, times_s, draw })
             })
             .collect::<Result<Vec<_>>>()?;
-        Ok(MergedLoops { components })
+        let labels = self.labels.iter().map(|map| map.iter().map(|&l| ids[l as usize]).collect::<Vec<u32>>()).collect();
+        Ok(MergedLoops { components, tiles: self.tiles.clone(), labels })
     }
 
     /// The partial merge as bytes (as [`TileSummary::to_bytes`], another tag).
@@ -1129,15 +1186,39 @@ pub struct MergedComponent {
     /// The times of its extents: `[[t(i_range[0]), t(i_range[1])], [t′(j_range[0]),
     /// t′(j_range[1])]]`, seconds, each on its session's own clock.
     pub times_s: [[f64; 2]; 2],
+    /// What a keyed draw of samples needs of it ([`KeyedDraw`](crate::KeyedDraw)).
+    pub draw: DrawStats,
 }
 
 /// The fleet's loop components from merged tiles ([`TileMerge::finish`]), by id.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MergedLoops {
     components: Vec<MergedComponent>,
+    tiles: Vec<Tile>,
+    labels: Vec<Vec<u32>>,
 }
 
 impl MergedLoops {
+    /// The tiles merged, in the merge's order.
+    pub fn tiles(&self) -> &[Tile] {
+        &self.tiles
+    }
+
+    /// The component id of each provisional component of tile `t` (an index in
+    /// [`tiles`](Self::tiles)), as the tile's summary numbered them: what a tile's keyed draw
+    /// needs to name its runs' components.
+    ///
+    /// # Panics
+    /// If `t` is not a tile of the merge.
+    pub fn tile_labels(&self, t: usize) -> &[u32] {
+        &self.labels[t]
+    }
+
+    /// The keyed draws' statistics of every component, by id.
+    pub fn draw_stats(&self) -> Vec<DrawStats> {
+        self.components.iter().map(|m| m.draw).collect()
+    }
+
     /// The components, by id.
     pub fn components(&self) -> &[MergedComponent] {
         &self.components
@@ -1206,7 +1287,7 @@ const TAGS: [([u8; 4], &str); 3] = [(*b"ILsb", "session blocks"), (*b"ILts", "ti
 
 /// `value` after its tag and the format version.
 #[cfg(feature = "serde")]
-fn encode<T: serde::Serialize>(tag: [u8; 4], value: &T) -> Vec<u8> {
+pub(crate) fn encode<T: serde::Serialize>(tag: [u8; 4], value: &T) -> Vec<u8> {
     let mut bytes = tag.to_vec();
     bytes.extend_from_slice(&TILE_FORMAT_VERSION.to_le_bytes());
     let body = rmp_serde::to_vec(value).expect("MessagePack writes the tile types to a Vec");
@@ -1216,7 +1297,7 @@ fn encode<T: serde::Serialize>(tag: [u8; 4], value: &T) -> Vec<u8> {
 
 /// The value of [`encode`]'s bytes, checking the tag, the version and that every byte is used.
 #[cfg(feature = "serde")]
-fn decode<T: serde::de::DeserializeOwned>(tag: [u8; 4], what: &'static str, bytes: &[u8]) -> Result<T> {
+pub(crate) fn decode<T: serde::de::DeserializeOwned>(tag: [u8; 4], what: &'static str, bytes: &[u8]) -> Result<T> {
     let corrupt = |reason: String| Error::InvalidState { what, reason };
     if bytes.len() < 6 {
         return Err(corrupt(format!("{} bytes, fewer than the 6 of its tag and version", bytes.len())));

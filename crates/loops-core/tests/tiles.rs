@@ -203,7 +203,10 @@ fn bytes_round_trip_and_fail_clearly() {
     let mut newer = bytes.clone();
     newer[4..6].copy_from_slice(&(TILE_FORMAT_VERSION + 1).to_le_bytes());
     let message = corrupt_message(TileSummary::from_bytes(&newer));
-    assert!(message.contains(&format!("format version {}; this build reads version 1", TILE_FORMAT_VERSION + 1)));
+    assert!(message.contains(&format!(
+        "format version {}; this build reads version {TILE_FORMAT_VERSION}",
+        TILE_FORMAT_VERSION + 1
+    )));
     assert!(corrupt_message(TileSummary::from_bytes(b"PK\x03\x04rest")).contains("start with \"PK\\u{3}\\u{4}\""));
     // A label that names no component, and a run outside its tile.
     let mut bad = summary.clone();

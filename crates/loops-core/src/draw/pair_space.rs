@@ -62,11 +62,6 @@ impl PairSpace {
         self.ends.last().copied().unwrap_or(0)
     }
 
-    /// The segments, in order.
-    pub(crate) fn segments(&self) -> &[Segment] {
-        &self.segments
-    }
-
     /// Pair number `k < len()`. O(log segments).
     #[cfg(test)]
     pub(crate) fn pair(&self, k: u64) -> [u32; 2] {

@@ -1,16 +1,11 @@
-//! The dispersed σ_ρ: a group's samples spread evenly over its rows, each the row's preferred
-//! item (its closest pair, or its best-scored detection); and the closest-first sampler, which
-//! takes the group's best item first and spreads the rest the same way.
+//! The dispersed σ_ρ on detection clusters: a cluster's samples spread evenly over its rows, each
+//! the row's best-scored detection; and the closest-first sampler, which takes the cluster's
+//! best detection first and spreads the rest the same way. (On exact components both are keyed
+//! draws: `keyed`.)
 
 use std::collections::BTreeSet;
 
 use rand::{Rng, RngExt};
-
-use crate::draw::PairSpace;
-use crate::error::Result;
-use crate::loops::Loops;
-use crate::metric::Metric;
-use crate::trajectory::Trajectory;
 
 /// Evenly spaced picks along a cluster: `q` positions stratified over its rows (distinct t,
 /// time order), each the best-scored detection of its row (the middle one without scores);
@@ -104,76 +99,6 @@ fn spread<R: Rng + ?Sized>(
         chosen.insert(p);
     }
     chosen.into_iter().collect()
-}
-
-/// In a run on the diagonal (whose closest pair is the pose itself): the closest column after
-/// the run's farthest point from x_i, i.e. where the path comes back along the same way (the
-/// last column when it never does).
-fn return_column<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, i: usize, start: u32, end: u32) -> u32 {
-    let x = traj.point(i);
-    let distances: Vec<f64> = (start..=end).map(|j| metric.distance(x, traj.point(j as usize))).collect();
-    let farthest = distances.iter().enumerate().fold(0, |best, (k, &d)| if d > distances[best] { k } else { best });
-    let back = distances[farthest..]
-        .iter()
-        .enumerate()
-        .fold(farthest, |best, (k, &d)| if d < distances[best] { farthest + k } else { best });
-    start + back as u32
-}
-
-/// The dispersed σ_ρ on one exact component: rows evenly spaced, each its closest pair. With
-/// `first` (the closest-first sampler), the component's closest pair (the closest of its rows'
-/// closest pairs, the first of equals in (i, j) order) is always one of them.
-pub(super) fn disperse_pairs<M: Metric + ?Sized, R: Rng + ?Sized>(
-    space: &PairSpace,
-    q: u64,
-    traj: &Trajectory,
-    metric: &M,
-    loops: &Loops,
-    first: bool,
-    rng: &mut R,
-) -> Result<Vec<[u32; 2]>> {
-    let segments = space.segments();
-    let mut rows = vec![0usize];
-    rows.extend((1..segments.len()).filter(|&s| segments[s].row != segments[s - 1].row));
-    rows.push(segments.len());
-    let set = loops.sublevel_set();
-    let closest = set.closest_columns();
-    // The closest pair of a row of the component, as its number in `space`.
-    let mut numbers = Vec::with_capacity(segments.len() + 1);
-    numbers.push(0u64);
-    for segment in segments {
-        numbers.push(numbers[numbers.len() - 1] + (segment.end - segment.start) as u64 + 1);
-    }
-    // The closest pair of row r of the component: (δ, its number in `space`).
-    let closest_of_row = |r: usize| -> (f64, u64) {
-        let mut best: Option<(f64, usize, u64)> = None;
-        for s in rows[r]..rows[r + 1] {
-            let segment = segments[s];
-            let i = segment.row as usize;
-            let column = match set.run_index(i, segment.start as usize) {
-                Some(run) if set.runs()[run].start as usize > i => closest[run],
-                _ => return_column(traj, metric, i, segment.start, segment.end),
-            };
-            let d = metric.distance(traj.point(i), traj.point(column as usize));
-            let number = numbers[s] + (column - segment.start) as u64;
-            if best.is_none_or(|(b, c, _)| (d, column as usize) < (b, c)) {
-                best = Some((d, column as usize, number));
-            }
-        }
-        best.map_or((f64::INFINITY, numbers[rows[r]]), |(d, _, number)| (d, number))
-    };
-    let preferred = |r: usize| closest_of_row(r).1 as usize;
-    let total = space.len() as usize;
-    let row_count = rows.len() - 1;
-    let mut picked = if first {
-        let closest: Vec<(f64, u64)> = (0..row_count).map(closest_of_row).collect();
-        let best = (0..row_count).fold(0, |best, r| if closest[r] < closest[best] { r } else { best });
-        first_then_spread(row_count, total, q, best, |r| closest[r].1 as usize, rng)
-    } else {
-        spread(row_count, total, q, preferred, rng)
-    };
-    picked.sort_unstable();
-    space.pairs_at(&picked)
 }
 
 #[cfg(test)]

@@ -2,12 +2,10 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 
-use super::disperse::disperse_pairs;
-use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
+use super::keyed::{DrawRun, DrawStats, KeyedDraw, RunHolder, draw_candidates};
+use super::{Sample, Sampler, Samples};
 use crate::baseline::baseline_pairs;
-use crate::draw::{PairSpace, SAMPLE_BYTES, check_count, check_every, draw_numbers, first_then_quotas, group_quotas};
 use crate::error::Result;
 use crate::interrupt::Interrupt;
 use crate::loops::Loops;
@@ -91,8 +89,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
     let mut warnings = Vec::new();
     sampler.check_applicable()?;
     let interrupt = Interrupt::current();
-    let components = loops.components();
-    let wanted = |c: usize| keep(c) && !(sampler.skip_trivial && components[c].trivial);
+    let wanted = |c: usize| keep(c);
     let (pairs, groups, available): (Vec<Picked>, usize, u64) = match (kind, kind.baseline(&sampler.baseline)) {
         (_, Some(baseline)) => {
             let (pairs, proposed, rule_warnings) =
@@ -100,54 +97,19 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
             warnings.extend(rule_warnings);
             (pairs.into_iter().map(|p| (p, None)).collect(), 0, proposed)
         }
-        (SamplerKind::Alpha, None) => {
-            // The off-diagonal pairs (j > i) of the wanted components.
-            let mut space = PairSpace::default();
-            for (k, run) in loops.runs().filter(|run| wanted(run.component)).enumerate() {
-                check_every(&interrupt, k)?;
-                space.push(run.row, run.start, run.end, run.row + 1)?;
-            }
-            let numbers = draw_numbers(space.len(), sampler.size, &mut rng, &mut warnings)?;
-            let pairs = space.pairs_at(&numbers)?;
-            (try_collect(pairs.into_iter().map(|p| (p, None)), "the samples")?, 0, space.len())
-        }
         (_, None) => {
-            let mut spaces = vec![PairSpace::default(); loops.components().len()];
-            for (k, run) in loops.runs().filter(|run| wanted(run.component)).enumerate() {
-                check_every(&interrupt, k)?;
-                spaces[run.component].push(run.row, run.start, run.end, run.row + 1)?;
+            let stats = draw_stats(loops);
+            let mut draw = KeyedDraw::new(sampler, &stats, &wanted)?;
+            let holder = LoopsHolder { traj, metric, loops };
+            while let Some(request) = draw.request().cloned() {
+                interrupt.check()?;
+                draw.absorb(draw_candidates(&holder, &request));
+                draw.complete();
             }
-            let ids: Vec<usize> = (0..spaces.len()).filter(|&c| spaces[c].len() > 0).collect();
-            let spaces: Vec<PairSpace> = ids.iter().map(|&c| std::mem::take(&mut spaces[c])).collect();
-            let rows_of = |s: &PairSpace| 1 + s.segments().windows(2).filter(|w| w[0].row != w[1].row).count();
-            let weights: Vec<f64> = match kind {
-                SamplerKind::One => vec![1.0; spaces.len()],
-                _ => spaces.iter().map(|s| rows_of(s) as f64).collect(),
-            };
-            let caps: Vec<u64> = spaces.iter().map(PairSpace::len).collect();
-            let quotas = if kind == SamplerKind::ClosestFirst {
-                first_then_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
-            } else {
-                group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
-            };
-            check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
-            let picks: Vec<Vec<Picked>> = spaces
-                .par_iter()
-                .zip(&quotas)
-                .zip(&ids)
-                .map(|((space, &q), &c)| {
-                    interrupt.check()?;
-                    let mut rng = group_rng(sampler.seed, c);
-                    let pairs = if matches!(kind, SamplerKind::RhoDispersed | SamplerKind::ClosestFirst) {
-                        let first = kind == SamplerKind::ClosestFirst;
-                        disperse_pairs(space, q, traj, metric, loops, first, &mut rng)?
-                    } else {
-                        space.pairs_at(&space.choose(q, &mut rng))?
-                    };
-                    try_collect(pairs.into_iter().map(|p| (p, Some(c))), "the samples")
-                })
-                .collect::<Result<_>>()?;
-            (concat(picks)?, ids.len(), caps.iter().sum())
+            warnings.extend(draw.warnings().iter().cloned());
+            let picks = draw.picks().unwrap_or_default();
+            let pairs = picks.iter().map(|p| ([p.pair[0] as u32, p.pair[1] as u32], Some(p.component)));
+            (try_collect(pairs, "the samples")?, draw.groups(), draw.available())
         }
     };
     let times = traj.timestamps_s();
@@ -172,6 +134,81 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
 
 /// A pair (i, j) and its component, when the sampler knows it.
 type Picked = ([u32; 2], Option<usize>);
+
+/// The keyed draws' statistics of every component of `loops` (by id), from its runs: the first
+/// and last row, the pairs off the diagonal, the closest pair. O(runs).
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, Trajectory, draw_stats, find_loops};
+/// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0], [5.0], [0.0]])?;
+/// let loops = find_loops(&traj, &Euclidean, 1.0)?;
+/// let stats = draw_stats(&loops);
+/// let pairs: Vec<u64> = stats.iter().map(|s| s.pairs).collect();
+/// assert_eq!(pairs.iter().sum::<u64>(), 1); // (0, 2) is the one pair off the diagonal
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn draw_stats(loops: &Loops) -> Vec<DrawStats> {
+    let mut stats: Vec<DrawStats> = loops
+        .components()
+        .iter()
+        .map(|c| DrawStats { trivial: c.trivial, rows: [usize::MAX, 0], pairs: 0, closest_pair: c.closest_pair })
+        .collect();
+    for run in loops.runs() {
+        let s = &mut stats[run.component];
+        s.rows = [s.rows[0].min(run.row), s.rows[1].max(run.row)];
+        let first = run.start.max(run.row + 1);
+        if first <= run.end {
+            s.pairs += (run.end - first + 1) as u64;
+        }
+    }
+    stats
+}
+
+/// The runs of loops in memory, for a keyed draw.
+struct LoopsHolder<'a, M: Metric + ?Sized> {
+    traj: &'a Trajectory,
+    metric: &'a M,
+    loops: &'a Loops,
+}
+
+impl<M: Metric + ?Sized> RunHolder for LoopsHolder<'_, M> {
+    fn rows(&self) -> std::ops::Range<usize> {
+        0..self.loops.len()
+    }
+
+    fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {
+        let set = self.loops.sublevel_set();
+        let offset = set.row_offset(i);
+        let labels = self.loops.run_components();
+        for (k, run) in set.row(i).iter().enumerate() {
+            f(DrawRun {
+                start: run.start as usize,
+                end: run.end as usize,
+                component: labels[offset + k] as usize,
+                closest: set.closest_columns()[offset + k] as usize,
+            });
+        }
+    }
+
+    fn measure(&self, i: usize, j: usize) -> (f64, f64) {
+        let (x, y) = (self.traj.point(i), self.traj.point(j));
+        (self.metric.distance(x, y), self.metric.distance_rank(x, y))
+    }
+
+    fn times_s(&self, i: usize, j: usize) -> [f64; 2] {
+        let t = self.traj.timestamps_s();
+        [t[i], t[j]]
+    }
+
+    fn diagonal_end(&self, _i: usize, end: usize) -> usize {
+        end
+    }
+
+    fn continues_diagonal(&self, _i: usize, _start: usize) -> bool {
+        false
+    }
+}
 
 /// The groups' picks in one buffer, allocated fallibly.
 pub(super) fn concat<T: Clone>(parts: Vec<Vec<T>>) -> Result<Vec<T>> {

@@ -6,11 +6,13 @@
 //! - [`Sample`] and [`Samples`]: what a sampler returns (`samples`);
 //! - [`sample_clusters`]: from the ε-graph clusters of detections (`clusters`);
 //! - [`sample_loops`]: from the exact loop components, or a baseline rule (`exact`);
-//! - the dispersed σ_ρ's even spread along a group (`disperse`).
+//! - the dispersed σ_ρ's even spread along a detection cluster (`disperse`);
+//! - keyed draws from the exact components, the same from tiles of a fleet (`keyed`).
 
 mod clusters;
 mod disperse;
 mod exact;
+mod keyed;
 mod kind;
 mod samples;
 
@@ -18,8 +20,12 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 pub use clusters::sample_clusters;
-pub use exact::sample_loops;
 pub(crate) use exact::sample_loops_where;
+pub use exact::{draw_stats, sample_loops};
+pub use keyed::{
+    ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, DrawStats, DrawnPair, KeyedDraw, pair_key,
+};
+pub(crate) use keyed::{DrawRun, RunHolder, draw_candidates};
 pub use kind::{Sampler, SamplerKind};
 pub use samples::{Sample, Samples};
 

@@ -1,0 +1,782 @@
+//! Keyed draws from the exact loop components: samples that depend on the seed, the sampler
+//! and the cells of S_γ alone — not on how the plane is cut into tiles, nor on the threads.
+//!
+//! Every pair (i, j) off the diagonal has a 64-bit *key*, a uniform random number taken from a
+//! stream keyed by (seed, i, ⌊j / 64⌋) (SplitMix64, bit-sliced over the 64 columns of the block,
+//! so that the keys at most a threshold come out of a few words per block without visiting
+//! every cell). Whoever holds a run of a component — the whole trajectory in memory, or one tile
+//! of a fleet on another machine — finds the same keys for its cells. From them:
+//!
+//! - **Quotas** per component come from statistics that merge from tiles: the number of pairs
+//!   off the diagonal, the first and last row, the closest pair (σ_1: 1 each; σ_ρ and the
+//!   dispersed samplers: the rows, `last − first + 1`, which is every row of a 4-connected
+//!   component). They are rounded at random with the sampler's own stream, in component order.
+//! - **Uniform picks** (σ_1, σ_ρ, the rest of the dispersed samplers) are the `q` pairs of the
+//!   component with the smallest keys: a uniform draw without replacement. Each holder returns
+//!   its pairs with a key at most a threshold that leaves a few more than `q` in expectation;
+//!   should fewer come back, the threshold grows and the holders are asked again (the answer
+//!   does not depend on the threshold). σ_α takes the smallest keys over all components (a
+//!   budget), or every pair with a key below `p · 2⁶⁴` (a rate).
+//! - **Row picks** (the dispersed σ_ρ and closest-first) are the closest pair of chosen rows
+//!   (stratified with an offset drawn from the component's own stream): each holder returns the
+//!   closest pair of its runs in those rows, and the closest of them wins (by the metric's rank,
+//!   then the column). A run on the diagonal offers the closest column after its farthest point
+//!   (a return along the same way); a tile reads past its last column to find the run's end.
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use super::{SamplerKind, group_rng};
+use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count, first_then_quotas, group_quotas};
+use crate::error::{Error, Result};
+use crate::sample::Sampler;
+
+/// Columns per key stream.
+const KEY_BLOCK: usize = 64;
+
+/// Rows per task of the in-memory draw.
+const ROWS_PER_TASK: usize = 4096;
+
+/// SplitMix64's output function.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// The stream of the keys of row `row`, columns `64 · block ..`, under `seed`.
+struct KeyStream(u64);
+
+impl KeyStream {
+    fn new(seed: u64, row: usize, block: usize) -> Self {
+        let s = mix(mix(seed.wrapping_add(GOLDEN)) ^ (row as u64).wrapping_mul(GOLDEN));
+        Self(mix(s ^ (block as u64).wrapping_add(0x6B65_7965_645F_6472)))
+    }
+
+    fn next_word(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(GOLDEN);
+        mix(self.0)
+    }
+}
+
+/// Calls `out(column, key)` for every column of `lo..=hi` (one block of 64) of row `row` whose
+/// key is at most `threshold`, in increasing column order. The key's bit 63 − ℓ is bit
+/// `column mod 64` of the stream's ℓ-th word.
+fn keys_at_most(seed: u64, row: usize, lo: usize, hi: usize, threshold: u64, out: &mut impl FnMut(usize, u64)) {
+    let block = lo / KEY_BLOCK;
+    debug_assert!(hi / KEY_BLOCK == block && lo <= hi);
+    let base = block * KEY_BLOCK;
+    let width = hi - lo + 1;
+    let mask = if width == 64 { u64::MAX } else { ((1u64 << width) - 1) << (lo - base) };
+    let mut stream = KeyStream::new(seed, row, block);
+    let mut words = [0u64; 64];
+    let (mut less, mut equal) = (0u64, mask);
+    let mut level = 0;
+    while level < 64 && equal != 0 {
+        let w = stream.next_word();
+        words[level] = w;
+        if (threshold >> (63 - level)) & 1 == 1 {
+            less |= equal & !w;
+            equal &= w;
+        } else {
+            equal &= !w;
+        }
+        level += 1;
+    }
+    let mut hits = less | equal;
+    if hits == 0 {
+        return;
+    }
+    for word in words.iter_mut().skip(level) {
+        *word = stream.next_word();
+    }
+    while hits != 0 {
+        let p = hits.trailing_zeros() as usize;
+        hits &= hits - 1;
+        let key = words.iter().enumerate().fold(0u64, |key, (l, w)| key | (((w >> p) & 1) << (63 - l)));
+        out(base + p, key);
+    }
+}
+
+/// Calls `out(column, key)` for the columns `start..=end` of row `row` with a key at most
+/// `threshold`.
+fn run_keys(seed: u64, row: usize, start: usize, end: usize, threshold: u64, out: &mut impl FnMut(usize, u64)) {
+    let mut lo = start;
+    while lo <= end {
+        let hi = end.min((lo / KEY_BLOCK + 1) * KEY_BLOCK - 1);
+        keys_at_most(seed, row, lo, hi, threshold, out);
+        lo = hi + 1;
+    }
+}
+
+/// The key of pair (i, j) under `seed` (for tests and checks: O(1) per pair).
+pub fn pair_key(seed: u64, i: usize, j: usize) -> u64 {
+    let mut key = 0;
+    keys_at_most(seed, i, j, j, u64::MAX, &mut |_, k| key = k);
+    key
+}
+
+/// What a keyed draw needs of one loop component: statistics that merge from tiles.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DrawStats {
+    /// Holds a diagonal cell.
+    pub trivial: bool,
+    /// First and last row with a cell of the component (upper half).
+    pub rows: [usize; 2],
+    /// Pairs (i, j) with j > i: the candidates of the samplers.
+    pub pairs: u64,
+    /// The closest pair (row, column); that of a trivial component is not used.
+    pub closest_pair: [usize; 2],
+}
+
+impl DrawStats {
+    /// Rows from the first to the last.
+    fn row_count(&self) -> usize {
+        self.rows[1] - self.rows[0] + 1
+    }
+}
+
+/// What one pass of a keyed draw asks of one component.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ComponentRequest {
+    /// The component.
+    pub id: usize,
+    /// Every pair off the diagonal with a key at most this.
+    pub pool: Option<u64>,
+    /// The closest pair of each of these rows (sorted).
+    pub rows: Vec<usize>,
+    /// The closest pair over all its rows.
+    pub best: bool,
+}
+
+/// What one pass of a keyed draw asks of whoever holds runs: per component, sorted by id.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DrawRequest {
+    /// The sampler's seed.
+    pub seed: u64,
+    /// The components asked about, by id.
+    pub components: Vec<ComponentRequest>,
+}
+
+impl DrawRequest {
+    /// The part of the request about these components, and rows in `rows` only.
+    pub fn restricted(&self, ids: &HashSet<usize>, rows: std::ops::Range<usize>) -> Self {
+        let components = self
+            .components
+            .iter()
+            .filter(|c| ids.contains(&c.id))
+            .map(|c| {
+                let lo = c.rows.partition_point(|&r| r < rows.start);
+                let hi = c.rows.partition_point(|&r| r < rows.end);
+                ComponentRequest { id: c.id, pool: c.pool, rows: c.rows[lo..hi].to_vec(), best: c.best }
+            })
+            .filter(|c| c.pool.is_some() || c.best || !c.rows.is_empty())
+            .collect();
+        Self { seed: self.seed, components }
+    }
+
+    /// Nothing is asked.
+    pub fn is_empty(&self) -> bool {
+        self.components.is_empty()
+    }
+}
+
+/// A pair offered to a keyed draw.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DrawCandidate {
+    /// Its component.
+    pub component: usize,
+    /// The pair (row, column), in the indices of the runs (fleet indices for a fleet).
+    pub pair: [usize; 2],
+    /// Its key (uniform picks), or 0.
+    pub key: u64,
+    /// The metric's rank of the pair (row picks), or 0.
+    pub rank: f64,
+    /// δ of the pair.
+    pub distance: f64,
+    /// Its two times, seconds (each on its session's clock, from tiles).
+    pub times_s: [f64; 2],
+}
+
+impl DrawCandidate {
+    /// Closer first, then the earlier pair.
+    fn closer(&self, other: &Self) -> bool {
+        self.rank.total_cmp(&other.rank).then(self.pair.cmp(&other.pair)).is_lt()
+    }
+}
+
+/// What one holder of runs offers a pass of a keyed draw.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DrawCandidates {
+    /// Pairs with a key at most their component's threshold.
+    pub pool: Vec<DrawCandidate>,
+    /// The closest pair of each requested row of each component (among the holder's runs).
+    pub rows: Vec<DrawCandidate>,
+    /// The closest pair of each component that asked for it (among the holder's runs).
+    pub best: Vec<DrawCandidate>,
+}
+
+impl DrawCandidates {
+    /// Adds `other`'s offers (the closer of two offers for one row or component is kept when
+    /// the draw reads them).
+    pub fn absorb(&mut self, other: Self) {
+        self.pool.extend(other.pool);
+        self.rows.extend(other.rows);
+        self.best.extend(other.best);
+    }
+
+    /// One offer per (component, row) and per component; the pool sorted by (component, key).
+    fn reduce(&mut self) {
+        let keep_closest = |list: &mut Vec<DrawCandidate>, key: &dyn Fn(&DrawCandidate) -> (usize, usize)| {
+            list.sort_by(|a, b| key(a).cmp(&key(b)).then(a.rank.total_cmp(&b.rank)).then(a.pair.cmp(&b.pair)));
+            list.dedup_by(|later, first| key(later) == key(first));
+        };
+        keep_closest(&mut self.rows, &|c| (c.component, c.pair[0]));
+        keep_closest(&mut self.best, &|c| (c.component, 0));
+        self.pool.sort_by_key(|a| (a.component, a.key, a.pair));
+        self.pool.dedup_by(|a, b| a.component == b.component && a.pair == b.pair);
+    }
+}
+
+/// A run as a keyed draw sees it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DrawRun {
+    pub start: usize,
+    pub end: usize,
+    pub component: usize,
+    /// The run's closest column (among its cells here).
+    pub closest: usize,
+}
+
+/// Whoever holds runs: the whole trajectory in memory, or one tile.
+pub(crate) trait RunHolder: Sync {
+    /// The rows held (indices of the runs).
+    fn rows(&self) -> std::ops::Range<usize>;
+    /// The runs of row `i`, in column order.
+    fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun));
+    /// δ and the metric's rank of pair (i, j).
+    fn measure(&self, i: usize, j: usize) -> (f64, f64);
+    /// The times of pair (i, j).
+    fn times_s(&self, i: usize, j: usize) -> [f64; 2];
+    /// The last column of the whole run of row `i` that starts on the diagonal and ends here at
+    /// `end` (a tile reads past its last column).
+    fn diagonal_end(&self, i: usize, end: usize) -> usize;
+    /// Whether the run of row `i` starting here at `start` continues a run that starts on the
+    /// diagonal elsewhere (whose holder offers it).
+    fn continues_diagonal(&self, i: usize, start: usize) -> bool;
+}
+
+/// The closest column after the farthest point of a diagonal run `start..=end` (by δ, the
+/// earliest of equals): where the path comes back along the same way, or the last column.
+fn return_column(holder: &dyn RunHolder, i: usize, start: usize, end: usize) -> usize {
+    let distances: Vec<f64> = (start..=end).map(|j| holder.measure(i, j).0).collect();
+    let farthest = distances.iter().enumerate().fold(0, |best, (k, &d)| if d > distances[best] { k } else { best });
+    let back = distances[farthest..]
+        .iter()
+        .enumerate()
+        .fold(farthest, |best, (k, &d)| if d < distances[best] { farthest + k } else { best });
+    start + back
+}
+
+/// The offers of `holder` to a pass: O(its runs + the pairs offered), rows in parallel.
+pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> DrawCandidates {
+    let index: HashMap<usize, &ComponentRequest> = request.components.iter().map(|c| (c.id, c)).collect();
+    let rows = holder.rows();
+    let chunks: Vec<std::ops::Range<usize>> =
+        (rows.start..rows.end).step_by(ROWS_PER_TASK).map(|s| s..(s + ROWS_PER_TASK).min(rows.end)).collect();
+    let parts: Vec<DrawCandidates> = chunks
+        .into_par_iter()
+        .map(|chunk| {
+            let mut out = DrawCandidates::default();
+            let mut best: BTreeMap<usize, DrawCandidate> = BTreeMap::new();
+            for i in chunk {
+                let mut row_best: BTreeMap<usize, DrawCandidate> = BTreeMap::new();
+                holder.for_each_run(i, &mut |run| {
+                    let Some(req) = index.get(&run.component) else { return };
+                    let c = run.component;
+                    if let Some(threshold) = req.pool {
+                        let first = run.start.max(i + 1);
+                        if first <= run.end {
+                            run_keys(request.seed, i, first, run.end, threshold, &mut |j, key| {
+                                let (distance, _) = holder.measure(i, j);
+                                let times_s = holder.times_s(i, j);
+                                out.pool.push(DrawCandidate {
+                                    component: c,
+                                    pair: [i, j],
+                                    key,
+                                    rank: 0.0,
+                                    distance,
+                                    times_s,
+                                });
+                            });
+                        }
+                    }
+                    let wants_row = req.rows.binary_search(&i).is_ok();
+                    if !(wants_row || req.best) {
+                        return;
+                    }
+                    let column = if run.start == i {
+                        let end = holder.diagonal_end(i, run.end);
+                        (end > i).then(|| return_column(holder, i, i + 1, end))
+                    } else if holder.continues_diagonal(i, run.start) {
+                        None
+                    } else {
+                        Some(run.closest)
+                    };
+                    let Some(j) = column else { return };
+                    let (distance, rank) = holder.measure(i, j);
+                    let offer = DrawCandidate {
+                        component: c,
+                        pair: [i, j],
+                        key: 0,
+                        rank,
+                        distance,
+                        times_s: holder.times_s(i, j),
+                    };
+                    if wants_row {
+                        let slot = row_best.entry(c).or_insert(offer);
+                        if offer.closer(slot) {
+                            *slot = offer;
+                        }
+                    }
+                    if req.best {
+                        let slot = best.entry(c).or_insert(offer);
+                        if offer.closer(slot) {
+                            *slot = offer;
+                        }
+                    }
+                });
+                out.rows.extend(row_best.into_values());
+            }
+            out.best.extend(best.into_values());
+            out
+        })
+        .collect();
+    let mut all = DrawCandidates::default();
+    for part in parts {
+        all.pool.extend(part.pool);
+        all.rows.extend(part.rows);
+        all.best.extend(part.best);
+    }
+    all.reduce();
+    all
+}
+
+/// A pair a keyed draw chose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DrawnPair {
+    /// Its component.
+    pub component: usize,
+    /// The pair (row, column).
+    pub pair: [usize; 2],
+    /// δ of the pair.
+    pub distance: f64,
+    /// Its times, seconds (each on its session's clock, from tiles).
+    pub times_s: [f64; 2],
+}
+
+/// A component of a keyed draw.
+#[derive(Debug, Clone)]
+struct Group {
+    id: usize,
+    quota: u64,
+    /// The stratification offset (dispersed samplers).
+    offset: f64,
+    /// The pool threshold asked last.
+    pool: Option<u64>,
+    /// Pairs needed from the pool at most (uniform picks and the rest).
+    rows: Vec<usize>,
+    best: bool,
+}
+
+/// A draw of samples from loop components by keys (see the module docs): plan, passes over
+/// whoever holds the runs, and the samples, the same for any holders.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, KeyedDraw, SampleSize, Sampler, SamplerKind, UrbanDrive, find_loops, sample_loops};
+/// let drive = UrbanDrive { duration_s: 600.0, ..UrbanDrive::default() }.generate()?;
+/// let loops = find_loops(&drive.trajectory, &Euclidean, 40.0)?;
+/// let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(50), 3);
+/// // sample_loops runs the passes over the loops in memory; tiles of a fleet run the same.
+/// let draw = KeyedDraw::new(&sampler, &loops_core::draw_stats(&loops), &|_| true)?;
+/// assert_eq!(draw.groups(), sample_loops(&drive.trajectory, &Euclidean, &loops, &sampler)?.groups());
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct KeyedDraw {
+    kind: SamplerKind,
+    size: SampleSize,
+    seed: u64,
+    stats: Vec<DrawStats>,
+    groups: Vec<Group>,
+    /// σ_α's threshold (all groups share it).
+    alpha: Option<u64>,
+    available: u64,
+    warnings: Vec<SampleWarning>,
+    candidates: DrawCandidates,
+    /// The request still to answer (none after the last pass).
+    pending: Option<DrawRequest>,
+    picks: Option<Vec<DrawnPair>>,
+}
+
+/// The threshold leaving `need` of `total` keys below it with a margin: ≥ need with
+/// overwhelming probability.
+fn threshold_for(need: u64, total: u64) -> u64 {
+    let n = need as f64;
+    let fraction = (n + 4.0 * n.sqrt() + 8.0) / total.max(1) as f64;
+    threshold_of_fraction(fraction)
+}
+
+fn threshold_of_fraction(fraction: f64) -> u64 {
+    if fraction >= 1.0 { u64::MAX } else { (fraction * 18_446_744_073_709_551_616.0) as u64 }
+}
+
+fn fraction_of(threshold: u64) -> f64 {
+    (threshold as f64 + 1.0) / 18_446_744_073_709_551_616.0
+}
+
+impl KeyedDraw {
+    /// The draw of `sampler` over the components with these statistics (by id) that `keep`
+    /// accepts: quotas and the first pass's request.
+    ///
+    /// # Errors
+    /// As [`sample_loops`](crate::sample_loops) for the samplers of components (`one`, `rho`,
+    /// `rho-dispersed`, `alpha`, `closest-first`); [`Error::NotApplicable`] for a baseline.
+    pub fn new(sampler: &Sampler, stats: &[DrawStats], keep: &dyn Fn(usize) -> bool) -> Result<Self> {
+        let kind = sampler.kind;
+        if kind.is_baseline() {
+            return Err(Error::NotApplicable {
+                option: "a keyed draw",
+                to: format!("the {kind} baseline"),
+                reason: "a baseline's rule runs over the whole trajectory; use one, rho, rho-dispersed, alpha or \
+                         closest-first",
+            });
+        }
+        sampler.size.validate(kind)?;
+        sampler.check_applicable()?;
+        let wanted = |c: usize| keep(c) && !(sampler.skip_trivial && stats[c].trivial) && stats[c].pairs > 0;
+        let ids: Vec<usize> = (0..stats.len()).filter(|&c| wanted(c)).collect();
+        let caps: Vec<u64> = ids.iter().map(|&c| stats[c].pairs).collect();
+        let available: u64 = caps.iter().sum();
+        let mut warnings = Vec::new();
+        let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
+        let (groups, alpha) = if kind == SamplerKind::Alpha {
+            let (count, threshold) = match sampler.size {
+                SampleSize::Rate(rate) => {
+                    let t = if rate >= 1.0 {
+                        u64::MAX
+                    } else {
+                        ((rate * 18_446_744_073_709_551_616.0) as u64).saturating_sub(1)
+                    };
+                    (rate * available as f64, t)
+                }
+                SampleSize::Budget(budget) => {
+                    if budget as u64 > available {
+                        warnings.push(SampleWarning::BudgetAboveAvailable { budget, available });
+                    }
+                    let need = (budget as u64).min(available);
+                    (need as f64, if need == available { u64::MAX } else { threshold_for(need, available) })
+                }
+            };
+            check_count("samples", sampler.size, count, SAMPLE_BYTES)?;
+            let groups = ids
+                .iter()
+                .map(|&id| Group { id, quota: 0, offset: 0.0, pool: Some(threshold), rows: Vec::new(), best: false })
+                .collect();
+            (groups, Some(threshold))
+        } else {
+            let weights: Vec<f64> = match kind {
+                SamplerKind::One => vec![1.0; ids.len()],
+                _ => ids.iter().map(|&c| stats[c].row_count() as f64).collect(),
+            };
+            let quotas = if kind == SamplerKind::ClosestFirst {
+                first_then_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
+            } else {
+                group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
+            };
+            check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
+            let groups = ids
+                .iter()
+                .zip(quotas)
+                .map(|(&id, quota)| {
+                    let s = &stats[id];
+                    let offset = group_rng(sampler.seed, id).random::<f64>();
+                    let r0 = s.rows[0];
+                    let count = s.row_count();
+                    let mut group = Group { id, quota, offset, pool: None, rows: Vec::new(), best: false };
+                    if quota == 0 {
+                        return group;
+                    }
+                    match kind {
+                        SamplerKind::One | SamplerKind::Rho => group.pool = Some(threshold_for(quota, s.pairs)),
+                        _ if quota as usize > count => {
+                            group.rows = (s.rows[0]..=s.rows[1]).collect();
+                            group.pool = Some(threshold_for(quota - count as u64, s.pairs));
+                        }
+                        SamplerKind::RhoDispersed => {
+                            let mut rows = BTreeMap::new();
+                            for idx in stratified(quota as usize, count, offset) {
+                                let r = r0 + idx;
+                                rows.insert(r, ());
+                                if s.trivial && r > r0 {
+                                    rows.insert(r - 1, ());
+                                }
+                            }
+                            group.rows = rows.into_keys().collect();
+                        }
+                        _ => {
+                            // Closest-first: the best row, then the others stratified around it.
+                            let mut rows = BTreeMap::new();
+                            if !s.trivial {
+                                rows.insert(s.closest_pair[0], ());
+                            } else {
+                                group.best = true;
+                            }
+                            for idx in stratified(quota as usize - 1, count - 1, offset) {
+                                let r = r0 + idx;
+                                if s.trivial {
+                                    for row in [r.saturating_sub(1).max(r0), r, r + 1] {
+                                        rows.insert(row, ());
+                                    }
+                                } else {
+                                    rows.insert(if r >= s.closest_pair[0] { r + 1 } else { r }, ());
+                                }
+                            }
+                            group.rows = rows.into_keys().collect();
+                        }
+                    }
+                    group
+                })
+                .collect();
+            (groups, None)
+        };
+        let mut draw = Self {
+            kind,
+            size: sampler.size,
+            seed: sampler.seed,
+            stats: stats.to_vec(),
+            groups,
+            alpha,
+            available,
+            warnings,
+            candidates: DrawCandidates::default(),
+            pending: None,
+            picks: None,
+        };
+        draw.pending = Some(draw.request_all());
+        Ok(draw)
+    }
+
+    /// Every group's current request.
+    fn request_all(&self) -> DrawRequest {
+        let components = self
+            .groups
+            .iter()
+            .filter(|g| g.pool.is_some() || g.best || !g.rows.is_empty())
+            .map(|g| ComponentRequest { id: g.id, pool: g.pool, rows: g.rows.clone(), best: g.best })
+            .collect();
+        DrawRequest { seed: self.seed, components }
+    }
+
+    /// The sampler.
+    pub fn sampler(&self) -> SamplerKind {
+        self.kind
+    }
+
+    /// Number of groups (components with a pair to sample; 0 for σ_α).
+    pub fn groups(&self) -> usize {
+        if self.alpha.is_some() { 0 } else { self.groups.len() }
+    }
+
+    /// Number of candidate pairs.
+    pub fn available(&self) -> u64 {
+        self.available
+    }
+
+    /// Warnings of the quotas (a budget below the groups, or above the pairs).
+    pub fn warnings(&self) -> &[SampleWarning] {
+        &self.warnings
+    }
+
+    /// What the next pass must offer ([`absorb`](Self::absorb)), or `None` when the draw is
+    /// done.
+    pub fn request(&self) -> Option<&DrawRequest> {
+        self.pending.as_ref()
+    }
+
+    /// Takes the offers of every holder of runs to the pending request (together, or one
+    /// holder at a time), then, once all of them are in ([`complete`](Self::complete)), works
+    /// out the samples or the next request.
+    pub fn absorb(&mut self, offers: DrawCandidates) {
+        self.candidates.absorb(offers);
+    }
+
+    /// Ends the pending pass: the samples, or a next request for components whose pool came
+    /// back short (rare: the thresholds leave a margin of four standard deviations).
+    pub fn complete(&mut self) {
+        if self.pending.take().is_none() {
+            return;
+        }
+        self.candidates.reduce();
+        match self.finish() {
+            Ok(picks) => self.picks = Some(picks),
+            Err(short) => {
+                // Grow the thresholds of the short groups; drop their pools (the next pass
+                // offers a superset).
+                let short: HashSet<usize> = short.into_iter().collect();
+                if let Some(t) = self.alpha {
+                    let grown = threshold_of_fraction(4.0 * fraction_of(t));
+                    self.alpha = Some(grown);
+                    self.groups.iter_mut().for_each(|g| g.pool = Some(grown));
+                    self.candidates.pool.clear();
+                } else {
+                    for g in self.groups.iter_mut().filter(|g| short.contains(&g.id)) {
+                        let s = &self.stats[g.id];
+                        g.pool = Some(match g.pool {
+                            Some(t) => threshold_of_fraction(4.0 * fraction_of(t)),
+                            None => threshold_for(g.quota, s.pairs),
+                        });
+                    }
+                    self.candidates.pool.retain(|c| !short.contains(&c.component));
+                }
+                let components = self
+                    .groups
+                    .iter()
+                    .filter(|g| short.contains(&g.id) || self.alpha.is_some())
+                    .map(|g| ComponentRequest { id: g.id, pool: g.pool, rows: Vec::new(), best: false })
+                    .collect();
+                self.pending = Some(DrawRequest { seed: self.seed, components });
+            }
+        }
+    }
+
+    /// The chosen pairs, by pair, once the draw is done.
+    pub fn picks(&self) -> Option<&[DrawnPair]> {
+        self.picks.as_deref()
+    }
+
+    /// The picks, or the groups whose pool is short.
+    fn finish(&self) -> std::result::Result<Vec<DrawnPair>, Vec<usize>> {
+        let c = &self.candidates;
+        let drawn = |o: &DrawCandidate| DrawnPair {
+            component: o.component,
+            pair: o.pair,
+            distance: o.distance,
+            times_s: o.times_s,
+        };
+        if let Some(threshold) = self.alpha {
+            let mut all: Vec<&DrawCandidate> = c.pool.iter().collect();
+            all.sort_by_key(|a| (a.key, a.pair));
+            let picks: Vec<DrawnPair> = match self.size {
+                SampleSize::Rate(_) => all.into_iter().map(drawn).collect(),
+                SampleSize::Budget(budget) => {
+                    let need = (budget as u64).min(self.available) as usize;
+                    if all.len() < need && threshold != u64::MAX {
+                        return Err(Vec::new());
+                    }
+                    all.into_iter().take(need).map(drawn).collect()
+                }
+            };
+            return Ok(sorted(picks));
+        }
+        let pool_of = |id: usize| {
+            let lo = c.pool.partition_point(|o| o.component < id);
+            let hi = c.pool.partition_point(|o| o.component <= id);
+            &c.pool[lo..hi]
+        };
+        let row_pick = |id: usize, row: usize| {
+            c.rows.binary_search_by(|o| (o.component, o.pair[0]).cmp(&(id, row))).ok().map(|k| &c.rows[k])
+        };
+        let mut picks = Vec::new();
+        let mut short = Vec::new();
+        for g in &self.groups {
+            let s = &self.stats[g.id];
+            let q = g.quota as usize;
+            if q == 0 {
+                continue;
+            }
+            // A row with no pair off the diagonal (the last row of a trivial component) gives
+            // its place to the row before, which always has one.
+            let offer_of = |row: usize| {
+                row_pick(g.id, row)
+                    .or_else(|| (s.trivial && row > s.rows[0]).then(|| row_pick(g.id, row - 1)).flatten())
+            };
+            let mut chosen: Vec<DrawCandidate> = Vec::with_capacity(q);
+            let mut seen: HashSet<[usize; 2]> = HashSet::new();
+            let count = s.row_count();
+            match self.kind {
+                SamplerKind::One | SamplerKind::Rho => {}
+                _ if q > count => {
+                    for row in s.rows[0]..=s.rows[1] {
+                        push(&mut chosen, &mut seen, offer_of(row));
+                    }
+                }
+                SamplerKind::RhoDispersed => {
+                    for idx in stratified(q, count, g.offset) {
+                        push(&mut chosen, &mut seen, offer_of(s.rows[0] + idx));
+                    }
+                }
+                _ => {
+                    // Closest-first: the component's closest pair, then the other rows.
+                    let best = if s.trivial {
+                        c.best.iter().find(|o| o.component == g.id)
+                    } else {
+                        row_pick(g.id, s.closest_pair[0])
+                    };
+                    if let Some(best) = best {
+                        push(&mut chosen, &mut seen, Some(best));
+                        let b = best.pair[0];
+                        for idx in stratified(q - 1, count - 1, g.offset) {
+                            let r = s.rows[0] + idx;
+                            push(&mut chosen, &mut seen, offer_of(if r >= b { r + 1 } else { r }));
+                        }
+                    }
+                }
+            }
+            // The rest from the pool, smallest keys first.
+            for o in pool_of(g.id) {
+                if chosen.len() >= q {
+                    break;
+                }
+                push(&mut chosen, &mut seen, Some(o));
+            }
+            if chosen.len() < q && g.pool != Some(u64::MAX) {
+                short.push(g.id);
+                continue;
+            }
+            picks.extend(chosen.iter().map(drawn));
+        }
+        if short.is_empty() { Ok(sorted(picks)) } else { Err(short) }
+    }
+}
+
+/// Takes `offer` unless that pair is taken already.
+fn push(chosen: &mut Vec<DrawCandidate>, seen: &mut HashSet<[usize; 2]>, offer: Option<&DrawCandidate>) {
+    if let Some(o) = offer
+        && seen.insert(o.pair)
+    {
+        chosen.push(*o);
+    }
+}
+
+fn sorted(mut picks: Vec<DrawnPair>) -> Vec<DrawnPair> {
+    picks.sort_by_key(|a| a.pair);
+    picks
+}
+
+/// `q` row indices of `rows`, stratified: ⌊(k + offset) · rows / q⌋.
+fn stratified(q: usize, rows: usize, offset: f64) -> impl Iterator<Item = usize> {
+    (0..q).map(move |k| (((k as f64 + offset) * rows as f64 / q as f64) as usize).min(rows.saturating_sub(1)))
+}

@@ -1,0 +1,337 @@
+//! What tiles give besides components: keyed draws of samples and the loop duration τ, each
+//! from one tile's rescan or scan, equal to the fleet's in memory.
+//!
+//! - **Samples.** After the merge, a [`KeyedDraw`](crate::KeyedDraw) over the merged statistics
+//!   ([`MergedLoops::draw_stats`]) asks for a few pairs per component; [`tile_requests`] cuts the
+//!   request into what each tile holds ([`MergedLoops::tile_labels`] names its provisional
+//!   components), and [`draw_session_tile`] rescans a tile and offers its pairs: the keyed pairs
+//!   below a threshold and the closest pair of requested rows. The draw takes the offers of every
+//!   tile and gives the samples of [`sample_fleet`](crate::sample_fleet), pair for pair.
+//! - **τ.** [`scan_session_tile_with_duration`] also returns the tile's share of τ
+//!   ([`TileDuration`]: what its runs add to each of its rows and columns), and
+//!   [`session_loop_duration`] adds up the shares of one session: `own` from the tiles within it,
+//!   `other` from the tiles with another session, as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
+//!   gives them (to rounding: the same widths, added in another order).
+
+use std::collections::HashSet;
+
+use crate::error::{Error, Result};
+use crate::metric::Metric;
+use crate::sample::{DrawCandidates, DrawRequest, DrawRun, RunHolder, draw_candidates};
+use crate::separation::Separation;
+use crate::spec::{MetricSpec, with_metric};
+use crate::tile::{MergedLoops, ScannedTile, Tile, TileSummary, scan_piece, summary_of};
+use crate::trajectory::{Trajectory, prefix_sums_by_session};
+
+/// The part of `request` each tile of `merged` must answer (by tile, as
+/// [`MergedLoops::tiles`]); `None` for a tile asked nothing. O(the tiles' provisional
+/// components + the request).
+pub fn tile_requests(merged: &MergedLoops, request: &DrawRequest) -> Vec<Option<DrawRequest>> {
+    merged
+        .tiles()
+        .iter()
+        .enumerate()
+        .map(|(t, tile)| {
+            let ids: HashSet<usize> = merged.tile_labels(t).iter().map(|&c| c as usize).collect();
+            let part = request.restricted(&ids, tile.rows.clone());
+            (!part.is_empty()).then_some(part)
+        })
+        .collect()
+}
+
+/// A tile's runs, rescanned, for a keyed draw.
+struct TileHolder<'a, M: Metric + ?Sized> {
+    sessions: [&'a Trajectory; 2],
+    starts: [usize; 2],
+    metric: &'a M,
+    gamma: f64,
+    diagonal: bool,
+    tile: &'a Tile,
+    scanned: ScannedTile<'a>,
+    provisional: Vec<u32>,
+    labels: &'a [u32],
+}
+
+impl<M: Metric + ?Sized> TileHolder<'_, M> {
+    fn point(&self, f: usize, side: usize) -> &[f64] {
+        self.sessions[side].point(f - self.starts[side])
+    }
+
+    /// δ(x_i, x_j) ≤ γ for a pair of the row session (within one session).
+    fn within(&self, i: usize, j: usize) -> bool {
+        self.metric.distance(self.point(i, 0), self.point(j, 0)) <= self.gamma
+    }
+}
+
+impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
+    fn rows(&self) -> std::ops::Range<usize> {
+        self.tile.rows.clone()
+    }
+
+    fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {
+        let set = &self.scanned.set;
+        let k = i - self.tile.rows.start;
+        let offset = set.row_offset(k);
+        let to_fleet = &self.scanned.to_fleet;
+        for (r, run) in set.row(k).iter().enumerate() {
+            let provisional = self.provisional[offset + r] as usize;
+            f(DrawRun {
+                start: to_fleet(run.start as usize),
+                end: to_fleet(run.end as usize),
+                component: self.labels[provisional] as usize,
+                closest: to_fleet(set.closest_columns()[offset + r] as usize),
+            });
+        }
+    }
+
+    fn measure(&self, i: usize, j: usize) -> (f64, f64) {
+        let (x, y) = (self.point(i, 0), self.point(j, 1));
+        (self.metric.distance(x, y), self.metric.distance_rank(x, y))
+    }
+
+    fn times_s(&self, i: usize, j: usize) -> [f64; 2] {
+        [self.sessions[0].timestamps_s()[i - self.starts[0]], self.sessions[1].timestamps_s()[j - self.starts[1]]]
+    }
+
+    fn diagonal_end(&self, i: usize, end: usize) -> usize {
+        if !self.diagonal || end + 1 != self.tile.columns.end {
+            return end;
+        }
+        // The run reaches the tile's last column: read on in the session.
+        let last = self.starts[1] + self.sessions[1].len() - 1;
+        let mut j = end;
+        while j < last && self.within(i, j + 1) {
+            j += 1;
+        }
+        j
+    }
+
+    fn continues_diagonal(&self, i: usize, start: usize) -> bool {
+        self.diagonal && start == self.tile.columns.start && start > i && (i + 1..start).all(|j| self.within(i, j))
+    }
+}
+
+/// Rescans one tile (as [`scan_session_tile`](crate::scan_session_tile)) and offers its pairs to a keyed draw: `labels`
+/// are the component ids of its provisional components ([`MergedLoops::tile_labels`]),
+/// `request` the part of the draw's request for this tile ([`tile_requests`]). A run on the
+/// diagonal that reaches the tile's last column is read on in the session, so that its return
+/// column is that of the whole run; the piece that continues it in the next tile offers nothing.
+///
+/// Time: the tile's scan, plus O(offered pairs) and the diagonal runs of requested rows.
+///
+/// # Errors
+/// As [`scan_session_tile`](crate::scan_session_tile); [`Error::InconsistentTiles`] for labels of another tile.
+#[allow(clippy::too_many_arguments)]
+pub fn draw_session_tile<M: Metric + ?Sized>(
+    sessions: [&Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    tile: &Tile,
+    labels: &[u32],
+    request: &DrawRequest,
+) -> Result<DrawCandidates> {
+    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
+    let (provisional, count) = crate::component::label_runs(&scanned.set, crate::component::ROWS_PER_LABEL_TASK);
+    if count as usize != labels.len() {
+        return Err(Error::InconsistentTiles {
+            problem: format!("tile {tile:?} has {count} components, but {} labels were given", labels.len()),
+        });
+    }
+    let diagonal = tile.sessions[0] == tile.sessions[1] && separation.is_none();
+    let holder = TileHolder { sessions, starts, metric, gamma, diagonal, tile, scanned, provisional, labels };
+    Ok(draw_candidates(&holder, request))
+}
+
+/// What one tile's runs add to the loop duration τ (Side both, seconds) of its rows and of its
+/// columns: `rows[k]` to fleet index `tile.rows.start + k`, `columns[k]` to `tile.columns.start
+/// + k`. Within one session both are that session's own τ; between two, each its τ with others.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct TileDuration {
+    /// The tile.
+    pub tile: Tile,
+    /// Per row of the tile, seconds.
+    pub rows: Vec<f64>,
+    /// Per column of the tile, seconds.
+    pub columns: Vec<f64>,
+}
+
+impl TileDuration {
+    /// As bytes (a tag, [`TILE_FORMAT_VERSION`](crate::TILE_FORMAT_VERSION), MessagePack).
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        crate::tile::encode(*b"ILtd", self)
+    }
+
+    /// From [`to_bytes`](Self::to_bytes).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for other bytes, or lengths that do not fit the tile.
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let d: Self = crate::tile::decode(*b"ILtd", "tile duration", bytes)?;
+        if d.rows.len() != d.tile.rows.len() || d.columns.len() != d.tile.columns.len() {
+            return Err(Error::InvalidState {
+                what: "tile duration",
+                reason: format!("{} rows and {} columns for tile {:?}", d.rows.len(), d.columns.len(), d.tile),
+            });
+        }
+        Ok(d)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl DrawRequest {
+    /// As bytes (a tag, the tile format version, MessagePack).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        crate::tile::encode(*b"ILdr", self)
+    }
+
+    /// From [`to_bytes`](Self::to_bytes).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for other bytes.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        crate::tile::decode(*b"ILdr", "draw request", bytes)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl DrawCandidates {
+    /// As bytes (a tag, the tile format version, MessagePack).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        crate::tile::encode(*b"ILdc", self)
+    }
+
+    /// From [`to_bytes`](Self::to_bytes).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for other bytes.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        crate::tile::decode(*b"ILdc", "draw candidates", bytes)
+    }
+}
+
+/// [`scan_session_tile`](crate::scan_session_tile) and the tile's share of τ from the same scan. O(the scan + the tile's
+/// rows and columns).
+///
+/// # Errors
+/// As [`scan_session_tile`](crate::scan_session_tile).
+pub fn scan_session_tile_with_duration<M: Metric + ?Sized>(
+    sessions: [&Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    tile: &Tile,
+) -> Result<(TileSummary, TileDuration)> {
+    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
+    Ok((summary_of(&scanned, metric, tile), duration_of(&scanned, tile)))
+}
+
+/// The share of τ of a scanned tile.
+fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> TileDuration {
+    let widths = scanned.piece.cell_widths_s();
+    let breaks: Vec<u32> = scanned.piece_starts[1..].iter().map(|&s| s as u32).collect();
+    let prefix = prefix_sums_by_session(widths, &breaks);
+    let width = |a: usize, b: usize| (prefix[b] + widths[b]) - prefix[a];
+    let mut rows = vec![0.0; tile.rows.len()];
+    let mut diff = vec![0.0; tile.columns.len() + 1];
+    let set = &scanned.set;
+    for (k, row) in rows.iter_mut().enumerate() {
+        let w_k = widths[k];
+        let fleet_row = tile.rows.start + k;
+        for run in set.row(k) {
+            let (a, b) = (run.start as usize, run.end as usize);
+            *row += width(a, b);
+            let (fa, fb) = ((scanned.to_fleet)(a), (scanned.to_fleet)(b));
+            let first = if fa == fleet_row { fa + 1 } else { fa };
+            if first <= fb {
+                diff[first - tile.columns.start] += w_k;
+                diff[fb + 1 - tile.columns.start] -= w_k;
+            }
+        }
+    }
+    let mut running = 0.0;
+    let columns = diff[..tile.columns.len()]
+        .iter()
+        .map(|d| {
+            running += d;
+            running
+        })
+        .collect();
+    TileDuration { tile: tile.clone(), rows, columns }
+}
+
+/// τ of session `session` (its first fleet index `start`, `poses` poses) from the shares of
+/// every tile that holds its rows or columns ([`scan_session_tile_with_duration`]), in any
+/// order: `(own, other)` per pose, seconds, as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
+/// splits them. Shares of tiles without the session are ignored.
+///
+/// # Errors
+/// [`Error::InconsistentTiles`] for a share whose rows or columns lie outside the session.
+pub fn session_loop_duration(
+    session: usize,
+    start: usize,
+    poses: usize,
+    parts: &[TileDuration],
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let (mut own, mut other) = (vec![0.0; poses], vec![0.0; poses]);
+    let mut ordered: Vec<&TileDuration> = parts.iter().collect();
+    ordered.sort_by_key(|p| (p.tile.sessions, p.tile.rows.start, p.tile.columns.start));
+    for part in ordered {
+        let t = &part.tile;
+        for (side, range, values) in [(0, &t.rows, &part.rows), (1, &t.columns, &part.columns)] {
+            if t.sessions[side] != session {
+                continue;
+            }
+            if range.start < start || range.end > start + poses || values.len() != range.len() {
+                return Err(Error::InconsistentTiles {
+                    problem: format!("tile {t:?} does not lie in session {session} (poses {start}..{})", start + poses),
+                });
+            }
+            let target = if t.sessions[0] == t.sessions[1] { &mut own } else { &mut other };
+            for (k, v) in values.iter().enumerate() {
+                target[range.start - start + k] += v;
+            }
+        }
+    }
+    Ok((own, other))
+}
+
+impl MetricSpec {
+    /// [`draw_session_tile`] under this metric.
+    ///
+    /// # Errors
+    /// As [`draw_session_tile`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw_session_tile(
+        &self,
+        sessions: [&Trajectory; 2],
+        starts: [usize; 2],
+        gamma: f64,
+        separation: Separation,
+        tile: &Tile,
+        labels: &[u32],
+        request: &DrawRequest,
+    ) -> Result<DrawCandidates> {
+        with_metric!(self, m => draw_session_tile(sessions, starts, m, gamma, separation, tile, labels, request))
+    }
+
+    /// [`scan_session_tile_with_duration`] under this metric.
+    ///
+    /// # Errors
+    /// As [`scan_session_tile_with_duration`].
+    pub fn scan_session_tile_with_duration(
+        &self,
+        sessions: [&Trajectory; 2],
+        starts: [usize; 2],
+        gamma: f64,
+        separation: Separation,
+        tile: &Tile,
+    ) -> Result<(TileSummary, TileDuration)> {
+        with_metric!(self, m => scan_session_tile_with_duration(sessions, starts, m, gamma, separation, tile))
+    }
+}

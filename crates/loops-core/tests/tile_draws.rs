@@ -1,0 +1,268 @@
+//! Samples and τ from tiles equal the fleet's in memory: keyed draws over the merged statistics,
+//! each tile offering its pairs after a rescan, give `sample_fleet`'s samples pair for pair for
+//! 1, 2 and 7 tiles per session pair and any thread count, for every sampler of components,
+//! budgets and rates, between sessions only or not, trivial components skipped or not; a fleet
+//! of one session samples as the session alone; τ from the tiles' shares is
+//! `FleetLoops::loop_duration`'s.
+
+use loops_core::{
+    DrawCandidates, DrawRequest, Euclidean, Fleet, FleetLoops, FleetOptions, KeyedDraw, SampleSize, Sampler,
+    SamplerKind, Separation, SessionBlocks, TileDuration, TileMerge, TileSummary, Trajectory, draw_session_tile,
+    find_fleet_loops, find_loops_separated, pair_key, plan_session_tiles, sample_fleet, sample_loops,
+    scan_session_tile_with_duration, session_loop_duration, tile_requests, with_threads,
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const SIGMAS: [SamplerKind; 5] =
+    [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha, SamplerKind::ClosestFirst];
+
+/// A figure-eight-ish loop in the plane, `n` poses, starting at time `t0`.
+fn tour(n: usize, t0: f64, offset: [f64; 2]) -> Trajectory {
+    let points: Vec<[f64; 2]> = (0..n)
+        .map(|k| {
+            let s = k as f64 / n as f64 * std::f64::consts::TAU * 1.5;
+            [offset[0] + 10.0 * s.cos(), offset[1] + 6.0 * (2.0 * s).sin()]
+        })
+        .collect();
+    Trajectory::from_points((0..n).map(|k| t0 + 0.5 * k as f64).collect(), &points).unwrap()
+}
+
+/// Random walks in a 30 m square that cross each other often, with stops (repeated poses).
+fn walks(seed: u64) -> Vec<Trajectory> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..rng.random_range(3..5))
+        .map(|k| {
+            let n = rng.random_range(60..160);
+            let mut p = [rng.random_range(-10.0..10.0), rng.random_range(-10.0..10.0)];
+            let mut t = 100.0 * k as f64;
+            let (mut times, mut points) = (Vec::new(), Vec::new());
+            for _ in 0..n {
+                if rng.random::<f64>() > 0.15 {
+                    p = [p[0] + rng.random_range(-1.0..1.0), p[1] + rng.random_range(-1.0..1.0)];
+                }
+                t += rng.random_range(0.05..0.3);
+                times.push(t);
+                points.push(p);
+            }
+            Trajectory::from_points(times, &points).unwrap()
+        })
+        .collect()
+}
+
+fn adversarial() -> Vec<Trajectory> {
+    let a = tour(90, 0.0, [0.0, 0.0]);
+    let points: Vec<[f64; 2]> = (0..a.len()).rev().map(|k| [a.point(k)[0], a.point(k)[1]]).collect();
+    let reversed = Trajectory::from_points((0..a.len()).map(|k| 1e5 + k as f64).collect(), &points).unwrap();
+    let parked = Trajectory::from_points((0..60).map(|k| k as f64 * 0.1).collect(), &vec![[10.0, 0.0]; 60]).unwrap();
+    vec![a.clone(), a, reversed, parked, tour(70, 7.0, [5e3, -5e3])]
+}
+
+/// The fleet's tiles, scanned (with their shares of τ) and merged in one step through bytes.
+struct Tiled {
+    merged: loops_core::MergedLoops,
+    durations: Vec<TileDuration>,
+    starts: Vec<usize>,
+}
+
+fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: usize) -> Tiled {
+    let longest = sessions.iter().map(Trajectory::len).max().unwrap();
+    let block = longest.div_ceil(per_pair).max(1);
+    let blocks: Vec<SessionBlocks> =
+        sessions.iter().map(|s| SessionBlocks::new(s, &Euclidean, block).unwrap()).collect();
+    let tiles = plan_session_tiles(&blocks, &Euclidean, gamma).unwrap();
+    let mut starts = vec![0];
+    for s in sessions {
+        starts.push(starts.last().unwrap() + s.len());
+    }
+    let (mut parts, mut durations) = (Vec::new(), Vec::new());
+    for tile in &tiles {
+        let [a, b] = tile.sessions;
+        let (summary, duration) = scan_session_tile_with_duration(
+            [&sessions[a], &sessions[b]],
+            [starts[a], starts[b]],
+            &Euclidean,
+            gamma,
+            separation,
+            tile,
+        )
+        .unwrap();
+        parts.push(TileMerge::new(TileSummary::from_bytes(&summary.to_bytes()).unwrap()).unwrap());
+        durations.push(TileDuration::from_bytes(&duration.to_bytes()).unwrap());
+    }
+    // Two levels: pairs of tiles, then all of those.
+    let mut level = Vec::new();
+    let mut rest = parts.into_iter();
+    while let Some(first) = rest.next() {
+        let merged = TileMerge::merge([first].into_iter().chain(rest.next()).collect()).unwrap();
+        level.push(TileMerge::from_bytes(&merged.to_bytes()).unwrap());
+    }
+    let merged = TileMerge::merge(level).unwrap().finish().unwrap();
+    starts.pop();
+    Tiled { merged, durations, starts }
+}
+
+/// The samples of a keyed draw over tiles, as (pair in fleet indices, component, δ, times).
+type Drawn = Vec<([usize; 2], usize, f64, [f64; 2])>;
+
+fn draw_from_tiles(
+    sessions: &[Trajectory],
+    t: &Tiled,
+    gamma: f64,
+    separation: Separation,
+    sampler: &Sampler,
+    between_only: bool,
+) -> (Drawn, usize, u64) {
+    let stats = t.merged.draw_stats();
+    let blocks: Vec<[usize; 2]> = t.merged.components().iter().map(|m| m.sessions).collect();
+    let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
+    let mut draw = KeyedDraw::new(sampler, &stats, &keep).unwrap();
+    let mut passes = 0;
+    while let Some(request) = draw.request().cloned() {
+        passes += 1;
+        assert!(passes < 10, "the draw does not end");
+        for (k, part) in tile_requests(&t.merged, &request).into_iter().enumerate() {
+            let Some(part) = part else { continue };
+            let part = DrawRequest::from_bytes(&part.to_bytes()).unwrap();
+            let tile = &t.merged.tiles()[k];
+            let [a, b] = tile.sessions;
+            let offers = draw_session_tile(
+                [&sessions[a], &sessions[b]],
+                [t.starts[a], t.starts[b]],
+                &Euclidean,
+                gamma,
+                separation,
+                tile,
+                t.merged.tile_labels(k),
+                &part,
+            )
+            .unwrap();
+            draw.absorb(DrawCandidates::from_bytes(&offers.to_bytes()).unwrap());
+        }
+        draw.complete();
+    }
+    let picks = draw.picks().unwrap().iter().map(|p| (p.pair, p.component, p.distance, p.times_s)).collect();
+    (picks, draw.groups(), draw.available())
+}
+
+fn in_memory(
+    fleet: &Fleet,
+    loops: &FleetLoops,
+    sampler: &Sampler,
+    between_only: bool,
+    threads: usize,
+) -> (Drawn, usize, u64) {
+    let samples =
+        with_threads(Some(threads), || sample_fleet(fleet, &Euclidean, loops, sampler, between_only)).unwrap().unwrap();
+    let located = fleet.localize(&samples).unwrap();
+    let drawn = samples
+        .rows()
+        .iter()
+        .zip(&located)
+        .map(|(s, l)| (s.pair.unwrap(), s.component.unwrap(), s.distance.unwrap(), l.times_s))
+        .collect();
+    (drawn, samples.groups(), samples.available())
+}
+
+fn samplers() -> Vec<Sampler> {
+    let mut out = Vec::new();
+    for (k, kind) in SIGMAS.into_iter().enumerate() {
+        for size in [SampleSize::Budget(3), SampleSize::Budget(40), SampleSize::Budget(700)] {
+            out.push(Sampler::new(kind, size, 11 + k as u64));
+        }
+        let rate = match kind {
+            SamplerKind::Alpha => 0.05,
+            SamplerKind::One => 2.0,
+            _ => 0.3,
+        };
+        out.push(Sampler::new(kind, SampleSize::Rate(rate), 5));
+        out.push(Sampler { skip_trivial: true, ..Sampler::new(kind, SampleSize::Budget(60), 2) });
+    }
+    out
+}
+
+fn check_fleet(sessions: &[Trajectory], gamma: f64, separation: Separation) {
+    let named = sessions.iter().enumerate().map(|(k, t)| (format!("s{k}"), t.clone())).collect();
+    let fleet = Fleet::new(named).unwrap();
+    let options = FleetOptions { separation, ..FleetOptions::default() };
+    let loops = find_fleet_loops(&fleet, &Euclidean, gamma, &options).unwrap();
+    let (own, other) = loops.loop_duration();
+    for per_pair in [1, 2, 7] {
+        let t = tiled(sessions, gamma, separation, per_pair);
+        // τ from the tiles' shares.
+        for (a, s) in sessions.iter().enumerate() {
+            let (o, x) = session_loop_duration(a, t.starts[a], s.len(), &t.durations).unwrap();
+            let range = t.starts[a]..t.starts[a] + s.len();
+            for (got, want) in [(&o, &own[range.clone()]), (&x, &other[range])] {
+                for (k, (g, w)) in got.iter().zip(want.iter()).enumerate() {
+                    assert!(
+                        (g - w).abs() <= 1e-9 * (1.0 + w.abs()),
+                        "{per_pair} tiles, session {a} pose {k}: τ {g} != {w}"
+                    );
+                }
+            }
+        }
+        for sampler in samplers() {
+            for between_only in [false, true] {
+                let expected = in_memory(&fleet, &loops, &sampler, between_only, 1);
+                let got = draw_from_tiles(sessions, &t, gamma, separation, &sampler, between_only);
+                assert_eq!(
+                    got, expected,
+                    "{per_pair} tiles per pair, {:?} {:?} skip_trivial {} between_only {between_only}, {separation}",
+                    sampler.kind, sampler.size, sampler.skip_trivial
+                );
+                if per_pair == 2 {
+                    assert_eq!(in_memory(&fleet, &loops, &sampler, between_only, 2), expected, "threads change it");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn random_fleets_draw_from_tiles_as_in_memory() {
+    for seed in 0..3 {
+        check_fleet(&walks(seed), 1.5, Separation::NONE);
+    }
+    check_fleet(&walks(7), 1.5, Separation::path(3.0));
+}
+
+#[test]
+fn adversarial_fleets_draw_from_tiles_as_in_memory() {
+    for separation in [Separation::NONE, Separation::path(4.5)] {
+        check_fleet(&adversarial(), 1.5, separation);
+    }
+}
+
+/// A fleet of one session is that session (on another clock): the same pairs for every sampler
+/// of components.
+#[test]
+fn a_fleet_of_one_samples_as_the_session_alone() {
+    let drive = walks(3).remove(0);
+    let fleet = Fleet::new(vec![("only".into(), drive.clone())]).unwrap();
+    let loops = find_fleet_loops(&fleet, &Euclidean, 1.5, &FleetOptions::default()).unwrap();
+    let alone = find_loops_separated(&drive, &Euclidean, 1.5, Separation::NONE).unwrap();
+    for sampler in samplers() {
+        let a = sample_fleet(&fleet, &Euclidean, &loops, &sampler, false).unwrap();
+        let b = sample_loops(&drive, &Euclidean, &alone, &sampler).unwrap();
+        let key = |s: &loops_core::Samples| -> Vec<_> {
+            s.rows().iter().map(|r| (r.pair, r.component, r.distance.map(f64::to_bits))).collect()
+        };
+        assert!(!b.is_empty());
+        assert_eq!(key(&a), key(&b), "{:?} {:?}", sampler.kind, sampler.size);
+    }
+}
+
+/// Keys are uniform: the share of keys below a threshold is the threshold's fraction, and
+/// σ_1's picks within one component spread over its pairs as a uniform draw does.
+#[test]
+fn keys_are_uniform_and_independent_of_the_block() {
+    let n = 200_000;
+    let below = (0..n).filter(|&k| pair_key(9, k / 300, k % 300 + 1) < u64::MAX / 4).count();
+    let share = below as f64 / n as f64;
+    assert!((share - 0.25).abs() < 0.005, "{share}");
+    // Seeds and rows give other keys; the same cell the same key.
+    assert_ne!(pair_key(1, 5, 70), pair_key(2, 5, 70));
+    assert_ne!(pair_key(1, 5, 70), pair_key(1, 6, 70));
+    assert_eq!(pair_key(1, 5, 70), pair_key(1, 5, 70));
+}
