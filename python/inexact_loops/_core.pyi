@@ -2501,6 +2501,40 @@ class TiledFleetLoops:
     def __reduce__(self) -> tuple[Callable[[bytes], TiledFleetLoops], tuple[bytes]]: ...
     @classmethod
     def _from_state(cls, state: bytes) -> TiledFleetLoops: ...
+    def draw(
+        self,
+        sampler: str,
+        *,
+        rate: float | None = None,
+        budget: int | None = None,
+        seed: int,
+        between_only: bool = False,
+        skip_trivial: bool = False,
+    ) -> KeyedDraw:
+        """Plans a keyed draw of samples (see :class:`KeyedDraw`): the same samples as
+        :func:`sample_fleet` on the same sessions, with the samplers of components (``"one"``,
+        ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``; not the baselines,
+        whose rules run over whole trajectories).
+
+        Args:
+            sampler: the sampler's name.
+            rate, budget: as :func:`sample_fleet` (exactly one).
+            seed: the seed.
+            between_only: only the components between two sessions.
+            skip_trivial: leave out the trivial components.
+
+        Returns:
+            :class:`KeyedDraw`.
+
+        Raises:
+            InvalidParameterError: an unknown sampler, a baseline, both or neither of rate and
+                budget, a budget of 0, a rate out of range; ``TooManySamplesError`` as
+                :func:`sample_fleet`.
+        """
+    @property
+    def tiles(self) -> list[Tile]:
+        """The tiles merged, in the merge's order (the indices of :meth:`KeyedDraw.requests`)."""
+
     @property
     def names(self) -> list[str]:
         """The sessions' names, in order."""
@@ -2520,6 +2554,152 @@ class TiledFleetLoops:
         Raises:
             ImportError: ``sparse=True`` without scipy.
         """
+
+class KeyedDraw:
+    """A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
+    the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
+    pairs (:func:`draw_tile`), until the draw is :attr:`done`. Its samples are those of
+    :func:`sample_fleet` with the same sampler, seed and options, pair for pair.
+    """
+
+    @property
+    def done(self) -> bool:
+        """Whether every pass has run (:meth:`table` then holds the samples)."""
+    @property
+    def groups(self) -> int:
+        """Number of groups (components with a pair to sample; 0 for σ_α)."""
+    @property
+    def available(self) -> int:
+        """Number of candidate pairs."""
+    @property
+    def warnings(self) -> list[str]:
+        """The warnings of the quotas, as text."""
+    def requests(self) -> list[tuple[int, TileDrawRequest]]:
+        """What the pending pass asks of the tiles: ``(tile index, TileDrawRequest)`` for every
+        tile asked something (indices in the merge's order, :attr:`TiledFleetLoops.tiles`);
+        empty once :attr:`done`.
+        """
+    def absorb(self, offers: list[DrawCandidates], *, complete: bool = True) -> None:
+        """Takes the tiles' offers to the pending pass (all at once, or in several calls), then,
+        with ``complete=True`` (the last call of the pass), ends the pass: the samples, or
+        another pass for components whose keyed pairs came back short (rare).
+
+        Raises:
+            TypeError: an offer of another type.
+        """
+    def table(self) -> Table:
+        """The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
+        ``t_s``, ``session_b``, ``name_b``, ``j``, ``t_prime_s`` (each on its session's clock),
+        ``component``, ``distance``, in order of the pairs.
+
+        Raises:
+            InvalidParameterError: before the draw is :attr:`done`.
+        """
+
+class TileDrawRequest:
+    """What one tile must offer a pass of a :class:`KeyedDraw`: the tile, the component ids of its
+    provisional components, and the part of the request about them. Pickles as its bytes.
+    """
+
+    def __new__(cls, tile: Tile, labels: bytes, request: bytes) -> TileDrawRequest: ...
+    def __reduce__(self) -> tuple[type[TileDrawRequest], tuple[Tile, bytes, bytes]]: ...
+    @property
+    def tile(self) -> Tile:
+        """The tile."""
+
+class DrawCandidates:
+    """What one tile offers a pass of a keyed draw (:func:`draw_tile`): its keyed pairs below the
+    thresholds and the closest pairs of requested rows. Pickles as its bytes.
+    """
+
+    def __new__(cls, data: bytes) -> DrawCandidates: ...
+    def __reduce__(self) -> tuple[type[DrawCandidates], tuple[bytes]]: ...
+    def __len__(self) -> int: ...
+    def to_bytes(self) -> bytes:
+        """The offers as bytes (a tag, the tile format version, then MessagePack)."""
+
+def draw_tile(
+    request: TileDrawRequest,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+) -> DrawCandidates:
+    """Rescans one tile from its two sessions, without the GIL, and offers its pairs to a pass of a
+    :class:`KeyedDraw` (the arguments as :func:`scan_tile`'s, which the request's tile must have
+    been scanned with).
+
+    Args:
+        request: a :class:`TileDrawRequest` of :meth:`KeyedDraw.requests`.
+        session_a, session_b, starts, gamma, metric, separation, threads: as :func:`scan_tile`.
+
+    Returns:
+        :class:`DrawCandidates`.
+
+    Raises:
+        InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan.
+    """
+
+class TileDuration:
+    """What one tile's runs add to the loop duration τ of its rows and columns
+    (:func:`scan_tile_with_duration`); :func:`session_loop_duration` adds up a session's.
+    Pickles as its bytes.
+    """
+
+    def __new__(cls, data: bytes) -> TileDuration: ...
+    def __reduce__(self) -> tuple[type[TileDuration], tuple[bytes]]: ...
+    def to_bytes(self) -> bytes:
+        """The share as bytes (a tag, the tile format version, then MessagePack)."""
+    @property
+    def tile(self) -> Tile:
+        """The tile."""
+
+def scan_tile_with_duration(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+) -> tuple[TileSummary, TileDuration]:
+    """:func:`scan_tile`, and the tile's share of the loop duration τ from the same scan.
+
+    Args:
+        As :func:`scan_tile`.
+
+    Returns:
+        ``(TileSummary, TileDuration)``.
+
+    Raises:
+        As :func:`scan_tile`.
+    """
+
+def session_loop_duration(
+    session: int, *, start: int, poses: int, parts: list[TileDuration]
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The loop duration τ of one session from the shares of the tiles that hold its rows or
+    columns (:func:`scan_tile_with_duration`), as :meth:`FleetLoops.loop_duration` splits it.
+
+    Args:
+        session: the session's index in the fleet.
+        start: its first fleet index.
+        poses: its number of poses.
+        parts: :class:`TileDuration` shares, in any order (others are ignored).
+
+    Returns:
+        ``(own_s, other_s)``: float64 arrays of ``poses`` seconds, τ within the session and with
+        the other sessions.
+
+    Raises:
+        InvalidParameterError: a share that does not lie in the session.
+    """
 
 def run_cli(args: list[str]) -> int:
     """Runs the ``loops`` command in this process with ``args`` (the arguments after the program

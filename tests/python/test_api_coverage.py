@@ -133,6 +133,36 @@ ELSEWHERE = {
             "TiledFleetLoops.session_pairs",
         )
     },
+    **{
+        name: ("python/test_dask.py", "test_samples_on_the_cluster_equal_sample_fleet")
+        for name in (
+            "TiledFleetLoops.draw",
+            "TiledFleetLoops.tiles",
+            "KeyedDraw",
+            "KeyedDraw.absorb",
+            "KeyedDraw.available",
+            "KeyedDraw.done",
+            "KeyedDraw.groups",
+            "KeyedDraw.requests",
+            "KeyedDraw.table",
+            "KeyedDraw.warnings",
+            "TileDrawRequest",
+            "TileDrawRequest.tile",
+            "DrawCandidates",
+            "DrawCandidates.to_bytes",
+            "draw_tile",
+        )
+    },
+    **{
+        name: ("python/test_dask.py", "test_loop_duration_from_tiles_equals_the_fleet")
+        for name in (
+            "TileDuration",
+            "TileDuration.tile",
+            "TileDuration.to_bytes",
+            "scan_tile_with_duration",
+            "session_loop_duration",
+        )
+    },
     "Trajectory.from_evo": (
         "python/test_interop.py",
         "test_from_evo_se3_reorders_w_first_quaternions",

@@ -37,6 +37,7 @@ mod py_quality;
 mod py_samples;
 mod py_separation;
 mod py_tile;
+mod py_tile_draw;
 mod py_trajectory;
 mod warning;
 
@@ -163,6 +164,13 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_tile::plan_tiles, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile::scan_tile, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile::merge_tiles, module)?)?;
+    module.add_class::<py_tile_draw::KeyedDraw>()?;
+    module.add_class::<py_tile_draw::TileDrawRequest>()?;
+    module.add_class::<py_tile_draw::DrawCandidates>()?;
+    module.add_class::<py_tile_draw::TileDuration>()?;
+    module.add_function(wrap_pyfunction!(py_tile_draw::draw_tile, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile_draw::scan_tile_with_duration, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile_draw::session_loop_duration, module)?)?;
     module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
     module.add_class::<py_graph::PoseGraph>()?;
     module.add_function(wrap_pyfunction!(py_graph::read_pose_graph, module)?)?;

@@ -28,7 +28,11 @@ pub(crate) struct SessionBlocks {
 }
 
 /// The metric of `metric=` (a name or an `inexact_loops.metrics` object), or `default`.
-fn tile_metric(metric: Option<&Bound<'_, PyAny>>, default: MetricSpec, function: &str) -> PyResult<MetricSpec> {
+pub(crate) fn tile_metric(
+    metric: Option<&Bound<'_, PyAny>>,
+    default: MetricSpec,
+    function: &str,
+) -> PyResult<MetricSpec> {
     match metric {
         None => Ok(default),
         Some(_) => MetricArg::spec_from_py(metric, function),
@@ -143,7 +147,7 @@ pub(crate) fn session_blocks(
 #[pyclass(frozen, eq, hash, module = "inexact_loops._core")]
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub(crate) struct Tile {
-    inner: loops_core::Tile,
+    pub(crate) inner: loops_core::Tile,
 }
 
 #[pymethods]
@@ -249,7 +253,7 @@ pub(crate) fn plan_tiles(
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct TileSummary {
-    inner: loops_core::TileSummary,
+    pub(crate) inner: loops_core::TileSummary,
 }
 
 #[pymethods]
@@ -470,13 +474,15 @@ impl TileMerge {
         }
         let spans: Vec<f64> = sessions.iter().map(|s| s.inner.span_s).collect();
         let merge = self.inner.clone();
-        let (components, times, pairs) = detached(py, move || {
+        let fleet_starts = starts.clone();
+        let (components, times, pairs, merged) = detached(py, move || {
             let merged = merge.finish()?;
-            let components = merged.fleet_components(&starts)?;
+            let components = merged.fleet_components(&fleet_starts)?;
             let times = merged.components().iter().map(|c| c.times_s).collect();
-            Ok((components, times, merged.session_pairs(&spans)?))
+            Ok((components, times, merged.session_pairs(&spans)?, merged))
         })?;
-        Ok(TiledFleetLoops { names, components, times, pairs })
+        let merged = Some((std::sync::Arc::new(merged), starts));
+        Ok(TiledFleetLoops { names, components, times, pairs, merged })
     }
 }
 
@@ -537,10 +543,26 @@ pub(crate) fn merge_tiles(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyRes
 /// they stayed on the machines that scanned the tiles.
 #[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct TiledFleetLoops {
-    names: Vec<String>,
+    pub(crate) names: Vec<String>,
     components: Vec<loops_core::FleetComponent>,
     times: Vec<[[f64; 2]; 2]>,
     pairs: Vec<loops_core::SessionPair>,
+    /// The merge and the sessions' first fleet indices, for keyed draws of samples
+    /// (`py_tile_draw`); not pickled (an unpickled result draws no samples).
+    pub(crate) merged: Option<(std::sync::Arc<loops_core::MergedLoops>, Vec<usize>)>,
+}
+
+impl TiledFleetLoops {
+    /// The merge and the sessions' first fleet indices, or why not.
+    pub(crate) fn merge(&self) -> PyResult<(&std::sync::Arc<loops_core::MergedLoops>, &[usize])> {
+        self.merged.as_ref().map(|(m, s)| (m, s.as_slice())).ok_or_else(|| {
+            invalid_parameter(
+                "this TiledFleetLoops was read from a pickle, which keeps its tables but not the merge: draw \
+                 samples from the one TileMerge.finish made"
+                    .to_owned(),
+            )
+        })
+    }
 }
 
 /// What a pickled `TiledFleetLoops` holds: names, components, their times, session pairs.
@@ -570,7 +592,7 @@ impl TiledFleetLoops {
         if let Some((k, p)) = pairs.iter().enumerate().find(|(_, p)| !fits(p.sessions)) {
             return Err(invalid(format!("session pair {k} has sessions {:?}, of {n}", p.sessions)));
         }
-        Ok(Self { names, components, times, pairs })
+        Ok(Self { names, components, times, pairs, merged: None })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
@@ -582,6 +604,50 @@ impl TiledFleetLoops {
 
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[self.names.len() as u64, self.components.len() as u64, self.pairs.len() as u64])
+    }
+
+    /// Plans a keyed draw of samples (see :class:`KeyedDraw`): the same samples as
+    /// :func:`sample_fleet` on the same sessions, with the samplers of components (``"one"``,
+    /// ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``; not the baselines,
+    /// whose rules run over whole trajectories).
+    ///
+    /// Args:
+    ///     sampler: the sampler's name.
+    ///     rate, budget: as :func:`sample_fleet` (exactly one).
+    ///     seed: the seed.
+    ///     between_only: only the components between two sessions.
+    ///     skip_trivial: leave out the trivial components.
+    ///
+    /// Returns:
+    ///     :class:`KeyedDraw`.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: an unknown sampler, a baseline, both or neither of rate and
+    ///         budget, a budget of 0, a rate out of range, a result read from a pickle (which
+    ///         holds no merge); ``TooManySamplesError`` as :func:`sample_fleet`.
+    #[pyo3(signature = (sampler, *, rate=None, budget=None, seed, between_only=false, skip_trivial=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn draw(
+        &self,
+        py: Python<'_>,
+        sampler: &str,
+        rate: Option<f64>,
+        budget: Option<usize>,
+        seed: u64,
+        between_only: bool,
+        skip_trivial: bool,
+    ) -> PyResult<crate::py_tile_draw::KeyedDraw> {
+        crate::py_tile_draw::plan_draw(py, self, sampler, rate, budget, seed, between_only, skip_trivial)
+    }
+
+    /// The tiles merged, in the merge's order (the indices of :meth:`KeyedDraw.requests`).
+    #[getter]
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a result read from a pickle, which holds no merge.
+    fn tiles(&self) -> PyResult<Vec<Tile>> {
+        let (merged, _) = self.merge()?;
+        Ok(merged.tiles().iter().map(|t| Tile { inner: t.clone() }).collect())
     }
 
     fn __repr__(&self) -> String {

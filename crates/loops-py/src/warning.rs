@@ -78,20 +78,29 @@ pub(crate) fn warn_loops(py: Python<'_>, loops: &loops_core::Loops) -> PyResult<
 /// Issues the warnings of `samples` (from `sample`), and an empty sample's when none of them
 /// says it is empty. `skip_trivial` is named in that message when it was asked for.
 pub(crate) fn warn_samples(py: Python<'_>, samples: &loops_core::Samples, skip_trivial: bool) -> PyResult<()> {
+    let (sampler, available) = (samples.sampler(), samples.available());
+    warn_sample_warnings(py, samples.warnings(), samples.is_empty(), sampler, available, skip_trivial)
+}
+
+/// [`warn_samples`] from its parts (a keyed draw's).
+pub(crate) fn warn_sample_warnings(
+    py: Python<'_>,
+    warnings: &[loops_core::SampleWarning],
+    is_empty: bool,
+    sampler: loops_core::SamplerKind,
+    available: u64,
+    skip_trivial: bool,
+) -> PyResult<()> {
     let empty = EmptySampleWarning::type_object(py);
     let mut said_empty = false;
-    for warning in samples.warnings() {
+    for warning in warnings {
         let engine = EngineWarning::Sample(warning);
         said_empty |= category(py, &engine).is(&empty);
         issue(py, &engine, &warning.to_string())?;
     }
-    if samples.is_empty() && !said_empty {
+    if is_empty && !said_empty {
         let hint = if skip_trivial { " (skip_trivial left out the trivial loop components)" } else { "" };
-        let message = format!(
-            "no samples: the {} sampler kept none of its {} candidate(s){hint}",
-            samples.sampler(),
-            samples.available()
-        );
+        let message = format!("no samples: the {sampler} sampler kept none of its {available} candidate(s){hint}");
         issue(py, &EngineWarning::NoSamples, &message)?;
     }
     Ok(())

@@ -1,0 +1,457 @@
+//! Samples and τ from tiles: `TiledFleetLoops.draw` (`KeyedDraw`), `TileDrawRequest`,
+//! `draw_tile` (`DrawCandidates`), `scan_tile_with_duration` (`TileDuration`) and
+//! `session_loop_duration`. The shipped objects pickle as their bytes.
+
+use std::sync::Arc;
+
+use pyo3::exceptions::PyTypeError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyList, PyTuple};
+
+use crate::convert::{float64_column, int64_column, table, to_numpy};
+use crate::detached;
+use crate::error::{Failure, invalid_parameter};
+use crate::py_metric::{MetricArg, MetricRef};
+use crate::py_separation::SeparationArg;
+use crate::py_tile::{Tile, TileSummary, TiledFleetLoops, tile_metric};
+use crate::py_trajectory::Trajectory;
+use loops_core::{SampleSize, Sampler, SamplerKind};
+
+/// A column of names as a numpy array of ``str``.
+fn names_column<'py>(py: Python<'py>, values: Vec<&str>) -> PyResult<Bound<'py, PyAny>> {
+    let numpy = py.import("numpy")?;
+    if values.is_empty() {
+        return numpy.call_method1("array", (PyList::empty(py), "<U1"));
+    }
+    numpy.call_method1("array", (PyList::new(py, values)?,))
+}
+
+/// A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
+/// the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
+/// pairs (:func:`draw_tile`), until the draw is :attr:`done`. Its samples are those of
+/// :func:`sample_fleet` with the same sampler, seed and options, pair for pair.
+#[pyclass(module = "inexact_loops._core")]
+pub(crate) struct KeyedDraw {
+    inner: loops_core::KeyedDraw,
+    merged: Arc<loops_core::MergedLoops>,
+    names: Vec<String>,
+    starts: Vec<usize>,
+    skip_trivial: bool,
+}
+
+/// [`TiledFleetLoops::draw`]'s body.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn plan_draw(
+    py: Python<'_>,
+    loops: &TiledFleetLoops,
+    sampler: &str,
+    rate: Option<f64>,
+    budget: Option<usize>,
+    seed: u64,
+    between_only: bool,
+    skip_trivial: bool,
+) -> PyResult<KeyedDraw> {
+    let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
+    let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
+    let spec = Sampler { skip_trivial, ..Sampler::new(kind, size, seed) };
+    let (merged, starts) = loops.merge()?;
+    let (merged, starts) = (Arc::clone(merged), starts.to_vec());
+    let kept = Arc::clone(&merged);
+    let inner = detached(py, move || {
+        let stats = merged.draw_stats();
+        let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
+        let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
+        Ok(loops_core::KeyedDraw::new(&spec, &stats, &keep)?)
+    })?;
+    Ok(KeyedDraw { inner, merged: kept, names: loops.names.clone(), starts, skip_trivial })
+}
+
+#[pymethods]
+impl KeyedDraw {
+    fn __repr__(&self) -> String {
+        format!(
+            "KeyedDraw(sampler={:?}, {} groups, {} candidates, {})",
+            self.inner.sampler().name(),
+            self.inner.groups(),
+            self.inner.available(),
+            if self.inner.picks().is_some() { "done" } else { "passes to run" }
+        )
+    }
+
+    /// Whether every pass has run (:meth:`table` then holds the samples).
+    #[getter]
+    fn done(&self) -> bool {
+        self.inner.picks().is_some()
+    }
+
+    /// Number of groups (components with a pair to sample; 0 for σ_α).
+    #[getter]
+    fn groups(&self) -> usize {
+        self.inner.groups()
+    }
+
+    /// Number of candidate pairs.
+    #[getter]
+    fn available(&self) -> u64 {
+        self.inner.available()
+    }
+
+    /// The warnings of the quotas, as text.
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.inner.warnings().iter().map(ToString::to_string).collect()
+    }
+
+    /// What the pending pass asks of the tiles: ``(tile index, TileDrawRequest)`` for every
+    /// tile asked something (indices in the merge's order, :attr:`TiledFleetLoops.tiles`);
+    /// empty once :attr:`done`.
+    fn requests(&self, py: Python<'_>) -> PyResult<Vec<(usize, TileDrawRequest)>> {
+        let Some(request) = self.inner.request().cloned() else { return Ok(Vec::new()) };
+        let merged = Arc::clone(&self.merged);
+        let parts = detached(py, move || Ok(loops_core::tile_requests(&merged, &request)))?;
+        Ok(parts
+            .into_iter()
+            .enumerate()
+            .filter_map(|(t, part)| {
+                part.map(|request| {
+                    let tile = self.merged.tiles()[t].clone();
+                    (t, TileDrawRequest { tile, labels: self.merged.tile_labels(t).to_vec(), request })
+                })
+            })
+            .collect())
+    }
+
+    /// Takes the tiles' offers to the pending pass (all at once, or in several calls), then,
+    /// with ``complete=True`` (the last call of the pass), ends the pass: the samples, or
+    /// another pass for components whose keyed pairs came back short (rare).
+    ///
+    /// Raises:
+    ///     TypeError: an offer of another type.
+    #[pyo3(signature = (offers, *, complete=true))]
+    fn absorb(&mut self, offers: Vec<PyRef<'_, DrawCandidates>>, complete: bool) {
+        for offer in offers {
+            self.inner.absorb(offer.inner.clone());
+        }
+        if complete {
+            self.inner.complete();
+        }
+    }
+
+    /// The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
+    /// ``t_s``, ``session_b``, ``name_b``, ``j``, ``t_prime_s`` (each on its session's clock),
+    /// ``component``, ``distance``, in order of the pairs.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: before the draw is :attr:`done`.
+    fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let Some(picks) = self.inner.picks() else {
+            return Err(invalid_parameter("the draw is not done: answer its requests() first".to_owned()));
+        };
+        let inner = &self.inner;
+        crate::warning::warn_sample_warnings(
+            py,
+            inner.warnings(),
+            picks.is_empty(),
+            inner.sampler(),
+            inner.available(),
+            self.skip_trivial,
+        )?;
+        let session_of = |f: usize| self.starts.partition_point(|&s| s <= f) - 1;
+        let located: Vec<([usize; 2], [usize; 2], &loops_core::DrawnPair)> = picks
+            .iter()
+            .map(|p| {
+                let (a, b) = (session_of(p.pair[0]), session_of(p.pair[1]));
+                ([a, b], [p.pair[0] - self.starts[a], p.pair[1] - self.starts[b]], p)
+            })
+            .collect();
+        table(
+            py,
+            [
+                ("session_a", int64_column(py, &located, |s| s.0[0])),
+                ("name_a", names_column(py, located.iter().map(|s| self.names[s.0[0]].as_str()).collect())?),
+                ("i", int64_column(py, &located, |s| s.1[0])),
+                ("t_s", float64_column(py, &located, |s| s.2.times_s[0])),
+                ("session_b", int64_column(py, &located, |s| s.0[1])),
+                ("name_b", names_column(py, located.iter().map(|s| self.names[s.0[1]].as_str()).collect())?),
+                ("j", int64_column(py, &located, |s| s.1[1])),
+                ("t_prime_s", float64_column(py, &located, |s| s.2.times_s[1])),
+                ("component", int64_column(py, &located, |s| s.2.component)),
+                ("distance", float64_column(py, &located, |s| s.2.distance)),
+            ],
+        )
+    }
+}
+
+/// What one tile must offer a pass of a :class:`KeyedDraw`: the tile, the component ids of its
+/// provisional components, and the part of the request about them. Pickles as its bytes.
+#[pyclass(frozen, module = "inexact_loops._core")]
+#[derive(Debug, Clone)]
+pub(crate) struct TileDrawRequest {
+    tile: loops_core::Tile,
+    labels: Vec<u32>,
+    request: loops_core::DrawRequest,
+}
+
+#[pymethods]
+impl TileDrawRequest {
+    /// The request from :meth:`to_bytes`'s parts (what pickling stores).
+    ///
+    /// Raises:
+    ///     InvalidParameterError: corrupt bytes.
+    #[new]
+    fn new(tile: &Tile, labels: &[u8], request: &[u8]) -> PyResult<Self> {
+        if !labels.len().is_multiple_of(4) {
+            return Err(invalid_parameter(format!("{} bytes of labels are not 4 bytes each", labels.len())));
+        }
+        let labels = labels.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+        let request = loops_core::DrawRequest::from_bytes(request).map_err(Failure::from)?;
+        Ok(Self { tile: tile.inner.clone(), labels, request })
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        let this = slf.get();
+        let labels: Vec<u8> = this.labels.iter().flat_map(|l| l.to_le_bytes()).collect();
+        let args =
+            (Tile { inner: this.tile.clone() }, PyBytes::new(py, &labels), PyBytes::new(py, &this.request.to_bytes()));
+        (slf.get_type(), args).into_pyobject(py)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("TileDrawRequest({:?}, {} components asked)", self.tile, self.request.components.len())
+    }
+
+    /// The tile.
+    #[getter]
+    fn tile(&self) -> Tile {
+        Tile { inner: self.tile.clone() }
+    }
+}
+
+/// What one tile offers a pass of a keyed draw (:func:`draw_tile`): its keyed pairs below the
+/// thresholds and the closest pairs of requested rows. Pickles as its bytes.
+#[pyclass(frozen, module = "inexact_loops._core")]
+#[derive(Debug, Clone)]
+pub(crate) struct DrawCandidates {
+    inner: loops_core::DrawCandidates,
+}
+
+#[pymethods]
+impl DrawCandidates {
+    /// The offers from :meth:`to_bytes`.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: corrupt bytes.
+    #[new]
+    fn new(data: &[u8]) -> PyResult<Self> {
+        Ok(Self { inner: loops_core::DrawCandidates::from_bytes(data).map_err(Failure::from)? })
+    }
+
+    /// The offers as bytes (a tag, the tile format version, then MessagePack).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.inner.to_bytes())
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        (slf.get_type(), (PyBytes::new(py, &slf.get().inner.to_bytes()),)).into_pyobject(py)
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.pool.len() + self.inner.rows.len() + self.inner.best.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "DrawCandidates({} keyed pairs, {} row picks, {} best picks)",
+            self.inner.pool.len(),
+            self.inner.rows.len(),
+            self.inner.best.len()
+        )
+    }
+}
+
+/// Rescans one tile from its two sessions, without the GIL, and offers its pairs to a pass of a
+/// :class:`KeyedDraw` (the arguments as :func:`scan_tile`'s, which the request's tile must have
+/// been scanned with).
+///
+/// Args:
+///     request: a :class:`TileDrawRequest` of :meth:`KeyedDraw.requests`.
+///     session_a, session_b, starts, gamma, metric, separation, threads: as :func:`scan_tile`.
+///
+/// Returns:
+///     :class:`DrawCandidates`.
+///
+/// Raises:
+///     InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan.
+#[pyfunction]
+#[pyo3(signature = (request, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
+    threads=None))]
+#[pyo3(
+    text_signature = "(request, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
+)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn draw_tile(
+    py: Python<'_>,
+    request: &TileDrawRequest,
+    session_a: &Trajectory,
+    session_b: Option<&Trajectory>,
+    starts: (usize, usize),
+    gamma: f64,
+    metric: Option<&Bound<'_, PyAny>>,
+    separation: SeparationArg,
+    threads: Option<usize>,
+) -> PyResult<DrawCandidates> {
+    let r = request.clone();
+    if session_b.is_none() && r.tile.sessions[0] != r.tile.sessions[1] {
+        return Err(PyTypeError::new_err(format!(
+            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
+            r.tile.sessions[0], r.tile.sessions[1]
+        )));
+    }
+    let metric = tile_metric(metric, session_a.default_metric(), "draw_tile")?;
+    let separation = separation.at(gamma);
+    let a = session_a.inner.clone();
+    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
+    let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
+        MetricRef::Spec(spec) => {
+            spec.draw_session_tile([&a, &b], [starts.0, starts.1], gamma, separation, &r.tile, &r.labels, &r.request)
+        }
+        MetricRef::Callable(callable) => loops_core::draw_session_tile(
+            [&a, &b],
+            [starts.0, starts.1],
+            callable,
+            gamma,
+            separation,
+            &r.tile,
+            &r.labels,
+            &r.request,
+        ),
+    })?;
+    Ok(DrawCandidates { inner })
+}
+
+/// What one tile's runs add to the loop duration τ of its rows and columns
+/// (:func:`scan_tile_with_duration`); :func:`session_loop_duration` adds up a session's.
+/// Pickles as its bytes.
+#[pyclass(frozen, module = "inexact_loops._core")]
+#[derive(Debug, Clone)]
+pub(crate) struct TileDuration {
+    inner: loops_core::TileDuration,
+}
+
+#[pymethods]
+impl TileDuration {
+    /// The share from :meth:`to_bytes`.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: corrupt bytes.
+    #[new]
+    fn new(data: &[u8]) -> PyResult<Self> {
+        Ok(Self { inner: loops_core::TileDuration::from_bytes(data).map_err(Failure::from)? })
+    }
+
+    /// The share as bytes (a tag, the tile format version, then MessagePack).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.inner.to_bytes())
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        (slf.get_type(), (PyBytes::new(py, &slf.get().inner.to_bytes()),)).into_pyobject(py)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("TileDuration({:?})", self.inner.tile)
+    }
+
+    /// The tile.
+    #[getter]
+    fn tile(&self) -> Tile {
+        Tile { inner: self.inner.tile.clone() }
+    }
+}
+
+/// :func:`scan_tile`, and the tile's share of the loop duration τ from the same scan.
+///
+/// Args:
+///     As :func:`scan_tile`.
+///
+/// Returns:
+///     ``(TileSummary, TileDuration)``.
+///
+/// Raises:
+///     As :func:`scan_tile`.
+#[pyfunction]
+#[pyo3(signature = (tile, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
+    threads=None))]
+#[pyo3(
+    text_signature = "(tile, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
+)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn scan_tile_with_duration(
+    py: Python<'_>,
+    tile: &Tile,
+    session_a: &Trajectory,
+    session_b: Option<&Trajectory>,
+    starts: (usize, usize),
+    gamma: f64,
+    metric: Option<&Bound<'_, PyAny>>,
+    separation: SeparationArg,
+    threads: Option<usize>,
+) -> PyResult<(TileSummary, TileDuration)> {
+    let tile = tile.inner.clone();
+    if session_b.is_none() && tile.sessions[0] != tile.sessions[1] {
+        return Err(PyTypeError::new_err(format!(
+            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
+            tile.sessions[0], tile.sessions[1]
+        )));
+    }
+    let metric = tile_metric(metric, session_a.default_metric(), "scan_tile_with_duration")?;
+    let separation = separation.at(gamma);
+    let a = session_a.inner.clone();
+    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
+    let (summary, duration) = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
+        MetricRef::Spec(spec) => {
+            spec.scan_session_tile_with_duration([&a, &b], [starts.0, starts.1], gamma, separation, &tile)
+        }
+        MetricRef::Callable(callable) => loops_core::scan_session_tile_with_duration(
+            [&a, &b],
+            [starts.0, starts.1],
+            callable,
+            gamma,
+            separation,
+            &tile,
+        ),
+    })?;
+    Ok((TileSummary { inner: summary }, TileDuration { inner: duration }))
+}
+
+/// The loop duration τ of one session from the shares of the tiles that hold its rows or
+/// columns (:func:`scan_tile_with_duration`), as :meth:`FleetLoops.loop_duration` splits it.
+///
+/// Args:
+///     session: the session's index in the fleet.
+///     start: its first fleet index.
+///     poses: its number of poses.
+///     parts: :class:`TileDuration` shares, in any order (others are ignored).
+///
+/// Returns:
+///     ``(own_s, other_s)``: float64 arrays of ``poses`` seconds, τ within the session and with
+///     the other sessions.
+///
+/// Raises:
+///     InvalidParameterError: a share that does not lie in the session.
+#[pyfunction]
+#[pyo3(signature = (session, *, start, poses, parts))]
+pub(crate) fn session_loop_duration<'py>(
+    py: Python<'py>,
+    session: usize,
+    start: usize,
+    poses: usize,
+    parts: Vec<PyRef<'py, TileDuration>>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let parts: Vec<loops_core::TileDuration> = parts.iter().map(|p| p.inner.clone()).collect();
+    let (own, other) = detached(py, move || Ok(loops_core::session_loop_duration(session, start, poses, &parts)?))?;
+    PyTuple::new(py, [to_numpy(py, own).into_any(), to_numpy(py, other).into_any()])
+}
