@@ -8,6 +8,7 @@ its two sessions are read, and merges the tiles' summaries in a tree of reductio
 
     loops = find_fleet_loops_dask(paths, gamma=20.0)                 # this machine
     loops = find_fleet_loops_dask(paths, gamma=20.0, client=client)  # the cluster
+    samples = loops.sample("rho", budget=500, seed=0)                # sample_fleet's samples
 
 What travels: the client sends paths, tiles and options, never poses. One task per session
 reads it and returns its pose count, span and block balls (:class:`~inexact_loops.SessionBlocks`,
@@ -16,29 +17,61 @@ two sessions (each worker keeps the last few it read) and returns a
 :class:`~inexact_loops.TileSummary` (statistics of its provisional components and the runs on
 its edges); merge tasks combine groups of summaries into :class:`~inexact_loops.TileMerge`
 objects, which keep only the edge runs still facing unmerged tiles, level by level, until one
-is left; the client finishes it into the components and the overlap matrix. Every task is a
-pure function of its inputs, so a worker that dies takes nothing with it: Dask reruns its
-tasks and the answer is the same.
+is left; the client finishes it into the components and the overlap matrix. Samples are drawn
+by keys (:class:`~inexact_loops.KeyedDraw`): the client works out each component's quota from
+the merged statistics, each tile's task rescans its tile and offers the few pairs asked of it
+(:func:`~inexact_loops.draw_tile`), and the samples are :func:`~inexact_loops.sample_fleet`'s,
+pair for pair, whatever the tiling and the workers. Loop duration per pose
+(``loop_duration=True``) comes from each tile's share (:func:`~inexact_loops.scan_tile_with_duration`),
+added up per session. Every task is a pure function of its inputs, so a worker that dies takes
+nothing with it: Dask reruns its tasks and the answer is the same.
 
-Requires ``dask[distributed]`` only with ``client=`` (``pip install 'inexact-loops[dask]'``).
+A session that cannot be read (a missing or corrupt log, or one whose dimension or metric
+differs from the others') is left out with a one-line error in :attr:`FleetRun.failures`; the
+rest of the fleet is computed without it (``on_error="raise"`` raises instead).
+
+:func:`run_fleet_dask` writes the tables as Parquet into an output folder (the command
+``loops-dask``, :func:`main`, is its command line).
+
+Requires ``dask[distributed]`` only with ``client=``, and pyarrow for Parquet
+(``pip install 'inexact-loops[dask]'``).
 """
 
 from __future__ import annotations
 
+import argparse
 import functools
+import json
+import operator
 import os
+import pickle
+import sys
+import tempfile
+import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from . import _core
-from .errors import InvalidParameterError
+import numpy as np
 
-__all__ = ["DEFAULT_BLOCK", "DEFAULT_FAN_IN", "find_fleet_loops_dask"]
+from . import _core
+from .errors import InvalidParameterError, LoopsIOError
+from .table import Table
+
+__all__ = [
+    "DEFAULT_BLOCK",
+    "DEFAULT_FAN_IN",
+    "FleetRun",
+    "find_fleet_loops_dask",
+    "main",
+    "read_pose_parquet",
+    "run_fleet_dask",
+    "write_pose_parquet",
+]
 
 #: Poses per block (the side of a tile) unless ``block=`` says otherwise: a tile of two blocks
-#: of a city drive at 10 Hz scans in well under a second on one core. Not tuned by a cost model.
+#: of a city drive at 10 Hz scans in well under a second on one core (BENCHMARKS.md, "Dask").
 DEFAULT_BLOCK = 50_000
 
 #: Summaries (or partial merges) combined by one merge task.
@@ -58,6 +91,131 @@ _READ_OPTIONS = (
     "quaternion_tolerance",
 )
 
+#: The columns of a Parquet pose store.
+_PARQUET_TIME = "t"
+_PARQUET_POSITION = ("x", "y", "z")
+_PARQUET_QUATERNION = ("qx", "qy", "qz", "qw")
+
+
+def _pyarrow() -> Any:
+    try:
+        import pyarrow  # type: ignore[import-untyped, import-not-found, unused-ignore]
+        import pyarrow.parquet  # type: ignore[import-untyped, import-not-found, unused-ignore]
+    except ImportError as error:
+        raise ImportError(
+            "Parquet needs pyarrow, which is not installed: pip install 'inexact-loops[dask]' "
+            f"(or pip install pyarrow) ({error})"
+        ) from error
+    return pyarrow
+
+
+def read_pose_parquet(path: str | os.PathLike[str], *, axes: tuple[int, int] | None = None) -> Any:
+    """Reads a session from a Parquet pose store: a column ``t`` (seconds, increasing), the
+    position ``x``, ``y`` and optionally ``z``, and optionally the orientation ``qx``, ``qy``,
+    ``qz``, ``qw`` (then an SE(3) trajectory, measured by its translation unless a metric says
+    otherwise). Read with pyarrow, only those columns.
+
+    Args:
+        path: the ``.parquet`` file.
+        axes: a plane of two position axes (0 = x, 1 = y, 2 = z), as :func:`read_trajectory`.
+
+    Returns:
+        :class:`Trajectory`.
+
+    Raises:
+        LoopsIOError: a missing column, a null or non-numeric value, naming the file and column.
+        InvalidTrajectoryError: times not increasing, non-finite values (naming the pose).
+        ImportError: without pyarrow.
+
+    Example:
+        >>> import tempfile, pathlib, numpy as np, inexact_loops as il
+        >>> from inexact_loops.dask import read_pose_parquet, write_pose_parquet
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "drive.parquet"
+        >>> write_pose_parquet(path, il.Trajectory(np.arange(3.0), np.eye(3)))
+        >>> len(read_pose_parquet(path))
+        3
+    """
+    pa = _pyarrow()
+    path = os.fspath(path)
+    try:
+        schema = pa.parquet.read_schema(path)
+    except FileNotFoundError:
+        raise
+    except Exception as error:  # pyarrow's own errors: not a Parquet file, corrupt footer
+        raise LoopsIOError(f"{path}: not a Parquet pose store: {error}") from error
+    names = set(schema.names)
+    missing = [c for c in (_PARQUET_TIME, "x", "y") if c not in names]
+    if missing:
+        raise LoopsIOError(
+            f"{path}: a Parquet pose store needs the columns t, x, y (z, qx, qy, qz, qw optional); "
+            f"missing {', '.join(missing)} (columns: {', '.join(schema.names)})"
+        )
+    position = [c for c in _PARQUET_POSITION if c in names]
+    orientation = all(c in names for c in _PARQUET_QUATERNION)
+    columns = [_PARQUET_TIME, *position, *(_PARQUET_QUATERNION if orientation else ())]
+    try:
+        table = pa.parquet.read_table(path, columns=columns)
+    except Exception as error:
+        raise LoopsIOError(f"{path}: cannot read the Parquet pose store: {error}") from error
+
+    def column(name: str) -> np.ndarray:
+        data = table.column(name)
+        if data.null_count:
+            raise LoopsIOError(f"{path}: column {name} has {data.null_count} null value(s)")
+        try:
+            return np.ascontiguousarray(data.to_numpy(), dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise LoopsIOError(f"{path}: column {name} is not numeric ({data.type})") from error
+
+    t = column(_PARQUET_TIME)
+    xyz = np.column_stack([column(c) for c in position])
+    if orientation:
+        if len(position) != 3:
+            raise LoopsIOError(f"{path}: an orientation (qx, qy, qz, qw) needs the position x, y, z")
+        q = np.column_stack([column(c) for c in _PARQUET_QUATERNION])
+        traj = _core.Trajectory.se3(t, xyz, q)
+    else:
+        traj = _core.Trajectory(t, xyz)
+    if axes is not None:
+        a, b = axes
+        if max(a, b) >= xyz.shape[1] or a == b or min(a, b) < 0:
+            raise InvalidParameterError(
+                f"axes {axes} do not name two position axes of {path} ({xyz.shape[1]} coordinates)"
+            )
+        traj = _core.Trajectory(t, xyz[:, [a, b]])
+    return traj
+
+
+def write_pose_parquet(path: str | os.PathLike[str], trajectory: Any) -> None:
+    """Writes a trajectory's times and positions (the first three coordinates, or two) as a
+    Parquet pose store that :func:`read_pose_parquet` reads: columns ``t``, ``x``, ``y`` (and
+    ``z``). Written to a temporary file beside ``path``, then renamed.
+
+    Raises:
+        ImportError: without pyarrow.
+    """
+    pa = _pyarrow()
+    points = np.asarray(trajectory.positions)
+    columns = {_PARQUET_TIME: np.asarray(trajectory.timestamps)}
+    for k, name in enumerate(_PARQUET_POSITION[: min(3, points.shape[1])]):
+        columns[name] = np.ascontiguousarray(points[:, k])
+    table = pa.table(columns)
+    _atomic(Path(path), lambda tmp: pa.parquet.write_table(table, tmp))
+
+
+def _atomic(path: Path, write: Callable[[str], None]) -> None:
+    """Writes ``path`` through a temporary file in its folder (``.NAME.XXXXXX.tmp``), renamed
+    into place: a reader sees the old file or the new one, never half of one."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
 
 def _hashable(value: Any) -> Any:
     """A read option as a hashable value (lists become tuples), for the worker's cache key."""
@@ -66,17 +224,46 @@ def _hashable(value: Any) -> Any:
     return value
 
 
+def _is_parquet(source: Any, options: dict[str, Any]) -> bool:
+    if options.get("format") == "parquet":
+        return True
+    return isinstance(source, str) and source.lower().endswith(".parquet")
+
+
 @functools.lru_cache(maxsize=SESSIONS_KEPT)
-def _read_session(source: str, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
+def _read_session(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
     """A session read on the worker (kept for the worker's next tiles)."""
-    return _core.read_trajectory(source, **dict(options))
+    read = dict(options)
+    if _is_parquet(source, read):
+        return read_pose_parquet(source, axes=read.get("axes"))
+    if isinstance(source, tuple):
+        source = list(source)
+    return _core.read_trajectory(source, **read)
+
+
+def _load(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
+    """A session: itself when in memory, else read (or found kept)."""
+    if isinstance(source, _core.Trajectory):
+        return source
+    return _read_session(source, options)
+
+
+class _Failed:
+    """A session that could not be read or does not fit the fleet: its error, as data."""
+
+    def __init__(self, error: BaseException) -> None:
+        self.error = error
 
 
 def _describe_session(
-    source: str, options: tuple[tuple[str, Any], ...], block: int, metric: Any
-) -> _core.SessionBlocks:
-    """Task: read one session, return what planning needs of it."""
-    return _core.session_blocks(_read_session(source, options), block=block, metric=metric)
+    source: Any, options: tuple[tuple[str, Any], ...], block: int, metric: Any
+) -> Any:
+    """Task: read one session, return what planning needs of it (or its error, as data)."""
+    try:
+        traj = _load(source, options)
+        return _core.session_blocks(traj, block=block, metric=metric), traj.manifold, traj.dim
+    except (OSError, ValueError, TypeError) as error:
+        return _Failed(error)
 
 
 def _separation(value: Any) -> Any:
@@ -87,20 +274,29 @@ def _separation(value: Any) -> Any:
     return value
 
 
+def _sessions_of(
+    sources: tuple[Any, Any], options: tuple[tuple[str, Any], ...]
+) -> tuple[_core.Trajectory, _core.Trajectory | None]:
+    a = _load(sources[0], options)
+    return a, None if sources[1] is None else _load(sources[1], options)
+
+
 def _scan_session_tile(
     tile: _core.Tile,
-    sources: tuple[str, str | None],
+    sources: tuple[Any, Any],
     options: tuple[tuple[str, Any], ...],
     starts: tuple[int, int],
     gamma: float,
     metric: str,
     separation: Any,
     threads: int | None,
-) -> _core.TileSummary:
-    """Task: read a tile's sessions (or find them kept), scan it without the GIL."""
-    a = _read_session(sources[0], options)
-    b = None if sources[1] is None else _read_session(sources[1], options)
-    return _core.scan_tile(
+    duration: bool,
+) -> Any:
+    """Task: read a tile's sessions (or find them kept), scan it without the GIL; with
+    ``duration``, also its share of tau."""
+    a, b = _sessions_of(sources, options)
+    scan = _core.scan_tile_with_duration if duration else _core.scan_tile
+    return scan(
         tile,
         a,
         b,
@@ -112,9 +308,59 @@ def _scan_session_tile(
     )
 
 
-def _merge(*parts: _core.TileSummary | _core.TileMerge) -> _core.TileMerge:
+def _draw_session_tile(
+    request: Any,
+    sources: tuple[Any, Any],
+    options: tuple[tuple[str, Any], ...],
+    starts: tuple[int, int],
+    gamma: float,
+    metric: str,
+    separation: Any,
+    threads: int | None,
+) -> Any:
+    """Task: rescan a tile and offer its pairs to a pass of a keyed draw."""
+    a, b = _sessions_of(sources, options)
+    return _core.draw_tile(
+        request,
+        a,
+        b,
+        starts=starts,
+        gamma=gamma,
+        metric=metric,
+        separation=_separation(separation),
+        threads=threads,
+    )
+
+
+def _merge(*parts: Any) -> Any:
     """Task: one merge of the tree."""
     return _core.merge_tiles(list(parts))
+
+
+def _session_tau(
+    session: int, start: int, poses: int, folder: str | None, name: str, t_s: Any, *parts: Any
+) -> Any:
+    """Task: a session's tau from its tiles' shares; written as Parquet into ``folder`` (on
+    the worker: the poses' tau never travels) or returned."""
+    own, other = _core.session_loop_duration(session, start=start, poses=poses, parts=list(parts))
+    if folder is None:
+        return own, other
+    pa = _pyarrow()
+    table = pa.table(
+        {
+            "pose": np.arange(poses, dtype=np.int64),
+            "t_s": np.asarray(t_s, dtype=np.float64),
+            "own_s": own,
+            "other_s": other,
+        }
+    )
+    _atomic(Path(folder) / f"{name}.parquet", lambda tmp: pa.parquet.write_table(table, tmp))
+    return poses
+
+
+def _session_times(source: Any, options: tuple[tuple[str, Any], ...]) -> Any:
+    """Task: a session's timestamps (for its tau table, on the worker that writes it)."""
+    return np.asarray(_load(source, options).timestamps)
 
 
 def _stem_name(path: str) -> str:
@@ -124,8 +370,9 @@ def _stem_name(path: str) -> str:
     return p.parent.name if p.name == "metadata.yaml" else p.stem
 
 
-def _named_sources(sessions: Any) -> list[tuple[str, str | _core.Trajectory]]:
-    """``(name, path or Trajectory)`` per session, in order, named as ``il.Fleet`` names them."""
+def _named_sources(sessions: Any) -> list[tuple[str, Any]]:
+    """``(name, path, paths or Trajectory)`` per session, in order, named as ``il.Fleet``
+    names them."""
     if isinstance(sessions, Mapping):
         items = list(sessions.items())
         for name, _ in items:
@@ -170,7 +417,7 @@ def _named_sources(sessions: Any) -> list[tuple[str, str | _core.Trajectory]]:
     if not items:
         raise InvalidParameterError("a fleet needs at least one session")
     seen: set[str] = set()
-    out: list[tuple[str, str | _core.Trajectory]] = []
+    out: list[tuple[str, Any]] = []
     for name, source in items:
         if name in seen:
             raise InvalidParameterError(
@@ -181,10 +428,15 @@ def _named_sources(sessions: Any) -> list[tuple[str, str | _core.Trajectory]]:
             out.append((name, source))
         elif isinstance(source, str | os.PathLike):
             out.append((name, os.fspath(source)))
+        elif isinstance(source, list | tuple) and source and all(
+            isinstance(p, str | os.PathLike) for p in source
+        ):
+            # Several files read as one trajectory, as read_trajectory reads a list.
+            out.append((name, tuple(os.fspath(p) for p in source)))
         else:
             raise TypeError(
-                f"session {name!r} must be a path (or, without client=, a Trajectory), "
-                f"got {type(source).__name__}"
+                f"session {name!r} must be a path, a list of paths (or, without client=, a "
+                f"Trajectory), got {type(source).__name__}"
             )
     return out
 
@@ -205,6 +457,197 @@ def _reduce(parts: list[Any], merge: Callable[[list[Any]], Any], fan_in: int) ->
     return parts[0]
 
 
+def _one_line(error: BaseException) -> str:
+    """An error as one line: its type and the first line of its message."""
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+class _Runner:
+    """Where tasks run: in this process (values), or on a Dask cluster (futures)."""
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+        self.token = uuid.uuid4().hex[:12]
+        self.count = 0
+        self.sent = 0  # bytes of task arguments shipped from the client
+        self.received = 0  # bytes of results gathered by the client
+
+    def submit(self, name: str, fn: Callable[..., Any], *args: Any) -> Any:
+        if self.client is None:
+            return fn(*args)
+        self.count += 1
+        self.sent += len(pickle.dumps([a for a in args if not _is_future(a)], protocol=5))
+        return self.client.submit(fn, *args, key=f"{name}-{self.token}-{self.count}", pure=False)
+
+    def gather(self, items: list[Any]) -> list[Any]:
+        if self.client is None:
+            return items
+        values = self.client.gather(items)
+        self.received += sum(len(pickle.dumps(v, protocol=5)) for v in values)
+        return values
+
+    def worker_bytes(self) -> int:
+        """Bytes the workers sent each other so far (Dask's own count)."""
+        if self.client is None:
+            return 0
+        totals = self.client.run(lambda dask_worker: dask_worker.transfer_outgoing_bytes_total)
+        return int(sum(totals.values()))
+
+
+def _is_future(value: Any) -> bool:
+    return type(value).__name__ == "Future"
+
+
+class FleetRun:
+    """A fleet's loops found from tiles (:func:`find_fleet_loops_dask`): the tables of
+    :class:`FleetLoops` that tiles give (``components``, ``session_pairs()``,
+    ``overlap_matrix()``, ``between_sessions()``), tau per session with
+    ``loop_duration=True``, samples drawn by keys (:meth:`sample`), the sessions left out
+    (:attr:`failures`), and the timings and bytes of the run (:attr:`stats`)."""
+
+    def __init__(self, **fields: Any) -> None:
+        self._loops: Any = fields["loops"]
+        self.names: list[str] = fields["names"]
+        #: ``(name, source, one-line error)`` of each session left out.
+        self.failures: list[tuple[str, str, str]] = fields["failures"]
+        #: Timings (seconds) and counts of the run: tiles, bytes shipped.
+        self.stats: dict[str, Any] = fields["stats"]
+        self._tau: dict[str, tuple[np.ndarray, np.ndarray]] | None = fields["tau"]
+        self._context: dict[str, Any] = fields["context"]
+
+    def __repr__(self) -> str:
+        left = f", {len(self.failures)} session(s) left out" if self.failures else ""
+        return f"FleetRun({self._loops!r}{left})"
+
+    @property
+    def loops(self) -> Any:
+        """The :class:`TiledFleetLoops`."""
+        return self._loops
+
+    @property
+    def components(self) -> Table:
+        """The loop components, as :attr:`FleetLoops.components`."""
+        return self._loops.components  # type: ignore[no-any-return]
+
+    def session_pairs(self) -> Table:
+        """The sparse overlap matrix as a table, as :meth:`FleetLoops.session_pairs`."""
+        return self._loops.session_pairs()  # type: ignore[no-any-return]
+
+    def overlap_matrix(self, *, sparse: bool = False) -> Any:
+        """The overlap matrix, as :meth:`FleetLoops.overlap_matrix`."""
+        return self._loops.overlap_matrix(sparse=sparse)
+
+    def between_sessions(self) -> np.ndarray:
+        """The ids of the components between two sessions, as :meth:`FleetLoops.between_sessions`."""
+        return self._loops.between_sessions()  # type: ignore[no-any-return]
+
+    def loop_duration(self, session: str | int) -> Table:
+        """Tau per pose of one session, as :meth:`FleetLoops.loop_duration` gives it:
+        ``session``, ``pose``, ``t_s``, ``own_s``, ``other_s`` (to rounding: the same widths
+        added in another order).
+
+        Raises:
+            InvalidParameterError: without ``loop_duration=True``; an unknown session.
+        """
+        if self._tau is None:
+            raise InvalidParameterError(
+                "loop duration was not computed: pass loop_duration=True to find_fleet_loops_dask"
+            )
+        k = session if isinstance(session, int) else self._index(session)
+        name = self.names[k]
+        if name not in self._tau:
+            # Added up where the tiles' shares are, brought here on first use.
+            c = self._context
+            runner: _Runner = c["runner"]
+            mine = [s for s, tile in zip(c["shares"], c["tiles"], strict=True) if k in tile.sessions]
+            poses = c["blocks"][k].poses
+            task = runner.submit(
+                "session-tau", _session_tau, k, c["starts"][k], poses, None, name, None, *mine
+            )
+            self._tau[name] = runner.gather([task])[0]
+        own, other = self._tau[name]
+        times = self._context["times"](k)
+        out = Table()
+        out["session"] = np.full(len(own), k, dtype=np.int64)
+        out["pose"] = np.arange(len(own), dtype=np.int64)
+        out["t_s"] = np.asarray(times, dtype=np.float64)
+        out["own_s"] = own
+        out["other_s"] = other
+        return out
+
+    def _index(self, name: str) -> int:
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise InvalidParameterError(
+                f"no session named {name!r} (sessions: {', '.join(self.names)})"
+            ) from None
+
+    def sample(
+        self,
+        sampler: str = "rho",
+        *,
+        rate: float | None = None,
+        budget: int | None = None,
+        seed: int = 0,
+        between_only: bool = False,
+        skip_trivial: bool = False,
+    ) -> Table:
+        """Samples drawn from the tiles by keys, where the tiles were scanned: the samples of
+        :func:`sample_fleet` with the same arguments, pair for pair (see
+        :class:`KeyedDraw`). Each pass rescans the tiles asked (one pass, rarely two).
+
+        Args:
+            sampler: ``"one"``, ``"rho"``, ``"rho-dispersed"``, ``"alpha"`` or
+                ``"closest-first"`` (the baselines run over whole trajectories: use
+                :func:`sample_fleet`).
+            rate, budget, seed, between_only, skip_trivial: as :func:`sample_fleet`
+                (neither rate nor budget: a budget of 1000).
+
+        Returns:
+            :class:`Table` as :attr:`FleetSamples.table`.
+        """
+        if rate is None and budget is None:
+            budget = 1000
+        started = time.perf_counter()
+        draw = self._loops.draw(
+            sampler,
+            rate=rate,
+            budget=budget,
+            seed=seed,
+            between_only=between_only,
+            skip_trivial=skip_trivial,
+        )
+        c = self._context
+        runner: _Runner = c["runner"]
+        tiles = self._loops.tiles
+        passes = 0
+        while not draw.done:
+            passes += 1
+            futures = []
+            for t, request in draw.requests():
+                a, b = tiles[t].sessions
+                futures.append(
+                    runner.submit(
+                        "draw-tile",
+                        _draw_session_tile,
+                        request,
+                        (c["sources"][a], None if a == b else c["sources"][b]),
+                        c["options"],
+                        (c["starts"][a], c["starts"][b]),
+                        c["gamma"],
+                        c["metric"],
+                        c["separation"],
+                        c["threads"],
+                    )
+                )
+            draw.absorb(runner.gather(futures))
+        self.stats["sample_s"] = time.perf_counter() - started
+        self.stats["sample_passes"] = passes
+        return draw.table()  # type: ignore[no-any-return]
+
+
 def find_fleet_loops_dask(
     sessions: Any,
     gamma: float,
@@ -215,6 +658,8 @@ def find_fleet_loops_dask(
     metric: Any = None,
     fan_in: int = DEFAULT_FAN_IN,
     threads: int | None = None,
+    loop_duration: bool = False,
+    on_error: str = "skip",
     format: str | None = None,
     axes: tuple[int, int] | None = None,
     topic: str | None = None,
@@ -223,17 +668,19 @@ def find_fleet_loops_dask(
     rate_hz: float | None = None,
     drop_duplicate_stamps: bool = False,
     quaternion_tolerance: float | None = None,
-) -> _core.TiledFleetLoops:
+) -> FleetRun:
     """Finds every inexact loop of a fleet from tiles, on this machine or on a Dask cluster:
     the components and the overlap matrix of :func:`inexact_loops.find_fleet_loops` on the same
     sessions (the same ids, sessions, poses, times, pair counts, holes and closest pairs; areas
-    to rounding, a relative 1e-12).
+    to rounding, a relative 1e-12); samples with :meth:`FleetRun.sample`.
 
     Args:
         sessions: a list of paths (each session named by its file stem, as :class:`Fleet`
-            names it), a dict ``{name: path}`` or a list of ``(name, path)`` pairs. Without
-            ``client=`` a session may also be a :class:`Trajectory`; with it, workers read every
-            session from its path, which they must reach.
+            names it), a dict ``{name: path}`` (a path may be a list of files, read as one
+            trajectory) or a list of ``(name, path)`` pairs. A ``.parquet`` path is a pose
+            store (:func:`read_pose_parquet`). Without ``client=`` a session may also be a
+            :class:`Trajectory`; with it, workers read every session from its path, which they
+            must reach.
         gamma: the distance threshold gamma > 0, in the metric's unit.
         client: a ``dask.distributed.Client``: the tasks run on its cluster. ``None``: in this
             process, without Dask.
@@ -246,19 +693,24 @@ def find_fleet_loops_dask(
         fan_in: summaries combined by one merge task (at least 2).
         threads: threads of each tile's scan; ``None``: one per core in this process, one per
             task on a cluster (Dask's worker threads share the cores).
+        loop_duration: also tau per pose (:meth:`FleetRun.loop_duration`): each tile's task
+            keeps its share where it ran, and a session's tau is added up there when asked.
+        on_error: ``"skip"``: a session that cannot be read, or does not fit the first one
+            read (dimension, manifold), is left out with its error in :attr:`FleetRun.failures`
+            (when every session fails, the first error is raised); ``"raise"``: raise it.
         format, axes, topic, time, frames, rate_hz, drop_duplicate_stamps,
-            quaternion_tolerance: how the paths are read, as in :func:`read_trajectory`.
+            quaternion_tolerance: how the paths are read, as in :func:`read_trajectory`
+            (``format="parquet"`` for a pose store without the suffix).
 
     Returns:
-        :class:`TiledFleetLoops`: ``components``, ``session_pairs()``, ``overlap_matrix()``.
+        :class:`FleetRun`.
 
     Raises:
-        InvalidParameterError: no session, two sessions of one name, sessions measured with
-            different metrics, a block of 0 poses, a fan-in below 2, and as
-            :func:`find_fleet_loops`.
+        InvalidParameterError: no session, two sessions of one name, a block of 0 poses, a
+            fan-in below 2, an unknown ``on_error``, and as :func:`find_fleet_loops`.
         TypeError: a session of another type; a Trajectory with ``client=``.
-        OSError, LoopsIOError, InvalidTrajectoryError: a session that cannot be read, as
-            :func:`read_trajectory`.
+        OSError, LoopsIOError, InvalidTrajectoryError: with ``on_error="raise"``, or when every
+            session fails, as :func:`read_trajectory`.
 
     Example:
         >>> import numpy as np, inexact_loops as il
@@ -271,11 +723,16 @@ def find_fleet_loops_dask(
         >>> tiled.overlap_matrix()  # as il.find_fleet_loops(il.Fleet(sessions), ...) gives it
         array([[93.5, 57.5],
                [57.5, 93.5]])
+        >>> len(tiled.sample("one", budget=3, seed=0)["i"])
+        3
     """
     if fan_in < 2:
         raise InvalidParameterError(f"fan_in = {fan_in} is invalid: a merge takes at least 2 parts")
+    if on_error not in ("skip", "raise"):
+        raise InvalidParameterError(f"on_error = {on_error!r} is invalid: 'skip' or 'raise'")
+    if block < 1:
+        raise InvalidParameterError(f"block = {block} is invalid: at least 1 pose per block")
     named = _named_sources(sessions)
-    names = [name for name, _ in named]
     read = {
         "format": format,
         "axes": axes,
@@ -294,32 +751,85 @@ def find_fleet_loops_dask(
     shipped = _shipped_separation(separation)
     if metric is not None and not isinstance(metric, str) and hasattr(metric, "spec"):
         metric = metric.spec  # an inexact_loops.metrics object, as the text every worker parses
+    if client is not None:
+        trajectories = [name for name, source in named if isinstance(source, _core.Trajectory)]
+        if trajectories:
+            raise TypeError(
+                f"session {trajectories[0]!r} is a Trajectory: with client=, workers read every "
+                "session from a path (the client ships no poses): write it to a file, or run "
+                "without client="
+            )
+    runner = _Runner(client)
+    stats: dict[str, Any] = {"workers": 0 if client is None else len(client.scheduler_info()["workers"])}
+    started = time_started = _now()
+    worker_bytes_before = runner.worker_bytes()
     if client is None:
-        return _in_process(named, names, options, gamma, block, shipped, metric, fan_in, threads)
-    trajectories = [name for name, source in named if isinstance(source, _core.Trajectory)]
-    if trajectories:
-        raise TypeError(
-            f"session {trajectories[0]!r} is a Trajectory: with client=, workers read every "
-            "session from a path (the client ships no poses): write it to a file, or run "
-            "without client="
+        # In this process: read each session once.
+        loaded: list[Any] = []
+        for _, source in named:
+            try:
+                loaded.append(_load(source, options) if not isinstance(source, str | tuple) else _read_uncached(source, options))
+            except (OSError, ValueError, TypeError) as error:
+                loaded.append(_Failed(error))
+        sources_all = loaded
+    else:
+        sources_all = [source for _, source in named]
+    described = runner.gather(
+        [
+            runner.submit("describe-session", _describe_session, source, options, block, metric)
+            if not isinstance(source, _Failed)
+            else source
+            for source in sources_all
+        ]
+    )
+    failures: list[tuple[str, str, str]] = []
+    kept: list[int] = []
+    first: tuple[str, str, int] | None = None
+    for k, (name, source) in enumerate(named):
+        d = described[k]
+        shown = source if isinstance(source, str) else (
+            ",".join(source) if isinstance(source, tuple) else "(in memory)"
         )
-    sources = [str(source) for _, source in named]
-    token = uuid.uuid4().hex[:12]
-    described = [
-        client.submit(
-            _describe_session, source, options, block, metric, key=f"describe-session-{token}-{k}"
-        )
-        for k, source in enumerate(sources)
-    ]
-    blocks = client.gather(described)
+        if isinstance(d, _Failed):
+            if on_error == "raise":
+                raise d.error
+            failures.append((name, shown, _one_line(d.error)))
+            continue
+        blocks, manifold, dim = d
+        if first is None:
+            first = (name, manifold, dim)
+        elif (manifold, dim) != first[1:]:
+            error = InvalidParameterError(
+                f"session {name!r} has {dim} coordinates on {manifold}, the first session "
+                f"({first[0]!r}) {first[2]} on {first[1]}: a fleet's sessions must agree"
+            )
+            if on_error == "raise":
+                raise error
+            failures.append((name, shown, _one_line(error)))
+            continue
+        kept.append(k)
+    if not kept:
+        raise next(d.error for d in described if isinstance(d, _Failed))
+    names = [named[k][0] for k in kept]
+    blocks = [described[k][0] for k in kept]
+    sources = [sources_all[k] for k in kept]
+    stats["read_s"] = _now() - started
+    started = _now()
     tiles = _core.plan_tiles(blocks, gamma=gamma, metric=metric)
     starts = _starts(blocks)
     metric_name = blocks[0].metric_name
+    stats["plan_s"] = _now() - started
+    stats["tiles"] = len(tiles)
+    stats["sessions"] = len(kept)
+    stats["poses"] = sum(b.poses for b in blocks)
+    task_threads = threads if client is None else (1 if threads is None else threads)
+    started = _now()
     scans = []
-    for k, tile in enumerate(tiles):
+    for tile in tiles:
         a, b = tile.sessions
         scans.append(
-            client.submit(
+            runner.submit(
+                "scan-tile",
                 _scan_session_tile,
                 tile,
                 (sources[a], None if a == b else sources[b]),
@@ -328,17 +838,63 @@ def find_fleet_loops_dask(
                 gamma,
                 metric_name,
                 shipped,
-                1 if threads is None else threads,
-                key=f"scan-tile-{token}-{k}",
+                task_threads,
+                loop_duration,
             )
         )
-    level = iter(range(1 << 30))
+    if loop_duration:
+        summaries = [runner.submit("tile-summary", operator.getitem, s, 0) for s in scans]
+        shares = [runner.submit("tile-duration", operator.getitem, s, 1) for s in scans]
+    else:
+        summaries, shares = scans, []
 
-    def merge_on_cluster(parts: list[Any]) -> Any:
-        return client.submit(_merge, *parts, key=f"merge-tiles-{token}-{next(level)}")
+    def merge(parts: list[Any]) -> Any:
+        return runner.submit("merge-tiles", _merge, *parts)
 
-    final = client.gather(_reduce(scans, merge_on_cluster, fan_in))
-    return final.finish(blocks, names=names)
+    final = runner.gather([_reduce(summaries, merge, fan_in)])[0]
+    loops = final.finish(blocks, names=names)
+    stats["scan_merge_s"] = _now() - started
+    times = _session_times_getter(runner, sources, options)
+    tau: dict[str, Any] | None = {} if loop_duration else None
+    stats["total_s"] = _now() - time_started
+    stats["bytes_sent"] = runner.sent
+    stats["bytes_received"] = runner.received
+    stats["bytes_between_workers"] = runner.worker_bytes() - worker_bytes_before
+    context = {
+        "runner": runner,
+        "sources": sources,
+        "options": options,
+        "starts": starts,
+        "gamma": gamma,
+        "metric": metric_name,
+        "separation": shipped,
+        "threads": task_threads,
+        "times": times,
+        "tiles": tiles,
+        "shares": shares,
+        "blocks": blocks,
+    }
+    return FleetRun(
+        loops=loops, names=names, failures=failures, stats=stats, tau=tau, context=context
+    )
+
+
+def _now() -> float:
+    return time.perf_counter()
+
+
+def _read_uncached(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
+    """A session read in this process (not kept in the workers' cache)."""
+    return _read_session.__wrapped__(source, options)  # type: ignore[attr-defined, no-any-return]
+
+
+def _session_times_getter(
+    runner: _Runner, sources: list[Any], options: tuple[tuple[str, Any], ...]
+) -> Callable[[int], Any]:
+    def times(k: int) -> Any:
+        return runner.gather([runner.submit("session-times", _session_times, sources[k], options)])[0]
+
+    return times
 
 
 def _starts(blocks: Sequence[_core.SessionBlocks]) -> list[int]:
@@ -350,42 +906,450 @@ def _starts(blocks: Sequence[_core.SessionBlocks]) -> list[int]:
     return starts
 
 
-def _in_process(
-    named: list[tuple[str, str | _core.Trajectory]],
-    names: list[str],
-    options: tuple[tuple[str, Any], ...],
-    gamma: float,
-    block: int,
-    separation: Any,
-    metric: Any,
-    fan_in: int,
-    threads: int | None,
-) -> _core.TiledFleetLoops:
-    """The steps of the cluster, in this process: each session read once, tiles one by one."""
-    trajectories = [
-        source
-        if isinstance(source, _core.Trajectory)
-        else _core.read_trajectory(source, **dict(options))
-        for _, source in named
-    ]
-    blocks = [_core.session_blocks(t, block=block, metric=metric) for t in trajectories]
-    tiles = _core.plan_tiles(blocks, gamma=gamma, metric=metric)
-    starts = _starts(blocks)
-    metric_name = blocks[0].metric_name
-    summaries = []
-    for tile in tiles:
-        a, b = tile.sessions
-        summaries.append(
-            _core.scan_tile(
-                tile,
-                trajectories[a],
-                None if a == b else trajectories[b],
-                starts=(starts[a], starts[b]),
-                gamma=gamma,
-                metric=metric_name,
-                separation=_separation(separation),
-                threads=threads,
+# ---------------------------------------------------------------------------------------------
+# The output folder
+# ---------------------------------------------------------------------------------------------
+
+#: The marker of a folder ``loops-dask`` wrote into: what it wrote there.
+MARKER = "loops-dask.json"
+
+#: What ``loops-dask`` writes at the top of its folder.
+OUT_FILES = (
+    "components.parquet",
+    "session_pairs.parquet",
+    "samples.parquet",
+    "failures.parquet",
+    "summary.json",
+    "loop_duration",
+)
+
+
+class _OutDir:
+    """The output folder of :func:`run_fleet_dask`, kept as ``loops fleet`` keeps its ``--out``:
+    one run at a time (an exclusive lock on the folder), every entry written is listed in the
+    marker :data:`MARKER` before it is moved into place, ``force`` replaces only listed entries
+    (never a file of yours named like one of ours), files are written to a temporary file and
+    renamed, and what killed runs left (``.NAME.XXXXXX.tmp``, ``.NAME.partial-PID``) is removed.
+    """
+
+    def __init__(self, out: Path, force: bool) -> None:
+        import fcntl
+
+        out.mkdir(parents=True, exist_ok=True)
+        self.path = out
+        self._lock = os.open(out, os.O_RDONLY)
+        try:
+            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(self._lock)
+            holder = self._read_marker()
+            pid = f" (pid {holder['pid']})" if holder else ""
+            raise InvalidParameterError(
+                f"out {out} is in use by another loops-dask{pid}; wait for it to finish or "
+                "choose another folder"
+            ) from None
+        try:
+            self._check(out, force)
+        except BaseException:
+            os.close(self._lock)
+            raise
+
+    def _check(self, out: Path, force: bool) -> None:
+        """Refuses a folder that holds anything but an earlier run's results (without
+        ``force``: anything at all), then records this run in the marker."""
+        previous = self._read_marker()
+        self._remove_leftovers()
+        entries = sorted(e for e in os.listdir(out) if e != MARKER)
+        if entries and not force:
+            raise InvalidParameterError(
+                f"out {out} exists and is not empty; pass force=True (--force) to replace the "
+                "results of an earlier run"
             )
+        owned = set(previous["entries"]) if previous else set()
+        for name in entries:
+            if name in OUT_FILES and name not in owned:
+                raise InvalidParameterError(
+                    f"out {out} holds {name}, which loops-dask did not write (it is not listed "
+                    f"in {MARKER}); not replacing it: move it away or choose another folder"
+                )
+        self.entries = owned
+        self._save()
+
+    def _read_marker(self) -> dict[str, Any] | None:
+        path = self.path / MARKER
+        try:
+            marker = json.loads(path.read_text())
+        except FileNotFoundError:
+            return None
+        except (OSError, ValueError) as error:
+            raise InvalidParameterError(f"{path} is not the marker of loops-dask: {error}") from None
+        if not isinstance(marker, dict) or marker.get("written_by") != "loops-dask":
+            raise InvalidParameterError(f"{path} is not the marker of loops-dask; not touching the folder")
+        return marker
+
+    def _remove_leftovers(self) -> None:
+        import re
+        import shutil
+
+        for name in os.listdir(self.path):
+            path = self.path / name
+            if path.is_dir() and re.fullmatch(r"\..+\.(partial|old)-\d+", name):
+                shutil.rmtree(path)
+            elif path.is_file() and re.fullmatch(r"\..+\.[A-Za-z0-9_]{6,}\.tmp", name):
+                path.unlink()
+
+    def _save(self) -> None:
+        from . import __version__
+
+        marker = {
+            "written_by": "loops-dask",
+            "version": __version__,
+            "pid": os.getpid(),
+            "entries": sorted(self.entries),
+        }
+        text = json.dumps(marker, indent=2) + "\n"
+        _atomic(self.path / MARKER, lambda tmp: Path(tmp).write_text(text))
+
+    def claim(self, name: str) -> None:
+        """Lists ``name`` in the marker, before it is written."""
+        if name not in self.entries:
+            self.entries.add(name)
+            self._save()
+
+    def write(self, name: str, write: Callable[[str], None]) -> None:
+        """Writes the file ``name`` through a temporary file."""
+        self.claim(name)
+        _atomic(self.path / name, write)
+
+    def remove(self, name: str) -> None:
+        """Removes an entry this tool wrote (an earlier run's), if there."""
+        import shutil
+
+        path = self.path / name
+        if name in self.entries and path.exists():
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
+
+    def staging(self, name: str) -> Path:
+        """A folder to fill and then :meth:`place` as ``name``."""
+        path = self.path / f".{name}.partial-{os.getpid()}"
+        path.mkdir()
+        return path
+
+    def place(self, name: str, staging: Path) -> None:
+        """Moves a filled staging folder into place as ``name``."""
+        import shutil
+
+        self.claim(name)
+        target = self.path / name
+        if target.exists():
+            old = self.path / f".{name}.old-{os.getpid()}"
+            os.replace(target, old)
+            os.replace(staging, target)
+            shutil.rmtree(old)
+        else:
+            os.replace(staging, target)
+
+    def close(self) -> None:
+        os.close(self._lock)
+
+
+def _write_table(out: _OutDir, name: str, table: Mapping[str, Any]) -> None:
+    pa = _pyarrow()
+    arrow = pa.table({k: np.asarray(v) for k, v in table.items()})
+    out.write(name, lambda tmp: pa.parquet.write_table(arrow, tmp))
+
+
+def run_fleet_dask(
+    sessions: Any,
+    gamma: float,
+    *,
+    out: str | os.PathLike[str],
+    force: bool = False,
+    sampler: str | None = "rho",
+    rate: float | None = None,
+    budget: int | None = None,
+    seed: int = 0,
+    between_only: bool = False,
+    skip_trivial: bool = False,
+    loop_duration: bool = True,
+    client: Any = None,
+    **options: Any,
+) -> dict[str, Any]:
+    """:func:`find_fleet_loops_dask`, samples and tau, with the tables written as Parquet into
+    the folder ``out``: ``components.parquet``, ``session_pairs.parquet``,
+    ``samples.parquet`` (with a sampler), ``failures.parquet`` (the sessions left out: name,
+    source, error), ``loop_duration/<session>.parquet`` (pose, t_s, own_s, other_s; written
+    by the workers where the tiles' shares are, never sent to the client) and
+    ``summary.json``. Each file is written to a temporary file and renamed; ``out`` is kept as
+    ``loops fleet`` keeps its ``--out`` (``loops-dask.json`` lists what this tool wrote there,
+    ``force`` replaces only that, one run holds the folder at a time). With ``client=``, the
+    workers must reach ``out`` (a shared file system) for tau.
+
+    Args:
+        sessions, gamma, client: as :func:`find_fleet_loops_dask`; ``options`` its other
+            keywords (``block``, ``separation``, ``metric``, read options, ...).
+        out: the output folder (made if missing).
+        force: replace what an earlier run of this tool wrote into ``out``.
+        sampler, rate, budget, seed, between_only, skip_trivial: as :meth:`FleetRun.sample`
+            (``sampler=None``: no samples).
+        loop_duration: write tau per session.
+
+    Returns:
+        The summary (as ``summary.json``): counts, the sessions and those left out, timings,
+        bytes.
+
+    Raises:
+        InvalidParameterError: ``out`` not empty without ``force``; a file in ``out`` that this
+            tool did not write; as :func:`find_fleet_loops_dask`.
+    """
+    folder = _OutDir(Path(out), force)
+    try:
+        run = find_fleet_loops_dask(
+            sessions, gamma, client=client, loop_duration=loop_duration, **options
         )
-    final = _reduce(summaries, _core.merge_tiles, fan_in)
-    return final.finish(blocks, names=names)
+        components = run.components
+        _write_table(folder, "components.parquet", components)
+        _write_table(folder, "session_pairs.parquet", run.session_pairs())
+        failures = Table()
+        failures["session"] = np.array([f[0] for f in run.failures] or [], dtype=str)
+        failures["source"] = np.array([f[1] for f in run.failures] or [], dtype=str)
+        failures["error"] = np.array([f[2] for f in run.failures] or [], dtype=str)
+        _write_table(folder, "failures.parquet", failures)
+        samples = None
+        if sampler is not None:
+            samples = run.sample(
+                sampler,
+                rate=rate,
+                budget=budget,
+                seed=seed,
+                between_only=between_only,
+                skip_trivial=skip_trivial,
+            )
+            _write_table(folder, "samples.parquet", samples)
+        else:
+            folder.remove("samples.parquet")
+        if loop_duration:
+            started = _now()
+            staging = folder.staging("loop_duration")
+            c = run._context
+            runner: _Runner = c["runner"]
+            futures = []
+            for k, b in enumerate(c["blocks"]):
+                source = c["sources"][k]
+                t_s = runner.submit("session-times", _session_times, source, c["options"])
+                mine = [s for s, tile in zip(c["shares"], c["tiles"], strict=True) if k in tile.sessions]
+                futures.append(
+                    runner.submit(
+                        "session-tau",
+                        _session_tau,
+                        k,
+                        c["starts"][k],
+                        b.poses,
+                        str(staging),
+                        run.names[k],
+                        t_s,
+                        *mine,
+                    )
+                )
+            runner.gather(futures)
+            folder.place("loop_duration", staging)
+            run.stats["loop_duration_s"] = _now() - started
+        else:
+            folder.remove("loop_duration")
+        between = int(np.sum(components["session_a"] != components["session_b"]))
+        summary = {
+            "gamma": gamma,
+            "sessions": [
+                {"name": n, "poses": int(b.poses), "span_s": float(b.span_s)}
+                for n, b in zip(run.names, run._context["blocks"], strict=True)
+            ],
+            "failures": [{"session": n, "source": s, "error": e} for n, s, e in run.failures],
+            "components": len(components["id"]),
+            "between_sessions": between,
+            "session_pairs": len(run.session_pairs()["components"]),
+            "samples": None if samples is None else len(samples["i"]),
+            "sampler": sampler,
+            "stats": run.stats,
+        }
+        text = json.dumps(summary, indent=2, default=float) + "\n"
+        folder.write("summary.json", lambda tmp: Path(tmp).write_text(text))
+        return summary
+    finally:
+        folder.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# The command line: loops-dask
+# ---------------------------------------------------------------------------------------------
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="loops-dask",
+        description=(
+            "Find the loops of several pose logs as one fleet, from tiles, on this machine or "
+            "on a Dask cluster (--scheduler): the components, the session-overlap matrix, "
+            "samples and loop duration, written as Parquet into --out. The options are those "
+            "of `loops fleet`; the Rust command has no Dask option, this one is its switch."
+        ),
+        epilog=(
+            "examples:\n"
+            "  loops-dask fleet/*.mcap --gamma 40 --out results\n"
+            "  loops-dask fleet/*.mcap --gamma 40 --scheduler tcp://10.0.0.5:8786 --out /shared/results\n"
+            "\nIn --out: components.parquet, session_pairs.parquet, samples.parquet, failures.parquet\n"
+            "(sessions left out, with their error), loop_duration/<session>.parquet, summary.json.\n"
+            "Exit code 0; 1 when a session was left out; 2 on an error."
+        ),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("logs", nargs="*", metavar="LOG", help="the pose logs, one session each, named by the file's stem")
+    p.add_argument(
+        "--session",
+        action="append",
+        default=[],
+        metavar="NAME=FILE[,FILE...]",
+        help="a session of several files, or a name of your choice",
+    )
+    p.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler (tcp://host:8786); without it: this machine, no Dask needed")
+    p.add_argument("--format", help="file format (as `loops fleet`), or parquet for a pose store (t, x, y[, z][, qx, qy, qz, qw])")
+    p.add_argument("--topic", help="topic to read from MCAP files and bags")
+    p.add_argument("--time", help="time of each pose from MCAP files and bags: header, log or publish")
+    p.add_argument("--frames", metavar="PARENT,CHILD", help="parent and child frame of a transform topic")
+    p.add_argument("--rate-hz", type=float, help="for files without times: pose i at i / RATE_HZ seconds")
+    p.add_argument("--axes", metavar="A,B", help="a plane of two position axes (0 = x, 1 = y, 2 = z)")
+    p.add_argument("--drop-duplicate-stamps", action="store_true", help="drop poses whose timestamp repeats the one before")
+    p.add_argument("--quaternion-tolerance", type=float, metavar="TOLERANCE", help="how far from unit length a quaternion may be")
+    p.add_argument("--gamma", type=float, required=True, help="the distance threshold γ, in the metric's unit")
+    p.add_argument("--metric", help="the metric (as `loops fleet`); default: the sessions' own")
+    p.add_argument("--separation-path", type=float, metavar="LENGTH", help="revisits only: pairs at least this path length apart [default: 4 x gamma]")
+    p.add_argument("--separation-time", type=float, metavar="SECONDS", help="revisits only: pairs at least this many seconds apart [default: 0]")
+    p.add_argument("--no-separation", action="store_true", help="the paper's S_gamma: no separation")
+    p.add_argument("--threads", type=int, help="threads of each tile's scan (default: one per core here, one per task on a cluster)")
+    p.add_argument("--sampler", default="rho", help="one, rho, rho-dispersed, alpha or closest-first [default: rho]; none for no samples")
+    p.add_argument("--budget", type=int, help="exactly this many samples [default: 1000 without --rate]")
+    p.add_argument("--rate", type=float, help="the sampler's rate instead of a budget")
+    p.add_argument("--seed", type=int, default=0, help="seed of the random choices [default: 0]")
+    p.add_argument("--skip-trivial", action="store_true", help="leave out the trivial loop components")
+    p.add_argument("--between-only", action="store_true", help="sample only pairs of two different sessions")
+    p.add_argument("--no-loop-duration", action="store_true", help="do not write loop_duration/")
+    p.add_argument("--block", type=int, default=DEFAULT_BLOCK, help=f"poses per block, the side of a tile [default: {DEFAULT_BLOCK}]")
+    p.add_argument("--fan-in", type=int, default=DEFAULT_FAN_IN, help=f"summaries per merge task [default: {DEFAULT_FAN_IN}]")
+    p.add_argument("--out", required=True, metavar="DIR", help="the folder for the results")
+    p.add_argument("--force", action="store_true", help="replace the results of an earlier loops-dask in --out (only what it wrote there)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    p.add_argument("--json", metavar="FILE", help="also write summary.json to FILE; - prints it instead of the table")
+    return p
+
+
+def _pair(text: str | None, what: str, kind: Callable[[str], Any]) -> Any:
+    if text is None:
+        return None
+    parts = text.split(",")
+    if len(parts) != 2:
+        raise InvalidParameterError(f"--{what} {text!r}: give two values separated by a comma")
+    return tuple(kind(p) for p in parts)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command ``loops-dask`` (``[project.scripts]``): ``loops fleet``'s options plus
+    ``--scheduler ADDRESS``. Returns the exit code: 0, 1 when a session was left out, 2 on an
+    error."""
+    args = _parser().parse_intermixed_args(argv)
+    try:
+        sessions: dict[str, Any] = {}
+        for log in args.logs:
+            name = _stem_name(log)
+            if name in sessions:
+                raise InvalidParameterError(
+                    f"{sessions[name]} and {log} are both named {name!r} by their file stem: "
+                    "use --session NAME=FILE to name them"
+                )
+            sessions[name] = log
+        for spec in args.session:
+            name, eq, files = spec.partition("=")
+            if not eq or not name or not files:
+                raise InvalidParameterError(f"--session {spec!r}: give NAME=FILE[,FILE...]")
+            if name in sessions:
+                raise InvalidParameterError(f"two sessions are named {name!r}")
+            parts = files.split(",")
+            sessions[name] = parts[0] if len(parts) == 1 else parts
+        if not sessions:
+            raise InvalidParameterError("no sessions: give LOG files or --session NAME=FILE")
+        if args.no_separation:
+            separation: Any = None
+        elif args.separation_path is not None or args.separation_time is not None:
+            separation = _core.Separation(
+                path=args.separation_path or 0.0, time_s=args.separation_time or 0.0
+            )
+        else:
+            separation = "auto"
+        sampler = None if args.sampler == "none" else args.sampler
+        client = None
+        if args.scheduler:
+            try:
+                from distributed import Client  # type: ignore[import-untyped, import-not-found, unused-ignore]
+            except ImportError as error:
+                raise InvalidParameterError(
+                    f"--scheduler needs dask.distributed: pip install 'inexact-loops[dask]' ({error})"
+                ) from None
+            client = Client(args.scheduler)
+        try:
+            summary = run_fleet_dask(
+                sessions,
+                args.gamma,
+                out=args.out,
+                force=args.force,
+                sampler=sampler,
+                rate=args.rate,
+                budget=args.budget,
+                seed=args.seed,
+                between_only=args.between_only,
+                skip_trivial=args.skip_trivial,
+                loop_duration=not args.no_loop_duration,
+                client=client,
+                block=args.block,
+                fan_in=args.fan_in,
+                separation=separation,
+                metric=args.metric,
+                threads=args.threads,
+                format=args.format,
+                axes=_pair(args.axes, "axes", int),
+                topic=args.topic,
+                time=args.time,
+                frames=_pair(args.frames, "frames", str),
+                rate_hz=args.rate_hz,
+                drop_duplicate_stamps=args.drop_duplicate_stamps,
+                quaternion_tolerance=args.quaternion_tolerance,
+            )
+        finally:
+            if client is not None:
+                client.close()
+    except (OSError, ValueError, TypeError, ImportError) as error:
+        print(f"loops-dask: error: {_one_line(error).split(': ', 1)[-1]}", file=sys.stderr)
+        return 2
+    text = json.dumps(summary, indent=2, default=float)
+    if args.json == "-":
+        print(text)
+    elif args.json:
+        Path(args.json).write_text(text + "\n")
+    for f in summary["failures"]:
+        print(f"loops-dask: session {f['session']} ({f['source']}) left out: {f['error']}", file=sys.stderr)
+    if not args.quiet and args.json != "-":
+        where = args.scheduler or "this machine"
+        stats = summary["stats"]
+        print(
+            f"loops-dask: {len(summary['sessions'])} session(s), {stats['poses']} poses, "
+            f"{stats['tiles']} tiles on {where}: {summary['components']} components "
+            f"({summary['between_sessions']} between sessions), "
+            f"{summary['samples'] if summary['samples'] is not None else 'no'} samples; "
+            f"results in {args.out} ({stats['total_s']:.1f} s)"
+        )
+    return 1 if summary["failures"] else 0
+
+
+if __name__ == "__main__":
+    # Run by `python -m inexact_loops.dask`: the tasks must be the module's functions (the
+    # workers import them by name), not this __main__'s copies.
+    from inexact_loops.dask import main as _main
+
+    sys.exit(_main())

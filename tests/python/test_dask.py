@@ -8,6 +8,7 @@ bytes fail clearly, and without ``client=`` Dask is not imported.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import pickle
@@ -303,3 +304,248 @@ def test_without_a_client_dask_is_not_imported(tmp_path):
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]", out.stdout
+
+
+# ---------------------------------------------------------------------------------------------
+# Samples and tau from tiles, Parquet, faults, the output folder and loops-dask
+# ---------------------------------------------------------------------------------------------
+
+SAMPLERS = [
+    ("one", {"budget": 25}),
+    ("rho", {"budget": 60}),
+    ("rho-dispersed", {"budget": 40}),
+    ("alpha", {"budget": 30}),
+    ("closest-first", {"budget": 50}),
+    ("rho", {"rate": 0.2}),
+    ("alpha", {"rate": 0.02}),
+]
+
+
+def assert_same_samples(ours: dict, theirs: dict) -> None:
+    assert list(ours) == list(theirs)
+    for column in theirs:
+        np.testing.assert_array_equal(ours[column], theirs[column], err_msg=column)
+
+
+@pytest.mark.filterwarnings("ignore::inexact_loops.DiagonalBrokenWarning")
+@pytest.mark.filterwarnings("ignore::inexact_loops.SampleBudgetWarning")
+@pytest.mark.parametrize("separation", ["auto", None])
+def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation):
+    paths = adversarial_fleet(tmp_path) + random_fleet(tmp_path, 11)
+    fleet = il.Fleet(paths)
+    loops = il.find_fleet_loops(fleet, gamma=1.5, separation=separation)
+    expected = {}
+    for k, (sampler, size) in enumerate(SAMPLERS):
+        for between_only in (False, True):
+            key = (k, between_only)
+            expected[key] = il.sample_fleet(
+                loops, sampler, seed=k, between_only=between_only, **size
+            ).table
+    for per_pair in TILES_PER_PAIR:
+        block = blocks_for(paths, per_pair)
+        tiled = find_fleet_loops_dask(
+            paths, 1.5, client=client, block=block, separation=separation, fan_in=3
+        )
+        for k, (sampler, size) in enumerate(SAMPLERS):
+            for between_only in (False, True):
+                got = tiled.sample(sampler, seed=k, between_only=between_only, **size)
+                assert_same_samples(got, expected[(k, between_only)])
+    # In this process, with 1 and 2 threads: the same.
+    for threads in (1, 2):
+        tiled = find_fleet_loops_dask(
+            paths, 1.5, block=blocks_for(paths, 2), separation=separation, threads=threads
+        )
+        got = tiled.sample("closest-first", budget=50, seed=4)
+        assert_same_samples(got, expected[(4, False)])
+    # The same draw by hand, through pickles, as a cluster runs it.
+    sessions = [il.read_trajectory(p) for p in paths]
+    starts = np.cumsum([0] + [len(t) for t in sessions])
+    by_hand = tiled.loops.draw("rho", budget=600, seed=1)
+    theirs = il.sample_fleet(loops, "rho", budget=600, seed=1)
+    assert (by_hand.groups, by_hand.available, by_hand.warnings) == (
+        theirs.samples.groups, theirs.samples.available, [],
+    )
+    tiles = tiled.loops.tiles
+    while not by_hand.done:
+        offers = []
+        for t, request in by_hand.requests():
+            request = pickle.loads(pickle.dumps(request))
+            assert request.tile == tiles[t]
+            a, b = request.tile.sessions
+            offer = il.draw_tile(
+                request, sessions[a], sessions[b], starts=(int(starts[a]), int(starts[b])),
+                gamma=1.5, separation=separation,
+            )
+            offers.append(il.DrawCandidates(offer.to_bytes()))
+        by_hand.absorb(offers)
+    assert by_hand.requests() == []
+    assert_same_samples(by_hand.table(), theirs.table)
+    with pytest.raises(il.InvalidParameterError, match="baseline"):
+        tiled.loops.draw("lio-sam", budget=10, seed=0)
+    many = tiled.loops.draw("one", budget=10_000_000, seed=0)
+    assert any("candidates" in w for w in many.warnings), many.warnings
+
+
+def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
+    paths = adversarial_fleet(tmp_path) + random_fleet(tmp_path, 12)
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5, separation=None)
+    for per_pair, c in ((1, None), (7, client)):
+        tiled = find_fleet_loops_dask(
+            paths, 1.5, client=c, block=blocks_for(paths, per_pair), separation=None,
+            loop_duration=True,
+        )
+        for name in tiled.names:
+            ours, theirs = tiled.loop_duration(name), fleet.loop_duration(name)
+            np.testing.assert_array_equal(ours["pose"], theirs["pose"])
+            np.testing.assert_array_equal(ours["t_s"], theirs["t_s"])
+            for column in ("own_s", "other_s"):
+                np.testing.assert_allclose(ours[column], theirs[column], rtol=1e-10, atol=1e-9)
+    with pytest.raises(il.InvalidParameterError, match="loop_duration=True"):
+        find_fleet_loops_dask(paths, 1.5, block=50).loop_duration(tiled.names[0])
+    # The shares by hand, through their bytes.
+    sessions = [il.read_trajectory(p) for p in paths]
+    blocks = [il.session_blocks(t, block=40) for t in sessions]
+    starts = np.cumsum([0] + [len(t) for t in sessions])
+    shares = []
+    for tile in il.plan_tiles(blocks, gamma=1.5):
+        a, b = tile.sessions
+        _, share = il.scan_tile_with_duration(
+            tile, sessions[a], sessions[b], starts=(int(starts[a]), int(starts[b])), gamma=1.5,
+            separation=None,
+        )
+        assert share.tile == tile
+        shares.append(pickle.loads(pickle.dumps(il.TileDuration(share.to_bytes()))))
+    own, other = il.session_loop_duration(2, start=int(starts[2]), poses=len(sessions[2]), parts=shares)
+    theirs = fleet.loop_duration(fleet.names[2])
+    np.testing.assert_allclose(own, theirs["own_s"], rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(other, theirs["other_s"], rtol=1e-10, atol=1e-9)
+
+
+def write_parquet(path: Path, t: np.ndarray, xy: np.ndarray) -> Path:
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    pq.write_table(pa.table({"t": t, "x": xy[:, 0], "y": xy[:, 1], "z": np.zeros(len(t))}), path)
+    return path
+
+
+def test_parquet_pose_stores_read_where_the_tiles_are(tmp_path, client):
+    tum = random_fleet(tmp_path, 13)
+    stores = []
+    for p in tum:
+        traj = il.read_trajectory(p)
+        stores.append(write_parquet(tmp_path / f"{p.stem}.parquet", traj.timestamps, traj.positions[:, :2]))
+    fleet = il.find_fleet_loops(il.Fleet(tum), gamma=1.5)
+    tiled = find_fleet_loops_dask(stores, 1.5, client=client, block=blocks_for(tum, 2))
+    assert_same(tiled, fleet)
+    # Bad stores fail with one line naming the file and what is wrong.
+    from inexact_loops.dask import read_pose_parquet
+
+    pa = pytest.importorskip("pyarrow")
+    import pyarrow.parquet as pq
+
+    bad = tmp_path / "bad.parquet"
+    pq.write_table(pa.table({"t": [0.0, 1.0], "x": [0.0, 1.0]}), bad)
+    with pytest.raises(il.LoopsIOError, match=r"bad.parquet: .* missing y"):
+        read_pose_parquet(bad)
+    garbage = tmp_path / "garbage.parquet"
+    garbage.write_bytes(b"not parquet at all")
+    with pytest.raises(il.LoopsIOError, match="garbage.parquet: not a Parquet pose store"):
+        read_pose_parquet(garbage)
+
+
+def test_a_bad_log_fails_only_its_session(tmp_path, client):
+    paths = random_fleet(tmp_path, 14)
+    corrupt = tmp_path / "corrupt.tum"
+    corrupt.write_text("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1\nthis is not a pose\n")
+    missing = tmp_path / "missing.tum"
+    sessions = [paths[0], corrupt, *paths[1:], missing]
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    tiled = find_fleet_loops_dask(sessions, 1.5, client=client, block=blocks_for(paths, 2))
+    assert_same(tiled, fleet)
+    assert [f[0] for f in tiled.failures] == ["corrupt", "missing"]
+    for name, source, error in tiled.failures:
+        assert "\n" not in error and source.endswith(f"{name}.tum"), error
+    assert "line 3" in tiled.failures[0][2], tiled.failures[0][2]
+    assert tiled.failures[1][2].startswith("FileNotFoundError"), tiled.failures[1][2]
+    got = tiled.sample("rho", budget=40, seed=1)
+    assert_same_samples(got, il.sample_fleet(fleet, "rho", budget=40, seed=1).table)
+    with pytest.raises(il.LoopsIOError, match="corrupt.tum"):
+        find_fleet_loops_dask(sessions, 1.5, client=client, on_error="raise")
+
+
+def read_parquet(path: Path) -> dict:
+    pq = pytest.importorskip("pyarrow.parquet")
+    table = pq.read_table(path)
+    return {name: table.column(name).to_numpy(zero_copy_only=False) for name in table.column_names}
+
+
+def test_the_output_folder_holds_parquet_tables_written_safely(tmp_path, client):
+    from inexact_loops.dask import run_fleet_dask
+
+    paths = random_fleet(tmp_path, 15)
+    corrupt = tmp_path / "corrupt.tum"
+    corrupt.write_text("garbage\n")
+    out = tmp_path / "out"
+    summary = run_fleet_dask(
+        [*paths, corrupt], 1.5, out=out, client=client, block=blocks_for(paths, 2),
+        sampler="rho", budget=30, seed=2,
+    )
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    names = sorted(os.listdir(out))
+    assert names == [
+        "components.parquet", "failures.parquet", "loop_duration", "loops-dask.json",
+        "samples.parquet", "session_pairs.parquet", "summary.json",
+    ], names
+    components = read_parquet(out / "components.parquet")
+    for column in ("id", "session_a", "session_b", "pair_count", "holes", "i_min", "j_max"):
+        np.testing.assert_array_equal(components[column], fleet.components[column], err_msg=column)
+    samples = read_parquet(out / "samples.parquet")
+    expected = il.sample_fleet(fleet, "rho", budget=30, seed=2).table
+    for column in ("i", "j", "component", "distance"):
+        np.testing.assert_array_equal(samples[column], expected[column], err_msg=column)
+    failures = read_parquet(out / "failures.parquet")
+    assert list(failures["session"]) == ["corrupt"] and summary["failures"][0]["session"] == "corrupt"
+    for name in fleet.names:
+        tau = read_parquet(out / "loop_duration" / f"{name}.parquet")
+        theirs = fleet.loop_duration(name)
+        np.testing.assert_allclose(tau["own_s"], theirs["own_s"], rtol=1e-10, atol=1e-9)
+        np.testing.assert_allclose(tau["other_s"], theirs["other_s"], rtol=1e-10, atol=1e-9)
+    assert not [n for n in os.listdir(out) if n.startswith(".")], "temporary files left"
+    # Not again without force; with force, only what it wrote is replaced.
+    with pytest.raises(il.InvalidParameterError, match="not empty; pass force=True"):
+        run_fleet_dask(paths, 1.5, out=out, block=50)
+    (out / ".components.parquet.abc123.tmp").write_text("left by a killed run")
+    run_fleet_dask(paths, 1.5, out=out, block=50, force=True, sampler=None)
+    assert not (out / "samples.parquet").exists(), "an earlier run's samples were left"
+    assert not (out / ".components.parquet.abc123.tmp").exists()
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "components.parquet").write_text("a file of the user's")
+    with pytest.raises(il.InvalidParameterError, match="holds components.parquet, which loops-dask did not write"):
+        run_fleet_dask(paths, 1.5, out=mine, block=50, force=True)
+    assert (mine / "components.parquet").read_text() == "a file of the user's"
+
+
+def test_loops_dask_is_the_one_switch(tmp_path, client):
+    paths = random_fleet(tmp_path, 16)
+    corrupt = tmp_path / "corrupt.tum"
+    corrupt.write_text("garbage\n")
+    here = [sys.executable, "-m", "inexact_loops.dask", *map(str, paths), "--gamma", "1.5", "--block", "40"]
+    run = subprocess.run([*here, "--out", str(tmp_path / "here")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "on this machine" in run.stdout
+    address = client.scheduler.address
+    there = [*here, str(corrupt), "--scheduler", address, "--out", str(tmp_path / "there"), "--json", "-"]
+    run = subprocess.run(there, capture_output=True, text=True)
+    assert run.returncode == 1, run.stderr  # a session was left out
+    assert "session corrupt" in run.stderr and "left out" in run.stderr
+    summary = json.loads(run.stdout)
+    assert summary["stats"]["workers"] == 2
+    a = read_parquet(tmp_path / "here" / "samples.parquet")
+    b = read_parquet(tmp_path / "there" / "samples.parquet")
+    for column in a:
+        np.testing.assert_array_equal(a[column], b[column], err_msg=column)
+    run = subprocess.run([*here, "--out", str(tmp_path / "here")], capture_output=True, text=True)
+    assert run.returncode == 2 and run.stderr.startswith("loops-dask: error: out "), run.stderr
+    assert run.stderr.count("\n") == 1, run.stderr
