@@ -36,14 +36,14 @@ struct RadiusClass {
 }
 
 /// A KD-tree over points of 1, 2 or 3 coordinates.
-enum Kd {
+pub(crate) enum Kd {
     One(ImmutableKdTree<f64, 1>),
     Two(ImmutableKdTree<f64, 2>),
     Three(ImmutableKdTree<f64, 3>),
 }
 
 impl Kd {
-    fn new(points: &[&[f64]]) -> Option<Self> {
+    pub(crate) fn new(points: &[&[f64]]) -> Option<Self> {
         fn fixed<const K: usize>(points: &[&[f64]]) -> Vec<[f64; K]> {
             points.iter().map(|p| std::array::from_fn(|k| p[k])).collect()
         }
@@ -57,7 +57,7 @@ impl Kd {
 
     /// Calls `visit` with the item of every point within `radius` of `x` (and perhaps a few
     /// just beyond: the squared radius is widened by a relative 10⁻⁹ for rounding).
-    fn within(&self, x: &[f64], radius: f64, mut visit: impl FnMut(usize)) {
+    pub(crate) fn within(&self, x: &[f64], radius: f64, mut visit: impl FnMut(usize)) {
         let squared = radius * radius * (1.0 + 1e-9);
         match self {
             Self::One(tree) => {

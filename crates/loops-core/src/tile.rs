@@ -222,7 +222,9 @@ pub fn plan_tiles<M: Metric + ?Sized>(fleet: &Fleet, metric: &M, gamma: f64, blo
 
 /// The tiles of the fleet whose sessions, in fleet order, have these blocks (see
 /// [`plan_tiles`]): fleet indices number the sessions' poses one session after another.
-/// O(blocks²) distance evaluations.
+/// For metrics that are the Euclidean distance of 1 to 3 coordinates, a KD-tree over the
+/// blocks' centres finds the candidates (O(blocks log blocks + candidates)); for any other
+/// metric every two blocks are compared (O(blocks²) distance evaluations).
 ///
 /// # Errors
 /// [`Error::InvalidGamma`]; [`Error::InvalidParameter`] for no sessions, or sessions cut into
@@ -261,16 +263,44 @@ pub fn plan_session_tiles<M: Metric + ?Sized>(sessions: &[SessionBlocks], metric
         }
         start += s.poses;
     }
-    let mut tiles = Vec::new();
-    for (p, (a, rows, c_r, r_r)) in blocks.iter().enumerate() {
-        for (b, columns, c_c, r_c) in &blocks[p..] {
-            let reach = gamma + r_r + r_c;
-            // The rounding of three distances: a relative 10⁻⁹ is far above it.
-            if metric.distance(c_r, c_c) <= reach * (1.0 + 1e-9) + 1e-9 {
-                tiles.push(Tile { sessions: [*a, *b], rows: rows.clone(), columns: columns.clone() });
+    // The rounding of three distances: a relative 10⁻⁹ is far above it.
+    let meets = |p: usize, q: usize| {
+        let ((_, _, c_r, r_r), (_, _, c_c, r_c)) = (&blocks[p], &blocks[q]);
+        metric.distance(c_r, c_c) <= (gamma + r_r + r_c) * (1.0 + 1e-9) + 1e-9
+    };
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    let centres: Vec<&[f64]> = blocks.iter().map(|b| b.2).collect();
+    let index = if metric.is_coordinate_euclidean() { crate::spatial::Kd::new(&centres) } else { None };
+    match index {
+        // Euclidean coordinates (1 to 3): each block asks a KD-tree over the centres for those
+        // within its reach plus the largest radius, O(blocks log blocks + candidates).
+        Some(index) => {
+            let largest = blocks.iter().map(|b| b.3).fold(0.0, f64::max);
+            for (p, block) in blocks.iter().enumerate() {
+                let reach = (gamma + block.3 + largest) * (1.0 + 1e-6) + 1e-6;
+                index.within(block.2, reach, |q| {
+                    if q >= p && meets(p, q) {
+                        pairs.push((p, q));
+                    }
+                });
+            }
+            pairs.sort_unstable();
+        }
+        // Any other metric: every two blocks, O(blocks²).
+        None => {
+            for p in 0..blocks.len() {
+                pairs.extend((p..blocks.len()).filter(|&q| meets(p, q)).map(|q| (p, q)));
             }
         }
     }
+    let tiles = pairs
+        .into_iter()
+        .map(|(p, q)| Tile {
+            sessions: [blocks[p].0, blocks[q].0],
+            rows: blocks[p].1.clone(),
+            columns: blocks[q].1.clone(),
+        })
+        .collect();
     Ok(tiles)
 }
 

@@ -270,3 +270,48 @@ fn session_tiles_check_their_sessions() {
     assert!(plan_session_tiles(&blocks, &Euclidean, 1.0).unwrap_err().to_string().contains("same block size"));
     assert!(SessionBlocks::new(&a, &Euclidean, 0).is_err());
 }
+
+/// The Euclidean distance, hidden from the planner's KD-tree (it is not declared the distance of
+/// the coordinates): the planner compares every two blocks.
+struct Hidden;
+
+impl Metric for Hidden {
+    fn name(&self) -> String {
+        "hidden euclidean".into()
+    }
+
+    fn check_dim(&self, dim: usize) -> loops_core::Result<()> {
+        Euclidean.check_dim(dim)
+    }
+
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        Euclidean.distance(a, b)
+    }
+}
+
+/// The planner's KD-tree over block centres finds the tiles that comparing every two blocks
+/// finds, on fleets of many small sessions spread over a city and on stacked identical ones.
+#[test]
+fn kd_tree_plans_equal_all_pairs_plans() {
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    for case in 0..6 {
+        let sessions: Vec<Trajectory> = (0..40)
+            .map(|k| {
+                let offset = if case % 2 == 0 {
+                    [rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)]
+                } else {
+                    [0.0, 0.0]
+                };
+                tour(20 + rng.random_range(0..60), k as f64, offset)
+            })
+            .collect();
+        for (gamma, block) in [(0.5, 7), (3.0, 16), (25.0, 40)] {
+            let blocks: Vec<SessionBlocks> =
+                sessions.iter().map(|s| SessionBlocks::new(s, &Euclidean, block).unwrap()).collect();
+            let fast = plan_session_tiles(&blocks, &Euclidean, gamma).unwrap();
+            let slow = plan_session_tiles(&blocks, &Hidden, gamma).unwrap();
+            assert_eq!(fast, slow, "case {case}, γ = {gamma}, block {block}");
+            assert!(!fast.is_empty());
+        }
+    }
+}
