@@ -22,7 +22,8 @@ by keys (:class:`~inexact_loops.KeyedDraw`): the client works out each component
 the merged statistics, each tile's task rescans its tile and offers the few pairs asked of it
 (:func:`~inexact_loops.draw_tile`), and the samples are :func:`~inexact_loops.sample_fleet`'s,
 pair for pair, whatever the tiling and the workers. Loop duration per pose
-(``loop_duration=True``) comes from each tile's share (:func:`~inexact_loops.scan_tile_with_duration`),
+(``loop_duration=True``) comes from each tile's share
+(:func:`~inexact_loops.scan_tile_with_duration`),
 added up per session. Every task is a pure function of its inputs, so a worker that dies takes
 nothing with it: Dask reruns its tasks and the answer is the same.
 
@@ -171,7 +172,9 @@ def read_pose_parquet(path: str | os.PathLike[str], *, axes: tuple[int, int] | N
     xyz = np.column_stack([column(c) for c in position])
     if orientation:
         if len(position) != 3:
-            raise LoopsIOError(f"{path}: an orientation (qx, qy, qz, qw) needs the position x, y, z")
+            raise LoopsIOError(
+                f"{path}: an orientation (qx, qy, qz, qw) needs the position x, y, z"
+            )
         q = np.column_stack([column(c) for c in _PARQUET_QUATERNION])
         traj = _core.Trajectory.se3(t, xyz, q)
     else:
@@ -428,8 +431,10 @@ def _named_sources(sessions: Any) -> list[tuple[str, Any]]:
             out.append((name, source))
         elif isinstance(source, str | os.PathLike):
             out.append((name, os.fspath(source)))
-        elif isinstance(source, list | tuple) and source and all(
-            isinstance(p, str | os.PathLike) for p in source
+        elif (
+            isinstance(source, list | tuple)
+            and source
+            and all(isinstance(p, str | os.PathLike) for p in source)
         ):
             # Several files read as one trajectory, as read_trajectory reads a list.
             out.append((name, tuple(os.fspath(p) for p in source)))
@@ -539,7 +544,8 @@ class FleetRun:
         return self._loops.overlap_matrix(sparse=sparse)
 
     def between_sessions(self) -> np.ndarray:
-        """The ids of the components between two sessions, as :meth:`FleetLoops.between_sessions`."""
+        """The ids of the components between two sessions, as
+        :meth:`FleetLoops.between_sessions`."""
         return self._loops.between_sessions()  # type: ignore[no-any-return]
 
     def loop_duration(self, session: str | int) -> Table:
@@ -560,7 +566,9 @@ class FleetRun:
             # Added up where the tiles' shares are, brought here on first use.
             c = self._context
             runner: _Runner = c["runner"]
-            mine = [s for s, tile in zip(c["shares"], c["tiles"], strict=True) if k in tile.sessions]
+            mine = [
+                s for s, tile in zip(c["shares"], c["tiles"], strict=True) if k in tile.sessions
+            ]
             poses = c["blocks"][k].poses
             task = runner.submit(
                 "session-tau", _session_tau, k, c["starts"][k], poses, None, name, None, *mine
@@ -760,7 +768,9 @@ def find_fleet_loops_dask(
                 "without client="
             )
     runner = _Runner(client)
-    stats: dict[str, Any] = {"workers": 0 if client is None else len(client.scheduler_info()["workers"])}
+    stats: dict[str, Any] = {
+        "workers": 0 if client is None else len(client.scheduler_info()["workers"])
+    }
     started = time_started = _now()
     worker_bytes_before = runner.worker_bytes()
     if client is None:
@@ -768,7 +778,11 @@ def find_fleet_loops_dask(
         loaded: list[Any] = []
         for _, source in named:
             try:
-                loaded.append(_load(source, options) if not isinstance(source, str | tuple) else _read_uncached(source, options))
+                loaded.append(
+                    _load(source, options)
+                    if not isinstance(source, str | tuple)
+                    else _read_uncached(source, options)
+                )
             except (OSError, ValueError, TypeError) as error:
                 loaded.append(_Failed(error))
         sources_all = loaded
@@ -787,8 +801,10 @@ def find_fleet_loops_dask(
     first: tuple[str, str, int] | None = None
     for k, (name, source) in enumerate(named):
         d = described[k]
-        shown = source if isinstance(source, str) else (
-            ",".join(source) if isinstance(source, tuple) else "(in memory)"
+        shown = (
+            source
+            if isinstance(source, str)
+            else (",".join(source) if isinstance(source, tuple) else "(in memory)")
         )
         if isinstance(d, _Failed):
             if on_error == "raise":
@@ -892,7 +908,9 @@ def _session_times_getter(
     runner: _Runner, sources: list[Any], options: tuple[tuple[str, Any], ...]
 ) -> Callable[[int], Any]:
     def times(k: int) -> Any:
-        return runner.gather([runner.submit("session-times", _session_times, sources[k], options)])[0]
+        return runner.gather([runner.submit("session-times", _session_times, sources[k], options)])[
+            0
+        ]
 
     return times
 
@@ -982,9 +1000,13 @@ class _OutDir:
         except FileNotFoundError:
             return None
         except (OSError, ValueError) as error:
-            raise InvalidParameterError(f"{path} is not the marker of loops-dask: {error}") from None
+            raise InvalidParameterError(
+                f"{path} is not the marker of loops-dask: {error}"
+            ) from None
         if not isinstance(marker, dict) or marker.get("written_by") != "loops-dask":
-            raise InvalidParameterError(f"{path} is not the marker of loops-dask; not touching the folder")
+            raise InvalidParameterError(
+                f"{path} is not the marker of loops-dask; not touching the folder"
+            )
         return marker
 
     def _remove_leftovers(self) -> None:
@@ -1137,7 +1159,9 @@ def run_fleet_dask(
             for k, b in enumerate(c["blocks"]):
                 source = c["sources"][k]
                 t_s = runner.submit("session-times", _session_times, source, c["options"])
-                mine = [s for s, tile in zip(c["shares"], c["tiles"], strict=True) if k in tile.sessions]
+                mine = [
+                    s for s, tile in zip(c["shares"], c["tiles"], strict=True) if k in tile.sessions
+                ]
                 futures.append(
                     runner.submit(
                         "session-tau",
@@ -1195,14 +1219,21 @@ def _parser() -> argparse.ArgumentParser:
         epilog=(
             "examples:\n"
             "  loops-dask fleet/*.mcap --gamma 40 --out results\n"
-            "  loops-dask fleet/*.mcap --gamma 40 --scheduler tcp://10.0.0.5:8786 --out /shared/results\n"
-            "\nIn --out: components.parquet, session_pairs.parquet, samples.parquet, failures.parquet\n"
-            "(sessions left out, with their error), loop_duration/<session>.parquet, summary.json.\n"
+            "  loops-dask fleet/*.mcap --gamma 40 --scheduler tcp://10.0.0.5:8786 \\\n"
+            "      --out /shared/results\n"
+            "\nIn --out: components.parquet, session_pairs.parquet, samples.parquet,\n"
+            "failures.parquet (sessions left out, with their error),\n"
+            "loop_duration/<session>.parquet, summary.json.\n"
             "Exit code 0; 1 when a session was left out; 2 on an error."
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("logs", nargs="*", metavar="LOG", help="the pose logs, one session each, named by the file's stem")
+    p.add_argument(
+        "logs",
+        nargs="*",
+        metavar="LOG",
+        help="the pose logs, one session each, named by the file's stem",
+    )
     p.add_argument(
         "--session",
         action="append",
@@ -1210,34 +1241,105 @@ def _parser() -> argparse.ArgumentParser:
         metavar="NAME=FILE[,FILE...]",
         help="a session of several files, or a name of your choice",
     )
-    p.add_argument("--scheduler", metavar="ADDRESS", help="a Dask scheduler (tcp://host:8786); without it: this machine, no Dask needed")
-    p.add_argument("--format", help="file format (as `loops fleet`), or parquet for a pose store (t, x, y[, z][, qx, qy, qz, qw])")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a Dask scheduler (tcp://host:8786); without it: this machine, no Dask needed",
+    )
+    p.add_argument(
+        "--format",
+        help="file format (as `loops fleet`), or parquet for a pose store "
+        "(t, x, y[, z][, qx, qy, qz, qw])",
+    )
     p.add_argument("--topic", help="topic to read from MCAP files and bags")
-    p.add_argument("--time", help="time of each pose from MCAP files and bags: header, log or publish")
-    p.add_argument("--frames", metavar="PARENT,CHILD", help="parent and child frame of a transform topic")
-    p.add_argument("--rate-hz", type=float, help="for files without times: pose i at i / RATE_HZ seconds")
-    p.add_argument("--axes", metavar="A,B", help="a plane of two position axes (0 = x, 1 = y, 2 = z)")
-    p.add_argument("--drop-duplicate-stamps", action="store_true", help="drop poses whose timestamp repeats the one before")
-    p.add_argument("--quaternion-tolerance", type=float, metavar="TOLERANCE", help="how far from unit length a quaternion may be")
-    p.add_argument("--gamma", type=float, required=True, help="the distance threshold γ, in the metric's unit")
+    p.add_argument(
+        "--time", help="time of each pose from MCAP files and bags: header, log or publish"
+    )
+    p.add_argument(
+        "--frames", metavar="PARENT,CHILD", help="parent and child frame of a transform topic"
+    )
+    p.add_argument(
+        "--rate-hz", type=float, help="for files without times: pose i at i / RATE_HZ seconds"
+    )
+    p.add_argument(
+        "--axes", metavar="A,B", help="a plane of two position axes (0 = x, 1 = y, 2 = z)"
+    )
+    p.add_argument(
+        "--drop-duplicate-stamps",
+        action="store_true",
+        help="drop poses whose timestamp repeats the one before",
+    )
+    p.add_argument(
+        "--quaternion-tolerance",
+        type=float,
+        metavar="TOLERANCE",
+        help="how far from unit length a quaternion may be",
+    )
+    p.add_argument(
+        "--gamma", type=float, required=True, help="the distance threshold γ, in the metric's unit"
+    )
     p.add_argument("--metric", help="the metric (as `loops fleet`); default: the sessions' own")
-    p.add_argument("--separation-path", type=float, metavar="LENGTH", help="revisits only: pairs at least this path length apart [default: 4 x gamma]")
-    p.add_argument("--separation-time", type=float, metavar="SECONDS", help="revisits only: pairs at least this many seconds apart [default: 0]")
-    p.add_argument("--no-separation", action="store_true", help="the paper's S_gamma: no separation")
-    p.add_argument("--threads", type=int, help="threads of each tile's scan (default: one per core here, one per task on a cluster)")
-    p.add_argument("--sampler", default="rho", help="one, rho, rho-dispersed, alpha or closest-first [default: rho]; none for no samples")
-    p.add_argument("--budget", type=int, help="exactly this many samples [default: 1000 without --rate]")
+    p.add_argument(
+        "--separation-path",
+        type=float,
+        metavar="LENGTH",
+        help="revisits only: pairs at least this path length apart [default: 4 x gamma]",
+    )
+    p.add_argument(
+        "--separation-time",
+        type=float,
+        metavar="SECONDS",
+        help="revisits only: pairs at least this many seconds apart [default: 0]",
+    )
+    p.add_argument(
+        "--no-separation", action="store_true", help="the paper's S_gamma: no separation"
+    )
+    p.add_argument(
+        "--threads",
+        type=int,
+        help="threads of each tile's scan (default: one per core here, one per task on a cluster)",
+    )
+    p.add_argument(
+        "--sampler",
+        default="rho",
+        help="one, rho, rho-dispersed, alpha or closest-first [default: rho]; none for no samples",
+    )
+    p.add_argument(
+        "--budget", type=int, help="exactly this many samples [default: 1000 without --rate]"
+    )
     p.add_argument("--rate", type=float, help="the sampler's rate instead of a budget")
     p.add_argument("--seed", type=int, default=0, help="seed of the random choices [default: 0]")
-    p.add_argument("--skip-trivial", action="store_true", help="leave out the trivial loop components")
-    p.add_argument("--between-only", action="store_true", help="sample only pairs of two different sessions")
+    p.add_argument(
+        "--skip-trivial", action="store_true", help="leave out the trivial loop components"
+    )
+    p.add_argument(
+        "--between-only", action="store_true", help="sample only pairs of two different sessions"
+    )
     p.add_argument("--no-loop-duration", action="store_true", help="do not write loop_duration/")
-    p.add_argument("--block", type=int, default=DEFAULT_BLOCK, help=f"poses per block, the side of a tile [default: {DEFAULT_BLOCK}]")
-    p.add_argument("--fan-in", type=int, default=DEFAULT_FAN_IN, help=f"summaries per merge task [default: {DEFAULT_FAN_IN}]")
+    p.add_argument(
+        "--block",
+        type=int,
+        default=DEFAULT_BLOCK,
+        help=f"poses per block, the side of a tile [default: {DEFAULT_BLOCK}]",
+    )
+    p.add_argument(
+        "--fan-in",
+        type=int,
+        default=DEFAULT_FAN_IN,
+        help=f"summaries per merge task [default: {DEFAULT_FAN_IN}]",
+    )
     p.add_argument("--out", required=True, metavar="DIR", help="the folder for the results")
-    p.add_argument("--force", action="store_true", help="replace the results of an earlier loops-dask in --out (only what it wrote there)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace the results of an earlier loops-dask in --out (only what it wrote there)",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
-    p.add_argument("--json", metavar="FILE", help="also write summary.json to FILE; - prints it instead of the table")
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        help="also write summary.json to FILE; - prints it instead of the table",
+    )
     return p
 
 
@@ -1290,7 +1392,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from distributed import Client  # type: ignore[import-untyped, import-not-found, unused-ignore]
             except ImportError as error:
                 raise InvalidParameterError(
-                    f"--scheduler needs dask.distributed: pip install 'inexact-loops[dask]' ({error})"
+                    "--scheduler needs dask.distributed: "
+                    f"pip install 'inexact-loops[dask]' ({error})"
                 ) from None
             client = Client(args.scheduler)
         try:
@@ -1333,7 +1436,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     elif args.json:
         Path(args.json).write_text(text + "\n")
     for f in summary["failures"]:
-        print(f"loops-dask: session {f['session']} ({f['source']}) left out: {f['error']}", file=sys.stderr)
+        print(
+            f"loops-dask: session {f['session']} ({f['source']}) left out: {f['error']}",
+            file=sys.stderr,
+        )
     if not args.quiet and args.json != "-":
         where = args.scheduler or "this machine"
         stats = summary["stats"]

@@ -363,7 +363,9 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
     by_hand = tiled.loops.draw("rho", budget=600, seed=1)
     theirs = il.sample_fleet(loops, "rho", budget=600, seed=1)
     assert (by_hand.groups, by_hand.available, by_hand.warnings) == (
-        theirs.samples.groups, theirs.samples.available, [],
+        theirs.samples.groups,
+        theirs.samples.available,
+        [],
     )
     tiles = tiled.loops.tiles
     while not by_hand.done:
@@ -373,8 +375,12 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
             assert request.tile == tiles[t]
             a, b = request.tile.sessions
             offer = il.draw_tile(
-                request, sessions[a], sessions[b], starts=(int(starts[a]), int(starts[b])),
-                gamma=1.5, separation=separation,
+                request,
+                sessions[a],
+                sessions[b],
+                starts=(int(starts[a]), int(starts[b])),
+                gamma=1.5,
+                separation=separation,
             )
             offers.append(il.DrawCandidates(offer.to_bytes()))
         by_hand.absorb(offers)
@@ -391,7 +397,11 @@ def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
     fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5, separation=None)
     for per_pair, c in ((1, None), (7, client)):
         tiled = find_fleet_loops_dask(
-            paths, 1.5, client=c, block=blocks_for(paths, per_pair), separation=None,
+            paths,
+            1.5,
+            client=c,
+            block=blocks_for(paths, per_pair),
+            separation=None,
             loop_duration=True,
         )
         for name in tiled.names:
@@ -410,12 +420,18 @@ def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
     for tile in il.plan_tiles(blocks, gamma=1.5):
         a, b = tile.sessions
         _, share = il.scan_tile_with_duration(
-            tile, sessions[a], sessions[b], starts=(int(starts[a]), int(starts[b])), gamma=1.5,
+            tile,
+            sessions[a],
+            sessions[b],
+            starts=(int(starts[a]), int(starts[b])),
+            gamma=1.5,
             separation=None,
         )
         assert share.tile == tile
         shares.append(pickle.loads(pickle.dumps(il.TileDuration(share.to_bytes()))))
-    own, other = il.session_loop_duration(2, start=int(starts[2]), poses=len(sessions[2]), parts=shares)
+    own, other = il.session_loop_duration(
+        2, start=int(starts[2]), poses=len(sessions[2]), parts=shares
+    )
     theirs = fleet.loop_duration(fleet.names[2])
     np.testing.assert_allclose(own, theirs["own_s"], rtol=1e-10, atol=1e-9)
     np.testing.assert_allclose(other, theirs["other_s"], rtol=1e-10, atol=1e-9)
@@ -434,7 +450,9 @@ def test_parquet_pose_stores_read_where_the_tiles_are(tmp_path, client):
     stores = []
     for p in tum:
         traj = il.read_trajectory(p)
-        stores.append(write_parquet(tmp_path / f"{p.stem}.parquet", traj.timestamps, traj.positions[:, :2]))
+        stores.append(
+            write_parquet(tmp_path / f"{p.stem}.parquet", traj.timestamps, traj.positions[:, :2])
+        )
     fleet = il.find_fleet_loops(il.Fleet(tum), gamma=1.5)
     tiled = find_fleet_loops_dask(stores, 1.5, client=client, block=blocks_for(tum, 2))
     assert_same(tiled, fleet)
@@ -488,14 +506,25 @@ def test_the_output_folder_holds_parquet_tables_written_safely(tmp_path, client)
     corrupt.write_text("garbage\n")
     out = tmp_path / "out"
     summary = run_fleet_dask(
-        [*paths, corrupt], 1.5, out=out, client=client, block=blocks_for(paths, 2),
-        sampler="rho", budget=30, seed=2,
+        [*paths, corrupt],
+        1.5,
+        out=out,
+        client=client,
+        block=blocks_for(paths, 2),
+        sampler="rho",
+        budget=30,
+        seed=2,
     )
     fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
     names = sorted(os.listdir(out))
     assert names == [
-        "components.parquet", "failures.parquet", "loop_duration", "loops-dask.json",
-        "samples.parquet", "session_pairs.parquet", "summary.json",
+        "components.parquet",
+        "failures.parquet",
+        "loop_duration",
+        "loops-dask.json",
+        "samples.parquet",
+        "session_pairs.parquet",
+        "summary.json",
     ], names
     components = read_parquet(out / "components.parquet")
     for column in ("id", "session_a", "session_b", "pair_count", "holes", "i_min", "j_max"):
@@ -505,7 +534,9 @@ def test_the_output_folder_holds_parquet_tables_written_safely(tmp_path, client)
     for column in ("i", "j", "component", "distance"):
         np.testing.assert_array_equal(samples[column], expected[column], err_msg=column)
     failures = read_parquet(out / "failures.parquet")
-    assert list(failures["session"]) == ["corrupt"] and summary["failures"][0]["session"] == "corrupt"
+    assert (
+        list(failures["session"]) == ["corrupt"] and summary["failures"][0]["session"] == "corrupt"
+    )
     for name in fleet.names:
         tau = read_parquet(out / "loop_duration" / f"{name}.parquet")
         theirs = fleet.loop_duration(name)
@@ -522,7 +553,9 @@ def test_the_output_folder_holds_parquet_tables_written_safely(tmp_path, client)
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "components.parquet").write_text("a file of the user's")
-    with pytest.raises(il.InvalidParameterError, match="holds components.parquet, which loops-dask did not write"):
+    with pytest.raises(
+        il.InvalidParameterError, match="holds components.parquet, which loops-dask did not write"
+    ):
         run_fleet_dask(paths, 1.5, out=mine, block=50, force=True)
     assert (mine / "components.parquet").read_text() == "a file of the user's"
 
@@ -531,12 +564,30 @@ def test_loops_dask_is_the_one_switch(tmp_path, client):
     paths = random_fleet(tmp_path, 16)
     corrupt = tmp_path / "corrupt.tum"
     corrupt.write_text("garbage\n")
-    here = [sys.executable, "-m", "inexact_loops.dask", *map(str, paths), "--gamma", "1.5", "--block", "40"]
+    here = [
+        sys.executable,
+        "-m",
+        "inexact_loops.dask",
+        *map(str, paths),
+        "--gamma",
+        "1.5",
+        "--block",
+        "40",
+    ]
     run = subprocess.run([*here, "--out", str(tmp_path / "here")], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert "on this machine" in run.stdout
     address = client.scheduler.address
-    there = [*here, str(corrupt), "--scheduler", address, "--out", str(tmp_path / "there"), "--json", "-"]
+    there = [
+        *here,
+        str(corrupt),
+        "--scheduler",
+        address,
+        "--out",
+        str(tmp_path / "there"),
+        "--json",
+        "-",
+    ]
     run = subprocess.run(there, capture_output=True, text=True)
     assert run.returncode == 1, run.stderr  # a session was left out
     assert "session corrupt" in run.stderr and "left out" in run.stderr
