@@ -62,6 +62,13 @@ __all__ = [
     "Update",
     "OnlineSampler",
     "Candidate",
+    "KeyedDraw",
+    "TileDrawRequest",
+    "DrawCandidates",
+    "TileDuration",
+    "draw_tile",
+    "scan_tile_with_duration",
+    "session_loop_duration",
 ]
 
 __version__: str
@@ -2555,6 +2562,7 @@ class TiledFleetLoops:
             ImportError: ``sparse=True`` without scipy.
         """
 
+@final
 class KeyedDraw:
     """A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
     the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
@@ -2596,6 +2604,7 @@ class KeyedDraw:
             InvalidParameterError: before the draw is :attr:`done`.
         """
 
+@final
 class TileDrawRequest:
     """What one tile must offer a pass of a :class:`KeyedDraw`: the tile, the component ids of its
     provisional components, and the part of the request about them. Pickles as its bytes.
@@ -2607,6 +2616,7 @@ class TileDrawRequest:
     def tile(self) -> Tile:
         """The tile."""
 
+@final
 class DrawCandidates:
     """What one tile offers a pass of a keyed draw (:func:`draw_tile`): its keyed pairs below the
     thresholds and the closest pairs of requested rows. Pickles as its bytes.
@@ -2644,6 +2654,7 @@ def draw_tile(
         InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan.
     """
 
+@final
 class TileDuration:
     """What one tile's runs add to the loop duration τ of its rows and columns
     (:func:`scan_tile_with_duration`); :func:`session_loop_duration` adds up a session's.

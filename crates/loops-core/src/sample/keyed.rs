@@ -395,8 +395,9 @@ struct Group {
     offset: f64,
     /// The pool threshold asked last.
     pool: Option<u64>,
-    /// Pairs needed from the pool at most (uniform picks and the rest).
+    /// The rows whose closest pair is asked (the dispersed samplers).
     rows: Vec<usize>,
+    /// Whether the closest pair over all rows is asked (closest-first, trivial components).
     best: bool,
 }
 
