@@ -38,6 +38,7 @@ mod py_samples;
 mod py_separation;
 mod py_tile;
 mod py_tile_draw;
+mod py_tile_merge;
 mod py_trajectory;
 mod warning;
 
@@ -158,12 +159,12 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_tile::SessionBlocks>()?;
     module.add_class::<py_tile::Tile>()?;
     module.add_class::<py_tile::TileSummary>()?;
-    module.add_class::<py_tile::TileMerge>()?;
-    module.add_class::<py_tile::TiledFleetLoops>()?;
+    module.add_class::<py_tile_merge::TileMerge>()?;
+    module.add_class::<py_tile_merge::TiledFleetLoops>()?;
     module.add_function(wrap_pyfunction!(py_tile::session_blocks, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile::plan_tiles, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile::scan_tile, module)?)?;
-    module.add_function(wrap_pyfunction!(py_tile::merge_tiles, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile_merge::merge_tiles, module)?)?;
     module.add_class::<py_tile_draw::KeyedDraw>()?;
     module.add_class::<py_tile_draw::TileDrawRequest>()?;
     module.add_class::<py_tile_draw::DrawCandidates>()?;

@@ -13,7 +13,7 @@ use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_separation::SeparationArg;
-use crate::py_tile::{Tile, TileSummary, TiledFleetLoops, tile_metric};
+use crate::py_tile::{Tile, TileSummary, tile_metric};
 use crate::py_trajectory::Trajectory;
 use loops_core::{SampleSize, Sampler, SamplerKind};
 
@@ -39,11 +39,11 @@ pub(crate) struct KeyedDraw {
     skip_trivial: bool,
 }
 
-/// [`TiledFleetLoops::draw`]'s body.
+/// `TiledFleetLoops.draw`'s body, from its merge, the sessions' first fleet indices and names.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_draw(
     py: Python<'_>,
-    loops: &TiledFleetLoops,
+    (merged, starts, names): (&Arc<loops_core::MergedLoops>, &[usize], &[String]),
     sampler: &str,
     rate: Option<f64>,
     budget: Option<usize>,
@@ -54,7 +54,6 @@ pub(crate) fn plan_draw(
     let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
     let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
     let spec = Sampler { skip_trivial, ..Sampler::new(kind, size, seed) };
-    let (merged, starts) = loops.merge()?;
     let (merged, starts) = (Arc::clone(merged), starts.to_vec());
     let kept = Arc::clone(&merged);
     let inner = detached(py, move || {
@@ -63,7 +62,7 @@ pub(crate) fn plan_draw(
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
         Ok(loops_core::KeyedDraw::new(&spec, &stats, &keep)?)
     })?;
-    Ok(KeyedDraw { inner, merged: kept, names: loops.names.clone(), starts, skip_trivial })
+    Ok(KeyedDraw { inner, merged: kept, names: names.to_vec(), starts, skip_trivial })
 }
 
 #[pymethods]
