@@ -2535,12 +2535,16 @@ class TiledFleetLoops:
 
         Raises:
             InvalidParameterError: an unknown sampler, a baseline, both or neither of rate and
-                budget, a budget of 0, a rate out of range; ``TooManySamplesError`` as
-                :func:`sample_fleet`.
+                budget, a budget of 0, a rate out of range, a result read from a pickle (which
+                holds no merge); ``TooManySamplesError`` as :func:`sample_fleet`.
         """
     @property
     def tiles(self) -> list[Tile]:
-        """The tiles merged, in the merge's order (the indices of :meth:`KeyedDraw.requests`)."""
+        """The tiles merged, in the merge's order (the indices of :meth:`KeyedDraw.requests`).
+
+        Raises:
+            InvalidParameterError: a result read from a pickle, which holds no merge.
+        """
 
     @property
     def names(self) -> list[str]:

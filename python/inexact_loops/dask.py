@@ -509,7 +509,9 @@ class FleetRun:
     :class:`FleetLoops` that tiles give (``components``, ``session_pairs()``,
     ``overlap_matrix()``, ``between_sessions()``), tau per session with
     ``loop_duration=True``, samples drawn by keys (:meth:`sample`), the sessions left out
-    (:attr:`failures`), and the timings and bytes of the run (:attr:`stats`)."""
+    (:attr:`failures`), and the timings and bytes of the run (:attr:`stats`). It holds the
+    run's connection (the client, the sessions' sources) for :meth:`sample`: pickle its tables
+    as :attr:`loops` (a :class:`TiledFleetLoops`)."""
 
     def __init__(self, **fields: Any) -> None:
         self._loops: Any = fields["loops"]

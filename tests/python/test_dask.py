@@ -388,6 +388,11 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
     assert_same_samples(by_hand.table(), theirs.table)
     with pytest.raises(il.InvalidParameterError, match="baseline"):
         tiled.loops.draw("lio-sam", budget=10, seed=0)
+    # A pickled result keeps its tables, not the merge.
+    unpickled = pickle.loads(pickle.dumps(tiled.loops))
+    assert unpickled == tiled.loops
+    with pytest.raises(il.InvalidParameterError, match="read from a pickle"):
+        unpickled.draw("rho", budget=10, seed=0)
     many = tiled.loops.draw("one", budget=10_000_000, seed=0)
     assert any("candidates" in w for w in many.warnings), many.warnings
 

@@ -224,7 +224,8 @@ def fleet_results(tmp_path_factory) -> dict[str, object]:
         "fleet samples": il.sample_fleet(loops, "closest-first", budget=80, seed=1),
         "between samples": il.sample_fleet(loops, "one", budget=40, seed=2, between_only=True),
         "baseline fleet samples": il.sample_fleet(loops, "lio-sam", budget=40, seed=3),
-        "tiled fleet loops": find_fleet_loops_dask(sessions, 30.0, block=500),
+        # FleetRun holds the run's connection; its tables pickle as TiledFleetLoops.
+        "tiled fleet loops": find_fleet_loops_dask(sessions, 30.0, block=500).loops,
         "pose graph": il.read_pose_graph(graph_path, metric="se2(rotation_weight_m_per_rad=2)"),
         "3-D pose graph": il.read_pose_graph(graph3_path),
         "chained pose graph": chained,
