@@ -29,7 +29,9 @@ fn a_parked_robot_fits_in_what_its_runs_need() {
     let exe = std::env::current_exe().expect("the test binary's path");
     let output = Command::new("sh")
         .arg("-c")
-        .arg(format!(r#"ulimit -v {LIMIT_KIB} && exec "$0" --exact a_parked_robot_fits_in_what_its_runs_need --test-threads=1"#))
+        .arg(format!(
+            r#"ulimit -v {LIMIT_KIB} && exec "$0" --exact a_parked_robot_fits_in_what_its_runs_need --test-threads=1"#
+        ))
         .arg(&exe)
         .env(CHILD, "1")
         .output()
