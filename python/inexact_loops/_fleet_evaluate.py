@@ -61,11 +61,19 @@ from .evaluate import (
     Odometry,
     Poses,
     Verifier,
+    _check_rule,
+    _curves,
+    _finish_axes,
     _gtsam,
     _inverse,
     _json_default,
+    _medians,
     _noise,
     _pose_value,
+    _read_csv,
+    _solve,
+    _summary_groups,
+    _write_csv,
     ape_errors,
 )
 from .table import Table
@@ -215,20 +223,13 @@ class FleetRule:
     between_only: bool = False
 
     def __post_init__(self) -> None:
-        if self.sampler not in SAMPLERS + BASELINES:
-            raise InvalidParameterError(
-                f"FleetRule: unknown sampler {self.sampler!r}: expected one of "
-                + ", ".join(SAMPLERS + BASELINES)
-            )
+        # An unknown sampler is no baseline: _check_rule names it.
         if self.between_only and self.sampler in BASELINES:
             raise InvalidParameterError(
                 f"FleetRule: {self.sampler} is a baseline, whose rule knows no components: "
                 "not with between_only"
             )
-        if self.budget < 1:
-            raise InvalidParameterError(f"FleetRule: budget = {self.budget} must be >= 1")
-        if not (math.isfinite(self.gamma) and self.gamma > 0):
-            raise InvalidParameterError(f"FleetRule: gamma = {self.gamma} must be > 0")
+        _check_rule("FleetRule", self.sampler, self.budget, self.gamma)
 
 
 def _fleet_loops(references: Sessions, gamma: float, separation: bool) -> FleetLoops:
@@ -408,51 +409,12 @@ def optimize_fleet(
             )
         for key, m in zip(session_keys, guess, strict=True):
             initial.insert(key, _pose_value(gtsam, m))
-    known = list(range(graph.size()))
     if matches is not None and len(matches):
         if matches.i.max(initial=0) >= starts[-1] or matches.j.max(initial=0) >= starts[-1]:
             raise InvalidParameterError(
                 f"optimize_fleet: a match past the last pose ({starts[-1]} poses in all)"
             )
-        robust = {
-            "cauchy": lambda: gtsam.noiseModel.mEstimator.Cauchy.Create(backend.kernel_width),
-            "huber": lambda: gtsam.noiseModel.mEstimator.Huber.Create(backend.kernel_width),
-        }.get(backend.kernel)
-        for a, b, rel, ts, rs in zip(
-            matches.i.tolist(),
-            matches.j.tolist(),
-            matches.relative,
-            matches.translation_sigma_m.tolist(),
-            matches.rotation_sigma_rad.tolist(),
-            strict=True,
-        ):
-            noise = _noise(gtsam, dim, ts, rs)
-            if robust is not None:
-                noise = gtsam.noiseModel.Robust.Create(robust(), noise)
-            graph.add(between(keys[a], keys[b], _pose_value(gtsam, rel), noise))
-    if backend.kernel == "gnc":
-        lm = gtsam.LevenbergMarquardtParams()
-        lm.setMaxIterations(backend.max_iterations)
-        lm.setRelativeErrorTol(backend.relative_error_tol)
-        params = gtsam.GncLMParams(lm)
-        params.setKnownInliers(known)
-        result = gtsam.GncLMOptimizer(graph, initial, params).optimize()
-    else:
-        params = gtsam.LevenbergMarquardtParams()
-        params.setMaxIterations(backend.max_iterations)
-        params.setRelativeErrorTol(backend.relative_error_tol)
-        result = gtsam.LevenbergMarquardtOptimizer(graph, initial, params).optimize()
-    # GTSAM extracts the poses in the order of their keys; put them back in fleet order.
-    order = np.argsort(np.asarray(keys, dtype=np.uint64), kind="stable")
-    if dim == 2:
-        flat = np.empty((len(keys), 3))
-        flat[order] = gtsam.utilities.extractPose2(result)
-        matrices = Poses.se2(np.arange(len(keys), dtype=float), flat).matrices
-    else:
-        raw = gtsam.utilities.extractPose3(result)
-        matrices = np.tile(np.eye(4), (len(keys), 1, 1))
-        matrices[order, :3, :3] = raw[:, :9].reshape(-1, 3, 3)
-        matrices[order, :3, 3] = raw[:, 9:]
+    matrices = _solve(gtsam, graph, initial, backend, dim, matches, keys)
     return [
         Poses(odometry.timestamps, matrices[starts[s] : starts[s + 1]])
         for s, odometry in enumerate(odometries)
@@ -610,12 +572,8 @@ class FleetResults:
         inter-session error with its quartiles, the median of the sessions' own ATEs, and the
         median candidates and matches (all and between sessions)."""
         keys = ("dataset", "sampler", "between_only", "separation", "outlier_rate", "budget")
-        groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
-        for r in self.rows:
-            groups.setdefault(tuple(r[k] for k in keys), []).append(r)
         out = []
-        for key, rows in groups.items():
-            ate_m = np.array([r["ate_m"] for r in rows])
+        for group, rows in _summary_groups(self.rows, keys):
             inter = np.array([r["inter_m"] for r in rows])
             finite = inter[np.isfinite(inter)]
             q = {
@@ -623,25 +581,24 @@ class FleetResults:
                 for p in (0.25, 0.5, 0.75)
             }
             out.append(
-                dict(zip(keys, key, strict=True))
+                group
                 | {
-                    "seeds": len(rows),
-                    "ate_median_m": float(np.median(ate_m)),
-                    "ate_q25_m": float(np.quantile(ate_m, 0.25)),
-                    "ate_q75_m": float(np.quantile(ate_m, 0.75)),
-                    "ate_min_m": float(ate_m.min()),
-                    "ate_max_m": float(ate_m.max()),
                     "inter_median_m": q[0.5],
                     "inter_q25_m": q[0.25],
                     "inter_q75_m": q[0.75],
                     "session_ate_median_m": float(np.median([r["session_ate_m"] for r in rows])),
-                    "candidates": float(np.median([r["candidates"] for r in rows])),
-                    "between_candidates": float(np.median([r["between_candidates"] for r in rows])),
-                    "matches": float(np.median([r["matches"] for r in rows])),
-                    "between_matches": float(np.median([r["between_matches"] for r in rows])),
-                    "wrong": float(np.median([r["wrong"] for r in rows])),
-                    "odometry_ate_m": float(np.median([r["odometry_ate_m"] for r in rows])),
                 }
+                | _medians(
+                    rows,
+                    (
+                        "candidates",
+                        "between_candidates",
+                        "matches",
+                        "between_matches",
+                        "wrong",
+                        "odometry_ate_m",
+                    ),
+                )
             )
         return out
 
@@ -650,19 +607,9 @@ class FleetResults:
     ) -> None:
         """Writes the rows as CSV (a header of :data:`FLEET_COLUMNS`), and the per-session rows
         to ``sessions_path`` when given."""
-        import csv
-
-        with open(path, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(FLEET_COLUMNS))
-            writer.writeheader()
-            for r in self.rows:
-                writer.writerow({c: r[c] for c in FLEET_COLUMNS})
+        _write_csv(path, FLEET_COLUMNS, self.rows)
         if sessions_path is not None:
-            with open(sessions_path, "w", newline="") as f:
-                writer = csv.DictWriter(f, fieldnames=list(SESSION_COLUMNS))
-                writer.writeheader()
-                for r in self.sessions:
-                    writer.writerow({c: r[c] for c in SESSION_COLUMNS})
+            _write_csv(sessions_path, SESSION_COLUMNS, self.sessions)
 
     def to_json(self, path: str | PathLike[str]) -> None:
         """Writes ``{"settings", "summary", "rows", "sessions"}`` as JSON (NaN as null)."""
@@ -679,27 +626,11 @@ class FleetResults:
     @classmethod
     def from_csv(cls, path: str | PathLike[str]) -> FleetResults:
         """Reads rows written by :meth:`to_csv` (not the per-session rows)."""
-        import csv
-
         ints = {"budget", "seed", "candidates", "between_candidates", "matches"}
         ints |= {"between_matches", "wrong", "placed"}
         bools = {"between_only", "separation"}
-        rows = []
-        with open(path, newline="") as f:
-            for raw in csv.DictReader(f):
-                row: dict[str, Any] = {}
-                for c in FLEET_COLUMNS:
-                    v = raw[c]
-                    if c in ints:
-                        row[c] = int(v)
-                    elif c in bools:
-                        row[c] = v == "True"
-                    elif c in ("dataset", "sampler"):
-                        row[c] = v
-                    else:
-                        row[c] = float(v)
-                rows.append(row)
-        return cls(rows)
+        floats = set(FLEET_COLUMNS) - ints - bools - {"dataset", "sampler"}
+        return cls(_read_csv(path, FLEET_COLUMNS, ints=ints, floats=floats, bools=bools))
 
     def extend(self, other: FleetResults) -> None:
         """Adds the rows of ``other`` (its per-session rows renumbered)."""
@@ -994,25 +925,9 @@ def plot_fleet_error_vs_matches(
     relative error) or ``"session_ate"`` (the sessions' own ATEs). ``select`` keeps the rows
     whose columns have these values. Needs matplotlib.
     """
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(6.4, 4.2))
-    select = dict(select or {})
-    summary = [
-        s
-        for s in results.summary()
-        if s["sampler"] != "odometry" and all(s.get(k) == v for k, v in select.items())
-    ]
+    ax, select, curves = _curves(results, ax, select, "between_only")
     column = {"ate": "ate", "inter": "inter", "session_ate": "session_ate"}[metric]
-    curves: dict[tuple[str, bool], list[dict[str, Any]]] = {}
-    for s in summary:
-        curves.setdefault((s["sampler"], s["between_only"]), []).append(s)
-    order = {name: k for k, name in enumerate(SAMPLERS + BASELINES)}
-    for (name, between), points in sorted(
-        curves.items(), key=lambda kv: (order.get(kv[0][0], 99), kv[0][1])
-    ):
-        points.sort(key=lambda s: s["budget"])
+    for (name, between), points in curves:
         x = [s["budget"] for s in points]
         y = [s[f"{column}_median_m"] for s in points]
         colour = COLOURS.get(name)
@@ -1034,26 +949,12 @@ def plot_fleet_error_vs_matches(
         and ("dataset" not in select or r["dataset"] == select["dataset"])
         and np.isfinite(r[odometry_column])
     ]
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    if odometry:
-        level = float(np.median(odometry))
-        low, high = ax.get_ylim()
-        ax.axhline(level, color="k", ls=":", lw=1, label="odometry alone")
-        ax.set_ylim(low, max(high, 1.5 * level))
-    ax.set_xlabel("matches tried (budget)")
-    ax.set_ylabel(
-        {
-            "ate": "joint ATE (m)",
-            "inter": "inter-session error (m)",
-            "session_ate": "session ATE (m)",
-        }[metric]
-    )
-    if title:
-        ax.set_title(title, fontsize=9)
-    ax.grid(True, which="both", lw=0.3, alpha=0.5)
-    if legend:
-        ax.legend(fontsize=7, ncol=2)
+    ylabel = {
+        "ate": "joint ATE (m)",
+        "inter": "inter-session error (m)",
+        "session_ate": "session ATE (m)",
+    }[metric]
+    _finish_axes(ax, odometry, ylabel, title, legend)
     return ax
 
 
@@ -1065,36 +966,31 @@ def plot_fleet_error_vs_matches(
 def _plot_fleet_panels(results: FleetResults, path: str, *, title: str) -> None:
     """:func:`plot_fleet_error_vs_matches`: a row per error (joint ATE, inter-session) and
     separation, a column per outlier rate."""
-    import matplotlib
+    from .evaluate import _save_panels
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    def draw(ax: Any, row: tuple[str, bool], outlier_rate: float) -> None:
+        metric, separation = row
+        plot_fleet_error_vs_matches(
+            results,
+            ax=ax,
+            metric=metric,  # type: ignore[arg-type]
+            select={"separation": separation, "outlier_rate": outlier_rate},
+            title=f"{title}: "
+            + ("joint ATE" if metric == "ate" else "inter-session error")
+            + (", revisits" if separation else ", S_gamma")
+            + f", {outlier_rate:.0%} wrong matches",
+        )
 
-    runs = [r for r in results.rows if r["sampler"] != "odometry"]
-    separations = sorted({r["separation"] for r in runs}, reverse=True)
-    columns = sorted({r["outlier_rate"] for r in runs})
-    panels = [(m, sep) for m in ("ate", "inter") for sep in separations]
-    fig, axes = plt.subplots(
-        max(len(panels), 1),
-        max(len(columns), 1),
-        figsize=(6.4 * max(len(columns), 1), 4.2 * max(len(panels), 1)),
-        squeeze=False,
+    _save_panels(
+        results.rows,
+        path,
+        lambda runs: [
+            (m, sep)
+            for m in ("ate", "inter")
+            for sep in sorted({r["separation"] for r in runs}, reverse=True)
+        ],
+        draw,
     )
-    for a, (metric, separation) in enumerate(panels):
-        for b, outlier_rate in enumerate(columns):
-            plot_fleet_error_vs_matches(
-                results,
-                ax=axes[a][b],
-                metric=metric,  # type: ignore[arg-type]
-                select={"separation": separation, "outlier_rate": outlier_rate},
-                title=f"{title}: "
-                + ("joint ATE" if metric == "ate" else "inter-session error")
-                + (", revisits" if separation else ", S_gamma")
-                + f", {outlier_rate:.0%} wrong matches",
-            )
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
 
 
 def _session_sources(paths: Sequence[str]) -> list[tuple[str, str]]:
@@ -1113,91 +1009,63 @@ def _session_sources(paths: Sequence[str]) -> list[tuple[str, str]]:
     return out
 
 
-def main_fleet(args: Any) -> int:
+def main_fleet(args: Any) -> None:
     """``loops-eval --fleet``: :func:`evaluate_fleet` on the pose files given, one a session
-    (``args`` parsed by :func:`inexact_loops.evaluate.main`)."""
-    import os
+    (``args`` parsed by :func:`inexact_loops.evaluate.main`, which reports the errors)."""
     import sys
 
-    from .evaluate import _csv_list
+    from .evaluate import _csv_list, _read_options, _write_outputs
 
     def both(value: str) -> list[bool]:
         return [False, True] if value == "both" else [value == "on"]
 
-    try:
-        if args.odometry:
-            raise InvalidParameterError("--fleet takes no --odometry: each session's is simulated")
-        if args.on != "reference" or args.source != "exact":
-            raise InvalidParameterError(
-                "--fleet chooses candidates on the references' exact components: not with --on "
-                "estimate or --source detections (between sessions, the estimates share no frame "
-                "before the first match)"
-            )
-        if os.path.exists(args.out) and os.listdir(args.out) and not args.force:
-            raise InvalidParameterError(
-                f"{args.out} exists and is not empty (--force to write into it)"
-            )
-        options: dict[str, Any] = {}
-        if args.rate_hz is not None:
-            options["rate_hz"] = args.rate_hz
-        if args.times:
-            options["times"] = args.times
-        if args.format:
-            options["format"] = args.format
-        axes: tuple[int, int] | None = None
-        if args.axes:
-            pair = _csv_list(args.axes, int)
-            if len(pair) != 2:
-                raise InvalidParameterError(f"--axes {args.axes}: two axes, e.g. 0,2")
-            axes = (pair[0], pair[1])
-        dim = 3 if args.se3 else 2
-        references = {
-            name: Poses.read(path, dim=dim, axes=axes, **options)  # type: ignore[arg-type]
-            for name, path in _session_sources(args.poses)
-        }
-        label = "+".join(references)
-        results = evaluate_fleet(
-            references,
-            gamma=args.gamma,
-            samplers=_csv_list(args.samplers, str),
-            budgets=_csv_list(args.budgets, int),
-            seeds=range(args.seeds),
-            between_only=both(args.between_only),
-            separations=[True, False] if args.separation == "both" else [args.separation == "on"],
-            outlier_rates=_csv_list(args.outliers, float),
-            backend=BackEnd(kernel=args.kernel),
-            anchor=args.anchor,
-            overlap_m=args.overlap_m,
-            keyframe_m=args.keyframe_m,
-            dataset=label,
-            progress=lambda r: print(
-                f"loops-eval: seed {r['seed']} {r['sampler']:>15} "
-                f"{'between' if r['between_only'] else 'all':>7} budget {r['budget']:>6}: "
-                f"{r['matches']:>5} matches ({r['between_matches']} between sessions, "
-                f"{r['wrong']} wrong), joint ATE {r['ate_m']:.3f} m, inter {r['inter_m']:.3f} m",
-                file=sys.stderr,
-            ),
+    if args.odometry:
+        raise InvalidParameterError("--fleet takes no --odometry: each session's is simulated")
+    if args.on != "reference" or args.source != "exact":
+        raise InvalidParameterError(
+            "--fleet chooses candidates on the references' exact components: not with --on "
+            "estimate or --source detections (between sessions, the estimates share no frame "
+            "before the first match)"
         )
-        os.makedirs(args.out, exist_ok=True)
-        results.to_csv(
-            os.path.join(args.out, "results.csv"), os.path.join(args.out, "sessions.csv")
-        )
-        results.to_json(os.path.join(args.out, "results.json"))
-        try:
-            _plot_fleet_panels(results, os.path.join(args.out, "error_vs_matches.png"), title=label)
-        except ImportError:
-            print("loops-eval: matplotlib is not installed: no plot", file=sys.stderr)
-        for s in results.summary():
-            if s["sampler"] != "odometry":
-                print(
-                    f"{s['sampler']:>15} {'between' if s['between_only'] else 'all':>7} "
-                    f"sep={int(s['separation'])} out={s['outlier_rate']:.2f} "
-                    f"budget {s['budget']:>6}: joint ATE {s['ate_median_m']:.3f} m "
-                    f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}], "
-                    f"inter {s['inter_median_m']:.3f} m"
-                )
-        print(f"loops-eval: results in {args.out}", file=sys.stderr)
-        return 0
-    except (InvalidParameterError, OSError, ValueError, ImportError) as err:
-        print(f"loops-eval: error: {err}", file=sys.stderr)
-        return 2
+    options, axes = _read_options(args)
+    dim = 3 if args.se3 else 2
+    references = {
+        name: Poses.read(path, dim=dim, axes=axes, **options)  # type: ignore[arg-type]
+        for name, path in _session_sources(args.poses)
+    }
+    label = "+".join(references)
+    results = evaluate_fleet(
+        references,
+        gamma=args.gamma,
+        samplers=_csv_list(args.samplers, str),
+        budgets=_csv_list(args.budgets, int),
+        seeds=range(args.seeds),
+        between_only=both(args.between_only),
+        separations=[True, False] if args.separation == "both" else [args.separation == "on"],
+        outlier_rates=_csv_list(args.outliers, float),
+        backend=BackEnd(kernel=args.kernel),
+        anchor=args.anchor,
+        overlap_m=args.overlap_m,
+        keyframe_m=args.keyframe_m,
+        dataset=label,
+        progress=lambda r: print(
+            f"loops-eval: seed {r['seed']} {r['sampler']:>15} "
+            f"{'between' if r['between_only'] else 'all':>7} budget {r['budget']:>6}: "
+            f"{r['matches']:>5} matches ({r['between_matches']} between sessions, "
+            f"{r['wrong']} wrong), joint ATE {r['ate_m']:.3f} m, inter {r['inter_m']:.3f} m",
+            file=sys.stderr,
+        ),
+    )
+    _write_outputs(
+        args.out,
+        results,
+        ["results.csv", "sessions.csv"],
+        lambda path: _plot_fleet_panels(results, path, title=label),
+        lambda s: (
+            f"{s['sampler']:>15} {'between' if s['between_only'] else 'all':>7} "
+            f"sep={int(s['separation'])} out={s['outlier_rate']:.2f} "
+            f"budget {s['budget']:>6}: joint ATE {s['ate_median_m']:.3f} m "
+            f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}], "
+            f"inter {s['inter_median_m']:.3f} m"
+        ),
+    )

@@ -694,15 +694,7 @@ class CandidateRule:
     epsilon_s: float = 30.0
 
     def __post_init__(self) -> None:
-        if self.sampler not in SAMPLERS + BASELINES:
-            raise InvalidParameterError(
-                f"CandidateRule: unknown sampler {self.sampler!r}: expected one of "
-                + ", ".join(SAMPLERS + BASELINES)
-            )
-        if self.budget < 1:
-            raise InvalidParameterError(f"CandidateRule: budget = {self.budget} must be >= 1")
-        if not (math.isfinite(self.gamma) and self.gamma > 0):
-            raise InvalidParameterError(f"CandidateRule: gamma = {self.gamma} must be > 0")
+        _check_rule("CandidateRule", self.sampler, self.budget, self.gamma)
         if self.source not in ("exact", "detections"):
             raise InvalidParameterError(
                 f"CandidateRule: source {self.source!r}: exact or detections"
@@ -718,6 +710,20 @@ class CandidateRule:
     def is_baseline(self) -> bool:
         """Whether the sampler is a deployed system's rule."""
         return self.sampler in BASELINES
+
+
+def _check_rule(kind: str, sampler: str, budget: int, gamma: float) -> None:
+    """The checks a candidate rule of either kind (``kind``, its class's name) makes of its
+    sampler, budget and gamma."""
+    if sampler not in SAMPLERS + BASELINES:
+        raise InvalidParameterError(
+            f"{kind}: unknown sampler {sampler!r}: expected one of "
+            + ", ".join(SAMPLERS + BASELINES)
+        )
+    if budget < 1:
+        raise InvalidParameterError(f"{kind}: budget = {budget} must be >= 1")
+    if not (math.isfinite(gamma) and gamma > 0):
+        raise InvalidParameterError(f"{kind}: gamma = {gamma} must be > 0")
 
 
 def choose_candidates(
@@ -1040,6 +1046,23 @@ def optimize(
         graph.add(between(k, k + 1, _pose_value(gtsam, step), noise))
     for k, m in enumerate(estimate):
         initial.insert(k, _pose_value(gtsam, m))
+    matrices = _solve(gtsam, graph, initial, backend, dim, matches, list(range(len(estimate))))
+    return Poses(odometry.timestamps, matrices)
+
+
+def _solve(
+    gtsam: Any,
+    graph: Any,
+    initial: Any,
+    backend: BackEnd,
+    dim: int,
+    matches: Matches | None,
+    keys: Sequence[int],
+) -> np.ndarray:
+    """Adds a loop factor per match to ``graph`` (the odometry factors and priors it holds are
+    the known inliers of GNC), optimises it from ``initial`` and returns the poses' matrices,
+    pose k the one of ``keys[k]`` (match indices index ``keys``)."""
+    between = gtsam.BetweenFactorPose2 if dim == 2 else gtsam.BetweenFactorPose3
     known = list(range(graph.size()))
     if matches is not None and len(matches):
         robust = {
@@ -1057,7 +1080,7 @@ def optimize(
             noise = _noise(gtsam, dim, ts, rs)
             if robust is not None:
                 noise = gtsam.noiseModel.Robust.Create(robust(), noise)
-            graph.add(between(a, b, _pose_value(gtsam, rel), noise))
+            graph.add(between(keys[a], keys[b], _pose_value(gtsam, rel), noise))
     if backend.kernel == "gnc":
         lm = gtsam.LevenbergMarquardtParams()
         lm.setMaxIterations(backend.max_iterations)
@@ -1070,14 +1093,17 @@ def optimize(
         params.setMaxIterations(backend.max_iterations)
         params.setRelativeErrorTol(backend.relative_error_tol)
         result = gtsam.LevenbergMarquardtOptimizer(graph, initial, params).optimize()
+    # GTSAM extracts the poses in the order of their keys; put them back in the order of keys.
+    order = np.argsort(np.asarray(keys, dtype=np.uint64), kind="stable")
     if dim == 2:
-        xyt = gtsam.utilities.extractPose2(result)
-        return Poses.se2(odometry.timestamps, xyt)
-    flat = gtsam.utilities.extractPose3(result)
-    out = np.tile(np.eye(4), (len(flat), 1, 1))
-    out[:, :3, :3] = flat[:, :9].reshape(-1, 3, 3)
-    out[:, :3, 3] = flat[:, 9:]
-    return Poses(odometry.timestamps, out)
+        flat = np.empty((len(keys), 3))
+        flat[order] = gtsam.utilities.extractPose2(result)
+        return Poses.se2(np.arange(len(keys), dtype=float), flat).matrices
+    raw = gtsam.utilities.extractPose3(result)
+    matrices = np.tile(np.eye(4), (len(keys), 1, 1))
+    matrices[order, :3, :3] = raw[:, :9].reshape(-1, 3, 3)
+    matrices[order, :3, 3] = raw[:, 9:]
+    return matrices
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1262,39 +1288,16 @@ class Results:
         seeds, the median ATE and RPE and the ATE's spread (min, max, and the interquartile
         range), the median candidates, matches and wrong matches."""
         keys = ("dataset", "sampler", "source", "on", "separation", "outlier_rate", "budget")
-        groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
-        for r in self.rows:
-            groups.setdefault(tuple(r[k] for k in keys), []).append(r)
-        out = []
-        for key, rows in groups.items():
-            ate_m = np.array([r["ate_m"] for r in rows])
-            out.append(
-                dict(zip(keys, key, strict=True))
-                | {
-                    "seeds": len(rows),
-                    "ate_median_m": float(np.median(ate_m)),
-                    "ate_q25_m": float(np.quantile(ate_m, 0.25)),
-                    "ate_q75_m": float(np.quantile(ate_m, 0.75)),
-                    "ate_min_m": float(ate_m.min()),
-                    "ate_max_m": float(ate_m.max()),
-                    "rpe_median_m": float(np.median([r["rpe_m"] for r in rows])),
-                    "candidates": float(np.median([r["candidates"] for r in rows])),
-                    "matches": float(np.median([r["matches"] for r in rows])),
-                    "wrong": float(np.median([r["wrong"] for r in rows])),
-                    "odometry_ate_m": float(np.median([r["odometry_ate_m"] for r in rows])),
-                }
-            )
-        return out
+        return [
+            group
+            | {"rpe_median_m": float(np.median([r["rpe_m"] for r in rows]))}
+            | _medians(rows, ("candidates", "matches", "wrong", "odometry_ate_m"))
+            for group, rows in _summary_groups(self.rows, keys)
+        ]
 
     def to_csv(self, path: str | PathLike[str]) -> None:
         """Writes the rows as CSV (a header of :data:`COLUMNS`)."""
-        import csv
-
-        with open(path, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(COLUMNS))
-            writer.writeheader()
-            for r in self.rows:
-                writer.writerow({c: r[c] for c in COLUMNS})
+        _write_csv(path, COLUMNS, self.rows)
 
     def to_json(self, path: str | PathLike[str]) -> None:
         """Writes ``{"settings", "summary", "rows"}`` as JSON."""
@@ -1306,30 +1309,85 @@ class Results:
     @classmethod
     def from_csv(cls, path: str | PathLike[str]) -> Results:
         """Reads rows written by :meth:`to_csv`."""
-        import csv
-
         ints = {"budget", "seed", "candidates", "matches", "wrong"}
         floats = {"outlier_rate", "ate_m", "rpe_m", "odometry_ate_m", "seconds"}
-        rows = []
-        with open(path, newline="") as f:
-            for raw in csv.DictReader(f):
-                row: dict[str, Any] = {}
-                for c in COLUMNS:
-                    v = raw[c]
-                    if c in ints:
-                        row[c] = int(v)
-                    elif c in floats:
-                        row[c] = float(v)
-                    elif c == "separation":
-                        row[c] = v == "True"
-                    else:
-                        row[c] = v
-                rows.append(row)
-        return cls(rows)
+        return cls(_read_csv(path, COLUMNS, ints=ints, floats=floats, bools={"separation"}))
 
     def extend(self, other: Results) -> None:
         """Adds the rows of ``other``."""
         self.rows.extend(other.rows)
+
+
+def _summary_groups(
+    rows: Sequence[dict[str, Any]], keys: Sequence[str]
+) -> list[tuple[dict[str, Any], list[dict[str, Any]]]]:
+    """The rows grouped by their values of ``keys`` (in the order of first appearance): per
+    group, those values with the number of seeds and the spread of the ATE (median, quartiles,
+    min, max), and the group's rows."""
+    groups: dict[tuple[Any, ...], list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault(tuple(r[k] for k in keys), []).append(r)
+    out = []
+    for key, members in groups.items():
+        ate_m = np.array([r["ate_m"] for r in members])
+        head = dict(zip(keys, key, strict=True)) | {
+            "seeds": len(members),
+            "ate_median_m": float(np.median(ate_m)),
+            "ate_q25_m": float(np.quantile(ate_m, 0.25)),
+            "ate_q75_m": float(np.quantile(ate_m, 0.75)),
+            "ate_min_m": float(ate_m.min()),
+            "ate_max_m": float(ate_m.max()),
+        }
+        out.append((head, members))
+    return out
+
+
+def _medians(rows: Sequence[dict[str, Any]], columns: Iterable[str]) -> dict[str, float]:
+    """The median of each of ``columns`` over ``rows``."""
+    return {c: float(np.median([r[c] for r in rows])) for c in columns}
+
+
+def _write_csv(
+    path: str | PathLike[str], columns: Sequence[str], rows: Iterable[dict[str, Any]]
+) -> None:
+    """Writes ``rows`` as CSV: a header of ``columns``, then those columns of each row."""
+    import csv
+
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(columns))
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({c: r[c] for c in columns})
+
+
+def _read_csv(
+    path: str | PathLike[str],
+    columns: Sequence[str],
+    *,
+    ints: set[str],
+    floats: set[str],
+    bools: set[str],
+) -> list[dict[str, Any]]:
+    """The rows :func:`_write_csv` wrote, ``columns`` of each: ``ints``, ``floats`` and
+    ``bools`` (``"True"``) converted, the others kept as text."""
+    import csv
+
+    rows = []
+    with open(path, newline="") as f:
+        for raw in csv.DictReader(f):
+            row: dict[str, Any] = {}
+            for c in columns:
+                v = raw[c]
+                if c in ints:
+                    row[c] = int(v)
+                elif c in floats:
+                    row[c] = float(v)
+                elif c in bools:
+                    row[c] = v == "True"
+                else:
+                    row[c] = v
+            rows.append(row)
+    return rows
 
 
 def _json_default(value: Any) -> Any:
@@ -1583,25 +1641,9 @@ def plot_error_vs_matches(
     ``legend=False`` leaves the legend to the caller (``ax.get_legend_handles_labels()``).
     Needs matplotlib.
     """
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(6.4, 4.2))
-    select = dict(select or {})
-    summary = [
-        s
-        for s in results.summary()
-        if s["sampler"] != "odometry" and all(s.get(k) == v for k, v in select.items())
-    ]
+    ax, select, curves = _curves(results, ax, select, "source")
     column = "ate" if metric == "ate" else "rpe"
-    curves: dict[tuple[str, str], list[dict[str, Any]]] = {}
-    for s in summary:
-        curves.setdefault((s["sampler"], s["source"]), []).append(s)
-    order = {name: k for k, name in enumerate(SAMPLERS + BASELINES)}
-    for (name, source), points in sorted(
-        curves.items(), key=lambda kv: (order.get(kv[0][0], 99), kv[0][1])
-    ):
-        points.sort(key=lambda s: s["budget"])
+    for (name, source), points in curves:
         x = [s["budget"] for s in points]
         y = [s[f"{column}_median_m"] for s in points]
         label = sampler_symbol(name) + (" (detections)" if source == "detections" else "")
@@ -1631,6 +1673,38 @@ def plot_error_vs_matches(
         if r["sampler"] == "odometry"
         and ("dataset" not in select or r["dataset"] == select["dataset"])
     ]
+    _finish_axes(ax, odometry, "ATE (m)" if column == "ate" else "RPE (m)", title, legend)
+    return ax
+
+
+def _curves(
+    results: Any, ax: Any, select: Mapping[str, Any] | None, style: str
+) -> tuple[Any, dict[str, Any], list[tuple[tuple[str, Any], list[dict[str, Any]]]]]:
+    """What a plot of the error against the budget draws: the axes (new ones when ``ax`` is
+    None), the selection as a dict, and the summary rows (not the odometry's) that ``select``
+    keeps, per (sampler, the value of ``style``), in the order of :data:`SAMPLERS` and
+    :data:`BASELINES`, each curve's points by budget."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6.4, 4.2))
+    select = dict(select or {})
+    curves: dict[tuple[str, Any], list[dict[str, Any]]] = {}
+    for s in results.summary():
+        if s["sampler"] != "odometry" and all(s.get(k) == v for k, v in select.items()):
+            curves.setdefault((s["sampler"], s[style]), []).append(s)
+    order = {name: k for k, name in enumerate(SAMPLERS + BASELINES)}
+    for points in curves.values():
+        points.sort(key=lambda s: s["budget"])
+    ranked = sorted(curves.items(), key=lambda kv: (order.get(kv[0][0], 99), kv[0][1]))
+    return ax, select, ranked
+
+
+def _finish_axes(
+    ax: Any, odometry: Sequence[float], ylabel: str, title: str | None, legend: bool
+) -> None:
+    """Log scales, the odometry alone as a dotted line (the median of ``odometry``, when
+    any), the labels, the title, the grid and the legend."""
     ax.set_xscale("log")
     ax.set_yscale("log")
     if odometry:
@@ -1639,47 +1713,27 @@ def plot_error_vs_matches(
         ax.axhline(level, color="k", ls=":", lw=1, label="odometry alone")
         ax.set_ylim(low, max(high, 1.5 * level))
     ax.set_xlabel("matches tried (budget)")
-    ax.set_ylabel("ATE (m)" if column == "ate" else "RPE (m)")
+    ax.set_ylabel(ylabel)
     if title:
         ax.set_title(title, fontsize=9)
     ax.grid(True, which="both", lw=0.3, alpha=0.5)
     if legend:
         ax.legend(fontsize=7, ncol=2)
-    return ax
 
 
 # ---------------------------------------------------------------------------------------------
 # The fleet case (its own module, which builds on this one; its names are served from here)
 # ---------------------------------------------------------------------------------------------
 
-_FLEET_NAMES = frozenset(
-    {
-        "FLEET_COLUMNS",
-        "SESSION_COLUMNS",
-        "FleetErrors",
-        "FleetResults",
-        "FleetRule",
-        "choose_fleet_candidates",
-        "evaluate_fleet",
-        "evaluate_fleet_one",
-        "fleet_errors",
-        "fleet_references",
-        "optimize_fleet",
-        "place_sessions",
-        "plot_fleet_error_vs_matches",
-        "session_key",
-        "simulate_fleet_odometry",
-    }
-)
-
 
 def __getattr__(name: str) -> Any:
-    """The fleet case's names, from :mod:`inexact_loops._fleet_evaluate` (imported on first
-    use: it imports this module)."""
-    if name in _FLEET_NAMES:
+    """The fleet case's names (its ``__all__``), from :mod:`inexact_loops._fleet_evaluate`
+    (imported on first use: it imports this module)."""
+    if not name.startswith("__"):
         from . import _fleet_evaluate
 
-        return getattr(_fleet_evaluate, name)
+        if name in _fleet_evaluate.__all__:
+            return getattr(_fleet_evaluate, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -1691,32 +1745,55 @@ def __getattr__(name: str) -> Any:
 def _plot_panels(results: Results, path: str, *, title: str) -> None:
     """:func:`plot_error_vs_matches` per run condition: a row per (on, separation), a column per
     outlier rate."""
+
+    def draw(ax: Any, row: tuple[str, bool], outlier_rate: float) -> None:
+        on, separation = row
+        plot_error_vs_matches(
+            results,
+            ax=ax,
+            select={"on": on, "separation": separation, "outlier_rate": outlier_rate},
+            title=f"{title}: candidates on the {on}, "
+            + ("revisits" if separation else "S_gamma")
+            + f", {outlier_rate:.0%} wrong matches",
+        )
+
+    _save_panels(
+        results.rows,
+        path,
+        lambda runs: sorted(
+            {(r["on"], r["separation"]) for r in runs},
+            key=lambda k: (k[0] != "reference", not k[1]),
+        ),
+        draw,
+    )
+
+
+def _save_panels(
+    rows: Sequence[dict[str, Any]],
+    path: str,
+    panel_rows: Callable[[list[dict[str, Any]]], Sequence[Any]],
+    draw: Callable[[Any, Any, float], None],
+) -> None:
+    """Saves to ``path`` a figure of panels: a row per value that ``panel_rows`` finds in the
+    runs of ``rows`` (not the odometry's), a column per outlier rate; ``draw(ax, row,
+    outlier_rate)`` draws each."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    runs = [r for r in results.rows if r["sampler"] != "odometry"]
-    rows = sorted(
-        {(r["on"], r["separation"]) for r in runs}, key=lambda k: (k[0] != "reference", not k[1])
-    )
+    runs = [r for r in rows if r["sampler"] != "odometry"]
+    panels = panel_rows(runs)
     columns = sorted({r["outlier_rate"] for r in runs})
     fig, axes = plt.subplots(
-        max(len(rows), 1),
+        max(len(panels), 1),
         max(len(columns), 1),
-        figsize=(6.4 * max(len(columns), 1), 4.2 * max(len(rows), 1)),
+        figsize=(6.4 * max(len(columns), 1), 4.2 * max(len(panels), 1)),
         squeeze=False,
     )
-    for a, (on, separation) in enumerate(rows):
+    for a, row in enumerate(panels):
         for b, outlier_rate in enumerate(columns):
-            plot_error_vs_matches(
-                results,
-                ax=axes[a][b],
-                select={"on": on, "separation": separation, "outlier_rate": outlier_rate},
-                title=f"{title}: candidates on the {on}, "
-                + ("revisits" if separation else "S_gamma")
-                + f", {outlier_rate:.0%} wrong matches",
-            )
+            draw(axes[a][b], row, outlier_rate)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -1726,12 +1803,63 @@ def _csv_list(text: str, kind: Callable[[str], Any]) -> list[Any]:
     return [kind(v) for v in text.split(",") if v.strip()]
 
 
+def _read_options(args: Any) -> tuple[dict[str, Any], tuple[int, int] | None]:
+    """Checks that ``--out`` is empty (or ``--force``), and returns the options of
+    :meth:`Poses.read` that the command line gives (``--rate-hz``, ``--times``, ``--format``)
+    and its ``--axes``."""
+    import os
+
+    if os.path.exists(args.out) and os.listdir(args.out) and not args.force:
+        raise InvalidParameterError(
+            f"{args.out} exists and is not empty (--force to write into it)"
+        )
+    options: dict[str, Any] = {}
+    if args.rate_hz is not None:
+        options["rate_hz"] = args.rate_hz
+    if args.times:
+        options["times"] = args.times
+    if args.format:
+        options["format"] = args.format
+    axes: tuple[int, int] | None = None
+    if args.axes:
+        pair = _csv_list(args.axes, int)
+        if len(pair) != 2:
+            raise InvalidParameterError(f"--axes {args.axes}: two axes, e.g. 0,2")
+        axes = (pair[0], pair[1])
+    return options, axes
+
+
+def _write_outputs(
+    out: str,
+    results: Any,
+    csv_names: Sequence[str],
+    plot: Callable[[str], None],
+    describe: Callable[[dict[str, Any]], str],
+) -> None:
+    """Writes ``results`` into the folder ``out``: ``results.to_csv`` to ``csv_names``,
+    ``results.json``, the plot ``error_vs_matches.png`` (a note on stderr without matplotlib),
+    and prints a line per summary row but the odometry's."""
+    import os
+    import sys
+
+    os.makedirs(out, exist_ok=True)
+    results.to_csv(*(os.path.join(out, name) for name in csv_names))
+    results.to_json(os.path.join(out, "results.json"))
+    try:
+        plot(os.path.join(out, "error_vs_matches.png"))
+    except ImportError:
+        print("loops-eval: matplotlib is not installed: no plot", file=sys.stderr)
+    for s in results.summary():
+        if s["sampler"] != "odometry":
+            print(describe(s))
+    print(f"loops-eval: results in {out}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``loops-eval``: runs :func:`evaluate` on a pose file (:func:`evaluate_fleet` on several,
     one a session, with ``--fleet``); writes ``results.csv``, ``results.json`` and
     ``error_vs_matches.png`` to ``--out`` (and ``sessions.csv`` for a fleet)."""
     import argparse
-    import os
     import sys
 
     parser = argparse.ArgumentParser(
@@ -1820,90 +1948,74 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="radius of the pose pairs of the inter-session error (default: gamma)",
     )
     args = parser.parse_args(argv)
-    if args.fleet:
-        from ._fleet_evaluate import main_fleet
-
-        return main_fleet(args)
-
-    def both(value: str, yes: Any, no: Any) -> list[Any]:
-        return [yes, no] if value == "both" else [yes if value in ("on", yes) else no]
-
     try:
-        if os.path.exists(args.out) and os.listdir(args.out) and not args.force:
-            raise InvalidParameterError(
-                f"{args.out} exists and is not empty (--force to write into it)"
-            )
-        options: dict[str, Any] = {}
-        if args.rate_hz is not None:
-            options["rate_hz"] = args.rate_hz
-        if args.times:
-            options["times"] = args.times
-        if args.format:
-            options["format"] = args.format
-        axes: tuple[int, int] | None = None
-        if args.axes:
-            pair = _csv_list(args.axes, int)
-            if len(pair) != 2:
-                raise InvalidParameterError(f"--axes {args.axes}: two axes, e.g. 0,2")
-            axes = (pair[0], pair[1])
-        dim: Literal[2, 3] = 3 if args.se3 else 2
-        paths = args.poses if len(args.poses) > 1 else args.poses[0]
-        reference = Poses.read(paths, dim=dim, axes=axes, **options)  # type: ignore[arg-type]
-        keep = reference.keyframes(args.keyframe_m)
-        reference = reference.take(keep)
-        odometry: Odometry | DriftModel = DriftModel()
-        if args.odometry:
-            sigma_t, sigma_r = _csv_list(args.odometry_sigma, float)
-            mine = Poses.read(args.odometry, dim=dim, axes=axes, **options).take(keep)
-            odometry = Odometry.from_poses(
-                mine, translation_sigma_m=sigma_t, rotation_sigma_rad=sigma_r
-            )
-        samplers = _csv_list(args.samplers, str)
-        results = evaluate(
-            reference,
-            gamma=args.gamma,
-            odometry=odometry,
-            samplers=samplers,
-            budgets=_csv_list(args.budgets, int),
-            seeds=range(args.seeds),
-            separations=both(args.separation, True, False),
-            sources=["exact", "detections"] if args.source == "both" else [args.source],
-            on=["reference", "estimate"] if args.on == "both" else [args.on],
-            outlier_rates=_csv_list(args.outliers, float),
-            backend=BackEnd(kernel=args.kernel),
-            gamma_inflation=args.gamma_inflation,
-            dataset=os.path.basename(args.poses[0]),
-            progress=lambda r: print(
-                f"loops-eval: seed {r['seed']} {r['sampler']:>15} {r['on'] or '':>9} "
-                f"budget {r['budget']:>6}: {r['matches']:>5} matches ({r['wrong']} wrong), "
-                f"ATE {r['ate_m']:.3f} m",
-                file=sys.stderr,
-            ),
-        )
-        os.makedirs(args.out, exist_ok=True)
-        results.to_csv(os.path.join(args.out, "results.csv"))
-        results.to_json(os.path.join(args.out, "results.json"))
-        try:
-            _plot_panels(
-                results,
-                os.path.join(args.out, "error_vs_matches.png"),
-                title=os.path.basename(args.poses[0]),
-            )
-        except ImportError:
-            print("loops-eval: matplotlib is not installed: no plot", file=sys.stderr)
-        for s in results.summary():
-            if s["sampler"] != "odometry":
-                print(
-                    f"{s['sampler']:>15} {s['source']:>10} {s['on']:>9} sep={int(s['separation'])} "
-                    f"out={s['outlier_rate']:.2f} budget {s['budget']:>6}: "
-                    f"ATE {s['ate_median_m']:.3f} m "
-                    f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}]"
-                )
-        print(f"loops-eval: results in {args.out}", file=sys.stderr)
+        if args.fleet:
+            from ._fleet_evaluate import main_fleet
+
+            main_fleet(args)
+        else:
+            _main_one(args)
         return 0
     except (InvalidParameterError, OSError, ValueError, ImportError) as err:
         print(f"loops-eval: error: {err}", file=sys.stderr)
         return 2
+
+
+def _main_one(args: Any) -> None:
+    """``loops-eval`` on one trajectory (``args`` parsed by :func:`main`)."""
+    import os
+    import sys
+
+    def both(value: str, yes: Any, no: Any) -> list[Any]:
+        return [yes, no] if value == "both" else [yes if value in ("on", yes) else no]
+
+    options, axes = _read_options(args)
+    dim: Literal[2, 3] = 3 if args.se3 else 2
+    paths = args.poses if len(args.poses) > 1 else args.poses[0]
+    reference = Poses.read(paths, dim=dim, axes=axes, **options)  # type: ignore[arg-type]
+    keep = reference.keyframes(args.keyframe_m)
+    reference = reference.take(keep)
+    odometry: Odometry | DriftModel = DriftModel()
+    if args.odometry:
+        sigma_t, sigma_r = _csv_list(args.odometry_sigma, float)
+        mine = Poses.read(args.odometry, dim=dim, axes=axes, **options).take(keep)
+        odometry = Odometry.from_poses(
+            mine, translation_sigma_m=sigma_t, rotation_sigma_rad=sigma_r
+        )
+    samplers = _csv_list(args.samplers, str)
+    results = evaluate(
+        reference,
+        gamma=args.gamma,
+        odometry=odometry,
+        samplers=samplers,
+        budgets=_csv_list(args.budgets, int),
+        seeds=range(args.seeds),
+        separations=both(args.separation, True, False),
+        sources=["exact", "detections"] if args.source == "both" else [args.source],
+        on=["reference", "estimate"] if args.on == "both" else [args.on],
+        outlier_rates=_csv_list(args.outliers, float),
+        backend=BackEnd(kernel=args.kernel),
+        gamma_inflation=args.gamma_inflation,
+        dataset=os.path.basename(args.poses[0]),
+        progress=lambda r: print(
+            f"loops-eval: seed {r['seed']} {r['sampler']:>15} {r['on'] or '':>9} "
+            f"budget {r['budget']:>6}: {r['matches']:>5} matches ({r['wrong']} wrong), "
+            f"ATE {r['ate_m']:.3f} m",
+            file=sys.stderr,
+        ),
+    )
+    _write_outputs(
+        args.out,
+        results,
+        ["results.csv"],
+        lambda path: _plot_panels(results, path, title=os.path.basename(args.poses[0])),
+        lambda s: (
+            f"{s['sampler']:>15} {s['source']:>10} {s['on']:>9} sep={int(s['separation'])} "
+            f"out={s['outlier_rate']:.2f} budget {s['budget']:>6}: "
+            f"ATE {s['ate_median_m']:.3f} m "
+            f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}]"
+        ),
+    )
 
 
 if __name__ == "__main__":
