@@ -43,18 +43,16 @@ line.
 from __future__ import annotations
 
 import argparse
-import csv
-import math
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 os.environ.setdefault("RAYON_NUM_THREADS", "1")  # the machine is shared: one engine thread
 
-from harness import machine_facts, write_section  # noqa: E402
+import map_eval_common as common  # noqa: E402
+from harness import machine_facts  # noqa: E402
 
 import inexact_loops as il  # noqa: E402
 from inexact_loops import evaluate as ev  # noqa: E402
@@ -90,66 +88,38 @@ def load(name: str, data: Path) -> dict[str, ev.Poses] | None:
     return {n: p.take(p.keyframes(step)) for n, p in sessions.items()}
 
 
-def read_rows(path: Path) -> list[dict]:
-    if not path.exists():
-        return []
-    return ev.FleetResults.from_csv(path).rows
-
-
 def run(args: argparse.Namespace) -> None:
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    rows_path = out / "rows.csv"
-    rows = read_rows(rows_path)
-    done = {(r["dataset"], int(r["seed"]), float(r["outlier_rate"])) for r in rows}
-    done_odometry = {(r["dataset"], int(r["seed"])) for r in rows if r["sampler"] == "odometry"}
-    new_file = not rows_path.exists()
-    f = open(rows_path, "a", newline="")  # noqa: SIM115 - appended row by row, closed at the end
-    writer = csv.DictWriter(f, fieldnames=list(ev.FLEET_COLUMNS))
-    if new_file:
-        writer.writeheader()
-    budgets = [int(b) for b in args.budgets.split(",")]
     names = args.datasets.split(",")
     sessions = {n: load(n, Path(args.data)) for n in names}
     for n, s in sessions.items():
         if s is not None:
             sizes = ", ".join(f"{k} {len(p)}" for k, p in s.items())
             print(f"fleet_map_eval: {n}: keyframes {sizes}", file=sys.stderr)
-    started = time.perf_counter()
-
-    def write(row: dict) -> None:
-        writer.writerow({c: row[c] for c in ev.FLEET_COLUMNS})
-        f.flush()
-
+    runs = common.Runs(
+        args,
+        SECTION,
+        ev.FleetResults,
+        ev.FLEET_COLUMNS,
+        lambda r: (r["dataset"], int(r["seed"]), float(r["outlier_rate"])),
+    )
     for seed in range(args.seeds):
         for name in names:
             references = sessions[name]
             if references is None:
                 continue
             for outlier_rate in OUTLIER_RATES:
-                if (name, seed, outlier_rate) in done:
+                if (name, seed, outlier_rate) in runs.done:
                     continue
-                block_start = time.perf_counter()
-                results = ev.evaluate_fleet(
+                runs.block(
+                    ev.evaluate_fleet,
                     references,
+                    dataset=name,
+                    seed=seed,
+                    outlier_rate=outlier_rate,
                     gamma=DATASETS[name][1],
                     samplers=SAMPLERS,
-                    budgets=budgets,
-                    seeds=[seed],
                     between_only=MODES,
-                    outlier_rates=(outlier_rate,),
-                    dataset=name,
-                    include_odometry=(name, seed) not in done_odometry,
-                    progress=write,
                 )
-                done_odometry.add((name, seed))
-                print(
-                    f"fleet_map_eval: {name} seed {seed} outliers {outlier_rate}: "
-                    f"{len(results.rows)} runs in {time.perf_counter() - block_start:.0f} s "
-                    f"({(time.perf_counter() - started) / 60:.1f} min in all)",
-                    file=sys.stderr,
-                )
-    f.close()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -211,50 +181,23 @@ def relative(results: ev.FleetResults, budgets: list[int], column: str) -> list[
     """Per sampler and mode, budget and outlier rate: the geometric mean over the datasets of
     its median error (``column``: ate or inter) over the best one's at that budget."""
     summary = [s for s in results.summary() if s["sampler"] != "odometry"]
-    names = datasets_of(results)
-    key = f"{column}_median_m"
-    columns = [(out, b) for out in OUTLIER_RATES for b in budgets]
-    best = {
-        (n, out, b): min(
-            (
-                s[key]
-                for s in summary
-                if (s["dataset"], s["outlier_rate"], s["budget"]) == (n, out, b)
-            ),
-            default=None,
+    rows = [
+        (
+            label(sampler, between),
+            lambda s, k=(sampler, between): (s["sampler"], s["between_only"]) == k,
         )
-        for n in names
-        for out, b in columns
-    }
-    header = "| sampler | " + " | ".join(f"{b} ({out:.0%} wrong)" for out, b in columns) + " |"
-    lines = [header, "|---|" + "---:|" * len(columns)]
-    for sampler in SAMPLERS:
-        for between in MODES:
-            cells = []
-            for out, b in columns:
-                ratios = [
-                    s[key] / best[(s["dataset"], out, b)]
-                    for s in summary
-                    if (s["sampler"], s["between_only"], s["outlier_rate"], s["budget"])
-                    == (sampler, between, out, b)
-                    and best[(s["dataset"], out, b)]
-                ]
-                cells.append(
-                    f"{math.exp(np.mean(np.log(ratios))):.2f}" if len(ratios) == len(names) else "–"
-                )
-            lines.append(f"| {label(sampler, between)} | " + " | ".join(cells) + " |")
-    return lines
+        for sampler in SAMPLERS
+        for between in MODES
+    ]
+    return common.relative(
+        summary, datasets_of(results), budgets, OUTLIER_RATES, f"{column}_median_m", rows
+    )
 
 
 def figure(results: ev.FleetResults, path: Path) -> None:
     """A row per dataset: the joint ATE and the inter-session error, no wrong matches."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     names = datasets_of(results)
-    fig, axes = plt.subplots(len(names), 2, figsize=(10, 3.1 * len(names) + 0.9), squeeze=False)
+    fig, axes = common.figure_rows(len(names), 3.1, 0.9)
     for row, n in enumerate(names):
         sub = ev.FleetResults([r for r in results.rows if r["dataset"] == n])
         for col, metric in enumerate(("ate", "inter")):
@@ -267,17 +210,16 @@ def figure(results: ev.FleetResults, path: Path) -> None:
                 + ("joint ATE" if metric == "ate" else "inter-session error"),
                 legend=False,
             )
-    handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7.5, frameon=False)
-    fig.suptitle(
+    common.save_figure(
+        fig,
+        axes,
+        path,
         "A fleet's map against the matches tried, no wrong matches\n(median over the seeds, "
         "band: middle half; dashed: the budget spent between sessions only)",
-        fontsize=9.5,
+        legend=(4, 7.5),
+        title_size=9.5,
+        rect=(0, 0.08, 1, 0.95),
     )
-    fig.tight_layout(rect=(0, 0.08, 1, 0.95))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
 
 
 def section(results: ev.FleetResults, budgets: list[int], command: str) -> str:
@@ -329,44 +271,14 @@ def section(results: ev.FleetResults, budgets: list[int], command: str) -> str:
 
 
 def report(args: argparse.Namespace) -> None:
-    out = Path(args.out)
-    results = ev.FleetResults(read_rows(out / "rows.csv"))
-    if not results.rows:
-        print(f"fleet_map_eval: no rows in {out / 'rows.csv'}", file=sys.stderr)
-        return
-    budgets = sorted({r["budget"] for r in results.rows if r["budget"]})
-    summary = results.summary()
-    with open(out / "summary.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(summary[0]))
-        writer.writeheader()
-        writer.writerows(
-            {k: round(v, 4) if isinstance(v, float) else v for k, v in s.items()} for s in summary
-        )
-    figure(results, ROOT / "docs" / "fleet_map_eval.png")
-    body = section(results, budgets, "nice -n 15 python benches/fleet_map_eval.py")
-    if args.no_write:
-        print(body)
-    else:
-        write_section(Path(args.output), SECTION, body)
-        print(f"fleet_map_eval: wrote <!-- {SECTION} --> of {args.output}", file=sys.stderr)
+    results = ev.FleetResults(common.read_rows(Path(args.out) / "rows.csv", ev.FleetResults))
+    common.report(args, SECTION, results, figure, section)
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
-    parser.add_argument("--out", default=str(ROOT / "benches" / "fleet_map_eval"))
-    parser.add_argument("--datasets", default=",".join(DATASETS))
-    parser.add_argument("--seeds", type=int, default=3)
-    parser.add_argument("--budgets", default="10,100,1000")
-    parser.add_argument("--report-only", action="store_true", help="no runs: the report only")
-    parser.add_argument("--output", default=str(ROOT / "BENCHMARKS.md"), help="the report file")
-    parser.add_argument(
-        "--no-write", action="store_true", help="print the section, write no report"
+    common.main(
+        __doc__, SECTION, list(DATASETS), seeds=3, budgets="10,100,1000", run=run, report=report
     )
-    args = parser.parse_args()
-    if not args.report_only:
-        run(args)
-    report(args)
 
 
 if __name__ == "__main__":

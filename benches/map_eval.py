@@ -47,18 +47,16 @@ rules (LIO-SAM's and hdl_graph_slam's do not depend on the separation and run on
 from __future__ import annotations
 
 import argparse
-import csv
-import math
 import os
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 os.environ.setdefault("RAYON_NUM_THREADS", "1")  # the machine is shared: one engine thread
 
-from harness import machine_facts, write_section  # noqa: E402
+import map_eval_common as common  # noqa: E402
+from harness import machine_facts  # noqa: E402
 
 import inexact_loops as il  # noqa: E402
 from inexact_loops import evaluate as ev  # noqa: E402
@@ -99,40 +97,17 @@ def load(name: str, data: Path) -> ev.Poses | None:
     return poses.take(poses.keyframes(step))
 
 
-def block_keys(rows: list[dict]) -> set[tuple]:
-    return {(r["dataset"], int(r["seed"]), float(r["outlier_rate"]), r["on"]) for r in rows}
-
-
-def read_rows(path: Path) -> list[dict]:
-    if not path.exists():
-        return []
-    return ev.Results.from_csv(path).rows
+def block_key(row: dict) -> tuple:
+    return (row["dataset"], int(row["seed"]), float(row["outlier_rate"]), row["on"])
 
 
 def run(args: argparse.Namespace) -> None:
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    rows_path = out / "rows.csv"
-    rows = read_rows(rows_path)
-    done = block_keys(rows)
-    odometry_done = {(r["dataset"], int(r["seed"])) for r in rows if r["sampler"] == "odometry"}
-    new_file = not rows_path.exists()
-    f = open(rows_path, "a", newline="")  # noqa: SIM115 - appended row by row, closed at the end
-    writer = csv.DictWriter(f, fieldnames=list(ev.COLUMNS))
-    if new_file:
-        writer.writeheader()
-    budgets = [int(b) for b in args.budgets.split(",")]
     names = args.datasets.split(",")
     poses = {n: load(n, Path(args.data)) for n in names}
     for n, p in poses.items():
         if p is not None:
             print(f"map_eval: {n}: {len(p)} keyframes", file=sys.stderr)
-    started = time.perf_counter()
-
-    def write(row: dict) -> None:
-        writer.writerow({c: row[c] for c in ev.COLUMNS})
-        f.flush()
-
+    runs = common.Runs(args, SECTION, ev.Results, ev.COLUMNS, block_key)
     # Candidates on the reference first (every dataset and seed), then on the estimate: an
     # interrupted run has whole conditions rather than a few seeds of everything.
     for on in ON:
@@ -141,34 +116,23 @@ def run(args: argparse.Namespace) -> None:
                 reference = poses[name]
                 if reference is None:
                     continue
-                gamma = DATASETS[name][2]
                 for outlier_rate in OUTLIER_RATES:
-                    if (name, seed, outlier_rate, on) in done:
+                    if (name, seed, outlier_rate, on) in runs.done:
                         continue
-                    block_start = time.perf_counter()
-                    results = ev.evaluate(
+                    runs.block(
+                        ev.evaluate,
                         reference,
-                        gamma=gamma,
+                        dataset=name,
+                        seed=seed,
+                        outlier_rate=outlier_rate,
+                        what=f" on {on}",
+                        gamma=DATASETS[name][2],
                         samplers=ev.SAMPLERS + ev.BASELINES,
-                        budgets=budgets,
-                        seeds=[seed],
                         separations=(True, False),
                         sources=("exact", "detections"),
                         detection_samplers=("alpha",),
                         on=(on,),
-                        outlier_rates=(outlier_rate,),
-                        dataset=name,
-                        include_odometry=(name, seed) not in odometry_done,
-                        progress=write,
                     )
-                    odometry_done.add((name, seed))
-                    print(
-                        f"map_eval: {name} seed {seed} outliers {outlier_rate} on {on}: "
-                        f"{len(results.rows)} runs in {time.perf_counter() - block_start:.0f} s "
-                        f"({(time.perf_counter() - started) / 60:.1f} min in all)",
-                        file=sys.stderr,
-                    )
-    f.close()
 
 
 # ---------------------------------------------------------------------------------------------
@@ -271,41 +235,14 @@ def relative(results: ev.Results, budgets: list[int], on: str, separation: bool)
         for s in results.summary()
         if s["sampler"] != "odometry" and s["on"] == on and s["separation"] == separation
     ]
-    names = datasets_of(results)
     keys = sorted(
         {(s["sampler"], s["source"]) for s in summary},
         key=lambda k: (ORDER.index(k[0]), k[1] != "exact"),
     )
-    columns = [(out, b) for out in OUTLIER_RATES for b in budgets]
-    best = {
-        (n, out, b): min(
-            (
-                s["ate_median_m"]
-                for s in summary
-                if (s["dataset"], s["outlier_rate"], s["budget"]) == (n, out, b)
-            ),
-            default=None,
-        )
-        for n in names
-        for out, b in columns
-    }
-    header = "| sampler | " + " | ".join(f"{b} ({out:.0%} wrong)" for out, b in columns) + " |"
-    lines = [header, "|---|" + "---:|" * len(columns)]
-    for sampler, source in keys:
-        cells = []
-        for out, b in columns:
-            ratios = [
-                s["ate_median_m"] / best[(s["dataset"], out, b)]
-                for s in summary
-                if (s["sampler"], s["source"], s["outlier_rate"], s["budget"])
-                == (sampler, source, out, b)
-                and best[(s["dataset"], out, b)]
-            ]
-            cells.append(
-                f"{math.exp(np.mean(np.log(ratios))):.2f}" if len(ratios) == len(names) else "–"
-            )
-        lines.append(f"| {label(sampler, source)} | " + " | ".join(cells) + " |")
-    return lines
+    rows = [(label(*k), lambda s, k=k: (s["sampler"], s["source"]) == k) for k in keys]
+    return common.relative(
+        summary, datasets_of(results), budgets, OUTLIER_RATES, "ate_median_m", rows
+    )
 
 
 def winners(results: ev.Results, budgets: list[int]) -> list[str]:
@@ -341,16 +278,11 @@ def figure(results: ev.Results, path: Path) -> None:
     """A row per dataset; candidates on the reference, revisits only; no and 10 % wrong
     matches. Cartographer and time gap are left out: with the separation they draw σ_α's
     candidates (the tables have them)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     names = datasets_of(results)
     shown = ev.Results(
         [r for r in results.rows if r["sampler"] not in ("cartographer", "time-gap")]
     )
-    fig, axes = plt.subplots(len(names), 2, figsize=(10, 2.9 * len(names) + 0.8), squeeze=False)
+    fig, axes = common.figure_rows(len(names), 2.9, 0.8)
     for row, n in enumerate(names):
         for col, outlier_rate in enumerate(OUTLIER_RATES):
             sub = ev.Results([r for r in shown.rows if r["dataset"] == n])
@@ -362,17 +294,16 @@ def figure(results: ev.Results, path: Path) -> None:
                 + (f"{outlier_rate:.0%} wrong matches" if outlier_rate else "no wrong matches"),
                 legend=False,
             )
-    handles, labels = axes[0][0].get_legend_handles_labels()
-    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=8, frameon=False)
-    fig.suptitle(
+    common.save_figure(
+        fig,
+        axes,
+        path,
         "ATE against the matches tried: candidates on the reference, revisits only "
         "(median over the seeds, band: middle half)",
-        fontsize=10,
+        legend=(5, 8),
+        title_size=10,
+        rect=(0, 0.05, 1, 0.98),
     )
-    fig.tight_layout(rect=(0, 0.05, 1, 0.98))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
 
 
 def section(results: ev.Results, budgets: list[int], command: str) -> str:
@@ -450,45 +381,17 @@ def section(results: ev.Results, budgets: list[int], command: str) -> str:
 
 def report(args: argparse.Namespace) -> None:
     out = Path(args.out)
-    results = ev.Results(read_rows(out / "rows.csv"))
-    if not results.rows:
-        print(f"map_eval: no rows in {out / 'rows.csv'}", file=sys.stderr)
-        return
-    budgets = sorted({r["budget"] for r in results.rows if r["budget"]})
-    text = tables(results, budgets)
-    (out / "tables.md").write_text(text)
-    summary = results.summary()
-    with open(out / "summary.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(summary[0]))
-        writer.writeheader()
-        writer.writerows(
-            {k: round(v, 4) if isinstance(v, float) else v for k, v in s.items()} for s in summary
-        )
-    figure(results, ROOT / "docs" / "map_eval.png")
-    body = section(results, budgets, "nice -n 15 python benches/map_eval.py")
-    if args.no_write:
-        print(body)
-    else:
-        write_section(Path(args.output), SECTION, body)
-        print(f"map_eval: wrote the section <!-- {SECTION} --> of {args.output}", file=sys.stderr)
+    results = ev.Results(common.read_rows(out / "rows.csv", ev.Results))
+    if results.rows:
+        budgets = sorted({r["budget"] for r in results.rows if r["budget"]})
+        (out / "tables.md").write_text(tables(results, budgets))
+    common.report(args, SECTION, results, figure, section)
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
-    parser.add_argument("--out", default=str(ROOT / "benches" / "map_eval"))
-    parser.add_argument("--datasets", default=",".join(DATASETS))
-    parser.add_argument("--seeds", type=int, default=5)
-    parser.add_argument("--budgets", default="100,1000,10000")
-    parser.add_argument("--report-only", action="store_true", help="no runs: the report only")
-    parser.add_argument("--output", default=str(ROOT / "BENCHMARKS.md"), help="the report file")
-    parser.add_argument(
-        "--no-write", action="store_true", help="print the section, write no report"
+    common.main(
+        __doc__, SECTION, list(DATASETS), seeds=5, budgets="100,1000,10000", run=run, report=report
     )
-    args = parser.parse_args()
-    if not args.report_only:
-        run(args)
-    report(args)
 
 
 if __name__ == "__main__":
