@@ -274,3 +274,25 @@ def data_dir() -> Path:
     if not DATA_DIR.is_dir():
         pytest.skip(f"real trajectories not found at {DATA_DIR.resolve()} (not in a user's clone)")
     return DATA_DIR
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers",
+        "gtsam: the test needs GTSAM (the pose-graph back end of inexact_loops.evaluate); "
+        "skipped, saying why, where it is not installed",
+    )
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Skips the tests marked ``gtsam`` where GTSAM is not installed."""
+    try:
+        import gtsam  # noqa: F401
+    except ImportError:  # pragma: no cover - CI installs the [test] extra, which has gtsam
+        skip = pytest.mark.skip(
+            reason="GTSAM is not installed: pip install 'inexact-loops[maps]' to test the "
+            "pose-graph back end"
+        )
+        for item in items:
+            if item.get_closest_marker("gtsam") is not None:
+                item.add_marker(skip)

@@ -20,18 +20,8 @@ import pytest
 import inexact_loops as il
 from inexact_loops import evaluate as ev
 
-try:
-    import gtsam  # noqa: F401
-
-    HAVE_GTSAM = True
-except ImportError:  # pragma: no cover - CI installs the [test] extra, which has gtsam
-    HAVE_GTSAM = False
-
-needs_gtsam = pytest.mark.skipif(
-    not HAVE_GTSAM,
-    reason="GTSAM is not installed: pip install 'inexact-loops[maps]' to test the pose-graph "
-    "back end",
-)
+#: The back-end tests: skipped, saying why, without GTSAM (conftest.py).
+needs_gtsam = pytest.mark.gtsam
 
 
 def circuit(laps: float = 2.0, n: int = 400, radius: float = 50.0) -> ev.Poses:

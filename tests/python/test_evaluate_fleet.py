@@ -23,18 +23,8 @@ import inexact_loops as il
 from inexact_loops import _fleet_evaluate
 from inexact_loops import evaluate as ev
 
-try:
-    import gtsam
-
-    HAVE_GTSAM = True
-except ImportError:  # pragma: no cover - CI installs the [test] extra, which has gtsam
-    HAVE_GTSAM = False
-
-needs_gtsam = pytest.mark.skipif(
-    not HAVE_GTSAM,
-    reason="GTSAM is not installed: pip install 'inexact-loops[maps]' to test the pose-graph "
-    "back end",
-)
+#: The back-end tests: skipped, saying why, without GTSAM (conftest.py).
+needs_gtsam = pytest.mark.gtsam
 
 EXACT = ev.DriftModel(
     translation_sigma_m_per_sqrt_m=0.0,
@@ -108,6 +98,8 @@ def subset(matches: ev.Matches, keep: np.ndarray) -> ev.Matches:
 
 @needs_gtsam
 def test_session_keys_are_gtsams_symbols_as_loops_fleet_writes_them():
+    import gtsam
+
     assert ev.session_key(0, 5) == gtsam.symbol("a", 5) == 6989586621679009797
     assert ev.session_key(25, 7) == gtsam.symbol("z", 7)
     assert ev.session_key(26, 3) == gtsam.symbol("A", 3)
