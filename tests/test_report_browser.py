@@ -29,15 +29,32 @@ ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = Path(os.environ.get("LOOPS_TEST_ARTIFACTS", ROOT / "target" / "test-artifacts"))
 FIGURES = {"loop-duration", "pairwise-distance", "sampled-pairs", "samples-per-component"}
 
-# Loads the report in a same-folder iframe and writes what the browser laid out and decoded
-# into the page, for --dump-dom to print.
-CHECK_PAGE = """<!DOCTYPE html><html><body>
-<iframe id="report" src="REPORT" style="width:1400px;height:4000px"></iframe>
+
+def check_page(src: str, body: str, result: str) -> str:
+    """A page that loads the page ``src`` in a same-folder iframe and, once it is loaded, runs
+    the JavaScript ``body`` on it (``doc`` its document, ``size(e)`` an element's laid-out
+    width and height) and writes the JSON of the expression ``result`` into a
+    ``<pre id="result">``, for --dump-dom to print."""
+    return f"""<!DOCTYPE html><html><body>
+<iframe id="report" src="{src}" style="width:1400px;height:4000px"></iframe>
 <script>
-document.getElementById("report").addEventListener("load", () => {
+document.getElementById("report").addEventListener("load", () => {{
   const doc = document.getElementById("report").contentDocument;
-  const size = (e) => { const r = e.getBoundingClientRect(); return [r.width, r.height]; };
-  const figures = [...doc.querySelectorAll(".figure")].map((f) => ({
+  const size = (e) => {{ const r = e.getBoundingClientRect(); return [r.width, r.height]; }};
+{body}
+  const out = document.createElement("pre");
+  out.id = "result";
+  out.textContent = JSON.stringify({result});
+  document.body.appendChild(out);
+}});
+</script></body></html>
+"""
+
+
+# What the browser laid out and decoded in the report: its figures and the components table.
+CHECK_PAGE = check_page(
+    "report.html",
+    """  const figures = [...doc.querySelectorAll(".figure")].map((f) => ({
     name: f.dataset.figure,
     size: size(f),
     images: [...f.querySelectorAll("img")].map((i) => ({
@@ -50,14 +67,9 @@ document.getElementById("report").addEventListener("load", () => {
   const text = (c) => c.textContent.trim();
   const header = table ? [...table.querySelectorAll("thead th")].map(text) : [];
   const rows = table ? [...table.querySelectorAll("tbody tr")].map(
-    (r) => [...r.cells].map(text)) : [];
-  const out = document.createElement("pre");
-  out.id = "result";
-  out.textContent = JSON.stringify({ title: doc.title, figures, header, rows });
-  document.body.appendChild(out);
-});
-</script></body></html>
-"""
+    (r) => [...r.cells].map(text)) : [];""",
+    "{ title: doc.title, figures, header, rows }",
+)
 
 
 def chromium() -> str:
@@ -79,6 +91,53 @@ def browse(browser: str, *args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+def rendered(check: Path, page: str):
+    """Writes the check page ``page`` (:func:`check_page`) to ``check`` and returns the JSON it
+    writes once headless Chromium has laid out the page it loads."""
+    browser = chromium()
+    check.write_text(page)
+    dumped = browse(
+        browser,
+        "--virtual-time-budget=15000",
+        "--window-size=1440,4200",
+        "--dump-dom",
+        check.as_uri(),
+    ).stdout
+    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
+    assert found, f"the check script did not run: {dumped[:2000]}"
+    return json.loads(html.unescape(found.group(1)))
+
+
+def screenshot(page: Path, name: str, height: int) -> np.ndarray:
+    """Headless Chromium's screenshot of ``page`` (1440 pixels wide, ``height`` high), kept as
+    ``name`` in the test artifacts: its RGB pixels, which are not nearly blank."""
+    browser = chromium()
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    shot = ARTIFACTS / name
+    shot.unlink(missing_ok=True)
+    browse(
+        browser,
+        "--virtual-time-budget=15000",
+        f"--window-size=1440,{height}",
+        f"--screenshot={shot}",
+        page.as_uri(),
+    )
+    assert shot.exists(), "Chromium wrote no screenshot"
+    image = pytest.importorskip("matplotlib.image").imread(shot)
+    pixels = np.asarray(image)[..., :3]
+    ink = (pixels.max(axis=2) - pixels.min(axis=2) > 0.1) | (pixels.mean(axis=2) < 0.6)
+    assert ink.mean() > 0.02, "the rendered page is nearly blank"
+    return pixels
+
+
+def assert_self_contained(page: str) -> None:
+    """A whole HTML document that loads nothing from the network and links no style sheet."""
+    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
+    fetched = re.findall(r"""(?:src|href)\s*=\s*["']?\s*(?:https?:)?//""", page)
+    assert not fetched, "the report must not load anything from the network"
+    assert "@import" not in page and "<link" not in page
+
+
 @pytest.fixture(scope="module")
 def report(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> Path:
     """A 20 min drive through `loops run`: its output folder."""
@@ -94,27 +153,12 @@ def report(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> Path:
 
 def test_report_is_self_contained(report: Path) -> None:
     page = (report / "report.html").read_text()
-    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
-    fetched = re.findall(r"""(?:src|href)\s*=\s*["']?\s*(?:https?:)?//""", page)
-    assert not fetched, "the report must not load anything from the network"
-    assert "@import" not in page and "<link" not in page
+    assert_self_contained(page)
     assert "drive &lt;&amp;&gt; 20min" in page and "drive <&> 20min" not in page
 
 
 def test_report_renders_in_chromium(report: Path) -> None:
-    browser = chromium()
-    check = report / "check.html"
-    check.write_text(CHECK_PAGE.replace("REPORT", "report.html"))
-    dumped = browse(
-        browser,
-        "--virtual-time-budget=15000",
-        "--window-size=1440,4200",
-        "--dump-dom",
-        check.as_uri(),
-    ).stdout
-    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
-    assert found, f"the check script did not run: {dumped[:2000]}"
-    page = json.loads(html.unescape(found.group(1)))
+    page = rendered(report / "check.html", CHECK_PAGE)
     assert "drive <&> 20min" in page["title"]
 
     figures = {f["name"]: f for f in page["figures"]}
@@ -157,22 +201,7 @@ def test_report_renders_in_chromium(report: Path) -> None:
 
 
 def test_report_screenshot_is_kept_and_not_blank(report: Path) -> None:
-    browser = chromium()
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    shot = ARTIFACTS / "report.png"
-    shot.unlink(missing_ok=True)
-    browse(
-        browser,
-        "--virtual-time-budget=15000",
-        "--window-size=1440,3600",
-        f"--screenshot={shot}",
-        (report / "report.html").as_uri(),
-    )
-    assert shot.exists(), "Chromium wrote no screenshot"
-    image = pytest.importorskip("matplotlib.image").imread(shot)
-    pixels = np.asarray(image)[..., :3]
-    ink = (pixels.max(axis=2) - pixels.min(axis=2) > 0.1) | (pixels.mean(axis=2) < 0.6)
-    assert ink.mean() > 0.02, "the rendered page is nearly blank"
+    pixels = screenshot(report / "report.html", "report.png", 3600)
     # Colour in the figures (viridis-coloured path, distance image), not only black text.
     colourful = pixels.max(axis=2) - pixels.min(axis=2) > 0.25
     assert colourful.mean() > 0.005
@@ -188,12 +217,9 @@ MAPS = ("loop-duration", "sampled-pairs")
 # What the browser laid out in the two maps: the axis labels (and whether they are drawn
 # upright), the tick labels, the path data of the track and its rendered box, and the start and
 # end markers.
-MAPS_PAGE = """<!DOCTYPE html><html><body>
-<iframe id="report" src="REPORT" style="width:1400px;height:4000px"></iframe>
-<script>
-document.getElementById("report").addEventListener("load", () => {
-  const doc = document.getElementById("report").contentDocument;
-  const maps = {};
+MAPS_PAGE = check_page(
+    "report.html",
+    """  const maps = {};
   for (const name of MAPS) {
     const svg = doc.querySelector(`.figure[data-figure="${name}"] svg`);
     if (!svg) continue;
@@ -218,14 +244,9 @@ document.getElementById("report").addEventListener("load", () => {
       start: start && [+start.getAttribute("cx"), +start.getAttribute("cy")],
       end: end && [+end.getAttribute("x") + 4, +end.getAttribute("y") + 4],
     };
-  }
-  const out = document.createElement("pre");
-  out.id = "result";
-  out.textContent = JSON.stringify(maps);
-  document.body.appendChild(out);
-});
-</script></body></html>
-"""
+  }""".replace("MAPS", json.dumps(list(MAPS))),
+    "maps",
+)
 
 
 def _number(text: str) -> float:
@@ -264,21 +285,7 @@ def test_kitti00_maps_draw_the_chosen_plane_in_chromium(kitti00_report: Path) ->
     """The KITTI 00 report with --axes 0,2 draws its loops: both maps, as Chromium lays them out,
     span both axes, are labelled x and z, and every drawn vertex, read back through the tick
     labels, is a pose's (x, z); start and end are the first and last poses."""
-    browser = chromium()
-    check = kitti00_report / "check-maps.html"
-    check.write_text(
-        MAPS_PAGE.replace("REPORT", "report.html").replace("MAPS", json.dumps(list(MAPS)))
-    )
-    dumped = browse(
-        browser,
-        "--virtual-time-budget=15000",
-        "--window-size=1440,4200",
-        "--dump-dom",
-        check.as_uri(),
-    ).stdout
-    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
-    assert found, f"the check script did not run: {dumped[:2000]}"
-    maps = json.loads(html.unescape(found.group(1)))
+    maps = rendered(kitti00_report / "check-maps.html", MAPS_PAGE)
     assert set(maps) == set(MAPS), maps.keys()
 
     rows = np.loadtxt(KITTI00)  # t, then the row-major 3x4 [R|t] of the camera
@@ -329,17 +336,12 @@ def scipy_spatial():
 # The fleet's report (index.html of `loops fleet`).
 # --------------------------------------------------------------------------------------------
 
-# Loads the fleet's page in a same-folder iframe and writes what the browser laid out into the
-# page, for --dump-dom to print.
 FLEET_FIGURES = {"overlap-matrix", "fleet-map"}
 
-FLEET_CHECK_PAGE = """<!DOCTYPE html><html><body>
-<iframe id="report" src="index.html" style="width:1400px;height:4000px"></iframe>
-<script>
-document.getElementById("report").addEventListener("load", () => {
-  const doc = document.getElementById("report").contentDocument;
-  const size = (e) => { const r = e.getBoundingClientRect(); return [r.width, r.height]; };
-  const figures = [...doc.querySelectorAll(".figure")].map((f) => ({
+# What the browser laid out in the fleet's page: its figures, tables and links.
+FLEET_CHECK_PAGE = check_page(
+    "index.html",
+    """  const figures = [...doc.querySelectorAll(".figure")].map((f) => ({
     name: f.dataset.figure,
     size: size(f),
     svgs: [...f.querySelectorAll("svg")].map((s) => ({
@@ -354,16 +356,11 @@ document.getElementById("report").addEventListener("load", () => {
     const rows = [...t.querySelectorAll("tbody tr")].map((r) => [...r.cells].map(text));
     return { header: [...t.querySelectorAll("thead th")].map(text), rows };
   };
-  const links = [...doc.querySelectorAll("#sessions a")].map((a) => [text(a), a.href]);
-  const out = document.createElement("pre");
-  out.id = "result";
-  out.textContent = JSON.stringify({
+  const links = [...doc.querySelectorAll("#sessions a")].map((a) => [text(a), a.href]);""",
+    """{
     title: doc.title, figures, between: table("between"), pairs: table("session-pairs"),
-    sessions: table("sessions"), links });
-  document.body.appendChild(out);
-});
-</script></body></html>
-"""
+    sessions: table("sessions"), links }""",
+)
 
 ODD = "night <&> shift"  # a session name that needs escaping, in HTML and in a link
 
@@ -385,27 +382,13 @@ def fleet_out(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path) -> Path
 
 def test_fleet_report_is_self_contained(fleet_out: Path) -> None:
     page = (fleet_out / "index.html").read_text()
-    assert page.startswith("<!DOCTYPE html>") and page.rstrip().endswith("</html>")
-    fetched = re.findall(r"""(?:src|href)\s*=\s*["']?\s*(?:https?:)?//""", page)
-    assert not fetched, "the report must not load anything from the network"
-    assert "@import" not in page and "<link" not in page and "<script" not in page
+    assert_self_contained(page)
+    assert "<script" not in page
     assert "night &lt;&amp;&gt; shift" in page and ODD not in page
 
 
 def test_fleet_report_renders_in_chromium(fleet_out: Path) -> None:
-    browser = chromium()
-    check = fleet_out / "check.html"
-    check.write_text(FLEET_CHECK_PAGE)
-    dumped = browse(
-        browser,
-        "--virtual-time-budget=15000",
-        "--window-size=1440,4200",
-        "--dump-dom",
-        check.as_uri(),
-    ).stdout
-    found = re.search(r'<pre id="result">(.*?)</pre>', dumped, re.S)
-    assert found, f"the check script did not run: {dumped[:2000]}"
-    page = json.loads(html.unescape(found.group(1)))
+    page = rendered(fleet_out / "check.html", FLEET_CHECK_PAGE)
     assert "Fleet of 6 sessions" in page["title"]
     summary = json.loads((fleet_out / "summary.json").read_text())
 
@@ -454,21 +437,6 @@ def test_fleet_report_renders_in_chromium(fleet_out: Path) -> None:
 
 
 def test_fleet_report_screenshot_is_kept_and_not_blank(fleet_out: Path) -> None:
-    browser = chromium()
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    shot = ARTIFACTS / "fleet-report.png"
-    shot.unlink(missing_ok=True)
-    browse(
-        browser,
-        "--virtual-time-budget=15000",
-        "--window-size=1440,2400",
-        f"--screenshot={shot}",
-        (fleet_out / "index.html").as_uri(),
-    )
-    assert shot.exists(), "Chromium wrote no screenshot"
-    image = pytest.importorskip("matplotlib.image").imread(shot)
-    pixels = np.asarray(image)[..., :3]
-    ink = (pixels.max(axis=2) - pixels.min(axis=2) > 0.1) | (pixels.mean(axis=2) < 0.6)
-    assert ink.mean() > 0.02, "the rendered page is nearly blank"
+    pixels = screenshot(fleet_out / "index.html", "fleet-report.png", 2400)
     colourful = pixels.max(axis=2) - pixels.min(axis=2) > 0.25
     assert colourful.mean() > 0.005, "the heat map and the sessions' colours"
