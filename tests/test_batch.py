@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import csv
 import json
-import signal
 import subprocess
 import time
 from pathlib import Path
@@ -34,17 +33,22 @@ def floats(column: list[str]) -> np.ndarray:
     return np.array([float(v) if v else np.nan for v in column])
 
 
+def synth(loops_cli: Path, logs: Path, count: int, duration_s: int) -> list[Path]:
+    """``count`` synthetic logs of ``duration_s`` seconds (`loops synth`) in ``logs``, sorted."""
+    subprocess.run(
+        [loops_cli, "synth", logs, "--count", str(count), "--duration-s", str(duration_s)],
+        check=True,
+        capture_output=True,
+    )
+    return sorted(logs.glob("*.mcap"))
+
+
 @pytest.fixture(scope="module")
 def batch(tmp_path_factory: pytest.TempPathFactory, loops_cli: Path):
     """19 synthetic logs (10 min each, seeds 0..18) and a truncated one: a batch of 20."""
     root = tmp_path_factory.mktemp("batch")
     logs = root / "logs"
-    subprocess.run(
-        [loops_cli, "synth", logs, "--count", str(LOGS), "--duration-s", "600"],
-        check=True,
-        capture_output=True,
-    )
-    good = sorted(logs.glob("*.mcap"))
+    good = synth(loops_cli, logs, LOGS, 600)
     assert len(good) == LOGS
     corrupt = logs / "corrupt.mcap"
     data = good[0].read_bytes()
@@ -209,15 +213,10 @@ def test_python_writes_the_files_of_loops_run(tmp_path: Path, batch, loops_cli: 
 def test_concurrent_runs_into_one_folder(tmp_path: Path, loops_cli: Path) -> None:
     """Issue 15, item 3: a second `loops run` into a folder a run holds stops at once, naming
     the folder and the holder's pid; the first finishes undisturbed."""
-    logs = tmp_path / "logs"
-    subprocess.run(
-        [loops_cli, "synth", logs, "--count", "2", "--duration-s", "1800"],
-        check=True,
-        capture_output=True,
-    )
+    logs = synth(loops_cli, tmp_path / "logs", 2, 1800)
     out = tmp_path / "results"
     out.mkdir()
-    args = [loops_cli, "run", *sorted(logs.glob("*.mcap")), "--out", out, "--threads", "1"]
+    args = [loops_cli, "run", *logs, "--out", out, "--threads", "1"]
     first = subprocess.Popen(
         [*args, "--gamma", "20"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
@@ -289,31 +288,14 @@ def test_json_summary_on_stdout(tmp_path: Path, batch, loops_cli: Path) -> None:
     assert [r["name"] for r in summary["results"]] == [p.stem for p in batch["logs"][:2]]
 
 
-def test_interrupt_leaves_no_partial_output(tmp_path: Path, loops_cli: Path) -> None:
+def test_interrupt_leaves_no_partial_output(
+    tmp_path: Path, loops_cli: Path, interrupt_batch
+) -> None:
     """SIGINT in the middle of a batch: finished logs stay whole, unfinished ones vanish."""
-    logs = tmp_path / "logs"
-    subprocess.run(
-        [loops_cli, "synth", logs, "--count", "8", "--duration-s", "1800"],
-        check=True,
-        capture_output=True,
-    )
+    logs = synth(loops_cli, tmp_path / "logs", 8, 1800)
     out = tmp_path / "results"
-    args = [loops_cli, "run", *sorted(logs.glob("*.mcap")), "--gamma", "40", "--out", out]
-    process = subprocess.Popen(
-        [*args, "--threads", "1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-    )
-    assert process.stderr is not None
-    # Wait until the first log has finished, then interrupt while the next is in progress.
-    deadline = time.monotonic() + 300
-    line = ""
-    while "[1/8]" not in line and time.monotonic() < deadline:
-        line = process.stderr.readline()
-        assert line or process.poll() is None, "the run ended before it could be interrupted"
-    process.send_signal(signal.SIGINT)
-    _, rest = process.communicate(timeout=120)
-    if process.returncode == 0:
-        pytest.skip("the batch finished before the interrupt arrived")
-    assert process.returncode == 130, rest
+    args = [loops_cli, "run", *logs, "--gamma", "40", "--out", out]
+    rest = interrupt_batch([*args, "--threads", "1"], 8)
     assert "interrupted" in rest
     entries = list(out.iterdir()) if out.exists() else []
     assert not [p for p in entries if p.name.startswith(".")], entries

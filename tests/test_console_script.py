@@ -12,9 +12,7 @@ import importlib.metadata
 import json
 import os
 import re
-import signal
 import subprocess
-import time
 from pathlib import Path
 
 import pytest
@@ -138,37 +136,14 @@ def test_a_closed_stdout_ends_the_command_quietly(
     assert stderr == ""
 
 
-def test_ctrl_c_removes_unfinished_output_and_exits_130(tmp_path: Path, script: Path) -> None:
+def test_ctrl_c_removes_unfinished_output_and_exits_130(
+    tmp_path: Path, script: Path, interrupt_batch
+) -> None:
     logs = tmp_path / "logs"
     done = run(script, "synth", logs, "--count", "8", "--duration-s", "1800")
     assert done.returncode == 0, done.stderr
     out = tmp_path / "results"
-    process = subprocess.Popen(
-        [
-            script,
-            "run",
-            *sorted(logs.glob("*.mcap")),
-            "--gamma",
-            "40",
-            "--out",
-            out,
-            "--threads",
-            "1",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    assert process.stderr is not None
-    deadline = time.monotonic() + 300
-    line = ""
-    while "[1/8]" not in line and time.monotonic() < deadline:
-        line = process.stderr.readline()
-        assert line or process.poll() is None, "the run ended before it could be interrupted"
-    process.send_signal(signal.SIGINT)
-    _, rest = process.communicate(timeout=120)
-    if process.returncode == 0:
-        pytest.skip("the batch finished before the interrupt arrived")
-    assert process.returncode == 130, rest
+    args = [script, "run", *sorted(logs.glob("*.mcap")), "--gamma", "40", "--out", out]
+    rest = interrupt_batch([*args, "--threads", "1"], 8)
     assert "loops: interrupted" in rest
     assert not [p for p in out.iterdir() if p.name.startswith(".")]
