@@ -207,20 +207,15 @@ ELSEWHERE = {
         "test_so3_and_se3_distance_images_equal_scipy_rotations",
     ),
     "Loops.label_image": ("python/test_plane.py", "test_label_image_is_the_dense_labelling_folded"),
-    "Loops.components_of_pairs": ("python/test_plane.py", "test_components_of_pairs_and_counts"),
-    "Loops.pair_counts_per_component": (
-        "python/test_plane.py",
-        "test_components_of_pairs_and_counts",
-    ),
+    **{
+        name: ("python/test_plane.py", "test_components_of_pairs_and_counts")
+        for name in ("Loops.components_of_pairs", "Loops.pair_counts_per_component")
+    },
     "Trajectory.nearest_poses": ("python/test_plane.py", "test_nearest_poses_are_the_argmin"),
-    "outline_segments": (
-        "python/test_plane.py",
-        "test_outlines_are_the_pixel_sides_between_labels",
-    ),
-    "component_outlines": (
-        "python/test_plane.py",
-        "test_outlines_are_the_pixel_sides_between_labels",
-    ),
+    **{
+        name: ("python/test_plane.py", "test_outlines_are_the_pixel_sides_between_labels")
+        for name in ("outline_segments", "component_outlines")
+    },
     "chain_polylines": ("python/test_plane.py", "test_chain_polylines_use_every_edge_once"),
     "isocontour": ("python/test_plane.py", "test_isocontour_crosses_between_pixel_centres"),
     "sampler_symbol": ("python/test_plane.py", "test_sampler_symbols_come_from_the_core"),
