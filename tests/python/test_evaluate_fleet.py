@@ -91,6 +91,18 @@ def subset(matches: ev.Matches, keep: np.ndarray) -> ev.Matches:
     )
 
 
+def drifted_sessions(
+    *, seed: int, heading_bias_rad_per_m: float, budget: int, dim: int = 2
+) -> tuple[dict[str, ev.Poses], dict[str, ev.Odometry], tuple[np.ndarray, np.ndarray]]:
+    """:func:`three_sessions`, their odometry simulated with ``seed`` and a heading bias, and
+    ``budget`` candidate pairs of closest-first (gamma 5 m) in fleet indices."""
+    refs = three_sessions(dim)
+    odos = ev.simulate_fleet_odometry(
+        refs, seed=seed, drift=ev.DriftModel(heading_bias_rad_per_m=heading_bias_rad_per_m)
+    )
+    return refs, odos, joint_pairs(refs, ev.FleetRule("closest-first", budget, 5.0))
+
+
 # ---------------------------------------------------------------------------------------------
 # Keys, errors and placement
 # ---------------------------------------------------------------------------------------------
@@ -223,11 +235,7 @@ def test_exact_odometry_and_matches_return_the_references(dim):
 
 @needs_gtsam
 def test_without_a_match_between_sessions_the_sessions_stay_apart():
-    refs = three_sessions()
-    odos = ev.simulate_fleet_odometry(
-        refs, seed=1, drift=ev.DriftModel(heading_bias_rad_per_m=5e-4)
-    )
-    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 150, 5.0))
+    refs, odos, (i, j) = drifted_sessions(seed=1, heading_bias_rad_per_m=5e-4, budget=150)
     matches = ev.Matches.exact(joint_poses(refs), i, j)
     within, between = split(i, j, starts_of(refs))
     assert within.sum() > 10 and between.sum() > 10
@@ -252,11 +260,7 @@ def test_without_a_match_between_sessions_the_sessions_stay_apart():
 @needs_gtsam
 @pytest.mark.parametrize("dim", [2, 3])
 def test_true_matches_between_sessions_lower_the_joint_error(dim):
-    refs = three_sessions(dim)
-    odos = ev.simulate_fleet_odometry(
-        refs, seed=2, drift=ev.DriftModel(heading_bias_rad_per_m=5e-4)
-    )
-    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 150, 5.0))
+    refs, odos, (i, j) = drifted_sessions(seed=2, heading_bias_rad_per_m=5e-4, budget=150, dim=dim)
     matches = ev.Matches.exact(joint_poses(refs), i, j)
     within, between = split(i, j, starts_of(refs))
     sessions = list(odos.values())
@@ -279,11 +283,7 @@ def test_true_matches_between_sessions_lower_the_joint_error(dim):
 
 @needs_gtsam
 def test_a_wrong_match_between_sessions_is_down_weighted():
-    refs = three_sessions()
-    odos = ev.simulate_fleet_odometry(
-        refs, seed=4, drift=ev.DriftModel(heading_bias_rad_per_m=2e-4)
-    )
-    i, j = joint_pairs(refs, ev.FleetRule("closest-first", 120, 5.0))
+    refs, odos, (i, j) = drifted_sessions(seed=4, heading_bias_rad_per_m=2e-4, budget=120)
     right = ev.Matches.exact(joint_poses(refs), i, j, sigma_m=0.05, sigma_rad=0.005)
     _, between = split(i, j, starts_of(refs))
     k = np.flatnonzero(between)[:3]

@@ -12,6 +12,7 @@ import csv
 import subprocess
 import sys
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -160,6 +161,12 @@ def test_tables_of_a_3d_graph(tmp_path: Path) -> None:
     np.testing.assert_array_equal(graph.trajectory.positions, positions)
 
 
+def write_lines(path: Path, lines: list[str]) -> Path:
+    """Writes ``lines`` to ``path``, one a line; returns ``path``."""
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
 def small_graph(tmp_path: Path) -> tuple[Path, np.ndarray, list[tuple[int, int]]]:
     """A figure of eight traced twice with a drift (90 vertices, headings along the path),
     odometry edges and loop closures between many pairs; the file, positions and closures."""
@@ -179,8 +186,7 @@ def small_graph(tmp_path: Path) -> tuple[Path, np.ndarray, list[tuple[int, int]]
                 pair = (i, j) if (i + j) % 2 == 0 else (j, i)
                 closures.append(pair)
                 lines.append(f"EDGE_SE2 {pair[0]} {pair[1]} 0 0 0 1 0 0 1 0 1")
-    path = tmp_path / "small.g2o"
-    path.write_text("\n".join(lines) + "\n")
+    path = write_lines(tmp_path / "small.g2o", lines)
     return path, points, closures
 
 
@@ -292,19 +298,32 @@ def random_se3(rng: np.random.Generator, n: int) -> tuple[np.ndarray, Rotation]:
     return positions, rotations
 
 
-def test_chained_se3_quat_edges_give_back_the_vertices(tmp_path: Path) -> None:
-    rng = np.random.default_rng(7)
-    n = 120
-    positions, rotations = random_se3(rng, n)
+def chained_se3(
+    seed: int, n: int, edge: Callable[[int, int, np.ndarray, Rotation], str], flipped: int = -1
+) -> tuple[np.ndarray, Rotation, list[str]]:
+    """A :func:`random_se3` path of ``n`` poses and the lines ``edge(a, b, d, r)`` of its steps
+    (pose b in the frame of pose a: translation d, rotation r), from each pose to the next
+    (step ``flipped`` from the next pose back)."""
+    positions, rotations = random_se3(np.random.default_rng(seed), n)
     lines = []
     for k in range(n - 1):
-        a, b = (k + 1, k) if k == 40 else (k, k + 1)
+        a, b = (k + 1, k) if k == flipped else (k, k + 1)
         d = rotations[a].inv().apply(positions[b] - positions[a])
-        q = (rotations[a].inv() * rotations[b]).as_quat()  # x, y, z, w
-        lines.append(f"EDGE_SE3:QUAT {a} {b} " + " ".join(num(v) for v in [*d, *q]))
+        lines.append(edge(a, b, d, rotations[a].inv() * rotations[b]))
+    return positions, rotations, lines
+
+
+def test_chained_se3_quat_edges_give_back_the_vertices(tmp_path: Path) -> None:
+    n = 120
+    # r.as_quat(): x, y, z, w.
+    positions, rotations, lines = chained_se3(
+        7,
+        n,
+        lambda a, b, d, r: f"EDGE_SE3:QUAT {a} {b} " + " ".join(num(v) for v in [*d, *r.as_quat()]),
+        flipped=40,
+    )
     lines.append(f"EDGE_SE3:QUAT 100 3 0 0 0 0 0 0 1{' 1' * 21}")
-    path = tmp_path / "se3.g2o"
-    path.write_text("\n".join(lines) + "\n")
+    path = write_lines(tmp_path / "se3.g2o", lines)
     with pytest.raises(il.LoopsIOError, match=r"120 edge\(s\).*chain_edges=True"):
         il.read_pose_graph(path)
     with pytest.warns(il.DeadReckoningWarning, match="120 poses .vertices 0 to 119. chained"):
@@ -321,16 +340,15 @@ def test_chained_se3_quat_edges_give_back_the_vertices(tmp_path: Path) -> None:
 
 def test_chained_toro_edge3_uses_roll_pitch_yaw(tmp_path: Path) -> None:
     """TORO's EDGE3 x y z roll pitch yaw, R = Rz(yaw) Ry(pitch) Rx(roll): scipy's intrinsic ZYX."""
-    rng = np.random.default_rng(11)
-    n = 60
-    positions, rotations = random_se3(rng, n)
-    lines = []
-    for k in range(n - 1):
-        d = rotations[k].inv().apply(positions[k + 1] - positions[k])
-        yaw, pitch, roll = (rotations[k].inv() * rotations[k + 1]).as_euler("ZYX")
-        lines.append(f"EDGE3 {k} {k + 1} " + " ".join(num(v) for v in [*d, roll, pitch, yaw]))
-    path = tmp_path / "edges.graph"
-    path.write_text("\n".join(lines) + "\n")
+    # r.as_euler("ZYX"): yaw, pitch, roll; TORO writes roll, pitch, yaw.
+    positions, rotations, lines = chained_se3(
+        11,
+        60,
+        lambda a, b, d, r: (
+            f"EDGE3 {a} {b} " + " ".join(num(v) for v in [*d, *r.as_euler("ZYX")[::-1]])
+        ),
+    )
+    path = write_lines(tmp_path / "edges.graph", lines)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", il.DeadReckoningWarning)
         traj = il.read_trajectory(path, chain_edges=True, metric="se3_rotation")
@@ -354,8 +372,7 @@ def test_chained_edge2_list_round_trip_and_gap(tmp_path: Path) -> None:
         lines.append(
             f"EDGE2 {k} {k + 1} {num(dx)} {num(dy)} {num(theta[k + 1] - theta[k])} 1 0 1 1 0 0"
         )
-    path = tmp_path / "odometry.graph"
-    path.write_text("\n".join(lines) + "\n")
+    path = write_lines(tmp_path / "odometry.graph", lines)
     with pytest.raises(il.LoopsIOError, match="chain_edges=True"):
         il.read_trajectory(path)
     with pytest.warns(il.DeadReckoningWarning, match="dead reckoning"):
