@@ -801,7 +801,34 @@ def evaluate_fleet(
             loops_cache[separation] = _fleet_loops(refs, gamma, separation)
         return loops_cache[separation]
 
-    def record(row: dict[str, Any], errors: FleetErrors) -> None:
+    def record(
+        base: dict[str, Any],
+        rule: FleetRule | None,
+        outlier_rate: float,
+        candidates: tuple[np.ndarray, np.ndarray],
+        matches: Matches | None,
+        placed: int,
+        errors: FleetErrors,
+        start: float,
+    ) -> None:
+        """Adds the row of a run (``rule`` None: the odometry alone) and its sessions' rows."""
+        row = base | {
+            "sampler": rule.sampler if rule else "odometry",
+            "between_only": rule.between_only if rule else False,
+            "separation": rule.separation if rule else False,
+            "outlier_rate": float(outlier_rate),
+            "budget": rule.budget if rule else 0,
+            "candidates": len(candidates[0]),
+            "between_candidates": between_count(*candidates),
+            "matches": 0 if matches is None else len(matches),
+            "between_matches": 0 if matches is None else between_count(matches.i, matches.j),
+            "wrong": 0 if matches is None else int(matches.wrong.sum()),
+            "placed": placed,
+            "ate_m": errors.ate_m,
+            "session_ate_m": errors.session_rms_m,
+            "inter_m": errors.inter_m,
+            "seconds": time.perf_counter() - start,
+        }
         run = len(results.rows)
         results.rows.append(row)
         for name, poses in items:
@@ -843,27 +870,8 @@ def evaluate_fleet(
             "odometry_inter_m": odo_errors.inter_m,
         }
         if include_odometry:
-            record(
-                base
-                | {
-                    "sampler": "odometry",
-                    "between_only": False,
-                    "separation": False,
-                    "outlier_rate": 0.0,
-                    "budget": 0,
-                    "candidates": 0,
-                    "between_candidates": 0,
-                    "matches": 0,
-                    "between_matches": 0,
-                    "wrong": 0,
-                    "placed": 1,
-                    "ate_m": odo_errors.ate_m,
-                    "session_ate_m": odo_errors.session_rms_m,
-                    "inter_m": odo_errors.inter_m,
-                    "seconds": time.perf_counter() - start,
-                },
-                odo_errors,
-            )
+            empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+            record(base, None, 0.0, empty, None, 1, odo_errors, start)
         for outlier_rate, rule in _fleet_grid(
             outlier_rates, separations, between_only, samplers, budgets, gamma
         ):
@@ -880,27 +888,7 @@ def evaluate_fleet(
             )
             assert matches is not None
             errors = fleet_errors(refs, estimates, overlap_m=overlap, pairs=pairs)
-            record(
-                base
-                | {
-                    "sampler": rule.sampler,
-                    "between_only": rule.between_only,
-                    "separation": rule.separation,
-                    "outlier_rate": float(outlier_rate),
-                    "budget": rule.budget,
-                    "candidates": len(i),
-                    "between_candidates": between_count(i, j),
-                    "matches": len(matches),
-                    "between_matches": between_count(matches.i, matches.j),
-                    "wrong": int(matches.wrong.sum()),
-                    "placed": placed,
-                    "ate_m": errors.ate_m,
-                    "session_ate_m": errors.session_rms_m,
-                    "inter_m": errors.inter_m,
-                    "seconds": time.perf_counter() - start,
-                },
-                errors,
-            )
+            record(base, rule, outlier_rate, (i, j), matches, placed, errors, start)
     return results
 
 

@@ -1538,6 +1538,35 @@ def evaluate(
     def errors(estimate: Poses) -> tuple[float, float]:
         return ate(reference, estimate), rpe(reference, estimate, delta=rpe_delta_m, delta_unit="m")
 
+    def record(
+        base: dict[str, Any],
+        rule: CandidateRule | None,
+        outlier_rate: float,
+        candidates: int,
+        matches: Matches | None,
+        ate_m: float,
+        rpe_m: float,
+        start: float,
+    ) -> None:
+        """Adds the row of a run (``rule`` None: the odometry alone)."""
+        row = base | {
+            "sampler": rule.sampler if rule else "odometry",
+            "source": rule.source if rule else "",
+            "on": rule.on if rule else "",
+            "separation": rule.separation if rule else False,
+            "outlier_rate": float(outlier_rate),
+            "budget": rule.budget if rule else 0,
+            "candidates": candidates,
+            "matches": 0 if matches is None else len(matches),
+            "wrong": 0 if matches is None else int(matches.wrong.sum()),
+            "ate_m": ate_m,
+            "rpe_m": rpe_m,
+            "seconds": time.perf_counter() - start,
+        }
+        results.rows.append(row)
+        if progress:
+            progress(row)
+
     for seed in seeds:
         odo = drift.simulate(reference, seed=seed) if drift else odometry
         assert isinstance(odo, Odometry)
@@ -1546,23 +1575,7 @@ def evaluate(
         odo_ate, odo_rpe = errors(odo.estimate)
         base = {"dataset": dataset, "seed": int(seed), "odometry_ate_m": odo_ate}
         if include_odometry:
-            row = base | {
-                "sampler": "odometry",
-                "source": "",
-                "on": "",
-                "separation": False,
-                "outlier_rate": 0.0,
-                "budget": 0,
-                "candidates": 0,
-                "matches": 0,
-                "wrong": 0,
-                "ate_m": odo_ate,
-                "rpe_m": odo_rpe,
-                "seconds": time.perf_counter() - start,
-            }
-            results.rows.append(row)
-            if progress:
-                progress(row)
+            record(base, None, 0.0, 0, None, odo_ate, odo_rpe, start)
         for outlier_rate, rule in _grid(
             outlier_rates,
             on,
@@ -1587,23 +1600,7 @@ def evaluate(
             )
             ate_m, rpe_m = errors(estimate)
             assert matches is not None
-            row = base | {
-                "sampler": rule.sampler,
-                "source": rule.source,
-                "on": rule.on,
-                "separation": rule.separation,
-                "outlier_rate": float(outlier_rate),
-                "budget": rule.budget,
-                "candidates": len(pairs[0]),
-                "matches": len(matches),
-                "wrong": int(matches.wrong.sum()),
-                "ate_m": ate_m,
-                "rpe_m": rpe_m,
-                "seconds": time.perf_counter() - start,
-            }
-            results.rows.append(row)
-            if progress:
-                progress(row)
+            record(base, rule, outlier_rate, len(pairs[0]), matches, ate_m, rpe_m, start)
     return results
 
 
