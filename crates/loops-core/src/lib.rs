@@ -80,6 +80,7 @@ mod sublevel;
 mod synth;
 mod tile;
 mod tile_draw;
+mod tile_piece;
 mod trajectory;
 mod union_find;
 mod verdict;

@@ -75,11 +75,9 @@ use crate::sample::DrawStats;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, path_length};
+use crate::tile_piece::live_stretches;
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
-
-/// Maps an index of a tile's piece to its fleet index, or to its time on its session's clock.
-type FromPiece<'a, T> = Box<dyn Fn(usize) -> T + Sync + 'a>;
 
 /// Poses per leaf of a tile's ball hierarchy.
 const LEAF_SIZE: usize = 16;
@@ -565,32 +563,53 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
 
 /// The summary of a scanned tile.
 pub(crate) fn summary_of<M: Metric + ?Sized>(scanned: &ScannedTile<'_>, metric: &M, tile: &Tile) -> TileSummary {
-    let ScannedTile { piece, piece_starts, rows, set, to_fleet, to_time } = scanned;
-    let rows = *rows;
-    let [a, b] = tile.sessions;
-    let to_piece = |f: usize| {
-        if a == b || tile.rows.contains(&f) { f - tile.rows.start } else { rows + f - tile.columns.start }
-    };
-    let mut summary = summarise(tile, piece, metric, set, piece_starts, rows, &**to_fleet);
+    let mut summary = summarise(tile, metric, scanned);
     for c in &mut summary.components {
         c.times_s = [
-            [to_time(to_piece(c.rows[0])), to_time(to_piece(c.rows[1]))],
-            [to_time(to_piece(c.columns[0])), to_time(to_piece(c.columns[1]))],
+            [scanned.time_s(0, c.rows[0]), scanned.time_s(0, c.rows[1])],
+            [scanned.time_s(1, c.columns[0]), scanned.time_s(1, c.columns[1])],
         ];
     }
     summary
 }
 
-/// A tile's poses as one small trajectory (the rows, then the columns; or, within one session,
-/// the stretch from its first row to its last column) and its cells of S_γ, with the maps from
-/// the piece's indices to fleet indices and to session times.
+/// A tile's poses as one small trajectory and its cells of S_γ. On the diagonal of a session,
+/// the piece is the tile's stretch of the session; otherwise it is the live stretches of the
+/// rows, then those of the columns ([`live_stretches`]): every cell of the tile lies in them.
+/// Piece rows are the first [`rows`](Self::rows) poses; each stretch is a session of the piece,
+/// so that runs and components never cross from one stretch to the next.
 pub(crate) struct ScannedTile<'a> {
     pub(crate) piece: Trajectory,
     pub(crate) piece_starts: Vec<usize>,
     pub(crate) rows: usize,
     pub(crate) set: SublevelSet,
-    pub(crate) to_fleet: FromPiece<'a, usize>,
-    pub(crate) to_time: FromPiece<'a, f64>,
+    /// The fleet index of the first pose of each stretch (one per `piece_starts`).
+    fleet_starts: Vec<usize>,
+    /// The row and column sessions' clocks and first fleet indices.
+    times_s: [&'a [f64]; 2],
+    session_starts: [usize; 2],
+}
+
+impl ScannedTile<'_> {
+    /// The fleet index of pose `k` of the piece.
+    pub(crate) fn to_fleet(&self, k: usize) -> usize {
+        let s = self.piece_starts.partition_point(|&p| p <= k) - 1;
+        self.fleet_starts[s] + k - self.piece_starts[s]
+    }
+
+    /// The piece row of fleet row `f`, or `None` when the row was left out (it holds no cell).
+    pub(crate) fn piece_row(&self, f: usize) -> Option<usize> {
+        let row_stretches = self.piece_starts.partition_point(|&p| p < self.rows);
+        let s = self.fleet_starts[..row_stretches].partition_point(|&g| g <= f).checked_sub(1)?;
+        let k = self.piece_starts[s] + f - self.fleet_starts[s];
+        let end = self.piece_starts.get(s + 1).copied().unwrap_or(self.piece.len()).min(self.rows);
+        (k < end).then_some(k)
+    }
+
+    /// The time of fleet index `f` of the row (`side` 0) or column (1) session.
+    pub(crate) fn time_s(&self, side: usize, f: usize) -> f64 {
+        self.times_s[side][f - self.session_starts[side]]
+    }
 }
 
 /// Checks a tile against its sessions and scans its cells (see [`scan_session_tile`]).
@@ -600,7 +619,7 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
     metric: &M,
     gamma: f64,
     separation: Separation,
-    tile: &'a Tile,
+    tile: &Tile,
 ) -> Result<ScannedTile<'a>> {
     check_gamma(gamma)?;
     separation.check()?;
@@ -627,52 +646,76 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
             return Err(mismatch(problem, "manifold"));
         }
     }
+    // Within one session, the column session is the row session.
+    let session_b = if a == b { session_a } else { session_b };
     let start_a = starts[0];
     let (r0, r1) = (tile.rows.start - start_a, tile.rows.end - start_a);
-    let rows = r1 - r0;
-    // The tile's poses as one small trajectory: the rows, then the columns (a ≠ b), or the
-    // stretch of the session from the first row to the last column (a = b).
-    #[allow(clippy::type_complexity)]
-    let (piece, piece_starts, to_fleet, to_time): (
-        Trajectory,
-        Vec<usize>,
-        FromPiece<'_, usize>,
-        FromPiece<'_, f64>,
-    ) = if a == b {
-        let c1 = tile.columns.end - start_a;
-        let times = session_a.timestamps_s();
-        (session_a.piece(r0..c1), vec![0], Box::new(move |k| tile.rows.start + k), Box::new(move |k| times[r0 + k]))
+    let (c0, c1) = (tile.columns.start - starts[1], tile.columns.end - starts[1]);
+    let diagonal = a == b && c0 < r1;
+    // Within one session, each row's first column (an index of the session) under the separation.
+    let separated = if a == b && !separation.is_none() {
+        Some(separation.first_columns(&path_length(session_a, metric), session_a.timestamps_s()))
     } else {
-        let (c0, c1) = (tile.columns.start - starts[1], tile.columns.end - starts[1]);
-        let parts = [session_a.piece(r0..r1), session_b.piece(c0..c1)];
-        let (joint, _) = Trajectory::concatenate(&[&parts[0], &parts[1]], 1.0)?;
-        let columns_start = tile.columns.start;
-        let (times_a, times_b) = (session_a.timestamps_s(), session_b.timestamps_s());
-        (
-            joint,
-            vec![0, rows],
-            Box::new(move |k| if k < rows { tile.rows.start + k } else { columns_start + k - rows }),
-            Box::new(move |k| if k < rows { times_a[r0 + k] } else { times_b[c0 + k - rows] }),
-        )
+        None
     };
-    // The metric's checks on the tile's poses only (a whole session per tile would cost more
-    // than a small tile's scan).
-    piece.check_metric(metric)?;
-    let first_columns: Vec<u32> = if a == b {
-        let local_c0 = tile.columns.start - tile.rows.start;
-        let separated = if separation.is_none() {
-            None
-        } else {
-            Some(separation.first_columns(&path_length(session_a, metric), session_a.timestamps_s()))
-        };
-        (0..piece.len())
+    let (piece, piece_starts, fleet_starts, rows, first_columns) = if diagonal {
+        // The stretch of the session from the first row to the last column.
+        let piece = session_a.piece(r0..c1);
+        piece.check_metric(metric)?;
+        let local_c0 = c0 - r0;
+        let first_columns: Vec<u32> = (0..piece.len())
             .map(|k| {
                 let own = separated.as_ref().map_or(r0 + k, |f| f[r0 + k] as usize) - r0;
                 own.max(local_c0).max(k) as u32
             })
-            .collect()
+            .collect();
+        (piece, vec![0], vec![tile.rows.start], r1 - r0, first_columns)
     } else {
-        (0..piece.len()).map(|k| if k < rows { rows as u32 } else { k as u32 }).collect()
+        let [mut live_rows, mut live_columns] = live_stretches(session_a, r0..r1, session_b, c0..c1, metric, gamma);
+        if live_rows.is_empty() || live_columns.is_empty() {
+            // No pair within γ: one chunk of each side, which holds no cell either.
+            live_rows = std::iter::once(r0..(r0 + crate::tile_piece::CHUNK).min(r1)).collect();
+            live_columns = std::iter::once(c0..(c0 + crate::tile_piece::CHUNK).min(c1)).collect();
+        }
+        let parts: Vec<Trajectory> = live_rows
+            .iter()
+            .map(|r| session_a.piece(r.clone()))
+            .chain(live_columns.iter().map(|c| session_b.piece(c.clone())))
+            .collect();
+        let (piece, _) = Trajectory::concatenate(&parts.iter().collect::<Vec<_>>(), 1.0)?;
+        piece.check_metric(metric)?;
+        let (mut piece_starts, mut fleet_starts, mut next) = (Vec::new(), Vec::new(), 0);
+        for (side, stretches) in [(0, &live_rows), (1, &live_columns)] {
+            for s in stretches {
+                piece_starts.push(next);
+                fleet_starts.push(starts[side] + s.start);
+                next += s.len();
+            }
+        }
+        let rows: usize = live_rows.iter().map(|r| r.len()).sum();
+        let column_stretches = live_rows.len();
+        // The first piece column at or after column `c` of the session.
+        let column_at = |c: usize| -> usize {
+            let s = live_columns.partition_point(|r| r.end <= c);
+            match live_columns.get(s) {
+                Some(r) => piece_starts[column_stretches + s] + c.saturating_sub(r.start),
+                None => piece.len(),
+            }
+        };
+        let first_columns: Vec<u32> = (0..piece.len())
+            .map(|k| {
+                if k >= rows {
+                    k as u32
+                } else if let Some(f) = &separated {
+                    let s = piece_starts.partition_point(|&p| p <= k) - 1;
+                    let row = fleet_starts[s] + k - piece_starts[s] - start_a;
+                    column_at(f[row] as usize).max(rows) as u32
+                } else {
+                    rows as u32
+                }
+            })
+            .collect();
+        (piece, piece_starts, fleet_starts, rows, first_columns)
     };
     let (arc, balls) = rayon::join(
         || ArcLength::new(&piece, metric, false),
@@ -689,19 +732,22 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
         &piece_starts,
         rows,
     )?;
-    Ok(ScannedTile { piece, piece_starts, rows, set, to_fleet, to_time })
+    Ok(ScannedTile {
+        piece,
+        piece_starts,
+        rows,
+        set,
+        fleet_starts,
+        times_s: [session_a.timestamps_s(), session_b.timestamps_s()],
+        session_starts: starts,
+    })
 }
 
 /// The provisional components of a tile's set and its edge runs.
-fn summarise<M: Metric + ?Sized>(
-    tile: &Tile,
-    piece: &Trajectory,
-    metric: &M,
-    set: &SublevelSet,
-    starts: &[usize],
-    rows: usize,
-    to_fleet: &dyn Fn(usize) -> usize,
-) -> TileSummary {
+fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<'_>) -> TileSummary {
+    let ScannedTile { piece, piece_starts: starts, rows, set, .. } = scanned;
+    let rows = *rows;
+    let to_fleet = |k: usize| scanned.to_fleet(k);
     let (labels, count) = label_runs(set, ROWS_PER_LABEL_TASK);
     let widths = piece.cell_widths_s();
     let breaks: Vec<u32> = starts[1..].iter().map(|&s| s as u32).collect();
@@ -763,7 +809,8 @@ fn summarise<M: Metric + ?Sized>(
                 c.closest = [fleet_i, to_fleet(j)];
                 c.closest_distance = metric.distance(piece.point(i), piece.point(j));
             }
-            if i == 0 || i + 1 == rows || start == first_column || end == last_column {
+            if fleet_i == tile.rows.start || fleet_i + 1 == tile.rows.end || start == first_column || end == last_column
+            {
                 edges.push(EdgeRun { row: fleet_i, start, end, label });
             }
         }

@@ -70,9 +70,9 @@ impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
 
     fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {
         let set = &self.scanned.set;
-        let k = i - self.tile.rows.start;
+        let Some(k) = self.scanned.piece_row(i) else { return };
         let offset = set.row_offset(k);
-        let to_fleet = &self.scanned.to_fleet;
+        let to_fleet = |k: usize| self.scanned.to_fleet(k);
         for (r, run) in set.row(k).iter().enumerate() {
             let provisional = self.provisional[offset + r] as usize;
             f(DrawRun {
@@ -240,13 +240,13 @@ fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> TileDuration {
     let mut rows = vec![0.0; tile.rows.len()];
     let mut diff = vec![0.0; tile.columns.len() + 1];
     let set = &scanned.set;
-    for (k, row) in rows.iter_mut().enumerate() {
-        let w_k = widths[k];
-        let fleet_row = tile.rows.start + k;
+    for (k, &w_k) in widths[..scanned.rows].iter().enumerate() {
+        let fleet_row = scanned.to_fleet(k);
+        let row = &mut rows[fleet_row - tile.rows.start];
         for run in set.row(k) {
             let (a, b) = (run.start as usize, run.end as usize);
             *row += width(a, b);
-            let (fa, fb) = ((scanned.to_fleet)(a), (scanned.to_fleet)(b));
+            let (fa, fb) = (scanned.to_fleet(a), scanned.to_fleet(b));
             let first = if fa == fleet_row { fa + 1 } else { fa };
             if first <= fb {
                 diff[first - tile.columns.start] += w_k;

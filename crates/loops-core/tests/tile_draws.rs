@@ -5,6 +5,8 @@
 //! of one session samples as the session alone; τ from the tiles' shares is
 //! `FleetLoops::loop_duration`'s.
 
+mod support;
+
 use loops_core::{
     DrawCandidates, DrawRequest, Euclidean, Fleet, FleetLoops, FleetOptions, KeyedDraw, SampleSize, Sampler,
     SamplerKind, Separation, SessionBlocks, TileDuration, TileMerge, TileSummary, Trajectory, draw_session_tile,
@@ -225,6 +227,15 @@ fn random_fleets_draw_from_tiles_as_in_memory() {
         check_fleet(&walks(seed), 1.5, Separation::NONE);
     }
     check_fleet(&walks(7), 1.5, Separation::path(3.0));
+}
+
+/// Long sessions, whose tiles are scanned on the stretches where their blocks meet.
+#[test]
+fn long_sessions_draw_from_tiles_as_in_memory() {
+    let sessions = support::fleets::district_walks(3, 700, 6.0, 3);
+    for separation in [Separation::NONE, Separation::path(3.0)] {
+        check_fleet(&sessions, 1.0, separation);
+    }
 }
 
 #[test]

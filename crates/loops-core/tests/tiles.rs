@@ -58,6 +58,18 @@ fn random_tree(mut parts: Vec<TileMerge>, rng: &mut ChaCha8Rng) -> Result<TileMe
 
 /// Plans from blocks, scans from sessions, random merge trees and bytes: the fleet's result.
 fn check_tree(sessions: &[Trajectory], gamma: f64, separation: Separation, seed: u64) -> Result<(), String> {
+    let longest = sessions.iter().map(Trajectory::len).max().unwrap_or(1);
+    check_tree_cut(sessions, gamma, separation, seed, &[1, 2, 7, longest])
+}
+
+/// [`check_tree`] for these numbers of blocks per session.
+fn check_tree_cut(
+    sessions: &[Trajectory],
+    gamma: f64,
+    separation: Separation,
+    seed: u64,
+    cuts: &[usize],
+) -> Result<(), String> {
     let named: Vec<(String, Trajectory)> =
         sessions.iter().enumerate().map(|(k, t)| (format!("s{k}"), t.clone())).collect();
     let fleet = Fleet::new(named).map_err(|e| e.to_string())?;
@@ -69,7 +81,7 @@ fn check_tree(sessions: &[Trajectory], gamma: f64, separation: Separation, seed:
     let spans: Vec<f64> = sessions.iter().map(Trajectory::span_s).collect();
     let longest = sessions.iter().map(Trajectory::len).max().unwrap_or(1);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    for per_session in [1, 2, 7, longest] {
+    for &per_session in cuts {
         let block = longest.div_ceil(per_session).max(1);
         let blocks: Vec<SessionBlocks> = sessions
             .iter()
@@ -159,6 +171,17 @@ fn adversarial_fleets_merge_in_trees() {
             check_tree(&sessions, gamma, separation, k as u64)
                 .unwrap_or_else(|e| panic!("γ = {gamma}, {separation}: {e}"));
         }
+    }
+}
+
+/// Sessions of 1,500 poses in blocks of hundreds: a tile's scan keeps only the stretches of its
+/// rows and columns that come within γ of the other side (chunks of 64 poses), within a session
+/// (with and without a separation) and between sessions; the result is the fleet's.
+#[test]
+fn long_sessions_scan_only_where_their_blocks_meet() {
+    let sessions = support::fleets::district_walks(3, 1500, 6.0, 18);
+    for separation in [Separation::NONE, Separation::path(3.0)] {
+        check_tree_cut(&sessions, 1.0, separation, 5, &[1, 3, 7]).unwrap_or_else(|e| panic!("{separation}: {e}"));
     }
 }
 

@@ -82,3 +82,28 @@ pub fn adversarial_fleet(tour_n: usize, parked_n: usize, far_parked_n: usize, fa
     let far = tour(far_n, 7.0, [5e3, -5e3]);
     [a.clone(), a, reversed, parked, parked_far, far]
 }
+
+/// Vehicles that each wander around their own district (centres `spacing` apart on a line) for
+/// `n` poses, 0.08 a step with a pull back to the centre, so that neighbours meet only near their
+/// border: long sessions whose tiles hold pairs within γ = 1 in a few stretches of their blocks.
+pub fn district_walks(vehicles: usize, n: usize, spacing: f64, seed: u64) -> Vec<Trajectory> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..vehicles)
+        .map(|v| {
+            let centre = spacing * v as f64;
+            let (mut p, mut heading) = ([centre, 0.0], rng.random_range(0.0..std::f64::consts::TAU));
+            let points: Vec<[f64; 2]> = (0..n)
+                .map(|_| {
+                    heading += rng.random_range(-0.4..0.4);
+                    p = [
+                        p[0] + 0.08 * heading.cos() + 0.01 * (centre - p[0]),
+                        p[1] + 0.08 * heading.sin() - 0.01 * p[1],
+                    ];
+                    p
+                })
+                .collect();
+            Trajectory::from_points((0..n).map(|k| 1e4 * v as f64 + 0.5 * k as f64).collect(), &points).unwrap()
+        })
+        .collect()
+}

@@ -1,0 +1,93 @@
+//! The stretches of a tile that can hold a pair within γ: a tile of two disjoint ranges of poses
+//! is scanned on those stretches only, so that its cost follows the poses that come near the
+//! other side rather than the whole block (a block covers its district; only its passes near
+//! the other block's district matter).
+//!
+//! Each side is cut into chunks of [`CHUNK`] consecutive poses with their bounding balls (centre
+//! the middle pose, radius the largest distance from it); a chunk is live when its ball comes
+//! within γ of a ball of the other side (first by groups of [`GROUP`] poses, then by chunks), and
+//! consecutive live chunks make one stretch. A pose of a chunk that is not live is farther than
+//! γ from every pose of the other side (triangle inequality, with a margin above rounding), so it
+//! holds no cell of S_γ in the tile.
+
+use std::ops::Range;
+
+use crate::metric::Metric;
+use crate::trajectory::Trajectory;
+
+/// Poses per chunk: the finest unit a tile's scan is trimmed to.
+pub(crate) const CHUNK: usize = 64;
+
+/// Poses per group: chunks are compared only within groups whose balls meet.
+const GROUP: usize = 16 * CHUNK;
+
+/// The bounding balls of `range` of `traj` cut every `size` poses: (range, centre pose, radius).
+fn balls<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    range: Range<usize>,
+    size: usize,
+    metric: &M,
+) -> Vec<(Range<usize>, usize, f64)> {
+    range
+        .clone()
+        .step_by(size)
+        .map(|lo| {
+            let hi = (lo + size).min(range.end);
+            let centre = lo + (hi - lo) / 2;
+            let radius = (lo..hi).map(|k| metric.distance(traj.point(centre), traj.point(k))).fold(0.0, f64::max);
+            (lo..hi, centre, radius)
+        })
+        .collect()
+}
+
+/// The live stretches of rows `rows` of `row_session` and columns `columns` of
+/// `column_session` (ranges of indices within their sessions, disjoint when the sessions are
+/// one): increasing, disjoint, non-adjacent ranges; either side is empty when no pair can lie
+/// within γ. O(poses) distance evaluations plus the meeting groups' chunk pairs.
+pub(crate) fn live_stretches<M: Metric + ?Sized>(
+    row_session: &Trajectory,
+    rows: Range<usize>,
+    column_session: &Trajectory,
+    columns: Range<usize>,
+    metric: &M,
+    gamma: f64,
+) -> [Vec<Range<usize>>; 2] {
+    // A relative 10⁻⁶ is far above the rounding of three distances.
+    let meets = |(_, p, r_p): &(Range<usize>, usize, f64), (_, q, r_q): &(Range<usize>, usize, f64)| {
+        metric.distance(row_session.point(*p), column_session.point(*q)) <= (gamma + r_p + r_q) * (1.0 + 1e-6) + 1e-9
+    };
+    let group_rows = balls(row_session, rows.clone(), GROUP, metric);
+    let group_columns = balls(column_session, columns.clone(), GROUP, metric);
+    let chunk_rows = balls(row_session, rows.clone(), CHUNK, metric);
+    let chunk_columns = balls(column_session, columns.clone(), CHUNK, metric);
+    let (mut live_rows, mut live_columns) = (vec![false; chunk_rows.len()], vec![false; chunk_columns.len()]);
+    let per_group = GROUP / CHUNK;
+    for (g, group_row) in group_rows.iter().enumerate() {
+        for (h, group_column) in group_columns.iter().enumerate() {
+            if !meets(group_row, group_column) {
+                continue;
+            }
+            let row_chunks = g * per_group..((g + 1) * per_group).min(chunk_rows.len());
+            let column_chunks = h * per_group..((h + 1) * per_group).min(chunk_columns.len());
+            for p in row_chunks {
+                for q in column_chunks.clone() {
+                    if (!live_rows[p] || !live_columns[q]) && meets(&chunk_rows[p], &chunk_columns[q]) {
+                        live_rows[p] = true;
+                        live_columns[q] = true;
+                    }
+                }
+            }
+        }
+    }
+    let stretches = |chunks: &[(Range<usize>, usize, f64)], live: &[bool]| {
+        let mut out: Vec<Range<usize>> = Vec::new();
+        for (chunk, _, _) in chunks.iter().zip(live).filter(|(_, live)| **live).map(|(c, _)| c) {
+            match out.last_mut() {
+                Some(last) if last.end == chunk.start => last.end = chunk.end,
+                _ => out.push(chunk.clone()),
+            }
+        }
+        out
+    };
+    [stretches(&chunk_rows, &live_rows), stretches(&chunk_columns, &live_columns)]
+}
