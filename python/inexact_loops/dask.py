@@ -41,13 +41,14 @@ Requires ``dask[distributed]`` only with ``client=``, and pyarrow for Parquet
 from __future__ import annotations
 
 import argparse
-import functools
+import collections
 import json
 import operator
 import os
 import pickle
 import sys
 import tempfile
+import threading
 import time
 import uuid
 from collections.abc import Callable, Mapping, Sequence
@@ -78,8 +79,14 @@ DEFAULT_BLOCK = 50_000
 #: Summaries (or partial merges) combined by one merge task.
 DEFAULT_FAN_IN = 8
 
-#: Sessions each worker process keeps after reading them, for the next tiles that need them.
-SESSIONS_KEPT = 4
+#: Poses each worker process keeps of the sessions it has read, for the next tiles that need
+#: them (a pose takes 32-40 bytes: 10^7 poses are ~400 MB); the least recently used go first,
+#: and the last one read is always kept.
+POSES_KEPT = 10_000_000
+
+#: The sessions a worker keeps, most recently used last: (source, options) -> Trajectory.
+_kept: collections.OrderedDict[Any, _core.Trajectory] = collections.OrderedDict()
+_kept_lock = threading.Lock()
 
 _READ_OPTIONS = (
     "format",
@@ -233,9 +240,26 @@ def _is_parquet(source: Any, options: dict[str, Any]) -> bool:
     return isinstance(source, str) and source.lower().endswith(".parquet")
 
 
-@functools.lru_cache(maxsize=SESSIONS_KEPT)
 def _read_session(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
-    """A session read on the worker (kept for the worker's next tiles)."""
+    """A session read on the worker, kept for the worker's next tiles (up to
+    :data:`POSES_KEPT` poses in all)."""
+    key = (source, options)
+    with _kept_lock:
+        if key in _kept:
+            _kept.move_to_end(key)
+            return _kept[key]
+    traj = _read_uncached(source, options)
+    with _kept_lock:
+        _kept[key] = traj
+        total = sum(len(t) for t in _kept.values())
+        while total > POSES_KEPT and len(_kept) > 1:
+            _, dropped = _kept.popitem(last=False)
+            total -= len(dropped)
+    return traj
+
+
+def _read_uncached(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
+    """A session read in this process (not kept)."""
     read = dict(options)
     if _is_parquet(source, read):
         return read_pose_parquet(source, axes=read.get("axes"))
@@ -284,55 +308,87 @@ def _sessions_of(
     return a, None if sources[1] is None else _load(sources[1], options)
 
 
-def _scan_session_tile(
-    tile: _core.Tile,
+def _tile_kwargs(
     sources: tuple[Any, Any],
     options: tuple[tuple[str, Any], ...],
     starts: tuple[int, int],
+    gamma: float,
+    metric: str,
+    separation: Any,
+    threads: int | None,
+) -> dict[str, Any]:
+    """What a tile's scan or draw takes besides the tile: its sessions (read, or found kept) and
+    the run's parameters."""
+    a, b = _sessions_of(sources, options)
+    return {
+        "session_a": a,
+        "session_b": b,
+        "starts": starts,
+        "gamma": gamma,
+        "metric": metric,
+        "separation": _separation(separation),
+        "threads": threads,
+    }
+
+
+def _scan_session_tiles(
+    tiles: list[tuple[_core.Tile, tuple[Any, Any], tuple[int, int]]],
+    options: tuple[tuple[str, Any], ...],
     gamma: float,
     metric: str,
     separation: Any,
     threads: int | None,
     duration: bool,
 ) -> Any:
-    """Task: read a tile's sessions (or find them kept), scan it without the GIL; with
-    ``duration``, also its share of tau."""
-    a, b = _sessions_of(sources, options)
+    """Task: scan a few tiles (each with its sessions' sources and first fleet indices) without
+    the GIL and merge them: their :class:`TileMerge`; with ``duration``, also each tile's share
+    of tau, in order."""
     scan = _core.scan_tile_with_duration if duration else _core.scan_tile
-    return scan(
-        tile,
-        a,
-        b,
-        starts=starts,
-        gamma=gamma,
-        metric=metric,
-        separation=_separation(separation),
-        threads=threads,
-    )
+    scanned = [
+        scan(tile, **_tile_kwargs(sources, options, starts, gamma, metric, separation, threads))
+        for tile, sources, starts in tiles
+    ]
+    if not duration:
+        return _core.merge_tiles(scanned)
+    return _core.merge_tiles([s for s, _ in scanned]), [d for _, d in scanned]
 
 
-def _draw_session_tile(
-    request: Any,
-    sources: tuple[Any, Any],
+def _draw_session_tiles(
+    requests: list[tuple[Any, tuple[Any, Any], tuple[int, int]]],
     options: tuple[tuple[str, Any], ...],
-    starts: tuple[int, int],
     gamma: float,
     metric: str,
     separation: Any,
     threads: int | None,
-) -> Any:
-    """Task: rescan a tile and offer its pairs to a pass of a keyed draw."""
-    a, b = _sessions_of(sources, options)
-    return _core.draw_tile(
-        request,
-        a,
-        b,
-        starts=starts,
-        gamma=gamma,
-        metric=metric,
-        separation=_separation(separation),
-        threads=threads,
-    )
+) -> list[Any]:
+    """Task: rescan a few tiles and offer their pairs to a pass of a keyed draw (an offer per
+    request, in order)."""
+    return [
+        _core.draw_tile(
+            request, **_tile_kwargs(sources, options, starts, gamma, metric, separation, threads)
+        )
+        for request, sources, starts in requests
+    ]
+
+
+def _tile_groups(tiles: Sequence[_core.Tile], block: int) -> list[list[int]]:
+    """The tiles of a plan in tasks: consecutive tiles of one row block (the plan lists a row
+    block's tiles together), so that a task reads the row session once and the scheduler sees
+    a task per block rather than per tile."""
+    groups: list[list[int]] = []
+    last: tuple[int, int] | None = None
+    for t, tile in enumerate(tiles):
+        key = (tile.sessions[0], tile.rows[0] // block)
+        if key != last:
+            groups.append([])
+            last = key
+        groups[-1].append(t)
+    return groups
+
+
+def _share(scan: Any, k: int) -> Any:
+    """Task: the share of tau of the ``k``-th tile of a scan task."""
+    return scan[1][k]
 
 
 def _merge(*parts: Any) -> Any:
@@ -633,26 +689,33 @@ class FleetRun:
         runner: _Runner = c["runner"]
         tiles = self._loops.tiles
         passes = 0
+        # The scan task that held each tile (tiles by value: the merge may list them in
+        # another order than the plan).
+        group_of = {c["tiles"][t]: g for g, members in enumerate(c["groups"]) for t in members}
         while not draw.done:
             passes += 1
-            futures = []
+            # The requests of the tiles that one scan task held, in one task.
+            grouped: dict[int, list[Any]] = {}
             for t, request in draw.requests():
                 a, b = tiles[t].sessions
-                futures.append(
-                    runner.submit(
-                        "draw-tile",
-                        _draw_session_tile,
-                        request,
-                        (c["sources"][a], None if a == b else c["sources"][b]),
-                        c["options"],
-                        (c["starts"][a], c["starts"][b]),
-                        c["gamma"],
-                        c["metric"],
-                        c["separation"],
-                        c["threads"],
-                    )
+                sources = (c["sources"][a], None if a == b else c["sources"][b])
+                grouped.setdefault(group_of[tiles[t]], []).append(
+                    (request, sources, (c["starts"][a], c["starts"][b]))
                 )
-            draw.absorb(runner.gather(futures))
+            futures = [
+                runner.submit(
+                    "draw-tiles",
+                    _draw_session_tiles,
+                    requests,
+                    c["options"],
+                    c["gamma"],
+                    c["metric"],
+                    c["separation"],
+                    c["threads"],
+                )
+                for requests in grouped.values()
+            ]
+            draw.absorb([offer for offers in runner.gather(futures) for offer in offers])
         self.stats["sample_s"] = time.perf_counter() - started
         self.stats["sample_passes"] = passes
         return draw.table()  # type: ignore[no-any-return]
@@ -842,17 +905,21 @@ def find_fleet_loops_dask(
     stats["poses"] = sum(b.poses for b in blocks)
     task_threads = threads if client is None else (1 if threads is None else threads)
     started = _now()
+    groups = _tile_groups(tiles, block)
     scans = []
-    for tile in tiles:
-        a, b = tile.sessions
+    for group in groups:
+        held = []
+        for t in group:
+            a, b = tiles[t].sessions
+            held.append(
+                (tiles[t], (sources[a], None if a == b else sources[b]), (starts[a], starts[b]))
+            )
         scans.append(
             runner.submit(
-                "scan-tile",
-                _scan_session_tile,
-                tile,
-                (sources[a], None if a == b else sources[b]),
+                "scan-tiles",
+                _scan_session_tiles,
+                held,
                 options,
-                (starts[a], starts[b]),
                 gamma,
                 metric_name,
                 shipped,
@@ -861,8 +928,12 @@ def find_fleet_loops_dask(
             )
         )
     if loop_duration:
-        summaries = [runner.submit("tile-summary", operator.getitem, s, 0) for s in scans]
-        shares = [runner.submit("tile-duration", operator.getitem, s, 1) for s in scans]
+        summaries = [runner.submit("tiles-merge", operator.getitem, s, 0) for s in scans]
+        shares = [
+            runner.submit("tile-duration", _share, scan, k)
+            for scan, group in zip(scans, groups, strict=True)
+            for k in range(len(group))
+        ]
     else:
         summaries, shares = scans, []
 
@@ -889,6 +960,7 @@ def find_fleet_loops_dask(
         "threads": task_threads,
         "times": times,
         "tiles": tiles,
+        "groups": groups,
         "shares": shares,
         "blocks": blocks,
     }
@@ -899,11 +971,6 @@ def find_fleet_loops_dask(
 
 def _now() -> float:
     return time.perf_counter()
-
-
-def _read_uncached(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
-    """A session read in this process (not kept in the workers' cache)."""
-    return _read_session.__wrapped__(source, options)  # type: ignore[attr-defined, no-any-return]
 
 
 def _session_times_getter(

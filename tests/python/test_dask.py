@@ -208,7 +208,7 @@ def test_a_worker_killed_mid_run_changes_nothing(tmp_path, client):
         "KillWorkerAfterPlugin",
         (KillWorkerAfter, distributed.diagnostics.plugin.SchedulerPlugin),
         {},
-    )("scan-tile-", 10)
+    )("scan-tiles-", 10)
     client.register_plugin(plugin)
     try:
         tiled = find_fleet_loops_dask(paths, 1.5, client=client, block=block, fan_in=2)
