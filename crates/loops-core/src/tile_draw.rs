@@ -182,37 +182,29 @@ impl TileDuration {
     }
 }
 
-#[cfg(feature = "serde")]
-impl DrawRequest {
-    /// As bytes (a tag, the tile format version, MessagePack).
-    pub fn to_bytes(&self) -> Vec<u8> {
-        crate::tile::encode(*b"ILdr", self)
-    }
+/// `to_bytes` and `from_bytes` of a draw's message: a tag, the tile format version, MessagePack.
+macro_rules! draw_bytes {
+    ($type:ty, $tag:literal, $what:literal) => {
+        #[cfg(feature = "serde")]
+        impl $type {
+            #[doc = concat!("The ", $what, " as bytes (a tag, the tile format version, MessagePack).")]
+            pub fn to_bytes(&self) -> Vec<u8> {
+                crate::tile::encode(*$tag, self)
+            }
 
-    /// From [`to_bytes`](Self::to_bytes).
-    ///
-    /// # Errors
-    /// [`Error::InvalidState`] for other bytes.
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
-        crate::tile::decode(*b"ILdr", "draw request", bytes)
-    }
+            #[doc = concat!("The ", $what, " from [`to_bytes`](Self::to_bytes).")]
+            ///
+            /// # Errors
+            /// [`Error::InvalidState`] for other bytes.
+            pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+                crate::tile::decode(*$tag, $what, bytes)
+            }
+        }
+    };
 }
 
-#[cfg(feature = "serde")]
-impl DrawCandidates {
-    /// As bytes (a tag, the tile format version, MessagePack).
-    pub fn to_bytes(&self) -> Vec<u8> {
-        crate::tile::encode(*b"ILdc", self)
-    }
-
-    /// From [`to_bytes`](Self::to_bytes).
-    ///
-    /// # Errors
-    /// [`Error::InvalidState`] for other bytes.
-    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
-        crate::tile::decode(*b"ILdc", "draw candidates", bytes)
-    }
-}
+draw_bytes!(DrawRequest, b"ILdr", "draw request");
+draw_bytes!(DrawCandidates, b"ILdc", "draw candidates");
 
 /// [`scan_session_tile`](crate::scan_session_tile) and the tile's share of τ from the same scan. O(the scan + the tile's
 /// rows and columns).

@@ -15,20 +15,10 @@ use loops_core::{
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use support::fleets::tour;
 
 const SIGMAS: [SamplerKind; 5] =
     [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha, SamplerKind::ClosestFirst];
-
-/// A figure-eight-ish loop in the plane, `n` poses, starting at time `t0`.
-fn tour(n: usize, t0: f64, offset: [f64; 2]) -> Trajectory {
-    let points: Vec<[f64; 2]> = (0..n)
-        .map(|k| {
-            let s = k as f64 / n as f64 * std::f64::consts::TAU * 1.5;
-            [offset[0] + 10.0 * s.cos(), offset[1] + 6.0 * (2.0 * s).sin()]
-        })
-        .collect();
-    Trajectory::from_points((0..n).map(|k| t0 + 0.5 * k as f64).collect(), &points).unwrap()
-}
 
 /// Random walks in a 30 m square that cross each other often, with stops (repeated poses).
 fn walks(seed: u64) -> Vec<Trajectory> {
