@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import contextlib
 import json
 import operator
 import os
@@ -51,7 +52,7 @@ import tempfile
 import threading
 import time
 import uuid
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -66,6 +67,7 @@ __all__ = [
     "DEFAULT_FAN_IN",
     "FleetRun",
     "find_fleet_loops_dask",
+    "local_client",
     "main",
     "read_pose_parquet",
     "run_fleet_dask",
@@ -719,6 +721,37 @@ class FleetRun:
         self.stats["sample_s"] = time.perf_counter() - started
         self.stats["sample_passes"] = passes
         return draw.table()  # type: ignore[no-any-return]
+
+
+@contextlib.contextmanager
+def local_client(workers: int = 2, **cluster: Any) -> Iterator[Any]:
+    """A ``dask.distributed`` client of a ``LocalCluster`` on this machine: ``workers`` processes
+    of one thread each, quiet (errors only, no dashboard); the cluster of the tests and of
+    BENCHMARKS.md. Closes both on leaving.
+
+    Args:
+        workers: worker processes.
+        cluster: more ``LocalCluster`` arguments (``memory_limit="10GB"``, ...).
+
+    Example:
+        >>> from inexact_loops.dask import find_fleet_loops_dask, local_client
+        >>> with local_client() as client:  # doctest: +SKIP
+        ...     run = find_fleet_loops_dask(["a.parquet", "b.parquet"], 20.0, client=client)
+    """
+    import logging
+
+    import distributed
+
+    options = {
+        "n_workers": workers,
+        "processes": True,
+        "threads_per_worker": 1,
+        "dashboard_address": None,
+        "silence_logs": logging.ERROR,
+        **cluster,
+    }
+    with distributed.LocalCluster(**options) as local, distributed.Client(local) as client:
+        yield client
 
 
 def find_fleet_loops_dask(

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import inexact_loops as il
-from inexact_loops.dask import find_fleet_loops_dask
+from inexact_loops.dask import find_fleet_loops_dask, local_client
 
 TILES_PER_PAIR = (1, 2, 7)
 
@@ -93,21 +93,10 @@ def blocks_for(paths: list[Path], per_pair: int, **read) -> int:
 
 @pytest.fixture(scope="module")
 def client():
-    distributed = pytest.importorskip(
+    pytest.importorskip(
         "distributed", reason="dask.distributed is not installed: pip install 'inexact-loops[dask]'"
     )
-    import logging
-
-    with (
-        distributed.LocalCluster(
-            n_workers=2,
-            processes=True,
-            threads_per_worker=1,
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
+    with local_client() as client:
         yield client
 
 
