@@ -104,23 +104,11 @@ def in_process(paths: list[str]) -> dict:
 
 
 def on_cluster(paths: list[str], block: int) -> dict:
-    import logging
-
     import distributed
 
-    from inexact_loops.dask import find_fleet_loops_dask
+    from inexact_loops.dask import find_fleet_loops_dask, local_client
 
-    with (
-        distributed.LocalCluster(
-            n_workers=2,
-            processes=True,
-            threads_per_worker=1,
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-            memory_limit="10GB",
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
+    with local_client(memory_limit="10GB") as client:
         started = time.perf_counter()
         with distributed.get_task_stream(client) as stream:
             run = find_fleet_loops_dask(paths, GAMMA_M, client=client, block=block)
@@ -194,7 +182,13 @@ def main() -> None:
         write_section(
             args.output,
             "dask",
-            report(saved["rows"], args.block, saved["seconds"], saved.get("load_start")),
+            report(
+                saved["rows"],
+                args.block,
+                saved["seconds"],
+                saved.get("load_start"),
+                args.timeout_s,
+            ),
         )
         return
     started = time.time()
@@ -227,11 +221,17 @@ def main() -> None:
                 default=float,
             )
         )
-    write_section(args.output, "dask", report(rows, args.block, seconds, load_start))
+    write_section(
+        args.output, "dask", report(rows, args.block, seconds, load_start, args.timeout_s)
+    )
 
 
 def report(
-    rows: list[dict], block: int, seconds: float, load_start: tuple | list | None = None
+    rows: list[dict],
+    block: int,
+    seconds: float,
+    load_start: tuple | list | None = None,
+    timeout_s: float | None = None,
 ) -> str:
     load = os.getloadavg()
     at_start = (
@@ -268,7 +268,9 @@ def report(
     for r in rows:
         local, dask = r["local"], r["dask"]
         if dask is None or local is None:
-            lines.append(f"| {r['poses']:,} | timed out |" + " |" * 14)
+            limit = f" after {timeout_s:.0f} s" if timeout_s is not None else ""
+            where = " on the cluster alone" if local and local.get("skipped") else ""
+            lines.append(f"| {r['poses']:,} | stopped unfinished{where}{limit} |" + " |" * 14)
             continue
         s = dask["stats"]
         skipped = local.get("skipped", False)
@@ -313,7 +315,7 @@ def report(
             f"{per('merge-tiles')} "
             f"| {per('draw-tiles')} | {same} |"
         )
-    lines += ["", *model(rows, block)]
+    lines += ["", *model(rows, block, timeout_s)]
     return "\n".join(lines) + "\n"
 
 
@@ -321,7 +323,7 @@ def report(
 SESSION_POSES = 1_000_000
 
 
-def model(rows: list[dict], block: int) -> list[str]:
+def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[str]:
     """The cost model fitted to the largest measured fleet, and its predictions."""
     measured = [r for r in rows if r["local"] is not None and r["dask"] is not None]
     if not measured:
@@ -392,8 +394,9 @@ def model(rows: list[dict], block: int) -> list[str]:
         f"- **Tiles.** {tiles:,} tiles for {blocks:,.0f} blocks: "
         f"{tiles_per_block:.2f} tiles per block "
         "(the diagonal tile, its neighbours in time, the few other vehicles met at district "
-        "borders). A district fleet keeps this constant as n grows; a fleet whose vehicles all "
-        "meet everywhere would not.",
+        "borders). A fleet whose vehicles keep to their own districts keeps this constant as n "
+        "grows; one whose vehicles all meet everywhere would not, nor does this one past 10⁷ "
+        "poses (its vehicles move on every 2.8 h: see Sizes).",
         f"- **Time per tile.** Scanning costs {scan_per_pose * 1e6:.2f} µs per pose "
         f"({cpu('scan-tiles') / max(1, tiles):.3f} s per tile of up to {block:,} x {block:,} "
         f"poses, in {count('scan-tiles'):,} tasks of a row block's tiles, the longest "
@@ -426,6 +429,16 @@ def model(rows: list[dict], block: int) -> list[str]:
             "fleet (its peak, linear from the largest in-process run, is in the table), more "
             "than this machine's 24 GB shared with others."
             if any(x["poses"] >= 10**8 for x in measured)
+            else (
+                "10⁸ poses (100 x 28 h) ran on the cluster alone and was stopped unfinished "
+                f"after {timeout_s:.0f} s on this shared machine: a vehicle moves on to the "
+                "next district (snake order) every 2.8 h, so over 28 h each district is worked "
+                "by 10 vehicles in turn and the cells grow about 10 times faster than the poses "
+                "(at 10⁷ poses each vehicle stays in its own district); one process "
+                "would not hold it either (its peak, linear from the largest in-process run, is "
+                "about 10 times the 10⁷ run's)."
+            )
+            if timeout_s is not None and any(x["poses"] >= 10**8 for x in rows)
             else "10⁸ poses (100 x 28 h) was not run: it did not fit the time set for it on this "
             "shared machine, and one process would not hold it (its peak, linear from the "
             "largest in-process run, is about 10 times the 10⁷ run's)."
