@@ -2,6 +2,8 @@
 //! (`plan_tiles`) and `TileSummary` (`scan_tile`); their merges are in `py_tile_merge`.
 //! Summaries pickle as their bytes.
 
+use std::sync::Arc;
+
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
@@ -34,6 +36,27 @@ pub(crate) fn tile_metric(
         None => Ok(default),
         Some(_) => MetricArg::spec_from_py(metric, function),
     }
+}
+
+/// The two sessions of a tile's scan or draw (session a twice for a tile within one session) and
+/// its metric (`session_a`'s own unless given): a tile between two sessions needs `session_b`.
+pub(crate) fn tile_sessions(
+    tile: &loops_core::Tile,
+    session_a: &Trajectory,
+    session_b: Option<&Trajectory>,
+    metric: Option<&Bound<'_, PyAny>>,
+    function: &str,
+) -> PyResult<([Arc<loops_core::Trajectory>; 2], MetricSpec)> {
+    if session_b.is_none() && tile.sessions[0] != tile.sessions[1] {
+        return Err(PyTypeError::new_err(format!(
+            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
+            tile.sessions[0], tile.sessions[1]
+        )));
+    }
+    let metric = tile_metric(metric, session_a.default_metric(), function)?;
+    let a = session_a.inner.clone();
+    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
+    Ok(([a, b], metric))
 }
 
 #[pymethods]
@@ -354,16 +377,8 @@ pub(crate) fn scan_tile(
     threads: Option<usize>,
 ) -> PyResult<TileSummary> {
     let tile = tile.inner.clone();
-    if session_b.is_none() && tile.sessions[0] != tile.sessions[1] {
-        return Err(PyTypeError::new_err(format!(
-            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
-            tile.sessions[0], tile.sessions[1]
-        )));
-    }
-    let metric = tile_metric(metric, session_a.default_metric(), "scan_tile")?;
+    let ([a, b], metric) = tile_sessions(&tile, session_a, session_b, metric, "scan_tile")?;
     let separation = separation.at(gamma);
-    let a = session_a.inner.clone();
-    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
     let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
         MetricRef::Spec(spec) => spec.scan_session_tile([&a, &b], [starts.0, starts.1], gamma, separation, &tile),
         MetricRef::Callable(callable) => {

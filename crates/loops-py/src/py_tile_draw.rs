@@ -4,7 +4,6 @@
 
 use std::sync::Arc;
 
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyList, PyTuple};
 
@@ -13,7 +12,7 @@ use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_separation::SeparationArg;
-use crate::py_tile::{Tile, TileSummary, tile_metric};
+use crate::py_tile::{Tile, TileSummary, tile_sessions};
 use crate::py_trajectory::Trajectory;
 use loops_core::{SampleSize, Sampler, SamplerKind};
 
@@ -302,16 +301,8 @@ pub(crate) fn draw_tile(
     threads: Option<usize>,
 ) -> PyResult<DrawCandidates> {
     let r = request.clone();
-    if session_b.is_none() && r.tile.sessions[0] != r.tile.sessions[1] {
-        return Err(PyTypeError::new_err(format!(
-            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
-            r.tile.sessions[0], r.tile.sessions[1]
-        )));
-    }
-    let metric = tile_metric(metric, session_a.default_metric(), "draw_tile")?;
+    let ([a, b], metric) = tile_sessions(&r.tile, session_a, session_b, metric, "draw_tile")?;
     let separation = separation.at(gamma);
-    let a = session_a.inner.clone();
-    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
     let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
         MetricRef::Spec(spec) => {
             spec.draw_session_tile([&a, &b], [starts.0, starts.1], gamma, separation, &r.tile, &r.labels, &r.request)
@@ -400,16 +391,8 @@ pub(crate) fn scan_tile_with_duration(
     threads: Option<usize>,
 ) -> PyResult<(TileSummary, TileDuration)> {
     let tile = tile.inner.clone();
-    if session_b.is_none() && tile.sessions[0] != tile.sessions[1] {
-        return Err(PyTypeError::new_err(format!(
-            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
-            tile.sessions[0], tile.sessions[1]
-        )));
-    }
-    let metric = tile_metric(metric, session_a.default_metric(), "scan_tile_with_duration")?;
+    let ([a, b], metric) = tile_sessions(&tile, session_a, session_b, metric, "scan_tile_with_duration")?;
     let separation = separation.at(gamma);
-    let a = session_a.inner.clone();
-    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
     let (summary, duration) = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
         MetricRef::Spec(spec) => {
             spec.scan_session_tile_with_duration([&a, &b], [starts.0, starts.1], gamma, separation, &tile)
