@@ -36,8 +36,8 @@ use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use loops_core::{
-    Candidate, Cap, Error, MetricSpec, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation,
-    Trajectory, Update,
+    Candidate, Cap, Error, ErrorClass, MetricSpec, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions,
+    Separation, Trajectory, Update,
 };
 
 /// What a call of this library did: `Ok` (`LOOPS_STATUS_OK` in C), or why it did nothing (the message is
@@ -220,27 +220,14 @@ fn set_last_error(message: &str) {
     LAST_ERROR.with(|last| *last.borrow_mut() = text);
 }
 
-/// The status of a core error, as Python maps them to exception classes.
+/// The status of a core error: its [`ErrorClass`], the class Python raises; a point of another
+/// dimension than the engine's is a pose it refuses here (for Python, a metric that does not fit
+/// the trajectory).
 fn core_status(error: &Error) -> LoopsStatus {
-    use Error as E;
-    match error {
-        E::TooFewPoses { .. }
-        | E::LengthMismatch { .. }
-        | E::RowCountMismatch { .. }
-        | E::ZeroDimension
-        | E::RaggedCoordinates { .. }
-        | E::NonFiniteTimestamp { .. }
-        | E::NonFiniteCoordinate { .. }
-        | E::TimestampTooLarge { .. }
-        | E::CoordinateTooLarge { .. }
-        | E::TimestampsNotIncreasing { .. }
-        | E::TooManyPoses { .. }
-        | E::NonUnitQuaternion { .. }
-        | E::NonUnitVector { .. }
-        | E::LatitudeOutOfRange { .. }
-        | E::DimensionMismatch { .. } => LoopsStatus::InvalidTrajectory,
-        E::IndexOutOfRange { .. } | E::PoseIndexOutOfRange { .. } => LoopsStatus::IndexOutOfRange,
-        E::OutOfMemory { .. } => LoopsStatus::OutOfMemory,
+    match (error, error.class()) {
+        (Error::DimensionMismatch { .. }, _) | (_, ErrorClass::InvalidTrajectory) => LoopsStatus::InvalidTrajectory,
+        (_, ErrorClass::IndexOutOfRange) => LoopsStatus::IndexOutOfRange,
+        (_, ErrorClass::OutOfMemory) => LoopsStatus::OutOfMemory,
         _ => LoopsStatus::InvalidParameter,
     }
 }

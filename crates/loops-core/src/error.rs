@@ -403,6 +403,59 @@ pub enum Error {
     },
 }
 
+/// The kind of an [`Error`], as the adapters report it: Python raises one exception class per
+/// kind, the C API returns one status per kind. Decided here, once, so that the two cannot drift.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ErrorClass {
+    /// A trajectory (or pose) the core refuses: too few poses, lengths that differ, a
+    /// coordinate or time that is not finite or too large, times not increasing, a quaternion
+    /// or vector that is not unit, a latitude out of range.
+    InvalidTrajectory,
+    /// A pose index past the last pose.
+    IndexOutOfRange,
+    /// Memory could not be had.
+    OutOfMemory,
+    /// The computation was interrupted.
+    Interrupted,
+    /// Any other bad input: a parameter out of range or unknown, inputs that do not fit together.
+    InvalidParameter,
+}
+
+impl Error {
+    /// The kind of this error.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Error, ErrorClass};
+    /// assert_eq!(Error::ZeroDimension.class(), ErrorClass::InvalidTrajectory);
+    /// assert_eq!(Error::InvalidGamma(-1.0).class(), ErrorClass::InvalidParameter);
+    /// ```
+    pub fn class(&self) -> ErrorClass {
+        use Error as E;
+        match self {
+            E::TooFewPoses { .. }
+            | E::LengthMismatch { .. }
+            | E::RowCountMismatch { .. }
+            | E::ZeroDimension
+            | E::RaggedCoordinates { .. }
+            | E::NonFiniteTimestamp { .. }
+            | E::NonFiniteCoordinate { .. }
+            | E::TimestampTooLarge { .. }
+            | E::CoordinateTooLarge { .. }
+            | E::TimestampsNotIncreasing { .. }
+            | E::TooManyPoses { .. }
+            | E::NonUnitQuaternion { .. }
+            | E::NonUnitVector { .. }
+            | E::LatitudeOutOfRange { .. } => ErrorClass::InvalidTrajectory,
+            E::IndexOutOfRange { .. } | E::PoseIndexOutOfRange { .. } => ErrorClass::IndexOutOfRange,
+            E::OutOfMemory { .. } => ErrorClass::OutOfMemory,
+            E::Interrupted => ErrorClass::Interrupted,
+            _ => ErrorClass::InvalidParameter,
+        }
+    }
+}
+
 /// A size in bytes for a message: `812 bytes`, `3.1 MiB`, `7.4 GiB`.
 pub(crate) fn size_text(bytes: u64) -> String {
     const UNITS: [&str; 6] = ["KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];

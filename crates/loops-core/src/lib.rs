@@ -90,7 +90,7 @@ pub use cluster::{DEFAULT_EPSILON_S, DetectionCluster, DetectionClusters, check_
 pub use component::LoopComponent;
 pub use detection::{Detection, Detections};
 pub use draw::{MAX_SAMPLES, SampleSize, SampleWarning};
-pub use error::{Error, MetricMisfit, Result, TooManySamples};
+pub use error::{Error, ErrorClass, MetricMisfit, Result, TooManySamples};
 pub use fleet::{
     FLEET_CLOCK_GAP_S, Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SessionPair,
     find_fleet_loops, sample_fleet,

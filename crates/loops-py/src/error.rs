@@ -84,29 +84,16 @@ impl From<Failure> for PyErr {
     }
 }
 
-/// The Python class of a core error: bad trajectories apart from bad parameters; memory that
-/// could not be had as `MemoryError`.
+/// The Python class of a core error ([`loops_core::Error::class`]): bad trajectories apart from
+/// bad parameters; memory that could not be had as `MemoryError`.
 fn core_error(error: &loops_core::Error, message: String) -> PyErr {
-    use loops_core::Error as E;
-    match error {
-        E::TooFewPoses { .. }
-        | E::LengthMismatch { .. }
-        | E::RowCountMismatch { .. }
-        | E::ZeroDimension
-        | E::RaggedCoordinates { .. }
-        | E::NonFiniteTimestamp { .. }
-        | E::NonFiniteCoordinate { .. }
-        | E::TimestampTooLarge { .. }
-        | E::CoordinateTooLarge { .. }
-        | E::TimestampsNotIncreasing { .. }
-        | E::TooManyPoses { .. }
-        | E::NonUnitQuaternion { .. }
-        | E::NonUnitVector { .. }
-        | E::LatitudeOutOfRange { .. } => InvalidTrajectoryError::new_err(message),
-        E::IndexOutOfRange { .. } | E::PoseIndexOutOfRange { .. } => PyIndexError::new_err(message),
-        E::OutOfMemory { .. } => OutOfMemoryError::new_err(message),
+    use loops_core::ErrorClass as C;
+    match error.class() {
+        C::InvalidTrajectory => InvalidTrajectoryError::new_err(message),
+        C::IndexOutOfRange => PyIndexError::new_err(message),
+        C::OutOfMemory => OutOfMemoryError::new_err(message),
         // Only when Python did not raise first (see `detached`): an interrupt without a signal.
-        E::Interrupted => PyKeyboardInterrupt::new_err(message),
+        C::Interrupted => PyKeyboardInterrupt::new_err(message),
         _ => InvalidParameterError::new_err(message),
     }
 }
