@@ -17,10 +17,10 @@ use crate::pickling::ReducedWith;
 use crate::py_loops::Loops;
 use crate::py_metric::loops_metric;
 use crate::py_metric::{MetricArg, MetricRef};
-use crate::py_samples::{Samples, baseline_params};
+use crate::py_samples::{Samples, baseline_params, sampler_of};
 use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::{DriveOptions, Trajectory};
-use loops_core::{FleetOptions, MetricSpec, Pruning, SampleSize, Sampler, SamplerKind};
+use loops_core::{FleetOptions, MetricSpec, Pruning, Sampler};
 
 /// Sessions — vehicles, days, robots — in one frame, each a :class:`Trajectory` with a name and
 /// its own clock: the input of :func:`find_fleet_loops`.
@@ -887,8 +887,6 @@ pub(crate) fn sample_fleet(
     cartographer_min_gap_s: Option<f64>,
     time_gap_s: Option<f64>,
 ) -> PyResult<FleetSamples> {
-    let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
-    let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
     let baseline = baseline_params(
         lio_sam_keyframe_step,
         lio_sam_period_s,
@@ -899,7 +897,7 @@ pub(crate) fn sample_fleet(
         cartographer_min_gap_s,
         time_gap_s,
     );
-    let spec = Sampler { kind, size, seed, baseline, skip_trivial };
+    let spec = Sampler { baseline, ..sampler_of(sampler, rate, budget, seed, skip_trivial)? };
     let metric = loops_metric(metric, loops.inner.loops())?;
     let fleet = Arc::clone(&loops.fleet_ref().inner);
     let inner = Arc::clone(&loops.inner);

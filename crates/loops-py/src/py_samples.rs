@@ -49,6 +49,21 @@ fn measured(
     })
 }
 
+/// The sampler named `sampler` (parsed), drawing `rate` or `budget` (one of them) with `seed`,
+/// from the keywords of the functions that sample; the baselines' parameters are the library
+/// defaults.
+pub(crate) fn sampler_of(
+    sampler: &str,
+    rate: Option<f64>,
+    budget: Option<usize>,
+    seed: u64,
+    skip_trivial: bool,
+) -> PyResult<Sampler> {
+    let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
+    let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
+    Ok(Sampler { skip_trivial, ..Sampler::new(kind, size, seed) })
+}
+
 /// The baselines' parameters from the keywords of `sample` (and `sample_fleet`): each `None`
 /// takes the library default.
 #[allow(clippy::too_many_arguments)]
@@ -168,8 +183,6 @@ pub(crate) fn sample(
     cartographer_min_gap_s: Option<f64>,
     time_gap_s: Option<f64>,
 ) -> PyResult<Samples> {
-    let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
-    let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
     let baseline = baseline_params(
         lio_sam_keyframe_step,
         lio_sam_period_s,
@@ -180,7 +193,7 @@ pub(crate) fn sample(
         cartographer_min_gap_s,
         time_gap_s,
     );
-    let spec = Sampler { kind, size, seed, baseline, skip_trivial };
+    let spec = Sampler { baseline, ..sampler_of(sampler, rate, budget, seed, skip_trivial)? };
     if let Ok(clusters) = source.cast::<DetectionClusters>() {
         let clusters = Arc::clone(&clusters.get().inner);
         let samples =
