@@ -24,20 +24,11 @@ pub(crate) fn group_quotas<R: Rng + ?Sized>(
         SampleSize::Rate(rate) => weights
             .iter()
             .zip(caps)
-            .map(|(&w, &cap)| {
-                let q = (rate * w).clamp(1.0, cap as f64);
-                let floor = q.floor();
-                let up = rng.random::<f64>() < q - floor;
-                (floor as u64 + u64::from(up)).min(cap)
-            })
+            .map(|(&w, &cap)| round_at_random((rate * w).clamp(1.0, cap as f64), rng).min(cap))
             .collect(),
         SampleSize::Budget(budget) => {
-            let available: u64 = caps.iter().sum();
-            if budget as u64 >= available {
-                if budget as u64 > available {
-                    warnings.push(SampleWarning::BudgetAboveAvailable { budget, available });
-                }
-                return caps.to_vec();
+            if let Some(all) = every_cap(budget, caps, warnings) {
+                return all;
             }
             let lo = if budget >= groups {
                 1.0
@@ -70,22 +61,12 @@ pub(crate) fn first_then_quotas<R: Rng + ?Sized>(
 ) -> Vec<u64> {
     debug_assert!(caps.iter().all(|&cap| cap >= 1));
     match size {
-        SampleSize::Rate(rate) => weights
-            .iter()
-            .zip(caps)
-            .map(|(&w, &cap)| {
-                let q = rate * w;
-                let up = rng.random::<f64>() < q - q.floor();
-                (1 + q.floor() as u64 + u64::from(up)).min(cap)
-            })
-            .collect(),
+        SampleSize::Rate(rate) => {
+            weights.iter().zip(caps).map(|(&w, &cap)| (1 + round_at_random(rate * w, rng)).min(cap)).collect()
+        }
         SampleSize::Budget(budget) => {
-            let available: u64 = caps.iter().sum();
-            if budget as u64 >= available {
-                if budget as u64 > available {
-                    warnings.push(SampleWarning::BudgetAboveAvailable { budget, available });
-                }
-                return caps.to_vec();
+            if let Some(all) = every_cap(budget, caps, warnings) {
+                return all;
             }
             if budget < weights.len() {
                 return group_quotas(weights, &vec![1; weights.len()], size, rng, warnings);
@@ -98,6 +79,25 @@ pub(crate) fn first_then_quotas<R: Rng + ?Sized>(
             round_to_total(&quotas, &rest, extra, rng).into_iter().map(|k| k + 1).collect()
         }
     }
+}
+
+/// `q` rounded at random to one of its two neighbouring integers, with expectation `q` (≥ 0).
+fn round_at_random<R: Rng + ?Sized>(q: f64, rng: &mut R) -> u64 {
+    let floor = q.floor();
+    floor as u64 + u64::from(rng.random::<f64>() < q - floor)
+}
+
+/// Every cap, when `budget` reaches their sum (with a warning when it is more); `None` when the
+/// budget must be shared.
+fn every_cap(budget: usize, caps: &[u64], warnings: &mut Vec<SampleWarning>) -> Option<Vec<u64>> {
+    let available: u64 = caps.iter().sum();
+    if (budget as u64) < available {
+        return None;
+    }
+    if budget as u64 > available {
+        warnings.push(SampleWarning::BudgetAboveAvailable { budget, available });
+    }
+    Some(caps.to_vec())
 }
 
 /// The s ≥ 0 with Σ clamp(s · w_g, lo, cap_g) = total, for lo · #groups ≤ total < Σ cap.
