@@ -8,7 +8,7 @@ use super::disperse::disperse_detections;
 use super::exact::concat;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::cluster::DetectionClusters;
-use crate::draw::{SAMPLE_BYTES, check_count, choose_indices, draw_numbers, first_then_quotas, group_quotas};
+use crate::draw::{choose_indices, draw_numbers};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::memory::try_collect;
@@ -85,17 +85,9 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
     } else {
         let members: Vec<&[u32]> = (0..clusters.len()).map(|g| &order[offsets[g]..offsets[g + 1]]).collect();
         let rows_of = |m: &[u32]| 1 + m.windows(2).filter(|w| xs[w[0] as usize] != xs[w[1] as usize]).count();
-        let weights: Vec<f64> = match kind {
-            SamplerKind::One => vec![1.0; members.len()],
-            _ => members.par_iter().map(|m| rows_of(m) as f64).collect(),
-        };
         let caps: Vec<u64> = members.iter().map(|m| m.len() as u64).collect();
-        let quotas = if kind == SamplerKind::ClosestFirst {
-            first_then_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
-        } else {
-            group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
-        };
-        check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
+        let rows = || members.par_iter().map(|m| rows_of(m) as f64).collect();
+        let quotas = sampler.group_quotas(rows, &caps, &mut rng, &mut warnings)?;
         let interrupt = Interrupt::current();
         let scores = det.scores();
         let picks: Vec<Vec<u32>> = members

@@ -30,7 +30,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::{SamplerKind, group_rng};
-use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count, first_then_quotas, group_quotas};
+use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count};
 use crate::error::{Error, Result};
 use crate::sample::Sampler;
 
@@ -498,16 +498,8 @@ impl KeyedDraw {
                 .collect();
             (groups, Some(threshold))
         } else {
-            let weights: Vec<f64> = match kind {
-                SamplerKind::One => vec![1.0; ids.len()],
-                _ => ids.iter().map(|&c| stats[c].row_count() as f64).collect(),
-            };
-            let quotas = if kind == SamplerKind::ClosestFirst {
-                first_then_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
-            } else {
-                group_quotas(&weights, &caps, sampler.size, &mut rng, &mut warnings)
-            };
-            check_count("samples", sampler.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
+            let rows = || ids.iter().map(|&c| stats[c].row_count() as f64).collect();
+            let quotas = sampler.group_quotas(rows, &caps, &mut rng, &mut warnings)?;
             let groups = ids
                 .iter()
                 .zip(quotas)

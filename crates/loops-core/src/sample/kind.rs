@@ -3,8 +3,10 @@
 use std::fmt;
 use std::str::FromStr;
 
+use rand::Rng;
+
 use crate::baseline::{Baseline, BaselineParams};
-use crate::draw::SampleSize;
+use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count, first_then_quotas, group_quotas};
 use crate::error::{Error, Result};
 
 /// Which sampler (paper, Sec. 5; DESIGN §4.5). Parsed from and printed as its name.
@@ -237,6 +239,33 @@ impl Sampler {
             });
         }
         Ok(())
+    }
+
+    /// Samples per group for the samplers of groups, from each group's rows (`rows`, used by
+    /// all but σ_1, which weighs every group 1) and its number of candidates (`caps`): the
+    /// closest-first sampler takes each group's closest pair first and shares the rest by rows
+    /// ([`first_then_quotas`]), the others share by weight ([`group_quotas`]).
+    ///
+    /// # Errors
+    /// [`Error::TooManySamples`] when the quotas make more samples than one call returns.
+    pub(crate) fn group_quotas<R: Rng + ?Sized>(
+        &self,
+        rows: impl FnOnce() -> Vec<f64>,
+        caps: &[u64],
+        rng: &mut R,
+        warnings: &mut Vec<SampleWarning>,
+    ) -> Result<Vec<u64>> {
+        let weights = match self.kind {
+            SamplerKind::One => vec![1.0; caps.len()],
+            _ => rows(),
+        };
+        let quotas = if self.kind == SamplerKind::ClosestFirst {
+            first_then_quotas(&weights, caps, self.size, rng, warnings)
+        } else {
+            group_quotas(&weights, caps, self.size, rng, warnings)
+        };
+        check_count("samples", self.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
+        Ok(quotas)
     }
 }
 
