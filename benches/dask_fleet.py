@@ -7,14 +7,17 @@ Usage::
     python benches/dask_fleet.py [--sizes 1e6,3e6,1e7] [--block 50000] [--output PATH]
 
 The fleet (``il.urban_fleet``, i.e. ``loops_core::UrbanFleet``): 100 vehicles, one session each,
-in the 10 x 10 km city worked by 1 km^2 districts (``district_m=1000``), every vehicle starting
-in its own district and moving on in snake order at the same pace, 10 Hz, gamma = 40 m, the
-default revisit separation (4 gamma of path). Why this fleet: a vehicle revisits a place only
-while it works that place's district, so its own loops stay a few runs per pose however long
-it drives (the district city of BENCHMARKS.md's "Scale" section: 3.7-4.1 runs per pose), and
-vehicles meet only where their districts border: the answer grows as n, as a real fleet's
-does, where a small city roamed for a day would make the answer (and the time) grow as n^2.
-The issue's 10^8 poses are 100 vehicles x 28 h; the sizes here change the hours.
+10 Hz, gamma = 40 m, the default revisit separation (4 gamma of path), in a city of 10 x 10
+districts where every vehicle works its own district for the whole session. The sizes change
+the hours (the issue's 10^8 poses are 100 vehicles x 28 h), and the districts grow with them:
+a district's area is 1 km^2 per 2.8 h (``DWELL_S``) of driving, so every size drives its
+streets as densely as the district city of BENCHMARKS.md's "Scale" section (1 km^2 districts
+worked for 2.8 h each: 3.7-4.1 runs per pose). Why this fleet: the answer per pose stays near
+those few runs however long the sessions, and vehicles meet only where their districts border,
+so the answer grows as n, as a real fleet's does, where a small city roamed for a day would
+make the answer (and the time) grow as n^2. (A fleet whose vehicles move on to the next
+district every 2.8 h through a fixed 10 x 10 km city does not: over 28 h each district is
+worked by 10 vehicles in turn and its cells grow about 10 times faster than its poses.)
 
 Each size runs twice, each in a fresh process: in-process (``il.find_fleet_loops`` and
 ``il.sample_fleet``, sigma_rho, budget 10^4, on both cores) and on a ``LocalCluster`` of 2
@@ -44,6 +47,8 @@ from harness import write_section  # noqa: E402
 
 GAMMA_M = 40.0
 VEHICLES = 100
+DISTRICTS_PER_SIDE = 10
+DWELL_S = 10_000.0  # the district city's time in a 1 km^2 district (loops_core::Districts)
 BUDGET = 10_000
 
 
@@ -55,18 +60,25 @@ def peak_mb() -> float:
     return float("nan")
 
 
+def district_side_m(poses: float) -> float:
+    """A district's side: 1 km^2 of area per DWELL_S of a vehicle's driving."""
+    return 1000.0 * (poses / VEHICLES / 10.0 / DWELL_S) ** 0.5
+
+
 def generate(folder: Path, poses: int, seed: int) -> list[str]:
     """The fleet as Parquet pose stores, one per vehicle."""
     import inexact_loops as il
     from inexact_loops.dask import write_pose_parquet
 
     duration_s = poses / VEHICLES / 10.0
+    district_m = district_side_m(poses)
     fleet = il.urban_fleet(
         vehicles=VEHICLES,
         days=1,
         duration_s=duration_s,
-        city_size_m=10_000.0,
-        district_m=1000.0,
+        city_size_m=DISTRICTS_PER_SIDE * district_m,
+        district_m=district_m,
+        district_dwell_s=2.0 * duration_s,
         seed=seed,
     )
     paths = []
@@ -252,8 +264,13 @@ def report(
         f"`nproc`: {os.cpu_count()}; "
         f"{at_start}at the end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}; git "
         f"{head.stdout.strip()}; {seconds:.0f} s in all",
-        f"- Fleet: {VEHICLES} vehicles, 10 x 10 km city by 1 km^2 districts, 10 Hz, gamma = "
-        f"{GAMMA_M:.0f} m, default separation; sigma_rho with a budget of {BUDGET:,}; block "
+        f"- Fleet: {VEHICLES} vehicles, each working its own district of a city of "
+        f"{DISTRICTS_PER_SIDE} x {DISTRICTS_PER_SIDE} districts for the whole session; a "
+        "district has 1 km^2 per 2.8 h of driving (so every size drives as densely as the "
+        'district city of "Scale": the side is '
+        + ", ".join(f"{district_side_m(x['poses']):,.0f} m" for x in rows)
+        + f" for the sizes below); 10 Hz, gamma = {GAMMA_M:.0f} m, default separation; "
+        f"sigma_rho with a budget of {BUDGET:,}; block "
         f"{block:,} poses; sessions read from Parquet by whoever needs them.",
         "- In-process: `find_fleet_loops` + `sample_fleet`, one process, both cores. Dask: "
         "`LocalCluster(n_workers=2, threads_per_worker=1)`, `find_fleet_loops_dask` + "
@@ -395,8 +412,7 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
         f"{tiles_per_block:.2f} tiles per block "
         "(the diagonal tile, its neighbours in time, the few other vehicles met at district "
         "borders). A fleet whose vehicles keep to their own districts keeps this constant as n "
-        "grows; one whose vehicles all meet everywhere would not, nor does this one past 10⁷ "
-        "poses (its vehicles move on every 2.8 h: see Sizes).",
+        "grows; one whose vehicles all meet everywhere would not.",
         f"- **Time per tile.** Scanning costs {scan_per_pose * 1e6:.2f} µs per pose "
         f"({cpu('scan-tiles') / max(1, tiles):.3f} s per tile of up to {block:,} x {block:,} "
         f"poses, in {count('scan-tiles'):,} tasks of a row block's tiles, the longest "
@@ -419,11 +435,11 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
         "the tasks).",
         "",
         where,
-        "- **Sizes.** The series lengthens the sessions (100 vehicles x 0.3 h to 2.8 h) and "
-        f"the answer per pose grew with them (components per 10⁶ poses: "
-        f"{growth}). "
-        "The constants are fitted at the largest size, the nearest to the 28 h sessions assumed "
-        "below; 28 h sessions revisit more still, so read the predictions as lower bounds. "
+        "- **Sizes.** The series lengthens the sessions (100 vehicles x "
+        + ", ".join(f"{x['poses'] / VEHICLES / 10 / 3600:.2g}" for x in rows)
+        + " h) and grows the districts with them, so the answer per pose should stay near the "
+        f"district city's (components per 10⁶ poses: {growth}). "
+        "The constants are fitted at the largest size. "
         + (
             "10⁸ poses (100 x 28 h) ran on the cluster alone: one process would hold the whole "
             "fleet (its peak, linear from the largest in-process run, is in the table), more "
@@ -431,12 +447,9 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
             if any(x["poses"] >= 10**8 for x in measured)
             else (
                 "10⁸ poses (100 x 28 h) ran on the cluster alone and was stopped unfinished "
-                f"after {timeout_s:.0f} s on this shared machine: a vehicle moves on to the "
-                "next district (snake order) every 2.8 h, so over 28 h each district is worked "
-                "by 10 vehicles in turn and the cells grow about 10 times faster than the poses "
-                "(at 10⁷ poses each vehicle stays in its own district); one process "
-                "would not hold it either (its peak, linear from the largest in-process run, is "
-                "about 10 times the 10⁷ run's)."
+                f"after {timeout_s:.0f} s on this shared machine; one process would not hold it "
+                "either (its peak, linear from the largest in-process run, is about 10 times the "
+                "10⁷ run's)."
             )
             if timeout_s is not None and any(x["poses"] >= 10**8 for x in rows)
             else "10⁸ poses (100 x 28 h) was not run: it did not fit the time set for it on this "
