@@ -37,6 +37,33 @@ pub(crate) fn reduce<'py, T: Serialize + ?Sized>(
     Ok((obj.get_type().getattr("_from_state")?, (PyBytes::new(py, &bytes),)))
 }
 
+/// The pickling methods of a class that holds its core value `$core` in a field `inner` (as
+/// the value or in an `Arc`): `__reduce__` gives the value's state under the class's name and
+/// `_from_state` reads it back, checked, and makes the class with `$build` (`$value` names the
+/// value read). They are a `#[pymethods]` block of their own (pyo3's `multiple-pymethods`), so
+/// each class names only its core type and how a value becomes the class; equality is the
+/// class's `#[pyclass(eq)]`.
+macro_rules! pickled {
+    ($class:ident, $core:ty, |$value:ident| $build:expr) => {
+        #[pyo3::pymethods]
+        impl $class {
+            fn __reduce__<'py>(
+                slf: &pyo3::Bound<'py, Self>,
+            ) -> pyo3::PyResult<(pyo3::Bound<'py, pyo3::PyAny>, (pyo3::Bound<'py, pyo3::types::PyBytes>,))> {
+                let value: &$core = &slf.get().inner;
+                crate::pickling::reduce(slf.as_any(), stringify!($class), value)
+            }
+
+            #[classmethod]
+            fn _from_state(cls: &pyo3::Bound<'_, pyo3::types::PyType>, state: &[u8]) -> pyo3::PyResult<Self> {
+                let $value: $core = crate::pickling::restore(cls.py(), stringify!($class), state)?;
+                $build
+            }
+        }
+    };
+}
+pub(crate) use pickled;
+
 /// What [`reduce_with`] returns: `(Class._from_state, (state, obj))`.
 pub(crate) type ReducedWith<'py, C> = (Bound<'py, PyAny>, (Bound<'py, PyBytes>, Py<C>));
 

@@ -4,7 +4,6 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{float64_column, int64_column, table, to_numpy};
 use crate::detached;
@@ -19,8 +18,8 @@ use crate::py_detections::Detections;
 ///     >>> clusters = il.cluster_detections(det, epsilon_s=30.0)
 ///     >>> len(clusters), clusters.labels.tolist(), clusters.clusters["t_max_s"].tolist()
 ///     (2, [0, 0, 1], [20.0, 500.0])
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug)]
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, PartialEq)]
 pub(crate) struct DetectionClusters {
     pub(crate) inner: Arc<loops_core::DetectionClusters>,
     detections: Arc<loops_core::Detections>,
@@ -64,24 +63,13 @@ pub(crate) fn cluster_detections(
     Ok(DetectionClusters { inner: Arc::new(inner), detections: Arc::clone(&detections.inner) })
 }
 
+crate::pickling::pickled!(DetectionClusters, loops_core::DetectionClusters, |value| Ok(Self {
+    detections: Arc::new(value.detections().clone()),
+    inner: Arc::new(value)
+}));
+
 #[pymethods]
 impl DetectionClusters {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "DetectionClusters", &*this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::DetectionClusters = crate::pickling::restore(cls.py(), "DetectionClusters", state)?;
-        let detections = Arc::new(value.detections().clone());
-        Ok(Self { inner: Arc::new(value), detections })
-    }
-
-    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
-        self.inner == other.inner
-    }
-
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[
             self.inner.len() as u64,

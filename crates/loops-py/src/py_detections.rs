@@ -4,7 +4,6 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{data_frame, index_column, real_column, to_numpy};
 use crate::detached;
@@ -111,8 +110,8 @@ pub(crate) fn read_detections(
 ///     >>> by_index = il.Detections.from_indices(traj, [2], [0])
 ///     >>> by_index.t.tolist(), by_index.t_prime.tolist(), by_index.i.tolist()
 ///     ([0.0], [2.0], [0])
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug)]
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, PartialEq)]
 pub(crate) struct Detections {
     pub(crate) inner: Arc<loops_core::Detections>,
 }
@@ -133,23 +132,10 @@ fn with_scores(
     }
 }
 
+crate::pickling::pickled!(Detections, loops_core::Detections, |value| Ok(Self { inner: Arc::new(value) }));
+
 #[pymethods]
 impl Detections {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "Detections", &*this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::Detections = crate::pickling::restore(cls.py(), "Detections", state)?;
-        Ok(Self { inner: Arc::new(value) })
-    }
-
-    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
-        self.inner == other.inner
-    }
-
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[self.inner.len() as u64, self.inner.t_s()[0].to_bits()])
     }

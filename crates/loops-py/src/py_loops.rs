@@ -6,7 +6,6 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{
     bool_column, float64_column, id_column, index_column, int64_column, pose_index, str_column, table, to_numpy,
@@ -128,8 +127,8 @@ pub(crate) fn path_length<'py>(
 /// The inexact loops of a trajectory at one γ: the sublevel set S_γ as runs, its loop
 /// components, and the loop duration, area and density over them. Returned by
 /// :func:`find_loops`.
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug)]
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, PartialEq)]
 pub(crate) struct Loops {
     pub(crate) inner: Arc<loops_core::Loops>,
 }
@@ -170,23 +169,10 @@ fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
     components.as_deref().map_or(Selection::All, Selection::Components)
 }
 
+crate::pickling::pickled!(Loops, loops_core::Loops, |value| Ok(Self { inner: Arc::new(value) }));
+
 #[pymethods]
 impl Loops {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "Loops", &*this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::Loops = crate::pickling::restore(cls.py(), "Loops", state)?;
-        Ok(Self { inner: Arc::new(value) })
-    }
-
-    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
-        self.inner == other.inner
-    }
-
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[
             self.inner.len() as u64,
@@ -746,29 +732,16 @@ impl TimelineArg {
 ///     >>> zoom = il.PlaneGrid(traj, 100, window_s=((2.0, 4.0), (6.5, 9.0)))
 ///     >>> zoom.columns.tolist(), zoom.rows.tolist(), zoom.column_edges_s.tolist()
 ///     ([2, 3, 4], [7, 8, 9], [1.5, 2.5, 3.5, 4.5])
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug)]
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, PartialEq)]
 pub(crate) struct PlaneGrid {
     pub(crate) inner: Arc<loops_core::PlaneGrid>,
 }
 
+crate::pickling::pickled!(PlaneGrid, loops_core::PlaneGrid, |value| Ok(Self { inner: Arc::new(value) }));
+
 #[pymethods]
 impl PlaneGrid {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "PlaneGrid", &*this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::PlaneGrid = crate::pickling::restore(cls.py(), "PlaneGrid", state)?;
-        Ok(Self { inner: Arc::new(value) })
-    }
-
-    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
-        self.inner == other.inner
-    }
-
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[self.inner.poses() as u64, self.inner.width() as u64, self.inner.height() as u64])
     }

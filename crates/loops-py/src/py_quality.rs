@@ -4,7 +4,6 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{bool_column, float64_column, id_column, int64_column, table, to_numpy};
 use crate::detached;
@@ -26,8 +25,8 @@ use crate::py_samples::Samples;
 ///     >>> quality = il.sample_quality(samples, loops, epsilon_s=1.0)
 ///     >>> quality.covered, quality.components, quality.coverage, quality.per_component.tolist()
 ///     (2, 2, 1.0, [1, 1])
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug)]
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, PartialEq)]
 pub(crate) struct SampleQuality {
     inner: loops_core::SampleQuality,
 }
@@ -70,23 +69,10 @@ pub(crate) fn sample_quality(
     Ok(SampleQuality { inner })
 }
 
+crate::pickling::pickled!(SampleQuality, loops_core::SampleQuality, |value| Ok(Self { inner: value }));
+
 #[pymethods]
 impl SampleQuality {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "SampleQuality", &this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::SampleQuality = crate::pickling::restore(cls.py(), "SampleQuality", state)?;
-        Ok(Self { inner: value })
-    }
-
-    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
-        self.inner == other.inner
-    }
-
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[self.inner.samples as u64, self.inner.covered as u64, self.inner.components as u64])
     }

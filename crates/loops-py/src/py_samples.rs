@@ -6,7 +6,6 @@ use std::sync::Arc;
 use numpy::PyArray1;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyType};
 
 use crate::convert::{data_frame, id_column, optional_column, to_numpy};
 use crate::detached;
@@ -27,8 +26,8 @@ use loops_core::{BaselineParams, Cartographer, HdlGraphSlam, LioSam, SampleSize,
 ///     >>> samples = il.sample(clusters, "rho-dispersed", budget=2, seed=0)
 ///     >>> samples.t_prime.tolist(), samples.cluster.tolist(), samples.score.tolist()
 ///     ([101.0, 900.0], [0, 1], [0.8, 0.5])
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug)]
+#[pyclass(frozen, eq, module = "inexact_loops._core")]
+#[derive(Debug, PartialEq)]
 pub(crate) struct Samples {
     pub(crate) inner: Arc<loops_core::Samples>,
 }
@@ -228,23 +227,10 @@ pub(crate) fn sample(
     )))
 }
 
+crate::pickling::pickled!(Samples, loops_core::Samples, |value| Ok(Self { inner: Arc::new(value) }));
+
 #[pymethods]
 impl Samples {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "Samples", &*this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::Samples = crate::pickling::restore(cls.py(), "Samples", state)?;
-        Ok(Self { inner: Arc::new(value) })
-    }
-
-    fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
-        self.inner == other.inner
-    }
-
     fn __hash__(&self) -> u64 {
         crate::pickling::hash_of(&[self.inner.len() as u64, self.inner.available()])
     }

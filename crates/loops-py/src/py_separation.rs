@@ -4,7 +4,6 @@
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
-use pyo3::types::{PyBytes, PyType};
 
 use crate::error::Failure;
 
@@ -32,20 +31,13 @@ pub(crate) struct Separation {
     pub(crate) inner: loops_core::Separation,
 }
 
+crate::pickling::pickled!(Separation, loops_core::Separation, |value| {
+    value.check().map_err(Failure::from)?;
+    Ok(Self { inner: value })
+});
+
 #[pymethods]
 impl Separation {
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.get();
-        crate::pickling::reduce(slf.as_any(), "Separation", &this.inner)
-    }
-
-    #[classmethod]
-    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: loops_core::Separation = crate::pickling::restore(cls.py(), "Separation", state)?;
-        value.check().map_err(Failure::from)?;
-        Ok(Self { inner: value })
-    }
-
     #[new]
     #[pyo3(signature = (*, path=0.0, time_s=0.0))]
     fn new(path: f64, time_s: f64) -> PyResult<Self> {
