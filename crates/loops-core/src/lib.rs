@@ -125,7 +125,8 @@ pub use tile::{
     TileSummary, merge_tiles, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
 };
 pub use tile_draw::{
-    TileDuration, draw_session_tile, scan_session_tile_with_duration, session_loop_duration, tile_requests,
+    TileDuration, TileRuns, draw_session_tile, draw_tile_runs, scan_session_tile_kept, scan_session_tile_with_duration,
+    session_loop_duration, tile_requests,
 };
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 pub use verdict::{PairVerdict, Verdict};

@@ -584,7 +584,7 @@ pub(crate) struct ScannedTile<'a> {
     pub(crate) rows: usize,
     pub(crate) set: SublevelSet,
     /// The fleet index of the first pose of each stretch (one per `piece_starts`).
-    fleet_starts: Vec<usize>,
+    pub(crate) fleet_starts: Vec<usize>,
     /// The row and column sessions' clocks and first fleet indices.
     times_s: [&'a [f64]; 2],
     session_starts: [usize; 2],
@@ -593,23 +593,36 @@ pub(crate) struct ScannedTile<'a> {
 impl ScannedTile<'_> {
     /// The fleet index of pose `k` of the piece.
     pub(crate) fn to_fleet(&self, k: usize) -> usize {
-        let s = self.piece_starts.partition_point(|&p| p <= k) - 1;
-        self.fleet_starts[s] + k - self.piece_starts[s]
-    }
-
-    /// The piece row of fleet row `f`, or `None` when the row was left out (it holds no cell).
-    pub(crate) fn piece_row(&self, f: usize) -> Option<usize> {
-        let row_stretches = self.piece_starts.partition_point(|&p| p < self.rows);
-        let s = self.fleet_starts[..row_stretches].partition_point(|&g| g <= f).checked_sub(1)?;
-        let k = self.piece_starts[s] + f - self.fleet_starts[s];
-        let end = self.piece_starts.get(s + 1).copied().unwrap_or(self.piece.len()).min(self.rows);
-        (k < end).then_some(k)
+        fleet_index(&self.piece_starts, &self.fleet_starts, k)
     }
 
     /// The time of fleet index `f` of the row (`side` 0) or column (1) session.
     pub(crate) fn time_s(&self, side: usize, f: usize) -> f64 {
         self.times_s[side][f - self.session_starts[side]]
     }
+}
+
+/// The fleet index of pose `k` of a piece whose stretches start at `piece_starts` (piece
+/// indices) and `fleet_starts` (fleet indices).
+pub(crate) fn fleet_index(piece_starts: &[usize], fleet_starts: &[usize], k: usize) -> usize {
+    let s = piece_starts.partition_point(|&p| p <= k) - 1;
+    fleet_starts[s] + k - piece_starts[s]
+}
+
+/// The piece row of fleet row `f` in a piece of `len` poses whose first `rows` are rows (its
+/// stretches as [`fleet_index`]), or `None` when the row was left out (it holds no cell).
+pub(crate) fn piece_row(
+    piece_starts: &[usize],
+    fleet_starts: &[usize],
+    rows: usize,
+    len: usize,
+    f: usize,
+) -> Option<usize> {
+    let row_stretches = piece_starts.partition_point(|&p| p < rows);
+    let s = fleet_starts[..row_stretches].partition_point(|&g| g <= f).checked_sub(1)?;
+    let k = piece_starts[s] + f - fleet_starts[s];
+    let end = piece_starts.get(s + 1).copied().unwrap_or(len).min(rows);
+    (k < end).then_some(k)
 }
 
 /// Checks a tile against its sessions and scans its cells (see [`scan_session_tile`]).

@@ -20,7 +20,7 @@ use crate::metric::Metric;
 use crate::sample::{DrawCandidates, DrawRequest, DrawRun, RunHolder, draw_candidates};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
-use crate::tile::{MergedLoops, ScannedTile, Tile, TileSummary, scan_piece, summary_of};
+use crate::tile::{MergedLoops, ScannedTile, Tile, TileSummary, fleet_index, piece_row, scan_piece, summary_of};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 
 /// The part of `request` each tile of `merged` must answer (by tile, as
@@ -39,7 +39,62 @@ pub fn tile_requests(merged: &MergedLoops, request: &DrawRequest) -> Vec<Option<
         .collect()
 }
 
-/// A tile's runs, rescanned, for a keyed draw.
+/// A tile's runs as its scan made them, with their provisional labels: what a keyed draw of the
+/// tile reads ([`draw_tile_runs`]), kept where the tile was scanned
+/// ([`scan_session_tile_kept`]) so that the draw need not rescan it. Owns its runs (16 bytes a
+/// run), not the tile's poses.
+#[derive(Debug, Clone)]
+pub struct TileRuns {
+    tile: Tile,
+    starts: [usize; 2],
+    gamma: f64,
+    separation: Separation,
+    set: crate::sublevel::SublevelSet,
+    piece_starts: Vec<usize>,
+    fleet_starts: Vec<usize>,
+    rows: usize,
+    piece_len: usize,
+    provisional: Vec<u32>,
+    components: u32,
+}
+
+impl TileRuns {
+    fn new(scanned: ScannedTile<'_>, tile: &Tile, starts: [usize; 2], gamma: f64, separation: Separation) -> Self {
+        let (provisional, components) =
+            crate::component::label_runs(&scanned.set, crate::component::ROWS_PER_LABEL_TASK);
+        let piece_len = scanned.piece.len();
+        let ScannedTile { piece_starts, rows, set, fleet_starts, .. } = scanned;
+        Self {
+            tile: tile.clone(),
+            starts,
+            gamma,
+            separation,
+            set,
+            piece_starts,
+            fleet_starts,
+            rows,
+            piece_len,
+            provisional,
+            components,
+        }
+    }
+
+    /// The tile.
+    pub fn tile(&self) -> &Tile {
+        &self.tile
+    }
+
+    /// Its runs.
+    pub fn run_count(&self) -> usize {
+        self.provisional.len()
+    }
+
+    fn to_fleet(&self, k: usize) -> usize {
+        fleet_index(&self.piece_starts, &self.fleet_starts, k)
+    }
+}
+
+/// A tile's runs, for a keyed draw.
 struct TileHolder<'a, M: Metric + ?Sized> {
     sessions: [&'a Trajectory; 2],
     starts: [usize; 2],
@@ -47,8 +102,7 @@ struct TileHolder<'a, M: Metric + ?Sized> {
     gamma: f64,
     diagonal: bool,
     tile: &'a Tile,
-    scanned: ScannedTile<'a>,
-    provisional: Vec<u32>,
+    runs: &'a TileRuns,
     labels: &'a [u32],
 }
 
@@ -69,12 +123,15 @@ impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
     }
 
     fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {
-        let set = &self.scanned.set;
-        let Some(k) = self.scanned.piece_row(i) else { return };
+        let runs = self.runs;
+        let set = &runs.set;
+        let Some(k) = piece_row(&runs.piece_starts, &runs.fleet_starts, runs.rows, runs.piece_len, i) else {
+            return;
+        };
         let offset = set.row_offset(k);
-        let to_fleet = |k: usize| self.scanned.to_fleet(k);
+        let to_fleet = |k: usize| runs.to_fleet(k);
         for (r, run) in set.row(k).iter().enumerate() {
-            let provisional = self.provisional[offset + r] as usize;
+            let provisional = runs.provisional[offset + r] as usize;
             f(DrawRun {
                 start: to_fleet(run.start as usize),
                 end: to_fleet(run.end as usize),
@@ -116,6 +173,7 @@ impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
 /// `request` the part of the draw's request for this tile ([`tile_requests`]). A run on the
 /// diagonal that reaches the tile's last column is read on in the session, so that its return
 /// column is that of the whole run; the piece that continues it in the next tile offers nothing.
+/// [`draw_tile_runs`] offers the same pairs from the runs its scan kept.
 ///
 /// Time: the tile's scan, plus O(offered pairs) and the diagonal runs of requested rows.
 ///
@@ -133,15 +191,70 @@ pub fn draw_session_tile<M: Metric + ?Sized>(
     request: &DrawRequest,
 ) -> Result<DrawCandidates> {
     let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    let (provisional, count) = crate::component::label_runs(&scanned.set, crate::component::ROWS_PER_LABEL_TASK);
-    if count as usize != labels.len() {
+    let runs = TileRuns::new(scanned, tile, starts, gamma, separation);
+    draw_tile_runs(sessions, starts, metric, &runs, labels, request)
+}
+
+/// [`draw_session_tile`] without the rescan: the pairs offered from `runs`, which
+/// [`scan_session_tile_kept`] made of the same tile with the same sessions, metric, γ and
+/// separation. The same offers as [`draw_session_tile`].
+///
+/// Time: O(offered pairs) and the diagonal runs of requested rows.
+///
+/// # Errors
+/// [`Error::InconsistentTiles`] for labels of another tile, or runs of another tile or
+/// other sessions' starts than the request's.
+pub fn draw_tile_runs<M: Metric + ?Sized>(
+    sessions: [&Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    runs: &TileRuns,
+    labels: &[u32],
+    request: &DrawRequest,
+) -> Result<DrawCandidates> {
+    let tile = &runs.tile;
+    if runs.components as usize != labels.len() {
         return Err(Error::InconsistentTiles {
-            problem: format!("tile {tile:?} has {count} components, but {} labels were given", labels.len()),
+            problem: format!(
+                "tile {tile:?} has {} components, but {} labels were given",
+                runs.components,
+                labels.len()
+            ),
         });
     }
-    let diagonal = tile.sessions[0] == tile.sessions[1] && separation.is_none();
-    let holder = TileHolder { sessions, starts, metric, gamma, diagonal, tile, scanned, provisional, labels };
+    let fits = |side: usize, range: &std::ops::Range<usize>| {
+        range.start >= starts[side] && range.end <= starts[side] + sessions[side].len()
+    };
+    if runs.starts != starts || !fits(0, &tile.rows) || !fits(1, &tile.columns) {
+        return Err(Error::InconsistentTiles {
+            problem: format!(
+                "the runs of tile {tile:?} were scanned with sessions at {:?}, not {starts:?}",
+                runs.starts
+            ),
+        });
+    }
+    let diagonal = tile.sessions[0] == tile.sessions[1] && runs.separation.is_none();
+    let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels };
     Ok(draw_candidates(&holder, request))
+}
+
+/// [`scan_session_tile_with_duration`] that also keeps the tile's runs for its draws
+/// ([`draw_tile_runs`]). O(the scan + the tile's runs, rows and columns).
+///
+/// # Errors
+/// As [`scan_session_tile`](crate::scan_session_tile).
+pub fn scan_session_tile_kept<M: Metric + ?Sized>(
+    sessions: [&Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    tile: &Tile,
+) -> Result<(TileSummary, TileDuration, TileRuns)> {
+    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
+    let summary = summary_of(&scanned, metric, tile);
+    let duration = duration_of(&scanned, tile);
+    Ok((summary, duration, TileRuns::new(scanned, tile, starts, gamma, separation)))
 }
 
 /// What one tile's runs add to the loop duration τ (Side both, seconds) of its rows and of its
@@ -310,6 +423,36 @@ impl MetricSpec {
         request: &DrawRequest,
     ) -> Result<DrawCandidates> {
         with_metric!(self, m => draw_session_tile(sessions, starts, m, gamma, separation, tile, labels, request))
+    }
+
+    /// [`draw_tile_runs`] under this metric.
+    ///
+    /// # Errors
+    /// As [`draw_tile_runs`].
+    pub fn draw_tile_runs(
+        &self,
+        sessions: [&Trajectory; 2],
+        starts: [usize; 2],
+        runs: &TileRuns,
+        labels: &[u32],
+        request: &DrawRequest,
+    ) -> Result<DrawCandidates> {
+        with_metric!(self, m => draw_tile_runs(sessions, starts, m, runs, labels, request))
+    }
+
+    /// [`scan_session_tile_kept`] under this metric.
+    ///
+    /// # Errors
+    /// As [`scan_session_tile_kept`].
+    pub fn scan_session_tile_kept(
+        &self,
+        sessions: [&Trajectory; 2],
+        starts: [usize; 2],
+        gamma: f64,
+        separation: Separation,
+        tile: &Tile,
+    ) -> Result<(TileSummary, TileDuration, TileRuns)> {
+        with_metric!(self, m => scan_session_tile_kept(sessions, starts, m, gamma, separation, tile))
     }
 
     /// [`scan_session_tile_with_duration`] under this metric.

@@ -1,5 +1,5 @@
 //! Samples and τ from tiles equal the fleet's in memory: keyed draws over the merged statistics,
-//! each tile offering its pairs after a rescan, give `sample_fleet`'s samples pair for pair for
+//! each tile offering its pairs after a rescan or from the runs its scan kept, give `sample_fleet`'s samples pair for pair for
 //! 1, 2 and 7 tiles per session pair and any thread count, for every sampler of components,
 //! budgets and rates, between sessions only or not, trivial components skipped or not; a fleet
 //! of one session samples as the session alone; τ from the tiles' shares is
@@ -9,9 +9,10 @@ mod support;
 
 use loops_core::{
     DrawCandidates, DrawRequest, Euclidean, Fleet, FleetLoops, FleetOptions, KeyedDraw, SampleSize, Sampler,
-    SamplerKind, Separation, SessionBlocks, TileDuration, TileMerge, TileSummary, Trajectory, draw_session_tile,
-    find_fleet_loops, find_loops_separated, pair_key, plan_session_tiles, sample_fleet, sample_loops,
-    scan_session_tile_with_duration, session_loop_duration, tile_requests, with_threads,
+    SamplerKind, Separation, SessionBlocks, TileDuration, TileMerge, TileRuns, TileSummary, Trajectory,
+    draw_session_tile, draw_tile_runs, find_fleet_loops, find_loops_separated, pair_key, plan_session_tiles,
+    sample_fleet, sample_loops, scan_session_tile_kept, scan_session_tile_with_duration, session_loop_duration,
+    tile_requests, with_threads,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -55,6 +56,8 @@ struct Tiled {
     merged: loops_core::MergedLoops,
     durations: Vec<TileDuration>,
     starts: Vec<usize>,
+    /// Each tile's runs as its scan kept them.
+    runs: std::collections::HashMap<loops_core::Tile, TileRuns>,
 }
 
 fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: usize) -> Tiled {
@@ -67,18 +70,17 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
     for s in sessions {
         starts.push(starts.last().unwrap() + s.len());
     }
-    let (mut parts, mut durations) = (Vec::new(), Vec::new());
+    let (mut parts, mut durations, mut runs) = (Vec::new(), Vec::new(), std::collections::HashMap::new());
     for tile in &tiles {
         let [a, b] = tile.sessions;
-        let (summary, duration) = scan_session_tile_with_duration(
-            [&sessions[a], &sessions[b]],
-            [starts[a], starts[b]],
-            &Euclidean,
-            gamma,
-            separation,
-            tile,
-        )
-        .unwrap();
+        let pair = [&sessions[a], &sessions[b]];
+        let (summary, duration) =
+            scan_session_tile_with_duration(pair, [starts[a], starts[b]], &Euclidean, gamma, separation, tile).unwrap();
+        let (kept_summary, kept_duration, kept) =
+            scan_session_tile_kept(pair, [starts[a], starts[b]], &Euclidean, gamma, separation, tile).unwrap();
+        assert_eq!((&kept_summary, &kept_duration), (&summary, &duration), "{tile:?}: the scan that keeps its runs");
+        assert_eq!(kept.tile(), tile);
+        runs.insert(tile.clone(), kept);
         parts.push(TileMerge::new(TileSummary::from_bytes(&summary.to_bytes()).unwrap()).unwrap());
         durations.push(TileDuration::from_bytes(&duration.to_bytes()).unwrap());
     }
@@ -91,7 +93,7 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
     }
     let merged = TileMerge::merge(level).unwrap().finish().unwrap();
     starts.pop();
-    Tiled { merged, durations, starts }
+    Tiled { merged, durations, starts, runs }
 }
 
 /// The samples of a keyed draw over tiles, as (pair in fleet indices, component, δ, times).
@@ -104,6 +106,7 @@ fn draw_from_tiles(
     separation: Separation,
     sampler: &Sampler,
     between_only: bool,
+    kept: bool,
 ) -> (Drawn, usize, u64) {
     let stats = t.merged.draw_stats();
     let blocks: Vec<[usize; 2]> = t.merged.components().iter().map(|m| m.sessions).collect();
@@ -118,16 +121,13 @@ fn draw_from_tiles(
             let part = DrawRequest::from_bytes(&part.to_bytes()).unwrap();
             let tile = &t.merged.tiles()[k];
             let [a, b] = tile.sessions;
-            let offers = draw_session_tile(
-                [&sessions[a], &sessions[b]],
-                [t.starts[a], t.starts[b]],
-                &Euclidean,
-                gamma,
-                separation,
-                tile,
-                t.merged.tile_labels(k),
-                &part,
-            )
+            let (pair, starts, labels) =
+                ([&sessions[a], &sessions[b]], [t.starts[a], t.starts[b]], t.merged.tile_labels(k));
+            let offers = if kept {
+                draw_tile_runs(pair, starts, &Euclidean, &t.runs[tile], labels, &part)
+            } else {
+                draw_session_tile(pair, starts, &Euclidean, gamma, separation, tile, labels, &part)
+            }
             .unwrap();
             draw.absorb(DrawCandidates::from_bytes(&offers.to_bytes()).unwrap());
         }
@@ -194,13 +194,15 @@ fn check_fleet(sessions: &[Trajectory], gamma: f64, separation: Separation) {
                 }
             }
         }
-        for sampler in samplers() {
+        for (s, sampler) in samplers().into_iter().enumerate() {
             for between_only in [false, true] {
                 let expected = in_memory(&fleet, &loops, &sampler, between_only, 1);
-                let got = draw_from_tiles(sessions, &t, gamma, separation, &sampler, between_only);
+                // Half the draws from the runs the scans kept, half from rescans.
+                let kept = (s + usize::from(between_only)) % 2 == 0;
+                let got = draw_from_tiles(sessions, &t, gamma, separation, &sampler, between_only, kept);
                 assert_eq!(
                     got, expected,
-                    "{per_pair} tiles per pair, {:?} {:?} skip_trivial {} between_only {between_only}, {separation}",
+                    "{per_pair} tiles per pair, {:?} {:?} skip_trivial {} between_only {between_only}, {separation}, kept runs {kept}",
                     sampler.kind, sampler.size, sampler.skip_trivial
                 );
                 if per_pair == 2 {
@@ -266,4 +268,31 @@ fn keys_are_uniform_and_independent_of_the_block() {
     assert_ne!(pair_key(1, 5, 70), pair_key(2, 5, 70));
     assert_ne!(pair_key(1, 5, 70), pair_key(1, 6, 70));
     assert_eq!(pair_key(1, 5, 70), pair_key(1, 5, 70));
+}
+
+/// Runs kept by one tile's scan answer only that tile's draws, with its labels and its sessions'
+/// starts: anything else is an error, not other pairs.
+#[test]
+fn kept_runs_refuse_another_tile() {
+    let sessions = walks(3);
+    let t = tiled(&sessions, 1.5, Separation::NONE, 2);
+    let stats = t.merged.draw_stats();
+    let mut draw =
+        KeyedDraw::new(&Sampler::new(SamplerKind::Rho, SampleSize::Budget(50), 1), &stats, &|_| true).unwrap();
+    let request = draw.request().cloned().unwrap();
+    let parts = tile_requests(&t.merged, &request);
+    let (k, part) = parts.iter().enumerate().find_map(|(k, p)| p.as_ref().map(|p| (k, p))).unwrap();
+    let tile = &t.merged.tiles()[k];
+    let [a, b] = tile.sessions;
+    let (pair, starts, labels) = ([&sessions[a], &sessions[b]], [t.starts[a], t.starts[b]], t.merged.tile_labels(k));
+    let runs = &t.runs[tile];
+    assert!(runs.run_count() > 0);
+    let good = draw_tile_runs(pair, starts, &Euclidean, runs, labels, part).unwrap();
+    draw.absorb(good);
+    let fewer = &labels[..labels.len() - 1];
+    let moved = [starts[0] + 1, starts[1] + 1];
+    for (labels, starts) in [(fewer, starts), (labels, moved)] {
+        let err = draw_tile_runs(pair, starts, &Euclidean, runs, labels, part).unwrap_err();
+        assert!(matches!(err, loops_core::Error::InconsistentTiles { .. }), "{err}");
+    }
 }
