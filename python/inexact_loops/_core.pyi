@@ -52,6 +52,7 @@ __all__ = [
     "SessionBlocks",
     "Tile",
     "TileMerge",
+    "TileRuns",
     "TileSummary",
     "TiledFleetLoops",
     "merge_tiles",
@@ -67,6 +68,7 @@ __all__ = [
     "DrawCandidates",
     "TileDuration",
     "draw_tile",
+    "scan_tile_kept",
     "scan_tile_with_duration",
     "session_loop_duration",
 ]
@@ -2642,20 +2644,24 @@ def draw_tile(
     metric: _MetricName = None,
     separation: Separation | float | Literal["auto", "none"] | None = "auto",
     threads: int | None = None,
+    runs: TileRuns | None = None,
 ) -> DrawCandidates:
     """Rescans one tile from its two sessions, without the GIL, and offers its pairs to a pass of a
     :class:`KeyedDraw` (the arguments as :func:`scan_tile`'s, which the request's tile must have
-    been scanned with).
+    been scanned with). Given the tile's ``runs`` (:func:`scan_tile_kept` with the same
+    arguments), it offers the same pairs from them without rescanning.
 
     Args:
         request: a :class:`TileDrawRequest` of :meth:`KeyedDraw.requests`.
         session_a, session_b, starts, gamma, metric, separation, threads: as :func:`scan_tile`.
+        runs: the request's tile's :class:`TileRuns`, or ``None`` (rescan the tile).
 
     Returns:
         :class:`DrawCandidates`.
 
     Raises:
-        InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan.
+        InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan;
+            runs of another tile, metric or starts.
     """
 
 @final
@@ -2695,6 +2701,49 @@ def scan_tile_with_duration(
     Raises:
         As :func:`scan_tile`.
     """
+
+def scan_tile_kept(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+) -> tuple[TileSummary, TileDuration, TileRuns]:
+    """:func:`scan_tile_with_duration` that also keeps the tile's runs, for :func:`draw_tile` to
+    offer a draw's pairs without rescanning the tile.
+
+    Args:
+        As :func:`scan_tile`.
+
+    Returns:
+        ``(TileSummary, TileDuration, TileRuns)``.
+
+    Raises:
+        As :func:`scan_tile`.
+    """
+
+@final
+class TileRuns:
+    """One tile's runs as its scan made them (:func:`scan_tile_kept`), with their provisional
+    labels: what :func:`draw_tile` reads of the tile when given them instead of rescanning it.
+    About 16 bytes a run; it holds no poses. Lives in the process that scanned the tile (it
+    does not pickle): a worker keeps it for the draws of its tiles.
+    """
+
+    def __len__(self) -> int: ...
+    @property
+    def metric_name(self) -> str:
+        """The metric's name the tile was scanned with."""
+    @property
+    def nbytes(self) -> int:
+        """The bytes it holds (its runs, 16 bytes each, and 8 bytes a row)."""
+    @property
+    def tile(self) -> Tile:
+        """The tile."""
 
 def session_loop_duration(
     session: int, *, start: int, poses: int, parts: list[TileDuration]

@@ -89,6 +89,14 @@ impl TileRuns {
         self.provisional.len()
     }
 
+    /// The bytes it holds: its runs (16 bytes each with their closest column and label) and its
+    /// rows' offsets (8 bytes a row).
+    pub fn heap_bytes(&self) -> usize {
+        let runs = self.run_count() * (std::mem::size_of::<crate::sublevel::Run>() + 8);
+        let rows = (self.set.rows() + 1 + self.piece_starts.len() + self.fleet_starts.len()) * 8;
+        runs + rows
+    }
+
     fn to_fleet(&self, k: usize) -> usize {
         fleet_index(&self.piece_starts, &self.fleet_starts, k)
     }

@@ -287,6 +287,7 @@ fn kept_runs_refuse_another_tile() {
     let (pair, starts, labels) = ([&sessions[a], &sessions[b]], [t.starts[a], t.starts[b]], t.merged.tile_labels(k));
     let runs = &t.runs[tile];
     assert!(runs.run_count() > 0);
+    assert!(runs.heap_bytes() >= 16 * runs.run_count());
     let good = draw_tile_runs(pair, starts, &Euclidean, runs, labels, part).unwrap();
     draw.absorb(good);
     let fewer = &labels[..labels.len() - 1];

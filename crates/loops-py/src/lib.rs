@@ -39,6 +39,7 @@ mod py_separation;
 mod py_tile;
 mod py_tile_draw;
 mod py_tile_merge;
+mod py_tile_runs;
 mod py_trajectory;
 mod warning;
 
@@ -172,6 +173,8 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_tile_draw::draw_tile, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile_draw::scan_tile_with_duration, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile_draw::session_loop_duration, module)?)?;
+    module.add_class::<py_tile_runs::TileRuns>()?;
+    module.add_function(wrap_pyfunction!(py_tile_draw::scan_tile_kept, module)?)?;
     module.add_function(wrap_pyfunction!(cli::run_cli, module)?)?;
     module.add_class::<py_graph::PoseGraph>()?;
     module.add_function(wrap_pyfunction!(py_graph::read_pose_graph, module)?)?;

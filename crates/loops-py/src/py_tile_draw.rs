@@ -1,6 +1,6 @@
 //! Samples and τ from tiles: `TiledFleetLoops.draw` (`KeyedDraw`), `TileDrawRequest`,
-//! `draw_tile` (`DrawCandidates`), `scan_tile_with_duration` (`TileDuration`) and
-//! `session_loop_duration`. The shipped objects pickle as their bytes.
+//! `draw_tile` (`DrawCandidates`), `scan_tile_with_duration` (`TileDuration`), `scan_tile_kept`
+//! (`TileRuns`, in `py_tile_runs`) and `session_loop_duration`. The shipped objects pickle as their bytes.
 
 use std::sync::Arc;
 
@@ -271,22 +271,25 @@ impl DrawCandidates {
 
 /// Rescans one tile from its two sessions, without the GIL, and offers its pairs to a pass of a
 /// :class:`KeyedDraw` (the arguments as :func:`scan_tile`'s, which the request's tile must have
-/// been scanned with).
+/// been scanned with). Given the tile's ``runs`` (:func:`scan_tile_kept` with the same
+/// arguments), it offers the same pairs from them without rescanning.
 ///
 /// Args:
 ///     request: a :class:`TileDrawRequest` of :meth:`KeyedDraw.requests`.
 ///     session_a, session_b, starts, gamma, metric, separation, threads: as :func:`scan_tile`.
+///     runs: the request's tile's :class:`TileRuns`, or ``None`` (rescan the tile).
 ///
 /// Returns:
 ///     :class:`DrawCandidates`.
 ///
 /// Raises:
-///     InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan.
+///     InvalidParameterError: as :func:`scan_tile`; labels that do not fit the tile's scan;
+///         runs of another tile, metric or starts.
 #[pyfunction]
 #[pyo3(signature = (request, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
-    threads=None))]
+    threads=None, runs=None))]
 #[pyo3(
-    text_signature = "(request, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
+    text_signature = "(request, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None, runs=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn draw_tile(
@@ -299,10 +302,23 @@ pub(crate) fn draw_tile(
     metric: Option<&Bound<'_, PyAny>>,
     separation: SeparationArg,
     threads: Option<usize>,
+    runs: Option<&crate::py_tile_runs::TileRuns>,
 ) -> PyResult<DrawCandidates> {
     let r = request.clone();
     let ([a, b], metric) = tile_sessions(&r.tile, session_a, session_b, metric, "draw_tile")?;
     let separation = separation.at(gamma);
+    let starts = [starts.0, starts.1];
+    if let Some(runs) = runs {
+        let runs = crate::py_tile_runs::runs_for(runs, &r.tile, metric)?;
+        let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
+            MetricRef::Spec(spec) => spec.draw_tile_runs([&a, &b], starts, &runs, &r.labels, &r.request),
+            MetricRef::Callable(callable) => {
+                loops_core::draw_tile_runs([&a, &b], starts, callable, &runs, &r.labels, &r.request)
+            }
+        })?;
+        return Ok(DrawCandidates { inner });
+    }
+    let starts = (starts[0], starts[1]);
     let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
         MetricRef::Spec(spec) => {
             spec.draw_session_tile([&a, &b], [starts.0, starts.1], gamma, separation, &r.tile, &r.labels, &r.request)
@@ -407,6 +423,51 @@ pub(crate) fn scan_tile_with_duration(
         ),
     })?;
     Ok((TileSummary { inner: summary }, TileDuration { inner: duration }))
+}
+
+/// :func:`scan_tile_with_duration` that also keeps the tile's runs, for :func:`draw_tile` to
+/// offer a draw's pairs without rescanning the tile.
+///
+/// Args:
+///     As :func:`scan_tile`.
+///
+/// Returns:
+///     ``(TileSummary, TileDuration, TileRuns)``.
+///
+/// Raises:
+///     As :func:`scan_tile`.
+#[pyfunction]
+#[pyo3(signature = (tile, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
+    threads=None))]
+#[pyo3(
+    text_signature = "(tile, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
+)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn scan_tile_kept(
+    py: Python<'_>,
+    tile: &Tile,
+    session_a: &Trajectory,
+    session_b: Option<&Trajectory>,
+    starts: (usize, usize),
+    gamma: f64,
+    metric: Option<&Bound<'_, PyAny>>,
+    separation: SeparationArg,
+    threads: Option<usize>,
+) -> PyResult<(TileSummary, TileDuration, crate::py_tile_runs::TileRuns)> {
+    let tile = tile.inner.clone();
+    let ([a, b], metric) = tile_sessions(&tile, session_a, session_b, metric, "scan_tile_kept")?;
+    let separation = separation.at(gamma);
+    let (summary, duration, runs) = MetricArg::Spec(metric).run(py, threads, move |m| match m {
+        MetricRef::Spec(spec) => spec.scan_session_tile_kept([&a, &b], [starts.0, starts.1], gamma, separation, &tile),
+        MetricRef::Callable(callable) => {
+            loops_core::scan_session_tile_kept([&a, &b], [starts.0, starts.1], callable, gamma, separation, &tile)
+        }
+    })?;
+    Ok((
+        TileSummary { inner: summary },
+        TileDuration { inner: duration },
+        crate::py_tile_runs::TileRuns { inner: Arc::new(runs), metric },
+    ))
 }
 
 /// The loop duration τ of one session from the shares of the tiles that hold its rows or
