@@ -118,6 +118,7 @@ def in_process(paths: list[str]) -> dict:
 def on_cluster(paths: list[str], block: int) -> dict:
     import distributed
 
+    import inexact_loops.dask as il_dask
     from inexact_loops.dask import find_fleet_loops_dask, local_client
 
     with local_client(memory_limit="10GB") as client:
@@ -128,6 +129,7 @@ def on_cluster(paths: list[str], block: int) -> dict:
             samples = run.sample("rho", budget=BUDGET, seed=0)
         total_s = time.perf_counter() - started
         peaks = client.run(peak_mb)
+        counts = client.run(lambda: dict(il_dask._runs_counts)).values()
         tasks: dict[str, list[float]] = {}
         for t in stream.data:
             prefix = t["key"].split("-")[0] + "-" + t["key"].split("-")[1]
@@ -147,6 +149,8 @@ def on_cluster(paths: list[str], block: int) -> dict:
             "first": [int(x) for x in samples["i"][:5]],
             "stats": stats,
             "tasks": {k: [len(v), sum(v), max(v)] for k, v in tasks.items()},
+            # The tiles' draws from the runs their scan kept, and from rescans.
+            "runs_kept": {k: sum(c.get(k, 0) for c in counts) for k in ("hits", "misses")},
         }
 
 
@@ -385,6 +389,16 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
             ct["describe-session"][1] if "describe-session" in ct else 0.0
         )
         draw_core = ct["draw-tiles"][1] if "draw-tiles" in ct else 0.0
+        kept = cd.get("runs_kept")
+        draws = (
+            "The draw rescans the tiles it asks"
+            if kept is None
+            else (
+                "The draw reads the runs each tile's scan kept on its worker "
+                f"({kept['hits']:,} tiles' draws found them, {kept['misses']:,} rescanned their "
+                "tile)"
+            )
+        )
         idle = max(0.0, cd["total_s"] - c_busy)
         where = (
             f"- **Where the overhead comes from** ({c['poses']:,} poses, the largest fleet run "
@@ -393,7 +407,7 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
             "time): a tile's scan keeps only the stretches of its rows and columns whose chunks "
             "(64 poses) come within gamma of the other side, so the tiles together cost about "
             "what the engine spends on the same cells, and each worker keeps the sessions it "
-            "has read (up to 10^7 poses). The draw rescans the tiles it asks: "
+            f"has read (up to 10^7 poses). {draws}: "
             f"{draw_core / max(1e-9, 2 * c['local']['sample_s']):.1f}x the in-process sampler's "
             f"core time. Dask adds {idle:.1f} s of wall time beyond the work shared by the 2 "
             f"workers ({c_tasks:,} tasks: a scan task per row block, a draw task per row block "
@@ -416,7 +430,7 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
         f"- **Time per tile.** Scanning costs {scan_per_pose * 1e6:.2f} µs per pose "
         f"({cpu('scan-tiles') / max(1, tiles):.3f} s per tile of up to {block:,} x {block:,} "
         f"poses, in {count('scan-tiles'):,} tasks of a row block's tiles, the longest "
-        f"{scan_max:.2f} s); the draw's rescan {draw_per_pose * 1e6:.2f} µs per pose; reading a "
+        f"{scan_max:.2f} s); the draw {draw_per_pose * 1e6:.2f} µs per pose; reading a "
         f"session (Parquet, planning's pass) {read_per_pose * 1e6:.2f} µs per pose.",
         f"- **Memory per tile.** A worker's peak is {peak:.0f} MB: the sessions it keeps (up to "
         "10^7 poses), a tile's piece of poses and its runs (O(block · runs per pose)), "

@@ -19,13 +19,15 @@ its edges); merge tasks combine groups of summaries into :class:`~inexact_loops.
 objects, which keep only the edge runs still facing unmerged tiles, level by level, until one
 is left; the client finishes it into the components and the overlap matrix. Samples are drawn
 by keys (:class:`~inexact_loops.KeyedDraw`): the client works out each component's quota from
-the merged statistics, each tile's task rescans its tile and offers the few pairs asked of it
-(:func:`~inexact_loops.draw_tile`), and the samples are :func:`~inexact_loops.sample_fleet`'s,
-pair for pair, whatever the tiling and the workers. Loop duration per pose
-(``loop_duration=True``) comes from each tile's share
-(:func:`~inexact_loops.scan_tile_with_duration`),
-added up per session. Every task is a pure function of its inputs, so a worker that dies takes
-nothing with it: Dask reruns its tasks and the answer is the same.
+the merged statistics, and each tile offers the few pairs asked of it
+(:func:`~inexact_loops.draw_tile`) from the runs its scan kept on the worker that scanned it
+(:data:`RUNS_KEPT`; the draws of a scan task's tiles are sent to that worker), rescanning the
+tile only when they are gone (evicted, or the worker restarted). The samples are
+:func:`~inexact_loops.sample_fleet`'s, pair for pair, whatever the tiling, the workers and
+where the runs were found. Loop duration per pose (``loop_duration=True``) comes from each
+tile's share (:func:`~inexact_loops.scan_tile_with_duration`), added up per session. Every
+task's result depends on its inputs alone (kept runs only save work), so a worker that dies
+takes nothing with it: Dask reruns its tasks and the answer is the same.
 
 A session that cannot be read (a missing or corrupt log, or one whose dimension or metric
 differs from the others') is left out with a one-line error in :attr:`FleetRun.failures`; the
@@ -85,6 +87,20 @@ DEFAULT_FAN_IN = 8
 #: them (a pose takes 32-40 bytes: 10^7 poses are ~400 MB); the least recently used go first,
 #: and the last one read is always kept.
 POSES_KEPT = 10_000_000
+
+#: Bytes of runs each worker process keeps of the tiles it scanned, for their draws (a run
+#: takes 16 bytes, a row 8: :attr:`TileRuns.nbytes`); the least recently used tiles go first.
+#: A draw of a tile whose runs are not kept (evicted, scanned elsewhere, or the worker
+#: restarted) rescans the tile: the samples are the same. 0: keep none.
+RUNS_KEPT = 1_000_000_000
+
+#: The tiles' runs a worker keeps, most recently used last: (run id, tile) -> (the scan task's
+#: group, TileRuns).
+_runs: collections.OrderedDict[Any, tuple[int, _core.TileRuns]] = collections.OrderedDict()
+_runs_held = 0
+#: This process's draws of a tile from kept runs ("hits") and from rescans ("misses").
+_runs_counts = {"hits": 0, "misses": 0}
+_runs_lock = threading.Lock()
 
 #: The sessions a worker keeps, most recently used last: (source, options) -> Trajectory.
 _kept: collections.OrderedDict[Any, _core.Trajectory] = collections.OrderedDict()
@@ -260,6 +276,48 @@ def _read_session(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Tr
     return traj
 
 
+def _keep_runs(key: Any, group: int, runs: _core.TileRuns) -> None:
+    """Keeps a tile's runs (scanned by the task of ``group``) for its draws (up to
+    :data:`RUNS_KEPT` bytes in all)."""
+    global _runs_held
+    with _runs_lock:
+        if key in _runs:
+            _runs_held -= _runs.pop(key)[1].nbytes
+        if runs.nbytes > RUNS_KEPT:
+            return
+        _runs[key] = (group, runs)
+        _runs_held += runs.nbytes
+        while _runs_held > RUNS_KEPT:
+            _, (_, dropped) = _runs.popitem(last=False)
+            _runs_held -= dropped.nbytes
+
+
+def _kept_runs(key: Any) -> _core.TileRuns | None:
+    """A tile's kept runs, or ``None``; counted as a hit or a miss."""
+    with _runs_lock:
+        kept = _runs.get(key)
+        if kept is not None:
+            _runs.move_to_end(key)
+        _runs_counts["hits" if kept is not None else "misses"] += 1
+        return None if kept is None else kept[1]
+
+
+def _kept_groups(run_id: str) -> dict[int, int]:
+    """Of run ``run_id``: the scan tasks' groups whose tiles' runs this process keeps, and how
+    many tiles of each."""
+    with _runs_lock:
+        return dict(collections.Counter(g for (r, _), (g, _) in _runs.items() if r == run_id))
+
+
+def _forget_runs() -> dict[str, int]:
+    """Drops every kept run of this process; returns the draws' hits and misses so far."""
+    global _runs_held
+    with _runs_lock:
+        _runs.clear()
+        _runs_held = 0
+        return dict(_runs_counts)
+
+
 def _read_uncached(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Trajectory:
     """A session read in this process (not kept)."""
     read = dict(options)
@@ -341,18 +399,23 @@ def _scan_session_tiles(
     separation: Any,
     threads: int | None,
     duration: bool,
+    run_id: str,
+    group: int,
 ) -> Any:
     """Task: scan a few tiles (each with its sessions' sources and first fleet indices) without
     the GIL and merge them: their :class:`TileMerge`; with ``duration``, also each tile's share
-    of tau, in order."""
-    scan = _core.scan_tile_with_duration if duration else _core.scan_tile
-    scanned = [
-        scan(tile, **_tile_kwargs(sources, options, starts, gamma, metric, separation, threads))
-        for tile, sources, starts in tiles
-    ]
+    of tau, in order. Keeps each tile's runs under ``(run_id, tile)`` for its draws, as scanned
+    by the task of ``group``."""
+    summaries, shares = [], []
+    for tile, sources, starts in tiles:
+        kwargs = _tile_kwargs(sources, options, starts, gamma, metric, separation, threads)
+        summary, share, runs = _core.scan_tile_kept(tile, **kwargs)
+        _keep_runs((run_id, tile), group, runs)
+        summaries.append(summary)
+        shares.append(share)
     if not duration:
-        return _core.merge_tiles(scanned)
-    return _core.merge_tiles([s for s, _ in scanned]), [d for _, d in scanned]
+        return _core.merge_tiles(summaries)
+    return _core.merge_tiles(summaries), shares
 
 
 def _draw_session_tiles(
@@ -362,12 +425,16 @@ def _draw_session_tiles(
     metric: str,
     separation: Any,
     threads: int | None,
+    run_id: str,
 ) -> list[Any]:
-    """Task: rescan a few tiles and offer their pairs to a pass of a keyed draw (an offer per
-    request, in order)."""
+    """Task: offer a few tiles' pairs to a pass of a keyed draw (an offer per request, in
+    order), from the runs their scan kept in this process under ``(run_id, tile)``, or from a
+    rescan where they are not kept."""
     return [
         _core.draw_tile(
-            request, **_tile_kwargs(sources, options, starts, gamma, metric, separation, threads)
+            request,
+            **_tile_kwargs(sources, options, starts, gamma, metric, separation, threads),
+            runs=_kept_runs((run_id, request.tile)),
         )
         for request, sources, starts in requests
     ]
@@ -536,12 +603,27 @@ class _Runner:
         self.sent = 0  # bytes of task arguments shipped from the client
         self.received = 0  # bytes of results gathered by the client
 
-    def submit(self, name: str, fn: Callable[..., Any], *args: Any) -> Any:
+    def submit(self, name: str, fn: Callable[..., Any], *args: Any, worker: Any = None) -> Any:
+        """``fn(*args)`` as a task; on ``worker`` (an address) if it can, else anywhere."""
         if self.client is None:
             return fn(*args)
         self.count += 1
         self.sent += len(pickle.dumps([a for a in args if not _is_future(a)], protocol=5))
-        return self.client.submit(fn, *args, key=f"{name}-{self.token}-{self.count}", pure=False)
+        where = {} if worker is None else {"workers": [worker], "allow_other_workers": True}
+        key = f"{name}-{self.token}-{self.count}"
+        return self.client.submit(fn, *args, key=key, pure=False, **where)
+
+    def holders(self, groups: int) -> list[Any]:
+        """For each of ``groups`` scan tasks, the worker that keeps the most of its tiles' runs
+        (``None``: none, or no cluster)."""
+        if self.client is None:
+            return [None] * groups
+        best: list[tuple[int, Any]] = [(0, None)] * groups
+        for address, kept in self.client.run(_kept_groups, self.token).items():
+            for g, tiles in kept.items():
+                if tiles > best[g][0]:
+                    best[g] = (tiles, address)
+        return [address for _, address in best]
 
     def gather(self, items: list[Any]) -> list[Any]:
         if self.client is None:
@@ -664,7 +746,8 @@ class FleetRun:
     ) -> Table:
         """Samples drawn from the tiles by keys, where the tiles were scanned: the samples of
         :func:`sample_fleet` with the same arguments, pair for pair (see
-        :class:`KeyedDraw`). Each pass rescans the tiles asked (one pass, rarely two).
+        :class:`KeyedDraw`). Each pass (one, rarely two) asks the tiles' runs kept by their
+        scan on its worker, and rescans a tile only where they are gone (:data:`RUNS_KEPT`).
 
         Args:
             sampler: ``"one"``, ``"rho"``, ``"rho-dispersed"``, ``"alpha"`` or
@@ -694,6 +777,8 @@ class FleetRun:
         # The scan task that held each tile (tiles by value: the merge may list them in
         # another order than the plan).
         group_of = {c["tiles"][t]: g for g, members in enumerate(c["groups"]) for t in members}
+        # Where each scan task's tiles' runs are kept: its draws go there.
+        where = runner.holders(len(c["groups"]))
         while not draw.done:
             passes += 1
             # The requests of the tiles that one scan task held, in one task.
@@ -714,8 +799,10 @@ class FleetRun:
                     c["metric"],
                     c["separation"],
                     c["threads"],
+                    runner.token,
+                    worker=where[g],
                 )
-                for requests in grouped.values()
+                for g, requests in grouped.items()
             ]
             draw.absorb([offer for offers in runner.gather(futures) for offer in offers])
         self.stats["sample_s"] = time.perf_counter() - started
@@ -940,7 +1027,7 @@ def find_fleet_loops_dask(
     started = _now()
     groups = _tile_groups(tiles, block)
     scans = []
-    for group in groups:
+    for g, group in enumerate(groups):
         held = []
         for t in group:
             a, b = tiles[t].sessions
@@ -958,6 +1045,8 @@ def find_fleet_loops_dask(
                 shipped,
                 task_threads,
                 loop_duration,
+                runner.token,
+                g,
             )
         )
     if loop_duration:

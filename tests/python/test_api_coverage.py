@@ -163,6 +163,16 @@ ELSEWHERE = {
             "session_loop_duration",
         )
     },
+    **{
+        name: ("python/test_dask.py", "test_draws_from_kept_runs_or_rescans_are_the_same")
+        for name in (
+            "TileRuns",
+            "TileRuns.metric_name",
+            "TileRuns.nbytes",
+            "TileRuns.tile",
+            "scan_tile_kept",
+        )
+    },
     "Trajectory.from_evo": (
         "python/test_interop.py",
         "test_from_evo_se3_reorders_w_first_quaternions",

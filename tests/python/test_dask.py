@@ -2,8 +2,9 @@
 the single-machine fleet API (:func:`inexact_loops.find_fleet_loops`): components, session pairs
 and the overlap matrix identical (areas to a relative 1e-10) for 1, 2 and 7 tiles per session
 pair, on random and adversarial fleets written to TUM files and on MulRan KAIST 01/02; a worker
-SIGKILLed during a run changes nothing. Also: the tile objects pickle as their bytes, corrupt
-bytes fail clearly, and without ``client=`` Dask is not imported.
+SIGKILLed during a run changes nothing; samples drawn from the runs the scans kept equal those
+drawn from rescans (every draw a cache hit, every one a miss). Also: the tile objects pickle as
+their bytes, corrupt bytes fail clearly, and without ``client=`` Dask is not imported.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 import pytest
 
 import inexact_loops as il
+import inexact_loops.dask as il_dask
 from inexact_loops.dask import find_fleet_loops_dask, local_client
 
 TILES_PER_PAIR = (1, 2, 7)
@@ -384,6 +386,80 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
         unpickled.draw("rho", budget=10, seed=0)
     many = tiled.loops.draw("one", budget=10_000_000, seed=0)
     assert any("candidates" in w for w in many.warnings), many.warnings
+
+
+def runs_counts(client) -> dict[str, int]:
+    """The draws from kept runs ("hits") and from rescans ("misses") of every worker so far."""
+    counts = client.run(lambda: dict(il_dask._runs_counts)).values()
+    return {k: sum(c[k] for c in counts) for k in ("hits", "misses")}
+
+
+@pytest.mark.filterwarnings("ignore::inexact_loops.DiagonalBrokenWarning")
+@pytest.mark.filterwarnings("ignore::inexact_loops.SampleBudgetWarning")
+def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypatch):
+    paths = adversarial_fleet(tmp_path) + random_fleet(tmp_path, 13)
+    loops = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    draws = [("rho", {"budget": 300}), ("closest-first", {"budget": 50}), ("alpha", {"rate": 0.05})]
+    expected = [il.sample_fleet(loops, s, seed=3, **size).table for s, size in draws]
+    block = blocks_for(paths, 7)
+
+    def sample(run) -> None:
+        for (sampler, size), want in zip(draws, expected, strict=True):
+            assert_same_samples(run.sample(sampler, seed=3, **size), want)
+
+    # On the cluster: the draws go where their tiles were scanned and read the kept runs.
+    run = find_fleet_loops_dask(paths, 1.5, client=client, block=block)
+    before = runs_counts(client)
+    sample(run)
+    hits = runs_counts(client)
+    assert hits["hits"] > before["hits"], "no draw found its tile's runs"
+    # Every kept run dropped between the scan and the draw: the draws rescan, the same samples.
+    client.run(il_dask._forget_runs)
+    sample(run)
+    misses = runs_counts(client)
+    assert misses["hits"] == hits["hits"], "runs were found after they were dropped"
+    assert misses["misses"] > hits["misses"], "no draw rescanned its tile"
+    # In this process: every draw a hit; with nothing kept (RUNS_KEPT = 0), every one a miss.
+    for kept, field in ((il_dask.RUNS_KEPT, "hits"), (0, "misses")):
+        monkeypatch.setattr(il_dask, "RUNS_KEPT", kept)
+        il_dask._forget_runs()
+        counted = dict(il_dask._runs_counts)
+        sample(find_fleet_loops_dask(paths, 1.5, block=block))
+        other = "misses" if field == "hits" else "hits"
+        assert il_dask._runs_counts[other] == counted[other], f"RUNS_KEPT = {kept}"
+        assert il_dask._runs_counts[field] > counted[field], f"RUNS_KEPT = {kept}"
+    il_dask._forget_runs()
+    # By hand: a tile's kept runs offer what its rescan offers, and only for that tile.
+    sessions = [il.read_trajectory(p) for p in paths]
+    starts = np.cumsum([0] + [len(t) for t in sessions])
+    tiled = find_fleet_loops_dask(paths, 1.5, block=block)
+    tiles = tiled.loops.tiles
+    draw = tiled.loops.draw("rho", budget=300, seed=3)
+    offered = 0
+    for t, request in draw.requests():
+        a, b = tiles[t].sessions
+        kwargs = {"starts": (int(starts[a]), int(starts[b])), "gamma": 1.5}
+        summary, share, runs = il.scan_tile_kept(tiles[t], sessions[a], sessions[b], **kwargs)
+        assert (
+            summary.to_bytes()
+            == il.scan_tile(tiles[t], sessions[a], sessions[b], **kwargs).to_bytes()
+        )
+        assert share.tile == runs.tile == tiles[t]
+        assert runs.metric_name == "euclidean" and "runs" in repr(runs)
+        assert runs.nbytes >= 16 * len(runs)
+        kept = il.draw_tile(request, sessions[a], sessions[b], runs=runs, **kwargs)
+        rescanned = il.draw_tile(request, sessions[a], sessions[b], **kwargs)
+        assert kept.to_bytes() == rescanned.to_bytes()
+        offered += len(kept)
+        other = next(u for u in tiles if u != tiles[t] and u.sessions == tiles[t].sessions)
+        _, _, wrong = il.scan_tile_kept(other, sessions[a], sessions[b], **kwargs)
+        with pytest.raises(il.InvalidParameterError, match="runs are of tile"):
+            il.draw_tile(request, sessions[a], sessions[b], runs=wrong, **kwargs)
+        with pytest.raises(il.InvalidParameterError, match="metric"):
+            il.draw_tile(request, sessions[a], sessions[b], runs=runs, metric="chebyshev", **kwargs)
+    assert offered > 0
+    with pytest.raises(TypeError):
+        pickle.dumps(runs)
 
 
 def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
