@@ -115,7 +115,30 @@ def in_process(paths: list[str]) -> dict:
     }
 
 
-def on_cluster(paths: list[str], block: int) -> dict:
+def in_process_tiles(paths: list[str], block: int | None) -> dict:
+    """The same fleet from tiles in one process, without Dask (``client=None``): a fleet too
+    large for the engine's one process still runs here, a tile at a time."""
+    from inexact_loops.dask import find_fleet_loops_dask
+
+    started = time.perf_counter()
+    run = find_fleet_loops_dask(paths, GAMMA_M, block=block)
+    found_s = time.perf_counter() - started
+    samples = run.sample("rho", budget=BUDGET, seed=0)
+    total_s = time.perf_counter() - started
+    return {
+        "tiles": True,
+        "read_s": run.stats["read_s"],
+        "find_s": found_s - run.stats["read_s"],
+        "sample_s": total_s - found_s,
+        "total_s": total_s,
+        "peak_mb": peak_mb(),
+        "components": len(run.components["id"]),
+        "samples": len(samples["i"]),
+        "first": [int(x) for x in samples["i"][:5]],
+    }
+
+
+def on_cluster(paths: list[str], block: int | None) -> dict:
     import distributed
 
     import inexact_loops.dask as il_dask
@@ -129,6 +152,7 @@ def on_cluster(paths: list[str], block: int) -> dict:
             samples = run.sample("rho", budget=BUDGET, seed=0)
         total_s = time.perf_counter() - started
         peaks = client.run(peak_mb)
+        runs_held = client.run(lambda: il_dask._runs_held)
         counts = client.run(lambda: dict(il_dask._runs_counts)).values()
         tasks: dict[str, list[float]] = {}
         for t in stream.data:
@@ -143,6 +167,7 @@ def on_cluster(paths: list[str], block: int) -> dict:
             "sample_s": total_s - found_s,
             "total_s": total_s,
             "worker_peak_mb": sorted(peaks.values()),
+            "runs_held_mb": sorted(v / 1e6 for v in runs_held.values()),
             "client_peak_mb": peak_mb(),
             "components": len(run.components["id"]),
             "samples": len(samples["i"]),
@@ -154,14 +179,21 @@ def on_cluster(paths: list[str], block: int) -> dict:
         }
 
 
-def child(kind: str, paths_file: str, block: int) -> None:
+def child(kind: str, paths_file: str, block: int | None) -> None:
     paths = json.loads(Path(paths_file).read_text())
-    result = in_process(paths) if kind == "in-process" else on_cluster(paths, block)
+    if kind == "in-process":
+        result = in_process(paths)
+    elif kind == "in-process-tiles":
+        result = in_process_tiles(paths, block)
+    else:
+        result = on_cluster(paths, block)
     print("RESULT " + json.dumps(result, default=float))
 
 
-def run_child(kind: str, paths_file: Path, block: int, timeout_s: float) -> dict | None:
-    cmd = [sys.executable, __file__, "--child", kind, str(paths_file), "--block", str(block)]
+def run_child(kind: str, paths_file: Path, block: int | None, timeout_s: float) -> dict | None:
+    cmd = [sys.executable, __file__, "--child", kind, str(paths_file)]
+    if block is not None:
+        cmd += ["--block", str(block)]
     try:
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, check=True)
     except subprocess.TimeoutExpired:
@@ -175,13 +207,16 @@ def run_child(kind: str, paths_file: Path, block: int, timeout_s: float) -> dict
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", default="1e6,3e6,1e7", help="poses per fleet, comma separated")
-    parser.add_argument("--block", type=int, default=50_000)
+    parser.add_argument(
+        "--block", type=int, help="poses per block [default: find_fleet_loops_dask's choice]"
+    )
     parser.add_argument("--timeout-s", type=float, default=1500.0)
     parser.add_argument(
         "--in-process-up-to",
         type=float,
         default=3e7,
-        help="larger fleets run on the cluster alone (one process would not hold them)",
+        help="larger fleets are compared with the tiles in one process, without Dask (the "
+        "engine's one process would not hold them)",
     )
     parser.add_argument("--output", type=Path, default=REPO / "BENCHMARKS.md")
     parser.add_argument("--json", type=Path, help="also write the raw figures here")
@@ -219,10 +254,11 @@ def main() -> None:
             paths_file = folder / "paths.json"
             paths_file.write_text(json.dumps(paths))
             print(f"{size:,} poses: generated in {generate_s:.0f} s", flush=True)
-            local = (
-                run_child("in-process", paths_file, args.block, args.timeout_s)
-                if size <= args.in_process_up_to
-                else {"skipped": True}
+            local = run_child(
+                "in-process" if size <= args.in_process_up_to else "in-process-tiles",
+                paths_file,
+                args.block,
+                args.timeout_s,
             )
             print(f"  in-process: {local}", flush=True)
             dask = run_child("dask", paths_file, args.block, args.timeout_s)
@@ -274,24 +310,32 @@ def report(
         'district city of "Scale": the side is '
         + ", ".join(f"{district_side_m(x['poses']):,.0f} m" for x in rows)
         + f" for the sizes below); 10 Hz, gamma = {GAMMA_M:.0f} m, default separation; "
-        f"sigma_rho with a budget of {BUDGET:,}; block "
-        f"{block:,} poses; sessions read from Parquet by whoever needs them.",
-        "- In-process: `find_fleet_loops` + `sample_fleet`, one process, both cores. Dask: "
-        "`LocalCluster(n_workers=2, threads_per_worker=1)`, `find_fleet_loops_dask` + "
-        "`FleetRun.sample`. Overhead = Dask wall time / in-process wall time - 1.",
+        f"sigma_rho with a budget of {BUDGET:,}; blocks of "
+        + ", ".join(f"{block_of(x, block):,}" for x in rows)
+        + " poses ("
+        + ("`--block`" if block else "`block=None`: half the longest session, 50,000 to 10^6")
+        + "); sessions read from Parquet by whoever needs them.",
+        "- In-process: `find_fleet_loops` + `sample_fleet`, one process, both cores; where marked "
+        "*tiles*, a fleet the engine's one process would not hold (its peak, linear from the "
+        "largest engine run, is given after the tiles' peak) runs as `find_fleet_loops_dask` "
+        "without a client (the same tiles one after another in this process, each scan on both "
+        "cores) + `FleetRun.sample`. Dask: `LocalCluster(n_workers=2, threads_per_worker=1, "
+        "memory_limit='10GB')`, `find_fleet_loops_dask` + `FleetRun.sample`. Overhead = Dask "
+        "wall time / in-process wall time - 1. Runs kept: the runs each worker keeps for the "
+        "draws at the end (`RUNS_KEPT`, half its memory limit).",
         "",
         "| poses | tiles | components | in-process: read + find / sample (s) | peak (MB) | Dask: "
-        "find / sample (s) | overhead: find / all | worker peaks (MB) | client to workers | "
-        "workers to client | between workers | scan tasks (n, s each) | merge tasks (n, s each) "
-        "| draw tasks (n, s each) | same samples |",
-        "|---:|---:|---:|---|---:|---|---|---|---:|---:|---:|---|---|---|---|",
+        "find / sample (s) | overhead: find / all | worker peaks (MB) | runs kept (MB) | client "
+        "to workers | workers to client | between workers | scan tasks (n, s each) | merge tasks "
+        "(n, s each) | draw tasks (n, s each) | same samples |",
+        "|---:|---:|---:|---|---|---|---|---|---|---:|---:|---:|---|---|---|---|",
     ]
     for r in rows:
         local, dask = r["local"], r["dask"]
         if dask is None or local is None:
             limit = f" after {timeout_s:.0f} s" if timeout_s is not None else ""
             where = " on the cluster alone" if local and local.get("skipped") else ""
-            lines.append(f"| {r['poses']:,} | stopped unfinished{where}{limit} |" + " |" * 14)
+            lines.append(f"| {r['poses']:,} | stopped unfinished{where}{limit} |" + " |" * 15)
             continue
         s = dask["stats"]
         skipped = local.get("skipped", False)
@@ -303,16 +347,19 @@ def report(
             n, total, longest = tasks[name]
             return f"{n:,}, {total / n:.3f} (max {longest:.2f})"
 
+        # The engine's one process would hold the whole fleet: its peak, linear from the
+        # largest engine run.
+        ran = [
+            x
+            for x in rows
+            if x["local"] and not (x["local"].get("skipped") or x["local"].get("tiles"))
+        ]
+        big = max(ran, key=lambda x: x["poses"]) if ran else None
+        engine_peak = (
+            f"~{big['local']['peak_mb'] * r['poses'] / big['poses'] / 1e3:.0f} GB" if big else "—"
+        )
         if skipped:
-            # One process would hold the whole fleet: its peak, linear from the largest run.
-            ran = [x for x in rows if x["local"] and not x["local"].get("skipped")]
-            big = max(ran, key=lambda x: x["poses"]) if ran else None
-            peak = (
-                f"~{big['local']['peak_mb'] * r['poses'] / big['poses'] / 1e3:.0f} GB"
-                if big
-                else "—"
-            )
-            in_process = "not run"
+            in_process, peak = "not run", f"engine {engine_peak}"
             overheads, same = "—", "—"
         else:
             local_find = local["read_s"] + local["find_s"]
@@ -325,12 +372,16 @@ def report(
             )
             in_process = f"{local_find:.1f} / {local['sample_s']:.1f}"
             peak = f"{local['peak_mb']:.0f}"
+            if local.get("tiles"):
+                in_process += " *tiles*"
+                peak += f" (engine {engine_peak})"
             overheads = f"{overhead_find:+.0%} / {overhead:+.0%}"
         lines.append(
             f"| {r['poses']:,} | {s['tiles']:,} | {dask['components']:,} | {in_process} | "
             f"{peak} | {dask['found_s']:.1f} / "
             f"{dask['sample_s']:.1f} | {overheads} | "
             f"{', '.join(f'{p:.0f}' for p in dask['worker_peak_mb'])} | "
+            f"{', '.join(f'{p:.0f}' for p in dask.get('runs_held_mb', [])) or '—'} | "
             f"{s['bytes_sent'] / 1e6:.2f} MB | {s['bytes_received'] / 1e6:.2f} MB | "
             f"{s['bytes_between_workers'] / 1e6:.2f} MB | {per('scan-tiles')} | "
             f"{per('merge-tiles')} "
@@ -344,17 +395,25 @@ def report(
 SESSION_POSES = 1_000_000
 
 
-def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[str]:
+def block_of(row: dict, block: int | None) -> int:
+    """The block a fleet ran with: ``--block``, or the one ``find_fleet_loops_dask`` chose."""
+    if row.get("dask") and "block" in row["dask"]["stats"]:
+        return int(row["dask"]["stats"]["block"])
+    return block or 50_000
+
+
+def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -> list[str]:
     """The cost model fitted to the largest measured fleet, and its predictions."""
     measured = [r for r in rows if r["local"] is not None and r["dask"] is not None]
     if not measured:
         return ["(no size finished: no cost model)"]
     r = max(measured, key=lambda r: r["poses"])
-    compared = [x for x in measured if not x["local"].get("skipped")]
+    compared = [x for x in measured if not (x["local"].get("skipped") or x["local"].get("tiles"))]
     # The largest fleet run both ways: where the overhead is taken apart.
     c = max(compared, key=lambda x: x["poses"]) if compared else None
     n, d, s = r["poses"], r["dask"], r["dask"]["stats"]
     tasks = d["tasks"]
+    block = block_of(r, block)
 
     def cpu(name: str) -> float:
         return tasks[name][1] if name in tasks else 0.0
@@ -379,6 +438,7 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
     scan_max = tasks["scan-tiles"][2]
     tasks_per_block = task_count / blocks
     peak = max(d["worker_peak_mb"])
+    runs_per_pose = sum(d.get("runs_held_mb") or [0]) * 1e6 / n
     growth = ", ".join(f"{x['dask']['components'] / x['poses'] * 1e6:.0f}" for x in measured)
     if c is not None:
         ct, cd = c["dask"]["tasks"], c["dask"]
@@ -432,9 +492,14 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
         f"poses, in {count('scan-tiles'):,} tasks of a row block's tiles, the longest "
         f"{scan_max:.2f} s); the draw {draw_per_pose * 1e6:.2f} µs per pose; reading a "
         f"session (Parquet, planning's pass) {read_per_pose * 1e6:.2f} µs per pose.",
-        f"- **Memory per tile.** A worker's peak is {peak:.0f} MB: the sessions it keeps (up to "
-        "10^7 poses), a tile's piece of poses and its runs (O(block · runs per pose)), "
-        "independent of the fleet.",
+        f"- **Memory per worker.** A worker's peak is {peak:.0f} MB: the sessions it keeps (up "
+        "to 10^7 poses, ~400 MB), a tile's piece of poses and its runs (O(block · runs per "
+        "pose)), and the runs of the tiles it scanned, kept for the draws "
+        f"({max(d.get('runs_held_mb') or [0]):.0f} MB at the end here, "
+        f"{runs_per_pose:.0f} bytes a pose; capped by `RUNS_KEPT`, half the worker's memory "
+        "limit by default: past it the least recently used go and their draws rescan). The "
+        "first two are bounded by the block, not the fleet; the third is a cache, bounded by "
+        "the cap.",
         f"- **Bytes per task.** {bytes_per_task / 1e3:.1f} kB on average over the "
         f"{task_count:,} tasks "
         "(paths, tiles and requests out; summaries, merges and offers back; Dask's own messages "
@@ -455,9 +520,10 @@ def model(rows: list[dict], block: int, timeout_s: float | None = None) -> list[
         f"district city's (components per 10⁶ poses: {growth}). "
         "The constants are fitted at the largest size. "
         + (
-            "10⁸ poses (100 x 28 h) ran on the cluster alone: one process would hold the whole "
-            "fleet (its peak, linear from the largest in-process run, is in the table), more "
-            "than this machine's 24 GB shared with others."
+            "At 10⁸ poses (100 x 28 h) the engine's one process would hold the whole fleet "
+            "(its peak, linear from the largest engine run, is in the table), more than this "
+            "machine's 24 GB: the cluster is compared with the same tiles in one process "
+            "without Dask."
             if any(x["poses"] >= 10**8 for x in measured)
             else (
                 "10⁸ poses (100 x 28 h) ran on the cluster alone and was stopped unfinished "

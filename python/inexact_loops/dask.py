@@ -76,9 +76,14 @@ __all__ = [
     "write_pose_parquet",
 ]
 
-#: Poses per block (the side of a tile) unless ``block=`` says otherwise: a tile of two blocks
-#: of a city drive at 10 Hz scans in well under a second on one core (BENCHMARKS.md, "Dask").
+#: The smallest block ``block=None`` chooses, and the unit each session is first cut into:
+#: a tile of two such blocks of a city drive at 10 Hz scans in well under a second on one core
+#: (BENCHMARKS.md, "Dask").
 DEFAULT_BLOCK = 50_000
+
+#: The largest block ``block=None`` chooses: a tile's memory (its piece of poses and its
+#: runs) grows with the block.
+MAX_AUTO_BLOCK = 1_000_000
 
 #: Summaries (or partial merges) combined by one merge task.
 DEFAULT_FAN_IN = 8
@@ -91,8 +96,15 @@ POSES_KEPT = 10_000_000
 #: Bytes of runs each worker process keeps of the tiles it scanned, for their draws (a run
 #: takes 16 bytes, a row 8: :attr:`TileRuns.nbytes`); the least recently used tiles go first.
 #: A draw of a tile whose runs are not kept (evicted, scanned elsewhere, or the worker
-#: restarted) rescans the tile: the samples are the same. 0: keep none.
-RUNS_KEPT = 1_000_000_000
+#: restarted) rescans the tile: the samples are the same. 0: keep none. ``None``:
+#: :data:`RUNS_KEPT_SHARE` of the Dask worker's memory limit (of the machine's memory outside
+#: a worker). A district fleet's runs take about 73 bytes a pose (BENCHMARKS.md, "Dask"): a
+#: worker of a 10 GB limit keeps those of 6.8 * 10^7 poses.
+RUNS_KEPT: int | None = None
+
+#: The share of a worker's memory limit :data:`RUNS_KEPT` ``= None`` keeps runs in (Dask
+#: spills its own data from 60% and pauses the worker at 80%; the runs are not Dask's data).
+RUNS_KEPT_SHARE = 0.5
 
 #: The tiles' runs a worker keeps, most recently used last: (run id, tile) -> (the scan task's
 #: group, TileRuns).
@@ -283,13 +295,29 @@ def _keep_runs(key: Any, group: int, runs: _core.TileRuns) -> None:
     with _runs_lock:
         if key in _runs:
             _runs_held -= _runs.pop(key)[1].nbytes
-        if runs.nbytes > RUNS_KEPT:
+        limit = _runs_limit()
+        if runs.nbytes > limit:
             return
         _runs[key] = (group, runs)
         _runs_held += runs.nbytes
-        while _runs_held > RUNS_KEPT:
+        while _runs_held > limit:
             _, (_, dropped) = _runs.popitem(last=False)
             _runs_held -= dropped.nbytes
+
+
+def _runs_limit() -> int:
+    """:data:`RUNS_KEPT` in bytes, worked out when it is ``None``."""
+    if RUNS_KEPT is not None:
+        return RUNS_KEPT
+    memory = None
+    if "distributed" in sys.modules:
+        try:
+            memory = sys.modules["distributed"].get_worker().memory_manager.memory_limit
+        except (ValueError, AttributeError):
+            memory = None  # not in a worker, or a worker without a limit
+    if not memory:
+        memory = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    return int(RUNS_KEPT_SHARE * memory)
 
 
 def _kept_runs(key: Any) -> _core.TileRuns | None:
@@ -438,6 +466,28 @@ def _draw_session_tiles(
         )
         for request, sources, starts in requests
     ]
+
+
+def _auto_block(longest: int, smallest: int | None = None, largest: int | None = None) -> int:
+    """The block ``block=None`` chooses for a fleet whose longest session has ``longest``
+    poses: half that session, rounded up to a multiple of ``smallest`` (:data:`DEFAULT_BLOCK`)
+    and at most ``largest`` (:data:`MAX_AUTO_BLOCK`, rounded down to a multiple).
+
+    Why half a session: a vehicle that works one area for hours comes back to every part of its
+    session, so a row block meets every block of its own session, and each tile queries its
+    rows again: the scans cost about (blocks per session) times the engine's. Two blocks per
+    session keep that near the engine's cost, and two tasks per session for the workers to
+    share. Measured on 4 sessions of 10^6 poses (a vehicle's 28 h in its own district,
+    BENCHMARKS.md "Dask"): blocks of 50,000 took 14x the in-process engine, of 200,000 1.8x,
+    of 500,000 1.0x.
+
+    >>> _auto_block(100_000), _auto_block(1_000_000), _auto_block(10**8), _auto_block(10)
+    (50000, 500000, 1000000, 50000)
+    """
+    smallest = DEFAULT_BLOCK if smallest is None else smallest
+    largest = MAX_AUTO_BLOCK if largest is None else largest
+    units = max(1, min(-(-longest // (2 * smallest)), largest // smallest))
+    return units * smallest
 
 
 def _tile_groups(tiles: Sequence[_core.Tile], block: int) -> list[list[int]]:
@@ -602,6 +652,7 @@ class _Runner:
         self.count = 0
         self.sent = 0  # bytes of task arguments shipped from the client
         self.received = 0  # bytes of results gathered by the client
+        self._workers: list[Any] | None = None
 
     def submit(self, name: str, fn: Callable[..., Any], *args: Any, worker: Any = None) -> Any:
         """``fn(*args)`` as a task; on ``worker`` (an address) if it can, else anywhere."""
@@ -612,6 +663,21 @@ class _Runner:
         where = {} if worker is None else {"workers": [worker], "allow_other_workers": True}
         key = f"{name}-{self.token}-{self.count}"
         return self.client.submit(fn, *args, key=key, pure=False, **where)
+
+    def worker_for(self, k: int, sessions: int) -> Any:
+        """The worker that reads session ``k`` of ``sessions`` and scans its row blocks
+        (``None`` without a cluster): the workers in address order take consecutive sessions,
+        so that each session is read by one worker and kept there for its tiles, and the
+        sessions next to it in the list (often the vehicles or days next to it) by few. Tasks
+        go elsewhere when their worker is gone or busy (``allow_other_workers``, and Dask's
+        work stealing)."""
+        if self.client is None:
+            return None
+        if self._workers is None:
+            self._workers = sorted(self.client.scheduler_info()["workers"])
+        if not self._workers:
+            return None
+        return self._workers[k * len(self._workers) // max(sessions, 1)]
 
     def holders(self, groups: int) -> list[Any]:
         """For each of ``groups`` scan tasks, the worker that keeps the most of its tiles' runs
@@ -846,7 +912,7 @@ def find_fleet_loops_dask(
     gamma: float,
     *,
     client: Any = None,
-    block: int = DEFAULT_BLOCK,
+    block: int | None = None,
     separation: Any = "auto",
     metric: Any = None,
     fan_in: int = DEFAULT_FAN_IN,
@@ -878,7 +944,10 @@ def find_fleet_loops_dask(
         client: a ``dask.distributed.Client``: the tasks run on its cluster. ``None``: in this
             process, without Dask.
         block: poses per block, the side of a tile: the unit of work and of a task's memory.
-            The result does not depend on it.
+            The result does not depend on it. ``None``: half the longest session, between
+            :data:`DEFAULT_BLOCK` and :data:`MAX_AUTO_BLOCK` poses (in
+            :attr:`FleetRun.stats` as ``"block"``): a session cut into many blocks scans
+            each row once per block it comes back to.
         separation: within each session, as in :func:`find_fleet_loops` (``"auto"``: 4 gamma of
             path; ``None``: the paper's S_gamma).
         metric: a metric name or an ``inexact_loops.metrics`` object (not a callable);
@@ -923,7 +992,7 @@ def find_fleet_loops_dask(
         raise InvalidParameterError(f"fan_in = {fan_in} is invalid: a merge takes at least 2 parts")
     if on_error not in ("skip", "raise"):
         raise InvalidParameterError(f"on_error = {on_error!r} is invalid: 'skip' or 'raise'")
-    if block < 1:
+    if block is not None and block < 1:
         raise InvalidParameterError(f"block = {block} is invalid: at least 1 pose per block")
     named = _named_sources(sessions)
     read = {
@@ -973,12 +1042,22 @@ def find_fleet_loops_dask(
         sources_all = loaded
     else:
         sources_all = [source for _, source in named]
+    # Each session is read first where its row blocks will be scanned (it stays kept there).
+    unit = DEFAULT_BLOCK if block is None else block
     described = runner.gather(
         [
-            runner.submit("describe-session", _describe_session, source, options, block, metric)
+            runner.submit(
+                "describe-session",
+                _describe_session,
+                source,
+                options,
+                unit,
+                metric,
+                worker=runner.worker_for(k, len(sources_all)),
+            )
             if not isinstance(source, _Failed)
             else source
-            for source in sources_all
+            for k, source in enumerate(sources_all)
         ]
     )
     failures: list[tuple[str, str, str]] = []
@@ -1014,6 +1093,11 @@ def find_fleet_loops_dask(
     names = [named[k][0] for k in kept]
     blocks = [described[k][0] for k in kept]
     sources = [sources_all[k] for k in kept]
+    if block is None:
+        block = _auto_block(max(b.poses for b in blocks))
+        if block > unit:
+            blocks = [b.coarsened(block // unit) for b in blocks]
+    stats["block"] = block
     stats["read_s"] = _now() - started
     started = _now()
     tiles = _core.plan_tiles(blocks, gamma=gamma, metric=metric)
@@ -1047,6 +1131,7 @@ def find_fleet_loops_dask(
                 loop_duration,
                 runner.token,
                 g,
+                worker=runner.worker_for(kept[tiles[group[0]].sessions[0]], len(sources_all)),
             )
         )
     if loop_duration:
@@ -1510,8 +1595,11 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--block",
         type=int,
-        default=DEFAULT_BLOCK,
-        help=f"poses per block, the side of a tile [default: {DEFAULT_BLOCK}]",
+        default=None,
+        help=(
+            "poses per block, the side of a tile [default: half the longest session, "
+            f"{DEFAULT_BLOCK:,} to {MAX_AUTO_BLOCK:,}]"
+        ),
     )
     p.add_argument(
         "--fan-in",
@@ -1636,7 +1724,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         stats = summary["stats"]
         print(
             f"loops-dask: {len(summary['sessions'])} session(s), {stats['poses']} poses, "
-            f"{stats['tiles']} tiles on {where}: {summary['components']} components "
+            f"{stats['tiles']} tiles of {stats['block']} poses on {where}: "
+            f"{summary['components']} components "
             f"({summary['between_sessions']} between sessions), "
             f"{summary['samples'] if summary['samples'] is not None else 'no'} samples; "
             f"results in {args.out} ({stats['total_s']:.1f} s)"

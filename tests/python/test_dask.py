@@ -140,6 +140,53 @@ def test_in_process_equals_the_fleet(tmp_path, per_pair):
     assert_same(find_fleet_loops_dask(trajectories, 1.5, block=block, separation=separation), fleet)
 
 
+@pytest.mark.filterwarnings("ignore::inexact_loops.DiagonalBrokenWarning")
+@pytest.mark.parametrize("where", ["in-process", "cluster"])
+def test_the_chosen_block_gives_the_fleet(tmp_path, request, monkeypatch, where):
+    """``block=None`` cuts each session into blocks of the smallest unit first, then joins
+    them (``SessionBlocks.coarsened``) to half the longest session: the tiles are fewer and
+    the answer is the fleet's, samples included."""
+    paths = adversarial_fleet(tmp_path) + random_fleet(tmp_path, 3)
+    client = request.getfixturevalue("client") if where == "cluster" else None
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    longest = max(len(il.read_trajectory(p)) for p in paths)
+    unit = 7
+    monkeypatch.setattr(il_dask, "DEFAULT_BLOCK", unit)
+    monkeypatch.setattr(il_dask, "MAX_AUTO_BLOCK", 10_000)
+    chosen = find_fleet_loops_dask(paths, 1.5, client=client)
+    assert chosen.stats["block"] == unit * -(-longest // (2 * unit)) > unit
+    assert_same(chosen, fleet)
+    fine = find_fleet_loops_dask(paths, 1.5, client=client, block=unit)
+    assert chosen.stats["tiles"] < fine.stats["tiles"]
+    expected = il.sample_fleet(fleet, "rho", budget=40, seed=5).table
+    got = chosen.sample("rho", budget=40, seed=5)
+    for column in ("i", "j", "component"):
+        np.testing.assert_array_equal(got[column], expected[column], err_msg=column)
+    # The largest block caps the choice.
+    monkeypatch.setattr(il_dask, "MAX_AUTO_BLOCK", 2 * unit + 1)
+    capped = find_fleet_loops_dask(paths, 1.5, client=client)
+    assert capped.stats["block"] == 2 * unit
+    assert_same(capped, fleet)
+
+
+def test_coarsened_blocks_are_cut_as_asked_and_pickle():
+    rng = np.random.default_rng(4)
+    xy = np.cumsum(rng.normal(0.0, 1.0, (101, 2)), axis=0)
+    drive = il.Trajectory(np.arange(101.0), xy)
+    fine = il.session_blocks(drive, block=6)
+    for factor in (1, 2, 5, 17, 40):
+        coarse = fine.coarsened(factor)
+        assert (coarse.block, len(coarse), coarse.poses) == (
+            6 * factor,
+            -(-101 // (6 * factor)),
+            101,
+        )
+        again = pickle.loads(pickle.dumps(coarse))
+        assert again.to_bytes() == coarse.to_bytes()
+    with pytest.raises(il.InvalidParameterError, match="factor"):
+        fine.coarsened(0)
+
+
 MULRAN = {
     "kaist01": Path("mulran_kaist") / "kaist01_localization_poses01_seq02asmap.txt",
     "kaist02": Path("mulran_kaist") / "kaist02_localization_poses02_seq02asmap.txt",

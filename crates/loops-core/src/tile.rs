@@ -152,6 +152,45 @@ impl SessionBlocks {
         Ok(Self { poses: session.len(), span_s: session.span_s(), block, dim: session.dim(), centres, radii })
     }
 
+    /// The same session in blocks `factor` times larger (the last may hold fewer poses), each
+    /// bounded from the balls of the blocks it joins: centred on its middle block's centre, with
+    /// radius the largest distance from there to a joined block's centre plus that block's
+    /// radius (by the triangle inequality, every pose of the block lies within it). Lets a planner
+    /// choose the tiles' size after learning every session's length, without reading the
+    /// sessions again. O(blocks) distance evaluations.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a factor of 0, or blocks of more than `usize::MAX` poses.
+    ///
+    /// # Example
+    /// ```
+    /// use loops_core::{Euclidean, SessionBlocks, Trajectory};
+    /// let x: Vec<f64> = (0..10).map(f64::from).collect();
+    /// let drive = Trajectory::new(x.clone(), x.iter().flat_map(|&x| [x, 0.0]).collect(), 2).unwrap();
+    /// let fine = SessionBlocks::new(&drive, &Euclidean, 2).unwrap();
+    /// let coarse = fine.coarsened(3, &Euclidean).unwrap();
+    /// assert_eq!((coarse.block, coarse.len()), (6, 2));
+    /// // Poses 0..6 around pose 3's centre (block 1 of 2): 2 + 1 from pose 1's block.
+    /// assert_eq!((&coarse.centres[..2], coarse.radii[0]), (&[3.0, 0.0][..], 3.0));
+    /// ```
+    pub fn coarsened<M: Metric + ?Sized>(&self, factor: usize, metric: &M) -> Result<Self> {
+        let block = self.block.checked_mul(factor).filter(|_| factor > 0).ok_or(Error::InvalidParameter {
+            name: "factor",
+            value: factor as f64,
+            expected: "at least 1, with blocks of at most usize::MAX poses",
+        })?;
+        let centre = |k: usize| &self.centres[k * self.dim..(k + 1) * self.dim];
+        let (mut centres, mut radii) = (Vec::new(), Vec::new());
+        for lo in (0..self.len()).step_by(factor) {
+            let hi = (lo + factor).min(self.len());
+            let middle = centre(lo + (hi - lo) / 2);
+            let radius = (lo..hi).map(|k| metric.distance(middle, centre(k)) + self.radii[k]).fold(0.0, f64::max);
+            centres.extend_from_slice(middle);
+            radii.push(radius);
+        }
+        Ok(Self { poses: self.poses, span_s: self.span_s, block, dim: self.dim, centres, radii })
+    }
+
     /// Number of blocks.
     pub fn len(&self) -> usize {
         self.radii.len()
@@ -309,6 +348,14 @@ impl MetricSpec {
     /// As [`SessionBlocks::new`].
     pub fn session_blocks(&self, session: &Trajectory, block: usize) -> Result<SessionBlocks> {
         with_metric!(self, m => SessionBlocks::new(session, m, block))
+    }
+
+    /// [`SessionBlocks::coarsened`] under this metric.
+    ///
+    /// # Errors
+    /// As [`SessionBlocks::coarsened`].
+    pub fn coarsened_blocks(&self, blocks: &SessionBlocks, factor: usize) -> Result<SessionBlocks> {
+        with_metric!(self, m => blocks.coarsened(factor, m))
     }
 
     /// [`plan_session_tiles`] under this metric.

@@ -154,8 +154,59 @@ fn check_tree_cut(
     Ok(())
 }
 
+/// Blocks made `factor` times larger from finer ones: the same cut as blocks made at that size,
+/// balls that hold every pose of their block (checked pose by pose), and plans from them that cover every pair within γ.
+fn check_coarsened(sessions: &[Trajectory], gamma: f64, block: usize, factor: usize) -> Result<(), String> {
+    let starts: Vec<usize> = sessions.iter().scan(0, |at, s| Some(std::mem::replace(at, *at + s.len()))).collect();
+    let mut coarse = Vec::new();
+    for (a, session) in sessions.iter().enumerate() {
+        let fine = SessionBlocks::new(session, &Euclidean, block).map_err(|e| e.to_string())?;
+        let got = fine.coarsened(factor, &Euclidean).map_err(|e| e.to_string())?;
+        let exact = SessionBlocks::new(session, &Euclidean, block * factor).map_err(|e| e.to_string())?;
+        if (got.poses, got.block, got.len(), got.span_s) != (exact.poses, exact.block, exact.len(), exact.span_s) {
+            return Err(format!("session {a}: {got:?} is not cut as {exact:?}"));
+        }
+        for k in 0..got.len() {
+            let centre = &got.centres[k * got.dim..(k + 1) * got.dim];
+            let bound = got.radii[k] * (1.0 + 1e-12) + 1e-12;
+            for i in k * got.block..((k + 1) * got.block).min(session.len()) {
+                let d = Euclidean.distance(centre, session.point(i));
+                if d > bound {
+                    return Err(format!("session {a}, block {k}: pose {i} at {d} outside radius {}", got.radii[k]));
+                }
+            }
+        }
+        coarse.push(SessionBlocks::from_bytes(&got.to_bytes()).map_err(|e| e.to_string())?);
+    }
+    let tiles = plan_session_tiles(&coarse, &Euclidean, gamma).map_err(|e| e.to_string())?;
+    check_cover(sessions, &starts, &tiles, gamma)
+}
+
+#[test]
+fn coarsened_blocks_refuse_a_factor_of_zero() {
+    let blocks = SessionBlocks::new(&tour(20, 0.0, [0.0, 0.0]), &Euclidean, 4).unwrap();
+    assert!(matches!(blocks.coarsened(0, &Euclidean), Err(Error::InvalidParameter { name: "factor", .. })));
+    assert!(matches!(blocks.coarsened(usize::MAX, &Euclidean), Err(Error::InvalidParameter { name: "factor", .. })));
+    assert_eq!(blocks.coarsened(1, &Euclidean).unwrap(), blocks);
+}
+
+#[test]
+fn adversarial_fleets_coarsen() {
+    let sessions = adversarial_fleet(90, 60, 40, 70);
+    for (block, factor) in [(1, 7), (4, 3), (7, 2), (16, 16)] {
+        check_coarsened(&sessions, 1.5, block, factor).unwrap_or_else(|e| panic!("block {block} x {factor}: {e}"));
+    }
+}
+
 proptest! {
     #![proptest_config(support::config(64, 0x7EE5))]
+
+    #[test]
+    fn coarsened_blocks_bound_their_poses(
+        fleet in random_fleet(40, 1..4, 2.0), block in 1usize..9, factor in 1usize..6,
+    ) {
+        check_coarsened(&fleet.sessions(), fleet.gamma(), block, factor).map_err(TestCaseError::fail)?;
+    }
 
     #[test]
     fn merge_trees_give_the_fleet_result(fleet in random_fleet(40, 1..4, 2.0), seed in any::<u64>()) {

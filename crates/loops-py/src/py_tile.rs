@@ -123,6 +123,25 @@ impl SessionBlocks {
     fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
         PyBytes::new(py, &self.inner.to_bytes())
     }
+
+    /// The same session in blocks ``factor`` times larger, bounded from these blocks' balls
+    /// (each ball still holds every pose of its block): a planner learns every session's
+    /// length first and then chooses the tiles' size without reading the sessions again.
+    /// O(blocks) distances.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a factor of 0.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
+    ///     >>> coarse = il.session_blocks(drive, block=2).coarsened(3)
+    ///     >>> coarse.block, len(coarse), coarse.poses
+    ///     (6, 2, 10)
+    fn coarsened(&self, factor: usize) -> PyResult<Self> {
+        let inner = self.metric.coarsened_blocks(&self.inner, factor).map_err(Failure::from)?;
+        Ok(Self { inner, metric: self.metric.clone() })
+    }
 }
 
 /// Cuts a session into blocks of ``block`` consecutive poses and bounds each by a ball: what
