@@ -313,7 +313,7 @@ def report(
         f"sigma_rho with a budget of {BUDGET:,}; blocks of "
         + ", ".join(f"{block_of(x, block):,}" for x in rows)
         + " poses ("
-        + ("`--block`" if block else "`block=None`: half the longest session, 50,000 to 10^6")
+        + ("`--block`" if block else "`block=None`: the longest session, 50,000 to 10^6")
         + "); sessions read from Parquet by whoever needs them.",
         "- In-process: `find_fleet_loops` + `sample_fleet`, one process, both cores; where marked "
         "*tiles*, a fleet the engine's one process would not hold (its peak, linear from the "
@@ -467,7 +467,7 @@ def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -
             "time): a tile's scan keeps only the stretches of its rows and columns whose chunks "
             "(64 poses) come within gamma of the other side, so the tiles together cost about "
             "what the engine spends on the same cells, and each worker keeps the sessions it "
-            f"has read (up to 10^7 poses). {draws}: "
+            f"has read (up to 3 * 10^7 poses). {draws}: "
             f"{draw_core / max(1e-9, 2 * c['local']['sample_s']):.1f}x the in-process sampler's "
             f"core time. Dask adds {idle:.1f} s of wall time beyond the work shared by the 2 "
             f"workers ({c_tasks:,} tasks: a scan task per row block, a draw task per row block "
@@ -493,7 +493,7 @@ def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -
         f"{scan_max:.2f} s); the draw {draw_per_pose * 1e6:.2f} µs per pose; reading a "
         f"session (Parquet, planning's pass) {read_per_pose * 1e6:.2f} µs per pose.",
         f"- **Memory per worker.** A worker's peak is {peak:.0f} MB: the sessions it keeps (up "
-        "to 10^7 poses, ~400 MB), a tile's piece of poses and its runs (O(block · runs per "
+        "to 3 * 10^7 poses, ~1.2 GB), a tile's piece of poses and its runs (O(block · runs per "
         "pose)), and the runs of the tiles it scanned, kept for the draws "
         f"({max(d.get('runs_held_mb') or [0]):.0f} MB at the end here, "
         f"{runs_per_pose:.0f} bytes a pose; capped by `RUNS_KEPT`, half the worker's memory "

@@ -89,9 +89,12 @@ MAX_AUTO_BLOCK = 1_000_000
 DEFAULT_FAN_IN = 8
 
 #: Poses each worker process keeps of the sessions it has read, for the next tiles that need
-#: them (a pose takes 32-40 bytes: 10^7 poses are ~400 MB); the least recently used go first,
-#: and the last one read is always kept.
-POSES_KEPT = 10_000_000
+#: them (a pose takes 32-40 bytes: 3 * 10^7 poses are ~1.2 GB); the least recently used go
+#: first, and the last one read is always kept. Enough for the sessions of ~25 vehicles of
+#: 28 h: a worker that scans consecutive sessions then reads each of its sessions and their
+#: neighbours about once (with 10^7, a fleet of 10^8 poses spent half its scan tasks' time
+#: reading sessions again).
+POSES_KEPT = 30_000_000
 
 #: Bytes of runs each worker process keeps of the tiles it scanned, for their draws (a run
 #: takes 16 bytes, a row 8: :attr:`TileRuns.nbytes`); the least recently used tiles go first.
@@ -470,24 +473,43 @@ def _draw_session_tiles(
 
 def _auto_block(longest: int, smallest: int | None = None, largest: int | None = None) -> int:
     """The block ``block=None`` chooses for a fleet whose longest session has ``longest``
-    poses: half that session, rounded up to a multiple of ``smallest`` (:data:`DEFAULT_BLOCK`)
-    and at most ``largest`` (:data:`MAX_AUTO_BLOCK`, rounded down to a multiple).
+    poses: that session, rounded up to a multiple of ``smallest`` (:data:`DEFAULT_BLOCK`) and
+    at most ``largest`` (:data:`MAX_AUTO_BLOCK`, rounded down to a multiple).
 
-    Why half a session: a vehicle that works one area for hours comes back to every part of its
-    session, so a row block meets every block of its own session, and each tile queries its
-    rows again: the scans cost about (blocks per session) times the engine's. Two blocks per
-    session keep that near the engine's cost, and two tasks per session for the workers to
-    share. Measured on 4 sessions of 10^6 poses (a vehicle's 28 h in its own district,
-    BENCHMARKS.md "Dask"): blocks of 50,000 took 14x the in-process engine, of 200,000 1.8x,
-    of 500,000 1.0x.
+    Why whole sessions: a vehicle that works one area for hours comes back to every part of
+    its session, so a row block meets every block of its own session, and each tile queries
+    its rows again: the scans cost more the more blocks a session is cut into. Measured on one
+    core, tiles in one process against the engine on the same fleet (BENCHMARKS.md, "Dask"):
+    25 sessions of 10^5 poses, 1.13x the engine in blocks of 10^5, 1.30x in blocks of 50,000;
+    9 sessions of 10^6 poses, 1.16x in blocks of 10^6, 1.24x in blocks of 500,000 (and 14x
+    in blocks of 50,000 on 4 such sessions).
 
-    >>> _auto_block(100_000), _auto_block(1_000_000), _auto_block(10**8), _auto_block(10)
-    (50000, 500000, 1000000, 50000)
+    >>> _auto_block(100_000), _auto_block(120_000), _auto_block(10**8), _auto_block(10)
+    (100000, 150000, 1000000, 50000)
     """
     smallest = DEFAULT_BLOCK if smallest is None else smallest
     largest = MAX_AUTO_BLOCK if largest is None else largest
-    units = max(1, min(-(-longest // (2 * smallest)), largest // smallest))
+    units = max(1, min(-(-longest // smallest), largest // smallest))
     return units * smallest
+
+
+def _interleaved(items: list[Any], workers: list[Any]) -> list[Any]:
+    """``items`` (each meant for the worker at the same place of ``workers``) in the order to
+    submit them: each worker's first, then each one's second, and so on, so that every worker
+    starts at once. Submitted in list order, the first worker's tasks would come first, the
+    others would steal them (Dask's work stealing moves tasks with loose restrictions) and read
+    their sessions, or rescan their runs, a second time.
+
+    >>> _interleaved(["a1", "a2", "a3", "b1"], ["A", "A", "A", "B"])
+    ['a1', 'b1', 'a2', 'a3']
+    """
+    queues: dict[Any, list[Any]] = {}
+    for item, worker in zip(items, workers, strict=True):
+        queues.setdefault(worker, []).append(item)
+    out = []
+    for round_ in range(max((len(q) for q in queues.values()), default=0)):
+        out += [q[round_] for q in queues.values() if round_ < len(q)]
+    return out
 
 
 def _tile_groups(tiles: Sequence[_core.Tile], block: int) -> list[list[int]]:
@@ -855,11 +877,13 @@ class FleetRun:
                 grouped.setdefault(group_of[tiles[t]], []).append(
                     (request, sources, (c["starts"][a], c["starts"][b]))
                 )
-            futures = [
-                runner.submit(
+            asked = list(grouped)
+            futures: dict[int, Any] = {}
+            for g in _interleaved(asked, [where[g] for g in asked]):
+                futures[g] = runner.submit(
                     "draw-tiles",
                     _draw_session_tiles,
-                    requests,
+                    grouped[g],
                     c["options"],
                     c["gamma"],
                     c["metric"],
@@ -868,9 +892,8 @@ class FleetRun:
                     runner.token,
                     worker=where[g],
                 )
-                for g, requests in grouped.items()
-            ]
-            draw.absorb([offer for offers in runner.gather(futures) for offer in offers])
+            offered = runner.gather([futures[g] for g in asked])
+            draw.absorb([offer for offers in offered for offer in offers])
         self.stats["sample_s"] = time.perf_counter() - started
         self.stats["sample_passes"] = passes
         return draw.table()  # type: ignore[no-any-return]
@@ -944,7 +967,7 @@ def find_fleet_loops_dask(
         client: a ``dask.distributed.Client``: the tasks run on its cluster. ``None``: in this
             process, without Dask.
         block: poses per block, the side of a tile: the unit of work and of a task's memory.
-            The result does not depend on it. ``None``: half the longest session, between
+            The result does not depend on it. ``None``: the longest session, between
             :data:`DEFAULT_BLOCK` and :data:`MAX_AUTO_BLOCK` poses (in
             :attr:`FleetRun.stats` as ``"block"``): a session cut into many blocks scans
             each row once per block it comes back to.
@@ -1044,22 +1067,20 @@ def find_fleet_loops_dask(
         sources_all = [source for _, source in named]
     # Each session is read first where its row blocks will be scanned (it stays kept there).
     unit = DEFAULT_BLOCK if block is None else block
-    described = runner.gather(
-        [
-            runner.submit(
+    readers = [runner.worker_for(k, len(sources_all)) for k in range(len(sources_all))]
+    describing: list[Any] = list(sources_all)  # a _Failed stays as it is
+    for k in _interleaved(list(range(len(sources_all))), readers):
+        if not isinstance(sources_all[k], _Failed):
+            describing[k] = runner.submit(
                 "describe-session",
                 _describe_session,
-                source,
+                sources_all[k],
                 options,
                 unit,
                 metric,
-                worker=runner.worker_for(k, len(sources_all)),
+                worker=readers[k],
             )
-            if not isinstance(source, _Failed)
-            else source
-            for k, source in enumerate(sources_all)
-        ]
-    )
+    described = runner.gather(describing)
     failures: list[tuple[str, str, str]] = []
     kept: list[int] = []
     first: tuple[str, str, int] | None = None
@@ -1110,29 +1131,31 @@ def find_fleet_loops_dask(
     task_threads = threads if client is None else (1 if threads is None else threads)
     started = _now()
     groups = _tile_groups(tiles, block)
-    scans = []
-    for g, group in enumerate(groups):
+    workers = [
+        runner.worker_for(kept[tiles[group[0]].sessions[0]], len(sources_all)) for group in groups
+    ]
+    scans: list[Any] = [None] * len(groups)
+    for g in _interleaved(list(range(len(groups))), workers):
+        group = groups[g]
         held = []
         for t in group:
             a, b = tiles[t].sessions
             held.append(
                 (tiles[t], (sources[a], None if a == b else sources[b]), (starts[a], starts[b]))
             )
-        scans.append(
-            runner.submit(
-                "scan-tiles",
-                _scan_session_tiles,
-                held,
-                options,
-                gamma,
-                metric_name,
-                shipped,
-                task_threads,
-                loop_duration,
-                runner.token,
-                g,
-                worker=runner.worker_for(kept[tiles[group[0]].sessions[0]], len(sources_all)),
-            )
+        scans[g] = runner.submit(
+            "scan-tiles",
+            _scan_session_tiles,
+            held,
+            options,
+            gamma,
+            metric_name,
+            shipped,
+            task_threads,
+            loop_duration,
+            runner.token,
+            g,
+            worker=workers[g],
         )
     if loop_duration:
         summaries = [runner.submit("tiles-merge", operator.getitem, s, 0) for s in scans]
@@ -1597,7 +1620,7 @@ def _parser() -> argparse.ArgumentParser:
         type=int,
         default=None,
         help=(
-            "poses per block, the side of a tile [default: half the longest session, "
+            "poses per block, the side of a tile [default: the longest session, "
             f"{DEFAULT_BLOCK:,} to {MAX_AUTO_BLOCK:,}]"
         ),
     )

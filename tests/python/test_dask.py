@@ -144,8 +144,8 @@ def test_in_process_equals_the_fleet(tmp_path, per_pair):
 @pytest.mark.parametrize("where", ["in-process", "cluster"])
 def test_the_chosen_block_gives_the_fleet(tmp_path, request, monkeypatch, where):
     """``block=None`` cuts each session into blocks of the smallest unit first, then joins
-    them (``SessionBlocks.coarsened``) to half the longest session: the tiles are fewer and
-    the answer is the fleet's, samples included."""
+    them (``SessionBlocks.coarsened``) to the longest session: the tiles are fewer and the
+    answer is the fleet's, samples included."""
     paths = adversarial_fleet(tmp_path) + random_fleet(tmp_path, 3)
     client = request.getfixturevalue("client") if where == "cluster" else None
     fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
@@ -154,7 +154,7 @@ def test_the_chosen_block_gives_the_fleet(tmp_path, request, monkeypatch, where)
     monkeypatch.setattr(il_dask, "DEFAULT_BLOCK", unit)
     monkeypatch.setattr(il_dask, "MAX_AUTO_BLOCK", 10_000)
     chosen = find_fleet_loops_dask(paths, 1.5, client=client)
-    assert chosen.stats["block"] == unit * -(-longest // (2 * unit)) > unit
+    assert chosen.stats["block"] == unit * -(-longest // unit) > unit
     assert_same(chosen, fleet)
     fine = find_fleet_loops_dask(paths, 1.5, client=client, block=unit)
     assert chosen.stats["tiles"] < fine.stats["tiles"]
