@@ -10,6 +10,11 @@
 //! together that hold it (the loops and the samples of one fleet share it again when unpickled),
 //! and `_from_state` checks that the state fits it. The loops of the 2.1 h drive at γ = 40 m (75,600 poses, 155,812 runs) pickle to 3.2 MB
 //! in about 25 ms and unpickle, checked, in about 35 ms.
+//!
+//! The tile objects a cluster ships between machines (`TileSummary`, `TileMerge`,
+//! `DrawCandidates`, `TileDuration`) pickle instead as `(Class, (bytes,))`, their core value's
+//! own `to_bytes` (a tag, the tile format version, MessagePack): the same bytes a worker can
+//! send without pickle ([`pickled_as_bytes!`]).
 
 use pyo3::PyClass;
 use pyo3::prelude::*;
@@ -63,6 +68,55 @@ macro_rules! pickled {
     };
 }
 pub(crate) use pickled;
+
+/// The pickling methods of a tile object that a cluster ships between machines as its own
+/// bytes: a class whose only field `inner` holds a core value `$core` with `to_bytes()` and
+/// `from_bytes(&[u8])` (the bytes carry their own tag and format version, so they are not
+/// wrapped in a [`reduce`] state). Emits the constructor from those bytes (decoded without the
+/// GIL; `InvalidParameterError` for bytes of something else, of another format version, or
+/// corrupt), `to_bytes` (docstring `$to_bytes_doc`) and `__reduce__` as `(Class, (bytes,))`;
+/// given `from_bytes`, also the static method `from_bytes`, as the constructor. `$what` names
+/// the value in the docstrings. A `#[pymethods]` block of its own, as [`pickled!`]'s.
+macro_rules! pickled_as_bytes {
+    ($class:ident, $core:ty, $what:literal, $to_bytes_doc:literal $(, $from_bytes:ident)?) => {
+        #[pyo3::pymethods]
+        impl $class {
+            #[doc = concat!("The ", $what, " from :meth:`to_bytes` (what pickling stores).")]
+            ///
+            /// Raises:
+            ///     InvalidParameterError: bytes of something else, of another format version, or corrupt
+            ///         (the message says which).
+            #[new]
+            fn new(py: pyo3::Python<'_>, data: &[u8]) -> pyo3::PyResult<Self> {
+                let inner = crate::detached(py, || Ok(<$core>::from_bytes(data)?))?;
+                Ok(Self { inner })
+            }
+
+            #[doc = $to_bytes_doc]
+            fn to_bytes<'py>(&self, py: pyo3::Python<'py>) -> pyo3::Bound<'py, pyo3::types::PyBytes> {
+                pyo3::types::PyBytes::new(py, &self.inner.to_bytes())
+            }
+
+            fn __reduce__<'py>(
+                slf: &pyo3::Bound<'py, Self>,
+            ) -> (pyo3::Bound<'py, pyo3::types::PyType>, (pyo3::Bound<'py, pyo3::types::PyBytes>,)) {
+                (slf.get_type(), (slf.get().to_bytes(slf.py()),))
+            }
+        }
+
+        $(
+            #[pyo3::pymethods]
+            impl $class {
+                #[doc = concat!("The ", $what, " from :meth:`to_bytes`; as the constructor.")]
+                #[staticmethod]
+                fn $from_bytes(py: pyo3::Python<'_>, data: &[u8]) -> pyo3::PyResult<Self> {
+                    Self::new(py, data)
+                }
+            }
+        )?
+    };
+}
+pub(crate) use pickled_as_bytes;
 
 /// What [`reduce_with`] returns: `(Class._from_state, (state, obj))`.
 pub(crate) type ReducedWith<'py, C> = (Bound<'py, PyAny>, (Bound<'py, PyBytes>, Py<C>));

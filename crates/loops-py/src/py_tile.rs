@@ -10,7 +10,7 @@ use pyo3::types::{PyBytes, PyTuple};
 
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
-use crate::py_metric::{MetricArg, MetricRef};
+use crate::py_metric::MetricArg;
 use crate::py_separation::SeparationArg;
 use crate::py_trajectory::Trajectory;
 use loops_core::MetricSpec;
@@ -38,25 +38,63 @@ pub(crate) fn tile_metric(
     }
 }
 
-/// The two sessions of a tile's scan or draw (session a twice for a tile within one session) and
-/// its metric (`session_a`'s own unless given): a tile between two sessions needs `session_b`.
-pub(crate) fn tile_sessions(
-    tile: &loops_core::Tile,
-    session_a: &Trajectory,
-    session_b: Option<&Trajectory>,
-    metric: Option<&Bound<'_, PyAny>>,
-    function: &str,
-) -> PyResult<([Arc<loops_core::Trajectory>; 2], MetricSpec)> {
-    if session_b.is_none() && tile.sessions[0] != tile.sessions[1] {
-        return Err(PyTypeError::new_err(format!(
-            "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
-            tile.sessions[0], tile.sessions[1]
-        )));
+/// A scan (or draw) of one tile, from the arguments that `scan_tile`, `scan_tile_with_duration`,
+/// `scan_tile_kept` and `draw_tile` share: the two sessions (session a twice for a tile within
+/// one session), their first fleet indices, γ, the separation at γ and the metric
+/// (`session_a`'s own unless given; only the core's metrics, so the engine's loops stay
+/// monomorphic).
+pub(crate) struct TileScan {
+    sessions: [Arc<loops_core::Trajectory>; 2],
+    pub(crate) starts: [usize; 2],
+    pub(crate) gamma: f64,
+    pub(crate) separation: loops_core::Separation,
+    pub(crate) metric: MetricSpec,
+}
+
+impl TileScan {
+    /// The scan of `tile` that `function` was asked for.
+    ///
+    /// # Errors
+    /// `TypeError`: a tile between two sessions without `session_b`; `InvalidParameterError`:
+    /// an unknown metric.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn new(
+        tile: &loops_core::Tile,
+        session_a: &Trajectory,
+        session_b: Option<&Trajectory>,
+        starts: (usize, usize),
+        gamma: f64,
+        metric: Option<&Bound<'_, PyAny>>,
+        separation: SeparationArg,
+        function: &str,
+    ) -> PyResult<Self> {
+        if session_b.is_none() && tile.sessions[0] != tile.sessions[1] {
+            return Err(PyTypeError::new_err(format!(
+                "tile of sessions ({}, {}) needs session_b: only a tile within one session takes one session",
+                tile.sessions[0], tile.sessions[1]
+            )));
+        }
+        let metric = tile_metric(metric, session_a.default_metric(), function)?;
+        let a = session_a.inner.clone();
+        let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
+        let separation = separation.at(gamma);
+        Ok(Self { sessions: [a, b], starts: [starts.0, starts.1], gamma, separation, metric })
     }
-    let metric = tile_metric(metric, session_a.default_metric(), function)?;
-    let a = session_a.inner.clone();
-    let b = session_b.map_or_else(|| a.clone(), |s| s.inner.clone());
-    Ok(([a, b], metric))
+
+    /// The two sessions.
+    pub(crate) fn sessions(&self) -> [&loops_core::Trajectory; 2] {
+        [&self.sessions[0], &self.sessions[1]]
+    }
+
+    /// Runs `job` on this scan on `threads` threads (`None`: one per core), without the GIL.
+    pub(crate) fn run<T: Send>(
+        self,
+        py: Python<'_>,
+        threads: Option<usize>,
+        job: impl FnOnce(&Self) -> loops_core::Result<T> + Send,
+    ) -> PyResult<T> {
+        MetricArg::Spec(self.metric).run(py, threads, move |_| job(&self))
+    }
 }
 
 #[pymethods]
@@ -295,36 +333,16 @@ pub(crate) struct TileSummary {
     pub(crate) inner: loops_core::TileSummary,
 }
 
+crate::pickling::pickled_as_bytes!(
+    TileSummary,
+    loops_core::TileSummary,
+    "summary",
+    "The summary as bytes: a 4-byte tag, the format version, then the fields (MessagePack).",
+    from_bytes
+);
+
 #[pymethods]
 impl TileSummary {
-    /// The summary from :meth:`to_bytes` (what pickling stores).
-    ///
-    /// Raises:
-    ///     InvalidParameterError: bytes of something else, of another format version, or corrupt
-    ///         (the message says which).
-    #[new]
-    fn new(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
-        let data = data.to_vec();
-        let inner = detached(py, move || Ok(loops_core::TileSummary::from_bytes(&data)?))?;
-        Ok(Self { inner })
-    }
-
-    /// The summary from :meth:`to_bytes`; as the constructor.
-    #[staticmethod]
-    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
-        Self::new(py, data)
-    }
-
-    /// The summary as bytes: a 4-byte tag, the format version, then the fields (MessagePack).
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.inner.to_bytes())
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        (slf.get_type(), (PyBytes::new(py, &slf.get().inner.to_bytes()),)).into_pyobject(py)
-    }
-
     fn __repr__(&self) -> String {
         format!(
             "TileSummary({}, {} components, {} edge runs)",
@@ -396,13 +414,8 @@ pub(crate) fn scan_tile(
     threads: Option<usize>,
 ) -> PyResult<TileSummary> {
     let tile = tile.inner.clone();
-    let ([a, b], metric) = tile_sessions(&tile, session_a, session_b, metric, "scan_tile")?;
-    let separation = separation.at(gamma);
-    let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
-        MetricRef::Spec(spec) => spec.scan_session_tile([&a, &b], [starts.0, starts.1], gamma, separation, &tile),
-        MetricRef::Callable(callable) => {
-            loops_core::scan_session_tile([&a, &b], [starts.0, starts.1], callable, gamma, separation, &tile)
-        }
-    })?;
+    let scan = TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile")?;
+    let inner = scan
+        .run(py, threads, move |s| s.metric.scan_session_tile(s.sessions(), s.starts, s.gamma, s.separation, &tile))?;
     Ok(TileSummary { inner })
 }

@@ -10,9 +10,8 @@ use pyo3::types::{PyBytes, PyList, PyTuple};
 use crate::convert::{float64_column, int64_column, table, to_numpy};
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
-use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_separation::SeparationArg;
-use crate::py_tile::{Tile, TileSummary, tile_sessions};
+use crate::py_tile::{Tile, TileScan, TileSummary};
 use crate::py_trajectory::Trajectory;
 use loops_core::{SampleSize, Sampler, SamplerKind};
 
@@ -234,27 +233,15 @@ pub(crate) struct DrawCandidates {
     inner: loops_core::DrawCandidates,
 }
 
+crate::pickling::pickled_as_bytes!(
+    DrawCandidates,
+    loops_core::DrawCandidates,
+    "offers",
+    "The offers as bytes (a tag, the tile format version, then MessagePack)."
+);
+
 #[pymethods]
 impl DrawCandidates {
-    /// The offers from :meth:`to_bytes`.
-    ///
-    /// Raises:
-    ///     InvalidParameterError: corrupt bytes.
-    #[new]
-    fn new(data: &[u8]) -> PyResult<Self> {
-        Ok(Self { inner: loops_core::DrawCandidates::from_bytes(data).map_err(Failure::from)? })
-    }
-
-    /// The offers as bytes (a tag, the tile format version, then MessagePack).
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.inner.to_bytes())
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        (slf.get_type(), (PyBytes::new(py, &slf.get().inner.to_bytes()),)).into_pyobject(py)
-    }
-
     fn __len__(&self) -> usize {
         self.inner.pool.len() + self.inner.rows.len() + self.inner.best.len()
     }
@@ -305,34 +292,13 @@ pub(crate) fn draw_tile(
     runs: Option<&crate::py_tile_runs::TileRuns>,
 ) -> PyResult<DrawCandidates> {
     let r = request.clone();
-    let ([a, b], metric) = tile_sessions(&r.tile, session_a, session_b, metric, "draw_tile")?;
-    let separation = separation.at(gamma);
-    let starts = [starts.0, starts.1];
-    if let Some(runs) = runs {
-        let runs = crate::py_tile_runs::runs_for(runs, &r.tile, metric)?;
-        let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
-            MetricRef::Spec(spec) => spec.draw_tile_runs([&a, &b], starts, &runs, &r.labels, &r.request),
-            MetricRef::Callable(callable) => {
-                loops_core::draw_tile_runs([&a, &b], starts, callable, &runs, &r.labels, &r.request)
-            }
-        })?;
-        return Ok(DrawCandidates { inner });
-    }
-    let starts = (starts[0], starts[1]);
-    let inner = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
-        MetricRef::Spec(spec) => {
-            spec.draw_session_tile([&a, &b], [starts.0, starts.1], gamma, separation, &r.tile, &r.labels, &r.request)
+    let scan = TileScan::new(&r.tile, session_a, session_b, starts, gamma, metric, separation, "draw_tile")?;
+    let runs = runs.map(|runs| crate::py_tile_runs::runs_for(runs, &r.tile, scan.metric)).transpose()?;
+    let inner = scan.run(py, threads, move |s| match runs {
+        Some(runs) => s.metric.draw_tile_runs(s.sessions(), s.starts, &runs, &r.labels, &r.request),
+        None => {
+            s.metric.draw_session_tile(s.sessions(), s.starts, s.gamma, s.separation, &r.tile, &r.labels, &r.request)
         }
-        MetricRef::Callable(callable) => loops_core::draw_session_tile(
-            [&a, &b],
-            [starts.0, starts.1],
-            callable,
-            gamma,
-            separation,
-            &r.tile,
-            &r.labels,
-            &r.request,
-        ),
     })?;
     Ok(DrawCandidates { inner })
 }
@@ -346,27 +312,15 @@ pub(crate) struct TileDuration {
     inner: loops_core::TileDuration,
 }
 
+crate::pickling::pickled_as_bytes!(
+    TileDuration,
+    loops_core::TileDuration,
+    "share",
+    "The share as bytes (a tag, the tile format version, then MessagePack)."
+);
+
 #[pymethods]
 impl TileDuration {
-    /// The share from :meth:`to_bytes`.
-    ///
-    /// Raises:
-    ///     InvalidParameterError: corrupt bytes.
-    #[new]
-    fn new(data: &[u8]) -> PyResult<Self> {
-        Ok(Self { inner: loops_core::TileDuration::from_bytes(data).map_err(Failure::from)? })
-    }
-
-    /// The share as bytes (a tag, the tile format version, then MessagePack).
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.inner.to_bytes())
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        (slf.get_type(), (PyBytes::new(py, &slf.get().inner.to_bytes()),)).into_pyobject(py)
-    }
-
     fn __repr__(&self) -> String {
         format!("TileDuration({:?})", self.inner.tile)
     }
@@ -407,20 +361,10 @@ pub(crate) fn scan_tile_with_duration(
     threads: Option<usize>,
 ) -> PyResult<(TileSummary, TileDuration)> {
     let tile = tile.inner.clone();
-    let ([a, b], metric) = tile_sessions(&tile, session_a, session_b, metric, "scan_tile_with_duration")?;
-    let separation = separation.at(gamma);
-    let (summary, duration) = MetricArg::Spec(metric).run(py, threads, move |metric| match metric {
-        MetricRef::Spec(spec) => {
-            spec.scan_session_tile_with_duration([&a, &b], [starts.0, starts.1], gamma, separation, &tile)
-        }
-        MetricRef::Callable(callable) => loops_core::scan_session_tile_with_duration(
-            [&a, &b],
-            [starts.0, starts.1],
-            callable,
-            gamma,
-            separation,
-            &tile,
-        ),
+    let scan =
+        TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile_with_duration")?;
+    let (summary, duration) = scan.run(py, threads, move |s| {
+        s.metric.scan_session_tile_with_duration(s.sessions(), s.starts, s.gamma, s.separation, &tile)
     })?;
     Ok((TileSummary { inner: summary }, TileDuration { inner: duration }))
 }
@@ -455,13 +399,10 @@ pub(crate) fn scan_tile_kept(
     threads: Option<usize>,
 ) -> PyResult<(TileSummary, TileDuration, crate::py_tile_runs::TileRuns)> {
     let tile = tile.inner.clone();
-    let ([a, b], metric) = tile_sessions(&tile, session_a, session_b, metric, "scan_tile_kept")?;
-    let separation = separation.at(gamma);
-    let (summary, duration, runs) = MetricArg::Spec(metric).run(py, threads, move |m| match m {
-        MetricRef::Spec(spec) => spec.scan_session_tile_kept([&a, &b], [starts.0, starts.1], gamma, separation, &tile),
-        MetricRef::Callable(callable) => {
-            loops_core::scan_session_tile_kept([&a, &b], [starts.0, starts.1], callable, gamma, separation, &tile)
-        }
+    let scan = TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile_kept")?;
+    let metric = scan.metric;
+    let (summary, duration, runs) = scan.run(py, threads, move |s| {
+        s.metric.scan_session_tile_kept(s.sessions(), s.starts, s.gamma, s.separation, &tile)
     })?;
     Ok((
         TileSummary { inner: summary },

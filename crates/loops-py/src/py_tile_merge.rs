@@ -5,7 +5,7 @@
 
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyTuple};
+use pyo3::types::PyBytes;
 
 use crate::convert::to_numpy;
 use crate::detached;
@@ -23,35 +23,16 @@ pub(crate) struct TileMerge {
     inner: loops_core::TileMerge,
 }
 
+crate::pickling::pickled_as_bytes!(
+    TileMerge,
+    loops_core::TileMerge,
+    "merge",
+    "The merge as bytes (as :meth:`TileSummary.to_bytes`, another tag).",
+    from_bytes
+);
+
 #[pymethods]
 impl TileMerge {
-    /// The merge from :meth:`to_bytes` (what pickling stores).
-    ///
-    /// Raises:
-    ///     InvalidParameterError: bytes of something else, of another format version, or corrupt.
-    #[new]
-    fn new(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
-        let data = data.to_vec();
-        let inner = detached(py, move || Ok(loops_core::TileMerge::from_bytes(&data)?))?;
-        Ok(Self { inner })
-    }
-
-    /// The merge from :meth:`to_bytes`; as the constructor.
-    #[staticmethod]
-    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
-        Self::new(py, data)
-    }
-
-    /// The merge as bytes (as :meth:`TileSummary.to_bytes`, another tag).
-    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
-        PyBytes::new(py, &self.inner.to_bytes())
-    }
-
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
-        let py = slf.py();
-        (slf.get_type(), (PyBytes::new(py, &slf.get().inner.to_bytes()),)).into_pyobject(py)
-    }
-
     fn __repr__(&self) -> String {
         format!(
             "TileMerge({} tiles, {} components, {} open edge runs)",
