@@ -11,10 +11,12 @@
 //! and `_from_state` checks that the state fits it. The loops of the 2.1 h drive at γ = 40 m (75,600 poses, 155,812 runs) pickle to 3.2 MB
 //! in about 25 ms and unpickle, checked, in about 35 ms.
 //!
-//! The tile objects a cluster ships between machines (`TileSummary`, `TileMerge`,
-//! `DrawCandidates`, `TileDuration`) pickle instead as `(Class, (bytes,))`, their core value's
-//! own `to_bytes` (a tag, the tile format version, MessagePack): the same bytes a worker can
-//! send without pickle ([`pickled_as_bytes!`]).
+//! The tile objects a cluster ships between machines pickle instead as `(Class, args)`, their
+//! constructor's arguments: `TileSummary`, `TileMerge`, `DrawCandidates` and `TileDuration` as
+//! `(Class, (bytes,))`, their core value's own `to_bytes` (a tag, the tile format version,
+//! MessagePack), the same bytes a worker can send without pickle ([`pickled_as_bytes!`]);
+//! `SessionBlocks` (its bytes and its metric's name), `TileDrawRequest` (its tile, labels and
+//! request) and `Tile` (its ranges) by their own `__reduce__`, as their constructors take more.
 
 use pyo3::PyClass;
 use pyo3::prelude::*;
