@@ -178,7 +178,7 @@ impl SessionBlocks {
     ///     (6, 2, 10)
     fn coarsened(&self, factor: usize) -> PyResult<Self> {
         let inner = self.metric.coarsened_blocks(&self.inner, factor).map_err(Failure::from)?;
-        Ok(Self { inner, metric: self.metric.clone() })
+        Ok(Self { inner, metric: self.metric })
     }
 }
 
