@@ -476,11 +476,25 @@ def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -
         )
     else:
         where = "- **Where the overhead comes from.** No fleet was run both ways."
+    engine_estimate = ""
+    if c is not None and r is not c and r["local"].get("tiles"):
+        per_pose = c["local"]["total_s"] / c["poses"]
+        estimate = per_pose * n
+        engine_estimate = (
+            f"Against the engine itself, estimated linear from its {c['poses']:,}-pose run "
+            f"({per_pose * 1e6:.2f} µs a pose for reading, finding and sampling on both cores: "
+            f"{estimate:.0f} s here, if it had the memory), the cluster's {d['total_s']:.0f} s "
+            f"would be {d['total_s'] / estimate - 1:+.0%}: the tiles' scans cost about what the "
+            "engine's do (the diagonal tiles are the engine on each session; the tiles between "
+            "two vehicles scan only their districts' borders), but two worker processes of "
+            "one thread share the machine less well than the engine's two threads, and "
+            "reading, planning and the root merge's finish come on top."
+        )
     out = [
         "### Cost model",
         "",
         f"Fitted to the largest fleet above ({n:,} poses, block {block:,}), every figure per core "
-        "of this machine under its load (times here run 2-7x slower than on an idle core):",
+        "of this machine under its load (a shared machine: its load average is in the header):",
         "",
         f"- **Tiles.** {tiles:,} tiles for {blocks:,.0f} blocks: "
         f"{tiles_per_block:.2f} tiles per block "
@@ -509,7 +523,8 @@ def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -
         "district fleet stay a tile's border, so a tree of fan-in f does O(tiles) work in "
         "log_f(tiles) levels; the root carries every component "
         f"({components_per_pose * 1e6:.0f} per 10⁶ poses here, ~150 bytes each) to the client.",
-        f"- **Per task.** Scheduling, imports and transfers: {overhead_per_task * 1e3:.1f} ms of "
+        f"- **Per task.** Scheduling, transfers and the client's own work (planning, the root "
+        f"merge's finish, the draw's bookkeeping): {overhead_per_task * 1e3:.1f} ms of "
         "wall time per task beyond the work (wall time less the work shared by 2 workers, over "
         "the tasks).",
         "",
@@ -523,7 +538,7 @@ def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -
             "At 10⁸ poses (100 x 28 h) the engine's one process would hold the whole fleet "
             "(its peak, linear from the largest engine run, is in the table), more than this "
             "machine's 24 GB: the cluster is compared with the same tiles in one process "
-            "without Dask."
+            "without Dask. " + engine_estimate
             if any(x["poses"] >= 10**8 for x in measured)
             else (
                 "10⁸ poses (100 x 28 h) ran on the cluster alone and was stopped unfinished "
@@ -546,38 +561,47 @@ def model(rows: list[dict], block: int | None, timeout_s: float | None = None) -
         "fast as one here; one scheduler; a network that carries the bytes above without "
         "waiting (they are kilobytes a task); perfect balance (tiles are many and alike).",
         "",
-        "| poses | workers | block | tiles | scan + draw + read (core-h) | merge (core-s) | "
+        "| poses | workers | block | tiles | draws' misses | scan + draw + read (core-h) | "
+        "merge (core-s) | "
         "tasks | scheduler (s) | planner (s) | wall (min) | worker peak (MB) | root merge (MB) |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     planner_per_candidate = 2e-6
+    # A worker's memory without the runs it keeps, and the cap on those (half a 10 GB limit).
+    base_mb = peak - max(d.get("runs_held_mb") or [0])
+    cap_mb = 5000.0
     for poses in (10**9, 10**10):
         for workers in (10, 100):
-            for b in (block, 10 * block):
-                nb = poses / b
-                t = nb * tiles_per_block
-                work = poses * (scan_per_pose + draw_per_pose + read_per_pose)
-                merge = t * merge_per_tile
-                ntasks = nb * tasks_per_block
-                scheduler = ntasks * max(overhead_per_task, 1e-3) / min(workers, 10)
-                planner = nb * tiles_per_block * 4 * planner_per_candidate
-                wall = (work + merge) / workers + scheduler + planner
-                memory = peak * (b / block) ** 1 if b != block else peak
-                root = poses * components_per_pose * 150 / 1e6
-                out.append(
-                    f"| {poses:.0e} | {workers} | {b:,} | {t:,.0f} | {work / 3600:.1f} | "
-                    f"{merge:.0f} | "
-                    f"{ntasks:,.0f} | {scheduler:.0f} | {planner:.0f} | {wall / 60:.1f} | "
-                    f"{memory:.0f} | {root:.0f} |"
-                )
+            nb = poses / block
+            t = nb * tiles_per_block
+            # The runs a worker would keep past the cap are rescanned by their draws.
+            runs_mb = poses / workers * runs_per_pose / 1e6
+            missed = max(0.0, 1 - cap_mb / runs_mb) if runs_mb > 0 else 0.0
+            work = poses * (scan_per_pose * (1 + missed) + draw_per_pose + read_per_pose)
+            merge = t * merge_per_tile
+            ntasks = nb * tasks_per_block
+            scheduler = ntasks * max(overhead_per_task, 1e-3) / min(workers, 10)
+            planner = nb * tiles_per_block * 4 * planner_per_candidate
+            wall = (work + merge) / workers + scheduler + planner
+            memory = base_mb + min(cap_mb, runs_mb)
+            root = poses * components_per_pose * 150 / 1e6
+            out.append(
+                f"| {poses:.0e} | {workers} | {block:,} | {t:,.0f} | {missed:.0%} | "
+                f"{work / 3600:.1f} | {merge:.0f} | "
+                f"{ntasks:,.0f} | {scheduler:.0f} | {planner:.0f} | {wall / 60:.1f} | "
+                f"{memory:.0f} | {root:.0f} |"
+            )
     out += [
         "",
         "Read: the work divides by the workers; what does not is the scheduler's time per task "
         "and the client's: its memory for the root merge (every component) and the finish. "
-        f"With blocks of {block:,} poses, 10¹⁰ poses make {1e10 / block:.0e} blocks and "
-        f"~{1e10 / block * tasks_per_block:.0e} tasks (a few per block: a task scans a row "
-        "block's tiles); blocks 10 times larger cut the tasks by 10 at the "
-        "cost of a worker's memory growing with the block (a tile's piece and runs). The root "
+        f"With blocks of {block:,} poses (a vehicle's 28 h), 10¹⁰ poses make "
+        f"{1e10 / block:.0e} blocks and ~{1e10 / block * tasks_per_block:.0e} tasks. A worker "
+        f"keeps the runs of its tiles ({runs_per_pose:.0f} bytes a pose) up to half its memory "
+        f"limit; with fewer workers than poses / {cap_mb * 1e6 / max(runs_per_pose, 1e-9):.1e} "
+        "(a 10 GB limit) the rest are rescanned by the draws "
+        "(the draws' misses above, each costing its tile's scan again), so memory stays "
+        "bounded and time grows instead. The root "
         f"merge's components (~{1e10 * components_per_pose * 150 / 1e9:.0f} GB at 10¹⁰ poses "
         "of this fleet) outgrow one client: beyond "
         "10⁹ poses the finish should stay a tree too (components written per session pair by "
