@@ -5,9 +5,11 @@
 //!
 //! Each side is cut into chunks of [`CHUNK`] consecutive poses with their bounding balls (centre
 //! the middle pose, radius the largest distance from it); a chunk is live when its ball comes
-//! within γ of a ball of the other side (first by groups of [`GROUP`] poses, then by chunks), and
-//! consecutive live chunks make one stretch. A pose of a chunk that is not live is farther than
-//! γ from every pose of the other side (triangle inequality, with a margin above rounding), so it
+//! within γ of a ball of the other side: first by groups of [`GROUP`] poses (balls joined from
+//! their chunks'), then, within two groups that meet, by the chunks of each that reach the other
+//! group, pair by pair. Consecutive live chunks make one stretch. A pose with a pose of the other
+//! side within γ passes every test (its chunk's ball reaches the other's chunk and group, by the
+//! triangle inequality, with a margin above rounding), so a pose of a chunk that is not live
 //! holds no cell of S_γ in the tile.
 
 use std::ops::Range;
@@ -40,10 +42,35 @@ fn balls<M: Metric + ?Sized>(
         .collect()
 }
 
+/// Balls of `per` consecutive `balls` of `traj` each: centred on the middle ball's centre, with
+/// radius the largest distance from there to a joined ball's centre plus its radius (so every
+/// pose of the joined balls lies within it). O(balls) distance evaluations, where bounding each
+/// group from its poses would cost O(poses).
+fn joined<M: Metric + ?Sized>(
+    traj: &Trajectory,
+    balls: &[(Range<usize>, usize, f64)],
+    per: usize,
+    metric: &M,
+) -> Vec<(Range<usize>, usize, f64)> {
+    balls
+        .chunks(per)
+        .map(|part| {
+            let centre = part[part.len() / 2].1;
+            let radius = part
+                .iter()
+                .map(|(_, c, r)| metric.distance(traj.point(centre), traj.point(*c)) + r)
+                .fold(0.0, f64::max);
+            (part[0].0.start..part[part.len() - 1].0.end, centre, radius)
+        })
+        .collect()
+}
+
 /// The live stretches of rows `rows` of `row_session` and columns `columns` of
 /// `column_session` (ranges of indices within their sessions, disjoint when the sessions are
 /// one): increasing, disjoint, non-adjacent ranges; either side is empty when no pair can lie
-/// within γ. O(poses) distance evaluations plus the meeting groups' chunk pairs.
+/// within γ. O(poses) distance evaluations (the chunks' balls), then O(groups²) for the groups'
+/// balls (joined from their chunks'), and for each meeting pair of groups, the chunks of each
+/// that reach the other group, and the pairs of those.
 pub(crate) fn live_stretches<M: Metric + ?Sized>(
     row_session: &Trajectory,
     rows: Range<usize>,
@@ -56,21 +83,27 @@ pub(crate) fn live_stretches<M: Metric + ?Sized>(
     let meets = |(_, p, r_p): &(Range<usize>, usize, f64), (_, q, r_q): &(Range<usize>, usize, f64)| {
         metric.distance(row_session.point(*p), column_session.point(*q)) <= (gamma + r_p + r_q) * (1.0 + 1e-6) + 1e-9
     };
-    let group_rows = balls(row_session, rows.clone(), GROUP, metric);
-    let group_columns = balls(column_session, columns.clone(), GROUP, metric);
+    let per_group = GROUP / CHUNK;
     let chunk_rows = balls(row_session, rows.clone(), CHUNK, metric);
     let chunk_columns = balls(column_session, columns.clone(), CHUNK, metric);
+    let group_rows = joined(row_session, &chunk_rows, per_group, metric);
+    let group_columns = joined(column_session, &chunk_columns, per_group, metric);
     let (mut live_rows, mut live_columns) = (vec![false; chunk_rows.len()], vec![false; chunk_columns.len()]);
-    let per_group = GROUP / CHUNK;
     for (g, group_row) in group_rows.iter().enumerate() {
         for (h, group_column) in group_columns.iter().enumerate() {
             if !meets(group_row, group_column) {
                 continue;
             }
-            let row_chunks = g * per_group..((g + 1) * per_group).min(chunk_rows.len());
-            let column_chunks = h * per_group..((h + 1) * per_group).min(chunk_columns.len());
-            for p in row_chunks {
-                for q in column_chunks.clone() {
+            // Only chunks whose ball meets the other side's group can meet one of its chunks:
+            // 2 · 16 tests first, then the pairs of those (few, at a border between districts).
+            let row_chunks: Vec<usize> = (g * per_group..((g + 1) * per_group).min(chunk_rows.len()))
+                .filter(|&p| meets(&chunk_rows[p], group_column))
+                .collect();
+            let column_chunks: Vec<usize> = (h * per_group..((h + 1) * per_group).min(chunk_columns.len()))
+                .filter(|&q| meets(group_row, &chunk_columns[q]))
+                .collect();
+            for &p in &row_chunks {
+                for &q in &column_chunks {
                     if (!live_rows[p] || !live_columns[q]) && meets(&chunk_rows[p], &chunk_columns[q]) {
                         live_rows[p] = true;
                         live_columns[q] = true;
