@@ -90,6 +90,10 @@ ELSEWHERE = {
         }.items()
         for name in names
     },
+    "SessionBlocks.coarsened": (
+        "python/test_dask.py",
+        "test_coarsened_blocks_are_cut_as_asked_and_pickle",
+    ),
     **{
         name: ("python/test_dask.py", "test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail")
         for name in (
