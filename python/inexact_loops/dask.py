@@ -101,8 +101,8 @@ POSES_KEPT = 30_000_000
 #: A draw of a tile whose runs are not kept (evicted, scanned elsewhere, or the worker
 #: restarted) rescans the tile: the samples are the same. 0: keep none. ``None``:
 #: :data:`RUNS_KEPT_SHARE` of the Dask worker's memory limit (of the machine's memory outside
-#: a worker). A district fleet's runs take about 73 bytes a pose (BENCHMARKS.md, "Dask"): a
-#: worker of a 10 GB limit keeps those of 6.8 * 10^7 poses.
+#: a worker). A district fleet's runs take 66-73 bytes a pose (BENCHMARKS.md, "Dask"): a
+#: worker of a 10 GB limit keeps those of ~7 * 10^7 poses.
 RUNS_KEPT: int | None = None
 
 #: The share of a worker's memory limit :data:`RUNS_KEPT` ``= None`` keeps runs in (Dask
@@ -471,10 +471,10 @@ def _draw_session_tiles(
     ]
 
 
-def _auto_block(longest: int, smallest: int | None = None, largest: int | None = None) -> int:
+def _auto_block(longest: int) -> int:
     """The block ``block=None`` chooses for a fleet whose longest session has ``longest``
-    poses: that session, rounded up to a multiple of ``smallest`` (:data:`DEFAULT_BLOCK`) and
-    at most ``largest`` (:data:`MAX_AUTO_BLOCK`, rounded down to a multiple).
+    poses: that session, rounded up to a multiple of :data:`DEFAULT_BLOCK`, and at most
+    :data:`MAX_AUTO_BLOCK` (rounded down to a multiple).
 
     Why whole sessions: a vehicle that works one area for hours comes back to every part of
     its session, so a row block meets every block of its own session, and each tile queries
@@ -487,10 +487,8 @@ def _auto_block(longest: int, smallest: int | None = None, largest: int | None =
     >>> _auto_block(100_000), _auto_block(120_000), _auto_block(10**8), _auto_block(10)
     (100000, 150000, 1000000, 50000)
     """
-    smallest = DEFAULT_BLOCK if smallest is None else smallest
-    largest = MAX_AUTO_BLOCK if largest is None else largest
-    units = max(1, min(-(-longest // smallest), largest // smallest))
-    return units * smallest
+    units = max(1, min(-(-longest // DEFAULT_BLOCK), MAX_AUTO_BLOCK // DEFAULT_BLOCK))
+    return units * DEFAULT_BLOCK
 
 
 def _interleaved(items: list[Any], workers: list[Any]) -> list[Any]:

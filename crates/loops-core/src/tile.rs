@@ -144,8 +144,7 @@ impl SessionBlocks {
         let (mut centres, mut radii) = (Vec::new(), Vec::new());
         for lo in (0..session.len()).step_by(block) {
             let hi = (lo + block).min(session.len());
-            let centre = lo + (hi - lo) / 2;
-            let radius = (lo..hi).map(|k| metric.distance(session.point(centre), session.point(k))).fold(0.0, f64::max);
+            let (centre, radius) = crate::tile_piece::pose_ball(session, lo, hi, metric);
             centres.extend_from_slice(session.point(centre));
             radii.push(radius);
         }
@@ -184,7 +183,7 @@ impl SessionBlocks {
         for lo in (0..self.len()).step_by(factor) {
             let hi = (lo + factor).min(self.len());
             let middle = centre(lo + (hi - lo) / 2);
-            let radius = (lo..hi).map(|k| metric.distance(middle, centre(k)) + self.radii[k]).fold(0.0, f64::max);
+            let radius = crate::tile_piece::joined_radius(middle, (lo..hi).map(|k| (centre(k), self.radii[k])), metric);
             centres.extend_from_slice(middle);
             radii.push(radius);
         }

@@ -23,6 +23,27 @@ pub(crate) const CHUNK: usize = 64;
 /// Poses per group: chunks are compared only within groups whose balls meet.
 const GROUP: usize = 16 * CHUNK;
 
+/// The ball of poses `lo..hi` of `traj` (not empty): its centre, the middle pose `lo + (hi −
+/// lo)/2`, and its radius, the largest distance from there to a pose of the range. The one
+/// rule for a tile's chunks and a session's blocks ([`SessionBlocks`](crate::SessionBlocks)).
+pub(crate) fn pose_ball<M: Metric + ?Sized>(traj: &Trajectory, lo: usize, hi: usize, metric: &M) -> (usize, f64) {
+    let centre = lo + (hi - lo) / 2;
+    let radius = (lo..hi).map(|k| metric.distance(traj.point(centre), traj.point(k))).fold(0.0, f64::max);
+    (centre, radius)
+}
+
+/// The radius of a ball centred on `centre` that holds the balls `parts` ((centre, radius)
+/// each): the largest distance from `centre` to a part's centre plus its radius, so every point
+/// of the parts lies within it (triangle inequality). The one rule for a tile's groups of
+/// chunks and [`SessionBlocks::coarsened`](crate::SessionBlocks::coarsened).
+pub(crate) fn joined_radius<'a, M: Metric + ?Sized>(
+    centre: &[f64],
+    parts: impl IntoIterator<Item = (&'a [f64], f64)>,
+    metric: &M,
+) -> f64 {
+    parts.into_iter().map(|(c, r)| metric.distance(centre, c) + r).fold(0.0, f64::max)
+}
+
 /// The bounding balls of `range` of `traj` cut every `size` poses: (range, centre pose, radius).
 fn balls<M: Metric + ?Sized>(
     traj: &Trajectory,
@@ -35,17 +56,15 @@ fn balls<M: Metric + ?Sized>(
         .step_by(size)
         .map(|lo| {
             let hi = (lo + size).min(range.end);
-            let centre = lo + (hi - lo) / 2;
-            let radius = (lo..hi).map(|k| metric.distance(traj.point(centre), traj.point(k))).fold(0.0, f64::max);
+            let (centre, radius) = pose_ball(traj, lo, hi, metric);
             (lo..hi, centre, radius)
         })
         .collect()
 }
 
-/// Balls of `per` consecutive `balls` of `traj` each: centred on the middle ball's centre, with
-/// radius the largest distance from there to a joined ball's centre plus its radius (so every
-/// pose of the joined balls lies within it). O(balls) distance evaluations, where bounding each
-/// group from its poses would cost O(poses).
+/// Balls of `per` consecutive `balls` of `traj` each, centred on the middle ball's centre
+/// ([`joined_radius`]): O(balls) distance evaluations, where bounding each group from its
+/// poses would cost O(poses).
 fn joined<M: Metric + ?Sized>(
     traj: &Trajectory,
     balls: &[(Range<usize>, usize, f64)],
@@ -56,10 +75,7 @@ fn joined<M: Metric + ?Sized>(
         .chunks(per)
         .map(|part| {
             let centre = part[part.len() / 2].1;
-            let radius = part
-                .iter()
-                .map(|(_, c, r)| metric.distance(traj.point(centre), traj.point(*c)) + r)
-                .fold(0.0, f64::max);
+            let radius = joined_radius(traj.point(centre), part.iter().map(|(_, c, r)| (traj.point(*c), *r)), metric);
             (part[0].0.start..part[part.len() - 1].0.end, centre, radius)
         })
         .collect()
