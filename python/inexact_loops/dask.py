@@ -561,13 +561,6 @@ def _session_times(source: Any, options: tuple[tuple[str, Any], ...]) -> Any:
     return np.asarray(_load(source, options).timestamps)
 
 
-def _stem_name(path: str) -> str:
-    """The name a path gives its session, as :class:`inexact_loops.Fleet` names it: its file
-    stem, or a rosbag2 bag's folder for ``metadata.yaml``."""
-    p = Path(path)
-    return p.parent.name if p.name == "metadata.yaml" else p.stem
-
-
 def _named_sources(sessions: Any) -> list[tuple[str, Any]]:
     """``(name, path, paths or Trajectory)`` per session, in order, named as ``il.Fleet``
     names them."""
@@ -589,7 +582,7 @@ def _named_sources(sessions: Any) -> list[tuple[str, Any]]:
                 items.append((item[0], item[1]))
             elif isinstance(item, str | os.PathLike):
                 path = os.fspath(item)
-                name = _stem_name(path)
+                name = _core.log_name(path)
                 if name in stems:
                     first, other = stems[name]
                     raise InvalidParameterError(
@@ -1239,143 +1232,35 @@ OUT_FILES = (
 )
 
 
-class _OutDir:
-    """The output folder of :func:`run_fleet_dask`, kept as ``loops fleet`` keeps its ``--out``:
-    one run at a time (an exclusive lock on the folder), every entry written is listed in the
-    marker :data:`MARKER` before it is moved into place, ``force`` replaces only listed entries
-    (never a file of yours named like one of ours), files are written to a temporary file and
-    renamed, and what killed runs left (``.NAME.XXXXXX.tmp``, ``.NAME.partial-PID``) is removed.
-    """
-
-    def __init__(self, out: Path, force: bool) -> None:
-        import fcntl
-
-        out.mkdir(parents=True, exist_ok=True)
-        self.path = out
-        self._lock = os.open(out, os.O_RDONLY)
-        try:
-            fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            os.close(self._lock)
-            holder = self._read_marker()
-            pid = f" (pid {holder['pid']})" if holder else ""
-            raise InvalidParameterError(
-                f"out {out} is in use by another loops-dask{pid}; wait for it to finish or "
-                "choose another folder"
-            ) from None
-        try:
-            self._check(out, force)
-        except BaseException:
-            os.close(self._lock)
-            raise
-
-    def _check(self, out: Path, force: bool) -> None:
-        """Refuses a folder that holds anything but an earlier run's results (without
-        ``force``: anything at all), then records this run in the marker."""
-        previous = self._read_marker()
-        self._remove_leftovers()
-        entries = sorted(e for e in os.listdir(out) if e != MARKER)
-        if entries and not force:
-            raise InvalidParameterError(
-                f"out {out} exists and is not empty; pass force=True (--force) to replace the "
-                "results of an earlier run"
-            )
-        owned = set(previous["entries"]) if previous else set()
-        for name in entries:
-            if name in OUT_FILES and name not in owned:
-                raise InvalidParameterError(
-                    f"out {out} holds {name}, which loops-dask did not write (it is not listed "
-                    f"in {MARKER}); not replacing it: move it away or choose another folder"
-                )
-        self.entries = owned
-        self._save()
-
-    def _read_marker(self) -> dict[str, Any] | None:
-        path = self.path / MARKER
-        try:
-            marker = json.loads(path.read_text())
-        except FileNotFoundError:
-            return None
-        except (OSError, ValueError) as error:
-            raise InvalidParameterError(
-                f"{path} is not the marker of loops-dask: {error}"
-            ) from None
-        if not isinstance(marker, dict) or marker.get("written_by") != "loops-dask":
-            raise InvalidParameterError(
-                f"{path} is not the marker of loops-dask; not touching the folder"
-            )
-        return marker
-
-    def _remove_leftovers(self) -> None:
-        import re
-        import shutil
-
-        for name in os.listdir(self.path):
-            path = self.path / name
-            if path.is_dir() and re.fullmatch(r"\..+\.(partial|old)-\d+", name):
-                shutil.rmtree(path)
-            elif path.is_file() and re.fullmatch(r"\..+\.[A-Za-z0-9_]{6,}\.tmp", name):
-                path.unlink()
-
-    def _save(self) -> None:
-        from . import __version__
-
-        marker = {
-            "written_by": "loops-dask",
-            "version": __version__,
-            "pid": os.getpid(),
-            "entries": sorted(self.entries),
-        }
-        text = json.dumps(marker, indent=2) + "\n"
-        _atomic(self.path / MARKER, lambda tmp: Path(tmp).write_text(text))
-
-    def claim(self, name: str) -> None:
-        """Lists ``name`` in the marker, before it is written."""
-        if name not in self.entries:
-            self.entries.add(name)
-            self._save()
-
-    def write(self, name: str, write: Callable[[str], None]) -> None:
-        """Writes the file ``name`` through a temporary file."""
-        self.claim(name)
-        _atomic(self.path / name, write)
-
-    def remove(self, name: str) -> None:
-        """Removes an entry this tool wrote (an earlier run's), if there."""
-        import shutil
-
-        path = self.path / name
-        if name in self.entries and path.exists():
-            shutil.rmtree(path) if path.is_dir() else path.unlink()
-
-    def staging(self, name: str) -> Path:
-        """A folder to fill and then :meth:`place` as ``name``."""
-        path = self.path / f".{name}.partial-{os.getpid()}"
-        path.mkdir()
-        return path
-
-    def place(self, name: str, staging: Path) -> None:
-        """Moves a filled staging folder into place as ``name``."""
-        import shutil
-
-        self.claim(name)
-        target = self.path / name
-        if target.exists():
-            old = self.path / f".{name}.old-{os.getpid()}"
-            os.replace(target, old)
-            os.replace(staging, target)
-            shutil.rmtree(old)
-        else:
-            os.replace(staging, target)
-
-    def close(self) -> None:
-        os.close(self._lock)
+def _write_entry(out: _core.OutDir, name: str, write: Callable[[str], None]) -> None:
+    """Writes the file ``name`` of ``out`` through ``write(path)`` into the folder's scratch
+    folder, then moves it into place (listed in the marker first; see :class:`_core.OutDir`)."""
+    staged = out.staging_path()
+    try:
+        write(str(staged))
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(staged)
+        raise
+    out.place(staged, name)
 
 
-def _write_table(out: _OutDir, name: str, table: Mapping[str, Any]) -> None:
+def _path_inputs(sessions: Any) -> list[str]:
+    """The files and folders among ``sessions`` (a mapping or list of paths, lists of paths or
+    trajectories): what the output must not be written onto."""
+    values = sessions.values() if isinstance(sessions, Mapping) else sessions
+    paths: list[str] = []
+    for value in values:
+        for item in value if isinstance(value, list | tuple) else [value]:
+            if isinstance(item, str | os.PathLike):
+                paths.append(os.fspath(item))
+    return paths
+
+
+def _write_table(out: _core.OutDir, name: str, table: Mapping[str, Any]) -> None:
     pa = _pyarrow()
     arrow = pa.table({k: np.asarray(v) for k, v in table.items()})
-    out.write(name, lambda tmp: pa.parquet.write_table(arrow, tmp))
+    _write_entry(out, name, lambda tmp: pa.parquet.write_table(arrow, tmp))
 
 
 def run_fleet_dask(
@@ -1419,9 +1304,11 @@ def run_fleet_dask(
 
     Raises:
         InvalidParameterError: ``out`` not empty without ``force``; a file in ``out`` that this
-            tool did not write; as :func:`find_fleet_loops_dask`.
+            tool did not write; ``out`` on an input (a session's file, a folder holding one);
+            as :func:`find_fleet_loops_dask`.
     """
-    folder = _OutDir(Path(out), force)
+    _core.refuse_output_on_input("out", Path(out), _path_inputs(sessions))
+    folder = _core.OutDir(Path(out), force=force, tool="loops-dask")
     try:
         run = find_fleet_loops_dask(
             sessions, gamma, client=client, loop_duration=loop_duration, **options
@@ -1449,7 +1336,8 @@ def run_fleet_dask(
             folder.remove("samples.parquet")
         if loop_duration:
             started = _now()
-            staging = folder.staging("loop_duration")
+            staging = folder.staging_path()
+            staging.mkdir()
             c = run._context
             runner: _Runner = c["runner"]
             futures = []
@@ -1493,7 +1381,7 @@ def run_fleet_dask(
             "stats": run.stats,
         }
         text = json.dumps(summary, indent=2, default=float) + "\n"
-        folder.write("summary.json", lambda tmp: Path(tmp).write_text(text))
+        _write_entry(folder, "summary.json", lambda tmp: Path(tmp).write_text(text))
         return summary
     finally:
         folder.close()
@@ -1660,7 +1548,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         sessions: dict[str, Any] = {}
         for log in args.logs:
-            name = _stem_name(log)
+            name = _core.log_name(log)
             if name in sessions:
                 raise InvalidParameterError(
                     f"{sessions[name]} and {log} are both named {name!r} by their file stem: "
@@ -1686,6 +1574,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             separation = "auto"
         sampler = None if args.sampler == "none" else args.sampler
+        if args.json and args.json != "-":
+            _core.refuse_output_on_input("--json", Path(args.json), _path_inputs(sessions))
+            if os.path.lexists(args.json) and not args.force:
+                raise InvalidParameterError(f"--json {args.json} exists; pass --force to replace it")
         client = None
         if args.scheduler:
             try:
@@ -1734,7 +1626,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.json == "-":
         print(text)
     elif args.json:
-        Path(args.json).write_text(text + "\n")
+        _atomic(Path(args.json), lambda tmp: Path(tmp).write_text(text + "\n"))
     for f in summary["failures"]:
         print(
             f"loops-dask: session {f['session']} ({f['source']}) left out: {f['error']}",

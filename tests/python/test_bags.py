@@ -104,3 +104,43 @@ def test_broken_bags_name_the_file(bags, tmp_path):
     db3.write_bytes(source.read_bytes()[:3000])
     with pytest.raises(il.LoopsIOError, match=r"cut\.db3"):
         il.read_trajectory(db3)
+
+
+def test_every_surface_names_sessions_alike(bags, tmp_path):
+    """``loops fleet`` (its summary.json), ``il.Fleet`` and ``inexact_loops.dask`` name the session
+    of a log by one rule: a TUM file and a standalone MCAP file by their stems, a rosbag2 bag by
+    its folder however it is given (folder, metadata.yaml, storage file), a ROS 1 bag by its
+    stem."""
+    import json
+    import subprocess
+    import sys
+
+    from inexact_loops import dask
+
+    t, p = poses()
+    tum = tmp_path / "monday.tum"
+    tum.write_text("".join(f"{a} {x + 50} {y} {z} 0 0 0 1\n" for a, (x, y, z) in zip(t, p, strict=True)))
+    standalone = tmp_path / "tuesday.mcap"
+    standalone.write_bytes(next(bags["mcap-zstd"].glob("*.mcap")).read_bytes())
+    sqlite = bags["sqlite3"]
+    ways = {
+        sqlite: "sqlite3",
+        sqlite / "metadata.yaml": "sqlite3",
+        next(sqlite.glob("*.db3")): "sqlite3",
+        next(bags["mcap-zstd"].glob("*.mcap")): "mcap-zstd",
+        bags["ros1"]: "drive",
+        standalone: "tuesday",
+    }
+    for k, (way, expected) in enumerate(ways.items()):
+        assert il.Fleet([way, tum]).names == [expected, "monday"], way
+        assert [name for name, _ in dask._named_sources([way, tum])] == [expected, "monday"], way
+        out = tmp_path / f"out{k}"
+        run = subprocess.run(
+            [sys.executable, "-m", "inexact_loops._cli", "fleet", str(way), str(tum)]
+            + ["--gamma", "1", "--budget", "5", "--out", str(out), "--quiet"],
+            capture_output=True,
+            text=True,
+        )
+        assert run.returncode == 0, run.stderr
+        summary = json.loads((out / "summary.json").read_text())
+        assert [s["name"] for s in summary["sessions"]] == [expected, "monday"], way

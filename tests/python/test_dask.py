@@ -663,18 +663,50 @@ def test_the_output_folder_holds_parquet_tables_written_safely(tmp_path, client)
     # Not again without force; with force, only what it wrote is replaced.
     with pytest.raises(il.InvalidParameterError, match="not empty; pass force=True"):
         run_fleet_dask(paths, 1.5, out=out, block=50)
-    (out / ".components.parquet.abc123.tmp").write_text("left by a killed run")
+    # An entry shaped like a killed run's leftover is the user's unless the marker lists it.
+    (out / ".components.parquet.abc123.tmp").write_text("the user's")
+    (out / ".thesis.partial-2024").mkdir()
     run_fleet_dask(paths, 1.5, out=out, block=50, force=True, sampler=None)
     assert not (out / "samples.parquet").exists(), "an earlier run's samples were left"
-    assert not (out / ".components.parquet.abc123.tmp").exists()
+    assert (out / ".components.parquet.abc123.tmp").read_text() == "the user's"
+    assert (out / ".thesis.partial-2024").is_dir()
+    # What a killed run left in its scratch folder, which the marker lists, goes.
+    (out / ".loops-dask.partial").mkdir()
+    (out / ".loops-dask.partial" / "0").write_text("half a table")
+    run_fleet_dask(paths, 1.5, out=out, block=50, force=True, sampler=None)
+    assert not (out / ".loops-dask.partial").exists()
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "components.parquet").write_text("a file of the user's")
     with pytest.raises(
-        il.InvalidParameterError, match="holds components.parquet, which loops-dask did not write"
+        il.InvalidParameterError, match="holds components.parquet, which `loops-dask` did not write"
     ):
         run_fleet_dask(paths, 1.5, out=mine, block=50, force=True)
     assert (mine / "components.parquet").read_text() == "a file of the user's"
+
+
+def test_no_output_lands_on_an_input(tmp_path):
+    """``out`` and ``--json`` on a session's file (or a link to it, or ``out`` holding it) are
+    refused, ``force`` or not, and the file is left as it was."""
+    paths = random_fleet(tmp_path, 4)
+    before = paths[0].read_bytes()
+    link = tmp_path / "link.json"
+    link.symlink_to(paths[0])
+    for out, says in ((paths[0], "would overwrite the input"), (link, "would overwrite the input"),
+                      (tmp_path, "lies inside out")):
+        with pytest.raises(il.InvalidParameterError, match=says):
+            run_fleet_dask(paths, 1.5, out=out, block=50, force=True)
+    for target in (paths[0], link):
+        argv = [*map(str, paths), "--gamma", "1.5", "--out", str(tmp_path / "o"), "--force"]
+        run = subprocess.run(
+            [sys.executable, "-m", "inexact_loops.dask", *argv, "--json", str(target)],
+            capture_output=True,
+            text=True,
+        )
+        assert run.returncode == 2, run.stderr
+        assert "would overwrite the input" in run.stderr and run.stderr.count("\n") == 1
+        assert not (tmp_path / "o").exists()
+    assert paths[0].read_bytes() == before
 
 
 def test_loops_dask_is_the_one_switch(tmp_path, client):

@@ -368,6 +368,16 @@ pub(crate) enum JsonTo {
     File(PathBuf),
 }
 
+impl JsonTo {
+    /// The file of `--json FILE` (none for `-`, or when the flag is absent).
+    pub(crate) fn file(to: &Option<JsonTo>) -> Option<&std::path::Path> {
+        match to {
+            Some(JsonTo::File(path)) => Some(path),
+            _ => None,
+        }
+    }
+}
+
 impl From<&OsStr> for JsonTo {
     fn from(value: &OsStr) -> Self {
         if value == "-" { Self::Stdout } else { Self::File(PathBuf::from(value)) }

@@ -81,6 +81,14 @@ pub(crate) fn components(args: ComponentsArgs) -> Result<()> {
     if args.edges.wanted() && args.files.len() != 1 {
         bail!("--edges reads the edges of one pose graph, and {} files were given", args.files.len());
     }
+    crate::out_dir::refuse_outputs_on_inputs(
+        [
+            ("--json", JsonTo::file(&args.output.json)),
+            ("--edges-csv", JsonTo::file(&args.edges.edges_csv)),
+            ("--edges-json", JsonTo::file(&args.edges.edges_json)),
+        ],
+        &args.files,
+    )?;
     let (table, traj) = args.input.read_table(&args.files, &spec)?;
     let measured = args.input.measured(&table, &traj);
     loops_core::check_gamma(args.engine.gamma)?;

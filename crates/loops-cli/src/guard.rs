@@ -3,14 +3,15 @@
 //! Every write of `loops` goes through [`with_writes`], which holds one process-wide lock while a
 //! file is written to a temporary name and renamed into place, and while a log's staging folder
 //! is renamed to its final name. The SIGINT/SIGTERM handler takes the same lock, so it runs
-//! between writes: it removes the staging folders of logs still in progress (and folders
-//! `loops` created that stayed empty), says so, and exits with 130. What is left is what was
+//! between writes: it removes the staging folders of logs still in progress and the scratch
+//! folders of output folders (and folders `loops` created that stayed empty), says so, and exits
+//! with 130. What is left is what was
 //! finished: whole files and whole per-log folders.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, OnceLock, PoisonError};
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use loops_core::Interrupt;
 use loops_io::WriteError;
 
@@ -27,9 +28,13 @@ pub(crate) struct Writes {
     /// Marker files of output folders, removed on interrupt with their folder when `loops`
     /// created it and it holds nothing else.
     markers: Vec<PathBuf>,
+    /// Scratch folders of output folders, removed on interrupt (after the staging folders in
+    /// them are counted).
+    scratch: Vec<PathBuf>,
 }
 
-static WRITES: Mutex<Writes> = Mutex::new(Writes { staged: Vec::new(), created: Vec::new(), markers: Vec::new() });
+static WRITES: Mutex<Writes> =
+    Mutex::new(Writes { staged: Vec::new(), created: Vec::new(), markers: Vec::new(), scratch: Vec::new() });
 
 fn lock() -> MutexGuard<'static, Writes> {
     // A panic while writing leaves the list as it was: still right to clean up.
@@ -86,6 +91,9 @@ pub(crate) fn install() -> Result<()> {
                 removed += 1;
             }
         }
+        for dir in &writes.scratch {
+            let _ = std::fs::remove_dir_all(dir);
+        }
         for marker in &writes.markers {
             let alone = marker
                 .parent()
@@ -133,59 +141,24 @@ impl Writes {
         }
     }
 
-    /// Creates a staging folder, removed on interrupt until [`commit`](Self::commit)ted.
+    /// Creates a staging folder (in an output folder's scratch folder), removed on interrupt
+    /// until [`unstage`](Self::unstage)d.
     pub(crate) fn stage(&mut self, dir: &Path) -> Result<()> {
-        if dir.exists() {
-            std::fs::remove_dir_all(dir).with_context(|| format!("removing the stale {}", dir.display()))?;
-        }
         std::fs::create_dir(dir).with_context(|| format!("creating {}", dir.display()))?;
         self.staged.push(dir.to_path_buf());
         Ok(())
     }
 
-    /// Removes a staging folder (after a failure).
-    pub(crate) fn discard(&mut self, dir: &Path) {
-        let _ = std::fs::remove_dir_all(dir);
+    /// Forgets a staging folder: moved into place, or removed.
+    pub(crate) fn unstage(&mut self, dir: &Path) {
         self.staged.retain(|d| d != dir);
     }
 
-    /// Renames the staging folder `staged` to `dir`. An existing `dir` is replaced only with
-    /// `force`, and only when it is a folder `command` (`loops run`) wrote (`owned`): never a
-    /// file or folder of the user's. The staging folder is removed when it cannot be renamed.
-    pub(crate) fn commit(&mut self, staged: &Path, dir: &Path, force: bool, owned: bool, command: &str) -> Result<()> {
-        let committed = self.rename(staged, dir, force, owned, command);
-        if committed.is_err() {
-            let _ = std::fs::remove_dir_all(staged);
+    /// Remembers the scratch folder of an output folder, removed on interrupt.
+    pub(crate) fn scratch(&mut self, dir: PathBuf) {
+        if !self.scratch.contains(&dir) {
+            self.scratch.push(dir);
         }
-        self.staged.retain(|d| d != staged);
-        committed
-    }
-
-    fn rename(&self, staged: &Path, dir: &Path, force: bool, owned: bool, command: &str) -> Result<()> {
-        if dir.exists() || dir.is_symlink() {
-            if !force {
-                bail!("{} exists; pass --force to replace it", dir.display());
-            }
-            if !dir.is_dir() || dir.is_symlink() || !owned {
-                bail!("{} exists and is not an output of `{command}`; not replacing it", dir.display());
-            }
-            let old = dir.with_file_name(format!(
-                ".{}.old-{}",
-                dir.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
-                std::process::id()
-            ));
-            std::fs::rename(dir, &old).with_context(|| format!("moving the old {} aside", dir.display()))?;
-            let renamed = std::fs::rename(staged, dir);
-            if let Err(error) = renamed {
-                let _ = std::fs::rename(&old, dir);
-                return Err(error).with_context(|| format!("renaming {} to {}", staged.display(), dir.display()));
-            }
-            let _ = std::fs::remove_dir_all(&old);
-        } else {
-            std::fs::rename(staged, dir)
-                .with_context(|| format!("renaming {} to {}", staged.display(), dir.display()))?;
-        }
-        Ok(())
     }
 }
 

@@ -57,6 +57,11 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     let Analysis { spec, sampler, separation } = args.analysis.checked()?;
     let AnalysisArgs { input, engine, sampling } = &args.analysis;
     let (gamma, epsilon_s) = (engine.gamma, sampling.epsilon_s);
+    let inputs: Vec<PathBuf> = args.files.iter().chain(&args.detections).cloned().collect();
+    crate::out_dir::refuse_outputs_on_inputs(
+        [("--csv", args.csv.as_deref()), ("--json", JsonTo::file(&args.json)), ("--g2o", args.g2o.as_deref())],
+        &inputs,
+    )?;
     let (table, traj) = input.read_table(&args.files, &spec)?;
     let (loops, samples) = loops_core::with_threads(engine.threads, || -> Result<(Loops, Samples)> {
         let loops = spec.find_loops_separated(&traj, gamma, separation)?;
@@ -112,8 +117,10 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     // writes nothing.
     let mut files = loops_io::StagedFiles::new();
     let mut lines = Vec::new();
-    let formats =
-        [(args.csv.as_ref(), loops_io::SamplesFormat::Csv), (json_file(&args.json), loops_io::SamplesFormat::Json)];
+    let formats = [
+        (args.csv.as_deref(), loops_io::SamplesFormat::Csv),
+        (JsonTo::file(&args.json), loops_io::SamplesFormat::Json),
+    ];
     for (path, format) in formats {
         if let Some(path) = path {
             files
@@ -139,14 +146,6 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The file of `--json FILE` (none for `-`).
-fn json_file(json: &Option<JsonTo>) -> Option<&PathBuf> {
-    match json {
-        Some(JsonTo::File(path)) => Some(path),
-        _ => None,
-    }
 }
 
 fn write_summary(

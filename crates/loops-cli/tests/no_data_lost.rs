@@ -1,11 +1,12 @@
-//! Issue 15, "data lost or overwritten" (items 1–5) and the flags of items 14 and 20: each test
-//! reproduces what the attack sweep did, and fails on the code before the fix.
+//! Data lost or overwritten: each test reproduces what an attack sweep did, and fails on the
+//! code before its fix (the table in `crates/loops-io/tests/FUZZ.md`). "Item N" is the sweep's
+//! numbering: the first sweep's items 1–5, 14 and 20; then the second sweep's items 1–3.
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod support;
-use support::{laps_tum, loops, names, stderr, temp_dir};
+use support::{assert_one_line_error, laps_tum, loops, names, stderr, temp_dir, write_in};
 
 /// Two laps of a 40 m square at 1 m/s, as TUM, in `dir`.
 fn laps(dir: &Path, name: &str) -> PathBuf {
@@ -99,8 +100,9 @@ fn a_second_run_into_a_held_folder_stops() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// Item 4: a failed log leaves no staging folder; what killed runs left is removed by the next
-/// run into the folder, which says so.
+/// Item 4: a failed log leaves no staging folder; what a killed run left in its scratch folder
+/// (which its marker lists) is removed by the next run into the folder, which says so. Entries
+/// of the user's that merely look like leftovers are never removed.
 #[test]
 fn staging_folders_do_not_stay_behind() {
     let dir = temp_dir("staging");
@@ -113,19 +115,33 @@ fn staging_folders_do_not_stay_behind() {
         assert_eq!(clash.status.code(), Some(1), "{}", stderr(&clash));
         assert!(!names(&out).iter().any(|n| n.starts_with('.')), "{:?}", names(&out));
     }
-    // What a SIGKILL leaves: a staging folder with a temporary file, a folder moved aside, a
-    // temporary file of the top level.
+    // What a SIGKILL leaves: the scratch folder, which the marker lists, with a log's folder
+    // and a file in progress; and beside it a user's entries shaped like leftovers.
     let killed = dir.join("killed");
     assert!(run(&log, &killed, &[]).status.success());
+    let marker = std::fs::read_to_string(killed.join("loops-run.json")).unwrap();
+    assert!(marker.contains(r#""scratch": ".loops-run.partial""#), "{marker}");
+    std::fs::create_dir_all(killed.join(".loops-run.partial/0")).unwrap();
+    std::fs::write(killed.join(".loops-run.partial/0/report.html"), "half").unwrap();
+    std::fs::write(killed.join(".loops-run.partial/1"), "half").unwrap();
     std::fs::create_dir(killed.join(".a.partial-999999")).unwrap();
-    std::fs::write(killed.join(".a.partial-999999/.report.html.Xy12Ab.tmp"), "half").unwrap();
-    std::fs::create_dir(killed.join(".a.old-999998")).unwrap();
-    std::fs::write(killed.join(".index.html.Qw34Er.tmp"), "half").unwrap();
+    std::fs::write(killed.join(".index.html.Qw34Er.tmp"), "a user's file").unwrap();
     std::fs::write(killed.join(".my-notes"), "a user's hidden file").unwrap();
     let next = run(&log, &killed, &["--force"]);
     assert!(next.status.success(), "{}", stderr(&next));
-    assert!(stderr(&next).contains("removed 3 leftover(s) of an interrupted run"), "{}", stderr(&next));
-    assert_eq!(names(&killed), [".my-notes", "a", "index.html", "loops-run.json", "summary.json"]);
+    assert!(stderr(&next).contains("removed what an interrupted run left"), "{}", stderr(&next));
+    assert_eq!(
+        names(&killed),
+        [
+            ".a.partial-999999",
+            ".index.html.Qw34Er.tmp",
+            ".my-notes",
+            "a",
+            "index.html",
+            "loops-run.json",
+            "summary.json"
+        ]
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -137,9 +153,11 @@ fn a_failing_sample_writes_no_file() {
     let csv = dir.join("x.csv");
     let json = dir.join("x.json");
     let args = ["sample", log.to_str().unwrap(), "--gamma", "2", "--budget", "10", "--csv", csv.to_str().unwrap()];
-    let output = loops(&[&args[..], &["--json", json.to_str().unwrap(), "--g2o", log.to_str().unwrap()]].concat());
+    let taken = write_in(&dir, "taken.g2o", "a user's file");
+    let output = loops(&[&args[..], &["--json", json.to_str().unwrap(), "--g2o", taken.to_str().unwrap()]].concat());
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
-    assert!(stderr(&output).contains("in.tum exists"), "{}", stderr(&output));
+    assert!(stderr(&output).contains("taken.g2o exists"), "{}", stderr(&output));
+    std::fs::remove_file(&taken).unwrap();
     assert_eq!(names(&dir), ["in.tum"], "no x.csv, no x.json, no temporary file");
     let output = loops(&[&args[..], &["--g2o", dir.join("x.g2o").to_str().unwrap()]].concat());
     assert!(output.status.success(), "{}", stderr(&output));
@@ -185,5 +203,115 @@ fn negative_and_infinite_values_reach_the_core() {
     let output = loops(&["components", log.to_str().unwrap(), "--gamma", "0.1", "--metric", metric]);
     assert_eq!(output.status.code(), Some(2), "{}", stderr(&output));
     assert!(stderr(&output).contains("repeated parameter 'rotation'"), "{}", stderr(&output));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+// The second sweep.
+
+/// A folder of `name` with a user's entries shaped like what a killed run leaves, and a file:
+/// the names it holds.
+fn users_leftover_shaped_entries(out: &Path) -> Vec<String> {
+    std::fs::create_dir_all(out.join(".thesis.partial-2024")).unwrap();
+    std::fs::write(out.join(".thesis.partial-2024/ch1.tex"), "work").unwrap();
+    std::fs::create_dir_all(out.join(".drive.old-12")).unwrap();
+    std::fs::write(out.join(".notes.backup.tmp"), "draft").unwrap();
+    std::fs::write(out.join(".summary.json.Ab12xZ.tmp"), "mine too").unwrap();
+    std::fs::write(out.join("mydata.txt"), "mine").unwrap();
+    names(out)
+}
+
+/// Second sweep, item 1: `loops run` and `loops fleet` never remove an entry of --out because it
+/// looks like a leftover, with or without --force: only what their marker lists.
+#[test]
+fn leftover_shaped_entries_of_the_user_are_never_removed() {
+    let dir = temp_dir("shaped");
+    let (a, b) = (laps(&dir, "a.tum"), dir.join("b.tum"));
+    laps_tum(&b, 1000, 0.5);
+    for (command, force) in [("run", false), ("run", true), ("fleet", false), ("fleet", true)] {
+        let out = dir.join(format!("u-{command}-{force}"));
+        let before = users_leftover_shaped_entries(&out);
+        let mut args = vec![command, a.to_str().unwrap()];
+        if command == "fleet" {
+            args.push(b.to_str().unwrap());
+        }
+        args.extend(["--gamma", "2", "--budget", "20", "--out", out.to_str().unwrap()]);
+        if force {
+            args.push("--force");
+        }
+        let output = loops(&args);
+        if force {
+            assert!(output.status.success(), "{command}: {}", stderr(&output));
+            let after = names(&out);
+            assert!(before.iter().all(|name| after.contains(name)), "{command}: {before:?} -> {after:?}");
+        } else {
+            assert_one_line_error(&output, "exists and is not empty");
+            assert_eq!(names(&out), before, "{command}");
+        }
+        assert!(!stderr(&output).contains("removed"), "{command}: {}", stderr(&output));
+        assert_eq!(std::fs::read_to_string(out.join(".thesis.partial-2024/ch1.tex")).unwrap(), "work");
+        assert_eq!(std::fs::read_to_string(out.join(".notes.backup.tmp")).unwrap(), "draft");
+        assert_eq!(std::fs::read_to_string(out.join(".summary.json.Ab12xZ.tmp")).unwrap(), "mine too");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Second sweep, item 2: no output is written onto an input, --force or not, also through a
+/// link: `loops run --json`, `loops fleet --json`, `loops components --json`, `loops sample
+/// --g2o/--csv/--json`.
+#[test]
+fn force_never_writes_onto_an_input() {
+    let dir = temp_dir("onto");
+    let (a, b) = (laps(&dir, "a.tum"), dir.join("b.tum"));
+    laps_tum(&b, 1000, 0.5);
+    let before = std::fs::read(&a).unwrap();
+    let link = dir.join("link.json");
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(&a, &link).unwrap();
+    #[cfg(not(unix))]
+    let link = a.clone();
+    let (a_str, b_str, out) = (a.to_str().unwrap(), b.to_str().unwrap(), dir.join("o"));
+    let out_str = out.to_str().unwrap();
+    for target in [a.to_str().unwrap(), link.to_str().unwrap()] {
+        let attempts: [Vec<&str>; 7] = [
+            vec!["run", a_str, "--gamma", "2", "--out", out_str, "--json", target, "--force"],
+            vec!["fleet", a_str, b_str, "--gamma", "2", "--out", out_str, "--json", target, "--force"],
+            vec!["components", a_str, "--gamma", "2", "--json", target, "--force"],
+            vec!["sample", a_str, "--gamma", "2", "--budget", "5", "--g2o", target, "--force"],
+            vec!["sample", a_str, "--gamma", "2", "--budget", "5", "--csv", target, "--force"],
+            vec!["sample", a_str, "--gamma", "2", "--budget", "5", "--json", target, "--force"],
+            vec!["components", a_str, "--gamma", "2", "--edges-csv", target, "--force"],
+        ];
+        for args in attempts {
+            let output = loops(&args);
+            assert_one_line_error(&output, &["would overwrite the input", "a.tum"]);
+            assert_eq!(std::fs::read(&a).unwrap(), before, "{args:?}");
+            assert!(!out.exists(), "{args:?}: refused before anything is written");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Second sweep, item 3: a log named like one of `loops run`'s own files gets a folder of another
+/// name, and a log with a name of 250 characters runs (its work in progress has a short name).
+#[test]
+fn logs_named_like_the_tools_files_and_long_names_run() {
+    let dir = temp_dir("names");
+    let marker_named = laps(&dir, "loops-run.json.tum");
+    let long = laps(&dir, &format!("{}.tum", "l".repeat(250)));
+    let out = dir.join("out");
+    let output = loops(&[
+        "run",
+        marker_named.to_str().unwrap(),
+        long.to_str().unwrap(),
+        "--gamma",
+        "2",
+        "--budget",
+        "20",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert_eq!(names(&out), ["index.html", &"l".repeat(250), "loops-run.json", "loops-run.json-2", "summary.json"]);
+    assert!(out.join("loops-run.json-2/summary.json").is_file());
     std::fs::remove_dir_all(&dir).unwrap();
 }

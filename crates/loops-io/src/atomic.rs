@@ -191,7 +191,7 @@ impl Staged {
 }
 
 /// Makes the rename into `dir` durable: fsync of the directory (Unix; elsewhere nothing to do).
-fn sync_directory(dir: &Path) -> io::Result<()> {
+pub(crate) fn sync_directory(dir: &Path) -> io::Result<()> {
     #[cfg(unix)]
     File::open(dir)?.sync_all()?;
     #[cfg(not(unix))]

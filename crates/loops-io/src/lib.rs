@@ -27,7 +27,10 @@
 //! all atomic, and never replacing a
 //! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
 //! the workspace: the CLI writes its files through it too; [`StagedFiles`] writes several files
-//! all or none (a command that fails writes nothing).
+//! all or none (a command that fails writes nothing). [`out_dir`] is the one rule for an output
+//! folder of several results (`loops run`, `loops fleet`, `loops-dask`): locked, marked, filled
+//! through a scratch folder, and never removing or replacing what the command did not write;
+//! [`out_dir::refuse_output_on_input`] keeps every writer off its inputs.
 //!
 //! Every error is an [`IoError`] whose message starts with the file and the line, or the topic
 //! and byte offset: `drive.tum line 12: column 3 ("abc") is not a number`, `drive.mcap topic
@@ -87,7 +90,7 @@
 // 5. readers: `csv`, `euroc`, `graph`, `kitti`, `tuc`, `tum`, `detections`; `read` picks one;
 // 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
 //    `loop_duration`, `report`, `quality`, `samples`, `edge_verdicts`; and `write` (TUM, g2o);
-//    `fleet` (a fleet's tables and g2o edges).
+//    `fleet` (a fleet's tables and g2o edges); `out_dir` (an output folder of several results).
 mod atomic;
 mod bag;
 mod cdr;
@@ -112,6 +115,7 @@ mod mcap;
 mod mcap_records;
 mod mcap_write;
 mod message;
+pub mod out_dir;
 mod pose_type;
 mod printable;
 mod quality;

@@ -20,7 +20,21 @@ pub(crate) enum Failure {
     Core(loops_core::Error),
     Io(Box<loops_io::IoError>),
     Write(loops_io::WriteError),
+    OutDir(loops_io::out_dir::OutDirError),
+    OutputOnInput(loops_io::out_dir::OutputOnInput),
     Panic(String),
+}
+
+impl From<loops_io::out_dir::OutDirError> for Failure {
+    fn from(error: loops_io::out_dir::OutDirError) -> Self {
+        Self::OutDir(error)
+    }
+}
+
+impl From<loops_io::out_dir::OutputOnInput> for Failure {
+    fn from(error: loops_io::out_dir::OutputOnInput) -> Self {
+        Self::OutputOnInput(error)
+    }
 }
 
 impl From<loops_core::Error> for Failure {
@@ -71,6 +85,16 @@ impl From<Failure> for PyErr {
                     _ => LoopsIOError::new_err(message),
                 }
             }
+            // A refused output folder or entry is a wrong argument (the user's choice of folder);
+            // the operating system's refusals are OSError.
+            Failure::OutDir(error) => {
+                let message = error.to_string();
+                match error {
+                    loops_io::out_dir::OutDirError::Io { error, .. } => os_error(&error, message),
+                    _ => InvalidParameterError::new_err(message),
+                }
+            }
+            Failure::OutputOnInput(error) => InvalidParameterError::new_err(error.to_string()),
             Failure::Write(error) => {
                 let message = error.to_string();
                 match error {

@@ -12,7 +12,9 @@
 //! `FleetLoops`, `FleetSamples`, `find_fleet_loops`, `sample_fleet`, `urban_fleet`) and `py_tile`
 //! (`SessionBlocks`, `Tile`, `TileSummary`, `TileMerge`, `TiledFleetLoops`: a fleet's tiles for a
 //! cluster), `py_online` (`OnlineLoops`, `Update`: loops while poses arrive) and
-//! `py_online_sampler` (`OnlineSampler`, `Candidate`: loop-closure candidates per keyframe).
+//! `py_online_sampler` (`OnlineSampler`, `Candidate`: loop-closure candidates per keyframe);
+//! `py_out_dir` (`OutDir`, `refuse_output_on_input`: loops-io's output folder, for
+//! `inexact_loops.dask`).
 //! Below them:
 //! `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
@@ -32,6 +34,7 @@ mod py_loops;
 mod py_metric;
 mod py_online;
 mod py_online_sampler;
+mod py_out_dir;
 mod py_plane;
 mod py_quality;
 mod py_samples;
@@ -135,6 +138,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_trajectory::urban_drive, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::read_trajectory, module)?)?;
     module.add_function(wrap_pyfunction!(py_trajectory::list_topics, module)?)?;
+    module.add_function(wrap_pyfunction!(py_trajectory::log_name, module)?)?;
     module.add_class::<py_detections::Detections>()?;
     module.add_class::<py_clusters::DetectionClusters>()?;
     module.add_class::<py_samples::Samples>()?;
@@ -182,5 +186,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_online::Update>()?;
     module.add_class::<py_online_sampler::OnlineSampler>()?;
     module.add_class::<py_online_sampler::Candidate>()?;
+    module.add_class::<py_out_dir::OutDir>()?;
+    module.add_function(wrap_pyfunction!(py_out_dir::refuse_output_on_input, module)?)?;
     Ok(())
 }

@@ -76,14 +76,11 @@ enum SessionSource<'py> {
     Read(Bound<'py, PyAny>),
 }
 
-/// The name a path gives its session: its file stem, or a bag's folder for `metadata.yaml`.
+/// The name a path gives its session ([`loops_io::log_name`], the rule of every surface), or
+/// none for a path that names no file.
 fn stem_name(path: &Path) -> Option<String> {
-    let name = if path.file_name().is_some_and(|f| f == "metadata.yaml") {
-        path.parent().and_then(Path::file_name)?
-    } else {
-        path.file_stem()?
-    };
-    Some(name.to_string_lossy().into_owned())
+    path.file_name()?;
+    Some(loops_io::log_name(path)).filter(|name| !name.is_empty())
 }
 
 /// The `(name, source)` pairs of `sessions`.

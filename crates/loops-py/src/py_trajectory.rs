@@ -775,6 +775,20 @@ fn paths_of(path: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
     Ok(paths)
 }
 
+/// The name a pose log gives its session (or its folder of results): the file's stem, or a
+/// rosbag2 bag's folder name however the bag is given (its folder, ``metadata.yaml`` or a storage
+/// file; a storage file of a split bag adds its own stem). ``loops run``, ``loops fleet``,
+/// :class:`Fleet` and ``inexact_loops.dask`` all name sessions by this one rule.
+///
+/// Example:
+///     >>> from inexact_loops import _core
+///     >>> _core.log_name("logs/monday.tum"), _core.log_name("logs/monday.db3.zstd")
+///     ('monday', 'monday')
+#[pyfunction]
+pub(crate) fn log_name(path: PathBuf) -> String {
+    loops_io::log_name(path)
+}
+
 /// The topics of an MCAP file, a rosbag2 bag (its folder, ``metadata.yaml`` or a storage
 /// file) or a ROS 1 bag: one dict per topic with ``topic``, ``schema``,
 /// ``encoding``, ``messages``, ``start_ns`` and ``end_ns`` (log time, ``None`` when empty) and

@@ -15,7 +15,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use loops_core::{
     Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SampleQuality, Samples, Trajectory,
@@ -36,9 +36,6 @@ mod page;
 
 /// `loops fleet` in its output folder: its marker, and the files it writes at the top.
 const TOOL: out_dir::Tool = out_dir::FLEET;
-
-/// The fleet's files at the top of --out.
-const FILES: [&str; 6] = out_dir::FLEET_FILES;
 
 /// Find the loops of several pose logs as one fleet: within each session and between every two
 /// (where vehicles, days or robots overlap), the session-overlap matrix, one sampling over all,
@@ -164,9 +161,10 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         );
     }
     let results = &args.results;
-    results.check()?;
     let specs = sessions(&args)?;
-    out_dir::refuse_non_empty(&results.out, results.force, TOOL)?;
+    let inputs: Vec<PathBuf> = specs.iter().flat_map(|s| s.files.iter().cloned()).collect();
+    results.check(&inputs)?;
+    loops_io::out_dir::refuse_non_empty(&results.out, results.force, TOOL)?;
 
     let batch = Batch::new(progress::Mode::detect(results.quiet), specs.len() + 1);
     let mut seconds = FleetSeconds::default();
@@ -189,7 +187,7 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
             .map_err(|error| mismatch(error, &specs, &sources))?;
 
         guard::with_writes(|writes| writes.create_dir(&results.out))?;
-        let out = OutDir::take(&results.out, results.force, TOOL)?;
+        let out = out_dir::take(&results.out, results.force, TOOL)?;
         batch.println(&format!(
             "loops: fleet of {} session(s), {} poses, gamma {} ({}), sampler {} ({}{}), results to {}",
             fleet.len(),
@@ -228,7 +226,7 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         let clock = Instant::now();
         let components = loops.components();
         let pairs = loops.session_pairs();
-        let g2o = write_fleet_files(&out, &results.out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
+        let g2o = write_fleet_files(&out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
         seconds.stages.write = clock.elapsed().as_secs_f64();
         let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
         let between_covered = components
@@ -286,7 +284,7 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
             sessions,
             warnings,
             seconds: FleetSeconds::default(),
-            files: FILES.iter().copied().filter(|&f| f != "samples.g2o" || g2o).collect(),
+            files: TOOL.top_files.iter().copied().filter(|&f| f != "samples.g2o" || g2o).collect(),
             pages: &pages,
         };
         let html = render(&FleetReportInput {
@@ -313,7 +311,7 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
 }
 
 /// The sessions as given: each LOG, then each --session, with unique names that can name a
-/// folder of --out, and no file inside --out.
+/// folder of --out.
 fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
     let mut specs: Vec<SessionSpec> = Vec::new();
     for path in &args.logs {
@@ -330,7 +328,6 @@ fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
         }
         specs.push(SessionSpec { name: name.to_owned(), files, given: format!("--session {text}") });
     }
-    let out_abs = crate::run::resolved(&args.results.out)?;
     for (k, spec) in specs.iter().enumerate() {
         if let Some(first) = specs[..k].iter().find(|s| s.name == spec.name) {
             bail!(
@@ -341,7 +338,8 @@ fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
                 spec.given
             );
         }
-        let reserved = FILES.contains(&spec.name.as_str()) || spec.name == TOOL.marker || spec.name == out_dir::MARKER;
+        // Each session's folder is a `loops run` folder: neither command's own names can name it.
+        let reserved = TOOL.reserves(&spec.name) || out_dir::RUN.reserves(&spec.name);
         if spec.name.is_empty()
             || spec.name.starts_with('.')
             || spec.name.contains(['/', '\\'])
@@ -354,15 +352,6 @@ fn sessions(args: &FleetArgs) -> Result<Vec<SessionSpec>> {
                 spec.name,
                 spec.given
             );
-        }
-        for file in &spec.files {
-            if crate::run::resolved(file)?.starts_with(&out_abs) {
-                bail!(
-                    "{} lies inside --out {}; write the results elsewhere",
-                    file.display(),
-                    args.results.out.display()
-                );
-            }
         }
     }
     Ok(specs)
@@ -389,7 +378,6 @@ fn mismatch(error: loops_core::Error, specs: &[SessionSpec], sources: &[String])
 #[allow(clippy::too_many_arguments)]
 fn write_fleet_files(
     out: &OutDir,
-    dir: &Path,
     fleet: &Fleet,
     loops: &FleetLoops,
     samples: &Samples,
@@ -398,8 +386,7 @@ fn write_fleet_files(
     localized: &[FleetSample],
 ) -> Result<bool> {
     let write = |name: &str, fill: &dyn Fn(&mut std::fs::File) -> std::io::Result<()>| -> Result<()> {
-        guard::with_writes(|writes| out.claim(writes, name))?;
-        guard::with_writes(|_| loops_io::write_atomically(dir.join(name), true, fill)).map_err(guard::write_error)
+        out_dir::write_file(out, name, fill)
     };
     let per_component = Some(quality.per_component.as_slice());
     write("components.csv", &|file| loops_io::fleet_components_to_csv(fleet, loops, per_component, file))?;
@@ -411,11 +398,7 @@ fn write_fleet_files(
         write("samples.g2o", &|file| file.write_all(text.as_bytes()))?;
         Ok(true)
     } else {
-        let stale = dir.join("samples.g2o");
-        if out.owns("samples.g2o") && stale.is_file() {
-            guard::with_writes(|_| std::fs::remove_file(&stale))
-                .with_context(|| format!("removing the earlier {}", stale.display()))?;
-        }
+        guard::with_writes(|_| out.remove("samples.g2o"))?;
         eprintln!(
             "loops: warning: samples.g2o not written: its GTSAM Symbol keys have one robot letter per session (a-z), for at \
              most {} sessions, and the fleet has {}",

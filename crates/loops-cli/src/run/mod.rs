@@ -91,9 +91,8 @@ pub(crate) struct Settings<'a> {
     pub(crate) spec: MetricSpec,
     pub(crate) sampler: Sampler,
     pub(crate) separation: Separation,
-    /// --out, and whether --force was given.
+    /// --out, and the folder held (which knows whether --force was given).
     pub(crate) out_path: &'a Path,
-    pub(crate) force: bool,
     pub(crate) out: &'a OutDir,
 }
 
@@ -109,7 +108,6 @@ impl<'a> Settings<'a> {
             sampler,
             separation,
             out_path: &results.out,
-            force: results.force,
             out,
         }
     }
@@ -126,10 +124,10 @@ pub(crate) fn run(args: RunArgs) -> Result<u8> {
     // Refused once, before any log is read, rather than once per log.
     let checked = args.analysis.checked()?;
     let results = &args.results;
-    results.check()?;
-    let jobs = jobs(&args.logs, &results.out)?;
+    results.check(&args.logs)?;
+    let jobs = jobs(&args.logs);
     guard::with_writes(|writes| writes.create_dir(&results.out))?;
-    let out = OutDir::take(&results.out, results.force, out_dir::RUN)?;
+    let out = out_dir::take(&results.out, results.force, out_dir::RUN)?;
 
     let settings = Settings::new(&args.analysis, checked, results, &out);
     let batch = Batch::new(progress::Mode::detect(results.quiet), jobs.len());
@@ -191,11 +189,14 @@ pub(crate) struct ResultsArgs {
 
 impl ResultsArgs {
     /// Refuses, before anything is read: an --out that is a file, a `--json FILE` that exists
-    /// without --force.
-    pub(crate) fn check(&self) -> Result<()> {
+    /// without --force, and either of them on one of the `inputs` (or --out inside one, or one
+    /// inside --out).
+    pub(crate) fn check(&self, inputs: &[PathBuf]) -> Result<()> {
         if self.out.exists() && !self.out.is_dir() {
             bail!("--out {} exists and is not a folder", self.out.display());
         }
+        let json = JsonTo::file(&self.json);
+        out_dir::refuse_outputs_on_inputs([("--out", Some(self.out.as_path())), ("--json", json)], inputs)?;
         if let Some(JsonTo::File(path)) = &self.json
             && path.exists()
             && !self.force
@@ -217,8 +218,7 @@ impl ResultsArgs {
     ) -> Result<()> {
         // Both are ours (OutDir::take refused a user's): listed, then replaced.
         for (name, bytes) in [("summary.json", json.as_bytes()), ("index.html", html.as_bytes())] {
-            guard::with_writes(|writes| out.claim(writes, name))?;
-            write_file(&self.out.join(name), bytes, true)?;
+            out_dir::write_file(out, name, |file| file.write_all(bytes))?;
         }
         if let Some(JsonTo::File(path)) = &self.json {
             write_file(path, json.as_bytes(), self.force)?;
@@ -235,51 +235,27 @@ impl ResultsArgs {
 }
 
 /// A folder name per log: its name ([`loops_io::log_name`]: the file stem, or a rosbag2 bag's
-/// folder name however the bag is given), with `-2`, `-3`, ... for repeated names. Logs inside
-/// --out are refused (results must never land on inputs), with links resolved on both sides.
-fn jobs(logs: &[PathBuf], out: &Path) -> Result<Vec<Job>> {
-    let out_abs = resolved(out)?;
+/// folder name however the bag is given), with `-2`, `-3`, ... for repeated names and for the
+/// names `loops run` keeps for itself ([`out_dir::Tool::reserves`]: `index.html`,
+/// `loops-run.json`, ...). (Logs inside --out were refused by [`ResultsArgs::check`].)
+fn jobs(logs: &[PathBuf]) -> Vec<Job> {
     let mut names: Vec<String> = Vec::with_capacity(logs.len());
     let mut jobs = Vec::with_capacity(logs.len());
     for path in logs {
-        let abs = resolved(path)?;
-        if abs.starts_with(&out_abs) {
-            bail!("{} lies inside --out {}; write the results elsewhere", path.display(), out.display());
-        }
         let stem = loops_io::log_name(path);
         let stem: String =
             stem.chars().map(|c| if c.is_control() || c == '/' || c == '\\' { '_' } else { c }).collect();
         let stem = if stem.starts_with('.') || stem.is_empty() { format!("log{stem}") } else { stem };
         let mut name = stem.clone();
         let mut k = 2;
-        while names.contains(&name) || name == "index.html" || name == "summary.json" {
+        while names.contains(&name) || out_dir::RUN.reserves(&name) {
             name = format!("{stem}-{k}");
             k += 1;
         }
         names.push(name.clone());
         jobs.push(Job { path: path.clone(), name });
     }
-    Ok(jobs)
-}
-
-/// `path` with every link resolved ([`std::fs::canonicalize`]), also when it does not exist yet:
-/// its longest existing ancestor resolved, and the rest appended.
-pub(crate) fn resolved(path: &Path) -> Result<PathBuf> {
-    let absolute = std::path::absolute(path).with_context(|| format!("resolving {}", path.display()))?;
-    let mut existing = absolute.as_path();
-    let mut rest = Vec::new();
-    loop {
-        match std::fs::canonicalize(existing) {
-            Ok(real) => return Ok(rest.iter().rev().fold(real, |dir, part| dir.join(part))),
-            Err(_) => match (existing.parent(), existing.file_name()) {
-                (Some(parent), Some(name)) => {
-                    rest.push(name.to_owned());
-                    existing = parent;
-                }
-                _ => return Ok(absolute),
-            },
-        }
-    }
+    jobs
 }
 
 /// Reads, finds, samples and writes one log.
@@ -427,32 +403,12 @@ fn compare_samplers(
         .collect()
 }
 
-/// Writes one log's files into a staging folder (`write`), then lists `name` in the marker of
-/// --out and renames the folder to `out/name`. The staging folder is removed when anything fails.
+/// Writes one log's files into a staging folder (`write`), then moves it into place as
+/// `out/name` ([`out_dir::write_folder`]). An earlier folder of that name is replaced (with
+/// --force) only when the marker of --out lists it and it still holds its `summary.json`.
 fn write_folder(settings: &Settings<'_>, name: &str, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let (out, force) = (settings.out_path, settings.force);
-    let staged = out.join(format!(".{name}.partial-{}", std::process::id()));
-    guard::with_writes(|writes| writes.stage(&staged))?;
-    let written = write(&staged);
-    let target = out.join(name);
-    let owned = settings.out.owns(name) && target.join(LOG_SUMMARY).is_file();
-    guard::with_writes(|writes| match written {
-        Ok(()) => {
-            // Listed before it is moved in place: what is ours is never unlisted.
-            let claimed = if target.exists() && !(force && owned) { Ok(()) } else { settings.out.claim(writes, name) };
-            match claimed {
-                Ok(()) => writes.commit(&staged, &target, force, owned, settings.out.command()),
-                Err(error) => {
-                    writes.discard(&staged);
-                    Err(error)
-                }
-            }
-        }
-        Err(error) => {
-            writes.discard(&staged);
-            Err(error)
-        }
-    })
+    let owned = settings.out.owns(name) && settings.out_path.join(name).join(LOG_SUMMARY).is_file();
+    out_dir::write_folder(settings.out, name, owned, write)
 }
 
 /// Writes `bytes` to `path` atomically ([`loops_io::write_atomically`]), under the write lock of
