@@ -6,6 +6,7 @@ them in ``crates/loops-py``, not here.
 
 from collections.abc import Callable
 from os import PathLike
+from pathlib import Path
 from typing import Any, ClassVar, Literal, Protocol, final
 
 import numpy as np
@@ -71,6 +72,9 @@ __all__ = [
     "scan_tile_kept",
     "scan_tile_with_duration",
     "session_loop_duration",
+    "log_name",
+    "OutDir",
+    "refuse_output_on_input",
 ]
 
 __version__: str
@@ -971,6 +975,18 @@ def list_topics(path: str | PathLike[str]) -> list[dict[str, object]]:
     Raises:
         OSError: the file cannot be opened. LoopsIOError: not a valid MCAP file or bag (names
         the offset, or the sqlite row).
+    """
+
+def log_name(path: str | PathLike[str]) -> str:
+    """The name a pose log gives its session (or its folder of results): the file's stem, or a
+    rosbag2 bag's folder name however the bag is given (its folder, ``metadata.yaml`` or a storage
+    file; a storage file of a split bag adds its own stem). ``loops run``, ``loops fleet``,
+    :class:`Fleet` and ``inexact_loops.dask`` all name sessions by this one rule.
+
+    Example:
+        >>> from inexact_loops import _core
+        >>> _core.log_name("logs/monday.tum"), _core.log_name("logs/monday.db3.zstd")
+        ('monday', 'monday')
     """
 
 @final
@@ -3368,3 +3384,72 @@ class Candidate:
     @property
     def first(self) -> bool:
         """Whether the first-appearance rule (P1 online) emitted it, rather than a draw."""
+
+@final
+class OutDir:
+    """An output folder a command fills with its results, held by this process: the rules of
+    ``loops run --out`` (one run at a time, an exclusive lock on the folder; every entry written
+    is listed in the command's marker before it is moved into place; ``force`` replaces only
+    listed entries, never a file of yours named like one of ours; work in progress is filled in
+    the command's scratch folder, and only that folder, as the marker lists it, is removed after
+    a killed run). Used by :func:`inexact_loops.dask.run_fleet_dask`.
+
+    Args:
+        path: the folder; created (with its parents) when missing.
+        force: replace the results of an earlier run of the command.
+        tool: the command: ``"loops-dask"``, ``"loops run"`` or ``"loops fleet"``.
+
+    Raises:
+        InvalidParameterError: the folder is in use, not empty without ``force``, or holds an
+            entry of the command's name that it did not write; an unknown ``tool``.
+        OSError: the folder cannot be created, read, locked or written.
+    """
+
+    def __new__(
+        cls, path: str | PathLike[str], *, force: bool = False, tool: str = "loops-dask"
+    ) -> OutDir: ...
+    @property
+    def path(self) -> Path:
+        """The folder, as given."""
+    @property
+    def scratch(self) -> Path:
+        """The scratch folder, where entries are filled before :meth:`place` moves them."""
+    @property
+    def entries(self) -> list[str]:
+        """The entries the command's marker lists (it wrote them), sorted."""
+    def owns(self, name: str) -> bool:
+        """Whether the entry ``name`` is listed in the marker: the command wrote it."""
+    def claim(self, name: str) -> None:
+        """Lists ``name`` in the marker, before it is written."""
+    def staging_path(self) -> Path:
+        """A new path in the scratch folder for one file or folder to fill, then :meth:`place`.
+        Nothing is created.
+        """
+    def place(self, staged: str | PathLike[str], name: str) -> None:
+        """Moves the filled file or folder ``staged`` into place as the entry ``name``, listing it
+        first. An existing entry is replaced only with ``force`` and only when the marker lists
+        it and it is of the same kind; ``staged`` is removed when it cannot be placed.
+
+        Raises:
+            InvalidParameterError: the entry exists and may not be replaced.
+            OSError: a rename failed.
+        """
+    def remove(self, name: str) -> bool:
+        """Removes the entry ``name`` when the command wrote it; anything else of that name is left
+        alone. Returns whether an entry was removed.
+        """
+    def close(self) -> None:
+        """Releases the folder: removes the scratch folder and the lock. Later calls raise."""
+    def __enter__(self) -> OutDir: ...
+    def __exit__(self, *exc: object) -> None: ...
+
+def refuse_output_on_input(
+    what: str, output: str | PathLike[str], inputs: list[str | PathLike[str]]
+) -> None:
+    """Refuses to write the output ``output`` onto an input, ``force`` or not: when it is, or
+    links to, one of ``inputs`` (files or folders), lies inside an input folder, or holds an
+    input. ``what`` names the output in the message.
+
+    Raises:
+        InvalidParameterError: naming both paths.
+    """

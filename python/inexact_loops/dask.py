@@ -1361,7 +1361,7 @@ def run_fleet_dask(
                     )
                 )
             runner.gather(futures)
-            folder.place("loop_duration", staging)
+            folder.place(staging, "loop_duration")
             run.stats["loop_duration_s"] = _now() - started
         else:
             folder.remove("loop_duration")

@@ -695,7 +695,7 @@ def test_no_output_lands_on_an_input(tmp_path):
     for out, says in ((paths[0], "would overwrite the input"), (link, "would overwrite the input"),
                       (tmp_path, "lies inside out")):
         with pytest.raises(il.InvalidParameterError, match=says):
-            run_fleet_dask(paths, 1.5, out=out, block=50, force=True)
+            il_dask.run_fleet_dask(paths, 1.5, out=out, block=50, force=True)
     for target in (paths[0], link):
         argv = [*map(str, paths), "--gamma", "1.5", "--out", str(tmp_path / "o"), "--force"]
         run = subprocess.run(

@@ -270,12 +270,14 @@ impl OutDir {
         if !entries.is_empty() && !force {
             return Err(OutDirError::NotEmpty { path: out.to_path_buf(), flag: tool.out_flag, force: tool.force_flag });
         }
-        for name in &entries {
-            if tool.reserves(name) && !owned.contains(name) {
+        // In the tool's order, so that the message names the same entry every time.
+        let reserved = tool.top_files.iter().copied().chain([tool.scratch]);
+        for name in reserved.filter(|name| entries.iter().any(|e| e == name)) {
+            if !owned.contains(name) {
                 return Err(OutDirError::NotOurs {
                     path: out.to_path_buf(),
                     flag: tool.out_flag,
-                    name: name.clone(),
+                    name: name.to_owned(),
                     command: tool.command,
                     marker: tool.marker,
                 });
