@@ -1577,7 +1577,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.json and args.json != "-":
             _core.refuse_output_on_input("--json", Path(args.json), _path_inputs(sessions))
             if os.path.lexists(args.json) and not args.force:
-                raise InvalidParameterError(f"--json {args.json} exists; pass --force to replace it")
+                raise InvalidParameterError(
+                    f"--json {args.json} exists; pass --force to replace it"
+                )
         client = None
         if args.scheduler:
             try:

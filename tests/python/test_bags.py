@@ -119,7 +119,9 @@ def test_every_surface_names_sessions_alike(bags, tmp_path):
 
     t, p = poses()
     tum = tmp_path / "monday.tum"
-    tum.write_text("".join(f"{a} {x + 50} {y} {z} 0 0 0 1\n" for a, (x, y, z) in zip(t, p, strict=True)))
+    tum.write_text(
+        "".join(f"{a} {x + 50} {y} {z} 0 0 0 1\n" for a, (x, y, z) in zip(t, p, strict=True))
+    )
     standalone = tmp_path / "tuesday.mcap"
     standalone.write_bytes(next(bags["mcap-zstd"].glob("*.mcap")).read_bytes())
     sqlite = bags["sqlite3"]

@@ -692,8 +692,11 @@ def test_no_output_lands_on_an_input(tmp_path):
     before = paths[0].read_bytes()
     link = tmp_path / "link.json"
     link.symlink_to(paths[0])
-    for out, says in ((paths[0], "would overwrite the input"), (link, "would overwrite the input"),
-                      (tmp_path, "lies inside out")):
+    for out, says in (
+        (paths[0], "would overwrite the input"),
+        (link, "would overwrite the input"),
+        (tmp_path, "lies inside out"),
+    ):
         with pytest.raises(il.InvalidParameterError, match=says):
             il_dask.run_fleet_dask(paths, 1.5, out=out, block=50, force=True)
     for target in (paths[0], link):
