@@ -18,7 +18,7 @@ mod ros1;
 mod rosbag2;
 mod sqlite;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::format::Format;
@@ -222,26 +222,47 @@ fn walk_any(path: &Path, scan: &mut Scan<'_>) -> Result<()> {
     Ok(())
 }
 
-/// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole.
+/// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole
+/// (into a file without a name: see `crate::temp_copy`).
 fn walk_storage(file: &StorageFile, visitor: &mut impl Visitor) -> Result<()> {
-    let decompressed = match file.compression {
-        Some(frame) => Some(crate::compression::decompress_file(&file.path, frame)?),
-        None => None,
+    let shown = &file.path;
+    let Some(frame) = file.compression else {
+        return match file.storage {
+            Storage::Sqlite3 => sqlite::walk(&sqlite::open(shown, shown, false)?, shown, visitor),
+            Storage::Mcap => crate::mcap_records::walk(shown, visitor),
+        };
     };
-    let walked = decompressed.as_ref().map_or(file.path.as_path(), |temp| temp.path());
+    let copy = crate::compression::decompress_file(shown, frame)?;
     match file.storage {
-        Storage::Sqlite3 => sqlite::walk(walked, &file.path, visitor),
-        Storage::Mcap => crate::mcap_records::walk(walked, visitor).map_err(|error| renamed(error, walked, &file.path)),
+        Storage::Sqlite3 => {
+            // SQLite opens files by name: the copy has one while SQLite opens it, no longer (on
+            // Unix SQLite then reads through its handle; elsewhere the name goes after).
+            let mut name = copy.name().map_err(|error| IoError::Bag {
+                path: shown.clone(),
+                message: format!(
+                    "cannot name the decompressed copy for SQLite: {}",
+                    crate::printable::one_line(&error)
+                ),
+            })?;
+            let db = sqlite::open(name.path(), shown, true)?;
+            if cfg!(unix) {
+                name.remove();
+            }
+            sqlite::walk(&db, shown, visitor)
+        }
+        Storage::Mcap => {
+            let file = copy.into_file();
+            crate::mcap_records::walk_file(file, shown, visitor).map_err(in_decompressed)
+        }
     }
 }
 
-/// An error about the decompressed copy `temp`, made about the file `shown` it came from.
-fn renamed(error: IoError, temp: &Path, shown: &Path) -> IoError {
-    let fix = |path: PathBuf| if path == temp { shown.to_path_buf() } else { path };
+/// An error about a decompressed copy, made about the compressed file it came from: its offsets
+/// are in the decompressed bytes.
+fn in_decompressed(error: IoError) -> IoError {
     match error {
-        IoError::Open { path, error } => IoError::Open { path: fix(path), error },
         IoError::Mcap { path, offset, message } => {
-            IoError::Mcap { path: fix(path), offset, message: format!("{message} (offset in the decompressed file)") }
+            IoError::Mcap { path, offset, message: format!("{message} (offset in the decompressed file)") }
         }
         other => other,
     }
