@@ -145,14 +145,15 @@ pub(crate) fn parse_tuc(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<
             }
             return Err(parse_error(unknown_tag(word)));
         };
-        let takes = Takes::Either(needed, needed + covariance);
-        let fields =
-            text::record(content.split_ascii_whitespace(), takes, || format!(" ({layout})")).map_err(parse_error)?;
+        // The numbers first, then their count: a second record's tag is named where it starts.
+        let fields: Vec<&str> = content.split_ascii_whitespace().collect();
         let mut values = [0.0; 4];
-        for (k, (value, field)) in values.iter_mut().zip(&fields[1..needed]).enumerate() {
+        for (k, (value, field)) in values.iter_mut().zip(fields.iter().take(needed).skip(1)).enumerate() {
             *value = text::parse_finite(field, k + 2).map_err(parse_error)?;
         }
-        text::check_numbers(&fields[needed..], needed + 1).map_err(parse_error)?;
+        text::check_numbers(fields.get(needed..).unwrap_or_default(), needed + 1).map_err(parse_error)?;
+        let takes = Takes::Either(needed, needed + covariance);
+        text::record(fields.into_iter(), takes, || format!(" ({layout})")).map_err(parse_error)?;
         if tag == "angle" {
             yaw_at.insert(values[0].to_bits(), values[1]);
             continue;
