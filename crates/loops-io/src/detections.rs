@@ -8,7 +8,7 @@ use loops_core::{Detections, Error, Timeline};
 use crate::dropped::Dropped;
 use crate::error::{IoError, Result};
 use crate::text::{self, Delimiter, Takes, is_header, open_lines, parse_finite};
-use crate::tuc::{LIBRSF_TAGS, unknown_tag};
+use crate::tuc::{LIBRSF_TAGS, is_librsf_tag, unknown_tag};
 
 /// Detections as read: times of the two poses of each detected loop, seconds, an optional
 /// score (higher is more confident), and the file line of each.
@@ -80,6 +80,7 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
             {
                 // Another record type of a keyword-led file (odom2, point2, ...), or a typo.
                 if LIBRSF_TAGS.contains(word) {
+                    text::check_one_record(delimiter.split(line), is_librsf_tag).map_err(|m| parse_error(number, m))?;
                     continue;
                 }
                 return Err(parse_error(number, unknown_tag(word)));

@@ -373,6 +373,8 @@ pub(crate) fn parse_pose_graph(
         let word = content.split_ascii_whitespace().next().unwrap_or_default();
         let Some(tag) = Tag::of(word) else {
             if OTHER_TAGS.contains(&word) {
+                let is_tag = |field: &str| Tag::of(field).is_some() || OTHER_TAGS.contains(&field);
+                text::check_one_record(content.split_ascii_whitespace(), is_tag).map_err(parse_error)?;
                 continue;
             }
             return Err(parse_error(unknown_tag(word)));

@@ -252,6 +252,28 @@ pub(crate) fn record<'a>(
     Err(format!("expected {takes} {columns}{}, found {found}{detail}", layout()))
 }
 
+/// Checks that a record a reader skips (a type of its format that holds no pose) does not hold
+/// another record after its own: none of `fields` (one line's, its tag first) but the first is
+/// a tag of the format (`is_tag`). A skipped line that two records were run into would
+/// otherwise take the second, a pose, with it.
+///
+/// # Errors
+/// The column and the tag of the second record, for the line's error.
+pub(crate) fn check_one_record<'a>(
+    fields: impl Iterator<Item = &'a str>,
+    is_tag: impl Fn(&str) -> bool,
+) -> Result<(), String> {
+    match fields.enumerate().skip(1).find(|(_, field)| is_tag(field)) {
+        Some((k, tag)) => Err(format!(
+            "column {} ({}) starts another record in a line of a record this reader skips (two records run \
+             together on one line?)",
+            k + 1,
+            quoted(tag)
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Checks that each of `fields`, which start at column `first_column` (1-based), is a number
 /// (finite or not): the further columns a reader ignores (a covariance, EuRoC's velocities) are
 /// still the record's, and a word among them is a defect of the line, not data to skip.
@@ -267,10 +289,12 @@ pub(crate) fn is_number(field: &str) -> bool {
     field.parse::<f64>().is_ok()
 }
 
-/// A header row: a row none of whose fields is a number. A row mixing numbers and words is a
-/// data row with a bad field, and fails as such.
+/// A header row: a row none of whose fields is a number, or holds one among its words. A row
+/// mixing numbers and words is a data row with a bad field, and fails as such; so does a row of
+/// records run together by another delimiter (`0.25 0 0 0 0 0 0 1,1.25 1 2 ...` has fields
+/// that are no numbers, but hold them), which is no header to skip.
 pub(crate) fn is_header<'a>(mut fields: impl Iterator<Item = &'a str>) -> bool {
-    !fields.any(is_number)
+    !fields.any(|field| field.split_ascii_whitespace().any(is_number))
 }
 
 /// The finite number in `field`, which is column `column` (1-based); or what is wrong with it.
@@ -383,6 +407,10 @@ mod tests {
         assert_eq!(record("1 2 3".split(' '), Takes::AtLeast(2), String::new).unwrap(), ["1", "2", "3"]);
         let error = record("1".split(' '), Takes::AtLeast(2), || " (t, t')".to_owned()).unwrap_err();
         assert_eq!(error, r#"expected at least 2 columns (t, t'), found 1: the line ends after column 1 ("1")"#);
+        let tags = |field: &str| field == "loop";
+        assert_eq!(check_one_record("odom2 0 0 0".split(' '), tags), Ok(()));
+        let error = check_one_record("odom2 0 0 loop 1 2".split(' '), tags).unwrap_err();
+        assert!(error.starts_with(r#"column 4 ("loop") starts another record"#), "{error}");
         assert_eq!(check_numbers(&["1", "nan"], 9), Ok(()));
         assert_eq!(check_numbers(&["1", "x"], 9).unwrap_err(), r#"column 10 ("x") is not a number"#);
     }
@@ -392,5 +420,8 @@ mod tests {
         assert!(is_header(["t", "x", "y"].into_iter()));
         assert!(!is_header(["t", "1.0", "y"].into_iter()));
         assert!(!is_header(["nan", "x"].into_iter()));
+        assert!(is_header(["p_x [m]", "time"].into_iter()));
+        assert!(!is_header(["0.25 0 0 1", "1.25 1 2 1"].into_iter()), "records run together");
+        assert!(!is_header(["loop 2.25 0.25 0.5", "loop 3.25 1.25 0.5"].into_iter()));
     }
 }

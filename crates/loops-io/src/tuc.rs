@@ -111,6 +111,11 @@ pub const LIBRSF_TAGS: &[&str] = &[
     "val1",
 ];
 
+/// Whether `word` is the tag of a libRSF record.
+pub(crate) fn is_librsf_tag(word: &str) -> bool {
+    LIBRSF_TAGS.contains(&word)
+}
+
 /// The message for a line whose first word is no libRSF record type.
 pub(crate) fn unknown_tag(word: &str) -> String {
     const SHOWN_CHARS: usize = 40;
@@ -141,6 +146,7 @@ pub(crate) fn parse_tuc(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<
         let parse_error = |message: String| IoError::parse(path, line, message);
         let Some((tag, needed, covariance, layout)) = columns_of(word) else {
             if LIBRSF_TAGS.contains(&word) {
+                text::check_one_record(content.split_ascii_whitespace(), is_librsf_tag).map_err(parse_error)?;
                 continue;
             }
             return Err(parse_error(unknown_tag(word)));
