@@ -531,7 +531,7 @@ fn mcap_message_opcodes() {
     // The top-level message records of an unchunked base (offset, body offset, body length).
     let is_message = |base: &Base, record: &(usize, usize, usize)| base.bytes[record.0] == 0x05;
     let mut first = true;
-    sweep("mcap_message_opcodes", 0x0C0D_E5, |rng, tally| {
+    sweep("mcap_message_opcodes", 0x000C_0DE5, |rng, tally| {
         if std::mem::take(&mut first) {
             // Crafted, once: every opcode at the first, a middle and the last message of each
             // unchunked base.

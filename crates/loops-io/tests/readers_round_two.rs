@@ -214,35 +214,45 @@ fn item4_the_real_files_still_read() {
 
 #[test]
 fn item5_a_corrupt_message_opcode_without_a_summary_is_never_a_silent_loss() {
-    let bytes = mcap(300, McapLayout { summary: false, ..McapLayout::UNCHUNKED });
-    let options = McapOptions::default().topic(TOPIC);
-    assert_eq!(read_mcap(write("whole.mcap", &bytes), &options).unwrap().len(), 300);
-    let data = logs::cdr_pose_stamped(150);
-    let message = bytes.windows(data.len()).position(|window| window == data).expect("pose 150") - 22 - 9;
-    assert_eq!(bytes[message], 0x05, "a message record");
-    for opcode in (0..=u8::MAX).filter(|&opcode| opcode != 0x05) {
+    // Without CRCs (the file: nothing but the records themselves can tell), and with them.
+    for crcs in [false, true] {
+        let bytes = mcap(300, McapLayout { summary: false, crcs, ..McapLayout::UNCHUNKED });
+        let options = McapOptions::default().topic(TOPIC);
+        assert_eq!(read_mcap(write("whole.mcap", &bytes), &options).unwrap().len(), 300);
+        let data = logs::cdr_pose_stamped(150);
+        let message = bytes.windows(data.len()).position(|window| window == data).expect("pose 150") - 22 - 9;
+        assert_eq!(bytes[message], 0x05, "a message record");
+        // The case, named where it stands.
         let mut broken = bytes.clone();
-        broken[message] = opcode;
-        let path = write("opcode.mcap", &broken);
-        match read_mcap(&path, &options) {
-            Ok(table) => panic!("opcode {opcode:#04x}: {} of 300 poses read without an error", table.len()),
+        broken[message] = 0x85;
+        match read_mcap(write("opcode-0x85.mcap", &broken), &options) {
+            Ok(table) => panic!("crcs {crcs}: opcode 0x85: {} of 300 poses read without an error", table.len()),
             Err(error) => {
+                assert_eq!(error.offset(), Some(message as u64), "{error}");
                 let text = error.to_string();
-                assert_one_line(&text, &path);
-                assert!(error.offset().is_some(), "opcode {opcode:#04x}: no offset: {text}");
+                assert!(
+                    text.contains(&format!("unknown opcode 0x85 reads as a message on channel 1 ({TOPIC})")),
+                    "{text}"
+                );
             }
         }
-        assert!(list_topics(&path).is_err(), "opcode {opcode:#04x}: the topic list walks the file too");
+        for opcode in (0..=u8::MAX).filter(|&opcode| opcode != 0x05) {
+            let mut broken = bytes.clone();
+            broken[message] = opcode;
+            let path = write("opcode.mcap", &broken);
+            match read_mcap(&path, &options) {
+                Ok(table) => {
+                    panic!("crcs {crcs}: opcode {opcode:#04x}: {} of 300 poses read without an error", table.len())
+                }
+                Err(error) => {
+                    let text = error.to_string();
+                    assert_one_line(&text, &path);
+                    assert!(error.offset().is_some(), "opcode {opcode:#04x}: no offset: {text}");
+                }
+            }
+            assert!(list_topics(&path).is_err(), "opcode {opcode:#04x}: the topic list walks the file too");
+        }
     }
-    // The case, named where it stands.
-    let mut broken = bytes.clone();
-    broken[message] = 0x85;
-    let error = read_mcap(write("opcode-0x85.mcap", &broken), &options).unwrap_err();
-    assert_eq!(error.offset(), Some(message as u64), "{error}");
-    assert!(
-        error.to_string().contains(&format!("unknown opcode 0x85 reads as a message on channel 1 ({TOPIC})")),
-        "{error}"
-    );
 }
 
 #[test]
