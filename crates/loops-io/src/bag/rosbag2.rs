@@ -388,6 +388,8 @@ fn check_unlisted(metadata: &Path, folder: &Path, listed: &[StorageFile]) -> Res
         }
     };
     let known: Vec<String> = listed.iter().map(|file| stem_of(&file.path)).collect();
+    // `metadata.yaml` named alone: its folder is the working one.
+    let folder = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
     let entries = std::fs::read_dir(folder).map_err(|error| IoError::Open { path: folder.to_path_buf(), error })?;
     let mut unlisted = Vec::new();
     for entry in entries {
