@@ -62,7 +62,7 @@ fn holds_a_file_in(pid: u32, dir: &Path) -> bool {
 fn ctrl_c_while_reading_a_compressed_bag_leaves_no_temporary_file() {
     let Some(bag) = compressed_bag() else { return };
     for round in 0..3 {
-        let tmp = std::env::temp_dir().join(format!("loops-bag-temp-{}-{round}", std::process::id()));
+        let tmp = std::env::temp_dir().join(format!("loops-tmpdir-{}-{round}", std::process::id()));
         let _ = std::fs::remove_dir_all(&tmp);
         std::fs::create_dir_all(&tmp).expect("a private temporary folder");
         let mut child = Command::new(env!("CARGO_BIN_EXE_loops"))

@@ -69,9 +69,9 @@ pub(crate) const MAX_FILE_RATIO: u64 = 1000;
 pub(crate) const MIN_FILE_LIMIT: u64 = 64 << 20;
 
 /// The most a storage file of `compressed` bytes may decompress to: [`MAX_FILE_RATIO`] times
-/// its size, and at least [`MIN_FILE_LIMIT`]. The decompressed file goes to a temporary file in
-/// the system's temporary folder (`TMPDIR`), removed after reading; a full disk is an error
-/// naming the file.
+/// its size, and at least [`MIN_FILE_LIMIT`]. The decompressed file goes to a temporary file
+/// without a name in the system's temporary folder (`TMPDIR`; see `crate::temp_copy`); a full
+/// disk is an error naming the file.
 pub(crate) fn file_limit(compressed: u64) -> u64 {
     compressed.saturating_mul(MAX_FILE_RATIO).max(MIN_FILE_LIMIT)
 }
