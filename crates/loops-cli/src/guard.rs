@@ -4,7 +4,8 @@
 //! file is written to a temporary name and renamed into place, and while a log's staging folder
 //! is renamed to its final name. The SIGINT/SIGTERM handler takes the same lock, so it runs
 //! between writes: it removes the staging folders of logs still in progress and the scratch
-//! folders of output folders (and folders `loops` created that stayed empty), says so, and exits
+//! folders of output folders (and folders `loops` created that stayed empty) and the names of
+//! temporary files the readers hold ([`loops_io::remove_temporary_files`]), says so, and exits
 //! with 130. What is left is what was
 //! finished: whole files and whole per-log folders.
 
@@ -106,6 +107,8 @@ pub(crate) fn install() -> Result<()> {
         for dir in writes.created.iter().rev() {
             let _ = std::fs::remove_dir(dir);
         }
+        // A bag's decompressed copy has no name but while SQLite opens it: remove that name too.
+        loops_io::remove_temporary_files();
         if removed == 0 {
             eprintln!("loops: interrupted");
         } else {

@@ -16,6 +16,7 @@ use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::printable::one_line;
+use crate::temp_copy::TempCopy;
 
 /// A compressed frame, by its magic number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -68,9 +69,9 @@ pub(crate) const MAX_FILE_RATIO: u64 = 1000;
 pub(crate) const MIN_FILE_LIMIT: u64 = 64 << 20;
 
 /// The most a storage file of `compressed` bytes may decompress to: [`MAX_FILE_RATIO`] times
-/// its size, and at least [`MIN_FILE_LIMIT`]. The decompressed file goes to a temporary file in
-/// the system's temporary folder (`TMPDIR`), removed after reading; a full disk is an error
-/// naming the file.
+/// its size, and at least [`MIN_FILE_LIMIT`]. The decompressed file goes to a temporary file
+/// without a name in the system's temporary folder (`TMPDIR`; see `crate::temp_copy`); a full
+/// disk is an error naming the file.
 pub(crate) fn file_limit(compressed: u64) -> u64 {
     compressed.saturating_mul(MAX_FILE_RATIO).max(MIN_FILE_LIMIT)
 }
@@ -137,14 +138,15 @@ fn too_large(frame: Frame, size: u64) -> String {
 }
 
 /// Decompresses the storage file at `path` (`.db3.zstd`, `.mcap.zstd`) into a temporary file,
-/// at most [`file_limit`] of its size; the file is removed when the handle drops.
+/// at most [`file_limit`] of its size: a file with no name ([`TempCopy`]), which the system
+/// frees when its handle drops or the process ends, however it ends.
 ///
 /// # Errors
 /// [`IoError::Open`] when the file cannot be read; [`IoError::Bag`] naming the file when it is
 /// not in `frame`'s format, does not decompress (with the number of bytes decompressed before
 /// the fault), declares (zstd) or reaches a size over the limit (naming both), or the temporary
 /// file cannot be written.
-pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::NamedTempFile> {
+pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<TempCopy> {
     let bag_error = |message: String| IoError::Bag { path: path.to_path_buf(), message };
     let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
     let file = File::open(path).map_err(open_error)?;
@@ -177,11 +179,9 @@ pub(crate) fn decompress_file(path: &Path, frame: Frame) -> Result<tempfile::Nam
         return Err(over_limit(format!("declares {declared} bytes decompressed")));
     }
     let input = io::Cursor::new(head.to_vec()).chain(input);
-    let temp = tempfile::Builder::new()
-        .prefix("loops-bag-")
-        .tempfile()
+    let temp = TempCopy::new()
         .map_err(|e| bag_error(format!("cannot create a temporary file to decompress into: {}", one_line(&e))))?;
-    let mut output = Counting { inner: BufWriter::with_capacity(1 << 20, temp.as_file()), written: 0 };
+    let mut output = Counting { inner: BufWriter::with_capacity(1 << 20, temp.file()), written: 0 };
     let copied = match frame {
         Frame::Zstd => zstd::stream::read::Decoder::new(input)
             .and_then(|decoder| io::copy(&mut decoder.take(limit + 1), &mut output)),

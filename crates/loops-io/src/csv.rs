@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::table::PoseTable;
-use crate::text::{self, Delimiter, Lines};
+use crate::text::{self, Delimiter, Lines, Takes};
 
 /// Reads positions from a delimited text file: `t,x,y` (2-D) or `t,x,y,z` (3-D) a line, time
 /// in seconds.
@@ -26,9 +26,10 @@ use crate::text::{self, Delimiter, Lines};
 ///
 /// # Errors
 /// - [`IoError::Open`] when the file cannot be read;
-/// - [`IoError::Parse`] for a line whose column count differs from the first line's, a field
-///   that is not a finite number, a header naming some of `t`, `x`, `y` but not all or one of
-///   them twice, or columns that neither a header nor their count (3 or 4) explains;
+/// - [`IoError::Parse`] for a line whose column count differs from the first line's (naming
+///   the first column past the record), a field that is not a finite number, a header naming
+///   some of `t`, `x`, `y` but not all or one of them twice, or columns that neither a header
+///   nor their count (3 or 4) explains;
 /// - [`IoError::Empty`] when there is no data line (an empty file, or a header alone).
 ///
 /// # Examples
@@ -87,9 +88,11 @@ pub(crate) fn parse_csv(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<
 
     let mut table = PoseTable::empty(path, if layout.z.is_some() { 3 } else { 2 });
     while let Some((line, content)) = lines.next_data()? {
-        let fields: Vec<&str> = delimiter.split(content).collect();
-        let (t, position) =
-            parse_row(&layout, &fields, first_line).map_err(|message| IoError::parse(path, line, message))?;
+        let (t, position) = text::record(delimiter.split(content), Takes::Exactly(layout.width), || {
+            format!(" as on line {first_line}")
+        })
+        .and_then(|fields| parse_row(&layout, &fields))
+        .map_err(|message| IoError::parse(path, line, message))?;
         table.timestamps_s.push(t);
         table.positions.push(position);
         table.source_lines.push(line);
@@ -106,10 +109,7 @@ fn delimiter_of(line: &str) -> Delimiter {
 }
 
 /// The time and position of a data row, or what is wrong with it.
-fn parse_row(layout: &Layout, fields: &[&str], first_line: usize) -> Result<(f64, [f64; 3]), String> {
-    if fields.len() != layout.width {
-        return Err(format!("expected {} columns as on line {first_line}, found {}", layout.width, fields.len()));
-    }
+fn parse_row(layout: &Layout, fields: &[&str]) -> Result<(f64, [f64; 3]), String> {
     let number = |column: usize| text::parse_finite(fields[column], column + 1);
     let t = number(layout.t)?;
     let x = number(layout.x)?;
@@ -212,7 +212,10 @@ mod tests {
     #[test]
     fn rows_must_match_the_first() {
         let error = parse("0,1,2\n1,1,2,3\n").unwrap_err();
-        assert_eq!(error.to_string(), "drive.csv line 2: expected 3 columns as on line 1, found 4");
+        assert_eq!(
+            error.to_string(),
+            r#"drive.csv line 2: expected 3 columns as on line 1, found 4: column 4 ("3") is past the end of the record, at column 3 (two records run together on one line?)"#
+        );
         let table = parse("0 1 2\n1 3 4\n").unwrap();
         assert_eq!(table.positions, [[1.0, 2.0, 0.0], [3.0, 4.0, 0.0]]);
     }

@@ -7,8 +7,8 @@ use loops_core::{Detections, Error, Timeline};
 
 use crate::dropped::Dropped;
 use crate::error::{IoError, Result};
-use crate::text::{Delimiter, is_header, open_lines, parse_finite};
-use crate::tuc::{LIBRSF_TAGS, unknown_tag};
+use crate::text::{self, Delimiter, Takes, is_header, open_lines, parse_finite};
+use crate::tuc::{LIBRSF_TAGS, is_librsf_tag, unknown_tag};
 
 /// Detections as read: times of the two poses of each detected loop, seconds, an optional
 /// score (higher is more confident), and the file line of each.
@@ -27,13 +27,14 @@ pub struct DetectionTable {
 }
 
 /// Reads detections: rows of `t, t_prime[, score]` separated by commas, semicolons, tabs or
-/// spaces, a header row allowed, `#` comments skipped; or lines `loop t1 t2 score ...` as in the
+/// spaces, a header row allowed, `#` comments skipped; or lines `loop t1 t2 [score]` as in the
 /// TUC SLAM datasets (the other libRSF record types, e.g. `odom2`, are skipped; a line of a
 /// keyword that is none of them is an error).
 ///
 /// # Errors
-/// [`IoError::Open`]; [`IoError::Parse`] naming line and column for a row with fewer than two
-/// numbers or a non-finite value, or naming an unknown keyword; [`IoError::Empty`] without any
+/// [`IoError::Open`]; [`IoError::Parse`] naming line and column for a row of other than 2 or 3
+/// columns (3 or 4 with `loop`; naming the first column past the record: two rows run together
+/// are not read as one) or a non-finite value, or naming an unknown keyword; [`IoError::Empty`] without any
 /// detection.
 ///
 /// # Examples
@@ -79,6 +80,7 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
             {
                 // Another record type of a keyword-led file (odom2, point2, ...), or a typo.
                 if LIBRSF_TAGS.contains(word) {
+                    text::check_one_record(delimiter.split(line), is_librsf_tag).map_err(|m| parse_error(number, m))?;
                     continue;
                 }
                 return Err(parse_error(number, unknown_tag(word)));
@@ -88,10 +90,13 @@ pub fn read_detections(path: impl AsRef<Path>) -> Result<DetectionTable> {
         if !keyword && table.t_s.is_empty() && is_header(fields.iter().copied()) {
             continue;
         }
-        if fields.len() < 2 {
-            return Err(parse_error(number, format!("found {} column(s), need t and t_prime", fields.len())));
-        }
-        let column_offset = usize::from(line.starts_with("loop"));
+        let (takes, layout) = if keyword {
+            (Takes::Either(3, 4), " (loop t t_prime, then a score or none)")
+        } else {
+            (Takes::Either(2, 3), " (t, t_prime, then a score or none)")
+        };
+        text::record(delimiter.split(line), takes, || layout.to_owned()).map_err(|m| parse_error(number, m))?;
+        let column_offset = usize::from(keyword);
         let t = parse_finite(fields[0], 1 + column_offset).map_err(|m| parse_error(number, m))?;
         let t_prime = parse_finite(fields[1], 2 + column_offset).map_err(|m| parse_error(number, m))?;
         match fields.get(2) {

@@ -5,13 +5,14 @@ use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::table::{PoseTable, seconds_of_ns};
-use crate::text::{self, Delimiter, Lines};
+use crate::text::{self, Delimiter, Lines, Takes};
 
 /// The columns a EuRoC line needs: time, position, quaternion.
 const COLUMNS: usize = 8;
 
 /// Reads a EuRoC ground-truth CSV: `timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z` and any
-/// further columns (velocities, biases), ignored.
+/// further columns (velocities, biases), ignored: numbers, as many on every line as on the
+/// first (two lines run together are an error, not one pose with extra columns).
 ///
 /// The timestamp is integer nanoseconds, kept exactly in [`PoseTable::timestamps_ns`]; the
 /// quaternion is `w` first in the file and stored `[x, y, z, w]` as everywhere else. The header
@@ -22,8 +23,10 @@ const COLUMNS: usize = 8;
 ///
 /// # Errors
 /// - [`IoError::Open`] when the file cannot be read;
-/// - [`IoError::Parse`] for a line with fewer than 8 columns, a timestamp that is not an integer,
-///   or a field that is not a finite number, naming line and column;
+/// - [`IoError::Parse`] for a line with fewer than 8 columns or another count than the first
+///   line's (naming the first column past the record), a timestamp that is not an integer, a
+///   field that is not a finite number, or a further column that is not a number, naming line
+///   and column;
 /// - [`IoError::Empty`] without data lines.
 ///
 /// # Examples
@@ -50,27 +53,40 @@ pub(crate) fn parse_euroc(path: &Path, lines: &mut Lines<impl BufRead>) -> Resul
     let mut orientations = Vec::new();
     let delimiter = Delimiter::Char(',');
     let mut first = true;
+    // The columns of the first data line, which every line has, and that line.
+    let mut width: Option<(usize, usize)> = None;
     while let Some((line, content)) = lines.next_data()? {
         if std::mem::take(&mut first) && text::is_header(delimiter.split(content)) {
             continue;
         }
         let parse_error = |message: String| IoError::parse(path, line, message);
-        let mut fields = delimiter.split(content);
-        let Some(stamp) = fields.next() else { unreachable!("a data line has a field") };
+        let takes = width.map_or(Takes::AtLeast(COLUMNS), |(count, _)| Takes::Exactly(count));
+        let fields = text::record(delimiter.split(content), takes, || match width {
+            Some((_, first_line)) => format!(" as on line {first_line}"),
+            None => " (timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z)".to_owned(),
+        })
+        .map_err(parse_error)?;
+        if let Some(&next) = fields.get(COLUMNS)
+            && is_stamp_ns(next)
+        {
+            // A first line of further columns sets every line's count; but a further column
+            // that is a timestamp starts a second record (a file of two lines run together).
+            return Err(parse_error(format!(
+                "column {} ({next:?}) is a timestamp in nanoseconds, not a further column: two records run together \
+                 on one line?",
+                COLUMNS + 1
+            )));
+        }
+        width.get_or_insert((fields.len(), line));
+        let stamp = fields[0];
         let stamp_ns: i64 = stamp
             .parse()
             .map_err(|_| parse_error(format!("column 1 ({stamp:?}) is not an integer timestamp in nanoseconds")))?;
         let mut values = [0.0; COLUMNS - 1];
-        let mut count = 1;
-        for (value, field) in values.iter_mut().zip(&mut fields) {
-            count += 1;
-            *value = text::parse_finite(field, count).map_err(parse_error)?;
+        for (k, (value, field)) in values.iter_mut().zip(&fields[1..]).enumerate() {
+            *value = text::parse_finite(field, k + 2).map_err(parse_error)?;
         }
-        if count < COLUMNS {
-            return Err(parse_error(format!(
-                "expected at least {COLUMNS} columns (timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z), found {count}"
-            )));
-        }
+        text::check_numbers(&fields[COLUMNS..], COLUMNS + 1).map_err(parse_error)?;
         let [x, y, z, qw, qx, qy, qz] = values;
         stamps_ns.push(stamp_ns);
         table.timestamps_s.push(seconds_of_ns(stamp_ns));
@@ -86,14 +102,17 @@ pub(crate) fn parse_euroc(path: &Path, lines: &mut Lines<impl BufRead>) -> Resul
     Ok(table)
 }
 
+/// Whether `field` is written as a EuRoC timestamp: an integer of 16 digits or more
+/// (nanoseconds since 1970).
+fn is_stamp_ns(field: &str) -> bool {
+    field.len() >= 16 && field.bytes().all(|b| b.is_ascii_digit())
+}
+
 /// Whether `text` looks like EuRoC: a first data line of at least 8 comma-separated numbers, the
 /// first an integer of 16 digits or more (nanoseconds since 1970).
 pub(crate) fn looks_like_euroc(first_lines: &[String]) -> bool {
     first_lines.iter().find(|line| !text::is_header(Delimiter::Char(',').split(line))).is_some_and(|line| {
         let fields: Vec<&str> = Delimiter::Char(',').split(line).collect();
-        fields.len() >= COLUMNS
-            && fields[0].len() >= 16
-            && fields[0].bytes().all(|b| b.is_ascii_digit())
-            && fields.iter().all(|field| text::is_number(field))
+        fields.len() >= COLUMNS && is_stamp_ns(fields[0]) && fields.iter().all(|field| text::is_number(field))
     })
 }

@@ -13,7 +13,7 @@ use chain::{chain_odometry, no_vertices};
 use crate::error::{IoError, Result};
 use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw, yaw_of};
 use crate::table::PoseTable;
-use crate::text::{self, Lines};
+use crate::text::{self, Lines, Takes};
 use crate::timing::Timing;
 
 /// A pose graph: its pose vertices as a table, and its edges between them.
@@ -77,46 +77,39 @@ pub enum RelativePose {
 
 impl GraphEdge {
     /// The edge of a line tagged `tag` (`word` as written): its ids, the numbers after them
-    /// (`values`) and the fields that follow (the information matrix, from column `column + 1`).
-    fn read<'a>(
+    /// (`values`) and the information matrix (`information`: its upper triangle, or none; from
+    /// column `column + 1`).
+    fn read(
         tag: Tag,
         word: &str,
         ids: [u64; 2],
         values: &[f64; 7],
-        rest: impl Iterator<Item = &'a str>,
+        information: &[&str],
         column: usize,
         line: usize,
     ) -> std::result::Result<Self, String> {
         let v = values;
-        let (measurement, count) = match tag {
-            Tag::Edge2 => (RelativePose::Se2 { translation: [v[0], v[1]], rotation_rad: v[2] }, 6),
+        let measurement = match tag {
+            Tag::Edge2 => RelativePose::Se2 { translation: [v[0], v[1]], rotation_rad: v[2] },
             Tag::Edge3Quat => {
-                (RelativePose::Se3 { translation: [v[0], v[1], v[2]], rotation_xyzw: [v[3], v[4], v[5], v[6]] }, 21)
+                RelativePose::Se3 { translation: [v[0], v[1], v[2]], rotation_xyzw: [v[3], v[4], v[5], v[6]] }
             }
             Tag::Edge3Euler => {
                 let rotation_xyzw = quaternion_from_roll_pitch_yaw(v[3], v[4], v[5]);
-                (RelativePose::Se3 { translation: [v[0], v[1], v[2]], rotation_xyzw }, 21)
+                RelativePose::Se3 { translation: [v[0], v[1], v[2]], rotation_xyzw }
             }
             Tag::Vertex2 | Tag::Vertex3Quat | Tag::Vertex3Euler => unreachable!("a vertex is not an edge"),
         };
-        let fields: Vec<&str> = rest.collect();
-        if !fields.is_empty() && fields.len() != count {
-            return Err(format!(
-                "{word} has {} number(s) after the measurement; the information matrix is {count} \
-                 (its upper triangle), or none",
-                fields.len()
-            ));
+        let mut entries = Vec::with_capacity(information.len());
+        for (k, field) in information.iter().enumerate() {
+            entries.push(text::parse_finite(field, column + 1 + k)?);
         }
-        let mut information = Vec::with_capacity(fields.len());
-        for (k, field) in fields.into_iter().enumerate() {
-            information.push(text::parse_finite(field, column + 1 + k)?);
-        }
-        if word == "EDGE2" && !information.is_empty() {
+        if word == "EDGE2" && !entries.is_empty() {
             // TORO: xx xy yy θθ xθ yθ.
-            let t = &information;
-            information = vec![t[0], t[1], t[4], t[2], t[5], t[3]];
+            let t = &entries;
+            entries = vec![t[0], t[1], t[4], t[2], t[5], t[3]];
         }
-        Ok(Self { from: ids[0], to: ids[1], line, measurement, information })
+        Ok(Self { from: ids[0], to: ids[1], line, measurement, information: entries })
     }
 
     /// Whether the edge joins vertices more than one id apart: a loop closure in graphs whose
@@ -194,15 +187,18 @@ impl Tag {
         }
     }
 
-    /// (ids, numbers after them, dimension, what a line looks like).
-    fn layout(self) -> (usize, usize, usize, &'static str) {
+    /// (ids, numbers after them, entries of the information matrix an edge may end with,
+    /// dimension, what a line looks like).
+    fn layout(self) -> (usize, usize, usize, usize, &'static str) {
         match self {
-            Self::Vertex2 => (1, 3, 2, "id x y theta"),
-            Self::Vertex3Quat => (1, 7, 3, "id x y z qx qy qz qw"),
-            Self::Vertex3Euler => (1, 6, 3, "id x y z roll pitch yaw"),
-            Self::Edge2 => (2, 3, 2, "i j dx dy dtheta"),
-            Self::Edge3Quat => (2, 7, 3, "i j x y z qx qy qz qw"),
-            Self::Edge3Euler => (2, 6, 3, "i j x y z roll pitch yaw"),
+            Self::Vertex2 => (1, 3, 0, 2, "id x y theta"),
+            Self::Vertex3Quat => (1, 7, 0, 3, "id x y z qx qy qz qw"),
+            Self::Vertex3Euler => (1, 6, 0, 3, "id x y z roll pitch yaw"),
+            Self::Edge2 => (2, 3, 6, 2, "i j dx dy dtheta, then the information matrix's 6 entries or none"),
+            Self::Edge3Quat => (2, 7, 21, 3, "i j x y z qx qy qz qw, then the information matrix's 21 entries or none"),
+            Self::Edge3Euler => {
+                (2, 6, 21, 3, "i j x y z roll pitch yaw, then the information matrix's 21 entries or none")
+            }
         }
     }
 }
@@ -324,7 +320,8 @@ fn unknown_tag(word: &str) -> String {
 /// # Errors
 /// - [`IoError::Open`] when a file cannot be read;
 /// - [`IoError::Parse`] for a line whose tag is none of the formats' (naming it), a vertex or
-///   edge line with too few columns, an id that is not a
+///   edge line with another count of columns than its record takes (naming the first column
+///   past the record: two records on one line are not read as one), an id that is not a
 ///   non-negative integer, a field that is not a finite number, 2-D and 3-D poses in one
 ///   file, an id given twice, or an edge to a vertex the file does not have, naming the line;
 /// - [`IoError::PoseGraph`] for a file of edges without vertices, saying that
@@ -372,33 +369,34 @@ pub(crate) fn parse_pose_graph(
     let mut edges = Vec::new();
     let mut dim: Option<(usize, usize)> = None;
     while let Some((line, content)) = lines.next_data()? {
-        let mut fields = content.split_ascii_whitespace();
         let parse_error = |message: String| IoError::parse(path, line, message);
-        let word = fields.next().unwrap_or_default();
+        let word = content.split_ascii_whitespace().next().unwrap_or_default();
         let Some(tag) = Tag::of(word) else {
             if OTHER_TAGS.contains(&word) {
+                let is_tag = |field: &str| Tag::of(field).is_some() || OTHER_TAGS.contains(&field);
+                text::check_one_record(content.split_ascii_whitespace(), is_tag).map_err(parse_error)?;
                 continue;
             }
             return Err(parse_error(unknown_tag(word)));
         };
-        let (id_count, value_count, tag_dim, layout) = tag.layout();
+        let (id_count, value_count, information_count, tag_dim, layout) = tag.layout();
+        let needed = 1 + id_count + value_count;
+        let takes = if information_count == 0 {
+            Takes::Exactly(needed)
+        } else {
+            Takes::Either(needed, needed + information_count)
+        };
+        let fields = text::record(content.split_ascii_whitespace(), takes, || format!(" ({word} {layout})"))
+            .map_err(parse_error)?;
         let mut ids = [0u64; 2];
-        let mut values = [0.0; 7];
-        let mut count = 1;
-        for field in fields.by_ref().take(id_count) {
-            count += 1;
-            ids[count - 2] = field.parse().map_err(|_| {
-                parse_error(format!("column {count} ({field:?}) is not a vertex id (a non-negative integer)"))
+        for (k, field) in fields[1..=id_count].iter().enumerate() {
+            ids[k] = field.parse().map_err(|_| {
+                parse_error(format!("column {} ({field:?}) is not a vertex id (a non-negative integer)", k + 2))
             })?;
         }
-        for (value, field) in values.iter_mut().zip(fields.by_ref()).take(value_count) {
-            count += 1;
-            *value = text::parse_finite(field, count).map_err(parse_error)?;
-        }
-        let needed = 1 + id_count + value_count;
-        if count < needed {
-            let word = content.split_ascii_whitespace().next().unwrap_or_default();
-            return Err(parse_error(format!("expected at least {needed} columns ({word} {layout}), found {count}")));
+        let mut values = [0.0; 7];
+        for (k, field) in fields[1 + id_count..needed].iter().enumerate() {
+            values[k] = text::parse_finite(field, 2 + id_count + k).map_err(parse_error)?;
         }
         match dim {
             Some((first, first_line)) if first != tag_dim => {
@@ -411,8 +409,8 @@ pub(crate) fn parse_pose_graph(
         }
         match tag {
             Tag::Edge2 | Tag::Edge3Quat | Tag::Edge3Euler => {
-                let word = content.split_ascii_whitespace().next().unwrap_or_default();
-                edges.push(GraphEdge::read(tag, word, ids, &values, fields, count, line).map_err(parse_error)?);
+                let edge = GraphEdge::read(tag, word, ids, &values, &fields[needed..], needed, line);
+                edges.push(edge.map_err(parse_error)?);
             }
             Tag::Vertex2 => vertices.push(Vertex {
                 id: ids[0],

@@ -8,7 +8,7 @@ use loops_core::FILE_QUATERNION_TOLERANCE;
 use crate::error::{IoError, Result};
 use crate::rotation::quaternion_from_matrix;
 use crate::table::PoseTable;
-use crate::text::{self, Lines};
+use crate::text::{self, Lines, Takes};
 use crate::timing::Timing;
 
 /// Reads KITTI poses: each line the 12 numbers of a row-major 3×4 matrix `[R|t]` (the pose of
@@ -30,7 +30,8 @@ use crate::timing::Timing;
 /// # Errors
 /// - [`IoError::Open`] when a file cannot be read;
 /// - [`IoError::Parse`] for a line with other than 12 or 13 numbers, or another count than the
-///   first line, or a field that is not a finite number, naming line and column; for 12
+///   first line (naming the first column past the record), or a field that is not a finite
+///   number, naming line and column; for 12
 ///   numbers without a rate or times file; for a rotation block that is not a rotation,
 ///   saying how;
 /// - [`IoError::Empty`] without data lines;
@@ -63,38 +64,30 @@ pub fn read_kitti(path: impl AsRef<Path>, timing: &Timing) -> Result<PoseTable> 
 pub(crate) fn parse_kitti(path: &Path, lines: &mut Lines<impl BufRead>, timing: &Timing) -> Result<PoseTable> {
     let mut table = PoseTable::empty(path, 3);
     let mut orientations = Vec::new();
-    let mut width = None;
+    let mut width: Option<(usize, usize)> = None;
     let mut values = [0.0; 13];
     while let Some((line, content)) = lines.next_data()? {
         let parse_error = |message: String| IoError::parse(path, line, message);
-        let mut count = 0;
-        for field in content.split_ascii_whitespace() {
-            if let Some(value) = values.get_mut(count) {
-                *value = text::parse_finite(field, count + 1).map_err(parse_error)?;
-            }
-            count += 1;
+        let takes = width.map_or(Takes::Either(12, 13), |(count, _)| Takes::Exactly(count));
+        let fields = text::record(content.split_ascii_whitespace(), takes, || match width {
+            Some((_, first_line)) => format!(" as on line {first_line}"),
+            None => " (a row-major 3×4 pose [R|t], after a time when 13)".to_owned(),
+        })
+        .map_err(parse_error)?;
+        for (column, (value, field)) in values.iter_mut().zip(&fields).enumerate() {
+            *value = text::parse_finite(field, column + 1).map_err(parse_error)?;
         }
-        let first_line = *width.get_or_insert((count, line));
-        if count != first_line.0 {
-            return Err(parse_error(format!(
-                "expected {} numbers as on line {}, found {count}",
-                first_line.0, first_line.1
-            )));
-        }
+        let count = fields.len();
+        width.get_or_insert((count, line));
         let (time, matrix) = match count {
             13 => (values[0], &values[1..13]),
-            12 if timing.is_given() => (f64::NAN, &values[..12]),
-            12 => {
+            _ if timing.is_given() => (f64::NAN, &values[..12]),
+            _ => {
                 return Err(parse_error(
                     "12 numbers (a 3×4 pose) and no time: give the poses' times, a rate (rate_hz, --rate-hz) \
                      or KITTI's times.txt (times, --times)"
                         .to_owned(),
                 ));
-            }
-            _ => {
-                return Err(parse_error(format!(
-                    "expected 12 numbers (a row-major 3×4 pose [R|t]) or 13 (a time, then the pose), found {count}"
-                )));
             }
         };
         let m = |row: usize, column: usize| matrix[4 * row + column];

@@ -125,6 +125,7 @@ mod ros1_message;
 mod rotation;
 mod samples;
 mod table;
+mod temp_copy;
 mod text;
 mod timing;
 mod topic;
@@ -169,6 +170,7 @@ pub use read::{
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
+pub use temp_copy::remove_temporary_files;
 pub use text::MAX_LINE_BYTES;
 pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};

@@ -22,10 +22,25 @@
 //! - the data section's CRC (in the data end record) and the summary section's (in the footer),
 //!   where the writer computed them;
 //! - the closing magic, and no byte after it;
-//! - a record of an unknown opcode is skipped (the format reserves opcodes for extensions),
-//!   unless its bytes are a chunk's (a chunk whose opcode byte is corrupt), which is an error;
-//!   inside a chunk, which holds only schema, channel and message records, any other record is
-//!   an error;
+//! - each record where the format allows it: the data section holds schema, channel, message,
+//!   chunk, message index (right after its chunk), attachment, metadata and data end records;
+//!   the summary schema, channel, chunk index, attachment index, statistics, metadata index and
+//!   summary offset records; a chunk only schema, channel and message records. A record of a
+//!   kind the format defines anywhere else is an error: a message whose opcode was corrupted into
+//!   a statistics record's, say, or records of the data section after a corrupt data end. The
+//!   attachment and metadata records of the data section are read to their ends, so that a
+//!   corrupt message does not pass as one. Two schema or channel records of one id must be
+//!   identical, as the format says;
+//! - a record of an unknown opcode is skipped, as the format asks (it reserves 0x01–0x7f for its
+//!   own new records and 0x80–0xff for extensions), unless it is a lost message or chunk: a
+//!   record whose bytes read as a message on a channel the file defined (its first two bytes
+//!   the channel's id, and at least a message's 22 bytes of header), or as a chunk (its fixed
+//!   fields, a compression this reader knows, and a records length that ends at the record's
+//!   end), is an error naming the offset and the channel. So a corrupt opcode never loses a
+//!   message without a word, in a file without a summary too, where no count would notice it.
+//!   The cost: an extension record whose first two bytes happen to equal a channel id is
+//!   refused too (no writer of this project's logs writes extension records). Opcode 0x00, which
+//!   no record has, is an error;
 //! - nothing lost against the file's own indexes: the message index records after a chunk
 //!   count its messages per channel; the summary's chunk indexes list the chunks; its
 //!   statistics record counts the chunks and the messages of each channel. A count that the
@@ -123,6 +138,13 @@ const RECORD_HEADER: u64 = 9;
 /// uncompressed size, CRC, the compression string's length.
 const CHUNK_FIXED: u64 = 8 + 8 + 8 + 4 + 4;
 
+/// The bytes of a message record before its data: channel id, sequence, log and publish times.
+const MESSAGE_HEAD: u64 = 2 + 4 + 8 + 8;
+
+/// The first bytes of a record of unknown opcode that are read to tell a corrupt message or
+/// chunk: a chunk's fixed fields, a compression name of up to 8 bytes, the records' length.
+const UNKNOWN_HEAD: usize = CHUNK_FIXED as usize + 8 + 8;
+
 /// The unknown records remembered, to name them when an index points at one.
 const MAX_UNKNOWN_KEPT: usize = 4096;
 
@@ -141,6 +163,19 @@ pub(crate) fn open_records(path: &Path) -> Result<(BufReader<File>, u64)> {
 /// Walks the records of the MCAP file at `path`, reporting channels and messages to `visitor`.
 pub(crate) fn walk(path: &Path, visitor: &mut impl Visitor) -> Result<()> {
     let (reader, len) = open_records(path)?;
+    walk_reader(reader, len, path, visitor)
+}
+
+/// Walks the records of the MCAP file `file` (read from its start), which errors call `path`.
+pub(crate) fn walk_file(mut file: File, path: &Path, visitor: &mut impl Visitor) -> Result<()> {
+    use std::io::Seek;
+    let open_error = |error| IoError::Open { path: path.to_path_buf(), error };
+    let len = file.metadata().map_err(open_error)?.len();
+    file.rewind().map_err(open_error)?;
+    walk_reader(BufReader::with_capacity(1 << 20, file), len, path, visitor)
+}
+
+fn walk_reader(reader: BufReader<File>, len: u64, path: &Path, visitor: &mut impl Visitor) -> Result<()> {
     let source = Source { reader, pos: 0, crc: crc32fast::Hasher::new(), summary_crc: None };
     let mut walker = Walker { path, source, len, state: State::default() };
     walker.run(visitor)
@@ -308,7 +343,7 @@ impl<'r, R: Read> Fields<'r, R> {
 }
 
 /// A schema as a channel needs it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 struct SchemaInfo {
     name: String,
     encoding: String,
@@ -320,6 +355,9 @@ struct State {
     schemas: HashMap<u16, SchemaInfo>,
     /// MCAP channel id to the visitor's index, and the topic (for messages).
     channels: HashMap<u16, (usize, String)>,
+    /// What each channel record defined: its schema id and message encoding, with the topic in
+    /// `channels`; a second record of the id must say the same.
+    channel_records: HashMap<u16, (u16, String)>,
     /// Messages read per MCAP channel id, in the whole file.
     counts: HashMap<u16, u64>,
     /// Reused buffer for message data.
@@ -331,6 +369,8 @@ struct State {
     chunks: Vec<(u64, u64)>,
     /// Offsets and opcodes of the first unknown records of the data section.
     unknown: Vec<(u64, u8)>,
+    /// The offset of the data end record, once walked.
+    data_end_at: Option<u64>,
     /// The chunks the summary indexes: offset and length, with the offset of the index record.
     chunk_indexes: Vec<ChunkIndex>,
     /// The summary's statistics record, and its offset.
@@ -494,6 +534,7 @@ impl Walker<'_> {
                 (op::DATA_END, Section::Data) => {
                     let result = data_end(&mut fields, crc_before.finalize());
                     section = Section::Summary;
+                    self.state.data_end_at = Some(pos);
                     result
                 }
                 (op::SCHEMA | op::CHANNEL | op::MESSAGE, Section::Data) => {
@@ -507,12 +548,28 @@ impl Walker<'_> {
                 (op::MESSAGE_INDEX, Section::Data) => {
                     self.state.message_index(&mut fields, pos).map_err(Failure::Fault)
                 }
+                (op::ATTACHMENT, Section::Data) => attachment(&mut fields).map_err(Failure::Fault),
+                (op::METADATA, Section::Data) => metadata(&mut fields).map_err(Failure::Fault),
                 (op::CHUNK_INDEX, Section::Summary) => self.state.chunk_index(&mut fields, pos).map_err(Failure::Fault),
                 (op::STATISTICS, Section::Summary) => self.state.statistics(&mut fields, pos).map_err(Failure::Fault),
                 (op::SUMMARY_OFFSET, Section::Summary) => {
                     self.state.summary_offset(&mut fields, pos).map_err(Failure::Fault)
                 }
-                (op::HEADER..=op::DATA_END, _) => Ok(()),
+                (op::SCHEMA | op::CHANNEL | op::ATTACHMENT_INDEX | op::METADATA_INDEX, Section::Summary) => Ok(()),
+                // The first record (a header anywhere else is an error above).
+                (op::HEADER, Section::Data) => Ok(()),
+                (op::HEADER..=op::DATA_END, Section::Data) => Err(Failure::Fault(format!(
+                    "a {} record in the data section, where the format has none (it belongs to the summary): the \
+                     record's opcode is corrupt (a message's?)",
+                    record_name(opcode)
+                ))),
+                (op::HEADER..=op::DATA_END, Section::Summary) => Err(Failure::Fault(format!(
+                    "a {} record after the data section ended (with the data end record at offset {}), where the \
+                     format has none: the file is corrupt (a record's opcode, or the data end's?), and what the data \
+                     section holds past it would be lost",
+                    record_name(opcode),
+                    self.state.data_end_at.unwrap_or(0)
+                ))),
                 (_, Section::Data) => self.state.unknown(&mut fields, pos, opcode).map_err(Failure::Fault),
                 (_, Section::Summary) => Ok(()),
             };
@@ -796,6 +853,43 @@ fn data_end(fields: &mut Fields<'_, Source>, calculated: u32) -> std::result::Re
     Ok(())
 }
 
+/// An attachment record of the data section: its fields read to the end, so that a record of
+/// another kind whose opcode became an attachment's fails here rather than being skipped.
+fn attachment(fields: &mut Fields<'_, Source>) -> std::result::Result<(), Fault> {
+    let _log_time = fields.u64("log time")?;
+    let _create_time = fields.u64("create time")?;
+    fields.skip_prefixed("name")?;
+    fields.skip_prefixed("media type")?;
+    let data_len = fields.u64("data length")?;
+    fields.skip(data_len, "data")?;
+    let _crc = fields.u32("CRC")?;
+    Ok(())
+}
+
+/// A metadata record of the data section: its name and its map of strings, read to the map's
+/// end (see [`attachment`]).
+fn metadata(fields: &mut Fields<'_, Source>) -> std::result::Result<(), Fault> {
+    fields.string("name")?;
+    let len = fields.u32("metadata's length")?;
+    let len = fields.check_length(u64::from(len), "metadata")?;
+    let end = fields.left - len;
+    while fields.left > end {
+        for what in ["metadata key", "metadata value"] {
+            let string_len = fields.u32(&format!("{what}'s length"))?;
+            if u64::from(string_len) > fields.left.saturating_sub(end) {
+                return Err(format!(
+                    "a {what} is declared {string_len} bytes long, past the end of the metadata's {len} bytes"
+                ));
+            }
+            fields.skip(u64::from(string_len), what)?;
+        }
+    }
+    if fields.left != end {
+        return Err(format!("the metadata's entries end past its declared {len} bytes"));
+    }
+    Ok(())
+}
+
 /// A chunk record at `offset`, its header fields not read yet: its records, decompressed as a
 /// stream and read one at a time.
 fn chunk(
@@ -993,8 +1087,22 @@ impl State {
                 let name = fields.string("name")?;
                 let encoding = fields.string("encoding")?;
                 fields.skip_prefixed("data")?;
-                self.schemas.entry(id).or_insert(SchemaInfo { name, encoding });
-                Ok(())
+                let schema = SchemaInfo { name, encoding };
+                match self.schemas.get(&id) {
+                    Some(first) if *first != schema => Err(Failure::Fault(format!(
+                        "schema {id} is {:?} ({:?}) here, but an earlier schema record defines it as {:?} ({:?}): \
+                         records of one id are identical, so this one is corrupt (a record whose opcode is corrupt?)",
+                        printable(&schema.name),
+                        printable(&schema.encoding),
+                        printable(&first.name),
+                        printable(&first.encoding)
+                    ))),
+                    Some(_) => Ok(()),
+                    None => {
+                        self.schemas.insert(id, schema);
+                        Ok(())
+                    }
+                }
             }
             op::CHANNEL => {
                 let id = fields.u16("id")?;
@@ -1002,9 +1110,25 @@ impl State {
                 let topic = fields.string("topic")?;
                 let message_encoding = fields.string("message encoding")?;
                 fields.skip_prefixed("metadata")?;
-                if self.channels.contains_key(&id) {
+                if let Some((_, first_topic)) = self.channels.get(&id) {
+                    let first = self.channel_records.get(&id);
+                    if *first_topic != topic || first != Some(&(schema_id, message_encoding.clone())) {
+                        return Err(Failure::Fault(format!(
+                            "channel {id} is topic {:?} (schema {schema_id}, {:?}) here, but an earlier channel record \
+                             defines it as {:?}{}: records of one id are identical, so this one is corrupt (a record \
+                             whose opcode is corrupt?)",
+                            printable(&topic),
+                            printable(&message_encoding),
+                            printable(first_topic),
+                            first.map_or_else(String::new, |(schema, encoding)| format!(
+                                " (schema {schema}, {:?})",
+                                printable(encoding)
+                            ))
+                        )));
+                    }
                     return Ok(());
                 }
+                self.channel_records.insert(id, (schema_id, message_encoding.clone()));
                 let schema = match schema_id {
                     0 => SchemaInfo { name: String::new(), encoding: String::new() },
                     schema_id => match self.schemas.get(&schema_id) {
@@ -1047,8 +1171,11 @@ impl State {
                 }
                 Ok(())
             }
-            // A message index that follows no chunk indexes nothing the walk reads.
-            None => Ok(()),
+            // Message indexes come right after their chunk: one after any other record is a
+            // record whose opcode is corrupt (a message's, whose message would be lost).
+            None => Err("a message index record that follows no chunk (message indexes come right after their \
+                         chunk): the record's opcode is corrupt (a message's?)"
+                .to_owned()),
         }
     }
 
@@ -1102,31 +1229,49 @@ impl State {
     }
 
     /// A record of an unknown opcode in the data section: skipped (the format reserves opcodes
-    /// for extensions), unless it holds a chunk's bytes.
+    /// for new records and extensions), unless its bytes are a message's or a chunk's (a record
+    /// whose opcode is corrupt), or its opcode is 0, which no record has.
     fn unknown(&mut self, fields: &mut Fields<'_, Source>, at: u64, opcode: u8) -> std::result::Result<(), Fault> {
         if self.unknown.len() < MAX_UNKNOWN_KEPT {
             self.unknown.push((at, opcode));
         }
-        if fields.left < CHUNK_FIXED + 8 {
+        if opcode == 0 {
+            return Err("a record of opcode 0x00, which no MCAP record has (the format's and its extensions' are \
+                        0x01 to 0xff): the record's opcode is corrupt"
+                .to_owned());
+        }
+        let body_len = fields.left;
+        let mut head = [0u8; UNKNOWN_HEAD];
+        let head = &mut head[..(body_len as usize).min(UNKNOWN_HEAD)];
+        fields.reader.read_exact(head).map_err(|e| fields.context.describe(&e))?;
+        fields.left -= head.len() as u64;
+        let u32_at = |at: usize| u32::from_le_bytes(head[at..at + 4].try_into().expect("4 bytes"));
+        let u64_at = |at: usize| u64::from_le_bytes(head[at..at + 8].try_into().expect("8 bytes"));
+        if body_len >= MESSAGE_HEAD {
+            // A message: channel id, sequence, log and publish times, then the data.
+            let channel = u16::from_le_bytes([head[0], head[1]]);
+            if let Some((_, topic)) = self.channels.get(&channel) {
+                return Err(format!(
+                    "a record of unknown opcode {opcode:#04x} reads as a message on channel {channel} ({}): the \
+                     message's opcode is corrupt, and it would be lost",
+                    printable(topic)
+                ));
+            }
+        }
+        if body_len < CHUNK_FIXED + 8 {
             return Ok(());
         }
-        let start = fields.u64("")?;
-        let end = fields.u64("")?;
-        let uncompressed_size = fields.u64("")?;
-        let _crc = fields.u32("")?;
-        let compression_len = u64::from(fields.u32("")?);
-        if compression_len > 8 || fields.left < compression_len + 8 {
+        let (start, end, uncompressed_size) = (u64_at(0), u64_at(8), u64_at(16));
+        let compression_len = u32_at(28) as usize;
+        if compression_len > 8 || (head.len() as u64) < CHUNK_FIXED + compression_len as u64 + 8 {
             return Ok(());
         }
-        let mut compression = [0u8; 8];
-        let compression = &mut compression[..compression_len as usize];
-        fields.reader.read_exact(compression).map_err(|e| fields.context.describe(&e))?;
-        fields.left -= compression_len;
-        let compressed_size = fields.u64("")?;
-        let known = matches!(&*compression, b"" | b"zstd" | b"lz4");
+        let compression = &head[CHUNK_FIXED as usize..CHUNK_FIXED as usize + compression_len];
+        let compressed_size = u64_at(CHUNK_FIXED as usize + compression_len);
+        let known = matches!(compression, b"" | b"zstd" | b"lz4");
         if known
             && start <= end
-            && compressed_size == fields.left
+            && compressed_size == body_len - (CHUNK_FIXED + compression_len as u64 + 8)
             && (!compression.is_empty() || compressed_size == uncompressed_size)
         {
             return Err(format!(

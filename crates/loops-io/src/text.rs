@@ -175,15 +175,126 @@ fn unquote(field: &str) -> &str {
     field.strip_prefix('"').and_then(|inner| inner.strip_suffix('"')).unwrap_or(field)
 }
 
+/// How many fields a record of a format takes: what [`record`] checks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Takes {
+    /// Exactly this many (every line of a file of columns has the count of its first).
+    Exactly(usize),
+    /// The first count, or the second: a record whose trailing fields are optional, as a whole
+    /// (an information matrix, a covariance, a score).
+    Either(usize, usize),
+    /// This many or more: a first line with further columns the format allows (EuRoC's
+    /// velocities and biases); the lines after it take [`Takes::Exactly`] its count.
+    AtLeast(usize),
+}
+
+impl Takes {
+    fn allows(self, count: usize) -> bool {
+        match self {
+            Self::Exactly(n) => count == n,
+            Self::Either(a, b) => count == a || count == b,
+            Self::AtLeast(n) => count >= n,
+        }
+    }
+
+    /// The most fields a record takes, if there is a most.
+    fn most(self) -> Option<usize> {
+        match self {
+            Self::Exactly(n) => Some(n),
+            Self::Either(a, b) => Some(a.max(b)),
+            Self::AtLeast(_) => None,
+        }
+    }
+}
+
+impl std::fmt::Display for Takes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Exactly(n) => write!(f, "{n}"),
+            Self::Either(a, b) => write!(f, "{a} or {b}"),
+            Self::AtLeast(n) => write!(f, "at least {n}"),
+        }
+    }
+}
+
+/// The fields of one record: `fields` (one data line's, split), when there are as many as
+/// `takes` allows. This is the one rule of every text reader for how long a record is: a line
+/// with more fields than its record takes is not read for its first fields with the rest
+/// dropped (two lines run together would lose the second pose without a word), and one with
+/// fewer is not padded.
+///
+/// # Errors
+/// What is wrong, for the line's error: `expected N columns{layout}, found M`, then the first
+/// field past the record's end (named, with its column) or the last field of a line that ends
+/// early. `layout` (called only then) says what a record looks like: ` (timestamp tx ty tz
+/// ...)`, ` as on line 1`.
+pub(crate) fn record<'a>(
+    fields: impl Iterator<Item = &'a str>,
+    takes: Takes,
+    layout: impl FnOnce() -> String,
+) -> Result<Vec<&'a str>, String> {
+    let fields: Vec<&str> = fields.collect();
+    let found = fields.len();
+    if takes.allows(found) {
+        return Ok(fields);
+    }
+    let detail = match (takes.most(), fields.last()) {
+        (Some(most), _) if found > most => format!(
+            ": column {} ({}) is past the end of the record, at column {most} (two records run together on one \
+             line?)",
+            most + 1,
+            quoted(fields[most])
+        ),
+        (_, Some(last)) => format!(": the line ends after column {found} ({})", quoted(last)),
+        (_, None) => String::new(),
+    };
+    let columns = if takes == Takes::Exactly(1) { "column" } else { "columns" };
+    Err(format!("expected {takes} {columns}{}, found {found}{detail}", layout()))
+}
+
+/// Checks that a record a reader skips (a type of its format that holds no pose) does not hold
+/// another record after its own: none of `fields` (one line's, its tag first) but the first is
+/// a tag of the format (`is_tag`). A skipped line that two records were run into would
+/// otherwise take the second, a pose, with it.
+///
+/// # Errors
+/// The column and the tag of the second record, for the line's error.
+pub(crate) fn check_one_record<'a>(
+    fields: impl Iterator<Item = &'a str>,
+    is_tag: impl Fn(&str) -> bool,
+) -> Result<(), String> {
+    match fields.enumerate().skip(1).find(|(_, field)| is_tag(field)) {
+        Some((k, tag)) => Err(format!(
+            "column {} ({}) starts another record in a line of a record this reader skips (two records run \
+             together on one line?)",
+            k + 1,
+            quoted(tag)
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Checks that each of `fields`, which start at column `first_column` (1-based), is a number
+/// (finite or not): the further columns a reader ignores (a covariance, EuRoC's velocities) are
+/// still the record's, and a word among them is a defect of the line, not data to skip.
+pub(crate) fn check_numbers(fields: &[&str], first_column: usize) -> Result<(), String> {
+    match fields.iter().position(|field| !is_number(field)) {
+        Some(k) => Err(format!("column {} ({}) is not a number", first_column + k, quoted(fields[k]))),
+        None => Ok(()),
+    }
+}
+
 /// Whether `field` reads as a number (finite or not): tells data rows from header rows.
 pub(crate) fn is_number(field: &str) -> bool {
     field.parse::<f64>().is_ok()
 }
 
-/// A header row: a row none of whose fields is a number. A row mixing numbers and words is a
-/// data row with a bad field, and fails as such.
+/// A header row: a row none of whose fields is a number, or holds one among its words. A row
+/// mixing numbers and words is a data row with a bad field, and fails as such; so does a row of
+/// records run together by another delimiter (`0.25 0 0 0 0 0 0 1,1.25 1 2 ...` has fields
+/// that are no numbers, but hold them), which is no header to skip.
 pub(crate) fn is_header<'a>(mut fields: impl Iterator<Item = &'a str>) -> bool {
-    !fields.any(is_number)
+    !fields.any(|field| field.split_ascii_whitespace().any(is_number))
 }
 
 /// The finite number in `field`, which is column `column` (1-based); or what is wrong with it.
@@ -275,9 +386,42 @@ mod tests {
     }
 
     #[test]
+    fn a_record_takes_its_count_of_fields_and_errors_name_the_field() {
+        let layout = || " (VERTEX_SE2 id x y theta)".to_owned();
+        let line = "VERTEX_SE2 1 1 0 0 VERTEX_SE2 2 2 0 0";
+        let error = record(line.split_ascii_whitespace(), Takes::Exactly(5), layout).unwrap_err();
+        assert_eq!(
+            error,
+            r#"expected 5 columns (VERTEX_SE2 id x y theta), found 10: column 6 ("VERTEX_SE2") is past the end of the record, at column 5 (two records run together on one line?)"#
+        );
+        let error = record("VERTEX_SE2 1 1 0".split_ascii_whitespace(), Takes::Exactly(5), layout).unwrap_err();
+        assert_eq!(
+            error,
+            r#"expected 5 columns (VERTEX_SE2 id x y theta), found 4: the line ends after column 4 ("0")"#
+        );
+        assert_eq!(record("a b c d".split(' '), Takes::Either(4, 8), String::new).unwrap().len(), 4);
+        let error = record("a b c d e".split(' '), Takes::Either(4, 8), String::new).unwrap_err();
+        assert_eq!(error, r#"expected 4 or 8 columns, found 5: the line ends after column 5 ("e")"#);
+        let error = record("1 2 3 4 5 6 7 8 9".split(' '), Takes::Either(4, 8), String::new).unwrap_err();
+        assert!(error.contains(r#"column 9 ("9") is past the end"#), "{error}");
+        assert_eq!(record("1 2 3".split(' '), Takes::AtLeast(2), String::new).unwrap(), ["1", "2", "3"]);
+        let error = record("1".split(' '), Takes::AtLeast(2), || " (t, t')".to_owned()).unwrap_err();
+        assert_eq!(error, r#"expected at least 2 columns (t, t'), found 1: the line ends after column 1 ("1")"#);
+        let tags = |field: &str| field == "loop";
+        assert_eq!(check_one_record("odom2 0 0 0".split(' '), tags), Ok(()));
+        let error = check_one_record("odom2 0 0 loop 1 2".split(' '), tags).unwrap_err();
+        assert!(error.starts_with(r#"column 4 ("loop") starts another record"#), "{error}");
+        assert_eq!(check_numbers(&["1", "nan"], 9), Ok(()));
+        assert_eq!(check_numbers(&["1", "x"], 9).unwrap_err(), r#"column 10 ("x") is not a number"#);
+    }
+
+    #[test]
     fn a_header_has_no_number() {
         assert!(is_header(["t", "x", "y"].into_iter()));
         assert!(!is_header(["t", "1.0", "y"].into_iter()));
         assert!(!is_header(["nan", "x"].into_iter()));
+        assert!(is_header(["p_x [m]", "time"].into_iter()));
+        assert!(!is_header(["0.25 0 0 1", "1.25 1 2 1"].into_iter()), "records run together");
+        assert!(!is_header(["loop 2.25 0.25 0.5", "loop 3.25 1.25 0.5"].into_iter()));
     }
 }

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{IoError, Result};
-use crate::text;
+use crate::text::{self, Takes};
 
 /// Where the times of poses come from, for formats whose lines may have none (KITTI poses
 /// without a time column, MulRan, pose graphs).
@@ -48,11 +48,12 @@ impl Timing {
                 let mut lines = text::open_lines(path)?;
                 let mut times = Vec::new();
                 while let Some((line, content)) = lines.next_data()? {
-                    let mut fields = content.split_ascii_whitespace();
-                    let (Some(field), None) = (fields.next(), fields.next()) else {
-                        return Err(IoError::parse(path, line, "expected one time in seconds a line"));
-                    };
-                    times.push(text::parse_finite(field, 1).map_err(|message| IoError::parse(path, line, message))?);
+                    let time = text::record(content.split_ascii_whitespace(), Takes::Exactly(1), || {
+                        " (one time in seconds a line)".to_owned()
+                    })
+                    .and_then(|fields| text::parse_finite(fields[0], 1))
+                    .map_err(|message| IoError::parse(path, line, message))?;
+                    times.push(time);
                 }
                 if times.len() != indices.len() {
                     return Err(IoError::Trajectory {

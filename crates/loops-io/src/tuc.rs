@@ -8,13 +8,15 @@ use std::path::Path;
 use crate::error::{IoError, Result};
 use crate::rotation::{ecef_to_enu, quaternion_from_yaw};
 use crate::table::PoseTable;
-use crate::text::{self, Lines};
+use crate::text::{self, Lines, Takes};
 
 /// Reads a libRSF ground-truth file (the TUC SLAM, Chemnitz City and smartLoc data sets): lines
 /// tagged by their first word.
 ///
-/// - `point2 t x y ...`: a 2-D position in metres at time `t` (seconds); further columns (a
-///   covariance) are ignored. `angle t yaw ...` lines at the same times give the heading
+/// - `point2 t x y ...`: a 2-D position in metres at time `t` (seconds); the covariance that
+///   libRSF writes after it (4 numbers; 9 after `point3`, 1 after `angle`) is ignored, but must
+///   be whole or absent: a record is never read from a line holding more (two lines run
+///   together). `angle t yaw ...` lines at the same times give the heading
 ///   (radians): when every `point2` has one, the table has orientations (rotations about z).
 /// - `point3 t X Y Z ...`: an ECEF position (metres, ≈ 4·10⁶ from the centre of the Earth). The
 ///   table holds it in the east-north-up frame at the first fix: the first position is
@@ -29,7 +31,8 @@ use crate::text::{self, Lines};
 /// # Errors
 /// - [`IoError::Open`] when the file cannot be read;
 /// - [`IoError::Parse`] for a line whose tag is not libRSF's, a `point2`, `point3` or `angle`
-///   line with too few columns, a field that is not a finite number, or `point2` and `point3`
+///   line with another count of columns than its record takes (naming the first column past
+///   it), a field that is not a finite number, or `point2` and `point3`
 ///   in one file;
 /// - [`IoError::Empty`] without `point2` or `point3` lines.
 ///
@@ -108,6 +111,11 @@ pub const LIBRSF_TAGS: &[&str] = &[
     "val1",
 ];
 
+/// Whether `word` is the tag of a libRSF record.
+pub(crate) fn is_librsf_tag(word: &str) -> bool {
+    LIBRSF_TAGS.contains(&word)
+}
+
 /// The message for a line whose first word is no libRSF record type.
 pub(crate) fn unknown_tag(word: &str) -> String {
     const SHOWN_CHARS: usize = 40;
@@ -116,12 +124,13 @@ pub(crate) fn unknown_tag(word: &str) -> String {
     format!("unknown record type {shown:?}{cut}: expected a libRSF record (point2, point3, angle, loop, odom2, ...)")
 }
 
-/// The tag, the columns it needs, and their names for messages.
-fn columns_of(tag: &str) -> Option<(&'static str, usize, &'static str)> {
+/// The tag, the columns its record needs (the tag, the time and the mean), the entries of the
+/// covariance that may follow them, and what a line looks like, for messages.
+fn columns_of(tag: &str) -> Option<(&'static str, usize, usize, &'static str)> {
     match tag {
-        "point2" => Some(("point2", 4, "point2 t x y")),
-        "point3" => Some(("point3", 5, "point3 t X Y Z")),
-        "angle" => Some(("angle", 3, "angle t yaw")),
+        "point2" => Some(("point2", 4, 4, "point2 t x y, then the covariance's 4 entries or none")),
+        "point3" => Some(("point3", 5, 9, "point3 t X Y Z, then the covariance's 9 entries or none")),
+        "angle" => Some(("angle", 3, 1, "angle t yaw, then its variance or none")),
         _ => None,
     }
 }
@@ -133,24 +142,24 @@ pub(crate) fn parse_tuc(path: &Path, lines: &mut Lines<impl BufRead>) -> Result<
     // Heading by the bits of its time: point2 and angle lines of one instant share the text.
     let mut yaw_at: HashMap<u64, f64> = HashMap::new();
     while let Some((line, content)) = lines.next_data()? {
-        let mut fields = content.split_ascii_whitespace();
-        let Some(word) = fields.next() else { continue };
+        let Some(word) = content.split_ascii_whitespace().next() else { continue };
         let parse_error = |message: String| IoError::parse(path, line, message);
-        let Some((tag, needed, layout)) = columns_of(word) else {
+        let Some((tag, needed, covariance, layout)) = columns_of(word) else {
             if LIBRSF_TAGS.contains(&word) {
+                text::check_one_record(content.split_ascii_whitespace(), is_librsf_tag).map_err(parse_error)?;
                 continue;
             }
             return Err(parse_error(unknown_tag(word)));
         };
+        // The numbers first, then their count: a second record's tag is named where it starts.
+        let fields: Vec<&str> = content.split_ascii_whitespace().collect();
         let mut values = [0.0; 4];
-        let mut count = 1;
-        for (value, field) in values.iter_mut().zip(fields).take(needed - 1) {
-            count += 1;
-            *value = text::parse_finite(field, count).map_err(parse_error)?;
+        for (k, (value, field)) in values.iter_mut().zip(fields.iter().take(needed).skip(1)).enumerate() {
+            *value = text::parse_finite(field, k + 2).map_err(parse_error)?;
         }
-        if count < needed {
-            return Err(parse_error(format!("expected at least {needed} columns ({layout}), found {count}")));
-        }
+        text::check_numbers(fields.get(needed..).unwrap_or_default(), needed + 1).map_err(parse_error)?;
+        let takes = Takes::Either(needed, needed + covariance);
+        text::record(fields.into_iter(), takes, || format!(" ({layout})")).map_err(parse_error)?;
         if tag == "angle" {
             yaw_at.insert(values[0].to_bits(), values[1]);
             continue;

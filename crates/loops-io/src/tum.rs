@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::table::PoseTable;
-use crate::text::{self, Delimiter, Lines};
+use crate::text::{self, Delimiter, Lines, Takes};
 
 /// The columns of a TUM line, in order.
 const COLUMNS: usize = 8;
@@ -22,7 +22,8 @@ const COLUMNS: usize = 8;
 ///
 /// # Errors
 /// - [`IoError::Open`] when the file cannot be read;
-/// - [`IoError::Parse`] for a line with other than 8 columns, or a field that is not a finite
+/// - [`IoError::Parse`] for a line with other than 8 columns (naming the first column past the
+///   record: two lines run together are not read as one pose), or a field that is not a finite
 ///   number, naming the line and the column;
 /// - [`IoError::Empty`] when there is no data line.
 ///
@@ -75,21 +76,23 @@ fn delimiter_of(line: &str) -> Delimiter {
 /// The 8 numbers of a data line, or what is wrong with it.
 fn parse_pose(delimiter: Delimiter, line: &str) -> Result<[f64; COLUMNS], String> {
     let mut values = [0.0; COLUMNS];
-    let mut count = 0;
-    for field in delimiter.split(line) {
-        if let Some(value) = values.get_mut(count) {
-            *value = text::parse_finite(field, count + 1)?;
-        }
-        count += 1;
+    // The numbers first: a line of words (a header of another tool) is named by its first word.
+    for (column, (value, field)) in values.iter_mut().zip(delimiter.split(line)).enumerate() {
+        *value = text::parse_finite(field, column + 1)?;
     }
-    if count != COLUMNS {
+    text::record(delimiter.split(line), Takes::Exactly(COLUMNS), || {
+        " (timestamp tx ty tz qx qy qz qw)".to_owned()
+    })
+    .map_err(|message| {
         // KITTI lines: a 3×4 pose, after a time when there are 13 numbers.
-        let hint = match count {
-            12 | 13 => ": a KITTI pose line? read the file as kitti (format=\"kitti\", --format kitti)",
-            _ => "",
-        };
-        return Err(format!("expected {COLUMNS} columns (timestamp tx ty tz qx qy qz qw), found {count}{hint}"));
-    }
+        match delimiter.split(line).count() {
+            count @ (12 | 13) => format!(
+                "expected {COLUMNS} columns (timestamp tx ty tz qx qy qz qw), found {count}: a KITTI pose line? read \
+                 the file as kitti (format=\"kitti\", --format kitti)"
+            ),
+            _ => message,
+        }
+    })?;
     Ok(values)
 }
 
@@ -114,11 +117,14 @@ mod tests {
     #[test]
     fn errors_name_line_and_column() {
         let error = parse("1 2 3 4 0 0 0 1\n2 2 3\n").unwrap_err();
-        assert_eq!(error.to_string(), "drive.tum line 2: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 3");
+        assert_eq!(
+            error.to_string(),
+            r#"drive.tum line 2: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 3: the line ends after column 3 ("3")"#
+        );
         let error = parse("1 2 x 4 0 0 0 1\n").unwrap_err();
         assert_eq!(error.to_string(), r#"drive.tum line 1: column 3 ("x") is not a number"#);
         let error = parse("1 2 3 4 0 0 0 1\n2 2 3 4 0 0 0 1 9\n").unwrap_err();
-        assert!(error.to_string().ends_with("found 9"), "{error}");
+        assert!(error.to_string().contains(r#"found 9: column 9 ("9") is past the end"#), "{error}");
         assert!(matches!(parse("# only\n\n").unwrap_err(), IoError::Empty { .. }));
     }
 

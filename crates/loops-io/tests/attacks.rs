@@ -99,6 +99,20 @@ fn item6_a_chunk_the_summary_indexes_must_be_there() {
     broken[chunk] = 0x8c;
     broken[chunk + 9 + 28..chunk + 9 + 32].copy_from_slice(&[0xff; 4]);
     let error = mcap_error("garbled-chunk.mcap", &broken);
+    // The message index records after the chunk now follow no chunk: the first is refused where
+    // it stands, before the summary's chunk index is reached.
+    let index = *offsets(&bytes, 0x07).iter().find(|&&at| at > chunk).expect("the chunk's message index");
+    assert_eq!(error.offset(), Some(index as u64), "{error}");
+    assert!(error.to_string().contains("a message index record that follows no chunk"), "{error}");
+    // Without them (one record of an extension in their place, which reads as nothing lost), the
+    // summary's chunk index names the chunk.
+    let mut no_index = broken.clone();
+    let chunks = offsets(&bytes, 0x06);
+    let next = chunks.iter().find(|&&at| at > chunk).copied().unwrap_or(offsets(&bytes, 0x0f)[0]);
+    no_index[index] = 0x8d;
+    no_index[index + 1..index + 9].copy_from_slice(&((next - index - 9) as u64).to_le_bytes());
+    no_index[index + 9..next].fill(0xff);
+    let error = mcap_error("garbled-chunk-no-index.mcap", &no_index);
     assert_eq!(error.offset(), Some(chunk as u64), "{error}");
     let message = error.to_string();
     assert!(message.contains("chunk index") && message.contains("unknown opcode 0x8c"), "{message}");
@@ -110,7 +124,15 @@ fn item6_a_message_lost_at_the_top_level_is_counted_by_the_statistics() {
     let message = message_of_pose(&bytes, 17);
     let mut broken = bytes.clone();
     broken[message] = 0x85;
+    // The record reads as a message on a channel of the file: refused where it stands.
     let error = mcap_error("lost-message.mcap", &broken);
+    assert_eq!(error.offset(), Some(message as u64), "{error}");
+    let text = error.to_string();
+    assert!(text.contains(&format!("unknown opcode 0x85 reads as a message on channel 1 ({TOPIC})")), "{text}");
+    // A record that does not read as one (its channel id corrupt too) is skipped, as the format
+    // asks, and the statistics count the loss.
+    broken[message + 9..message + 11].copy_from_slice(&[0x77, 0x77]);
+    let error = mcap_error("lost-message-unknown-channel.mcap", &broken);
     let statistics = offsets(&bytes, 0x0b)[0];
     assert_eq!(error.offset(), Some(statistics as u64), "{error}");
     let text = error.to_string();
@@ -129,7 +151,11 @@ fn item6_a_statistics_record_lost_with_a_message_is_noticed_by_the_summary_offse
     let bytes = mcap(30, McapLayout { crcs: false, ..McapLayout::UNCHUNKED });
     let statistics = offsets(&bytes, 0x0b)[0];
     let mut broken = bytes.clone();
-    broken[message_of_pose(&bytes, 9)] = 0x34;
+    let message = message_of_pose(&bytes, 9);
+    broken[message] = 0x34;
+    // Its channel id corrupt too, so that the record does not read as a message (which is
+    // refused where it stands).
+    broken[message + 9..message + 11].copy_from_slice(&[0x77, 0x77]);
     broken[statistics] = 0xa3;
     let error = mcap_error("lost-statistics.mcap", &broken);
     let text = error.to_string();

@@ -75,7 +75,11 @@ mod kitti {
         assert_eq!(after_path(&error, &short), ": 2 timestamps but 3 poses");
         let bad = dir.file("bad_times.txt", "0\n1 2\n3\n");
         let error = read_kitti(&path, &Timing::TimesFile(bad.clone())).unwrap_err();
-        assert_eq!(after_path(&error, &bad), " line 2: expected one time in seconds a line");
+        assert_eq!(
+            after_path(&error, &bad),
+            " line 2: expected 1 column (one time in seconds a line), found 2: column 2 (\"2\") is past the end of the \
+             record, at column 1 (two records run together on one line?)"
+        );
         for rate in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let error = read_kitti(&path, &Timing::RateHz(rate)).unwrap_err();
             assert!(
@@ -95,11 +99,15 @@ mod kitti {
         let error = read_kitti(&path, &Timing::RateHz(1.0)).unwrap_err();
         assert_eq!(
             after_path(&error, &path),
-            " line 1: expected 12 numbers (a row-major 3×4 pose [R|t]) or 13 (a time, then the pose), found 11"
+            " line 1: expected 12 or 13 columns (a row-major 3×4 pose [R|t], after a time when 13), found 11: the line \
+             ends after column 11 (\"1\")"
         );
         let path = dir.file("ragged.txt", &format!("0 {QUARTER_TURN}\n{QUARTER_TURN}\n"));
         let error = read_kitti(&path, &Timing::FromFile).unwrap_err();
-        assert_eq!(after_path(&error, &path), " line 2: expected 13 numbers as on line 1, found 12");
+        assert_eq!(
+            after_path(&error, &path),
+            " line 2: expected 13 columns as on line 1, found 12: the line ends after column 12 (\"10\")"
+        );
         let path = dir.file("word.txt", "0 1 0 0 x 0 1 0 0 0 0 1 0\n");
         let error = read_kitti(&path, &Timing::FromFile).unwrap_err();
         assert_eq!(after_path(&error, &path), r#" line 1: column 5 ("x") is not a number"#);
@@ -119,7 +127,7 @@ mod euroc {
         let dir = TempDir::new();
         let text = format!(
             "{HEADER}1403715524907143168,0.515356,1.996773,0.971104,0.161996,0.789985,-0.205376,0.554528,-0.002276\n\
-             1403715524912143104, 0.5, 2, 1, 1, 0, 0, 0\n"
+             1403715524912143104, 0.5, 2, 1, 1, 0, 0, 0, 0.1\n"
         );
         let path = dir.file("data.csv", &text);
         let table = read_euroc(&path).unwrap();
@@ -139,7 +147,7 @@ mod euroc {
         let error = read_euroc(&path).unwrap_err();
         assert_eq!(
             after_path(&error, &path),
-            " line 2: expected at least 8 columns (timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z), found 7"
+            r#" line 2: expected at least 8 columns (timestamp [ns], p_x, p_y, p_z, q_w, q_x, q_y, q_z), found 7: the line ends after column 7 ("0")"#
         );
         let path = dir.file("seconds.csv", "1403715524.9,0.5,2,1,1,0,0,0\n");
         let error = read_euroc(&path).unwrap_err();
@@ -181,7 +189,7 @@ mod tuc {
         let length = gradient.iter().map(|v| v * v).sum::<f64>().sqrt();
         let up = gradient.map(|v| v / length);
         let text = format!(
-            "point3 0 {} {} {} 0 0 0\npoint3 1 {} {} {} 0 0 0\npoint3 2 {} {} {} 0 0 0\n",
+            "point3 0 {} {} {} 0 0 0 0 0 0 0 0 0\npoint3 1 {} {} {}\npoint3 2 {} {} {} 0 0 0 0 0 0 0 0 0\n",
             origin[0],
             origin[1],
             origin[2],
@@ -207,7 +215,8 @@ mod tuc {
         let path = dir.file("few.txt", "point3 0 1 2\n");
         assert_eq!(
             after_path(&read_tuc(&path).unwrap_err(), &path),
-            " line 1: expected at least 5 columns (point3 t X Y Z), found 4"
+            " line 1: expected 5 or 14 columns (point3 t X Y Z, then the covariance's 9 entries or none), found 4: the \
+             line ends after column 4 (\"2\")"
         );
         let path = dir.file("mixed.txt", "point2 0 1 2\npoint3 1 1 2 3\n");
         assert_eq!(
@@ -279,10 +288,14 @@ mod graph {
     fn bad_graphs() {
         let dir = TempDir::new();
         let cases = [
-            ("VERTEX_SE2 0 0 0\n", " line 1: expected at least 5 columns (VERTEX_SE2 id x y theta), found 4"),
+            (
+                "VERTEX_SE2 0 0 0\n",
+                r#" line 1: expected 5 columns (VERTEX_SE2 id x y theta), found 4: the line ends after column 4 ("0")"#,
+            ),
             (
                 "VERTEX_SE2 0 0 0 0\nEDGE_SE2 0 1\n",
-                " line 2: expected at least 6 columns (EDGE_SE2 i j dx dy dtheta), found 3",
+                " line 2: expected 6 or 12 columns (EDGE_SE2 i j dx dy dtheta, then the information matrix's 6 \
+                 entries or none), found 3: the line ends after column 3 (\"1\")",
             ),
             ("VERTEX_SE2 -1 0 0 0\n", r#" line 1: column 2 ("-1") is not a vertex id (a non-negative integer)"#),
             ("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 0 1 0 0\n", " line 2: vertex 0 is given twice (first on line 1)"),

@@ -258,7 +258,8 @@ fn rosbag2_folders() {
     std::fs::create_dir_all(&dir).expect("scratch");
     let mut runner = TestRunner::new_with_rng(Config::default(), TestRng::from_seed(RngAlgorithm::ChaCha, &[9; 32]));
     let poses = proptest::collection::vec(pose(), 30).new_tree(&mut runner).expect("poses").current();
-    let plain = dir.join("plain.db3");
+    // Beside the bag's folder: a storage file in it that metadata.yaml does not list is an error.
+    let plain = dir.with_file_name("folder-plain.db3");
     sqlite_bag(&plain, &poses, false);
     let compressed = zstd::bulk::compress(&std::fs::read(&plain).expect("db3"), 3).expect("zstd");
     let storage = dir.join("bag_0.db3.zstd");

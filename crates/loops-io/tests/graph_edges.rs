@@ -72,7 +72,8 @@ fn a_partial_or_bad_information_matrix_names_its_line() {
     let cases = [
         (
             "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0\n",
-            "line 3: EDGE_SE2 has 3 number(s) after the measurement; the information matrix is 6 (its upper triangle), or none",
+            "line 3: expected 6 or 12 columns (EDGE_SE2 i j dx dy dtheta, then the information matrix's 6 entries or \
+             none), found 9: the line ends after column 9 (\"0\")",
         ),
         (
             "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nEDGE_SE2 0 1 1 0 0 1 0 0 1 x 1\n",

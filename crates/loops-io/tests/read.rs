@@ -95,14 +95,21 @@ mod tum {
         let file = TempFile::new("few.tum", "# c\n0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0\n");
         let error = read_tum(file.path()).unwrap_err();
         assert!(matches!(error, IoError::Parse { line: 3, .. }), "{error:?}");
-        assert_eq!(after_path(&error, &file), " line 3: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 7");
+        assert_eq!(
+            after_path(&error, &file),
+            r#" line 3: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 7: the line ends after column 7 ("0")"#
+        );
     }
 
     #[test]
     fn too_many_columns() {
         let file = TempFile::new("many.tum", "0 0 0 0 0 0 0 1 7\n");
         let error = read_tum(file.path()).unwrap_err();
-        assert_eq!(after_path(&error, &file), " line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 9");
+        assert_eq!(
+            after_path(&error, &file),
+            " line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 9: column 9 (\"7\") is past the end \
+             of the record, at column 8 (two records run together on one line?)"
+        );
     }
 
     #[test]
@@ -263,7 +270,10 @@ mod csv {
     fn too_few_columns() {
         let file = TempFile::new("few.csv", "t,x,y,z\n0,1,2,3\n1,1,2\n");
         let error = read_csv(file.path()).unwrap_err();
-        assert_eq!(after_path(&error, &file), " line 3: expected 4 columns as on line 1, found 3");
+        assert_eq!(
+            after_path(&error, &file),
+            r#" line 3: expected 4 columns as on line 1, found 3: the line ends after column 3 ("2")"#
+        );
         let file = TempFile::new("two.csv", "0,1\n1,2\n");
         let error = read_csv(file.path()).unwrap_err();
         assert!(after_path(&error, &file).starts_with(" line 1: expected 3 columns (t, x, y) or 4"), "{error}");
@@ -604,7 +614,9 @@ mod real_data {
         let Some(dir) = real_data_dir() else { return };
         let error = read_trajectory(dir.join("urbannav_hk/UrbanNav_TST_GT.txt"), None).unwrap_err();
         assert!(
-            error.to_string().ends_with("line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 20"),
+            error
+                .to_string()
+                .contains("line 1: expected 8 columns (timestamp tx ty tz qx qy qz qw), found 20: column 9"),
             "{error}"
         );
         // Two header lines: the first has no number and is skipped, the second ("(sec) ...") fails.

@@ -18,15 +18,15 @@ mod ros1;
 mod rosbag2;
 mod sqlite;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::error::{IoError, Result};
 use crate::format::Format;
 use crate::mcap::{McapOptions, Scan};
-use crate::mcap_records::Visitor;
+use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor};
 use crate::table::PoseTable;
 use crate::topic::{FramePairInfo, TopicInfo};
-use rosbag2::{Rosbag2, Storage, StorageFile};
+use rosbag2::{Rosbag2, Storage, StorageFile, TopicCounts};
 
 /// Reads the poses of one topic of a rosbag2 bag, named the way users name it: the bag's folder,
 /// its `metadata.yaml`, or one of its storage files (`.db3`, `.mcap`, `.db3.zstd`,
@@ -37,12 +37,16 @@ use rosbag2::{Rosbag2, Storage, StorageFile};
 /// - Splits: the files `metadata.yaml` lists (`relative_file_paths`), in its order; for a folder
 ///   without `metadata.yaml`, its `.db3` / `.mcap` files ordered by split index (`bag_2` before
 ///   `bag_10`). Poses of all files make one table, sorted by time.
+/// - Nothing left out: with a `metadata.yaml`, a storage file in the folder that it does not
+///   list is an error, and so is a storage file, a topic or the bag holding fewer messages than
+///   its `message_count`s say.
 /// - Compression: `compression_mode: message` (each CDR message a zstd frame, recognised by its
 ///   magic number whether or not `metadata.yaml` says so; an lz4 frame too), and `compression_mode:
 ///   file` (each storage file compressed whole, `*.db3.zstd`, `*.mcap.zstd`; decompressed to a
-///   temporary file in `TMPDIR`, removed after reading; at most 1000 times the compressed file,
-///   and at least 64 MiB, so that a compression bomb is an error, not a full disk). One
-///   message may decompress to at most 64 MiB.
+///   temporary file in `TMPDIR` that has no name, so that no exit of the process, Ctrl-C
+///   included, leaves it behind ([`remove_temporary_files`](crate::remove_temporary_files)); at
+///   most 1000 times the compressed file, and at least 64 MiB, so that a compression bomb is an
+///   error, not a full disk). One message may decompress to at most 64 MiB.
 /// - Topic, time and frame pair as `options` say, as for [`read_mcap`](crate::read_mcap). A
 ///   sqlite3 file records one time per message, so [`TimeSource::Log`](crate::TimeSource::Log)
 ///   and [`TimeSource::Publish`](crate::TimeSource::Publish) both take it.
@@ -56,8 +60,9 @@ use rosbag2::{Rosbag2, Storage, StorageFile};
 /// # Errors
 /// - [`IoError::Open`] when a file cannot be read; [`IoError::Parse`] (with the line) for a
 ///   `metadata.yaml` that is not one; [`IoError::Bag`] for a bag whose metadata lists a missing
-///   file, a storage or compression this crate does not read, or a compressed file that does
-///   not decompress;
+///   file or leaves out one in the folder, counts more messages than its files hold (naming the
+///   file or topic and both counts), names a storage or compression this crate does not read,
+///   or a compressed file that does not decompress;
 /// - [`IoError::Sqlite`] naming the file (and row) for a `.db3` that SQLite cannot read or that
 ///   lacks the rosbag2 tables; [`IoError::Mcap`] naming the offset for a broken `.mcap`;
 /// - [`IoError::Message`] naming the file, topic and offset (or row) for a message that does not
@@ -75,14 +80,8 @@ use rosbag2::{Rosbag2, Storage, StorageFile};
 pub fn read_rosbag2(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTable> {
     let bag = Rosbag2::resolve(path.as_ref())?;
     let mut scan = Scan::new(Some(options));
-    let mut files = Vec::with_capacity(bag.files.len());
-    for (index, file) in bag.files.iter().enumerate() {
-        scan.file = index;
-        scan.path = file.path.clone();
-        walk_storage(file, &mut scan)?;
-        files.push(file.path.clone());
-    }
-    scan.into_table(files, options)
+    walk_rosbag2(&bag, &mut scan)?;
+    scan.into_table(bag.files.iter().map(|file| file.path.clone()).collect(), options)
 }
 
 /// A short name for the log at `path`, for a folder of results or a row of a table: a rosbag2
@@ -203,13 +202,7 @@ pub fn list_frame_pairs(path: impl AsRef<Path>) -> Result<Vec<(String, Vec<Frame
 /// Walks an MCAP file or a bag of the kind [`Format::detect`] tells (any other file as MCAP).
 fn walk_any(path: &Path, scan: &mut Scan<'_>) -> Result<()> {
     match Format::detect(path) {
-        Some(Format::Rosbag2) => {
-            for (index, file) in Rosbag2::resolve(path)?.files.iter().enumerate() {
-                scan.file = index;
-                scan.path = file.path.clone();
-                walk_storage(file, scan)?;
-            }
-        }
+        Some(Format::Rosbag2) => walk_rosbag2(&Rosbag2::resolve(path)?, scan)?,
         Some(Format::Ros1) => {
             scan.path = path.to_path_buf();
             ros1::walk(path, scan)?;
@@ -222,26 +215,97 @@ fn walk_any(path: &Path, scan: &mut Scan<'_>) -> Result<()> {
     Ok(())
 }
 
-/// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole.
-fn walk_storage(file: &StorageFile, visitor: &mut impl Visitor) -> Result<()> {
-    let decompressed = match file.compression {
-        Some(frame) => Some(crate::compression::decompress_file(&file.path, frame)?),
-        None => None,
-    };
-    let walked = decompressed.as_ref().map_or(file.path.as_path(), |temp| temp.path());
-    match file.storage {
-        Storage::Sqlite3 => sqlite::walk(walked, &file.path, visitor),
-        Storage::Mcap => crate::mcap_records::walk(walked, visitor).map_err(|error| renamed(error, walked, &file.path)),
+/// Walks the storage files of a rosbag2 bag in order, then checks the messages of each file and
+/// topic against the counts of its metadata ([`Rosbag2::check_counts`]).
+fn walk_rosbag2(bag: &Rosbag2, scan: &mut Scan<'_>) -> Result<()> {
+    let mut read = Vec::with_capacity(bag.files.len());
+    for (index, file) in bag.files.iter().enumerate() {
+        scan.file = index;
+        scan.path = file.path.clone();
+        let mut counted = Counted { inner: &mut *scan, topics: Vec::new(), counts: TopicCounts::new() };
+        walk_storage(file, &mut counted)?;
+        read.push(counted.counts);
+    }
+    bag.check_counts(&read)
+}
+
+/// A visitor that counts the messages of each topic on their way to `inner`.
+struct Counted<'v, V> {
+    inner: &'v mut V,
+    /// The topic of each channel `inner` numbered, by its number.
+    topics: Vec<Option<String>>,
+    counts: TopicCounts,
+}
+
+impl<V: Visitor> Visitor for Counted<'_, V> {
+    fn channel(&mut self, key: ChannelKey, at: At) -> usize {
+        let topic = key.topic.clone();
+        let channel = self.inner.channel(key, at);
+        if self.topics.len() <= channel {
+            self.topics.resize(channel + 1, None);
+        }
+        self.topics[channel] = Some(topic);
+        channel
+    }
+
+    fn message(&mut self, channel: usize, header: MessageHeader, data: &[u8], at: At) -> Result<()> {
+        if let Some(Some(topic)) = self.topics.get(channel) {
+            match self.counts.get_mut(topic) {
+                Some(count) => *count += 1,
+                None => {
+                    self.counts.insert(topic.clone(), 1);
+                }
+            }
+        }
+        self.inner.message(channel, header, data, at)
+    }
+
+    fn decodes(&self, channel: usize) -> bool {
+        self.inner.decodes(channel)
     }
 }
 
-/// An error about the decompressed copy `temp`, made about the file `shown` it came from.
-fn renamed(error: IoError, temp: &Path, shown: &Path) -> IoError {
-    let fix = |path: PathBuf| if path == temp { shown.to_path_buf() } else { path };
+/// Walks one storage file of a rosbag2 bag, decompressing it first when it is compressed whole
+/// (into a file without a name: see `crate::temp_copy`).
+fn walk_storage(file: &StorageFile, visitor: &mut impl Visitor) -> Result<()> {
+    let shown = &file.path;
+    let Some(frame) = file.compression else {
+        return match file.storage {
+            Storage::Sqlite3 => sqlite::walk(&sqlite::open(shown, shown, false)?, shown, visitor),
+            Storage::Mcap => crate::mcap_records::walk(shown, visitor),
+        };
+    };
+    let copy = crate::compression::decompress_file(shown, frame)?;
+    match file.storage {
+        Storage::Sqlite3 => {
+            // SQLite opens files by name: the copy has one while SQLite opens it, no longer (on
+            // Unix SQLite then reads through its handle; elsewhere the name goes after).
+            let mut name = copy.name().map_err(|error| IoError::Bag {
+                path: shown.clone(),
+                message: format!(
+                    "cannot name the decompressed copy for SQLite: {}",
+                    crate::printable::one_line(&error)
+                ),
+            })?;
+            let db = sqlite::open(name.path(), shown, true)?;
+            if cfg!(unix) {
+                name.remove();
+            }
+            sqlite::walk(&db, shown, visitor)
+        }
+        Storage::Mcap => {
+            let file = copy.into_file();
+            crate::mcap_records::walk_file(file, shown, visitor).map_err(in_decompressed)
+        }
+    }
+}
+
+/// An error about a decompressed copy, made about the compressed file it came from: its offsets
+/// are in the decompressed bytes.
+fn in_decompressed(error: IoError) -> IoError {
     match error {
-        IoError::Open { path, error } => IoError::Open { path: fix(path), error },
         IoError::Mcap { path, offset, message } => {
-            IoError::Mcap { path: fix(path), offset, message: format!("{message} (offset in the decompressed file)") }
+            IoError::Mcap { path, offset, message: format!("{message} (offset in the decompressed file)") }
         }
         other => other,
     }

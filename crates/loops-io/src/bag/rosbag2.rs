@@ -12,9 +12,23 @@
 //! splits, in recording order; else `files[].path`), `compression_format` (`zstd`; `lz4` for
 //! third-party plugins) and `compression_mode` (`FILE`: each storage file is compressed as a
 //! whole and named `*.zstd`; `MESSAGE`: each message is compressed, which the CDR decoder
-//! recognises by the frame's magic number whatever the metadata says). Everything else
-//! (durations, counts, QoS) is ignored: the storage files are the truth.
+//! recognises by the frame's magic number whatever the metadata says); and the message counts,
+//! `message_count` (the bag's), `topics_with_message_count` (each topic's) and
+//! `files[].message_count` (each storage file's). Everything else (durations, QoS) is ignored.
+//!
+//! The storage files hold the messages, and the metadata says what they should hold. Two
+//! checks keep a bag from being read short without a word:
+//! - the folder's storage files are the ones the metadata lists: a `.db3` or `.mcap` file
+//!   (compressed or not) in the folder that the metadata does not list is an error, as is a
+//!   listed file that is missing. A split left out of `relative_file_paths` (a bag copied in
+//!   parts, a metadata file written before the last split) would otherwise be skipped;
+//! - after the walk ([`Rosbag2::check_counts`]), a storage file, a topic or the bag with fewer
+//!   messages than the metadata counts is an error naming the counts. More messages than
+//!   counted are read: a recording stopped before its metadata was last written leaves it
+//!   short, and nothing is lost then. Metadata without counts (written by hand, by tools that
+//!   leave them out) is not checked.
 
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
@@ -39,11 +53,29 @@ pub(crate) struct StorageFile {
     pub(crate) compression: Option<Frame>,
 }
 
-/// The storage files of a bag, in order.
+/// The storage files of a bag, in order, and the message counts its metadata declares.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct Rosbag2 {
     pub(crate) files: Vec<StorageFile>,
+    /// The counts of `metadata.yaml` (none without one).
+    counts: Option<Counts>,
 }
+
+/// The message counts a `metadata.yaml` declares, each where it gives one.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Counts {
+    /// The metadata file, which errors name.
+    metadata: PathBuf,
+    /// `message_count`: the bag's.
+    total: Option<u64>,
+    /// `topics_with_message_count`: each topic's.
+    topics: Vec<(String, u64)>,
+    /// `files[].message_count`: each storage file's, in the order of [`Rosbag2::files`].
+    files: Vec<Option<u64>>,
+}
+
+/// The messages read from one storage file, per topic: what [`Rosbag2::check_counts`] checks.
+pub(crate) type TopicCounts = BTreeMap<String, u64>;
 
 #[derive(Debug, Deserialize)]
 struct MetadataFile {
@@ -62,11 +94,28 @@ struct Metadata {
     compression_format: Option<String>,
     #[serde(default)]
     compression_mode: Option<String>,
+    #[serde(default)]
+    message_count: Option<u64>,
+    #[serde(default)]
+    topics_with_message_count: Vec<TopicEntry>,
 }
 
 #[derive(Debug, Deserialize)]
 struct FileEntry {
     path: String,
+    #[serde(default)]
+    message_count: Option<u64>,
+}
+
+#[derive(Debug, Deserialize)]
+struct TopicEntry {
+    topic_metadata: TopicMetadata,
+    message_count: u64,
+}
+
+#[derive(Debug, Deserialize)]
+struct TopicMetadata {
+    name: String,
 }
 
 /// The storage a file name says: `.db3` or `.mcap`, under a `.zstd` / `.lz4` compression
@@ -133,7 +182,10 @@ impl Rosbag2 {
         }
         std::fs::metadata(path).map_err(|error| IoError::Open { path: path.to_path_buf(), error })?;
         match storage_of_name(path) {
-            Some((storage, compression)) => Ok(Rosbag2 { files: vec![StorageFile { path: path.to_path_buf(), storage, compression }] }),
+            Some((storage, compression)) => Ok(Rosbag2 {
+                files: vec![StorageFile { path: path.to_path_buf(), storage, compression }],
+                counts: None,
+            }),
             None => Err(bag_error(
                 path,
                 "not a rosbag2 storage file: expected a .db3 or .mcap file (or .db3.zstd, .mcap.zstd), a bag's folder, \
@@ -181,6 +233,8 @@ impl Rosbag2 {
                 return Err(bag_error(format!("compression_mode {other:?}: expected FILE, MESSAGE or none")));
             }
         };
+        let file_counts: HashMap<String, u64> =
+            metadata.files.iter().filter_map(|file| Some((file.path.clone(), file.message_count?))).collect();
         let names: Vec<String> = if metadata.relative_file_paths.is_empty() {
             metadata.files.into_iter().map(|file| file.path).collect()
         } else {
@@ -190,8 +244,8 @@ impl Rosbag2 {
             return Err(bag_error("the bag lists no storage file (relative_file_paths is empty)".to_owned()));
         }
         let mut files = Vec::with_capacity(names.len());
-        for name in names {
-            let mut path = folder.join(&name);
+        for name in &names {
+            let mut path = folder.join(name);
             // rosbag2 lists a file-compressed split under its compressed name; accept the plain
             // name too, when only the compressed file is there.
             if !path.exists() && file_frame.is_some() {
@@ -220,7 +274,85 @@ impl Rosbag2 {
             };
             files.push(StorageFile { path, storage, compression });
         }
-        Ok(Rosbag2 { files })
+        check_unlisted(metadata_path, folder, &files)?;
+        let counts = Counts {
+            metadata: metadata_path.to_path_buf(),
+            total: metadata.message_count,
+            topics: metadata
+                .topics_with_message_count
+                .into_iter()
+                .map(|topic| (topic.topic_metadata.name, topic.message_count))
+                .collect(),
+            files: names.iter().map(|name| file_counts.get(name).copied()).collect(),
+        };
+        Ok(Rosbag2 { files, counts: Some(counts) })
+    }
+
+    /// Checks what the walk read, `read` (per storage file, the messages of each topic), against
+    /// the counts of the metadata: no storage file, topic or bag may have fewer messages.
+    ///
+    /// # Errors
+    /// [`IoError::Bag`] naming the metadata file, the storage file or topic, and both counts.
+    pub(crate) fn check_counts(&self, read: &[TopicCounts]) -> Result<()> {
+        let Some(counts) = &self.counts else { return Ok(()) };
+        let short = |message: String| {
+            Err(IoError::Bag {
+                path: counts.metadata.clone(),
+                message: format!("{message}: messages were lost (a storage file cut short or corrupt?)"),
+            })
+        };
+        for ((file, declared), read) in self.files.iter().zip(&counts.files).zip(read) {
+            let held: u64 = read.values().sum();
+            if let Some(declared) = *declared
+                && held < declared
+            {
+                let name = file.path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+                return short(format!(
+                    "the bag counts {declared} messages in its storage file {name:?}, which holds {held}"
+                ));
+            }
+        }
+        let mut topics = TopicCounts::new();
+        for (topic, count) in read.iter().flatten() {
+            *topics.entry(topic.clone()).or_default() += count;
+        }
+        for (topic, declared) in &counts.topics {
+            let held = topics.get(topic).copied().unwrap_or(0);
+            if held < *declared {
+                return short(format!(
+                    "the bag counts {declared} messages on topic {}, but its {} storage file(s) ({}) hold {held}",
+                    crate::printable::printable(topic),
+                    self.files.len(),
+                    self.file_names()
+                ));
+            }
+        }
+        let held: u64 = topics.values().sum();
+        if let Some(declared) = counts.total
+            && held < declared
+        {
+            return short(format!(
+                "the bag counts {declared} messages (message_count), but its {} storage file(s) ({}) hold {held}",
+                self.files.len(),
+                self.file_names()
+            ));
+        }
+        Ok(())
+    }
+
+    /// The names of the storage files, for messages: `a_0.db3, a_1.db3` (the first few).
+    fn file_names(&self) -> String {
+        const SHOWN: usize = 4;
+        let mut names: Vec<String> = self
+            .files
+            .iter()
+            .take(SHOWN)
+            .map(|file| file.path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned()))
+            .collect();
+        if self.files.len() > SHOWN {
+            names.push(format!("and {} more", self.files.len() - SHOWN));
+        }
+        names.join(", ")
     }
 
     /// A folder without `metadata.yaml`: its storage files, splits in order of their index.
@@ -240,7 +372,47 @@ impl Rosbag2 {
             });
         }
         files.sort_by_key(|file| split_key(&file.path));
-        Ok(Rosbag2 { files })
+        Ok(Rosbag2 { files, counts: None })
+    }
+}
+
+/// Checks that the folder of `metadata` holds no storage file beyond `listed` (the files the
+/// metadata lists): a split it leaves out would not be read. A file and its compressed twin
+/// (`a.db3` beside a listed `a.db3.zstd`, or the other way round) are one storage file.
+fn check_unlisted(metadata: &Path, folder: &Path, listed: &[StorageFile]) -> Result<()> {
+    let stem_of = |path: &Path| {
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        match Frame::of_name(path) {
+            Some(_) => name.rsplit_once('.').map_or(name.clone(), |(stem, _)| stem.to_owned()),
+            None => name,
+        }
+    };
+    let known: Vec<String> = listed.iter().map(|file| stem_of(&file.path)).collect();
+    // `metadata.yaml` named alone: its folder is the working one.
+    let folder = if folder.as_os_str().is_empty() { Path::new(".") } else { folder };
+    let entries = std::fs::read_dir(folder).map_err(|error| IoError::Open { path: folder.to_path_buf(), error })?;
+    let mut unlisted = Vec::new();
+    for entry in entries {
+        let path = entry.map_err(|error| IoError::Open { path: folder.to_path_buf(), error })?.path();
+        if storage_of_name(&path).is_some() && path.is_file() && !known.contains(&stem_of(&path)) {
+            unlisted.push(path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
+        }
+    }
+    unlisted.sort();
+    match unlisted.first() {
+        None => Ok(()),
+        Some(first) => Err(IoError::Bag {
+            path: metadata.to_path_buf(),
+            message: format!(
+                "the folder holds the storage file {first:?}{}, which the bag does not list (relative_file_paths lists \
+                 {}): its messages would not be read; list it there, or move it out of the folder",
+                match unlisted.len() {
+                    1 => String::new(),
+                    n => format!(" and {} more", n - 1),
+                },
+                listed.len()
+            ),
+        }),
     }
 }
 

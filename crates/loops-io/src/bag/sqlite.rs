@@ -68,17 +68,37 @@ fn check_header(file: &Path, shown: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Walks the messages of the rosbag2 sqlite3 file `file`, reporting topics (as channels) and
-/// messages to `visitor`; errors name `shown` (the file as the user knows it: the compressed
-/// file, for a decompressed copy).
-pub(crate) fn walk(file: &Path, shown: &Path, visitor: &mut impl Visitor) -> Result<()> {
-    let error = |row: Option<i64>, message: String| IoError::Sqlite { path: shown.to_path_buf(), row, message };
+/// The rosbag2 sqlite3 file `file` opened read-only, its header checked; errors name `shown`
+/// (the file as the user knows it: the compressed file, for a decompressed copy).
+///
+/// A `copy` (a decompressed copy, private to this process) is opened immutable: SQLite then
+/// locks nothing and looks for no journal or write-ahead log beside it, so it creates no `-shm`
+/// file there and keeps reading after the copy's name is removed.
+pub(crate) fn open(file: &Path, shown: &Path, copy: bool) -> Result<Connection> {
     check_header(file, shown)?;
+    let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+    let opened = match file.to_str().filter(|_| copy) {
+        // A URI's path ends at `?` or `#`, and `%` starts an escape.
+        Some(path) => Connection::open_with_flags(
+            format!("file:{}?immutable=1", path.replace('%', "%25").replace('?', "%3f").replace('#', "%23")),
+            flags | OpenFlags::SQLITE_OPEN_URI,
+        ),
+        None => Connection::open_with_flags(file, flags),
+    };
+    opened.map_err(|e| IoError::Sqlite {
+        path: shown.to_path_buf(),
+        row: None,
+        message: format!("SQLite cannot open the database: {}", one_line(&e)),
+    })
+}
+
+/// Walks the messages of the rosbag2 sqlite3 database `db` (see [`open`]), reporting topics (as
+/// channels) and messages to `visitor`; errors name `shown`.
+pub(crate) fn walk(db: &Connection, shown: &Path, visitor: &mut impl Visitor) -> Result<()> {
+    let error = |row: Option<i64>, message: String| IoError::Sqlite { path: shown.to_path_buf(), row, message };
     let sql = |row: Option<i64>, what: &'static str| {
         move |e: rusqlite::Error| error(row, format!("{what}: {}", one_line(&e)))
     };
-    let db = Connection::open_with_flags(file, OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX)
-        .map_err(sql(None, "SQLite cannot open the database"))?;
 
     let mut topics: HashMap<i64, usize> = HashMap::new();
     let mut decoded: Vec<i64> = Vec::new();
