@@ -275,3 +275,88 @@ def test_runs_at_the_same_time(tmp_path: Path, loops_cli: Path, logs) -> None:
             assert len(lines) == 1 and str(shared) in lines[0], err
     assert 0 in codes, codes
     assert complete_results(shared, logs) == results[0]
+
+
+def _square_laps(path: Path, t0: int, dx: float) -> Path:
+    """Two laps of a 40 m square at 1 m/s as TUM: a small log with revisits."""
+    lines = []
+    for k in range(320):
+        s, side = (k % 160) * 0.25, (k % 160) // 40
+        x, y = [(s, 0.0), (10.0, s - 10.0), (30.0 - s, 10.0), (0.0, 40.0 - s)][side]
+        lines.append(f"{t0 + k}.0 {x + dx} {y} 0 0 0 0 1")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def _leftover_shaped(rng: random.Random) -> str:
+    stem = rng.choice(["thesis", "a", "drive-0", "summary.json", "index.html", "notes"])
+    kind = rng.randrange(3)
+    if kind == 0:
+        return f".{stem}.partial-{rng.randrange(10**6)}"
+    if kind == 1:
+        return f".{stem}.old-{rng.randrange(10**6)}"
+    return f".{stem}.{''.join(rng.choices('abcXYZ019', k=6))}.tmp"
+
+
+def test_output_folders_never_lose_a_users_file(tmp_path: Path, loops_cli: Path) -> None:
+    """Seeded: folders holding a user's entries shaped like a killed run's leftovers (and files
+    named like the tools' own), logs named like the tools' files, and outputs aimed at the logs
+    being read (by path, through a link, by another spelling), through `loops run`, `loops
+    fleet`, `loops components` and `loops sample`, with and without --force. Every user file and
+    every log must be left as it was."""
+    rng = random.Random(SEED)
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    inputs = [_square_laps(logs / "a.tum", 0, 0.0), _square_laps(logs / "b.tum", 1000, 0.5)]
+    inputs.append(_square_laps(logs / "loops-run.json.tum", 2000, 0.2))
+    (tmp_path / "link.json").symlink_to(inputs[0])
+    counts = {"cases": 0, "refused": 0, "ran": 0, "deleted": 0, "overwritten": 0, "panics": 0}
+    for case in range(int(os.environ.get("LOOPS_SWEEP_FOLDERS", "36"))):
+        out = tmp_path / f"out-{case}"
+        out.mkdir()
+        mine: dict[Path, bytes] = {}
+        for k in range(rng.randint(0, 4)):
+            entry = out / _leftover_shaped(rng)
+            if entry.name.endswith(".tmp"):
+                entry.write_bytes(f"user file {k}".encode())
+                mine[entry] = entry.read_bytes()
+            else:
+                entry.mkdir(exist_ok=True)
+                (entry / "work.txt").write_text(f"user work {k}")
+                mine[entry / "work.txt"] = (entry / "work.txt").read_bytes()
+        if rng.random() < 0.3:
+            top = out / rng.choice(["index.html", "summary.json", "components.csv"])
+            top.write_text("a file of the user's")
+            mine[top] = top.read_bytes()
+        before = {p: p.read_bytes() for p in inputs}
+        onto_inputs = [str(inputs[0]), str(tmp_path / "link.json"), f"{logs}/./a.tum"]
+        target = rng.choice(onto_inputs) if rng.random() < 0.4 else str(tmp_path / "x.out")
+        command = rng.choice(["run", "fleet", "components", "sample"])
+        args = [str(loops_cli), command]
+        if command in ("run", "fleet"):
+            args += [str(p) for p in rng.sample(inputs, rng.randint(2, 3))]
+            args += ["--out", str(out), "--budget", "10"]
+            if rng.random() < 0.5:
+                args += ["--json", target]
+        else:
+            args += [str(inputs[0])]
+            flag = "--json" if command == "components" else rng.choice(["--csv", "--g2o", "--json"])
+            args += [flag, target] + (["--budget", "5"] if command == "sample" else [])
+        args += ["--gamma", "2", "--quiet"] + (["--force"] if rng.random() < 0.6 else [])
+        run = subprocess.run(args, capture_output=True, text=True, timeout=300)
+        counts["cases"] += 1
+        counts["panics"] += "panicked" in run.stderr or run.returncode not in (0, 1, 2)
+        counts["refused" if run.returncode == 2 else "ran"] += 1
+        for path, data in {**mine, **before}.items():
+            if not path.exists():
+                counts["deleted"] += 1
+                print(f"case {case}: {path} deleted by {args}")
+            elif path.read_bytes() != data:
+                counts["overwritten"] += 1
+                print(f"case {case}: {path} overwritten by {args}")
+        with_json = Path(target).name == "x.out" and Path(target).exists()
+        if with_json:
+            Path(target).unlink()
+    print(f"output-folder sweep, seed {SEED}: {counts}")
+    assert counts["deleted"] == counts["overwritten"] == counts["panics"] == 0, counts
+    assert counts["refused"] > 0 and counts["ran"] > 0, counts
