@@ -150,10 +150,17 @@ pub fn check_threads(threads: usize) -> Result<()> {
     }
 }
 
-/// Runs `f` on a rayon pool of `threads` threads (`None`: the global pool, one thread per core).
+/// Runs `f` on a rayon pool of `threads` threads (`None`: the process's default pool, one
+/// thread per core).
 ///
 /// Results of this crate do not depend on the thread count. An [`Interrupt`] installed on the
 /// calling thread applies inside `f` too.
+///
+/// The default pool belongs to the process that made it: a child made by `fork` (Python's
+/// `multiprocessing` with the `fork` start method, `os.fork`, a pre-forking server) inherits
+/// the parent's pool in memory but none of its threads, so work sent there would wait for
+/// ever. A call from such a child makes the child a pool of its own, and leaves the parent's
+/// alone.
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] when `threads` is 0 or more than [`MAX_THREADS`]
@@ -167,7 +174,11 @@ pub fn check_threads(threads: usize) -> Result<()> {
 /// ```
 pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> Result<R> {
     match threads {
-        None => Ok(f()),
+        None => {
+            let pool = default_pool()?;
+            let interrupt = Interrupt::current();
+            Ok(pool.install(|| interrupt.run(f)))
+        }
         Some(count) => {
             check_threads(count)?;
             let pool = rayon::ThreadPoolBuilder::new().num_threads(count).build();
@@ -185,6 +196,32 @@ pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Sen
             }
         }
     }
+}
+
+/// The pool of [`with_threads`]`(None, ..)`, made on first use in each process (see there).
+fn default_pool() -> Result<std::sync::Arc<rayon::ThreadPool>> {
+    use std::sync::{Arc, Mutex, PoisonError};
+    static POOL: Mutex<Option<(u32, Arc<rayon::ThreadPool>)>> = Mutex::new(None);
+    let pid = std::process::id();
+    let mut held = POOL.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some((owner, pool)) = held.as_ref()
+        && *owner == pid
+    {
+        return Ok(Arc::clone(pool));
+    }
+    // A pool of the parent, whose threads this process does not have: dropping it would signal
+    // threads that are not there, so it is left as it is.
+    if let Some(inherited) = held.take() {
+        std::mem::forget(inherited);
+    }
+    let pool = rayon::ThreadPoolBuilder::new().build().map_err(|_| Error::InvalidParameter {
+        name: "threads",
+        value: 0.0,
+        expected: "a pool of threads the system can start",
+    })?;
+    let pool = Arc::new(pool);
+    *held = Some((pid, Arc::clone(&pool)));
+    Ok(pool)
 }
 
 #[cfg(test)]

@@ -62,6 +62,7 @@ const SIGNAL_POLL: Duration = Duration::from_millis(50);
 /// (`PyErr_CheckSignals`). When a handler raises (Ctrl-C: `KeyboardInterrupt`), the token is
 /// interrupted, the engine stops at its next check (within a block of rows), and the handler's
 /// exception is raised. A Python metric callable run by `f` takes the GIL from the worker thread.
+/// `f` runs on the process's default rayon pool, so that a child of `fork` computes too.
 pub(crate) fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, error::Failure> + Send) -> PyResult<T> {
     let interrupt = loops_core::Interrupt::new();
     let done = Done::default();
@@ -69,9 +70,18 @@ pub(crate) fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, er
         let work = {
             let (interrupt, done) = (&interrupt, &done);
             move || {
-                let result = interrupt.run(|| std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)));
+                // On the process's default pool, which a forked child makes anew (see
+                // `loops_core::with_threads`).
+                let result = interrupt.run(|| {
+                    loops_core::with_threads(None, || std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)))
+                });
                 done.finish();
-                result.unwrap_or_else(|payload| Err(error::Failure::Panic(panic_message(payload.as_ref()))))
+                match result {
+                    Ok(done) => {
+                        done.unwrap_or_else(|payload| Err(error::Failure::Panic(panic_message(payload.as_ref()))))
+                    }
+                    Err(error) => Err(error::Failure::from(error)),
+                }
             }
         };
         let worker = std::thread::Builder::new()
