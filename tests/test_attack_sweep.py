@@ -1,7 +1,9 @@
 """The parts of the attack sweep (issue 15) that are not about file contents: calls with wrong
-types and values through the whole Python API, `loops run` killed at seeded moments, and runs
-at the same time. Each part counts its cases and fails on a panic, an abort, or a lost or
-half-written result. (Corrupted and crafted files: `crates/loops-io/tests/attack_sweep.rs`.)
+types and values through the whole Python API, `loops run` killed at seeded moments, runs at
+the same time, and Ctrl-C or a kill while `loops` or Python reads a file-compressed rosbag2 bag
+(no decompressed copy may stay in the temporary folder). Each part counts its cases and fails on
+a panic, an abort, a lost or half-written result, or a file left behind. (Corrupted and crafted
+files: `crates/loops-io/tests/attack_sweep.rs`.)
 
 Seeded: `LOOPS_SWEEP_SEED` changes the seed, `LOOPS_SWEEP_ROUNDS` the number of kills.
 """
@@ -360,3 +362,98 @@ def test_output_folders_never_lose_a_users_file(tmp_path: Path, loops_cli: Path)
     print(f"output-folder sweep, seed {SEED}: {counts}")
     assert counts["deleted"] == counts["overwritten"] == counts["panics"] == 0, counts
     assert counts["refused"] > 0 and counts["ran"] > 0, counts
+
+
+#: Reads the bag ``sys.argv[1]`` in a child, after a line on stdout: the parent interrupts it.
+READ_BAG = r"""
+import sys
+import inexact_loops as il
+
+print("reading", flush=True)
+il.read_trajectory(sys.argv[1])
+print("read", flush=True)
+"""
+
+
+@pytest.fixture(scope="module")
+def compressed_bag(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A rosbag2 sqlite3 bag of 60,000 PoseStamped compressed per file (zstd), written by the
+    independent `rosbags` writer."""
+    pytest.importorskip("rosbags")
+    from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    t = store.types
+    folder = tmp_path_factory.mktemp("compressed-bag") / "drive"
+    writer = Writer2(folder, version=9, storage_plugin=StoragePlugin.SQLITE3)
+    writer.set_compression(CompressionMode.FILE, CompressionFormat.ZSTD)
+    with writer:
+        conn = writer.add_connection("/pose", "geometry_msgs/msg/PoseStamped", typestore=store)
+        for i in range(60_000):
+            ns = 1_700_000_000_000_000_000 + i * 100_000_000
+            stamp = t["builtin_interfaces/msg/Time"](sec=ns // 10**9, nanosec=ns % 10**9)
+            message = t["geometry_msgs/msg/PoseStamped"](
+                header=t["std_msgs/msg/Header"](stamp=stamp, frame_id="map"),
+                pose=t["geometry_msgs/msg/Pose"](
+                    position=t["geometry_msgs/msg/Point"](x=0.01 * i, y=1.0, z=0.0),
+                    orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+                ),
+            )
+            writer.write(conn, ns, store.serialize_cdr(message, "geometry_msgs/msg/PoseStamped"))
+    assert list(folder.glob("*.db3.zstd")), sorted(os.listdir(folder))
+    return folder
+
+
+def holds_a_file_in(pid: int, folder: Path) -> bool:
+    """Whether process ``pid`` has a file of ``folder`` open (Linux: its /proc fd links)."""
+    try:
+        fds = os.listdir(f"/proc/{pid}/fd")
+    except OSError:
+        return False
+    for fd in fds:
+        try:
+            if os.readlink(f"/proc/{pid}/fd/{fd}").startswith(str(folder)):
+                return True
+        except OSError:
+            continue
+    return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="watches /proc for the open copy")
+def test_interrupted_bag_reads_leave_no_decompressed_copy(
+    tmp_path: Path, loops_cli: Path, compressed_bag: Path
+) -> None:
+    """`loops info` and a Python read of a `.db3.zstd` bag, sent SIGINT (Ctrl-C, or
+    KeyboardInterrupt in Python) or SIGKILL at a seeded moment after the copy is opened: the
+    private TMPDIR is empty afterwards, every time."""
+    rng = random.Random(SEED)
+    readers = {
+        "cli": [str(loops_cli), "info", str(compressed_bag)],
+        "python": [sys.executable, "-c", READ_BAG, str(compressed_bag)],
+    }
+    outcomes: dict[str, int] = {}
+    for round in range(2 * ROUNDS):
+        reader = "cli" if round % 2 == 0 else "python"
+        sig = signal.SIGINT if rng.random() < 0.75 else signal.SIGKILL
+        tmp = tmp_path / f"tmp-{round}"
+        tmp.mkdir()
+        child = subprocess.Popen(
+            readers[reader],
+            env={**os.environ, "TMPDIR": str(tmp)},
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+        )
+        start = time.monotonic()
+        while not holds_a_file_in(child.pid, tmp) and child.poll() is None:
+            assert time.monotonic() - start < 120, f"{reader}: never opened a temporary file"
+            time.sleep(0.002)
+        time.sleep(rng.uniform(0.0, 0.3))
+        child.send_signal(sig)
+        child.communicate(timeout=300)
+        left = sorted(os.listdir(tmp))
+        assert left == [], f"round {round}: {reader} sent {sig.name} left {left} in TMPDIR"
+        key = f"{reader} {sig.name} exit {child.returncode}"
+        outcomes[key] = outcomes.get(key, 0) + 1
+    print(f"{2 * ROUNDS} interrupted bag reads, nothing left: {outcomes}")
