@@ -2,6 +2,7 @@
 
 import json
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -82,7 +83,7 @@ def test_mcap_through_python_and_cli(tmp_path: Path, loops_binary: Path) -> None
     poses read by topic, and an ambiguous read names the topics."""
     pytest.importorskip("mcap_ros2")
     out = tmp_path / "fixtures"
-    subprocess.run(["python3", MCAP_FIXTURES, out], check=True, capture_output=True)
+    subprocess.run([sys.executable, MCAP_FIXTURES, out], check=True, capture_output=True)
     path = out / "ros2_chunked.mcap"
     topics = il.list_topics(path)
     readable = [t["topic"] for t in topics if t["pose_type"] is not None]

@@ -12,6 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+mod support;
+
 /// Poses in the bag: about 12 MB of sqlite3, a few seconds of reading in a debug build.
 const POSES: usize = 100_000;
 
@@ -24,7 +26,7 @@ fn compressed_bag() -> Option<PathBuf> {
         return Some(compressed);
     }
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../loops-io/tests/make_bag_fixtures.py");
-    let written = Command::new("python3")
+    let written = Command::new(support::python())
         .arg(&script)
         .args(["--bench", &POSES.to_string()])
         .arg(&root)
@@ -32,7 +34,7 @@ fn compressed_bag() -> Option<PathBuf> {
         .map_err(|error| error.to_string())
         .and_then(|out| if out.status.success() { Ok(()) } else { Err(String::from_utf8_lossy(&out.stderr).into()) });
     if let Err(why) = written {
-        eprintln!("skipping: Python cannot write the bag here ({})", why.trim());
+        support::skip("the interrupted read of a compressed bag", &format!("Python cannot write the bag here ({why})"));
         return None;
     }
     let db3 = std::fs::read(root.join("bench-sqlite3/bench-sqlite3.db3")).expect("the bag's storage file");

@@ -209,7 +209,10 @@ fn kitti_poses_take_their_times_from_a_times_file() {
 fn kitti_00_with_a_times_file_equals_the_file_with_times() {
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/kitti_odometry/00.txt");
     if !data.is_file() {
-        eprintln!("skipping KITTI 00 with --times: no {} (it lives beside the checkout in CI)", data.display());
+        support::skipped(
+            "KITTI 00 with --times",
+            &format!("no {} (it lives beside the checkout in CI)", data.display()),
+        );
         return;
     }
     let dir = temp_dir("kitti00");
@@ -311,15 +314,15 @@ fn info_tells_the_format_the_order_and_a_graphs_edges() {
 fn info_lists_the_frame_pairs_of_transform_topics() {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../loops-io/tests/make_mcap_fixtures.py");
     let dir = temp_dir("info-mcap");
-    let made = match Command::new("python3").arg(&script).arg(&dir).output() {
+    let made = match Command::new(support::python()).arg(&script).arg(&dir).output() {
         Ok(output) => output,
         Err(error) => {
-            eprintln!("skipping the frame pairs of loops info: cannot run python3 ({error})");
+            support::skip("the frame pairs of loops info", &format!("cannot run Python ({error})"));
             return;
         }
     };
     if made.status.code() == Some(3) {
-        eprintln!("skipping the frame pairs of loops info: {}", stderr(&made).trim());
+        support::skip("the frame pairs of loops info", &stderr(&made));
         return;
     }
     assert!(made.status.success(), "{}", stderr(&made));

@@ -378,7 +378,10 @@ fn kitti() -> Option<&'static Kitti> {
         .get_or_init(|| {
             let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/kitti_odometry/00.txt");
             if !path.is_file() {
-                eprintln!("skipping the KITTI bags: no {} (it lives beside the checkout in CI)", path.display());
+                support::skipped(
+                    "the KITTI bags",
+                    &format!("no {} (it lives beside the checkout in CI)", path.display()),
+                );
                 return None;
             }
             let table = read_kitti(&path, &Timing::FromFile).expect("KITTI 00");

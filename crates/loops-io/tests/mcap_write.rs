@@ -13,6 +13,8 @@ use loops_io::{
 };
 use serde_json::Value;
 
+mod support;
+
 /// A fresh, empty folder for one test.
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("mcap-write-{name}-{}", std::process::id()));
@@ -271,17 +273,17 @@ print(json.dumps(out))
 
 /// What the Python reader says of `path`, or `None` (after a message) when it cannot run here.
 fn read_with_python(path: &Path) -> Option<Value> {
-    let output = match Command::new("python3").arg("-c").arg(PYTHON_READER).arg(path).output() {
+    let output = match Command::new(support::python()).arg("-c").arg(PYTHON_READER).arg(path).output() {
         Ok(output) => output,
         Err(error) => {
-            eprintln!("skipping the Python reader check: cannot run python3 ({error})");
+            support::skip("the Python reader check", &format!("cannot run Python ({error})"));
             return None;
         }
     };
     match output.status.code() {
         Some(0) => Some(serde_json::from_slice(&output.stdout).expect("the reader's JSON")),
         Some(3) => {
-            eprintln!("skipping the Python reader check: {}", String::from_utf8_lossy(&output.stderr).trim());
+            support::skip("the Python reader check", &String::from_utf8_lossy(&output.stderr));
             None
         }
         _ => panic!("the Python reader failed on {}: {}", path.display(), String::from_utf8_lossy(&output.stderr)),

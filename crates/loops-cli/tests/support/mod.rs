@@ -2,6 +2,10 @@
 //! and the checks of its output.
 #![allow(dead_code)] // each test crate uses a different part
 
+#[path = "../../../loops-io/tests/support/python.rs"]
+mod python;
+pub use python::{python, skip, skipped};
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

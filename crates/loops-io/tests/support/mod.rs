@@ -3,6 +3,9 @@
 #![allow(dead_code)] // each test crate uses a different part
 
 pub mod logs;
+mod python;
+
+pub use python::{python, skip, skipped};
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -88,10 +91,10 @@ pub fn mutate(data: &[u8], mutations: &[Mutation]) -> Vec<u8> {
     data
 }
 
-/// Runs the Python fixture `script` (`python3 script ARGS... FOLDER`, the arguments from `args`,
+/// Runs the Python fixture `script` (`$PYTHON script ARGS... FOLDER`, the arguments from `args`,
 /// called only when it runs) into `dir` unless `dir` holds a `manifest.json` already, and returns
-/// `dir`'s manifest. `None`, with a message naming `what` is skipped, when python3 cannot run
-/// or the script exits 3 (a missing package); a panic when it fails otherwise.
+/// `dir`'s manifest. `None` ([`skip`]: a failure under CI) when Python cannot run or the script
+/// exits 3 (a missing package); a panic when it fails otherwise.
 pub fn python_fixtures(
     what: &str,
     script: &Path,
@@ -101,17 +104,17 @@ pub fn python_fixtures(
     if !dir.join("manifest.json").is_file() {
         let building = dir.with_extension(format!("tmp{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&building);
-        let output = match Command::new("python3").arg(script).args(args()).arg(&building).output() {
+        let output = match Command::new(python()).arg(script).args(args()).arg(&building).output() {
             Ok(output) => output,
             Err(error) => {
-                eprintln!("skipping {what}: cannot run python3 ({error})");
+                skip(what, &format!("cannot run {} ({error})", python().to_string_lossy()));
                 return None;
             }
         };
         match output.status.code() {
             Some(0) => {}
             Some(3) => {
-                eprintln!("skipping {what}: {}", String::from_utf8_lossy(&output.stderr).trim());
+                skip(what, &String::from_utf8_lossy(&output.stderr));
                 return None;
             }
             _ => panic!("{} failed: {}", script.display(), String::from_utf8_lossy(&output.stderr)),
@@ -190,7 +193,10 @@ pub fn real_data_dir() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
-        eprintln!("skipping: no real data at {} (it lives beside the checkout in CI)", dir.display());
+        skipped(
+            "a test on real data",
+            &format!("no real data at {} (it lives beside the checkout in CI)", dir.display()),
+        );
         None
     }
 }
