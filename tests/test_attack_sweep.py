@@ -5,6 +5,12 @@ the same time, and Ctrl-C or a kill while `loops` or Python reads a file-compres
 a panic, an abort, a lost or half-written result, or a file left behind. (Corrupted and crafted
 files: `crates/loops-io/tests/attack_sweep.rs`.)
 
+
+the same time, forged pickles, bad arguments to every console script and threads sharing one
+engine. Each part counts its cases and fails on a panic, an abort, a hang, a lost or
+half-written result, an error of more than one line or of the wrong class. (Corrupted and
+crafted files: `crates/loops-io/tests/attack_sweep.rs`.)
+
 Seeded: `LOOPS_SWEEP_SEED` changes the seed, `LOOPS_SWEEP_ROUNDS` the number of kills.
 """
 
@@ -457,3 +463,284 @@ def test_interrupted_bag_reads_leave_no_decompressed_copy(
         key = f"{reader} {sig.name} exit {child.returncode}"
         outcomes[key] = outcomes.get(key, 0) + 1
     print(f"{2 * ROUNDS} interrupted bag reads, nothing left: {outcomes}")
+
+
+# --- Forged pickles: every state that does not hold together is an UnpicklingError ------------
+
+#: Runs in a child. Each picklable object's state is forged at seeded places (bytes flipped,
+#: cut short, a float made huge, NaN or negative, a name replaced, a length or type byte
+#: changed); restoring it either raises ``pickle.UnpicklingError`` of one line or gives an object
+#: whose repr works and whose measures are finite.
+FORGED_PICKLES = r"""
+import json, math, pickle, random, struct, sys, warnings
+import numpy as np
+import inexact_loops as il
+
+warnings.simplefilter("ignore")
+rng = random.Random(int(sys.argv[1]))
+cases_per_object = int(sys.argv[2])
+
+def objects():
+    traj = il.urban_drive(duration_s=300.0, seed=3)
+    loops = il.find_loops(traj, gamma=40.0)
+    paper = il.find_loops(traj, gamma=40.0, separation=None)
+    det = il.draw_detections(paper, rate=0.01, seed=1)
+    clusters = il.cluster_detections(det, epsilon_s=20.0)
+    samples = il.sample(loops, "rho", budget=50, seed=0, trajectory=traj)
+    fleet = il.urban_fleet(vehicles=2, duration_s=200.0, seed=2)
+    fleet_loops = il.find_fleet_loops(fleet, gamma=30.0)
+    online = il.OnlineLoops(gamma=1.0, dim=2)
+    online.push_many(np.arange(50.0), np.c_[np.cos(np.arange(50) / 5), np.sin(np.arange(50) / 5)])
+    update = online.push(50.0, [1.0, 0.0])
+    sessions = [fleet.session(n) for n in fleet.names]
+    blocks = [il.session_blocks(s, block=100) for s in sessions]
+    starts = np.cumsum([0] + [len(s) for s in sessions])
+    tiles = il.plan_tiles(blocks, gamma=30.0)
+    tile = tiles[0]
+    a, b = tile.sessions
+    kwargs = dict(starts=(int(starts[a]), int(starts[b])), gamma=30.0)
+    summary, duration = il.scan_tile_with_duration(tile, sessions[a], sessions[b], **kwargs)
+    summaries = [il.scan_tile(t, sessions[t.sessions[0]], sessions[t.sessions[1]],
+                              starts=(int(starts[t.sessions[0]]), int(starts[t.sessions[1]])),
+                              gamma=30.0)
+                 for t in tiles]
+    merge = il.merge_tiles(summaries)
+    from inexact_loops.dask import find_fleet_loops_dask
+    named = dict(zip(fleet.names, sessions))
+    tiled = find_fleet_loops_dask(named, 30.0, block=100).loops
+    with open("square.g2o", "w") as f:
+        f.write("VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 1.5708\nVERTEX_SE2 2 1 1 3.1416\n"
+                "EDGE_SE2 0 1 1 0 1.5708 10 0 0 10 0 100\nEDGE_SE2 2 0 1 1 -3.1416 5 0 0 5 0 50\n")
+    graph = il.read_pose_graph("square.g2o")
+    return {
+        "Trajectory": traj, "Loops": loops, "paper Loops": paper,
+        "Separation": il.Separation(path=24.0, time_s=30.0),
+        "Detections": det, "DetectionClusters": clusters, "Samples": samples,
+        "SampleQuality": il.sample_quality(samples, loops), "PlaneGrid": il.PlaneGrid(traj, 50),
+        "Fleet": fleet, "FleetLoops": fleet_loops,
+        "FleetSamples": il.sample_fleet(fleet_loops, "closest-first", budget=30, seed=1),
+        "TiledFleetLoops": tiled, "PoseGraph": graph, "OnlineLoops": online, "Update": update,
+        "SessionBlocks": blocks[0], "Tile": tile, "TileSummary": summary, "TileDuration": duration,
+        "TileMerge": merge,
+    }
+
+def floats(data):
+    return [k for k in range(len(data) - 8) if data[k] == 0xCB]
+
+def strings(data):
+    return [k for k in range(len(data))
+            if 0xA1 <= data[k] <= 0xBF and k + 1 + (data[k] - 0xA0) <= len(data)
+            and all(32 <= c < 127 for c in data[k + 1 : k + 1 + data[k] - 0xA0])]
+
+WEIRD = [1e308, -1e308, float("nan"), float("inf"), -1.0, 0.0, 1e-300, 5e15]
+
+def mutate(data):
+    kind = rng.choice(["flip", "truncate", "float", "string", "int"])
+    data = bytearray(data)
+    if kind == "flip":
+        for _ in range(rng.randint(1, 3)):
+            data[rng.randrange(len(data))] = rng.randrange(256)
+    elif kind == "truncate":
+        data = data[: rng.randrange(len(data))]
+    elif kind == "float" and floats(data):
+        k = rng.choice(floats(data))
+        data[k + 1 : k + 9] = struct.pack(">d", rng.choice(WEIRD))
+    elif kind == "string" and strings(data):
+        k = rng.choice(strings(data))
+        n = data[k] - 0xA0
+        data[k : k + 1 + n] = bytes([0xA1]) + b"x"
+    else:
+        k = rng.randrange(len(data))
+        data[k] = rng.choice([0x00, 0x7F, 0xCC, 0xCD, 0xCE, 0xCF, 0xFF, 0xE0])
+    return kind, bytes(data)
+
+def sane(obj):
+    # Whatever reads back must hold together: its repr works and its measures are finite.
+    repr(obj)
+    tables = [getattr(obj, name) for name in ("components", "table") if hasattr(obj, name)]
+    for table in tables:
+        if callable(table) or not hasattr(table, "items"):
+            continue
+        for column, values in table.items():
+            values = np.asarray(values)
+            if values.dtype.kind == "f" and not np.isfinite(values).all():
+                raise ValueError(f"column {column} is not finite")
+    if isinstance(obj, il.Loops):
+        if not np.isfinite(obj.loop_duration()).all():
+            raise ValueError("loop duration is not finite")
+        area = obj.loop_area(-1e15, 1e15)
+        if area is not None and not math.isfinite(area):
+            raise ValueError(f"loop area {area}")
+
+counts = {"cases": 0, "objects": 0, "unpickling_errors": 0, "other_errors": 0, "panics": 0,
+          "insane": 0}
+bad = []
+for name, value in objects().items():
+    reduced = value.__reduce__()
+    restore, args = reduced[0], tuple(reduced[1])
+    slot = next((k for k, a in enumerate(args) if isinstance(a, bytes)), None)
+    if slot is None:
+        continue
+    for _ in range(cases_per_object):
+        kind, forged = mutate(args[slot])
+        forged_args = args[:slot] + (forged,) + args[slot + 1 :]
+        counts["cases"] += 1
+        try:
+            back = restore(*forged_args)
+        except pickle.UnpicklingError as error:
+            counts["unpickling_errors"] += 1
+            if "\n" in str(error):
+                bad.append(f"{name}/{kind}: multi-line {str(error)[:100]!r}")
+        except Exception as error:
+            counts["other_errors"] += 1
+            bad.append(f"{name}/{kind}: {type(error).__name__}: {str(error)[:120]}")
+        except BaseException as error:
+            counts["panics"] += 1
+            bad.append(f"{name}/{kind}: {type(error).__name__}: {str(error)[:120]}")
+        else:
+            counts["objects"] += 1
+            try:
+                sane(back)
+            except Exception as error:
+                counts["insane"] += 1
+                bad.append(f"{name}/{kind}: accepted but {type(error).__name__}: {error}"[:200])
+print(json.dumps({"counts": counts, "bad": bad[:20]}))
+"""
+
+
+def test_forged_pickles_are_unpickling_errors_or_objects_that_hold_together(tmp_path: Path) -> None:
+    child = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(FORGED_PICKLES), str(SEED), "25"],
+        capture_output=True,
+        text=True,
+        timeout=900,
+        cwd=tmp_path,
+    )
+    assert child.returncode == 0, f"exit {child.returncode}: {child.stderr[-3000:]}"
+    report = json.loads(child.stdout.strip().splitlines()[-1])
+    counts = report["counts"]
+    print(f"forged pickles: {counts}")
+    assert counts["cases"] >= 400 and counts["unpickling_errors"] > counts["cases"] // 4, counts
+    assert counts["other_errors"] == counts["panics"] == counts["insane"] == 0, report["bad"]
+
+
+# --- Bad arguments to the console scripts: one line, exit code 2 -----------------------------
+
+SCRIPTS = {
+    "inexact_loops._cli": [
+        ["components", "LOG", "--gamma", "BAD"],
+        ["sample", "LOG", "--gamma", "5", "--budget", "BAD"],
+        ["run", "LOG", "--gamma", "5", "--out", "o", "--threads", "BAD"],
+        ["fleet", "LOG", "--gamma", "BAD", "--out", "o"],
+        ["replay", "LOG", "--gamma", "5", "--rate", "BAD"],
+        ["info", "LOG", "--BAD"],
+    ],
+    "inexact_loops.evaluate": [
+        ["LOG", "--gamma", "BAD", "--out", "e"],
+        ["LOG", "--gamma", "5", "--fleet", "--out", "e", "--seeds", "BAD"],
+        ["LOG", "--gamma", "5", "--fleet", "--budgets", "10", "--seeds", "1", "--out", "e"],
+    ],
+    "inexact_loops.dask": [
+        ["LOG", "--gamma", "BAD", "--out", "d"],
+        ["LOG", "--gamma", "5", "--out", "d", "--block", "BAD"],
+        ["LOG", "--gamma", "5", "--out", "d", "--axes", "BAD"],
+    ],
+}
+BAD_VALUES = ["abc", "", "-1", "nan", "1e999", "--x", "0x10", "1,2,3", "\u00e9", "inf"]
+
+
+def test_bad_arguments_to_the_console_scripts_are_one_line(tmp_path: Path) -> None:
+    rng = random.Random(SEED)
+    poses = tmp_path / "drive.tum"
+    poses.write_text("".join(f"{0.5 * k} {k % 17} {k % 5} 0 0 0 0 1\n" for k in range(120)))
+    counts = {"cases": 0, "one_line": 0}
+    bad = []
+    for module, forms in SCRIPTS.items():
+        for form in forms:
+            value = rng.choice(BAD_VALUES)
+            args = [str(poses) if a == "LOG" else value if a == "BAD" else a for a in form]
+            done = subprocess.run(
+                [sys.executable, "-m", module, *args],
+                capture_output=True,
+                text=True,
+                timeout=300,
+                cwd=tmp_path,
+                env={**os.environ, "MPLBACKEND": "Agg"},
+            )
+            counts["cases"] += 1
+            if (
+                done.returncode == 2
+                and done.stderr.count("\n") == 1
+                and "Traceback" not in done.stderr
+            ):
+                counts["one_line"] += 1
+            elif done.returncode != 0:
+                bad.append(f"{module} {args}: exit {done.returncode}: {done.stderr[-300:]!r}")
+    print(f"console scripts: {counts}")
+    assert not bad, bad
+
+
+# --- Threads sharing one object: calls run one at a time -------------------------------------
+
+#: Runs in a child: seeded calls of four threads on one OnlineLoops and one OnlineSampler.
+THREADS = r"""
+import json, random, sys, threading
+import numpy as np
+import inexact_loops as il
+
+rng = random.Random(int(sys.argv[1]))
+online = il.OnlineLoops(gamma=1.0, dim=8)
+sampler = il.OnlineSampler(rate=0.5, seed=1)
+points = np.random.default_rng(int(sys.argv[1])).normal(size=(20_000, 8))
+clock = {"next": 0}
+ticket = threading.Lock()
+counts = {"calls": 0, "expected_refusals": 0, "unexpected": 0}
+bad = []
+
+def call(plan):
+    for name in plan:
+        counts["calls"] += 1
+        try:
+            if name == "push_many":
+                with ticket:
+                    k = clock["next"]
+                    clock["next"] += 400
+                online.push_many(np.arange(k, k + 400) * 0.1, points[k % 19_600 : k % 19_600 + 400])
+            elif name == "offer":
+                update = online.push_many([], np.zeros((0, 8)))
+                sampler.offer(online, update)
+            elif name == "read":
+                len(online), online.components, repr(online)
+            elif name == "pickle":
+                __import__("pickle").dumps(online)
+            elif name == "to_loops" and len(online) >= 2:
+                online.to_loops()
+        except (il.InvalidTrajectoryError, il.InvalidParameterError):
+            counts["expected_refusals"] += 1
+        except Exception as error:
+            counts["unexpected"] += 1
+            bad.append(f"{name}: {type(error).__name__}: {error}")
+
+names = ["push_many", "offer", "read", "pickle", "to_loops"]
+plans = [[rng.choice(names) for _ in range(25)] for _ in range(4)]
+threads = [threading.Thread(target=call, args=(p,)) for p in plans]
+for t in threads:
+    t.start()
+for t in threads:
+    t.join(600)
+hung = sum(t.is_alive() for t in threads)
+print(json.dumps({"counts": counts, "hung": hung, "bad": bad[:20]}))
+"""
+
+
+def test_threads_sharing_one_engine_never_collide() -> None:
+    child = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(THREADS), str(SEED)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert child.returncode == 0, f"exit {child.returncode}: {child.stderr[-3000:]}"
+    report = json.loads(child.stdout.strip().splitlines()[-1])
+    print(f"threads: {report['counts']}")
+    assert report["hung"] == 0 and report["counts"]["unexpected"] == 0, report["bad"]

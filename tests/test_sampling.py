@@ -381,14 +381,16 @@ def test_sampling_uses_the_loops_metric():
         il.InvalidParameterError, match="metric euclidean does not fit an se3 trajectory"
     ):
         il.sample(loops, "alpha", budget=300, seed=0, trajectory=traj, metric="euclidean")
-    # A callable has no name to parse: it must be given again.
+    # A callable is recorded as custom(NAME), which names no metric: it must be given again.
     line = il.Trajectory(np.arange(50) * 0.1, np.c_[np.cos(np.arange(50)), np.zeros(50)])
 
     def l1(a, b):
         return float(np.abs(a - b).sum())
 
     callable_loops = il.find_loops(line, gamma=0.5, metric=l1, separation=None)
-    with pytest.raises(il.InvalidParameterError, match='metric "l1", which is not a metric name'):
+    with pytest.raises(
+        il.InvalidParameterError, match=r'metric "custom\(l1\)", which is not a metric'
+    ):
         il.sample(callable_loops, "one", budget=5, seed=0, trajectory=line)
     again = il.sample(callable_loops, "one", budget=5, seed=0, trajectory=line, metric=l1)
     pos = line.positions

@@ -454,7 +454,8 @@ class Loops:
     @property
     def metric_name(self) -> str:
         """The name of the metric the loops were found with: its spec (``"euclidean"``,
-        ``"se3(rotation_weight_m_per_rad=10, rotation=geodesic)"``), or a callable's ``__name__``.
+        ``"se3(rotation_weight_m_per_rad=10, rotation=geodesic)"``), or ``custom(NAME)`` for a
+        callable, NAME its ``__name__``.
         """
     @property
     def span_s(self) -> float:
@@ -2605,7 +2606,8 @@ class KeyedDraw:
     """A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
     the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
     pairs (:func:`draw_tile`), until the draw is :attr:`done`. Its samples are those of
-    :func:`sample_fleet` with the same sampler, seed and options, pair for pair.
+    :func:`sample_fleet` with the same sampler, seed and options, pair for pair. Threads may share
+    it: its calls run one at a time.
     """
 
     @property
@@ -3029,6 +3031,9 @@ class OnlineLoops:
         ([True, False], [0, 197])
         >>> online.to_loops() == il.find_loops(online.trajectory, gamma=4.0, separation=None)
         True
+
+    Threads may share an engine: its calls run one at a time, each whole (a call waits, without
+    the GIL, while another thread's is in progress).
     """
 
     def __new__(
@@ -3065,7 +3070,9 @@ class OnlineLoops:
     def push_many(self, timestamps: npt.ArrayLike, points: npt.ArrayLike) -> Update:
         """Adds several poses at once, as that many :meth:`push` es, with one :class:`Update`
         covering all of them (an :class:`OnlineSampler` gives the same candidates either way).
-        All or nothing: on an error none is added. The GIL is released.
+        All or nothing: on an error none is added. The GIL is released. Ctrl-C stops it before
+        the next pose (``KeyboardInterrupt``): the poses before that one stay added, as their
+        pushes would have left them (``len`` says how many), and no :class:`Update` covers them.
 
         Args:
             timestamps: seconds, shape ``(n,)``, increasing, after the last pose's.
@@ -3286,6 +3293,8 @@ class OnlineSampler:
         ...     for c in sampler.offer(online, update):
         ...         print(c.keyframe, c.j, c.first)
         50 0 True
+
+    Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`').
     """
 
     def __new__(

@@ -263,8 +263,9 @@ def choose_fleet_candidates(
             loops, rule.sampler, budget=rule.budget, seed=seed, between_only=rule.between_only
         ).samples
     i, j = samples.i, samples.j
-    if i is None or j is None:  # pragma: no cover - fleet samples always have pairs
-        raise RuntimeError("fleet samples without pose indices")
+    # An empty sample (no component between the sessions) has no pose columns.
+    if i is None or j is None:
+        return empty
     return np.minimum(i, j), np.maximum(i, j)
 
 
@@ -1007,6 +1008,11 @@ def main_fleet(args: Any) -> None:
     def both(value: str) -> list[bool]:
         return [False, True] if value == "both" else [value == "on"]
 
+    if len(args.poses) < 2:
+        raise InvalidParameterError(
+            f"--fleet needs the pose files of at least two sessions, got {len(args.poses)}: "
+            "without --fleet, loops-eval evaluates one trajectory"
+        )
     if args.odometry:
         raise InvalidParameterError("--fleet takes no --odometry: each session's is simulated")
     if args.on != "reference" or args.source != "exact":

@@ -60,7 +60,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
+from . import _console, _core
 from .errors import InvalidParameterError, LoopsIOError
 from .table import Table
 
@@ -1393,7 +1393,7 @@ def run_fleet_dask(
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _console.ArgumentParser(
         prog="loops-dask",
         description=(
             "Find the loops of several pose logs as one fleet, from tiles, on this machine or "
@@ -1621,9 +1621,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         finally:
             if client is not None:
                 client.close()
-    except (OSError, ValueError, TypeError, ImportError) as error:
+    except (OSError, ValueError, TypeError, ImportError, MemoryError) as error:
         print(f"loops-dask: error: {_one_line(error).split(': ', 1)[-1]}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        return _console.interrupted("loops-dask")
     text = json.dumps(summary, indent=2, default=float)
     if args.json == "-":
         print(text)

@@ -1856,10 +1856,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``loops-eval``: runs :func:`evaluate` on a pose file (:func:`evaluate_fleet` on several,
     one a session, with ``--fleet``); writes ``results.csv``, ``results.json`` and
     ``error_vs_matches.png`` to ``--out`` (and ``sessions.csv`` for a fleet)."""
-    import argparse
     import sys
 
-    parser = argparse.ArgumentParser(
+    from . import _console
+    from .errors import LoopsError
+
+    parser = _console.ArgumentParser(
         prog="loops-eval",
         description=(
             "Do the samples make better maps? Simulates an odometry from the reference poses (or "
@@ -1953,9 +1955,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             _main_one(args)
         return 0
-    except (InvalidParameterError, OSError, ValueError, ImportError) as err:
-        print(f"loops-eval: error: {err}", file=sys.stderr)
+    except (LoopsError, OSError, ValueError, ImportError, MemoryError) as err:
+        text = str(err).strip().splitlines()
+        print(f"loops-eval: error: {text[0] if text else type(err).__name__}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        return _console.interrupted("loops-eval")
 
 
 def _main_one(args: Any) -> None:

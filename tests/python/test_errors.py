@@ -416,3 +416,86 @@ def test_a_repeated_metric_key_is_named():
         il.find_loops(
             traj, gamma=1.0, metric="so3(rotation=chordal,rotation=geodesic)", separation=None
         )
+
+
+# --- the console scripts: a usage error is one line, exit code 2 ------------------------------
+
+
+def console(module: str, *args: str, cwd=None) -> tuple[int, str]:
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-m", module, *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=cwd,
+        env={**__import__("os").environ, "MPLBACKEND": "Agg"},
+    )
+    return done.returncode, done.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "shown"),
+    [
+        (["components", "x.tum", "--gamma", "abc"], "invalid value 'abc' for '--gamma <GAMMA>'"),
+        (["components", "x.tum"], "required arguments were not provided: --gamma <GAMMA>"),
+        (["sample", "x.tum", "--gamma", "5", "--sampler"], "a value is required for '--sampler"),
+        (
+            ["run", "x.tum", "--gamma", "5", "--out", "o", "--bogus"],
+            "unexpected argument '--bogus'",
+        ),
+        (["frobnicate"], "unrecognized subcommand 'frobnicate'"),
+    ],
+)
+def test_usage_errors_of_loops_are_one_line(tmp_path, args, shown):
+    code, err = console("inexact_loops._cli", *args, cwd=tmp_path)
+    assert code == 2, err
+    assert err.count("\n") == 1 and err.startswith("loops: error: "), err
+    assert shown in err, err
+    command = "loops" if args[0] == "frobnicate" else f"loops {args[0]}"
+    assert err.rstrip().endswith(f"(try '{command} --help')"), err
+
+
+def test_usage_errors_of_the_python_scripts_are_one_line(tmp_path):
+    t = np.arange(200) * 0.5
+    poses = np.c_[
+        t, 30 * np.cos(t / 20), 30 * np.sin(t / 20), 0 * t, 0 * t, 0 * t, 0 * t, 1 + 0 * t
+    ]
+    np.savetxt(tmp_path / "ref.tum", poses)
+    cases = [
+        (
+            "inexact_loops.evaluate",
+            ["ref.tum", "--gamma", "abc", "--out", "e1"],
+            "argument --gamma",
+        ),
+        (
+            "inexact_loops.evaluate",
+            [
+                "ref.tum",
+                "--gamma",
+                "5",
+                "--fleet",
+                "--budgets",
+                "10",
+                "--seeds",
+                "1",
+                "--out",
+                "eo",
+            ],
+            "--fleet needs the pose files of at least two sessions, got 1",
+        ),
+        (
+            "inexact_loops.evaluate",
+            ["ref.tum", "--gamma", "5", "--out", "e2", "--budgets", "x"],
+            "",
+        ),
+        ("inexact_loops.dask", ["ref.tum", "--gamma", "abc", "--out", "d1"], "argument --gamma"),
+        ("inexact_loops.dask", ["ref.tum", "--gamma", "5", "--out", "d2", "--axes", "0"], "--axes"),
+    ]
+    for module, args, shown in cases:
+        code, err = console(module, *args, cwd=tmp_path)
+        assert code == 2, (args, err[-2000:])
+        assert err.count("\n") == 1 and "Traceback" not in err, (args, err[-2000:])
+        assert shown in err, (args, err)

@@ -273,3 +273,118 @@ traj = il.Trajectory(np.arange(6_000) * 0.1, rng.normal(size=(6_000, 2_048)))
     seconds, out = interrupt_child(setup, "il.distance_image(traj, il.PlaneGrid(traj, 6_000))")
     assert out.startswith("interrupted "), out
     assert seconds < 10, seconds
+
+
+# --- Ctrl-C in the samplers, the quality measures and the online engine ----------------------
+# Each input takes tens of seconds or more in full; the interrupt must arrive within a bound
+# (a hang check for a loaded machine, not a timing benchmark).
+
+#: A robot parked for 40,000 poses: one trivial component whose rows each span the whole stop.
+#: The closest-first sampler measures every row's diagonal run for its return column: 8 x 10^8
+#: distances.
+PARKED = """
+import numpy as np
+import inexact_loops as il
+import warnings
+warnings.simplefilter("ignore")
+def parked(n):
+    return il.Trajectory(np.arange(n) * 0.1, np.zeros((n, 2)))
+"""
+
+
+def test_ctrl_c_stops_the_closest_first_sampler():
+    setup = (
+        PARKED
+        + """
+traj = parked(40_000)
+loops = il.find_loops(traj, gamma=1.0, separation=None)
+"""
+    )
+    call = 'il.sample(loops, "closest-first", budget=10, seed=0, trajectory=traj)'
+    seconds, out = interrupt_child(setup, call)
+    assert out.startswith("interrupted "), out
+    assert seconds < 10, seconds
+
+
+def test_ctrl_c_stops_sample_quality():
+    # 10^6 samples of one component, 3,000 to a row: the nearest other sample of each is
+    # searched among its row's.
+    setup = (
+        PARKED
+        + """
+traj = parked(3_000)
+loops = il.find_loops(traj, gamma=1.0, separation=None)
+samples = il.sample(loops, "alpha", budget=1_000_000, seed=0, trajectory=traj)
+"""
+    )
+    seconds, out = interrupt_child(setup, "il.sample_quality(samples, loops)")
+    assert out.startswith("interrupted "), out
+    assert seconds < 10, seconds
+
+
+def test_ctrl_c_stops_sample_fleet():
+    setup = (
+        PARKED
+        + """
+fleet = il.Fleet({"monday": parked(30_000), "tuesday": parked(30_000)})
+loops = il.find_fleet_loops(fleet, gamma=1.0, separation=None)
+"""
+    )
+    call = 'il.sample_fleet(loops, "closest-first", budget=10, seed=0)'
+    seconds, out = interrupt_child(setup, call)
+    assert out.startswith("interrupted "), out
+    assert seconds < 10, seconds
+
+
+def test_ctrl_c_stops_push_many_and_keeps_the_poses_before():
+    # 30,000 points in 256 dimensions: every new pose is measured against every earlier one
+    # (minutes in full).
+    code = textwrap.dedent(
+        """
+        import sys, time
+        import numpy as np
+        import inexact_loops as il
+        rng = np.random.default_rng(0)
+        points = rng.normal(size=(30_000, 256))
+        times = np.arange(len(points)) * 0.1
+        online = il.OnlineLoops(gamma=1.0, dim=256)
+        print("started", flush=True)
+        start = time.monotonic()
+        try:
+            online.push_many(times, points)
+            print("finished", flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", time.monotonic() - start, flush=True)
+        n = len(online)
+        again = il.OnlineLoops(gamma=1.0, dim=256)
+        again.push_many(times[:n], points[:n])
+        tables = online.components, again.components
+        same = all(np.array_equal(tables[0][k], tables[1][k]) for k in tables[1])
+        duration = online.loop_duration(n - 1) == again.loop_duration(n - 1)
+        print("kept", n, same, duration, flush=True)
+        # It goes on from there, as if the poses had come in two batches.
+        online.push_many(times[n : n + 10], points[n : n + 10])
+        print("went on", len(online), flush=True)
+        """
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None
+    assert child.stdout.readline() == "started\n"
+    started = time.monotonic()
+    time.sleep(1.0)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    try:
+        out, err = child.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        raise
+    assert child.returncode == 0, err[-2000:]
+    lines = out.splitlines()
+    assert lines[0].startswith("interrupted "), out
+    assert float(lines[0].split()[1]) - (sent - started) < 10, out
+    _, kept, same, duration = lines[1].split()
+    assert 0 < int(kept) < 30_000 and same == "True" and duration == "True", out
+    assert lines[2] == f"went on {int(kept) + 10}", out

@@ -402,3 +402,77 @@ def test_flipped_bytes_of_fleet_states_give_an_equal_object_a_valid_one_or_an_er
         one_line=True,
         tables=("components", "table", "edges", "vertices"),
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# Forged states the checks used to let through, and every failure an UnpicklingError
+# ---------------------------------------------------------------------------------------------
+
+
+def float_at(value: float) -> bytes:
+    """A float64 as MessagePack writes it."""
+    import struct
+
+    return b"\xcb" + struct.pack(">d", value)
+
+
+def test_a_time_cell_wider_than_its_timestamps_is_refused():
+    # Cells of 0.5, 1.5, 3 and 2 s: one of 1e308 s would make every area infinite.
+    traj = il.Trajectory([0.0, 1.0, 3.0, 7.0], np.array([[0.0, 0], [0.5, 0], [0.1, 0], [0.2, 0]]))
+    loops = il.find_loops(traj, gamma=1.0, separation=None)
+    for value in (loops, traj):
+        restore, state = state_of(value)
+        assert state.count(float_at(1.5)) == 1
+        for width in (1e308, 1.6, -0.5):
+            forged = state.replace(float_at(1.5), float_at(width))
+            with pytest.raises(
+                pickle.UnpicklingError, match=r"the time cell of pose 1 is .* s, outside 0 to 1.5 s"
+            ):
+                restore(forged)
+    assert pickle.loads(pickle.dumps(loops)).loop_area(0.0, 7.0) == loops.loop_area(0.0, 7.0)
+
+
+def test_a_metric_name_that_is_no_metric_is_refused():
+    traj = il.Trajectory([0.0, 1.0, 2.0], np.array([[0.0, 0], [0.5, 0], [0.1, 0]]))
+    loops = il.find_loops(traj, gamma=1.0, separation=None)
+    restore, state = state_of(loops)
+    for forged_name in (b"\xa1x", b"\xa9euclidea_", b"\xa3se3"):
+        forged = state.replace(b"\xa9euclidean", forged_name, 1)
+        with pytest.raises(pickle.UnpicklingError, match="cannot unpickle Loops: .*its metric"):
+            restore(forged)
+
+    # A callable's loops name it custom(NAME), and pickle.
+    def manhattan(a, b):
+        return float(np.abs(a - b).sum())
+
+    custom = il.find_loops(traj, gamma=1.0, metric=manhattan, separation=None)
+    assert custom.metric_name == "custom(manhattan)"
+    assert pickle.loads(pickle.dumps(custom)) == custom
+    with pytest.raises(il.InvalidParameterError, match=r"custom\(manhattan\).*pass metric="):
+        il.sample(custom, "one", budget=1, seed=0, trajectory=traj)
+
+
+def test_every_failure_of_unpickling_is_an_unpickling_error():
+    # A separation out of range, and the tile objects' bytes (their constructors raise
+    # InvalidParameterError when called directly).
+    restore, state = state_of(il.Separation(path=2.0))
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle Separation: .*path"):
+        restore(state.replace(float_at(2.0), float_at(-2.0)))
+    fleet = il.urban_fleet(vehicles=2, duration_s=120.0, seed=2)
+    blocks = il.session_blocks(fleet.session(fleet.names[0]), block=50)
+    restore, (data, metric) = blocks.__reduce__()
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle SessionBlocks: "):
+        restore(data[:-5], metric)
+    with pytest.raises(
+        pickle.UnpicklingError, match="cannot unpickle SessionBlocks: unknown metric"
+    ):
+        restore(data, "x")
+    with pytest.raises(il.InvalidParameterError):
+        il.SessionBlocks(data[:-5], metric)
+    session = fleet.session(fleet.names[0])
+    tile = il.plan_tiles([blocks], gamma=30.0)[0]
+    summary = il.scan_tile(tile, session, starts=(0, 0), gamma=30.0)
+    assert pickle.loads(pickle.dumps(summary)).to_bytes() == summary.to_bytes()
+    restore, (data,) = summary.__reduce__()
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle TileSummary: "):
+        restore(data[: len(data) // 2])

@@ -29,7 +29,8 @@ use std::ffi::OsString;
 use std::io::Write;
 
 use anyhow::Result;
-use clap::{Parser, Subcommand};
+use clap::error::ErrorKind;
+use clap::{CommandFactory, Parser, Subcommand};
 
 /// Find, measure and sample inexact loops (loop closures) in robot trajectories.
 #[derive(Debug, Parser)]
@@ -68,13 +69,22 @@ where
     I: IntoIterator<Item = T>,
     T: Into<OsString> + Clone,
 {
-    let code = match Cli::try_parse_from(args) {
-        // Help and version go to stdout with code 0, usage errors to stderr with code 2, as
-        // clap's own `exit` prints them (its broken pipe swallowed too), without leaving the
-        // process.
-        Err(error) => {
+    let args: Vec<OsString> = args.into_iter().map(Into::into).collect();
+    let code = match Cli::try_parse_from(&args) {
+        // Help and version go to stdout with code 0, as clap's own `exit` prints them (its
+        // broken pipe swallowed too), without leaving the process; a usage error is one line
+        // on stderr with code 2, as every other error.
+        Err(error) if !error.use_stderr() || error.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
             let _ = error.print();
             u8::try_from(error.exit_code()).unwrap_or(2)
+        }
+        Err(error) => {
+            // The command whose help to point at: the subcommand given, if it is one.
+            let subcommand =
+                args.get(1).and_then(|a| a.to_str()).filter(|a| Cli::command().find_subcommand(a).is_some());
+            let command = subcommand.map_or_else(|| "loops".to_owned(), |name| format!("loops {name}"));
+            eprintln!("loops: error: {}", usage_error(&error.render().to_string(), &command));
+            2
         }
         Ok(cli) => match run(cli) {
             Ok(code) => code,
@@ -103,6 +113,36 @@ fn run(cli: Cli) -> Result<u8> {
         Command::Replay(args) => return replay::replay(args),
     };
     done.map(|()| 0)
+}
+
+/// clap's usage error of `command` (`rendered`: its text without styles) as one line: the
+/// message and its indented details (a missing argument, the valid values, a tip) joined, the
+/// usage and "For more information" lines replaced by where the help is
+/// (`try 'loops components --help'`).
+fn usage_error(rendered: &str, command: &str) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    // Whether the last part introduced a list ("...were not provided:"), one item a line.
+    let mut listing = false;
+    for line in rendered.lines().map(str::trim).filter(|line| !line.is_empty()) {
+        if line.starts_with("Usage: ") || line.starts_with("For more information") {
+            continue;
+        }
+        let line = line.strip_prefix("error: ").unwrap_or(line);
+        match parts.last_mut() {
+            Some(last) if listing || line.starts_with('[') => {
+                if !last.ends_with(':') && listing {
+                    last.push(',');
+                }
+                last.push(' ');
+                last.push_str(line);
+            }
+            _ => {
+                listing = line.ends_with(':');
+                parts.push(line.to_owned());
+            }
+        }
+    }
+    format!("{} (try '{command} --help')", parts.join("; "))
 }
 
 fn is_broken_pipe(error: &anyhow::Error) -> bool {

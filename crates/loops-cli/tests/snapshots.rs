@@ -77,6 +77,9 @@ fn components() {
     );
     snapshot!("components_bad_gamma", transcript(&dir, &["components", "drive-b.tum", "--gamma", "-1"]));
     snapshot!("components_missing", transcript(&dir, &["components", "nowhere.tum", "--gamma", "1"]));
+    // Usage errors are one line, as every other error: the option, the value, where the help is.
+    snapshot!("components_gamma_not_a_number", transcript(&dir, &["components", "drive-b.tum", "--gamma", "abc"]));
+    snapshot!("components_without_gamma", transcript(&dir, &["components", "drive-b.tum"]));
 }
 
 #[test]

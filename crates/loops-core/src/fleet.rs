@@ -276,6 +276,47 @@ pub struct SessionPair {
     pub density: f64,
 }
 
+/// Checks a fleet's tables read back from a saved result that holds no loops (a cluster's
+/// merged tiles): for `sessions` sessions, components numbered in order in blocks (a, b),
+/// a ≤ b < `sessions`, with finite areas and closest distances of at least 0 and a time extent
+/// `[[t_min, t_max], [t′_min, t′_max]]` each (seconds, finite, ordered); session pairs within
+/// the sessions, with finite measures of at least 0.
+///
+/// # Errors
+/// [`Error::InvalidState`] naming the first entry that does not fit (`what`: `"fleet tables"`).
+pub fn check_fleet_tables(
+    sessions: usize,
+    components: &[FleetComponent],
+    times_s: &[[[f64; 2]; 2]],
+    pairs: &[SessionPair],
+) -> Result<()> {
+    let invalid = |reason: String| Error::InvalidState { what: "fleet tables", reason };
+    let fits = |[a, b]: [usize; 2]| a <= b && b < sessions;
+    let measure = |value: f64| value.is_finite() && value >= 0.0;
+    if times_s.len() != components.len() {
+        return Err(invalid(format!("{} components but {} time extents", components.len(), times_s.len())));
+    }
+    for (k, (c, times)) in components.iter().zip(times_s).enumerate() {
+        let ordered = times.iter().all(|[lo, hi]| lo.is_finite() && hi.is_finite() && lo <= hi);
+        if c.id != k || !fits(c.sessions) || !measure(c.area_s2) || !measure(c.closest_distance) || !ordered {
+            return Err(invalid(format!(
+                "component {k} has id {}, sessions {:?} of {sessions}, area {} s^2, closest distance {} and \
+                 times {times:?} s",
+                c.id, c.sessions, c.area_s2, c.closest_distance
+            )));
+        }
+    }
+    if let Some((k, p)) =
+        pairs.iter().enumerate().find(|(_, p)| !(fits(p.sessions) && measure(p.area_s2) && measure(p.density)))
+    {
+        return Err(invalid(format!(
+            "session pair {k} has sessions {:?} of {sessions}, area {} s^2 and density {}",
+            p.sessions, p.area_s2, p.density
+        )));
+    }
+    Ok(())
+}
+
 /// S_γ over a fleet, its loop components per block, and the measures per session pair.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FleetLoops {

@@ -93,7 +93,7 @@ pub use draw::{MAX_SAMPLES, SampleSize, SampleWarning};
 pub use error::{Error, ErrorClass, MetricMisfit, Result, TooManySamples};
 pub use fleet::{
     FLEET_CLOCK_GAP_S, Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SessionPair,
-    find_fleet_loops, sample_fleet,
+    check_fleet_tables, find_fleet_loops, sample_fleet,
 };
 pub use interrupt::Interrupt;
 pub use loops::{LabelledRun, Loops, Warning, find_loops, find_loops_separated};
@@ -117,7 +117,7 @@ pub use sample::{
     SamplerKind, Samples, draw_stats, pair_key, sample_clusters, sample_loops,
 };
 pub use separation::Separation;
-pub use spec::MetricSpec;
+pub use spec::{MetricSpec, recorded_metric_name};
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
 pub use tile::{

@@ -9,7 +9,7 @@ use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
 use crate::memory::try_copy;
 use crate::metric::Metric;
 use crate::separation::Separation;
-use crate::spec::{MetricSpec, with_metric};
+use crate::spec::{MetricSpec, recorded_metric_name, with_metric};
 use crate::sublevel::SublevelSet;
 use crate::trajectory::{Timeline, Trajectory, cell_of, sealed};
 
@@ -245,7 +245,7 @@ impl Loops {
         Ok(Self {
             gamma: set.gamma(),
             separation,
-            metric: metric.name(),
+            metric: recorded_metric_name(metric),
             timestamps_s: try_copy(traj.timestamps_s(), "the timestamps of the loops")?,
             cell_widths_s: try_copy(traj.cell_widths_s(), "the time cells of the loops")?,
             labels: labelling.labels,
@@ -270,8 +270,9 @@ impl Loops {
         !self.separation.is_none()
     }
 
-    /// The metric's name, as [`Metric::name`] gives it (a [`MetricSpec`](crate::MetricSpec)
-    /// parses it back).
+    /// The metric's name, as [`recorded_metric_name`] gives it: a
+    /// [`MetricSpec`](crate::MetricSpec)'s, which parses back, or `custom(NAME)` for a metric of
+    /// the caller's own.
     pub fn metric_name(&self) -> &str {
         &self.metric
     }
@@ -480,7 +481,8 @@ struct LoopsState {
 impl TryFrom<LoopsState> for Loops {
     type Error = Error;
 
-    /// Checks the timestamps (as a trajectory's) and time cells, the sublevel set, and that every run's label
+    /// Checks the timestamps (as a trajectory's) and time cells, the metric's name (as
+    /// [`recorded_metric_name`] gives one), the sublevel set, and that every run's label
     /// names a component and every component's indices are pose indices.
     fn try_from(state: LoopsState) -> Result<Self> {
         let invalid = |reason: String| Error::InvalidState { what: "Loops", reason };
@@ -498,6 +500,7 @@ impl TryFrom<LoopsState> for Loops {
         if state.labels.len() != state.set.runs().len() {
             return Err(invalid(format!("{} labels for {} runs", state.labels.len(), state.set.runs().len())));
         }
+        crate::spec::check_recorded_metric_name(&state.metric).map_err(invalid)?;
         let count = state.components.len();
         if let Some(r) = state.labels.iter().position(|&c| c as usize >= count) {
             return Err(invalid(format!("run {r} belongs to component {}, of {count}", state.labels[r])));
@@ -513,7 +516,7 @@ impl TryFrom<LoopsState> for Loops {
         }
         let LoopsState { gamma, separation, metric, timestamps_s, cell_widths_s, set, labels, components, warnings } =
             state;
-        let cell_widths_s = crate::trajectory::checked_cell_widths("Loops", cell_widths_s, n)?;
+        let cell_widths_s = crate::trajectory::checked_cell_widths("Loops", cell_widths_s, &timestamps_s)?;
         Ok(Self { gamma, separation, metric, timestamps_s, cell_widths_s, set, labels, components, warnings })
     }
 }

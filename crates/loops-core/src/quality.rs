@@ -3,6 +3,7 @@
 
 use crate::cluster::check_epsilon_s;
 use crate::error::Result;
+use crate::interrupt::Interrupt;
 use crate::loops::Loops;
 use crate::sample::Samples;
 
@@ -83,7 +84,9 @@ impl SampleQuality {
 /// # Errors
 /// [`Error::InvalidParameter`](crate::Error::InvalidParameter) unless `epsilon_s` is positive and finite;
 /// [`Error::TrajectoryMismatch`](crate::Error::TrajectoryMismatch) when the samples index another trajectory;
-/// [`Error::DetectionOutsideSpan`](crate::Error::DetectionOutsideSpan) for a sample time outside it.
+/// [`Error::DetectionOutsideSpan`](crate::Error::DetectionOutsideSpan) for a sample time outside it;
+/// [`Error::Interrupted`](crate::Error::Interrupted) when an [`Interrupt`] installed on this
+/// thread is interrupted.
 ///
 /// # Examples
 /// ```
@@ -134,11 +137,12 @@ pub fn sample_quality(samples: &Samples, loops: &Loops, epsilon_s: f64) -> Resul
         .collect();
     by_component.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)).then(a.2.total_cmp(&b.2)));
     let mut nearest_spacing_s = vec![None; rows.len()];
+    let interrupt = Interrupt::current();
     let mut start = 0;
     while start < by_component.len() {
         let end = start + by_component[start..].iter().take_while(|p| p.0 == by_component[start].0).count();
         let group = &by_component[start..end];
-        for (spacing, point) in nearest_spacings(group).into_iter().zip(group) {
+        for (spacing, point) in nearest_spacings(group, &interrupt)?.into_iter().zip(group) {
             nearest_spacing_s[point.3] = spacing;
         }
         start = end;
@@ -180,10 +184,12 @@ pub fn sample_quality(samples: &Samples, loops: &Loops, epsilon_s: f64) -> Resul
 }
 
 /// For points sorted by t, the distance to the nearest other point (`None` for a lone point).
-/// A sweep outwards in t that stops once |Δt| exceeds the best distance so far.
-fn nearest_spacings(points: &[(usize, f64, f64, usize)]) -> Vec<Option<f64>> {
+/// A sweep outwards in t that stops once |Δt| exceeds the best distance so far: up to all the
+/// points for one of many at the same t, so `interrupt` is looked at before every point.
+fn nearest_spacings(points: &[(usize, f64, f64, usize)], interrupt: &Interrupt) -> Result<Vec<Option<f64>>> {
     (0..points.len())
         .map(|a| {
+            interrupt.check()?;
             let (_, x, y, _) = points[a];
             let mut best = f64::INFINITY;
             for &(_, bx, by, _) in &points[a + 1..] {
@@ -200,7 +206,7 @@ fn nearest_spacings(points: &[(usize, f64, f64, usize)]) -> Vec<Option<f64>> {
                 }
                 best = best.min(dx.hypot(by - y));
             }
-            best.is_finite().then_some(best)
+            Ok(best.is_finite().then_some(best))
         })
         .collect()
 }
@@ -223,9 +229,13 @@ mod tests {
     #[test]
     fn spacing_and_slope() {
         let points = [(0, 0.0, 0.0, 0), (0, 3.0, 4.0, 1), (0, 3.0, 5.0, 2), (0, 100.0, 0.0, 3)];
-        let got = nearest_spacings(&points);
+        let none = Interrupt::new();
+        let got = nearest_spacings(&points, &none).unwrap();
         assert_eq!(got, [Some(5.0), Some(1.0), Some(1.0), Some(97.0f64.hypot(4.0))]);
-        assert_eq!(nearest_spacings(&points[..1]), [None]);
+        assert_eq!(nearest_spacings(&points[..1], &none).unwrap(), [None]);
+        let stopped = Interrupt::new();
+        stopped.interrupt();
+        assert_eq!(nearest_spacings(&points, &stopped), Err(crate::Error::Interrupted));
         assert_eq!(slope(&[(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)]), Some(2.0));
         assert_eq!(slope(&[(1.0, 1.0), (1.0, 3.0)]), None);
     }

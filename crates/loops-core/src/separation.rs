@@ -33,13 +33,33 @@ use crate::error::{Error, Result};
 /// assert_eq!(revisits.components()[0].closest_pair, [0, 10]);
 /// # Ok::<(), loops_core::Error>(())
 /// ```
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(try_from = "SeparationState"))]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Separation {
     /// Minimum path length between the poses, in the metric's unit: `s_j − s_i ≥ path`.
     pub path: f64,
     /// Minimum time between the poses, seconds: `t_j − t_i ≥ time_s`.
     pub time_s: f64,
+}
+
+/// What a serialised [`Separation`] holds.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct SeparationState {
+    path: f64,
+    time_s: f64,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<SeparationState> for Separation {
+    type Error = Error;
+
+    /// Checked as [`Separation::check`] checks it.
+    fn try_from(state: SeparationState) -> Result<Self> {
+        let separation = Self { path: state.path, time_s: state.time_s };
+        separation.check()?;
+        Ok(separation)
+    }
 }
 
 impl Separation {

@@ -103,6 +103,44 @@ macro_rules! with_metric {
 }
 pub(crate) use with_metric;
 
+/// The name a result records for `metric` ([`Loops::metric_name`](crate::Loops::metric_name)):
+/// [`Metric::name`] when it is a [`MetricSpec`]'s (parsing it back gives the same text), or
+/// else `custom(NAME)`, a metric of the caller's own (a Python callable, a type of your own),
+/// which no spec parses as. A saved result read back can so tell a metric it can rebuild by
+/// name from one it cannot, and a name that is neither is refused as corrupt
+/// ([`check_recorded_metric_name`]).
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, MetricSpec, recorded_metric_name};
+/// assert_eq!(recorded_metric_name(&Euclidean), "euclidean");
+/// let se3: MetricSpec = "se3(rotation_weight_m_per_rad=2)".parse()?;
+/// assert_eq!(recorded_metric_name(se3.as_metric()), se3.name());
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn recorded_metric_name<M: Metric + ?Sized>(metric: &M) -> String {
+    let name = metric.name();
+    match name.parse::<MetricSpec>() {
+        Ok(spec) if spec.name() == name => name,
+        _ => format!("custom({name})"),
+    }
+}
+
+/// Checks a metric's name read from a saved result: one that [`recorded_metric_name`] gives.
+///
+/// # Errors
+/// What is wrong with it, in words.
+#[cfg(feature = "serde")]
+pub(crate) fn check_recorded_metric_name(name: &str) -> std::result::Result<(), String> {
+    let custom = name.strip_prefix("custom(").and_then(|rest| rest.strip_suffix(')'));
+    match name.parse::<MetricSpec>() {
+        Ok(spec) if spec.name() == name => Ok(()),
+        _ if custom.is_some() => Ok(()),
+        Ok(spec) => Err(format!("its metric {name:?} is not written as the metric {spec} is")),
+        Err(error) => Err(format!("its metric {name:?} is neither a metric's name ({error}) nor custom(NAME)")),
+    }
+}
+
 impl MetricSpec {
     /// The accepted names.
     pub const NAMES: &'static str = "euclidean, so3, se3, se3_rotation, se2, torus, sphere, haversine, angular";

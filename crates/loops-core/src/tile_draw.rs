@@ -211,7 +211,8 @@ pub fn draw_session_tile<M: Metric + ?Sized>(
 ///
 /// # Errors
 /// [`Error::InconsistentTiles`] for labels of another tile, or runs of another tile or
-/// other sessions' starts than the request's.
+/// other sessions' starts than the request's; [`Error::Interrupted`] when an
+/// [`Interrupt`](crate::Interrupt) installed on this thread is interrupted.
 pub fn draw_tile_runs<M: Metric + ?Sized>(
     sessions: [&Trajectory; 2],
     starts: [usize; 2],
@@ -243,7 +244,7 @@ pub fn draw_tile_runs<M: Metric + ?Sized>(
     }
     let diagonal = tile.sessions[0] == tile.sessions[1] && runs.separation.is_none();
     let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels };
-    Ok(draw_candidates(&holder, request))
+    draw_candidates(&holder, request)
 }
 
 /// [`scan_session_tile_with_duration`] that also keeps the tile's runs for its draws

@@ -498,21 +498,36 @@ impl TryFrom<TrajectoryState> for Trajectory {
     type Error = Error;
 
     /// Validated as [`Trajectory::new`] and, for a manifold, as its default metric validates
-    /// its points (unit quaternions, latitudes, ...); one finite time cell of at least 0 s a pose.
+    /// its points (unit quaternions, latitudes, ...); time cells as [`checked_cell_widths`].
     fn try_from(state: TrajectoryState) -> Result<Self> {
         let mut traj = Self::new(state.timestamps_s, state.coords, state.dim)?.on(state.manifold);
         traj.default_metric().validate(&traj)?;
-        traj.cell_widths_s = checked_cell_widths("Trajectory", state.cell_widths_s, traj.len())?;
+        traj.cell_widths_s = checked_cell_widths("Trajectory", state.cell_widths_s, &traj.timestamps_s)?;
         Ok(traj)
     }
 }
 
-/// Time cells read from a saved `what`: one a pose, each finite and at least 0 s.
+/// Time cells read from a saved `what` with these (checked) timestamps: one a pose, each at
+/// least 0 s and at most the pose's whole cell, `(t_{i+1} − t_{i−1}) / 2` (a session's end in a
+/// fleet keeps a half cell), with a few roundings of the timestamps to spare (a fleet's are
+/// shifted onto one clock). So no area or duration summed from them can overflow.
 #[cfg(feature = "serde")]
-pub(crate) fn checked_cell_widths(what: &'static str, widths: Vec<f64>, poses: usize) -> Result<Vec<f64>> {
-    let bad = widths.iter().position(|w| !(w.is_finite() && *w >= 0.0));
-    if widths.len() != poses || bad.is_some() {
-        let reason = format!("{} time cells for {poses} poses (first bad one: {bad:?})", widths.len());
+pub(crate) fn checked_cell_widths(what: &'static str, widths: Vec<f64>, timestamps_s: &[f64]) -> Result<Vec<f64>> {
+    let poses = timestamps_s.len();
+    if widths.len() != poses {
+        let reason = format!("{} time cells for {poses} poses", widths.len());
+        return Err(Error::InvalidState { what, reason });
+    }
+    let most_s = |i: usize| {
+        let near = timestamps_s[i.saturating_sub(1)..(i + 2).min(poses)].iter().map(|t| t.abs()).sum::<f64>();
+        cell_width(timestamps_s, i) + 4.0 * f64::EPSILON * near
+    };
+    if let Some(i) = (0..poses).find(|&i| !(widths[i] >= 0.0 && widths[i] <= most_s(i))) {
+        let reason = format!(
+            "the time cell of pose {i} is {:?} s, outside 0 to {:?} s (its timestamps' cell)",
+            widths[i],
+            cell_width(timestamps_s, i)
+        );
         return Err(Error::InvalidState { what, reason });
     }
     Ok(widths)

@@ -112,7 +112,7 @@ impl Loops {
         pairs: &[[usize; 2]],
     ) -> Result<Vec<PairVerdict>> {
         self.check_trajectory(traj)?;
-        if metric.name() != self.metric_name() {
+        if crate::spec::recorded_metric_name(metric) != self.metric_name() {
             return Err(Error::MetricMismatch {
                 metric: metric.name(),
                 expected: "the metric the loops were found with (Loops::metric_name)",

@@ -542,3 +542,25 @@ fn mulran_kaist_01() {
     let points: Vec<[f64; 3]> = rows.iter().map(|r| [r[3], r[7], r[11]]).collect();
     check_real(&Trajectory::from_points(times, &points).unwrap(), 10.0);
 }
+
+#[test]
+fn an_interrupted_push_many_keeps_the_poses_before_it() {
+    let traj = loops_core::UrbanDrive { duration_s: 120.0, ..loops_core::UrbanDrive::default() }
+        .generate()
+        .unwrap()
+        .trajectory;
+    let dim = traj.dim();
+    let mut online = OnlineLoops::new(MetricSpec::Euclidean, dim, 20.0).unwrap();
+    online.push_many(&traj.timestamps_s()[..50], &traj.coords()[..50 * dim]).unwrap();
+    let before = online.to_loops().unwrap();
+    // Interrupted before the first pose of the batch: none of it is added.
+    let stop = loops_core::Interrupt::new();
+    stop.interrupt();
+    let rest = (&traj.timestamps_s()[50..], &traj.coords()[50 * dim..]);
+    assert_eq!(stop.run(|| online.push_many(rest.0, rest.1)), Err(Error::Interrupted));
+    assert_eq!(online.len(), 50);
+    assert_eq!(online.to_loops().unwrap(), before);
+    // And it goes on as if nothing had been asked.
+    online.push_many(rest.0, rest.1).unwrap();
+    assert_eq!(online.to_loops().unwrap(), loops_core::find_loops(&traj, &loops_core::Euclidean, 20.0).unwrap());
+}

@@ -135,3 +135,17 @@ fn forged_detections_clusters_samples_and_grids_are_refused() {
         Err(message) if !message.is_empty()
     ));
 }
+
+#[test]
+fn forged_time_cells_metric_names_and_separations_are_refused() {
+    let loops = drive().loops;
+    let wide = forged(&loops, |v| v["cell_widths_s"][3] = json!(1e308));
+    assert!(wide.contains("the time cell of pose 3 is 1e308 s"), "{wide}");
+    let named = forged(&loops, |v| v["metric"] = json!("x"));
+    assert!(named.contains("its metric \"x\" is neither"), "{named}");
+    let mut custom = serde_json::to_value(&loops).unwrap();
+    custom["metric"] = json!("custom(mine)");
+    assert_eq!(serde_json::from_value::<Loops>(custom).unwrap().metric_name(), "custom(mine)");
+    let separation = forged(&loops_core::Separation::path(3.0), |v| v["path"] = json!(-1.0));
+    assert!(separation.contains("path separation"), "{separation}");
+}

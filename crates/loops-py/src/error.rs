@@ -1,9 +1,12 @@
 //! The Python exception hierarchy and the one place core errors become Python exceptions.
 
 use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyIndexError, PyIsADirectoryError, PyKeyboardInterrupt,
+    PyFileExistsError, PyFileNotFoundError, PyIndexError, PyIsADirectoryError, PyKeyboardInterrupt, PyMemoryError,
     PyNotADirectoryError, PyOSError, PyPermissionError, PyValueError,
 };
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::PyType;
 use pyo3::{PyErr, import_exception};
 
 // The hierarchy lives in Python (`inexact_loops/errors.py`) so that classes can also be
@@ -125,6 +128,35 @@ fn core_error(error: &loops_core::Error, message: String) -> PyErr {
 /// An `InvalidParameterError` about how arguments combine (a check no single core call makes).
 pub(crate) fn invalid_parameter(message: String) -> PyErr {
     InvalidParameterError::new_err(message)
+}
+
+static UNPICKLING_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// `pickle.UnpicklingError("cannot unpickle {class}: {reason}")`.
+pub(crate) fn unpickling_error(py: Python<'_>, class: &str, reason: impl std::fmt::Display) -> PyErr {
+    match UNPICKLING_ERROR.import(py, "pickle", "UnpicklingError") {
+        Ok(unpickling) => PyErr::from_type(unpickling.clone(), format!("cannot unpickle {class}: {reason}")),
+        Err(error) => error,
+    }
+}
+
+/// Any exception raised while unpickling a `class` as the `pickle.UnpicklingError` that
+/// pickling documents, naming the class and carrying the message of the check that refused the
+/// state (a core error's class would say "invalid parameter" of a file's bytes); the original
+/// is its `__cause__`. An `UnpicklingError` already, `KeyboardInterrupt` and `MemoryError` pass
+/// unchanged: they say nothing about the state.
+pub(crate) fn unpickling(py: Python<'_>, class: &str, error: PyErr) -> PyErr {
+    let passes = |class: Option<&Bound<'_, PyType>>| class.is_some_and(|class| error.is_instance(py, class));
+    let unpickling = UNPICKLING_ERROR.import(py, "pickle", "UnpicklingError").ok();
+    if passes(unpickling)
+        || error.is_instance_of::<PyKeyboardInterrupt>(py)
+        || error.is_instance_of::<PyMemoryError>(py)
+    {
+        return error;
+    }
+    let converted = unpickling_error(py, class, error.value(py));
+    converted.set_cause(py, Some(error));
+    converted
 }
 
 /// A `ValueError` about an argument's shape or value that Python itself should have caught.

@@ -18,8 +18,9 @@
 //! Below them:
 //! `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
-//! (the one mapping of errors to exceptions) and `warning` (the one mapping of the engine's
-//! warnings to Python warning categories). Beside them, `cli` (`run_cli`): the `loops` command
+//! (the one mapping of errors to exceptions), `warning` (the one mapping of the engine's
+//! warnings to Python warning categories) and `shared` (the value of a class whose methods
+//! change it, used by one thread at a time). Beside them, `cli` (`run_cli`): the `loops` command
 //! of `loops-cli`, for the wheel's console script.
 
 mod cli;
@@ -44,6 +45,7 @@ mod py_tile_draw;
 mod py_tile_merge;
 mod py_tile_runs;
 mod py_trajectory;
+mod shared;
 mod warning;
 
 use std::sync::{Condvar, Mutex, PoisonError};

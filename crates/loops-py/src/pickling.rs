@@ -2,26 +2,28 @@
 //! state is one MessagePack byte string `["inexact_loops", format, class name, value]` of the
 //! core's serde form of the value (`loops-core`'s `serde` feature). Unpickling reads the header
 //! first, so a state of another format or class is refused naming both; the value is then
-//! checked by the core as it is read (`Error::InvalidState`, or the constructor's own errors),
-//! so a corrupt or forged state raises `pickle.UnpicklingError` naming what is wrong, never a
-//! panic. A class that holds another object of the module — `FleetLoops` and `FleetSamples`
+//! checked by the core as it is read (`Error::InvalidState`, or the constructor's own errors).
+//! Every `_from_state` runs in [`restoring`], so a corrupt or forged state raises
+//! `pickle.UnpicklingError` naming the class and what is wrong, whatever the check that found
+//! it, never a panic. A class that holds another object of the module — `FleetLoops` and `FleetSamples`
 //! their `Fleet`, `PoseGraph` its `Trajectory` — passes it as a second argument,
 //! `(Class._from_state, (state, obj))`: pickle writes it once for all the objects pickled
 //! together that hold it (the loops and the samples of one fleet share it again when unpickled),
 //! and `_from_state` checks that the state fits it. The loops of the 2.1 h drive at γ = 40 m (75,600 poses, 155,812 runs) pickle to 3.2 MB
 //! in about 25 ms and unpickle, checked, in about 35 ms.
 //!
-//! The tile objects a cluster ships between machines pickle instead as `(Class, args)`, their
-//! constructor's arguments: `TileSummary`, `TileMerge`, `DrawCandidates` and `TileDuration` as
-//! `(Class, (bytes,))`, their core value's own `to_bytes` (a tag, the tile format version,
-//! MessagePack), the same bytes a worker can send without pickle ([`pickled_as_bytes!`]);
-//! `SessionBlocks` (its bytes and its metric's name), `TileDrawRequest` (its tile, labels and
-//! request) and `Tile` (its ranges) by their own `__reduce__`, as their constructors take more.
+//! The tile objects a cluster ships between machines pickle instead as
+//! `(Class._from_state, args)`, their constructor's arguments, read by the constructor in
+//! [`restoring`]: `TileSummary`, `TileMerge`, `DrawCandidates` and `TileDuration` as
+//! `(Class._from_state, (bytes,))`, their core value's own `to_bytes` (a tag, the tile format
+//! version, MessagePack), the same bytes a worker can send without pickle
+//! ([`pickled_as_bytes!`]); `SessionBlocks` (its bytes and its metric's name),
+//! `TileDrawRequest` (its tile, labels and request) and `Tile` (its ranges) by their own
+//! `__reduce__`, as their constructors take more.
 
 use pyo3::PyClass;
 use pyo3::prelude::*;
-use pyo3::sync::PyOnceLock;
-use pyo3::types::{PyBytes, PyType};
+use pyo3::types::PyBytes;
 use serde::Serialize;
 use serde::de::{DeserializeOwned, IgnoredAny};
 
@@ -63,8 +65,10 @@ macro_rules! pickled {
 
             #[classmethod]
             fn _from_state(cls: &pyo3::Bound<'_, pyo3::types::PyType>, state: &[u8]) -> pyo3::PyResult<Self> {
-                let $value: $core = crate::pickling::restore(cls.py(), stringify!($class), state)?;
-                $build
+                crate::pickling::restoring(cls.py(), stringify!($class), || {
+                    let $value: $core = crate::pickling::restore(cls.py(), stringify!($class), state)?;
+                    $build
+                })
             }
         }
     };
@@ -76,8 +80,9 @@ pub(crate) use pickled;
 /// `from_bytes(&[u8])` (the bytes carry their own tag and format version, so they are not
 /// wrapped in a [`reduce`] state). Emits the constructor from those bytes (decoded without the
 /// GIL; `InvalidParameterError` for bytes of something else, of another format version, or
-/// corrupt), `to_bytes` (docstring `$to_bytes_doc`) and `__reduce__` as `(Class, (bytes,))`;
-/// given `from_bytes`, also the static method `from_bytes`, as the constructor. `$what` names
+/// corrupt), `to_bytes` (docstring `$to_bytes_doc`), `__reduce__` as
+/// `(Class._from_state, (bytes,))` and `_from_state`, the constructor in [`restoring`]; given
+/// `from_bytes`, also the static method `from_bytes`, as the constructor. `$what` names
 /// the value in the docstrings. A `#[pymethods]` block of its own, as [`pickled!`]'s.
 macro_rules! pickled_as_bytes {
     ($class:ident, $core:ty, $what:literal, $to_bytes_doc:literal $(, $from_bytes:ident)?) => {
@@ -101,8 +106,13 @@ macro_rules! pickled_as_bytes {
 
             fn __reduce__<'py>(
                 slf: &pyo3::Bound<'py, Self>,
-            ) -> (pyo3::Bound<'py, pyo3::types::PyType>, (pyo3::Bound<'py, pyo3::types::PyBytes>,)) {
-                (slf.get_type(), (slf.get().to_bytes(slf.py()),))
+            ) -> pyo3::PyResult<(pyo3::Bound<'py, pyo3::PyAny>, (pyo3::Bound<'py, pyo3::types::PyBytes>,))> {
+                Ok((slf.get_type().getattr("_from_state")?, (slf.get().to_bytes(slf.py()),)))
+            }
+
+            #[classmethod]
+            fn _from_state(cls: &pyo3::Bound<'_, pyo3::types::PyType>, data: &[u8]) -> pyo3::PyResult<Self> {
+                crate::pickling::restoring(cls.py(), stringify!($class), || Self::new(cls.py(), data))
             }
         }
 
@@ -135,13 +145,19 @@ pub(crate) fn reduce_with<'py, T: Serialize + ?Sized, C>(
     Ok((restore, (state, companion)))
 }
 
+/// Runs `f`, the body of `class`'s `_from_state`, turning any exception it raises into
+/// `pickle.UnpicklingError` ([`crate::error::unpickling`]).
+pub(crate) fn restoring<T>(py: Python<'_>, class: &str, f: impl FnOnce() -> PyResult<T>) -> PyResult<T> {
+    f().map_err(|error| crate::error::unpickling(py, class, error))
+}
+
 /// The value of a state made by [`reduce`] for `class`.
 ///
 /// # Errors
 /// `pickle.UnpicklingError` for a state that is not one, of another format or class, or whose
 /// value is corrupt or does not fit together.
 pub(crate) fn restore<T: DeserializeOwned>(py: Python<'_>, class: &str, state: &[u8]) -> PyResult<T> {
-    let fail = |reason: String| unpickling_error(py, format!("cannot unpickle {class}: {reason}"));
+    let fail = |reason: String| crate::error::unpickling_error(py, class, reason);
     let header: (String, u32, String, IgnoredAny) =
         rmp_serde::from_slice(state).map_err(|_| fail("not a pickled inexact_loops state".to_owned()))?;
     match header {
@@ -162,7 +178,7 @@ pub(crate) fn restore<T: DeserializeOwned>(py: Python<'_>, class: &str, state: &
 /// `pickle.UnpicklingError("cannot unpickle {class}: {reason}")`: a state that does not fit
 /// together or does not fit the object it came with.
 pub(crate) fn invalid(py: Python<'_>, class: &str, reason: impl std::fmt::Display) -> PyErr {
-    unpickling_error(py, format!("cannot unpickle {class}: {reason}"))
+    crate::error::unpickling_error(py, class, reason)
 }
 
 /// The object of class `T` that a state came with (`what` names it in the message).
@@ -178,16 +194,6 @@ pub(crate) fn companion<'a, 'py, T: PyClass>(
         let got = obj.get_type().name().map_or_else(|_| "?".to_owned(), |n| n.to_string());
         invalid(obj.py(), class, format!("its {what} is a {got}, not a {}", T::NAME))
     })
-}
-
-static UNPICKLING_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
-
-/// `pickle.UnpicklingError` with `message`.
-pub(crate) fn unpickling_error(py: Python<'_>, message: String) -> PyErr {
-    match UNPICKLING_ERROR.import(py, "pickle", "UnpicklingError") {
-        Ok(class) => PyErr::from_type(class.clone(), message),
-        Err(error) => error,
-    }
 }
 
 /// A hash of the few values given, for `__hash__` of classes whose equality compares whole

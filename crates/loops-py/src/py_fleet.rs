@@ -243,31 +243,33 @@ impl Fleet {
 
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let py = cls.py();
-        type State = (Vec<(String, loops_core::Trajectory)>, Vec<Option<(usize, usize)>>, Vec<Option<String>>);
-        let (sessions, plane_axes, metrics): State = crate::pickling::restore(py, "Fleet", state)?;
-        let invalid = |reason: String| crate::pickling::invalid(py, "Fleet", reason);
-        if plane_axes.len() != sessions.len() || metrics.len() != sessions.len() {
-            return Err(invalid(format!(
-                "{} sessions but {} planes and {} metrics",
-                sessions.len(),
-                plane_axes.len(),
-                metrics.len()
-            )));
-        }
-        let mut specs = Vec::with_capacity(metrics.len());
-        for ((name, traj), metric) in sessions.iter().zip(metrics) {
-            let Some(text) = metric else {
-                specs.push(None);
-                continue;
-            };
-            let spec: MetricSpec =
-                text.parse().map_err(|e: loops_core::Error| invalid(format!("session {name:?}: {e}")))?;
-            spec.validate(traj).map_err(|e| invalid(format!("session {name:?}: {e}")))?;
-            specs.push(Some(spec));
-        }
-        let inner = py.detach(move || loops_core::Fleet::new(sessions)).map_err(|e| invalid(e.to_string()))?;
-        Ok(Self { inner: Arc::new(inner), plane_axes, metrics: specs })
+        crate::pickling::restoring(cls.py(), "Fleet", || {
+            let py = cls.py();
+            type State = (Vec<(String, loops_core::Trajectory)>, Vec<Option<(usize, usize)>>, Vec<Option<String>>);
+            let (sessions, plane_axes, metrics): State = crate::pickling::restore(py, "Fleet", state)?;
+            let invalid = |reason: String| crate::pickling::invalid(py, "Fleet", reason);
+            if plane_axes.len() != sessions.len() || metrics.len() != sessions.len() {
+                return Err(invalid(format!(
+                    "{} sessions but {} planes and {} metrics",
+                    sessions.len(),
+                    plane_axes.len(),
+                    metrics.len()
+                )));
+            }
+            let mut specs = Vec::with_capacity(metrics.len());
+            for ((name, traj), metric) in sessions.iter().zip(metrics) {
+                let Some(text) = metric else {
+                    specs.push(None);
+                    continue;
+                };
+                let spec: MetricSpec =
+                    text.parse().map_err(|e: loops_core::Error| invalid(format!("session {name:?}: {e}")))?;
+                spec.validate(traj).map_err(|e| invalid(format!("session {name:?}: {e}")))?;
+                specs.push(Some(spec));
+            }
+            let inner = py.detach(move || loops_core::Fleet::new(sessions)).map_err(|e| invalid(e.to_string()))?;
+            Ok(Self { inner: Arc::new(inner), plane_axes, metrics: specs })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
@@ -533,15 +535,17 @@ impl FleetLoops {
 
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8], fleet: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let py = cls.py();
-        let fleet = crate::pickling::companion::<Fleet>(fleet, "FleetLoops", "fleet")?;
-        let (loops, pruning): (loops_core::Loops, String) = crate::pickling::restore(py, "FleetLoops", state)?;
-        let invalid = |e: loops_core::Error| crate::pickling::invalid(py, "FleetLoops", e);
-        let pruning = pruning.parse().map_err(invalid)?;
-        let inner_fleet = Arc::clone(&fleet.get().inner);
-        let inner =
-            py.detach(move || loops_core::FleetLoops::from_loops(&inner_fleet, loops, pruning)).map_err(invalid)?;
-        Ok(Self { inner: Arc::new(inner), fleet: fleet.clone().unbind(), loops: PyOnceLock::new() })
+        crate::pickling::restoring(cls.py(), "FleetLoops", || {
+            let py = cls.py();
+            let fleet = crate::pickling::companion::<Fleet>(fleet, "FleetLoops", "fleet")?;
+            let (loops, pruning): (loops_core::Loops, String) = crate::pickling::restore(py, "FleetLoops", state)?;
+            let invalid = |e: loops_core::Error| crate::pickling::invalid(py, "FleetLoops", e);
+            let pruning = pruning.parse().map_err(invalid)?;
+            let inner_fleet = Arc::clone(&fleet.get().inner);
+            let inner =
+                py.detach(move || loops_core::FleetLoops::from_loops(&inner_fleet, loops, pruning)).map_err(invalid)?;
+            Ok(Self { inner: Arc::new(inner), fleet: fleet.clone().unbind(), loops: PyOnceLock::new() })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {
@@ -929,24 +933,26 @@ impl FleetSamples {
 
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8], fleet: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let py = cls.py();
-        let fleet = crate::pickling::companion::<Fleet>(fleet, "FleetSamples", "fleet")?;
-        let samples: loops_core::Samples = crate::pickling::restore(py, "FleetSamples", state)?;
-        let poses = fleet.get().inner.poses();
-        if samples.poses() != Some(poses) {
-            return Err(crate::pickling::invalid(
-                py,
-                "FleetSamples",
-                match samples.poses() {
-                    Some(count) => format!("the samples are of {count} poses, its fleet has {poses}"),
-                    None => format!("the samples are of no trajectory, its fleet has {poses} poses"),
-                },
-            ));
-        }
-        let located =
-            fleet.get().inner.localize(&samples).map_err(|e| crate::pickling::invalid(py, "FleetSamples", e))?;
-        let samples = Py::new(py, Samples { inner: Arc::new(samples) })?;
-        Ok(Self { samples, located, fleet: fleet.clone().unbind() })
+        crate::pickling::restoring(cls.py(), "FleetSamples", || {
+            let py = cls.py();
+            let fleet = crate::pickling::companion::<Fleet>(fleet, "FleetSamples", "fleet")?;
+            let samples: loops_core::Samples = crate::pickling::restore(py, "FleetSamples", state)?;
+            let poses = fleet.get().inner.poses();
+            if samples.poses() != Some(poses) {
+                return Err(crate::pickling::invalid(
+                    py,
+                    "FleetSamples",
+                    match samples.poses() {
+                        Some(count) => format!("the samples are of {count} poses, its fleet has {poses}"),
+                        None => format!("the samples are of no trajectory, its fleet has {poses} poses"),
+                    },
+                ));
+            }
+            let located =
+                fleet.get().inner.localize(&samples).map_err(|e| crate::pickling::invalid(py, "FleetSamples", e))?;
+            let samples = Py::new(py, Samples { inner: Arc::new(samples) })?;
+            Ok(Self { samples, located, fleet: fleet.clone().unbind() })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>, py: Python<'_>) -> bool {

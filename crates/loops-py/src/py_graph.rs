@@ -111,12 +111,14 @@ impl PoseGraph {
 
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8], trajectory: &Bound<'_, PyAny>) -> PyResult<Self> {
-        let py = cls.py();
-        let trajectory = crate::pickling::companion::<Trajectory>(trajectory, "PoseGraph", "trajectory")?;
-        let graph: loops_io::PoseGraph = crate::pickling::restore(py, "PoseGraph", state)?;
-        check_graph(&graph, &trajectory.get().inner)
-            .map_err(|reason| crate::pickling::invalid(py, "PoseGraph", reason))?;
-        Ok(Self { graph: Arc::new(graph), trajectory: trajectory.clone().unbind() })
+        crate::pickling::restoring(cls.py(), "PoseGraph", || {
+            let py = cls.py();
+            let trajectory = crate::pickling::companion::<Trajectory>(trajectory, "PoseGraph", "trajectory")?;
+            let graph: loops_io::PoseGraph = crate::pickling::restore(py, "PoseGraph", state)?;
+            check_graph(&graph, &trajectory.get().inner)
+                .map_err(|reason| crate::pickling::invalid(py, "PoseGraph", reason))?;
+            Ok(Self { graph: Arc::new(graph), trajectory: trajectory.clone().unbind() })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {

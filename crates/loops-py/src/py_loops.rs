@@ -212,7 +212,8 @@ impl Loops {
     }
 
     /// The name of the metric the loops were found with: its spec (``"euclidean"``,
-    /// ``"se3(rotation_weight_m_per_rad=10, rotation=geodesic)"``), or a callable's ``__name__``.
+    /// ``"se3(rotation_weight_m_per_rad=10, rotation=geodesic)"``), or ``custom(NAME)`` for a
+    /// callable, NAME its ``__name__``.
     #[getter]
     fn metric_name(&self) -> String {
         self.inner.metric_name().to_owned()

@@ -15,6 +15,7 @@ use crate::error::{Failure, value_error};
 use crate::py_loops::Loops;
 use crate::py_metric::MetricArg;
 use crate::py_trajectory::Trajectory;
+use crate::shared::Shared;
 use loops_core::ComponentId;
 
 /// Gives every `OnlineLoops` a number of its own, so that an `Update` names the engine it came
@@ -65,12 +66,21 @@ fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
 ///     ([True, False], [0, 197])
 ///     >>> online.to_loops() == il.find_loops(online.trajectory, gamma=4.0, separation=None)
 ///     True
-#[pyclass(module = "inexact_loops._core")]
+///
+/// Threads may share an engine: its calls run one at a time, each whole (a call waits, without
+/// the GIL, while another thread's is in progress).
+#[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct OnlineLoops {
-    pub(crate) inner: loops_core::OnlineLoops,
     /// This engine's number (see [`SERIALS`]).
     pub(crate) serial: u64,
+    pub(crate) engine: Shared<Engine>,
+}
+
+/// What an `OnlineLoops` changes as poses are pushed.
+#[derive(Debug)]
+pub(crate) struct Engine {
+    pub(crate) inner: loops_core::OnlineLoops,
     /// Pushes so far (an `Update` is the last one's when its count is this).
     pub(crate) pushes: u64,
     /// The number of poses the last rebuild started from (0: none, or cleared): a pickle
@@ -122,24 +132,30 @@ struct UpdateState {
     loop_duration_s: f64,
 }
 
-impl OnlineLoops {
-    fn update(&mut self, update: loops_core::Update) -> Update {
+impl Engine {
+    /// The `Update` of the push that just ended, from engine `serial`.
+    fn update(&mut self, serial: u64, update: loops_core::Update) -> Update {
         self.pushes += 1;
-        Update { inner: Arc::new(update), origin: (self.serial, self.inner.rebuild_count(), self.pushes) }
+        Update { inner: Arc::new(update), origin: (serial, self.inner.rebuild_count(), self.pushes) }
     }
+}
 
-    /// `point` as `dim` coordinates.
-    fn point(&self, py: Python<'_>, point: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-        let array = real_array(py, point, "point")?;
-        let dim = self.inner.dim();
-        if array.shape.len() > 1 || array.values.len() != dim {
-            let shape: Vec<String> = array.shape.iter().map(ToString::to_string).collect();
-            let shape = if shape.len() == 1 { format!("({},)", shape[0]) } else { format!("({})", shape.join(", ")) };
-            return Err(value_error(format!(
-                "point must have the engine's {dim} coordinate(s), shape ({dim},), got shape {shape}"
-            )));
-        }
-        Ok(array.values)
+/// `point` as `dim` coordinates.
+fn point_of(py: Python<'_>, point: &Bound<'_, PyAny>, dim: usize) -> PyResult<Vec<f64>> {
+    let array = real_array(py, point, "point")?;
+    if array.shape.len() > 1 || array.values.len() != dim {
+        let shape: Vec<String> = array.shape.iter().map(ToString::to_string).collect();
+        let shape = if shape.len() == 1 { format!("({},)", shape[0]) } else { format!("({})", shape.join(", ")) };
+        return Err(value_error(format!(
+            "point must have the engine's {dim} coordinate(s), shape ({dim},), got shape {shape}"
+        )));
+    }
+    Ok(array.values)
+}
+
+impl OnlineLoops {
+    fn from_engine(engine: Engine) -> Self {
+        Self { serial: SERIALS.fetch_add(1, Ordering::Relaxed), engine: Shared::new(engine) }
     }
 }
 
@@ -150,11 +166,11 @@ impl OnlineLoops {
     fn new(gamma: f64, dim: usize, metric: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let spec = MetricArg::spec_from_py(metric, "OnlineLoops")?;
         let inner = loops_core::OnlineLoops::new(spec, dim, gamma).map_err(Failure::from)?;
-        Ok(Self { inner, serial: SERIALS.fetch_add(1, Ordering::Relaxed), pushes: 0, rebuilt_len: 0 })
+        Ok(Self::from_engine(Engine { inner, pushes: 0, rebuilt_len: 0 }))
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
-        let this = slf.borrow();
+        let this = slf.get().engine.lock(slf.py())?;
         let state = OnlineState {
             metric: this.inner.metric().to_string(),
             dim: this.inner.dim(),
@@ -170,54 +186,52 @@ impl OnlineLoops {
     /// which gives the same components and ids (the engine is deterministic).
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let py = cls.py();
-        let state: OnlineState = crate::pickling::restore(py, "OnlineLoops", state)?;
-        let fail = |error: loops_core::Error| {
-            crate::pickling::unpickling_error(py, format!("cannot unpickle OnlineLoops: {error}"))
-        };
-        let spec: loops_core::MetricSpec = state.metric.parse().map_err(fail)?;
-        let mut this = Self {
-            inner: loops_core::OnlineLoops::new(spec, state.dim, state.gamma).map_err(fail)?,
-            serial: SERIALS.fetch_add(1, Ordering::Relaxed),
-            pushes: 0,
-            rebuilt_len: state.rebuilt_len,
-        };
-        let (rebuilt, dim) = (state.rebuilt_len, state.dim);
-        let corrupt =
-            |what: String| crate::pickling::unpickling_error(py, format!("cannot unpickle OnlineLoops: {what}"));
-        if Some(state.coords.len()) != state.timestamps_s.len().checked_mul(dim) || rebuilt > state.timestamps_s.len() {
-            return Err(corrupt("its poses do not fit together".to_owned()));
-        }
-        let inner = &mut this.inner;
-        detached(py, move || {
-            if rebuilt > 0 {
-                let traj = loops_core::Trajectory::new(
-                    state.timestamps_s[..rebuilt].to_vec(),
-                    state.coords[..rebuilt * dim].to_vec(),
-                    dim,
-                )?;
-                inner.rebuild(&traj)?;
+        crate::pickling::restoring(cls.py(), "OnlineLoops", || {
+            let py = cls.py();
+            let state: OnlineState = crate::pickling::restore(py, "OnlineLoops", state)?;
+            let spec: loops_core::MetricSpec = state.metric.parse().map_err(Failure::from)?;
+            let mut this = Engine {
+                inner: loops_core::OnlineLoops::new(spec, state.dim, state.gamma).map_err(Failure::from)?,
+                pushes: 0,
+                rebuilt_len: state.rebuilt_len,
+            };
+            let (rebuilt, dim) = (state.rebuilt_len, state.dim);
+            if Some(state.coords.len()) != state.timestamps_s.len().checked_mul(dim)
+                || rebuilt > state.timestamps_s.len()
+            {
+                return Err(crate::pickling::invalid(py, "OnlineLoops", "its poses do not fit together"));
             }
-            inner.push_many(&state.timestamps_s[rebuilt..], &state.coords[rebuilt * dim..])?;
-            Ok(())
+            let inner = &mut this.inner;
+            detached(py, move || {
+                if rebuilt > 0 {
+                    let traj = loops_core::Trajectory::new(
+                        state.timestamps_s[..rebuilt].to_vec(),
+                        state.coords[..rebuilt * dim].to_vec(),
+                        dim,
+                    )?;
+                    inner.rebuild(&traj)?;
+                }
+                inner.push_many(&state.timestamps_s[rebuilt..], &state.coords[rebuilt * dim..])?;
+                Ok(())
+            })?;
+            Ok(Self::from_engine(this))
         })
-        .map_err(|error| corrupt(error.to_string()))?;
-        Ok(this)
     }
 
-    fn __len__(&self) -> usize {
-        self.inner.len()
+    fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.engine.lock(py)?.inner.len())
     }
 
-    fn __repr__(&self) -> String {
-        format!(
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let this = self.engine.lock(py)?;
+        Ok(format!(
             "OnlineLoops(gamma={}, metric={}, dim={}, {} poses, {} components)",
-            self.inner.gamma(),
-            self.inner.metric(),
-            self.inner.dim(),
-            self.inner.len(),
-            self.inner.components().count()
-        )
+            this.inner.gamma(),
+            this.inner.metric(),
+            this.inner.dim(),
+            this.inner.len(),
+            this.inner.components().count()
+        ))
     }
 
     /// Adds the pose at time ``t`` (seconds, after the last pose's) with ``point`` (``dim``
@@ -242,15 +256,20 @@ impl OnlineLoops {
     ///     >>> online = il.OnlineLoops(gamma=1.0, dim=2)
     ///     >>> online.push(0.0, [0.0, 0.0]).created.tolist(), online.push(1.0, [0.5, 0.0]).pose
     ///     ([0], 1)
-    fn push(&mut self, py: Python<'_>, t: f64, point: &Bound<'_, PyAny>) -> PyResult<Update> {
-        let point = self.point(py, point)?;
-        let update = attached(|| Ok(self.inner.push(t, &point)?))?;
-        Ok(self.update(update))
+    fn push(&self, py: Python<'_>, t: f64, point: &Bound<'_, PyAny>) -> PyResult<Update> {
+        // Converted first: the conversion may run Python code, which must not find the engine held.
+        let dim = self.engine.lock(py)?.inner.dim();
+        let point = point_of(py, point, dim)?;
+        let mut this = self.engine.lock(py)?;
+        let update = attached(|| Ok(this.inner.push(t, &point)?))?;
+        Ok(this.update(self.serial, update))
     }
 
     /// Adds several poses at once, as that many :meth:`push` es, with one :class:`Update`
     /// covering all of them (an :class:`OnlineSampler` gives the same candidates either way).
-    /// All or nothing: on an error none is added. The GIL is released.
+    /// All or nothing: on an error none is added. The GIL is released. Ctrl-C stops it before
+    /// the next pose (``KeyboardInterrupt``): the poses before that one stay added, as their
+    /// pushes would have left them (``len`` says how many), and no :class:`Update` covers them.
     ///
     /// Args:
     ///     timestamps: seconds, shape ``(n,)``, increasing, after the last pose's.
@@ -270,22 +289,26 @@ impl OnlineLoops {
     ///     >>> update = online.push_many(np.arange(3.0), np.zeros((3, 2)))
     ///     >>> update.first_pose, update.pose, len(online)
     ///     (0, 2, 3)
-    fn push_many(
-        &mut self,
-        py: Python<'_>,
-        timestamps: &Bound<'_, PyAny>,
-        points: &Bound<'_, PyAny>,
-    ) -> PyResult<Update> {
+    fn push_many(&self, py: Python<'_>, timestamps: &Bound<'_, PyAny>, points: &Bound<'_, PyAny>) -> PyResult<Update> {
         let (t, coords, dim) = timestamps_and_points(py, timestamps, points, "points")?;
-        let expected = self.inner.dim();
+        let mut this = self.engine.lock(py)?;
+        let (expected, before) = (this.inner.dim(), this.inner.len());
         if dim != expected && !t.is_empty() {
             return Err(value_error(format!(
                 "points must have the engine's {expected} coordinate(s) per row, got {dim}"
             )));
         }
-        let inner = &mut self.inner;
-        let update = detached(py, move || Ok(inner.push_many(&t, &coords)?))?;
-        Ok(self.update(update))
+        let inner = &mut this.inner;
+        match detached(py, move || Ok(inner.push_many(&t, &coords)?)) {
+            Ok(update) => Ok(this.update(self.serial, update)),
+            Err(error) => {
+                // Interrupted after some poses: the update offered last is no longer the last.
+                if this.inner.len() != before {
+                    this.pushes += 1;
+                }
+                Err(error)
+            }
+        }
     }
 
     /// Restarts from ``trajectory``, the poses so far as the back end corrected them after a
@@ -308,11 +331,12 @@ impl OnlineLoops {
     ///     >>> online.rebuild(il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 2.0, 3.0])))
     ///     >>> online.components["id"].tolist(), online.rebuild_count
     ///     ([0, 1, 2, 3], 1)
-    fn rebuild(&mut self, py: Python<'_>, trajectory: &Trajectory) -> PyResult<()> {
+    fn rebuild(&self, py: Python<'_>, trajectory: &Trajectory) -> PyResult<()> {
         let traj = Arc::clone(&trajectory.inner);
-        let inner = &mut self.inner;
+        let mut this = self.engine.lock(py)?;
+        let inner = &mut this.inner;
         detached(py, move || Ok(inner.rebuild(&traj)?))?;
-        self.rebuilt_len = trajectory.inner.len();
+        this.rebuilt_len = trajectory.inner.len();
         Ok(())
     }
 
@@ -325,9 +349,11 @@ impl OnlineLoops {
     ///     >>> online.clear()
     ///     >>> len(online), online.rebuild_count
     ///     (0, 1)
-    fn clear(&mut self) {
-        self.inner.clear();
-        self.rebuilt_len = 0;
+    fn clear(&self, py: Python<'_>) -> PyResult<()> {
+        let mut this = self.engine.lock(py)?;
+        this.inner.clear();
+        this.rebuilt_len = 0;
+        Ok(())
     }
 
     /// The loops of the poses so far as :func:`find_loops` gives them with ``separation=None``
@@ -344,7 +370,8 @@ impl OnlineLoops {
     ///     >>> online.to_loops().components["pair_count"].tolist()
     ///     [1, 1, 4, 1]
     fn to_loops(&self, py: Python<'_>) -> PyResult<Loops> {
-        let inner = &self.inner;
+        let this = self.engine.lock(py)?;
+        let inner = &this.inner;
         let loops = detached(py, move || Ok(inner.to_loops()?))?;
         Ok(Loops { inner: Arc::new(loops) })
     }
@@ -362,9 +389,9 @@ impl OnlineLoops {
     ///     >>> _ = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 1.0, 1.0, 0.0])
     ///     >>> online.loop_duration(0), online.loop_duration(1)
     ///     (1.0, 2.0)
-    fn loop_duration(&self, pose: i64) -> PyResult<f64> {
+    fn loop_duration(&self, py: Python<'_>, pose: i64) -> PyResult<f64> {
         let pose = crate::convert::pose_index(pose, "pose")?;
-        Ok(self.inner.loop_duration_s(pose).map_err(Failure::from)?)
+        Ok(self.engine.lock(py)?.inner.loop_duration_s(pose).map_err(Failure::from)?)
     }
 
     /// The live id that component ``id`` now belongs to, following merges (``id`` itself for a
@@ -376,46 +403,48 @@ impl OnlineLoops {
     ///     >>> update = online.push_many([0.0, 1.0, 2.0, 3.0], [0.0, 0.8, 0.0, 0.4])
     ///     >>> update.merged["retired"].tolist(), update.merged["survivor"].tolist(), online.resolve(3)
     ///     ([3], [2], 2)
-    fn resolve(&self, id: ComponentId) -> ComponentId {
-        self.inner.resolve(id)
+    fn resolve(&self, py: Python<'_>, id: ComponentId) -> PyResult<ComponentId> {
+        Ok(self.engine.lock(py)?.inner.resolve(id))
     }
 
     /// The threshold γ.
     #[getter]
-    fn gamma(&self) -> f64 {
-        self.inner.gamma()
+    fn gamma(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(self.engine.lock(py)?.inner.gamma())
     }
 
     /// Coordinates per pose.
     #[getter]
-    fn dim(&self) -> usize {
-        self.inner.dim()
+    fn dim(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.engine.lock(py)?.inner.dim())
     }
 
     /// The metric's name (its spec, e.g. ``"euclidean"``).
     #[getter]
-    fn metric_name(&self) -> String {
-        self.inner.metric().to_string()
+    fn metric_name(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(self.engine.lock(py)?.inner.metric().to_string())
     }
 
     /// How many times the engine was rebuilt or cleared: ids from before mean nothing now.
     #[getter]
-    fn rebuild_count(&self) -> u64 {
-        self.inner.rebuild_count()
+    fn rebuild_count(&self, py: Python<'_>) -> PyResult<u64> {
+        Ok(self.engine.lock(py)?.inner.rebuild_count())
     }
 
     /// The times of the poses pushed, seconds (a copy).
     #[getter]
-    fn timestamps<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        to_numpy(py, self.inner.timestamps_s().to_vec())
+    fn timestamps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let times = self.engine.lock(py)?.inner.timestamps_s().to_vec();
+        Ok(to_numpy(py, times))
     }
 
     /// The poses pushed so far as a :class:`Trajectory` (a copy), or ``None`` before the second.
     #[getter]
-    fn trajectory(&self) -> Option<Trajectory> {
+    fn trajectory(&self, py: Python<'_>) -> PyResult<Option<Trajectory>> {
+        let this = self.engine.lock(py)?;
         // The metric is named only where it is not the trajectory's own default.
-        let metric = Some(self.inner.metric()).filter(|&metric| metric != loops_core::MetricSpec::default());
-        self.inner.trajectory().map(|traj| Trajectory::read(traj.clone(), None, metric))
+        let metric = Some(this.inner.metric()).filter(|&metric| metric != loops_core::MetricSpec::default());
+        Ok(this.inner.trajectory().map(|traj| Trajectory::read(traj.clone(), None, metric)))
     }
 
     /// The live loop components so far as a :class:`~inexact_loops.Table`, one row a component,
@@ -433,8 +462,9 @@ impl OnlineLoops {
     ///     ([0, 1, 2, 3], [True, True, False, True], [0, 1, 3, 3])
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let cs: Vec<&loops_core::OnlineComponent> = self.inner.components().map(|(_, c)| c).collect();
-        let t = self.inner.timestamps_s();
+        let this = self.engine.lock(py)?;
+        let cs: Vec<&loops_core::OnlineComponent> = this.inner.components().map(|(_, c)| c).collect();
+        let t = this.inner.timestamps_s();
         table(
             py,
             [
@@ -481,30 +511,32 @@ impl Update {
     /// An unpickled update is data only: it names no engine, so it cannot be offered.
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let s: UpdateState = crate::pickling::restore(cls.py(), "Update", state)?;
-        let inner = loops_core::Update {
-            first_pose: s.first_pose,
-            pose: s.pose,
-            runs: s
-                .runs
-                .into_iter()
-                .map(|(row, start, end, component, closest)| loops_core::RowRun {
-                    row,
-                    run: loops_core::Run { start, end },
-                    component,
-                    closest,
-                })
-                .collect(),
-            created: s.created,
-            extended: s.extended,
-            merged: s
-                .merged
-                .into_iter()
-                .map(|(pose, retired, survivor)| loops_core::Merge { pose, retired, survivor })
-                .collect(),
-            loop_duration_s: s.loop_duration_s,
-        };
-        Ok(Self { inner: Arc::new(inner), origin: (u64::MAX, 0, 0) })
+        crate::pickling::restoring(cls.py(), "Update", || {
+            let s: UpdateState = crate::pickling::restore(cls.py(), "Update", state)?;
+            let inner = loops_core::Update {
+                first_pose: s.first_pose,
+                pose: s.pose,
+                runs: s
+                    .runs
+                    .into_iter()
+                    .map(|(row, start, end, component, closest)| loops_core::RowRun {
+                        row,
+                        run: loops_core::Run { start, end },
+                        component,
+                        closest,
+                    })
+                    .collect(),
+                created: s.created,
+                extended: s.extended,
+                merged: s
+                    .merged
+                    .into_iter()
+                    .map(|(pose, retired, survivor)| loops_core::Merge { pose, retired, survivor })
+                    .collect(),
+                loop_duration_s: s.loop_duration_s,
+            };
+            Ok(Self { inner: Arc::new(inner), origin: (u64::MAX, 0, 0) })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {

@@ -6,6 +6,7 @@ use pyo3::types::{PyDict, PyTuple};
 use crate::error::{Failure, invalid_parameter};
 use crate::py_online::{OnlineLoops, Update};
 use crate::py_separation::{Separation, SeparationArg};
+use crate::shared::Shared;
 use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 
 /// Picks loop-closure candidates from each :class:`Update` of an :class:`OnlineLoops`, as a
@@ -44,9 +45,19 @@ use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 ///     ...     for c in sampler.offer(online, update):
 ///     ...         print(c.keyframe, c.j, c.first)
 ///     50 0 True
-#[pyclass(module = "inexact_loops._core")]
+///
+/// Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`').
+#[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct OnlineSampler {
+    /// Its options (the sampler's own copy is in `state`).
+    options: OnlineSamplerOptions,
+    state: Shared<SamplerState>,
+}
+
+/// What an `OnlineSampler` changes as updates are offered.
+#[derive(Debug)]
+struct SamplerState {
     inner: loops_core::OnlineSampler,
     /// The update offered last: (engine, rebuild count, push count), as [`Update::origin`].
     offered: Option<(u64, u64, u64)>,
@@ -110,11 +121,11 @@ impl OnlineSampler {
         };
         let options = OnlineSamplerOptions { rate, cap, first_on_appearance, separation, seed };
         let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
-        Ok(Self { inner, offered: None })
+        Ok(Self { options: *inner.options(), state: Shared::new(SamplerState { inner, offered: None }) })
     }
 
     fn __repr__(&self) -> String {
-        let o = self.inner.options();
+        let o = &self.options;
         let cap = match o.cap {
             Cap::None => String::new(),
             Cap::PerMinute(c) => format!(", cap_per_minute={c}"),
@@ -152,8 +163,11 @@ impl OnlineSampler {
     ///     >>> update = online.push_many([0.0, 1.0, 2.0], [0.0, 0.1, 0.0])
     ///     >>> [c.pair for c in sampler.offer(online, update) if c.first]
     ///     [(0, 1)]
-    fn offer(&mut self, online: PyRef<'_, OnlineLoops>, update: PyRef<'_, Update>) -> PyResult<Vec<Candidate>> {
-        let latest = (online.serial, online.inner.rebuild_count(), online.pushes);
+    fn offer(&self, py: Python<'_>, online: &OnlineLoops, update: &Update) -> PyResult<Vec<Candidate>> {
+        // The sampler, then the engine: the one order in which two objects are held together.
+        let mut this = self.state.lock(py)?;
+        let engine = online.engine.lock(py)?;
+        let latest = (online.serial, engine.inner.rebuild_count(), engine.pushes);
         if update.origin != latest {
             return Err(invalid_parameter(format!(
                 "this update (poses {}..={}) is not the last push of this OnlineLoops: offer each push's update \
@@ -161,29 +175,29 @@ impl OnlineSampler {
                 update.inner.first_pose, update.inner.pose
             )));
         }
-        if self.offered == Some(latest) {
+        if this.offered == Some(latest) {
             return Err(invalid_parameter(format!(
                 "this update (poses {}..={}) was already offered to this sampler",
                 update.inner.first_pose, update.inner.pose
             )));
         }
         let candidates =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.inner.offer(&online.inner, &update.inner)))
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| this.inner.offer(&engine.inner, &update.inner)))
                 .map_err(|payload| PyErr::from(Failure::Panic(crate::panic_message(payload.as_ref()))))?;
-        self.offered = Some(latest);
+        this.offered = Some(latest);
         Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
     }
 
     /// σ_ρ's rate: candidates per component per pose.
     #[getter]
     fn rate(&self) -> f64 {
-        self.inner.options().rate
+        self.options.rate
     }
 
     /// The cap per minute per component, or ``None``.
     #[getter]
     fn cap_per_minute(&self) -> Option<f64> {
-        match self.inner.options().cap {
+        match self.options.cap {
             Cap::PerMinute(c) => Some(c),
             _ => None,
         }
@@ -192,7 +206,7 @@ impl OnlineSampler {
     /// The cap per metre of travel per component, or ``None``.
     #[getter]
     fn cap_per_metre(&self) -> Option<f64> {
-        match self.inner.options().cap {
+        match self.options.cap {
             Cap::PerMetre(c) => Some(c),
             _ => None,
         }
@@ -201,19 +215,19 @@ impl OnlineSampler {
     /// Whether a component's first appearance brings a candidate (P1 online).
     #[getter]
     fn first_on_appearance(&self) -> bool {
-        self.inner.options().first_on_appearance
+        self.options.first_on_appearance
     }
 
     /// The separation the candidates keep (:class:`Separation`).
     #[getter]
     fn separation(&self) -> Separation {
-        Separation { inner: self.inner.options().separation }
+        Separation { inner: self.options.separation }
     }
 
     /// The seed.
     #[getter]
     fn seed(&self) -> u64 {
-        self.inner.options().seed
+        self.options.seed
     }
 }
 

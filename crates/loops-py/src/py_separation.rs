@@ -31,10 +31,7 @@ pub(crate) struct Separation {
     pub(crate) inner: loops_core::Separation,
 }
 
-crate::pickling::pickled!(Separation, loops_core::Separation, |value| {
-    value.check().map_err(Failure::from)?;
-    Ok(Self { inner: value })
-});
+crate::pickling::pickled!(Separation, loops_core::Separation, |value| Ok(Self { inner: value }));
 
 #[pymethods]
 impl Separation {

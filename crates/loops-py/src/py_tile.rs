@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyTuple};
+use pyo3::types::{PyBytes, PyTuple, PyType};
 
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
@@ -115,7 +115,13 @@ impl SessionBlocks {
         let py = slf.py();
         let this = slf.get();
         let args = (PyBytes::new(py, &this.inner.to_bytes()), this.metric.name());
-        (slf.get_type(), args).into_pyobject(py)
+        (slf.get_type().getattr("_from_state")?, args).into_pyobject(py)
+    }
+
+    /// The constructor, for unpickling: its errors are `pickle.UnpicklingError`.
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, data: &[u8], metric: &str) -> PyResult<Self> {
+        crate::pickling::restoring(cls.py(), "SessionBlocks", || Self::new(data, metric))
     }
 
     fn __repr__(&self) -> String {

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyList, PyTuple};
+use pyo3::types::{PyBytes, PyList, PyTuple, PyType};
 
 use crate::convert::{float64_column, int64_column, table, to_numpy};
 use crate::detached;
@@ -13,6 +13,7 @@ use crate::error::{Failure, invalid_parameter};
 use crate::py_separation::SeparationArg;
 use crate::py_tile::{Tile, TileScan, TileSummary};
 use crate::py_trajectory::Trajectory;
+use crate::shared::Shared;
 use loops_core::{SampleSize, Sampler, SamplerKind};
 
 /// A column of names as a numpy array of ``str``.
@@ -27,10 +28,11 @@ fn names_column<'py>(py: Python<'py>, values: Vec<&str>) -> PyResult<Bound<'py, 
 /// A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
 /// the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
 /// pairs (:func:`draw_tile`), until the draw is :attr:`done`. Its samples are those of
-/// :func:`sample_fleet` with the same sampler, seed and options, pair for pair.
-#[pyclass(module = "inexact_loops._core")]
+/// :func:`sample_fleet` with the same sampler, seed and options, pair for pair. Threads may share
+/// it: its calls run one at a time.
+#[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct KeyedDraw {
-    inner: loops_core::KeyedDraw,
+    inner: Shared<loops_core::KeyedDraw>,
     merged: Arc<loops_core::MergedLoops>,
     names: Vec<String>,
     starts: Vec<usize>,
@@ -60,50 +62,51 @@ pub(crate) fn plan_draw(
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
         Ok(loops_core::KeyedDraw::new(&spec, &stats, &keep)?)
     })?;
-    Ok(KeyedDraw { inner, merged: kept, names: names.to_vec(), starts, skip_trivial })
+    Ok(KeyedDraw { inner: Shared::new(inner), merged: kept, names: names.to_vec(), starts, skip_trivial })
 }
 
 #[pymethods]
 impl KeyedDraw {
-    fn __repr__(&self) -> String {
-        format!(
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let draw = self.inner.lock(py)?;
+        Ok(format!(
             "KeyedDraw(sampler={:?}, {} groups, {} candidates, {})",
-            self.inner.sampler().name(),
-            self.inner.groups(),
-            self.inner.available(),
-            if self.inner.picks().is_some() { "done" } else { "passes to run" }
-        )
+            draw.sampler().name(),
+            draw.groups(),
+            draw.available(),
+            if draw.picks().is_some() { "done" } else { "passes to run" }
+        ))
     }
 
     /// Whether every pass has run (:meth:`table` then holds the samples).
     #[getter]
-    fn done(&self) -> bool {
-        self.inner.picks().is_some()
+    fn done(&self, py: Python<'_>) -> PyResult<bool> {
+        Ok(self.inner.lock(py)?.picks().is_some())
     }
 
     /// Number of groups (components with a pair to sample; 0 for σ_α).
     #[getter]
-    fn groups(&self) -> usize {
-        self.inner.groups()
+    fn groups(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.inner.lock(py)?.groups())
     }
 
     /// Number of candidate pairs.
     #[getter]
-    fn available(&self) -> u64 {
-        self.inner.available()
+    fn available(&self, py: Python<'_>) -> PyResult<u64> {
+        Ok(self.inner.lock(py)?.available())
     }
 
     /// The warnings of the quotas, as text.
     #[getter]
-    fn warnings(&self) -> Vec<String> {
-        self.inner.warnings().iter().map(ToString::to_string).collect()
+    fn warnings(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        Ok(self.inner.lock(py)?.warnings().iter().map(ToString::to_string).collect())
     }
 
     /// What the pending pass asks of the tiles: ``(tile index, TileDrawRequest)`` for every
     /// tile asked something (indices in the merge's order, :attr:`TiledFleetLoops.tiles`);
     /// empty once :attr:`done`.
     fn requests(&self, py: Python<'_>) -> PyResult<Vec<(usize, TileDrawRequest)>> {
-        let Some(request) = self.inner.request().cloned() else { return Ok(Vec::new()) };
+        let Some(request) = self.inner.lock(py)?.request().cloned() else { return Ok(Vec::new()) };
         let merged = Arc::clone(&self.merged);
         let parts = detached(py, move || Ok(loops_core::tile_requests(&merged, &request)))?;
         Ok(parts
@@ -125,13 +128,15 @@ impl KeyedDraw {
     /// Raises:
     ///     TypeError: an offer of another type.
     #[pyo3(signature = (offers, *, complete=true))]
-    fn absorb(&mut self, offers: Vec<PyRef<'_, DrawCandidates>>, complete: bool) {
+    fn absorb(&self, py: Python<'_>, offers: Vec<PyRef<'_, DrawCandidates>>, complete: bool) -> PyResult<()> {
+        let mut draw = self.inner.lock(py)?;
         for offer in offers {
-            self.inner.absorb(offer.inner.clone());
+            draw.absorb(offer.inner.clone());
         }
         if complete {
-            self.inner.complete();
+            draw.complete();
         }
+        Ok(())
     }
 
     /// The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
@@ -141,10 +146,11 @@ impl KeyedDraw {
     /// Raises:
     ///     InvalidParameterError: before the draw is :attr:`done`.
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let Some(picks) = self.inner.picks() else {
+        let draw = self.inner.lock(py)?;
+        let Some(picks) = draw.picks() else {
             return Err(invalid_parameter("the draw is not done: answer its requests() first".to_owned()));
         };
-        let inner = &self.inner;
+        let inner = &*draw;
         crate::warning::warn_sample_warnings(
             py,
             inner.warnings(),
@@ -211,7 +217,13 @@ impl TileDrawRequest {
         let labels: Vec<u8> = this.labels.iter().flat_map(|l| l.to_le_bytes()).collect();
         let args =
             (Tile { inner: this.tile.clone() }, PyBytes::new(py, &labels), PyBytes::new(py, &this.request.to_bytes()));
-        (slf.get_type(), args).into_pyobject(py)
+        (slf.get_type().getattr("_from_state")?, args).into_pyobject(py)
+    }
+
+    /// The constructor, for unpickling: its errors are `pickle.UnpicklingError`.
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, tile: &Tile, labels: &[u8], request: &[u8]) -> PyResult<Self> {
+        crate::pickling::restoring(cls.py(), "TileDrawRequest", || Self::new(tile, labels, request))
     }
 
     fn __repr__(&self) -> String {

@@ -196,21 +196,13 @@ impl TiledFleetLoops {
 
     #[classmethod]
     fn _from_state(cls: &Bound<'_, pyo3::types::PyType>, state: &[u8]) -> PyResult<Self> {
-        let py = cls.py();
-        let (names, components, times, pairs): TiledState = crate::pickling::restore(py, "TiledFleetLoops", state)?;
-        let invalid = |reason: String| crate::pickling::invalid(py, "TiledFleetLoops", reason);
-        let n = names.len();
-        let fits = |[a, b]: [usize; 2]| a <= b && b < n;
-        if times.len() != components.len() {
-            return Err(invalid(format!("{} components but {} time extents", components.len(), times.len())));
-        }
-        if let Some((k, c)) = components.iter().enumerate().find(|(k, c)| c.id != *k || !fits(c.sessions)) {
-            return Err(invalid(format!("component {k} has id {} and sessions {:?}, of {n}", c.id, c.sessions)));
-        }
-        if let Some((k, p)) = pairs.iter().enumerate().find(|(_, p)| !fits(p.sessions)) {
-            return Err(invalid(format!("session pair {k} has sessions {:?}, of {n}", p.sessions)));
-        }
-        Ok(Self { names, components, times, pairs, merged: None })
+        crate::pickling::restoring(cls.py(), "TiledFleetLoops", || {
+            let py = cls.py();
+            let (names, components, times, pairs): TiledState = crate::pickling::restore(py, "TiledFleetLoops", state)?;
+            loops_core::check_fleet_tables(names.len(), &components, &times, &pairs)
+                .map_err(crate::error::Failure::from)?;
+            Ok(Self { names, components, times, pairs, merged: None })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {

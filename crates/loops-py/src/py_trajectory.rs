@@ -81,18 +81,20 @@ impl Trajectory {
 
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
-        let value: (loops_core::Trajectory, Option<(usize, usize)>, Option<String>) =
-            crate::pickling::restore(cls.py(), "Trajectory", state)?;
-        let (inner, plane_axes, metric) = value;
-        let metric = match metric {
-            None => None,
-            Some(text) => {
-                let spec: loops_core::MetricSpec = text.parse().map_err(Failure::from)?;
-                spec.validate(&inner).map_err(Failure::from)?;
-                Some(spec)
-            }
-        };
-        Ok(Self { inner: Arc::new(inner), plane_axes, metric })
+        crate::pickling::restoring(cls.py(), "Trajectory", || {
+            let value: (loops_core::Trajectory, Option<(usize, usize)>, Option<String>) =
+                crate::pickling::restore(cls.py(), "Trajectory", state)?;
+            let (inner, plane_axes, metric) = value;
+            let metric = match metric {
+                None => None,
+                Some(text) => {
+                    let spec: loops_core::MetricSpec = text.parse().map_err(Failure::from)?;
+                    spec.validate(&inner).map_err(Failure::from)?;
+                    Some(spec)
+                }
+            };
+            Ok(Self { inner: Arc::new(inner), plane_axes, metric })
+        })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {

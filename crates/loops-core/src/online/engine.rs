@@ -318,14 +318,23 @@ impl OnlineLoops {
     ///
     /// # Errors
     /// As [`push`](Self::push), for the first bad pose; none of the poses is added then.
+    /// [`Error::Interrupted`] when an [`Interrupt`] installed on this thread is interrupted: it
+    /// is looked at before every pose, and the poses before the one it stopped at stay added, as
+    /// their pushes would have left them ([`len`](Self::len) says how many); the rest are not.
     pub fn push_many(&mut self, timestamps_s: &[f64], coords: &[f64]) -> Result<Update> {
         let first = self.len();
-        self.append_checked(timestamps_s, coords)?;
-        let mut update = Update { first_pose: first, pose: self.len().saturating_sub(1), ..Update::default() };
+        self.check_new_poses(timestamps_s, coords)?;
+        let dim = self.dim();
+        let pose = (first + timestamps_s.len()).saturating_sub(1);
+        let mut update = Update { first_pose: first, pose, ..Update::default() };
         let ids_before = self.components.len() as ComponentId;
         let metric = self.metric;
+        let interrupt = Interrupt::current();
         with_metric!(&metric, m => {
-            for n in first..self.len() {
+            for (k, &t_s) in timestamps_s.iter().enumerate() {
+                interrupt.check()?;
+                let n = first + k;
+                self.traj.push_pose(t_s, &coords[k * dim..(k + 1) * dim]);
                 self.grow(m, n);
                 let mut block = Block::default();
                 self.scan_row(&Swapped(m), n, &mut block);
@@ -343,8 +352,9 @@ impl OnlineLoops {
     }
 
     /// Checks the new poses as [`Trajectory::new`] and the metric check them, naming each by
-    /// its index in the whole trajectory, and appends them; on an error nothing is appended.
-    fn append_checked(&mut self, timestamps_s: &[f64], coords: &[f64]) -> Result<()> {
+    /// its index in the whole trajectory, and raises the rounding scale to theirs; on an error
+    /// nothing changes. [`push_many`](Self::push_many) then appends them one by one.
+    fn check_new_poses(&mut self, timestamps_s: &[f64], coords: &[f64]) -> Result<()> {
         let (dim, first) = (self.dim(), self.len());
         if !coords.len().is_multiple_of(dim) {
             return Err(Error::RaggedCoordinates { len: coords.len(), dim });
@@ -376,9 +386,6 @@ impl OnlineLoops {
         self.metric.validate(&fresh).map_err(shift)?;
         let scale = with_metric!(&self.metric, m => m.rounding_scale(&fresh));
         self.scale = self.scale.max(scale);
-        for (k, &t_s) in timestamps_s.iter().enumerate() {
-            self.traj.push_pose(t_s, &coords[k * dim..(k + 1) * dim]);
-        }
         Ok(())
     }
 
@@ -769,9 +776,11 @@ impl OnlineLoops {
             return Err(Error::TooFewPoses { count: n });
         }
         let (row_offsets, runs) = transpose_runs(n, |k| &self.runs[self.row_offsets[k]..self.row_offsets[k + 1]])?;
+        let interrupt = Interrupt::current();
         with_metric!(&self.metric, m => {
             let mut closest = try_with_capacity(runs.len(), "the closest columns of S_gamma")?;
             for i in 0..n {
+                interrupt.check()?;
                 for run in &runs[row_offsets[i]..row_offsets[i + 1]] {
                     let span = (run.start as usize, run.end as usize);
                     closest.push(closest_column(m, &self.traj, &self.balls, self.arc.margin, i, span) as u32);

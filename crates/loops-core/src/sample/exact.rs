@@ -7,7 +7,6 @@ use super::keyed::{DrawRun, DrawStats, KeyedDraw, RunHolder, draw_candidates};
 use super::{Sample, Sampler, Samples};
 use crate::baseline::baseline_pairs;
 use crate::error::Result;
-use crate::interrupt::Interrupt;
 use crate::loops::Loops;
 use crate::memory::{try_collect, try_with_capacity};
 use crate::metric::Metric;
@@ -47,7 +46,7 @@ impl MetricSpec {
 /// for a budget of 0, a rate out of range or a bad baseline parameter; [`Error::NotApplicable`](crate::Error::NotApplicable)
 /// for `skip_trivial` with a baseline; [`Error::TooManySamples`](crate::Error::TooManySamples) for a size that makes more than
 /// [`MAX_SAMPLES`](crate::MAX_SAMPLES) samples, before any is drawn; [`Error::OutOfMemory`](crate::Error::OutOfMemory);
-/// [`Error::Interrupted`](crate::Error::Interrupted) when an [`Interrupt`] installed on this thread is interrupted.
+/// [`Error::Interrupted`](crate::Error::Interrupted) when an [`Interrupt`](crate::Interrupt) installed on this thread is interrupted.
 ///
 /// # Examples
 /// ```
@@ -88,7 +87,6 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
     let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
     let mut warnings = Vec::new();
     sampler.check_applicable()?;
-    let interrupt = Interrupt::current();
     let wanted = |c: usize| keep(c);
     let (pairs, groups, available): (Vec<Picked>, usize, u64) = match (kind, kind.baseline(&sampler.baseline)) {
         (_, Some(baseline)) => {
@@ -102,8 +100,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
             let mut draw = KeyedDraw::new(sampler, &stats, &wanted)?;
             let holder = LoopsHolder { traj, metric, loops };
             while let Some(request) = draw.request().cloned() {
-                interrupt.check()?;
-                draw.absorb(draw_candidates(&holder, &request));
+                draw.absorb(draw_candidates(&holder, &request)?);
                 draw.complete();
             }
             warnings.extend(draw.warnings().iter().cloned());

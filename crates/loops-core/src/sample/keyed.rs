@@ -32,6 +32,7 @@ use rayon::prelude::*;
 use super::{SamplerKind, group_rng};
 use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count};
 use crate::error::{Error, Result};
+use crate::interrupt::Interrupt;
 use crate::sample::Sampler;
 
 /// Columns per key stream.
@@ -288,18 +289,27 @@ fn return_column(holder: &dyn RunHolder, i: usize, start: usize, end: usize) -> 
     start + back
 }
 
-/// The offers of `holder` to a pass: O(its runs + the pairs offered), rows in parallel.
-pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> DrawCandidates {
+/// The offers of `holder` to a pass: O(its runs + the pairs offered, + the length of each
+/// diagonal run asked for its return column), rows in parallel.
+///
+/// # Errors
+/// [`Error::Interrupted`] when the [`Interrupt`] installed on this thread is interrupted: it is
+/// looked at before every row.
+pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> Result<DrawCandidates> {
     let index: HashMap<usize, &ComponentRequest> = request.components.iter().map(|c| (c.id, c)).collect();
     let rows = holder.rows();
     let chunks: Vec<std::ops::Range<usize>> =
         (rows.start..rows.end).step_by(ROWS_PER_TASK).map(|s| s..(s + ROWS_PER_TASK).min(rows.end)).collect();
+    let interrupt = Interrupt::current();
     let parts: Vec<DrawCandidates> = chunks
         .into_par_iter()
         .map(|chunk| {
             let mut out = DrawCandidates::default();
             let mut best: BTreeMap<usize, DrawCandidate> = BTreeMap::new();
             for i in chunk {
+                // One row costs its runs, its pairs offered and, on the diagonal, the run's
+                // length: a parked robot's rows span the whole stop.
+                interrupt.check()?;
                 let mut row_best: BTreeMap<usize, DrawCandidate> = BTreeMap::new();
                 holder.for_each_run(i, &mut |run| {
                     let Some(req) = index.get(&run.component) else { return };
@@ -359,9 +369,9 @@ pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> 
                 out.rows.extend(row_best.into_values());
             }
             out.best.extend(best.into_values());
-            out
+            Ok(out)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let mut all = DrawCandidates::default();
     for part in parts {
         all.pool.extend(part.pool);
@@ -369,7 +379,7 @@ pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> 
         all.best.extend(part.best);
     }
     all.reduce();
-    all
+    Ok(all)
 }
 
 /// A pair a keyed draw chose.

@@ -173,8 +173,23 @@ struct SamplesState {
 impl TryFrom<SamplesState> for Samples {
     type Error = Error;
 
-    /// Checks that every pair (i ≤ j) is a pair of poses of the samples' trajectory.
+    /// Checks that every pair (i ≤ j) is a pair of poses of the samples' trajectory, and that
+    /// every time is finite and every distance finite and at least 0.
     fn try_from(state: SamplesState) -> Result<Self> {
+        let unmeasurable = state.rows.iter().position(|row| {
+            !(row.t_s.is_finite() && row.t_prime_s.is_finite())
+                || row.distance.is_some_and(|d| !(d.is_finite() && d >= 0.0))
+        });
+        if let Some(k) = unmeasurable {
+            let row = &state.rows[k];
+            return Err(Error::InvalidState {
+                what: "Samples",
+                reason: format!(
+                    "sample {k} has the times ({}, {}) s and the distance {:?}",
+                    row.t_s, row.t_prime_s, row.distance
+                ),
+            });
+        }
         let bad = state
             .rows
             .iter()
