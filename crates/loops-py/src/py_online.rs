@@ -2,7 +2,6 @@
 //! changed). The candidate sampler is in `py_online_sampler`.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -16,10 +15,6 @@ use crate::py_loops::Loops;
 use crate::py_metric::MetricArg;
 use crate::py_trajectory::Trajectory;
 use loops_core::ComponentId;
-
-/// Gives every `OnlineLoops` a number of its own, so that an `Update` names the engine it came
-/// from.
-static SERIALS: AtomicU64 = AtomicU64::new(0);
 
 /// Runs `f` with the GIL held (a push takes microseconds: releasing the GIL would cost more),
 /// turning a panic into `InternalError`.
@@ -50,7 +45,7 @@ fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
 ///
 /// Raises:
 ///     InvalidParameterError: gamma not positive and finite, an unknown metric, a metric that
-///         does not take ``dim`` coordinates.
+///         does not take ``dim`` coordinates, ``dim`` above 65,536.
 ///
 /// Example:
 ///     A 95% circle of radius 10 m, pushed pose by pose: its ends come within γ of each other.
@@ -69,10 +64,6 @@ fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
 #[derive(Debug)]
 pub(crate) struct OnlineLoops {
     pub(crate) inner: loops_core::OnlineLoops,
-    /// This engine's number (see [`SERIALS`]).
-    pub(crate) serial: u64,
-    /// Pushes so far (an `Update` is the last one's when its count is this).
-    pub(crate) pushes: u64,
     /// The number of poses the last rebuild started from (0: none, or cleared): a pickle
     /// replays the same rebuild and pushes.
     rebuilt_len: usize,
@@ -93,8 +84,6 @@ pub(crate) struct OnlineLoops {
 #[derive(Debug)]
 pub(crate) struct Update {
     pub(crate) inner: Arc<loops_core::Update>,
-    /// The engine it came from ([`OnlineLoops::serial`]), its rebuild count and push count then.
-    pub(crate) origin: (u64, u64, u64),
 }
 
 /// What a pickled `OnlineLoops` holds: enough to replay it exactly.
@@ -123,11 +112,6 @@ struct UpdateState {
 }
 
 impl OnlineLoops {
-    fn update(&mut self, update: loops_core::Update) -> Update {
-        self.pushes += 1;
-        Update { inner: Arc::new(update), origin: (self.serial, self.inner.rebuild_count(), self.pushes) }
-    }
-
     /// `point` as `dim` coordinates.
     fn point(&self, py: Python<'_>, point: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
         let array = real_array(py, point, "point")?;
@@ -150,7 +134,7 @@ impl OnlineLoops {
     fn new(gamma: f64, dim: usize, metric: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let spec = MetricArg::spec_from_py(metric, "OnlineLoops")?;
         let inner = loops_core::OnlineLoops::new(spec, dim, gamma).map_err(Failure::from)?;
-        Ok(Self { inner, serial: SERIALS.fetch_add(1, Ordering::Relaxed), pushes: 0, rebuilt_len: 0 })
+        Ok(Self { inner, rebuilt_len: 0 })
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
@@ -178,8 +162,6 @@ impl OnlineLoops {
         let spec: loops_core::MetricSpec = state.metric.parse().map_err(fail)?;
         let mut this = Self {
             inner: loops_core::OnlineLoops::new(spec, state.dim, state.gamma).map_err(fail)?,
-            serial: SERIALS.fetch_add(1, Ordering::Relaxed),
-            pushes: 0,
             rebuilt_len: state.rebuilt_len,
         };
         let (rebuilt, dim) = (state.rebuilt_len, state.dim);
@@ -245,7 +227,7 @@ impl OnlineLoops {
     fn push(&mut self, py: Python<'_>, t: f64, point: &Bound<'_, PyAny>) -> PyResult<Update> {
         let point = self.point(py, point)?;
         let update = attached(|| Ok(self.inner.push(t, &point)?))?;
-        Ok(self.update(update))
+        Ok(Update { inner: Arc::new(update) })
     }
 
     /// Adds several poses at once, as that many :meth:`push` es, with one :class:`Update`
@@ -285,7 +267,7 @@ impl OnlineLoops {
         }
         let inner = &mut self.inner;
         let update = detached(py, move || Ok(inner.push_many(&t, &coords)?))?;
-        Ok(self.update(update))
+        Ok(Update { inner: Arc::new(update) })
     }
 
     /// Restarts from ``trajectory``, the poses so far as the back end corrected them after a
@@ -503,8 +485,9 @@ impl Update {
                 .map(|(pose, retired, survivor)| loops_core::Merge { pose, retired, survivor })
                 .collect(),
             loop_duration_s: s.loop_duration_s,
+            stamp: loops_core::PushStamp::default(),
         };
-        Ok(Self { inner: Arc::new(inner), origin: (u64::MAX, 0, 0) })
+        Ok(Self { inner: Arc::new(inner) })
     }
 
     fn __eq__(&self, other: PyRef<'_, Self>) -> bool {

@@ -48,8 +48,6 @@ use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 #[derive(Debug)]
 pub(crate) struct OnlineSampler {
     inner: loops_core::OnlineSampler,
-    /// The update offered last: (engine, rebuild count, push count), as [`Update::origin`].
-    offered: Option<(u64, u64, u64)>,
 }
 
 /// A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
@@ -110,7 +108,7 @@ impl OnlineSampler {
         };
         let options = OnlineSamplerOptions { rate, cap, first_on_appearance, separation, seed };
         let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
-        Ok(Self { inner, offered: None })
+        Ok(Self { inner })
     }
 
     fn __repr__(&self) -> String {
@@ -153,24 +151,11 @@ impl OnlineSampler {
     ///     >>> [c.pair for c in sampler.offer(online, update) if c.first]
     ///     [(0, 1)]
     fn offer(&mut self, online: PyRef<'_, OnlineLoops>, update: PyRef<'_, Update>) -> PyResult<Vec<Candidate>> {
-        let latest = (online.serial, online.inner.rebuild_count(), online.pushes);
-        if update.origin != latest {
-            return Err(invalid_parameter(format!(
-                "this update (poses {}..={}) is not the last push of this OnlineLoops: offer each push's update \
-                 once, in order",
-                update.inner.first_pose, update.inner.pose
-            )));
-        }
-        if self.offered == Some(latest) {
-            return Err(invalid_parameter(format!(
-                "this update (poses {}..={}) was already offered to this sampler",
-                update.inner.first_pose, update.inner.pose
-            )));
-        }
-        let candidates =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.inner.offer(&online.inner, &update.inner)))
-                .map_err(|payload| PyErr::from(Failure::Panic(crate::panic_message(payload.as_ref()))))?;
-        self.offered = Some(latest);
+        let offered =
+            std::panic::AssertUnwindSafe(|| self.inner.offer(&online.inner, &update.inner).map_err(Failure::from));
+        let candidates = std::panic::catch_unwind(offered)
+            .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
+            .map_err(PyErr::from)?;
         Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
     }
 
