@@ -1,17 +1,15 @@
-"""The parts of the attack sweep (issue 15) that are not about file contents: calls with wrong
-types and values through the whole Python API, `loops run` killed at seeded moments, runs at
-the same time, and Ctrl-C or a kill while `loops` or Python reads a file-compressed rosbag2 bag
-(no decompressed copy may stay in the temporary folder). Each part counts its cases and fails on
-a panic, an abort, a lost or half-written result, or a file left behind. (Corrupted and crafted
-files: `crates/loops-io/tests/attack_sweep.rs`.)
+"""The parts of the attack sweep that are not about file contents: calls with wrong types and
+values through the whole Python API, `loops run` killed at seeded moments, runs at the same
+time, output folders holding a user's leftover-shaped entries and outputs aimed at the logs,
+Ctrl-C or a kill while `loops` or Python reads a file-compressed rosbag2 bag (no decompressed
+copy may stay in the temporary folder), forged pickles, bad arguments to every console script,
+threads sharing one engine, and the C ABI attacked from C under AddressSanitizer. Each part
+counts its cases and fails on a panic, an abort, a hang, a lost, overwritten or half-written
+result, a file left behind, or an error of more than one line or of the wrong class.
+(Corrupted and crafted files: `crates/loops-io/tests/attack_sweep.rs`.)
 
-
-the same time, forged pickles, bad arguments to every console script and threads sharing one
-engine. Each part counts its cases and fails on a panic, an abort, a hang, a lost or
-half-written result, an error of more than one line or of the wrong class. (Corrupted and
-crafted files: `crates/loops-io/tests/attack_sweep.rs`.)
-
-Seeded: `LOOPS_SWEEP_SEED` changes the seed, `LOOPS_SWEEP_ROUNDS` the number of kills.
+Seeded: `LOOPS_SWEEP_SEED` changes the seed, `LOOPS_SWEEP_ROUNDS` the number of kills (and a
+hundredth of the C ABI's cases).
 """
 
 from __future__ import annotations
@@ -19,6 +17,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
@@ -30,6 +29,7 @@ import pytest
 
 SEED = int(os.environ.get("LOOPS_SWEEP_SEED", "15"))
 ROUNDS = int(os.environ.get("LOOPS_SWEEP_ROUNDS", "8"))
+ROOT = Path(__file__).resolve().parents[1]
 FILES = {"components.csv", "samples.csv", "loop_duration.csv", "summary.json", "report.html"}
 
 #: Runs in a child: a panic that escapes, or an abort, ends the child, not this test.
@@ -81,6 +81,7 @@ PLAUSIBLE = {
     "epsilon_s": [1.0, -1.0, float("inf")],
     "axes": [(0, 1), (0, 0), (5, 9), ()],
     "path": ["x", "/dev/null", "/nonexistent/x"],
+    "dim": [2, 0, 2**16 + 1, 2**62],
 }
 # Calls that would legitimately run long get only modest numbers.
 SLOW = {"urban_drive", "urban_fleet"}
@@ -744,3 +745,65 @@ def test_threads_sharing_one_engine_never_collide() -> None:
     report = json.loads(child.stdout.strip().splitlines()[-1])
     print(f"threads: {report['counts']}")
     assert report["hung"] == 0 and report["counts"]["unexpected"] == 0, report["bad"]
+
+
+def test_the_c_abi_attacked_from_c_under_address_sanitizer(tmp_path: Path) -> None:
+    """`crates/loops-capi/tests/c/attacks.c`, built with AddressSanitizer and
+    UndefinedBehaviorSanitizer against the debug `libinexact_loops.a`: a seeded sweep of cap
+    kinds outside the enum, huge dimensions and counts, engines freed and made again, updates
+    offered twice and NULL pointers; every call returns the status it deserves, with nothing
+    read or written out of bounds and nothing leaked."""
+    cc = next(
+        (
+            shutil.which(n)
+            for n in (os.environ.get("CC", ""), "cc", "gcc", "clang")
+            if n and shutil.which(n)
+        ),
+        None,
+    )
+    cargo = shutil.which("cargo")
+    if cc is None or cargo is None:
+        pytest.skip("the C ABI sweep needs cargo and a C compiler (cc, gcc or clang)")
+    subprocess.run([cargo, "build", "--quiet", "-p", "loops-capi"], cwd=ROOT, check=True)
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    library = (target if target.is_absolute() else ROOT / target) / "debug" / "libinexact_loops.a"
+    binary = tmp_path / "attacks"
+    sanitizers = ["-fsanitize=address,undefined", "-fno-sanitize-recover=undefined"]
+    build = [cc, "-std=c11", "-g", "-O1", "-fno-omit-frame-pointer", "-Wall", "-Wextra", "-Werror"]
+    capi = ROOT / "crates" / "loops-capi"
+    source = [f"-I{capi / 'include'}", str(capi / "tests" / "c" / "attacks.c"), str(library)]
+    built = subprocess.run(
+        [*build, *sanitizers, *source, "-lpthread", "-ldl", "-lm", "-o", str(binary)],
+        capture_output=True,
+        text=True,
+    )
+    if built.returncode != 0 and "sanitize" in built.stderr:
+        pytest.skip(f"{cc} cannot build with AddressSanitizer here: {built.stderr[-300:]}")
+    assert built.returncode == 0, built.stderr
+    child = subprocess.run(
+        [str(binary), str(SEED), str(100 * ROUNDS)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "ASAN_OPTIONS": "detect_leaks=1:abort_on_error=0"},
+    )
+    # A negative return code is a crash; a sanitizer's report exits 1 with its report on stderr.
+    assert child.returncode == 0, (
+        f"exit {child.returncode}: {child.stdout[-2000:]}{child.stderr[-3000:]}"
+    )
+    kinds = {}
+    for line in child.stdout.splitlines():
+        name, cases, refused, accepted = line.split()
+        kinds[name] = (int(cases), int(refused), int(accepted))
+    print(kinds)
+    assert set(kinds) == {
+        "cap_kind",
+        "dim",
+        "count",
+        "remade_engine",
+        "offered_twice",
+        "null_pointers",
+    }
+    # Every kind ran, and the bad values were among the cases.
+    assert all(cases > 0 for cases, _, _ in kinds.values()), kinds
+    assert all(kinds[k][1] > 0 for k in ("cap_kind", "dim", "count", "offered_twice")), kinds

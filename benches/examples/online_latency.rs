@@ -61,7 +61,7 @@ fn report(name: &str, traj: &Trajectory, gamma: f64) {
         let t0 = Instant::now();
         let update = online.push(traj.timestamps_s()[k], traj.point(k)).expect("valid pose");
         let t1 = Instant::now();
-        candidates += sampler.offer(&online, &update).len();
+        candidates += sampler.offer(&online, &update).expect("the last push, offered once").len();
         let t2 = Instant::now();
         push_ns.push((t1 - t0).as_nanos() as u64);
         step_ns.push((t2 - t0).as_nanos() as u64);

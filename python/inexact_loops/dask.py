@@ -27,7 +27,9 @@ tile only when they are gone (evicted, or the worker restarted). The samples are
 where the runs were found. Loop duration per pose (``loop_duration=True``) comes from each
 tile's share (:func:`~inexact_loops.scan_tile_with_duration`), added up per session. Every
 task's result depends on its inputs alone (kept runs only save work), so a worker that dies
-takes nothing with it: Dask reruns its tasks and the answer is the same.
+takes nothing with it: Dask reruns its tasks and the answer is the same. A run never waits for
+ever: its tasks that wait for a worker are sent to the running ones, and when none can take
+them for :data:`NO_WORKER_TIMEOUT_S` the run raises :class:`ClusterError` and cancels them.
 
 A session that cannot be read (a missing or corrupt log, or one whose dimension or metric
 differs from the others') is left out with a one-line error in :attr:`FleetRun.failures`; the
@@ -61,12 +63,14 @@ from typing import Any
 import numpy as np
 
 from . import _console, _core
-from .errors import InvalidParameterError, LoopsIOError
+from .errors import InvalidParameterError, LoopsError, LoopsIOError
 from .table import Table
 
 __all__ = [
     "DEFAULT_BLOCK",
     "DEFAULT_FAN_IN",
+    "NO_WORKER_TIMEOUT_S",
+    "ClusterError",
     "FleetRun",
     "find_fleet_loops_dask",
     "local_client",
@@ -108,6 +112,14 @@ RUNS_KEPT: int | None = None
 #: The share of a worker's memory limit :data:`RUNS_KEPT` ``= None`` keeps runs in (Dask
 #: spills its own data from 60% and pauses the worker at 80%; the runs are not Dask's data).
 RUNS_KEPT_SHARE = 0.5
+
+#: How long, in seconds, the tasks of a run may wait with no worker to run them (Dask's
+#: "no-worker" state: every worker gone, restarting or paused) before the run gives up with
+#: :class:`ClusterError`. A worker the cluster restarts takes a few seconds.
+NO_WORKER_TIMEOUT_S = 120.0
+
+#: How often, in seconds, a run waiting for its tasks asks the scheduler whether they can run.
+_WAIT_POLL_S = 2.0
 
 #: The tiles' runs a worker keeps, most recently used last: (run id, tile) -> (the scan task's
 #: group, TileRuns).
@@ -656,6 +668,43 @@ def _one_line(error: BaseException) -> str:
     return f"{type(error).__name__}: {text[0] if text else ''}".rstrip(": ")
 
 
+class ClusterError(LoopsError, RuntimeError):
+    """The Dask cluster could not run a run's tasks: none of its workers could take them for
+    :data:`NO_WORKER_TIMEOUT_S` seconds, or the workers running one of them died again and
+    again (Dask's ``KilledWorker``, after ``distributed.scheduler.allowed-failures``). The
+    run's tasks are cancelled: the cluster is free for the next run once it has workers."""
+
+
+def _dispatch_stranded(token: str, dask_scheduler: Any = None) -> tuple[list[str], int, int]:
+    """On the scheduler: sends the run ``token``'s tasks that wait in Dask's "no-worker" state
+    to its running workers; returns the keys of the run's tasks that still cannot run (in
+    "no-worker", or not done while no worker runs), the number of running workers and of all
+    workers.
+
+    A task with a preferred worker (``workers=``, ``allow_other_workers=True``) goes to
+    "no-worker" when no worker is running at the moment it needs one (its worker was killed
+    while the others were restarting or paused). Dask reconsiders it only when a worker joins
+    at one of its preferred addresses, never for a new worker elsewhere (a restarted worker
+    has a new address): without this it would wait for ever."""
+    running = len(dask_scheduler.running)
+    stranded = [
+        key
+        for key, task in dask_scheduler.tasks.items()
+        if task.state == "no-worker" and token in str(key)
+    ]
+    if stranded and running:
+        dask_scheduler.transitions(
+            dict.fromkeys(stranded, "processing"), stimulus_id=f"stranded-{token}-{time.time()}"
+        )
+    stuck = [
+        str(key)
+        for key, task in dask_scheduler.tasks.items()
+        if token in str(key)
+        and (task.state == "no-worker" or (running == 0 and task.state not in ("memory", "erred")))
+    ]
+    return stuck, running, len(dask_scheduler.workers)
+
+
 class _Runner:
     """Where tasks run: in this process (values), or on a Dask cluster (futures)."""
 
@@ -705,11 +754,63 @@ class _Runner:
         return [address for _, address in best]
 
     def gather(self, items: list[Any]) -> list[Any]:
+        """The values of ``items`` (futures or values), once their tasks are done.
+
+        Raises:
+            ClusterError: as :meth:`wait`; the task's own error when one failed.
+        """
         if self.client is None:
             return items
-        values = self.client.gather(items)
+        import distributed
+
+        futures = [item for item in items if _is_future(item)]
+        try:
+            self.wait(futures)
+            values = self.client.gather(items)
+        except BaseException as error:
+            # Nothing of this run is left to wait in the cluster for a worker.
+            self.client.cancel(futures)
+            if isinstance(error, distributed.KilledWorker):
+                raise ClusterError(
+                    f"workers died running a task of this run, again and again: "
+                    f"{_one_line(error)}; the run's tasks were cancelled"
+                ) from error
+            raise
         self.received += sum(len(pickle.dumps(v, protocol=5)) for v in values)
         return values
+
+    def wait(self, futures: list[Any]) -> None:
+        """Waits until ``futures`` are done (finished, failed or cancelled). Every few seconds
+        it sends this run's tasks that wait for a worker to the running workers
+        (:func:`_dispatch_stranded`), and counts how long some found none.
+
+        Raises:
+            ClusterError: the run's tasks found no worker for :data:`NO_WORKER_TIMEOUT_S`.
+        """
+        import distributed
+
+        stuck_since: float | None = None
+        pending = futures
+        while pending:
+            try:
+                distributed.wait(pending, timeout=_WAIT_POLL_S)
+                return
+            except distributed.TimeoutError:
+                pass
+            pending = [f for f in pending if not f.done()]
+            stuck, running, workers = self.client.run_on_scheduler(_dispatch_stranded, self.token)
+            if not stuck:
+                stuck_since = None
+                continue
+            now = time.monotonic()
+            stuck_since = now if stuck_since is None else stuck_since
+            if now - stuck_since >= NO_WORKER_TIMEOUT_S:
+                raise ClusterError(
+                    f"{len(stuck)} task(s) of this run (e.g. {stuck[0]!r}) found no worker "
+                    f"to run on for {now - stuck_since:.0f} s ({running} of {workers} "
+                    "worker(s) running): the cluster lost its workers, or they are paused "
+                    "(memory); the run's tasks were cancelled"
+                )
 
     def worker_bytes(self) -> int:
         """Bytes the workers sent each other so far (Dask's own count)."""

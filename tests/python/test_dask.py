@@ -9,13 +9,18 @@ their bytes, corrupt bytes fail clearly, and without ``client=`` Dask is not imp
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
 import pickle
+import random
 import signal
 import subprocess
 import sys
+import threading
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -264,6 +269,141 @@ def test_a_worker_killed_mid_run_changes_nothing(tmp_path, client):
     assert_same(tiled, fleet)
     client.wait_for_workers(2, timeout=60)
     assert killed not in set(client.run(os.getpid).values()), "the nanny started a new worker"
+
+
+class Hung(BaseException):
+    """A run past its deadline (a BaseException, so that no ``except Exception`` of the code
+    under test swallows it)."""
+
+
+@contextlib.contextmanager
+def deadline(seconds: int, what: str) -> Iterator[None]:
+    """Fails the block when it runs past ``seconds`` (SIGALRM in the main thread): a run that
+    hangs fails the test instead of hanging it."""
+
+    def expired(signum, frame) -> None:
+        raise Hung(f"{what}: still running after {seconds} s")
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def test_tasks_stranded_when_the_only_worker_dies_run_on_its_restart(tmp_path, monkeypatch):
+    """A cluster of one worker, SIGKILLed after its first scan task: the run's tasks, which
+    prefer that worker, find no running worker and wait in Dask's no-worker state, which Dask
+    never reconsiders for the worker the nanny starts at a new address. The run sends them
+    there, and gives the fleet's answer."""
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(il_dask, "NO_WORKER_TIMEOUT_S", 90.0)
+    paths = adversarial_fleet(tmp_path)
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    block = blocks_for(paths, 7)
+    with local_client(workers=1) as own:
+        own.wait_for_workers(1, timeout=60)
+        plugin = type(
+            "KillWorkerAfterPlugin",
+            (KillWorkerAfter, distributed.diagnostics.plugin.SchedulerPlugin),
+            {},
+        )("scan-tiles-", 1)
+        own.register_plugin(plugin)
+        with deadline(240, "a run whose only worker was killed"):
+            tiled = find_fleet_loops_dask(paths, 1.5, client=own, block=block, fan_in=2)
+        killed = own.run_on_scheduler(
+            lambda dask_scheduler: dask_scheduler.plugins["kill-worker-after"].killed
+        )
+    assert killed is not None, "the worker was killed during the run"
+    assert_same(tiled, fleet)
+
+
+def worker_pids(client, gone: int | None = None, want: int = 2) -> list[int]:
+    """The process ids of the cluster's workers, once ``gone`` (a worker killed) is not among
+    them: ``want`` of them, or at least one after a minute (a nanny does not always start a
+    new worker for one killed at an unlucky moment; the run must then do with the others)."""
+    started = time.monotonic()
+    with deadline(180, f"workers other than {gone}"):
+        while True:
+            pids = sorted(client.run(os.getpid, on_error="ignore").values())
+            waited_s = time.monotonic() - started
+            if gone not in pids and (len(pids) >= want or (pids and waited_s > 60)):
+                return pids
+            time.sleep(0.2)
+
+
+#: Seeded trials of a worker killed at a random moment of a run.
+KILL_TRIALS = 6
+
+
+def test_workers_killed_at_seeded_moments_never_hang_a_run(tmp_path, monkeypatch):
+    """On a cluster of two worker processes of its own, each trial SIGKILLs one worker (of
+    two, or of one when a nanny did not replace a worker killed earlier) at a seeded moment of
+    a run (or just after it): the run gives the fleet's answer, or fails with ClusterError,
+    within its deadline; then the next run on the same cluster gives the fleet's answer."""
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(il_dask, "NO_WORKER_TIMEOUT_S", 20.0)
+    paths = adversarial_fleet(tmp_path) + random_fleet(tmp_path, 8)
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    block = blocks_for(paths, 7)
+    outcomes = []
+    victim = None
+    with local_client(workers=2) as own:
+        for trial in range(KILL_TRIALS):
+            rng = random.Random(trial)
+            pids = worker_pids(own, gone=victim)
+            victim, delay_s = rng.choice(pids), rng.uniform(0.0, 1.5)
+            killer = threading.Timer(delay_s, os.kill, (victim, signal.SIGKILL))
+            killer.start()
+            what = f"trial {trial} (worker {victim} killed after {delay_s:.2f} s)"
+            try:
+                with deadline(240, what):
+                    tiled = find_fleet_loops_dask(paths, 1.5, client=own, block=block, fan_in=2)
+                assert_same(tiled, fleet)
+                outcomes.append("same")
+            except il_dask.ClusterError as error:
+                assert "\n" not in str(error)
+                outcomes.append("ClusterError")
+            finally:
+                killer.join()
+        print(outcomes)
+        worker_pids(own, gone=victim)
+        with deadline(240, "the run after the trials"):
+            tiled = find_fleet_loops_dask(paths, 1.5, client=own, block=block, fan_in=2)
+    assert_same(tiled, fleet)
+
+
+def test_a_run_whose_tasks_find_no_worker_fails_and_the_cluster_runs_the_next(
+    tmp_path, monkeypatch
+):
+    """With no running worker (all gone), a run's tasks wait in Dask's no-worker state: the
+    run raises ClusterError after NO_WORKER_TIMEOUT_S and cancels them; once workers are back
+    the next run on the same cluster gives the fleet's answer."""
+    pytest.importorskip("distributed")
+    monkeypatch.setattr(il_dask, "NO_WORKER_TIMEOUT_S", 2.0)
+    paths = random_fleet(tmp_path, 9)
+    fleet = il.find_fleet_loops(il.Fleet(paths), gamma=1.5)
+    block = blocks_for(paths, 2)
+    with local_client(workers=1) as own:
+        own.wait_for_workers(1, timeout=60)
+        own.cluster.scale(0)
+        with deadline(120, "the cluster's worker leaving"):
+            while own.scheduler_info()["workers"]:
+                time.sleep(0.1)
+        with deadline(120, "a run without workers"):
+            with pytest.raises(il_dask.ClusterError, match="found no worker to run on"):
+                find_fleet_loops_dask(paths, 1.5, client=own, block=block)
+        # Its tasks were cancelled: none is left waiting for a worker.
+        with deadline(60, "the failed run's tasks left in the cluster"):
+            while own.run_on_scheduler(lambda dask_scheduler: len(dask_scheduler.tasks)):
+                time.sleep(0.1)
+        own.cluster.scale(1)
+        own.wait_for_workers(1, timeout=60)
+        with deadline(120, "the run after it"):
+            tiled = find_fleet_loops_dask(paths, 1.5, client=own, block=block)
+    assert_same(tiled, fleet)
 
 
 def test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail(tmp_path):

@@ -443,6 +443,32 @@ def test_an_update_is_offered_once_in_order_to_its_own_engine():
         sampler.offer(online, pickle.loads(pickle.dumps(online.push(2.0, [0.9]))))
 
 
+def test_a_dimension_beyond_the_limit_is_refused_naming_it():
+    for dim in (2**62, 2**16 + 1):
+        with pytest.raises(il.InvalidParameterError, match=f"dim = {dim} is invalid"):
+            il.OnlineLoops(gamma=1.0, dim=dim)
+    widest = il.OnlineLoops(gamma=1.0, dim=2**16)
+    widest.push(0.0, np.zeros(2**16))
+    assert len(widest) == 1
+
+
+def test_a_sampler_offered_another_engines_updates_starts_afresh():
+    """Each engine's components are new to the sampler, whichever engine it followed before
+    and whatever became of that engine."""
+    times, points = walk(4, 80)
+
+    def candidates(sampler: il.OnlineSampler) -> list[tuple[int, int, bool]]:
+        online = il.OnlineLoops(gamma=2.0, dim=2)
+        update = online.push_many(times, points)
+        return [(c.keyframe, c.j, c.first) for c in sampler.offer(online, update)]
+
+    expected = candidates(il.OnlineSampler(seed=3))
+    assert any(first for _, _, first in expected)
+    sampler = il.OnlineSampler(seed=3)
+    for _ in range(3):
+        assert candidates(sampler) == expected
+
+
 def test_the_getters_say_what_was_given():
     online = il.OnlineLoops(gamma=1.5, dim=2, metric=il.metrics.Euclidean())
     assert (online.gamma, online.dim, online.metric_name, online.rebuild_count) == (

@@ -48,7 +48,7 @@ typedef enum LoopsStatus {
 
 /**
  * How an [`LoopsSamplerOptions`] caps each component's candidates (a token bucket per
- * component).
+ * component): the values of its `cap_kind`.
  */
 typedef enum LoopsCapKind {
   /**
@@ -190,9 +190,11 @@ typedef struct LoopsSamplerOptions {
    */
   double rate;
   /**
-   * The kind of cap per component.
+   * The kind of cap per component: one of [`LoopsCapKind`]'s values (`LOOPS_CAP_KIND_NONE`,
+   * ...); any other is refused with [`LoopsStatus::InvalidParameter`]. An integer rather
+   * than the enum, so that a value outside it is an error here, not undefined behaviour.
    */
-  enum LoopsCapKind cap_kind;
+  uint32_t cap_kind;
   /**
    * The cap's value (candidates per minute or per metre); ignored without a cap.
    */
@@ -264,6 +266,10 @@ const char *loops_version(void);
  * `metric` (NUL-terminated UTF-8, e.g. `"euclidean"` or
  * `"se3(rotation_weight_m_per_rad=10)"`; NULL is `"euclidean"`), threshold `gamma` > 0 in the
  * metric's unit. On success `*out` is a new handle for [`loops_online_free`].
+ *
+ * # Errors
+ * [`LoopsStatus::InvalidParameter`] for γ, the metric, and a `dim` the metric does not take
+ * or above 65,536 (`loops_core::OnlineLoops::MAX_DIM`).
  *
  * # Safety
  * `metric` is NULL or a NUL-terminated string; `out` is valid for writing a pointer.
@@ -391,9 +397,13 @@ enum LoopsStatus loops_sampler_options_default(struct LoopsSamplerOptions *optio
  * Makes a candidate sampler with `*options` (NULL: the defaults); on success `*out` is a new
  * handle for [`loops_sampler_free`].
  *
+ * # Errors
+ * [`LoopsStatus::InvalidParameter`] for a `cap_kind` that is not one of [`LoopsCapKind`]'s
+ * values, and options the sampler refuses (a negative rate, a cap that is not positive).
+ *
  * # Safety
- * `options` is NULL or valid for reading a [`LoopsSamplerOptions`] whose `cap_kind` is one of
- * [`LoopsCapKind`]'s values; `out` is valid for writing a pointer.
+ * `options` is NULL or valid for reading a [`LoopsSamplerOptions`]; `out` is valid for
+ * writing a pointer.
  */
 enum LoopsStatus loops_sampler_new(const struct LoopsSamplerOptions *options,
                                    struct LoopsSampler **out);
@@ -411,6 +421,8 @@ void loops_sampler_free(struct LoopsSampler *sampler);
  * after every push (or push_many), in order, once each. The first `min(capacity, n)` candidates
  * (by keyframe, component and pose) are written to `out` (NULL when `capacity` is 0) and `n`
  * to `*count`; all `n` stay readable with [`loops_sampler_candidates`] until the next offer.
+ * Offered the pushes of another engine (a new one, even at a freed one's address), or of one
+ * rebuilt or cleared, the sampler starts afresh: every component is new to it.
  *
  * # Errors
  * [`LoopsStatus::InvalidParameter`] when `online` has not been pushed to since its last

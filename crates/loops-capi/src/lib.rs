@@ -65,7 +65,7 @@ pub enum LoopsStatus {
 }
 
 /// How an [`LoopsSamplerOptions`] caps each component's candidates (a token bucket per
-/// component).
+/// component): the values of its `cap_kind`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LoopsCapKind {
@@ -86,8 +86,10 @@ pub struct LoopsSamplerOptions {
     /// σ_ρ: the expected number of candidates per component per pose (0: only the
     /// first-appearance candidates).
     pub rate: f64,
-    /// The kind of cap per component.
-    pub cap_kind: LoopsCapKind,
+    /// The kind of cap per component: one of [`LoopsCapKind`]'s values (`LOOPS_CAP_KIND_NONE`,
+    /// ...); any other is refused with [`LoopsStatus::InvalidParameter`]. An integer rather
+    /// than the enum, so that a value outside it is an error here, not undefined behaviour.
+    pub cap_kind: u32,
     /// The cap's value (candidates per minute or per metre); ignored without a cap.
     pub cap_value: f64,
     /// P1 online: a candidate (the closest pair) when a component first has a pair to offer.
@@ -181,8 +183,6 @@ pub struct LoopsOnline {
     inner: OnlineLoops,
     /// The last push's update, for [`loops_sampler_offer`].
     last: Option<Update>,
-    /// Pushes so far, to tell updates apart.
-    pushes: u64,
 }
 
 /// A loop-closure candidate sampler. Made by [`loops_sampler_new`], freed by
@@ -192,8 +192,6 @@ pub struct LoopsSampler {
     inner: OnlineSampler,
     /// The candidates of the last offer.
     candidates: Vec<Candidate>,
-    /// The update offered last: (the online handle, its rebuild count, its push count).
-    offered: Option<(usize, u64, u64)>,
 }
 
 /// Why a call failed, before it becomes a status and a message.
@@ -292,11 +290,6 @@ unsafe fn slice<'a, T>(pointer: *const T, len: usize, argument: &'static str) ->
     Ok(unsafe { std::slice::from_raw_parts(pointer, len) })
 }
 
-/// `count` × `dim` coordinates, the product checked.
-fn coordinate_count(count: usize, dim: usize) -> Result<usize, Failure> {
-    count.checked_mul(dim).ok_or_else(|| Failure::Parameter(format!("{count} poses of {dim} coordinates overflow")))
-}
-
 /// Writes `value` through `out` when it is not NULL.
 ///
 /// # Safety
@@ -364,7 +357,7 @@ impl LoopsSamplerOptions {
         };
         Self {
             rate: options.rate,
-            cap_kind,
+            cap_kind: cap_kind as u32,
             cap_value,
             first_on_appearance: options.first_on_appearance,
             separation_path: options.separation.path,
@@ -373,19 +366,31 @@ impl LoopsSamplerOptions {
         }
     }
 
-    fn to_core(self) -> OnlineSamplerOptions {
-        let cap = match self.cap_kind {
+    fn to_core(self) -> Result<OnlineSamplerOptions, Failure> {
+        let cap = match LoopsCapKind::checked(self.cap_kind)? {
             LoopsCapKind::None => Cap::None,
             LoopsCapKind::PerMinute => Cap::PerMinute(self.cap_value),
             LoopsCapKind::PerMetre => Cap::PerMetre(self.cap_value),
         };
-        OnlineSamplerOptions {
+        Ok(OnlineSamplerOptions {
             rate: self.rate,
             cap,
             first_on_appearance: self.first_on_appearance,
             separation: Separation { path: self.separation_path, time_s: self.separation_time_s },
             seed: self.seed,
-        }
+        })
+    }
+}
+
+impl LoopsCapKind {
+    /// The kind whose value is `value`, checked: a C enum may hold any integer.
+    fn checked(value: u32) -> Result<Self, Failure> {
+        [Self::None, Self::PerMinute, Self::PerMetre].into_iter().find(|&kind| kind as u32 == value).ok_or_else(|| {
+            Failure::Parameter(format!(
+                "cap_kind = {value} is invalid: LOOPS_CAP_KIND_NONE (0), LOOPS_CAP_KIND_PER_MINUTE (1) or \
+                 LOOPS_CAP_KIND_PER_METRE (2)"
+            ))
+        })
     }
 }
 
@@ -413,6 +418,10 @@ pub extern "C" fn loops_version() -> *const c_char {
 /// `"se3(rotation_weight_m_per_rad=10)"`; NULL is `"euclidean"`), threshold `gamma` > 0 in the
 /// metric's unit. On success `*out` is a new handle for [`loops_online_free`].
 ///
+/// # Errors
+/// [`LoopsStatus::InvalidParameter`] for γ, the metric, and a `dim` the metric does not take
+/// or above 65,536 (`loops_core::OnlineLoops::MAX_DIM`).
+///
 /// # Safety
 /// `metric` is NULL or a NUL-terminated string; `out` is valid for writing a pointer.
 #[unsafe(no_mangle)]
@@ -434,7 +443,7 @@ pub unsafe extern "C" fn loops_online_new(
             text.parse::<MetricSpec>()?
         };
         let inner = OnlineLoops::new(spec, dim, gamma)?;
-        *out = Box::into_raw(Box::new(LoopsOnline { inner, last: None, pushes: 0 }));
+        *out = Box::into_raw(Box::new(LoopsOnline { inner, last: None }));
         Ok(())
     })
 }
@@ -499,12 +508,12 @@ pub unsafe extern "C" fn loops_online_push_many(
                 online.inner.dim()
             )));
         }
+        let coordinates = online.inner.coordinate_count(count)?;
         let timestamps_s = unsafe { slice(timestamps_s, count, "timestamps_s") }?;
-        let coords = unsafe { slice(coords, coordinate_count(count, dim)?, "coords") }?;
+        let coords = unsafe { slice(coords, coordinates, "coords") }?;
         let pushed = online.inner.push_many(timestamps_s, coords)?;
         unsafe { write_optional(update, LoopsUpdate::of(&pushed)) };
         online.last = Some(pushed);
-        online.pushes += 1;
         Ok(())
     })
 }
@@ -527,8 +536,9 @@ pub unsafe extern "C" fn loops_online_rebuild(
     entry("loops_online_rebuild", || {
         let online = unsafe { exclusive(online, "online") }?;
         let dim = online.inner.dim();
+        let coordinates = online.inner.coordinate_count(count)?;
         let timestamps_s = unsafe { slice(timestamps_s, count, "timestamps_s") }?;
-        let coords = unsafe { slice(coords, coordinate_count(count, dim)?, "coords") }?;
+        let coords = unsafe { slice(coords, coordinates, "coords") }?;
         let traj = Trajectory::new(timestamps_s.to_vec(), coords.to_vec(), dim)?;
         online.inner.rebuild(&traj)?;
         online.last = None;
@@ -635,9 +645,13 @@ pub unsafe extern "C" fn loops_sampler_options_default(options: *mut LoopsSample
 /// Makes a candidate sampler with `*options` (NULL: the defaults); on success `*out` is a new
 /// handle for [`loops_sampler_free`].
 ///
+/// # Errors
+/// [`LoopsStatus::InvalidParameter`] for a `cap_kind` that is not one of [`LoopsCapKind`]'s
+/// values, and options the sampler refuses (a negative rate, a cap that is not positive).
+///
 /// # Safety
-/// `options` is NULL or valid for reading a [`LoopsSamplerOptions`] whose `cap_kind` is one of
-/// [`LoopsCapKind`]'s values; `out` is valid for writing a pointer.
+/// `options` is NULL or valid for reading a [`LoopsSamplerOptions`]; `out` is valid for
+/// writing a pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn loops_sampler_new(
     options: *const LoopsSamplerOptions,
@@ -647,11 +661,11 @@ pub unsafe extern "C" fn loops_sampler_new(
         let out = unsafe { exclusive(out, "out") }?;
         // SAFETY: NULL or a valid options struct, the caller's promise.
         let options = match unsafe { options.as_ref() } {
-            Some(options) => options.to_core(),
+            Some(options) => options.to_core()?,
             None => OnlineSamplerOptions::default(),
         };
         let inner = OnlineSampler::new(options)?;
-        *out = Box::into_raw(Box::new(LoopsSampler { inner, candidates: Vec::new(), offered: None }));
+        *out = Box::into_raw(Box::new(LoopsSampler { inner, candidates: Vec::new() }));
         Ok(())
     })
 }
@@ -673,6 +687,8 @@ pub unsafe extern "C" fn loops_sampler_free(sampler: *mut LoopsSampler) {
 /// after every push (or push_many), in order, once each. The first `min(capacity, n)` candidates
 /// (by keyframe, component and pose) are written to `out` (NULL when `capacity` is 0) and `n`
 /// to `*count`; all `n` stay readable with [`loops_sampler_candidates`] until the next offer.
+/// Offered the pushes of another engine (a new one, even at a freed one's address), or of one
+/// rebuilt or cleared, the sampler starts afresh: every component is new to it.
 ///
 /// # Errors
 /// [`LoopsStatus::InvalidParameter`] when `online` has not been pushed to since its last
@@ -691,25 +707,17 @@ pub unsafe extern "C" fn loops_sampler_offer(
 ) -> LoopsStatus {
     entry("loops_sampler_offer", || {
         let sampler = unsafe { exclusive(sampler, "sampler") }?;
-        let online_ref = unsafe { reference(online, "online") }?;
+        let online = unsafe { reference(online, "online") }?;
         let count = unsafe { exclusive(count, "count") }?;
         if capacity > 0 && out.is_null() {
             return Err(Failure::Null("out"));
         }
-        let Some(update) = &online_ref.last else {
+        let Some(update) = &online.last else {
             return Err(Failure::Parameter(
                 "nothing to offer: no pose was pushed since the engine was made, rebuilt or cleared".to_owned(),
             ));
         };
-        let key = (online as usize, online_ref.inner.rebuild_count(), online_ref.pushes);
-        if sampler.offered == Some(key) {
-            return Err(Failure::Parameter(format!(
-                "the push ending at pose {} was already offered to this sampler",
-                update.pose
-            )));
-        }
-        sampler.candidates = sampler.inner.offer(&online_ref.inner, update);
-        sampler.offered = Some(key);
+        sampler.candidates = sampler.inner.offer(&online.inner, update)?;
         for (k, candidate) in sampler.candidates.iter().take(capacity).enumerate() {
             // SAFETY: k < capacity, within the caller's buffer.
             unsafe { out.add(k).write(LoopsCandidate::of(candidate)) };

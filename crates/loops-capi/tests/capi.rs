@@ -33,7 +33,7 @@ fn sampler(options: &LoopsSamplerOptions) -> *mut LoopsSampler {
 fn default_options() -> LoopsSamplerOptions {
     let mut options = LoopsSamplerOptions {
         rate: f64::NAN,
-        cap_kind: LoopsCapKind::None,
+        cap_kind: LoopsCapKind::None as u32,
         cap_value: 0.0,
         first_on_appearance: false,
         separation_path: 0.0,
@@ -70,7 +70,7 @@ fn defaults_are_the_cores() {
     let options = default_options();
     let core = OnlineSamplerOptions::default();
     assert_eq!(options.rate, core.rate);
-    assert_eq!(options.cap_kind, LoopsCapKind::None);
+    assert_eq!(options.cap_kind, LoopsCapKind::None as u32);
     assert_eq!(options.first_on_appearance, core.first_on_appearance);
     assert_eq!((options.separation_path, options.separation_time_s), (0.0, 0.0));
     assert_eq!(options.seed, core.seed);
@@ -233,7 +233,7 @@ fn c_candidates(options: &LoopsSamplerOptions, capacity: usize) -> Vec<LoopsCand
 fn candidates_equal_the_rust_apis_whatever_the_buffer() {
     let options = LoopsSamplerOptions {
         rate: 0.3,
-        cap_kind: LoopsCapKind::PerMinute,
+        cap_kind: LoopsCapKind::PerMinute as u32,
         cap_value: 4.0,
         seed: 7,
         ..default_options()
@@ -251,7 +251,7 @@ fn candidates_equal_the_rust_apis_whatever_the_buffer() {
     let mut expected = Vec::new();
     for (k, &t) in times.iter().enumerate() {
         let update = engine.push(t, &coords[3 * k..3 * k + 3]).unwrap();
-        expected.extend(rust.offer(&engine, &update).iter().map(|c| LoopsCandidate {
+        expected.extend(rust.offer(&engine, &update).unwrap().iter().map(|c| LoopsCandidate {
             keyframe: c.keyframe,
             j: c.pair[0],
             component: c.component,
@@ -309,4 +309,94 @@ fn components_and_rebuild() {
     assert_eq!(unsafe { loops_online_clear(o) }, LoopsStatus::Ok);
     assert_eq!(unsafe { loops_online_len(o) }, 0);
     unsafe { loops_online_free(o) };
+}
+
+#[test]
+fn a_cap_kind_outside_the_enum_is_refused() {
+    for cap_kind in [3, 7, u32::MAX] {
+        let options = LoopsSamplerOptions { cap_kind, cap_value: 1.0, ..default_options() };
+        let mut s = ptr::null_mut();
+        assert_eq!(unsafe { loops_sampler_new(&options, &mut s) }, LoopsStatus::InvalidParameter);
+        assert!(last_error().contains(&format!("cap_kind = {cap_kind}")), "{}", last_error());
+        assert!(s.is_null());
+    }
+    for kind in [LoopsCapKind::None, LoopsCapKind::PerMinute, LoopsCapKind::PerMetre] {
+        let s = sampler(&LoopsSamplerOptions { cap_kind: kind as u32, cap_value: 1.0, ..default_options() });
+        unsafe { loops_sampler_free(s) };
+    }
+}
+
+#[test]
+fn dimensions_and_counts_beyond_the_limits_are_refused_before_any_read() {
+    let mut out = ptr::null_mut();
+    for dim in [1 << 62, usize::MAX, OnlineLoops::MAX_DIM + 1] {
+        assert_eq!(unsafe { loops_online_new(ptr::null(), dim, 1.0, &mut out) }, LoopsStatus::InvalidParameter);
+        assert!(last_error().contains(&format!("dim = {dim}")), "{}", last_error());
+        assert!(out.is_null());
+    }
+    // The largest dimension is an engine that works.
+    let widest = OnlineLoops::MAX_DIM;
+    let o = online("euclidean", widest, 1.0);
+    let point = vec![0.5; widest];
+    assert_eq!(unsafe { loops_online_push(o, 0.0, point.as_ptr(), widest, ptr::null_mut()) }, LoopsStatus::Ok);
+    unsafe { loops_online_free(o) };
+    // Counts whose coordinates would pass the end of memory are refused without reading them
+    // (the buffers here hold one pose).
+    let o = online("euclidean", 3, 1.0);
+    let (times, coords) = ([0.0], [0.0; 3]);
+    for count in [1 << 61, usize::MAX / 3 + 1, usize::MAX] {
+        let status = unsafe { loops_online_push_many(o, times.as_ptr(), coords.as_ptr(), count, 3, ptr::null_mut()) };
+        assert_eq!(status, LoopsStatus::InvalidTrajectory, "{count}");
+        assert!(last_error().contains(&count.to_string()), "{}", last_error());
+        let status = unsafe { loops_online_rebuild(o, times.as_ptr(), coords.as_ptr(), count) };
+        assert_eq!(status, LoopsStatus::InvalidTrajectory, "{count}");
+    }
+    assert_eq!(unsafe { loops_online_len(o) }, 0);
+    unsafe { loops_online_free(o) };
+}
+
+/// The candidates of a fresh sampler offered one push of `times` and `coords` (2-D) to a fresh
+/// engine.
+fn fresh_candidates(times: &[f64], coords: &[f64]) -> Vec<LoopsCandidate> {
+    let o = online("euclidean", 2, 1.0);
+    let s = sampler(&default_options());
+    let pushed = unsafe { loops_online_push_many(o, times.as_ptr(), coords.as_ptr(), times.len(), 2, ptr::null_mut()) };
+    assert_eq!(pushed, LoopsStatus::Ok, "{}", last_error());
+    let mut buffer = [LoopsCandidate::default(); 16];
+    let mut count = 0;
+    assert_eq!(unsafe { loops_sampler_offer(s, o, buffer.as_mut_ptr(), 16, &mut count) }, LoopsStatus::Ok);
+    unsafe {
+        loops_sampler_free(s);
+        loops_online_free(o);
+    }
+    buffer[..count].to_vec()
+}
+
+#[test]
+fn an_engine_made_where_a_freed_one_was_is_a_new_engine_to_a_sampler() {
+    let times = [0.0, 1.0, 2.0, 3.0];
+    let coords = [0.0, 0.0, 0.2, 0.0, 5.0, 0.0, 0.1, 0.0];
+    let expected = fresh_candidates(&times, &coords);
+    assert!(expected.iter().any(|c| c.first), "{expected:?}");
+    let s = sampler(&default_options());
+    let mut buffer = [LoopsCandidate::default(); 16];
+    let (mut previous, mut reused) = (ptr::null_mut(), 0);
+    for _ in 0..32 {
+        let o = online("euclidean", 2, 1.0);
+        reused += usize::from(o == previous);
+        let pushed =
+            unsafe { loops_online_push_many(o, times.as_ptr(), coords.as_ptr(), times.len(), 2, ptr::null_mut()) };
+        assert_eq!(pushed, LoopsStatus::Ok, "{}", last_error());
+        let mut count = 0;
+        let status = unsafe { loops_sampler_offer(s, o, buffer.as_mut_ptr(), 16, &mut count) };
+        assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
+        // Every engine is new to the sampler: its components are served afresh.
+        assert_eq!(&buffer[..count], &expected[..]);
+        unsafe { loops_online_free(o) };
+        previous = o;
+    }
+    unsafe { loops_sampler_free(s) };
+    // The allocator gave a freed engine's address to the next one at least once (else this test
+    // proves nothing about addresses).
+    assert!(reused > 0, "no engine was made at a freed engine's address");
 }

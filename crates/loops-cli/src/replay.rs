@@ -231,7 +231,7 @@ fn run(
         let coords = &traj.coords()[next * dim..(keyframe + 1) * dim];
         let began = Instant::now();
         let update = engine.push_many(&times[next..=keyframe], coords)?;
-        let candidates = sampler.offer(engine, &update);
+        let candidates = sampler.offer(engine, &update)?;
         let latency = began.elapsed();
         figures.latencies.push(latency);
         figures.poses = keyframe + 1;

@@ -44,7 +44,7 @@ fn rust_candidates(
     let mut out = Vec::new();
     for (t, p) in times.iter().zip(points) {
         let update = online.push(*t, p).unwrap();
-        for c in sampler.offer(&online, &update) {
+        for c in sampler.offer(&online, &update).unwrap() {
             out.push((c.keyframe as u64, c.pair[0] as u64, u64::from(c.component), c.distance, c.first));
         }
     }

@@ -132,6 +132,35 @@ pub enum Error {
         /// The largest supported count.
         max: usize,
     },
+    /// Points of more coordinates than an online engine takes
+    /// ([`OnlineLoops::MAX_DIM`](crate::OnlineLoops::MAX_DIM)).
+    #[error("dim = {dim} is invalid: an online engine takes points of at most {max} coordinates")]
+    DimensionTooLarge {
+        /// The dimension given.
+        dim: usize,
+        /// The largest accepted.
+        max: usize,
+    },
+    /// An update offered to a sampler that is not its engine's last push: an older one, another
+    /// engine's, one from before a rebuild or clear, or one that names no engine.
+    #[error(
+        "the update of poses {first_pose}..={pose} is not the last push of this engine: offer each push's \
+         update once, in order, with the engine that made it"
+    )]
+    UpdateNotLatest {
+        /// Its first pose.
+        first_pose: usize,
+        /// Its last pose.
+        pose: usize,
+    },
+    /// An update offered to a sampler twice.
+    #[error("the update of poses {first_pose}..={pose} was already offered to this sampler")]
+    UpdateAlreadyOffered {
+        /// Its first pose.
+        first_pose: usize,
+        /// Its last pose.
+        pose: usize,
+    },
     /// γ must be a positive, finite distance.
     #[error("gamma must be a positive finite distance, got {0}")]
     InvalidGamma(f64),

@@ -104,8 +104,8 @@ pub use manifold::{
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric};
 pub use online::{
-    Candidate, Cap, ComponentId, Merge, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, RowRun,
-    Update,
+    Candidate, Cap, ComponentId, Merge, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, PushStamp,
+    RowRun, Update,
 };
 pub use plane::{
     Border, PixelEdge, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments,

@@ -31,7 +31,7 @@ fn run(
         let end = (pushed + size.max(1)).min(traj.len());
         let update =
             online.push_many(&traj.timestamps_s()[pushed..end], &traj.coords()[pushed * dim..end * dim]).unwrap();
-        candidates.extend(sampler.offer(&online, &update));
+        candidates.extend(sampler.offer(&online, &update).unwrap());
         updates.push(update);
         pushed = end;
     }
@@ -328,13 +328,43 @@ fn seeds_matter_and_a_rebuild_starts_the_sampler_again() {
     let mut sampler = OnlineSampler::new(options).unwrap();
     let half = traj.len() / 2;
     let update = online.push_many(&traj.timestamps_s()[..half], &traj.coords()[..3 * half]).unwrap();
-    assert!(sampler.offer(&online, &update).iter().any(|c| c.first));
+    assert!(sampler.offer(&online, &update).unwrap().iter().any(|c| c.first));
     let part = Trajectory::new(traj.timestamps_s()[..half].to_vec(), traj.coords()[..3 * half].to_vec(), 3).unwrap();
     online.rebuild(&part).unwrap();
     let update = online.push(traj.timestamps_s()[half], traj.point(half)).unwrap();
-    let after = sampler.offer(&online, &update);
+    let after = sampler.offer(&online, &update).unwrap();
     assert!(after.iter().any(|c| c.first), "{after:?}");
     assert!(OnlineSampler::new(OnlineSamplerOptions { rate: -1.0, ..options }).is_err());
     assert!(OnlineSampler::new(OnlineSamplerOptions { cap: Cap::PerMinute(0.0), ..options }).is_err());
     assert!(OnlineSampler::new(OnlineSamplerOptions { separation: Separation::path(f64::NAN), ..options }).is_err());
+}
+
+#[test]
+fn an_update_is_offered_once_in_order_by_its_own_engine() {
+    let points = [0.0, 0.0, 0.2, 0.0, 5.0, 0.0, 0.1, 0.0];
+    let push = |online: &mut OnlineLoops| online.push_many(&[0.0, 1.0, 2.0, 3.0], &points).unwrap();
+    let mut online = OnlineLoops::new(MetricSpec::Euclidean, 2, 1.0).unwrap();
+    let mut sampler = OnlineSampler::new(OnlineSamplerOptions::default()).unwrap();
+    let update = push(&mut online);
+    let expected = sampler.offer(&online, &update).unwrap();
+    assert!(expected.iter().any(|c| c.first), "{expected:?}");
+    let twice = sampler.offer(&online, &update).unwrap_err();
+    assert!(twice.to_string().contains("already offered"), "{twice}");
+    // An older update, one that names no engine, one of a clone: not the engine's last push.
+    let older = update.clone();
+    let _ = online.push(4.0, &[0.0, 0.0]).unwrap();
+    let copy = online.clone();
+    let latest = online.push(5.0, &[0.0, 0.1]).unwrap();
+    for stale in [older, Update { stamp: Default::default(), ..latest.clone() }] {
+        let refused = sampler.offer(&online, &stale).unwrap_err();
+        assert!(refused.to_string().contains("not the last push"), "{refused}");
+    }
+    assert!(sampler.offer(&copy, &latest).is_err());
+    // Engines made one after another (each dropped before the next) are new to the sampler,
+    // whichever address they get: each gets its first candidates again.
+    for _ in 0..3 {
+        let mut fresh = OnlineLoops::new(MetricSpec::Euclidean, 2, 1.0).unwrap();
+        let update = push(&mut fresh);
+        assert_eq!(sampler.offer(&fresh, &update).unwrap(), expected);
+    }
 }

@@ -2,7 +2,6 @@
 //! changed). The candidate sampler is in `py_online_sampler`.
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -17,10 +16,6 @@ use crate::py_metric::MetricArg;
 use crate::py_trajectory::Trajectory;
 use crate::shared::Shared;
 use loops_core::ComponentId;
-
-/// Gives every `OnlineLoops` a number of its own, so that an `Update` names the engine it came
-/// from.
-static SERIALS: AtomicU64 = AtomicU64::new(0);
 
 /// Runs `f` with the GIL held (a push takes microseconds: releasing the GIL would cost more),
 /// turning a panic into `InternalError`.
@@ -72,8 +67,6 @@ fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct OnlineLoops {
-    /// This engine's number (see [`SERIALS`]).
-    pub(crate) serial: u64,
     pub(crate) engine: Shared<Engine>,
 }
 
@@ -81,8 +74,6 @@ pub(crate) struct OnlineLoops {
 #[derive(Debug)]
 pub(crate) struct Engine {
     pub(crate) inner: loops_core::OnlineLoops,
-    /// Pushes so far (an `Update` is the last one's when its count is this).
-    pub(crate) pushes: u64,
     /// The number of poses the last rebuild started from (0: none, or cleared): a pickle
     /// replays the same rebuild and pushes.
     rebuilt_len: usize,
@@ -103,8 +94,6 @@ pub(crate) struct Engine {
 #[derive(Debug)]
 pub(crate) struct Update {
     pub(crate) inner: Arc<loops_core::Update>,
-    /// The engine it came from ([`OnlineLoops::serial`]), its rebuild count and push count then.
-    pub(crate) origin: (u64, u64, u64),
 }
 
 /// What a pickled `OnlineLoops` holds: enough to replay it exactly.
@@ -132,14 +121,6 @@ struct UpdateState {
     loop_duration_s: f64,
 }
 
-impl Engine {
-    /// The `Update` of the push that just ended, from engine `serial`.
-    fn update(&mut self, serial: u64, update: loops_core::Update) -> Update {
-        self.pushes += 1;
-        Update { inner: Arc::new(update), origin: (serial, self.inner.rebuild_count(), self.pushes) }
-    }
-}
-
 /// `point` as `dim` coordinates.
 fn point_of(py: Python<'_>, point: &Bound<'_, PyAny>, dim: usize) -> PyResult<Vec<f64>> {
     let array = real_array(py, point, "point")?;
@@ -155,7 +136,7 @@ fn point_of(py: Python<'_>, point: &Bound<'_, PyAny>, dim: usize) -> PyResult<Ve
 
 impl OnlineLoops {
     fn from_engine(engine: Engine) -> Self {
-        Self { serial: SERIALS.fetch_add(1, Ordering::Relaxed), engine: Shared::new(engine) }
+        Self { engine: Shared::new(engine) }
     }
 }
 
@@ -166,7 +147,7 @@ impl OnlineLoops {
     fn new(gamma: f64, dim: usize, metric: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let spec = MetricArg::spec_from_py(metric, "OnlineLoops")?;
         let inner = loops_core::OnlineLoops::new(spec, dim, gamma).map_err(Failure::from)?;
-        Ok(Self::from_engine(Engine { inner, pushes: 0, rebuilt_len: 0 }))
+        Ok(Self::from_engine(Engine { inner, rebuilt_len: 0 }))
     }
 
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
@@ -192,7 +173,6 @@ impl OnlineLoops {
             let spec: loops_core::MetricSpec = state.metric.parse().map_err(Failure::from)?;
             let mut this = Engine {
                 inner: loops_core::OnlineLoops::new(spec, state.dim, state.gamma).map_err(Failure::from)?,
-                pushes: 0,
                 rebuilt_len: state.rebuilt_len,
             };
             let (rebuilt, dim) = (state.rebuilt_len, state.dim);
@@ -262,7 +242,7 @@ impl OnlineLoops {
         let point = point_of(py, point, dim)?;
         let mut this = self.engine.lock(py)?;
         let update = attached(|| Ok(this.inner.push(t, &point)?))?;
-        Ok(this.update(self.serial, update))
+        Ok(Update { inner: Arc::new(update) })
     }
 
     /// Adds several poses at once, as that many :meth:`push` es, with one :class:`Update`
@@ -292,23 +272,17 @@ impl OnlineLoops {
     fn push_many(&self, py: Python<'_>, timestamps: &Bound<'_, PyAny>, points: &Bound<'_, PyAny>) -> PyResult<Update> {
         let (t, coords, dim) = timestamps_and_points(py, timestamps, points, "points")?;
         let mut this = self.engine.lock(py)?;
-        let (expected, before) = (this.inner.dim(), this.inner.len());
+        let expected = this.inner.dim();
         if dim != expected && !t.is_empty() {
             return Err(value_error(format!(
                 "points must have the engine's {expected} coordinate(s) per row, got {dim}"
             )));
         }
         let inner = &mut this.inner;
-        match detached(py, move || Ok(inner.push_many(&t, &coords)?)) {
-            Ok(update) => Ok(this.update(self.serial, update)),
-            Err(error) => {
-                // Interrupted after some poses: the update offered last is no longer the last.
-                if this.inner.len() != before {
-                    this.pushes += 1;
-                }
-                Err(error)
-            }
-        }
+        // Interrupted after some poses, the engine counts a push: the update offered last is
+        // no longer the last.
+        let update = detached(py, move || Ok(inner.push_many(&t, &coords)?))?;
+        Ok(Update { inner: Arc::new(update) })
     }
 
     /// Restarts from ``trajectory``, the poses so far as the back end corrected them after a
@@ -534,8 +508,9 @@ impl Update {
                     .map(|(pose, retired, survivor)| loops_core::Merge { pose, retired, survivor })
                     .collect(),
                 loop_duration_s: s.loop_duration_s,
+                stamp: loops_core::PushStamp::default(),
             };
-            Ok(Self { inner: Arc::new(inner), origin: (u64::MAX, 0, 0) })
+            Ok(Self { inner: Arc::new(inner) })
         })
     }
 

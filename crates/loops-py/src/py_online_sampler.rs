@@ -59,8 +59,6 @@ pub(crate) struct OnlineSampler {
 #[derive(Debug)]
 struct SamplerState {
     inner: loops_core::OnlineSampler,
-    /// The update offered last: (engine, rebuild count, push count), as [`Update::origin`].
-    offered: Option<(u64, u64, u64)>,
 }
 
 /// A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
@@ -121,7 +119,7 @@ impl OnlineSampler {
         };
         let options = OnlineSamplerOptions { rate, cap, first_on_appearance, separation, seed };
         let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
-        Ok(Self { options: *inner.options(), state: Shared::new(SamplerState { inner, offered: None }) })
+        Ok(Self { options: *inner.options(), state: Shared::new(SamplerState { inner }) })
     }
 
     fn __repr__(&self) -> String {
@@ -167,24 +165,12 @@ impl OnlineSampler {
         // The sampler, then the engine: the one order in which two objects are held together.
         let mut this = self.state.lock(py)?;
         let engine = online.engine.lock(py)?;
-        let latest = (online.serial, engine.inner.rebuild_count(), engine.pushes);
-        if update.origin != latest {
-            return Err(invalid_parameter(format!(
-                "this update (poses {}..={}) is not the last push of this OnlineLoops: offer each push's update \
-                 once, in order",
-                update.inner.first_pose, update.inner.pose
-            )));
-        }
-        if this.offered == Some(latest) {
-            return Err(invalid_parameter(format!(
-                "this update (poses {}..={}) was already offered to this sampler",
-                update.inner.first_pose, update.inner.pose
-            )));
-        }
-        let candidates =
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| this.inner.offer(&engine.inner, &update.inner)))
-                .map_err(|payload| PyErr::from(Failure::Panic(crate::panic_message(payload.as_ref()))))?;
-        this.offered = Some(latest);
+        // "Each update once, in order" is the core's rule (`loops_core::OnlineSampler::offer`).
+        let offered =
+            std::panic::AssertUnwindSafe(|| this.inner.offer(&engine.inner, &update.inner).map_err(Failure::from));
+        let candidates = std::panic::catch_unwind(offered)
+            .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
+            .map_err(PyErr::from)?;
         Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
     }
 

@@ -1,5 +1,7 @@
 //! [`OnlineLoops`]: the incremental engine.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use crate::ball_tree::{BallTree, Leaf};
 use crate::component;
 use crate::error::{Error, Result};
@@ -99,8 +101,55 @@ pub struct OnlineLoops {
     /// τ of every pose from later, settled rows (partners j > i), as range additions.
     later_tau_s: RangeSums,
     rebuilds: u64,
+    /// This engine's identity, for the [`PushStamp`] of its updates.
+    serial: Serial,
+    /// Pushes since it was made, rebuilt or cleared.
+    pushes: u64,
     /// Scratch: the stretches a row scan visits, and the scanned runs.
     stretches: Vec<Leaf>,
+}
+
+/// Which push of which engine an [`Update`] reports: the engine (a number drawn for it when it
+/// was made, never reused in this process, so that an engine made where a dropped one was is
+/// another engine), its [rebuild count](OnlineLoops::rebuild_count) and its pushes since. An
+/// [`OnlineSampler`](super::OnlineSampler) offers an update only when it is its engine's
+/// [`last_push`](OnlineLoops::last_push), and only once. The default stamp names no engine.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct PushStamp {
+    engine: u64,
+    rebuilds: u64,
+    pushes: u64,
+}
+
+impl PushStamp {
+    /// Whether `other` is a push of the same engine since the same rebuild (or clear): its
+    /// component ids mean the same.
+    pub(crate) fn same_run(self, other: Self) -> bool {
+        (self.engine, self.rebuilds) == (other.engine, other.rebuilds)
+    }
+}
+
+/// An engine's number for its [`PushStamp`]s, from a process-wide counter starting at 1 (0 is
+/// no engine). A clone draws a number of its own: it goes its own way from there.
+#[derive(Debug)]
+struct Serial(u64);
+
+impl Serial {
+    fn next() -> Self {
+        static SERIALS: AtomicU64 = AtomicU64::new(1);
+        Self(SERIALS.fetch_add(1, Ordering::Relaxed))
+    }
+
+    /// The same number, for the engine a rebuild or clear makes in this one's place.
+    fn same(&self) -> Self {
+        Self(self.0)
+    }
+}
+
+impl Clone for Serial {
+    fn clone(&self) -> Self {
+        Self::next()
+    }
 }
 
 /// Statistics of a live loop component, so far: the quantities of
@@ -248,8 +297,9 @@ pub struct Merge {
     pub survivor: ComponentId,
 }
 
-/// What a push changed.
-#[derive(Debug, Clone, Default, PartialEq)]
+/// What a push changed. Two updates are equal when they report the same changes, whichever
+/// push of whichever engine made them (their [`stamp`](Self::stamp)s are not compared).
+#[derive(Debug, Clone, Default)]
 pub struct Update {
     /// Index of the first pose the push added.
     pub first_pose: usize,
@@ -267,21 +317,66 @@ pub struct Update {
     /// The loop duration τ of the last pose so far, seconds: how long the trajectory has stayed
     /// within γ of it (its own time cell included).
     pub loop_duration_s: f64,
+    /// The push that made it ([`PushStamp::default`], no engine, for an update made otherwise,
+    /// e.g. read back from a file: such an update cannot be offered).
+    pub stamp: PushStamp,
+}
+
+impl PartialEq for Update {
+    fn eq(&self, other: &Self) -> bool {
+        let Self { first_pose, pose, runs, created, extended, merged, loop_duration_s, stamp: _ } = self;
+        (first_pose, pose, runs, created, extended, merged, loop_duration_s)
+            == (
+                &other.first_pose,
+                &other.pose,
+                &other.runs,
+                &other.created,
+                &other.extended,
+                &other.merged,
+                &other.loop_duration_s,
+            )
+    }
 }
 
 impl OnlineLoops {
+    /// The most coordinates a pose of an online engine may have: 65,536 (a place-recognition
+    /// descriptor has a few thousand). With at most [`MAX_POSES`] poses, every buffer of an
+    /// engine's coordinates then fits in memory's address space, so that
+    /// [`coordinate_count`](Self::coordinate_count) never overflows.
+    pub const MAX_DIM: usize = 1 << 16;
+
     /// An empty engine for poses of `dim` coordinates measured by `metric`, threshold γ (the
     /// metric's unit).
     ///
     /// # Errors
-    /// [`Error::InvalidGamma`]; the metric's dimension error.
+    /// [`Error::InvalidGamma`]; [`Error::DimensionTooLarge`] beyond [`MAX_DIM`](Self::MAX_DIM);
+    /// the metric's dimension error.
     pub fn new(metric: MetricSpec, dim: usize, gamma: f64) -> Result<Self> {
         check_gamma(gamma)?;
+        if dim > Self::MAX_DIM {
+            return Err(Error::DimensionTooLarge { dim, max: Self::MAX_DIM });
+        }
         metric.as_metric().check_dim(dim)?;
-        Ok(Self::empty(metric, gamma, Trajectory::growing(dim, Manifold::Euclidean), 0))
+        Ok(Self::empty(metric, gamma, Trajectory::growing(dim, Manifold::Euclidean), 0, Serial::next()))
     }
 
-    fn empty(metric: MetricSpec, gamma: f64, traj: Trajectory, rebuilds: u64) -> Self {
+    /// The number of coordinates of `poses` poses of this engine, `poses` × [`dim`](Self::dim),
+    /// for a caller that takes them from a raw buffer: a count whose buffer fits in memory's
+    /// address space.
+    ///
+    /// # Errors
+    /// [`Error::TooManyPoses`] beyond [`MAX_POSES`].
+    pub fn coordinate_count(&self, poses: usize) -> Result<usize> {
+        const _: () = assert!(
+            (MAX_POSES as u128) * (OnlineLoops::MAX_DIM as u128) * (size_of::<f64>() as u128) <= isize::MAX as u128
+        );
+        if poses > MAX_POSES {
+            return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
+        }
+        Ok(poses * self.dim())
+    }
+
+    fn empty(metric: MetricSpec, gamma: f64, traj: Trajectory, rebuilds: u64, serial: Serial) -> Self {
         Self {
             metric,
             gamma,
@@ -298,6 +393,8 @@ impl OnlineLoops {
             own_tau_s: Vec::new(),
             later_tau_s: RangeSums::default(),
             rebuilds,
+            serial,
+            pushes: 0,
             stretches: Vec::new(),
         }
     }
@@ -332,7 +429,14 @@ impl OnlineLoops {
         let interrupt = Interrupt::current();
         with_metric!(&metric, m => {
             for (k, &t_s) in timestamps_s.iter().enumerate() {
-                interrupt.check()?;
+                if let Err(stopped) = interrupt.check() {
+                    // The poses added so far make this a push: the update offered last is no
+                    // longer the last.
+                    if k > 0 {
+                        self.pushes += 1;
+                    }
+                    return Err(stopped);
+                }
                 let n = first + k;
                 self.traj.push_pose(t_s, &coords[k * dim..(k + 1) * dim]);
                 self.grow(m, n);
@@ -348,6 +452,8 @@ impl OnlineLoops {
         extended.dedup();
         update.extended = extended;
         update.loop_duration_s = self.own_tau_s.last().copied().unwrap_or(0.0);
+        self.pushes += 1;
+        update.stamp = self.last_push();
         Ok(update)
     }
 
@@ -631,8 +737,13 @@ impl OnlineLoops {
     fn rebuilt<M: Metric + ?Sized>(&self, metric: &M, traj: &Trajectory) -> Result<Self> {
         let set = SublevelSet::compute(traj, metric, self.gamma)?;
         let (row_offsets, runs) = transpose_runs(traj.len(), |i| set.row(i))?;
-        let mut fresh =
-            Self::empty(self.metric, self.gamma, Trajectory::growing(traj.dim(), traj.manifold()), self.rebuilds + 1);
+        let mut fresh = Self::empty(
+            self.metric,
+            self.gamma,
+            Trajectory::growing(traj.dim(), traj.manifold()),
+            self.rebuilds + 1,
+            self.serial.same(),
+        );
         fresh.scale = metric.rounding_scale(traj);
         let interrupt = Interrupt::current();
         let mut closest = Vec::new();
@@ -665,6 +776,7 @@ impl OnlineLoops {
             self.gamma,
             Trajectory::growing(self.dim(), Manifold::Euclidean),
             self.rebuilds + 1,
+            self.serial.same(),
         );
     }
 
@@ -718,6 +830,12 @@ impl OnlineLoops {
     /// an earlier count mean nothing now.
     pub fn rebuild_count(&self) -> u64 {
         self.rebuilds
+    }
+
+    /// The stamp of this engine's last push (its [`Update::stamp`]): another after every push,
+    /// rebuild and clear, and never one of another engine's.
+    pub fn last_push(&self) -> PushStamp {
+        PushStamp { engine: self.serial.0, rebuilds: self.rebuilds, pushes: self.pushes }
     }
 
     /// The live components (not retired) by id, increasing, with their statistics so far.

@@ -13,5 +13,5 @@
 mod engine;
 mod sampler;
 
-pub use engine::{ComponentId, Merge, OnlineComponent, OnlineLoops, RowRun, Update};
+pub use engine::{ComponentId, Merge, OnlineComponent, OnlineLoops, PushStamp, RowRun, Update};
 pub use sampler::{Candidate, Cap, OnlineSampler, OnlineSamplerOptions};

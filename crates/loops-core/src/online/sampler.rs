@@ -4,7 +4,7 @@
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::engine::{ComponentId, OnlineLoops, RowRun, Update};
+use super::engine::{ComponentId, OnlineLoops, PushStamp, RowRun, Update};
 use crate::draw::choose_indices;
 use crate::error::{Error, Result};
 use crate::metric::Metric;
@@ -85,7 +85,8 @@ pub struct Candidate {
 /// component's id at a pose is the same whether the poses came one at a time or in batches
 /// ([`RowRun::component`](super::RowRun::component) is the id as of the row), so the candidates
 /// do not depend on how the poses were pushed. After a [rebuild](OnlineLoops::rebuild) the ids
-/// start again, and so does the sampler: every component is new to it.
+/// start again, and so does the sampler: every component is new to it; likewise when it is
+/// offered the updates of another engine.
 ///
 /// Cost per update: its runs plus the candidates, and a closest column (O(log n)) per component
 /// that P1 serves; memory a few words per component.
@@ -106,7 +107,7 @@ pub struct Candidate {
 /// let mut candidates = Vec::new();
 /// for n in 0..traj.len() {
 ///     let update = online.push(traj.timestamps_s()[n], traj.point(n))?;
-///     candidates.extend(sampler.offer(&online, &update));
+///     candidates.extend(sampler.offer(&online, &update)?);
 /// }
 /// assert!(!candidates.is_empty());
 /// assert!(candidates.iter().all(|c| c.pair[1] == c.keyframe && c.distance <= 20.0));
@@ -115,8 +116,8 @@ pub struct Candidate {
 #[derive(Debug, Clone)]
 pub struct OnlineSampler {
     options: OnlineSamplerOptions,
-    /// The engine's rebuild count when the states were made.
-    rebuilds: Option<u64>,
+    /// The push offered last: its engine and rebuild count are those the states were made for.
+    offered: Option<PushStamp>,
     /// By component id: `None` until the component has a pair to offer.
     states: Vec<Option<Bucket>>,
 }
@@ -158,7 +159,7 @@ impl OnlineSampler {
             _ => {}
         }
         options.separation.check()?;
-        Ok(Self { options, rebuilds: None, states: Vec::new() })
+        Ok(Self { options, offered: None, states: Vec::new() })
     }
 
     /// Its options.
@@ -167,12 +168,24 @@ impl OnlineSampler {
     }
 
     /// The candidates that `update` (the last push's, from `loops`) made possible, by keyframe,
-    /// component and column. Call it after every push or push_many, in order.
-    pub fn offer(&mut self, loops: &OnlineLoops, update: &Update) -> Vec<Candidate> {
-        if self.rebuilds != Some(loops.rebuild_count()) {
-            self.rebuilds = Some(loops.rebuild_count());
+    /// component and column. Call it after every push or push_many, in order, once each.
+    ///
+    /// # Errors
+    /// [`Error::UpdateNotLatest`] when `update` is not `loops`' [last
+    /// push](OnlineLoops::last_push); [`Error::UpdateAlreadyOffered`] when it was offered to
+    /// this sampler already. Nothing changes then.
+    pub fn offer(&mut self, loops: &OnlineLoops, update: &Update) -> Result<Vec<Candidate>> {
+        let (first_pose, pose) = (update.first_pose, update.pose);
+        if update.stamp != loops.last_push() {
+            return Err(Error::UpdateNotLatest { first_pose, pose });
+        }
+        if self.offered == Some(update.stamp) {
+            return Err(Error::UpdateAlreadyOffered { first_pose, pose });
+        }
+        if !self.offered.is_some_and(|offered| offered.same_run(update.stamp)) {
             self.states.clear();
         }
+        self.offered = Some(update.stamp);
         let mut candidates = Vec::new();
         let mut merges = update.merged.iter().peekable();
         let mut runs = &update.runs[..];
@@ -189,7 +202,7 @@ impl OnlineSampler {
         for merge in merges {
             self.merge(loops, merge.pose, merge.retired, merge.survivor);
         }
-        candidates
+        Ok(candidates)
     }
 
     /// The candidates of row n (`row`: its runs, in column order).
