@@ -4,6 +4,7 @@
 
 #[path = "../../../loops-io/tests/support/python.rs"]
 mod python;
+#[allow(unused_imports)] // each test crate uses a different part
 pub use python::{python, skip, skipped};
 
 use std::path::{Path, PathBuf};

@@ -5,6 +5,7 @@
 pub mod logs;
 mod python;
 
+#[allow(unused_imports)] // each test crate uses a different part
 pub use python::{python, skip, skipped};
 
 use std::ffi::OsString;
