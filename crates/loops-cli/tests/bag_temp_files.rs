@@ -88,7 +88,14 @@ fn ctrl_c_while_reading_a_compressed_bag_leaves_no_temporary_file() {
         assert!(killed.success());
         let output = child.wait_with_output().expect("loops ends");
         let stderr = String::from_utf8_lossy(&output.stderr);
-        assert_eq!(output.status.code(), Some(130), "round {round}: not interrupted while reading: {stderr}");
+        // Round 0 is interrupted as soon as the copy is open; the later rounds may find the read
+        // finished on a quiet machine, which must leave nothing behind just the same.
+        let finished_first = round > 0 && output.status.code() == Some(0);
+        assert!(
+            output.status.code() == Some(130) || finished_first,
+            "round {round}: not interrupted while reading ({:?}): {stderr}",
+            output.status.code()
+        );
         assert_eq!(names(&tmp), Vec::<String>::new(), "round {round}: left in TMPDIR after Ctrl-C");
         let _ = std::fs::remove_dir_all(&tmp);
     }
