@@ -715,6 +715,8 @@ class _Runner:
         self.sent = 0  # bytes of task arguments shipped from the client
         self.received = 0  # bytes of results gathered by the client
         self._workers: list[Any] | None = None
+        #: Since when some of this run's tasks found no worker (None: they all have one).
+        self._stuck_since: float | None = None
 
     def submit(self, name: str, fn: Callable[..., Any], *args: Any, worker: Any = None) -> Any:
         """``fn(*args)`` as a task; on ``worker`` (an address) if it can, else anywhere."""
@@ -747,7 +749,8 @@ class _Runner:
         if self.client is None:
             return [None] * groups
         best: list[tuple[int, Any]] = [(0, None)] * groups
-        for address, kept in self.client.run(_kept_groups, self.token).items():
+        # A worker that died meanwhile keeps nothing.
+        for address, kept in self.client.run(_kept_groups, self.token, on_error="ignore").items():
             for g, tiles in kept.items():
                 if tiles > best[g][0]:
                     best[g] = (tiles, address)
@@ -764,9 +767,10 @@ class _Runner:
         import distributed
 
         futures = [item for item in items if _is_future(item)]
+        self._stuck_since = None
         try:
             self.wait(futures)
-            values = self.client.gather(items)
+            values = [self._value(item) if _is_future(item) else item for item in items]
         except BaseException as error:
             # Nothing of this run is left to wait in the cluster for a worker.
             self.client.cancel(futures)
@@ -779,17 +783,31 @@ class _Runner:
         self.received += sum(len(pickle.dumps(v, protocol=5)) for v in values)
         return values
 
+    def _value(self, future: Any) -> Any:
+        """The value of ``future``, done. A value lost before it arrives (its worker died) is
+        computed again by Dask: it is waited for again (:meth:`wait`), and given twice the time
+        to arrive at each try, so that a large one is not cut short for ever."""
+        import distributed
+
+        arrival_s = 4 * _WAIT_POLL_S
+        while True:
+            try:
+                return future.result(timeout=arrival_s)
+            except distributed.TimeoutError:
+                arrival_s *= 2
+                self.wait([future])
+
     def wait(self, futures: list[Any]) -> None:
         """Waits until ``futures`` are done (finished, failed or cancelled). Every few seconds
         it sends this run's tasks that wait for a worker to the running workers
-        (:func:`_dispatch_stranded`), and counts how long some found none.
+        (:func:`_dispatch_stranded`), and counts how long some found none (over the calls of
+        one :meth:`gather`).
 
         Raises:
             ClusterError: the run's tasks found no worker for :data:`NO_WORKER_TIMEOUT_S`.
         """
         import distributed
 
-        stuck_since: float | None = None
         pending = futures
         while pending:
             try:
@@ -800,14 +818,14 @@ class _Runner:
             pending = [f for f in pending if not f.done()]
             stuck, running, workers = self.client.run_on_scheduler(_dispatch_stranded, self.token)
             if not stuck:
-                stuck_since = None
+                self._stuck_since = None
                 continue
             now = time.monotonic()
-            stuck_since = now if stuck_since is None else stuck_since
-            if now - stuck_since >= NO_WORKER_TIMEOUT_S:
+            self._stuck_since = now if self._stuck_since is None else self._stuck_since
+            if now - self._stuck_since >= NO_WORKER_TIMEOUT_S:
                 raise ClusterError(
                     f"{len(stuck)} task(s) of this run (e.g. {stuck[0]!r}) found no worker "
-                    f"to run on for {now - stuck_since:.0f} s ({running} of {workers} "
+                    f"to run on for {now - self._stuck_since:.0f} s ({running} of {workers} "
                     "worker(s) running): the cluster lost its workers, or they are paused "
                     "(memory); the run's tasks were cancelled"
                 )
@@ -816,7 +834,10 @@ class _Runner:
         """Bytes the workers sent each other so far (Dask's own count)."""
         if self.client is None:
             return 0
-        totals = self.client.run(lambda dask_worker: dask_worker.transfer_outgoing_bytes_total)
+        # A worker that died meanwhile counts for nothing.
+        totals = self.client.run(
+            lambda dask_worker: dask_worker.transfer_outgoing_bytes_total, on_error="ignore"
+        )
         return int(sum(totals.values()))
 
 
