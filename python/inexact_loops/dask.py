@@ -1340,18 +1340,8 @@ def _starts(blocks: Sequence[_core.SessionBlocks]) -> list[int]:
 # The output folder
 # ---------------------------------------------------------------------------------------------
 
-#: The marker of a folder ``loops-dask`` wrote into: what it wrote there.
-MARKER = "loops-dask.json"
-
-#: What ``loops-dask`` writes at the top of its folder.
-OUT_FILES = (
-    "components.parquet",
-    "session_pairs.parquet",
-    "samples.parquet",
-    "failures.parquet",
-    "summary.json",
-    "loop_duration",
-)
+# The marker (``loops-dask.json``), the scratch folder and the files of the folder are
+# loops-io's ``out_dir::DASK``, reached through :class:`_core.OutDir`.
 
 
 def _write_entry(out: _core.OutDir, name: str, write: Callable[[str], None]) -> None:
