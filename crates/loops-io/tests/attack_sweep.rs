@@ -1,4 +1,4 @@
-//! The seeded attack sweep of the readers (issue 15): every reader takes corrupted input —
+//! The seeded attack sweep of the readers: every reader takes corrupted input —
 //! bytes flipped and overwritten at seeded offsets, records with huge lengths and flipped
 //! opcodes, bombs, malformed text — and must give, for each case, either a correct read or a
 //! one-line error naming the file. Each target counts its cases and fails on any of:

@@ -1,4 +1,4 @@
-//! The attacks that found the reader failures of issue 15 ("Nothing lost, nothing aborted"),
+//! The attacks that found the reader failures of the first attack sweep ("nothing lost, nothing aborted"),
 //! one test (or a few) per item: data dropped without a word (items 6, 7, 8, 10), aborts from
 //! allocations a corrupt length or a bomb declares (11, 12, 16) and messages that were not one
 //! line (19). Each builds its input here, and checks that the reader refuses it with one line
