@@ -3016,7 +3016,7 @@ class OnlineLoops:
 
     Raises:
         InvalidParameterError: gamma not positive and finite, an unknown metric, a metric that
-            does not take ``dim`` coordinates, ``dim`` above 65,536.
+            does not take ``dim`` coordinates.
 
     Example:
         A 95% circle of radius 10 m, pushed pose by pose: its ends come within γ of each other.

@@ -34,7 +34,7 @@ use std::sync::{Mutex, PoisonError};
 
 use serde::{Deserialize, Serialize};
 
-use crate::atomic::{sync_directory, write_atomically};
+use crate::atomic::sync_directory;
 
 /// A command that writes into an output folder: its name, its marker, its scratch folder, the
 /// files it writes at the folder's top (beside a folder per log or session), and how its users
@@ -59,7 +59,14 @@ impl Tool {
     /// Whether `name` is an entry of the folder the command itself uses (its marker, its scratch
     /// folder or one of its top files): no log or session may be given that name.
     pub fn reserves(&self, name: &str) -> bool {
-        name == self.marker || name == self.scratch || self.top_files.contains(&name)
+        name == self.marker || name == self.scratch || name == self.marker_partial() || self.top_files.contains(&name)
+    }
+
+    /// The name the marker is written under before it is renamed into place
+    /// (`.loops-run.json.partial`): one fixed name, so that a run killed while writing it leaves
+    /// nothing the next run cannot recognise as its own.
+    pub fn marker_partial(&self) -> String {
+        format!(".{}.partial", self.marker)
     }
 }
 
@@ -266,12 +273,17 @@ impl OutDir {
         let owned = previous.as_ref().map(|m| m.entries.clone()).unwrap_or_default();
         let cleaned = previous.as_ref().and_then(|m| m.scratch.as_deref()) == Some(tool.scratch)
             && remove_scratch(&out.join(tool.scratch))?;
+        let partial = out.join(tool.marker_partial());
+        if is_marker_partial(&partial, tool) {
+            std::fs::remove_file(&partial).map_err(io_error("removing", &partial))?;
+        }
         let entries = entries(out, tool)?;
         if !entries.is_empty() && !force {
             return Err(OutDirError::NotEmpty { path: out.to_path_buf(), flag: tool.out_flag, force: tool.force_flag });
         }
         // In the tool's order, so that the message names the same entry every time.
-        let reserved = tool.top_files.iter().copied().chain([tool.scratch]);
+        let partial_name = tool.marker_partial();
+        let reserved = tool.top_files.iter().copied().chain([tool.scratch, partial_name.as_str()]);
         for name in reserved.filter(|name| entries.iter().any(|e| e == name)) {
             if !owned.contains(name) {
                 return Err(OutDirError::NotOurs {
@@ -441,20 +453,24 @@ impl OutDir {
         Ok(true)
     }
 
-    /// Writes the marker, atomically.
+    /// Writes the marker, atomically: under [`Tool::marker_partial`], synced, then renamed into
+    /// place. (Not through a temporary file of a random name: a run killed while writing it
+    /// would leave a file the next run could not tell from a user's.)
     fn save(&self) -> Result<(), OutDirError> {
         let marker = self.marker().clone();
-        let json = serde_json::to_string_pretty(&marker).map_err(|e| OutDirError::Io {
-            what: "writing".to_owned(),
-            path: self.path.join(self.tool.marker),
-            error: io::Error::other(e),
-        })? + "\n";
         let path = self.path.join(self.tool.marker);
-        write_atomically(&path, true, |file| file.write_all(json.as_bytes())).map_err(|error| match error {
-            crate::WriteError::Write { path, error } => OutDirError::Io { what: "writing".to_owned(), path, error },
-            crate::WriteError::Exists { path } => {
-                OutDirError::Io { what: "writing".to_owned(), path, error: io::ErrorKind::AlreadyExists.into() }
-            }
+        let partial = self.path.join(self.tool.marker_partial());
+        let json = serde_json::to_string_pretty(&marker).map_err(io::Error::other).map(|json| json + "\n");
+        let written = json.and_then(|json| {
+            let mut file = File::create(&partial)?;
+            file.write_all(json.as_bytes())?;
+            file.sync_all()?;
+            std::fs::rename(&partial, &path)?;
+            sync_directory(&self.path)
+        });
+        written.map_err(|error| {
+            let _ = std::fs::remove_file(&partial);
+            OutDirError::Io { what: "writing".to_owned(), path, error }
         })
     }
 }
@@ -525,6 +541,22 @@ fn read_marker(path: &Path, tool: Tool) -> Result<Option<Marker>, OutDirError> {
         Ok(marker) if marker.written_by == tool.command => Ok(Some(marker)),
         _ => Err(OutDirError::NotMarker { path: path.to_path_buf(), command: tool.command }),
     }
+}
+
+/// Whether the file at `path` is a marker of `tool` being written when its run was killed: a
+/// regular file whose bytes agree with the start every marker of `tool` has
+/// (`{"written_by": "loops run", ...`, as written) as far as either goes.
+fn is_marker_partial(path: &Path, tool: Tool) -> bool {
+    if !path.symlink_metadata().is_ok_and(|m| m.is_file()) {
+        return false;
+    }
+    let header = format!("{{\n  \"written_by\": \"{}\",", tool.command);
+    let mut start = Vec::with_capacity(header.len());
+    let read = File::open(path).and_then(|file| {
+        use std::io::Read;
+        file.take(header.len() as u64).read_to_end(&mut start)
+    });
+    read.is_ok() && header.as_bytes().starts_with(&start)
 }
 
 /// The entries of `out` but the tool's marker, by name.
@@ -690,6 +722,23 @@ mod tests {
         assert!(matches!(OutDir::take(&out, false, RUN), Err(OutDirError::NotEmpty { .. })));
         assert!(matches!(OutDir::take(&out, true, RUN), Err(OutDirError::NotOurs { .. })));
         assert_eq!(std::fs::read_to_string(out.join(RUN.scratch).join("mine")).unwrap(), "x");
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn a_marker_cut_short_by_a_kill_is_recognised_and_a_users_file_of_its_name_is_not() {
+        let out = scratch_dir("partial");
+        drop(OutDir::take(&out, false, RUN).unwrap());
+        let partial = out.join(RUN.marker_partial());
+        for cut in ["", "{\n  \"writ", "{\n  \"written_by\": \"loops run\",\n  \"version\": \"0."] {
+            std::fs::write(&partial, cut).unwrap();
+            drop(OutDir::take(&out, false, RUN).unwrap());
+            assert_eq!(names(&out), ["loops-run.json"], "{cut:?}");
+        }
+        std::fs::write(&partial, "notes of mine").unwrap();
+        assert!(matches!(OutDir::take(&out, false, RUN), Err(OutDirError::NotEmpty { .. })));
+        assert!(matches!(OutDir::take(&out, true, RUN), Err(OutDirError::NotOurs { .. })));
+        assert_eq!(std::fs::read_to_string(&partial).unwrap(), "notes of mine");
         std::fs::remove_dir_all(&out).unwrap();
     }
 
