@@ -182,6 +182,28 @@ sys.exit(main())
 # --- item 18: Ctrl-C during a long computation -----------------------------------------------
 
 
+def signalled(code: str) -> tuple[str, float, float]:
+    """Runs `code` in a child, which prints "started" first; sends it SIGINT one second later.
+    Returns its output once it exits (with code 0), when it said "started" and when the signal
+    was sent (this process's monotonic clock)."""
+    child = subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert child.stdout is not None
+    assert child.stdout.readline() == "started\n"
+    started = time.monotonic()
+    time.sleep(1.0)
+    sent = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    try:
+        out, err = child.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        raise
+    assert child.returncode == 0, err[-2000:]
+    return out, sent, started
+
+
 def interrupt_child(setup: str, call: str) -> tuple[float, str]:
     """Runs `call` in a child after `setup`; sends SIGINT one second into it. Returns the
     seconds from the signal to the KeyboardInterrupt in the child (its own clock: neither the
@@ -202,24 +224,7 @@ except KeyboardInterrupt:
     print("after", len(small.components), flush=True)
 """
     )
-    child = subprocess.Popen(
-        [sys.executable, "-c", textwrap.dedent(code)],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    assert child.stdout is not None
-    assert child.stdout.readline() == "started\n"
-    started = time.monotonic()
-    time.sleep(1.0)
-    sent = time.monotonic()
-    child.send_signal(signal.SIGINT)
-    try:
-        out, err = child.communicate(timeout=120)
-    except subprocess.TimeoutExpired:
-        child.kill()
-        raise
-    assert child.returncode == 0, err[-2000:]
+    out, sent, started = signalled(textwrap.dedent(code))
     first = out.split()
     if first[:1] == ["interrupted"]:
         # The call started right after "started" and the signal came `sent - started` later.
@@ -367,21 +372,7 @@ def test_ctrl_c_stops_push_many_and_keeps_the_poses_before():
         print("went on", len(online), flush=True)
         """
     )
-    child = subprocess.Popen(
-        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
-    )
-    assert child.stdout is not None
-    assert child.stdout.readline() == "started\n"
-    started = time.monotonic()
-    time.sleep(1.0)
-    sent = time.monotonic()
-    child.send_signal(signal.SIGINT)
-    try:
-        out, err = child.communicate(timeout=120)
-    except subprocess.TimeoutExpired:
-        child.kill()
-        raise
-    assert child.returncode == 0, err[-2000:]
+    out, sent, started = signalled(code)
     lines = out.splitlines()
     assert lines[0].startswith("interrupted "), out
     assert float(lines[0].split()[1]) - (sent - started) < 10, out
