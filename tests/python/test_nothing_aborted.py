@@ -1,7 +1,7 @@
 """Nothing aborted (issue 15, items 13, 15 and 18): a budget too large for one answer is refused
-before anything is drawn, an answer too big for memory raises ``OutOfMemoryError`` (a
-``MemoryError``) instead of killing the interpreter, the command line exits 2 with one line for
-both, and Ctrl-C stops a long computation at once.
+before anything is drawn, an answer (or an input, or a synthetic fleet) too big for memory
+raises ``OutOfMemoryError`` (a ``MemoryError``) instead of killing the interpreter, the
+command line exits 2 with one line for both, and Ctrl-C stops a long computation at once.
 
 The memory tests run in a child process whose address space is capped (``RLIMIT_AS``) a few
 hundred MB above what it holds after start-up, on inputs whose answers need gigabytes, so the
@@ -10,6 +10,7 @@ machine is never short of memory.
 
 from __future__ import annotations
 
+import re
 import signal
 import subprocess
 import sys
@@ -108,6 +109,10 @@ t = np.arange(x.size) * 0.1
 """
 
 
+#: The error of S_gamma's runs, or of their closest columns, whichever outgrows the room first.
+RUNS_OUT_OF_MEMORY = r"bytes\) for the (runs|closest columns) of S_gamma could not be allocated"
+
+
 def run_child(code: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [sys.executable, "-c", textwrap.dedent(code)],
@@ -146,11 +151,65 @@ print("after:", len(small.components))
     assert done.returncode == 0, done.stderr[-2000:]
     lines = done.stdout.splitlines()
     assert lines[0].startswith("raised: out of memory: "), lines
-    assert "bytes) for the runs of S_gamma could not be allocated" in lines[0], lines
+    assert re.search(RUNS_OUT_OF_MEMORY, lines[0]), lines
     image = "image: out of memory: 74.5 GiB (80000000000 bytes) for the distance image could"
     assert lines[1].startswith(image), lines
     assert lines[2].startswith("image: out of memory: "), lines
     assert lines[3].startswith("after: "), lines
+
+
+def test_a_fleet_too_big_for_memory_raises_memory_error():
+    """Ten million vehicles driving 30 s each: 3 x 10^9 poses, about 120 GB of joint trajectory.
+    Refused at once, naming its size; the generator once aborted some hundred thousand
+    sessions in."""
+    done = run_child(
+        LIMIT
+        + """
+import inexact_loops as il
+cap_memory()
+try:
+    il.urban_fleet(vehicles=10**7, duration_s=30.0)
+except il.OutOfMemoryError as error:
+    print("raised:", error)
+print("after:", len(il.urban_fleet(vehicles=2, duration_s=30.0)))
+"""
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("raised: out of memory: 111.8 GiB (120000000000 bytes)"), lines
+    assert "for the joint trajectory of a fleet could not be allocated" in lines[0], lines
+    assert lines[1] == "after: 2", lines
+
+
+def test_a_trajectory_and_find_loops_too_big_for_memory_raise_memory_error():
+    """2.5 x 10^7 poses on a line, 600 MB above what the interpreter holds: the trajectory's
+    copy does not fit; made before the cap, it fits, and find_loops does not. find_loops once
+    aborted growing its ball hierarchy."""
+    done = run_child(
+        LIMIT
+        + """
+import numpy as np
+import inexact_loops as il
+n = 25_000_000
+t, x = np.arange(n) * 0.1, np.arange(n, dtype=float)
+made = il.Trajectory(t, x)
+cap_memory(extra_mb=200)
+try:
+    il.Trajectory(t, x)
+except il.OutOfMemoryError as error:
+    print("trajectory:", error)
+try:
+    il.find_loops(made, gamma=0.5)
+except il.OutOfMemoryError as error:
+    print("find_loops:", error)
+print("after:", len(il.find_loops(il.Trajectory(t[:1000], x[:1000]), gamma=0.5).components))
+"""
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("trajectory: out of memory: "), lines
+    assert lines[1].startswith("find_loops: out of memory: "), lines
+    assert lines[2].startswith("after: "), lines
 
 
 def test_the_command_line_exits_2_with_one_line_when_memory_runs_out(tmp_path: Path):
@@ -176,7 +235,7 @@ sys.exit(main())
     assert done.returncode == 2, (done.returncode, done.stderr[-2000:])
     assert done.stderr.count("\n") == 1, done.stderr
     assert "out of memory: " in done.stderr
-    assert "bytes) for the runs of S_gamma could not be allocated" in done.stderr
+    assert re.search(RUNS_OUT_OF_MEMORY, done.stderr)
 
 
 # --- item 18: Ctrl-C during a long computation -----------------------------------------------

@@ -10,7 +10,17 @@
 //! engine), it is a forest of perfect binary trees like the digits of a binary counter: a new
 //! leaf joins the last tree when they are the same size, and so on up, so a pose costs O(1)
 //! amortised metric evaluations and the forest has at most log₂(n / leaf) + 1 trees.
+//!
+//! A node whose poses are all one point, bit for bit (a robot parked, reporting one pose), is
+//! marked `uniform`: δ from any x to each of its poses is then one number, so a walk hands the
+//! node over whole and a scan decides all of its poses with one distance, exactly, whatever that
+//! distance is. Without it, two stops at nearly one place cost n² (each row of one stop ranks
+//! every pose of the other, all at one distance above 0, and, at γ give or take the rounding
+//! margin, measures each of them: the path length within a stop is 0, so the arc-length bounds
+//! jump over none).
 
+use crate::error::Result;
+use crate::memory::{try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
 
@@ -30,18 +40,44 @@ struct Node {
     left: u32,
     /// Index of the right child (when `left` is not `LEAF`).
     right: u32,
+    /// Every pose of the stretch has the centre's coordinates, bit for bit.
+    uniform: bool,
 }
 
 impl Node {
-    /// A node over poses `lo..hi` whose children are `left` and `left + 1`.
-    fn inner(lo: usize, hi: usize, centre: usize, radius: f64, left: usize) -> Self {
-        Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: left as u32, right: left as u32 + 1 }
+    /// A leaf over poses `lo..hi` of `traj`: its centre the middle pose, its radius exact.
+    fn leaf<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, lo: usize, hi: usize) -> Self {
+        let centre = lo + (hi - lo) / 2;
+        let x_c = traj.point(centre);
+        let radius = (lo..hi).map(|k| metric.distance(x_c, traj.point(k))).fold(0.0, f64::max);
+        let uniform = (lo..hi).all(|k| traj.same_point(k, centre));
+        Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF, right: LEAF, uniform }
+    }
+
+    /// The node over poses `a.lo..b.hi` whose children are `a` (at index `left`) and `b` (at
+    /// `right`): its centre the middle pose, its radius bounded from the children's.
+    fn joined<M: Metric + ?Sized>(
+        traj: &Trajectory,
+        metric: &M,
+        (a, left): (&Node, u32),
+        (b, right): (&Node, u32),
+    ) -> Self {
+        let (lo, hi) = (a.lo as usize, b.hi as usize);
+        let centre = lo + (hi - lo) / 2;
+        let x_c = traj.point(centre);
+        let radius = [a, b]
+            .iter()
+            .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
+            .fold(0.0, f64::max);
+        let uniform = a.uniform && b.uniform && traj.same_point(a.centre as usize, b.centre as usize);
+        Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left, right, uniform }
     }
 }
 
 /// A stretch of the path that a query could not rule out: poses `lo..hi` within `radius` of pose
-/// `centre`. Either a leaf of the hierarchy, or (`inside`) a whole subtree that lies within the
-/// query's inner reach, taken without visiting its leaves.
+/// `centre`. Either a leaf of the hierarchy, or a whole subtree taken without visiting its
+/// leaves: one that lies within the query's inner reach (`inside`), or one whose poses are all
+/// the centre's point (`uniform`).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Leaf {
     pub lo: u32,
@@ -49,6 +85,13 @@ pub(crate) struct Leaf {
     pub centre: u32,
     pub radius: f64,
     pub inside: bool,
+    pub uniform: bool,
+}
+
+impl Leaf {
+    fn of(node: &Node, inside: bool) -> Self {
+        Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside, uniform: node.uniform }
+    }
 }
 
 /// A node of the hierarchy that a spatial index holds ([`BallTree::chunks`]): poses up to `hi`
@@ -78,17 +121,11 @@ impl BallTree {
     /// Builds the hierarchy: exact radii at the leaves (one δ per pose), bounds above them
     /// (`δ(centre, child centre) + child radius`). O(n) metric evaluations; memory about
     /// `(48 + 16 · dim) / leaf_size` bytes a pose.
-    pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, leaf_size: usize) -> Self {
-        let mut tree = Self {
-            nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size)),
-            centres: Vec::new(),
-            dim: traj.dim(),
-            roots: vec![0],
-        };
-        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF });
-        tree.build(0, 0, traj.len(), traj, metric, leaf_size.max(1));
-        tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
-        tree
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory).
+    pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, leaf_size: usize) -> Result<Self> {
+        Self::with_sessions(traj, metric, leaf_size, &[0])
     }
 
     /// An empty hierarchy over points of `dim` coordinates, to grow by
@@ -109,27 +146,14 @@ impl BallTree {
     pub(crate) fn push_leaf<M: Metric + ?Sized>(&mut self, traj: &Trajectory, metric: &M, hi: usize) {
         let lo = self.covered();
         debug_assert!(lo < hi && hi <= traj.len());
-        let centre = lo + (hi - lo) / 2;
-        let x_c = traj.point(centre);
-        let radius = (lo..hi).map(|k| metric.distance(x_c, traj.point(k))).fold(0.0, f64::max);
-        self.push_node(
-            traj,
-            Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF, right: LEAF },
-        );
+        self.push_node(traj, Node::leaf(traj, metric, lo, hi));
         while let [.., left, right] = self.roots[..] {
             let (a, b) = (self.nodes[left as usize], self.nodes[right as usize]);
             if a.hi - a.lo != b.hi - b.lo {
                 break;
             }
-            let (lo, hi) = (a.lo as usize, b.hi as usize);
-            let centre = lo + (hi - lo) / 2;
-            let x_c = traj.point(centre);
-            let radius = [a, b]
-                .iter()
-                .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
-                .fold(0.0, f64::max);
             self.roots.truncate(self.roots.len() - 2);
-            self.push_node(traj, Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left, right });
+            self.push_node(traj, Node::joined(traj, metric, (&a, left), (&b, right)));
         }
     }
 
@@ -143,25 +167,36 @@ impl BallTree {
     /// The hierarchy over a fleet's concatenated sessions (`starts`: the first pose of each
     /// session, the first being 0): its top levels split the sessions in halves, so every node
     /// below them, and every leaf, holds poses of one session only. A single session (`starts`
-    /// = `[0]`) gives exactly [`new`](Self::new)'s hierarchy.
+    /// = `[0]`) gives [`new`](Self::new)'s hierarchy.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory).
     pub(crate) fn with_sessions<M: Metric + ?Sized>(
         traj: &Trajectory,
         metric: &M,
         leaf_size: usize,
         starts: &[usize],
-    ) -> Self {
+    ) -> Result<Self> {
+        let leaf_size = leaf_size.max(1);
+        let ends = starts.iter().skip(1).copied().chain(std::iter::once(traj.len()));
+        let capacity =
+            starts.len() - 1 + starts.iter().zip(ends).map(|(&lo, hi)| tree_size(hi - lo, leaf_size)).sum::<usize>();
         let mut tree = Self {
-            nodes: Vec::with_capacity(2 * traj.len().div_ceil(leaf_size) + 2 * starts.len()),
+            nodes: try_with_capacity(capacity, "the ball hierarchy")?,
             centres: Vec::new(),
             dim: traj.dim(),
             roots: vec![0],
         };
-        let mut bounds = starts.to_vec();
+        let mut bounds = try_with_capacity(starts.len() + 1, "the ball hierarchy")?;
+        bounds.extend_from_slice(starts);
         bounds.push(traj.len());
-        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF });
-        tree.build_sessions(0, &bounds, traj, metric, leaf_size.max(1));
-        tree.centres = tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)).copied().collect();
-        tree
+        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF, uniform: false });
+        tree.build_sessions(0, &bounds, traj, metric, leaf_size);
+        debug_assert_eq!(tree.nodes.len(), capacity, "the nodes fill their room exactly");
+        let mut centres = try_with_capacity(tree.nodes.len() * traj.dim(), "the ball hierarchy")?;
+        centres.extend(tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)));
+        tree.centres = centres;
+        Ok(tree)
     }
 
     /// Builds the node at `slot` over the sessions between `bounds[0]` and `bounds[last]`.
@@ -185,13 +220,9 @@ impl BallTree {
         let middle = (bounds.len() - 1) / 2;
         self.build_sessions(left, &bounds[..=middle], traj, metric, leaf_size);
         self.build_sessions(left + 1, &bounds[middle..], traj, metric, leaf_size);
-        let centre = lo + (hi - lo) / 2;
-        let x_c = traj.point(centre);
-        let radius = [self.nodes[left], self.nodes[left + 1]]
-            .iter()
-            .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
-            .fold(0.0, f64::max);
-        self.nodes[slot] = Node::inner(lo, hi, centre, radius, left);
+        let (a, b) = (self.nodes[left], self.nodes[left + 1]);
+        debug_assert!(a.lo as usize == lo && b.hi as usize == hi);
+        self.nodes[slot] = Node::joined(traj, metric, (&a, left as u32), (&b, left as u32 + 1));
     }
 
     /// The chunks a spatial index holds: the largest nodes that lie in one session (`starts` as
@@ -217,6 +248,9 @@ impl BallTree {
 
     /// [`near_spans`](Self::near_spans) under the node `root` only, appended to `out` (not
     /// cleared, not merged with what `out` holds).
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) when the stretches do not fit in memory.
     pub(crate) fn near_spans_under<M: Metric + ?Sized>(
         &self,
         root: u32,
@@ -225,10 +259,14 @@ impl BallTree {
         from: usize,
         reach: (f64, f64),
         out: &mut Vec<Leaf>,
-    ) {
+    ) -> Result<()> {
+        let mut grown = Ok(());
         self.walk_from(root, metric, x, from, reach, |node, inside| {
-            out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside });
+            if grown.is_ok() {
+                grown = try_reserve(out, 1, "the stretches of a row scan").map(|()| out.push(Leaf::of(node, inside)));
+            }
         });
+        grown
     }
 
     fn build<M: Metric + ?Sized>(
@@ -240,12 +278,8 @@ impl BallTree {
         metric: &M,
         leaf_size: usize,
     ) {
-        let centre = lo + (hi - lo) / 2;
-        let x_c = traj.point(centre);
         if hi - lo <= leaf_size {
-            let radius = (lo..hi).map(|k| metric.distance(x_c, traj.point(k))).fold(0.0, f64::max);
-            self.nodes[slot] =
-                Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF, right: LEAF };
+            self.nodes[slot] = Node::leaf(traj, metric, lo, hi);
             return;
         }
         let left = self.nodes.len();
@@ -255,19 +289,20 @@ impl BallTree {
         let middle = lo + (hi - lo) / 2;
         self.build(left, lo, middle, traj, metric, leaf_size);
         self.build(left + 1, middle, hi, traj, metric, leaf_size);
-        let radius = [self.nodes[left], self.nodes[left + 1]]
-            .iter()
-            .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
-            .fold(0.0, f64::max);
-        self.nodes[slot] = Node::inner(lo, hi, centre, radius, left);
+        let (a, b) = (self.nodes[left], self.nodes[left + 1]);
+        self.nodes[slot] = Node::joined(traj, metric, (&a, left as u32), (&b, left as u32 + 1));
     }
 
     /// The stretches, in increasing order, that end after `from` and whose ball reaches within
-    /// `reach` of `x` (appended to `out`, cleared first): leaves, and whole subtrees whose ball
-    /// lies within `inside_reach` of `x` (`δ(x, centre) + radius ≤ inside_reach`), marked
-    /// `inside` and not descended into. Poses outside every stretch are all farther than `reach`
-    /// from `x`. Adjacent inside stretches are merged, so a parked robot's whole past is one
-    /// stretch: the walk costs O(stretches · log n), not O(leaves).
+    /// `reach` of `x` (appended to `out`, cleared first): leaves, whole subtrees whose ball lies
+    /// within `inside_reach` of `x` (`δ(x, centre) + radius ≤ inside_reach`), marked `inside`,
+    /// and whole subtrees of one point (`uniform`), neither descended into. Poses outside every
+    /// stretch are all farther than `reach` from `x`. Adjacent inside stretches are merged, so a
+    /// parked robot's whole past is one stretch: the walk costs O(stretches · log n), not
+    /// O(leaves).
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) when the stretches do not fit in memory.
     pub(crate) fn near_spans<M: Metric + ?Sized>(
         &self,
         metric: &M,
@@ -275,20 +310,30 @@ impl BallTree {
         from: usize,
         (reach, inside_reach): (f64, f64),
         out: &mut Vec<Leaf>,
-    ) {
+    ) -> Result<()> {
         out.clear();
+        let mut grown = Ok(());
         self.walk(metric, x, from, (reach, inside_reach), |node, inside| match out.last_mut() {
-            Some(last) if inside && last.inside && last.hi == node.lo => last.hi = node.hi,
-            _ => out.push(Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside }),
+            Some(last) if inside && last.inside && last.hi == node.lo => {
+                last.hi = node.hi;
+                last.uniform = false;
+            }
+            _ if grown.is_ok() => {
+                grown = try_reserve(out, 1, "the stretches of a row scan").map(|()| out.push(Leaf::of(node, inside)));
+            }
+            _ => {}
         });
+        grown
     }
 
     /// The pose of `lo..=hi` closest to `x` under the metric's
     /// [`distance_rank`](Metric::distance_rank), the earliest on ties: the same answer as
     /// [`Metric::closest_in`] over the stretch. Branch and bound over the hierarchy, in index
     /// order: a ball whose nearest possible pose is farther than the best so far by more than
-    /// `margin` (the rounding allowance of δ) is skipped, and a rank of 0 ends the search. A
-    /// parked robot's run of a million identical poses costs O(log n), not a million ranks.
+    /// `margin` (the rounding allowance of δ) is skipped, a ball of one point (`uniform`) is
+    /// ranked once, at its first pose in the range, and a rank of 0 ends the search. A parked
+    /// robot's run of a million identical poses costs O(log n), not a million ranks, at whatever
+    /// distance from `x` it is parked.
     pub(crate) fn closest_in_range<M: Metric + ?Sized>(
         &self,
         metric: &M,
@@ -309,6 +354,17 @@ impl BallTree {
                 continue;
             }
             if metric.distance(x, self.centre(index)) - node.radius > best.1 + margin {
+                continue;
+            }
+            if node.uniform {
+                // Every pose of the range ranks as pose `a`: the earliest of them is the one.
+                let rank = metric.distance_rank(x, traj.point(a));
+                if rank < best.0 {
+                    best = (rank, metric.distance(x, traj.point(a)), a);
+                    if rank <= 0.0 {
+                        return a;
+                    }
+                }
                 continue;
             }
             if node.left != LEAF {
@@ -340,9 +396,10 @@ impl BallTree {
         &self.centres[index as usize * self.dim..(index as usize + 1) * self.dim]
     }
 
-    /// Calls `visit(lo, hi)` for every leaf stretch, in increasing order, that ends after
-    /// `from` and whose ball reaches within `reach` of `x`; `lo` is clipped to `from`. Poses in
-    /// the stretches not visited are all farther than `reach` from `x`.
+    /// Calls `visit(lo, hi)` for every stretch (a leaf, or a subtree of one point), in
+    /// increasing order, that ends after `from` and whose ball reaches within `reach` of `x`;
+    /// `lo` is clipped to `from`. Poses in the stretches not visited are all farther than `reach`
+    /// from `x`.
     pub(crate) fn for_each_near_leaf<M: Metric + ?Sized>(
         &self,
         metric: &M,
@@ -369,7 +426,8 @@ impl BallTree {
 
     /// The walk of the hierarchy, in increasing order of poses: nodes ending by `from`, or
     /// whose ball stays farther than `reach` from `x`, are skipped; a node whose ball lies within
-    /// `inside_reach` of `x` is visited whole (`inside`), and so is every other leaf.
+    /// `inside_reach` of `x` is visited whole (`inside`), and so is a node of one point
+    /// (`uniform`) and every other leaf.
     fn walk<M: Metric + ?Sized>(
         &self,
         metric: &M,
@@ -405,7 +463,7 @@ impl BallTree {
                 continue;
             }
             let inside = d + node.radius <= inside_reach;
-            if inside || node.left == LEAF {
+            if inside || node.uniform || node.left == LEAF {
                 visit(&node, inside);
             } else {
                 stack.push(node.right);
@@ -413,6 +471,31 @@ impl BallTree {
             }
         }
     }
+}
+
+/// The number of nodes [`BallTree::build`] makes over `poses` poses (at least 1) in leaves of
+/// at most `leaf_size`: the halves of a level differ in size by at most one, so each level
+/// holds at most two sizes. O(log poses).
+fn tree_size(poses: usize, leaf_size: usize) -> usize {
+    // (size, how many nodes of that size) on the current level: at most two entries.
+    let mut level = vec![(poses, 1_usize)];
+    let mut nodes = 0;
+    while !level.is_empty() {
+        let mut next: Vec<(usize, usize)> = Vec::with_capacity(2);
+        for (size, count) in level {
+            nodes += count;
+            if size > leaf_size {
+                for half in [size / 2, size - size / 2] {
+                    match next.iter_mut().find(|(s, _)| *s == half) {
+                        Some((_, c)) => *c += count,
+                        None => next.push((half, count)),
+                    }
+                }
+            }
+        }
+        level = next;
+    }
+    nodes
 }
 
 #[cfg(test)]
@@ -437,7 +520,7 @@ mod tests {
     fn closest_in_range_is_the_linear_scan_ties_included() {
         for seed in 0..20 {
             let traj = tied_trajectory(1500, seed);
-            let tree = BallTree::new(&traj, &Euclidean, 16);
+            let tree = BallTree::new(&traj, &Euclidean, 16).unwrap();
             for (k, lo) in (0..traj.len()).step_by(37).enumerate() {
                 let hi = (lo + 40 + 97 * k).min(traj.len() - 1);
                 for x in [traj.point((lo * 7 + 3) % traj.len()), &[0.5, 0.5][..], &[1.0, 1.0][..]] {
@@ -470,7 +553,7 @@ mod tests {
             let (lo, hi) = (n / 5, n - 1);
             let expected = lo + Euclidean.closest_in(x, &traj.coords()[2 * lo..2 * n]);
             assert_eq!(forest.closest_in_range(&Euclidean, &traj, x, (lo, hi), 1e-12), expected, "{n} poses");
-            forest.near_spans(&Euclidean, x, 0, (1.0, 0.5), &mut spans);
+            forest.near_spans(&Euclidean, x, 0, (1.0, 0.5), &mut spans).unwrap();
             for k in 0..forest.covered() {
                 match spans.iter().find(|s| (s.lo as usize..s.hi as usize).contains(&k)) {
                     Some(span) if span.inside => assert!(Euclidean.distance(x, traj.point(k)) <= 0.5),
@@ -484,11 +567,11 @@ mod tests {
     #[test]
     fn inside_spans_are_within_reach_and_pruned_poses_beyond() {
         let traj = tied_trajectory(3000, 7);
-        let tree = BallTree::new(&traj, &Euclidean, 16);
+        let tree = BallTree::new(&traj, &Euclidean, 16).unwrap();
         let mut spans = Vec::new();
         for (q, from) in [(0, 0), (100, 50), (2000, 1990)] {
             let x = traj.point(q);
-            tree.near_spans(&Euclidean, x, from, (1.0, 0.5), &mut spans);
+            tree.near_spans(&Euclidean, x, from, (1.0, 0.5), &mut spans).unwrap();
             let span_of = |k: usize| spans.iter().find(|s| (s.lo as usize..s.hi as usize).contains(&k));
             for k in from..traj.len() {
                 match span_of(k) {

@@ -213,7 +213,10 @@ impl<'a, M: Metric + ?Sized> NearestKeyframe<'a, M> {
         let largest = traj.coords().iter().fold(0.0_f64, |m, c| m.max(c.abs()));
         // The ball bounds are only used to prune; a margin for their rounding keeps them safe.
         let reach = gamma + 64.0 * f64::EPSILON * (gamma + largest + 1.0);
-        Self { traj, metric, tree: BallTree::new(traj, metric, 64), is_keyframe, gamma, reach }
+        // The baselines hold per-pose buffers of their own, allocated as usual: out of memory,
+        // the hierarchy panics with the error rather than returning it.
+        let tree = BallTree::new(traj, metric, 64).unwrap_or_else(|error| panic!("{error}"));
+        Self { traj, metric, tree, is_keyframe, gamma, reach }
     }
 
     fn find(&self, query: usize, limit: usize) -> Option<usize> {

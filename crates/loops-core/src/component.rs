@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::interrupt::Interrupt;
-use crate::memory::{try_filled, try_reserve, try_with_capacity};
+use crate::memory::{try_collect, try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::sublevel::{Run, SublevelSet};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
@@ -132,7 +132,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
 ) -> Result<Labelling> {
     let (labels, count) = try_label_runs(set, ROWS_PER_LABEL_TASK, interrupt)?;
     let widths = traj.cell_widths_s();
-    let prefix = prefix_sums_by_session(widths, set.breaks());
+    let prefix = prefix_sums_by_session(widths, set.breaks())?;
 
     let mut tallies = try_filled(
         count as usize,
@@ -219,9 +219,9 @@ fn try_label_runs(set: &SublevelSet, rows_per_task: usize, interrupt: &Interrupt
     try_reserve(&mut parent, run_count, "the component labels of the runs")?;
     parent.par_extend(0..run_count as u32);
     let rows = set.rows();
-    let starts: Vec<usize> = (0..rows).step_by(rows_per_task.max(1)).collect();
+    let starts: Vec<usize> = try_collect((0..rows).step_by(rows_per_task.max(1)), "the component labels of the runs")?;
     // Each stretch of rows with its own slice of the parent array.
-    let mut stretches = Vec::with_capacity(starts.len());
+    let mut stretches = try_with_capacity(starts.len(), "the component labels of the runs")?;
     let mut rest = parent.as_mut_slice();
     for &start in &starts {
         let end = (start + rows_per_task.max(1)).min(rows);

@@ -27,12 +27,13 @@ use crate::component::LoopComponent;
 use crate::error::{Error, Result};
 use crate::loops::Loops;
 use crate::measure::{Scale, Selection, Side};
+use crate::memory::{try_collect, try_with_capacity};
 use crate::metric::Metric;
 use crate::sample::{Sampler, Samples, sample_loops_where};
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
 use crate::spec::{MetricSpec, with_metric};
-use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, path_length};
+use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, try_path_length};
 use crate::trajectory::Trajectory;
 
 /// Seconds between the end of one session and the start of the next on the fleet clock: more
@@ -72,11 +73,14 @@ impl Fleet {
     /// # Errors
     /// [`Error::EmptyFleet`]; [`Error::DuplicateSession`]; [`Error::SessionMismatch`] for a
     /// session whose dimension or manifold differs from the first's; [`Error::TooManyPoses`]
-    /// for more poses in all than one trajectory may hold.
+    /// for more poses in all than one trajectory may hold; [`Error::OutOfMemory`].
     pub fn new(sessions: Vec<(String, Trajectory)>) -> Result<Self> {
         let Some((_, first)) = sessions.first() else { return Err(Error::EmptyFleet) };
         let (dim, manifold) = (first.dim(), first.manifold());
+        let what = "the sessions of a fleet";
         let mut seen = std::collections::HashSet::new();
+        seen.try_reserve(sessions.len())
+            .map_err(|_| Error::OutOfMemory { what, bytes: (sessions.len() * 2 * size_of::<&str>()) as u64 })?;
         for (name, traj) in &sessions {
             if !seen.insert(name.as_str()) {
                 return Err(Error::DuplicateSession { name: name.clone() });
@@ -90,16 +94,23 @@ impl Fleet {
                 return Err(Error::SessionMismatch { session: name.clone(), problem, what: "manifold" });
             }
         }
-        let parts: Vec<&Trajectory> = sessions.iter().map(|(_, t)| t).collect();
+        drop(seen);
+        let parts: Vec<&Trajectory> = try_collect(sessions.iter().map(|(_, t)| t), what)?;
         let (joint, clock_offsets) = Trajectory::concatenate(&parts, FLEET_CLOCK_GAP_S)?;
-        let mut starts = Vec::with_capacity(sessions.len());
+        drop(parts);
+        let mut starts = try_with_capacity(sessions.len(), what)?;
         let mut next = 0;
         for (_, traj) in &sessions {
             starts.push(next);
             next += traj.len();
         }
-        let (names, sessions) = sessions.into_iter().unzip();
-        Ok(Self { names, sessions, starts, joint, clock_offsets })
+        let (mut names, mut trajectories) =
+            (try_with_capacity(sessions.len(), what)?, try_with_capacity(sessions.len(), what)?);
+        for (name, traj) in sessions {
+            names.push(name);
+            trajectories.push(traj);
+        }
+        Ok(Self { names, sessions: trajectories, starts, joint, clock_offsets })
     }
 
     /// Number of sessions.
@@ -347,13 +358,13 @@ pub fn find_fleet_loops<M: Metric + ?Sized>(
     let separation = options.separation;
     // Each session's first separated columns, from its own path length and clock, so that an
     // intra-session block is exactly that session's own result.
-    let mut first_columns = Vec::with_capacity(joint.len());
+    let mut first_columns = try_with_capacity(joint.len(), "the first columns of the rows")?;
     for (a, traj) in fleet.sessions.iter().enumerate() {
         let start = fleet.starts[a] as u32;
         if separation.is_none() {
             first_columns.extend((0..traj.len() as u32).map(|i| start + i));
         } else {
-            let local = separation.first_columns(&path_length(traj, metric), traj.timestamps_s());
+            let local = separation.first_columns(&try_path_length(traj, metric)?, traj.timestamps_s())?;
             first_columns.extend(local.into_iter().map(|j| start + j));
         }
     }
@@ -374,6 +385,7 @@ pub fn find_fleet_loops<M: Metric + ?Sized>(
         || ArcLength::new(joint, metric, false),
         || BallTree::with_sessions(joint, metric, LEAF_SIZE, &fleet.starts),
     );
+    let (arc, balls) = (arc?, balls?);
     let index = match pruning {
         Pruning::KdTree => {
             let radius = options.chunk_radius.filter(|r| *r > 0.0 && r.is_finite()).unwrap_or(gamma);

@@ -6,7 +6,7 @@ use crate::component::{LoopComponent, label_components};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
-use crate::memory::try_copy;
+use crate::memory::{try_copy, try_reserve};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, recorded_metric_name, with_metric};
@@ -109,7 +109,8 @@ pub struct Loops {
 ///
 /// # Errors
 /// [`Error::InvalidGamma`] unless `gamma` is positive and finite; the metric's dimension error;
-/// [`Error::OutOfMemory`] when the answer does not fit in memory (naming the size it needs);
+/// [`Error::OutOfMemory`] when the answer, or a buffer of the engine that grows with the input,
+/// does not fit in memory (naming the size it needs);
 /// [`Error::Interrupted`] when an [`Interrupt`] installed on this thread is interrupted.
 ///
 /// # Examples
@@ -190,10 +191,10 @@ impl MetricSpec {
     /// [`path_length`](crate::path_length) under this metric.
     ///
     /// # Errors
-    /// The metric's dimension error.
+    /// The metric's dimension error; [`Error::OutOfMemory`].
     pub fn path_length(&self, traj: &Trajectory) -> Result<Vec<f64>> {
         self.validate(traj)?;
-        Ok(with_metric!(self, m => crate::sublevel::path_length(traj, m)))
+        with_metric!(self, m => crate::sublevel::try_path_length(traj, m))
     }
 }
 
@@ -223,13 +224,12 @@ impl Loops {
         // breaks δ(x, x) = 0 may even leave the diagonal cell out).
         // A separated set has no diagonal to break.
         let separation = set.separation();
-        let gaps: Vec<usize> = if separation.is_none() {
-            (0..n - 1)
-                .filter(|&i| !set.breaks_after(i) && set.row(i).first().is_none_or(|r| (r.end as usize) <= i))
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let broken = |i: &usize| !set.breaks_after(*i) && set.row(*i).first().is_none_or(|r| (r.end as usize) <= *i);
+        let mut gaps: Vec<usize> = Vec::new();
+        if separation.is_none() {
+            try_reserve(&mut gaps, (0..n - 1).filter(broken).count(), "the gaps of the diagonal")?;
+            gaps.extend((0..n - 1).filter(broken));
+        }
         let mut warnings = Vec::new();
         if let Some(&first_gap) = gaps.first() {
             let largest_step =
@@ -405,7 +405,7 @@ impl Loops {
         let keep = self.selection_mask(selection)?;
         let rows = (0..self.len()).map(|i| (i, self.set.row(i)));
         let mut tau =
-            loop_duration_s(&self.cell_widths_s, self.set.breaks(), rows, |r| keep(self.labels[r] as usize), side);
+            loop_duration_s(&self.cell_widths_s, self.set.breaks(), rows, |r| keep(self.labels[r] as usize), side)?;
         if scale == Scale::Normalized {
             let span = self.span_s();
             tau.iter_mut().for_each(|t| *t /= span);

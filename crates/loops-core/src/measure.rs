@@ -2,7 +2,8 @@
 
 use std::str::FromStr;
 
-use crate::error::Error;
+use crate::error::{Error, Result};
+use crate::memory::try_filled;
 
 /// Which partners t′ of a time t count towards τ(t) (paper, after Eq. 6).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -69,14 +70,14 @@ pub(crate) fn loop_duration_s<'r>(
     rows: impl Iterator<Item = (usize, &'r [crate::sublevel::Run])>,
     keep: impl Fn(usize) -> bool,
     side: Side,
-) -> Vec<f64> {
+) -> Result<Vec<f64>> {
     let n = cell_widths_s.len();
-    let prefix = crate::trajectory::prefix_sums_by_session(cell_widths_s, breaks);
+    let prefix = crate::trajectory::prefix_sums_by_session(cell_widths_s, breaks)?;
     let width = |a: usize, b: usize| if a > b { 0.0 } else { (prefix[b] + cell_widths_s[b]) - prefix[a] };
     let is_break = |k: usize| breaks.binary_search(&(k as u32)).is_ok();
-    let mut tau = vec![0.0; n];
+    let mut tau = try_filled(n, 0.0, "the loop durations")?;
     // Column contributions as a difference array over j.
-    let mut column_diff = vec![0.0; n + 1];
+    let mut column_diff = try_filled(n + 1, 0.0, "the loop durations")?;
     let mut run_index = 0;
     for (r, runs) in rows {
         let w_r = cell_widths_s[r];
@@ -117,7 +118,7 @@ pub(crate) fn loop_duration_s<'r>(
         running += diff;
         *t += running;
     }
-    tau
+    Ok(tau)
 }
 
 /// α_X(a, b) = ∫_a^b τ_X: Σ_i |cell_i ∩ [a, b]| τ(i), seconds in, s² out.

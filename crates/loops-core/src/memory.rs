@@ -2,8 +2,9 @@
 //! [`Error::OutOfMemory`] naming what it was for and its size, instead of aborting the process
 //! (and a Python interpreter with it).
 //!
-//! Only the buffers that grow with the answer go through here (runs, labels, components,
-//! samples, images); small, bounded buffers allocate as usual.
+//! The buffers that grow with the input or the answer go through here (time cells, path
+//! lengths, the ball hierarchy, runs, labels, components, samples, images, a fleet's sessions);
+//! small, bounded buffers allocate as usual.
 
 use crate::error::{Error, Result};
 

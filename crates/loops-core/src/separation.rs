@@ -13,6 +13,7 @@
 use std::fmt;
 
 use crate::error::{Error, Result};
+use crate::memory::try_collect;
 
 /// The minimum separation along the trajectory between the two poses of a loop: a path length
 /// (the metric's unit, e.g. metres) and a time (seconds). Both must hold. [`Separation::NONE`]
@@ -111,20 +112,22 @@ impl Separation {
     /// The first column of every row that the separation keeps: c_i = the smallest j > i with
     /// `s_j − s_i ≥ path` and `t_j − t_i ≥ time_s` (`n` when there is none), or i itself with no
     /// separation. Non-decreasing in i. O(n log n).
-    pub(crate) fn first_columns(&self, path_length: &[f64], timestamps_s: &[f64]) -> Vec<u32> {
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`].
+    pub(crate) fn first_columns(&self, path_length: &[f64], timestamps_s: &[f64]) -> Result<Vec<u32>> {
         let n = timestamps_s.len();
-        (0..n)
-            .map(|i| {
-                if self.is_none() {
-                    return i as u32;
-                }
-                let after = |values: &[f64], bound: f64| {
-                    let start = i + 1;
-                    start + values[start..].partition_point(|&v| v - values[i] < bound)
-                };
-                after(path_length, self.path).max(after(timestamps_s, self.time_s)) as u32
-            })
-            .collect()
+        let columns = (0..n).map(|i| {
+            if self.is_none() {
+                return i as u32;
+            }
+            let after = |values: &[f64], bound: f64| {
+                let start = i + 1;
+                start + values[start..].partition_point(|&v| v - values[i] < bound)
+            };
+            after(path_length, self.path).max(after(timestamps_s, self.time_s)) as u32
+        });
+        try_collect(columns, "the first columns of the rows")
     }
 }
 
@@ -148,13 +151,13 @@ mod tests {
     fn first_columns_by_path_and_time() {
         let s = [0.0, 1.0, 1.0, 3.0, 6.0];
         let t = [0.0, 1.0, 2.0, 3.0, 4.0];
-        assert_eq!(Separation::NONE.first_columns(&s, &t), vec![0, 1, 2, 3, 4]);
-        assert_eq!(Separation::path(2.0).first_columns(&s, &t), vec![3, 3, 3, 4, 5]);
-        assert_eq!(Separation::time_s(2.0).first_columns(&s, &t), vec![2, 3, 4, 5, 5]);
+        assert_eq!(Separation::NONE.first_columns(&s, &t).unwrap(), vec![0, 1, 2, 3, 4]);
+        assert_eq!(Separation::path(2.0).first_columns(&s, &t).unwrap(), vec![3, 3, 3, 4, 5]);
+        assert_eq!(Separation::time_s(2.0).first_columns(&s, &t).unwrap(), vec![2, 3, 4, 5, 5]);
         let both = Separation { path: 2.0, time_s: 2.0 };
-        assert_eq!(both.first_columns(&s, &t), vec![3, 3, 4, 5, 5]);
+        assert_eq!(both.first_columns(&s, &t).unwrap(), vec![3, 3, 4, 5, 5]);
         // A tiny separation still leaves the diagonal out.
-        assert_eq!(Separation::time_s(1e-9).first_columns(&s, &t), vec![1, 2, 3, 4, 5]);
+        assert_eq!(Separation::time_s(1e-9).first_columns(&s, &t).unwrap(), vec![1, 2, 3, 4, 5]);
     }
 
     #[test]

@@ -19,6 +19,7 @@
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use crate::ball_tree::{BallTree, Chunk, Leaf};
+use crate::error::Result;
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
 
@@ -121,6 +122,9 @@ impl ChunkIndex {
     /// into leaves and inside stretches), found through the chunks near `x`: in increasing
     /// order, adjacent inside stretches merged. `x` has the trajectory's 1 to 3 coordinates,
     /// and the metric is their Euclidean distance.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) when the stretches do not fit in memory.
     pub(crate) fn near_spans<M: Metric + ?Sized>(
         &self,
         tree: &BallTree,
@@ -129,16 +133,18 @@ impl ChunkIndex {
         from: usize,
         (reach, inside_reach): (f64, f64),
         out: &mut Vec<Leaf>,
-    ) {
+    ) -> Result<()> {
         out.clear();
+        let mut grown = Ok(());
         for class in &self.classes {
             class.tree.within(x, reach + class.max_radius, |item| {
                 let chunk = self.chunks[class.members[item] as usize];
-                if chunk.hi as usize > from {
-                    tree.near_spans_under(chunk.node, metric, x, from, (reach, inside_reach), out);
+                if chunk.hi as usize > from && grown.is_ok() {
+                    grown = tree.near_spans_under(chunk.node, metric, x, from, (reach, inside_reach), out);
                 }
             });
         }
+        grown?;
         out.sort_unstable_by_key(|leaf| leaf.lo);
         // Merge adjacent inside stretches, as the hierarchy walk does.
         let mut kept = 0;
@@ -152,6 +158,7 @@ impl ChunkIndex {
             }
         }
         out.truncate(kept);
+        Ok(())
     }
 }
 
@@ -187,14 +194,14 @@ mod tests {
     fn chunks_find_what_the_walk_finds() {
         for seed in 0..6 {
             let (traj, starts) = fleet_points(12, seed);
-            let tree = BallTree::with_sessions(&traj, &Euclidean, 16, &starts);
+            let tree = BallTree::with_sessions(&traj, &Euclidean, 16, &starts).unwrap();
             let index = ChunkIndex::new(&traj, &tree, &starts, 2.0).unwrap();
             assert!(index.len() < traj.len());
             let (mut by_walk, mut by_index) = (Vec::new(), Vec::new());
             for (q, from) in [(0, 0), (150, 100), (400, 0), (traj.len() - 1, 700)] {
                 let x = traj.point(q.min(traj.len() - 1));
-                tree.near_spans(&Euclidean, x, from, (3.0, 1.0), &mut by_walk);
-                index.near_spans(&tree, &Euclidean, x, from, (3.0, 1.0), &mut by_index);
+                tree.near_spans(&Euclidean, x, from, (3.0, 1.0), &mut by_walk).unwrap();
+                index.near_spans(&tree, &Euclidean, x, from, (3.0, 1.0), &mut by_index).unwrap();
                 let covered = |spans: &[Leaf], inside: bool| -> Vec<usize> {
                     spans
                         .iter()

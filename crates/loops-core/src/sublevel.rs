@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
-use crate::memory::{try_extend, try_reserve, try_with_capacity};
+use crate::memory::{try_collect, try_extend, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
@@ -101,6 +101,12 @@ impl SublevelSet {
     /// stretches whose ball comes within γ of `x_i`, so the cost of a row no longer grows with
     /// the length of path far away.
     ///
+    /// A robot that stops (consecutive poses at one point, bit for bit) costs its runs: the
+    /// hierarchy's nodes of one point are decided with one distance and ranked once for a
+    /// closest column, and a row whose pose is the previous row's repeats that row's runs. Two
+    /// stops at nearly one place would otherwise cost n²: the arc-length bounds jump over no
+    /// pose of a stop, whose path length is 0.
+    ///
     /// Each run also records its closest column (the argmin of δ over the run), measured over
     /// every cell of runs off the diagonal.
     ///
@@ -128,11 +134,12 @@ impl SublevelSet {
         check_gamma(gamma)?;
         separation.check()?;
         traj.check_metric(metric)?;
-        let (mut arc, balls) = rayon::join(
+        let (arc, balls) = rayon::join(
             || ArcLength::new(traj, metric, !separation.is_none()),
             || BallTree::new(traj, metric, LEAF_SIZE),
         );
-        let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s());
+        let (mut arc, balls) = (arc?, balls?);
+        let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s())?;
         arc.plain = Vec::new();
         let pruner = Pruner::Hierarchy(&balls);
         Self::scan(traj, metric, gamma, separation, &arc, pruner, &first_columns, &[0], traj.len())
@@ -162,29 +169,38 @@ impl SublevelSet {
         let interrupt = Interrupt::current();
         let scanner = RowScanner { traj, metric, arc, pruner, gamma, first_columns, starts };
         // Blocks of rows, cut where a session starts; rows from `scan_rows` on are left empty.
-        let mut block_rows: Vec<std::ops::Range<usize>> = Vec::with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len());
+        let mut block_rows: Vec<std::ops::Range<usize>> =
+            try_with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len(), "the row blocks of S_gamma")?;
         for (k, &start) in starts.iter().enumerate() {
             let end = starts.get(k + 1).copied().unwrap_or(n).min(scan_rows);
             block_rows.extend((start..end).step_by(ROWS_PER_TASK).map(|a| a..(a + ROWS_PER_TASK).min(end)));
         }
-        let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Result<Vec<Block>> {
-            blocks
-                .par_iter()
-                .map(|rows| {
-                    let mut block = Block::default();
-                    let mut candidates = Vec::new();
-                    scanner.candidates_for(rows.clone(), &mut candidates);
-                    for i in rows.clone() {
-                        interrupt.check()?;
-                        block.make_room()?;
+        // Each batch's blocks go into room taken fallibly first (a parallel collect would grow
+        // its vector as usual); the first error in block order is the batch's.
+        let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Result<Vec<Result<Block>>> {
+            let mut scanned = try_with_capacity(blocks.len(), "the row blocks of S_gamma")?;
+            let scan_block = |rows: &std::ops::Range<usize>| -> Result<Block> {
+                // Every block of the batch is started: once interrupted, they end here.
+                interrupt.check()?;
+                let mut block = Block::default();
+                let mut candidates = Vec::new();
+                scanner.candidates_for(rows.clone(), &mut candidates)?;
+                for i in rows.clone() {
+                    interrupt.check()?;
+                    block.make_room()?;
+                    if i > rows.start && traj.same_point(i - 1, i) {
+                        scanner.repeat_row(i, &mut block);
+                    } else {
                         scanner.scan_row(i, &candidates, &mut block);
-                        block.row_lengths.push(block.runs.len());
                     }
-                    Ok(block)
-                })
-                .collect()
+                    block.row_lengths.push(block.runs.len());
+                }
+                Ok(block)
+            };
+            blocks.par_iter().map(scan_block).collect_into_vec(&mut scanned);
+            Ok(scanned)
         };
-        let breaks = if starts.len() > 1 { starts[1..].iter().map(|&s| s as u32).collect() } else { Vec::new() };
+        let breaks = try_collect(starts.iter().skip(1).map(|&s| s as u32), "the session starts of S_gamma")?;
         let row_offsets = try_with_capacity(n + 1, "the row offsets of S_gamma")?;
         let mut set = Self { gamma, separation, row_offsets, runs: Vec::new(), closest: Vec::new(), breaks };
         set.row_offsets.push(0);
@@ -216,9 +232,11 @@ impl SublevelSet {
         Self { gamma, separation: Separation::NONE, row_offsets, runs, closest, breaks: Vec::new() }
     }
 
-    /// Appends the rows of scanned blocks, in order, growing the result fallibly.
-    fn append(&mut self, blocks: Vec<Block>) -> Result<()> {
+    /// Appends the rows of scanned blocks, in order, growing the result fallibly; the first
+    /// block that failed ends it with its error.
+    fn append(&mut self, blocks: Vec<Result<Block>>) -> Result<()> {
         for block in blocks {
+            let block = block?;
             let base = self.runs.len();
             self.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
             try_extend(&mut self.runs, &block.runs, "the runs of S_gamma")?;
@@ -250,7 +268,7 @@ impl SublevelSet {
         separation.check()?;
         traj.check_metric(metric)?;
         let n = traj.len();
-        let (s, t) = (path_length(traj, metric), traj.timestamps_s());
+        let (s, t) = (try_path_length(traj, metric)?, traj.timestamps_s());
         let separated = |i: usize, j: usize| {
             separation.is_none() || (j > i && s[j] - s[i] >= separation.path && t[j] - t[i] >= separation.time_s)
         };
@@ -367,6 +385,13 @@ pub(crate) struct Block {
 }
 
 impl Block {
+    /// The runs of the last row scanned: indices into `runs` and `closest`.
+    fn last_row(&self) -> std::ops::Range<usize> {
+        let end = self.row_lengths.last().copied().unwrap_or(0);
+        let start = self.row_lengths.len().checked_sub(2).map_or(0, |k| self.row_lengths[k]);
+        start..end
+    }
+
     /// Before a row: room for as many runs again as the block holds (at least 64), allocated
     /// fallibly, so that the row's pushes do not have to grow the buffers.
     fn make_room(&mut self) -> Result<()> {
@@ -385,6 +410,10 @@ const TREE_CLOSEST_LEN: usize = 256;
 /// metric's unit, summed in order (as `numpy.cumsum` of the steps sums them): the path length a
 /// [`Separation`] bounds. O(n).
 ///
+/// # Panics
+/// When the path lengths do not fit in memory ([`MetricSpec::path_length`] returns the error
+/// instead).
+///
 /// # Examples
 /// ```
 /// use loops_core::{Euclidean, Trajectory, path_length};
@@ -392,8 +421,18 @@ const TREE_CLOSEST_LEN: usize = 256;
 /// assert_eq!(path_length(&traj, &Euclidean), vec![0.0, 5.0, 5.0]);
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+///
+/// [`MetricSpec::path_length`]: crate::MetricSpec::path_length
 pub fn path_length<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Vec<f64> {
-    ArcLength::new(traj, metric, true).plain
+    try_path_length(traj, metric).unwrap_or_else(|error| panic!("{error}"))
+}
+
+/// [`path_length`], allocated fallibly.
+///
+/// # Errors
+/// [`Error::OutOfMemory`].
+pub(crate) fn try_path_length<M: Metric + ?Sized>(traj: &Trajectory, metric: &M) -> Result<Vec<f64>> {
+    Ok(ArcLength::new(traj, metric, true)?.plain)
 }
 
 /// Cumulative path length under δ, summed rounding up, with the rounding margin for bounds.
@@ -407,10 +446,14 @@ pub(crate) struct ArcLength {
 }
 
 impl ArcLength {
-    pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, with_plain: bool) -> Self {
+    /// The sums of `traj` under `metric`, and the plain ones `with_plain`.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`].
+    pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, with_plain: bool) -> Result<Self> {
         let n = traj.len();
-        let mut s = Vec::with_capacity(n);
-        let mut plain = Vec::with_capacity(if with_plain { n } else { 0 });
+        let mut s = try_with_capacity(n, "the path lengths")?;
+        let mut plain = try_with_capacity(if with_plain { n } else { 0 }, "the path lengths")?;
         let mut total = 0.0_f64;
         let mut plain_total = 0.0_f64;
         if with_plain {
@@ -431,7 +474,7 @@ impl ArcLength {
             }
         }
         let margin = rounding_margin(total, largest_step, scale);
-        Self { s, margin, plain, largest_step }
+        Ok(Self { s, margin, plain, largest_step })
     }
 
     /// Appends a pose `step` = δ(x_{k−1}, x_k) after the last (the step of the first pose is
@@ -533,7 +576,10 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
     /// The stretches of the path that may hold a pose within γ of any row in `rows`: one walk of
     /// the hierarchy per block with the block's own bounding ball, instead of one per row.
     /// Stretches that lie within γ of every row of the block come whole, marked `inside`.
-    pub(crate) fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) {
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`] when the stretches do not fit in memory.
+    pub(crate) fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) -> Result<()> {
         let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
         let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
         let margin = self.arc.margin;
@@ -566,9 +612,21 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             let leaf = candidates[next];
             next += 1;
             let (lo, hi) = ((leaf.lo as usize).max(first), leaf.hi as usize);
-            if !leaf.inside && self.metric.distance(x_i, self.traj.point(leaf.centre as usize)) - leaf.radius > reach {
-                // Poses of a stretch whose ball stays farther than γ from x_i are all outside.
-                continue;
+            // Every pose of the stretch is within γ of x_i, known without measuring them.
+            let mut whole = leaf.inside;
+            if !leaf.inside {
+                let d = self.metric.distance(x_i, self.traj.point(leaf.centre as usize));
+                if leaf.uniform {
+                    // Every pose of the stretch is the centre's point, bit for bit: δ from x_i
+                    // to each of them is d, so d decides them all, exactly.
+                    if d > self.gamma {
+                        continue;
+                    }
+                    whole = true;
+                } else if d - leaf.radius > reach {
+                    // Poses of a stretch whose ball stays farther than γ from x_i are all outside.
+                    continue;
+                }
             }
             if j < lo {
                 // Columns j..lo lie in pruned stretches: all outside, so a run open at j − 1 ends.
@@ -577,8 +635,8 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                 }
                 j = lo;
             }
-            if leaf.inside {
-                // Every pose of the stretch is within γ of x_i: one run, no distance measured.
+            if whole {
+                // Every pose of the stretch is within γ of x_i: one run.
                 open = match open {
                     Some((a, b)) if b + 1 == j => Some((a, hi - 1)),
                     other => {
@@ -620,6 +678,40 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         }
     }
 
+    /// Row `i` of a robot that stands still, from row `i − 1` (the last row of `out`) when the two
+    /// poses are one point bit for bit: every distance from x_i is the one from x_{i−1}, so row
+    /// i is row i − 1 from row i's first column on, cut where sessions start as before. A run
+    /// kept whole keeps its closest column; a run cut at its start takes the diagonal cell when
+    /// it starts there, else keeps its closest column when that is still in the run (the
+    /// earliest argmin of a run is the earliest of any part of it that holds it), takes its new
+    /// first column when that is the same point as the one cut off (a stop within the run),
+    /// else is ranked again. No distance is measured for the rest: a stop of m poses costs its
+    /// runs, not m scans.
+    pub(crate) fn repeat_row(&self, i: usize, out: &mut Block) {
+        let first = self.first_column(i);
+        debug_assert!(self.first_column(i - 1) <= first, "first columns grow with the row");
+        for k in out.last_row() {
+            let (run, column) = (out.runs[k], out.closest[k] as usize);
+            let (a, b) = (run.start as usize, run.end as usize);
+            if b < first {
+                continue;
+            }
+            let start = a.max(first);
+            let column = if start == i {
+                i
+            } else if start == a || column >= start {
+                column
+            } else if self.traj.same_point(start, column) {
+                // The cut-off closest pose's twin is the run's first: the earliest of the least.
+                start
+            } else {
+                self.closest_of(i, start, b)
+            };
+            out.runs.push(Run { start: start as u32, end: run.end });
+            out.closest.push(column as u32);
+        }
+    }
+
     /// Records the run `a..=b` of row `i` with its closest column (row i's own cell when the run
     /// starts on the diagonal).
     fn close_run(&self, i: usize, a: usize, b: usize, runs: &mut Vec<Run>, closest: &mut Vec<u32>) {
@@ -636,12 +728,17 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
 
     /// Records the run `a..=b`, within one session's columns, with its closest column.
     fn close_part(&self, i: usize, a: usize, b: usize, runs: &mut Vec<Run>, closest: &mut Vec<u32>) {
+        let column = self.closest_of(i, a, b);
+        runs.push(Run { start: a as u32, end: b as u32 });
+        closest.push(column as u32);
+    }
+
+    /// The closest column of the run `a..=b` of row `i` ([`closest_column`]).
+    fn closest_of(&self, i: usize, a: usize, b: usize) -> usize {
         let balls = match self.pruner {
             Pruner::Hierarchy(balls) | Pruner::Chunks(balls, _) => balls,
         };
-        let column = closest_column(self.metric, self.traj, balls, self.arc.margin, i, (a, b));
-        runs.push(Run { start: a as u32, end: b as u32 });
-        closest.push(column as u32);
+        closest_column(self.metric, self.traj, balls, self.arc.margin, i, (a, b))
     }
 }
 
@@ -755,7 +852,7 @@ mod tests {
     #[test]
     fn gallop_bounds() {
         let traj = line(&[0.0, 0.0, 0.0, 1.0, 1.0, 5.0, 9.0]);
-        let arc = ArcLength::new(&traj, &Euclidean, false);
+        let arc = ArcLength::new(&traj, &Euclidean, false).unwrap();
         // s = [0, 0, 0, 1, 1, 5, 9], each rounded up by at most a few ulps.
         assert_eq!(arc.last_within(0, 0.5), 2);
         assert_eq!(arc.last_within(0, 1.5), 4);

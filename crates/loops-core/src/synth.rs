@@ -4,7 +4,8 @@ use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::error::{Error, Result};
-use crate::trajectory::Trajectory;
+use crate::memory::try_with_capacity;
+use crate::trajectory::{MAX_POSES, Trajectory};
 
 /// A vehicle on a Manhattan grid: random turns at intersections, a speed drawn per block, stops
 /// at some intersections, driving in the right-hand lane with a little lateral noise, z nearly
@@ -194,6 +195,9 @@ pub struct UrbanFleet {
     pub start_spread_s: f64,
 }
 
+/// Sessions generated in parallel before they are moved into the fleet.
+const SESSIONS_PER_BATCH: usize = 1024;
+
 impl Default for UrbanFleet {
     /// 10 vehicles, one day, 10-minute drives in the default 1 km² city, starts spread over an
     /// hour.
@@ -212,10 +216,42 @@ impl UrbanFleet {
     /// of threads).
     ///
     /// # Errors
-    /// As [`drives`](Self::drives); [`Fleet::new`](crate::Fleet::new)'s.
+    /// As [`drives`](Self::drives); [`Fleet::new`](crate::Fleet::new)'s, checked before any
+    /// session is generated: [`Error::TooManyPoses`] for more poses in all than one trajectory
+    /// may hold, [`Error::OutOfMemory`] when the joint trajectory does not fit in memory.
     pub fn generate(&self) -> Result<crate::fleet::Fleet> {
+        let sessions = self.session_count()?;
+        self.drive.validate()?;
+        let poses = self.drive.pose_count()?.saturating_mul(sessions);
+        if poses > MAX_POSES {
+            return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
+        }
+        // The joint trajectory's room (timestamps, three coordinates, time cells), taken first so
+        // that a fleet too big for memory is refused at once, naming its size, instead of after
+        // its sessions were generated; given back just before the joint trajectory takes it.
+        let room: Vec<f64> = try_with_capacity(poses * 5, "the joint trajectory of a fleet")?;
         let drives = self.drives()?;
-        crate::fleet::Fleet::new(drives.into_iter().map(|(name, drive)| (name, drive.trajectory)).collect())
+        drop(room);
+        let mut named = try_with_capacity(drives.len(), "the sessions of a fleet")?;
+        named.extend(drives.into_iter().map(|(name, drive)| (name, drive.trajectory)));
+        crate::fleet::Fleet::new(named)
+    }
+
+    /// vehicles × days.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for no vehicles or days, or more sessions than 2³².
+    fn session_count(&self) -> Result<usize> {
+        for (name, value) in [("vehicles", self.vehicles), ("days", self.days)] {
+            if value == 0 {
+                return Err(Error::InvalidParameter { name, value: 0.0, expected: "at least 1" });
+            }
+        }
+        self.vehicles.checked_mul(self.days).filter(|&n| n <= u32::MAX as usize).ok_or(Error::InvalidParameter {
+            name: "vehicles * days",
+            value: self.vehicles as f64 * self.days as f64,
+            expected: "at most 2³² sessions",
+        })
     }
 
     /// Each session's name and drive, in fleet order, its trajectory on the session's clock
@@ -224,14 +260,11 @@ impl UrbanFleet {
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for no vehicles or days, a negative or non-finite spread, or
-    /// more sessions than 2³²; the drive's own errors.
+    /// more sessions than 2³²; the drive's own errors; [`Error::OutOfMemory`] when the sessions
+    /// do not fit in memory.
     pub fn drives(&self) -> Result<Vec<(String, SyntheticDrive)>> {
         use rayon::prelude::*;
-        for (name, value) in [("vehicles", self.vehicles), ("days", self.days)] {
-            if value == 0 {
-                return Err(Error::InvalidParameter { name, value: 0.0, expected: "at least 1" });
-            }
-        }
+        let sessions = self.session_count()?;
         if !(self.start_spread_s >= 0.0 && self.start_spread_s.is_finite()) {
             return Err(Error::InvalidParameter {
                 name: "start_spread_s",
@@ -239,31 +272,34 @@ impl UrbanFleet {
                 expected: "a finite number of seconds, at least 0",
             });
         }
-        let sessions = self.vehicles.checked_mul(self.days).filter(|&n| n <= u32::MAX as usize).ok_or(
-            Error::InvalidParameter {
-                name: "vehicles * days",
-                value: self.vehicles as f64 * self.days as f64,
-                expected: "at most 2³² sessions",
-            },
-        )?;
         self.drive.validate()?;
         let width = |n: usize| (n - 1).max(1).ilog10() as usize + 1;
         let (vw, dw) = (width(self.vehicles), width(self.days));
-        (0..sessions)
-            .into_par_iter()
-            .map(|k| {
-                let (day, vehicle) = (k / self.vehicles, k % self.vehicles);
-                // Each session's own stream of the fleet seed.
-                let mut rng = ChaCha8Rng::seed_from_u64(self.drive.seed);
-                rng.set_stream(1 + k as u64);
-                let start = day as f64 * 86_400.0 + rng.random::<f64>() * self.start_spread_s;
-                let spec = UrbanDrive { seed: rng.random(), first_district: vehicle, ..self.drive.clone() };
-                let drive = spec.generate()?;
-                let times = drive.trajectory.timestamps_s().iter().map(|t| t + start).collect();
-                let trajectory = Trajectory::new(times, drive.trajectory.coords().to_vec(), drive.trajectory.dim())?;
-                Ok((format!("car{vehicle:0vw$}-day{day:0dw$}"), SyntheticDrive { trajectory, ..drive }))
-            })
-            .collect()
+        let session = |k: usize| -> Result<(String, SyntheticDrive)> {
+            let (day, vehicle) = (k / self.vehicles, k % self.vehicles);
+            // Each session's own stream of the fleet seed.
+            let mut rng = ChaCha8Rng::seed_from_u64(self.drive.seed);
+            rng.set_stream(1 + k as u64);
+            let start = day as f64 * 86_400.0 + rng.random::<f64>() * self.start_spread_s;
+            let spec = UrbanDrive { seed: rng.random(), first_district: vehicle, ..self.drive.clone() };
+            let SyntheticDrive { trajectory, yaw_rad } = spec.generate()?;
+            let dim = trajectory.dim();
+            let (mut times, coords) = trajectory.into_parts();
+            times.iter_mut().for_each(|t| *t += start);
+            let trajectory = Trajectory::new(times, coords, dim)?;
+            Ok((format!("car{vehicle:0vw$}-day{day:0dw$}"), SyntheticDrive { trajectory, yaw_rad }))
+        };
+        // In parallel a batch at a time, into room taken first: memory that runs out is an error
+        // of the batch's session, not an abort of a parallel collect.
+        let mut drives = try_with_capacity(sessions, "the sessions of a fleet")?;
+        for first in (0..sessions).step_by(SESSIONS_PER_BATCH) {
+            let batch: Vec<Result<(String, SyntheticDrive)>> =
+                (first..(first + SESSIONS_PER_BATCH).min(sessions)).into_par_iter().map(session).collect();
+            for drive in batch {
+                drives.push(drive?);
+            }
+        }
+        Ok(drives)
     }
 }
 
@@ -301,28 +337,12 @@ impl UrbanDrive {
     /// [`Error::InvalidParameter`] for a non-positive duration, rate, block or speed, a city
     /// smaller than one block, speeds or stops out of order, a probability outside [0, 1], or a
     /// drive shorter than two poses or longer than [`MAX_POSES`](crate::MAX_POSES) (checked before
-    /// anything is allocated).
+    /// anything is allocated); [`Error::OutOfMemory`] when the drive does not fit in memory.
     pub fn generate(&self) -> Result<SyntheticDrive> {
         self.validate()?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let blocks = (self.city_size_m / self.block_m).floor() as i64;
-        let count = (self.duration_s * self.rate_hz).round();
-        if count > crate::MAX_POSES as f64 {
-            // Checked before allocating: a huge duration is an error, not an out-of-memory abort.
-            return Err(Error::InvalidParameter {
-                name: "duration_s * rate_hz",
-                value: count,
-                expected: "at most MAX_POSES = 2³² − 2 poses (the engine's limit)",
-            });
-        }
-        let poses = count as usize;
-        if poses < 2 {
-            return Err(Error::InvalidParameter {
-                name: "duration_s * rate_hz",
-                value: self.duration_s * self.rate_hz,
-                expected: "at least 2 poses",
-            });
-        }
+        let poses = self.pose_count()?;
         // The box of nodes the walk keeps to at a time: the whole city, or the current district.
         let area = |t: f64| -> [[i64; 2]; 2] {
             self.districts
@@ -390,6 +410,31 @@ impl UrbanDrive {
         let Emitter { timestamps, coords, yaw_rad, .. } = out;
         let trajectory = Trajectory::new(timestamps, coords, 3)?;
         Ok(SyntheticDrive { trajectory, yaw_rad })
+    }
+
+    /// The number of poses of the drive, checked before anything is allocated: a huge duration
+    /// is an error, not an out-of-memory abort.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for fewer than two poses or more than
+    /// [`MAX_POSES`](crate::MAX_POSES).
+    fn pose_count(&self) -> Result<usize> {
+        let count = (self.duration_s * self.rate_hz).round();
+        if count > MAX_POSES as f64 {
+            return Err(Error::InvalidParameter {
+                name: "duration_s * rate_hz",
+                value: count,
+                expected: "at most MAX_POSES = 2³² − 2 poses (the engine's limit)",
+            });
+        }
+        if count < 2.0 {
+            return Err(Error::InvalidParameter {
+                name: "duration_s * rate_hz",
+                value: self.duration_s * self.rate_hz,
+                expected: "at least 2 poses",
+            });
+        }
+        Ok(count as usize)
     }
 
     fn validate(&self) -> Result<()> {
@@ -479,18 +524,11 @@ struct Emitter<'a> {
 
 impl<'a> Emitter<'a> {
     /// # Errors
-    /// [`Error::InvalidParameter`] when the drive does not fit in memory.
+    /// [`Error::OutOfMemory`] when the drive does not fit in memory.
     fn new(spec: &'a UrbanDrive, poses: usize) -> Result<Self> {
-        let (mut timestamps, mut coords, mut yaw_rad) = (Vec::new(), Vec::new(), Vec::new());
-        timestamps
-            .try_reserve_exact(poses)
-            .and_then(|()| coords.try_reserve_exact(3 * poses))
-            .and_then(|()| yaw_rad.try_reserve_exact(poses))
-            .map_err(|_| Error::InvalidParameter {
-                name: "duration_s * rate_hz",
-                value: poses as f64,
-                expected: "a number of poses whose drive fits in memory (40 bytes a pose)",
-            })?;
+        let what = "the poses of a synthetic drive";
+        let (timestamps, coords, yaw_rad) =
+            (try_with_capacity(poses, what)?, try_with_capacity(3 * poses, what)?, try_with_capacity(poses, what)?);
         let dt = 1.0 / spec.rate_hz;
         // Lateral offset: an AR(1) process with a ~10 s correlation time and the given deviation.
         let keep = (-dt / 10.0_f64).exp();

@@ -74,7 +74,7 @@ use crate::metric::Metric;
 use crate::sample::DrawStats;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
-use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, path_length};
+use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, try_path_length};
 use crate::tile_piece::live_stretches;
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
@@ -604,19 +604,26 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
     tile: &Tile,
 ) -> Result<TileSummary> {
     let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    Ok(summary_of(&scanned, metric, tile))
+    summary_of(&scanned, metric, tile)
 }
 
 /// The summary of a scanned tile.
-pub(crate) fn summary_of<M: Metric + ?Sized>(scanned: &ScannedTile<'_>, metric: &M, tile: &Tile) -> TileSummary {
-    let mut summary = summarise(tile, metric, scanned);
+///
+/// # Errors
+/// [`Error::OutOfMemory`].
+pub(crate) fn summary_of<M: Metric + ?Sized>(
+    scanned: &ScannedTile<'_>,
+    metric: &M,
+    tile: &Tile,
+) -> Result<TileSummary> {
+    let mut summary = summarise(tile, metric, scanned)?;
     for c in &mut summary.components {
         c.times_s = [
             [scanned.time_s(0, c.rows[0]), scanned.time_s(0, c.rows[1])],
             [scanned.time_s(1, c.columns[0]), scanned.time_s(1, c.columns[1])],
         ];
     }
-    summary
+    Ok(summary)
 }
 
 /// A tile's poses as one small trajectory and its cells of S_γ. On the diagonal of a session,
@@ -713,13 +720,13 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
     let diagonal = a == b && c0 < r1;
     // Within one session, each row's first column (an index of the session) under the separation.
     let separated = if a == b && !separation.is_none() {
-        Some(separation.first_columns(&path_length(session_a, metric), session_a.timestamps_s()))
+        Some(separation.first_columns(&try_path_length(session_a, metric)?, session_a.timestamps_s())?)
     } else {
         None
     };
     let (piece, piece_starts, fleet_starts, rows, first_columns) = if diagonal {
         // The stretch of the session from the first row to the last column.
-        let piece = session_a.piece(r0..c1);
+        let piece = session_a.piece(r0..c1)?;
         piece.check_metric(metric)?;
         let local_c0 = c0 - r0;
         let first_columns: Vec<u32> = (0..piece.len())
@@ -740,7 +747,7 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
             .iter()
             .map(|r| session_a.piece(r.clone()))
             .chain(live_columns.iter().map(|c| session_b.piece(c.clone())))
-            .collect();
+            .collect::<Result<_>>()?;
         let (piece, _) = Trajectory::concatenate(&parts.iter().collect::<Vec<_>>(), 1.0)?;
         piece.check_metric(metric)?;
         let (mut piece_starts, mut fleet_starts, mut next) = (Vec::new(), Vec::new(), 0);
@@ -780,6 +787,7 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
         || ArcLength::new(&piece, metric, false),
         || BallTree::with_sessions(&piece, metric, LEAF_SIZE, &piece_starts),
     );
+    let (arc, balls) = (arc?, balls?);
     let set = SublevelSet::scan(
         &piece,
         metric,
@@ -803,14 +811,14 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
 }
 
 /// The provisional components of a tile's set and its edge runs.
-fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<'_>) -> TileSummary {
+fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<'_>) -> Result<TileSummary> {
     let ScannedTile { piece, piece_starts: starts, rows, set, .. } = scanned;
     let rows = *rows;
     let to_fleet = |k: usize| scanned.to_fleet(k);
     let (labels, count) = label_runs(set, ROWS_PER_LABEL_TASK);
     let widths = piece.cell_widths_s();
     let breaks: Vec<u32> = starts[1..].iter().map(|&s| s as u32).collect();
-    let prefix = prefix_sums_by_session(widths, &breaks);
+    let prefix = prefix_sums_by_session(widths, &breaks)?;
     let mut components = vec![
         TileComponent {
             trivial: false,
@@ -874,7 +882,7 @@ fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<
             }
         }
     }
-    TileSummary { tile: tile.clone(), components, edges }
+    Ok(TileSummary { tile: tile.clone(), components, edges })
 }
 
 /// A component of a partial merge: its session pair and the statistics of its pieces, with the

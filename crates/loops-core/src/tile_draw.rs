@@ -261,8 +261,8 @@ pub fn scan_session_tile_kept<M: Metric + ?Sized>(
     tile: &Tile,
 ) -> Result<(TileSummary, TileDuration, TileRuns)> {
     let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    let summary = summary_of(&scanned, metric, tile);
-    let duration = duration_of(&scanned, tile);
+    let summary = summary_of(&scanned, metric, tile)?;
+    let duration = duration_of(&scanned, tile)?;
     Ok((summary, duration, TileRuns::new(scanned, tile, starts, gamma, separation)))
 }
 
@@ -342,14 +342,14 @@ pub fn scan_session_tile_with_duration<M: Metric + ?Sized>(
     tile: &Tile,
 ) -> Result<(TileSummary, TileDuration)> {
     let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    Ok((summary_of(&scanned, metric, tile), duration_of(&scanned, tile)))
+    Ok((summary_of(&scanned, metric, tile)?, duration_of(&scanned, tile)?))
 }
 
 /// The share of τ of a scanned tile.
-fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> TileDuration {
+fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<TileDuration> {
     let widths = scanned.piece.cell_widths_s();
     let breaks: Vec<u32> = scanned.piece_starts[1..].iter().map(|&s| s as u32).collect();
-    let prefix = prefix_sums_by_session(widths, &breaks);
+    let prefix = prefix_sums_by_session(widths, &breaks)?;
     let width = |a: usize, b: usize| (prefix[b] + widths[b]) - prefix[a];
     let mut rows = vec![0.0; tile.rows.len()];
     let mut diff = vec![0.0; tile.columns.len() + 1];
@@ -376,7 +376,7 @@ fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> TileDuration {
             running
         })
         .collect();
-    TileDuration { tile: tile.clone(), rows, columns }
+    Ok(TileDuration { tile: tile.clone(), rows, columns })
 }
 
 /// τ of session `session` (its first fleet index `start`, `poses` poses) from the shares of

@@ -1,6 +1,7 @@
 //! Trajectories: strictly increasing timestamps and one point per timestamp.
 
 use crate::error::{Error, Result};
+use crate::memory::{try_collect, try_copy, try_with_capacity};
 
 /// A sampled trajectory ξ: timestamps in seconds, strictly increasing, and one point of a fixed
 /// dimension per timestamp, stored row-major in one flat buffer.
@@ -189,7 +190,8 @@ impl Trajectory {
     /// [`Error::ZeroDimension`], [`Error::RaggedCoordinates`], [`Error::LengthMismatch`],
     /// [`Error::TooFewPoses`] (fewer than 2), [`Error::TooManyPoses`],
     /// [`Error::NonFiniteTimestamp`], [`Error::TimestampsNotIncreasing`] (unsorted or
-    /// duplicate) and [`Error::NonFiniteCoordinate`], each naming the first offending index.
+    /// duplicate) and [`Error::NonFiniteCoordinate`], each naming the first offending index;
+    /// [`Error::OutOfMemory`] when the time cells do not fit in memory.
     pub fn new(timestamps_s: Vec<f64>, coords: Vec<f64>, dim: usize) -> Result<Self> {
         if dim == 0 {
             return Err(Error::ZeroDimension);
@@ -209,7 +211,7 @@ impl Trajectory {
         }
         validate_timestamps(&timestamps_s)?;
         validate_coordinates(&coords, dim, 0)?;
-        let cell_widths_s = cell_widths(&timestamps_s);
+        let cell_widths_s = cell_widths(&timestamps_s)?;
         Ok(Self { timestamps_s, coords, dim, cell_widths_s, manifold: Manifold::Euclidean })
     }
 
@@ -217,20 +219,24 @@ impl Trajectory {
     /// after the previous one ends), each keeping its own time cells (half cells at its ends):
     /// a fleet's sessions as one trajectory. Returns it with each part's clock offset (time on
     /// the joint clock − time on the part's clock). The parts share a dimension and manifold.
+    ///
+    /// # Errors
+    /// [`Error::TooManyPoses`]; [`Error::OutOfMemory`].
     pub(crate) fn concatenate(parts: &[&Trajectory], gap_s: f64) -> Result<(Self, Vec<f64>)> {
         let poses: usize = parts.iter().map(|p| p.len()).sum();
         if poses > MAX_POSES {
             return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
         }
         let first = parts[0];
+        let what = "the joint trajectory of a fleet";
         let mut joint = Self {
-            timestamps_s: Vec::with_capacity(poses),
-            coords: Vec::with_capacity(poses * first.dim),
+            timestamps_s: try_with_capacity(poses, what)?,
+            coords: try_with_capacity(poses * first.dim, what)?,
             dim: first.dim,
-            cell_widths_s: Vec::with_capacity(poses),
+            cell_widths_s: try_with_capacity(poses, what)?,
             manifold: first.manifold,
         };
-        let mut offsets = Vec::with_capacity(parts.len());
+        let mut offsets = try_with_capacity(parts.len(), what)?;
         let mut next_start = 0.0;
         for part in parts {
             let offset = next_start - part.timestamps_s[0];
@@ -245,14 +251,23 @@ impl Trajectory {
 
     /// The poses `range` with their own time cells (not half cells at the cut): a piece of a
     /// session for a tile. May hold a single pose.
-    pub(crate) fn piece(&self, range: std::ops::Range<usize>) -> Self {
-        Self {
-            timestamps_s: self.timestamps_s[range.clone()].to_vec(),
-            coords: self.coords[range.start * self.dim..range.end * self.dim].to_vec(),
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`].
+    pub(crate) fn piece(&self, range: std::ops::Range<usize>) -> Result<Self> {
+        let what = "a piece of a session";
+        Ok(Self {
+            timestamps_s: try_copy(&self.timestamps_s[range.clone()], what)?,
+            coords: try_copy(&self.coords[range.start * self.dim..range.end * self.dim], what)?,
             dim: self.dim,
-            cell_widths_s: self.cell_widths_s[range].to_vec(),
+            cell_widths_s: try_copy(&self.cell_widths_s[range], what)?,
             manifold: self.manifold,
-        }
+        })
+    }
+
+    /// The timestamps and the coordinates, moved out.
+    pub(crate) fn into_parts(self) -> (Vec<f64>, Vec<f64>) {
+        (self.timestamps_s, self.coords)
     }
 
     /// No pose yet, `dim` coordinates a point on `manifold`: the online engine's trajectory,
@@ -332,6 +347,13 @@ impl Trajectory {
     /// If `i >= len()`.
     pub fn point(&self, i: usize) -> &[f64] {
         &self.coords[i * self.dim..(i + 1) * self.dim]
+    }
+
+    /// Whether poses `i` and `j` have the same coordinates bit for bit, so that every metric
+    /// measures the same distance from anything to either (`-0.0` and `0.0` differ: an angle's
+    /// sign may matter).
+    pub(crate) fn same_point(&self, i: usize, j: usize) -> bool {
+        self.point(i).iter().zip(self.point(j)).all(|(a, b)| a.to_bits() == b.to_bits())
     }
 
     /// Time-cell widths `w_i`, seconds; they sum to [`span_s`](Self::span_s).
@@ -450,8 +472,11 @@ pub(crate) fn cell_of(timestamps_s: &[f64], i: usize) -> (f64, f64) {
 /// widths from the start of k's session to k − 1. The width of cells `a..=b` of one session is
 /// `(P[b] + w_b) − P[a]`, bit for bit what the session alone would give (and, without breaks,
 /// `P[b + 1] − P[a]`).
-pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> Vec<f64> {
-    let mut prefix = Vec::with_capacity(cell_widths_s.len() + 1);
+///
+/// # Errors
+/// [`Error::OutOfMemory`].
+pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> Result<Vec<f64>> {
+    let mut prefix = try_with_capacity(cell_widths_s.len() + 1, "the running sums of the time cells")?;
     prefix.push(0.0);
     let mut acc = 0.0;
     let mut next_break = breaks.iter().peekable();
@@ -464,13 +489,13 @@ pub(crate) fn prefix_sums_by_session(cell_widths_s: &[f64], breaks: &[u32]) -> V
         acc += w;
         prefix.push(acc);
     }
-    prefix
+    Ok(prefix)
 }
 
 /// Widths `(t_{i+1} − t_{i−1}) / 2` (half cells at the ends), from differences of neighbouring
 /// timestamps, which are exact even on an epoch clock (differences of midpoints are not).
-fn cell_widths(timestamps_s: &[f64]) -> Vec<f64> {
-    (0..timestamps_s.len()).map(|i| cell_width(timestamps_s, i)).collect()
+fn cell_widths(timestamps_s: &[f64]) -> Result<Vec<f64>> {
+    try_collect((0..timestamps_s.len()).map(|i| cell_width(timestamps_s, i)), "the time cells of a trajectory")
 }
 
 /// The width of cell `i` of [`cell_widths`] (a half cell when `i` is the last).

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use crate::error::{Error, Result};
 use crate::loops::Loops;
 use crate::metric::Metric;
-use crate::sublevel::path_length;
+use crate::sublevel::try_path_length;
 use crate::trajectory::Trajectory;
 
 /// Where a pair of poses falls: [`Loops::pair_verdicts`].
@@ -82,7 +82,7 @@ impl Loops {
     /// The component is the engine's ([`component_of`](Self::component_of)). A pair in none is
     /// `Outside` when δ > γ and `NotSeparated` otherwise: the separation is checked as the
     /// engine checks it, `s_j − s_i ≥ path` and `t_j − t_i ≥ time_s` for `i < j` on the path
-    /// length `s` under `metric` ([`path_length`]), and a pair of one pose is never separated.
+    /// length `s` under `metric` ([`path_length`](crate::path_length)), and a pair of one pose is never separated.
     ///
     /// Time O(n) for the path length, plus O(log runs) and one distance per pair, in parallel.
     ///
@@ -123,7 +123,7 @@ impl Loops {
             return Err(Error::IndexOutOfRange { index, len: self.len() });
         }
         let separation = self.separation();
-        let s = if separation.is_none() { Vec::new() } else { path_length(traj, metric) };
+        let s = if separation.is_none() { Vec::new() } else { try_path_length(traj, metric)? };
         let t = traj.timestamps_s();
         let separated = |i: usize, j: usize| {
             let (i, j) = (i.min(j), i.max(j));

@@ -43,6 +43,10 @@
 //! `LOOPS_FUZZ_SECONDS=1800 nice -n 19 cargo test --release -p loops-io --test attack_sweep mcap --
 //! --exact --nocapture`; `LOOPS_FUZZ_FORMAT=tum` (kitti, euroc, tuc, g2o, csv, detections) limits
 //! the `text` target to one reader. The figures of the long runs are in `tests/FUZZ.md`.
+//!
+//! The `engine_stops` target sweeps the engine itself, on a robot that parks at nearly one
+//! place twice or three times: its failures are panics, aborts, wrong answers (against the
+//! brute force) and hangs (distances measured per row and run beyond a bound).
 
 // The readers' errors (`IoError`) are returned as they are, through the measuring closures.
 #![allow(clippy::result_large_err)]
@@ -1168,4 +1172,136 @@ fn rosbag2_split_lists() {
             tally.case_in_place(&base, Some(holds), &label);
         }
     });
+}
+
+// ---- the engine: stops at one place ---------------------------------------------------------
+
+/// The Euclidean metric, counting the distances measured and the ranks taken.
+#[derive(Default)]
+struct CountingMetric(std::sync::atomic::AtomicU64);
+
+impl loops_core::Metric for CountingMetric {
+    fn name(&self) -> String {
+        "euclidean".to_owned()
+    }
+    fn check_dim(&self, dim: usize) -> loops_core::Result<()> {
+        loops_core::Euclidean.check_dim(dim)
+    }
+    fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        loops_core::Euclidean.distance(a, b)
+    }
+    fn is_coordinate_euclidean(&self) -> bool {
+        true
+    }
+    fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
+        self.0.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        loops_core::Euclidean.distance_rank(a, b)
+    }
+    fn closest_in(&self, x: &[f64], points: &[f64]) -> usize {
+        self.0.fetch_add((points.len() / x.len()) as u64, std::sync::atomic::Ordering::Relaxed);
+        loops_core::Euclidean.closest_in(x, points)
+    }
+}
+
+/// Distances and ranks per row and run past which a case counts as a hang: the stops cost
+/// O(log n) each, a few here; the engine once spent the length of the other stop.
+const STOP_EVALUATIONS_PER_RUN: f64 = 16.0;
+
+/// The engine on a robot that parks two or three times at nearly one place: each case draws
+/// the stops' offsets from the ones the arithmetic finds hardest (10⁻¹⁴ m, γ/2, γ − 10⁻⁹, γ,
+/// one ulp beyond γ, …), their lengths, jitter (none, or 10⁻⁹ m), a separation and the origin
+/// (near 0, or far, where the offsets round), and must give the brute force's set, closest
+/// columns included (a **wrong answer** otherwise), within a bounded number of distances per
+/// row and run when the stops are exact (a **hang** otherwise: the n² of the old engine on
+/// stops; jittered stops, no two poses alike, cost what their length does), allocating less than
+/// [`ABORT_BYTES`] at once, without a panic.
+#[test]
+fn engine_stops() {
+    use loops_core::{Euclidean, Separation, SublevelSet, Trajectory};
+    let start = Instant::now();
+    let budget = std::env::var("LOOPS_FUZZ_SECONDS").ok().and_then(|s| s.parse::<f64>().ok());
+    let (mut cases, mut panics, mut aborts, mut hangs, mut wrong) = (0u64, 0u64, 0u64, 0u64, 0u64);
+    let mut most_per_run = 0.0_f64;
+    let mut failures: Vec<String> = Vec::new();
+    let mut round = 0;
+    loop {
+        let mut rng = Rng::new(0x0057_0F5E, round);
+        for _ in 0..24 {
+            let gamma = *rng.pick(&[1.5, 40.0, 0.3]);
+            let offsets = [0.0, 1e-14, 0.5 * gamma, gamma - 1e-9, gamma, f64::next_up(gamma), gamma + 1e-9];
+            let origin = *rng.pick(&[[0.0, 0.0], [1000.0, -3000.0], [-7.25, 1e5]]);
+            let stops = 2 + rng.below(2);
+            let places: Vec<f64> = (0..stops).map(|k| if k == 0 { 0.0 } else { *rng.pick(&offsets) }).collect();
+            let jitter = *rng.pick(&[0.0, 0.0, 1e-9]);
+            let separation = *rng.pick(&[
+                Separation::NONE,
+                Separation { path: gamma, time_s: 0.0 },
+                Separation { path: 0.0, time_s: 5.0 },
+            ]);
+            let mut points: Vec<[f64; 2]> = Vec::new();
+            for (k, &offset) in places.iter().enumerate() {
+                let place = [origin[0] + offset, origin[1]];
+                if k > 0 {
+                    // Out 3γ and back in steps of γ/7.
+                    points.extend(
+                        (1..42).map(|s: i32| [place[0], place[1] + f64::from(21 - (21 - s).abs()) * gamma / 7.0]),
+                    );
+                }
+                for _ in 0..100 + rng.below(400) {
+                    let noise = |rng: &mut Rng| jitter * (rng.below(1000) as f64 / 1000.0 - 0.5);
+                    points.push([place[0] + noise(&mut rng), place[1] + noise(&mut rng)]);
+                }
+            }
+            let label = format!("stops at {places:?} from {origin:?}, γ {gamma}, jitter {jitter}, {separation}");
+            let traj = Trajectory::from_points((0..points.len()).map(|i| i as f64 * 0.1).collect(), &points)
+                .expect("valid poses");
+            cases += 1;
+            let counting = CountingMetric::default();
+            // On one thread of its own pool, whose allocations the thread's counter sees.
+            let outcome = catch_unwind(AssertUnwindSafe(|| {
+                loops_core::with_threads(Some(1), || {
+                    peak::peak_of(|| SublevelSet::compute_separated(&traj, &counting, gamma, separation))
+                })
+                .expect("a pool of one thread")
+            }));
+            let Ok((set, peak)) = outcome else {
+                panics += 1;
+                failures.push(format!("panic: {label}"));
+                continue;
+            };
+            let set = set.expect("valid input");
+            if peak > ABORT_BYTES {
+                aborts += 1;
+                failures.push(format!("abort: {label}: {peak} bytes allocated"));
+            }
+            let per_run = counting.0.into_inner() as f64 / (set.rows() + set.runs().len()) as f64;
+            // Jittered stops are no stops to the engine (no two poses alike): their closest
+            // columns cost what the stretch's length does, and only their answer is checked.
+            if jitter == 0.0 {
+                most_per_run = most_per_run.max(per_run);
+            }
+            if jitter == 0.0 && per_run > STOP_EVALUATIONS_PER_RUN {
+                hangs += 1;
+                failures.push(format!("hang: {label}: {per_run:.1} distances per row and run"));
+            }
+            let brute = SublevelSet::brute_force_separated(&traj, &Euclidean, gamma, separation).expect("valid input");
+            if set != brute {
+                wrong += 1;
+                failures.push(format!("wrong answer: {label}"));
+            }
+        }
+        round += 1;
+        match budget {
+            Some(seconds) if start.elapsed() < Duration::from_secs_f64(seconds) => {}
+            _ => break,
+        }
+    }
+    println!(
+        "sweep engine_stops: {cases} cases in {:.0} s; {panics} panics, {aborts} aborts, {hangs} hangs, {wrong} wrong \
+         answers; at most {most_per_run:.1} distances per row and run on exact stops",
+        start.elapsed().as_secs_f64()
+    );
+    failures.truncate(SHOWN_FAILURES);
+    assert!(panics + aborts + hangs + wrong == 0, "sweep engine_stops failed:\n{}", failures.join("\n"));
 }

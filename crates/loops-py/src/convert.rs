@@ -39,10 +39,18 @@ pub(crate) fn real_array(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> 
     let as_f64 = numpy.call_method("asarray", (array,), Some(&[("dtype", "float64")].into_py_dict(py)?))?;
     let view: PyReadonlyArrayDyn<'_, f64> = as_f64.extract()?;
     let shape = view.shape().to_vec();
-    let values = match view.as_slice() {
-        Ok(slice) if view.is_c_contiguous() => slice.to_vec(),
-        _ => view.as_array().iter().copied().collect(),
-    };
+    // The copy grows with the input: allocated fallibly, an `OutOfMemoryError` and not an abort.
+    let mut values = Vec::new();
+    if values.try_reserve_exact(view.len()).is_err() {
+        let bytes = (view.len() as u128 * 8).min(u64::MAX as u128) as u64;
+        return Err(
+            crate::error::Failure::from(loops_core::Error::OutOfMemory { what: "a copy of an array", bytes }).into()
+        );
+    }
+    match view.as_slice() {
+        Ok(slice) if view.is_c_contiguous() => values.extend_from_slice(slice),
+        _ => values.extend(view.as_array().iter().copied()),
+    }
     Ok(Real { values, shape })
 }
 

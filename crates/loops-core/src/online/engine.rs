@@ -439,10 +439,7 @@ impl OnlineLoops {
                 }
                 let n = first + k;
                 self.traj.push_pose(t_s, &coords[k * dim..(k + 1) * dim]);
-                self.grow(m, n);
-                let mut block = Block::default();
-                self.scan_row(&Swapped(m), n, &mut block);
-                self.join_row(m, n, &block.runs, &block.closest, Some(&mut update));
+                self.add_row(m, n, &mut update);
             }
         });
         let mut extended: Vec<ComponentId> = std::mem::take(&mut update.extended);
@@ -455,6 +452,14 @@ impl OnlineLoops {
         self.pushes += 1;
         update.stamp = self.last_push();
         Ok(update)
+    }
+
+    /// Scans and joins the row of pose `n` (in the trajectory already).
+    fn add_row<M: Metric + ?Sized>(&mut self, metric: &M, n: usize, update: &mut Update) {
+        self.grow(metric, n);
+        let mut block = Block::default();
+        self.scan_row(&Swapped(metric), n, &mut block);
+        self.join_row(metric, n, &block.runs, &block.closest, Some(update));
     }
 
     /// Checks the new poses as [`Trajectory::new`] and the metric check them, naming each by
@@ -560,12 +565,14 @@ impl OnlineLoops {
             first_columns: &[],
             starts: &[0],
         };
-        scanner.candidates_for(n..n + 1, &mut self.stretches);
+        // The stretches near one pose are few; a push has no way back from half-added rows,
+        // so running out of memory here is not an error to return.
+        scanner.candidates_for(n..n + 1, &mut self.stretches).unwrap_or_else(|error| panic!("{error}"));
         // The poses after the last leaf: one stretch that no ball rules out.
         let covered = self.balls.covered();
         if covered <= n {
             let (lo, hi) = (covered as u32, n as u32 + 1);
-            self.stretches.push(Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false });
+            self.stretches.push(Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false, uniform: false });
         }
         scanner.scan_row(n, &self.stretches, block);
     }
@@ -1082,5 +1089,72 @@ fn shift_pose_index(error: Error, first: usize) -> Error {
         Error::NonUnitVector { index, norm } => Error::NonUnitVector { index: first + index, norm },
         Error::LatitudeOutOfRange { index, value_deg } => Error::LatitudeOutOfRange { index: first + index, value_deg },
         other => other,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::metric::Euclidean;
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+
+    /// The Euclidean metric, counting the distances measured and the ranks taken.
+    #[derive(Default)]
+    struct Counting(AtomicU64);
+
+    impl Metric for Counting {
+        fn name(&self) -> String {
+            Euclidean.name()
+        }
+        fn check_dim(&self, dim: usize) -> Result<()> {
+            Euclidean.check_dim(dim)
+        }
+        fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+            self.0.fetch_add(1, Relaxed);
+            Euclidean.distance(a, b)
+        }
+        fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
+            self.0.fetch_add(1, Relaxed);
+            Euclidean.distance_rank(a, b)
+        }
+        fn closest_in(&self, x: &[f64], points: &[f64]) -> usize {
+            self.0.fetch_add((points.len() / x.len()) as u64, Relaxed);
+            Euclidean.closest_in(x, points)
+        }
+    }
+
+    /// Two stops of 4,000 identical poses each, 10⁻¹⁴ m, γ and one ulp beyond γ apart, joined by
+    /// a drive out and back: each push of the second stop measures a bounded number of distances
+    /// per row and run. The engine once ranked every pose of the first stop for each of them.
+    #[test]
+    fn a_second_stop_at_one_place_costs_a_bounded_number_of_distances_per_push() {
+        let gamma: f64 = 1.5;
+        let stop = 4000;
+        let mut costs = Vec::new();
+        for offset in [0.0, 1e-14, gamma, gamma.next_up()] {
+            let mut points = vec![[0.0, 0.0]; stop];
+            points.extend((1..42).map(|s: i32| [offset, f64::from(21 - (21 - s).abs()) * gamma / 7.0]));
+            points.extend(vec![[offset, 0.0]; stop]);
+            let mut online = OnlineLoops::new(MetricSpec::Euclidean, 2, gamma).unwrap();
+            let counting = Counting::default();
+            let (mut rows, mut runs) = (0, 0);
+            for (n, point) in points.iter().enumerate() {
+                let t_s = n as f64 * 0.1;
+                online.check_new_poses(&[t_s], point).unwrap();
+                online.traj.push_pose(t_s, point);
+                let before = counting.0.load(Relaxed);
+                let mut update = Update::default();
+                online.add_row(&counting, n, &mut update);
+                if n >= stop + 41 {
+                    rows += 1;
+                    runs += update.runs.len() as u64;
+                } else {
+                    // The first stop and the drive are not counted.
+                    counting.0.store(before, Relaxed);
+                }
+            }
+            costs.push((offset, counting.0.load(Relaxed) as f64 / (rows + runs) as f64));
+        }
+        assert!(costs.iter().all(|&(_, per_run)| per_run <= 64.0), "(offset, per row and run): {costs:?}");
     }
 }
