@@ -8,7 +8,7 @@ Usage::
 Two workloads, each n detections drawn uniformly from the off-diagonal pairs of S_γ (γ = 40 m)
 of a drive with ``il.draw_detections(loops, budget=n, seed=0)``; ε = 30 s:
 
-- *dense*: the reference urban drive (DESIGN.md §8: ``il.urban_drive()``, 1 km², 2.1 h,
+- *dense*: the reference urban drive (``il.urban_drive()``, 1 km², 2.1 h,
   75,600 poses), n = 1e5 and 1e6. At n = 1e6, 3% of S_γ's 32.7 million pairs are drawn and a
   detection has ≈ 2,700 others within ε;
 - *sparse*: the 10 × 10 km city for 28 h (``il.urban_drive(duration_s=100_000,
@@ -425,7 +425,7 @@ def main() -> int:
             "|---|---:|---|---|---:|---:|---:|---|",
             *rows,
             "",
-            "| Target (issue 4) | Workload | n | Measured | |",
+            "| Target | Workload | n | Measured | |",
             "|---|---|---:|---:|---|",
             *targets,
             "",

@@ -5,7 +5,7 @@ Usage::
 
     python benches/compare.py [--quick] [--repeat N] [--skip-lattice] [--output PATH]
 
-Scenario: the reference urban drive of DESIGN.md §8 (``il.urban_drive()``: 2.1 h at 10 Hz,
+Scenario: the reference urban drive (``il.urban_drive()``: 2.1 h at 10 Hz,
 75,600 poses, seed 0) and a 30 min drive (18,000 poses) that every contender finishes; γ = 40 m
 on the 3-D positions. Contenders:
 
@@ -425,7 +425,7 @@ def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str
         "",
         "## Method",
         "",
-        "Input: the seeded urban drive of DESIGN.md §8 (`il.urban_drive()`, seed 0; 1 km² "
+        "Input: the seeded urban drive (`il.urban_drive()`, seed 0; 1 km² "
         "Manhattan grid, 10 Hz), 3-D positions, γ = 40 m, Euclidean metric. Every repetition "
         "of a contender runs in a fresh subprocess, after one untimed call on a 1 min drive "
         "(so that one-time costs such as lazy imports count for no one). Repetitions go in "
@@ -446,7 +446,7 @@ def report(scenarios: list[Scenario], args: argparse.Namespace, loads: tuple[str
         "",
         "- **inexact-loops**: `il.find_loops(traj, gamma=40.0, threads=1, separation=None)`, then "
         "`loops.components` and `loops.loop_duration()`: the whole sublevel set S_γ as runs by "
-        "arc-length skipping (DESIGN.md §4.1), its exact 4-connected loop components by "
+        "arc-length skipping, its exact 4-connected loop components by "
         "union-find over runs with area, pairs, holes, extents and closest pair each, and the "
         "loop duration τ of every pose. The 2-thread row splits the rows over two threads; the "
         "harness checks that its runs and component table are identical.",

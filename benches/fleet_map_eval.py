@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Do the samples make better maps of a fleet? The joint and inter-session errors of a
 multi-session pose graph against the budget, for every sampler, sampling every component or
-only those between sessions (issue 20, the fleet case).
+only those between sessions.
 
 Usage::
 

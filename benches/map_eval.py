@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Do the samples make better maps? ATE against the budget for every sampler and baseline, on
-the 2.1 h urban drive, KITTI 00, 05, 08 and MulRan KAIST 01 (issue 20).
+the 2.1 h urban drive, KITTI 00, 05, 08 and MulRan KAIST 01.
 
 Usage::
 

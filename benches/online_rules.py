@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Online loop-closure candidates (issue 19): online σ_ρ (a candidate at each component's first
+"""Online loop-closure candidates: online σ_ρ (a candidate at each component's first
 appearance, P1 online, and a cap per component) against the online rules of LIO-SAM and
 hdl_graph_slam, at the same number of candidates per minute.
 

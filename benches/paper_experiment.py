@@ -7,7 +7,7 @@ Usage::
 
     python benches/paper_experiment.py [--budget B] [--seed S] [--no-write] [--output PATH]
 
-The reference urban drive (DESIGN.md §8: ``il.urban_drive()``, 75,600 poses, 2.1 h at 10 Hz),
+The reference urban drive (``il.urban_drive()``, 75,600 poses, 2.1 h at 10 Hz),
 γ = 40 m, 1% of the pairs of S_γ drawn as detections, ε = 30 s, a budget of 1e4 samples per
 sampler. Every sampler runs on the detection clusters (σ_1, σ_ρ, dispersed σ_ρ, σ_α) and on the
 exact loop components (the same four and the baselines of LIO-SAM, hdl_graph_slam,

@@ -211,7 +211,7 @@ def test_python_writes_the_files_of_loops_run(tmp_path: Path, batch, loops_cli: 
 
 
 def test_concurrent_runs_into_one_folder(tmp_path: Path, loops_cli: Path) -> None:
-    """Issue 15, item 3: a second `loops run` into a folder a run holds stops at once, naming
+    """A second `loops run` into a folder a run holds stops at once, naming
     the folder and the holder's pid; the first finishes undisturbed."""
     logs = synth(loops_cli, tmp_path / "logs", 2, 1800)
     out = tmp_path / "results"

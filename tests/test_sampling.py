@@ -1,4 +1,4 @@
-"""Detections, ε-graph clustering and the samplers (issue 4) through the Python API.
+"""Detections, ε-graph clustering and the samplers through the Python API.
 
 - The cluster partition equals scikit-learn's ``DBSCAN(eps, min_samples=1)`` (a KD-tree, which
   tests ``dx² + dy² <= eps²`` as we do) on random and adversarial point sets.

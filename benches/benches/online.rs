@@ -1,4 +1,4 @@
-//! The online engine (issue 19): latency of a push, and of a push with the online sampler's
+//! The online engine: latency of a push, and of a push with the online sampler's
 //! offer, after most of a drive is in (the cost of a pose grows with what is near it, not with
 //! the drive's length). On the reference 2.1 h urban drive and on the 10⁶-pose district drive.
 //! `benches/examples/online_latency.rs` prints the percentiles per push.

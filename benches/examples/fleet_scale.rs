@@ -1,4 +1,4 @@
-//! Fleets at scale (issue 17): time and peak memory of `find_fleet_loops` on synthetic fleets,
+//! Fleets at scale: time and peak memory of `find_fleet_loops` on synthetic fleets,
 //! with either pruning, against the single-trajectory engine on the same poses.
 //!
 //! `cargo run --release -p loops-benches --example fleet_scale -- CASE VEHICLES MINUTES CITY_M ENGINE [THREADS]`

@@ -1,4 +1,4 @@
-//! Latency of the online engine per pose, and its memory (issue 19).
+//! Latency of the online engine per pose, and its memory.
 //!
 //! `cargo run --release -p loops-benches --example online_latency [-- quick]`
 //!

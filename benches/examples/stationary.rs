@@ -1,12 +1,12 @@
 //! A parked robot against a moving drive with about as many runs: time and peak memory of
-//! `find_loops` (issue 15, "cost beyond the answer").
+//! `find_loops`: no cost beyond the answer.
 //!
 //! `cargo run --release -p loops-benches --example stationary -- 1000000 [threads]`
 //!
 //! The parked robot reports n identical poses at 10 Hz: S_γ is the whole plane, one component
 //! in n runs (row i: columns i..n). The moving robot drives a straight road at 10 m/s with the
 //! same number of poses: also n runs (row i: the next 40 m), but short ones. Then the urban
-//! drive of DESIGN §8 (1 km² city, γ = 40 m), for scale. Prints one line per case: poses, runs,
+//! drive (1 km² city, γ = 40 m), for scale. Prints one line per case: poses, runs,
 //! components, seconds, and the process's peak resident set so far (`VmHWM`, so the cases run
 //! in increasing order of memory).
 

@@ -2,7 +2,7 @@
 
 use loops_core::{Districts, Trajectory, UrbanDrive};
 
-/// The reference urban drive of DESIGN §8 (1 km² city, 10 Hz) lasting `hours`, seed 0.
+/// The reference urban drive (1 km² city, 10 Hz) lasting `hours`, seed 0.
 ///
 /// # Panics
 /// If the generator rejects the parameters (it does not for positive hours).

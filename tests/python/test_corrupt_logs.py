@@ -1,4 +1,4 @@
-"""Issue 15, items 11, 16 and 19 from Python: a corrupt log raises an exception whose message is
+"""Corrupt logs from Python: a corrupt log raises an exception whose message is
 one line naming the file and the offset (no library backtrace, no escape sequences), a string
 declaring 4 GiB allocates nothing, and a file without line breaks fails at its first line."""
 

@@ -390,7 +390,7 @@ def test_unknown_format(tmp_path):
     assert len(il.read_trajectory(other, format="tum")) == 6
 
 
-# --- issue 15: refused at once, named by the core --------------------------------------------
+# --- refused at once, named by the core --------------------------------------------
 
 
 def test_thread_counts_past_the_cap_are_refused_at_once():

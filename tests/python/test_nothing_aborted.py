@@ -1,4 +1,4 @@
-"""Nothing aborted (issue 15, items 13, 15 and 18): a budget too large for one answer is refused
+"""Nothing aborted: a budget too large for one answer is refused
 before anything is drawn, an answer (or an input, or a synthetic fleet) too big for memory
 raises ``OutOfMemoryError`` (a ``MemoryError``) instead of killing the interpreter, the
 command line exits 2 with one line for both, and Ctrl-C stops a long computation at once.

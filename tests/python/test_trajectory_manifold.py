@@ -1,4 +1,4 @@
-"""A trajectory knows its manifold (issue 14): every constructor records what its points are, and
+"""A trajectory knows its manifold: every constructor records what its points are, and
 ``find_loops``, ``sample``, ``Samples.measure`` and ``distance_image`` without ``metric=``
 measure them with that manifold's metric — checked against a brute-force distance matrix written
 here from the definitions (scipy's ``Rotation`` for rotations, a textbook haversine, numpy) —

@@ -1,4 +1,4 @@
-//! Issue 15, items 16 and 19 on the command line: a corrupt log gives one line on stderr (no
+//! Corrupt logs on the command line: a corrupt log gives one line on stderr (no
 //! library backtrace, no escape sequences, no source path) naming the file and the offset, and
 //! a file without line breaks fails at once instead of filling the memory.
 

@@ -1,4 +1,4 @@
-//! Loop-candidate rules of deployed SLAM systems (DESIGN §4.5), as samplers under the same
+//! Loop-candidate rules of deployed SLAM systems, as samplers under the same
 //! budget as σ_1, σ_ρ and σ_α, so that users can see which revisits they would miss.
 //!
 //! Each rule is run with perfect knowledge of the trajectory: its radius is γ (the threshold of

@@ -111,7 +111,7 @@ impl Tally {
 }
 
 /// Labels the runs of `set` by union-find over 4-adjacent runs of consecutive rows (a
-/// two-pointer sweep per row pair; DESIGN §4.2; stretches of rows in parallel, see
+/// two-pointer sweep per row pair; stretches of rows in parallel, see
 /// [`label_runs`]) and measures every component from its runs, row by row (one pass, in row
 /// order, so that sums are the same on any number of threads).
 ///

@@ -7,7 +7,7 @@
 //! separation, if any); an inter-session block (a, b), a < b, has no diagonal, and each of its
 //! components is one place where the two sessions overlap.
 //!
-//! The engine is the single-trajectory engine (DESIGN §9): the sessions are laid one after
+//! The engine is the single-trajectory engine: the sessions are laid one after
 //! another as one trajectory (each keeping its own time cells, half cells at its ends), the path
 //! length runs on across a break with the jump between the sessions (the triangle inequality
 //! still bounds the scan), runs are cut where a session starts, and rows of different sessions

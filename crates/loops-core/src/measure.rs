@@ -56,7 +56,7 @@ pub enum Selection<'a> {
     Components(&'a [usize]),
 }
 
-/// τ_X(t_i) for every sample i, seconds, from the runs of X (DESIGN §4.3). O(runs + n).
+/// τ_X(t_i) for every sample i, seconds, from the runs of X. O(runs + n).
 ///
 /// Each upper-half run (row r, columns a..=b) adds its time width to τ(r), and by symmetry adds
 /// w_r to τ(j) for every column j > r. The diagonal cell (r, r) counts half to `Begin` and half to

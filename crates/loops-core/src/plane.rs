@@ -1,4 +1,4 @@
-//! Derived results on the (t, t′) plane, for figures and reports (DESIGN §2): the pairwise
+//! Derived results on the (t, t′) plane, for figures and reports: the pairwise
 //! distance π_ξ(t, t′) = δ(ξ(t), ξ(t′)) sampled on a grid of poses, the loop component of every
 //! pixel, the outlines ∂Ω of the components, and isocontours of π_ξ.
 //!

@@ -1,5 +1,5 @@
 //! Revisits: the part X ⊆ S_γ whose pairs lie at least a path length L and a time T apart along
-//! the trajectory (DESIGN §9).
+//! the trajectory.
 //!
 //! Near the diagonal of S_γ every pair is a loop by the paper's definition: poses a step apart
 //! are within γ of each other. A SLAM system calls a pair a loop only when the robot has been

@@ -84,7 +84,7 @@ const BLOCKS_PER_BATCH: usize = 1024;
 pub(crate) const LEAF_SIZE: usize = 16;
 
 impl SublevelSet {
-    /// Computes S_γ by arc-length skipping (DESIGN §4.1) within the stretches of the path that a
+    /// Computes S_γ by arc-length skipping within the stretches of the path that a
     /// hierarchy of bounding balls cannot rule out, rows in parallel on the current rayon pool.
     ///
     /// With s_k the cumulative path length under δ, the triangle inequality gives
@@ -116,7 +116,7 @@ impl SublevelSet {
         Self::compute_separated(traj, metric, gamma, Separation::NONE)
     }
 
-    /// The part X of S_γ whose pairs are also `separation` apart (DESIGN §9), by the same scan:
+    /// The part X of S_γ whose pairs are also `separation` apart, by the same scan:
     /// row i starts at its first separated column instead of at i, so runs are clipped where
     /// they are produced and no distance is measured that [`compute`](Self::compute) would not
     /// measure. With [`Separation::NONE`], exactly [`compute`](Self::compute).

@@ -1,4 +1,4 @@
-//! Seeded synthetic trajectories: the "urban drive" of DESIGN §8, for demos, tests and benchmarks.
+//! Seeded synthetic trajectories: the "urban drive", for demos, tests and benchmarks.
 
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

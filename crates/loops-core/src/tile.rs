@@ -1,5 +1,5 @@
 //! Tiles of a fleet's plane: blocks of rows × blocks of columns of one session pair, computed
-//! apart (on other machines) and merged into the fleet's loop components (DESIGN §9).
+//! apart (on other machines) and merged into the fleet's loop components.
 //!
 //! A tile is scanned by the same engine as the whole fleet, on the tile's poses only, and
 //! returns a [`TileSummary`]: the statistics of each of its provisional components (cells, area,

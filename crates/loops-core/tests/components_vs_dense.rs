@@ -121,7 +121,7 @@ fn check_separated(case: &Case, separation: Separation, interval: (f64, f64)) ->
 proptest! {
     #![proptest_config(config(256, 0x5EED_0014))]
 
-    /// Revisits (DESIGN §9): components, holes, closest pairs and τ/α/ρ of X = S_γ ∩ {pairs
+    /// Revisits: components, holes, closest pairs and τ/α/ρ of X = S_γ ∩ {pairs
     /// `separation` apart} equal the dense matrix's.
     #[test]
     fn revisit_components_and_measures_equal_the_dense_reference(

@@ -264,8 +264,8 @@ impl Metric for Counting {
 }
 
 /// The separated set equals the dense matrix restricted to pairs far enough apart and the
-/// brute force, and its scan measures no distance that the unseparated scan does not (DESIGN §9:
-/// each row starts at its first separated column, and from a later column the bounds jump at
+/// brute force, and its scan measures no distance that the unseparated scan does not (each
+/// row starts at its first separated column, and from a later column the bounds jump at
 /// least as far).
 fn check_separated_set(case: &Case, separation: Separation) -> Result<(), TestCaseError> {
     let Case { traj, gamma, .. } = case;

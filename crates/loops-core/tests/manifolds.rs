@@ -1,4 +1,4 @@
-//! Metrics on manifolds (issue 3): the metric axioms on random and adversarial points, values
+//! Metrics on manifolds: the metric axioms on random and adversarial points, values
 //! against formulas written here from textbooks (rotation matrices, haversine, ellipsoid radii),
 //! the engine against the brute force under every metric, bad input, the paper's Fig. 4, and
 //! the manifold every constructor records (its default metric, and the metrics refused).
@@ -1664,7 +1664,7 @@ fn huge_and_tiny_vectors_are_normalised() {
 }
 
 // =============================================================================================
-// 6. A trajectory knows its manifold (issue 14): every constructor's points are measured by its
+// 6. A trajectory knows its manifold: every constructor's points are measured by its
 //    manifold's metric when none is chosen, and by no metric that does not fit them
 // =============================================================================================
 

@@ -1,4 +1,4 @@
-//! The online engine (issue 19) against the batch engine: after pushes one at a time or in
+//! The online engine against the batch engine: after pushes one at a time or in
 //! batches of random sizes, `to_loops` equals `find_loops` on the same poses bit for bit, and
 //! the live components (after every push, on small inputs) have the batch's statistics; each
 //! pushed row is the brute force's column; ids, creations and merges are consistent; rebuilds

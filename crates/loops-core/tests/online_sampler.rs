@@ -1,4 +1,4 @@
-//! The online sampler (issue 19): the same candidates whether poses come one at a time or in
+//! The online sampler: the same candidates whether poses come one at a time or in
 //! batches; every candidate a pair of its component within γ; P1 online (a component's first
 //! candidate in the first row where it has a pair to offer); the cap and the separation hold;
 //! σ_ρ's rate and uniformity, by counts against their expectations with fixed seeds.

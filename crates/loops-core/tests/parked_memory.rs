@@ -1,4 +1,4 @@
-//! A parked robot's memory follows its runs (issue 15, item 17): two million identical poses
+//! A parked robot's memory follows its runs: two million identical poses
 //! are one component in two million runs (row i: columns i..n), a few tens of megabytes. The
 //! engine once held candidate stretches for every near ball of a block and needed 3.3 GB for
 //! them; under an address-space limit of 1 GiB that run ended in an allocation failure.

@@ -209,14 +209,7 @@ pub(crate) fn edge_line(kind: EdgeKind, [i, j]: [u64; 2], a: ([f64; 3], [f64; 4]
             let (theta_i, theta_j) = (yaw_of(a.1), yaw_of(b.1));
             let (s, c) = theta_i.sin_cos();
             let (dx, dy) = (b.0[0] - a.0[0], b.0[1] - a.0[1]);
-            // Wrapped into (-π, π] here until loops-core makes its angle wrap public (issue 13,
-            // the core's part): then this calls it, and the copy goes.
-            let mut dtheta = theta_j - theta_i;
-            if dtheta > std::f64::consts::PI {
-                dtheta -= std::f64::consts::TAU;
-            } else if dtheta <= -std::f64::consts::PI {
-                dtheta += std::f64::consts::TAU;
-            }
+            let dtheta = loops_core::wrap_angle(theta_j - theta_i);
             format!("EDGE_SE2 {i} {j} {} {} {dtheta} 1 0 0 1 0 1\n", c * dx + s * dy, -s * dx + c * dy)
         }
         EdgeKind::Se3 => {

@@ -1,5 +1,5 @@
 //! The ε graph of detections (paper, Sec. 5.3) and its connected components, exactly, without
-//! enumerating the ε-pairs (DESIGN §4.4).
+//! enumerating the ε-pairs.
 
 use std::f64::consts::SQRT_2;
 

@@ -9,7 +9,7 @@ use crate::baseline::{Baseline, BaselineParams};
 use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count, first_then_quotas, group_quotas};
 use crate::error::{Error, Result};
 
-/// Which sampler (paper, Sec. 5; DESIGN §4.5). Parsed from and printed as its name.
+/// Which sampler (paper, Sec. 5). Parsed from and printed as its name.
 ///
 /// | name | sampler |
 /// |---|---|
