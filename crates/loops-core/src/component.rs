@@ -55,10 +55,17 @@ pub(crate) struct Labelling {
 
 /// What a component's statistics are summed from, over the runs of its upper half (rows for the
 /// batch, columns for the online engine: the Euler number and everything else is the same).
+///
+/// The one home of the component tally: the batch labeller fills it row by row, the online
+/// engine column by column, a tile's provisional component ([`TileComponent`]) is one with the
+/// times of its extents; all of them merge parts with [`absorb`](Self::absorb) and report with
+/// [`fold`](Self::fold).
+///
+/// [`TileComponent`]: crate::TileComponent
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Tally {
     pub(crate) trivial: bool,
-    pub(crate) runs: usize,
+    pub(crate) runs: u64,
     /// Pairs of runs of consecutive rows (or columns) that share a column (or row).
     pub(crate) overlaps: u64,
     pub(crate) pairs: u64,
@@ -77,22 +84,36 @@ pub(crate) struct Tally {
 pub(crate) struct Folded {
     pub(crate) area_s2: f64,
     pub(crate) pair_count: u64,
-    pub(crate) euler: i64,
+    pub(crate) euler: i128,
     pub(crate) i_range: [usize; 2],
     pub(crate) j_range: [usize; 2],
 }
 
+impl Folded {
+    /// Holes: 1 − χ for a connected set.
+    pub(crate) fn holes(&self) -> u64 {
+        u64::try_from(1 - self.euler).unwrap_or(u64::MAX)
+    }
+}
+
+/// Whether the closest pair `candidate` (rank, pair) beats `current`: a smaller rank, or the
+/// same rank at an earlier pair in row order.
+pub(crate) fn closer(candidate: (f64, [usize; 2]), current: (f64, [usize; 2])) -> bool {
+    candidate.0 < current.0 || (candidate.0 == current.0 && candidate.1 < current.1)
+}
+
 impl Tally {
     /// The reported statistics from the upper half's tallies: a trivial component whole (the
-    /// half, its mirror, the diagonal counted once), another as its half.
+    /// half, its mirror, the diagonal counted once), another as its half. Counts saturate; only
+    /// tallies decoded from corrupt bytes come near their limits ([`check`](Self::check)).
     pub(crate) fn fold(&self) -> Folded {
-        let euler_half = self.runs as i64 - self.overlaps as i64;
-        let folded = if self.trivial {
+        let euler_half = i128::from(self.runs) - i128::from(self.overlaps);
+        if self.trivial {
             let extent = [self.rows[0], self.columns[1]];
             Folded {
                 area_s2: 2.0 * self.area_s2 - self.diagonal_area_s2,
-                pair_count: 2 * self.pairs - self.diagonal_cells,
-                euler: 2 * euler_half - self.diagonal_cells as i64 + self.diagonal_links as i64,
+                pair_count: self.pairs.saturating_mul(2).saturating_sub(self.diagonal_cells),
+                euler: 2 * euler_half - i128::from(self.diagonal_cells) + i128::from(self.diagonal_links),
                 i_range: extent,
                 j_range: extent,
             }
@@ -104,9 +125,75 @@ impl Tally {
                 i_range: self.rows,
                 j_range: self.columns,
             }
-        };
-        debug_assert!(folded.euler <= 1, "a connected set has Euler number ≤ 1");
-        folded
+        }
+    }
+
+    /// Whether the counts are those of a set of cells: at most 2⁶³ pairs, no more diagonal
+    /// cells than cells in a trivial component, and an Euler number of at most 1 (connected).
+    ///
+    /// # Errors
+    /// What is wrong, as a phrase (“has Euler number 2, above …”), for the caller's error.
+    pub(crate) fn check(&self) -> std::result::Result<(), String> {
+        if self.trivial && self.pairs.checked_mul(2).and_then(|p| p.checked_sub(self.diagonal_cells)).is_none() {
+            return Err("more diagonal cells than cells, or more than 2⁶³ cells".into());
+        }
+        let euler = self.fold().euler;
+        if euler > 1 {
+            return Err(format!("Euler number {euler}, above the 1 of a connected set"));
+        }
+        Ok(())
+    }
+
+    /// An empty tally, before its first run.
+    pub(crate) fn empty() -> Self {
+        Self { rows: [usize::MAX, 0], columns: [usize::MAX, 0], closest: (f64::INFINITY, [0, 0]), ..Self::default() }
+    }
+
+    /// Adds a run of row `i` over the columns `a..=b` (upper half: a ≥ i is not required, a = i
+    /// is a diagonal cell), whose cells cover `area_s2`; `w_i` is row i's cell width, seconds.
+    pub(crate) fn add_run(&mut self, i: usize, [a, b]: [usize; 2], area_s2: f64, w_i: f64) {
+        self.runs += 1;
+        self.pairs += (b - a + 1) as u64;
+        self.area_s2 += area_s2;
+        self.rows = [self.rows[0].min(i), self.rows[1].max(i)];
+        self.columns = [self.columns[0].min(a), self.columns[1].max(b)];
+        if a == i {
+            self.trivial = true;
+            self.diagonal_cells += 1;
+            self.diagonal_area_s2 += w_i * w_i;
+            if b > i {
+                self.diagonal_links += 1;
+            }
+        }
+    }
+
+    /// Offers the pair `[i, j]` at the metric's `rank` as the closest; true when it is (a
+    /// strictly smaller rank: runs come in row order, so the earliest pair wins ties).
+    pub(crate) fn offer_closest(&mut self, rank: f64, pair: [usize; 2]) -> bool {
+        let closer = rank < self.closest.0;
+        if closer {
+            self.closest = (rank, pair);
+        }
+        closer
+    }
+
+    /// Adds the tally of `other`, a part of the same component: counts and areas add, extents
+    /// widen, the closer pair ([`closer`]) stays.
+    pub(crate) fn absorb(&mut self, other: &Self) {
+        self.trivial |= other.trivial;
+        // Saturating: only counts decoded from corrupt bytes come near 2⁶⁴.
+        self.runs = self.runs.saturating_add(other.runs);
+        self.overlaps = self.overlaps.saturating_add(other.overlaps);
+        self.pairs = self.pairs.saturating_add(other.pairs);
+        self.area_s2 += other.area_s2;
+        self.diagonal_cells = self.diagonal_cells.saturating_add(other.diagonal_cells);
+        self.diagonal_links = self.diagonal_links.saturating_add(other.diagonal_links);
+        self.diagonal_area_s2 += other.diagonal_area_s2;
+        self.rows = [self.rows[0].min(other.rows[0]), self.rows[1].max(other.rows[1])];
+        self.columns = [self.columns[0].min(other.columns[0]), self.columns[1].max(other.columns[1])];
+        if closer(other.closest, self.closest) {
+            self.closest = other.closest;
+        }
     }
 }
 
@@ -134,11 +221,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     let widths = traj.cell_widths_s();
     let prefix = prefix_sums_by_session(widths, set.breaks())?;
 
-    let mut tallies = try_filled(
-        count as usize,
-        Tally { rows: [usize::MAX, 0], columns: [usize::MAX, 0], closest: (f64::INFINITY, [0, 0]), ..Tally::default() },
-        "the loop components",
-    )?;
+    let mut tallies = try_filled(count as usize, Tally::empty(), "the loop components")?;
     for (i, &w_i) in widths.iter().enumerate() {
         if i.is_multiple_of(4096) {
             interrupt.check()?;
@@ -151,39 +234,25 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
             let r = offset + k;
             let tally = &mut tallies[labels[r] as usize];
             let (a, b) = (run.start as usize, run.end as usize);
-            tally.runs += 1;
-            tally.pairs += run.len() as u64;
-            tally.area_s2 += w_i * ((prefix[b] + widths[b]) - prefix[a]);
-            tally.rows = [tally.rows[0].min(i), tally.rows[1].max(i)];
-            tally.columns = [tally.columns[0].min(a), tally.columns[1].max(b)];
-            if a == i {
-                tally.trivial = true;
-                tally.diagonal_cells += 1;
-                tally.diagonal_area_s2 += w_i * w_i;
-                if b > i {
-                    tally.diagonal_links += 1;
-                }
-            }
+            tally.add_run(i, [a, b], w_i * ((prefix[b] + widths[b]) - prefix[a]), w_i);
             let j = set.closest_columns()[r] as usize;
-            let rank = metric.distance_rank(traj.point(i), traj.point(j));
-            if rank < tally.closest.0 {
-                tally.closest = (rank, [i, j]);
-            }
+            tally.offer_closest(metric.distance_rank(traj.point(i), traj.point(j)), [i, j]);
         }
     }
 
     let mut components = try_with_capacity(tallies.len(), "the loop components")?;
     components.extend(tallies.into_iter().enumerate().map(|(id, t)| {
-        let Folded { area_s2, pair_count, euler, i_range, j_range } = t.fold();
+        debug_assert!(t.check().is_ok(), "a component's tally: {:?}", t.check());
+        let folded = t.fold();
         LoopComponent {
             id,
             trivial: t.trivial,
-            area_s2,
-            pair_count,
-            run_count: t.runs,
-            holes: (1 - euler) as u64,
-            i_range,
-            j_range,
+            area_s2: folded.area_s2,
+            pair_count: folded.pair_count,
+            run_count: t.runs as usize,
+            holes: folded.holes(),
+            i_range: folded.i_range,
+            j_range: folded.j_range,
             closest_pair: t.closest.1,
             closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
         }

@@ -67,7 +67,7 @@
 use std::collections::HashMap;
 
 use crate::ball_tree::BallTree;
-use crate::component::{LoopComponent, ROWS_PER_LABEL_TASK, for_each_overlap, label_runs};
+use crate::component::{LoopComponent, ROWS_PER_LABEL_TASK, Tally, closer, for_each_overlap, label_runs};
 use crate::error::{Error, Result};
 use crate::fleet::{Fleet, FleetComponent, SessionPair, localize, session_pairs_of};
 use crate::metric::Metric;
@@ -419,36 +419,88 @@ pub struct TileComponent {
 }
 
 impl TileComponent {
-    /// Adds the statistics of `other`, a provisional component of the same final component.
+    /// The tally of the counts, extents and closest pair ([`Tally`]).
+    fn tally(&self) -> Tally {
+        Tally {
+            trivial: self.trivial,
+            runs: self.runs,
+            overlaps: self.overlaps,
+            pairs: self.pairs,
+            area_s2: self.area_s2,
+            diagonal_cells: self.diagonal_cells,
+            diagonal_links: self.diagonal_links,
+            diagonal_area_s2: self.diagonal_area_s2,
+            rows: self.rows,
+            columns: self.columns,
+            closest: (self.closest_rank, self.closest),
+        }
+    }
+
+    /// A provisional component from its tally, first cell and closest pair's distance; the times
+    /// of its extents are filled in later.
+    fn from_tally(tally: Tally, first: [usize; 2], closest_distance: f64) -> Self {
+        let mut component = Self {
+            trivial: false,
+            runs: 0,
+            overlaps: 0,
+            pairs: 0,
+            area_s2: 0.0,
+            diagonal_cells: 0,
+            diagonal_links: 0,
+            diagonal_area_s2: 0.0,
+            rows: [0; 2],
+            columns: [0; 2],
+            times_s: [[0.0; 2]; 2],
+            closest: [0; 2],
+            closest_rank: f64::INFINITY,
+            closest_distance,
+            first,
+        };
+        component.set_tally(tally);
+        component
+    }
+
+    /// Sets the counts, extents and closest pair from `tally`.
+    fn set_tally(&mut self, tally: Tally) {
+        let Tally {
+            trivial,
+            runs,
+            overlaps,
+            pairs,
+            area_s2,
+            diagonal_cells,
+            diagonal_links,
+            diagonal_area_s2,
+            rows,
+            columns,
+            closest,
+        } = tally;
+        (self.trivial, self.runs, self.overlaps, self.pairs, self.area_s2) = (trivial, runs, overlaps, pairs, area_s2);
+        (self.diagonal_cells, self.diagonal_links, self.diagonal_area_s2) =
+            (diagonal_cells, diagonal_links, diagonal_area_s2);
+        (self.rows, self.columns, (self.closest_rank, self.closest)) = (rows, columns, closest);
+    }
+
+    /// Adds the statistics of `other`, a provisional component of the same final component: the
+    /// tallies merge by [`Tally::absorb`]; each extreme keeps its time, and the closest pair its
+    /// distance.
     fn absorb(&mut self, other: &Self) {
-        self.trivial |= other.trivial;
-        // Saturating: only counts decoded from corrupt bytes come near 2⁶⁴.
-        self.runs = self.runs.saturating_add(other.runs);
-        self.overlaps = self.overlaps.saturating_add(other.overlaps);
-        self.pairs = self.pairs.saturating_add(other.pairs);
-        self.area_s2 += other.area_s2;
-        self.diagonal_cells = self.diagonal_cells.saturating_add(other.diagonal_cells);
-        self.diagonal_links = self.diagonal_links.saturating_add(other.diagonal_links);
-        self.diagonal_area_s2 += other.diagonal_area_s2;
-        // Within a session, times grow with the index: each extreme keeps its time.
-        for (axis, (mine, theirs)) in
-            [(&mut self.rows, other.rows), (&mut self.columns, other.columns)].into_iter().enumerate()
-        {
+        let mut tally = self.tally();
+        tally.absorb(&other.tally());
+        // Within a session, times grow with the index: an extreme `other` moved takes its time.
+        for axis in 0..2 {
+            let (mine, theirs) = if axis == 0 { (self.rows, other.rows) } else { (self.columns, other.columns) };
             if theirs[0] < mine[0] {
-                mine[0] = theirs[0];
                 self.times_s[axis][0] = other.times_s[axis][0];
             }
             if theirs[1] > mine[1] {
-                mine[1] = theirs[1];
                 self.times_s[axis][1] = other.times_s[axis][1];
             }
         }
-        let (mine, theirs) = ((self.closest_rank, self.closest), (other.closest_rank, other.closest));
-        if theirs.0 < mine.0 || (theirs.0 == mine.0 && theirs.1 < mine.1) {
-            self.closest_rank = other.closest_rank;
-            self.closest = other.closest;
+        if closer((other.closest_rank, other.closest), (self.closest_rank, self.closest)) {
             self.closest_distance = other.closest_distance;
         }
+        self.set_tally(tally);
         self.first = self.first.min(other.first);
     }
 }
@@ -819,62 +871,29 @@ fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<
     let widths = piece.cell_widths_s();
     let breaks: Vec<u32> = starts[1..].iter().map(|&s| s as u32).collect();
     let prefix = prefix_sums_by_session(widths, &breaks)?;
-    let mut components = vec![
-        TileComponent {
-            trivial: false,
-            runs: 0,
-            overlaps: 0,
-            pairs: 0,
-            area_s2: 0.0,
-            diagonal_cells: 0,
-            diagonal_links: 0,
-            diagonal_area_s2: 0.0,
-            rows: [usize::MAX, 0],
-            columns: [usize::MAX, 0],
-            times_s: [[0.0; 2]; 2],
-            closest: [0, 0],
-            closest_rank: f64::INFINITY,
-            closest_distance: f64::INFINITY,
-            first: [usize::MAX, usize::MAX],
-        };
-        count as usize
-    ];
+    // The tallies, with the first cell and the closest pair's distance of each.
+    let mut tallies = vec![(Tally::empty(), [usize::MAX; 2], f64::INFINITY); count as usize];
     let mut edges = Vec::new();
     let (first_column, last_column) = (tile.columns.start, tile.columns.end - 1);
     for i in 0..rows {
         if i + 1 < rows {
-            for_each_overlap(set, i..i + 1, |x, _| components[labels[x] as usize].overlaps += 1);
+            for_each_overlap(set, i..i + 1, |x, _| tallies[labels[x] as usize].0.overlaps += 1);
         }
         let offset = set.row_offset(i);
         let (w_i, fleet_i) = (widths[i], to_fleet(i));
         for (k, run) in set.row(i).iter().enumerate() {
             let r = offset + k;
             let label = labels[r];
-            let c = &mut components[label as usize];
+            let (tally, first, closest_distance) = &mut tallies[label as usize];
             let (x, y) = (run.start as usize, run.end as usize);
             let (start, end) = (to_fleet(x), to_fleet(y));
-            c.runs += 1;
-            c.pairs += run.len() as u64;
-            c.area_s2 += w_i * ((prefix[y] + widths[y]) - prefix[x]);
-            c.rows = [c.rows[0].min(fleet_i), c.rows[1].max(fleet_i)];
-            c.columns = [c.columns[0].min(start), c.columns[1].max(end)];
-            if c.first[0] == usize::MAX {
-                c.first = [fleet_i, start];
-            }
-            if start == fleet_i {
-                c.trivial = true;
-                c.diagonal_cells += 1;
-                c.diagonal_area_s2 += w_i * w_i;
-                if end > fleet_i {
-                    c.diagonal_links += 1;
-                }
+            tally.add_run(fleet_i, [start, end], w_i * ((prefix[y] + widths[y]) - prefix[x]), w_i);
+            if first[0] == usize::MAX {
+                *first = [fleet_i, start];
             }
             let j = set.closest_columns()[r] as usize;
-            let rank = metric.distance_rank(piece.point(i), piece.point(j));
-            if rank < c.closest_rank {
-                c.closest_rank = rank;
-                c.closest = [fleet_i, to_fleet(j)];
-                c.closest_distance = metric.distance(piece.point(i), piece.point(j));
+            if tally.offer_closest(metric.distance_rank(piece.point(i), piece.point(j)), [fleet_i, to_fleet(j)]) {
+                *closest_distance = metric.distance(piece.point(i), piece.point(j));
             }
             if fleet_i == tile.rows.start || fleet_i + 1 == tile.rows.end || start == first_column || end == last_column
             {
@@ -882,6 +901,10 @@ fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<
             }
         }
     }
+    let components = tallies
+        .into_iter()
+        .map(|(tally, first, closest_distance)| TileComponent::from_tally(tally, first, closest_distance))
+        .collect();
     Ok(TileSummary { tile: tile.clone(), components, edges })
 }
 
@@ -1259,32 +1282,25 @@ impl TileMerge {
                 let inconsistent = |what: &str| Error::InconsistentTiles {
                     problem: format!("the component with first cell {:?} has {what}", c.first),
                 };
-                let euler_half = i128::from(c.runs) - i128::from(c.overlaps);
-                let (area_s2, pairs, euler, rows, columns, times_s) = if c.trivial {
-                    let euler = 2 * euler_half - i128::from(c.diagonal_cells) + i128::from(c.diagonal_links);
-                    let extent = [c.rows[0], c.columns[1]];
+                let tally = c.tally();
+                tally.check().map_err(|problem| inconsistent(&problem))?;
+                let folded = tally.fold();
+                // The extents' times follow the extents (a trivial component's are mirrored).
+                let times_s = if c.trivial {
                     let times = [c.times_s[0][0], c.times_s[1][1]];
-                    let pairs = c
-                        .pairs
-                        .checked_mul(2)
-                        .and_then(|p| p.checked_sub(c.diagonal_cells))
-                        .ok_or_else(|| inconsistent("more diagonal cells than cells, or more than 2⁶³ cells"))?;
-                    (2.0 * c.area_s2 - c.diagonal_area_s2, pairs, euler, extent, extent, [times, times])
+                    [times, times]
                 } else {
-                    (c.area_s2, c.pairs, euler_half, c.rows, c.columns, c.times_s)
+                    c.times_s
                 };
-                if euler > 1 {
-                    return Err(inconsistent(&format!("Euler number {euler}, above the 1 of a connected set")));
-                }
                 let component = LoopComponent {
                     id,
                     trivial: c.trivial,
-                    area_s2,
-                    pair_count: pairs,
+                    area_s2: folded.area_s2,
+                    pair_count: folded.pair_count,
                     run_count: c.runs as usize,
-                    holes: (1 - euler) as u64,
-                    i_range: rows,
-                    j_range: columns,
+                    holes: folded.holes(),
+                    i_range: folded.i_range,
+                    j_range: folded.j_range,
                     closest_pair: c.closest,
                     closest_distance: c.closest_distance,
                 };

@@ -234,21 +234,10 @@ impl OnlineComponent {
 
     /// Adds the statistics of `other`, merged into this one.
     fn absorb(&mut self, other: &Self) {
-        let (t, o) = (&mut self.tally.half, &other.tally.half);
-        t.trivial |= o.trivial;
-        t.runs += o.runs;
-        t.overlaps += o.overlaps;
-        t.pairs += o.pairs;
-        t.diagonal_cells += o.diagonal_cells;
-        t.diagonal_links += o.diagonal_links;
-        t.rows = [t.rows[0].min(o.rows[0]), t.rows[1].max(o.rows[1])];
-        t.columns = [t.columns[0].min(o.columns[0]), t.columns[1].max(o.columns[1])];
-        t.area_s2 += o.area_s2;
-        t.diagonal_area_s2 += o.diagonal_area_s2;
-        if o.closest < t.closest {
-            t.closest = o.closest;
+        if component::closer(other.tally.half.closest, self.tally.half.closest) {
             self.closest_distance = other.closest_distance;
         }
+        self.tally.half.absorb(&other.tally.half);
         self.tally.row_runs += other.tally.row_runs;
         self.tally.pending_area_s2 += other.tally.pending_area_s2;
         self.tally.pending_diagonal_area_s2 += other.tally.pending_diagonal_area_s2;
@@ -265,7 +254,7 @@ impl OnlineComponent {
         self.trivial = whole.trivial;
         self.area_s2 = folded.area_s2;
         self.pair_count = folded.pair_count;
-        self.holes = (1 - folded.euler) as u64;
+        self.holes = folded.holes();
         (self.i_range, self.j_range) = (folded.i_range, folded.j_range);
         self.run_count = self.tally.row_runs as usize;
         self.closest_pair = whole.closest.1;
