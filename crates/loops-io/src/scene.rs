@@ -238,7 +238,7 @@ impl Scene {
     /// let points: Vec<[f64; 2]> = (0..8).map(|i| square[i % 4]).collect();
     /// let traj = Trajectory::from_points((0..8).map(f64::from).collect(), &points)?;
     /// let loops = find_loops(&traj, &Euclidean, 1.0)?;
-    /// let samples = sample_loops(&traj, &loops, &Euclidean, &Sampler::new(SamplerKind::One, SampleSize::PerComponent(1), 7))?;
+    /// let samples = sample_loops(&traj, &Euclidean, &loops, &Sampler::new(SamplerKind::One, SampleSize::Budget(4), 7))?;
     /// let scene = loops_io::Scene::of_trajectory("square", &traj, None, None, &loops, &samples)?;
     /// assert_eq!((scene.paths[0].positions.len(), scene.components.len()), (8, loops.components().len()));
     /// assert_eq!(scene.candidates.len(), samples.len());
@@ -486,7 +486,7 @@ fn plane_image(loops: &Loops, grid: &PlaneGrid, pairs: &[[usize; 2]]) -> loops_c
 /// let points: Vec<[f64; 2]> = (0..8).map(|i| [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]][i % 4]).collect();
 /// let traj = Trajectory::from_points((0..8).map(f64::from).collect(), &points)?;
 /// let loops = find_loops(&traj, &Euclidean, 1.0)?;
-/// let samples = sample_loops(&traj, &loops, &Euclidean, &Sampler::new(SamplerKind::One, SampleSize::PerComponent(1), 7))?;
+/// let samples = sample_loops(&traj, &Euclidean, &loops, &Sampler::new(SamplerKind::One, SampleSize::Budget(4), 7))?;
 /// let scene = loops_io::Scene::of_trajectory("square", &traj, None, None, &loops, &samples)?;
 /// let path = std::env::temp_dir().join(format!("loops-io-scene-{}.mcap", std::process::id()));
 /// loops_io::write_scene_mcap(&path, &scene, false)?;
