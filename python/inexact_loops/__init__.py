@@ -186,10 +186,11 @@ __all__ = [
 
 
 def __getattr__(name: str) -> object:
-    """``inexact_loops.plot`` and ``inexact_loops.evaluate`` on first use: matplotlib is
-    imported only when plots are drawn (the optional extra ``inexact-loops[plot]``), GTSAM only
-    when a pose graph is optimised (``inexact-loops[maps]``)."""
-    if name in ("plot", "evaluate"):
+    """``inexact_loops.plot``, ``inexact_loops.evaluate`` and ``inexact_loops.viewers`` on first
+    use: matplotlib is imported only when plots are drawn (the optional extra
+    ``inexact-loops[plot]``), GTSAM only when a pose graph is optimised (``inexact-loops[maps]``),
+    rerun-sdk only when a recording is written (``inexact-loops[rerun]``)."""
+    if name in ("plot", "evaluate", "viewers"):
         import importlib
 
         return importlib.import_module(f"{__name__}.{name}")
@@ -197,4 +198,4 @@ def __getattr__(name: str) -> object:
 
 
 def __dir__() -> list[str]:
-    return sorted([*globals(), "plot", "evaluate"])
+    return sorted([*globals(), "plot", "evaluate", "viewers"])

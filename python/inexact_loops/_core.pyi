@@ -75,6 +75,8 @@ __all__ = [
     "log_name",
     "OutDir",
     "refuse_output_on_input",
+    "Scene",
+    "scene",
 ]
 
 __version__: str
@@ -3461,4 +3463,84 @@ def refuse_output_on_input(
 
     Raises:
         InvalidParameterError: naming both paths.
+    """
+
+@final
+class Scene:
+    """What robotics viewers draw of a result: a path per session with τ along it, every loop
+    component (its two stretches of path and its closest pair, a colour each), the sampled
+    candidate pairs and the (t, t′) plane as an RGB image. Made by :func:`scene`; written as
+    MCAP by :meth:`to_mcap` (Foxglove, RViz) and drawn by
+    :func:`inexact_loops.viewers.to_rerun` (Rerun).
+    """
+
+    def to_mcap(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
+        """Writes the scene as MCAP for Foxglove and RViz: Foxglove's schemas on ``/loops/trajectory``
+        (PosesInFrame), ``/loops/tau``, ``/loops/components``, ``/loops/candidates`` (SceneUpdate)
+        and ``/loops/plane`` (RawImage), and a ROS 2 ``visualization_msgs/msg/MarkerArray`` on
+        ``/loops/markers``. Atomic; beside it, :attr:`foxglove_layout` opens the right panels.
+
+        Raises:
+            FileExistsError: ``path`` exists and ``overwrite`` is false.
+            OSError: the file cannot be written.
+        """
+    @property
+    def foxglove_layout(self) -> str:
+        """The Foxglove layout (JSON text) for the MCAP file: a 3D panel with the scene's topics
+        and an Image panel with the plane.
+        """
+    @property
+    def paths(self) -> list[dict[str, Any]]:
+        """One dict per session: ``name``, ``timestamps_s`` (n), ``positions`` (n × 3),
+        ``loop_duration_s`` (n, τ) and ``tau_rgba`` (n × 4, τ's colour in [0, 1]).
+        """
+    @property
+    def components(self) -> list[dict[str, Any]]:
+        """One dict per component, in id order: ``id``, ``trivial``, ``sessions`` (a, b),
+        ``poses`` ((i_min, i_max), (j_min, j_max)), ``closest_pair``, ``closest_distance``,
+        ``area_s2``, ``pair_count`` and ``rgba`` (its colour in [0, 1]).
+        """
+    @property
+    def candidates(self) -> dict[str, npt.NDArray[np.int64]]:
+        """The candidate pairs, in the samples' order: int64 columns ``session_a``, ``session_b``,
+        ``i``, ``j`` (poses in their sessions) and ``component`` (−1 when unknown).
+        """
+    @property
+    def plane(self) -> npt.NDArray[np.uint8]:
+        """The (t, t′) plane: uint8 array (height, width, 3), row 0 the latest t′ (t′ up), each
+        component in its colour, candidates white.
+        """
+    @property
+    def frame_id(self) -> str:
+        """The frame every entity is in."""
+
+def scene(
+    loops: Loops | FleetLoops,
+    samples: Samples | FleetSamples,
+    trajectory: Trajectory | None = None,
+    *,
+    name: str = "trajectory",
+) -> Scene:
+    """The scene of a result: ``loops`` found on ``trajectory`` with ``samples`` drawn from them,
+    or a fleet's :class:`FleetLoops` with its :class:`FleetSamples` (no ``trajectory``).
+    Positions are each pose's first three coordinates.
+
+    Args:
+        loops: a :class:`Loops` or a :class:`FleetLoops`.
+        samples: its :class:`Samples` (a :class:`FleetSamples` for a fleet).
+        trajectory: the :class:`Trajectory` of ``loops`` (not for a fleet).
+        name: the trajectory's session name.
+
+    Raises:
+        TypeError: arguments of other types, or of a fleet and a single trajectory mixed.
+        InvalidParameterError: ``trajectory`` or ``samples`` are not those of ``loops``.
+
+    Example:
+        >>> import numpy as np, inexact_loops as il
+        >>> traj = il.Trajectory(np.arange(6.0), np.array([[0, 0], [5, 0], [5, 5], [0, 0], [5, 0], [5, 5.0]]))
+        >>> loops = il.find_loops(traj, gamma=0.5)
+        >>> samples = il.sample(loops, "one", budget=3, seed=0, trajectory=traj)
+        >>> scene = il.viewers.scene(loops, samples, traj)
+        >>> scene.paths[0]["positions"].shape, scene.plane.shape[2]
+        ((6, 3), 3)
     """

@@ -1,5 +1,5 @@
 //! ROS 2 messages out, by hand: `PoseStamped` and `Odometry` in little-endian CDR, and their
-//! stamps. Written by hand as `cdr.rs` reads them: two fixed layouts do not need a serde CDR
+//! stamps; the primitives for the scene's `MarkerArray` ([`CdrWriter`]). Written by hand as `cdr.rs` reads them: two fixed layouts do not need a serde CDR
 //! crate, and the reader's tests decode what this writes.
 
 /// The orientation of a table without orientations.
@@ -80,7 +80,7 @@ pub(crate) fn encode_message(
 /// then each primitive aligned to its size relative to the start of the body (what `cdr.rs`
 /// reads).
 #[derive(Debug)]
-struct CdrWriter<'a> {
+pub(crate) struct CdrWriter<'a> {
     data: &'a mut Vec<u8>,
 }
 
@@ -88,7 +88,8 @@ struct CdrWriter<'a> {
 const ENCAPSULATION: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 impl<'a> CdrWriter<'a> {
-    fn new(data: &'a mut Vec<u8>) -> Self {
+    /// Starts a message in `data` (cleared first) with the encapsulation header.
+    pub(crate) fn new(data: &'a mut Vec<u8>) -> Self {
         data.clear();
         data.extend_from_slice(&ENCAPSULATION);
         Self { data }
@@ -101,26 +102,39 @@ impl<'a> CdrWriter<'a> {
         self.data.resize(self.data.len() + padding, 0);
     }
 
-    fn i32(&mut self, value: i32) {
+    pub(crate) fn i32(&mut self, value: i32) {
         self.align(4);
         self.data.extend_from_slice(&value.to_le_bytes());
     }
 
-    fn u32(&mut self, value: u32) {
+    pub(crate) fn u32(&mut self, value: u32) {
         self.align(4);
         self.data.extend_from_slice(&value.to_le_bytes());
     }
 
-    fn f64s(&mut self, values: &[f64]) {
+    pub(crate) fn f64s(&mut self, values: &[f64]) {
         self.align(8);
         for value in values {
             self.data.extend_from_slice(&value.to_le_bytes());
         }
     }
 
+    /// `float32`s, each aligned to 4 bytes.
+    pub(crate) fn f32s(&mut self, values: &[f32]) {
+        self.align(4);
+        for value in values {
+            self.data.extend_from_slice(&value.to_le_bytes());
+        }
+    }
+
+    /// A `bool`: one byte, 0 or 1.
+    pub(crate) fn bool(&mut self, value: bool) {
+        self.data.push(u8::from(value));
+    }
+
     /// A string: `u32` length counting the terminating NUL, the bytes, the NUL. Checked to fit
     /// by the writer before anything is written.
-    fn string(&mut self, text: &str) {
+    pub(crate) fn string(&mut self, text: &str) {
         debug_assert!(text.len() < u32::MAX as usize && !text.contains('\0'));
         self.u32(text.len() as u32 + 1);
         self.data.extend_from_slice(text.as_bytes());

@@ -24,6 +24,8 @@
 //! trajectories, [`write_g2o_edges`] for candidate loop-closure edges with relative-pose
 //! guesses (and [`write_fleet_g2o_edges`] for a fleet's, keyed by [`gtsam_symbol_key`]); a
 //! fleet's tables: [`write_fleet_components`], [`write_session_pairs`], [`write_fleet_samples`];
+//! the results for robotics viewers: [`Scene`] and [`write_scene_mcap`] (Foxglove's schemas and
+//! a ROS 2 `MarkerArray`, on the topics of [`SCENE_TOPICS`], with [`FOXGLOVE_LAYOUT`]);
 //! all atomic, and never replacing a
 //! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
 //! the workspace: the CLI writes its files through it too; [`StagedFiles`] writes several files
@@ -90,7 +92,8 @@
 // 5. readers: `csv`, `euroc`, `graph`, `kitti`, `tuc`, `tum`, `detections`; `read` picks one;
 // 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
 //    `loop_duration`, `report`, `quality`, `samples`, `edge_verdicts`; and `write` (TUM, g2o);
-//    `fleet` (a fleet's tables and g2o edges); `out_dir` (an output folder of several results).
+//    `fleet` (a fleet's tables and g2o edges); `out_dir` (an output folder of several results);
+//    `scene` (the results for Foxglove, RViz and Rerun, and its MCAP file).
 mod atomic;
 mod bag;
 mod cdr;
@@ -124,6 +127,7 @@ mod report;
 mod ros1_message;
 mod rotation;
 mod samples;
+mod scene;
 mod table;
 mod temp_copy;
 mod text;
@@ -169,6 +173,10 @@ pub use read::{
 };
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
+pub use scene::{
+    FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PLANE_PIXELS, RgbImage, SCENE_FRAME, SCENE_TOPICS, Scene, SceneCandidate,
+    SceneComponent, ScenePath, SceneTopic, scene_mcap_to, tau_rgba, write_scene_mcap,
+};
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
 pub use temp_copy::remove_temporary_files;
 pub use text::MAX_LINE_BYTES;

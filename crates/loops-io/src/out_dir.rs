@@ -85,7 +85,16 @@ pub const FLEET: Tool = Tool {
     command: "loops fleet",
     marker: "loops-fleet.json",
     scratch: ".loops-fleet.partial",
-    top_files: &["index.html", "components.csv", "session_pairs.csv", "samples.csv", "samples.g2o", "summary.json"],
+    top_files: &[
+        "index.html",
+        "components.csv",
+        "session_pairs.csv",
+        "samples.csv",
+        "samples.g2o",
+        "summary.json",
+        "results.mcap",
+        "foxglove-layout.json",
+    ],
     out_flag: "--out",
     force_flag: "--force",
 };

@@ -14,7 +14,8 @@
 //! cluster), `py_online` (`OnlineLoops`, `Update`: loops while poses arrive) and
 //! `py_online_sampler` (`OnlineSampler`, `Candidate`: loop-closure candidates per keyframe);
 //! `py_out_dir` (`OutDir`, `refuse_output_on_input`: loops-io's output folder, for
-//! `inexact_loops.dask`).
+//! `inexact_loops.dask`); `py_scene` (`Scene`, `scene`: the results for Foxglove, RViz and
+//! Rerun).
 //! Below them:
 //! `convert` (arguments to Rust
 //! buffers, results to numpy columns and tables), `py_metric` (metric arguments), `error`
@@ -39,6 +40,7 @@ mod py_out_dir;
 mod py_plane;
 mod py_quality;
 mod py_samples;
+mod py_scene;
 mod py_separation;
 mod py_tile;
 mod py_tile_draw;
@@ -200,5 +202,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_online_sampler::Candidate>()?;
     module.add_class::<py_out_dir::OutDir>()?;
     module.add_function(wrap_pyfunction!(py_out_dir::refuse_output_on_input, module)?)?;
+    module.add_class::<py_scene::Scene>()?;
+    module.add_function(wrap_pyfunction!(py_scene::scene, module)?)?;
     Ok(())
 }

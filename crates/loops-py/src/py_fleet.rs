@@ -507,8 +507,8 @@ pub(crate) fn find_fleet_loops(
 /// :class:`Loops` does.
 #[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct FleetLoops {
-    inner: Arc<loops_core::FleetLoops>,
-    fleet: Py<Fleet>,
+    pub(crate) inner: Arc<loops_core::FleetLoops>,
+    pub(crate) fleet: Py<Fleet>,
     /// The joint result as a `Loops`, copied on first use.
     loops: PyOnceLock<Py<Loops>>,
 }
@@ -917,7 +917,7 @@ pub(crate) fn sample_fleet(
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct FleetSamples {
-    samples: Py<Samples>,
+    pub(crate) samples: Py<Samples>,
     located: Vec<loops_core::FleetSample>,
     fleet: Py<Fleet>,
 }

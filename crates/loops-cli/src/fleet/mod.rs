@@ -227,6 +227,7 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         let components = loops.components();
         let pairs = loops.session_pairs();
         let g2o = write_fleet_files(&out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
+        write_fleet_scene(&out, results.mcap, &fleet, &loops, &samples, &tables)?;
         seconds.stages.write = clock.elapsed().as_secs_f64();
         let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
         let between_covered = components
@@ -284,7 +285,12 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
             sessions,
             warnings,
             seconds: FleetSeconds::default(),
-            files: TOOL.top_files.iter().copied().filter(|&f| f != "samples.g2o" || g2o).collect(),
+            files: TOOL
+                .top_files
+                .iter()
+                .copied()
+                .filter(|&f| (f != "samples.g2o" || g2o) && (results.mcap || !crate::run::MCAP_FILES.contains(&f)))
+                .collect(),
             pages: &pages,
         };
         let html = render(&FleetReportInput {
@@ -407,6 +413,31 @@ fn write_fleet_files(
         );
         Ok(false)
     }
+}
+
+/// Writes the fleet's results.mcap (every session's path, the components within and between
+/// sessions, the samples, the joint (t, t′) plane) and foxglove-layout.json into --out with
+/// `mcap` (--mcap); without it, removes those of an earlier run of ours, so that none is left
+/// that does not match the other files.
+fn write_fleet_scene(
+    out: &OutDir,
+    mcap: bool,
+    fleet: &Fleet,
+    loops: &FleetLoops,
+    samples: &Samples,
+    tables: &[PoseTable],
+) -> Result<()> {
+    let [results, layout] = crate::run::MCAP_FILES;
+    if !mcap {
+        guard::with_writes(|_| out.remove(results).and_then(|_| out.remove(layout)))?;
+        return Ok(());
+    }
+    // The logs' own positions, where reading kept every pose.
+    let fits = tables.iter().enumerate().all(|(a, table)| table.positions.len() == fleet.session(a).len());
+    let positions: Vec<Vec<[f64; 3]>> = tables.iter().map(|table| table.positions.clone()).collect();
+    let scene = loops_io::Scene::of_fleet(fleet, Some(positions.as_slice()).filter(|_| fits), loops, samples)?;
+    out_dir::write_file(out, results, |file| loops_io::scene_mcap_to(file, &scene))?;
+    out_dir::write_file(out, layout, |file| file.write_all(loops_io::FOXGLOVE_LAYOUT.as_bytes()))
 }
 
 /// Per session: its poses, span, components within and between, and the samples touching it.

@@ -36,6 +36,10 @@ use crate::report::{self, ReportInput};
 /// holds it, and the marker of --out lists it).
 const LOG_SUMMARY: &str = "summary.json";
 
+/// The files of each log's folder, and those --mcap adds.
+const LOG_FILES: [&str; 5] = ["components.csv", "samples.csv", "loop_duration.csv", "summary.json", "report.html"];
+pub(crate) const MCAP_FILES: [&str; 2] = ["results.mcap", loops_io::FOXGLOVE_LAYOUT_FILE];
+
 /// The samplers of the samples-per-component figure (the run's own is added when not among them).
 const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::Alpha];
 
@@ -59,10 +63,12 @@ const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerK
     loops run logs/*.mcap --gamma 40 --out results\n  \
     loops run logs/*.mcap --gamma 40 --sampler rho --budget 2000 --out results --force\n  \
     loops run a.mcap b.tum --gamma 0.5 --metric 'se3(rotation_weight_m_per_rad=1)' --out results --json -\n  \
-    loops run night/*.mcap --topic /odom --gamma 10 --out night-results --quiet\n\n\
+    loops run night/*.mcap --topic /odom --gamma 10 --out night-results --quiet\n  \
+    loops run drive.mcap --gamma 40 --out results --mcap   # results/drive/results.mcap for Foxglove\n\n\
     Per log (results/<log>/): components.csv, samples.csv, loop_duration.csv, summary.json,\n\
-    report.html. For the batch: results/index.html and results/summary.json. Ctrl-C keeps the\n\
-    logs already finished and removes the rest; nothing half-written is left."
+    report.html; with --mcap also results.mcap and foxglove-layout.json (open both in Foxglove).\n\
+    For the batch: results/index.html and results/summary.json. Ctrl-C keeps the logs already\n\
+    finished and removes the rest; nothing half-written is left."
 )]
 pub(crate) struct RunArgs {
     /// The pose logs: MCAP, or any format `loops info` reads (TUM, CSV, KITTI, EuRoC, TUC, g2o).
@@ -91,6 +97,8 @@ pub(crate) struct Settings<'a> {
     pub(crate) spec: MetricSpec,
     pub(crate) sampler: Sampler,
     pub(crate) separation: Separation,
+    /// Whether to write results.mcap and foxglove-layout.json (--mcap).
+    pub(crate) mcap: bool,
     /// --out, and the folder held (which knows whether --force was given).
     pub(crate) out_path: &'a Path,
     pub(crate) out: &'a OutDir,
@@ -107,6 +115,7 @@ impl<'a> Settings<'a> {
             spec,
             sampler,
             separation,
+            mcap: results.mcap,
             out_path: &results.out,
             out,
         }
@@ -185,6 +194,11 @@ pub(crate) struct ResultsArgs {
     /// the table.
     #[arg(long, value_name = "FILE")]
     pub(crate) json: Option<JsonTo>,
+    /// Also write the results for Foxglove and RViz: results.mcap (trajectory, components,
+    /// candidates, τ, the (t, t′) plane, a ROS 2 MarkerArray) and foxglove-layout.json beside
+    /// each report.
+    #[arg(long)]
+    pub(crate) mcap: bool,
 }
 
 impl ResultsArgs {
@@ -323,7 +337,7 @@ pub(crate) fn analyse(
         comparison: comparison.iter().map(|(kind, q)| QualitySummary::new(*kind, q)).collect(),
         seconds: Seconds::default(),
         warnings: warnings(&loops, &samples),
-        files: ["components.csv", "samples.csv", "loop_duration.csv", "summary.json", "report.html"],
+        files: [&LOG_FILES[..], if settings.mcap { &MCAP_FILES[..] } else { &[] }].concat(),
     };
     let html = report::render(&ReportInput {
         name,
@@ -349,6 +363,15 @@ pub(crate) fn analyse(
         log.warn(warning);
     }
     let json = serde_json::to_string_pretty(&summary)? + "\n";
+    let scene = if settings.mcap {
+        // The log's own positions and orientations, unless reading dropped or merged poses.
+        let fits = table.positions.len() == traj.len();
+        let positions = Some(table.positions.as_slice()).filter(|_| fits);
+        let orientations = table.orientations_xyzw.as_deref().filter(|_| fits);
+        Some(loops_io::Scene::of_trajectory(name, traj, positions, orientations, &loops, &samples)?)
+    } else {
+        None
+    };
     write_folder(settings, name, |dir| {
         let file = |name: &str| dir.join(name);
         let per_component = Some(quality.per_component.as_slice());
@@ -359,6 +382,10 @@ pub(crate) fn analyse(
             loops_io::write_loop_duration(file("loop_duration.csv"), t, &table.positions, &loop_duration_s, false)
         })?;
         write_file(&file("report.html"), html.as_bytes(), false)?;
+        if let Some(scene) = &scene {
+            written(|| loops_io::write_scene_mcap(file(MCAP_FILES[0]), scene, false))?;
+            write_file(&file(MCAP_FILES[1]), loops_io::FOXGLOVE_LAYOUT.as_bytes(), false)?;
+        }
         write_file(&file(LOG_SUMMARY), json.as_bytes(), false)
     })?;
     Ok(summary)

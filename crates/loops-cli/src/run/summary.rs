@@ -70,7 +70,7 @@ pub(crate) struct LogSummary {
     pub(crate) comparison: Vec<QualitySummary>,
     pub(crate) seconds: Seconds,
     pub(crate) warnings: Vec<String>,
-    pub(crate) files: [&'static str; 5],
+    pub(crate) files: Vec<&'static str>,
 }
 
 /// Where a log's time went, seconds.

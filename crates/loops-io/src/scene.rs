@@ -1,0 +1,849 @@
+//! The results as a scene for robotics viewers: Foxglove, RViz (through a ROS 2 bag) and
+//! Rerun. A [`Scene`] holds what every viewer draws, computed once here: the paths (one per
+//! session), τ along them as a colour, each loop component (the two stretches of path it joins
+//! and its closest pair, a colour per component), the sampled candidate pairs, and the (t, t′)
+//! plane as an RGB image. [`write_scene_mcap`] writes it as MCAP on the topics of
+//! [`SCENE_TOPICS`]; the Python package draws the same [`Scene`] with `rerun-sdk`.
+//!
+//! The Foxglove messages are the `foxglove` crate's (Foxglove's SDK: its published protobuf
+//! schemas, each with its `FileDescriptorSet`, so Foxglove and the `foxglove-schemas-protobuf`
+//! package decode them); the file is written with the `mcap` crate, as [`write_mcap`](crate::write_mcap)
+//! writes pose logs, rather than with the SDK's writer: the SDK's writer logs through a
+//! process-wide context of channels and sinks, where ours writes one file from one value,
+//! through [`write_atomically`], with the log times we choose, and reports each error. The ROS
+//! 2 `visualization_msgs/msg/MarkerArray` is written in CDR by hand, as the pose messages are
+//! (`cdr_write`), with the Humble definition as its `ros2msg` schema.
+
+use std::collections::BTreeMap;
+use std::io::{self, BufWriter, Seek, Write};
+use std::path::Path;
+
+use foxglove::Encode;
+use foxglove::messages::{
+    Color, KeyValuePair, LinePrimitive, Point3, Pose, PosesInFrame, Quaternion, RawImage, SceneEntity, SceneUpdate,
+    Timestamp, Vector3, line_primitive,
+};
+use loops_core::{Fleet, FleetLoops, Loops, PlaneGrid, Samples, Scale, Selection, Side, Trajectory};
+use mcap::records::MessageHeader;
+
+use crate::atomic::write_atomically;
+use crate::cdr_write::{CdrWriter, IDENTITY_XYZW, RosTime};
+use crate::error::WriteError;
+use crate::loop_duration::point_positions;
+
+/// The most pixels a side of the plane image ([`Scene::plane`]).
+pub const PLANE_PIXELS: usize = 512;
+
+/// The frame every entity is in, unless [`Scene::frame_id`] says otherwise.
+pub const SCENE_FRAME: &str = "map";
+
+/// One topic of the scene's MCAP file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct SceneTopic {
+    /// The topic.
+    pub topic: &'static str,
+    /// Its schema (message type).
+    pub schema: &'static str,
+    /// What its messages hold.
+    pub holds: &'static str,
+}
+
+/// The topics [`write_scene_mcap`] writes, in the file's channel order.
+pub const SCENE_TOPICS: [SceneTopic; 6] = [
+    SceneTopic {
+        topic: "/loops/trajectory",
+        schema: "foxglove.PosesInFrame",
+        holds: "one message per session, in fleet order: every pose, position and orientation",
+    },
+    SceneTopic {
+        topic: "/loops/tau",
+        schema: "foxglove.SceneUpdate",
+        holds: "an entity `tau/<session>` per session: its path as a line strip coloured by τ (red = the longest τ)",
+    },
+    SceneTopic {
+        topic: "/loops/components",
+        schema: "foxglove.SceneUpdate",
+        holds: "an entity `component/<id>` per component: its two stretches of path and its closest pair, in its colour; \
+                the components.csv values as metadata",
+    },
+    SceneTopic {
+        topic: "/loops/candidates",
+        schema: "foxglove.SceneUpdate",
+        holds: "an entity `candidates`: one line per sampled pair of poses, in samples.csv order",
+    },
+    SceneTopic {
+        topic: "/loops/plane",
+        schema: "foxglove.RawImage",
+        holds: "the (t, t′) plane, rgb8: t to the right, t′ up, each component in its colour, candidates white",
+    },
+    SceneTopic {
+        topic: "/loops/markers",
+        schema: "visualization_msgs/msg/MarkerArray",
+        holds: "the same for RViz (ROS 2 CDR): namespaces trajectory, tau, components (3 markers each), candidates",
+    },
+];
+
+/// The Foxglove layout shipped beside an MCAP file of the scene: a 3D panel with the scene's
+/// topics and an Image panel with the plane. Import it in Foxglove (Layouts, Import from file).
+pub const FOXGLOVE_LAYOUT: &str = include_str!("scene_layout.json");
+
+/// The name of the layout file beside `results.mcap`.
+pub const FOXGLOVE_LAYOUT_FILE: &str = "foxglove-layout.json";
+
+/// One session's path: its poses and their loop duration τ.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct ScenePath {
+    /// The session's name (the log's, for one trajectory).
+    pub name: String,
+    /// Each pose's time, seconds (on the session's own clock).
+    pub timestamps_s: Vec<f64>,
+    /// Each pose's position `[x, y, z]` (0 for the coordinates a 1-D or 2-D path lacks).
+    pub positions: Vec<[f64; 3]>,
+    /// Each pose's orientation `[x, y, z, w]`, when the log has them.
+    pub orientations_xyzw: Option<Vec<[f64; 4]>>,
+    /// Each pose's loop duration τ, seconds (over the whole fleet for a fleet's session).
+    pub loop_duration_s: Vec<f64>,
+}
+
+/// A loop component as the scene draws it.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct SceneComponent {
+    /// Its id (`components.csv`'s `id`).
+    pub id: usize,
+    /// Whether it is trivial.
+    pub trivial: bool,
+    /// The sessions of its rows (t) and its columns (t′); `[0, 0]` for one trajectory.
+    pub sessions: [usize; 2],
+    /// Its first and last pose by t in session `sessions[0]`, and by t′ in `sessions[1]`.
+    pub poses: [[usize; 2]; 2],
+    /// Its closest pair: a pose of each session.
+    pub closest_pair: [usize; 2],
+    /// δ at the closest pair, in the metric's unit.
+    pub closest_distance: f64,
+    /// Its area, s².
+    pub area_s2: f64,
+    /// Its number of pose pairs.
+    pub pair_count: u64,
+}
+
+/// A sampled candidate pair as the scene draws it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct SceneCandidate {
+    /// The sessions of the earlier and the later pose.
+    pub sessions: [usize; 2],
+    /// The poses, each in its session.
+    pub poses: [usize; 2],
+    /// Its component, when known.
+    pub component: Option<usize>,
+}
+
+/// An RGB image, 8 bits a channel, rows from the top.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct RgbImage {
+    /// Pixels a row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// `width × height × 3` bytes, row by row from the top.
+    pub rgb: Vec<u8>,
+}
+
+/// What the viewers draw of a result; see the [module](self).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct Scene {
+    /// The frame of every entity: [`SCENE_FRAME`] unless set.
+    pub frame_id: String,
+    /// The paths, one per session.
+    pub paths: Vec<ScenePath>,
+    /// Every loop component, in id order.
+    pub components: Vec<SceneComponent>,
+    /// Every sampled pair of poses, in the samples' order (samples without a pose pair, drawn
+    /// from detections off the trajectory, are left out).
+    pub candidates: Vec<SceneCandidate>,
+    /// The (t, t′) plane: [`PLANE_PIXELS`] pixels a side at most (see [`SCENE_TOPICS`]).
+    pub plane: RgbImage,
+}
+
+/// The colour of the plane's pixels outside every component.
+const BACKGROUND_RGB: [u8; 3] = [32, 32, 32];
+/// The colour of candidate pairs: lines in 3-D, pixels on the plane.
+const CANDIDATE_RGBA: [f64; 4] = [1.0, 1.0, 1.0, 0.9];
+/// The colour of trivial components (a pose near its own time).
+const TRIVIAL_RGBA: [f64; 4] = [0.6, 0.6, 0.6, 0.35];
+/// Colours of non-trivial components, by id (Tableau 10 without grey).
+const COMPONENT_RGB: [[u8; 3]; 9] = [
+    [0x4e, 0x79, 0xa7],
+    [0xf2, 0x8e, 0x2b],
+    [0xe1, 0x57, 0x59],
+    [0x76, 0xb7, 0xb2],
+    [0x59, 0xa1, 0x4f],
+    [0xed, 0xc9, 0x48],
+    [0xb0, 0x7a, 0xa1],
+    [0xff, 0x9d, 0xa7],
+    [0x9c, 0x75, 0x5f],
+];
+/// Line widths, in the frame's unit: paths, components, candidates.
+const PATH_WIDTH: f64 = 0.5;
+const COMPONENT_WIDTH: f64 = 1.5;
+const CANDIDATE_WIDTH: f64 = 0.3;
+
+impl SceneComponent {
+    /// Its colour, RGBA in [0, 1]: one of nine by id for a non-trivial component, a
+    /// translucent grey for a trivial one.
+    pub fn rgba(&self) -> [f64; 4] {
+        if self.trivial {
+            return TRIVIAL_RGBA;
+        }
+        let [r, g, b] = COMPONENT_RGB[self.id % COMPONENT_RGB.len()];
+        [f64::from(r) / 255.0, f64::from(g) / 255.0, f64::from(b) / 255.0, 1.0]
+    }
+}
+
+/// The colour of a pose whose τ is `loop_duration_s`, on a scale whose red end is
+/// `max_loop_duration_s`: RGBA `[f, 0.3, 1 − f, 1]`, f = τ / max (blue: no loop; 0 when the
+/// max is not positive).
+///
+/// # Examples
+/// ```
+/// assert_eq!(loops_io::tau_rgba(5.0, 10.0), [0.5, 0.3, 0.5, 1.0]);
+/// assert_eq!(loops_io::tau_rgba(0.0, 0.0), [0.0, 0.3, 1.0, 1.0]);
+/// ```
+pub fn tau_rgba(loop_duration_s: f64, max_loop_duration_s: f64) -> [f64; 4] {
+    let f = if max_loop_duration_s > 0.0 { (loop_duration_s / max_loop_duration_s).clamp(0.0, 1.0) } else { 0.0 };
+    [f, 0.3, 1.0 - f, 1.0]
+}
+
+impl Scene {
+    /// The scene of `loops` found on `traj` (the session `name`), with `samples` drawn from them.
+    /// `positions` and `orientations_xyzw` are the poses as the log gave them (a
+    /// [`PoseTable`](crate::PoseTable)'s); without them, each point's first three coordinates
+    /// ([`point_positions`]) and no orientations. O(n + components + samples + plane pixels).
+    ///
+    /// # Errors
+    /// [`loops_core::Error::RowCountMismatch`] when `positions` or `orientations_xyzw` do not
+    /// have one row per pose, [`loops_core::Error::TrajectoryMismatch`] (or another of
+    /// [`Loops::check_trajectory`]'s) when `loops` were found on another trajectory, and
+    /// [`loops_core::Error::PoseIndexOutOfRange`] for samples of another trajectory.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind, Trajectory, find_loops, sample_loops};
+    /// let square = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+    /// let points: Vec<[f64; 2]> = (0..8).map(|i| square[i % 4]).collect();
+    /// let traj = Trajectory::from_points((0..8).map(f64::from).collect(), &points)?;
+    /// let loops = find_loops(&traj, &Euclidean, 1.0)?;
+    /// let samples = sample_loops(&traj, &Euclidean, &loops, &Sampler::new(SamplerKind::One, SampleSize::Budget(4), 7))?;
+    /// let scene = loops_io::Scene::of_trajectory("square", &traj, None, None, &loops, &samples)?;
+    /// assert_eq!((scene.paths[0].positions.len(), scene.components.len()), (8, loops.components().len()));
+    /// assert_eq!(scene.candidates.len(), samples.len());
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn of_trajectory(
+        name: &str,
+        traj: &Trajectory,
+        positions: Option<&[[f64; 3]]>,
+        orientations_xyzw: Option<&[[f64; 4]]>,
+        loops: &Loops,
+        samples: &Samples,
+    ) -> loops_core::Result<Self> {
+        loops.check_trajectory(traj)?;
+        let n = traj.len();
+        for (what, rows) in
+            [("positions", positions.map(<[_]>::len)), ("orientations", orientations_xyzw.map(<[_]>::len))]
+        {
+            if let Some(rows) = rows.filter(|&rows| rows != n) {
+                return Err(loops_core::Error::RowCountMismatch {
+                    first: "poses",
+                    first_rows: n,
+                    second: what,
+                    second_rows: rows,
+                });
+            }
+        }
+        let path = ScenePath {
+            name: name.to_owned(),
+            timestamps_s: traj.timestamps_s().to_vec(),
+            positions: positions.map_or_else(|| point_positions(traj), <[_]>::to_vec),
+            orientations_xyzw: orientations_xyzw.map(<[_]>::to_vec),
+            loop_duration_s: loops.loop_duration(Selection::All, Side::Both, Scale::Seconds)?,
+        };
+        let components = loops
+            .components()
+            .iter()
+            .map(|c| SceneComponent {
+                id: c.id,
+                trivial: c.trivial,
+                sessions: [0, 0],
+                poses: [c.i_range, c.j_range],
+                closest_pair: c.closest_pair,
+                closest_distance: c.closest_distance,
+                area_s2: c.area_s2,
+                pair_count: c.pair_count,
+            })
+            .collect();
+        let mut candidates = Vec::with_capacity(samples.len());
+        for sample in samples.rows() {
+            if let Some(pair) = sample.pair {
+                for index in pair {
+                    loops.check_index(index)?;
+                }
+                candidates.push(SceneCandidate { sessions: [0, 0], poses: pair, component: sample.component });
+            }
+        }
+        let pairs: Vec<[usize; 2]> = candidates.iter().map(|c| c.poses).collect();
+        let plane = plane_image(loops, &PlaneGrid::new(loops, None, PLANE_PIXELS)?, &pairs)?;
+        let frame_id = SCENE_FRAME.to_owned();
+        Ok(Self { frame_id, paths: vec![path], components, candidates, plane })
+    }
+
+    /// The scene of a fleet's `loops` found on `fleet`, with `samples` drawn from them: a path
+    /// per session (each point's first three coordinates, [`point_positions`], or `positions`
+    /// per session when given), τ over the whole fleet, every component with its two sessions,
+    /// and the plane of the joint trajectory (sessions one after the other).
+    ///
+    /// # Errors
+    /// [`loops_core::Error::RowCountMismatch`] when `positions` do not have one list per session
+    /// and one row per pose; what [`Fleet::localize`] returns for samples of another fleet.
+    pub fn of_fleet(
+        fleet: &Fleet,
+        positions: Option<&[Vec<[f64; 3]>]>,
+        loops: &FleetLoops,
+        samples: &Samples,
+    ) -> loops_core::Result<Self> {
+        let joint = loops.loops();
+        joint.check_trajectory(fleet.joint())?;
+        if let Some(positions) = positions.filter(|p| p.len() != fleet.len()) {
+            return Err(loops_core::Error::RowCountMismatch {
+                first: "sessions",
+                first_rows: fleet.len(),
+                second: "position lists",
+                second_rows: positions.len(),
+            });
+        }
+        let (own, other) = loops.loop_duration();
+        let mut paths = Vec::with_capacity(fleet.len());
+        for (a, name) in fleet.names().iter().enumerate() {
+            let session = fleet.session(a);
+            let start = fleet.starts()[a];
+            let session_positions = match positions {
+                Some(positions) if positions[a].len() != session.len() => {
+                    return Err(loops_core::Error::RowCountMismatch {
+                        first: "poses",
+                        first_rows: session.len(),
+                        second: "positions",
+                        second_rows: positions[a].len(),
+                    });
+                }
+                Some(positions) => positions[a].clone(),
+                None => point_positions(session),
+            };
+            paths.push(ScenePath {
+                name: name.clone(),
+                timestamps_s: session.timestamps_s().to_vec(),
+                positions: session_positions,
+                orientations_xyzw: None,
+                loop_duration_s: (start..start + session.len()).map(|k| own[k] + other[k]).collect(),
+            });
+        }
+        let components = loops
+            .components()
+            .into_iter()
+            .map(|c| SceneComponent {
+                id: c.id,
+                trivial: c.trivial,
+                sessions: c.sessions,
+                poses: c.poses,
+                closest_pair: c.closest_pair,
+                closest_distance: c.closest_distance,
+                area_s2: c.area_s2,
+                pair_count: c.pair_count,
+            })
+            .collect();
+        let candidates = fleet
+            .localize(samples)?
+            .into_iter()
+            .map(|s| SceneCandidate { sessions: s.sessions, poses: s.poses, component: s.component })
+            .collect();
+        let joint_pairs: Vec<[usize; 2]> = samples.rows().iter().filter_map(|s| s.pair).collect();
+        let plane = plane_image(joint, &PlaneGrid::new(joint, None, PLANE_PIXELS)?, &joint_pairs)?;
+        Ok(Self { frame_id: SCENE_FRAME.to_owned(), paths, components, candidates, plane })
+    }
+
+    /// The largest τ of every path, seconds: the red end of [`tau_rgba`]'s scale.
+    pub fn max_loop_duration_s(&self) -> f64 {
+        self.paths.iter().flat_map(|p| p.loop_duration_s.iter().copied()).fold(0.0, f64::max)
+    }
+
+    /// The position of pose `pose` of session `session`.
+    fn position(&self, session: usize, pose: usize) -> [f64; 3] {
+        self.paths[session].positions[pose]
+    }
+
+    /// The line strip of poses `first..=last` of `session`.
+    fn stretch(&self, session: usize, [first, last]: [usize; 2]) -> Vec<[f64; 3]> {
+        self.paths[session].positions[first..=last].to_vec()
+    }
+
+    /// Why the scene cannot be drawn: an index outside its paths (a scene built by hand).
+    fn check(&self) -> Result<(), String> {
+        let fits = |session: usize, pose: usize| self.paths.get(session).is_some_and(|p| pose < p.positions.len());
+        for c in &self.components {
+            let [[i0, i1], [j0, j1]] = c.poses;
+            let [a, b] = c.sessions;
+            let inside = i0 <= i1 && j0 <= j1 && fits(a, i1) && fits(b, j1);
+            if !inside || !fits(a, c.closest_pair[0]) || !fits(b, c.closest_pair[1]) {
+                return Err(format!("component {}: a pose outside its sessions' paths", c.id));
+            }
+        }
+        for (k, c) in self.candidates.iter().enumerate() {
+            if !fits(c.sessions[0], c.poses[0]) || !fits(c.sessions[1], c.poses[1]) {
+                return Err(format!("candidate {k}: a pose outside its sessions' paths"));
+            }
+        }
+        for p in &self.paths {
+            let orientations = p.orientations_xyzw.as_ref().map_or(p.positions.len(), Vec::len);
+            if p.timestamps_s.len() != p.positions.len()
+                || p.loop_duration_s.len() != p.positions.len()
+                || orientations != p.positions.len()
+            {
+                return Err(format!("session {:?}: its columns have different lengths", p.name));
+            }
+        }
+        if self.frame_id.contains('\0') || self.plane.rgb.len() != self.plane.width * self.plane.height * 3 {
+            return Err("the frame id has a NUL character, or the plane's pixels do not fill it".to_owned());
+        }
+        Ok(())
+    }
+}
+
+/// The (t, t′) plane of `loops` on `grid` as RGB, t′ up: each pixel in its component's colour
+/// ([`SceneComponent::rgba`]), [`BACKGROUND_RGB`] outside, and the pixels of `pairs` (and their
+/// mirrors) white.
+fn plane_image(loops: &Loops, grid: &PlaneGrid, pairs: &[[usize; 2]]) -> loops_core::Result<RgbImage> {
+    let labels = loops.label_image(grid)?;
+    let (width, height) = (grid.width(), grid.height());
+    let colours: Vec<[u8; 3]> = loops
+        .components()
+        .iter()
+        .map(|c| {
+            let component = SceneComponent {
+                id: c.id,
+                trivial: c.trivial,
+                sessions: [0, 0],
+                poses: [c.i_range, c.j_range],
+                closest_pair: c.closest_pair,
+                closest_distance: c.closest_distance,
+                area_s2: c.area_s2,
+                pair_count: c.pair_count,
+            };
+            component.rgba().map(|v| (v * 255.0).round() as u8)[..3].try_into().expect("three channels")
+        })
+        .collect();
+    let mut rgb = vec![0; width * height * 3];
+    // Row 0 of the labels is the earliest t′: the image's bottom row.
+    for (k, label) in labels.iter().enumerate() {
+        let (row, column) = (k / width, k % width);
+        let colour = label.map_or(BACKGROUND_RGB, |id| colours[id as usize]);
+        let at = ((height - 1 - row) * width + column) * 3;
+        rgb[at..at + 3].copy_from_slice(&colour);
+    }
+    let white = CANDIDATE_RGBA.map(|v| (v * 255.0).round() as u8);
+    // The pixel of a pose on an axis: the last column (row) whose pose is at or before it.
+    let pixel = |axis: &[usize], pose: usize| axis.partition_point(|&p| p <= pose).checked_sub(1);
+    for &[i, j] in pairs {
+        for (t, t_prime) in [(i, j), (j, i)] {
+            if let (Some(column), Some(row)) = (pixel(grid.columns(), t), pixel(grid.rows(), t_prime)) {
+                let at = ((height - 1 - row) * width + column) * 3;
+                rgb[at..at + 3].copy_from_slice(&white[..3]);
+            }
+        }
+    }
+    Ok(RgbImage { width, height, rgb })
+}
+
+/// Writes `scene` as an MCAP file on the topics of [`SCENE_TOPICS`]: Foxglove's schemas
+/// (protobuf, each with its descriptor set) and a ROS 2 `MarkerArray` (CDR), one message each
+/// (one per session on `/loops/trajectory`), all at the first pose's time (0 when it is not a
+/// time of 1970 to 2038), with a metadata record `loops` naming the sessions. Every entity lives
+/// until replaced (no lifetime). The file is chunked (zstd), indexed and written atomically; an
+/// existing file is replaced only with `overwrite`. O(poses + components + candidates + pixels).
+///
+/// # Errors
+/// [`WriteError::Exists`] when `path` exists and `overwrite` is false; [`WriteError::Write`]
+/// when it cannot be written, or (an [`io::ErrorKind::InvalidInput`] error) for a scene built by
+/// hand whose indices fall outside its paths. Nothing is written then.
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind, Trajectory, find_loops, sample_loops};
+/// let points: Vec<[f64; 2]> = (0..8).map(|i| [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]][i % 4]).collect();
+/// let traj = Trajectory::from_points((0..8).map(f64::from).collect(), &points)?;
+/// let loops = find_loops(&traj, &Euclidean, 1.0)?;
+/// let samples = sample_loops(&traj, &Euclidean, &loops, &Sampler::new(SamplerKind::One, SampleSize::Budget(4), 7))?;
+/// let scene = loops_io::Scene::of_trajectory("square", &traj, None, None, &loops, &samples)?;
+/// let path = std::env::temp_dir().join(format!("loops-io-scene-{}.mcap", std::process::id()));
+/// loops_io::write_scene_mcap(&path, &scene, false)?;
+/// assert!(loops_io::write_scene_mcap(&path, &scene, false).is_err()); // not overwritten
+/// # std::fs::remove_file(&path)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn write_scene_mcap(path: impl AsRef<Path>, scene: &Scene, overwrite: bool) -> Result<(), WriteError> {
+    let path = path.as_ref();
+    scene.check().map_err(|message| WriteError::Write {
+        path: path.to_path_buf(),
+        error: io::Error::new(io::ErrorKind::InvalidInput, message),
+    })?;
+    write_atomically(path, overwrite, |file| scene_mcap_to(file, scene))
+}
+
+/// Writes `scene` as [`write_scene_mcap`] does, into `out` (a file of an output folder that
+/// another rule places: [`OutDir::write_file`](crate::out_dir::OutDir::write_file)).
+///
+/// # Errors
+/// What `out` returns; an [`io::ErrorKind::InvalidInput`] error for a scene built by hand whose
+/// indices fall outside its paths (nothing is written then).
+pub fn scene_mcap_to<W: Write + Seek>(out: W, scene: &Scene) -> io::Result<()> {
+    scene.check().map_err(|message| io::Error::new(io::ErrorKind::InvalidInput, message))?;
+    write_scene(out, scene).map_err(|error| match error {
+        mcap::McapError::Io(error) => error,
+        error => io::Error::other(error),
+    })
+}
+
+/// Writes the scene's MCAP file into `out`.
+fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
+    let mut writer = mcap::WriteOptions::new()
+        .profile("")
+        .library(concat!("loops-io ", env!("CARGO_PKG_VERSION")))
+        .compression(Some(mcap::Compression::Zstd))
+        .compression_threads(0)
+        .create(BufWriter::new(out))?;
+    let stamp = scene.paths.first().and_then(|p| p.timestamps_s.first()).and_then(|&t| RosTime::of_seconds(t));
+    let stamp = stamp.unwrap_or(RosTime { sec: 0, nanosec: 0 });
+    let timestamp = Some(Timestamp::new(stamp.sec.unsigned_abs(), stamp.nanosec));
+    let mut sequence = 0;
+    let mut add = |writer: &mut mcap::Writer<BufWriter<W>>, channel_id: u16, data: &[u8]| {
+        let header = MessageHeader { channel_id, sequence, log_time: stamp.ns(), publish_time: stamp.ns() };
+        sequence += 1;
+        writer.write_to_known_channel(&header, data)
+    };
+    let mut channels = Vec::new();
+    for topic in &SCENE_TOPICS[..5] {
+        let (schema, encoding, data) = match topic.schema {
+            "foxglove.PosesInFrame" => foxglove_schema::<PosesInFrame>(),
+            "foxglove.RawImage" => foxglove_schema::<RawImage>(),
+            _ => foxglove_schema::<SceneUpdate>(),
+        };
+        let schema_id = writer.add_schema(&schema, &encoding, &data)?;
+        channels.push(writer.add_channel(schema_id, topic.topic, "protobuf", &BTreeMap::new())?);
+    }
+    let schema_id = writer.add_schema(SCENE_TOPICS[5].schema, "ros2msg", MARKER_ARRAY_SCHEMA.as_bytes())?;
+    let markers_channel = writer.add_channel(schema_id, SCENE_TOPICS[5].topic, "cdr", &BTreeMap::new())?;
+
+    let frame_id = &scene.frame_id;
+    for path in &scene.paths {
+        let poses = path
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(k, &position)| {
+                let [x, y, z, w] = path.orientations_xyzw.as_ref().map_or(IDENTITY_XYZW, |q| q[k]);
+                Pose { position: Some(vector(position)), orientation: Some(Quaternion { x, y, z, w }) }
+            })
+            .collect();
+        let message = PosesInFrame { timestamp, frame_id: frame_id.clone(), poses };
+        add(&mut writer, channels[0], &encoded(&message)?)?;
+    }
+    let update = |entities: Vec<SceneEntity>| SceneUpdate { deletions: Vec::new(), entities };
+    let entity = |id: String, lines: Vec<LinePrimitive>, metadata: Vec<(&str, String)>| SceneEntity {
+        timestamp,
+        frame_id: frame_id.clone(),
+        id,
+        lines,
+        metadata: metadata.into_iter().map(|(key, value)| KeyValuePair { key: key.to_owned(), value }).collect(),
+        ..SceneEntity::default()
+    };
+    let max_tau = scene.max_loop_duration_s();
+    let tau = update(
+        scene
+            .paths
+            .iter()
+            .map(|p| {
+                let colors = p.loop_duration_s.iter().map(|&t| color(tau_rgba(t, max_tau))).collect();
+                let mut strip = line(line_primitive::Type::LineStrip, p.positions.clone(), None, PATH_WIDTH);
+                strip.colors = colors;
+                entity(format!("tau/{}", p.name), vec![strip], vec![("max_loop_duration_s", max_tau.to_string())])
+            })
+            .collect(),
+    );
+    add(&mut writer, channels[1], &encoded(&tau)?)?;
+    let components = update(
+        scene
+            .components
+            .iter()
+            .map(|c| {
+                let [a, b] = c.sessions;
+                let rgba = Some(c.rgba());
+                let closest = vec![scene.position(a, c.closest_pair[0]), scene.position(b, c.closest_pair[1])];
+                let lines = vec![
+                    line(line_primitive::Type::LineStrip, scene.stretch(a, c.poses[0]), rgba, COMPONENT_WIDTH),
+                    line(line_primitive::Type::LineStrip, scene.stretch(b, c.poses[1]), rgba, COMPONENT_WIDTH),
+                    line(line_primitive::Type::LineList, closest, rgba, COMPONENT_WIDTH),
+                ];
+                entity(format!("component/{}", c.id), lines, component_metadata(scene, c))
+            })
+            .collect(),
+    );
+    add(&mut writer, channels[2], &encoded(&components)?)?;
+    let candidate_points: Vec<[f64; 3]> = scene
+        .candidates
+        .iter()
+        .flat_map(|c| [scene.position(c.sessions[0], c.poses[0]), scene.position(c.sessions[1], c.poses[1])])
+        .collect();
+    let candidates = update(vec![entity(
+        "candidates".to_owned(),
+        vec![line(line_primitive::Type::LineList, candidate_points.clone(), Some(CANDIDATE_RGBA), CANDIDATE_WIDTH)],
+        vec![("count", scene.candidates.len().to_string())],
+    )]);
+    add(&mut writer, channels[3], &encoded(&candidates)?)?;
+    let plane = &scene.plane;
+    let image = RawImage {
+        timestamp,
+        frame_id: "plane".to_owned(),
+        width: plane.width as u32,
+        height: plane.height as u32,
+        encoding: "rgb8".to_owned(),
+        step: (plane.width * 3) as u32,
+        data: plane.rgb.clone().into(),
+    };
+    add(&mut writer, channels[4], &encoded(&image)?)?;
+    let mut data = Vec::new();
+    marker_array(&mut data, scene, stamp, &candidate_points);
+    add(&mut writer, markers_channel, &data)?;
+
+    let names: Vec<&str> = scene.paths.iter().map(|p| p.name.as_str()).collect();
+    let metadata = BTreeMap::from([
+        ("sessions".to_owned(), serde_json::to_string(&names).expect("strings")),
+        ("frame_id".to_owned(), frame_id.clone()),
+    ]);
+    writer.write_metadata(&mcap::records::Metadata { name: "loops".to_owned(), metadata })?;
+    writer.finish()?;
+    writer.into_inner().flush()?;
+    Ok(())
+}
+
+/// `message` in its encoding (protobuf).
+fn encoded<T: Encode>(message: &T) -> mcap::McapResult<Vec<u8>> {
+    let mut data = Vec::new();
+    message.encode(&mut data).map_err(|error| mcap::McapError::Io(io::Error::other(error.to_string())))?;
+    Ok(data)
+}
+
+/// The schema of a Foxglove message: its name, encoding and descriptor set.
+fn foxglove_schema<T: Encode>() -> (String, String, Vec<u8>) {
+    let schema = T::get_schema().expect("Foxglove's messages have schemas");
+    (schema.name, schema.encoding, schema.data.into_owned())
+}
+
+/// The metadata of a component entity: `components.csv`'s columns, numbers as they print there.
+fn component_metadata(scene: &Scene, c: &SceneComponent) -> Vec<(&'static str, String)> {
+    let [[i_min, i_max], [j_min, j_max]] = c.poses;
+    vec![
+        ("id", c.id.to_string()),
+        ("trivial", c.trivial.to_string()),
+        ("session_a", scene.paths[c.sessions[0]].name.clone()),
+        ("session_b", scene.paths[c.sessions[1]].name.clone()),
+        ("area_s2", c.area_s2.to_string()),
+        ("pair_count", c.pair_count.to_string()),
+        ("i_min", i_min.to_string()),
+        ("i_max", i_max.to_string()),
+        ("j_min", j_min.to_string()),
+        ("j_max", j_max.to_string()),
+        ("closest_i", c.closest_pair[0].to_string()),
+        ("closest_j", c.closest_pair[1].to_string()),
+        ("closest_distance", c.closest_distance.to_string()),
+    ]
+}
+
+fn vector([x, y, z]: [f64; 3]) -> Vector3 {
+    Vector3 { x, y, z }
+}
+
+fn color([r, g, b, a]: [f64; 4]) -> Color {
+    Color { r, g, b, a }
+}
+
+/// A line primitive through `points` of `kind`, `width` wide, in `rgba` (or per point).
+fn line(kind: line_primitive::Type, points: Vec<[f64; 3]>, rgba: Option<[f64; 4]>, width: f64) -> LinePrimitive {
+    LinePrimitive {
+        r#type: kind as i32,
+        pose: Some(Pose {
+            position: Some(vector([0.0; 3])),
+            orientation: Some(Quaternion { w: 1.0, ..Default::default() }),
+        }),
+        thickness: width,
+        scale_invariant: false,
+        points: points.into_iter().map(|[x, y, z]| Point3 { x, y, z }).collect(),
+        color: rgba.map(color),
+        colors: Vec::new(),
+        indices: Vec::new(),
+    }
+}
+
+/// `visualization_msgs/msg/MarkerArray` (ROS 2 Humble and later, with textures and mesh
+/// files), with the definitions it uses.
+const MARKER_ARRAY_SCHEMA: &str = "visualization_msgs/Marker[] markers\n\
+================================================================================\n\
+MSG: visualization_msgs/Marker\n\
+int32 ARROW=0\nint32 CUBE=1\nint32 SPHERE=2\nint32 CYLINDER=3\nint32 LINE_STRIP=4\nint32 LINE_LIST=5\n\
+int32 CUBE_LIST=6\nint32 SPHERE_LIST=7\nint32 POINTS=8\nint32 TEXT_VIEW_FACING=9\nint32 MESH_RESOURCE=10\n\
+int32 TRIANGLE_LIST=11\nint32 ADD=0\nint32 MODIFY=0\nint32 DELETE=2\nint32 DELETEALL=3\n\
+std_msgs/Header header\nstring ns\nint32 id\nint32 type\nint32 action\ngeometry_msgs/Pose pose\n\
+geometry_msgs/Vector3 scale\nstd_msgs/ColorRGBA color\nbuiltin_interfaces/Duration lifetime\nbool frame_locked\n\
+geometry_msgs/Point[] points\nstd_msgs/ColorRGBA[] colors\nstring texture_resource\n\
+sensor_msgs/CompressedImage texture\nUVCoordinate[] uv_coordinates\nstring text\nstring mesh_resource\n\
+MeshFile mesh_file\nbool mesh_use_embedded_materials\n\
+================================================================================\n\
+MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n\
+================================================================================\n\
+MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n\
+================================================================================\n\
+MSG: geometry_msgs/Pose\nPoint position\nQuaternion orientation\n\
+================================================================================\n\
+MSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n\
+================================================================================\n\
+MSG: geometry_msgs/Quaternion\nfloat64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n\
+================================================================================\n\
+MSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n\
+================================================================================\n\
+MSG: std_msgs/ColorRGBA\nfloat32 r\nfloat32 g\nfloat32 b\nfloat32 a\n\
+================================================================================\n\
+MSG: builtin_interfaces/Duration\nint32 sec\nuint32 nanosec\n\
+================================================================================\n\
+MSG: sensor_msgs/CompressedImage\nstd_msgs/Header header\nstring format\nuint8[] data\n\
+================================================================================\n\
+MSG: visualization_msgs/UVCoordinate\nfloat32 u\nfloat32 v\n\
+================================================================================\n\
+MSG: visualization_msgs/MeshFile\nstring filename\nuint8[] data\n";
+
+/// `visualization_msgs/msg/Marker`'s LINE_STRIP and LINE_LIST.
+const LINE_STRIP: i32 = 4;
+const LINE_LIST: i32 = 5;
+
+/// One marker of the array: a line of `kind` through `points`, in `rgba` or per point `colors`.
+struct Marker<'a> {
+    ns: &'a str,
+    id: i32,
+    kind: i32,
+    width: f64,
+    rgba: [f64; 4],
+    points: &'a [[f64; 3]],
+    colors: &'a [[f64; 4]],
+}
+
+/// The scene as a `MarkerArray` in CDR, into `data`: namespace `trajectory` (id = session),
+/// `tau` (id = session, a colour per pose), `components` (ids 3k, 3k + 1: the stretches of
+/// component k; 3k + 2: its closest pair) and `candidates` (id 0: every pair, in order). Ids
+/// past `i32::MAX` wrap (no scene has that many components).
+fn marker_array(data: &mut Vec<u8>, scene: &Scene, stamp: RosTime, candidate_points: &[[f64; 3]]) {
+    let max_tau = scene.max_loop_duration_s();
+    let tau_colors: Vec<Vec<[f64; 4]>> =
+        scene.paths.iter().map(|p| p.loop_duration_s.iter().map(|&t| tau_rgba(t, max_tau)).collect()).collect();
+    let stretches: Vec<[Vec<[f64; 3]>; 3]> = scene
+        .components
+        .iter()
+        .map(|c| {
+            let [a, b] = c.sessions;
+            [
+                scene.stretch(a, c.poses[0]),
+                scene.stretch(b, c.poses[1]),
+                vec![scene.position(a, c.closest_pair[0]), scene.position(b, c.closest_pair[1])],
+            ]
+        })
+        .collect();
+    let mut markers: Vec<Marker<'_>> = Vec::new();
+    for (k, p) in scene.paths.iter().enumerate() {
+        let (ns, id, width) = ("trajectory", k as i32, PATH_WIDTH);
+        markers.push(Marker { ns, id, kind: LINE_STRIP, width, rgba: [1.0; 4], points: &p.positions, colors: &[] });
+    }
+    for (k, p) in scene.paths.iter().enumerate() {
+        let (ns, id, width, colors) = ("tau", k as i32, PATH_WIDTH, tau_colors[k].as_slice());
+        markers.push(Marker { ns, id, kind: LINE_STRIP, width, rgba: [1.0; 4], points: &p.positions, colors });
+    }
+    for (c, lines) in scene.components.iter().zip(&stretches) {
+        for (k, points) in lines.iter().enumerate() {
+            let kind = if k == 2 { LINE_LIST } else { LINE_STRIP };
+            let id = (3 * c.id + k) as i32;
+            let (ns, width, rgba) = ("components", COMPONENT_WIDTH, c.rgba());
+            markers.push(Marker { ns, id, kind, width, rgba, points, colors: &[] });
+        }
+    }
+    let (ns, width, rgba) = ("candidates", CANDIDATE_WIDTH, CANDIDATE_RGBA);
+    markers.push(Marker { ns, id: 0, kind: LINE_LIST, width, rgba, points: candidate_points, colors: &[] });
+
+    let mut cdr = CdrWriter::new(data);
+    cdr.u32(markers.len() as u32);
+    for marker in &markers {
+        cdr.i32(stamp.sec);
+        cdr.u32(stamp.nanosec);
+        cdr.string(&scene.frame_id);
+        cdr.string(marker.ns);
+        cdr.i32(marker.id);
+        cdr.i32(marker.kind);
+        cdr.i32(0); // ADD
+        cdr.f64s(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]); // pose
+        cdr.f64s(&[marker.width, 0.0, 0.0]); // scale: x is the line width
+        cdr.f32s(&marker.rgba.map(|v| v as f32));
+        cdr.i32(0); // lifetime: forever
+        cdr.u32(0);
+        cdr.bool(false); // frame_locked
+        cdr.u32(marker.points.len() as u32);
+        for point in marker.points {
+            cdr.f64s(point);
+        }
+        cdr.u32(marker.colors.len() as u32);
+        for rgba in marker.colors {
+            cdr.f32s(&rgba.map(|v| v as f32));
+        }
+        cdr.string(""); // texture_resource
+        cdr.i32(0); // texture: an empty sensor_msgs/CompressedImage
+        cdr.u32(0);
+        cdr.string("");
+        cdr.string(""); // its format
+        cdr.u32(0); // its data
+        cdr.u32(0); // uv_coordinates
+        cdr.string(""); // text
+        cdr.string(""); // mesh_resource
+        cdr.string(""); // mesh_file: no file name
+        cdr.u32(0); // and no data
+        cdr.bool(false); // mesh_use_embedded_materials
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_layout_names_every_foxglove_topic() {
+        let layout: serde_json::Value = serde_json::from_str(FOXGLOVE_LAYOUT).unwrap();
+        let text = layout.to_string();
+        for topic in &SCENE_TOPICS[..5] {
+            assert!(text.contains(topic.topic), "{}", topic.topic);
+        }
+    }
+
+    #[test]
+    fn tau_runs_from_blue_to_red() {
+        assert_eq!(tau_rgba(0.0, 4.0), [0.0, 0.3, 1.0, 1.0]);
+        assert_eq!(tau_rgba(4.0, 4.0), [1.0, 0.3, 0.0, 1.0]);
+    }
+}

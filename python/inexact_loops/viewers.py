@@ -1,0 +1,193 @@
+"""The results in robotics viewers: Foxglove, RViz and Rerun.
+
+- :func:`to_mcap`: an MCAP file for Foxglove (and, through ``ros2 bag play``, RViz), with the
+  Foxglove layout beside it; ``loops run --mcap`` and ``loops fleet --mcap`` write the same.
+- :func:`to_rerun`: a Rerun recording (``.rrd``) of the same entities; needs ``rerun-sdk``
+  (``pip install 'inexact-loops[rerun]'``).
+
+Both draw one :class:`~inexact_loops._core.Scene`, built in Rust (:func:`scene`): a path per
+session with τ along it as a colour, every loop component (its two stretches of path and its
+closest pair, a colour each), the sampled candidate pairs, and the (t, t′) plane as an image.
+
+MCAP topics:
+
+======================  ====================================  ==================================
+topic                   schema                                holds
+======================  ====================================  ==================================
+``/loops/trajectory``   ``foxglove.PosesInFrame``             every pose, one message a session
+``/loops/tau``          ``foxglove.SceneUpdate``              each path coloured by τ
+``/loops/components``   ``foxglove.SceneUpdate``              ``component/<id>``: 3 lines each
+``/loops/candidates``   ``foxglove.SceneUpdate``              one line a candidate pair
+``/loops/plane``        ``foxglove.RawImage``                 the (t, t′) plane, rgb8
+``/loops/markers``      ``visualization_msgs/msg/MarkerArray``  the same for RViz (ROS 2 CDR)
+======================  ====================================  ==================================
+
+Rerun entities: ``loops/trajectory/<session>`` (points), ``loops/tau/<session>`` (points
+coloured by τ), ``loops/components/<id>`` (line strips and the components.csv values),
+``loops/candidates`` (one strip a pair) and ``loops/plane`` (image), all static.
+
+Example:
+    >>> import os, tempfile, inexact_loops as il
+    >>> from inexact_loops import viewers
+    >>> traj = il.urban_drive(duration_s=600.0)
+    >>> loops = il.find_loops(traj, gamma=40.0)
+    >>> samples = il.sample(loops, "one", budget=20, seed=0, trajectory=traj)
+    >>> folder = tempfile.mkdtemp()
+    >>> viewers.to_mcap(loops, samples, os.path.join(folder, "results.mcap"), trajectory=traj)
+    >>> sorted(os.listdir(folder))
+    ['foxglove-layout.json', 'results.mcap']
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+from ._core import Scene, scene
+
+__all__ = ["LAYOUT_FILE", "Scene", "scene", "to_mcap", "to_rerun"]
+
+#: The name of the Foxglove layout file written beside an MCAP file.
+LAYOUT_FILE = "foxglove-layout.json"
+
+
+def to_mcap(
+    loops: Any,
+    samples: Any,
+    path: str | os.PathLike[str],
+    *,
+    trajectory: Any = None,
+    name: str = "trajectory",
+    overwrite: bool = False,
+) -> None:
+    """Write ``loops`` and ``samples`` as an MCAP file for Foxglove and RViz, and the Foxglove
+    layout (:data:`LAYOUT_FILE`) beside it.
+
+    Args:
+        loops: a :class:`~inexact_loops.Loops` (with ``trajectory``) or a
+            :class:`~inexact_loops.FleetLoops`.
+        samples: its :class:`~inexact_loops.Samples` (:class:`~inexact_loops.FleetSamples`).
+        path: the MCAP file.
+        trajectory: the :class:`~inexact_loops.Trajectory` of ``loops`` (not for a fleet).
+        name: the trajectory's session name.
+        overwrite: replace existing files.
+
+    Raises:
+        FileExistsError: ``path`` or the layout file exists and ``overwrite`` is false (nothing
+            is written then).
+    """
+    path = Path(path)
+    layout = path.with_name(LAYOUT_FILE)
+    if not overwrite:
+        for existing in (path, layout):
+            if os.path.lexists(existing):
+                raise FileExistsError(f"{existing} exists; pass overwrite=True to replace it")
+    made = scene(loops, samples, trajectory, name=name)
+    made.to_mcap(path, overwrite=overwrite)
+    _write_new(layout, made.foxglove_layout.encode(), overwrite)
+
+
+def to_rerun(
+    loops: Any,
+    samples: Any,
+    path: str | os.PathLike[str],
+    *,
+    trajectory: Any = None,
+    name: str = "trajectory",
+    overwrite: bool = False,
+) -> None:
+    """Write ``loops`` and ``samples`` as a Rerun recording (``.rrd``): the entities of the
+    module's table, all static, for ``rerun path.rrd``. Arguments as :func:`to_mcap`.
+
+    The file is written beside ``path`` under a temporary name, then moved into place.
+
+    Raises:
+        FileExistsError: ``path`` exists and ``overwrite`` is false.
+        ImportError: ``rerun-sdk`` is not installed.
+    """
+    try:
+        import rerun as rr
+    except ImportError as err:  # pragma: no cover - exercised only without rerun-sdk
+        raise ImportError(
+            "to_rerun needs rerun-sdk: pip install 'inexact-loops[rerun]' "
+            "(or pip install rerun-sdk)"
+        ) from err
+    path = Path(path)
+    if not overwrite and os.path.lexists(path):
+        raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
+    made = scene(loops, samples, trajectory, name=name)
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:
+        rec = rr.RecordingStream("inexact-loops", recording_id=f"loops-{path.stem}")
+        rec.save(partial)
+        _log_scene(rr, rec, made)
+        rec.flush()
+        rec.disconnect()
+        _move_new(partial, path, overwrite)
+    finally:
+        if os.path.lexists(partial):
+            os.unlink(partial)
+
+
+def _log_scene(rr: Any, rec: Any, made: Scene) -> None:
+    """Logs every entity of ``made`` into ``rec``, static."""
+    import numpy as np
+
+    paths = made.paths
+    for p in paths:
+        rec.log(f"loops/trajectory/{p['name']}", rr.Points3D(p["positions"]), static=True)
+        rec.log(
+            f"loops/tau/{p['name']}",
+            rr.Points3D(p["positions"], colors=p["tau_rgba"]),
+            rr.AnyValues(loop_duration_s=p["loop_duration_s"]),
+            static=True,
+        )
+    for c in made.components:
+        (a, b), ((i0, i1), (j0, j1)), (ci, cj) = c["sessions"], c["poses"], c["closest_pair"]
+        strips = [
+            paths[a]["positions"][i0 : i1 + 1],
+            paths[b]["positions"][j0 : j1 + 1],
+            np.stack([paths[a]["positions"][ci], paths[b]["positions"][cj]]),
+        ]
+        values = {
+            key: c[key] for key in ("id", "trivial", "closest_distance", "area_s2", "pair_count")
+        }
+        rec.log(
+            f"loops/components/{c['id']}",
+            rr.LineStrips3D(strips, colors=[c["rgba"]] * 3),
+            rr.AnyValues(
+                **values, i_min=i0, i_max=i1, j_min=j0, j_max=j1, closest_i=ci, closest_j=cj
+            ),
+            static=True,
+        )
+    cand = made.candidates
+    pairs = [
+        np.stack([paths[a]["positions"][i], paths[b]["positions"][j]])
+        for a, b, i, j in zip(
+            cand["session_a"], cand["session_b"], cand["i"], cand["j"], strict=True
+        )
+    ]
+    rec.log("loops/candidates", rr.LineStrips3D(pairs, colors=[[1.0, 1.0, 1.0, 0.9]]), static=True)
+    rec.log("loops/plane", rr.Image(made.plane), static=True)
+
+
+def _write_new(path: Path, data: bytes, overwrite: bool) -> None:
+    """Writes ``data`` to ``path`` through a temporary file beside it."""
+    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
+    try:
+        partial.write_bytes(data)
+        _move_new(partial, path, overwrite)
+    finally:
+        if os.path.lexists(partial):
+            os.unlink(partial)
+
+
+def _move_new(partial: Path, path: Path, overwrite: bool) -> None:
+    """Moves ``partial`` to ``path``; without ``overwrite`` never onto an existing file (a
+    hard link fails when ``path`` exists, even one made meanwhile)."""
+    if overwrite:
+        os.replace(partial, path)
+    else:
+        os.link(partial, path)
+        os.unlink(partial)

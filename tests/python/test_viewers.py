@@ -1,0 +1,369 @@
+"""The results in Foxglove, RViz and Rerun: ``results.mcap`` of ``loops run --mcap`` and
+``loops fleet --mcap``, ``viewers.to_mcap`` and ``viewers.to_rerun``, read back with the
+official readers and decoders, independent of the writer: ``mcap`` for the file, Foxglove's
+published protobuf classes (``foxglove-schemas-protobuf``) for its messages, ``rosbags``' own
+ROS 2 Humble definition for the MarkerArray's CDR, and rerun-sdk's RRD reader. Every pose,
+component and candidate is checked against the input log (read with ``mcap-ros2-support``),
+``components.csv`` and ``samples.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from foxglove_schemas_protobuf.PosesInFrame_pb2 import PosesInFrame
+from foxglove_schemas_protobuf.RawImage_pb2 import RawImage
+from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate
+from google.protobuf.descriptor_pb2 import FileDescriptorSet
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
+from rosbags.typesys import Stores, get_typestore
+
+import inexact_loops as il
+from inexact_loops import viewers
+
+TOPICS = {
+    "/loops/trajectory": "foxglove.PosesInFrame",
+    "/loops/tau": "foxglove.SceneUpdate",
+    "/loops/components": "foxglove.SceneUpdate",
+    "/loops/candidates": "foxglove.SceneUpdate",
+    "/loops/plane": "foxglove.RawImage",
+    "/loops/markers": "visualization_msgs/msg/MarkerArray",
+}
+
+
+def loops_cli(*args: object, cwd: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "inexact_loops._cli", *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+
+
+def read_messages(path: Path) -> dict[str, list[tuple[object, bytes]]]:
+    """Every message of the file by topic, with its schema, from the official reader."""
+    out: dict[str, list[tuple[object, bytes]]] = {}
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        assert summary is not None and summary.statistics is not None
+        for schema, channel, message in reader.iter_messages():
+            out.setdefault(channel.topic, []).append((schema, message.data))
+    return out
+
+
+def read_table(path: Path) -> list[dict[str, str]]:
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def input_poses(log: Path) -> np.ndarray:
+    """The log's positions, decoded by mcap-ros2-support."""
+    with open(log, "rb") as f:
+        reader = make_reader(f, decoder_factories=[Ros2DecoderFactory()])
+        rows = []
+        for _, _, _, msg in reader.iter_decoded_messages():
+            pose = msg.pose.pose if hasattr(msg.pose, "pose") else msg.pose
+            rows.append([pose.position.x, pose.position.y, pose.position.z])
+    return np.array(rows)
+
+
+def check_file(path: Path, sessions: list[str]) -> dict[str, list]:
+    """Checks the topics and schemas, decodes every message with the published classes, and
+    returns them by topic."""
+    messages = read_messages(path)
+    assert {topic: schemas[0][0].name for topic, schemas in messages.items()} == TOPICS
+    for rows in messages.values():
+        schema = rows[0][0]
+        if schema.encoding == "protobuf":
+            names = {
+                m.name
+                for f in FileDescriptorSet.FromString(schema.data).file
+                for m in f.message_type
+            }
+            assert schema.name.split(".")[1] in names
+    with open(path, "rb") as f:
+        metadata = list(make_reader(f).iter_metadata())
+    assert json.loads(metadata[0].metadata["sessions"]) == sessions
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    return {
+        "/loops/trajectory": [PosesInFrame.FromString(d) for _, d in messages["/loops/trajectory"]],
+        "/loops/tau": [SceneUpdate.FromString(d) for _, d in messages["/loops/tau"]],
+        "/loops/components": [SceneUpdate.FromString(d) for _, d in messages["/loops/components"]],
+        "/loops/candidates": [SceneUpdate.FromString(d) for _, d in messages["/loops/candidates"]],
+        "/loops/plane": [RawImage.FromString(d) for _, d in messages["/loops/plane"]],
+        "/loops/markers": [
+            store.deserialize_cdr(d, "visualization_msgs/msg/MarkerArray")
+            for _, d in messages["/loops/markers"]
+        ],
+    }
+
+
+def xyz(traj: il.Trajectory) -> np.ndarray:
+    """The first three coordinates of each point, 0 for those it lacks."""
+    p = np.asarray(traj.positions, dtype=float).reshape(len(traj), -1)[:, :3]
+    return np.c_[p, np.zeros((len(p), 3 - p.shape[1]))]
+
+
+def points(line) -> np.ndarray:
+    return np.array([[p.x, p.y, p.z] for p in line.points])
+
+
+def check_scene(
+    decoded: dict[str, list],
+    positions: list[np.ndarray],
+    sessions: list[str],
+    components: list[dict[str, str]],
+    samples: list[dict[str, str]],
+    tau: list[np.ndarray],
+) -> None:
+    """Every pose, component and candidate of the decoded file against the independent
+    ``positions`` (one array per session), ``components.csv``, ``samples.csv`` and τ."""
+    index = {name: k for k, name in enumerate(sessions)}
+    trajectory = decoded["/loops/trajectory"]
+    assert len(trajectory) == len(sessions)
+    for message, expected in zip(trajectory, positions, strict=True):
+        got = np.array([[p.position.x, p.position.y, p.position.z] for p in message.poses])
+        np.testing.assert_array_equal(got, expected)
+
+    (tau_update,) = decoded["/loops/tau"]
+    max_tau = max(t.max() for t in tau)
+    for entity, name, expected in zip(tau_update.entities, sessions, tau, strict=True):
+        assert entity.id == f"tau/{name}"
+        (strip,) = entity.lines
+        red = np.array([c.r for c in strip.colors])
+        np.testing.assert_allclose(red * max_tau, expected, atol=1e-9 * max_tau)
+
+    (update,) = decoded["/loops/components"]
+    assert [e.id for e in update.entities] == [f"component/{row['id']}" for row in components]
+    (markers,) = decoded["/loops/markers"]
+    by_ns: dict[str, dict[int, object]] = {}
+    for marker in markers.markers:
+        by_ns.setdefault(marker.ns, {})[marker.id] = marker
+    assert len(by_ns["components"]) == 3 * len(components)
+    for entity, row in zip(update.entities, components, strict=True):
+        meta = {kv.key: kv.value for kv in entity.metadata}
+        for key in ("i_min", "i_max", "j_min", "j_max", "closest_i", "closest_j", "pair_count"):
+            assert int(meta[key]) == int(row[key]), key
+        for key in ("area_s2", "closest_distance"):
+            assert float(meta[key]) == float(row[key]), key
+        a, b = (index[row["session_a"]], index[row["session_b"]]) if "session_a" in row else (0, 0)
+        i0, i1, j0, j1 = (int(row[k]) for k in ("i_min", "i_max", "j_min", "j_max"))
+        ci, cj = int(row["closest_i"]), int(row["closest_j"])
+        stretch_a, stretch_b, closest = entity.lines
+        np.testing.assert_array_equal(points(stretch_a), positions[a][i0 : i1 + 1])
+        np.testing.assert_array_equal(points(stretch_b), positions[b][j0 : j1 + 1])
+        np.testing.assert_array_equal(points(closest), [positions[a][ci], positions[b][cj]])
+        # The MarkerArray: the same three lines, in RViz's types (LINE_STRIP 4, LINE_LIST 5).
+        k = int(row["id"])
+        for part, (kind, expected) in enumerate(
+            [
+                (4, positions[a][i0 : i1 + 1]),
+                (4, positions[b][j0 : j1 + 1]),
+                (5, [positions[a][ci], positions[b][cj]]),
+            ]
+        ):
+            marker = by_ns["components"][3 * k + part]
+            assert marker.type == kind
+            np.testing.assert_array_equal(points(marker), expected)
+            assert marker.header.frame_id == "map"
+
+    pairs = []
+    for row in samples:
+        a, b = (index[row["session_a"]], index[row["session_b"]]) if "session_a" in row else (0, 0)
+        pairs.append([positions[a][int(row["i"])], positions[b][int(row["j"])]])
+    expected_pairs = np.array(pairs).reshape(-1, 3)
+    (candidates,) = decoded["/loops/candidates"]
+    (line,) = candidates.entities[0].lines
+    assert line.type == 2  # LINE_LIST
+    np.testing.assert_array_equal(points(line), expected_pairs)
+    np.testing.assert_array_equal(points(by_ns["candidates"][0]), expected_pairs)
+    assert len(samples) > 0
+
+    (image,) = decoded["/loops/plane"]
+    assert image.encoding == "rgb8" and image.step == 3 * image.width
+    assert len(image.data) == image.height * image.step > 0
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("logs")
+    done = loops_cli(
+        "synth", folder / "drives", "--count", 1, "--duration-s", 900, "--force", cwd=folder
+    )
+    assert done.returncode == 0, done.stderr
+    done = loops_cli(
+        "synth", folder / "fleet", "--vehicles", 2, "--days", 1, "--duration-s", 600, cwd=folder
+    )
+    assert done.returncode == 0, done.stderr
+    return folder
+
+
+def test_loops_run_mcap_holds_every_pose_component_and_candidate(logs, tmp_path):
+    (log,) = sorted((logs / "drives").glob("*.mcap"))
+    out = tmp_path / "results"
+    done = loops_cli(
+        "run", log, "--gamma", 40, "--budget", 200, "--out", out, "--mcap", "--quiet", cwd=tmp_path
+    )
+    assert done.returncode == 0, done.stderr
+    folder = out / log.stem
+    assert json.loads((folder / "foxglove-layout.json").read_text())["configById"]
+    summary = json.loads((folder / "summary.json").read_text())
+    assert {"results.mcap", "foxglove-layout.json"} <= set(summary["files"])
+    components = read_table(folder / "components.csv")
+    samples = read_table(folder / "samples.csv")
+    tau = np.array([float(r["loop_duration_s"]) for r in read_table(folder / "loop_duration.csv")])
+    decoded = check_file(folder / "results.mcap", [log.stem])
+    check_scene(decoded, [input_poses(log)], [log.stem], components, samples, [tau])
+    assert len(components) > 5 and sum(r["trivial"] == "false" for r in components) > 0
+
+
+def test_loops_fleet_mcap_holds_every_session(logs, tmp_path):
+    fleet_logs = sorted((logs / "fleet").glob("*.mcap"))
+    assert len(fleet_logs) == 2
+    out = tmp_path / "fleet"
+    done = loops_cli(
+        "fleet",
+        *fleet_logs,
+        "--gamma",
+        40,
+        "--budget",
+        100,
+        "--out",
+        out,
+        "--mcap",
+        "--quiet",
+        cwd=tmp_path,
+    )
+    assert done.returncode == 0, done.stderr
+    names = [p.stem for p in fleet_logs]
+    components = read_table(out / "components.csv")
+    samples = read_table(out / "samples.csv")
+    # τ over the whole fleet, per session: the sessions' columns as the fleet computes them.
+    fleet = il.Fleet(
+        {name: il.read_trajectory(p) for name, p in zip(names, fleet_logs, strict=True)}
+    )
+    table = il.find_fleet_loops(fleet, gamma=40.0).loop_duration()
+    total = np.asarray(table["own_s"]) + np.asarray(table["other_s"])
+    tau = [total[np.asarray(table["session"]) == k] for k in range(len(names))]
+    decoded = check_file(out / "results.mcap", names)
+    check_scene(decoded, [input_poses(p) for p in fleet_logs], names, components, samples, tau)
+    assert any(r["session_a"] != r["session_b"] for r in components)
+    assert any(r["session_a"] != r["session_b"] for r in samples)
+    for name in names:  # each session's folder, as `loops run` writes it
+        assert (out / name / "results.mcap").is_file()
+
+
+def test_python_to_mcap_equals_the_csv_files(tmp_path):
+    traj = il.urban_drive(duration_s=900.0)
+    loops = il.find_loops(traj, gamma=40.0)
+    samples = il.sample(loops, "rho", budget=100, seed=3, trajectory=traj)
+    loops.components_to_csv(tmp_path / "components.csv")
+    samples.to_csv(tmp_path / "samples.csv")
+    viewers.to_mcap(loops, samples, tmp_path / "results.mcap", trajectory=traj, name="urban")
+    decoded = check_file(tmp_path / "results.mcap", ["urban"])
+    positions = xyz(traj)
+    components = read_table(tmp_path / "components.csv")
+    tau = loops.loop_duration()
+    check_scene(
+        decoded, [positions], ["urban"], components, read_table(tmp_path / "samples.csv"), [tau]
+    )
+    assert (tmp_path / viewers.LAYOUT_FILE).is_file()
+
+
+def test_existing_files_are_not_replaced_without_force(tmp_path):
+    traj = il.urban_drive(duration_s=300.0)
+    loops = il.find_loops(traj, gamma=40.0)
+    samples = il.sample(loops, "one", budget=5, seed=0, trajectory=traj)
+    target = tmp_path / "results.mcap"
+    target.write_bytes(b"mine")
+    with pytest.raises(FileExistsError, match="results.mcap"):
+        viewers.to_mcap(loops, samples, target, trajectory=traj)
+    assert target.read_bytes() == b"mine" and not (tmp_path / viewers.LAYOUT_FILE).exists()
+    with pytest.raises(FileExistsError, match="rrd"):
+        (tmp_path / "r.rrd").write_bytes(b"mine")
+        viewers.to_rerun(loops, samples, tmp_path / "r.rrd", trajectory=traj)
+    assert (tmp_path / "r.rrd").read_bytes() == b"mine"
+    viewers.to_mcap(loops, samples, target, trajectory=traj, overwrite=True)
+    assert target.read_bytes()[:8] == b"\x89MCAP0\r\n"
+
+
+def test_cli_refuses_a_users_results_mcap_and_replaces_its_own_with_force(logs, tmp_path):
+    fleet_logs = sorted((logs / "fleet").glob("*.mcap"))
+    out = tmp_path / "fleet"
+    out.mkdir()
+    (out / "results.mcap").write_bytes(b"mine")
+    done = loops_cli(
+        "fleet",
+        *fleet_logs,
+        "--gamma",
+        40,
+        "--out",
+        out,
+        "--mcap",
+        "--quiet",
+        "--force",
+        cwd=tmp_path,
+    )
+    assert done.returncode == 2 and "results.mcap" in done.stderr, done.stderr
+    assert (out / "results.mcap").read_bytes() == b"mine"
+    (out / "results.mcap").unlink()
+    args = ("fleet", *fleet_logs, "--gamma", 40, "--out", out, "--mcap", "--quiet")
+    assert loops_cli(*args, cwd=tmp_path).returncode == 0
+    first = (out / "results.mcap").read_bytes()
+    again = loops_cli(*args, cwd=tmp_path)
+    assert again.returncode == 2 and "--force" in again.stderr, again.stderr
+    assert (out / "results.mcap").read_bytes() == first
+    assert loops_cli(*args, "--force", cwd=tmp_path).returncode == 0
+    assert (out / "results.mcap").read_bytes() == first  # the same results, byte for byte
+
+
+def test_a_corrupt_log_gives_a_clear_error_and_no_mcap(logs, tmp_path):
+    (log,) = sorted((logs / "drives").glob("*.mcap"))
+    broken = tmp_path / "broken.mcap"
+    broken.write_bytes(log.read_bytes()[: log.stat().st_size // 2])
+    out = tmp_path / "results"
+    done = loops_cli("run", broken, "--gamma", 40, "--out", out, "--mcap", "--quiet", cwd=tmp_path)
+    assert done.returncode == 1
+    assert "broken.mcap" in done.stderr and "\n" not in done.stderr.strip().splitlines()[-1]
+    assert not list(out.rglob("results.mcap"))
+
+
+def test_rerun_recording_holds_the_same_entities(tmp_path):
+    rerun_chunk = pytest.importorskip("rerun.chunk")
+    traj = il.urban_drive(duration_s=900.0)
+    loops = il.find_loops(traj, gamma=40.0)
+    samples = il.sample(loops, "rho", budget=50, seed=1, trajectory=traj)
+    path = tmp_path / "results.rrd"
+    viewers.to_rerun(loops, samples, path, trajectory=traj, name="urban")
+    entities: dict[str, dict[str, list]] = {}
+    for chunk in rerun_chunk.RrdReader(path).stream():
+        batch = chunk.to_record_batch()
+        columns = entities.setdefault(str(chunk.entity_path), {})
+        for name in batch.schema.names:
+            columns.setdefault(name, []).extend(batch.column(name).to_pylist())
+    positions = xyz(traj)
+    (trajectory,) = entities["/loops/trajectory/urban"]["Points3D:positions"]
+    np.testing.assert_allclose(trajectory, positions, rtol=1e-6, atol=1e-3)  # float32
+    table = loops.components
+    ids = [int(i) for i in table["id"]]
+    assert {f"/loops/components/{i}" for i in ids} <= set(entities)
+    assert len([e for e in entities if e.startswith("/loops/components/")]) == len(ids)
+    for k in ids:
+        columns = entities[f"/loops/components/{k}"]
+        assert columns["area_s2"] == [[table["area_s2"][k]]]
+        (strips,) = columns["LineStrips3D:strips"]
+        i0, i1 = int(table["i_min"][k]), int(table["i_max"][k])
+        np.testing.assert_allclose(strips[0], positions[i0 : i1 + 1], rtol=1e-6, atol=1e-3)
+    (candidates,) = entities["/loops/candidates"]["LineStrips3D:strips"]
+    expected = np.stack([positions[samples.i], positions[samples.j]], axis=1)
+    np.testing.assert_allclose(np.array(candidates), expected, rtol=1e-6, atol=1e-3)
+    assert "Image:buffer" in entities["/loops/plane"]
