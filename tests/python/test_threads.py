@@ -71,8 +71,10 @@ def test_threads_sharing_an_online_engine_end_as_a_serial_run():
 
     def reader():
         while not done.is_set():
-            n = len(online)
+            # The table first: poses only grow, so the count read after bounds its components
+            # (read before, another thread's push in between made it fail).
             table = online.components
+            n = len(online)
             assert len(table["id"]) <= max(n, 1)
             if n >= 2:
                 online.loop_duration(n - 1)
