@@ -39,7 +39,7 @@ def test_fleet_g2o_keys_and_measurements_are_gtsams(tmp_path: Path, loops_cli: P
     graph, initial = gtsam.readG2o(str(out / "samples.g2o"), True)
     assert graph.size() == len(rows) and initial.size() == 0
     for k, row in enumerate(rows):
-        a, b, i, j = (int(row[name]) for name in ("a", "b", "i", "j"))
+        a, b, i, j = (int(row[name]) for name in ("session_a", "session_b", "i", "j"))
         assert a != b, "between sessions only"
         factor = graph.at(k)
         keys = [gtsam.symbol(chr(ord("a") + a), i), gtsam.symbol(chr(ord("a") + b), j)]

@@ -403,20 +403,20 @@ def test_fleet_report_renders_in_chromium(fleet_out: Path) -> None:
     matrix = figures["overlap-matrix"]["svgs"][0]
     with (fleet_out / "session_pairs.csv").open(newline="") as f:
         pairs = list(csv.DictReader(f))
-    own = sum(p["a"] == p["b"] for p in pairs)
+    own = sum(p["session_a"] == p["session_b"] for p in pairs)
     assert matrix["cells"] == own + 2 * (len(pairs) - own)
     assert len(page["pairs"]["rows"]) == len(pairs)
 
     # The components between sessions: the rows of components.csv with a != b, same numbers.
     with (fleet_out / "components.csv").open(newline="") as f:
-        between = {int(r["id"]): r for r in csv.DictReader(f) if r["a"] != r["b"]}
+        between = {int(r["id"]): r for r in csv.DictReader(f) if r["session_a"] != r["session_b"]}
     table = page["between"]
     assert len(table["rows"]) == len(between) == summary["between_components"] > 0
     column = {name: table["header"].index(name) for name in table["header"]}
     for row in table["rows"]:
         want = between[int(row[column["id"]])]
-        assert row[column["session_a"]] == want["session_a"]
-        assert row[column["session_b"]] == want["session_b"]
+        assert row[column["name_a"]] == want["name_a"]
+        assert row[column["name_b"]] == want["name_b"]
         assert int(row[column["pair_count"]]) == int(want["pair_count"])
         assert int(row[column["samples"]]) == int(want["samples"])
         assert float(row[column["area_s2"]]) == pytest.approx(float(want["area_s2"]), abs=0.06)

@@ -906,3 +906,46 @@ def test_loops_dask_is_the_one_switch(tmp_path, client):
     run = subprocess.run([*here, "--out", str(tmp_path / "here")], capture_output=True, text=True)
     assert run.returncode == 2 and run.stderr.startswith("loops-dask: error: out "), run.stderr
     assert run.stderr.count("\n") == 1, run.stderr
+
+
+def test_session_a_means_one_thing_on_every_surface(tmp_path):
+    """``session_a`` and ``session_b`` are the sessions' indices in fleet order, and ``name_a`` and
+    ``name_b`` their names, in ``loops fleet``'s CSV files, in the Python tables and in
+    ``run_fleet_dask``'s Parquet tables alike (the CSV once named them ``session_a``)."""
+    import csv
+    import subprocess
+    import sys
+
+    from inexact_loops.dask import run_fleet_dask
+
+    paths = random_fleet(tmp_path, 21)
+    names = [p.stem for p in paths]
+    fleet = il.Fleet(paths)
+    loops = il.find_fleet_loops(fleet, gamma=1.5)
+    python = {
+        "components": loops.components,
+        "session_pairs": loops.session_pairs(),
+        "samples": il.sample_fleet(loops, "rho", budget=20, seed=3).table,
+    }
+    cli_out, dask_out = tmp_path / "cli", tmp_path / "dask"
+    run = subprocess.run(
+        [sys.executable, "-m", "inexact_loops._cli", "fleet", *map(str, paths)]
+        + ["--gamma", "1.5", "--sampler", "rho", "--budget", "20", "--seed", "3"]
+        + ["--out", str(cli_out), "--quiet"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr
+    run_fleet_dask(paths, 1.5, out=dask_out, sampler="rho", budget=20, seed=3)
+    for table, ours in python.items():
+        with (cli_out / f"{table}.csv").open(newline="") as f:
+            rows = list(csv.DictReader(f))
+        parquet = read_parquet(dask_out / f"{table}.parquet")
+        assert len(rows) == len(ours["session_a"]) == len(parquet["session_a"]) > 0, table
+        for side in ("a", "b"):
+            index = np.asarray(ours[f"session_{side}"], dtype=np.int64)
+            assert [int(r[f"session_{side}"]) for r in rows] == index.tolist(), table
+            np.testing.assert_array_equal(parquet[f"session_{side}"], index)
+            want = [names[k] for k in index]
+            assert [r[f"name_{side}"] for r in rows] == want, table
+            assert list(ours[f"name_{side}"]) == want == list(parquet[f"name_{side}"]), table

@@ -127,7 +127,6 @@ def check_scene(
 ) -> None:
     """Every pose, component and candidate of the decoded file against the independent
     ``positions`` (one array per session), ``components.csv``, ``samples.csv`` and τ."""
-    index = {name: k for k, name in enumerate(sessions)}
     trajectory = decoded["/loops/trajectory"]
     assert len(trajectory) == len(sessions)
     for message, expected in zip(trajectory, positions, strict=True):
@@ -155,7 +154,11 @@ def check_scene(
             assert int(meta[key]) == int(row[key]), key
         for key in ("area_s2", "closest_distance"):
             assert float(meta[key]) == float(row[key]), key
-        a, b = (index[row["session_a"]], index[row["session_b"]]) if "session_a" in row else (0, 0)
+        a, b = (int(row["session_a"]), int(row["session_b"])) if "session_a" in row else (0, 0)
+        if "name_a" in row:
+            for key in ("session_a", "session_b", "name_a", "name_b"):
+                assert meta[key] == row[key], key
+            assert [sessions[a], sessions[b]] == [row["name_a"], row["name_b"]]
         i0, i1, j0, j1 = (int(row[k]) for k in ("i_min", "i_max", "j_min", "j_max"))
         ci, cj = int(row["closest_i"]), int(row["closest_j"])
         stretch_a, stretch_b, closest = entity.lines
@@ -178,7 +181,7 @@ def check_scene(
 
     pairs = []
     for row in samples:
-        a, b = (index[row["session_a"]], index[row["session_b"]]) if "session_a" in row else (0, 0)
+        a, b = (int(row["session_a"]), int(row["session_b"])) if "session_a" in row else (0, 0)
         pairs.append([positions[a][int(row["i"])], positions[b][int(row["j"])]])
     expected_pairs = np.array(pairs).reshape(-1, 3)
     (candidates,) = decoded["/loops/candidates"]

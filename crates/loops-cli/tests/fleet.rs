@@ -109,8 +109,8 @@ fn fleet_files_agree_with_the_core() {
     assert!(between > 0 && between < components.len(), "a fleet with loops within and between sessions");
     for (row, c) in rows.iter().zip(&components) {
         assert_eq!(field::<usize>(row, "id"), c.id);
-        assert_eq!([field::<usize>(row, "a"), field::<usize>(row, "b")], c.sessions);
-        assert_eq!(row["session_a"], fleet.names()[c.sessions[0]]);
+        assert_eq!([field::<usize>(row, "session_a"), field::<usize>(row, "session_b")], c.sessions);
+        assert_eq!(row["name_a"], fleet.names()[c.sessions[0]]);
         assert_eq!(field::<u64>(row, "pair_count"), c.pair_count);
         assert_eq!(field::<f64>(row, "area_s2"), c.area_s2);
         let poses: [[usize; 2]; 2] =
@@ -126,7 +126,7 @@ fn fleet_files_agree_with_the_core() {
     let core_pairs = core.session_pairs();
     assert_eq!(pairs.len(), core_pairs.len());
     for (row, p) in pairs.iter().zip(&core_pairs) {
-        assert_eq!([field::<usize>(row, "a"), field(row, "b")], p.sessions);
+        assert_eq!([field::<usize>(row, "session_a"), field(row, "session_b")], p.sessions);
         assert_eq!((field::<usize>(row, "components"), field::<u64>(row, "pair_count")), (p.components, p.pair_count));
         assert_eq!(field::<f64>(row, "density"), p.density);
     }
@@ -137,8 +137,12 @@ fn fleet_files_agree_with_the_core() {
     assert_eq!(samples.len(), 300);
     let mut per_component: BTreeMap<usize, u64> = BTreeMap::new();
     for row in &samples {
-        let (a, b, i, j) =
-            (field::<usize>(row, "a"), field::<usize>(row, "b"), field::<usize>(row, "i"), field(row, "j"));
+        let (a, b, i, j) = (
+            field::<usize>(row, "session_a"),
+            field::<usize>(row, "session_b"),
+            field::<usize>(row, "i"),
+            field(row, "j"),
+        );
         let distance = Euclidean.distance(fleet.session(a).point(i), fleet.session(b).point(j));
         assert!(distance <= 40.0 && distance == field::<f64>(row, "distance"), "{row:?}");
         let component: usize = field(row, "component");
@@ -162,8 +166,8 @@ fn fleet_files_agree_with_the_core() {
             let key: u64 = word.parse().unwrap();
             assert_eq!(((key >> 56) as u8, key & ((1 << 56) - 1)), (b'a' + session as u8, pose as u64), "{edge}");
         };
-        key(words[1], field(row, "a"), field(row, "i"));
-        key(words[2], field(row, "b"), field(row, "j"));
+        key(words[1], field(row, "session_a"), field(row, "i"));
+        key(words[2], field(row, "session_b"), field(row, "j"));
     }
 
     // summary.json and the table: the same counts.
@@ -213,7 +217,7 @@ fn fleet_files_agree_with_the_core() {
     assert_eq!(printed["between_covered"], printed["between_components"], "P1 between sessions");
     let (_, samples) = read_csv(&between_only.join("samples.csv"));
     assert_eq!(samples.len(), 100);
-    assert!(samples.iter().all(|row| row["a"] != row["b"]));
+    assert!(samples.iter().all(|row| row["session_a"] != row["session_b"]));
     // The pruning does not change the result.
     assert_eq!(
         std::fs::read(between_only.join("session_pairs.csv")).unwrap(),
@@ -360,7 +364,7 @@ fn more_sessions_than_robot_letters_have_no_g2o() {
     assert!(!out.join("samples.g2o").exists());
     // Every session at the same place: all 27 × 26 / 2 session pairs meet.
     let (_, pairs) = read_csv(&out.join("session_pairs.csv"));
-    assert_eq!(pairs.iter().filter(|r| r["a"] != r["b"]).count(), 27 * 26 / 2);
+    assert_eq!(pairs.iter().filter(|r| r["session_a"] != r["session_b"]).count(), 27 * 26 / 2);
     // With 26 sessions the g2o is written, and an earlier one of ours is removed at 27.
     let output = fleet(&refs[..26], &out, &["--no-separation", "--quiet", "--force"]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));

@@ -24,11 +24,11 @@ use crate::table::PoseTable;
 use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
 
 /// The columns of a fleet's `components.csv`, without the optional `samples`: the block (both
-/// sessions by name and index), then the columns of `components.csv` but `id` (see
+/// sessions by index, `session_a` and `session_b`, then by name, `name_a` and `name_b`), then the columns of `components.csv` but `id` (see
 /// [`COMPONENT_COLUMNS`](crate::COMPONENT_COLUMNS)), with `i` indexing poses of session `a` and
 /// `j` poses of session `b`.
 pub const FLEET_COMPONENT_COLUMNS: [&str; 21] =
-    columns(&[&["id", "session_a", "session_b", "a", "b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
+    columns(&[&["id", "session_a", "session_b", "name_a", "name_b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
 
 /// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::FleetComponent) with
 /// the names of its sessions and the times of its pose ranges, each on its session's clock: in
@@ -37,18 +37,20 @@ pub const FLEET_COMPONENT_COLUMNS: [&str; 21] =
 /// block's (trivial: it holds diagonal cells, within one session only).
 pub type FleetComponentRow = ComponentRow<SessionBlock>;
 
-/// The block of a fleet's component: its two sessions, by name and index.
+/// The block of a fleet's component: its two sessions, by index and name. `session_a` and
+/// `session_b` are indices in the fleet everywhere (these files, the Python tables, the Parquet
+/// tables); `name_a` and `name_b` their names.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 #[non_exhaustive]
 pub struct SessionBlock {
-    /// The name of session `a` (the rows, t).
-    pub session_a: String,
-    /// The name of session `b` (the columns, t′).
-    pub session_b: String,
-    /// Session `a`'s index in the fleet.
-    pub a: usize,
-    /// Session `b`'s index in the fleet (`a ≤ b`; `a = b` within one session).
-    pub b: usize,
+    /// Session `a`'s index in the fleet (the rows, t).
+    pub session_a: usize,
+    /// Session `b`'s index in the fleet (the columns, t′; `a ≤ b`, `a = b` within one session).
+    pub session_b: usize,
+    /// The name of session `a`.
+    pub name_a: String,
+    /// The name of session `b`.
+    pub name_b: String,
 }
 
 /// The rows of a fleet's `components.csv`: one per component of `loops` (found on `fleet`), in
@@ -70,10 +72,10 @@ pub fn fleet_component_rows(
         .map(|c| {
             let [a, b] = c.sessions;
             let times = [fleet.session(a).timestamps_s(), fleet.session(b).timestamps_s()];
-            let (session_a, session_b) = (fleet.names()[a].clone(), fleet.names()[b].clone());
+            let (name_a, name_b) = (fleet.names()[a].clone(), fleet.names()[b].clone());
             FleetComponentRow {
                 id: c.id,
-                block: SessionBlock { session_a, session_b, a, b },
+                block: SessionBlock { session_a: a, session_b: b, name_a, name_b },
                 // The joint component's measures are the block's (a fleet component is the joint
                 // one in its sessions' poses).
                 measures: ComponentMeasures::new(&joint[c.id]),
@@ -104,9 +106,9 @@ pub fn fleet_component_rows(
 /// let mut text = Vec::new();
 /// loops_io::fleet_components_to_csv(&fleet, &loops, None, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
-/// assert!(text.starts_with("id,session_a,session_b,a,b,trivial,area_s2,"));
+/// assert!(text.starts_with("id,session_a,session_b,name_a,name_b,trivial,area_s2,"));
 /// // Tuesday's pose 1 (t = 101 s on its clock) passes Monday's pose 0, 0.5 away.
-/// assert!(text.lines().any(|line| line.ends_with(",monday,tuesday,0,1,false,0.25,1,1,0,0,0,1,1,0,0,101,101,0,1,0.5")));
+/// assert!(text.lines().any(|line| line.ends_with(",0,1,monday,tuesday,false,0.25,1,1,0,0,0,1,1,0,0,101,101,0,1,0.5")));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn fleet_components_to_csv<W: Write>(
@@ -144,21 +146,21 @@ pub fn write_fleet_components(
 
 /// The columns of `session_pairs.csv`.
 pub const SESSION_PAIR_COLUMNS: [&str; 8] =
-    ["session_a", "session_b", "a", "b", "components", "pair_count", "area_s2", "density"];
+    ["session_a", "session_b", "name_a", "name_b", "components", "pair_count", "area_s2", "density"];
 
 /// One row of `session_pairs.csv`, one entry of the sparse session-overlap matrix: a
 /// [`SessionPair`](loops_core::SessionPair) with its sessions' names.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct SessionPairRow {
-    /// The name of session `a`.
-    pub session_a: String,
-    /// The name of session `b`.
-    pub session_b: String,
     /// Session `a`'s index in the fleet.
-    pub a: usize,
+    pub session_a: usize,
     /// Session `b`'s index in the fleet (`a ≤ b`; `a = b`: the session alone).
-    pub b: usize,
+    pub session_b: usize,
+    /// The name of session `a`.
+    pub name_a: String,
+    /// The name of session `b`.
+    pub name_b: String,
     /// Loop components in the block.
     pub components: usize,
     /// Pose pairs in the block (for `a = b`, both halves of the square, the diagonal once).
@@ -180,10 +182,10 @@ pub fn session_pair_rows(fleet: &Fleet, loops: &FleetLoops) -> Vec<SessionPairRo
         .session_pairs()
         .into_iter()
         .map(|p| SessionPairRow {
-            session_a: fleet.names()[p.sessions[0]].clone(),
-            session_b: fleet.names()[p.sessions[1]].clone(),
-            a: p.sessions[0],
-            b: p.sessions[1],
+            session_a: p.sessions[0],
+            session_b: p.sessions[1],
+            name_a: fleet.names()[p.sessions[0]].clone(),
+            name_b: fleet.names()[p.sessions[1]].clone(),
             components: p.components,
             pair_count: p.pair_count,
             area_s2: p.area_s2,
@@ -211,9 +213,9 @@ pub fn session_pair_rows(fleet: &Fleet, loops: &FleetLoops) -> Vec<SessionPairRo
 /// let mut text = Vec::new();
 /// loops_io::session_pairs_to_csv(&fleet, &loops, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
-/// assert_eq!(text.lines().next(), Some("session_a,session_b,a,b,components,pair_count,area_s2,density"));
+/// assert_eq!(text.lines().next(), Some("session_a,session_b,name_a,name_b,components,pair_count,area_s2,density"));
 /// // Two places where the sessions meet, one cell each: 1 s × 1 s of 2 s × 1 s of spans.
-/// assert_eq!(text.lines().nth(2), Some("monday,tuesday,0,1,2,2,0.5,0.25"));
+/// assert_eq!(text.lines().nth(2), Some("0,1,monday,tuesday,2,2,0.5,0.25"));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn session_pairs_to_csv<W: Write>(fleet: &Fleet, loops: &FleetLoops, out: W) -> io::Result<()> {
@@ -240,21 +242,21 @@ pub fn write_session_pairs(
 
 /// The columns of a fleet's samples, as the CSV header names them.
 pub const FLEET_SAMPLE_COLUMNS: [&str; 11] =
-    ["session_a", "session_b", "a", "b", "i", "j", "t_s", "t_prime_s", "component", "distance", "sampler"];
+    ["session_a", "session_b", "name_a", "name_b", "i", "j", "t_s", "t_prime_s", "component", "distance", "sampler"];
 
 /// One row of a fleet's samples file: a [`FleetSample`] with its sessions' names. `None` is
 /// unknown: an empty CSV field, `null` in JSON.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct FleetSampleRow {
-    /// The session of the earlier pose (in fleet order).
-    pub session_a: String,
-    /// The session of the later pose.
-    pub session_b: String,
-    /// Session `a`'s index in the fleet.
-    pub a: usize,
-    /// Session `b`'s index in the fleet (`a ≤ b`).
-    pub b: usize,
+    /// The index in the fleet of the session of the earlier pose (in fleet order).
+    pub session_a: usize,
+    /// The index of the session of the later pose (`a ≤ b`).
+    pub session_b: usize,
+    /// The name of session `a`.
+    pub name_a: String,
+    /// The name of session `b`.
+    pub name_b: String,
     /// The pose of session `a`.
     pub i: usize,
     /// The pose of session `b`.
@@ -283,10 +285,10 @@ pub fn fleet_sample_rows(fleet: &Fleet, samples: &Samples) -> loops_core::Result
 
 fn sample_row(fleet: &Fleet, s: &FleetSample, sampler: &'static str) -> FleetSampleRow {
     FleetSampleRow {
-        session_a: fleet.names()[s.sessions[0]].clone(),
-        session_b: fleet.names()[s.sessions[1]].clone(),
-        a: s.sessions[0],
-        b: s.sessions[1],
+        session_a: s.sessions[0],
+        session_b: s.sessions[1],
+        name_a: fleet.names()[s.sessions[0]].clone(),
+        name_b: fleet.names()[s.sessions[1]].clone(),
         i: s.poses[0],
         j: s.poses[1],
         t_s: s.times_s[0],
@@ -322,7 +324,7 @@ fn invalid(error: Error) -> io::Error {
 /// loops_io::fleet_samples_to_csv(&fleet, &samples, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
 /// let first = text.lines().nth(1).unwrap();
-/// assert!(first.starts_with("monday,tuesday,0,1,0,1,0,101,") && first.ends_with(",0.5,one"), "{first}");
+/// assert!(first.starts_with("0,1,monday,tuesday,0,1,0,101,") && first.ends_with(",0.5,one"), "{first}");
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn fleet_samples_to_csv<W: Write>(fleet: &Fleet, samples: &Samples, out: W) -> io::Result<()> {
@@ -585,19 +587,22 @@ mod tests {
         for row in &rows {
             let c = &loops.components()[row.id];
             let block = &row.block;
-            assert_eq!([block.a, block.b], c.sessions);
-            assert_eq!([&block.session_a, &block.session_b], [&fleet.names()[block.a], &fleet.names()[block.b]]);
-            assert_eq!(row.extent.t_min_s, fleet.session(block.a).timestamps_s()[row.extent.i_min]);
-            assert_eq!(row.extent.t_prime_max_s, fleet.session(block.b).timestamps_s()[row.extent.j_max]);
+            assert_eq!([block.session_a, block.session_b], c.sessions);
+            assert_eq!(
+                [&block.name_a, &block.name_b],
+                [&fleet.names()[block.session_a], &fleet.names()[block.session_b]]
+            );
+            assert_eq!(row.extent.t_min_s, fleet.session(block.session_a).timestamps_s()[row.extent.i_min]);
+            assert_eq!(row.extent.t_prime_max_s, fleet.session(block.session_b).timestamps_s()[row.extent.j_max]);
             assert_eq!(row.measures.run_count, loops.loops().components()[row.id].run_count);
         }
         // The way back meets the way out in one band: every pair within γ, every pose of the
         // way back, on its own clock from 500 s.
-        let between: Vec<_> = rows.iter().filter(|r| r.block.a != r.block.b).collect();
+        let between: Vec<_> = rows.iter().filter(|r| r.block.session_a != r.block.session_b).collect();
         assert_eq!(between.len(), 1);
         let pairs = cross_pairs(&fleet);
         assert_eq!(
-            (between[0].block.a, between[0].block.b, between[0].measures.pair_count),
+            (between[0].block.session_a, between[0].block.session_b, between[0].measures.pair_count),
             (0, 1, pairs.len() as u64)
         );
         assert_eq!((between[0].extent.t_prime_min_s, between[0].extent.t_prime_max_s), (500.0, 512.0));
@@ -607,14 +612,14 @@ mod tests {
         fleet_components_to_csv(&fleet, &loops, None, &mut text).unwrap();
         let text = String::from_utf8(text).unwrap();
         assert_eq!(text.lines().count(), 1 + rows.len());
-        assert!(text.contains(",out,\"back, \"\"quoted\"\"\",0,1,false,"), "{text}");
+        assert!(text.contains(",0,1,out,\"back, \"\"quoted\"\"\",false,"), "{text}");
     }
 
     #[test]
     fn session_pairs_are_the_sparse_matrix() {
         let (fleet, loops) = fleet();
         let rows = session_pair_rows(&fleet, &loops);
-        let blocks: Vec<[usize; 2]> = rows.iter().map(|r| [r.a, r.b]).collect();
+        let blocks: Vec<[usize; 2]> = rows.iter().map(|r| [r.session_a, r.session_b]).collect();
         assert_eq!(blocks, [[0, 0], [0, 1], [1, 1], [2, 2]], "far never meets the others");
         let between = &rows[1];
         let c = loops.components().into_iter().find(|c| c.sessions == [0, 1]).unwrap();
@@ -636,7 +641,7 @@ mod tests {
         assert_eq!(rows.len(), cross_pairs(&fleet).len(), "every pair between the sessions");
         assert_eq!(crate::csv_rows::inferred_columns(&rows[0]), FLEET_SAMPLE_COLUMNS);
         for row in &rows {
-            assert_eq!((row.a, row.b, row.session_b.as_str()), (0, 1, "back, \"quoted\""));
+            assert_eq!((row.session_a, row.session_b, row.name_b.as_str()), (0, 1, "back, \"quoted\""));
             assert_eq!(row.t_s, fleet.session(0).timestamps_s()[row.i]);
             assert_eq!(row.t_prime_s, fleet.session(1).timestamps_s()[row.j]);
             let (pa, pb) = (fleet.session(0).point(row.i), fleet.session(1).point(row.j));
@@ -647,7 +652,7 @@ mod tests {
         let value: serde_json::Value = serde_json::from_slice(&json).unwrap();
         assert_eq!(value["count"], rows.len());
         assert_eq!(value["sessions"][2], "far");
-        assert_eq!(value["samples"][0]["session_a"], "out");
+        assert_eq!(value["samples"][0]["name_a"], "out");
         // Samples of another fleet are refused, not written.
         let other = Fleet::new(vec![("x".into(), fleet.session(2).clone())]).unwrap();
         let error = fleet_samples_to_csv(&other, &samples, Vec::new()).unwrap_err();

@@ -659,8 +659,10 @@ fn component_metadata(scene: &Scene, c: &SceneComponent) -> Vec<(&'static str, S
     vec![
         ("id", c.id.to_string()),
         ("trivial", c.trivial.to_string()),
-        ("session_a", scene.paths[c.sessions[0]].name.clone()),
-        ("session_b", scene.paths[c.sessions[1]].name.clone()),
+        ("session_a", c.sessions[0].to_string()),
+        ("session_b", c.sessions[1].to_string()),
+        ("name_a", scene.paths[c.sessions[0]].name.clone()),
+        ("name_b", scene.paths[c.sessions[1]].name.clone()),
         ("area_s2", c.area_s2.to_string()),
         ("pair_count", c.pair_count.to_string()),
         ("i_min", i_min.to_string()),

@@ -421,8 +421,8 @@ fn map_figure(input: &FleetReportInput<'_>) -> Markup {
 /// the position of the closest pair), and what they mean.
 const BETWEEN_COLUMNS: [(&str, &str); 14] = [
     ("id", "component id, as in components.csv"),
-    ("session_a", "the earlier session in fleet order (rows, t)"),
-    ("session_b", "the later session (columns, t′)"),
+    ("name_a", "the earlier session in fleet order (rows, t)"),
+    ("name_b", "the later session (columns, t′)"),
     ("t_min_s", "first t, seconds on session a's clock"),
     ("t_max_s", "last t, seconds on session a's clock"),
     ("t_prime_min_s", "first t′, seconds on session b's clock"),
@@ -511,7 +511,7 @@ fn pairs_section(input: &FleetReportInput<'_>) -> Markup {
                 table #session-pairs .data {
                     thead {
                         tr {
-                            th { "session_a" } th { "session_b" } th { "components" } th { "pair_count" }
+                            th { "name_a" } th { "name_b" } th { "components" } th { "pair_count" }
                             th { "area_s2" } th { "density" }
                         }
                     }
