@@ -107,6 +107,7 @@ mod euroc;
 mod fleet;
 mod format;
 mod foxglove;
+mod frame_tree;
 mod graph;
 mod json;
 mod kitti;

@@ -619,7 +619,10 @@ pub(crate) fn urban_drive(
 ///         listing them, see :func:`list_topics`).
 ///     time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
 ///     frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
-///         topic's only pair.
+///         topic's only pair. Frames that no one transform links are composed along the TF
+///         tree, ``/tf_static`` included (``("map", "velodyne")`` through ``odom`` and
+///         ``base_link``), at the stamps of the moving link nearest the child, the others
+///         interpolated there.
 ///     rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
 ///     times: for files without times (KITTI poses, pose graphs): a file of one time a line,
 ///         seconds, one per pose in order (KITTI's ``sequences/XX/times.txt``).
