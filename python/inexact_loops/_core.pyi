@@ -1222,6 +1222,22 @@ class Samples:
     @property
     def score(self) -> npt.NDArray[np.float64] | None:
         """The detection's score of each sample, or ``None`` when the detections had none."""
+    @property
+    def relative_poses(self) -> npt.NDArray[np.float64]:
+        """The relative pose the trajectory predicts from pose ``i`` to pose ``j`` of each sample:
+        the scan matcher's initial guess, shape ``(n, 8)``, columns ``dx, dy, dz, dqx, dqy, dqz,
+        dqw, dtheta_rad``: ``T_i⁻¹ T_j`` for SE(3) and SE(2) trajectories (translation in the
+        frame of pose ``i``; ``dtheta_rad`` for SE(2) only), the coordinate difference for
+        positions alone (up to 3 columns; no rotation). NaN where there is none (no pose pair;
+        other manifolds). No uncertainty: trajectories hold no covariance.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.5]))
+            >>> loops = il.find_loops(traj, gamma=0.6, separation=None)
+            >>> il.sample(loops, "alpha", rate=1.0, seed=0, trajectory=traj).relative_poses[:, 0].tolist()
+            [0.5, 0.0, -0.5, -0.5]
+        """
     def locate(self, loops: Loops) -> Samples:
         """The same samples placed on the poses of ``loops``' trajectory (where not yet), with the
         exact loop component of each (:attr:`component`).
@@ -1258,8 +1274,9 @@ class Samples:
         """The samples as a ``pandas.DataFrame``, one row a sample in order of (t, t′): columns
         ``t``, ``t_prime`` (float64, seconds), ``i``, ``j`` (int64; only when placed on a
         trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
-        ``distance`` (float64, NaN where not measured) and ``score`` (float64; only when the
-        detections had scores) — the getters of the same names.
+        ``distance`` (float64, NaN where not measured), ``score`` (float64; only when the
+        detections had scores) — the getters of the same names — and, when any sample has one,
+        the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`).
 
         Raises:
             ImportError: pandas is not installed (it is not a dependency of the library).
@@ -1273,7 +1290,8 @@ class Samples:
         """
     def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
-        distance,score,sampler``, then one line a sample; unknown values are empty fields.
+        distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad`` (the last eight: the relative
+        pose, :attr:`relative_poses`), then one line a sample; unknown values are empty fields.
         Atomic (a temporary file renamed into place).
 
         Raises:
@@ -1287,7 +1305,7 @@ class Samples:
             >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
             >>> samples.to_csv(path)
             >>> open(path).read().splitlines()[1]
-            '0,3,,,,0,0,,,alpha'
+            '0,3,,,,0,0,,,alpha,,,,,,,,'
         """
     def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as one JSON object: ``sampler``, ``count``, ``groups``,

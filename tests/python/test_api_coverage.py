@@ -1294,15 +1294,19 @@ def test_samples_locate_measure_and_their_errors(traj, loops, clusters):
         samples.measure(traj, metric=lambda a, b: 1 / 0)
 
 
-@covers("Samples.to_csv", "Samples.to_json")
+@covers("Samples.to_csv", "Samples.to_json", "Samples.relative_poses")
 def test_samples_files_and_their_errors(tmp_path, clusters):
     samples = il.sample(clusters, "alpha", rate=1.0, seed=0)
     csv, js = tmp_path / "s.csv", tmp_path / "s.json"
     samples.to_csv(csv)
     samples.to_json(js)
     lines = csv.read_text().splitlines()
-    assert lines[0] == "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler"
+    assert lines[0] == ",".join(
+        ["t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler"]
+        + ["dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad"]
+    )
     assert len(lines) == 4
+    assert np.isnan(samples.relative_poses).all(), "detections not placed: no guess"
     document = json.loads(js.read_text())
     assert document["count"] == 3 and [s["score"] for s in document["samples"]] == [0.1, 0.2, 0.3]
     for write, path in ((samples.to_csv, csv), (samples.to_json, js)):

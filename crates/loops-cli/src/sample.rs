@@ -94,6 +94,16 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         };
         Ok((loops, samples))
     })??;
+    // One guess per pair in every file: the orientations the table holds (as the g2o edges
+    // measure them), else the trajectory's own.
+    let mut samples = samples;
+    if table.orientations_xyzw.is_some() {
+        samples.set_relative_poses(|i, j| {
+            loops_io::table_relative_pose(&table, i, j).or_else(|| loops_core::relative_pose(&traj, i, j))
+        });
+    } else {
+        samples.set_relative_poses(|i, j| loops_core::relative_pose(&traj, i, j));
+    }
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
     for warning in crate::run::warnings(&loops, &samples) {
         eprintln!("loops: warning: {warning}");

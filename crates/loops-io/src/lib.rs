@@ -177,4 +177,4 @@ pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::{LIBRSF_TAGS, read_tuc};
 pub use tum::read_tum;
-pub use write::{EdgeKind, G2oOptions, g2o_edges_text, write_g2o_edges, write_tum};
+pub use write::{EdgeKind, G2oOptions, g2o_edges_text, table_relative_pose, write_g2o_edges, write_tum};
