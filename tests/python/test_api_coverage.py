@@ -658,11 +658,18 @@ def test_descriptors():
 
 
 @covers(
-    "find_loops", "Loops", "Loops.gamma", "Loops.metric_name", "Loops.span_s", "Loops.pair_count"
+    "find_loops",
+    "Loops",
+    "Loops.gamma",
+    "Loops.metric_name",
+    "Loops.span_s",
+    "Loops.pair_count",
+    "Loops.pose_pair_count",
 )
 def test_find_loops_counts_the_dense_pairs(traj, loops):
     distances = cdist(traj.positions, traj.positions)
     assert loops.pair_count == np.count_nonzero(distances <= 4.0)
+    assert loops.pose_pair_count == np.count_nonzero(np.triu(distances <= 4.0, k=1))
     assert loops.gamma == 4.0 and loops.metric_name == "euclidean" and loops.span_s == traj.span_s
     assert len(loops) == N
     by_callable = il.find_loops(

@@ -187,10 +187,24 @@ fn write_summary(
         "  P1 coverage: {}/{} non-trivial components ({} of all {})",
         quality.nontrivial_covered, quality.nontrivial_components, quality.covered, quality.components
     )?;
+    let outside = quality.outside_components();
+    if outside > 0 {
+        let why = if loops.is_separated() {
+            "farther than gamma, or within it but not a revisit"
+        } else {
+            "farther than gamma"
+        };
+        writeln!(
+            out,
+            "  {outside} of {} samples lie in no loop component ({why}): the coverage above counts the other {}",
+            quality.samples,
+            quality.samples - outside
+        )?;
+    }
     let mut missed: Vec<_> = quality.missed.iter().filter(|m| !m.trivial).collect();
     missed.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2));
     for m in missed.iter().take(5) {
-        writeln!(out, "    missed component {}: {:.1} s², {} pairs", m.id, m.area_s2, m.pair_count)?;
+        writeln!(out, "    missed component {}: {:.1} s², {} pose pairs", m.id, m.area_s2, m.pose_pair_count)?;
     }
     if missed.len() > 5 {
         writeln!(out, "    ... {} more missed", missed.len() - 5)?;

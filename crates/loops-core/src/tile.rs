@@ -1281,6 +1281,7 @@ impl TileMerge {
                     trivial: c.trivial,
                     area_s2,
                     pair_count: pairs,
+                    pose_pair_count: c.pairs.saturating_sub(c.diagonal_cells),
                     run_count: c.runs as usize,
                     holes: (1 - euler) as u64,
                     i_range: rows,

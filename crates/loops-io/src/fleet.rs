@@ -27,7 +27,7 @@ use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
 /// sessions by name and index), then the columns of `components.csv` but `id` (see
 /// [`COMPONENT_COLUMNS`](crate::COMPONENT_COLUMNS)), with `i` indexing poses of session `a` and
 /// `j` poses of session `b`.
-pub const FLEET_COMPONENT_COLUMNS: [&str; 21] =
+pub const FLEET_COMPONENT_COLUMNS: [&str; 22] =
     columns(&[&["id", "session_a", "session_b", "a", "b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
 
 /// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::FleetComponent) with
