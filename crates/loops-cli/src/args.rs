@@ -108,9 +108,9 @@ impl InputArgs {
         } else {
             let mut tables = Vec::with_capacity(files.len());
             for file in files {
-                let (table, chain) = loops_io::read_trajectory_chaining(file, &options)?;
-                if let Some(chain) = chain {
-                    eprintln!("loops: warning: {chain}");
+                let (table, notes) = loops_io::read_trajectory_chaining(file, &options)?;
+                for warning in notes.warnings() {
+                    eprintln!("loops: warning: {warning}");
                 }
                 tables.push(table);
             }

@@ -93,6 +93,9 @@ fn describe(out: &mut impl Write, file: &Path, options: &ReadOptions) -> Result<
                 chain.odometry_edges, chain.first_id
             )?;
         }
+        if let Some(skipped) = &graph.skipped {
+            eprintln!("loops: warning: {skipped}");
+        }
     }
     Ok(())
 }
