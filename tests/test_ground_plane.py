@@ -134,7 +134,7 @@ def test_kitti00_se2_on_x_z_equals_the_dense_reference(kitti00, loops_cli):
 
 def test_maps_draw_and_label_the_plane_a_trajectory_was_read_on(tmp_path):
     matplotlib = pytest.importorskip(
-        "matplotlib", reason="matplotlib is not installed: pip install 'inexact-loops[plot]'"
+        "matplotlib", reason="matplotlib is not installed: pip install '.[plot]' in a checkout"
     )
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 matplotlib = pytest.importorskip(
-    "matplotlib", reason="matplotlib is not installed: pip install 'inexact-loops[plot]'"
+    "matplotlib", reason="matplotlib is not installed: pip install '.[plot]' in a checkout"
 )
 matplotlib.use("Agg")
 
@@ -512,7 +512,7 @@ def test_without_matplotlib_the_error_names_the_extra():
         "    print(err)\n"
     )
     assert done.returncode == 0, done.stderr
-    assert "inexact-loops[plot]" in done.stdout
+    assert "pip install '.[plot]' in a checkout" in done.stdout
 
 
 # --------------------------------------------------------------------------------------------

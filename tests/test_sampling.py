@@ -418,6 +418,7 @@ def test_sample_files(drive, tmp_path):
         "distance",
         "score",
         "sampler",
+        *["dx", "dy", "dz", "dqx", "dqy", "dqz", "dqw", "dtheta_rad"],
     ]
     assert len(rows) == len(samples)
     np.testing.assert_array_equal([float(r["t_s"]) for r in rows], samples.t)

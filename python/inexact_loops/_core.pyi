@@ -466,6 +466,18 @@ class Loops:
     def pair_count(self) -> int:
         """Number of lattice cells (i, j) of S_γ in the full plane, both halves and the diagonal."""
     @property
+    def pose_pair_count(self) -> int:
+        """Number of pose pairs {i, j}, i < j, of S_γ (unordered pairs of distinct poses): the
+        count the command line's summaries and reports print, the sum of the components'
+        ``pose_pair_count``, and what :func:`sample` draws from.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> loops = il.find_loops(il.Trajectory(np.arange(3.0), np.zeros(3)), gamma=1.0, separation=None)
+            >>> loops.pair_count, loops.pose_pair_count
+            (9, 3)
+        """
+    @property
     def warnings(self) -> list[str]:
         """Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences;
         :func:`find_loops` also issues each with :func:`warnings.warn`, in a category of
@@ -476,7 +488,8 @@ class Loops:
         """The loop components as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row
         a component, by id; ``.to_pandas()`` for a DataFrame): ``id`` (int64), ``trivial``
         (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
-        set for a trivial one), ``pair_count`` (int64, cells, same rule), ``run_count``, ``holes`` (int64),
+        set for a trivial one), ``pair_count`` (int64, cells, same rule), ``pose_pair_count`` (int64, pairs
+        of distinct poses i < j: they sum to :attr:`pose_pair_count`), ``run_count``, ``holes`` (int64),
         ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
         ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
         ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
@@ -937,7 +950,10 @@ def read_trajectory(
             listing them, see :func:`list_topics`).
         time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
         frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
-            topic's only pair.
+            topic's only pair. Frames that no one transform links are composed along the TF
+            tree, ``/tf_static`` included (``("map", "velodyne")`` through ``odom`` and
+            ``base_link``), at the stamps of the moving link nearest the child, the others
+            interpolated there.
         rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
         times: for files without times (KITTI poses, pose graphs): a file of one time a line,
             seconds, one per pose in order (KITTI's ``sequences/XX/times.txt``).
@@ -1221,6 +1237,22 @@ class Samples:
     @property
     def score(self) -> npt.NDArray[np.float64] | None:
         """The detection's score of each sample, or ``None`` when the detections had none."""
+    @property
+    def relative_poses(self) -> npt.NDArray[np.float64]:
+        """The relative pose the trajectory predicts from pose ``i`` to pose ``j`` of each sample:
+        the scan matcher's initial guess, shape ``(n, 8)``, columns ``dx, dy, dz, dqx, dqy, dqz,
+        dqw, dtheta_rad``: ``T_i⁻¹ T_j`` for SE(3) and SE(2) trajectories (translation in the
+        frame of pose ``i``; ``dtheta_rad`` for SE(2) only), the coordinate difference for
+        positions alone (up to 3 columns; no rotation). NaN where there is none (no pose pair;
+        other manifolds). No uncertainty: trajectories hold no covariance.
+
+        Example:
+            >>> import numpy as np, inexact_loops as il
+            >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.5]))
+            >>> loops = il.find_loops(traj, gamma=0.6, separation=None)
+            >>> il.sample(loops, "alpha", rate=1.0, seed=0, trajectory=traj).relative_poses[:, 0].tolist()
+            [0.5, 0.0, -0.5, -0.5]
+        """
     def locate(self, loops: Loops) -> Samples:
         """The same samples placed on the poses of ``loops``' trajectory (where not yet), with the
         exact loop component of each (:attr:`component`).
@@ -1257,8 +1289,9 @@ class Samples:
         """The samples as a ``pandas.DataFrame``, one row a sample in order of (t, t′): columns
         ``t``, ``t_prime`` (float64, seconds), ``i``, ``j`` (int64; only when placed on a
         trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
-        ``distance`` (float64, NaN where not measured) and ``score`` (float64; only when the
-        detections had scores) — the getters of the same names.
+        ``distance`` (float64, NaN where not measured), ``score`` (float64; only when the
+        detections had scores) — the getters of the same names — and, when any sample has one,
+        the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`).
 
         Raises:
             ImportError: pandas is not installed (it is not a dependency of the library).
@@ -1272,7 +1305,8 @@ class Samples:
         """
     def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
-        distance,score,sampler``, then one line a sample; unknown values are empty fields.
+        distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad`` (the last eight: the relative
+        pose, :attr:`relative_poses`), then one line a sample; unknown values are empty fields.
         Atomic (a temporary file renamed into place).
 
         Raises:
@@ -1286,7 +1320,7 @@ class Samples:
             >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
             >>> samples.to_csv(path)
             >>> open(path).read().splitlines()[1]
-            '0,3,,,,0,0,,,alpha'
+            '0,3,,,,0,0,,,alpha,,,,,,,,'
         """
     def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as one JSON object: ``sampler``, ``count``, ``groups``,

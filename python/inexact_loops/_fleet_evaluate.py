@@ -368,7 +368,7 @@ def optimize_fleet(
         the optimised poses of each session, in order.
 
     Raises:
-        ImportError: GTSAM is not installed (``pip install 'inexact-loops[maps]'``).
+        ImportError: GTSAM is not installed (``pip install '.[maps]'`` in a checkout).
         InvalidParameterError: no session, sessions of different dimensions, more than 52
             sessions, an anchor out of range.
     """

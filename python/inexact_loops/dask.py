@@ -39,7 +39,7 @@ rest of the fleet is computed without it (``on_error="raise"`` raises instead).
 ``loops-dask``, :func:`main`, is its command line).
 
 Requires ``dask[distributed]`` only with ``client=``, and pyarrow for Parquet
-(``pip install 'inexact-loops[dask]'``).
+(``pip install '.[dask]'`` in a checkout).
 """
 
 from __future__ import annotations
@@ -156,7 +156,7 @@ def _pyarrow() -> Any:
         import pyarrow.parquet  # type: ignore[import-untyped, import-not-found, unused-ignore]
     except ImportError as error:
         raise ImportError(
-            "Parquet needs pyarrow, which is not installed: pip install 'inexact-loops[dask]' "
+            "Parquet needs pyarrow, which is not installed: pip install '.[dask]' in a checkout "
             f"(or pip install pyarrow) ({error})"
         ) from error
     return pyarrow
@@ -1699,7 +1699,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             except ImportError as error:
                 raise InvalidParameterError(
                     "--scheduler needs dask.distributed: "
-                    f"pip install 'inexact-loops[dask]' ({error})"
+                    f"pip install '.[dask]' in a checkout ({error})"
                 ) from None
             client = Client(args.scheduler)
         try:

@@ -31,7 +31,7 @@ between only), a multi-session GTSAM graph, the joint and inter-session errors -
 :func:`optimize_fleet`, :func:`fleet_errors` and :func:`plot_fleet_error_vs_matches`; its
 method is in :mod:`inexact_loops._fleet_evaluate`.
 
-Needs GTSAM for the back end: ``pip install 'inexact-loops[maps]'`` (the simulation, the
+Needs GTSAM for the back end: ``pip install '.[maps]'`` in a checkout (the simulation, the
 verifier and the errors work without it); matplotlib for the plot.
 
 Example:
@@ -138,7 +138,8 @@ SAMPLERS: tuple[str, ...] = ("one", "rho", "rho-dispersed", "closest-first", "al
 BASELINES: tuple[str, ...] = ("lio-sam", "hdl-graph-slam", "cartographer", "time-gap")
 
 _GTSAM_HINT = (
-    "the pose-graph back end needs GTSAM: pip install 'inexact-loops[maps]' (or pip install gtsam)"
+    "the pose-graph back end needs GTSAM: pip install '.[maps]' in a checkout "
+    "(or pip install gtsam)"
 )
 
 
@@ -1030,7 +1031,7 @@ def optimize(
     """The pose graph of ``odometry`` and ``matches`` optimised by ``backend`` (GTSAM).
 
     Raises:
-        ImportError: GTSAM is not installed (``pip install 'inexact-loops[maps]'``).
+        ImportError: GTSAM is not installed (``pip install '.[maps]'`` in a checkout).
     """
     gtsam = _gtsam()
     backend = backend or BackEnd()

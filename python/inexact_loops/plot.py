@@ -1,6 +1,6 @@
 """Plots of inexact loops with matplotlib: the paper's figures for your own trajectories.
 
-Needs matplotlib (``pip install 'inexact-loops[plot]'``); ``import inexact_loops`` does not
+Needs matplotlib (``pip install '.[plot]'`` in a checkout); ``import inexact_loops`` does not
 import it, ``inexact_loops.plot`` (or ``import inexact_loops.plot``) does.
 
 - :func:`distance_image`: the pairwise distance function pi(t, t') as an image, with gamma
@@ -60,7 +60,7 @@ try:
 except ImportError as err:  # pragma: no cover - exercised only without matplotlib
     raise ImportError(
         "inexact_loops.plot needs matplotlib: install it with "
-        "pip install 'inexact-loops[plot]' (or pip install matplotlib)"
+        "pip install '.[plot]' in a checkout (or pip install matplotlib)"
     ) from err
 
 from . import metrics as _metrics

@@ -290,7 +290,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         import gtsam  # noqa: F401
     except ImportError:  # pragma: no cover - CI installs the [test] extra, which has gtsam
         skip = pytest.mark.skip(
-            reason="GTSAM is not installed: pip install 'inexact-loops[maps]' to test the "
+            reason="GTSAM is not installed: pip install '.[maps]' in a checkout to test the "
             "pose-graph back end"
         )
         for item in items:

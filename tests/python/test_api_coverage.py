@@ -658,11 +658,18 @@ def test_descriptors():
 
 
 @covers(
-    "find_loops", "Loops", "Loops.gamma", "Loops.metric_name", "Loops.span_s", "Loops.pair_count"
+    "find_loops",
+    "Loops",
+    "Loops.gamma",
+    "Loops.metric_name",
+    "Loops.span_s",
+    "Loops.pair_count",
+    "Loops.pose_pair_count",
 )
 def test_find_loops_counts_the_dense_pairs(traj, loops):
     distances = cdist(traj.positions, traj.positions)
     assert loops.pair_count == np.count_nonzero(distances <= 4.0)
+    assert loops.pose_pair_count == np.count_nonzero(np.triu(distances <= 4.0, k=1))
     assert loops.gamma == 4.0 and loops.metric_name == "euclidean" and loops.span_s == traj.span_s
     assert len(loops) == N
     by_callable = il.find_loops(
@@ -1294,15 +1301,19 @@ def test_samples_locate_measure_and_their_errors(traj, loops, clusters):
         samples.measure(traj, metric=lambda a, b: 1 / 0)
 
 
-@covers("Samples.to_csv", "Samples.to_json")
+@covers("Samples.to_csv", "Samples.to_json", "Samples.relative_poses")
 def test_samples_files_and_their_errors(tmp_path, clusters):
     samples = il.sample(clusters, "alpha", rate=1.0, seed=0)
     csv, js = tmp_path / "s.csv", tmp_path / "s.json"
     samples.to_csv(csv)
     samples.to_json(js)
     lines = csv.read_text().splitlines()
-    assert lines[0] == "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler"
+    assert lines[0] == ",".join(
+        ["t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler"]
+        + ["dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad"]
+    )
     assert len(lines) == 4
+    assert np.isnan(samples.relative_poses).all(), "detections not placed: no guess"
     document = json.loads(js.read_text())
     assert document["count"] == 3 and [s["score"] for s in document["samples"]] == [0.1, 0.2, 0.3]
     for write, path in ((samples.to_csv, csv), (samples.to_json, js)):

@@ -146,3 +146,146 @@ def test_every_surface_names_sessions_alike(bags, tmp_path):
         assert run.returncode == 0, run.stderr
         summary = json.loads((out / "summary.json").read_text())
         assert [s["name"] for s in summary["sessions"]] == [expected, "monday"], way
+
+
+# Transform trees: map -> odom (2 Hz) -> base_link (10 Hz) on /tf, base_link -> velodyne on
+# /tf_static, composed by scipy's Rotation and Slerp as the reference.
+
+TF_MESSAGE = "geometry_msgs/TransformStamped[] transforms\n"
+
+
+def tf_tree_links():
+    """The two moving links (stamps in ns, positions, rotations) and the static one."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(7)
+    t0 = 1_600_000_000 * 10**9
+    odom_ns = t0 + np.arange(0, 41) * 100_000_000  # 10 Hz, 4 s
+    map_ns = t0 - 300_000_000 + np.arange(0, 9) * 500_000_000  # 2 Hz, ends before odom
+    moving = {}
+    for name, stamps in (("map_odom", map_ns), ("odom_base", odom_ns)):
+        n = len(stamps)
+        moving[name] = (
+            stamps,
+            np.cumsum(rng.normal(0, 0.3, (n, 3)), axis=0),
+            Rotation.from_rotvec(np.cumsum(rng.normal(0, 0.1, (n, 3)), axis=0)),
+        )
+    fixed = (np.array([0.4, -0.1, 1.2]), Rotation.from_euler("xyz", [0.05, -0.2, 1.3]))
+    return moving, fixed
+
+
+def tf_tree_expected():
+    """map -> velodyne at each odom -> base_link stamp within map -> odom's span, by scipy."""
+    from scipy.spatial.transform import Slerp
+
+    moving, (p_fixed, r_fixed) = tf_tree_links()
+    m_ns, m_p, m_r = moving["map_odom"]
+    o_ns, o_p, o_r = moving["odom_base"]
+    inside = (o_ns >= m_ns[0]) & (o_ns <= m_ns[-1])
+    at = o_ns[inside]
+    r_map = Slerp(m_ns.astype(float), m_r)(at.astype(float))
+    p_map = np.stack([np.interp(at, m_ns, m_p[:, k]) for k in range(3)], axis=1)
+    r_base, p_base = o_r[inside], o_p[inside]
+    # T_map_velodyne = T_map_odom * T_odom_base * T_base_velodyne
+    p = p_map + r_map.apply(p_base + r_base.apply(p_fixed))
+    r = r_map * r_base * r_fixed
+    return at, p, r
+
+
+def tf_message(store, transforms, ros1: bool):
+    t = store.types
+    items = []
+    for ns, parent, child, p, r in transforms:
+        stamp = t["builtin_interfaces/msg/Time"](sec=int(ns) // 10**9, nanosec=int(ns) % 10**9)
+        header = (
+            t["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=parent)
+            if ros1
+            else t["std_msgs/msg/Header"](stamp=stamp, frame_id=parent)
+        )
+        x, y, z, w = r.as_quat()
+        transform = t["geometry_msgs/msg/Transform"](
+            translation=t["geometry_msgs/msg/Vector3"](x=p[0], y=p[1], z=p[2]),
+            rotation=t["geometry_msgs/msg/Quaternion"](x=x, y=y, z=z, w=w),
+        )
+        items.append(
+            t["geometry_msgs/msg/TransformStamped"](
+                header=header, child_frame_id=child, transform=transform
+            )
+        )
+    return t["tf2_msgs/msg/TFMessage"](transforms=items)
+
+
+@pytest.fixture(scope="module")
+def tf_bags(tmp_path_factory):
+    """The tree written by rosbags: rosbag2 sqlite3, rosbag2 MCAP and ROS 1."""
+    from rosbags.typesys import get_types_from_msg
+
+    folder = tmp_path_factory.mktemp("tf")
+    moving, (p_fixed, r_fixed) = tf_tree_links()
+    messages = []  # (log ns, transforms)
+    for (parent, child), (stamps, ps, rs) in zip(
+        [("map", "odom"), ("odom", "base_link")], moving.values(), strict=True
+    ):
+        for i, ns in enumerate(stamps):
+            messages.append((int(ns), [(ns, parent, child, ps[i], rs[i])]))
+    messages.sort(key=lambda m: m[0])
+    t0 = int(moving["odom_base"][0][0])
+    static = [(t0, "base_link", "velodyne", p_fixed, r_fixed)]
+    store2 = get_typestore(Stores.ROS2_HUMBLE)
+    store1 = get_typestore(Stores.ROS1_NOETIC)
+    store1.register(get_types_from_msg(TF_MESSAGE, "tf2_msgs/msg/TFMessage"))
+    made = {}
+    name = "tf2_msgs/msg/TFMessage"
+    for kind, plugin in [("sqlite3", StoragePlugin.SQLITE3), ("mcap", StoragePlugin.MCAP)]:
+        with Writer2(folder / kind, version=9, storage_plugin=plugin) as writer:
+            tf = writer.add_connection("/tf", name, typestore=store2)
+            tf_static = writer.add_connection("/tf_static", name, typestore=store2)
+            writer.write(
+                tf_static, t0 - 1, store2.serialize_cdr(tf_message(store2, static, False), name)
+            )
+            for log, transforms in messages:
+                writer.write(
+                    tf, log, store2.serialize_cdr(tf_message(store2, transforms, False), name)
+                )
+        made[kind] = folder / kind
+    with Writer1(folder / "tf.bag") as writer:
+        tf = writer.add_connection("/tf", name, typestore=store1)
+        tf_static = writer.add_connection("/tf_static", name, typestore=store1)
+        writer.write(
+            tf_static, t0 - 1, store1.serialize_ros1(tf_message(store1, static, True), name)
+        )
+        for log, transforms in messages:
+            writer.write(tf, log, store1.serialize_ros1(tf_message(store1, transforms, True), name))
+    made["ros1"] = folder / "tf.bag"
+    return made
+
+
+@pytest.mark.parametrize("kind", ["sqlite3", "mcap", "ros1"])
+def test_tf_trees_compose_at_the_stamps_of_the_lowest_moving_link(tf_bags, kind):
+    from scipy.spatial.transform import Rotation
+
+    at, p, r = tf_tree_expected()
+    traj = il.read_trajectory(
+        tf_bags[kind],
+        topic="/tf",
+        frames=("map", "velodyne"),
+        metric="se3(rotation_weight_m_per_rad=1)",
+    )
+    assert len(at) < 41, "some odom stamps lie outside map -> odom's span and have no pose"
+    np.testing.assert_array_equal(traj.timestamps, at / 1e9)
+    np.testing.assert_allclose(traj.positions[:, :3], p, atol=1e-9)
+    got = Rotation.from_quat(traj.positions[:, 3:7])
+    assert np.max((got.inv() * r).magnitude()) < 1e-9
+    # A direct pair still reads as it is.
+    direct = il.read_trajectory(tf_bags[kind], topic="/tf", frames=("odom", "base_link"))
+    assert len(direct) == 41
+
+
+def test_tf_frames_not_linked_name_the_missing_link(tf_bags):
+    with pytest.raises(il.LoopsIOError) as error:
+        il.read_trajectory(tf_bags["mcap"], topic="/tf", frames=("map", "camera_mount"))
+    message = str(error.value)
+    assert "camera_mount" in message and "map" in message, message
+    with pytest.raises(il.LoopsIOError) as error:
+        il.read_trajectory(tf_bags["ros1"], topic="/tf", frames=("base_link", "laser"))
+    assert "not linked" in str(error.value) or "no transform" in str(error.value), error.value

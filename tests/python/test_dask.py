@@ -101,7 +101,8 @@ def blocks_for(paths: list[Path], per_pair: int, **read) -> int:
 @pytest.fixture(scope="module")
 def client():
     pytest.importorskip(
-        "distributed", reason="dask.distributed is not installed: pip install 'inexact-loops[dask]'"
+        "distributed",
+        reason="dask.distributed is not installed: pip install '.[dask]' in a checkout",
     )
     with local_client() as client:
         yield client

@@ -417,3 +417,24 @@ def test_the_example_prints_the_verdicts(tmp_path: Path) -> None:
     pytest.importorskip("pandas")
     with out.open() as file:
         assert [row["verdict"] for row in csv.DictReader(file)] == verdicts["verdict"].tolist()
+
+
+def test_gtsam_graphs_say_what_they_skip_and_evo_kitti_reads(tmp_path):
+    """GTSAM's LANDMARK2/BR lines and TORO's EQUIV are skipped with one warning naming them;
+    evo's ``.kitti`` files are KITTI."""
+    path = tmp_path / "example.graph"
+    path.write_text(
+        "VERTEX2 0 0 0 0\nVERTEX2 1 1 0 0\nEDGE2 0 1 1 0 0 1 0 1 1 0 0\n"
+        "LANDMARK2 1 7 2.5 0.3 1 0 1\nBR 1 7 0.2 2.5 0.01 0.1\nEQUIV 0 1\n"
+    )
+    for read in (il.read_trajectory, il.read_pose_graph):
+        with pytest.warns(il.DroppedInputWarning) as caught:
+            read(path)
+        messages = [str(w.message) for w in caught]
+        assert len(messages) == 1, messages
+        assert "1 LANDMARK2 line" in messages[0] and "1 BR line" in messages[0], messages
+        assert "1 EQUIV line (first on line 6)" in messages[0], messages
+    kitti = tmp_path / "traj.kitti"
+    kitti.write_text("1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n")
+    traj = il.read_trajectory(kitti, rate_hz=10.0)
+    np.testing.assert_array_equal(traj.positions[1], [1.0, 0.0, 0.0])

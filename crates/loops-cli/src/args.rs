@@ -31,7 +31,9 @@ pub(crate) struct InputArgs {
     /// (bags record one time: log and publish both take it).
     #[arg(long)]
     time: Option<String>,
-    /// Parent and child frame of a transform topic (TF), e.g. odom,base_link.
+    /// Parent and child frame of a transform topic (TF), e.g. odom,base_link. Frames linked
+    /// through others (map,velodyne over odom and base_link, /tf_static included) are composed
+    /// at the stamps of the moving transform nearest the child.
     #[arg(long, value_delimiter = ',', value_name = "PARENT,CHILD")]
     frames: Option<Vec<String>>,
     /// For files without times (KITTI poses, pose graphs): pose i at i / RATE_HZ seconds.
@@ -106,9 +108,9 @@ impl InputArgs {
         } else {
             let mut tables = Vec::with_capacity(files.len());
             for file in files {
-                let (table, chain) = loops_io::read_trajectory_chaining(file, &options)?;
-                if let Some(chain) = chain {
-                    eprintln!("loops: warning: {chain}");
+                let (table, notes) = loops_io::read_trajectory_chaining(file, &options)?;
+                for warning in notes.warnings() {
+                    eprintln!("loops: warning: {warning}");
                 }
                 tables.push(table);
             }

@@ -278,7 +278,7 @@ fn write_table(
     let t0 = traj.timestamps_s()[0];
     writeln!(
         out,
-        "  {} poses over {:.1} s; gamma {} ({}): {} components ({} non-trivial), {} pairs, \
+        "  {} poses over {:.1} s; gamma {} ({}): {} components ({} non-trivial), {} pose pairs (i < j), \
          mean loop duration {:.1} s; {:.3} s",
         traj.len(),
         traj.span_s(),
@@ -286,7 +286,7 @@ fn write_table(
         loops.metric_name(),
         components.len(),
         nontrivial,
-        loops.pair_count(),
+        loops.pose_pair_count(),
         density,
         seconds
     )?;
@@ -297,7 +297,7 @@ fn write_table(
     writeln!(
         out,
         "{:>6} {:>7} {:>12} {:>10} {:>5}  {:>21}  {:>21}  {:>10}",
-        "id", "trivial", "area_s2", "pairs", "holes", "t range (s)", "t' range (s)", "closest"
+        "id", "trivial", "area_s2", "pose pairs", "holes", "t range (s)", "t' range (s)", "closest"
     )?;
     let t: Vec<f64> = traj.timestamps_s().iter().map(|t| t - t0).collect();
     for c in &order[..shown] {
@@ -307,7 +307,7 @@ fn write_table(
             c.id,
             if c.trivial { "yes" } else { "no" },
             c.area_s2,
-            c.pair_count,
+            c.pose_pair_count,
             c.holes,
             t[c.i_range[0]],
             t[c.i_range[1]],

@@ -69,13 +69,21 @@ fn describe(out: &mut impl Write, file: &Path, options: &ReadOptions) -> Result<
     };
     let t = &table.timestamps_s;
     let span = t.iter().copied().fold(f64::NEG_INFINITY, f64::max) - t.iter().copied().fold(f64::INFINITY, f64::min);
+    // A graph's times are its vertex ids unless a rate or a times file gave seconds.
+    let over = match &graph {
+        Some(graph) if options.timing == loops_io::Timing::FromFile => format!(
+            "vertex ids {} to {} (no times: --rate-hz or --times gives seconds)",
+            graph.vertex_ids.first().copied().unwrap_or_default(),
+            graph.vertex_ids.last().copied().unwrap_or_default()
+        ),
+        _ => format!("over {span:.3} s"),
+    };
     writeln!(
         out,
-        "  {} poses, {} coordinates each, {} orientations, over {:.3} s",
+        "  {} poses, {} coordinates each, {} orientations, {over}",
         table.len(),
         table.dim,
         if table.orientations_xyzw.is_some() { "with" } else { "without" },
-        span
     )?;
     writeln!(out, "  {}", timestamp_order(&table))?;
     if let Some(graph) = graph {
@@ -92,6 +100,9 @@ fn describe(out: &mut impl Write, file: &Path, options: &ReadOptions) -> Result<
                  reckoning",
                 chain.odometry_edges, chain.first_id
             )?;
+        }
+        if let Some(skipped) = &graph.skipped {
+            eprintln!("loops: warning: {skipped}");
         }
     }
     Ok(())

@@ -120,7 +120,8 @@ impl KeyframeLine<'_> {
             pose: update.pose,
             t_s,
             poses: update.pose + 1 - update.first_pose,
-            latency_us: latency.as_secs_f64() * 1e6,
+            // Whole nanoseconds in µs: `4.496`, not the `4.4959999999999996` of seconds × 10⁶.
+            latency_us: latency.as_nanos() as f64 / 1e3,
             loop_duration_s: update.loop_duration_s,
             candidates: candidates
                 .iter()

@@ -94,6 +94,16 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
         };
         Ok((loops, samples))
     })??;
+    // One guess per pair in every file: the orientations the table holds (as the g2o edges
+    // measure them), else the trajectory's own.
+    let mut samples = samples;
+    if table.orientations_xyzw.is_some() {
+        samples.set_relative_poses(|i, j| {
+            loops_io::table_relative_pose(&table, i, j).or_else(|| loops_core::relative_pose(&traj, i, j))
+        });
+    } else {
+        samples.set_relative_poses(|i, j| loops_core::relative_pose(&traj, i, j));
+    }
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
     for warning in crate::run::warnings(&loops, &samples) {
         eprintln!("loops: warning: {warning}");
@@ -177,10 +187,24 @@ fn write_summary(
         "  P1 coverage: {}/{} non-trivial components ({} of all {})",
         quality.nontrivial_covered, quality.nontrivial_components, quality.covered, quality.components
     )?;
+    let outside = quality.outside_components();
+    if outside > 0 {
+        let why = if loops.is_separated() {
+            "farther than gamma, or within it but not a revisit"
+        } else {
+            "farther than gamma"
+        };
+        writeln!(
+            out,
+            "  {outside} of {} samples lie in no loop component ({why}): the coverage above counts the other {}",
+            quality.samples,
+            quality.samples - outside
+        )?;
+    }
     let mut missed: Vec<_> = quality.missed.iter().filter(|m| !m.trivial).collect();
     missed.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2));
     for m in missed.iter().take(5) {
-        writeln!(out, "    missed component {}: {:.1} s², {} pairs", m.id, m.area_s2, m.pair_count)?;
+        writeln!(out, "    missed component {}: {:.1} s², {} pose pairs", m.id, m.area_s2, m.pose_pair_count)?;
     }
     if missed.len() > 5 {
         writeln!(out, "    ... {} more missed", missed.len() - 5)?;

@@ -93,6 +93,13 @@ fn each_keyframes_line_parses_and_its_candidates_are_the_rust_apis() {
     let output = loops(&dir, &args);
     let parsed = lines(&output);
     assert_eq!(parsed.len(), times.len(), "one line per pose");
+    // Latencies are whole nanoseconds, printed as such: at most 3 decimals of µs.
+    let text = String::from_utf8_lossy(&output.stdout);
+    for latency in text.split("\"latency_us\":").skip(1) {
+        let number: String = latency.chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+        let decimals = number.split('.').nth(1).map_or(0, str::len);
+        assert!(decimals <= 3, "latency_us {number}");
+    }
     for (k, line) in parsed.iter().enumerate() {
         assert_eq!(line["pose"].as_u64(), Some(k as u64));
         assert_eq!(line["t_s"].as_f64(), Some(times[k]));

@@ -28,8 +28,13 @@ pub struct LoopComponent {
     pub trivial: bool,
     /// Area in the (t, t′) plane, s²: Σ w_i w_j over its cells.
     pub area_s2: f64,
-    /// Number of lattice cells (i, j).
+    /// Number of lattice cells (i, j), by the rule of `area_s2` (the half for a non-trivial
+    /// component, the whole for a trivial one).
     pub pair_count: u64,
+    /// Number of pose pairs {i, j}, i < j: unordered pairs of distinct poses, the count every
+    /// summary prints and the samplers draw from (the upper half without the diagonal). They
+    /// sum over the components to [`Loops::pose_pair_count`](crate::Loops::pose_pair_count).
+    pub pose_pair_count: u64,
     /// Number of runs (row intervals) in the upper half.
     pub run_count: usize,
     /// Number of holes (bounded background regions, 8-connected background) in the full plane.
@@ -144,6 +149,11 @@ impl Tally {
         Ok(())
     }
 
+    /// Pose pairs i < j of the component (its cells off the diagonal, in the upper half).
+    pub(crate) fn pose_pair_count(&self) -> u64 {
+        self.pairs.saturating_sub(self.diagonal_cells)
+    }
+
     /// An empty tally, before its first run.
     pub(crate) fn empty() -> Self {
         Self { rows: [usize::MAX, 0], columns: [usize::MAX, 0], closest: (f64::INFINITY, [0, 0]), ..Self::default() }
@@ -249,6 +259,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
             trivial: t.trivial,
             area_s2: folded.area_s2,
             pair_count: folded.pair_count,
+            pose_pair_count: t.pose_pair_count(),
             run_count: t.runs as usize,
             holes: folded.holes(),
             i_range: folded.i_range,

@@ -72,6 +72,7 @@ mod online;
 mod plane;
 mod pose;
 mod quality;
+mod relative;
 mod sample;
 mod separation;
 mod spatial;
@@ -112,6 +113,7 @@ pub use plane::{
 };
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
 pub use quality::{MissedComponent, SampleQuality, sample_quality};
+pub use relative::{RelativePose, relative_pose, se2_between, se3_between};
 pub use sample::{
     ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, DrawStats, DrawnPair, KeyedDraw, Sample, Sampler,
     SamplerKind, Samples, draw_stats, pair_key, sample_clusters, sample_loops,

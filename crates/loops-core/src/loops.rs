@@ -388,11 +388,23 @@ impl Loops {
         self.component_of(i, j).is_some_and(|c| self.components[c].trivial)
     }
 
-    /// Number of lattice cells of S_γ in the full (t, t′) plane, both halves.
+    /// Number of lattice cells of S_γ in the full (t, t′) plane, both halves: (i, j) and
+    /// (j, i) are two cells. Summaries count [`pose_pair_count`](Self::pose_pair_count).
     pub fn pair_count(&self) -> u64 {
-        let diagonal =
-            (0..self.len()).filter(|&i| self.set.row(i).first().is_some_and(|r| r.start as usize == i)).count();
-        2 * self.set.upper_pairs() - diagonal as u64
+        2 * self.set.upper_pairs() - self.diagonal_cells()
+    }
+
+    /// Number of pose pairs {i, j}, i < j, of S_γ: unordered pairs of distinct poses within γ
+    /// (the upper half without the diagonal). The one count of pairs the summaries, reports and
+    /// the component tables print ([`LoopComponent::pose_pair_count`] sums to it), and what the
+    /// samplers draw from. O(n).
+    pub fn pose_pair_count(&self) -> u64 {
+        self.set.upper_pairs() - self.diagonal_cells()
+    }
+
+    /// The diagonal cells (i, i) of S_γ (every pose, without a separation).
+    fn diagonal_cells(&self) -> u64 {
+        (0..self.len()).filter(|&i| self.set.row(i).first().is_some_and(|r| r.start as usize == i)).count() as u64
     }
 
     /// Loop duration τ_X(t_i) for every sample (paper, Eq. 6): how long the trajectory stays

@@ -19,6 +19,8 @@ pub struct MissedComponent {
     pub area_s2: f64,
     /// Its lattice cells (as [`LoopComponent::pair_count`](crate::LoopComponent::pair_count)).
     pub pair_count: u64,
+    /// Its pose pairs i < j (as [`LoopComponent::pose_pair_count`](crate::LoopComponent::pose_pair_count)).
+    pub pose_pair_count: u64,
 }
 
 /// P1, P2 and P3 of a sample (paper, Sec. 5.2).
@@ -71,6 +73,12 @@ impl SampleQuality {
         if self.components == 0 { 1.0 } else { self.covered as f64 / self.components as f64 }
     }
 
+    /// Samples in no loop component: farther apart than γ, or (with a separation) within γ
+    /// but not a revisit. P1 counts the components the other samples reach; these reach none.
+    pub fn outside_components(&self) -> usize {
+        self.sample_components.iter().filter(|c| c.is_none()).count()
+    }
+
     /// P2 as a fraction: redundant / samples (0 without samples).
     pub fn redundancy(&self) -> f64 {
         if self.samples == 0 { 0.0 } else { self.redundant as f64 / self.samples as f64 }
@@ -120,7 +128,13 @@ pub fn sample_quality(samples: &Samples, loops: &Loops, epsilon_s: f64) -> Resul
         .iter()
         .filter(counted)
         .filter(|c| per_component[c.id] == 0)
-        .map(|c| MissedComponent { id: c.id, trivial: c.trivial, area_s2: c.area_s2, pair_count: c.pair_count })
+        .map(|c| MissedComponent {
+            id: c.id,
+            trivial: c.trivial,
+            area_s2: c.area_s2,
+            pair_count: c.pair_count,
+            pose_pair_count: c.pose_pair_count,
+        })
         .collect();
     missed.sort_by(|a, b| b.area_s2.total_cmp(&a.area_s2).then(a.id.cmp(&b.id)));
     let total = components.iter().filter(counted).count();

@@ -1297,6 +1297,7 @@ impl TileMerge {
                     trivial: c.trivial,
                     area_s2: folded.area_s2,
                     pair_count: folded.pair_count,
+                    pose_pair_count: tally.pose_pair_count(),
                     run_count: c.runs as usize,
                     holes: folded.holes(),
                     i_range: folded.i_range,

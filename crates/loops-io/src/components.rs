@@ -11,10 +11,10 @@ use crate::error::WriteError;
 
 /// The columns of `components.csv`, without the optional `samples`: the names of the Python
 /// API's `Loops.components` columns. `id`, then [`MEASURE_COLUMNS`] and [`EXTENT_COLUMNS`].
-pub const COMPONENT_COLUMNS: [&str; 17] = columns(&[&["id"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
+pub const COMPONENT_COLUMNS: [&str; 18] = columns(&[&["id"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
 
 /// The columns of a [`ComponentMeasures`], as every component table names them.
-pub const MEASURE_COLUMNS: [&str; 5] = ["trivial", "area_s2", "pair_count", "run_count", "holes"];
+pub const MEASURE_COLUMNS: [&str; 6] = ["trivial", "area_s2", "pair_count", "pose_pair_count", "run_count", "holes"];
 
 /// The columns of a [`ComponentExtent`], as `components.csv` and a fleet's name them.
 pub const EXTENT_COLUMNS: [&str; 11] = [
@@ -102,8 +102,10 @@ pub struct ComponentMeasures {
     pub trivial: bool,
     /// Its area in the (t, t′) plane, s².
     pub area_s2: f64,
-    /// Its number of pose pairs.
+    /// Its number of lattice cells, by the rule of `area_s2`.
     pub pair_count: u64,
+    /// Its number of pose pairs {i, j}, i < j: the count summaries print.
+    pub pose_pair_count: u64,
     /// Its number of runs (row intervals).
     pub run_count: usize,
     /// Its number of holes.
@@ -118,6 +120,7 @@ impl ComponentMeasures {
             trivial: c.trivial,
             area_s2: c.area_s2,
             pair_count: c.pair_count,
+            pose_pair_count: c.pose_pair_count,
             run_count: c.run_count,
             holes: c.holes,
         }
@@ -212,7 +215,7 @@ pub fn component_rows(loops: &Loops, samples_per_component: Option<&[u64]>) -> V
 /// let mut text = Vec::new();
 /// loops_io::components_to_csv(&loops, None, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
-/// assert!(text.starts_with("id,trivial,area_s2,pair_count,run_count,holes,i_min,"));
+/// assert!(text.starts_with("id,trivial,area_s2,pair_count,pose_pair_count,run_count,holes,i_min,"));
 /// assert_eq!(text.lines().count(), 1 + loops.components().len());
 /// # Ok::<(), loops_core::Error>(())
 /// ```
@@ -267,11 +270,12 @@ mod tests {
         for c in loops.components() {
             let _ = write!(
                 csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 c.id,
                 c.trivial,
                 c.area_s2,
                 c.pair_count,
+                c.pose_pair_count,
                 c.run_count,
                 c.holes,
                 c.i_range[0],

@@ -183,6 +183,18 @@ pub enum IoError {
         /// The pairs on the topic, with their transform counts.
         pairs: Vec<FramePairInfo>,
     },
+    /// A transform topic whose frames asked for are not linked by its transforms (with those of
+    /// its static topic, `/tf` → `/tf_static`), or whose chain cannot be composed: the message
+    /// names the frames at the top of each chain, a frame with two parents, or the spans.
+    #[error("{} topic {}: {message}", .path.display(), printable(.topic))]
+    FrameTree {
+        /// The (first) file.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// What does not link up.
+        message: String,
+    },
     /// A ROS 1 bag whose structure is broken at a byte offset: not a ROS 1 bag of format 2.0,
     /// cut short, a record whose header does not parse, a chunk that does not decompress.
     #[error("{} offset {offset}: {message}", .path.display())]
@@ -251,7 +263,8 @@ impl IoError {
             | Self::AmbiguousTopic { path, .. }
             | Self::UnsupportedTopic { path, .. }
             | Self::EmptyTopic { path, .. }
-            | Self::FramePair { path, .. } => path,
+            | Self::FramePair { path, .. }
+            | Self::FrameTree { path, .. } => path,
             Self::Trajectory { path, .. } => path,
             Self::Message { location, .. } => &location.path,
             Self::Write(WriteError::Exists { path } | WriteError::Write { path, .. }) => path,
@@ -287,7 +300,9 @@ impl IoError {
         match self {
             Self::Message { location, .. } => Some(&location.topic),
             Self::Trajectory { messages: Some(messages), .. } => Some(&messages.message.topic),
-            Self::TopicNotFound { topic, .. } | Self::FramePair { topic, .. } => Some(topic),
+            Self::TopicNotFound { topic, .. } | Self::FramePair { topic, .. } | Self::FrameTree { topic, .. } => {
+                Some(topic)
+            }
             Self::UnsupportedTopic { topic, .. } | Self::EmptyTopic { topic, .. } => Some(&topic.topic),
             _ => None,
         }

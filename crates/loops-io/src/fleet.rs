@@ -24,10 +24,11 @@ use crate::table::PoseTable;
 use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
 
 /// The columns of a fleet's `components.csv`, without the optional `samples`: the block (both
-/// sessions by index, `session_a` and `session_b`, then by name, `name_a` and `name_b`), then the columns of `components.csv` but `id` (see
+/// sessions by index, `session_a` and `session_b`, then by name, `name_a` and `name_b`), then
+/// the columns of `components.csv` but `id` (see
 /// [`COMPONENT_COLUMNS`](crate::COMPONENT_COLUMNS)), with `i` indexing poses of session `a` and
 /// `j` poses of session `b`.
-pub const FLEET_COMPONENT_COLUMNS: [&str; 21] =
+pub const FLEET_COMPONENT_COLUMNS: [&str; 22] =
     columns(&[&["id", "session_a", "session_b", "name_a", "name_b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
 
 /// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::FleetComponent) with

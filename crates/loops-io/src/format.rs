@@ -65,8 +65,8 @@ impl Format {
     }
 
     /// The file extensions (without the dot, lower case) that [`from_path`](Self::from_path)
-    /// takes for this format. KITTI, EuRoC and libRSF files have the extensions of TUM and CSV
-    /// (`.txt`, `.csv`) and none of their own: [`read_trajectory`](crate::read_trajectory) tells them by
+    /// takes for this format. KITTI files are `.kitti` as evo writes them, or `.txt`; EuRoC and
+    /// libRSF files have the extensions of TUM and CSV (`.txt`, `.csv`) and none of their own: [`read_trajectory`](crate::read_trajectory) tells them by
     /// their first line.
     pub fn extensions(self) -> &'static [&'static str] {
         match self {
@@ -76,7 +76,8 @@ impl Format {
             Self::Mcap => &["mcap"],
             Self::Rosbag2 => &["db3", "yaml", "zstd", "lz4"],
             Self::Ros1 => &["bag"],
-            Self::Kitti | Self::Euroc | Self::Tuc => &[],
+            Self::Kitti => &["kitti"],
+            Self::Euroc | Self::Tuc => &[],
         }
     }
 

@@ -11,6 +11,7 @@ pub use chain::EdgeChain;
 use chain::{chain_odometry, no_vertices};
 
 use crate::error::{IoError, Result};
+use crate::printable::printable;
 use crate::rotation::{quaternion_from_roll_pitch_yaw, quaternion_from_yaw, yaw_of};
 use crate::table::PoseTable;
 use crate::text::{self, Lines, Takes};
@@ -33,6 +34,50 @@ pub struct PoseGraph {
     /// ([`read_pose_graph_with`](crate::read_pose_graph_with)): how its vertices were chained
     /// from its odometry edges (dead reckoning). `None` when the file gave its vertices.
     pub chain: Option<EdgeChain>,
+    /// The lines of other record types the file held (landmarks, `FIX`, `EQUIV`, GTSAM's `BR`
+    /// bearing-range measurements, ...), which were not read: what a caller says it left out.
+    /// `None` when every line was a pose vertex or an edge between them.
+    #[serde(default)]
+    pub skipped: Option<SkippedRecords>,
+}
+
+/// The lines of a pose graph file that were skipped, by tag in order of first appearance:
+/// displays as one sentence, `w10000.graph: skipped 5875 EQUIV lines (first on line 10001): only
+/// pose vertices and the edges between them are read`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub struct SkippedRecords {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// `(tag, lines, first line)` per tag skipped.
+    pub tags: Vec<(String, usize, usize)>,
+}
+
+impl SkippedRecords {
+    /// Counts a skipped line of `tag` at `line`.
+    fn add(&mut self, tag: &str, line: usize) {
+        match self.tags.iter_mut().find(|(known, _, _)| known == tag) {
+            Some((_, count, _)) => *count += 1,
+            None => self.tags.push((tag.to_owned(), 1, line)),
+        }
+    }
+}
+
+impl std::fmt::Display for SkippedRecords {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let parts: Vec<String> = self
+            .tags
+            .iter()
+            .map(|(tag, count, first)| {
+                format!("{count} {} line{} (first on line {first})", printable(tag), if *count == 1 { "" } else { "s" })
+            })
+            .collect();
+        write!(
+            f,
+            "{}: skipped {}: only pose vertices and the edges between them are read",
+            self.path.display(),
+            parts.join(", ")
+        )
+    }
 }
 
 /// An edge of a [`PoseGraph`]: a measured relative pose from vertex `from` to vertex `to`, and
@@ -211,6 +256,10 @@ impl Tag {
 const OTHER_TAGS: &[&str] = &[
     "FIX",
     "EQUIV",
+    "BR",
+    "LANDMARK",
+    "LANDMARK2",
+    "LANDMARK3",
     "CACHE_CAMERA",
     "CACHE_SE2_OFFSET",
     "CACHE_SE3_OFFSET",
@@ -310,8 +359,9 @@ fn unknown_tag(word: &str) -> String {
 /// file by `timing` ([`Timing`]; a times file gives one time per vertex in id order). 2-D
 /// graphs give a 2-D table with headings as rotations about z; 3-D ones a 3-D table. Lines of
 /// the other types g2o defines (landmarks `VERTEX_XY`, `EDGE_SE2_XY`, `FIX`, parameters, ...),
-/// TORO's `EQUIV` and Vertigo's switchable constraints are skipped, as are blank lines and `#`
-/// comments; a line of any other tag (a misspelled `VERTX2`) is an error. The vertex values of the classic data sets are odometry
+/// TORO's `EQUIV`, GTSAM's landmarks and bearing-range measurements (`LANDMARK2`, `BR`) and
+/// Vertigo's switchable constraints are skipped, counted in [`PoseGraph::skipped`] for the
+/// caller to say so, as are blank lines and `#` comments; a line of any other tag (a misspelled `VERTX2`) is an error. The vertex values of the classic data sets are odometry
 /// guesses, not ground truth; their edges with `|i − j| > 1` are the loop closures
 /// ([`PoseGraph::loop_closures`]).
 ///
@@ -368,6 +418,7 @@ pub(crate) fn parse_pose_graph(
     let mut vertices = Vec::new();
     let mut edges = Vec::new();
     let mut dim: Option<(usize, usize)> = None;
+    let mut skipped = SkippedRecords { path: path.to_path_buf(), tags: Vec::new() };
     while let Some((line, content)) = lines.next_data()? {
         let parse_error = |message: String| IoError::parse(path, line, message);
         let word = content.split_ascii_whitespace().next().unwrap_or_default();
@@ -375,6 +426,7 @@ pub(crate) fn parse_pose_graph(
             if OTHER_TAGS.contains(&word) {
                 let is_tag = |field: &str| Tag::of(field).is_some() || OTHER_TAGS.contains(&field);
                 text::check_one_record(content.split_ascii_whitespace(), is_tag).map_err(parse_error)?;
+                skipped.add(word, line);
                 continue;
             }
             return Err(parse_error(unknown_tag(word)));
@@ -476,7 +528,14 @@ pub(crate) fn parse_pose_graph(
     table.positions = vertices.iter().map(|vertex| vertex.position).collect();
     table.orientations_xyzw = Some(vertices.iter().map(|vertex| vertex.orientation).collect());
     table.source_lines = vertices.iter().map(|vertex| vertex.line).collect();
-    Ok(PoseGraph { vertices: table, vertex_ids: vertices.iter().map(|vertex| vertex.id).collect(), edges, chain })
+    let skipped = (!skipped.tags.is_empty()).then_some(skipped);
+    Ok(PoseGraph {
+        vertices: table,
+        vertex_ids: vertices.iter().map(|vertex| vertex.id).collect(),
+        edges,
+        chain,
+        skipped,
+    })
 }
 
 /// Whether the first data line is a g2o or TORO vertex or edge.

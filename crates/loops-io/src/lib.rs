@@ -110,6 +110,7 @@ mod euroc;
 mod fleet;
 mod format;
 mod foxglove;
+mod frame_tree;
 mod graph;
 mod json;
 mod kitti;
@@ -158,7 +159,7 @@ pub use fleet::{
     write_session_pairs,
 };
 pub use format::Format;
-pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, read_pose_graph};
+pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, SkippedRecords, read_pose_graph};
 pub use kitti::{ROTATION_MATRIX_TOLERANCE, read_kitti};
 pub use loop_duration::{
     LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
@@ -169,7 +170,8 @@ pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
 pub use quality::QualitySummary;
 pub use read::{
-    ReadOptions, format_of, read_pose_graph_with, read_trajectory, read_trajectory_chaining, read_trajectory_with,
+    ReadNotes, ReadOptions, format_of, read_pose_graph_with, read_trajectory, read_trajectory_chaining,
+    read_trajectory_with,
 };
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
@@ -184,4 +186,4 @@ pub use timing::Timing;
 pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::{LIBRSF_TAGS, read_tuc};
 pub use tum::read_tum;
-pub use write::{EdgeKind, G2oOptions, g2o_edges_text, write_g2o_edges, write_tum};
+pub use write::{EdgeKind, G2oOptions, g2o_edges_text, table_relative_pose, write_g2o_edges, write_tum};

@@ -13,6 +13,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::error::{IoError, MessageLocation, Result};
+use crate::frame_tree::{self, Link, Row};
 use crate::mcap_records::{At, ChannelKey, MessageHeader, Visitor, walk};
 use crate::message::decode_samples;
 use crate::pose_type::{MessageEncoding, PoseType};
@@ -72,7 +73,9 @@ pub struct McapOptions {
     /// Which time each pose gets; the message's stamp by default.
     pub time: TimeSource,
     /// For transform topics (TF, `FrameTransform`): the `(parent, child)` frame pair to read;
-    /// `None` takes the topic's one pair. Not used for other topics.
+    /// `None` takes the topic's one pair. Not used for other topics. Frames that no single
+    /// transform links are composed along the tree of the topic's transforms and of its static
+    /// topic (`/tf` → `/tf_static`): see [`read_mcap_files`].
     pub frames: Option<(String, String)>,
 }
 
@@ -116,7 +119,13 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTa
 ///   across all files; duplicate times are left for [`PoseTable::to_trajectory`] to report, at
 ///   their messages.
 /// - For transform topics, one `(parent, child)` frame pair: `options.frames`, or the topic's
-///   only pair.
+///   only pair. When no transform goes straight from `parent` to `child`, the pose is composed
+///   along the tree of transforms (`map → odom → base_link → velodyne`) of the topic and of its
+///   static topic (the topic's name with `_static`: `/tf_static` for `/tf`), whose transforms
+///   hold at all times. The poses are those of the moving link nearest to `child`, at its
+///   stamps; the other moving links are interpolated at each such stamp (positions linearly,
+///   rotations by slerp between the transforms around it), and a stamp outside their span has
+///   no pose (as in TF, nothing is extrapolated). Each pose keeps the message of that link.
 ///
 /// The table is 3-D with orientations, and holds the exact integer stamps
 /// ([`PoseTable::timestamps_ns`]) and each pose's message ([`PoseTable::messages`]).
@@ -138,8 +147,10 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<PoseTa
 /// - [`IoError::TopicNotFound`], [`IoError::UnsupportedTopic`] (a type this crate does not
 ///   read), [`IoError::EmptyTopic`] for the topic named; [`IoError::NoPoseTopic`] and
 ///   [`IoError::AmbiguousTopic`] when none is named;
-/// - [`IoError::FramePair`] for a transform topic with several pairs and none named, or without
-///   the pair named;
+/// - [`IoError::FramePair`] for a transform topic with several pairs and none named;
+///   [`IoError::FrameTree`] when the frames named are not linked by the transforms (naming the
+///   top of each chain), a frame has two parents, every link between them is static, or no
+///   stamp falls within the span of every moving link;
 /// - [`IoError::Trajectory`] holding [`loops_core::Error::InvalidParameter`] for no file at all.
 pub fn read_mcap_files<P: AsRef<Path>>(paths: &[P], options: &McapOptions) -> Result<PoseTable> {
     let files: Vec<PathBuf> = paths.iter().map(|path| path.as_ref().to_path_buf()).collect();
@@ -153,15 +164,6 @@ pub fn read_mcap_files<P: AsRef<Path>>(paths: &[P], options: &McapOptions) -> Re
         walk(path, &mut scan)?;
     }
     scan.into_table(files, options)
-}
-
-/// One pose, with where it came from.
-#[derive(Debug, Clone, Copy)]
-struct Row {
-    stamp_ns: i64,
-    position: [f64; 3],
-    orientation: [f64; 4],
-    source: MessageRef,
 }
 
 /// The poses of one frame pair of a topic (the only group of a topic that is not a transform).
@@ -238,11 +240,34 @@ impl<'o> Scan<'o> {
         let Some(first) = files.first().cloned() else {
             return Err(IoError::invalid(Path::new(""), "number of files", 0.0, "at least one file"));
         };
-        let scan = &mut self;
-        let bucket = scan.choose(&first, options)?;
-        let (group, frames) = choose_group(&files, bucket, options)?;
-        let mut rows = std::mem::take(&mut bucket.groups[group].rows);
-        rows.sort_by_key(|row| row.stamp_ns);
+        let chosen = self.choose(&first, options)?;
+        let bucket = &self.buckets[chosen];
+        let (rows, frames) = match choose_group(&files, bucket, options) {
+            Ok((group, frames)) => {
+                let mut rows = std::mem::take(&mut self.buckets[chosen].groups[group].rows);
+                rows.sort_by_key(|row| row.stamp_ns);
+                (rows, frames)
+            }
+            Err(IoError::FramePair { path, topic, wanted: Some((parent, child)), pairs }) => {
+                let rows = self.composed(chosen, &parent, &child).map_err(|message| {
+                    let on_topic = |frame: &str| pairs.iter().any(|pair| pair.parent == frame || pair.child == frame);
+                    if on_topic(&parent) || on_topic(&child) {
+                        IoError::FrameTree { path: path.clone(), topic: topic.clone(), message }
+                    } else {
+                        // Neither frame is on the topic: the list of pairs says more.
+                        IoError::FramePair {
+                            path: path.clone(),
+                            topic: topic.clone(),
+                            wanted: Some((parent.clone(), child.clone())),
+                            pairs: pairs.clone(),
+                        }
+                    }
+                })?;
+                (rows, Some((parent, child)))
+            }
+            Err(error) => return Err(error),
+        };
+        let bucket = &self.buckets[chosen];
         let mut table = PoseTable::empty(&first, 3);
         table.timestamps_s = rows.iter().map(|row| seconds_of_ns(row.stamp_ns)).collect();
         table.timestamps_ns = Some(rows.iter().map(|row| row.stamp_ns).collect());
@@ -267,8 +292,33 @@ impl<'o> Scan<'o> {
         topics
     }
 
-    /// The bucket to read: the topic named, or the one topic with poses.
-    fn choose(&mut self, first: &Path, options: &McapOptions) -> Result<&mut Bucket> {
+    /// The poses of `child` in `parent` composed along the transforms of the bucket `chosen`
+    /// and of its static topic (see [`read_mcap_files`]).
+    fn composed(&mut self, chosen: usize, parent: &str, child: &str) -> std::result::Result<Vec<Row>, String> {
+        let static_topic = static_topic_of(&self.buckets[chosen].info.topic);
+        for bucket in &mut self.buckets {
+            for group in &mut bucket.groups {
+                group.rows.sort_by_key(|row| row.stamp_ns);
+            }
+        }
+        let mut links = Vec::new();
+        for (index, bucket) in self.buckets.iter().enumerate() {
+            let is_static = bucket.info.topic == static_topic;
+            if index != chosen && !(is_static && bucket.kind.is_some_and(|(t, _)| t.is_transform())) {
+                continue;
+            }
+            links.extend(bucket.groups.iter().map(|group| Link {
+                parent: &group.parent,
+                child: &group.child,
+                rows: &group.rows,
+                is_static,
+            }));
+        }
+        frame_tree::compose(&links, parent, child)
+    }
+
+    /// The index of the bucket to read: the topic named, or the one topic with poses.
+    fn choose(&mut self, first: &Path, options: &McapOptions) -> Result<usize> {
         let path = first.to_path_buf();
         let chosen: Vec<usize> = match &options.topic {
             Some(topic) => {
@@ -321,7 +371,7 @@ impl<'o> Scan<'o> {
         if let Some(error) = bucket.error.take() {
             return Err(error);
         }
-        Ok(bucket)
+        Ok(chosen[0])
     }
 }
 
@@ -362,6 +412,11 @@ fn choose_group(
     }
 }
 
+/// The static topic that goes with a transform topic: `/tf_static` for `/tf`.
+fn static_topic_of(topic: &str) -> String {
+    format!("{topic}_static")
+}
+
 /// The frame pairs of a transform topic's bucket with their transform counts, sorted.
 fn pairs_of(bucket: &Bucket) -> Vec<FramePairInfo> {
     let mut pairs: Vec<FramePairInfo> = bucket
@@ -386,7 +441,12 @@ impl Visitor for Scan<'_> {
         let decode = match self.options {
             Some(options) => {
                 kind.is_some_and(|(pose_type, _)| !self.frames_only || pose_type.is_transform())
-                    && options.topic.as_ref().is_none_or(|topic| topic == &key.topic)
+                    && options.topic.as_ref().is_none_or(|topic| {
+                        topic == &key.topic
+                            || (options.frames.is_some()
+                                && kind.is_some_and(|(pose_type, _)| pose_type.is_transform())
+                                && static_topic_of(topic) == key.topic)
+                    })
             }
             None => false,
         };
@@ -437,7 +497,7 @@ impl Visitor for Scan<'_> {
             }
         };
         let transform = pose_type.is_transform();
-        let wanted = options.frames.as_ref().filter(|_| transform);
+        // With frames named, every pair is kept: the pair may be a chain of them.
         let keep_rows = !self.frames_only;
         let groups = &mut bucket.groups;
         let result = decode_samples(pose_type, encoding, data, |sample| {
@@ -461,7 +521,7 @@ impl Visitor for Scan<'_> {
             };
             let group = &mut groups[index];
             group.count += 1;
-            if keep_rows && wanted.is_none_or(|(parent, child)| parent == sample.parent && child == sample.child) {
+            if keep_rows {
                 group.rows.push(Row {
                     stamp_ns: record_time.unwrap_or(sample.stamp_ns),
                     position: sample.position,

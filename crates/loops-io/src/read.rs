@@ -7,7 +7,7 @@ use crate::csv::parse_csv;
 use crate::error::{IoError, Result};
 use crate::euroc::{looks_like_euroc, parse_euroc};
 use crate::format::Format;
-use crate::graph::{EdgeChain, PoseGraph, looks_like_graph, parse_pose_graph};
+use crate::graph::{EdgeChain, PoseGraph, SkippedRecords, looks_like_graph, parse_pose_graph};
 use crate::kitti::parse_kitti;
 use crate::mcap::{McapOptions, read_mcap};
 use crate::table::PoseTable;
@@ -100,25 +100,42 @@ pub fn read_pose_graph_with(path: impl AsRef<Path>, options: &ReadOptions) -> Re
     parse_pose_graph(path, &mut text::open_lines(path)?, &options.timing, options.chain_edges)
 }
 
-/// Reads a pose file as [`read_trajectory_with`], and says how a pose graph's poses were chained
-/// from its edges when `options.chain_edges` chained them (`None` otherwise): what the caller
-/// warns about, as dead reckoning.
+/// What reading a pose file has to say beside its poses ([`read_trajectory_chaining`]): each a
+/// warning the caller gives, one line each ([`warnings`](Self::warnings)).
+#[derive(Debug, Clone, PartialEq, Default)]
+#[non_exhaustive]
+pub struct ReadNotes {
+    /// How a pose graph's poses were chained from its edges (dead reckoning), when
+    /// `chain_edges` chained them.
+    pub chain: Option<EdgeChain>,
+    /// The lines of a pose graph that were not poses or edges between them, when it had some.
+    pub skipped: Option<SkippedRecords>,
+}
+
+impl ReadNotes {
+    /// The notes as one-line sentences, dead reckoning first.
+    pub fn warnings(&self) -> Vec<String> {
+        self.chain.iter().map(ToString::to_string).chain(self.skipped.iter().map(ToString::to_string)).collect()
+    }
+}
+
+/// Reads a pose file as [`read_trajectory_with`], and says what the caller should warn about
+/// ([`ReadNotes`]): how a pose graph's poses were chained from its edges when
+/// `options.chain_edges` chained them (dead reckoning), and the lines of a pose graph that
+/// were skipped (landmarks, `EQUIV`, ...).
 ///
 /// # Errors
 /// As [`read_trajectory_with`].
-pub fn read_trajectory_chaining(
-    path: impl AsRef<Path>,
-    options: &ReadOptions,
-) -> Result<(PoseTable, Option<EdgeChain>)> {
+pub fn read_trajectory_chaining(path: impl AsRef<Path>, options: &ReadOptions) -> Result<(PoseTable, ReadNotes)> {
     let path = path.as_ref();
     let format = match options.format {
         Some(format) => format,
         None => detect(path)?,
     };
     match format {
-        Format::Mcap => return Ok((read_mcap(path, &options.mcap)?, None)),
-        Format::Rosbag2 => return Ok((read_rosbag2(path, &options.mcap)?, None)),
-        Format::Ros1 => return Ok((read_ros1(path, &options.mcap)?, None)),
+        Format::Mcap => return Ok((read_mcap(path, &options.mcap)?, ReadNotes::default())),
+        Format::Rosbag2 => return Ok((read_rosbag2(path, &options.mcap)?, ReadNotes::default())),
+        Format::Ros1 => return Ok((read_ros1(path, &options.mcap)?, ReadNotes::default())),
         _ => {}
     }
     let sniffed = match options.format {
@@ -133,12 +150,12 @@ pub fn read_trajectory_chaining(
         Format::Euroc => parse_euroc(path, lines),
         Format::G2o => {
             let graph = parse_pose_graph(path, lines, &options.timing, options.chain_edges)?;
-            return Ok((graph.vertices, graph.chain));
+            return Ok((graph.vertices, ReadNotes { chain: graph.chain, skipped: graph.skipped }));
         }
         Format::Tuc => parse_tuc(path, lines),
         Format::Mcap | Format::Rosbag2 | Format::Ros1 => unreachable!("logs with topics are read above"),
     }?;
-    Ok((table, None))
+    Ok((table, ReadNotes::default()))
 }
 
 /// Reads a pose file in `format`, or when `None` in the format its extension and first line

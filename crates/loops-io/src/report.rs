@@ -27,8 +27,12 @@ pub struct LoopsReport {
     pub metric: String,
     /// The separation the pairs keep (both 0: the paper's S_γ).
     pub separation: SeparationReport,
-    /// The number of pose pairs in S_γ (in the revisits, with a separation).
+    /// The number of cells of S_γ in the full (t, t′) plane ((i, j) and (j, i) both; in the
+    /// revisits, with a separation).
     pub pair_count: u64,
+    /// The number of pose pairs {i, j}, i < j, of S_γ: the count summaries print, and the sum
+    /// of the components' `pose_pair_count`.
+    pub pose_pair_count: u64,
     /// The mean loop duration over the whole trajectory, seconds.
     pub loop_density_s: f64,
     /// The result's warnings, as sentences.
@@ -116,6 +120,7 @@ impl LoopsReport {
             metric: loops.metric_name().to_owned(),
             separation: loops.separation().into(),
             pair_count: loops.pair_count(),
+            pose_pair_count: loops.pose_pair_count(),
             loop_density_s: loops.loop_density(t[0], t[t.len() - 1], Selection::All, Side::Both, Scale::Seconds)?,
             warnings: loops.warnings().iter().map(ToString::to_string).collect(),
             components: loops.components().iter().map(|c| ComponentReport::new(c, t)).collect(),
@@ -182,6 +187,7 @@ mod tests {
             "trivial",
             "area_s2",
             "pair_count",
+            "pose_pair_count",
             "run_count",
             "holes",
             "t_range_s",

@@ -88,20 +88,6 @@ pub(crate) fn normalized(q: [f64; 4]) -> Option<[f64; 4]> {
     (norm.is_finite() && norm > 0.0).then(|| xyzw(UnitQuaternion::new_unchecked(quaternion(q) / norm)))
 }
 
-/// The pose of `b` in the frame of `a` (`a⁻¹ b`), for unit quaternions: translation and
-/// rotation.
-///
-/// The translation is rotated by the product `a⁻¹ (b − a) a` of nalgebra's quaternions, as the
-/// written g2o files always had it: `UnitQuaternion::inverse_transform_vector` (a cross-product
-/// form) rounds differently in the last bit.
-pub(crate) fn relative_pose(a: ([f64; 3], [f64; 4]), b: ([f64; 3], [f64; 4])) -> ([f64; 3], [f64; 4]) {
-    let rotation_a = quaternion(a.1);
-    let inverse = rotation_a.conjugate();
-    let delta = Quaternion::from_imag(Vector3::from(b.0) - Vector3::from(a.0));
-    let translation = (inverse * delta * rotation_a).imag();
-    (translation.into(), (inverse * quaternion(b.1)).coords.into())
-}
-
 /// The rows of the rotation from ECEF to the local east-north-up frame at `origin` (ECEF
 /// metres, WGS84 geodetic latitude).
 pub(crate) fn ecef_to_enu(origin: [f64; 3]) -> [[f64; 3]; 3] {
@@ -211,6 +197,7 @@ mod tests {
 
     #[test]
     fn relative_pose_composes_back() {
+        use loops_core::se3_between as relative_pose;
         let a = ([1.0, 2.0, 3.0], normalized([0.1, 0.2, 0.3, 0.9]).unwrap());
         let b = ([-4.0, 0.5, 2.0], normalized([-0.3, 0.1, 0.0, 0.8]).unwrap());
         let (t, q) = relative_pose(a, b);
@@ -289,7 +276,7 @@ mod tests {
                 [uniform() * 100.0, uniform() * 100.0, uniform()],
                 normalized([uniform(), 0.1, uniform(), 1.0]).unwrap(),
             );
-            let (t, r) = relative_pose(a, b);
+            let (t, r) = loops_core::se3_between(a, b);
             let (t_ref, r_ref) = reference::relative_pose(a, b);
             assert_eq!((t, r), (t_ref, r_ref), "{a:?} {b:?}");
             let (roll, pitch, yaw) = (uniform() * 3.2, uniform() * 1.6, uniform() * 3.2);

@@ -60,8 +60,13 @@ impl FromStr for SamplesFormat {
 
 /// The CSV header: times in seconds, pose indices, the exact loop component, the detection
 /// cluster and detection index (samples drawn from detections), δ(x_i, x_j) in the metric's
-/// unit, the detection's score and the sampler's name.
-pub const CSV_HEADER: &str = "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler";
+/// unit, the detection's score, the sampler's name, and the relative pose the trajectory
+/// predicts from pose i to pose j ([`loops_core::relative_pose`]: the scan matcher's initial
+/// guess): `dx dy dz` (in the frame of pose i for SE(2) and SE(3); the coordinate difference
+/// for positions alone), `dqx dqy dqz dqw` (SE(2) and SE(3)) and `dtheta_rad` (SE(2)). No
+/// uncertainty column: trajectories hold no covariance.
+pub const CSV_HEADER: &str =
+    "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad";
 
 /// Writes `samples` as CSV: [`CSV_HEADER`], then one line a sample in the samples' order
 /// ((t, t′) order). Unknown values (no pose pair, no component, no score, ...) are empty fields;
@@ -79,7 +84,7 @@ pub const CSV_HEADER: &str = "t_s,t_prime_s,i,j,component,cluster,detection,dist
 /// let mut text = Vec::new();
 /// loops_io::samples_to_csv(&samples, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
-/// assert_eq!(text.lines().nth(1), Some("0,100,,,,0,0,,,one"));
+/// assert_eq!(text.lines().nth(1), Some("0,100,,,,0,0,,,one,,,,,,,,"));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn samples_to_csv<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
@@ -112,14 +117,50 @@ pub struct SampleRow {
     pub score: Option<f64>,
     /// The sampler's name.
     pub sampler: &'static str,
+    /// The translation of the relative pose from pose i to pose j, when there is one.
+    pub dx: Option<f64>,
+    /// See [`dx`](Self::dx).
+    pub dy: Option<f64>,
+    /// See [`dx`](Self::dx).
+    pub dz: Option<f64>,
+    /// The rotation of the relative pose, `[dqx, dqy, dqz, dqw]`, for SE(2) and SE(3).
+    pub dqx: Option<f64>,
+    /// See [`dqx`](Self::dqx).
+    pub dqy: Option<f64>,
+    /// See [`dqx`](Self::dqx).
+    pub dqz: Option<f64>,
+    /// See [`dqx`](Self::dqx).
+    pub dqw: Option<f64>,
+    /// The heading change of the relative pose, radians in (−π, π], for SE(2).
+    pub dtheta_rad: Option<f64>,
 }
 
 /// The columns of [`SampleRow`], as the CSV header names them.
-const SAMPLE_COLUMNS: [&str; 10] =
-    ["t_s", "t_prime_s", "i", "j", "component", "cluster", "detection", "distance", "score", "sampler"];
+const SAMPLE_COLUMNS: [&str; 18] = [
+    "t_s",
+    "t_prime_s",
+    "i",
+    "j",
+    "component",
+    "cluster",
+    "detection",
+    "distance",
+    "score",
+    "sampler",
+    "dx",
+    "dy",
+    "dz",
+    "dqx",
+    "dqy",
+    "dqz",
+    "dqw",
+    "dtheta_rad",
+];
 
 impl From<&Sample> for SampleRow {
     fn from(row: &Sample) -> Self {
+        let guess = row.relative_pose;
+        let rotation = guess.and_then(|g| g.rotation_xyzw);
         Self {
             t_s: row.t_s,
             t_prime_s: row.t_prime_s,
@@ -131,6 +172,14 @@ impl From<&Sample> for SampleRow {
             distance: row.distance,
             score: row.score,
             sampler: row.sampler.name(),
+            dx: guess.map(|g| g.translation[0]),
+            dy: guess.map(|g| g.translation[1]),
+            dz: guess.map(|g| g.translation[2]),
+            dqx: rotation.map(|q| q[0]),
+            dqy: rotation.map(|q| q[1]),
+            dqz: rotation.map(|q| q[2]),
+            dqw: rotation.map(|q| q[3]),
+            dtheta_rad: guess.and_then(|g| g.rotation_rad),
         }
     }
 }
@@ -230,7 +279,7 @@ mod tests {
         let text = String::from_utf8(text).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], CSV_HEADER);
-        assert_eq!(lines[1..], ["0,3,0,3,1,,,0,,alpha", "1,2,1,2,2,,,0,,alpha"]);
+        assert_eq!(lines[1..], ["0,3,0,3,1,,,0,,alpha,0,0,0,,,,,", "1,2,1,2,2,,,0,,alpha,0,0,0,,,,,"]);
     }
 
     #[test]

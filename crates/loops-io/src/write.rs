@@ -9,7 +9,7 @@ use loops_core::Error;
 
 use crate::atomic::write_atomically;
 use crate::error::{IoError, Result, WriteError};
-use crate::rotation::{normalized, relative_pose, yaw_of};
+use crate::rotation::{normalized, yaw_of};
 use crate::table::{PoseTable, exact_seconds};
 
 /// Writes `table` as a TUM trajectory: a `# timestamp tx ty tz qx qy qz qw` header, then one
@@ -180,6 +180,27 @@ pub fn g2o_edges_text(table: &PoseTable, pairs: &[(usize, usize)], options: &G2o
     Ok(lines)
 }
 
+/// The relative pose from row `i` to row `j` of `table` that a g2o edge of [`write_g2o_edges`]
+/// measures ([`loops_core::se3_between`], or [`loops_core::se2_between`] on the headings for a
+/// 2-D table), for the samples' files to give the same guess as the edges. `None` for a table
+/// without orientations (the trajectory's own guess then holds) or a quaternion that does not
+/// normalise.
+pub fn table_relative_pose(table: &PoseTable, i: usize, j: usize) -> Option<loops_core::RelativePose> {
+    table.orientations_xyzw.as_ref()?;
+    let (a, b) = (pose_of(table, i).ok()?, pose_of(table, j).ok()?);
+    if table.dim == 2 {
+        let ([dx, dy], dtheta) = loops_core::se2_between([a.0[0], a.0[1], yaw_of(a.1)], [b.0[0], b.0[1], yaw_of(b.1)]);
+        let (s, c) = (0.5 * dtheta).sin_cos();
+        return Some(loops_core::RelativePose {
+            translation: [dx, dy, 0.0],
+            rotation_xyzw: Some([0.0, 0.0, s, c]),
+            rotation_rad: Some(dtheta),
+        });
+    }
+    let (translation, rotation) = loops_core::se3_between(a, b);
+    Some(loops_core::RelativePose { translation, rotation_xyzw: Some(rotation), rotation_rad: None })
+}
+
 /// A pose of a table for g2o: its position and its unit quaternion (normalised; the identity
 /// for a table without orientations).
 ///
@@ -206,14 +227,12 @@ pub(crate) fn vertex_line(kind: EdgeKind, id: u64, ([x, y, z], q): ([f64; 3], [f
 pub(crate) fn edge_line(kind: EdgeKind, [i, j]: [u64; 2], a: ([f64; 3], [f64; 4]), b: ([f64; 3], [f64; 4])) -> String {
     match kind {
         EdgeKind::Se2 => {
-            let (theta_i, theta_j) = (yaw_of(a.1), yaw_of(b.1));
-            let (s, c) = theta_i.sin_cos();
-            let (dx, dy) = (b.0[0] - a.0[0], b.0[1] - a.0[1]);
-            let dtheta = loops_core::wrap_angle(theta_j - theta_i);
-            format!("EDGE_SE2 {i} {j} {} {} {dtheta} 1 0 0 1 0 1\n", c * dx + s * dy, -s * dx + c * dy)
+            let ([dx, dy], dtheta) =
+                loops_core::se2_between([a.0[0], a.0[1], yaw_of(a.1)], [b.0[0], b.0[1], yaw_of(b.1)]);
+            format!("EDGE_SE2 {i} {j} {dx} {dy} {dtheta} 1 0 0 1 0 1\n")
         }
         EdgeKind::Se3 => {
-            let ([x, y, z], [qx, qy, qz, qw]) = relative_pose(a, b);
+            let ([x, y, z], [qx, qy, qz, qw]) = loops_core::se3_between(a, b);
             format!("EDGE_SE3:QUAT {i} {j} {x} {y} {z} {qx} {qy} {qz} {qw} 1 0 0 0 0 0 1 0 0 0 0 1 0 0 0 1 0 0 1 0 1\n")
         }
     }

@@ -99,7 +99,8 @@ fn an_edge_only_file_is_refused_naming_the_option_and_chained_on_request() {
         assert!(message.contains("3 edge(s) (the first on line 2) but no vertex"), "{message}");
         assert!(message.contains("chain_edges=True (--chain-edges)"), "{message}");
     }
-    let (table, chain) = loops_io::read_trajectory_chaining(&path, &chained()).unwrap();
+    let (table, notes) = loops_io::read_trajectory_chaining(&path, &chained()).unwrap();
+    let chain = notes.chain;
     assert_eq!(table.positions, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]]);
     assert_eq!(table.timestamps_s, [0.0, 1.0, 2.0]);
     assert_eq!(table.source_lines, [2, 2, 3], "the line of the edge that placed each pose");
@@ -109,8 +110,8 @@ fn an_edge_only_file_is_refused_naming_the_option_and_chained_on_request() {
     assert!(chain.to_string().contains("dead reckoning"));
     // A file with vertices is read as before, chain_edges or not.
     let with_vertices = dir.file("v.g2o", "VERTEX_SE2 0 5 5 0\nVERTEX_SE2 1 6 5 0\nEDGE_SE2 0 1 1 0 0\n");
-    let (table, chain) = loops_io::read_trajectory_chaining(&with_vertices, &chained()).unwrap();
-    assert!(chain.is_none());
+    let (table, notes) = loops_io::read_trajectory_chaining(&with_vertices, &chained()).unwrap();
+    assert!(notes.chain.is_none() && notes.warnings().is_empty());
     assert_eq!(table.positions[0], [5.0, 5.0, 0.0]);
     // A rate times the chained poses by their ids.
     let graph = read_pose_graph_with(&path, &chained().timing(Timing::RateHz(4.0))).unwrap();
@@ -289,4 +290,35 @@ fn real_graphs_information_and_their_odometry_chain() {
         eprintln!("{name}: chained odometry within {worst:.2e} m of the vertices");
         assert!(worst < 2e-3, "{name}: {worst}");
     }
+}
+
+/// GTSAM's own graphs: `LANDMARK2` (Victoria Park, City Trees) and `BR` (`example.graph`) lines
+/// are skipped with their poses read, and every skipped tag (TORO's `EQUIV` too) is counted, for
+/// the caller to say so; evo's `.kitti` extension is KITTI.
+#[test]
+fn gtsam_graphs_read_their_poses_and_say_what_was_skipped() {
+    let dir = TempDir::new();
+    let text = "VERTEX2 0 0 0 0\nVERTEX2 1 1 0 0\nEDGE2 0 1 1 0 0 1 0 1 1 0 0\n\
+                LANDMARK2 1 7 2.5 0.3 1 0 1\nBR 1 7 0.2 2.5 0.01 0.1\nEQUIV 0 1\nEQUIV 1 0\n";
+    let path = dir.file("example.graph", text);
+    let (table, notes) = loops_io::read_trajectory_chaining(&path, &loops_io::ReadOptions::default()).unwrap();
+    assert_eq!(table.len(), 2);
+    let warnings = notes.warnings();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].ends_with(
+            "example.graph: skipped 1 LANDMARK2 line (first on line 4), 1 BR line (first on line 5), 2 EQUIV lines \
+             (first on line 6): only pose vertices and the edges between them are read"
+        ),
+        "{}",
+        warnings[0]
+    );
+    let graph = read_pose_graph_with(&path, &loops_io::ReadOptions::default()).unwrap();
+    assert_eq!(graph.skipped.map(|s| s.tags.len()), Some(3));
+    // evo writes KITTI poses as `.kitti`: 12 numbers a line, no times.
+    let kitti = dir.file("traj.kitti", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n");
+    assert_eq!(loops_io::Format::detect(&kitti), Some(loops_io::Format::Kitti));
+    let options = loops_io::ReadOptions::default().timing(Timing::RateHz(10.0));
+    let table = loops_io::read_trajectory_with(&kitti, &options).unwrap();
+    assert_eq!(table.positions[1], [1.0, 0.0, 0.0]);
 }

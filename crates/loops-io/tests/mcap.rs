@@ -213,8 +213,15 @@ fn transform_topics_need_a_pair_when_they_have_several() {
         ),
         "{error}"
     );
-    let error = read_mcap(&path, &McapOptions::default().topic("/tf").frames("map", "laser")).unwrap_err();
-    assert!(error.to_string().contains(r#"no transform from "map" to "laser"; the frame pairs"#), "{error}");
+    // A pair no transform holds is composed along map -> odom -> base_link -> laser, at the
+    // five stamps of base_link -> laser (the link nearest the child); frames not linked fail.
+    let table = read_mcap(&path, &McapOptions::default().topic("/tf").frames("map", "laser")).unwrap();
+    assert_eq!(table.len(), 5);
+    let error = read_mcap(&path, &McapOptions::default().topic("/tf").frames("world", "camera")).unwrap_err();
+    assert!(error.to_string().contains(r#"no transform from "world" to "camera"; the frame pairs"#), "{error}");
+    let error = read_mcap(&path, &McapOptions::default().topic("/tf").frames("map", "camera")).unwrap_err();
+    assert!(matches!(error, IoError::FrameTree { .. }), "{error:?}");
+    assert!(error.to_string().contains(r#"frame "camera" is on no transform"#), "{error}");
     // Foxglove FrameTransforms likewise.
     let path = dir.join("protobuf_zstd.mcap");
     let error = read_mcap(&path, &McapOptions::default().topic("/fox/tfs")).unwrap_err();

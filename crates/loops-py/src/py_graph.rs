@@ -393,6 +393,9 @@ pub(crate) fn read_pose_graph(
     if let Some(chain) = &graph.chain {
         crate::warning::warn_dead_reckoning(py, &chain.to_string())?;
     }
+    if let Some(skipped) = &graph.skipped {
+        crate::warning::warn_dropped_input(py, &skipped.to_string())?;
+    }
     let trajectory = Trajectory::read(traj, axes, metric.is_some().then_some(spec));
     Ok(PoseGraph { graph: Arc::new(graph), trajectory: Py::new(py, trajectory)? })
 }

@@ -231,6 +231,20 @@ impl Loops {
         self.inner.pair_count()
     }
 
+    /// Number of pose pairs {i, j}, i < j, of S_γ (unordered pairs of distinct poses): the
+    /// count the command line's summaries and reports print, the sum of the components'
+    /// ``pose_pair_count``, and what :func:`sample` draws from.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> loops = il.find_loops(il.Trajectory(np.arange(3.0), np.zeros(3)), gamma=1.0, separation=None)
+    ///     >>> loops.pair_count, loops.pose_pair_count
+    ///     (9, 3)
+    #[getter]
+    fn pose_pair_count(&self) -> u64 {
+        self.inner.pose_pair_count()
+    }
+
     /// Warnings about the result (e.g. consecutive poses farther apart than γ), as sentences;
     /// :func:`find_loops` also issues each with :func:`warnings.warn`, in a category of
     /// :class:`LoopsWarning`.
@@ -242,7 +256,8 @@ impl Loops {
     /// The loop components as a :class:`~inexact_loops.Table` (a dict of numpy columns, one row
     /// a component, by id; ``.to_pandas()`` for a DataFrame): ``id`` (int64), ``trivial``
     /// (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
-    /// set for a trivial one), ``pair_count`` (int64, cells, same rule), ``run_count``, ``holes`` (int64),
+    /// set for a trivial one), ``pair_count`` (int64, cells, same rule), ``pose_pair_count`` (int64, pairs
+    /// of distinct poses i < j: they sum to :attr:`pose_pair_count`), ``run_count``, ``holes`` (int64),
     /// ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
     /// ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
     /// ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
@@ -265,6 +280,7 @@ impl Loops {
                 ("trivial", bool_column(py, cs, |c| c.trivial)),
                 ("area_s2", float64_column(py, cs, |c| c.area_s2)),
                 ("pair_count", int64_column(py, cs, |c| c.pair_count as usize)),
+                ("pose_pair_count", int64_column(py, cs, |c| c.pose_pair_count as usize)),
                 ("run_count", int64_column(py, cs, |c| c.run_count)),
                 ("holes", int64_column(py, cs, |c| c.holes as usize)),
                 ("t_min_s", float64_column(py, cs, |c| t[c.i_range[0]])),

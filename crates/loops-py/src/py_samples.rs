@@ -3,11 +3,14 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use numpy::PyArray1;
+use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::convert::{data_frame, id_column, optional_column, to_numpy};
+
+/// The columns of :attr:`Samples.relative_poses`, as the samples' CSV names them.
+const RELATIVE_POSE_COLUMNS: [&str; 8] = ["dx", "dy", "dz", "dqx", "dqy", "dqz", "dqw", "dtheta_rad"];
 use crate::detached;
 use crate::error::Failure;
 use crate::py_clusters::DetectionClusters;
@@ -339,6 +342,42 @@ impl Samples {
         optional_column(py, self.inner.rows().iter().map(|s| s.score), f64::NAN)
     }
 
+    /// The relative pose the trajectory predicts from pose ``i`` to pose ``j`` of each sample:
+    /// the scan matcher's initial guess, shape ``(n, 8)``, columns ``dx, dy, dz, dqx, dqy, dqz,
+    /// dqw, dtheta_rad``: ``T_i⁻¹ T_j`` for SE(3) and SE(2) trajectories (translation in the
+    /// frame of pose ``i``; ``dtheta_rad`` for SE(2) only), the coordinate difference for
+    /// positions alone (up to 3 columns; no rotation). NaN where there is none (no pose pair;
+    /// other manifolds). No uncertainty: trajectories hold no covariance.
+    ///
+    /// Example:
+    ///     >>> import numpy as np, inexact_loops as il
+    ///     >>> traj = il.Trajectory(np.arange(4.0), np.array([0.0, 1.0, 1.0, 0.5]))
+    ///     >>> loops = il.find_loops(traj, gamma=0.6, separation=None)
+    ///     >>> il.sample(loops, "alpha", rate=1.0, seed=0, trajectory=traj).relative_poses[:, 0].tolist()
+    ///     [0.5, 0.0, -0.5, -0.5]
+    #[getter]
+    fn relative_poses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+        let rows: Vec<Vec<f64>> = self
+            .inner
+            .rows()
+            .iter()
+            .map(|s| {
+                let guess = s.relative_pose;
+                let rotation = guess.and_then(|g| g.rotation_xyzw);
+                let mut row = vec![f64::NAN; 8];
+                if let Some(g) = guess {
+                    row[..3].copy_from_slice(&g.translation);
+                }
+                if let Some(q) = rotation {
+                    row[3..7].copy_from_slice(&q);
+                }
+                row[7] = guess.and_then(|g| g.rotation_rad).unwrap_or(f64::NAN);
+                row
+            })
+            .collect();
+        to_numpy(py, rows.concat()).reshape([self.inner.len(), RELATIVE_POSE_COLUMNS.len()])
+    }
+
     /// The same samples placed on the poses of ``loops``' trajectory (where not yet), with the
     /// exact loop component of each (:attr:`component`).
     ///
@@ -386,8 +425,9 @@ impl Samples {
     /// The samples as a ``pandas.DataFrame``, one row a sample in order of (t, t′): columns
     /// ``t``, ``t_prime`` (float64, seconds), ``i``, ``j`` (int64; only when placed on a
     /// trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
-    /// ``distance`` (float64, NaN where not measured) and ``score`` (float64; only when the
-    /// detections had scores) — the getters of the same names.
+    /// ``distance`` (float64, NaN where not measured), ``score`` (float64; only when the
+    /// detections had scores) — the getters of the same names — and, when any sample has one,
+    /// the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`).
     ///
     /// Raises:
     ///     ImportError: pandas is not installed (it is not a dependency of the library).
@@ -399,6 +439,14 @@ impl Samples {
     ///     >>> list(frame.columns), frame["cluster"].tolist()
     ///     (['t', 't_prime', 'component', 'cluster', 'detection', 'distance'], [0, 1])
     fn to_pandas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let guesses = self.inner.rows().iter().any(|s| s.relative_pose.is_some());
+        let relative = if guesses { Some(self.relative_poses(py)?) } else { None };
+        let relative_columns = RELATIVE_POSE_COLUMNS.iter().enumerate().map(|(k, &name)| {
+            relative.as_ref().map(|matrix| {
+                let values: Vec<f64> = matrix.readonly().as_array().column(k).to_vec();
+                (name, to_numpy(py, values).into_any())
+            })
+        });
         data_frame(
             py,
             [
@@ -411,12 +459,15 @@ impl Samples {
                 Some(("detection", self.detection(py).into_any())),
                 Some(("distance", self.distance(py).into_any())),
                 self.score(py).map(|column| ("score", column.into_any())),
-            ],
+            ]
+            .into_iter()
+            .chain(relative_columns),
         )
     }
 
     /// Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
-    /// distance,score,sampler``, then one line a sample; unknown values are empty fields.
+    /// distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad`` (the last eight: the relative
+    /// pose, :attr:`relative_poses`), then one line a sample; unknown values are empty fields.
     /// Atomic (a temporary file renamed into place).
     ///
     /// Raises:
@@ -430,7 +481,7 @@ impl Samples {
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
     ///     >>> samples.to_csv(path)
     ///     >>> open(path).read().splitlines()[1]
-    ///     '0,3,,,,0,0,,,alpha'
+    ///     '0,3,,,,0,0,,,alpha,,,,,,,,'
     #[pyo3(signature = (path, *, overwrite=false))]
     fn to_csv(&self, py: Python<'_>, path: PathBuf, overwrite: bool) -> PyResult<()> {
         self.write(py, path, loops_io::SamplesFormat::Csv, overwrite)

@@ -619,7 +619,10 @@ pub(crate) fn urban_drive(
 ///         listing them, see :func:`list_topics`).
 ///     time: MCAP and bag times from ``"header"`` stamps (the default), ``"log"`` or ``"publish"`` time.
 ///     frames: ``(parent, child)`` frame pair of a transform topic (TF); ``None`` takes the
-///         topic's only pair.
+///         topic's only pair. Frames that no one transform links are composed along the TF
+///         tree, ``/tf_static`` included (``("map", "velodyne")`` through ``odom`` and
+///         ``base_link``), at the stamps of the moving link nearest the child, the others
+///         interpolated there.
 ///     rate_hz: for files without times (KITTI poses, pose graphs): pose i at i / rate_hz s.
 ///     times: for files without times (KITTI poses, pose graphs): a file of one time a line,
 ///         seconds, one per pose in order (KITTI's ``sequences/XX/times.txt``).
@@ -696,6 +699,7 @@ pub(crate) fn read_trajectory(
         }
         options = options.chain_edges(chain_edges);
         let mut chains = Vec::new();
+        let mut skipped = Vec::new();
         let is_mcap =
             |path: &PathBuf| options.format.or_else(|| loops_io::Format::detect(path)) == Some(loops_io::Format::Mcap);
         let mut tables = if paths.len() > 1 && paths.iter().all(is_mcap) {
@@ -703,8 +707,9 @@ pub(crate) fn read_trajectory(
         } else {
             let mut tables = Vec::with_capacity(paths.len());
             for path in paths {
-                let (table, chain) = loops_io::read_trajectory_chaining(path, &options)?;
-                chains.extend(chain);
+                let (table, notes) = loops_io::read_trajectory_chaining(path, &options)?;
+                chains.extend(notes.chain);
+                skipped.extend(notes.skipped);
                 tables.push(table);
             }
             tables
@@ -725,10 +730,14 @@ pub(crate) fn read_trajectory(
             }
         }
         let table = loops_io::PoseTable::join(tables)?;
-        Ok((trajectory_for(&table, &spec, axes, Source::File)?, dropped, chains))
+        Ok((trajectory_for(&table, &spec, axes, Source::File)?, dropped, (chains, skipped)))
     })?;
+    let (chains, skipped) = chains;
     for chain in chains {
         crate::warning::warn_dead_reckoning(py, &chain.to_string())?;
+    }
+    for records in skipped {
+        crate::warning::warn_dropped_input(py, &records.to_string())?;
     }
     for dropped in dropped {
         warn_dropped(

@@ -8,6 +8,12 @@ use super::ReportInput;
 use super::numbers::{duration_text, percent, plural, thousands};
 use super::palette::sampler_name;
 
+/// What the samples were chosen from, named as the loops card names them: detections, or
+/// pose pairs (i < j).
+fn candidates_name(samples: &loops_core::Samples) -> &'static str {
+    if samples.rows().iter().any(|s| s.detection.is_some()) { "detections" } else { "pose pairs" }
+}
+
 /// The summary cards: trajectory, loops, samples.
 pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
     let (traj, loops, samples, quality) = (input.traj, input.loops, input.samples, input.quality);
@@ -47,8 +53,8 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                 dl {
                     dt { "components" }
                     dd { b { (nontrivial) } " non-trivial, " (components.len() - nontrivial) " trivial" }
-                    dt { "pairs in S" sub { "γ" } }
-                    dd { (thousands(loops.pair_count())) }
+                    dt { "pose pairs in S" sub { "γ" } }
+                    dd { (thousands(loops.pose_pair_count())) span.muted { " (i < j)" } }
                     dt { "loop density ρ" }
                     dd {
                         @if let Some(d) = density {
@@ -67,7 +73,7 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                     dt { "sampler" }
                     dd {
                         (sampler_name(samples.sampler())) ": " b { (count) } " samples of "
-                        (thousands(samples.available())) " candidates"
+                        (thousands(samples.available())) " " (candidates_name(samples))
                         @if input.skip_trivial { " (trivial components skipped)" }
                     }
                     dt { "P1 coverage" }
@@ -96,6 +102,13 @@ pub(super) fn cards(input: &ReportInput<'_>) -> Markup {
                         span.muted {
                             "(ln samples on ln area, " (plural(quality.p3_components, "component", "components"))
                             "; σ" sub { "1" } " ≈ 0, σ" sub { "α" } " ≈ 1)"
+                        }
+                    }
+                    @if quality.outside_components() > 0 {
+                        dt { "in no component" }
+                        dd {
+                            (quality.outside_components()) " of " (quality.samples)
+                            span.muted { " samples (not a pair of S" sub { "γ" } "): P1 counts the others" }
                         }
                     }
                     @if quality.outside > 0 {

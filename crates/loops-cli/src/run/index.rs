@@ -24,7 +24,7 @@ pub(crate) fn render(batch: &BatchSummary<'_>) -> String {
             thead {
                 tr {
                     th { "log" } th { "source" } th { "poses" } th { "span (s)" } th { "components" }
-                    th { "non-trivial" } th { "pairs" } th { "loop density (s)" } th { "samples" }
+                    th { "non-trivial" } th { "pose pairs (i < j)" } th { "loop density (s)" } th { "samples" }
                     th { "P1 (non-trivial)" } th { "time (s)" } th { "status" }
                 }
             }
@@ -38,7 +38,7 @@ pub(crate) fn render(batch: &BatchSummary<'_>) -> String {
                             td { (format!("{:.1}", s.span_s)) }
                             td { (s.components) }
                             td { (s.nontrivial_components) }
-                            td { (s.pair_count) }
+                            td { (s.pose_pair_count) }
                             td { (format!("{:.2}", s.loop_density_s)) }
                             td { (s.samples) }
                             td { (s.quality.nontrivial_covered) "/" (s.quality.nontrivial_components) }

@@ -330,6 +330,7 @@ pub(crate) fn analyse(
         nontrivial_components: components.iter().filter(|c| !c.trivial).count(),
         holes: components.iter().map(|c| c.holes).sum(),
         pair_count: loops.pair_count(),
+        pose_pair_count: loops.pose_pair_count(),
         loop_area_s2: loops.loop_area(a, b, Selection::All, Side::Both, Scale::Seconds)?,
         loop_density_s: loops.loop_density(a, b, Selection::All, Side::Both, Scale::Seconds)?,
         samples: samples.len(),

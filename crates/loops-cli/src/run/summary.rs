@@ -62,7 +62,10 @@ pub(crate) struct LogSummary {
     pub(crate) components: usize,
     pub(crate) nontrivial_components: usize,
     pub(crate) holes: u64,
+    /// Cells of S_γ in the full plane ((i, j) and (j, i) both).
     pub(crate) pair_count: u64,
+    /// Pose pairs {i, j}, i < j: the count the pages print.
+    pub(crate) pose_pair_count: u64,
     pub(crate) loop_area_s2: f64,
     pub(crate) loop_density_s: f64,
     pub(crate) samples: usize,

@@ -118,6 +118,7 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
             detection: Some(k),
             distance: None,
             score: det.scores().map(|s| s[k]),
+            relative_pose: None,
             sampler: kind,
         }
     });

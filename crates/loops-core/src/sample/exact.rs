@@ -121,6 +121,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
             detection: None,
             distance: Some(metric.distance(traj.point(i), traj.point(j))),
             score: None,
+            relative_pose: crate::relative_pose(traj, i, j),
             sampler: kind,
         }
     });

@@ -30,6 +30,10 @@ pub struct Sample {
     pub distance: Option<f64>,
     /// The detection's score, when it has one.
     pub score: Option<f64>,
+    /// The pose of x_j in the frame of x_i that the trajectory predicts ([`relative_pose`](crate::relative_pose)):
+    /// the scan matcher's initial guess. `None` without a pose pair, or on a manifold without
+    /// such a guess. No uncertainty goes with it: trajectories hold no covariance.
+    pub relative_pose: Option<crate::RelativePose>,
     /// The sampler that chose it.
     pub sampler: SamplerKind,
 }
@@ -104,8 +108,19 @@ impl Samples {
         Ok(())
     }
 
-    /// Fills in the distance δ(x_i, x_j) of every sample (placing times on the nearest poses
-    /// where pairs are missing). O(samples) distances.
+    /// Sets the relative pose of every sample with a pose pair `(i, j)` to `guess(i, j)`: for
+    /// a caller that holds the poses in another form than the trajectory sampled (orientations
+    /// kept beside positions measured alone), so every output of a pair gives one guess.
+    /// O(samples) calls.
+    pub fn set_relative_poses(&mut self, mut guess: impl FnMut(usize, usize) -> Option<crate::RelativePose>) {
+        for row in &mut self.rows {
+            row.relative_pose = row.pair.and_then(|[i, j]| guess(i, j));
+        }
+    }
+
+    /// Fills in the distance δ(x_i, x_j) and the relative pose ([`relative_pose`](crate::relative_pose))
+    /// of every sample (placing times on the nearest poses where pairs are missing). O(samples)
+    /// distances.
     ///
     /// # Errors
     /// As [`locate`](Self::locate), for `traj`; the metric's dimension error.
@@ -116,6 +131,7 @@ impl Samples {
         for (row, pair) in self.rows.iter_mut().zip(pairs) {
             row.pair = Some(pair);
             row.distance = Some(metric.distance(traj.point(pair[0]), traj.point(pair[1])));
+            row.relative_pose = crate::relative_pose(traj, pair[0], pair[1]);
         }
         self.poses = Some(traj.len());
         Ok(())
