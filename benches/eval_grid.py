@@ -18,7 +18,8 @@ the benchmarks never use). ``--on rounds`` is ``on="estimate"`` with the budget 
 ``--rounds`` rounds (:class:`inexact_loops.evaluate.Rounds`). Verifier models are
 :data:`inexact_loops.evaluate.VERIFIER_MODELS`. Every run appends its row to ``OUT/rows.csv``
 as it finishes and a second invocation skips the blocks already there; the table goes to
-``OUT/ratios.md`` (``--report-only``: the table alone, from ``rows.csv``).
+``OUT/ratios.md`` (``--report-only``: the table alone, from ``rows.csv``; ``--also DIR,...``
+adds the rows of other grids to the table).
 """
 
 from __future__ import annotations
@@ -74,12 +75,16 @@ def arguments() -> argparse.Namespace:
     parser.add_argument("--datasets", default="urban,kitti00")
     parser.add_argument("--budgets", default="100,1000")
     parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--first-seed", type=int, default=0, help="seeds FIRST..FIRST+SEEDS-1")
     parser.add_argument("--on", default="reference,estimate")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of --on rounds")
     parser.add_argument("--verifiers", default="distance-aware")
     parser.add_argument("--outliers", default="0")
     parser.add_argument("--samplers", default=",".join(ev.SAMPLERS + ev.BASELINES))
     parser.add_argument("--report-only", action="store_true")
+    parser.add_argument(
+        "--also", default="", help="comma-separated folders whose rows.csv join the table"
+    )
     return parser.parse_args()
 
 
@@ -93,7 +98,7 @@ def run(args: argparse.Namespace, rows_path: Path) -> None:
         reference, gamma = load(name, Path(args.data))
         if reference is None:
             continue
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             for on in args.on.split(","):
                 for verifier in args.verifiers.split(","):
                     for rate in outliers:
@@ -161,7 +166,10 @@ def main() -> None:
     rows_path = out / "rows.csv"
     if not args.report_only:
         run(args, rows_path)
-    text = report(common.read_rows(rows_path, ev.Results))
+    rows = common.read_rows(rows_path, ev.Results)
+    for folder in filter(None, args.also.split(",")):
+        rows += common.read_rows(Path(folder) / "rows.csv", ev.Results)
+    text = report(rows)
     (out / "ratios.md").write_text(text)
     print(text)
 
