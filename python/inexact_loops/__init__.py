@@ -36,6 +36,7 @@ and :class:`OnlineSampler` picks loop-closure candidates at each keyframe.
 
 from . import metrics
 from ._core import (
+    DEFAULT_SAMPLER,
     Candidate,
     DetectionClusters,
     Detections,
@@ -152,6 +153,7 @@ __all__ = [
     "TiledFleetLoops",
     "Trajectory",
     "Update",
+    "DEFAULT_SAMPLER",
     "__version__",
     "chain_polylines",
     "cluster_detections",

@@ -27,6 +27,7 @@ __all__ = [
     "SampleQuality",
     "Samples",
     "Trajectory",
+    "DEFAULT_SAMPLER",
     "__version__",
     "chain_polylines",
     "cluster_detections",
@@ -80,6 +81,7 @@ __all__ = [
 ]
 
 __version__: str
+DEFAULT_SAMPLER: str
 
 _Side = Literal["both", "begin", "end"]
 _SamplerName = Literal[
@@ -88,6 +90,7 @@ _SamplerName = Literal[
     "rho-dispersed",
     "alpha",
     "closest-first",
+    "closest-then-spread",
     "lio-sam",
     "hdl-graph-slam",
     "cartographer",
@@ -1536,7 +1539,7 @@ def cluster_detections(
 
 def sample(
     source: DetectionClusters | Loops,
-    sampler: _SamplerName | str,
+    sampler: _SamplerName | str | None = None,
     *,
     rate: float | None = None,
     budget: int | None = None,
@@ -1566,8 +1569,10 @@ def sample(
             point), ``"rho-dispersed"`` (σ_ρ's counts spread evenly along each group, each the
             row's closest pair, or best-scored detection), ``"alpha"`` (σ_α: uniform over all
             detections or pairs), ``"closest-first"`` (each group's closest pair, or best-scored
-            detection, first; the rest as ``"rho-dispersed"``), or a baseline of a deployed SLAM
-            system (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
+            detection, first; the rest as ``"rho-dispersed"``), ``"closest-then-spread"`` (the
+            default, :data:`DEFAULT_SAMPLER`: σ_ρ's counts, each group's first pick its closest
+            pair, the rest as ``"rho-dispersed"``), or a baseline of a deployed SLAM system
+            (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
             ``"time-gap"``.
         rate: the sampler's own rate (c, r, or a probability in (0, 1] for σ_α and the
             baselines); or
@@ -2217,7 +2222,7 @@ def find_fleet_loops(
 
 def sample_fleet(
     loops: FleetLoops,
-    sampler: _SamplerName | str,
+    sampler: _SamplerName | str | None = None,
     *,
     rate: float | None = None,
     budget: int | None = None,
@@ -2581,7 +2586,7 @@ class TiledFleetLoops:
     def _from_state(cls, state: bytes) -> TiledFleetLoops: ...
     def draw(
         self,
-        sampler: str,
+        sampler: str | None = None,
         *,
         rate: float | None = None,
         budget: int | None = None,
@@ -2591,11 +2596,12 @@ class TiledFleetLoops:
     ) -> KeyedDraw:
         """Plans a keyed draw of samples (see :class:`KeyedDraw`): the same samples as
         :func:`sample_fleet` on the same sessions, with the samplers of components (``"one"``,
-        ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``; not the baselines,
+        ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``,
+        ``"closest-then-spread"``; not the baselines,
         whose rules run over whole trajectories).
 
         Args:
-            sampler: the sampler's name.
+            sampler: the sampler's name (``None``: :data:`DEFAULT_SAMPLER`).
             rate, budget: as :func:`sample_fleet` (exactly one).
             seed: the seed.
             between_only: only the components between two sessions.
@@ -3309,6 +3315,9 @@ class OnlineSampler:
             Give at most one.
         first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
             component has a pair to offer.
+        closest_in_row: the first of a row's draws for a component is its closest pair in the
+            row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
+            keyframe); ``False``: all uniform (the paper's σ_ρ).
         separation: only pairs this far apart along the trajectory: ``None`` (every pair), a path
             length, or a :class:`Separation` (e.g. ``Separation.for_gamma(gamma)``, the
             revisits of :func:`find_loops`' default).
@@ -3340,6 +3349,7 @@ class OnlineSampler:
         cap_per_minute: float | None = None,
         cap_per_metre: float | None = None,
         first_on_appearance: bool = True,
+        closest_in_row: bool = True,
         separation: Separation | float | Literal["none"] | None = None,
         seed: int = 0,
     ) -> OnlineSampler: ...

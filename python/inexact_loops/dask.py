@@ -8,7 +8,7 @@ its two sessions are read, and merges the tiles' summaries in a tree of reductio
 
     loops = find_fleet_loops_dask(paths, gamma=20.0)                 # this machine
     loops = find_fleet_loops_dask(paths, gamma=20.0, client=client)  # the cluster
-    samples = loops.sample("rho", budget=500, seed=0)                # sample_fleet's samples
+    samples = loops.sample(budget=500, seed=0)                       # sample_fleet's samples
 
 What travels: the client sends paths, tiles and options, never poses. One task per session
 reads it and returns its pose count, span and block balls (:class:`~inexact_loops.SessionBlocks`,
@@ -63,6 +63,7 @@ from typing import Any
 import numpy as np
 
 from . import _console, _core
+from ._core import DEFAULT_SAMPLER
 from .errors import InvalidParameterError, LoopsError, LoopsIOError
 from .table import Table
 
@@ -937,7 +938,7 @@ class FleetRun:
 
     def sample(
         self,
-        sampler: str = "rho",
+        sampler: str = DEFAULT_SAMPLER,
         *,
         rate: float | None = None,
         budget: int | None = None,
@@ -951,9 +952,10 @@ class FleetRun:
         scan on its worker, and rescans a tile only where they are gone (:data:`RUNS_KEPT`).
 
         Args:
-            sampler: ``"one"``, ``"rho"``, ``"rho-dispersed"``, ``"alpha"`` or
-                ``"closest-first"`` (the baselines run over whole trajectories: use
-                :func:`sample_fleet`).
+            sampler: ``"one"``, ``"rho"``, ``"rho-dispersed"``, ``"alpha"``,
+                ``"closest-first"`` or ``"closest-then-spread"`` (the default,
+                :data:`~inexact_loops.DEFAULT_SAMPLER`; the baselines run over whole
+                trajectories: use :func:`sample_fleet`).
             rate, budget, seed, between_only, skip_trivial: as :func:`sample_fleet`
                 (neither rate nor budget: a budget of 1000).
 
@@ -1381,7 +1383,7 @@ def run_fleet_dask(
     *,
     out: str | os.PathLike[str],
     force: bool = False,
-    sampler: str | None = "rho",
+    sampler: str | None = DEFAULT_SAMPLER,
     rate: float | None = None,
     budget: int | None = None,
     seed: int = 0,
@@ -1598,8 +1600,9 @@ def _parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--sampler",
-        default="rho",
-        help="one, rho, rho-dispersed, alpha or closest-first [default: rho]; none for no samples",
+        default=DEFAULT_SAMPLER,
+        help="one, rho, rho-dispersed, alpha, closest-first or closest-then-spread "
+        f"[default: {DEFAULT_SAMPLER}]; none for no samples",
     )
     p.add_argument(
         "--budget", type=int, help="exactly this many samples [default: 1000 without --rate]"

@@ -97,6 +97,7 @@ if TYPE_CHECKING:
 __all__ = [
     "BASELINES",
     "FLEET_COLUMNS",
+    "VERIFIER_MODELS",
     "SAMPLERS",
     "SESSION_COLUMNS",
     "BackEnd",
@@ -109,6 +110,7 @@ __all__ = [
     "Odometry",
     "Poses",
     "Results",
+    "Rounds",
     "Verifier",
     "ape_errors",
     "ate",
@@ -133,7 +135,14 @@ __all__ = [
 ]
 
 #: The samplers of the paper and beyond (:func:`inexact_loops.sample`'s names).
-SAMPLERS: tuple[str, ...] = ("one", "rho", "rho-dispersed", "closest-first", "alpha")
+SAMPLERS: tuple[str, ...] = (
+    "one",
+    "rho",
+    "rho-dispersed",
+    "closest-first",
+    "closest-then-spread",
+    "alpha",
+)
 #: The candidate rules of deployed SLAM systems, under the same budget.
 BASELINES: tuple[str, ...] = ("lio-sam", "hdl-graph-slam", "cartographer", "time-gap")
 
@@ -682,6 +691,9 @@ class CandidateRule:
             gamma).
         detection_rate: for ``source="detections"``.
         epsilon_s: for ``source="detections"``.
+        rounds: for ``on="estimate"``: the budget spent in this many rounds, each chosen on
+            the estimate the matches of the rounds before corrected (:class:`Rounds`); 1: all
+            at once on the odometry's estimate.
     """
 
     sampler: str
@@ -693,6 +705,7 @@ class CandidateRule:
     gamma_inflation: float = 2.0
     detection_rate: float = 0.01
     epsilon_s: float = 30.0
+    rounds: int = 1
 
     def __post_init__(self) -> None:
         _check_rule("CandidateRule", self.sampler, self.budget, self.gamma)
@@ -705,6 +718,11 @@ class CandidateRule:
         if not (math.isfinite(self.gamma_inflation) and self.gamma_inflation >= 1):
             raise InvalidParameterError(
                 f"CandidateRule: gamma_inflation = {self.gamma_inflation} must be >= 1"
+            )
+        if self.rounds < 1 or (self.rounds > 1 and self.on != "estimate"):
+            raise InvalidParameterError(
+                f"CandidateRule: rounds = {self.rounds}: at least 1, and more only with "
+                'on="estimate"'
             )
 
     @property
@@ -728,19 +746,23 @@ def _check_rule(kind: str, sampler: str, budget: int, gamma: float) -> None:
 
 
 def choose_candidates(
-    poses: Poses, rule: CandidateRule, *, seed: int
+    poses: Poses, rule: CandidateRule, *, seed: int, gamma_inflation: float | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Candidate pairs ``(i, j)``, i < j, chosen by ``rule`` on ``poses`` (the reference, or the
     odometry's estimate for ``rule.on == "estimate"``: pass the poses the rule is to see).
 
-    Loops are found on the positions (Euclidean, metres); warnings of the samplers (a budget above
-    the candidates, below the components) are kept quiet: the returned count says it.
+    Loops are found on the positions (Euclidean, metres) within ``rule.gamma`` times the
+    inflation (``gamma_inflation``, else ``rule.gamma_inflation`` on the estimate, 1 on the
+    reference); warnings of the samplers (a budget above the candidates, below the components)
+    are kept quiet: the returned count says it.
     """
     import warnings
 
     from .errors import LoopsWarning
 
-    gamma = rule.gamma * (rule.gamma_inflation if rule.on == "estimate" else 1.0)
+    if gamma_inflation is None:
+        gamma_inflation = rule.gamma_inflation if rule.on == "estimate" else 1.0
+    gamma = rule.gamma * gamma_inflation
     separation: Separation | None = Separation.for_gamma(rule.gamma) if rule.separation else None
     traj = poses.to_trajectory()
     with warnings.catch_warnings():
@@ -760,6 +782,113 @@ def choose_candidates(
     if i is None or j is None:  # pragma: no cover - samples on a trajectory always have pairs
         raise RuntimeError("samples without pose indices")
     return np.minimum(i, j), np.maximum(i, j)
+
+
+class Rounds:
+    """Candidates in rounds, for a pipeline without ground truth: choose some pairs on the
+    current estimate, match them, optimise, and choose the next ones on the corrected estimate.
+
+    The budget (``rule.budget``) is spent in ``rule.rounds`` rounds of equal shares (the last
+    takes what the others left). Round k chooses with ``rule``'s sampler on the estimate it is
+    given, gamma inflated by a factor that starts at ``rule.gamma_inflation`` and shrinks as the
+    estimate settles: after each round, ``1 + min(gamma_inflation - 1, c / gamma)``, with c the
+    median distance (metres) the last optimisation moved the poses. A pair is tried once: the
+    pairs of earlier rounds are left out (the sampler is asked for that many more, and a seeded
+    draw keeps the round's share). Each round's sampler seed is ``seed + round``.
+
+    Drive it with your own matcher and back end::
+
+        rounds = Rounds(CandidateRule("closest-then-spread", 1000, 15.0, on="estimate",
+                                      rounds=3), seed=0)
+        estimate = odometry_estimate
+        while not rounds.done:
+            i, j = rounds.choose(estimate)          # pairs to match, i < j
+            ...                                    # match them, add the loop factors
+            corrected = ...                        # optimise the pose graph
+            rounds.update(estimate, corrected)
+            estimate = corrected
+
+    Example:
+        >>> import numpy as np
+        >>> from inexact_loops.evaluate import CandidateRule, Poses, Rounds
+        >>> angle = np.linspace(0, 4 * np.pi, 400)
+        >>> xy = 50 * np.c_[np.cos(angle), np.sin(angle)]
+        >>> circle = Poses.from_positions(np.arange(400.0), xy)
+        >>> rounds = Rounds(CandidateRule("closest-then-spread", 30, 10.0, on="estimate", rounds=3),
+        ...                 seed=0)
+        >>> i, j = rounds.choose(circle)
+        >>> len(i), rounds.round, rounds.gamma_inflation
+        (10, 1, 2.0)
+        >>> rounds.update(circle, circle)               # nothing moved: gamma back to 10 m
+        >>> rounds.gamma_inflation
+        1.0
+    """
+
+    def __init__(self, rule: CandidateRule, *, seed: int) -> None:
+        if rule.on != "estimate":
+            raise InvalidParameterError('Rounds: the rule chooses on="estimate"')
+        self.rule = rule
+        self.seed = int(seed)
+        #: Rounds chosen so far.
+        self.round = 0
+        #: The inflation of gamma the next round uses.
+        self.gamma_inflation = float(rule.gamma_inflation)
+        self._tried: set[tuple[int, int]] = set()
+
+    @property
+    def done(self) -> bool:
+        """Whether every round is chosen (or the budget is spent)."""
+        return self.round >= self.rule.rounds or len(self._tried) >= self.rule.budget
+
+    @property
+    def tried(self) -> int:
+        """Pairs chosen so far."""
+        return len(self._tried)
+
+    def choose(self, estimate: Poses) -> tuple[np.ndarray, np.ndarray]:
+        """The next round's pairs ``(i, j)``, i < j, chosen on ``estimate``, none of them chosen
+        before; empty once :attr:`done`."""
+        if self.done:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        left = self.rule.budget - len(self._tried)
+        share = (
+            left if self.round == self.rule.rounds - 1 else left // (self.rule.rounds - self.round)
+        )
+        share = max(share, 1)
+        seed = self.seed + self.round
+        ask = dataclasses.replace(self.rule, budget=share + len(self._tried), rounds=1)
+        i, j = choose_candidates(estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation)
+        pairs = zip(i.tolist(), j.tolist(), strict=True)
+        fresh = np.array([p not in self._tried for p in pairs], bool)
+        i, j = i[fresh], j[fresh]
+        if len(i) > share:
+            rng = np.random.default_rng(np.random.SeedSequence([seed, 0x0C0]))
+            keep = np.sort(rng.choice(len(i), share, replace=False))
+            i, j = i[keep], j[keep]
+        self._tried.update(zip(i.tolist(), j.tolist(), strict=True))
+        self.round += 1
+        return i, j
+
+    def update(self, before: Poses, after: Poses) -> None:
+        """Tells the rounds how the last optimisation moved the estimate (``before`` to
+        ``after``, the same poses): the next round's gamma inflation."""
+        moved = np.linalg.norm(after.positions - before.positions, axis=1)
+        c = float(np.median(moved)) if len(moved) else 0.0
+        top = self.rule.gamma_inflation - 1.0
+        self.gamma_inflation = 1.0 + min(top, c / self.rule.gamma)
+
+
+def _concat_matches(parts: Sequence[Matches]) -> Matches:
+    """The matches of several rounds as one."""
+    return Matches(
+        np.concatenate([m.i for m in parts]),
+        np.concatenate([m.j for m in parts]),
+        np.concatenate([m.relative for m in parts]),
+        np.concatenate([m.translation_sigma_m for m in parts]),
+        np.concatenate([m.rotation_sigma_rad for m in parts]),
+        np.concatenate([m.wrong for m in parts]),
+        sum(m.tried for m in parts),
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -854,8 +983,10 @@ class Verifier:
       (SE(3): a ball) of radius ``outlier_radius_m`` and a rotation uniform (a heading in
       [-pi, pi); SE(3): uniform on SO(3)), whatever the true one is;
     - otherwise it **succeeds** with probability
-      ``p(d) = success_max * 2 ** (-(d / half_success_distance_m) ** 2)`` (p falls to half at
-      ``half_success_distance_m``: scans far apart overlap less), and returns the true relative
+      ``p(d) = success_max * 2 ** (-(d / half_success_distance_m) ** 2)`` for
+      ``d <= max_range_m``, 0 beyond (p falls to half at ``half_success_distance_m``: scans far
+      apart overlap less; ``half_success_distance_m = inf`` makes it blind to the distance up
+      to ``max_range_m``), and returns the true relative
       pose with noise ``N(0, sigma_t(d)**2)`` per translation axis and ``N(0, sigma_r(d)**2)`` per
       rotation axis, ``sigma_t(d) = translation_sigma_m + translation_sigma_per_m * d`` and
       ``sigma_r(d) = rotation_sigma_rad + rotation_sigma_rad_per_m * d``;
@@ -864,6 +995,13 @@ class Verifier:
     A match reports its standard deviations as the matcher would know them: sigma_t and
     sigma_r at the distance it measured (the norm of its returned translation), so a wrong match
     claims to be as good as a right one of that length.
+
+    :data:`VERIFIER_MODELS` names three matchers, so that a ranking of samplers can be checked
+    not to be an artefact of one: ``"distance-aware"`` (the defaults), ``"steep"`` (success
+    halves at 8 m instead of 20 m and the noise grows twice as fast with d: a matcher that needs
+    the poses close) and ``"blind"`` (success 0.8 at any d up to 40 m, none beyond, a noise that
+    does not grow with d: a matcher with a global descriptor and a wide initial search). Each
+    with ``outlier_rate=0.1`` gives its version with 10 % wrong matches.
 
     Example:
         >>> import numpy as np
@@ -882,20 +1020,20 @@ class Verifier:
     rotation_sigma_rad_per_m: float = 0.0002
     outlier_rate: float = 0.0
     outlier_radius_m: float = 20.0
+    max_range_m: float = math.inf
 
     def __post_init__(self) -> None:
+        if not (self.half_success_distance_m > 0 and self.max_range_m > 0):
+            raise InvalidParameterError(
+                "Verifier: half_success_distance_m and max_range_m must be > 0 (inf allowed)"
+            )
         if not 0.0 <= self.success_max <= 1.0:
             raise InvalidParameterError(f"Verifier: success_max = {self.success_max} not in [0, 1]")
         if not 0.0 <= self.outlier_rate <= 1.0:
             raise InvalidParameterError(
                 f"Verifier: outlier_rate = {self.outlier_rate} not in [0, 1]"
             )
-        for name in (
-            "half_success_distance_m",
-            "translation_sigma_m",
-            "rotation_sigma_rad",
-            "outlier_radius_m",
-        ):
+        for name in ("translation_sigma_m", "rotation_sigma_rad", "outlier_radius_m"):
             if not (math.isfinite(getattr(self, name)) and getattr(self, name) > 0):
                 raise InvalidParameterError(f"Verifier: {name} must be > 0")
         for name in ("translation_sigma_per_m", "rotation_sigma_rad_per_m"):
@@ -905,7 +1043,8 @@ class Verifier:
     def success_probability(self, distance_m: npt.ArrayLike) -> np.ndarray:
         """p(d): the probability that a right match succeeds."""
         d = np.asarray(distance_m, dtype=float)
-        return self.success_max * np.exp2(-((d / self.half_success_distance_m) ** 2))
+        p = self.success_max * np.exp2(-((d / self.half_success_distance_m) ** 2))
+        return np.where(d <= self.max_range_m, p, 0.0)
 
     def sigmas(self, distance_m: npt.ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """sigma_t(d) (metres) and sigma_r(d) (radians)."""
@@ -969,6 +1108,32 @@ class Verifier:
         claimed = np.linalg.norm(measured[:, :d, d], axis=1)
         c_t, c_r = self.sigmas(claimed)
         return Matches(i[keep], j[keep], measured[keep], c_t[keep], c_r[keep], wrong[keep], len(i))
+
+
+#: Named verifier models (:class:`Verifier`): today's distance-aware default, a steeper one and
+#: a distance-blind one. ``dataclasses.replace(model, outlier_rate=0.1)`` adds wrong matches.
+VERIFIER_MODELS: Mapping[str, Verifier] = {
+    "distance-aware": Verifier(),
+    "steep": Verifier(
+        half_success_distance_m=8.0, translation_sigma_per_m=0.01, rotation_sigma_rad_per_m=0.0004
+    ),
+    "blind": Verifier(
+        success_max=0.8,
+        half_success_distance_m=math.inf,
+        max_range_m=40.0,
+        translation_sigma_m=0.1,
+        translation_sigma_per_m=0.0,
+        rotation_sigma_rad=0.004,
+        rotation_sigma_rad_per_m=0.0,
+    ),
+}
+
+
+def _verifier_name(verifier: Verifier) -> str:
+    """The name of ``verifier``'s model in :data:`VERIFIER_MODELS` (its outlier rate aside), or
+    ``"custom"``."""
+    plain = dataclasses.replace(verifier, outlier_rate=0.0)
+    return next((k for k, v in VERIFIER_MODELS.items() if v == plain), "custom")
 
 
 def _uniform_rotations(u1: np.ndarray, u2: np.ndarray, u3: np.ndarray) -> np.ndarray:
@@ -1252,6 +1417,8 @@ COLUMNS: tuple[str, ...] = (
     "on",
     "separation",
     "outlier_rate",
+    "verifier",
+    "rounds",
     "budget",
     "seed",
     "candidates",
@@ -1271,7 +1438,9 @@ class Results:
 
     Columns (:data:`COLUMNS`): ``dataset``; ``sampler`` (``"odometry"`` for the odometry alone);
     ``source`` (``exact`` / ``detections``); ``on`` (``reference`` / ``estimate``);
-    ``separation`` (bool); ``outlier_rate``; ``budget``; ``seed``; ``candidates`` (pairs the
+    ``separation`` (bool); ``outlier_rate``; ``verifier`` (the name of its model in
+    :data:`VERIFIER_MODELS`, or ``custom``); ``rounds`` (the candidates' rounds, 0 for the
+    odometry alone); ``budget``; ``seed``; ``candidates`` (pairs the
     sampler returned, at most the budget); ``matches`` (accepted by the verifier); ``wrong``
     (of them wrong); ``ate_m``; ``rpe_m`` (RPE over ``rpe_delta_m`` of path); ``odometry_ate_m``
     (the same seed's odometry alone); ``seconds`` (candidates, verification and optimisation).
@@ -1285,10 +1454,21 @@ class Results:
         return Table({c: np.asarray([r[c] for r in self.rows]) for c in COLUMNS})
 
     def summary(self) -> list[dict[str, Any]]:
-        """Per (dataset, sampler, source, on, separation, outlier_rate, budget): the number of
+        """Per (dataset, sampler, source, on, separation, outlier_rate, verifier, rounds, budget):
+        the number of
         seeds, the median ATE and RPE and the ATE's spread (min, max, and the interquartile
         range), the median candidates, matches and wrong matches."""
-        keys = ("dataset", "sampler", "source", "on", "separation", "outlier_rate", "budget")
+        keys = (
+            "dataset",
+            "sampler",
+            "source",
+            "on",
+            "separation",
+            "outlier_rate",
+            "verifier",
+            "rounds",
+            "budget",
+        )
         return [
             group
             | {"rpe_median_m": float(np.median([r["rpe_m"] for r in rows]))}
@@ -1310,7 +1490,7 @@ class Results:
     @classmethod
     def from_csv(cls, path: str | PathLike[str]) -> Results:
         """Reads rows written by :meth:`to_csv`."""
-        ints = {"budget", "seed", "candidates", "matches", "wrong"}
+        ints = {"budget", "seed", "candidates", "matches", "wrong", "rounds"}
         floats = {"outlier_rate", "ate_m", "rpe_m", "odometry_ate_m", "seconds"}
         return cls(_read_csv(path, COLUMNS, ints=ints, floats=floats, bools={"separation"}))
 
@@ -1361,6 +1541,10 @@ def _write_csv(
             writer.writerow({c: r[c] for c in columns})
 
 
+#: Values of columns that older result files lack.
+_MISSING: Mapping[str, str] = {"verifier": "distance-aware", "rounds": "1"}
+
+
 def _read_csv(
     path: str | PathLike[str],
     columns: Sequence[str],
@@ -1378,7 +1562,8 @@ def _read_csv(
         for raw in csv.DictReader(f):
             row: dict[str, Any] = {}
             for c in columns:
-                v = raw[c]
+                # Files written before a column existed: its value for them.
+                v = raw.get(c) or _MISSING.get(c, "")
                 if c in ints:
                     row[c] = int(v)
                 elif c in floats:
@@ -1410,7 +1595,8 @@ def evaluate_one(
     verifier: Verifier | None = None,
     backend: BackEnd | None = None,
 ) -> tuple[Poses, Matches | None, tuple[np.ndarray, np.ndarray]]:
-    """One run: candidates by ``rule`` (``None``: the odometry alone), verified, optimised.
+    """One run: candidates by ``rule`` (``None``: the odometry alone), verified, optimised; in
+    ``rule.rounds`` rounds (:class:`Rounds`), each verified and optimised before the next.
 
     Returns the optimised poses, the matches and the candidate pairs.
     """
@@ -1418,6 +1604,18 @@ def evaluate_one(
     if rule is None:
         empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
         return optimize(odometry, None, backend), None, empty
+    if rule.rounds > 1:
+        rounds = Rounds(rule, seed=seed)
+        estimate, parts, chosen = odometry.estimate, [], []
+        while not rounds.done:
+            i, j = rounds.choose(estimate)
+            parts.append(verifier.verify(reference, i, j, seed=seed))
+            chosen.append((i, j))
+            corrected = optimize(odometry, _concat_matches(parts), backend)
+            rounds.update(estimate, corrected)
+            estimate = corrected
+        pairs = (np.concatenate([c[0] for c in chosen]), np.concatenate([c[1] for c in chosen]))
+        return estimate, _concat_matches(parts), pairs
     chooser = reference if rule.on == "reference" else odometry.estimate
     i, j = choose_candidates(chooser, rule, seed=seed)
     matches = verifier.verify(reference, i, j, seed=seed)
@@ -1432,6 +1630,7 @@ def _grid(
     samplers: Sequence[str],
     detection_samplers: Sequence[str],
     budgets: Sequence[int],
+    rounds: int = 1,
     **rule: Any,
 ) -> Iterable[tuple[float, CandidateRule]]:
     """The runs of :func:`evaluate`, in its order: detections only for ``detection_samplers``
@@ -1456,6 +1655,7 @@ def _grid(
                                     separation=bool(separation),
                                     source=source,
                                     on=where,
+                                    rounds=rounds if where == "estimate" else 1,
                                     **rule,
                                 ),
                             )
@@ -1474,9 +1674,10 @@ def evaluate(
     detection_samplers: Sequence[str] | None = None,
     on: Sequence[Literal["reference", "estimate"]] = ("reference",),
     outlier_rates: Sequence[float] = (0.0,),
-    verifier: Verifier | None = None,
+    verifier: Verifier | str | None = None,
     backend: BackEnd | None = None,
     gamma_inflation: float = 2.0,
+    rounds: int = 1,
     detection_rate: float = 0.01,
     epsilon_s: float = 30.0,
     rpe_delta_m: float = 100.0,
@@ -1501,9 +1702,11 @@ def evaluate(
         detection_samplers: the samplers run on detections (default: every non-baseline).
         on: ``"reference"``, ``"estimate"`` or both (:class:`CandidateRule`).
         outlier_rates: the verifier's ``outlier_rate`` values to run.
-        verifier: the verifier (its ``outlier_rate`` is replaced by each of ``outlier_rates``).
+        verifier: the verifier (its ``outlier_rate`` is replaced by each of ``outlier_rates``),
+            or the name of one of :data:`VERIFIER_MODELS`.
         backend: the back end.
-        gamma_inflation, detection_rate, epsilon_s: as in :class:`CandidateRule`.
+        gamma_inflation, rounds, detection_rate, epsilon_s: as in :class:`CandidateRule`
+            (``rounds`` for the runs on the estimate).
         rpe_delta_m: the RPE's path delta (metres, pairs from the reference).
         dataset: a name for the rows.
         include_odometry: add a row per seed for the odometry alone (sampler ``"odometry"``).
@@ -1512,7 +1715,15 @@ def evaluate(
     Returns:
         :class:`Results`.
     """
+    if isinstance(verifier, str):
+        if verifier not in VERIFIER_MODELS:
+            raise InvalidParameterError(
+                f"evaluate: unknown verifier model {verifier!r}: expected one of "
+                + ", ".join(VERIFIER_MODELS)
+            )
+        verifier = VERIFIER_MODELS[verifier]
     verifier = verifier or Verifier()
+    verifier_name = _verifier_name(verifier)
     backend = backend or BackEnd()
     drift = (
         odometry
@@ -1556,6 +1767,8 @@ def evaluate(
             "on": rule.on if rule else "",
             "separation": rule.separation if rule else False,
             "outlier_rate": float(outlier_rate),
+            "verifier": verifier_name,
+            "rounds": rule.rounds if rule else 0,
             "budget": rule.budget if rule else 0,
             "candidates": candidates,
             "matches": 0 if matches is None else len(matches),
@@ -1585,6 +1798,7 @@ def evaluate(
             samplers,
             detection_samplers,
             budgets,
+            rounds,
             gamma=gamma,
             gamma_inflation=gamma_inflation,
             detection_rate=detection_rate,
@@ -1615,6 +1829,7 @@ COLOURS: Mapping[str, str] = {
     "rho": "forestgreen",
     "rho-dispersed": "darkorange",
     "closest-first": "crimson",
+    "closest-then-spread": "black",
     "alpha": "magenta",
     "lio-sam": "0.35",
     "hdl-graph-slam": "sienna",
@@ -1922,6 +2137,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="choose candidates on the reference, on the odometry's estimate, or both",
     )
     parser.add_argument("--gamma-inflation", type=float, default=2.0)
+    parser.add_argument(
+        "--rounds",
+        type=int,
+        default=1,
+        help="with --on estimate: spend the budget in this many rounds, each chosen on the "
+        "estimate the earlier rounds' matches corrected (default 1: all at once)",
+    )
+    parser.add_argument(
+        "--verifier",
+        default="distance-aware",
+        choices=list(VERIFIER_MODELS),
+        help="the scan matcher's stand-in (VERIFIER_MODELS in inexact_loops.evaluate)",
+    )
     parser.add_argument("--outliers", default="0", help="comma-separated outlier rates")
     parser.add_argument("--kernel", default="cauchy", choices=["cauchy", "huber", "gauss", "gnc"])
     parser.add_argument("--force", action="store_true", help="write into an existing --out")
@@ -1997,8 +2225,10 @@ def _main_one(args: Any) -> None:
         sources=["exact", "detections"] if args.source == "both" else [args.source],
         on=["reference", "estimate"] if args.on == "both" else [args.on],
         outlier_rates=_csv_list(args.outliers, float),
+        verifier=args.verifier,
         backend=BackEnd(kernel=args.kernel),
         gamma_inflation=args.gamma_inflation,
+        rounds=args.rounds,
         dataset=os.path.basename(args.poses[0]),
         progress=lambda r: print(
             f"loops-eval: seed {r['seed']} {r['sampler']:>15} {r['on'] or '':>9} "

@@ -1207,6 +1207,32 @@ def test_sample_errors(traj, loops, clusters):
         il.sample(loops, "lio-sam", budget=1, seed=0, trajectory=traj, skip_trivial=True)
 
 
+def test_the_default_sampler_is_the_cores_everywhere():
+    """``sample``, ``sample_fleet`` and the online sampler take the core's default when no
+    sampler is named: closest-then-spread, its first pick in each component the closest pair."""
+    assert il.DEFAULT_SAMPLER == "closest-then-spread"
+    drive = il.urban_drive(duration_s=1200.0, seed=4)
+    found = il.find_loops(drive, gamma=40.0)
+    plain = il.sample(found, budget=200, seed=3, trajectory=drive)
+    named = il.sample(found, il.DEFAULT_SAMPLER, budget=200, seed=3, trajectory=drive)
+    assert plain.sampler == il.DEFAULT_SAMPLER
+    assert np.array_equal(plain.i, named.i) and np.array_equal(plain.j, named.j)
+    pairs = set(zip(plain.i.tolist(), plain.j.tolist(), strict=True))
+    table = found.components
+    nontrivial = ~table["trivial"]
+    closest = zip(
+        table["closest_i"][nontrivial].tolist(),
+        table["closest_j"][nontrivial].tolist(),
+        strict=True,
+    )
+    for i, j in closest:
+        assert (min(i, j), max(i, j)) in pairs
+    fleet = il.urban_fleet(vehicles=2, duration_s=300.0, seed=1)
+    fleet_loops = il.find_fleet_loops(fleet, gamma=20.0)
+    assert il.sample_fleet(fleet_loops, budget=20, seed=0).sampler == il.DEFAULT_SAMPLER
+    assert "closest_in_row=True" in repr(il.OnlineSampler())
+
+
 def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
     drive = il.urban_drive(duration_s=1200.0, seed=4)
     found = il.find_loops(drive, gamma=40.0, separation=None)
@@ -1214,7 +1240,7 @@ def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
     trivial = set(table["id"][table["trivial"]].tolist())
     nontrivial = set(table["id"][~table["trivial"]].tolist())
     assert trivial and len(nontrivial) > 5
-    for sampler in ["one", "rho", "rho-dispersed", "alpha", "closest-first"]:
+    for sampler in ["one", "rho", "rho-dispersed", "alpha", "closest-first", "closest-then-spread"]:
         plain = il.sample(found, sampler, budget=300, seed=3, trajectory=drive)
         only = il.sample(found, sampler, budget=300, seed=3, trajectory=drive, skip_trivial=True)
         assert set(plain.component.tolist()) & trivial, sampler

@@ -509,6 +509,7 @@ SAMPLERS = [
     ("rho-dispersed", {"budget": 40}),
     ("alpha", {"budget": 30}),
     ("closest-first", {"budget": 50}),
+    ("closest-then-spread", {"budget": 50}),
     ("rho", {"rate": 0.2}),
     ("alpha", {"rate": 0.02}),
 ]

@@ -9,6 +9,7 @@ table and plot. The back-end tests skip, saying why, when GTSAM is not installed
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import subprocess
@@ -548,3 +549,74 @@ def test_loops_eval_command(tmp_path):
     )
     assert missing.returncode == 2 and "nowhere.tum" in missing.stderr
     assert len(missing.stderr.strip().splitlines()) == 1
+
+
+def test_verifier_models_follow_their_laws():
+    """The three named models: the steep one falls to half at 8 m, the blind one does not
+    depend on the distance up to its range and fails beyond; 10 % wrong matches on each."""
+    d = np.array([0.0, 8.0, 20.0, 39.0, 41.0])
+    aware, steep, blind = (ev.VERIFIER_MODELS[k] for k in ("distance-aware", "steep", "blind"))
+    assert aware == ev.Verifier()
+    np.testing.assert_allclose(aware.success_probability(d)[[0, 2]], [0.95, 0.475])
+    np.testing.assert_allclose(steep.success_probability(d)[[0, 1]], [0.95, 0.475])
+    np.testing.assert_allclose(blind.success_probability(d), [0.8, 0.8, 0.8, 0.8, 0.0])
+    np.testing.assert_allclose(blind.sigmas(d)[0], 0.1)
+    # Counted: a blind model's matches do not thin out with the distance.
+    n = 4000
+    poses = ev.Poses.from_positions(
+        np.arange(n + 1.0), np.c_[np.r_[0.0, np.full(n, 30.0)], np.zeros(n + 1)]
+    )
+    matches = blind.verify(poses, np.zeros(n, np.int64), np.arange(1, n + 1), seed=3)
+    assert abs(len(matches) / n - 0.8) < 0.03
+    wrong = dataclasses.replace(steep, outlier_rate=0.1).verify(
+        poses, np.zeros(n, np.int64), np.arange(1, n + 1), seed=3
+    )
+    assert abs(wrong.wrong.sum() / n - 0.1) < 0.02
+    with pytest.raises(il.InvalidParameterError):
+        ev.Verifier(max_range_m=0.0)
+    with pytest.raises(il.InvalidParameterError, match="unknown verifier model"):
+        ev.evaluate(circuit(), gamma=10.0, verifier="perfect")
+
+
+def test_rounds_choose_on_the_estimate_they_are_given():
+    """A round's candidates move when the estimate moves; a pair is tried once; the budget is
+    spent in the rounds; the inflation of gamma shrinks as the estimate settles."""
+    reference = circuit(laps=3.0, n=600)
+    drifted = ev.DriftModel(heading_bias_rad_per_m=2e-3).simulate(reference, seed=0).estimate
+    rule = ev.CandidateRule("closest-then-spread", 60, 8.0, on="estimate", rounds=3)
+    on_reference, on_drifted = ev.Rounds(rule, seed=1), ev.Rounds(rule, seed=1)
+    a = set(zip(*(x.tolist() for x in on_reference.choose(reference)), strict=True))
+    b = set(zip(*(x.tolist() for x in on_drifted.choose(drifted)), strict=True))
+    assert len(a) == len(b) == 20
+    assert len(a & b) < 10, f"{len(a & b)} of 20 pairs the same on a drifted estimate"
+    # The next rounds: no pair again, the budget spent, gamma back towards 1x once settled.
+    on_reference.update(drifted, reference)
+    assert on_reference.gamma_inflation == rule.gamma_inflation  # moved by far more than gamma
+    chosen = set(a)
+    while not on_reference.done:
+        i, j = on_reference.choose(reference)
+        new = set(zip(i.tolist(), j.tolist(), strict=True))
+        assert not new & chosen
+        chosen |= new
+        on_reference.update(reference, reference)
+        assert on_reference.gamma_inflation == 1.0
+    assert len(chosen) == on_reference.tried == 60
+    with pytest.raises(il.InvalidParameterError):
+        ev.CandidateRule("rho", 10, 8.0, rounds=2)
+
+
+@needs_gtsam
+def test_rounds_in_the_evaluation_match_more_of_their_candidates():
+    """Candidates in rounds on a drifted estimate: later rounds choose on the corrected
+    estimate, so more of the same budget are revisits the verifier accepts, and the map is no
+    worse than with all of them chosen at once."""
+    reference = circuit(laps=3.0, n=600)
+    odometry = ev.DriftModel(heading_bias_rad_per_m=5e-4).simulate(reference, seed=0)
+    ate, matched = {}, {}
+    for rounds in (1, 3):
+        rule = ev.CandidateRule("closest-then-spread", 60, 8.0, on="estimate", rounds=rounds)
+        estimate, matches, pairs = ev.evaluate_one(reference, odometry, rule, seed=0)
+        assert matches is not None and len(pairs[0]) <= 60
+        ate[rounds], matched[rounds] = ev.ate(reference, estimate), len(matches)
+    assert matched[3] > matched[1] + 5, matched
+    assert ate[3] <= ate[1], ate

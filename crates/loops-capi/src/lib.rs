@@ -378,6 +378,8 @@ impl LoopsSamplerOptions {
             first_on_appearance: self.first_on_appearance,
             separation: Separation { path: self.separation_path, time_s: self.separation_time_s },
             seed: self.seed,
+            // The C options keep their layout: a row's pick is the default sampler's.
+            ..OnlineSamplerOptions::default()
         })
     }
 }

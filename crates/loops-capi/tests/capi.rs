@@ -246,6 +246,7 @@ fn candidates_equal_the_rust_apis_whatever_the_buffer() {
         first_on_appearance: true,
         separation: Separation::NONE,
         seed: 7,
+        ..OnlineSamplerOptions::default()
     })
     .unwrap();
     let mut expected = Vec::new();

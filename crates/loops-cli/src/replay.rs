@@ -68,6 +68,10 @@ struct OnlineSamplerArgs {
     /// No candidate at a component's first appearance (P1 online): only the drawn ones.
     #[arg(long)]
     no_first: bool,
+    /// Every drawn candidate uniform in its row (the paper's σ_ρ), not the row's closest pair
+    /// first (the default sampler's rule).
+    #[arg(long)]
+    uniform_in_row: bool,
     /// Seed of the random choices.
     #[arg(long, default_value_t = OnlineSamplerOptions::default().seed)]
     seed: u64,
@@ -80,7 +84,14 @@ impl OnlineSamplerArgs {
             (None, Some(c)) => Cap::PerMetre(c),
             (None, None) => Cap::None,
         };
-        OnlineSamplerOptions { rate: self.rate, cap, first_on_appearance: !self.no_first, separation, seed: self.seed }
+        OnlineSamplerOptions {
+            rate: self.rate,
+            cap,
+            first_on_appearance: !self.no_first,
+            closest_in_row: OnlineSamplerOptions::default().closest_in_row && !self.uniform_in_row,
+            separation,
+            seed: self.seed,
+        }
     }
 }
 

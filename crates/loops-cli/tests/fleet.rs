@@ -68,7 +68,10 @@ fn fleet_files_agree_with_the_core() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     let stdout = String::from_utf8_lossy(&output.stdout);
     let err = stderr(&output);
-    assert!(err.contains(" poses, gamma 40 (euclidean), sampler rho (budget 300), results to "), "{err}");
+    assert!(
+        err.contains(" poses, gamma 40 (euclidean), sampler closest-then-spread (budget 300), results to "),
+        "{err}"
+    );
     assert!(err.contains("separation: path >= 160 (the default"), "{err}");
     assert!(err.contains("loops: pruning kd-tree (auto"), "{err}");
 

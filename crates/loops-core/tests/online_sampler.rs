@@ -68,17 +68,18 @@ fn options_strategy() -> impl Strategy<Value = OnlineSamplerOptions> {
     (
         prop_oneof![Just(0.0), 0.0..3.0f64, Just(1.0)],
         prop_oneof![Just(Cap::None), (0.5..30.0f64).prop_map(Cap::PerMinute), (0.01..2.0f64).prop_map(Cap::PerMetre)],
-        any::<bool>(),
+        (any::<bool>(), any::<bool>()),
         prop_oneof![
             Just(Separation::NONE),
             (0.0..4.0f64, 0.0..3.0f64).prop_map(|(p, t)| Separation { path: p, time_s: t })
         ],
         any::<u64>(),
     )
-        .prop_map(|(rate, cap, first_on_appearance, separation, seed)| OnlineSamplerOptions {
+        .prop_map(|(rate, cap, (first_on_appearance, closest_in_row), separation, seed)| OnlineSamplerOptions {
             rate,
             cap,
             first_on_appearance,
+            closest_in_row,
             separation,
             seed,
         })
@@ -255,8 +256,13 @@ fn the_rate_and_the_spread_are_sigma_rho() {
     let traj = drive(1800.0, 11);
     let gamma = 30.0;
     for rate in [0.37, 2.5] {
-        let options =
-            OnlineSamplerOptions { rate, first_on_appearance: false, seed: 2, ..OnlineSamplerOptions::default() };
+        let options = OnlineSamplerOptions {
+            rate,
+            first_on_appearance: false,
+            closest_in_row: false,
+            seed: 2,
+            ..OnlineSamplerOptions::default()
+        };
         let (_, candidates, updates) = run(&traj, gamma, options, &[1]);
         let offered = offers(&traj, &updates, Separation::NONE);
         let (low, p) = (rate.floor(), rate.fract());
@@ -312,6 +318,38 @@ fn the_rate_and_the_spread_are_sigma_rho() {
         // The 99.9% point of χ² with 9 degrees of freedom.
         assert!(chi2 < 27.88, "rate {rate}: χ² = {chi2:.1} over {bins_found:?} against {bins_expected:?}");
     }
+}
+
+/// The default's pick in a row: at rate 1 every drawn candidate is the closest pair its
+/// component offers in that row (measured here by brute force over the offered pairs); without
+/// `closest_in_row` most are not.
+#[test]
+fn the_default_draws_the_closest_pair_of_each_row() {
+    let traj = drive(1200.0, 4);
+    let gamma = 30.0;
+    let options = OnlineSamplerOptions { rate: 1.0, first_on_appearance: false, ..OnlineSamplerOptions::default() };
+    assert!(options.closest_in_row, "the default sampler takes a row's closest pair");
+    let closest_share = |options: OnlineSamplerOptions| {
+        let (_, candidates, updates) = run(&traj, gamma, options, &[1]);
+        let offered = offers(&traj, &updates, Separation::NONE);
+        let distance = |j: usize, n: usize| {
+            let (a, b) = (traj.point(j), traj.point(n));
+            a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>().sqrt()
+        };
+        let mut closest = 0;
+        for c in &candidates {
+            let n = c.keyframe;
+            let (_, _, spans) = offered.iter().find(|(row, id, _)| *row == n && *id == c.component).unwrap();
+            let best = spans.iter().flat_map(|&[a, b]| a..=b).map(|j| distance(j, n)).fold(f64::INFINITY, f64::min);
+            closest += usize::from(distance(c.pair[0], n) <= best + 1e-9);
+        }
+        (closest, candidates.len())
+    };
+    let (closest, all) = closest_share(options);
+    assert!(all > 1000, "{all} candidates");
+    assert_eq!(closest, all, "{closest} of {all} candidates are their row's closest pair");
+    let (uniform, all) = closest_share(OnlineSamplerOptions { closest_in_row: false, ..options });
+    assert!(uniform < all / 2, "uniform draws: {uniform} of {all} the closest");
 }
 
 #[test]

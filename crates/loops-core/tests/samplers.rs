@@ -10,8 +10,14 @@ use loops_core::{
     with_threads,
 };
 
-const SIGMAS: [SamplerKind; 5] =
-    [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha, SamplerKind::ClosestFirst];
+const SIGMAS: [SamplerKind; 6] = [
+    SamplerKind::One,
+    SamplerKind::Rho,
+    SamplerKind::RhoDispersed,
+    SamplerKind::Alpha,
+    SamplerKind::ClosestFirst,
+    SamplerKind::ClosestThenSpread,
+];
 const BASELINES: [SamplerKind; 4] =
     [SamplerKind::LioSam, SamplerKind::HdlGraphSlam, SamplerKind::Cartographer, SamplerKind::TimeGap];
 
@@ -217,6 +223,81 @@ fn closest_first_takes_every_closest_pair_then_disperses() {
     for row in samples.rows().iter().filter(|r| !components[r.component.unwrap()].trivial) {
         assert_eq!(row.pair.unwrap(), closest(row.component.unwrap()));
     }
+}
+
+/// Closest-then-spread (the default): every component's closest pair first when the budget
+/// covers the components, then σ_ρ's counts, in proportion to the rows (the first pick counts
+/// towards them, unlike closest-first's one-plus-a-share), spread one per row.
+#[test]
+fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
+    assert_eq!(SamplerKind::default(), SamplerKind::DEFAULT);
+    assert_eq!(SamplerKind::DEFAULT, SamplerKind::ClosestThenSpread);
+    let s = setup();
+    let components = s.loops.components();
+    let groups = samplable(&s.loops);
+    let rows_of = |c: usize| -> f64 {
+        let rows: BTreeSet<usize> =
+            s.loops.runs().filter(|r| r.component == c && r.end > r.row).map(|r| r.row).collect();
+        (rows.last().unwrap() - rows.first().unwrap() + 1) as f64
+    };
+    let counts = |kind, budget| -> BTreeMap<usize, usize> {
+        let samples =
+            sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler::new(kind, SampleSize::Budget(budget), 6)).unwrap();
+        assert_eq!(samples.len(), budget);
+        let mut counts = BTreeMap::new();
+        for r in samples.rows() {
+            *counts.entry(r.component.unwrap()).or_insert(0) += 1;
+        }
+        counts
+    };
+    for budget in [groups.len(), groups.len() + 5, 3 * groups.len(), 1500] {
+        let sampler = Sampler::new(SamplerKind::ClosestThenSpread, SampleSize::Budget(budget), 6);
+        let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+        assert!(samples.warnings().is_empty(), "{:?}", samples.warnings());
+        let pairs: BTreeSet<[usize; 2]> = samples.rows().iter().map(|r| r.pair.unwrap()).collect();
+        assert_eq!(pairs.len(), budget, "a pair twice");
+        for &c in groups.iter().filter(|&&c| !components[c].trivial) {
+            let [i, j] = components[c].closest_pair;
+            assert!(pairs.contains(&[i.min(j), i.max(j)]), "budget {budget}: component {c} without its closest pair");
+        }
+        // The counts: at least one each, then in proportion to the rows; s fitted on the
+        // components above the floor, each count within rounding of s · rows.
+        let mine = counts(SamplerKind::ClosestThenSpread, budget);
+        assert_eq!(mine.len(), groups.len(), "budget {budget}: P1 fails");
+        let above: Vec<(usize, usize)> = mine.iter().filter(|&(_, &k)| k > 1).map(|(&c, &k)| (c, k)).collect();
+        if above.len() > 3 {
+            let scale =
+                above.iter().map(|&(_, k)| k as f64).sum::<f64>() / above.iter().map(|&(c, _)| rows_of(c)).sum::<f64>();
+            for &(c, k) in &above {
+                let want = scale * rows_of(c);
+                assert!((k as f64 - want).abs() < 1.5, "budget {budget}: component {c}: {k} samples for {want:.2}");
+            }
+            for (&c, _) in mine.iter().filter(|&(_, &k)| k == 1) {
+                assert!(
+                    scale * rows_of(c) < 2.5,
+                    "budget {budget}: component {c} at the floor with {} rows",
+                    rows_of(c)
+                );
+            }
+        }
+        // Closest-first gives every component one plus a share: more to the small ones.
+        if budget == 3 * groups.len() {
+            let first = counts(SamplerKind::ClosestFirst, budget);
+            let mut rows: Vec<f64> = mine.keys().map(|&c| rows_of(c)).collect();
+            rows.sort_by(f64::total_cmp);
+            let quartile = rows[rows.len() / 4];
+            let small = |k: &BTreeMap<usize, usize>| {
+                mine.keys().filter(|c| rows_of(**c) <= quartile).map(|c| k[c]).sum::<usize>()
+            };
+            assert!(small(&mine) > 0);
+            assert!(small(&mine) < small(&first), "small components: {} against {}", small(&mine), small(&first));
+        }
+    }
+    // A budget below the components: that many components, each with its closest pair.
+    let sampler = Sampler::new(SamplerKind::ClosestThenSpread, SampleSize::Budget(groups.len() / 2), 0);
+    let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+    assert_eq!(samples.len(), groups.len() / 2);
+    assert!(matches!(samples.warnings(), [SampleWarning::BudgetBelowGroups { .. }]));
 }
 
 /// On detection clusters, closest-first takes each cluster's best-scored detection first.

@@ -18,8 +18,14 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use support::fleets::tour;
 
-const SIGMAS: [SamplerKind; 5] =
-    [SamplerKind::One, SamplerKind::Rho, SamplerKind::RhoDispersed, SamplerKind::Alpha, SamplerKind::ClosestFirst];
+const SIGMAS: [SamplerKind; 6] = [
+    SamplerKind::One,
+    SamplerKind::Rho,
+    SamplerKind::RhoDispersed,
+    SamplerKind::Alpha,
+    SamplerKind::ClosestFirst,
+    SamplerKind::ClosestThenSpread,
+];
 
 /// Random walks in a 30 m square that cross each other often, with stops (repeated poses).
 fn walks(seed: u64) -> Vec<Trajectory> {

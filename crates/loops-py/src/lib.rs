@@ -144,6 +144,7 @@ pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 #[pymodule]
 fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    module.add("DEFAULT_SAMPLER", loops_core::SamplerKind::DEFAULT.name())?;
     module.add_class::<py_trajectory::Trajectory>()?;
     module.add_class::<py_loops::Loops>()?;
     module.add_class::<py_separation::Separation>()?;

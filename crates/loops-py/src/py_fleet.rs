@@ -864,14 +864,14 @@ pub(crate) fn overlap_matrix<'py>(
 ///     >>> bool((rows["session_a"] != rows["session_b"]).all()), len(samples)
 ///     (True, 50)
 #[pyfunction]
-#[pyo3(signature = (loops, sampler, *, rate=None, budget=None, seed, between_only=false, metric=None, threads=None,
+#[pyo3(signature = (loops, sampler=None, *, rate=None, budget=None, seed, between_only=false, metric=None, threads=None,
     skip_trivial=false, lio_sam_keyframe_step=None, lio_sam_period_s=None, lio_sam_min_age_s=None, hdl_keyframe_step=None,
     hdl_min_travel=None, hdl_edge_spacing=None, cartographer_min_gap_s=None, time_gap_s=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sample_fleet(
     py: Python<'_>,
     loops: &FleetLoops,
-    sampler: &str,
+    sampler: Option<&str>,
     rate: Option<f64>,
     budget: Option<usize>,
     seed: u64,

@@ -25,6 +25,9 @@ use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 ///         Give at most one.
 ///     first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
 ///         component has a pair to offer.
+///     closest_in_row: the first of a row's draws for a component is its closest pair in the
+///         row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
+///         keyframe); ``False``: all uniform (the paper's σ_ρ).
 ///     separation: only pairs this far apart along the trajectory: ``None`` (every pair), a path
 ///         length, or a :class:`Separation` (e.g. ``Separation.for_gamma(gamma)``, the
 ///         revisits of :func:`find_loops`' default).
@@ -86,15 +89,18 @@ pub(crate) struct Candidate {
 impl OnlineSampler {
     #[new]
     #[pyo3(signature = (*, rate=OnlineSamplerOptions::default().rate, cap_per_minute=None, cap_per_metre=None,
-        first_on_appearance=OnlineSamplerOptions::default().first_on_appearance, separation=None,
+        first_on_appearance=OnlineSamplerOptions::default().first_on_appearance,
+        closest_in_row=OnlineSamplerOptions::default().closest_in_row, separation=None,
         seed=OnlineSamplerOptions::default().seed))]
     #[pyo3(text_signature = "(*, rate=1.0, cap_per_minute=None, cap_per_metre=None, first_on_appearance=True, \
-        separation=None, seed=0)")]
+        closest_in_row=True, separation=None, seed=0)")]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         rate: f64,
         cap_per_minute: Option<f64>,
         cap_per_metre: Option<f64>,
         first_on_appearance: bool,
+        closest_in_row: bool,
         separation: Option<SeparationArg>,
         seed: u64,
     ) -> PyResult<Self> {
@@ -117,7 +123,7 @@ impl OnlineSampler {
                 ));
             }
         };
-        let options = OnlineSamplerOptions { rate, cap, first_on_appearance, separation, seed };
+        let options = OnlineSamplerOptions { rate, cap, first_on_appearance, closest_in_row, separation, seed };
         let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
         Ok(Self { options: *inner.options(), state: Shared::new(SamplerState { inner }) })
     }
@@ -130,10 +136,11 @@ impl OnlineSampler {
             Cap::PerMetre(c) => format!(", cap_per_metre={c}"),
         };
         format!(
-            "OnlineSampler(rate={}{cap}, first_on_appearance={}, separation=Separation(path={:?}, time_s={:?}), \
-             seed={})",
+            "OnlineSampler(rate={}{cap}, first_on_appearance={}, closest_in_row={}, separation=Separation(path={:?}, \
+             time_s={:?}), seed={})",
             o.rate,
             if o.first_on_appearance { "True" } else { "False" },
+            if o.closest_in_row { "True" } else { "False" },
             o.separation.path,
             o.separation.time_s,
             o.seed

@@ -51,17 +51,23 @@ fn measured(
     })
 }
 
-/// The sampler named `sampler` (parsed), drawing `rate` or `budget` (one of them) with `seed`,
-/// from the keywords of the functions that sample; the baselines' parameters are the library
-/// defaults.
+/// The sampler named `sampler` (parsed; `None`: the library's default,
+/// [`SamplerKind::DEFAULT`]).
+pub(crate) fn sampler_kind(sampler: Option<&str>) -> PyResult<SamplerKind> {
+    Ok(sampler.map(str::parse).transpose().map_err(Failure::from)?.unwrap_or(SamplerKind::DEFAULT))
+}
+
+/// The sampler named `sampler` ([`sampler_kind`]), drawing `rate` or `budget` (one of them) with
+/// `seed`, from the keywords of the functions that sample; the baselines' parameters are the
+/// library defaults.
 pub(crate) fn sampler_of(
-    sampler: &str,
+    sampler: Option<&str>,
     rate: Option<f64>,
     budget: Option<usize>,
     seed: u64,
     skip_trivial: bool,
 ) -> PyResult<Sampler> {
-    let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
+    let kind = sampler_kind(sampler)?;
     let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
     Ok(Sampler { skip_trivial, ..Sampler::new(kind, size, seed) })
 }
@@ -108,8 +114,10 @@ pub(crate) fn baseline_params(
 ///         point), ``"rho-dispersed"`` (σ_ρ's counts spread evenly along each group, each the
 ///         row's closest pair, or best-scored detection), ``"alpha"`` (σ_α: uniform over all
 ///         detections or pairs), ``"closest-first"`` (each group's closest pair, or best-scored
-///         detection, first; the rest as ``"rho-dispersed"``), or a baseline of a deployed SLAM
-///         system (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
+///         detection, first; the rest as ``"rho-dispersed"``), ``"closest-then-spread"`` (the
+///         default, :data:`DEFAULT_SAMPLER`: σ_ρ's counts, each group's first pick its closest
+///         pair, the rest as ``"rho-dispersed"``), or a baseline of a deployed SLAM system
+///         (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
 ///         ``"time-gap"``.
 ///     rate: the sampler's own rate (c, r, or a probability in (0, 1] for σ_α and the
 ///         baselines); or
@@ -161,14 +169,14 @@ pub(crate) fn baseline_params(
 ///     >>> sorted(samples.cluster.tolist()) == list(range(len(clusters)))
 ///     True
 #[pyfunction]
-#[pyo3(signature = (source, sampler, *, rate=None, budget=None, seed, trajectory=None, metric=None, threads=None,
+#[pyo3(signature = (source, sampler=None, *, rate=None, budget=None, seed, trajectory=None, metric=None, threads=None,
     skip_trivial=false, lio_sam_keyframe_step=None, lio_sam_period_s=None, lio_sam_min_age_s=None, hdl_keyframe_step=None,
     hdl_min_travel=None, hdl_edge_spacing=None, cartographer_min_gap_s=None, time_gap_s=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn sample(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
-    sampler: &str,
+    sampler: Option<&str>,
     rate: Option<f64>,
     budget: Option<usize>,
     seed: u64,

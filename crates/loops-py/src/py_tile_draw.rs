@@ -14,7 +14,7 @@ use crate::py_separation::SeparationArg;
 use crate::py_tile::{Tile, TileScan, TileSummary};
 use crate::py_trajectory::Trajectory;
 use crate::shared::Shared;
-use loops_core::{SampleSize, Sampler, SamplerKind};
+use loops_core::{SampleSize, Sampler};
 
 /// A column of names as a numpy array of ``str``.
 fn names_column<'py>(py: Python<'py>, values: Vec<&str>) -> PyResult<Bound<'py, PyAny>> {
@@ -44,14 +44,14 @@ pub(crate) struct KeyedDraw {
 pub(crate) fn plan_draw(
     py: Python<'_>,
     (merged, starts, names): (&Arc<loops_core::MergedLoops>, &[usize], &[String]),
-    sampler: &str,
+    sampler: Option<&str>,
     rate: Option<f64>,
     budget: Option<usize>,
     seed: u64,
     between_only: bool,
     skip_trivial: bool,
 ) -> PyResult<KeyedDraw> {
-    let kind: SamplerKind = sampler.parse().map_err(Failure::from)?;
+    let kind = crate::py_samples::sampler_kind(sampler)?;
     let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
     let spec = Sampler { skip_trivial, ..Sampler::new(kind, size, seed) };
     let (merged, starts) = (Arc::clone(merged), starts.to_vec());

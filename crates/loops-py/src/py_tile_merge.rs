@@ -218,11 +218,12 @@ impl TiledFleetLoops {
 
     /// Plans a keyed draw of samples (see :class:`KeyedDraw`): the same samples as
     /// :func:`sample_fleet` on the same sessions, with the samplers of components (``"one"``,
-    /// ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``; not the baselines,
+    /// ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``,
+    /// ``"closest-then-spread"``; not the baselines,
     /// whose rules run over whole trajectories).
     ///
     /// Args:
-    ///     sampler: the sampler's name.
+    ///     sampler: the sampler's name (``None``: :data:`DEFAULT_SAMPLER`).
     ///     rate, budget: as :func:`sample_fleet` (exactly one).
     ///     seed: the seed.
     ///     between_only: only the components between two sessions.
@@ -235,12 +236,12 @@ impl TiledFleetLoops {
     ///     InvalidParameterError: an unknown sampler, a baseline, both or neither of rate and
     ///         budget, a budget of 0, a rate out of range, a result read from a pickle (which
     ///         holds no merge); ``TooManySamplesError`` as :func:`sample_fleet`.
-    #[pyo3(signature = (sampler, *, rate=None, budget=None, seed, between_only=false, skip_trivial=false))]
+    #[pyo3(signature = (sampler=None, *, rate=None, budget=None, seed, between_only=false, skip_trivial=false))]
     #[allow(clippy::too_many_arguments)]
     fn draw(
         &self,
         py: Python<'_>,
-        sampler: &str,
+        sampler: Option<&str>,
         rate: Option<f64>,
         budget: Option<usize>,
         seed: u64,

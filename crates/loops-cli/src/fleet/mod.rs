@@ -74,7 +74,7 @@ pub(crate) struct FleetArgs {
     #[command(flatten)]
     analysis: AnalysisArgs,
     /// Sample only pairs of two different sessions (map merging): the budget goes to the places
-    /// where sessions overlap (one, rho, rho-dispersed, alpha, closest-first).
+    /// where sessions overlap (any sampler but the baselines).
     #[arg(long)]
     between_only: bool,
     /// Far-field pruning: auto, hierarchy or kd-tree (auto: a KD-tree over chunk balls for

@@ -82,6 +82,7 @@ pub(crate) fn sampler_name(kind: SamplerKind) -> Markup {
         SamplerKind::RhoDispersed => "σ<sub>ρ</sub> dispersed",
         SamplerKind::Alpha => "σ<sub>α</sub>",
         SamplerKind::ClosestFirst => "closest-first σ<sub>ρ</sub>",
+        SamplerKind::ClosestThenSpread => "closest-then-spread σ<sub>ρ</sub>",
         SamplerKind::LioSam => "LIO-SAM",
         SamplerKind::HdlGraphSlam => "hdl_graph_slam",
         SamplerKind::Cartographer => "Cartographer",

@@ -8,6 +8,7 @@ use super::engine::{ComponentId, OnlineLoops, PushStamp, RowRun, Update};
 use crate::draw::choose_indices;
 use crate::error::{Error, Result};
 use crate::metric::Metric;
+use crate::sample::SamplerKind;
 use crate::separation::Separation;
 use crate::spec::with_metric;
 
@@ -39,6 +40,11 @@ pub struct OnlineSamplerOptions {
     /// P1 online: a component's first candidate comes in the first row where it has a pair to
     /// offer (at its creation, for a component off the diagonal): the closest such pair.
     pub first_on_appearance: bool,
+    /// The first of a row's draws for a component is its closest pair in the row (the likeliest
+    /// match), the others uniform; `false`: all uniform (the paper's σ_ρ). The default follows
+    /// the default sampler ([`SamplerKind::DEFAULT`]): each row is one time of the component,
+    /// so taking its closest pair spreads the candidates in time as the batch sampler does.
+    pub closest_in_row: bool,
     /// Only pairs this far apart along the trajectory ([`Separation::NONE`]: every pair j < n).
     pub separation: Separation,
     /// The seed: every random choice is keyed by (seed, pose, component), so that pushing one
@@ -47,9 +53,17 @@ pub struct OnlineSamplerOptions {
 }
 
 impl Default for OnlineSamplerOptions {
-    /// σ_ρ at r = 1, no cap, P1 online, no separation, seed 0.
+    /// σ_ρ at r = 1 with the default sampler's pick in a row, no cap, P1 online, no separation,
+    /// seed 0.
     fn default() -> Self {
-        Self { rate: 1.0, cap: Cap::None, first_on_appearance: true, separation: Separation::NONE, seed: 0 }
+        Self {
+            rate: 1.0,
+            cap: Cap::None,
+            first_on_appearance: true,
+            closest_in_row: SamplerKind::DEFAULT.picks_closest_in_row(),
+            separation: Separation::NONE,
+            seed: 0,
+        }
     }
 }
 
@@ -76,7 +90,9 @@ pub struct Candidate {
 /// 1. P1 online ([`first_on_appearance`](OnlineSamplerOptions::first_on_appearance)): the first
 ///    time the component (with every component merged into it) has such a pair, its closest
 ///    one is a candidate, whatever the rate and the cap (a bucket starts full).
-/// 2. σ_ρ: ⌊r⌋ or ⌈r⌉ distinct pairs (⌈r⌉ with probability r − ⌊r⌋), uniformly among them,
+/// 2. σ_ρ: ⌊r⌋ or ⌈r⌉ distinct pairs (⌈r⌉ with probability r − ⌊r⌋): with
+///    [`closest_in_row`](OnlineSamplerOptions::closest_in_row) (the default) the first of them
+///    the row's closest pair, the others uniformly among the rest; without it all uniformly;
 ///    dropping the one the first rule took.
 /// 3. The [`Cap`]: a candidate takes a token from the component's bucket, and is dropped when
 ///    there is none. Merged components keep the smaller of their buckets.
@@ -237,7 +253,14 @@ impl OnlineSampler {
             }
             let mut rng = keyed_rng(self.options.seed, n, c);
             let rate = self.options.rate;
-            let draws = rate.floor() as u64 + u64::from(rng.random::<f64>() < rate.fract());
+            let mut draws = rate.floor() as u64 + u64::from(rng.random::<f64>() < rate.fract());
+            if self.options.closest_in_row && draws > 0 {
+                let j = closest_available(loops, n, &available);
+                if columns.iter().all(|&(taken, _)| taken != j) {
+                    columns.push((j, false));
+                }
+                draws -= 1;
+            }
             for k in choose_indices(count, draws.min(count), &mut rng) {
                 let j = column_at(&available, k);
                 if columns.iter().all(|&(taken, _)| taken != j) {

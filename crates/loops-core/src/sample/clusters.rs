@@ -14,8 +14,9 @@ use crate::interrupt::Interrupt;
 use crate::memory::try_collect;
 
 /// Samples detections, grouped by their ε-graph clusters (paper, Sec. 5.3–5.5): σ_1, σ_ρ, the
-/// dispersed σ_ρ, σ_α, or closest-first (each cluster's best-scored detection first, the middle
-/// one of its middle row without scores; the rest as the dispersed σ_ρ). "Trajectory points" of
+/// dispersed σ_ρ, σ_α, closest-first (each cluster's best-scored detection first, the middle
+/// one of its middle row without scores; the rest as the dispersed σ_ρ), or closest-then-spread
+/// (σ_ρ's counts, picked as closest-first). "Trajectory points" of
 /// a cluster (σ_ρ) are its distinct times t.
 ///
 /// Within a group, picks are uniform without replacement (σ_1, σ_ρ) or spread evenly over the
@@ -97,11 +98,17 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
             .map(|(g, (m, &q))| {
                 interrupt.check()?;
                 let mut rng = group_rng(sampler.seed, g);
-                Ok(if matches!(kind, SamplerKind::RhoDispersed | SamplerKind::ClosestFirst) {
-                    disperse_detections(m, q, xs, scores, kind == SamplerKind::ClosestFirst, &mut rng)
-                } else {
-                    choose_indices(m.len() as u64, q, &mut rng).into_iter().map(|p| m[p as usize]).collect()
-                })
+                Ok(
+                    if matches!(
+                        kind,
+                        SamplerKind::RhoDispersed | SamplerKind::ClosestFirst | SamplerKind::ClosestThenSpread
+                    ) {
+                        let best_first = kind != SamplerKind::RhoDispersed;
+                        disperse_detections(m, q, xs, scores, best_first, &mut rng)
+                    } else {
+                        choose_indices(m.len() as u64, q, &mut rng).into_iter().map(|p| m[p as usize]).collect()
+                    },
+                )
             })
             .collect::<Result<_>>()?;
         (concat(picks)?, clusters.len())

@@ -35,7 +35,8 @@ impl MetricSpec {
 /// pair is the pose itself, the closest column after the run's farthest point: a return along
 /// the same way, or the run's last column). The closest-first sampler takes each component's
 /// closest pair (the closest of those row pairs) first, one per component, and shares the rest
-/// of the budget as the dispersed σ_ρ does. σ_α and the gap rules draw over the runs of all of
+/// of the budget as the dispersed σ_ρ does; closest-then-spread takes σ_ρ's counts, each
+/// component's first pick its closest pair and the others as the dispersed σ_ρ. σ_α and the gap rules draw over the runs of all of
 /// S_γ. With [`Sampler::skip_trivial`], the samplers other than the baselines leave out the
 /// trivial components.
 /// Never a list of all pairs: memory O(runs + samples); time O(runs + samples · log runs),

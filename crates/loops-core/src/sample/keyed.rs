@@ -17,7 +17,7 @@
 //!   should fewer come back, the threshold grows and the holders are asked again (the answer
 //!   does not depend on the threshold). σ_α takes the smallest keys over all components (a
 //!   budget), or every pair with a key below `p · 2⁶⁴` (a rate).
-//! - **Row picks** (the dispersed σ_ρ and closest-first) are the closest pair of chosen rows
+//! - **Row picks** (the dispersed σ_ρ, closest-first and closest-then-spread) are the closest pair of chosen rows
 //!   (stratified with an offset drawn from the component's own stream): each holder returns the
 //!   closest pair of its runs in those rows, and the closest of them wins (by the metric's rank,
 //!   then the column). A run on the diagonal offers the closest column after its farthest point
@@ -464,15 +464,15 @@ impl KeyedDraw {
     ///
     /// # Errors
     /// As [`sample_loops`](crate::sample_loops) for the samplers of components (`one`, `rho`,
-    /// `rho-dispersed`, `alpha`, `closest-first`); [`Error::NotApplicable`] for a baseline.
+    /// `rho-dispersed`, `alpha`, `closest-first`, `closest-then-spread`); [`Error::NotApplicable`] for a baseline.
     pub fn new(sampler: &Sampler, stats: &[DrawStats], keep: &dyn Fn(usize) -> bool) -> Result<Self> {
         let kind = sampler.kind;
         if kind.is_baseline() {
             return Err(Error::NotApplicable {
                 option: "a keyed draw",
                 to: format!("the {kind} baseline"),
-                reason: "a baseline's rule runs over the whole trajectory; use one, rho, rho-dispersed, alpha or \
-                         closest-first",
+                reason: "a baseline's rule runs over the whole trajectory; use one, rho, rho-dispersed, alpha, \
+                         closest-first or closest-then-spread",
             });
         }
         sampler.size.validate(kind)?;
@@ -540,7 +540,8 @@ impl KeyedDraw {
                             group.rows = rows.into_keys().collect();
                         }
                         _ => {
-                            // Closest-first: the best row, then the others stratified around it.
+                            // Closest-first and closest-then-spread: the best row, then the
+                            // others stratified around it.
                             let mut rows = BTreeMap::new();
                             if !s.trivial {
                                 rows.insert(s.closest_pair[0], ());
@@ -732,7 +733,8 @@ impl KeyedDraw {
                     }
                 }
                 _ => {
-                    // Closest-first: the component's closest pair, then the other rows.
+                    // Closest-first and closest-then-spread: the component's closest pair,
+                    // then the other rows.
                     let best = if s.trivial {
                         c.best.iter().find(|o| o.component == g.id)
                     } else {

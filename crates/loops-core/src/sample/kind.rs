@@ -18,6 +18,7 @@ use crate::error::{Error, Result};
 /// | `rho-dispersed` | σ_ρ's counts, spread evenly along each group (stratified over its rows), each the row's closest pair (best score for detections) |
 /// | `alpha` | σ_α ∈ O(α): uniform over all detections (or pairs of S_γ), no groups |
 /// | `closest-first` | one sample per group first, its closest pair (best score for detections: the likeliest match); the rest as `rho-dispersed` |
+/// | `closest-then-spread` | **the default**: σ_ρ's counts (at least one per group), the first of each group its closest pair, the rest spread along the group as `rho-dispersed` |
 /// | `lio-sam`, `hdl-graph-slam`, `cartographer`, `time-gap` | baselines of deployed systems, see [`BaselineParams`] |
 ///
 /// A *group* is a detection cluster ([`sample_clusters`](crate::sample_clusters)) or an exact loop component
@@ -38,9 +39,8 @@ use crate::error::{Error, Result};
 pub enum SamplerKind {
     /// σ_1: a constant number per group.
     One,
-    /// σ_ρ: a constant number per group per trajectory point. The default: it covers every
-    /// component (P1) and samples large ones more (P3) without oversampling them (P2).
-    #[default]
+    /// σ_ρ: a constant number per group per trajectory point: it covers every component (P1)
+    /// and samples large ones more (P3) without oversampling them (P2).
     Rho,
     /// σ_ρ spread along each group, preferring each row's closest pair.
     RhoDispersed,
@@ -50,6 +50,15 @@ pub enum SamplerKind {
     /// best-scored one), then the rest of the budget as [`RhoDispersed`](Self::RhoDispersed):
     /// in proportion to the rows, spread along each group, each the row's closest pair.
     ClosestFirst,
+    /// The default ([`DEFAULT`](Self::DEFAULT)): σ_ρ's counts per group (at least one each
+    /// when the budget allows, P1; in proportion to the rows beyond that, P2 and P3); the first
+    /// of each group its closest pair (the likeliest match, the best-scored detection), the
+    /// others the closest pairs of rows stratified along the group. At a budget near the number
+    /// of groups it is closest-first; at large budgets it is the dispersed σ_ρ, whose counts
+    /// give a small group no more than its share. A group's first sample counts towards its
+    /// share: the rest of the budget goes where the share is still lacking.
+    #[default]
+    ClosestThenSpread,
     /// LIO-SAM: nearest keyframe within γ older than a time gap, searched at 1 Hz.
     LioSam,
     /// hdl_graph_slam: a keyframe within γ after a minimum travel, one per stretch of travel.
@@ -62,24 +71,29 @@ pub enum SamplerKind {
 
 impl SamplerKind {
     /// Every sampler, in the order of [`NAMES`](Self::NAMES).
-    pub const ALL: [Self; 9] = [
+    pub const ALL: [Self; 10] = [
         Self::One,
         Self::Rho,
         Self::RhoDispersed,
         Self::Alpha,
         Self::ClosestFirst,
+        Self::ClosestThenSpread,
         Self::LioSam,
         Self::HdlGraphSlam,
         Self::Cartographer,
         Self::TimeGap,
     ];
 
+    /// The sampler used when none is named: by the command line, Python, Dask, fleets and
+    /// (its per-keyframe rule) the online sampler.
+    pub const DEFAULT: Self = Self::ClosestThenSpread;
+
     /// The accepted names.
-    pub const NAMES: &'static str =
-        "one, rho, rho-dispersed, alpha, closest-first, lio-sam, hdl-graph-slam, cartographer, time-gap";
+    pub const NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread, lio-sam, \
+                                     hdl-graph-slam, cartographer, time-gap";
 
     /// The samplers that work on detection clusters.
-    pub const CLUSTER_NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first";
+    pub const CLUSTER_NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread";
 
     /// The name, as parsed.
     pub fn name(self) -> &'static str {
@@ -89,6 +103,7 @@ impl SamplerKind {
             Self::RhoDispersed => "rho-dispersed",
             Self::Alpha => "alpha",
             Self::ClosestFirst => "closest-first",
+            Self::ClosestThenSpread => "closest-then-spread",
             Self::LioSam => "lio-sam",
             Self::HdlGraphSlam => "hdl-graph-slam",
             Self::Cartographer => "cartographer",
@@ -112,11 +127,19 @@ impl SamplerKind {
             Self::RhoDispersed => "σ_ρ dispersed",
             Self::Alpha => "σ_α",
             Self::ClosestFirst => "closest-first σ_ρ",
+            Self::ClosestThenSpread => "closest-then-spread σ_ρ",
             Self::LioSam => "LIO-SAM",
             Self::HdlGraphSlam => "hdl_graph_slam",
             Self::Cartographer => "Cartographer",
             Self::TimeGap => "time gap",
         }
+    }
+
+    /// Whether the sampler takes a row's closest pair (the dispersed σ_ρ, closest-first,
+    /// closest-then-spread) rather than a uniform one: what the online sampler's
+    /// [`closest_in_row`](crate::OnlineSamplerOptions::closest_in_row) follows.
+    pub fn picks_closest_in_row(self) -> bool {
+        matches!(self, Self::RhoDispersed | Self::ClosestFirst | Self::ClosestThenSpread)
     }
 
     /// Whether this is a baseline of a deployed system (it needs the trajectory).
@@ -125,10 +148,12 @@ impl SamplerKind {
     }
 
     /// The baseline rule this sampler runs, with its parameters taken from `params`; `None` for
-    /// σ_1, σ_ρ, the dispersed σ_ρ, σ_α and the closest-first sampler.
+    /// σ_1, σ_ρ, the dispersed σ_ρ, σ_α and the closest-first and closest-then-spread samplers.
     pub fn baseline(self, params: &BaselineParams) -> Option<Baseline> {
         match self {
-            Self::One | Self::Rho | Self::RhoDispersed | Self::Alpha | Self::ClosestFirst => None,
+            Self::One | Self::Rho | Self::RhoDispersed | Self::Alpha | Self::ClosestFirst | Self::ClosestThenSpread => {
+                None
+            }
             Self::LioSam => Some(Baseline::LioSam(params.lio_sam)),
             Self::HdlGraphSlam => Some(Baseline::HdlGraphSlam(params.hdl_graph_slam)),
             Self::Cartographer => Some(Baseline::Cartographer(params.cartographer)),
@@ -166,7 +191,10 @@ impl SampleSize {
             Self::Rate(rate) => {
                 let (ok, expected) = match kind {
                     SamplerKind::One => (rate > 0.0, "a positive number of samples per group"),
-                    SamplerKind::Rho | SamplerKind::RhoDispersed | SamplerKind::ClosestFirst => {
+                    SamplerKind::Rho
+                    | SamplerKind::RhoDispersed
+                    | SamplerKind::ClosestFirst
+                    | SamplerKind::ClosestThenSpread => {
                         (rate > 0.0, "a positive number of samples per group per trajectory point")
                     }
                     _ => (rate > 0.0 && rate <= 1.0, "a probability in (0, 1]"),
@@ -235,7 +263,7 @@ impl Sampler {
                 option: "skip_trivial",
                 to: format!("the {} baseline", self.kind),
                 reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
-                         rho-dispersed, alpha or closest-first",
+                         rho-dispersed, alpha, closest-first or closest-then-spread",
             });
         }
         Ok(())
@@ -244,7 +272,8 @@ impl Sampler {
     /// Samples per group for the samplers of groups, from each group's rows (`rows`, used by
     /// all but σ_1, which weighs every group 1) and its number of candidates (`caps`): the
     /// closest-first sampler takes each group's closest pair first and shares the rest by rows
-    /// ([`first_then_quotas`]), the others share by weight ([`group_quotas`]).
+    /// ([`first_then_quotas`]), the others (closest-then-spread too: its first pick counts
+    /// towards the group's share) share by weight ([`group_quotas`]).
     ///
     /// # Errors
     /// [`Error::TooManySamples`] when the quotas make more samples than one call returns.
@@ -281,8 +310,8 @@ mod tests {
         let err = "sigma_rho".parse::<SamplerKind>().unwrap_err();
         assert_eq!(
             err.to_string(),
-            "unknown sampler \"sigma_rho\": expected one of one, rho, rho-dispersed, alpha, closest-first, lio-sam, \
-             hdl-graph-slam, cartographer, time-gap"
+            "unknown sampler \"sigma_rho\": expected one of one, rho, rho-dispersed, alpha, closest-first, \
+             closest-then-spread, lio-sam, hdl-graph-slam, cartographer, time-gap"
         );
     }
 }

@@ -1,0 +1,178 @@
+#!/usr/bin/env python3
+"""Which sampler makes the best map in every cell of a grid? The ratio of each sampler's median
+ATE to the best one's, per cell (dataset, candidates on the reference or the estimate, verifier
+model, wrong matches, budget), and whether the default sampler meets the bar: within 1.10x of
+the best and below the LIO-SAM and hdl_graph_slam rules.
+
+Usage::
+
+    nice -n 10 python benches/eval_grid.py --out benches/eval_grid/small \\
+        [--datasets urban,kitti00] [--budgets 100,1000] [--seeds 3] \\
+        [--on reference,estimate,rounds] [--rounds 3] \\
+        [--verifiers distance-aware,steep,blind] [--outliers 0,0.1] \\
+        [--samplers default,closest-first,...] [--report-only]
+
+Datasets are those of ``map_eval.py`` (``urban``, ``kitti00``, ``kitti05``, ``kitti08``,
+``kaist01``: the same keyframes and gamma), plus ``urbanN``: the urban drive of seed N (a drive
+the benchmarks never use). ``--on rounds`` is ``on="estimate"`` with the budget spent in
+``--rounds`` rounds (:class:`inexact_loops.evaluate.Rounds`). Verifier models are
+:data:`inexact_loops.evaluate.VERIFIER_MODELS`. Every run appends its row to ``OUT/rows.csv``
+as it finishes and a second invocation skips the blocks already there; the table goes to
+``OUT/ratios.md`` (``--report-only``: the table alone, from ``rows.csv``; ``--also DIR,...``
+adds the rows of other grids to the table).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("RAYON_NUM_THREADS", "1")  # the machine is shared: one engine thread
+
+import map_eval_common as common  # noqa: E402
+from map_eval import DATASETS  # noqa: E402
+from map_eval import load as load_dataset  # noqa: E402
+
+import inexact_loops as il  # noqa: E402
+from inexact_loops import evaluate as ev  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT = il.DEFAULT_SAMPLER
+#: The rules the default must beat in every cell.
+RIVALS = ("lio-sam", "hdl-graph-slam")
+#: The bar: the default's median ATE at most this many times the best one's.
+WITHIN = 1.10
+
+
+def load(name: str, data: Path) -> tuple[ev.Poses | None, float]:
+    """The keyframed reference of dataset ``name`` and its gamma."""
+    if name.startswith("urban") and name[5:].isdigit():
+        drive = il.urban_drive(seed=int(name[5:]))
+        poses = ev.Poses.from_positions(drive.timestamps, drive.positions[:, :2])
+        return poses.take(poses.keyframes(DATASETS["urban"][3])), DATASETS["urban"][2]
+    return load_dataset(name, data), DATASETS[name][2]
+
+
+def cell_key(row: dict) -> tuple:
+    on = "rounds" if row["on"] == "estimate" and int(row["rounds"]) > 1 else row["on"]
+    return (row["dataset"], on, row["verifier"], float(row["outlier_rate"]), int(row["budget"]))
+
+
+def block_key(row: dict) -> tuple:
+    d, on, verifier, outliers, _ = cell_key(row)
+    return (d, on, verifier, outliers, int(row["seed"]))
+
+
+def arguments() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
+    parser.add_argument("--out", required=True, help="folder for rows.csv and ratios.md")
+    parser.add_argument("--datasets", default="urban,kitti00")
+    parser.add_argument("--budgets", default="100,1000")
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--first-seed", type=int, default=0, help="seeds FIRST..FIRST+SEEDS-1")
+    parser.add_argument("--on", default="reference,estimate")
+    parser.add_argument("--rounds", type=int, default=3, help="rounds of --on rounds")
+    parser.add_argument("--verifiers", default="distance-aware")
+    parser.add_argument("--outliers", default="0")
+    parser.add_argument("--samplers", default=",".join(ev.SAMPLERS + ev.BASELINES))
+    parser.add_argument("--report-only", action="store_true")
+    parser.add_argument(
+        "--also", default="", help="comma-separated folders whose rows.csv join the table"
+    )
+    return parser.parse_args()
+
+
+def run(args: argparse.Namespace, rows_path: Path) -> None:
+    done = {block_key(r) for r in common.read_rows(rows_path, ev.Results)}
+    write = common.appender(rows_path, ev.COLUMNS)
+    samplers = args.samplers.replace("default", DEFAULT).split(",")
+    budgets = [int(b) for b in args.budgets.split(",")]
+    outliers = [float(o) for o in args.outliers.split(",")]
+    for name in args.datasets.split(","):
+        reference, gamma = load(name, Path(args.data))
+        if reference is None:
+            continue
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
+            for on in args.on.split(","):
+                for verifier in args.verifiers.split(","):
+                    for rate in outliers:
+                        if (name, on, verifier, rate, seed) in done:
+                            continue
+                        print(
+                            f"eval_grid: {name} seed {seed} {on} {verifier} {rate}", file=sys.stderr
+                        )
+                        ev.evaluate(
+                            reference,
+                            gamma=gamma,
+                            samplers=samplers,
+                            budgets=budgets,
+                            seeds=[seed],
+                            on=["reference" if on == "reference" else "estimate"],
+                            rounds=args.rounds if on == "rounds" else 1,
+                            outlier_rates=[rate],
+                            verifier=verifier,
+                            dataset=name,
+                            include_odometry=False,
+                            progress=write,
+                        )
+
+
+def report(rows: list[dict]) -> str:
+    """The markdown table: per cell, the best sampler and the ratio of each to it."""
+    ate: dict[tuple, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
+    for r in rows:
+        if r["sampler"] != "odometry":
+            ate[cell_key(r)][r["sampler"]].append(float(r["ate_m"]))
+    names = [n for n in ev.SAMPLERS + ev.BASELINES if any(n in c for c in ate.values())]
+    head = ["dataset", "on", "verifier", "wrong", "budget", "seeds", "best (m)"]
+    lines = [
+        "| " + " | ".join(head + [il.sampler_symbol(n) for n in names] + ["meets"]) + " |",
+        "|" + "---|" * (len(head) + len(names) + 1),
+    ]
+    met = 0
+    for key in sorted(ate):
+        medians = {n: float(np.median(v)) for n, v in ate[key].items()}
+        best = min(medians.values())
+        seeds = min(len(v) for v in ate[key].values())
+        mine = medians.get(DEFAULT, np.nan)
+        ok = mine <= WITHIN * best and all(mine < medians.get(r, np.inf) for r in RIVALS)
+        met += ok
+        cells = [f"{medians[n] / best:.2f}" if n in medians else "–" for n in names]
+        cells = [f"**{c}**" if n == DEFAULT else c for n, c in zip(names, cells, strict=True)]
+        d, on, verifier, outlier_rate, budget = key
+        lines.append(
+            f"| {d} | {on} | {verifier} | {outlier_rate:.0%} | {budget} | {seeds} | {best:.2f} | "
+            + " | ".join(cells)
+            + f" | {'yes' if ok else 'no'} |"
+        )
+    lines.append("")
+    lines.append(
+        f"The default ({DEFAULT}) meets the bar (at most {WITHIN:.2f}x the best median ATE, below "
+        f"the LIO-SAM and hdl_graph_slam rules) in {met} of {len(ate)} cells."
+    )
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    args = arguments()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    rows_path = out / "rows.csv"
+    if not args.report_only:
+        run(args, rows_path)
+    rows = common.read_rows(rows_path, ev.Results)
+    for folder in filter(None, args.also.split(",")):
+        rows += common.read_rows(Path(folder) / "rows.csv", ev.Results)
+    text = report(rows)
+    (out / "ratios.md").write_text(text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()
