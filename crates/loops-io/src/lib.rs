@@ -124,6 +124,7 @@ mod report;
 mod ros1_message;
 mod rotation;
 mod samples;
+pub mod store;
 mod table;
 mod temp_copy;
 mod text;
