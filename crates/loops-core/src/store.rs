@@ -631,8 +631,8 @@ impl FleetStore {
                 parts.iter().enumerate().filter_map(|(k, p)| p.as_ref().map(|p| (k, p))).collect();
             for &(k, _) in &asked {
                 for s in merged.tiles()[k].sessions {
-                    if !read.contains_key(&s) {
-                        read.insert(s, read_session(&self.sessions[s], source)?);
+                    if let std::collections::hash_map::Entry::Vacant(slot) = read.entry(s) {
+                        slot.insert(read_session(&self.sessions[s], source)?);
                     }
                 }
             }

@@ -197,7 +197,8 @@ fn refused_updates_change_nothing() {
     let before = store.clone();
     let name = current.keys().next().unwrap().clone();
     let flat = Trajectory::new(vec![0.0, 1.0, 2.0], vec![0.0, 1.0, 2.0], 1).unwrap();
-    let cases: Vec<(Vec<(String, Trajectory)>, Vec<String>, &str)> = vec![
+    type Case<'a> = (Vec<(String, Trajectory)>, Vec<String>, &'a str);
+    let cases: Vec<Case> = vec![
         (vec![], vec!["nobody".into()], "\"nobody\" is not in the store"),
         (vec![(name.clone(), pool[&name][1].clone())], vec![name.clone()], "is both given and removed"),
         (vec![("flat".into(), flat)], vec![], "session \"flat\" has 1 coordinates"),
