@@ -43,10 +43,10 @@ const TOOL: out_dir::Tool = out_dir::FLEET;
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
+    group(clap::ArgGroup::new("destination").args(["out", "store"]).required(true)),
     mut_arg("out", |arg| arg
         .help("The folder for the results: the fleet's files and a folder per session")
         .required(false)
-        .required_unless_present("store")
         .default_value(".")
         .hide_default_value(true)),
     mut_arg("force", |arg| arg.help(
@@ -59,7 +59,8 @@ const TOOL: out_dir::Tool = out_dir::FLEET;
     loops synth fleet --vehicles 3 --days 2 --duration-s 900\n  \
     loops fleet fleet/*.mcap --gamma 40 --out fleet-results\n  \
     loops fleet fleet/*.mcap --gamma 40 --between-only --budget 500 --out merge --force\n  \
-    loops fleet --session monday=mon_0.mcap,mon_1.mcap --session tuesday=tue.mcap --gamma 40 --out results\n\n\
+    loops fleet --session monday=mon_0.mcap,mon_1.mcap --session tuesday=tue.mcap --gamma 40 --out results\n  \
+    loops fleet --store city fleet/*day1.mcap --gamma 40 --budget 500 --block 20000\n\n\
     In --out: index.html (the fleet's report), components.csv (every component, both sessions\n\
     by name and index, times on each session's clock), session_pairs.csv (the sparse overlap\n\
     matrix), samples.csv, samples.g2o (GTSAM Symbol keys: robot letter a, b, ... per session, up\n\
@@ -87,11 +88,10 @@ pub(crate) struct FleetArgs {
     /// on it.
     #[arg(long, default_value_t = Pruning::default().name().to_owned())]
     pruning: String,
-    /// Keep the fleet in a store (instead of --out): add the sessions to the fleet store DIR,
-    /// replacing those of the same name, scanning only the tiles that hold them, and write its
-    /// tables there (Parquet: sessions, tiles, components, session_pairs, loop_duration,
-    /// samples). Made on first use in a missing or empty folder, with the settings given then;
-    /// later runs must give the same settings.
+    /// Keep the fleet in the store DIR instead of --out: add the sessions (replacing those of
+    /// the same name), scan only the tiles that hold them, and write the store's Parquet tables
+    /// (sessions, tiles, components, session_pairs, loop_duration, samples). A missing or empty
+    /// DIR is made with the settings given; later runs must give the same.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["force", "json"])]
     store: Option<PathBuf>,
     /// With --store: remove the session NAME from the store (repeat for more).
