@@ -559,6 +559,15 @@ impl FleetStore {
         self.update(Vec::new(), names, &mut unread)
     }
 
+    /// The ids of the components of `loops` (this store's [`loops`](Self::loops)) that hold a
+    /// session the last update added or replaced, with itself or another: the components the
+    /// update added. O(components).
+    pub fn added_components(&self, loops: &StoreLoops) -> Vec<usize> {
+        let changed: HashSet<usize> =
+            self.last_update.changed().into_iter().filter_map(|name| self.session_index(name)).collect();
+        loops.components_of(&changed)
+    }
+
     /// The fleet's loops, merged from the stored summaries: O(the tiles' components and edge
     /// runs).
     ///

@@ -35,8 +35,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use loops_core::{
-    FleetStore, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, SessionBlocks, StoreSamples, StoreSession,
-    StoreSettings, StoreUpdate, StoredTile, TileDuration, TileSummary, Trajectory,
+    FleetSample, FleetStore, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, SessionBlocks, StoreLoops,
+    StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile, TileDuration, TileSummary, Trajectory,
 };
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
 use parquet::file::properties::WriterProperties;
@@ -79,7 +79,7 @@ pub enum StoreError {
     #[error(transparent)]
     Core(#[from] loops_core::Error),
     /// Settings given for an existing store that differ from its own.
-    #[error("--store {}: {what} is {stored} in the store, not {given}; a store keeps the settings it was made with", .path.display())]
+    #[error("fleet store {}: {what} is {stored} in the store, not {given}; a store keeps the settings it was made with", .path.display())]
     Settings {
         /// The store.
         path: PathBuf,
@@ -331,6 +331,36 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
 }
 
+/// The samples of the store's current state (`samples.parquet`), in its order: those
+/// [`update_store`] drew, read back.
+///
+/// # Errors
+/// [`StoreError::Io`] or [`StoreError::Corrupt`] for a table that cannot be read back.
+pub fn read_samples(stored: &StoredFleet) -> Result<Vec<FleetSample>> {
+    let path = stored.table("samples.parquet");
+    let index = |row: &Row, i: usize| -> std::result::Result<usize, String> {
+        let value = row.get_long(i).map_err(|e| format!("column {i}: {e}"))?;
+        usize::try_from(value).map_err(|_| format!("column {i}: {value} is not an index"))
+    };
+    read_rows(&path)?
+        .iter()
+        .enumerate()
+        .map(|(k, row)| -> std::result::Result<FleetSample, String> {
+            let component = row.get_long(8).map_err(|e| format!("column 8: {e}"))?;
+            let distance = row.float(9)?;
+            Ok(FleetSample {
+                sessions: [index(row, 2)?, index(row, 3)?],
+                poses: [index(row, 4)?, index(row, 5)?],
+                times_s: [row.float(6)?, row.float(7)?],
+                component: usize::try_from(component).ok(),
+                distance: (!distance.is_nan()).then_some(distance),
+            })
+            .map_err(|e: String| format!("row {k}: {e}"))
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| StoreError::Corrupt { path, reason })
+}
+
 /// What [`update_store`] did.
 #[derive(Debug, Clone)]
 pub struct StoreReport {
@@ -340,8 +370,10 @@ pub struct StoreReport {
     pub components: usize,
     /// Components of the sessions the update added or replaced.
     pub added_components: usize,
-    /// Samples written.
-    pub samples: usize,
+    /// The loops written (`components.parquet`, `session_pairs.parquet`).
+    pub loops: StoreLoops,
+    /// The samples written (`samples.parquet`), if the store has a sampler.
+    pub samples: Option<StoreSamples>,
 }
 
 /// Adds or replaces the sessions `put` (by name) and removes `remove` in the store in `dir`,
@@ -435,8 +467,7 @@ pub fn update_store(
     let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
     write_sessions(&staged.join("sessions.parquet"), &store)?;
     write_tiles(&staged.join("tiles.parquet"), &store)?;
-    let changed_ix: HashSet<usize> = changed.iter().filter_map(|n| store.session_index(n)).collect();
-    let added: HashSet<usize> = loops.components_of(&changed_ix).into_iter().collect();
+    let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
     write_components(&staged.join("components.parquet"), &loops, &names, &added)?;
     write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names)?;
     write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other)?;
@@ -463,7 +494,8 @@ pub fn update_store(
     let report = StoreReport {
         components: loops.components().len(),
         added_components: added.len(),
-        samples: samples.as_ref().map_or(0, |s| s.rows.len()),
+        samples,
+        loops,
         stored: StoredFleet { dir: dir.to_path_buf(), state, store, config },
     };
     Ok(report)

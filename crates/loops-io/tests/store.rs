@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use loops_core::{
     FleetStore, SampleSize, Sampler, SamplerKind, StoreSession, StoreSettings, Trajectory, UrbanDrive, UrbanFleet,
 };
-use loops_io::store::{StoreConfig, read_store, update_store};
+use loops_io::store::{StoreConfig, read_samples, read_store, update_store};
 
 fn sessions() -> Vec<(String, Trajectory)> {
     let spec = UrbanFleet {
@@ -84,8 +84,14 @@ fn a_store_reads_back_as_written() {
     let rows = parquet_rows(&read.table("components.parquet"));
     assert_eq!(rows, loops.components().len());
     assert_eq!(parquet_rows(&read.table("loop_duration.parquet")), all.iter().map(|(_, t)| t.len()).sum::<usize>());
-    assert!(report.samples > 0);
-    assert_eq!(parquet_rows(&read.table("samples.parquet")), report.samples);
+    let drawn = &report.samples.as_ref().unwrap().rows;
+    assert!(!drawn.is_empty());
+    assert_eq!(parquet_rows(&read.table("samples.parquet")), drawn.len());
+    // Read back as drawn, and as drawn in memory.
+    assert_eq!(&read_samples(&read).unwrap(), drawn);
+    let (sampler, between_only) = config().sampler.unwrap();
+    assert_eq!(&memory.samples(&loops, &sampler, between_only, &mut source).unwrap().rows, drawn);
+    assert_eq!(report.added_components, read.store.added_components(&loops).len());
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -383,7 +383,7 @@ fn fleet_store(args: &FleetArgs, dir: &Path) -> Result<u8> {
             report.stored.store.sessions().len(),
             report.components,
             report.added_components,
-            report.samples,
+            report.samples.as_ref().map_or(0, |s| s.rows.len()),
             start.elapsed().as_secs_f64()
         );
     }
