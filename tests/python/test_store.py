@@ -237,3 +237,9 @@ def test_settings_are_fixed_when_the_store_is_made(tmp_path: Path) -> None:
     (tmp_path / "theirs" / "notes.txt").write_text("mine")
     with pytest.raises(FileNotFoundError, match="no fleet store here"):
         il.FleetStore.open(tmp_path / "theirs")
+
+
+def test_the_dask_runner_cuts_sessions_by_the_core_block() -> None:
+    """One constant: the Dask runner's default block is the core's object, not a copy."""
+    dask_runner = pytest.importorskip("inexact_loops.dask")
+    assert dask_runner.DEFAULT_BLOCK is il.FleetStore.DEFAULT_BLOCK
