@@ -47,6 +47,7 @@ __all__ = [
     "urban_drive",
     "Fleet",
     "FleetLoops",
+    "FleetStore",
     "FleetSamples",
     "find_fleet_loops",
     "sample_fleet",
@@ -2104,6 +2105,183 @@ class FleetLoops:
 
         Raises:
             KeyError: no session of that name. IndexError: an index out of range.
+        """
+
+@final
+class FleetStore:
+    """A fleet's loops kept in a folder and updated at the cost of the new data: each
+    :meth:`update` adds sessions (replacing those of the same name) and removes others,
+    scans only the tiles that hold a new or replaced session, merges again from the stored tile
+    summaries and redraws the samples by keyed draws. After any sequence of updates the tables
+    are those of :func:`find_fleet_loops` and :func:`sample_fleet` over the stored sessions in
+    name order, whatever the order of the updates.
+
+    The folder is what ``loops fleet --store DIR`` keeps: Parquet tables that pandas, pyarrow
+    and DuckDB read (``store.json`` names the current state, ``state-NNNNNN/``, holding
+    ``sessions``, ``tiles``, ``components``, ``session_pairs``, ``loop_duration`` and
+    ``samples``, ``.parquet`` each); each update replaces the state whole, so a reader or a
+    killed update sees the old state or the new one. Made by :meth:`open` and :meth:`update`.
+
+    Example:
+        Monday drives out along a street; Tuesday's drive, added the next day, comes back along
+        it half a metre aside: the store's answer is the fleet's.
+
+        >>> import tempfile, numpy as np, inexact_loops as il
+        >>> x = np.arange(21) * 0.5
+        >>> monday = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+        >>> tuesday = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+        >>> folder = tempfile.mkdtemp() + "/city"
+        >>> store = il.FleetStore.open(folder)
+        >>> store.update(add=[("monday", monday)], gamma=1.0, separation=None, block=8)["added"]
+        ['monday']
+        >>> update = store.update(add=[("tuesday", tuesday)])
+        >>> update["added"], update["tiles_kept"] > 0
+        (['tuesday'], True)
+        >>> store.names, store.added.tolist()  # Tuesday's own component and the one with Monday
+        (['monday', 'tuesday'], [1, 2])
+        >>> fleet = il.Fleet({"monday": monday, "tuesday": tuesday})
+        >>> scratch = il.find_fleet_loops(fleet, gamma=1.0, separation=None)
+        >>> np.array_equal(store.overlap_matrix(), scratch.overlap_matrix())
+        True
+    """
+
+    DEFAULT_BLOCK: ClassVar[int]
+    @staticmethod
+    def open(path: str | PathLike[str]) -> FleetStore:
+        """The store in the folder ``path``: its current state, or, for a missing or empty folder,
+        a store that the first :meth:`update` makes there (with the settings it gives).
+
+        Raises:
+            FileNotFoundError: ``path`` holds files but no store (no ``store.json``).
+            LoopsIOError: a file of the store that cannot be read back (named).
+        """
+    def update(
+        self,
+        *,
+        add: dict[str, _SessionSource]
+        | list[tuple[str, _SessionSource]]
+        | list[str | PathLike[str]]
+        | list[tuple[str, _SessionSource] | str | PathLike[str]]
+        | None = None,
+        remove: list[str] | None = None,
+        gamma: float | None = None,
+        metric: str | _MetricLike | None = None,
+        separation: Separation | float | Literal["auto", "none"] | None = "auto",
+        block: int | None = None,
+        sampler: _SamplerName | str | None = None,
+        rate: float | None = None,
+        budget: int | None = None,
+        seed: int | None = None,
+        between_only: bool = False,
+        skip_trivial: bool = False,
+        threads: int | None = None,
+        format: str | None = None,
+        axes: tuple[int, int] | None = None,
+        topic: str | None = None,
+        time: Literal["header", "log", "publish"] | str | None = None,
+        frames: tuple[str, str] | None = None,
+        rate_hz: float | None = None,
+        drop_duplicate_stamps: bool = False,
+        quaternion_tolerance: float | None = None,
+    ) -> dict[str, Any]:
+        """Adds the sessions ``add`` (replacing stored ones of the same name) and removes the
+        sessions named in ``remove``, in one update written atomically; a session given with the
+        content it has in the store changes nothing. Scans only the tiles that hold an added or
+        replaced session (reading the stored sessions they meet from the store's pose files).
+
+        The settings are fixed when the store is made: the first update gives ``gamma`` and
+        whichever others it wants; a later one gives none (the store's own) or all of them as
+        the store has them (a check: otherwise an error, the store unchanged).
+
+        Args:
+            add: sessions as :class:`Fleet` takes them (a dict ``{name: session}``, ``(name,
+                session)`` pairs or paths named by their stem), read with the reading keywords.
+            remove: names of stored sessions to remove.
+            gamma: γ, in the metric's unit.
+            metric: a metric name or object (not a callable); ``None``: the sessions' own.
+            separation: within each session, as in :func:`find_fleet_loops`.
+            block: poses per block of a session; ``None``: :attr:`DEFAULT_BLOCK`.
+            sampler, rate, budget, seed, skip_trivial, between_only: the samples of every state,
+                as :func:`sample_fleet` draws them (a component sampler); ``None``: no samples.
+            threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+            format, axes, topic, time, frames, rate_hz, drop_duplicate_stamps,
+                quaternion_tolerance: how paths are read, as in :class:`Fleet`.
+
+        Returns:
+            :attr:`last_update`.
+
+        Raises:
+            InvalidParameterError: no ``gamma`` for a new store; settings other than the store's;
+                a name given twice, or removed and given, or removed but not stored; a session of
+                another dimension or manifold. The store is then unchanged.
+            OSError, LoopsIOError: a path that cannot be read; a store file that cannot be read
+                or written (named).
+        """
+    def __len__(self) -> int: ...
+    @property
+    def path(self) -> Path:
+        """The store's folder."""
+    @property
+    def state_path(self) -> Path | None:
+        """The folder of the current state (``path / "state-NNNNNN"``), whose ``.parquet`` tables
+        are the store's; ``None`` before the first update.
+        """
+    @property
+    def names(self) -> list[str]:
+        """The stored sessions' names, in name order (the order of the session indices of the
+        tables).
+        """
+    @property
+    def gamma(self) -> float | None:
+        """γ; ``None`` before the first update."""
+    @property
+    def metric_name(self) -> str | None:
+        """The name of the store's metric; ``None`` before the first update."""
+    @property
+    def separation(self) -> Separation | None:
+        """The separation within a session (:class:`Separation`); ``None`` before the first update."""
+    @property
+    def block(self) -> int | None:
+        """Poses per block of a session; ``None`` before the first update."""
+    @property
+    def sampler(self) -> str | None:
+        """The name of the store's sampler; ``None`` for a store without samples."""
+    @property
+    def last_update(self) -> dict[str, Any]:
+        """What the last update did: a dict of ``added``, ``replaced``, ``unchanged``,
+        ``removed`` (session names, each in name order) and ``tiles_scanned``, ``tiles_kept``,
+        ``tiles_dropped`` (int).
+        """
+    @property
+    def components(self) -> Table:
+        """The loop components as a :class:`~inexact_loops.Table`, with the columns of
+        :attr:`FleetLoops.components` (sessions by index in :attr:`names`).
+        """
+    @property
+    def added(self) -> npt.NDArray[np.int64]:
+        """The ids of the components the last update added: those of a session it added or
+        replaced (with itself or another), int64, increasing.
+        """
+    def session_pairs(self) -> Table:
+        """The sparse overlap matrix as a :class:`~inexact_loops.Table`, as
+        :meth:`FleetLoops.session_pairs`.
+        """
+    def overlap_matrix(self, *, sparse: bool = False) -> npt.NDArray[np.float64] | Any:
+        """The overlap matrix, as :meth:`FleetLoops.overlap_matrix`."""
+    def loop_duration(self, session: _SessionKey | None = None) -> Table:
+        """Loop duration τ per pose, split into own and other sessions, as
+        :meth:`FleetLoops.loop_duration` (times read from the store's pose files).
+
+        Args:
+            session: only this session's poses (its name or index); ``None``: every pose.
+
+        Raises:
+            KeyError: no session of that name. IndexError: an index out of range.
+        """
+    @property
+    def samples(self) -> Table:
+        """The samples of the current state as a :class:`~inexact_loops.Table`, with the columns
+        of :attr:`FleetSamples.table`; no rows for a store without a sampler.
         """
 
 @final

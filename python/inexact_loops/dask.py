@@ -83,8 +83,9 @@ __all__ = [
 
 #: The smallest block ``block=None`` chooses, and the unit each session is first cut into:
 #: a tile of two such blocks of a city drive at 10 Hz scans in well under a second on one core
-#: (BENCHMARKS.md, "Dask").
-DEFAULT_BLOCK = 50_000
+#: (BENCHMARKS.md, "Dask"). The core's constant (:attr:`inexact_loops.FleetStore.DEFAULT_BLOCK`),
+#: so that a store and a Dask run cut sessions alike.
+DEFAULT_BLOCK: int = _core.FleetStore.DEFAULT_BLOCK
 
 #: The largest block ``block=None`` chooses: a tile's memory (its piece of poses and its
 #: runs) grows with the block.

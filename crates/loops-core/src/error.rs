@@ -24,6 +24,15 @@ pub enum Error {
         /// The name.
         name: String,
     },
+    /// A session a fleet store's update names that it cannot take: one not in the store
+    /// (removing it), or one both given and removed.
+    #[error("session {name:?} {problem}")]
+    StoreSession {
+        /// The session's name.
+        name: String,
+        /// What is wrong, in words.
+        problem: &'static str,
+    },
     /// A session that does not fit the fleet's first session.
     #[error("session {session:?} {problem}: every session of a fleet must have the first session's {what}")]
     SessionMismatch {

@@ -77,6 +77,7 @@ mod sample;
 mod separation;
 mod spatial;
 mod spec;
+mod store;
 mod sublevel;
 mod synth;
 mod tile;
@@ -120,11 +121,16 @@ pub use sample::{
 };
 pub use separation::Separation;
 pub use spec::{MetricSpec, recorded_metric_name};
+pub use store::{
+    FleetStore, STORE_FORMAT_VERSION, SessionSource, StoreLoops, StoreSamples, StoreSession, StoreSettings,
+    StoreUpdate, StoredTile, session_fingerprint,
+};
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
 pub use tile::{
     EdgeRun, MergedComponent, MergedLoops, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileComponent, TileMerge,
-    TileSummary, merge_tiles, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
+    TileSummary, merge_tiles, plan_session_tiles, plan_session_tiles_touching, plan_tiles, scan_session_tile,
+    scan_tile,
 };
 pub use tile_draw::{
     TileDuration, TileRuns, draw_session_tile, draw_tile_runs, scan_session_tile_kept, scan_session_tile_with_duration,

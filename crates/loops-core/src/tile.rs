@@ -201,7 +201,7 @@ impl SessionBlocks {
     }
 
     /// The fields agree with each other.
-    fn check(&self) -> std::result::Result<(), String> {
+    pub(crate) fn check(&self) -> std::result::Result<(), String> {
         if self.block == 0 || self.dim == 0 {
             return Err(format!("block {} and dimension {} must be at least 1", self.block, self.dim));
         }
@@ -267,6 +267,54 @@ pub fn plan_tiles<M: Metric + ?Sized>(fleet: &Fleet, metric: &M, gamma: f64, blo
 /// blocks of different sizes or of points of different dimensions; [`Error::InconsistentTiles`]
 /// for blocks whose fields disagree.
 pub fn plan_session_tiles<M: Metric + ?Sized>(sessions: &[SessionBlocks], metric: &M, gamma: f64) -> Result<Vec<Tile>> {
+    plan_blocks(sessions, metric, gamma, None)
+}
+
+/// The tiles of [`plan_session_tiles`] that hold a session marked in `touched` (one flag per
+/// session) as their rows or their columns: what an update of those sessions must scan
+/// anew, the plan of every other session pair being unchanged (a tile depends on its two
+/// sessions' blocks alone). The same tiles, in the same order, as filtering the whole plan;
+/// the candidates are searched from the marked sessions' blocks only.
+///
+/// # Errors
+/// As [`plan_session_tiles`]; [`Error::InvalidParameter`] for a number of flags other than
+/// the number of sessions.
+///
+/// # Examples
+/// ```
+/// use loops_core::{Euclidean, SessionBlocks, Trajectory, plan_session_tiles, plan_session_tiles_touching};
+/// let line = |t0: f64, y: f64| Trajectory::from_points(vec![t0, t0 + 1.0], &[[0.0, y], [1.0, y]]);
+/// let blocks: Vec<SessionBlocks> =
+///     [line(0.0, 0.0)?, line(10.0, 0.5)?, line(20.0, 9.0)?].iter().map(|s| SessionBlocks::new(s, &Euclidean, 2)).collect::<Result<_, _>>()?;
+/// let all = plan_session_tiles(&blocks, &Euclidean, 1.0)?;
+/// let touched = plan_session_tiles_touching(&blocks, &Euclidean, 1.0, &[false, true, false])?;
+/// let expected: Vec<_> = all.into_iter().filter(|t| t.sessions.contains(&1)).collect();
+/// assert_eq!(touched, expected); // session 1 with itself and with session 0
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn plan_session_tiles_touching<M: Metric + ?Sized>(
+    sessions: &[SessionBlocks],
+    metric: &M,
+    gamma: f64,
+    touched: &[bool],
+) -> Result<Vec<Tile>> {
+    if touched.len() != sessions.len() {
+        return Err(Error::InvalidParameter {
+            name: "touched",
+            value: touched.len() as f64,
+            expected: "one flag per session",
+        });
+    }
+    plan_blocks(sessions, metric, gamma, Some(touched))
+}
+
+/// [`plan_session_tiles`], keeping only the tiles of a session marked in `touched` when given.
+fn plan_blocks<M: Metric + ?Sized>(
+    sessions: &[SessionBlocks],
+    metric: &M,
+    gamma: f64,
+    touched: Option<&[bool]>,
+) -> Result<Vec<Tile>> {
     check_gamma(gamma)?;
     let Some(first) = sessions.first() else {
         return Err(Error::InvalidParameter { name: "sessions", value: 0.0, expected: "at least one session" });
@@ -312,20 +360,28 @@ pub fn plan_session_tiles<M: Metric + ?Sized>(sessions: &[SessionBlocks], metric
         // within its reach plus the largest radius, O(blocks log blocks + candidates).
         Some(index) => {
             let largest = blocks.iter().map(|b| b.3).fold(0.0, f64::max);
+            // With `touched`, only the marked blocks ask, for partners on either side; each
+            // pair is measured as (lower, higher) block, as the whole plan measures it.
             for (p, block) in blocks.iter().enumerate() {
+                if touched.is_some_and(|t| !t[block.0]) {
+                    continue;
+                }
                 let reach = (gamma + block.3 + largest) * (1.0 + 1e-6) + 1e-6;
                 index.within(block.2, reach, |q| {
-                    if q >= p && meets(p, q) {
-                        pairs.push((p, q));
+                    let (lo, hi) = (p.min(q), p.max(q));
+                    if (q >= p || touched.is_some()) && meets(lo, hi) {
+                        pairs.push((lo, hi));
                     }
                 });
             }
             pairs.sort_unstable();
+            pairs.dedup();
         }
         // Any other metric: every two blocks, O(blocks²).
         None => {
+            let kept = |p: usize, q: usize| touched.is_none_or(|t| t[blocks[p].0] || t[blocks[q].0]);
             for p in 0..blocks.len() {
-                pairs.extend((p..blocks.len()).filter(|&q| meets(p, q)).map(|q| (p, q)));
+                pairs.extend((p..blocks.len()).filter(|&q| kept(p, q) && meets(p, q)).map(|q| (p, q)));
             }
         }
     }
@@ -555,7 +611,7 @@ impl TileSummary {
     }
 
     /// The tile is well formed, every edge run lies in it and every label names a component.
-    fn check(&self) -> std::result::Result<(), String> {
+    pub(crate) fn check(&self) -> std::result::Result<(), String> {
         let tile = &self.tile;
         if !tile.is_well_formed() {
             return Err(format!("tile {tile:?} is empty, below the diagonal or has sessions a > b"));

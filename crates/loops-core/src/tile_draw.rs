@@ -386,14 +386,14 @@ fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<TileDuration> {
 ///
 /// # Errors
 /// [`Error::InconsistentTiles`] for a share whose rows or columns lie outside the session.
-pub fn session_loop_duration(
+pub fn session_loop_duration<'a>(
     session: usize,
     start: usize,
     poses: usize,
-    parts: &[TileDuration],
+    parts: impl IntoIterator<Item = &'a TileDuration>,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
     let (mut own, mut other) = (vec![0.0; poses], vec![0.0; poses]);
-    let mut ordered: Vec<&TileDuration> = parts.iter().collect();
+    let mut ordered: Vec<&TileDuration> = parts.into_iter().collect();
     ordered.sort_by_key(|p| (p.tile.sessions, p.tile.rows.start, p.tile.columns.start));
     for part in ordered {
         let t = &part.tile;

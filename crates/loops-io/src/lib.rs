@@ -129,6 +129,7 @@ mod ros1_message;
 mod rotation;
 mod samples;
 mod scene;
+pub mod store;
 mod table;
 mod temp_copy;
 mod text;

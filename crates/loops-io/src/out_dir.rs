@@ -116,9 +116,20 @@ pub const DASK: Tool = Tool {
     force_flag: "force=True (--force)",
 };
 
+/// A fleet store (`loops fleet --store`, Python's `FleetStore`): `loops-store.json`, the
+/// pointer `store.json` and one folder per state (`state-000001`, ...).
+pub const STORE: Tool = Tool {
+    command: "loops fleet --store",
+    marker: "loops-store.json",
+    scratch: ".loops-store.partial",
+    top_files: &["store.json"],
+    out_flag: "--store",
+    force_flag: "a new --store folder",
+};
+
 /// Every command that takes an output folder, for naming the holder of a lock and for
 /// [`Tool::named`].
-pub const TOOLS: [&Tool; 3] = [&RUN, &FLEET, &DASK];
+pub const TOOLS: [&Tool; 4] = [&RUN, &FLEET, &DASK, &STORE];
 
 impl Tool {
     /// The tool whose command is `command` (`"loops run"`, `"loops fleet"`, `"loops-dask"`).
@@ -444,6 +455,32 @@ impl OutDir {
             std::fs::rename(staged, &target).map_err(io_error(format!("renaming {} to", staged.display()), &target))?;
         }
         sync_directory(&self.path).map_err(io_error("syncing", &self.path))
+    }
+
+    /// Moves the filled file `staged` onto the file `name` in one rename, so that a reader finds
+    /// the old file or the new one, never neither (a store's pointer to its state). `name` must
+    /// be absent or a file the command wrote ([`owns`](Self::owns)); `staged` is removed when it
+    /// cannot be placed.
+    ///
+    /// # Errors
+    /// [`OutDirError::NotAnOutput`] for an entry that is not the command's file,
+    /// [`OutDirError::Io`] when the rename fails.
+    pub fn swap_file(&self, staged: &Path, name: &str) -> Result<(), OutDirError> {
+        let target = self.path.join(name);
+        let swapped = (|| {
+            if let Ok(existing) = target.symlink_metadata()
+                && (!self.owns(name) || !existing.is_file())
+            {
+                return Err(OutDirError::NotAnOutput { path: target.clone(), command: self.tool.command });
+            }
+            self.claim(name)?;
+            std::fs::rename(staged, &target).map_err(io_error(format!("renaming {} to", staged.display()), &target))?;
+            sync_directory(&self.path).map_err(io_error("syncing", &self.path))
+        })();
+        if swapped.is_err() {
+            let _ = remove_entry(staged);
+        }
+        swapped
     }
 
     /// Removes the entry `name`, when the command wrote it (an earlier run's); anything else of

@@ -25,7 +25,18 @@ pub(crate) enum Failure {
     Write(loops_io::WriteError),
     OutDir(loops_io::out_dir::OutDirError),
     OutputOnInput(loops_io::out_dir::OutputOnInput),
+    Store(loops_io::store::StoreError),
     Panic(String),
+}
+
+impl From<loops_io::store::StoreError> for Failure {
+    fn from(error: loops_io::store::StoreError) -> Self {
+        match error {
+            loops_io::store::StoreError::Core(error) => Self::Core(error),
+            loops_io::store::StoreError::OutDir(error) => Self::OutDir(error),
+            error => Self::Store(error),
+        }
+    }
 }
 
 impl From<loops_io::out_dir::OutDirError> for Failure {
@@ -103,6 +114,17 @@ impl From<Failure> for PyErr {
                 match error {
                     loops_io::WriteError::Exists { .. } => PyFileExistsError::new_err(message),
                     loops_io::WriteError::Write { error, .. } => os_error(&error, message),
+                    _ => LoopsIOError::new_err(message),
+                }
+            }
+            // A store's settings other than those given are a wrong argument; its files, an
+            // I/O error naming the file.
+            Failure::Store(error) => {
+                let message = error.to_string();
+                match error {
+                    loops_io::store::StoreError::Io { error, .. } => os_error(&error, message),
+                    loops_io::store::StoreError::Settings { .. } => InvalidParameterError::new_err(message),
+                    loops_io::store::StoreError::NotAStore { .. } => PyFileNotFoundError::new_err(message),
                     _ => LoopsIOError::new_err(message),
                 }
             }

@@ -42,6 +42,7 @@ mod py_quality;
 mod py_samples;
 mod py_scene;
 mod py_separation;
+mod py_store;
 mod py_tile;
 mod py_tile_draw;
 mod py_tile_merge;
@@ -172,6 +173,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_plane::sampler_symbol, module)?)?;
     module.add_class::<py_fleet::Fleet>()?;
     module.add_class::<py_fleet::FleetLoops>()?;
+    module.add_class::<py_store::FleetStore>()?;
     module.add_class::<py_fleet::FleetSamples>()?;
     module.add_function(wrap_pyfunction!(py_fleet::find_fleet_loops, module)?)?;
     module.add_function(wrap_pyfunction!(py_fleet::sample_fleet, module)?)?;

@@ -162,6 +162,95 @@ fn session_sources<'py>(sessions: &Bound<'py, PyAny>) -> PyResult<Vec<(String, S
     Ok(out)
 }
 
+/// The sessions of `sessions` (what :class:`Fleet` takes), each read with the options given
+/// where it is a path: `Fleet`'s rule, for every surface that takes sessions.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn read_sessions(
+    py: Python<'_>,
+    sessions: &Bound<'_, PyAny>,
+    format: Option<String>,
+    axes: Option<(usize, usize)>,
+    metric: Option<&Bound<'_, PyAny>>,
+    topic: Option<String>,
+    time: Option<String>,
+    frames: Option<(String, String)>,
+    rate_hz: Option<f64>,
+    drop_duplicate_stamps: bool,
+    quaternion_tolerance: Option<f64>,
+) -> PyResult<Vec<(String, Trajectory)>> {
+    session_sources(sessions)?
+        .into_iter()
+        .map(|(name, source)| {
+            let traj = match source {
+                SessionSource::Trajectory(traj) => traj,
+                SessionSource::Read(path) => crate::py_trajectory::read_trajectory(
+                    py,
+                    &path,
+                    format.clone(),
+                    axes,
+                    metric,
+                    topic.clone(),
+                    time.clone(),
+                    frames.clone(),
+                    rate_hz,
+                    None,
+                    drop_duplicate_stamps,
+                    quaternion_tolerance,
+                    false,
+                )?,
+            };
+            Ok((name, traj))
+        })
+        .collect()
+}
+
+/// The index of the session `key` names among `names`: its name, or its index.
+///
+/// # Errors
+/// `KeyError` for an unknown name, `IndexError` for an index out of range, `TypeError` for
+/// anything else.
+pub(crate) fn session_index_of(names: &[String], key: &Bound<'_, PyAny>) -> PyResult<usize> {
+    if let Ok(name) = key.cast::<PyString>() {
+        let name = name.to_str()?;
+        return names.iter().position(|n| n == name).ok_or_else(|| {
+            let shown: Vec<&str> = names.iter().take(10).map(String::as_str).collect();
+            let more = if names.len() > 10 { format!(", ... ({} in all)", names.len()) } else { String::new() };
+            PyKeyError::new_err(format!("no session is named {name:?}; the sessions are {shown:?}{more}"))
+        });
+    }
+    if !key.is_instance_of::<PyBool>()
+        && let Ok(index) = key.extract::<i64>()
+    {
+        return usize::try_from(index).ok().filter(|&a| a < names.len()).ok_or_else(|| {
+            PyIndexError::new_err(format!("session {index} out of range: the fleet has {} sessions", names.len()))
+        });
+    }
+    Err(PyTypeError::new_err(format!(
+        "a session is named by its name (str) or its index (int), got {}",
+        key.get_type().name()?
+    )))
+}
+
+/// The one metric that sessions `(name, metric)` are measured by when no `metric=` is given.
+///
+/// # Errors
+/// `InvalidParameterError` when two sessions are measured by different metrics.
+pub(crate) fn common_metric<'a>(
+    mut sessions: impl Iterator<Item = (&'a str, MetricSpec)>,
+) -> PyResult<Option<MetricSpec>> {
+    let Some((first_name, first)) = sessions.next() else { return Ok(None) };
+    for (name, metric) in sessions {
+        if metric != first {
+            return Err(invalid_parameter(format!(
+                "session {name:?} is measured by {} but session {first_name:?} by {}: pass metric=",
+                metric.name(),
+                first.name()
+            )));
+        }
+    }
+    Ok(Some(first))
+}
+
 impl Fleet {
     /// The session `key` names: its name, or its index.
     ///
@@ -169,26 +258,7 @@ impl Fleet {
     /// `KeyError` for an unknown name, `IndexError` for an index out of range, `TypeError`
     /// for anything else.
     pub(crate) fn session_index(&self, key: &Bound<'_, PyAny>) -> PyResult<usize> {
-        let names = self.inner.names();
-        if let Ok(name) = key.cast::<PyString>() {
-            let name = name.to_str()?;
-            return names.iter().position(|n| n == name).ok_or_else(|| {
-                let shown: Vec<&str> = names.iter().take(10).map(String::as_str).collect();
-                let more = if names.len() > 10 { format!(", ... ({} in all)", names.len()) } else { String::new() };
-                PyKeyError::new_err(format!("no session is named {name:?}; the sessions are {shown:?}{more}"))
-            });
-        }
-        if !key.is_instance_of::<PyBool>()
-            && let Ok(index) = key.extract::<i64>()
-        {
-            return usize::try_from(index).ok().filter(|&a| a < names.len()).ok_or_else(|| {
-                PyIndexError::new_err(format!("session {index} out of range: the fleet has {} sessions", names.len()))
-            });
-        }
-        Err(PyTypeError::new_err(format!(
-            "a session is named by its name (str) or its index (int), got {}",
-            key.get_type().name()?
-        )))
+        session_index_of(self.inner.names(), key)
     }
 
     /// Whether two fleets hold the same sessions, read on the same planes for the same metrics.
@@ -212,21 +282,10 @@ impl Fleet {
     /// # Errors
     /// `InvalidParameterError` when two sessions are measured by different metrics.
     fn default_metric(&self) -> PyResult<MetricSpec> {
+        let names = self.inner.names();
         let metric = |a: usize| self.metrics[a].unwrap_or_else(|| self.inner.session(a).default_metric());
-        let first = metric(0);
-        for a in 1..self.inner.len() {
-            if metric(a) != first {
-                let names = self.inner.names();
-                return Err(invalid_parameter(format!(
-                    "session {:?} is measured by {} but session {:?} by {}: pass metric=",
-                    names[a],
-                    metric(a).name(),
-                    names[0],
-                    first.name()
-                )));
-            }
-        }
-        Ok(first)
+        let metric = common_metric((0..self.inner.len()).map(|a| (names[a].as_str(), metric(a))))?;
+        Ok(metric.expect("a fleet has a session"))
     }
 }
 
@@ -298,28 +357,22 @@ impl Fleet {
         drop_duplicate_stamps: bool,
         quaternion_tolerance: Option<f64>,
     ) -> PyResult<Self> {
-        let sources = session_sources(sessions)?;
-        let mut named = Vec::with_capacity(sources.len());
+        let read = read_sessions(
+            py,
+            sessions,
+            format,
+            axes,
+            metric,
+            topic,
+            time,
+            frames,
+            rate_hz,
+            drop_duplicate_stamps,
+            quaternion_tolerance,
+        )?;
+        let mut named = Vec::with_capacity(read.len());
         let (mut plane_axes, mut metrics) = (Vec::new(), Vec::new());
-        for (name, source) in sources {
-            let traj = match source {
-                SessionSource::Trajectory(traj) => traj,
-                SessionSource::Read(path) => crate::py_trajectory::read_trajectory(
-                    py,
-                    &path,
-                    format.clone(),
-                    axes,
-                    metric,
-                    topic.clone(),
-                    time.clone(),
-                    frames.clone(),
-                    rate_hz,
-                    None,
-                    drop_duplicate_stamps,
-                    quaternion_tolerance,
-                    false,
-                )?,
-            };
+        for (name, traj) in read {
             plane_axes.push(traj.plane_axes);
             metrics.push(traj.metric);
             named.push((name, traj.inner));
@@ -718,21 +771,32 @@ impl FleetLoops {
         let f = &fleet.inner;
         let end = f.starts()[sessions.end - 1] + f.session(sessions.end - 1).len();
         let span = f.starts()[sessions.start]..end;
-        let session_of: Vec<i64> =
-            sessions.clone().flat_map(|a| std::iter::repeat_n(a as i64, f.session(a).len())).collect();
-        let pose: Vec<i64> = sessions.clone().flat_map(|a| 0..f.session(a).len() as i64).collect();
-        let t_s: Vec<f64> = sessions.flat_map(|a| f.session(a).timestamps_s().iter().copied()).collect();
-        table(
-            py,
-            [
-                ("session", to_numpy(py, session_of).into_any()),
-                ("pose", to_numpy(py, pose).into_any()),
-                ("t_s", to_numpy(py, t_s).into_any()),
-                ("own_s", to_numpy(py, own[span.clone()].to_vec()).into_any()),
-                ("other_s", to_numpy(py, other[span].to_vec()).into_any()),
-            ],
-        )
+        let sessions: Vec<(usize, &[f64])> = sessions.map(|a| (a, f.session(a).timestamps_s())).collect();
+        loop_duration_table(py, &sessions, &own[span.clone()], &other[span])
     }
+}
+
+/// The table of :meth:`FleetLoops.loop_duration` (see there) of `sessions` (index, times of
+/// its poses) in order, with τ `own` and `other` of their poses.
+pub(crate) fn loop_duration_table<'py>(
+    py: Python<'py>,
+    sessions: &[(usize, &[f64])],
+    own: &[f64],
+    other: &[f64],
+) -> PyResult<Bound<'py, PyAny>> {
+    let session_of: Vec<i64> = sessions.iter().flat_map(|&(a, t)| std::iter::repeat_n(a as i64, t.len())).collect();
+    let pose: Vec<i64> = sessions.iter().flat_map(|(_, t)| 0..t.len() as i64).collect();
+    let t_s: Vec<f64> = sessions.iter().flat_map(|(_, t)| t.iter().copied()).collect();
+    table(
+        py,
+        [
+            ("session", to_numpy(py, session_of).into_any()),
+            ("pose", to_numpy(py, pose).into_any()),
+            ("t_s", to_numpy(py, t_s).into_any()),
+            ("own_s", to_numpy(py, own.to_vec()).into_any()),
+            ("other_s", to_numpy(py, other.to_vec()).into_any()),
+        ],
+    )
 }
 
 /// The table of :attr:`FleetLoops.components` (see there) of fleet components with the times
@@ -1027,26 +1091,7 @@ impl FleetSamples {
     /// baseline's pair outside S_γ) and ``distance`` (float64, δ between the poses).
     #[getter]
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let names = self.fleet.bind(py).get().inner.names();
-        let s = &self.located;
-        table(
-            py,
-            [
-                ("session_a", int64_column(py, s, |s| s.sessions[0])),
-                ("name_a", str_column(py, s.iter().map(|s| names[s.sessions[0]].as_str()).collect())?),
-                ("i", int64_column(py, s, |s| s.poses[0])),
-                ("t_s", float64_column(py, s, |s| s.times_s[0])),
-                ("session_b", int64_column(py, s, |s| s.sessions[1])),
-                ("name_b", str_column(py, s.iter().map(|s| names[s.sessions[1]].as_str()).collect())?),
-                ("j", int64_column(py, s, |s| s.poses[1])),
-                ("t_prime_s", float64_column(py, s, |s| s.times_s[1])),
-                (
-                    "component",
-                    to_numpy(py, s.iter().map(|s| s.component.map_or(-1, |c| c as i64)).collect()).into_any(),
-                ),
-                ("distance", float64_column(py, s, |s| s.distance.unwrap_or(f64::NAN))),
-            ],
-        )
+        fleet_samples_table(py, &self.located, self.fleet.bind(py).get().inner.names())
     }
 
     /// :attr:`table` as a ``pandas.DataFrame``.
@@ -1056,6 +1101,29 @@ impl FleetSamples {
     fn to_pandas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         self.table(py)?.call_method0("to_pandas")
     }
+}
+
+/// The table of :attr:`FleetSamples.table` (see there).
+pub(crate) fn fleet_samples_table<'py>(
+    py: Python<'py>,
+    s: &[loops_core::FleetSample],
+    names: &[String],
+) -> PyResult<Bound<'py, PyAny>> {
+    table(
+        py,
+        [
+            ("session_a", int64_column(py, s, |s| s.sessions[0])),
+            ("name_a", str_column(py, s.iter().map(|s| names[s.sessions[0]].as_str()).collect())?),
+            ("i", int64_column(py, s, |s| s.poses[0])),
+            ("t_s", float64_column(py, s, |s| s.times_s[0])),
+            ("session_b", int64_column(py, s, |s| s.sessions[1])),
+            ("name_b", str_column(py, s.iter().map(|s| names[s.sessions[1]].as_str()).collect())?),
+            ("j", int64_column(py, s, |s| s.poses[1])),
+            ("t_prime_s", float64_column(py, s, |s| s.times_s[1])),
+            ("component", to_numpy(py, s.iter().map(|s| s.component.map_or(-1, |c| c as i64)).collect()).into_any()),
+            ("distance", float64_column(py, s, |s| s.distance.unwrap_or(f64::NAN))),
+        ],
+    )
 }
 
 /// A seeded synthetic fleet: ``vehicles`` cars driving every one of ``days`` days in one city

@@ -43,7 +43,12 @@ const TOOL: out_dir::Tool = out_dir::FLEET;
 #[derive(Debug, Args)]
 #[command(
     allow_negative_numbers = true,
-    mut_arg("out", |arg| arg.help("The folder for the results: the fleet's files and a folder per session")),
+    group(clap::ArgGroup::new("destination").args(["out", "store"]).required(true)),
+    mut_arg("out", |arg| arg
+        .help("The folder for the results: the fleet's files and a folder per session")
+        .required(false)
+        .default_value(".")
+        .hide_default_value(true)),
     mut_arg("force", |arg| arg.help(
         "Replace the results of an earlier `loops fleet` in --out (only what it wrote there)"
     )),
@@ -54,7 +59,8 @@ const TOOL: out_dir::Tool = out_dir::FLEET;
     loops synth fleet --vehicles 3 --days 2 --duration-s 900\n  \
     loops fleet fleet/*.mcap --gamma 40 --out fleet-results\n  \
     loops fleet fleet/*.mcap --gamma 40 --between-only --budget 500 --out merge --force\n  \
-    loops fleet --session monday=mon_0.mcap,mon_1.mcap --session tuesday=tue.mcap --gamma 40 --out results\n\n\
+    loops fleet --session monday=mon_0.mcap,mon_1.mcap --session tuesday=tue.mcap --gamma 40 --out results\n  \
+    loops fleet --store city fleet/*day1.mcap --gamma 40 --budget 500 --block 20000\n\n\
     In --out: index.html (the fleet's report), components.csv (every component, both sessions\n\
     by name and index, times on each session's clock), session_pairs.csv (the sparse overlap\n\
     matrix), samples.csv, samples.g2o (GTSAM Symbol keys: robot letter a, b, ... per session, up\n\
@@ -64,7 +70,7 @@ const TOOL: out_dir::Tool = out_dir::FLEET;
 pub(crate) struct FleetArgs {
     /// The pose logs, one session each, named by the file's stem (a rosbag2 bag by its folder's
     /// name); names must be unique.
-    #[arg(value_name = "LOG", required_unless_present = "sessions")]
+    #[arg(value_name = "LOG", required_unless_present_any = ["sessions", "remove"])]
     logs: Vec<PathBuf>,
     /// A session of several files, or a name of your choice: NAME=FILE[,FILE...]. The files are
     /// read as one trajectory, as `loops components A B` reads them (MCAP parts merged by time,
@@ -82,6 +88,19 @@ pub(crate) struct FleetArgs {
     /// on it.
     #[arg(long, default_value_t = Pruning::default().name().to_owned())]
     pruning: String,
+    /// Keep the fleet in the store DIR instead of --out: add the sessions (replacing those of
+    /// the same name), scan only the tiles that hold them, and write the store's Parquet tables
+    /// (sessions, tiles, components, session_pairs, loop_duration, samples). A missing or empty
+    /// DIR is made with the settings given; later runs must give the same.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["force", "json"])]
+    store: Option<PathBuf>,
+    /// With --store: remove the session NAME from the store (repeat for more).
+    #[arg(long, value_name = "NAME", requires = "store")]
+    remove: Vec<String>,
+    /// With --store: poses per block of a session (tiles are blocks × blocks), fixed when the
+    /// store is made.
+    #[arg(long, value_name = "POSES", requires = "store", default_value_t = loops_core::StoreSettings::DEFAULT_BLOCK)]
+    block: usize,
     #[command(flatten)]
     results: ResultsArgs,
 }
@@ -159,6 +178,9 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
              rho, rho-dispersed or alpha",
             sampler.kind
         );
+    }
+    if let Some(store) = &args.store {
+        return fleet_store(&args, store);
     }
     let results = &args.results;
     let specs = sessions(&args)?;
@@ -314,6 +336,64 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         batch.finish();
     }
     result
+}
+
+/// `loops fleet --store DIR`: the sessions read (every one before the store is touched, so that
+/// a log that cannot be read is one line on stderr and the store unchanged), then one update of
+/// the store ([`loops_io::store::update_store`]).
+fn fleet_store(args: &FleetArgs, dir: &Path) -> Result<u8> {
+    let start = Instant::now();
+    let checked = args.analysis.checked()?;
+    let (spec, sampler, separation) = (checked.spec, checked.sampler.clone(), checked.separation);
+    let (input, gamma) = (&args.analysis.input, args.analysis.engine.gamma);
+    let specs = sessions(args)?;
+    let inputs: Vec<PathBuf> = specs.iter().flat_map(|s| s.files.iter().cloned()).collect();
+    if dir.exists() && !dir.is_dir() {
+        bail!("--store {} exists and is not a folder", dir.display());
+    }
+    out_dir::refuse_outputs_on_inputs([("--store", Some(dir))], &inputs)?;
+    let config = loops_io::store::StoreConfig {
+        settings: loops_core::StoreSettings { metric: spec, gamma, separation, block: args.block },
+        sampler: Some((sampler, args.between_only)),
+    };
+    config.settings.check()?;
+    let report = loops_core::with_threads(args.analysis.engine.threads, || -> Result<_> {
+        let put: Vec<(String, Trajectory)> = specs
+            .par_iter()
+            .map(|s| input.read_table(&s.files, &spec).map(|(_, trajectory)| (s.name.clone(), trajectory)))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<_>>()?;
+        Ok(loops_io::store::update_store(dir, Some(&config), put, &args.remove)?)
+    })??;
+    let update = report.stored.store.last_update();
+    let list = |what: &str, names: &[String]| (!names.is_empty()).then(|| format!("{what} {}", names.join(", ")));
+    let done: Vec<String> = [
+        list("added", &update.added),
+        list("replaced", &update.replaced),
+        list("removed", &update.removed),
+        list("unchanged", &update.unchanged),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if !args.results.quiet {
+        println!(
+            "loops: store {}: {}; {} tiles scanned, {} kept, {} dropped; {} sessions, {} components ({} of the \
+             sessions changed), {} samples, {:.2} s",
+            dir.display(),
+            if done.is_empty() { "nothing to do".to_owned() } else { done.join("; ") },
+            update.tiles_scanned,
+            update.tiles_kept,
+            update.tiles_dropped,
+            report.stored.store.sessions().len(),
+            report.components,
+            report.added_components,
+            report.samples.as_ref().map_or(0, |s| s.rows.len()),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(0)
 }
 
 /// The sessions as given: each LOG, then each --session, with unique names that can name a

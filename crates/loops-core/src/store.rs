@@ -1,0 +1,779 @@
+//! A fleet's loops kept up to date as sessions come, are corrected and go: [`FleetStore`], the
+//! state of a fleet's tiles (see [`tile`](crate::TileSummary)) that an update changes at the
+//! cost of the sessions it changes.
+//!
+//! The store holds its sessions (name, content fingerprint, blocks: what planning needs) in
+//! name order, and the summary and share of τ of every tile of their plan, in fleet indices of
+//! that order. An update ([`FleetStore::update`]: sessions added or replaced by name, others
+//! removed) keeps the tiles of every pair of unchanged sessions (moved to the new fleet
+//! indices: a tile depends on its two sessions alone), drops those of replaced and removed
+//! sessions, and scans only the tiles that hold a new or replaced session (new × old, new ×
+//! new). The answer is merged again from the stored summaries ([`FleetStore::loops`]), and
+//! samples are drawn by keys ([`FleetStore::samples`]), rescanning only the tiles a draw asks.
+//!
+//! **Same answer as from scratch.** After any sequence of updates, the components, the overlap
+//! matrix, τ and the samples are those of [`find_fleet_loops`](crate::find_fleet_loops) and
+//! [`sample_fleet`](crate::sample_fleet) over the store's sessions in name order (areas to
+//! rounding, as for any tiling; everything else exactly), and the store itself (its tiles,
+//! bit for bit) does not depend on the order of the updates.
+//!
+//! The store holds no poses: an update and a draw ask a *source* for the stored sessions they
+//! read (`FnMut(&StoreSession) -> Result<Trajectory>`), and check what comes back against the
+//! session's pose count and fingerprint. Where the poses live (a folder of tables, a cluster's
+//! storage) is the caller's: `loops_io::store` keeps them beside the tables.
+//!
+//! # Examples
+//! ```
+//! use loops_core::{Euclidean, Fleet, FleetOptions, FleetStore, StoreSettings, Trajectory, find_fleet_loops};
+//! let line = |t0: f64, y: f64| Trajectory::from_points(vec![t0, t0 + 1.0, t0 + 2.0], &[[0.0, y], [5.0, y], [10.0, y]]);
+//! let (monday, tuesday) = (line(0.0, 0.0)?, line(100.0, 0.5)?);
+//! let mut store = FleetStore::new(StoreSettings { block: 2, ..StoreSettings::new(1.0) })?;
+//! let mut no_poses = |s: &loops_core::StoreSession| -> loops_core::Result<Trajectory> { unreachable!("{}", s.name) };
+//! store.update(vec![("monday".into(), monday.clone())], &[], &mut no_poses)?;
+//! // Tuesday's tiles with Monday need Monday's poses: the source gives them.
+//! let mut source = |s: &loops_core::StoreSession| -> loops_core::Result<Trajectory> {
+//!     assert_eq!(s.name, "monday");
+//!     Ok(monday.clone())
+//! };
+//! let update = store.update(vec![("tuesday".into(), tuesday.clone())], &[], &mut source)?;
+//! assert_eq!(update.added, ["tuesday"]);
+//! let loops = store.loops()?;
+//! let fleet = Fleet::new(vec![("monday".into(), monday), ("tuesday".into(), tuesday)])?;
+//! let scratch = find_fleet_loops(&fleet, &Euclidean, 1.0, &FleetOptions::default())?;
+//! assert_eq!(loops.components().len(), scratch.components().len());
+//! # Ok::<(), loops_core::Error>(())
+//! ```
+
+use std::collections::{BTreeMap, HashMap, HashSet};
+
+use rayon::prelude::*;
+
+use crate::draw::SampleWarning;
+use crate::error::{Error, Result};
+use crate::fleet::{FleetComponent, FleetSample, SessionPair};
+use crate::sample::{DrawCandidates, KeyedDraw, Sampler};
+use crate::separation::Separation;
+use crate::spec::{MetricSpec, with_metric};
+use crate::sublevel::check_gamma;
+use crate::tile::{MergedLoops, SessionBlocks, Tile, TileMerge, TileSummary, plan_session_tiles_touching};
+use crate::tile_draw::{TileDuration, draw_session_tile, scan_session_tile_with_duration, tile_requests};
+use crate::trajectory::{Manifold, Trajectory};
+
+/// The version of a store's layout (its tables and their meaning); a store of another version
+/// is refused when read back.
+pub const STORE_FORMAT_VERSION: u16 = 1;
+
+/// What a store's answer depends on, fixed when the store is made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StoreSettings {
+    /// The metric δ.
+    pub metric: MetricSpec,
+    /// γ, in the metric's unit.
+    pub gamma: f64,
+    /// The revisit separation within a session.
+    pub separation: Separation,
+    /// Poses per block of a session: tiles are blocks × blocks.
+    pub block: usize,
+}
+
+impl StoreSettings {
+    /// Poses per block when none is chosen: the unit the Dask runner cuts sessions into.
+    pub const DEFAULT_BLOCK: usize = 50_000;
+
+    /// γ with the Euclidean metric, no separation and [`DEFAULT_BLOCK`](Self::DEFAULT_BLOCK).
+    pub fn new(gamma: f64) -> Self {
+        Self { metric: MetricSpec::Euclidean, gamma, separation: Separation::NONE, block: Self::DEFAULT_BLOCK }
+    }
+
+    /// γ, the separation and the block are valid.
+    ///
+    /// # Errors
+    /// [`Error::InvalidGamma`]; [`Error::InvalidSeparation`]; [`Error::InvalidParameter`] for a
+    /// block of 0 poses.
+    pub fn check(&self) -> Result<()> {
+        check_gamma(self.gamma)?;
+        self.separation.check()?;
+        if self.block == 0 {
+            return Err(Error::InvalidParameter { name: "block", value: 0.0, expected: "at least 1 pose" });
+        }
+        Ok(())
+    }
+}
+
+/// One session of a store: what planning and checking it need, not its poses.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct StoreSession {
+    /// Its name (sessions are kept in name order).
+    pub name: String,
+    /// [`session_fingerprint`] of its trajectory.
+    pub fingerprint: u64,
+    /// What its points are.
+    pub manifold: Manifold,
+    /// The times of its first and last pose, seconds, on its own clock.
+    pub times_s: [f64; 2],
+    /// Its blocks (pose count, span, dimension, bounding balls).
+    pub blocks: SessionBlocks,
+}
+
+impl StoreSession {
+    /// The session of `trajectory` under `settings`: O(poses).
+    ///
+    /// # Errors
+    /// The metric's errors on the trajectory; [`Error::InvalidParameter`] for a block of 0.
+    pub fn new(name: String, trajectory: &Trajectory, settings: &StoreSettings) -> Result<Self> {
+        with_metric!(&settings.metric, m => trajectory.check_metric(m))?;
+        let blocks = with_metric!(&settings.metric, m => SessionBlocks::new(trajectory, m, settings.block))?;
+        let times = trajectory.timestamps_s();
+        Ok(Self {
+            name,
+            fingerprint: session_fingerprint(trajectory),
+            manifold: trajectory.manifold(),
+            times_s: [times[0], times[times.len() - 1]],
+            blocks,
+        })
+    }
+
+    /// Number of poses.
+    pub fn poses(&self) -> usize {
+        self.blocks.poses
+    }
+}
+
+/// A 64-bit fingerprint of a trajectory's content: its manifold, dimension, times and
+/// coordinates, bit for bit. Two trajectories with the same fingerprint are taken as the same
+/// session (an update that gives a session again unchanged scans nothing). O(poses).
+///
+/// # Examples
+/// ```
+/// use loops_core::{Trajectory, session_fingerprint};
+/// let a = Trajectory::from_points(vec![0.0, 1.0], &[[0.0, 0.0], [1.0, 0.0]])?;
+/// let b = Trajectory::from_points(vec![0.0, 1.0], &[[0.0, 0.0], [1.0, 1e-12]])?;
+/// assert_eq!(session_fingerprint(&a), session_fingerprint(&a.clone()));
+/// assert_ne!(session_fingerprint(&a), session_fingerprint(&b));
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn session_fingerprint(trajectory: &Trajectory) -> u64 {
+    // SplitMix64's finaliser over each 64-bit word, chained.
+    fn mix(mut z: u64) -> u64 {
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    let mut h = mix(0x6c6f_6f70_732d_7374);
+    let mut eat = |word: u64| h = mix(h ^ word).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    trajectory.manifold().name().bytes().for_each(|b| eat(u64::from(b)));
+    eat(trajectory.dim() as u64);
+    eat(trajectory.len() as u64);
+    trajectory.timestamps_s().iter().for_each(|t| eat(t.to_bits()));
+    trajectory.coords().iter().for_each(|x| eat(x.to_bits()));
+    h
+}
+
+/// A tile of a store: its summary and its share of τ, in the store's fleet indices.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct StoredTile {
+    /// What the merge reads.
+    pub summary: TileSummary,
+    /// What τ adds up.
+    pub duration: TileDuration,
+}
+
+impl StoredTile {
+    /// The tile.
+    pub fn tile(&self) -> &Tile {
+        &self.summary.tile
+    }
+
+    /// The same tile with its sessions renumbered and its rows and columns moved by `shifts`
+    /// (fleet indices): what a rescan at the new place gives, since a tile reads its two
+    /// sessions alone.
+    fn moved(&self, sessions: [usize; 2], shifts: [isize; 2]) -> Self {
+        let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
+        let range = |r: &std::ops::Range<usize>, side| at(r.start, side)..at(r.end, side);
+        let old = &self.summary.tile;
+        let tile = Tile { sessions, rows: range(&old.rows, 0), columns: range(&old.columns, 1) };
+        let components = self
+            .summary
+            .components
+            .iter()
+            .map(|c| {
+                let mut c = c.clone();
+                c.rows = [at(c.rows[0], 0), at(c.rows[1], 0)];
+                c.columns = [at(c.columns[0], 1), at(c.columns[1], 1)];
+                c.closest = [at(c.closest[0], 0), at(c.closest[1], 1)];
+                c.first = [at(c.first[0], 0), at(c.first[1], 1)];
+                c
+            })
+            .collect();
+        let edges = self
+            .summary
+            .edges
+            .iter()
+            .map(|e| crate::tile::EdgeRun { row: at(e.row, 0), start: at(e.start, 1), end: at(e.end, 1), ..*e })
+            .collect();
+        let summary = TileSummary { tile: tile.clone(), components, edges };
+        let duration = TileDuration { tile, ..self.duration.clone() };
+        Self { summary, duration }
+    }
+}
+
+/// What an update did, by session name (each list in name order), and its tiles.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct StoreUpdate {
+    /// Sessions new to the store.
+    pub added: Vec<String>,
+    /// Sessions given anew with other content.
+    pub replaced: Vec<String>,
+    /// Sessions given anew with the same content (nothing to do).
+    pub unchanged: Vec<String>,
+    /// Sessions removed.
+    pub removed: Vec<String>,
+    /// Tiles scanned.
+    pub tiles_scanned: usize,
+    /// Tiles kept from before.
+    pub tiles_kept: usize,
+    /// Tiles of replaced or removed sessions dropped.
+    pub tiles_dropped: usize,
+}
+
+impl StoreUpdate {
+    /// The sessions whose tiles the update scanned: added and replaced, in name order.
+    pub fn changed(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = self.added.iter().chain(&self.replaced).map(String::as_str).collect();
+        names.sort_unstable();
+        names
+    }
+}
+
+/// A fleet's loops kept up to date by session (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FleetStore {
+    settings: StoreSettings,
+    sessions: Vec<StoreSession>,
+    tiles: Vec<StoredTile>,
+    last_update: StoreUpdate,
+}
+
+/// Where a store reads a stored session's poses.
+pub type SessionSource<'a> = dyn FnMut(&StoreSession) -> Result<Trajectory> + 'a;
+
+impl FleetStore {
+    /// An empty store.
+    ///
+    /// # Errors
+    /// As [`StoreSettings::check`].
+    pub fn new(settings: StoreSettings) -> Result<Self> {
+        settings.check()?;
+        Ok(Self { settings, sessions: Vec::new(), tiles: Vec::new(), last_update: StoreUpdate::default() })
+    }
+
+    /// A store from its parts as saved (sessions in name order, tiles in plan order), checked:
+    /// the settings, each session's blocks, and that the tiles are exactly the plan of the
+    /// sessions (O(blocks log blocks)), each lying in its sessions with a share of τ of its
+    /// size.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"fleet store"`) naming the first part that does not
+    /// fit; the settings' errors.
+    pub fn from_parts(
+        settings: StoreSettings,
+        sessions: Vec<StoreSession>,
+        tiles: Vec<StoredTile>,
+        last_update: StoreUpdate,
+    ) -> Result<Self> {
+        settings.check()?;
+        let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
+        for (k, s) in sessions.iter().enumerate() {
+            if k > 0 && sessions[k - 1].name >= s.name {
+                return Err(corrupt(format!(
+                    "session {k} {:?} is not after {:?} in name order",
+                    s.name,
+                    sessions[k - 1].name
+                )));
+            }
+            s.blocks.check().map_err(|p| corrupt(format!("session {k} {:?}: {p}", s.name)))?;
+            if s.blocks.block != settings.block {
+                return Err(corrupt(format!(
+                    "session {k} {:?} is cut into blocks of {} poses, the store into blocks of {}",
+                    s.name, s.blocks.block, settings.block
+                )));
+            }
+        }
+        for (k, t) in tiles.iter().enumerate() {
+            t.summary.check().map_err(|p| corrupt(format!("tile {k}: {p}")))?;
+            let d = &t.duration;
+            if d.tile != t.summary.tile || d.rows.len() != d.tile.rows.len() || d.columns.len() != d.tile.columns.len()
+            {
+                return Err(corrupt(format!("tile {k}: its share of τ is not of tile {:?}", t.summary.tile)));
+            }
+        }
+        let store = Self { settings, sessions, tiles, last_update };
+        let plan = store.plan(&vec![true; store.sessions.len()])?;
+        if let Some(k) =
+            (0..plan.len().max(store.tiles.len())).find(|&k| plan.get(k) != store.tiles.get(k).map(StoredTile::tile))
+        {
+            return Err(corrupt(format!(
+                "tile {k} is {:?}, but the plan of the sessions has {:?} there ({} tiles in all, {} stored)",
+                store.tiles.get(k).map(StoredTile::tile),
+                plan.get(k),
+                plan.len(),
+                store.tiles.len()
+            )));
+        }
+        Ok(store)
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &StoreSettings {
+        &self.settings
+    }
+
+    /// The sessions, in name order (their fleet order).
+    pub fn sessions(&self) -> &[StoreSession] {
+        &self.sessions
+    }
+
+    /// The tiles, in plan order.
+    pub fn tiles(&self) -> &[StoredTile] {
+        &self.tiles
+    }
+
+    /// What the last update did.
+    pub fn last_update(&self) -> &StoreUpdate {
+        &self.last_update
+    }
+
+    /// The index of the session named `name`.
+    pub fn session_index(&self, name: &str) -> Option<usize> {
+        self.sessions.binary_search_by(|s| s.name.as_str().cmp(name)).ok()
+    }
+
+    /// The first fleet index of each session.
+    pub fn starts(&self) -> Vec<usize> {
+        starts_of(&self.sessions)
+    }
+
+    /// The tiles of the sessions marked in `touched`, as the whole plan has them.
+    fn plan(&self, touched: &[bool]) -> Result<Vec<Tile>> {
+        if self.sessions.is_empty() {
+            return Ok(Vec::new());
+        }
+        let blocks: Vec<SessionBlocks> = self.sessions.iter().map(|s| s.blocks.clone()).collect();
+        with_metric!(&self.settings.metric, m => plan_session_tiles_touching(&blocks, m, self.settings.gamma, touched))
+    }
+
+    /// Adds or replaces the sessions `put` (by name) and removes the sessions `remove`, in one
+    /// update: scans only the tiles that hold an added or replaced session (reading the stored
+    /// sessions they meet from `source`, each once), keeps the tiles of every other pair, and
+    /// drops those of replaced and removed sessions. A session given with the content it has
+    /// in the store (same fingerprint) changes nothing. On an error the store is unchanged.
+    ///
+    /// Time: the scans of the new tiles (rows in parallel, tiles in parallel), plus O(stored
+    /// tiles) to move them when a new name sorts before stored ones, plus O(blocks log blocks)
+    /// to plan.
+    ///
+    /// # Errors
+    /// [`Error::DuplicateSession`] for a name given twice; [`Error::StoreSession`] for a
+    /// removed name not in the store or also given; [`Error::SessionMismatch`] for a session
+    /// whose dimension or manifold differs from the others'; the metric's errors on a session;
+    /// [`Error::InvalidState`] for a stored session that `source` gives with another pose
+    /// count or content; `source`'s errors.
+    pub fn update(
+        &mut self,
+        put: Vec<(String, Trajectory)>,
+        remove: &[String],
+        source: &mut SessionSource<'_>,
+    ) -> Result<&StoreUpdate> {
+        let mut given: BTreeMap<String, (StoreSession, Trajectory)> = BTreeMap::new();
+        for (name, trajectory) in put {
+            if given.contains_key(&name) {
+                return Err(Error::DuplicateSession { name });
+            }
+            let session = StoreSession::new(name.clone(), &trajectory, &self.settings)?;
+            given.insert(name, (session, trajectory));
+        }
+        let mut removed = BTreeMap::new();
+        for name in remove {
+            let Some(k) = self.session_index(name) else {
+                return Err(Error::StoreSession { name: name.clone(), problem: "is not in the store (to remove)" });
+            };
+            if given.contains_key(name) {
+                return Err(Error::StoreSession { name: name.clone(), problem: "is both given and removed" });
+            }
+            removed.insert(name.clone(), k);
+        }
+        let mut report = StoreUpdate::default();
+        let mut changed: BTreeMap<String, (StoreSession, Trajectory)> = BTreeMap::new();
+        for (name, (session, trajectory)) in given {
+            match self.session_index(&name).map(|k| &self.sessions[k]) {
+                Some(old) if old.fingerprint == session.fingerprint && old.poses() == session.poses() => {
+                    report.unchanged.push(name);
+                }
+                Some(_) => {
+                    report.replaced.push(name.clone());
+                    changed.insert(name, (session, trajectory));
+                }
+                None => {
+                    report.added.push(name.clone());
+                    changed.insert(name, (session, trajectory));
+                }
+            }
+        }
+        report.removed = removed.keys().cloned().collect();
+        // The new sessions in name order, with where each was before (unchanged ones).
+        let mut next: BTreeMap<&str, (StoreSession, Option<usize>)> = BTreeMap::new();
+        for (k, s) in self.sessions.iter().enumerate() {
+            if !removed.contains_key(&s.name) && !changed.contains_key(&s.name) {
+                next.insert(&s.name, (s.clone(), Some(k)));
+            }
+        }
+        for (name, (session, _)) in &changed {
+            next.insert(name, (session.clone(), None));
+        }
+        let (sessions, before): (Vec<StoreSession>, Vec<Option<usize>>) = next.into_values().unzip();
+        if let Some(first) = sessions.first() {
+            for s in &sessions {
+                let mismatch =
+                    |problem: String, what| Error::SessionMismatch { session: s.name.clone(), problem, what };
+                if s.blocks.dim != first.blocks.dim {
+                    let problem =
+                        format!("has {} coordinates, session {:?} has {}", s.blocks.dim, first.name, first.blocks.dim);
+                    return Err(mismatch(problem, "dimension"));
+                }
+                if s.manifold != first.manifold {
+                    let problem =
+                        format!("lies on {}, session {:?} on {}", s.manifold.name(), first.name, first.manifold.name());
+                    return Err(mismatch(problem, "manifold"));
+                }
+            }
+        }
+        let starts = starts_of(&sessions);
+        // Stored tiles of two unchanged sessions move to the new indices; the rest are dropped.
+        let old_starts = self.starts();
+        let mut now = vec![None; self.sessions.len()];
+        for (k, b) in before.iter().enumerate() {
+            if let Some(b) = *b {
+                now[b] = Some(k);
+            }
+        }
+        let mut tiles = Vec::with_capacity(self.tiles.len());
+        for t in &self.tiles {
+            let [a, b] = t.tile().sessions;
+            match (now[a], now[b]) {
+                (Some(na), Some(nb)) => {
+                    let shift = |new: usize, old: usize| new as isize - old as isize;
+                    let shifts = [shift(starts[na], old_starts[a]), shift(starts[nb], old_starts[b])];
+                    tiles.push(if shifts == [0, 0] && [na, nb] == [a, b] {
+                        t.clone()
+                    } else {
+                        t.moved([na, nb], shifts)
+                    });
+                }
+                _ => report.tiles_dropped += 1,
+            }
+        }
+        report.tiles_kept = tiles.len();
+        // The tiles of changed sessions: plan, read the stored sessions they meet, scan.
+        let touched: Vec<bool> = before.iter().map(Option::is_none).collect();
+        let candidate =
+            Self { settings: self.settings, sessions, tiles: Vec::new(), last_update: StoreUpdate::default() };
+        let new_tiles = candidate.plan(&touched)?;
+        let mut read: HashMap<usize, Trajectory> = HashMap::new();
+        for tile in &new_tiles {
+            for s in tile.sessions {
+                if touched[s] || read.contains_key(&s) {
+                    continue;
+                }
+                read.insert(s, read_session(&candidate.sessions[s], source)?);
+            }
+        }
+        let trajectory = |s: usize| -> &Trajectory {
+            match changed.get(&candidate.sessions[s].name) {
+                Some((_, t)) => t,
+                None => &read[&s],
+            }
+        };
+        let settings = self.settings;
+        let scanned = new_tiles
+            .par_iter()
+            .map(|tile| {
+                let [a, b] = tile.sessions;
+                let (summary, duration) = with_metric!(&settings.metric, m => scan_session_tile_with_duration(
+                    [trajectory(a), trajectory(b)],
+                    [starts[a], starts[b]],
+                    m,
+                    settings.gamma,
+                    settings.separation,
+                    tile,
+                ))?;
+                Ok(StoredTile { summary, duration })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        report.tiles_scanned = scanned.len();
+        tiles.extend(scanned);
+        // Plan order: by row block, then column block (fleet indices order both).
+        tiles.sort_by_key(|t| (t.tile().rows.start, t.tile().columns.start));
+        self.sessions = candidate.sessions;
+        self.tiles = tiles;
+        self.last_update = report;
+        Ok(&self.last_update)
+    }
+
+    /// Adds new sessions ([`update`](Self::update)).
+    ///
+    /// # Errors
+    /// [`Error::StoreSession`] for a name already in the store; as [`update`](Self::update).
+    pub fn add(&mut self, sessions: Vec<(String, Trajectory)>, source: &mut SessionSource<'_>) -> Result<&StoreUpdate> {
+        if let Some((name, _)) = sessions.iter().find(|(name, _)| self.session_index(name).is_some()) {
+            return Err(Error::StoreSession { name: name.clone(), problem: "is already in the store (replace it)" });
+        }
+        self.update(sessions, &[], source)
+    }
+
+    /// Replaces sessions of the store by name ([`update`](Self::update)).
+    ///
+    /// # Errors
+    /// [`Error::StoreSession`] for a name not in the store; as [`update`](Self::update).
+    pub fn replace(
+        &mut self,
+        sessions: Vec<(String, Trajectory)>,
+        source: &mut SessionSource<'_>,
+    ) -> Result<&StoreUpdate> {
+        if let Some((name, _)) = sessions.iter().find(|(name, _)| self.session_index(name).is_none()) {
+            return Err(Error::StoreSession { name: name.clone(), problem: "is not in the store (add it)" });
+        }
+        self.update(sessions, &[], source)
+    }
+
+    /// Removes sessions by name ([`update`](Self::update)): no scan.
+    ///
+    /// # Errors
+    /// As [`update`](Self::update).
+    pub fn remove(&mut self, names: &[String]) -> Result<&StoreUpdate> {
+        let mut unread = |s: &StoreSession| -> Result<Trajectory> {
+            Err(Error::StoreSession { name: s.name.clone(), problem: "was read by a removal" })
+        };
+        self.update(Vec::new(), names, &mut unread)
+    }
+
+    /// The ids of the components of `loops` (this store's [`loops`](Self::loops)) that hold a
+    /// session the last update added or replaced, with itself or another: the components the
+    /// update added. O(components).
+    pub fn added_components(&self, loops: &StoreLoops) -> Vec<usize> {
+        let changed: HashSet<usize> =
+            self.last_update.changed().into_iter().filter_map(|name| self.session_index(name)).collect();
+        loops.components_of(&changed)
+    }
+
+    /// The fleet's loops, merged from the stored summaries: O(the tiles' components and edge
+    /// runs).
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for summaries that do not fit together (a corrupt store).
+    pub fn loops(&self) -> Result<StoreLoops> {
+        let starts = self.starts();
+        if self.tiles.is_empty() {
+            return Ok(StoreLoops { merged: None, components: Vec::new(), session_pairs: Vec::new(), starts });
+        }
+        let parts = self.tiles.iter().map(|t| TileMerge::new(t.summary.clone())).collect::<Result<Vec<_>>>()?;
+        let merged = TileMerge::merge(parts)?.finish()?;
+        let components = merged.fleet_components(&starts)?;
+        let spans: Vec<f64> = self.sessions.iter().map(|s| s.blocks.span_s).collect();
+        let session_pairs = merged.session_pairs(&spans)?;
+        Ok(StoreLoops { merged: Some(merged), components, session_pairs, starts })
+    }
+
+    /// τ of every pose, split as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
+    /// splits it: `(own, other)`, seconds, by fleet index. O(the tiles' rows and columns).
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for a share outside its session (a corrupt store).
+    pub fn loop_duration(&self) -> Result<(Vec<f64>, Vec<f64>)> {
+        let mut of_session: Vec<Vec<&TileDuration>> = vec![Vec::new(); self.sessions.len()];
+        for t in &self.tiles {
+            let [a, b] = t.tile().sessions;
+            of_session[a].push(&t.duration);
+            if b != a {
+                of_session[b].push(&t.duration);
+            }
+        }
+        let (mut own, mut other) = (Vec::new(), Vec::new());
+        for (a, (s, start)) in self.sessions.iter().zip(self.starts()).enumerate() {
+            let (o, x) = crate::tile_draw::session_loop_duration(a, start, s.poses(), of_session[a].iter().copied())?;
+            own.extend(o);
+            other.extend(x);
+        }
+        Ok((own, other))
+    }
+
+    /// The samples of `sampler` (a sampler of components) over `loops` (this store's
+    /// [`loops`](Self::loops)), by keyed draws: those of [`sample_fleet`](crate::sample_fleet)
+    /// over the store's sessions, with `between_only` as there. Rescans the tiles each pass
+    /// asks, reading their stored sessions from `source` (each once).
+    ///
+    /// # Errors
+    /// As [`KeyedDraw::new`]; the scans' errors; [`Error::InvalidState`] for a session that
+    /// `source` gives with another content; `source`'s errors.
+    pub fn samples(
+        &self,
+        loops: &StoreLoops,
+        sampler: &Sampler,
+        between_only: bool,
+        source: &mut SessionSource<'_>,
+    ) -> Result<StoreSamples> {
+        let Some(merged) = &loops.merged else {
+            let draw = KeyedDraw::new(sampler, &[], &|_| true)?;
+            return Ok(StoreSamples { rows: Vec::new(), groups: 0, available: 0, warnings: draw.warnings().to_vec() });
+        };
+        let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
+        let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
+        let mut draw = KeyedDraw::new(sampler, &merged.draw_stats(), &keep)?;
+        let mut read: HashMap<usize, Trajectory> = HashMap::new();
+        let settings = self.settings;
+        let starts = &loops.starts;
+        while let Some(request) = draw.request().cloned() {
+            let parts = tile_requests(merged, &request);
+            let asked: Vec<(usize, &crate::sample::DrawRequest)> =
+                parts.iter().enumerate().filter_map(|(k, p)| p.as_ref().map(|p| (k, p))).collect();
+            for &(k, _) in &asked {
+                for s in merged.tiles()[k].sessions {
+                    if let std::collections::hash_map::Entry::Vacant(slot) = read.entry(s) {
+                        slot.insert(read_session(&self.sessions[s], source)?);
+                    }
+                }
+            }
+            let offers = asked
+                .par_iter()
+                .map(|&(k, part)| {
+                    let tile = &merged.tiles()[k];
+                    let [a, b] = tile.sessions;
+                    with_metric!(&settings.metric, m => draw_session_tile(
+                        [&read[&a], &read[&b]],
+                        [starts[a], starts[b]],
+                        m,
+                        settings.gamma,
+                        settings.separation,
+                        tile,
+                        merged.tile_labels(k),
+                        part,
+                    ))
+                })
+                .collect::<Result<Vec<DrawCandidates>>>()?;
+            offers.into_iter().for_each(|o| draw.absorb(o));
+            draw.complete();
+        }
+        let rows = draw
+            .picks()
+            .unwrap_or_default()
+            .iter()
+            .map(|p| {
+                let (a, pa) = locate(starts, p.pair[0]);
+                let (b, pb) = locate(starts, p.pair[1]);
+                FleetSample {
+                    sessions: [a, b],
+                    poses: [pa, pb],
+                    times_s: p.times_s,
+                    component: Some(p.component),
+                    distance: Some(p.distance),
+                }
+            })
+            .collect();
+        Ok(StoreSamples {
+            rows,
+            groups: draw.groups(),
+            available: draw.available(),
+            warnings: draw.warnings().to_vec(),
+        })
+    }
+}
+
+/// A stored session's poses from `source`, checked against what the store knows of it.
+fn read_session(session: &StoreSession, source: &mut SessionSource<'_>) -> Result<Trajectory> {
+    let trajectory = source(session)?;
+    if trajectory.len() != session.poses() || session_fingerprint(&trajectory) != session.fingerprint {
+        return Err(Error::InvalidState {
+            what: "fleet store",
+            reason: format!(
+                "the poses read for session {:?} ({} poses) are not those stored ({} poses, fingerprint {:016x})",
+                session.name,
+                trajectory.len(),
+                session.poses(),
+                session.fingerprint
+            ),
+        });
+    }
+    Ok(trajectory)
+}
+
+/// The first fleet index of each session.
+fn starts_of(sessions: &[StoreSession]) -> Vec<usize> {
+    let mut next = 0;
+    sessions
+        .iter()
+        .map(|s| {
+            let start = next;
+            next += s.poses();
+            start
+        })
+        .collect()
+}
+
+/// (session, pose) of fleet index `f`.
+fn locate(starts: &[usize], f: usize) -> (usize, usize) {
+    let a = starts.partition_point(|&s| s <= f) - 1;
+    (a, f - starts[a])
+}
+
+/// A store's loops ([`FleetStore::loops`]).
+#[derive(Debug, Clone)]
+pub struct StoreLoops {
+    merged: Option<MergedLoops>,
+    components: Vec<FleetComponent>,
+    session_pairs: Vec<SessionPair>,
+    starts: Vec<usize>,
+}
+
+impl StoreLoops {
+    /// The components in their sessions' poses, by id (as
+    /// [`FleetLoops::components`](crate::FleetLoops::components)).
+    pub fn components(&self) -> &[FleetComponent] {
+        &self.components
+    }
+
+    /// The sparse overlap matrix (as [`FleetLoops::session_pairs`](crate::FleetLoops::session_pairs)).
+    pub fn session_pairs(&self) -> &[SessionPair] {
+        &self.session_pairs
+    }
+
+    /// The times of each component's extents (`[[t(i0), t(i1)], [t′(j0), t′(j1)]]`, seconds,
+    /// each on its session's clock), by id.
+    pub fn component_times_s(&self) -> Vec<[[f64; 2]; 2]> {
+        self.merged.as_ref().map_or_else(Vec::new, |m| m.components().iter().map(|c| c.times_s).collect())
+    }
+
+    /// The ids of the components of a session in `sessions` (indices), with itself or another:
+    /// after an update, with the sessions it changed, the components it added.
+    pub fn components_of(&self, sessions: &HashSet<usize>) -> Vec<usize> {
+        self.components
+            .iter()
+            .filter(|c| sessions.contains(&c.sessions[0]) || sessions.contains(&c.sessions[1]))
+            .map(|c| c.id)
+            .collect()
+    }
+}
+
+/// The samples of a store ([`FleetStore::samples`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoreSamples {
+    /// The samples, ordered by pair (fleet order), in their sessions' poses and clocks.
+    pub rows: Vec<FleetSample>,
+    /// Components with a pair to sample (0 for σ_α).
+    pub groups: usize,
+    /// Candidate pairs.
+    pub available: u64,
+    /// Warnings of the quotas.
+    pub warnings: Vec<SampleWarning>,
+}

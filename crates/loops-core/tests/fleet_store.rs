@@ -1,0 +1,235 @@
+//! A fleet store kept up by random sequences of adds, replacements and removals gives the
+//! from-scratch answer: `find_fleet_loops` and `sample_fleet` over its sessions in name order
+//! (components and the overlap matrix, areas to rounding; τ; samples pair for pair), and the
+//! same stored tiles, bit for bit, as a store made in one update of the final sessions.
+
+use std::collections::{BTreeMap, HashMap};
+
+use loops_core::{
+    Euclidean, Fleet, FleetOptions, FleetStore, Result, SampleSize, Sampler, SamplerKind, Separation, StoreSession,
+    StoreSettings, Trajectory, UrbanDrive, UrbanFleet, find_fleet_loops, sample_fleet,
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const GAMMA_M: f64 = 8.0;
+
+/// Two versions of each session of a small city fleet (a corrected trajectory is another
+/// drive under the same name).
+fn versions() -> BTreeMap<String, [Trajectory; 2]> {
+    let spec = |seed: u64| UrbanFleet {
+        vehicles: 3,
+        days: 2,
+        drive: UrbanDrive { duration_s: 50.0, rate_hz: 4.0, city_size_m: 300.0, seed, ..UrbanDrive::default() },
+        start_spread_s: 600.0,
+    };
+    let (a, b) = (spec(3).generate().unwrap(), spec(4).generate().unwrap());
+    (0..a.len()).map(|k| (a.names()[k].clone(), [a.session(k).clone(), b.session(k).clone()])).collect()
+}
+
+fn close(got: f64, want: f64) -> bool {
+    (got - want).abs() <= 1e-9 * (1.0 + want.abs())
+}
+
+fn samplers() -> Vec<(Sampler, bool)> {
+    vec![
+        (Sampler::new(SamplerKind::Rho, SampleSize::Budget(30), 5), false),
+        (Sampler::new(SamplerKind::ClosestFirst, SampleSize::Budget(20), 6), true),
+        (Sampler::new(SamplerKind::Alpha, SampleSize::Rate(0.01), 7), false),
+    ]
+}
+
+/// The store's answer against the from-scratch one over `sessions` (name → trajectory).
+fn check_against_scratch(store: &FleetStore, sessions: &BTreeMap<String, Trajectory>, context: &str) {
+    let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, sessions.keys().map(String::as_str).collect::<Vec<_>>(), "{context}: sessions");
+    let loops = store.loops().unwrap();
+    if sessions.is_empty() {
+        assert!(loops.components().is_empty() && loops.session_pairs().is_empty(), "{context}");
+        return;
+    }
+    let settings = store.settings();
+    let fleet = Fleet::new(sessions.iter().map(|(n, t)| (n.clone(), t.clone())).collect()).unwrap();
+    let options = FleetOptions { separation: settings.separation, ..FleetOptions::default() };
+    let scratch = find_fleet_loops(&fleet, &Euclidean, settings.gamma, &options).unwrap();
+    let want = scratch.components();
+    assert_eq!(loops.components().len(), want.len(), "{context}: component count");
+    for (g, w) in loops.components().iter().zip(&want) {
+        assert!(close(g.area_s2, w.area_s2), "{context}: area of {w:?}: {}", g.area_s2);
+        let g = loops_core::FleetComponent { area_s2: w.area_s2, ..g.clone() };
+        assert_eq!(&g, w, "{context}: component");
+    }
+    let want = scratch.session_pairs();
+    assert_eq!(loops.session_pairs().len(), want.len(), "{context}: overlap matrix entries");
+    for (g, w) in loops.session_pairs().iter().zip(&want) {
+        assert_eq!((g.sessions, g.components, g.pair_count), (w.sessions, w.components, w.pair_count), "{context}");
+        assert!(close(g.area_s2, w.area_s2) && close(g.density, w.density), "{context}: {g:?} vs {w:?}");
+    }
+    let (own, other) = store.loop_duration().unwrap();
+    let (want_own, want_other) = scratch.loop_duration();
+    for (got, want) in [(&own, &want_own), (&other, &want_other)] {
+        assert_eq!(got.len(), want.len(), "{context}: τ length");
+        assert!(got.iter().zip(want.iter()).all(|(g, w)| close(*g, *w)), "{context}: τ");
+    }
+    let mut source = source_of(sessions);
+    for (sampler, between_only) in samplers() {
+        let got = store.samples(&loops, &sampler, between_only, &mut source).unwrap();
+        let samples = sample_fleet(&fleet, &Euclidean, &scratch, &sampler, between_only).unwrap();
+        let want = fleet.localize(&samples).unwrap();
+        assert_eq!(got.rows, want, "{context}: samples of {:?} {:?}", sampler.kind, sampler.size);
+        assert_eq!((got.groups, got.available), (samples.groups(), samples.available()), "{context}");
+        assert_eq!(got.warnings, samples.warnings(), "{context}");
+    }
+}
+
+/// A source that gives each stored session's poses from `sessions`.
+fn source_of(sessions: &BTreeMap<String, Trajectory>) -> impl FnMut(&StoreSession) -> Result<Trajectory> + '_ {
+    |s: &StoreSession| Ok(sessions[&s.name].clone())
+}
+
+fn settings(separation: Separation) -> StoreSettings {
+    StoreSettings { gamma: GAMMA_M, separation, block: 64, ..StoreSettings::new(GAMMA_M) }
+}
+
+/// Random updates from an empty store; after each, the from-scratch answer, and at the end the
+/// tiles of a store made at once.
+fn random_updates(seed: u64, separation: Separation) {
+    let pool = versions();
+    let names: Vec<String> = pool.keys().cloned().collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut store = FleetStore::new(settings(separation)).unwrap();
+    // What the store should hold: name → version.
+    let mut held: BTreeMap<String, usize> = BTreeMap::new();
+    let mut scans = 0;
+    for step in 0..9 {
+        let absent: Vec<&String> = names.iter().filter(|n| !held.contains_key(*n)).collect();
+        let present: Vec<String> = held.keys().cloned().collect();
+        let mut put = Vec::new();
+        let mut remove = Vec::new();
+        let kind = rng.random_range(0..6);
+        match kind {
+            // Add one or two sessions (a day's drives at once).
+            0..=2 if !absent.is_empty() => {
+                for _ in 0..rng.random_range(1..=2.min(absent.len())) {
+                    let name = absent[rng.random_range(0..absent.len())].clone();
+                    if put.iter().all(|(n, _)| *n != name) {
+                        let version = rng.random_range(0..2);
+                        put.push((name.clone(), pool[&name][version].clone()));
+                        held.insert(name, version);
+                    }
+                }
+            }
+            // Replace a session by its other version (or by itself: nothing to scan).
+            3 | 4 if !present.is_empty() => {
+                let name = present[rng.random_range(0..present.len())].clone();
+                let version = if rng.random::<f64>() < 0.8 { 1 - held[&name] } else { held[&name] };
+                put.push((name.clone(), pool[&name][version].clone()));
+                held.insert(name, version);
+            }
+            // Remove a session, and maybe add another in the same update.
+            _ if !present.is_empty() => {
+                let name = present[rng.random_range(0..present.len())].clone();
+                held.remove(&name);
+                remove.push(name);
+                if let Some(&new) = absent.first() {
+                    put.push((new.clone(), pool[new][0].clone()));
+                    held.insert(new.clone(), 0);
+                }
+            }
+            _ => {
+                let name = absent[0].clone();
+                put.push((name.clone(), pool[&name][0].clone()));
+                held.insert(name, 0);
+            }
+        }
+        let current: BTreeMap<String, Trajectory> =
+            held.iter().map(|(n, &v)| (n.clone(), pool[n][v].clone())).collect();
+        let mut source = source_of(&current);
+        let update = store.update(put, &remove, &mut source).unwrap().clone();
+        scans += update.tiles_scanned;
+        // Only the tiles of changed sessions are scanned.
+        let changed: Vec<usize> = update.changed().iter().map(|n| store.session_index(n).unwrap()).collect();
+        let touching = store.tiles().iter().filter(|t| t.tile().sessions.iter().any(|s| changed.contains(s))).count();
+        assert_eq!(update.tiles_scanned, touching, "seed {seed} step {step}: {update:?}");
+        check_against_scratch(&store, &current, &format!("seed {seed} step {step} ({kind}, {update:?})"));
+    }
+    // The same tiles as a store made in one update, bit for bit.
+    let current: BTreeMap<String, Trajectory> = held.iter().map(|(n, &v)| (n.clone(), pool[n][v].clone())).collect();
+    let mut at_once = FleetStore::new(settings(separation)).unwrap();
+    let all: Vec<(String, Trajectory)> = current.iter().map(|(n, t)| (n.clone(), t.clone())).collect();
+    at_once.update(all, &[], &mut source_of(&current)).unwrap();
+    assert_eq!(store.sessions(), at_once.sessions(), "seed {seed}");
+    assert!(store.tiles() == at_once.tiles(), "seed {seed}: the stored tiles depend on the order of the updates");
+    assert!(scans > 0, "seed {seed}");
+    // Parts read back are accepted; a missing tile is not.
+    let parts = |tiles: Vec<loops_core::StoredTile>| {
+        FleetStore::from_parts(*store.settings(), store.sessions().to_vec(), tiles, store.last_update().clone())
+    };
+    assert_eq!(parts(store.tiles().to_vec()).unwrap(), store);
+    if store.tiles().len() > 1 {
+        let mut fewer = store.tiles().to_vec();
+        fewer.remove(fewer.len() / 2);
+        let err = parts(fewer).unwrap_err().to_string();
+        assert!(err.contains("but the plan of the sessions has"), "{err}");
+    }
+}
+
+#[test]
+fn random_updates_give_the_answer_from_scratch() {
+    for seed in 0..4 {
+        random_updates(seed, Separation::NONE);
+    }
+}
+
+#[test]
+fn random_updates_with_a_separation_give_the_answer_from_scratch() {
+    random_updates(11, Separation::path(20.0));
+}
+
+/// Bad updates leave the store as it was, with a message naming the session.
+#[test]
+fn refused_updates_change_nothing() {
+    let pool = versions();
+    let mut store = FleetStore::new(settings(Separation::NONE)).unwrap();
+    let first: Vec<(String, Trajectory)> = pool.iter().take(2).map(|(n, v)| (n.clone(), v[0].clone())).collect();
+    let current: BTreeMap<String, Trajectory> = first.iter().cloned().collect();
+    store.update(first, &[], &mut source_of(&current)).unwrap();
+    let before = store.clone();
+    let name = current.keys().next().unwrap().clone();
+    let flat = Trajectory::new(vec![0.0, 1.0, 2.0], vec![0.0, 1.0, 2.0], 1).unwrap();
+    type Case<'a> = (Vec<(String, Trajectory)>, Vec<String>, &'a str);
+    let cases: Vec<Case> = vec![
+        (vec![], vec!["nobody".into()], "\"nobody\" is not in the store"),
+        (vec![(name.clone(), pool[&name][1].clone())], vec![name.clone()], "is both given and removed"),
+        (vec![("flat".into(), flat)], vec![], "session \"flat\" has 1 coordinates"),
+    ];
+    for (put, remove, message) in cases {
+        let err = store.update(put, &remove, &mut source_of(&current)).unwrap_err().to_string();
+        assert!(err.contains(message), "{err}");
+        assert_eq!(store, before);
+    }
+    // A source that gives other poses for a stored session.
+    let third = pool.iter().nth(2).map(|(n, v)| (n.clone(), v[0].clone())).unwrap();
+    let mut wrong = |_: &StoreSession| Ok(pool[&third.0][1].clone());
+    let err = store.update(vec![third.clone()], &[], &mut wrong).unwrap_err().to_string();
+    assert!(err.contains("are not those stored"), "{err}");
+    assert_eq!(store, before);
+    assert!(store.add(vec![(name.clone(), pool[&name][0].clone())], &mut source_of(&current)).is_err());
+    assert!(store.replace(vec![(third.0, third.1)], &mut source_of(&current)).is_err());
+    assert_eq!(store, before);
+}
+
+/// Adding the last day scans only its tiles: far fewer than all.
+#[test]
+fn a_new_day_scans_its_own_tiles_only() {
+    let pool = versions();
+    let mut store = FleetStore::new(settings(Separation::NONE)).unwrap();
+    let (day0, day1): (Vec<_>, Vec<_>) =
+        pool.iter().map(|(n, v)| (n.clone(), v[0].clone())).partition(|(n, _)| n.ends_with("day0"));
+    let all: HashMap<String, Trajectory> = pool.iter().map(|(n, v)| (n.clone(), v[0].clone())).collect();
+    let mut source = |s: &StoreSession| Ok(all[&s.name].clone());
+    store.update(day0, &[], &mut source).unwrap();
+    let update = store.update(day1, &[], &mut source).unwrap().clone();
+    assert_eq!(update.tiles_kept + update.tiles_scanned, store.tiles().len());
+    assert!(update.tiles_kept > 0 && update.tiles_scanned > 0, "{update:?}");
+}

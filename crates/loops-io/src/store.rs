@@ -1,0 +1,821 @@
+//! A fleet store on disk: a [`FleetStore`] and its answer as a folder of Parquet tables that
+//! pandas, pyarrow and DuckDB read, updated atomically.
+//!
+//! ```text
+//! DIR/
+//!   loops-store.json      the ownership marker (out_dir::STORE)
+//!   store.json            {"format": "inexact-loops fleet store", "version": 1, "state": "state-000003"}
+//!   state-000003/         the current state, complete
+//!     settings.json       metric, gamma, separation, block, sampler, what the last update did
+//!     sessions.parquet    session, name, fingerprint, poses, t_first_s, t_last_s, span_s, dim, manifold, blocks
+//!     tiles.parquet       a, b, rows_start, rows_end, columns_start, columns_end, components, summary, duration
+//!     components.parquet  id, session_a, session_b, a, b, trivial, area_s2, pair_count, run_count, holes,
+//!                         i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
+//!                         closest_i, closest_j, closest_distance, added
+//!     session_pairs.parquet  session_a, session_b, a, b, components, pair_count, area_s2, density
+//!     loop_duration.parquet  session, pose, t_s, own_s, other_s
+//!     samples.parquet     session_a, session_b, a, b, i, j, t_s, t_prime_s, component, distance
+//!     poses/FINGERPRINT.parquet  pose, t_s, cell_s, then one column per coordinate
+//! ```
+//!
+//! Indices `a`, `b` are sessions in name order; `i`, `j` poses within them; times on each
+//! session's own clock. `summary`, `duration` and `blocks` are the bytes the tiles ship as
+//! ([`loops_core::TileSummary::to_bytes`]). `added` marks the components of the sessions the
+//! last update added or replaced.
+//!
+//! **Atomic.** An update reads the current state, builds the whole new state in the store's
+//! scratch folder (pose files of unchanged sessions are hard links), moves it into place under
+//! a new name, then replaces `store.json` in one rename, then removes the old state. A run
+//! killed at any moment leaves `store.json` naming the old state or the new one, each
+//! complete; the next update removes what the killed one left.
+
+use std::collections::HashSet;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use loops_core::{
+    FleetSample, FleetStore, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, SessionBlocks, StoreLoops,
+    StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile, TileDuration, TileSummary, Trajectory,
+};
+use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
+use parquet::file::properties::WriterProperties;
+use parquet::file::reader::{FileReader, SerializedFileReader};
+use parquet::file::writer::SerializedFileWriter;
+use parquet::record::{Row, RowAccessor};
+use serde::{Deserialize, Serialize};
+
+use crate::out_dir::{OutDir, OutDirError, STORE};
+
+/// What `store.json` says a store is.
+pub const STORE_FORMAT: &str = "inexact-loops fleet store";
+
+/// Why a store could not be read or updated: one line naming the file.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreError {
+    /// The folder could not be taken or written ([`OutDir`]'s rules).
+    #[error(transparent)]
+    OutDir(#[from] OutDirError),
+    /// A file could not be read or written.
+    #[error("{what} {}: {error}", .path.display())]
+    Io {
+        /// What was being done.
+        what: &'static str,
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+    /// A file of the store is not what the store wrote.
+    #[error("{}: {reason}", .path.display())]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// What does not fit.
+        reason: String,
+    },
+    /// The core refused the update or the state read back.
+    #[error(transparent)]
+    Core(#[from] loops_core::Error),
+    /// Settings given for an existing store that differ from its own.
+    #[error("fleet store {}: {what} is {stored} in the store, not {given}; a store keeps the settings it was made with", .path.display())]
+    Settings {
+        /// The store.
+        path: PathBuf,
+        /// The setting.
+        what: &'static str,
+        /// The store's.
+        stored: String,
+        /// The one given.
+        given: String,
+    },
+    /// No store in the folder (to read).
+    #[error("{}: no fleet store here (no store.json)", .path.display())]
+    NotAStore {
+        /// The folder.
+        path: PathBuf,
+    },
+}
+
+type Result<T> = std::result::Result<T, StoreError>;
+
+/// A store's settings and sampler, fixed when it is made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StoreConfig {
+    /// What the answer depends on.
+    pub settings: StoreSettings,
+    /// The sampler of `samples.parquet`, if any, and whether it samples between sessions only.
+    pub sampler: Option<(Sampler, bool)>,
+}
+
+/// A store read from its folder.
+#[derive(Debug, Clone)]
+pub struct StoredFleet {
+    /// The folder.
+    pub dir: PathBuf,
+    /// The current state's folder (a name in `dir`).
+    pub state: String,
+    /// The store.
+    pub store: FleetStore,
+    /// Its sampler.
+    pub config: StoreConfig,
+}
+
+impl StoredFleet {
+    /// The poses of a stored session, from its pose file.
+    ///
+    /// # Errors
+    /// [`StoreError::Io`] or [`StoreError::Corrupt`] for a pose file that cannot be read back.
+    pub fn poses(&self, session: &StoreSession) -> Result<Trajectory> {
+        read_poses(&self.dir.join(&self.state).join("poses").join(pose_file(session)))
+    }
+
+    /// The path of one of the current state's tables (`components.parquet`, ...).
+    pub fn table(&self, name: &str) -> PathBuf {
+        self.dir.join(&self.state).join(name)
+    }
+}
+
+/// `store.json`.
+#[derive(Debug, Serialize, Deserialize)]
+struct Pointer {
+    format: String,
+    version: u16,
+    state: String,
+}
+
+/// `settings.json` of a state.
+#[derive(Debug, Serialize, Deserialize)]
+struct SettingsFile {
+    version: u16,
+    metric: String,
+    gamma: f64,
+    separation_path: f64,
+    separation_time_s: f64,
+    block: usize,
+    sampler: Option<SamplerFile>,
+    last_update: UpdateFile,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+struct SamplerFile {
+    kind: String,
+    budget: Option<usize>,
+    rate: Option<f64>,
+    seed: u64,
+    skip_trivial: bool,
+    between_only: bool,
+}
+
+#[derive(Debug, Default, Serialize, Deserialize)]
+struct UpdateFile {
+    added: Vec<String>,
+    replaced: Vec<String>,
+    unchanged: Vec<String>,
+    removed: Vec<String>,
+    tiles_scanned: usize,
+    tiles_kept: usize,
+    tiles_dropped: usize,
+}
+
+impl From<&StoreUpdate> for UpdateFile {
+    fn from(u: &StoreUpdate) -> Self {
+        Self {
+            added: u.added.clone(),
+            replaced: u.replaced.clone(),
+            unchanged: u.unchanged.clone(),
+            removed: u.removed.clone(),
+            tiles_scanned: u.tiles_scanned,
+            tiles_kept: u.tiles_kept,
+            tiles_dropped: u.tiles_dropped,
+        }
+    }
+}
+
+impl From<UpdateFile> for StoreUpdate {
+    fn from(u: UpdateFile) -> Self {
+        StoreUpdate {
+            added: u.added,
+            replaced: u.replaced,
+            unchanged: u.unchanged,
+            removed: u.removed,
+            tiles_scanned: u.tiles_scanned,
+            tiles_kept: u.tiles_kept,
+            tiles_dropped: u.tiles_dropped,
+        }
+    }
+}
+
+fn settings_file(config: &StoreConfig, update: &StoreUpdate) -> SettingsFile {
+    let s = &config.settings;
+    SettingsFile {
+        version: loops_core::STORE_FORMAT_VERSION,
+        metric: s.metric.name(),
+        gamma: s.gamma,
+        separation_path: s.separation.path,
+        separation_time_s: s.separation.time_s,
+        block: s.block,
+        sampler: config.sampler.as_ref().map(|(sampler, between_only)| SamplerFile {
+            kind: sampler.kind.name().to_owned(),
+            budget: match sampler.size {
+                SampleSize::Budget(b) => Some(b),
+                _ => None,
+            },
+            rate: match sampler.size {
+                SampleSize::Rate(r) => Some(r),
+                _ => None,
+            },
+            seed: sampler.seed,
+            skip_trivial: sampler.skip_trivial,
+            between_only: *between_only,
+        }),
+        last_update: update.into(),
+    }
+}
+
+fn config_of(file: &SettingsFile, path: &Path) -> Result<StoreConfig> {
+    let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    if file.version != loops_core::STORE_FORMAT_VERSION {
+        return Err(corrupt(format!(
+            "store format version {}; this build reads version {}",
+            file.version,
+            loops_core::STORE_FORMAT_VERSION
+        )));
+    }
+    let metric: MetricSpec = file.metric.parse().map_err(|e| corrupt(format!("metric: {e}")))?;
+    let separation = Separation { path: file.separation_path, time_s: file.separation_time_s };
+    let settings = StoreSettings { metric, gamma: file.gamma, separation, block: file.block };
+    let sampler = match &file.sampler {
+        None => None,
+        Some(s) => {
+            let kind: SamplerKind = s.kind.parse().map_err(|e| corrupt(format!("sampler: {e}")))?;
+            let size = match (s.budget, s.rate) {
+                (Some(b), None) => SampleSize::Budget(b),
+                (None, Some(r)) => SampleSize::Rate(r),
+                _ => return Err(corrupt("the sampler needs a budget or a rate".to_owned())),
+            };
+            let sampler = Sampler { skip_trivial: s.skip_trivial, ..Sampler::new(kind, size, s.seed) };
+            Some((sampler, s.between_only))
+        }
+    };
+    Ok(StoreConfig { settings, sampler })
+}
+
+/// The pose file of a session: named by its fingerprint.
+fn pose_file(session: &StoreSession) -> String {
+    format!("{:016x}.parquet", session.fingerprint)
+}
+
+/// Reads the store in `dir`: its current state.
+///
+/// # Errors
+/// [`StoreError::NotAStore`]; [`StoreError::Io`] or [`StoreError::Corrupt`] naming the file
+/// that cannot be read back; [`StoreError::Core`] for tables that do not fit together.
+pub fn read_store(dir: &Path) -> Result<StoredFleet> {
+    let pointer_path = dir.join("store.json");
+    if !pointer_path.is_file() {
+        return Err(StoreError::NotAStore { path: dir.to_path_buf() });
+    }
+    let pointer: Pointer = read_json(&pointer_path)?;
+    let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    if pointer.format != STORE_FORMAT || pointer.version != loops_core::STORE_FORMAT_VERSION {
+        return Err(corrupt(
+            &pointer_path,
+            format!(
+                "format {:?} version {}, not {STORE_FORMAT:?} version {}",
+                pointer.format,
+                pointer.version,
+                loops_core::STORE_FORMAT_VERSION
+            ),
+        ));
+    }
+    if !is_state_name(&pointer.state) {
+        return Err(corrupt(&pointer_path, format!("state {:?} is not a state folder's name", pointer.state)));
+    }
+    let state = dir.join(&pointer.state);
+    let settings_path = state.join("settings.json");
+    let file: SettingsFile = read_json(&settings_path)?;
+    let config = config_of(&file, &settings_path)?;
+    let sessions_path = state.join("sessions.parquet");
+    let sessions = read_rows(&sessions_path)?
+        .iter()
+        .enumerate()
+        .map(|(k, row)| -> std::result::Result<StoreSession, String> {
+            let blocks = SessionBlocks::from_bytes(row.bytes(9)?).map_err(|e| e.to_string())?;
+            let fingerprint = u64::from_str_radix(row.text(2)?, 16).map_err(|e| format!("fingerprint: {e}"))?;
+            let manifold = manifold_of(row.text(8)?).ok_or_else(|| format!("manifold {:?} is unknown", row.text(8)))?;
+            Ok(StoreSession {
+                name: row.text(1)?.to_owned(),
+                fingerprint,
+                manifold,
+                times_s: [row.float(4)?, row.float(5)?],
+                blocks,
+            })
+            .map_err(|e: String| format!("row {k}: {e}"))
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| corrupt(&sessions_path, reason))?;
+    let tiles_path = state.join("tiles.parquet");
+    let tiles = read_rows(&tiles_path)?
+        .iter()
+        .enumerate()
+        .map(|(k, row)| -> std::result::Result<StoredTile, String> {
+            let summary = TileSummary::from_bytes(row.bytes(7)?).map_err(|e| format!("row {k}: {e}"))?;
+            let duration = TileDuration::from_bytes(row.bytes(8)?).map_err(|e| format!("row {k}: {e}"))?;
+            Ok(StoredTile { summary, duration })
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| corrupt(&tiles_path, reason))?;
+    let store = FleetStore::from_parts(config.settings, sessions, tiles, file.last_update.into())?;
+    Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
+}
+
+/// The samples of the store's current state (`samples.parquet`), in its order: those
+/// [`update_store`] drew, read back.
+///
+/// # Errors
+/// [`StoreError::Io`] or [`StoreError::Corrupt`] for a table that cannot be read back.
+pub fn read_samples(stored: &StoredFleet) -> Result<Vec<FleetSample>> {
+    let path = stored.table("samples.parquet");
+    let index = |row: &Row, i: usize| -> std::result::Result<usize, String> {
+        let value = row.get_long(i).map_err(|e| format!("column {i}: {e}"))?;
+        usize::try_from(value).map_err(|_| format!("column {i}: {value} is not an index"))
+    };
+    read_rows(&path)?
+        .iter()
+        .enumerate()
+        .map(|(k, row)| -> std::result::Result<FleetSample, String> {
+            let component = row.get_long(8).map_err(|e| format!("column 8: {e}"))?;
+            let distance = row.float(9)?;
+            Ok(FleetSample {
+                sessions: [index(row, 2)?, index(row, 3)?],
+                poses: [index(row, 4)?, index(row, 5)?],
+                times_s: [row.float(6)?, row.float(7)?],
+                component: usize::try_from(component).ok(),
+                distance: (!distance.is_nan()).then_some(distance),
+            })
+            .map_err(|e: String| format!("row {k}: {e}"))
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| StoreError::Corrupt { path, reason })
+}
+
+/// What [`update_store`] did.
+#[derive(Debug, Clone)]
+pub struct StoreReport {
+    /// The store as it now is.
+    pub stored: StoredFleet,
+    /// Components in all, and those the update added.
+    pub components: usize,
+    /// Components of the sessions the update added or replaced.
+    pub added_components: usize,
+    /// The loops written (`components.parquet`, `session_pairs.parquet`).
+    pub loops: StoreLoops,
+    /// The samples written (`samples.parquet`), if the store has a sampler.
+    pub samples: Option<StoreSamples>,
+}
+
+/// Adds or replaces the sessions `put` (by name) and removes `remove` in the store in `dir`,
+/// making the store when the folder is missing or empty (with `config`, which must then be
+/// given; for an existing store, `config` when given must be the store's own). Scans only the
+/// new tiles ([`FleetStore::update`]), then writes the new state atomically (see the module
+/// docs).
+///
+/// # Errors
+/// [`StoreError::OutDir`] for a folder that holds anything but a store, or a store in use;
+/// [`StoreError::Settings`] for a `config` other than the store's; the core's errors on the
+/// update (the store is then unchanged); [`StoreError::Io`] when a file cannot be written.
+pub fn update_store(
+    dir: &Path,
+    config: Option<&StoreConfig>,
+    put: Vec<(String, Trajectory)>,
+    remove: &[String],
+) -> Result<StoreReport> {
+    let exists = dir.join(STORE.marker).is_file();
+    if !exists {
+        crate::out_dir::refuse_non_empty(dir, false, STORE)?;
+        std::fs::create_dir_all(dir).map_err(|error| StoreError::Io {
+            what: "creating",
+            path: dir.to_path_buf(),
+            error,
+        })?;
+    }
+    let out = OutDir::take(dir, exists, STORE)?;
+    let current = if dir.join("store.json").is_file() { Some(read_store(dir)?) } else { None };
+    // States a killed update left (not the one store.json names).
+    for name in out.entries() {
+        if is_state_name(&name) && current.as_ref().is_none_or(|c| c.state != name) {
+            out.remove(&name)?;
+        }
+    }
+    let (mut store, config, old_state) = match (current, config) {
+        (Some(c), Some(given)) => {
+            check_same(dir, &c.config, given)?;
+            (c.store, c.config, Some(c.state))
+        }
+        (Some(c), None) => (c.store, c.config, Some(c.state)),
+        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None),
+        (None, None) => {
+            return Err(StoreError::NotAStore { path: dir.to_path_buf() });
+        }
+    };
+    let poses_dir = old_state.as_ref().map(|s| dir.join(s).join("poses"));
+    let new_poses: Vec<(String, Trajectory)> = put.clone();
+    // A session given now from what was given (the core checks its fingerprint), else from
+    // the current state's pose file.
+    let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
+        if let Some((_, trajectory)) = new_poses.iter().find(|(name, _)| *name == s.name) {
+            return Ok(trajectory.clone());
+        }
+        let path = poses_dir.as_ref().map(|p| p.join(pose_file(s))).unwrap_or_default();
+        read_poses(&path).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
+    };
+    store.update(put, remove, &mut source)?;
+    let loops = store.loops()?;
+    let samples = match &config.sampler {
+        Some((sampler, between_only)) => Some(store.samples(&loops, sampler, *between_only, &mut source)?),
+        None => None,
+    };
+    let (own, other) = store.loop_duration()?;
+
+    // The new state, complete, in the scratch folder.
+    let staged = out.staging_path();
+    let io = |what: &'static str, path: &Path| {
+        let path = path.to_path_buf();
+        move |error| StoreError::Io { what, path, error }
+    };
+    std::fs::create_dir_all(staged.join("poses")).map_err(io("creating", &staged))?;
+    let changed: HashSet<&str> = store.last_update().changed().into_iter().collect();
+    for s in store.sessions() {
+        let target = staged.join("poses").join(pose_file(s));
+        if target.exists() {
+            continue;
+        }
+        let given = new_poses.iter().find(|(n, _)| *n == s.name && changed.contains(n.as_str()));
+        match (given, &poses_dir) {
+            (Some((_, trajectory)), _) => write_poses(&target, trajectory)?,
+            (None, Some(old)) => {
+                let from = old.join(pose_file(s));
+                if std::fs::hard_link(&from, &target).is_err() {
+                    std::fs::copy(&from, &target).map_err(io("copying", &from))?;
+                }
+            }
+            (None, None) => unreachable!("a stored session without a state"),
+        }
+    }
+    let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
+    write_sessions(&staged.join("sessions.parquet"), &store)?;
+    write_tiles(&staged.join("tiles.parquet"), &store)?;
+    let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
+    write_components(&staged.join("components.parquet"), &loops, &names, &added)?;
+    write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names)?;
+    write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other)?;
+    write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names)?;
+    let settings_json =
+        serde_json::to_string_pretty(&settings_file(&config, store.last_update())).map_err(std::io::Error::other);
+    write_synced(&staged.join("settings.json"), settings_json.map(String::into_bytes))?;
+    crate::atomic::sync_directory(&staged.join("poses")).map_err(io("syncing", &staged))?;
+    crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
+
+    // Placed under a new name, then pointed at in one rename, then the old state removed.
+    let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
+    let state = format!("state-{generation:06}");
+    out.place(&staged, &state, true)?;
+    let pointer =
+        Pointer { format: STORE_FORMAT.to_owned(), version: loops_core::STORE_FORMAT_VERSION, state: state.clone() };
+    let pointer_staged = out.staging_path();
+    let json = serde_json::to_string_pretty(&pointer).map_err(std::io::Error::other).map(|j| (j + "\n").into_bytes());
+    write_synced(&pointer_staged, json)?;
+    out.swap_file(&pointer_staged, "store.json")?;
+    if let Some(old) = old_state {
+        out.remove(&old)?;
+    }
+    let report = StoreReport {
+        components: loops.components().len(),
+        added_components: added.len(),
+        samples,
+        loops,
+        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config },
+    };
+    Ok(report)
+}
+
+/// A state folder's name: `state-` and digits.
+fn is_state_name(name: &str) -> bool {
+    name.strip_prefix("state-").is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+}
+
+fn check_same(dir: &Path, stored: &StoreConfig, given: &StoreConfig) -> Result<()> {
+    let (s, g) = (&stored.settings, &given.settings);
+    let differs = |what: &'static str, stored: String, given: String| {
+        Err(StoreError::Settings { path: dir.to_path_buf(), what, stored, given })
+    };
+    if s.metric != g.metric {
+        return differs("the metric", s.metric.name(), g.metric.name());
+    }
+    if s.gamma != g.gamma {
+        return differs("gamma", s.gamma.to_string(), g.gamma.to_string());
+    }
+    if s.separation != g.separation {
+        return differs("the separation", format!("{:?}", s.separation), format!("{:?}", g.separation));
+    }
+    if s.block != g.block {
+        return differs("the block", s.block.to_string(), g.block.to_string());
+    }
+    if stored.sampler != given.sampler {
+        let text = |c: &StoreConfig| {
+            c.sampler.as_ref().map_or("none".to_owned(), |(s, b)| {
+                format!("{} {:?} seed {}{}", s.kind, s.size, s.seed, if *b { " between only" } else { "" })
+            })
+        };
+        return differs("the sampler", text(stored), text(given));
+    }
+    Ok(())
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|error| StoreError::Io {
+        what: "reading",
+        path: path.to_path_buf(),
+        error,
+    })?;
+    serde_json::from_str(&text).map_err(|e| StoreError::Corrupt { path: path.to_path_buf(), reason: e.to_string() })
+}
+
+fn write_synced(path: &Path, bytes: std::io::Result<Vec<u8>>) -> Result<()> {
+    let written = bytes.and_then(|bytes| {
+        use std::io::Write;
+        let mut file = File::create_new(path)?;
+        file.write_all(&bytes)?;
+        file.sync_all()
+    });
+    written.map_err(|error| StoreError::Io { what: "writing", path: path.to_path_buf(), error })
+}
+
+/// One column of a table.
+enum Column {
+    Int(Vec<i64>),
+    Float(Vec<f64>),
+    Bool(Vec<bool>),
+    Text(Vec<String>),
+    Bytes(Vec<Vec<u8>>),
+}
+
+/// Writes `columns` as a Parquet file of one row group (required columns, uncompressed), synced.
+fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
+    let fields: Vec<String> = columns
+        .iter()
+        .map(|(name, c)| match c {
+            Column::Int(_) => format!("REQUIRED INT64 {name};"),
+            Column::Float(_) => format!("REQUIRED DOUBLE {name};"),
+            Column::Bool(_) => format!("REQUIRED BOOLEAN {name};"),
+            Column::Text(_) => format!("REQUIRED BYTE_ARRAY {name} (STRING);"),
+            Column::Bytes(_) => format!("REQUIRED BYTE_ARRAY {name};"),
+        })
+        .collect();
+    let schema = format!("message table {{ {} }}", fields.join(" "));
+    let failed = |e: parquet::errors::ParquetError| StoreError::Io {
+        what: "writing",
+        path: path.to_path_buf(),
+        error: std::io::Error::other(e),
+    };
+    let schema = Arc::new(parquet::schema::parser::parse_message_type(&schema).map_err(failed)?);
+    let file =
+        File::create_new(path).map_err(|error| StoreError::Io { what: "creating", path: path.to_path_buf(), error })?;
+    let mut writer =
+        SerializedFileWriter::new(file, schema, Arc::new(WriterProperties::builder().build())).map_err(failed)?;
+    let mut group = writer.next_row_group().map_err(failed)?;
+    for (_, column) in columns {
+        let mut out = group.next_column().map_err(failed)?.expect("one writer per column of the schema");
+        match column {
+            Column::Int(v) => out.typed::<Int64Type>().write_batch(&v, None, None),
+            Column::Float(v) => out.typed::<DoubleType>().write_batch(&v, None, None),
+            Column::Bool(v) => out.typed::<BoolType>().write_batch(&v, None, None),
+            Column::Text(v) => {
+                let v: Vec<ByteArray> = v.into_iter().map(|s| ByteArray::from(s.into_bytes())).collect();
+                out.typed::<ByteArrayType>().write_batch(&v, None, None)
+            }
+            Column::Bytes(v) => {
+                let v: Vec<ByteArray> = v.into_iter().map(ByteArray::from).collect();
+                out.typed::<ByteArrayType>().write_batch(&v, None, None)
+            }
+        }
+        .map_err(failed)?;
+        out.close().map_err(failed)?;
+    }
+    group.close().map_err(failed)?;
+    let file = writer.into_inner().map_err(failed)?;
+    file.sync_all().map_err(|error| StoreError::Io { what: "syncing", path: path.to_path_buf(), error })
+}
+
+/// The rows of a Parquet file.
+fn read_rows(path: &Path) -> Result<Vec<Row>> {
+    let failed =
+        |e: parquet::errors::ParquetError| StoreError::Corrupt { path: path.to_path_buf(), reason: e.to_string() };
+    let file = File::open(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
+    let reader = SerializedFileReader::new(file).map_err(failed)?;
+    reader.get_row_iter(None).map_err(failed)?.map(|r| r.map_err(failed)).collect()
+}
+
+/// Typed reads of a row, with one-line errors.
+trait Cells {
+    fn float(&self, i: usize) -> std::result::Result<f64, String>;
+    fn text(&self, i: usize) -> std::result::Result<&str, String>;
+    fn bytes(&self, i: usize) -> std::result::Result<&[u8], String>;
+}
+
+impl Cells for Row {
+    fn float(&self, i: usize) -> std::result::Result<f64, String> {
+        self.get_double(i).map_err(|e| format!("column {i}: {e}"))
+    }
+    fn text(&self, i: usize) -> std::result::Result<&str, String> {
+        self.get_string(i).map(String::as_str).map_err(|e| format!("column {i}: {e}"))
+    }
+    fn bytes(&self, i: usize) -> std::result::Result<&[u8], String> {
+        self.get_bytes(i).map(|b| b.data()).map_err(|e| format!("column {i}: {e}"))
+    }
+}
+
+/// The manifold of its variant's name (as `settings` and the tables write it).
+fn manifold_of(name: &str) -> Option<loops_core::Manifold> {
+    serde_json::from_value(serde_json::Value::String(name.to_owned())).ok()
+}
+
+/// A column's name for coordinate `k` of `names` (the manifold's), or `x{k}` where a name is
+/// not a plain identifier.
+fn coordinate_names(t: &Trajectory) -> Vec<String> {
+    let dim = t.dim();
+    let names: Vec<String> = t.manifold().columns(dim).split_whitespace().map(str::to_owned).collect();
+    let plain = |n: &String| n.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'_') && n != "pose" && n != "t_s";
+    if names.len() == dim && names.iter().all(plain) { names } else { (0..dim).map(|k| format!("x{k}")).collect() }
+}
+
+fn ints(values: impl IntoIterator<Item = usize>) -> Column {
+    Column::Int(values.into_iter().map(|v| v as i64).collect())
+}
+
+fn write_poses(path: &Path, t: &Trajectory) -> Result<()> {
+    let dim = t.dim();
+    let names = coordinate_names(t);
+    let mut columns = vec![
+        ("pose", ints(0..t.len())),
+        ("t_s", Column::Float(t.timestamps_s().to_vec())),
+        ("cell_s", Column::Float(t.cell_widths_s().to_vec())),
+    ];
+    let coords: Vec<Column> =
+        (0..dim).map(|k| Column::Float(t.coords().iter().skip(k).step_by(dim).copied().collect())).collect();
+    columns.extend(names.iter().map(String::as_str).zip(coords));
+    // The manifold, as its variant's name (a trajectory read back is on it).
+    columns.push(("manifold", Column::Text(vec![format!("{:?}", t.manifold()); t.len()])));
+    write_table(path, columns)
+}
+
+fn read_poses(path: &Path) -> Result<Trajectory> {
+    let rows = read_rows(path)?;
+    let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    let Some(first) = rows.first() else { return Err(corrupt("no poses".to_owned())) };
+    let width = first.len();
+    let dim = width.checked_sub(4).filter(|&d| d > 0).ok_or_else(|| corrupt(format!("{width} columns")))?;
+    let (mut times, mut cells, mut coords) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, row) in rows.iter().enumerate() {
+        let cell = |i: usize| row.float(i).map_err(|e| corrupt(format!("row {k}: {e}")));
+        times.push(cell(1)?);
+        cells.push(cell(2)?);
+        for c in 0..dim {
+            coords.push(cell(3 + c)?);
+        }
+    }
+    let manifold = first.text(3 + dim).map_err(corrupt)?.to_owned();
+    let state = serde_json::json!({
+        "timestamps_s": times, "coords": coords, "dim": dim, "cell_widths_s": cells, "manifold": manifold,
+    });
+    serde_json::from_value(state).map_err(|e| corrupt(format!("the poses do not make a trajectory: {e}")))
+}
+
+fn write_sessions(path: &Path, store: &FleetStore) -> Result<()> {
+    let s = store.sessions();
+    write_table(
+        path,
+        vec![
+            ("session", ints(0..s.len())),
+            ("name", Column::Text(s.iter().map(|s| s.name.clone()).collect())),
+            ("fingerprint", Column::Text(s.iter().map(|s| format!("{:016x}", s.fingerprint)).collect())),
+            ("poses", ints(s.iter().map(StoreSession::poses))),
+            ("t_first_s", Column::Float(s.iter().map(|s| s.times_s[0]).collect())),
+            ("t_last_s", Column::Float(s.iter().map(|s| s.times_s[1]).collect())),
+            ("span_s", Column::Float(s.iter().map(|s| s.blocks.span_s).collect())),
+            ("dim", ints(s.iter().map(|s| s.blocks.dim))),
+            ("manifold", Column::Text(s.iter().map(|s| format!("{:?}", s.manifold)).collect())),
+            ("blocks", Column::Bytes(s.iter().map(|s| s.blocks.to_bytes()).collect())),
+        ],
+    )
+}
+
+fn write_tiles(path: &Path, store: &FleetStore) -> Result<()> {
+    let t = store.tiles();
+    let tile = |f: &dyn Fn(&loops_core::Tile) -> usize| ints(t.iter().map(|x| f(x.tile())));
+    write_table(
+        path,
+        vec![
+            ("a", tile(&|x| x.sessions[0])),
+            ("b", tile(&|x| x.sessions[1])),
+            ("rows_start", tile(&|x| x.rows.start)),
+            ("rows_end", tile(&|x| x.rows.end)),
+            ("columns_start", tile(&|x| x.columns.start)),
+            ("columns_end", tile(&|x| x.columns.end)),
+            ("components", ints(t.iter().map(|x| x.summary.components.len()))),
+            ("summary", Column::Bytes(t.iter().map(|x| x.summary.to_bytes()).collect())),
+            ("duration", Column::Bytes(t.iter().map(|x| x.duration.to_bytes()).collect())),
+        ],
+    )
+}
+
+fn write_components(path: &Path, loops: &loops_core::StoreLoops, names: &[&str], added: &HashSet<usize>) -> Result<()> {
+    let c = loops.components();
+    let times = loops.component_times_s();
+    let f = |g: &dyn Fn(&loops_core::FleetComponent) -> f64| Column::Float(c.iter().map(g).collect());
+    let u = |g: &dyn Fn(&loops_core::FleetComponent) -> usize| ints(c.iter().map(g));
+    let time = |g: &dyn Fn(&[[f64; 2]; 2]) -> f64| Column::Float(times.iter().map(g).collect());
+    write_table(
+        path,
+        vec![
+            ("id", u(&|c| c.id)),
+            ("session_a", Column::Text(c.iter().map(|c| names[c.sessions[0]].to_owned()).collect())),
+            ("session_b", Column::Text(c.iter().map(|c| names[c.sessions[1]].to_owned()).collect())),
+            ("a", u(&|c| c.sessions[0])),
+            ("b", u(&|c| c.sessions[1])),
+            ("trivial", Column::Bool(c.iter().map(|c| c.trivial).collect())),
+            ("area_s2", f(&|c| c.area_s2)),
+            ("pair_count", Column::Int(c.iter().map(|c| c.pair_count as i64).collect())),
+            ("holes", Column::Int(c.iter().map(|c| c.holes as i64).collect())),
+            ("i_min", u(&|c| c.poses[0][0])),
+            ("i_max", u(&|c| c.poses[0][1])),
+            ("j_min", u(&|c| c.poses[1][0])),
+            ("j_max", u(&|c| c.poses[1][1])),
+            ("t_min_s", time(&|t| t[0][0])),
+            ("t_max_s", time(&|t| t[0][1])),
+            ("t_prime_min_s", time(&|t| t[1][0])),
+            ("t_prime_max_s", time(&|t| t[1][1])),
+            ("closest_i", u(&|c| c.closest_pair[0])),
+            ("closest_j", u(&|c| c.closest_pair[1])),
+            ("closest_distance", f(&|c| c.closest_distance)),
+            ("added", Column::Bool(c.iter().map(|c| added.contains(&c.id)).collect())),
+        ],
+    )
+}
+
+fn write_session_pairs(path: &Path, loops: &loops_core::StoreLoops, names: &[&str]) -> Result<()> {
+    let p = loops.session_pairs();
+    write_table(
+        path,
+        vec![
+            ("session_a", Column::Text(p.iter().map(|p| names[p.sessions[0]].to_owned()).collect())),
+            ("session_b", Column::Text(p.iter().map(|p| names[p.sessions[1]].to_owned()).collect())),
+            ("a", ints(p.iter().map(|p| p.sessions[0]))),
+            ("b", ints(p.iter().map(|p| p.sessions[1]))),
+            ("components", ints(p.iter().map(|p| p.components))),
+            ("pair_count", Column::Int(p.iter().map(|p| p.pair_count as i64).collect())),
+            ("area_s2", Column::Float(p.iter().map(|p| p.area_s2).collect())),
+            ("density", Column::Float(p.iter().map(|p| p.density).collect())),
+        ],
+    )
+}
+
+fn write_loop_duration(path: &Path, store: &FleetStore, own: &[f64], other: &[f64]) -> Result<()> {
+    let (mut session, mut pose) = (Vec::new(), Vec::new());
+    for (a, s) in store.sessions().iter().enumerate() {
+        session.extend(std::iter::repeat_n(a, s.poses()));
+        pose.extend(0..s.poses());
+    }
+    write_table(
+        path,
+        vec![
+            ("session", ints(session)),
+            ("pose", ints(pose)),
+            ("own_s", Column::Float(own.to_vec())),
+            ("other_s", Column::Float(other.to_vec())),
+        ],
+    )
+}
+
+fn write_samples(path: &Path, samples: Option<&StoreSamples>, names: &[&str]) -> Result<()> {
+    let rows = samples.map_or(&[][..], |s| &s.rows[..]);
+    let f = |g: &dyn Fn(&loops_core::FleetSample) -> f64| Column::Float(rows.iter().map(g).collect());
+    let u = |g: &dyn Fn(&loops_core::FleetSample) -> usize| ints(rows.iter().map(g));
+    write_table(
+        path,
+        vec![
+            ("session_a", Column::Text(rows.iter().map(|s| names[s.sessions[0]].to_owned()).collect())),
+            ("session_b", Column::Text(rows.iter().map(|s| names[s.sessions[1]].to_owned()).collect())),
+            ("a", u(&|s| s.sessions[0])),
+            ("b", u(&|s| s.sessions[1])),
+            ("i", u(&|s| s.poses[0])),
+            ("j", u(&|s| s.poses[1])),
+            ("t_s", f(&|s| s.times_s[0])),
+            ("t_prime_s", f(&|s| s.times_s[1])),
+            ("component", u(&|s| s.component.unwrap_or(usize::MAX))),
+            ("distance", f(&|s| s.distance.unwrap_or(f64::NAN))),
+        ],
+    )
+}

@@ -1,0 +1,484 @@
+//! `FleetStore`: a fleet store on disk (`loops_io::store` over `loops_core::FleetStore`), its
+//! updates and its tables.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::to_numpy;
+use crate::detached;
+use crate::error::{Failure, invalid_parameter};
+use crate::py_fleet::{
+    common_metric, components_table, fleet_samples_table, loop_duration_table, overlap_matrix, read_sessions,
+    session_index_of, session_pairs_table,
+};
+use crate::py_metric::MetricArg;
+use crate::py_samples::sampler_of;
+use crate::py_separation::{Separation, SeparationArg};
+use loops_core::{FleetSample, StoreLoops, StoreSettings};
+use loops_io::store::{StoreConfig, StoreError, StoredFleet, read_samples, read_store, update_store};
+
+/// A fleet's loops kept in a folder and updated at the cost of the new data: each
+/// :meth:`update` adds sessions (replacing those of the same name) and removes others,
+/// scans only the tiles that hold a new or replaced session, merges again from the stored tile
+/// summaries and redraws the samples by keyed draws. After any sequence of updates the tables
+/// are those of :func:`find_fleet_loops` and :func:`sample_fleet` over the stored sessions in
+/// name order, whatever the order of the updates.
+///
+/// The folder is what ``loops fleet --store DIR`` keeps: Parquet tables that pandas, pyarrow
+/// and DuckDB read (``store.json`` names the current state, ``state-NNNNNN/``, holding
+/// ``sessions``, ``tiles``, ``components``, ``session_pairs``, ``loop_duration`` and
+/// ``samples``, ``.parquet`` each); each update replaces the state whole, so a reader or a
+/// killed update sees the old state or the new one. Made by :meth:`open` and :meth:`update`.
+///
+/// Example:
+///     Monday drives out along a street; Tuesday's drive, added the next day, comes back along
+///     it half a metre aside: the store's answer is the fleet's.
+///
+///     >>> import tempfile, numpy as np, inexact_loops as il
+///     >>> x = np.arange(21) * 0.5
+///     >>> monday = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+///     >>> tuesday = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+///     >>> folder = tempfile.mkdtemp() + "/city"
+///     >>> store = il.FleetStore.open(folder)
+///     >>> store.update(add=[("monday", monday)], gamma=1.0, separation=None, block=8)["added"]
+///     ['monday']
+///     >>> update = store.update(add=[("tuesday", tuesday)])
+///     >>> update["added"], update["tiles_kept"] > 0
+///     (['tuesday'], True)
+///     >>> store.names, store.added.tolist()  # Tuesday's own component and the one with Monday
+///     (['monday', 'tuesday'], [1, 2])
+///     >>> fleet = il.Fleet({"monday": monday, "tuesday": tuesday})
+///     >>> scratch = il.find_fleet_loops(fleet, gamma=1.0, separation=None)
+///     >>> np.array_equal(store.overlap_matrix(), scratch.overlap_matrix())
+///     True
+#[pyclass(module = "inexact_loops._core")]
+pub(crate) struct FleetStore {
+    dir: PathBuf,
+    /// None until the first update makes the store.
+    state: Option<State>,
+}
+
+/// A store as read or written, and its answer.
+struct State {
+    stored: StoredFleet,
+    loops: StoreLoops,
+    samples: Vec<FleetSample>,
+    added: Vec<usize>,
+}
+
+impl State {
+    /// The answer of a store written by `update_store` (`loops` and `samples` as written) or
+    /// read back (`None`: merged again, and the samples table read).
+    fn new(stored: StoredFleet, loops: Option<StoreLoops>, samples: Option<Vec<FleetSample>>) -> Result<Self, Failure> {
+        let loops = match loops {
+            Some(loops) => loops,
+            None => stored.store.loops()?,
+        };
+        let samples = match samples {
+            Some(samples) => samples,
+            None => read_samples(&stored)?,
+        };
+        let added = stored.store.added_components(&loops);
+        Ok(Self { stored, loops, samples, added })
+    }
+}
+
+impl FleetStore {
+    fn names(&self) -> Vec<String> {
+        self.state
+            .as_ref()
+            .map_or_else(Vec::new, |s| s.stored.store.sessions().iter().map(|s| s.name.clone()).collect())
+    }
+
+    fn settings(&self) -> Option<&StoreSettings> {
+        self.state.as_ref().map(|s| s.stored.store.settings())
+    }
+
+    /// The settings of an update: `None` without `gamma` (the store's own), else all of them.
+    #[allow(clippy::too_many_arguments)]
+    fn config(
+        &self,
+        gamma: Option<f64>,
+        metric: Option<&Bound<'_, PyAny>>,
+        separation: SeparationArg,
+        block: Option<usize>,
+        sampler: Option<&str>,
+        rate: Option<f64>,
+        budget: Option<usize>,
+        seed: Option<u64>,
+        between_only: bool,
+        skip_trivial: bool,
+        sessions: &[(String, crate::py_trajectory::Trajectory)],
+    ) -> PyResult<Option<StoreConfig>> {
+        let Some(gamma) = gamma else {
+            let given = metric.is_some()
+                || block.is_some()
+                || sampler.is_some()
+                || rate.is_some()
+                || budget.is_some()
+                || seed.is_some()
+                || between_only
+                || skip_trivial;
+            if given || self.state.is_none() {
+                return Err(invalid_parameter(format!(
+                    "FleetStore.update: {}: give gamma= with the other settings (metric=, separation=, block=, \
+                     sampler=, ...), or no setting to keep the store's",
+                    if self.state.is_none() {
+                        format!("{} holds no store yet, which needs its settings", self.dir.display())
+                    } else {
+                        "a store's settings are given whole".to_owned()
+                    }
+                )));
+            }
+            return Ok(None);
+        };
+        let metric = match metric {
+            Some(_) => MetricArg::spec_from_py(metric, "FleetStore.update")?,
+            None => {
+                let of_sessions = sessions
+                    .iter()
+                    .map(|(name, t)| (name.as_str(), t.metric.unwrap_or_else(|| t.inner.default_metric())));
+                match (common_metric(of_sessions)?, self.settings()) {
+                    (Some(metric), _) => metric,
+                    (None, Some(settings)) => settings.metric,
+                    (None, None) => loops_core::MetricSpec::default(),
+                }
+            }
+        };
+        let sampler = match (sampler, seed) {
+            (Some(name), Some(seed)) => Some((sampler_of(name, rate, budget, seed, skip_trivial)?, between_only)),
+            (Some(_), None) => return Err(invalid_parameter("FleetStore.update: sampler= needs seed=".to_owned())),
+            (None, _) if rate.is_some() || budget.is_some() || seed.is_some() || between_only || skip_trivial => {
+                return Err(invalid_parameter(
+                    "FleetStore.update: rate=, budget=, seed=, between_only= and skip_trivial= go with sampler="
+                        .to_owned(),
+                ));
+            }
+            (None, _) => None,
+        };
+        let block = block.unwrap_or(StoreSettings::DEFAULT_BLOCK);
+        let settings = StoreSettings { metric, gamma, separation: separation.at(gamma), block };
+        settings.check().map_err(Failure::from)?;
+        Ok(Some(StoreConfig { settings, sampler }))
+    }
+}
+
+/// `update`'s report as a dict.
+fn update_dict<'py>(py: Python<'py>, update: &loops_core::StoreUpdate) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    dict.set_item("added", &update.added)?;
+    dict.set_item("replaced", &update.replaced)?;
+    dict.set_item("unchanged", &update.unchanged)?;
+    dict.set_item("removed", &update.removed)?;
+    dict.set_item("tiles_scanned", update.tiles_scanned)?;
+    dict.set_item("tiles_kept", update.tiles_kept)?;
+    dict.set_item("tiles_dropped", update.tiles_dropped)?;
+    Ok(dict)
+}
+
+#[pymethods]
+impl FleetStore {
+    /// Poses per block of a session when ``block=`` is not given (tiles are blocks × blocks);
+    /// also the unit :mod:`inexact_loops.dask` cuts sessions into.
+    #[classattr]
+    const DEFAULT_BLOCK: usize = StoreSettings::DEFAULT_BLOCK;
+
+    /// The store in the folder ``path``: its current state, or, for a missing or empty folder,
+    /// a store that the first :meth:`update` makes there (with the settings it gives).
+    ///
+    /// Raises:
+    ///     FileNotFoundError: ``path`` holds files but no store (no ``store.json``).
+    ///     LoopsIOError: a file of the store that cannot be read back (named).
+    #[staticmethod]
+    fn open(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        let dir = path.clone();
+        let state = detached(py, move || {
+            if dir.join("store.json").is_file() {
+                return Ok(Some(State::new(read_store(&dir)?, None, None)?));
+            }
+            let empty = match std::fs::read_dir(&dir) {
+                Ok(mut entries) => entries.next().is_none(),
+                Err(error) => error.kind() == std::io::ErrorKind::NotFound,
+            };
+            if empty { Ok(None) } else { Err(Failure::from(StoreError::NotAStore { path: dir })) }
+        })?;
+        Ok(Self { dir: path, state })
+    }
+
+    /// Adds the sessions ``add`` (replacing stored ones of the same name) and removes the
+    /// sessions named in ``remove``, in one update written atomically; a session given with the
+    /// content it has in the store changes nothing. Scans only the tiles that hold an added or
+    /// replaced session (reading the stored sessions they meet from the store's pose files).
+    ///
+    /// The settings are fixed when the store is made: the first update gives ``gamma`` and
+    /// whichever others it wants; a later one gives none (the store's own) or all of them as
+    /// the store has them (a check: otherwise an error, the store unchanged).
+    ///
+    /// Args:
+    ///     add: sessions as :class:`Fleet` takes them (a dict ``{name: session}``, ``(name,
+    ///         session)`` pairs or paths named by their stem), read with the reading keywords.
+    ///     remove: names of stored sessions to remove.
+    ///     gamma: γ, in the metric's unit.
+    ///     metric: a metric name or object (not a callable); ``None``: the sessions' own.
+    ///     separation: within each session, as in :func:`find_fleet_loops`.
+    ///     block: poses per block of a session; ``None``: :attr:`DEFAULT_BLOCK`.
+    ///     sampler, rate, budget, seed, skip_trivial, between_only: the samples of every state,
+    ///         as :func:`sample_fleet` draws them (a component sampler); ``None``: no samples.
+    ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+    ///     format, axes, topic, time, frames, rate_hz, drop_duplicate_stamps,
+    ///         quaternion_tolerance: how paths are read, as in :class:`Fleet`.
+    ///
+    /// Returns:
+    ///     :attr:`last_update`.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: no ``gamma`` for a new store; settings other than the store's;
+    ///         a name given twice, or removed and given, or removed but not stored; a session of
+    ///         another dimension or manifold. The store is then unchanged.
+    ///     OSError, LoopsIOError: a path that cannot be read; a store file that cannot be read
+    ///         or written (named).
+    #[pyo3(signature = (*, add=None, remove=None, gamma=None, metric=None, separation=SeparationArg::Auto, block=None,
+        sampler=None, rate=None, budget=None, seed=None, between_only=false, skip_trivial=false, threads=None,
+        format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, drop_duplicate_stamps=false,
+        quaternion_tolerance=None))]
+    #[pyo3(
+        text_signature = "($self, *, add=None, remove=None, gamma=None, metric=None, separation='auto', block=None, \
+                          sampler=None, rate=None, budget=None, seed=None, between_only=False, skip_trivial=False, \
+                          threads=None, format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, \
+                          drop_duplicate_stamps=False, quaternion_tolerance=None)"
+    )]
+    #[allow(clippy::too_many_arguments)]
+    fn update<'py>(
+        &mut self,
+        py: Python<'py>,
+        add: Option<&Bound<'py, PyAny>>,
+        remove: Option<Vec<String>>,
+        gamma: Option<f64>,
+        metric: Option<&Bound<'py, PyAny>>,
+        separation: SeparationArg,
+        block: Option<usize>,
+        sampler: Option<&str>,
+        rate: Option<f64>,
+        budget: Option<usize>,
+        seed: Option<u64>,
+        between_only: bool,
+        skip_trivial: bool,
+        threads: Option<usize>,
+        format: Option<String>,
+        axes: Option<(usize, usize)>,
+        topic: Option<String>,
+        time: Option<String>,
+        frames: Option<(String, String)>,
+        rate_hz: Option<f64>,
+        drop_duplicate_stamps: bool,
+        quaternion_tolerance: Option<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let sessions = match add {
+            None => Vec::new(),
+            Some(add) => read_sessions(
+                py,
+                add,
+                format,
+                axes,
+                metric,
+                topic,
+                time,
+                frames,
+                rate_hz,
+                drop_duplicate_stamps,
+                quaternion_tolerance,
+            )?,
+        };
+        let config = self.config(
+            gamma,
+            metric,
+            separation,
+            block,
+            sampler,
+            rate,
+            budget,
+            seed,
+            between_only,
+            skip_trivial,
+            &sessions,
+        )?;
+        let put: Vec<(String, loops_core::Trajectory)> =
+            sessions.into_iter().map(|(name, t)| (name, Arc::unwrap_or_clone(t.inner))).collect();
+        let remove = remove.unwrap_or_default();
+        let dir = self.dir.clone();
+        let state = detached(py, move || {
+            let report = loops_core::with_threads(threads, || update_store(&dir, config.as_ref(), put, &remove))??;
+            State::new(report.stored, Some(report.loops), Some(report.samples.map(|s| s.rows).unwrap_or_default()))
+        })?;
+        let update = update_dict(py, state.stored.store.last_update())?;
+        self.state = Some(state);
+        Ok(update)
+    }
+
+    fn __len__(&self) -> usize {
+        self.state.as_ref().map_or(0, |s| s.stored.store.sessions().len())
+    }
+
+    fn __repr__(&self) -> String {
+        match &self.state {
+            None => format!("FleetStore({:?}, no store yet)", self.dir.display().to_string()),
+            Some(s) => {
+                let settings = s.stored.store.settings();
+                format!(
+                    "FleetStore({:?}, {}, gamma={}, metric={}, block={}, {} sessions, {} components, {} samples)",
+                    self.dir.display().to_string(),
+                    s.stored.state,
+                    settings.gamma,
+                    settings.metric.name(),
+                    settings.block,
+                    s.stored.store.sessions().len(),
+                    s.loops.components().len(),
+                    s.samples.len()
+                )
+            }
+        }
+    }
+
+    /// The store's folder.
+    #[getter]
+    fn path(&self) -> PathBuf {
+        self.dir.clone()
+    }
+
+    /// The folder of the current state (``path / "state-NNNNNN"``), whose ``.parquet`` tables
+    /// are the store's; ``None`` before the first update.
+    #[getter]
+    fn state_path(&self) -> Option<PathBuf> {
+        self.state.as_ref().map(|s| s.stored.dir.join(&s.stored.state))
+    }
+
+    /// The stored sessions' names, in name order (the order of the session indices of the
+    /// tables).
+    #[getter]
+    #[pyo3(name = "names")]
+    fn py_names(&self) -> Vec<String> {
+        self.names()
+    }
+
+    /// γ; ``None`` before the first update.
+    #[getter]
+    fn gamma(&self) -> Option<f64> {
+        self.settings().map(|s| s.gamma)
+    }
+
+    /// The name of the store's metric; ``None`` before the first update.
+    #[getter]
+    fn metric_name(&self) -> Option<String> {
+        self.settings().map(|s| s.metric.name())
+    }
+
+    /// The separation within a session (:class:`Separation`); ``None`` before the first update.
+    #[getter]
+    fn separation(&self) -> Option<Separation> {
+        self.settings().map(|s| Separation { inner: s.separation })
+    }
+
+    /// Poses per block of a session; ``None`` before the first update.
+    #[getter]
+    fn block(&self) -> Option<usize> {
+        self.settings().map(|s| s.block)
+    }
+
+    /// The name of the store's sampler; ``None`` for a store without samples.
+    #[getter]
+    fn sampler(&self) -> Option<&'static str> {
+        self.state.as_ref().and_then(|s| s.stored.config.sampler.as_ref().map(|(sampler, _)| sampler.kind.name()))
+    }
+
+    /// What the last update did: a dict of ``added``, ``replaced``, ``unchanged``,
+    /// ``removed`` (session names, each in name order) and ``tiles_scanned``, ``tiles_kept``,
+    /// ``tiles_dropped`` (int).
+    #[getter]
+    fn last_update<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let empty = loops_core::StoreUpdate::default();
+        update_dict(py, self.state.as_ref().map_or(&empty, |s| s.stored.store.last_update()))
+    }
+
+    /// The loop components as a :class:`~inexact_loops.Table`, with the columns of
+    /// :attr:`FleetLoops.components` (sessions by index in :attr:`names`).
+    #[getter]
+    fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let names = self.names();
+        match &self.state {
+            None => components_table(py, &[], &names, &[]),
+            Some(s) => components_table(py, s.loops.components(), &names, &s.loops.component_times_s()),
+        }
+    }
+
+    /// The ids of the components the last update added: those of a session it added or
+    /// replaced (with itself or another), int64, increasing.
+    #[getter]
+    fn added<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        let added = self.state.as_ref().map_or_else(Vec::new, |s| s.added.iter().map(|&c| c as i64).collect());
+        to_numpy(py, added)
+    }
+
+    /// The sparse overlap matrix as a :class:`~inexact_loops.Table`, as
+    /// :meth:`FleetLoops.session_pairs`.
+    fn session_pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let pairs = self.state.as_ref().map_or(&[][..], |s| s.loops.session_pairs());
+        session_pairs_table(py, pairs, &self.names())
+    }
+
+    /// The overlap matrix, as :meth:`FleetLoops.overlap_matrix`.
+    #[pyo3(signature = (*, sparse=false))]
+    fn overlap_matrix<'py>(&self, py: Python<'py>, sparse: bool) -> PyResult<Bound<'py, PyAny>> {
+        let pairs = self.state.as_ref().map_or(&[][..], |s| s.loops.session_pairs());
+        overlap_matrix(py, self.__len__(), pairs, sparse)
+    }
+
+    /// Loop duration τ per pose, split into own and other sessions, as
+    /// :meth:`FleetLoops.loop_duration` (times read from the store's pose files).
+    ///
+    /// Args:
+    ///     session: only this session's poses (its name or index); ``None``: every pose.
+    ///
+    /// Raises:
+    ///     KeyError: no session of that name. IndexError: an index out of range.
+    #[pyo3(signature = (session=None))]
+    fn loop_duration<'py>(&self, py: Python<'py>, session: Option<&Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyAny>> {
+        let names = self.names();
+        let Some(state) = &self.state else { return loop_duration_table(py, &[], &[], &[]) };
+        let chosen = match session {
+            Some(key) => {
+                let a = session_index_of(&names, key)?;
+                a..a + 1
+            }
+            None => 0..names.len(),
+        };
+        let store = &state.stored;
+        let (times, own, other) = detached(py, || {
+            let sessions = store.store.sessions();
+            let times = chosen
+                .clone()
+                .map(|a| Ok((a, store.poses(&sessions[a])?.timestamps_s().to_vec())))
+                .collect::<Result<Vec<_>, StoreError>>()?;
+            let (own, other) = store.store.loop_duration()?;
+            Ok((times, own, other))
+        })?;
+        let starts = state.stored.store.starts();
+        let span = match times.last() {
+            Some((last, t)) => starts[chosen.start]..starts[*last] + t.len(),
+            None => 0..0,
+        };
+        let sessions: Vec<(usize, &[f64])> = times.iter().map(|(a, t)| (*a, t.as_slice())).collect();
+        loop_duration_table(py, &sessions, &own[span.clone()], &other[span])
+    }
+
+    /// The samples of the current state as a :class:`~inexact_loops.Table`, with the columns
+    /// of :attr:`FleetSamples.table`; no rows for a store without a sampler.
+    #[getter]
+    fn samples<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let samples = self.state.as_ref().map_or(&[][..], |s| &s.samples[..]);
+        fleet_samples_table(py, samples, &self.names())
+    }
+}

@@ -1,0 +1,245 @@
+"""The fleet store (:class:`inexact_loops.FleetStore`) against one run over its sessions.
+
+Its Parquet tables, read by DuckDB, pandas and pyarrow (independent Parquet readers), hold the
+values of :func:`find_fleet_loops` and :func:`sample_fleet` over the stored sessions in name
+order; a seeded random sequence of adds, replacements and removals (and a corrupt log, which
+changes no file) ends with the answer of one run over the final sessions.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import inexact_loops as il
+
+duckdb = pytest.importorskip("duckdb")
+pq = pytest.importorskip("pyarrow.parquet")
+pd = pytest.importorskip("pandas")
+
+quiet = pytest.mark.filterwarnings("ignore::inexact_loops.errors.LoopsWarning")
+
+GAMMA = 40.0
+BLOCK = 700
+SAMPLING = {"sampler": "one", "budget": 60, "seed": 3}
+
+#: Component columns compared exactly (areas to rounding: a tiling sums them in another order).
+EXACT = (
+    "session_a",
+    "session_b",
+    "trivial",
+    "pair_count",
+    "holes",
+    "i_min",
+    "i_max",
+    "j_min",
+    "j_max",
+)
+
+
+def sessions() -> dict[str, il.Trajectory]:
+    """Three cars on two days in one city, by name."""
+    fleet = il.urban_fleet(vehicles=3, days=2, duration_s=300.0, seed=5)
+    return {name: fleet.session(name) for name in fleet.names}
+
+
+def scratch(stored: dict[str, il.Trajectory]) -> tuple[il.FleetLoops, il.FleetSamples]:
+    """One run over `stored` in name order, as the store orders its sessions."""
+    fleet = il.Fleet({name: stored[name] for name in sorted(stored)})
+    loops = il.find_fleet_loops(fleet, gamma=GAMMA)
+    return loops, il.sample_fleet(
+        loops, SAMPLING["sampler"], budget=SAMPLING["budget"], seed=SAMPLING["seed"]
+    )
+
+
+def state_dir(folder: Path) -> Path:
+    """The current state, as a reader finds it: the folder `store.json` names."""
+    return folder / json.loads((folder / "store.json").read_text())["state"]
+
+
+def assert_same_answer(store: il.FleetStore, stored: dict[str, il.Trajectory]) -> None:
+    loops, samples = scratch(stored)
+    assert store.names == sorted(stored)
+    got, want = store.components, loops.components
+    assert len(got["id"]) == len(want["id"])
+    for column in EXACT:
+        np.testing.assert_array_equal(got[column], want[column], err_msg=column)
+    np.testing.assert_allclose(got["area_s2"], want["area_s2"], rtol=1e-9)
+    np.testing.assert_allclose(store.overlap_matrix(), loops.overlap_matrix(), rtol=1e-9, atol=1e-9)
+    tau, want_tau = store.loop_duration(), loops.loop_duration()
+    np.testing.assert_array_equal(tau["t_s"], want_tau["t_s"])
+    for column in ("own_s", "other_s"):
+        np.testing.assert_allclose(
+            tau[column], want_tau[column], rtol=1e-9, atol=1e-9, err_msg=column
+        )
+    drawn, want_drawn = store.samples, samples.table
+    for column in ("session_a", "i", "session_b", "j", "component"):
+        np.testing.assert_array_equal(drawn[column], want_drawn[column], err_msg=column)
+
+
+@quiet
+def test_duckdb_pandas_and_pyarrow_read_what_find_fleet_loops_finds(tmp_path: Path) -> None:
+    """A store built day by day; its tables, read by DuckDB, pandas and pyarrow, hold what one
+    run over the same sessions finds."""
+    all_sessions = sessions()
+    folder = tmp_path / "city"
+    store = il.FleetStore.open(folder)
+    for day in ("day0", "day1"):
+        today = {name: t for name, t in all_sessions.items() if name.endswith(day)}
+        store.update(add=today, gamma=GAMMA, block=BLOCK, **SAMPLING)
+    assert store.last_update["added"] == ["car0-day1", "car1-day1", "car2-day1"]
+    assert store.last_update["tiles_kept"] > 0
+    loops, samples = scratch(all_sessions)
+    state = state_dir(folder)
+    assert state == store.state_path
+
+    # DuckDB: counts, a join with the sessions table and a GROUP BY against the overlap matrix.
+    sql = duckdb.connect().execute
+    components = (state / "components.parquet").as_posix()
+    sessions_table = (state / "sessions.parquet").as_posix()
+    (count,) = sql(f"SELECT count(*) FROM '{components}'").fetchone()
+    assert count == len(loops.components["id"]) > len(all_sessions)
+    # Every state folder matches the glob; only the current one is left after an update.
+    (globbed,) = sql(
+        f"SELECT count(*) FROM '{folder.as_posix()}/state-*/components.parquet'"
+    ).fetchone()
+    assert globbed == count
+    rows = sql(
+        "SELECT c.id, sa.name AS name_a, sb.name AS name_b, c.pair_count, c.area_s2, "
+        "c.i_min, c.j_max "
+        f"FROM '{components}' c JOIN '{sessions_table}' sa ON c.a = sa.session "
+        f"JOIN '{sessions_table}' sb ON c.b = sb.session ORDER BY c.id"
+    ).fetchnumpy()
+    want = loops.components
+    np.testing.assert_array_equal(rows["id"], want["id"])
+    for column in ("name_a", "name_b", "pair_count", "i_min", "j_max"):
+        np.testing.assert_array_equal(np.asarray(rows[column]), want[column], err_msg=column)
+    np.testing.assert_allclose(rows["area_s2"], want["area_s2"], rtol=1e-9)
+    pairs = sql(
+        f"SELECT a, b, count(*) AS components, sum(pair_count) AS cells, sum(area_s2) AS area_s2 "
+        f"FROM '{components}' GROUP BY a, b ORDER BY a, b"
+    ).fetchnumpy()
+    want_pairs = loops.session_pairs()
+    np.testing.assert_array_equal(pairs["a"], want_pairs["session_a"])
+    np.testing.assert_array_equal(pairs["b"], want_pairs["session_b"])
+    np.testing.assert_array_equal(pairs["components"], want_pairs["components"])
+    # Within a session a component is the half t < t' (as FleetLoops.components; the
+    # separation keeps the diagonal out), the session pair the whole square: twice as much.
+    halves = np.where(pairs["a"] == pairs["b"], 2, 1)
+    np.testing.assert_array_equal(pairs["cells"] * halves, want_pairs["pair_count"])
+    np.testing.assert_allclose(pairs["area_s2"] * halves, want_pairs["area_s2"], rtol=1e-9)
+    (added,) = sql(f"SELECT count(*) FROM '{components}' WHERE added").fetchone()
+    assert added == len(store.added) > 0
+    drawn = sql(
+        f"SELECT a, i, b, j, component FROM '{(state / 'samples.parquet').as_posix()}'"
+    ).fetchnumpy()
+    want_drawn = samples.table
+    assert len(drawn["a"]) == len(want_drawn["i"]) == SAMPLING["budget"]
+    for column, want_column in (("a", "session_a"), ("i", "i"), ("b", "session_b"), ("j", "j")):
+        np.testing.assert_array_equal(drawn[column], want_drawn[want_column], err_msg=column)
+    np.testing.assert_array_equal(drawn["component"], want_drawn["component"])
+
+    # pandas and pyarrow: the session pairs and the loop duration.
+    frame = pd.read_parquet(state / "session_pairs.parquet")
+    np.testing.assert_array_equal(frame["session_a"].to_numpy(), want_pairs["name_a"])
+    np.testing.assert_allclose(frame["area_s2"].to_numpy(), want_pairs["area_s2"], rtol=1e-9)
+    np.testing.assert_allclose(frame["density"].to_numpy(), want_pairs["density"], rtol=1e-9)
+    tau = pq.read_table(state / "loop_duration.parquet").to_pydict()
+    want_tau = loops.loop_duration()
+    np.testing.assert_array_equal(tau["pose"], want_tau["pose"])
+    np.testing.assert_allclose(tau["own_s"], want_tau["own_s"], rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(tau["other_s"], want_tau["other_s"], rtol=1e-9, atol=1e-9)
+
+    # The Python tables are those of find_fleet_loops, and a store read back is the same.
+    assert_same_answer(store, all_sessions)
+    assert_same_answer(il.FleetStore.open(folder), all_sessions)
+
+
+@quiet
+def test_random_adds_replacements_and_removals_equal_one_run(tmp_path: Path) -> None:
+    """A seeded random sequence of updates, each checked against one run over the sessions
+    then stored; a corrupt log on the way is refused and changes no file."""
+    rng = np.random.default_rng(11)
+    pool = sessions()
+    names = sorted(pool)
+    folder = tmp_path / "store"
+    store = il.FleetStore.open(folder)
+    stored: dict[str, il.Trajectory] = {}
+    first = names[int(rng.integers(len(names)))]
+    store.update(add=[(first, pool[first])], gamma=GAMMA, block=BLOCK, **SAMPLING)
+    stored[first] = pool[first]
+    kinds = []
+    for step in range(6):
+        kind = rng.choice(["add", "replace", "remove"])
+        absent = [n for n in names if n not in stored]
+        if kind == "add" and absent or not stored:
+            new = list(
+                rng.choice(absent, size=min(len(absent), int(rng.integers(1, 3))), replace=False)
+            )
+            update = store.update(add={n: pool[n] for n in new})
+            stored.update({n: pool[n] for n in new})
+            assert update["added"] == sorted(new)
+        elif kind == "replace" or len(stored) == 1:
+            name = sorted(stored)[int(rng.integers(len(stored)))]
+            old = stored[name]
+            moved = old.positions + rng.normal(0.0, 2.0, size=old.positions.shape)
+            stored[name] = il.Trajectory(old.timestamps, moved)
+            update = store.update(add=[(name, stored[name])])
+            assert update["replaced"] == [name]
+        else:
+            name = sorted(stored)[int(rng.integers(len(stored)))]
+            del stored[name]
+            update = store.update(remove=[name])
+            assert update["removed"] == [name]
+        kinds.append(str(kind))
+        assert_same_answer(store, stored)
+        if step == 2:
+            corrupt = tmp_path / "broken.tum"
+            corrupt.write_text("0.0 1.0 2.0\nnot a pose\n")
+            before = {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+            with pytest.raises((il.errors.LoopsError, OSError, ValueError), match="broken.tum"):
+                store.update(add=[corrupt])
+            assert {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()} == before
+    assert {"add", "replace", "remove"} <= set(kinds), kinds
+
+
+def test_settings_are_fixed_when_the_store_is_made(tmp_path: Path) -> None:
+    t = np.arange(30.0)
+    line = il.Trajectory(t, np.c_[t, 0 * t])
+    store = il.FleetStore.open(tmp_path / "s")
+    assert len(store) == 0 and store.gamma is None and len(store.components["id"]) == 0
+    with pytest.raises(il.errors.InvalidParameterError, match="needs its settings"):
+        store.update(add=[("a", line)])
+    store.update(add=[("a", line)], gamma=2.0, separation=None, block=8)
+    assert (store.gamma, store.block, store.sampler, store.metric_name) == (
+        2.0,
+        8,
+        None,
+        "euclidean",
+    )
+    assert store.path == tmp_path / "s" and store.separation == il.Separation()
+    with pytest.raises(il.errors.InvalidParameterError, match="gamma is 2 in the store, not 3"):
+        store.update(add=[("b", line)], gamma=3.0, separation=None, block=8)
+    with pytest.raises(il.errors.InvalidParameterError, match="given whole"):
+        store.update(add=[("b", line)], block=8)
+    with pytest.raises(il.errors.InvalidParameterError, match="is not in the store"):
+        store.update(remove=["nobody"])
+    assert store.names == ["a"]
+    # The same settings given again are accepted.
+    store.update(add=[("b", line)], gamma=2.0, separation=None, block=8)
+    assert store.names == ["a", "b"] and store.last_update["added"] == ["b"]
+    assert store.session_pairs()["components"].tolist() == [1, 1, 1]
+    assert store.loop_duration("b")["session"].tolist() == [1] * len(t)
+    (tmp_path / "theirs").mkdir()
+    (tmp_path / "theirs" / "notes.txt").write_text("mine")
+    with pytest.raises(FileNotFoundError, match="no fleet store here"):
+        il.FleetStore.open(tmp_path / "theirs")
+
+
+def test_the_dask_runner_cuts_sessions_by_the_core_block() -> None:
+    """One constant: the Dask runner's default block is the core's object, not a copy."""
+    dask_runner = pytest.importorskip("inexact_loops.dask")
+    assert dask_runner.DEFAULT_BLOCK is il.FleetStore.DEFAULT_BLOCK
