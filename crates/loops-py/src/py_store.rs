@@ -150,7 +150,7 @@ impl FleetStore {
             }
         };
         let sampler = match (sampler, seed) {
-            (Some(name), Some(seed)) => Some((sampler_of(name, rate, budget, seed, skip_trivial)?, between_only)),
+            (Some(name), Some(seed)) => Some((sampler_of(Some(name), rate, budget, seed, skip_trivial)?, between_only)),
             (Some(_), None) => return Err(invalid_parameter("FleetStore.update: sampler= needs seed=".to_owned())),
             (None, _) if rate.is_some() || budget.is_some() || seed.is_some() || between_only || skip_trivial => {
                 return Err(invalid_parameter(
