@@ -38,12 +38,19 @@ fn main() -> Result<()> {
             .cloned()
             .collect()
     };
-    // The answer a store gives after an update: merge, τ and samples.
-    let answer = |store: &FleetStore, source: &mut dyn FnMut(&StoreSession) -> Result<Trajectory>| -> Result<usize> {
+    // The answer a store gives after an update: merge, τ and samples (components, and the
+    // seconds of each part).
+    let answer = |store: &FleetStore,
+                  source: &mut dyn FnMut(&StoreSession) -> Result<Trajectory>|
+     -> Result<(usize, [f64; 3])> {
+        let clock = Instant::now();
         let loops = store.loops()?;
+        let merge = clock.elapsed().as_secs_f64();
         store.loop_duration()?;
+        let tau = clock.elapsed().as_secs_f64() - merge;
         store.samples(&loops, &sampler, false, source)?;
-        Ok(loops.components().len())
+        let draw = clock.elapsed().as_secs_f64() - merge - tau;
+        Ok((loops.components().len(), [merge, tau, draw]))
     };
 
     let mut store = FleetStore::new(settings)?;
@@ -53,14 +60,14 @@ fn main() -> Result<()> {
     let clock = Instant::now();
     let update = store.update(day(days - 1), &[], &mut source)?.clone();
     let scanned = clock.elapsed().as_secs_f64();
-    let components = answer(&store, &mut source)?;
+    let (components, parts) = answer(&store, &mut source)?;
     let incremental = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
     let mut at_once = FleetStore::new(settings)?;
     at_once.update(sessions.clone(), &[], &mut source)?;
     let at_once_scan = clock.elapsed().as_secs_f64();
-    assert_eq!(answer(&at_once, &mut source)?, components);
+    assert_eq!(answer(&at_once, &mut source)?.0, components);
     let whole = clock.elapsed().as_secs_f64();
     assert!(at_once.tiles() == store.tiles(), "the day-by-day store differs from the one made at once");
 
@@ -87,7 +94,9 @@ fn main() -> Result<()> {
     println!("scan+merge+tau+draw: day {days} / all days at once = {:.3}", incremental / whole);
     println!("scan+merge+tau+draw: day {days} / find_fleet_loops+sample_fleet = {:.3}", incremental / in_memory);
     println!(
-        "seconds: day {days} {incremental:.3} (scan {scanned:.3}); at once {whole:.3} (scan {at_once_scan:.3}); in memory {in_memory:.3}"
+        "seconds: day {days} {incremental:.3} (scan {scanned:.3}, merge {:.3}, tau {:.3}, draw {:.3}); at once \
+         {whole:.3} (scan {at_once_scan:.3}); in memory {in_memory:.3}",
+        parts[0], parts[1], parts[2]
     );
     Ok(())
 }
