@@ -731,7 +731,7 @@ class Loops:
             >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
             >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
             >>> open(path).read().splitlines()[2]
-            '1,false,0.25,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+            '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
         """
     def loop_duration_to_csv(
         self,
