@@ -150,8 +150,9 @@ def test_engine_equals_brute_force_on_so3() -> None:
 def test_bad_manifold_input() -> None:
     t = np.array([0.0, 1.0])
     with pytest.raises(il.InvalidTrajectoryError, match="pose 1"):
-        il.Trajectory.so3(t, [[0, 0, 0, 1.0], [0, 0, 0, 1.00001]])
-    ok = il.Trajectory.so3(t, [[0, 0, 0, 1.0], [0, 0, 0, 1.0000001]])
+        il.Trajectory.so3(t, [[0, 0, 0, 1.0], [0, 0, 0, 1.01]])
+    # Within 1e-3 of unit length (4 printed decimals), as read_trajectory accepts: normalised.
+    ok = il.Trajectory.so3(t, [[0, 0, 0, 1.0], [0, 0, 0, 1.00001]])
     assert np.linalg.norm(ok.positions[1]) == pytest.approx(1.0, abs=1e-15)
     with pytest.raises(il.InvalidTrajectoryError, match="pose 0"):
         il.Trajectory.se3(t, np.zeros((2, 3)), [[0, 0, 0, 0.0], [0, 0, 0, 1.0]])

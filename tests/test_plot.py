@@ -593,3 +593,17 @@ def test_paper_figures_rejects_unknown_figures(tmp_path):
     done = run_example("--out", str(tmp_path), "--only", "fig3")
     assert done.returncode == 2 and "invalid choice" in done.stderr
     assert not list(tmp_path.glob("*.png"))
+
+
+def test_sample_pairs_show_pairs_shorter_than_a_line(loop2):
+    """A pair at its closest approach (both poses at one place) is drawn as dots at its ends."""
+    traj, _ = loop2
+    p = traj.positions
+    pairs = np.array([[0, 0], [5, 5]])  # zero-length segments
+    ax = plot.sample_pairs(traj, pairs)
+    dots = [c for c in ax.collections if not isinstance(c, LineCollection)]
+    assert len(dots) == 1, ax.collections
+    np.testing.assert_allclose(
+        dots[0].get_offsets(), np.concatenate([p[pairs[:, 0]], p[pairs[:, 1]]])
+    )
+    assert dots[0].get_sizes()[0] > 0

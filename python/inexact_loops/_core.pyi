@@ -242,9 +242,8 @@ class Trajectory:
         """SE(3) poses, for the ``se3`` / ``se3_rotation`` metrics: positions ``(n, 3)`` and
         orientations as quaternions ``(n, 4)`` in **x, y, z, w** order (the ROS and
         ``scipy.spatial.transform.Rotation.as_quat()`` order). Quaternions within
-        ``quaternion_tolerance`` (default 1e-6) of unit length are normalised; others (zero
-        included) raise, naming the pose. Files that print few decimals need a looser tolerance
-        (:func:`read_trajectory` uses 1e-3).
+        ``quaternion_tolerance`` (default 1e-3, as :func:`read_trajectory`) of unit length are normalised; others (zero
+        included) raise, naming the pose: 4-decimal quaternions (TUM files) are accepted.
 
         Without ``metric=``, the poses are measured by
         ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``: the distance between the
@@ -738,7 +737,7 @@ class Loops:
             >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
             >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
             >>> open(path).read().splitlines()[2]
-            '1,false,0.25,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+            '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
         """
     def loop_duration_to_csv(
         self,

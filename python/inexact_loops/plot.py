@@ -399,7 +399,8 @@ def sample_pairs(
         position_unit: unit of the coordinates, for the axis labels.
 
     Returns:
-        The Axes: the path (one line) and one LineCollection of samples per sampler.
+        The Axes: the path (one line), and per sampler one LineCollection of samples and one
+        collection of dots at their ends (so that pairs shorter than a line width show).
 
     Raises:
         TypeError: ``traj`` not a Trajectory; samples that are not index pairs.
@@ -414,7 +415,7 @@ def sample_pairs(
         >>> traj = il.Trajectory(s, np.c_[np.cos(s), np.sin(s)])
         >>> ax = sample_pairs(traj, {"rho": np.array([[0, 99], [1, 98]]), "one": [[2, 97]]})
         >>> len(ax.lines), len(ax.collections)
-        (1, 2)
+        (1, 4)
         >>> import matplotlib.pyplot as plt; plt.close("all")
     """
     _check_trajectory(traj)
@@ -441,6 +442,17 @@ def sample_pairs(
                 zorder=2,
                 label=f"{label} ({len(i)})",
             )
+        )
+        # A dot at both ends: a pair whose poses lie within a line width of each other (a
+        # revisit found at its closest) is a dot, not an invisible line.
+        ends = np.concatenate([xy[i], xy[j]])
+        ax.scatter(
+            ends[:, 0],
+            ends[:, 1],
+            s=(2.5 * linewidth) ** 2,
+            color=line_color,
+            alpha=alpha,
+            zorder=2,
         )
     _frame(ax, xy, names, position_unit)
     if legend:

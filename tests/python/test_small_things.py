@@ -39,3 +39,16 @@ def test_graph_times_that_are_vertex_ids_are_not_seconds(tmp_path):
         text=True,
     ).stdout
     assert "vertex ids 0 to 5 (no times" in out and " s\n" not in out.split("poses")[1], out
+
+
+def test_se3_takes_the_quaternions_read_trajectory_takes(tmp_path):
+    import numpy as np
+
+    import inexact_loops as il
+
+    q = np.array([[0.0, 0.0, 0.7071, 0.7071], [0.0, 0.0, 0.3827, 0.9239]])  # 4 decimals
+    path = tmp_path / "two.tum"
+    path.write_text("".join(f"{t} 0 0 0 {' '.join(map(str, row))}\n" for t, row in enumerate(q)))
+    from_file = il.read_trajectory(path, metric="se3(rotation_weight_m_per_rad=1)")
+    made = il.Trajectory.se3(np.arange(2.0), np.zeros((2, 3)), q)
+    np.testing.assert_array_equal(made.positions, from_file.positions)

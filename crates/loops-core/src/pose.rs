@@ -12,9 +12,11 @@ use crate::error::{Error, Result};
 use crate::manifold::wrap_angle;
 use crate::trajectory::{Manifold, Trajectory};
 
-/// How far from unit length a quaternion handed to a constructor may be before it is an error
-/// rather than normalised.
-pub const QUATERNION_TOLERANCE: f64 = 1e-6;
+/// How far from unit length a quaternion may be before it is an error rather than normalised:
+/// one rule for quaternions handed to a constructor and read from files. Files and arrays often
+/// hold 4 decimals (TUM ground truth), which leaves norms up to ~1e-4 from 1; a quaternion
+/// further off is no rotation written to a few digits but a mistake.
+pub const QUATERNION_TOLERANCE: f64 = 1e-3;
 
 fn same_length(positions: usize, quaternions: usize) -> Result<()> {
     if positions == quaternions {
@@ -36,9 +38,9 @@ fn finite_row(index: usize, row: &[f64]) -> Result<()> {
     }
 }
 
-/// How far from unit length a quaternion read from a text file may be: such files often print
-/// 4 decimals (TUM ground truth), which leaves norms up to ~1e-4 from 1.
-pub const FILE_QUATERNION_TOLERANCE: f64 = 1e-3;
+/// How far from unit length a quaternion read from a text file may be: the same rule as for
+/// constructors, [`QUATERNION_TOLERANCE`] (kept as a name for the readers' callers).
+pub const FILE_QUATERNION_TOLERANCE: f64 = QUATERNION_TOLERANCE;
 
 /// A quaternion tolerance must be a number ≥ 0 (infinity: normalise any non-zero quaternion).
 fn check_tolerance(tolerance: f64) -> Result<()> {
@@ -90,7 +92,7 @@ impl Trajectory {
     /// `se3(rotation_weight_m_per_rad=0)`, the translation; never by [`Euclidean`](crate::Euclidean).
     ///
     /// # Errors
-    /// [`Error::NonUnitQuaternion`] for a quaternion farther than 1e-6 from unit length (a zero
+    /// [`Error::NonUnitQuaternion`] for a quaternion farther than [`QUATERNION_TOLERANCE`] (1e-3) from unit length (a zero
     /// quaternion included), naming the pose; [`Error::LengthMismatch`]; and as
     /// [`Trajectory::new`].
     ///

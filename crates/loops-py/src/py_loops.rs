@@ -591,7 +591,7 @@ impl Loops {
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
     ///     >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
     ///     >>> open(path).read().splitlines()[2]
-    ///     '1,false,0.25,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+    ///     '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
     #[pyo3(signature = (path, *, samples_per_component=None, overwrite=false))]
     fn components_to_csv(
         &self,

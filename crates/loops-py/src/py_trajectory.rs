@@ -232,9 +232,8 @@ impl Trajectory {
     /// SE(3) poses, for the ``se3`` / ``se3_rotation`` metrics: positions ``(n, 3)`` and
     /// orientations as quaternions ``(n, 4)`` in **x, y, z, w** order (the ROS and
     /// ``scipy.spatial.transform.Rotation.as_quat()`` order). Quaternions within
-    /// ``quaternion_tolerance`` (default 1e-6) of unit length are normalised; others (zero
-    /// included) raise, naming the pose. Files that print few decimals need a looser tolerance
-    /// (:func:`read_trajectory` uses 1e-3).
+    /// ``quaternion_tolerance`` (default 1e-3, as :func:`read_trajectory`) of unit length are normalised; others (zero
+    /// included) raise, naming the pose: 4-decimal quaternions (TUM files) are accepted.
     ///
     /// Without ``metric=``, the poses are measured by
     /// ``se3(rotation_weight_m_per_rad=0, rotation=geodesic)``: the distance between the
