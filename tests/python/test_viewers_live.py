@@ -44,7 +44,8 @@ def write_log(path: Path) -> np.ndarray:
     as the file holds them."""
     rng = np.random.default_rng(7)
     corners = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]])
-    lap = np.concatenate([np.linspace(a, b, 4, endpoint=False) for a, b in zip(corners, corners[1:])])
+    sides = zip(corners[:-1], corners[1:], strict=True)
+    lap = np.concatenate([np.linspace(a, b, 4, endpoint=False) for a, b in sides])
     xy = np.tile(lap, (3, 1)) + rng.normal(0, 1.0, (3 * len(lap), 2))
     t = 1_700_000_000.0 + 0.5 * np.arange(len(xy))
     rows = np.c_[t, xy, np.zeros(len(xy))]
@@ -90,7 +91,9 @@ async def serve_and_listen(log: Path) -> tuple[dict, dict, dict[str, list], int,
                 assert message["op"] == "advertise", message
                 channels.update({c["topic"]: c for c in message["channels"]})
             by_subscription = {k: c["topic"] for k, c in enumerate(channels.values())}
-            subscriptions = [{"id": k, "channelId": channels[t]["id"]} for k, t in by_subscription.items()]
+            subscriptions = [
+                {"id": k, "channelId": channels[t]["id"]} for k, t in by_subscription.items()
+            ]
             await ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
             # The server closes the connection after the last keyframe.
             async for frame in ws:
@@ -131,7 +134,8 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
         t: len(m) for t, m in messages.items()
     }
 
-    live: dict[str, SceneUpdate.SceneEntity] = {}  # the components' entities, as Foxglove keeps them
+    # The components' entities, as Foxglove keeps them: updated by id, removed by deletions.
+    live: dict[str, SceneUpdate.SceneEntity] = {}
     for k, line in enumerate(keyframes):
         n = line["pose"] + 1
         stamp_ns = round(rows[line["pose"], 0] * 1e9)
@@ -170,7 +174,7 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
         assert json.loads(meta["pairs"]) == [[c["keyframe"], c["j"]] for c in line["candidates"]]
         assert json.loads(meta["components"]) == [c["component"] for c in line["candidates"]]
         ends = np.array([[p.x, p.y, p.z] for p in entity.lines[0].points]).reshape(-1, 2, 3)
-        for (a, b), c in zip(ends, line["candidates"]):
+        for (a, b), c in zip(ends, line["candidates"], strict=True):
             np.testing.assert_allclose([a, b], rows[[c["keyframe"], c["j"]], 1:4], atol=1e-9)
 
     # The entities left are the live components of the engine pushed the same poses.

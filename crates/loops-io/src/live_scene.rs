@@ -240,3 +240,42 @@ impl LiveScene {
         Ok(messages.collect())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use foxglove::Decode;
+    use loops_core::MetricSpec;
+
+    use super::*;
+
+    #[test]
+    fn a_keyframe_past_the_scene_poses_is_an_error() {
+        let scene = LiveScene::new("two", vec![[0.0; 3], [1.0, 0.0, 0.0]], None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        for t in 0..2 {
+            let update = engine.push(f64::from(t), &[f64::from(t)]).unwrap();
+            assert_eq!(scene.keyframe(&engine, &update, &[]).unwrap().len(), LIVE_TOPICS.len());
+        }
+        let update = engine.push(2.0, &[2.0]).unwrap();
+        let error = scene.keyframe(&engine, &update, &[]).unwrap_err();
+        assert!(matches!(error, loops_core::Error::IndexOutOfRange { index: 2, len: 2 }), "{error}");
+        let rows = LiveScene::new("bad", vec![[0.0; 3]; 2], Some(vec![[0.0, 0.0, 0.0, 1.0]]));
+        assert!(matches!(rows, Err(loops_core::Error::RowCountMismatch { second_rows: 1, .. })));
+    }
+
+    #[test]
+    fn the_trajectory_grows_keyframe_by_keyframe() {
+        let positions: Vec<[f64; 3]> = (0..5).map(|k| [f64::from(k), 0.0, 0.0]).collect();
+        let scene = LiveScene::new("line", positions, None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        for k in 0..5 {
+            let update = engine.push(1.7e9 + f64::from(k), &[f64::from(k)]).unwrap();
+            let messages = scene.keyframe(&engine, &update, &[]).unwrap();
+            let poses = PosesInFrame::decode(messages[0].data.as_slice()).unwrap();
+            assert_eq!(poses.poses.len(), k as usize + 1);
+            assert_eq!(messages[0].log_time_ns, Some(1_700_000_000_000_000_000 + k as u64 * 1_000_000_000));
+            let candidates = SceneUpdate::decode(messages[3].data.as_slice()).unwrap();
+            assert!(candidates.entities.is_empty());
+        }
+    }
+}
