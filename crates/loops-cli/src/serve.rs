@@ -58,15 +58,24 @@ pub(crate) struct LiveServer {
     address: SocketAddr,
 }
 
-/// The channels each client subscribed to, and when the first subscription came.
+/// What the clients subscribed to so far.
 #[derive(Debug, Default)]
-struct Subscriptions(Mutex<(HashMap<ClientId, HashSet<ChannelId>>, Option<Instant>)>);
+struct Subscribed {
+    /// The channels of each client.
+    channels: HashMap<ClientId, HashSet<ChannelId>>,
+    /// When the first subscription came.
+    first: Option<Instant>,
+}
+
+/// The server's listener: records [`Subscribed`].
+#[derive(Debug, Default)]
+struct Subscriptions(Mutex<Subscribed>);
 
 impl ServerListener for Subscriptions {
     fn on_subscribe(&self, client: Client, channel: ChannelView) {
         let mut state = self.0.lock().unwrap_or_else(PoisonError::into_inner);
-        state.0.entry(client.id()).or_default().insert(channel.id());
-        state.1.get_or_insert_with(Instant::now);
+        state.channels.entry(client.id()).or_default().insert(channel.id());
+        state.first.get_or_insert_with(Instant::now);
     }
 }
 
@@ -115,8 +124,8 @@ impl LiveServer {
             }
             {
                 let state = self.subscriptions.0.lock().unwrap_or_else(PoisonError::into_inner);
-                let all = state.0.values().any(|channels| channels.len() >= self.channels.len());
-                if all || state.1.is_some_and(|first| first.elapsed() >= SUBSCRIBE_SETTLE) {
+                let all = state.channels.values().any(|channels| channels.len() >= self.channels.len());
+                if all || state.first.is_some_and(|first| first.elapsed() >= SUBSCRIBE_SETTLE) {
                     return true;
                 }
             }
