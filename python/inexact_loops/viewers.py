@@ -4,6 +4,10 @@
   Foxglove layout beside it; ``loops run --mcap`` and ``loops fleet --mcap`` write the same.
 - :func:`to_rerun`: a Rerun recording (``.rrd``) of the same entities; needs ``rerun-sdk``
   (``pip install 'inexact-loops[rerun]'``).
+- Live, while the log plays: ``loops replay LOG --serve`` (``python -m inexact_loops._cli
+  replay ...``) serves the online engine's keyframes over Foxglove's WebSocket protocol on the
+  first four topics below; the command is the way from Python too, since the server, its
+  start-up wait and its shutdown on Ctrl-C belong to one process that owns the replay.
 
 Both draw one :class:`~inexact_loops._core.Scene`, built in Rust (:func:`scene`): a path per
 session with τ along it as a colour, every loop component (its two stretches of path and its

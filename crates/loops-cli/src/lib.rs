@@ -23,6 +23,7 @@ mod replay;
 mod report;
 mod run;
 mod sample;
+mod serve;
 mod synth;
 
 use std::ffi::OsString;

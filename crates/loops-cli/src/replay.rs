@@ -1,9 +1,11 @@
 //! `loops replay`: a pose log fed to the online engine pose by pose, as a SLAM front end would
 //! feed it, streaming what the front end would get at each keyframe (one JSON line: its
 //! loop-closure candidates, the components created and merged, the time the push took) and
-//! printing latency figures at the end.
+//! printing latency figures at the end. With `--serve`, the same keyframes go live to Foxglove
+//! (the [`serve`](crate::serve) module); with `--speed`, at the pace of the log's clock.
 
 use std::io::Write;
+use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -14,6 +16,7 @@ use serde::Serialize;
 
 use crate::args::{EngineArgs, InputArgs};
 use crate::guard;
+use crate::serve::LiveServer;
 
 /// Replay a pose log through the online engine, pose by pose, as a SLAM front end would: one
 /// JSON line per keyframe on stdout (its loop-closure candidates, the components created and
@@ -24,7 +27,8 @@ use crate::guard;
     after_help = "Examples:\n  \
     loops replay drive.tum --gamma 40 --rate 0.05 --cap-per-minute 2\n  \
     loops replay drive.mcap --gamma 40 --every-s 1 | jq -c 'select(.candidates != [])'\n  \
-    loops replay kitti_odometry/00.txt --axes 0,2 --gamma 6 --rate 0.02 --quiet    # latency only\n\n\
+    loops replay kitti_odometry/00.txt --axes 0,2 --gamma 6 --rate 0.02 --quiet    # latency only\n  \
+    loops replay drive.mcap --gamma 40 --serve --speed 1 --quiet    # live in Foxglove: ws://127.0.0.1:8765\n\n\
     Each line: {\"pose\": last pose pushed, \"t_s\", \"poses\": poses pushed at this keyframe,\n\
     \"latency_us\": push + offer, \"loop_duration_s\": tau of the pose so far, \"candidates\":\n\
     [{\"keyframe\", \"j\", \"component\", \"distance\", \"first\"}], \"created\": [ids],\n\
@@ -50,6 +54,19 @@ pub(crate) struct ReplayArgs {
     /// No JSON lines: only the figures on stderr.
     #[arg(long)]
     quiet: bool,
+    /// Serve the keyframes live over Foxglove's WebSocket protocol on ADDR:PORT (port 0: a free
+    /// one; the address is printed on stderr): in Foxglove, Open connection, Foxglove WebSocket.
+    /// The replay starts when a client subscribes; the server closes at the end of the log
+    /// (after its clients leave, 2 s at most) or on Ctrl-C. Topics: /loops/trajectory,
+    /// /loops/tau, /loops/components, /loops/candidates, as in `loops run --mcap`.
+    #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
+    serve: Option<String>,
+    /// With --serve: keep serving after the end of the log, until Ctrl-C.
+    #[arg(long, requires = "serve")]
+    hold: bool,
+    /// Play at this many times the log's clock (1: real time) instead of as fast as it goes.
+    #[arg(long, value_name = "FACTOR", allow_hyphen_values = true)]
+    speed: Option<f64>,
 }
 
 /// The online sampler's flags, with the core's defaults.
@@ -182,21 +199,92 @@ pub(crate) fn replay(args: ReplayArgs) -> Result<u8> {
     if !(every_s.is_finite() && every_s >= 0.0) {
         bail!("--every-s takes a finite number of seconds >= 0, got {every_s}");
     }
+    if let Some(speed) = args.speed.filter(|&speed| !(speed.is_finite() && speed > 0.0)) {
+        bail!("--speed takes a finite factor > 0, got {speed}");
+    }
+    let serve_address = match &args.serve {
+        Some(address) => Some(
+            address
+                .parse::<SocketAddr>()
+                .map_err(|_| anyhow::anyhow!("--serve {address}: expected ADDR:PORT, e.g. 127.0.0.1:8765"))?,
+        ),
+        None => None,
+    };
     let separation = args.engine.separation()?;
     let mut sampler = OnlineSampler::new(args.sampler.options(separation))?;
     let source = crate::args::source_name(&args.files);
-    let (_, traj) = args.input.read_table(&args.files, &spec)?;
+    let (table, traj) = args.input.read_table(&args.files, &spec)?;
     let mut engine = OnlineLoops::new(spec, traj.dim(), args.engine.gamma)?;
     let stop = Interrupt::new();
     let _stop_guard = guard::stop_on_interrupt(stop.clone());
-    let figures = loops_core::with_threads(args.engine.threads, || {
-        run(&traj, &mut engine, &mut sampler, every_s, args.quiet, &stop)
+    let live = match serve_address {
+        Some(address) => {
+            let batches = keyframes(traj.timestamps_s(), every_s).len();
+            let server = LiveServer::start(address, batches * loops_io::LIVE_TOPICS.len())?;
+            // The log's own positions and orientations, unless reading dropped or merged poses.
+            let fits = table.positions.len() == traj.len();
+            let positions = if fits { table.positions.clone() } else { loops_io::point_positions(&traj) };
+            let orientations = table.orientations_xyzw.clone().filter(|_| fits);
+            // The log's name, as `loops run` names its scene (several files: their names joined).
+            let names: Vec<String> = args.files.iter().map(loops_io::log_name).collect();
+            let scene = loops_io::LiveScene::new(&names.join("+"), positions, orientations)?;
+            eprintln!(
+                "loops replay: serving on ws://{} (Foxglove: Open connection, Foxglove WebSocket); waiting for a \
+                 client",
+                server.address()
+            );
+            Some((server, scene))
+        }
+        None => None,
+    };
+    let pace = Pace { speed: args.speed, live: live.as_ref() };
+    let replayed = loops_core::with_threads(args.engine.threads, || {
+        run(&traj, &mut engine, &mut sampler, every_s, args.quiet, &pace, &stop)
     })
     .map_err(anyhow::Error::from)
     .and_then(|replayed| replayed)
-    .with_context(|| format!("replaying {source}"))?;
+    .with_context(|| format!("replaying {source}"));
+    let figures = match live {
+        Some((server, _)) => {
+            if replayed.is_ok() && !stop.is_interrupted() {
+                if args.hold {
+                    eprintln!("loops replay: the log is over; serving until Ctrl-C");
+                }
+                server.hold(args.hold, &stop);
+            }
+            server.close();
+            replayed?
+        }
+        None => replayed?,
+    };
     figures.print(&source, &engine);
-    Ok(if figures.interrupted { guard::INTERRUPTED } else { 0 })
+    Ok(if figures.interrupted || stop.is_interrupted() { guard::INTERRUPTED } else { 0 })
+}
+
+/// Where the keyframes go besides stdout, and how fast.
+#[derive(Debug)]
+struct Pace<'a> {
+    /// Play at this many times the log's clock, or as fast as it goes.
+    speed: Option<f64>,
+    /// The server and the scene whose messages it sends.
+    live: Option<&'a (LiveServer, loops_io::LiveScene)>,
+}
+
+impl Pace<'_> {
+    /// Waits until the keyframe at `t_s` is due (the log's first pose at `t0_s` is due at
+    /// `start`); `false` when `stop` came first.
+    fn wait(&self, start: Instant, t0_s: f64, t_s: f64, stop: &Interrupt) -> bool {
+        let Some(speed) = self.speed else { return !stop.is_interrupted() };
+        let due = start + Duration::from_secs_f64(((t_s - t0_s) / speed).max(0.0));
+        while !stop.is_interrupted() {
+            let now = Instant::now();
+            if now >= due {
+                return true;
+            }
+            std::thread::sleep((due - now).min(Duration::from_millis(20)));
+        }
+        false
+    }
 }
 
 /// What the replay measured.
@@ -219,6 +307,7 @@ fn run(
     sampler: &mut OnlineSampler,
     every_s: f64,
     quiet: bool,
+    pace: &Pace<'_>,
     stop: &Interrupt,
 ) -> Result<Figures> {
     let times = traj.timestamps_s();
@@ -232,11 +321,17 @@ fn run(
         wall: Duration::ZERO,
         interrupted: false,
     };
+    if let Some((server, _)) = pace.live
+        && !server.wait_for_client(stop)
+    {
+        figures.interrupted = true;
+        return Ok(figures);
+    }
     let mut stdout = std::io::stdout().lock();
     let start = Instant::now();
     let mut next = 0;
     for &keyframe in &batches {
-        if stop.is_interrupted() {
+        if !pace.wait(start, times[0], times[keyframe], stop) {
             figures.interrupted = true;
             break;
         }
@@ -249,6 +344,9 @@ fn run(
         figures.poses = keyframe + 1;
         figures.candidates += candidates.len();
         figures.first_candidates += candidates.iter().filter(|c| c.first).count();
+        if let Some((server, scene)) = pace.live {
+            server.send(&scene.keyframe(engine, &update, &candidates)?);
+        }
         if !quiet {
             let line = KeyframeLine::new(&update, times[keyframe], latency, &candidates);
             serde_json::to_writer(&mut stdout, &line)?;

@@ -25,7 +25,8 @@
 //! guesses (and [`write_fleet_g2o_edges`] for a fleet's, keyed by [`gtsam_symbol_key`]); a
 //! fleet's tables: [`write_fleet_components`], [`write_session_pairs`], [`write_fleet_samples`];
 //! the results for robotics viewers: [`Scene`] and [`write_scene_mcap`] (Foxglove's schemas and
-//! a ROS 2 `MarkerArray`, on the topics of [`SCENE_TOPICS`], with [`FOXGLOVE_LAYOUT`]);
+//! a ROS 2 `MarkerArray`, on the topics of [`SCENE_TOPICS`], with [`FOXGLOVE_LAYOUT`]), and
+//! [`LiveScene`], the same messages keyframe by keyframe for a live stream;
 //! all atomic, and never replacing a
 //! file unless asked ([`WriteError::Exists`]). [`write_atomically`] is the one atomic writer of
 //! the workspace: the CLI writes its files through it too; [`StagedFiles`] writes several files
@@ -93,7 +94,8 @@
 // 6. writers: `csv_rows` (serde rows through the csv crate), the result files `components`,
 //    `loop_duration`, `report`, `quality`, `samples`, `edge_verdicts`; and `write` (TUM, g2o);
 //    `fleet` (a fleet's tables and g2o edges); `out_dir` (an output folder of several results);
-//    `scene` (the results for Foxglove, RViz and Rerun, and its MCAP file).
+//    `scene` (the results for Foxglove, RViz and Rerun, and its MCAP file); `live_scene` (its
+//    messages keyframe by keyframe, from the online engine).
 mod atomic;
 mod bag;
 mod cdr;
@@ -114,6 +116,7 @@ mod frame_tree;
 mod graph;
 mod json;
 mod kitti;
+mod live_scene;
 mod loop_duration;
 mod mcap;
 mod mcap_records;
@@ -162,6 +165,7 @@ pub use fleet::{
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, SkippedRecords, read_pose_graph};
 pub use kitti::{ROTATION_MATRIX_TOLERANCE, read_kitti};
+pub use live_scene::{LIVE_TOPICS, LiveChannel, LiveMessage, LiveScene};
 pub use loop_duration::{
     LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
     write_loop_duration,

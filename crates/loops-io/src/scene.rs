@@ -550,38 +550,17 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
 
     let frame_id = &scene.frame_id;
     for path in &scene.paths {
-        let poses = path
-            .positions
-            .iter()
-            .enumerate()
-            .map(|(k, &position)| {
-                let [x, y, z, w] = path.orientations_xyzw.as_ref().map_or(IDENTITY_XYZW, |q| q[k]);
-                Pose { position: Some(vector(position)), orientation: Some(Quaternion { x, y, z, w }) }
-            })
-            .collect();
-        let message = PosesInFrame { timestamp, frame_id: frame_id.clone(), poses };
+        let orientations = path.orientations_xyzw.as_deref();
+        let message = poses_in_frame(frame_id, timestamp, &path.positions, orientations);
         add(&mut writer, channels[0], &encoded(&message)?)?;
     }
     let update = |entities: Vec<SceneEntity>| SceneUpdate { deletions: Vec::new(), entities };
-    let entity = |id: String, lines: Vec<LinePrimitive>, metadata: Vec<(&str, String)>| SceneEntity {
-        timestamp,
-        frame_id: frame_id.clone(),
-        id,
-        lines,
-        metadata: metadata.into_iter().map(|(key, value)| KeyValuePair { key: key.to_owned(), value }).collect(),
-        ..SceneEntity::default()
-    };
     let max_tau = scene.max_loop_duration_s();
     let tau = update(
         scene
             .paths
             .iter()
-            .map(|p| {
-                let colors = p.loop_duration_s.iter().map(|&t| color(tau_rgba(t, max_tau))).collect();
-                let mut strip = line(line_primitive::Type::LineStrip, p.positions.clone(), None, PATH_WIDTH);
-                strip.colors = colors;
-                entity(format!("tau/{}", p.name), vec![strip], vec![("max_loop_duration_s", max_tau.to_string())])
-            })
+            .map(|p| tau_entity(frame_id, timestamp, &p.name, &p.positions, &p.loop_duration_s, max_tau))
             .collect(),
     );
     add(&mut writer, channels[1], &encoded(&tau)?)?;
@@ -591,14 +570,14 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
             .iter()
             .map(|c| {
                 let [a, b] = c.sessions;
-                let rgba = Some(c.rgba());
-                let closest = vec![scene.position(a, c.closest_pair[0]), scene.position(b, c.closest_pair[1])];
-                let lines = vec![
-                    line(line_primitive::Type::LineStrip, scene.stretch(a, c.poses[0]), rgba, COMPONENT_WIDTH),
-                    line(line_primitive::Type::LineStrip, scene.stretch(b, c.poses[1]), rgba, COMPONENT_WIDTH),
-                    line(line_primitive::Type::LineList, closest, rgba, COMPONENT_WIDTH),
-                ];
-                entity(format!("component/{}", c.id), lines, component_metadata(scene, c))
+                let (paths, names) = ([&scene.paths[a], &scene.paths[b]], [&scene.paths[a].name, &scene.paths[b].name]);
+                component_entity(
+                    frame_id,
+                    timestamp,
+                    paths.map(|p| p.positions.as_slice()),
+                    names.map(String::as_str),
+                    c,
+                )
             })
             .collect(),
     );
@@ -608,9 +587,11 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
         .iter()
         .flat_map(|c| [scene.position(c.sessions[0], c.poses[0]), scene.position(c.sessions[1], c.poses[1])])
         .collect();
-    let candidates = update(vec![entity(
+    let candidates = update(vec![candidates_entity(
+        frame_id,
+        timestamp,
         "candidates".to_owned(),
-        vec![line(line_primitive::Type::LineList, candidate_points.clone(), Some(CANDIDATE_RGBA), CANDIDATE_WIDTH)],
+        candidate_points.clone(),
         vec![("count", scene.candidates.len().to_string())],
     )]);
     add(&mut writer, channels[3], &encoded(&candidates)?)?;
@@ -642,27 +623,117 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
 
 /// `message` in its encoding (protobuf).
 fn encoded<T: Encode>(message: &T) -> mcap::McapResult<Vec<u8>> {
+    protobuf(message).map_err(mcap::McapError::Io)
+}
+
+/// `message` in protobuf.
+pub(crate) fn protobuf<T: Encode>(message: &T) -> io::Result<Vec<u8>> {
     let mut data = Vec::new();
-    message.encode(&mut data).map_err(|error| mcap::McapError::Io(io::Error::other(error.to_string())))?;
+    message.encode(&mut data).map_err(|error| io::Error::other(error.to_string()))?;
     Ok(data)
 }
 
 /// The schema of a Foxglove message: its name, encoding and descriptor set.
-fn foxglove_schema<T: Encode>() -> (String, String, Vec<u8>) {
+pub(crate) fn foxglove_schema<T: Encode>() -> (String, String, Vec<u8>) {
     let schema = T::get_schema().expect("Foxglove's messages have schemas");
     (schema.name, schema.encoding, schema.data.into_owned())
 }
 
+/// The poses of a path as a `PosesInFrame` (identity orientations without `orientations_xyzw`).
+pub(crate) fn poses_in_frame(
+    frame_id: &str,
+    timestamp: Option<Timestamp>,
+    positions: &[[f64; 3]],
+    orientations_xyzw: Option<&[[f64; 4]]>,
+) -> PosesInFrame {
+    let poses = positions
+        .iter()
+        .enumerate()
+        .map(|(k, &position)| {
+            let [x, y, z, w] = orientations_xyzw.map_or(IDENTITY_XYZW, |q| q[k]);
+            Pose { position: Some(vector(position)), orientation: Some(Quaternion { x, y, z, w }) }
+        })
+        .collect();
+    PosesInFrame { timestamp, frame_id: frame_id.to_owned(), poses }
+}
+
+/// An entity `id` of `lines`, with `metadata`.
+pub(crate) fn entity(
+    frame_id: &str,
+    timestamp: Option<Timestamp>,
+    id: String,
+    lines: Vec<LinePrimitive>,
+    metadata: Vec<(&str, String)>,
+) -> SceneEntity {
+    SceneEntity {
+        timestamp,
+        frame_id: frame_id.to_owned(),
+        id,
+        lines,
+        metadata: metadata.into_iter().map(|(key, value)| KeyValuePair { key: key.to_owned(), value }).collect(),
+        ..SceneEntity::default()
+    }
+}
+
+/// The entity `tau/<name>`: the path through `positions` coloured by τ ([`tau_rgba`]).
+pub(crate) fn tau_entity(
+    frame_id: &str,
+    timestamp: Option<Timestamp>,
+    name: &str,
+    positions: &[[f64; 3]],
+    loop_duration_s: &[f64],
+    max_loop_duration_s: f64,
+) -> SceneEntity {
+    let colors = loop_duration_s.iter().map(|&t| color(tau_rgba(t, max_loop_duration_s))).collect();
+    let mut strip = line(line_primitive::Type::LineStrip, positions.to_vec(), None, PATH_WIDTH);
+    strip.colors = colors;
+    let metadata = vec![("max_loop_duration_s", max_loop_duration_s.to_string())];
+    entity(frame_id, timestamp, format!("tau/{name}"), vec![strip], metadata)
+}
+
+/// The entity `component/<id>` of `c`: its two stretches of path and its closest pair, in its
+/// colour, with `components.csv`'s values as metadata. `positions` and `names` are the paths
+/// and names of its two sessions (`c.sessions`).
+pub(crate) fn component_entity(
+    frame_id: &str,
+    timestamp: Option<Timestamp>,
+    positions: [&[[f64; 3]]; 2],
+    names: [&str; 2],
+    c: &SceneComponent,
+) -> SceneEntity {
+    let rgba = Some(c.rgba());
+    let [[i0, i1], [j0, j1]] = c.poses;
+    let closest = vec![positions[0][c.closest_pair[0]], positions[1][c.closest_pair[1]]];
+    let lines = vec![
+        line(line_primitive::Type::LineStrip, positions[0][i0..=i1].to_vec(), rgba, COMPONENT_WIDTH),
+        line(line_primitive::Type::LineStrip, positions[1][j0..=j1].to_vec(), rgba, COMPONENT_WIDTH),
+        line(line_primitive::Type::LineList, closest, rgba, COMPONENT_WIDTH),
+    ];
+    entity(frame_id, timestamp, format!("component/{}", c.id), lines, component_metadata(names, c))
+}
+
+/// The entity `id`: a line per pair of `points` (two a pair), in the candidates' colour.
+pub(crate) fn candidates_entity(
+    frame_id: &str,
+    timestamp: Option<Timestamp>,
+    id: String,
+    points: Vec<[f64; 3]>,
+    metadata: Vec<(&str, String)>,
+) -> SceneEntity {
+    let lines = vec![line(line_primitive::Type::LineList, points, Some(CANDIDATE_RGBA), CANDIDATE_WIDTH)];
+    entity(frame_id, timestamp, id, lines, metadata)
+}
+
 /// The metadata of a component entity: `components.csv`'s columns, numbers as they print there.
-fn component_metadata(scene: &Scene, c: &SceneComponent) -> Vec<(&'static str, String)> {
+fn component_metadata(names: [&str; 2], c: &SceneComponent) -> Vec<(&'static str, String)> {
     let [[i_min, i_max], [j_min, j_max]] = c.poses;
     vec![
         ("id", c.id.to_string()),
         ("trivial", c.trivial.to_string()),
         ("session_a", c.sessions[0].to_string()),
         ("session_b", c.sessions[1].to_string()),
-        ("name_a", scene.paths[c.sessions[0]].name.clone()),
-        ("name_b", scene.paths[c.sessions[1]].name.clone()),
+        ("name_a", names[0].to_owned()),
+        ("name_b", names[1].to_owned()),
         ("area_s2", c.area_s2.to_string()),
         ("pair_count", c.pair_count.to_string()),
         ("i_min", i_min.to_string()),

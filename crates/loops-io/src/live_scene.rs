@@ -1,0 +1,281 @@
+//! The scene while the robot drives: what the online engine reports at each keyframe, as the
+//! messages of a live stream on the topics and in the schemas of the scene's MCAP file
+//! ([`SCENE_TOPICS`]), built by the same code. A [`LiveScene`] holds the log's poses; at each
+//! keyframe, [`LiveScene::keyframe`] turns the engine's [`Update`] and the sampler's
+//! [`Candidate`]s into one message per topic of [`LIVE_TOPICS`]. Sending them is the caller's
+//! (`loops replay --serve` serves them over Foxglove's WebSocket protocol): this crate stays
+//! free of a network stack.
+
+use loops_core::{Candidate, OnlineLoops, Update};
+
+use foxglove::messages::{PosesInFrame, SceneEntityDeletion, SceneUpdate, Timestamp, scene_entity_deletion};
+
+use crate::cdr_write::RosTime;
+use crate::scene::{
+    SCENE_FRAME, SCENE_TOPICS, SceneComponent, SceneTopic, candidates_entity, component_entity, foxglove_schema,
+    poses_in_frame, protobuf, tau_entity,
+};
+
+/// The topics of the live stream, in channel order: the first four of [`SCENE_TOPICS`] (the
+/// plane image and the ROS `MarkerArray` are left to the MCAP file). Each keyframe sends one
+/// message on each, in this order.
+pub const LIVE_TOPICS: [SceneTopic; 4] = [
+    SceneTopic { holds: "every pose pushed so far, position and orientation", ..SCENE_TOPICS[0] },
+    SceneTopic {
+        holds: "the entity `tau/<log>`: the path so far coloured by τ so far (red = the longest)",
+        ..SCENE_TOPICS[1]
+    },
+    SceneTopic {
+        holds: "what the keyframe changed: a deletion of `component/<id>` per component merged into another, \
+                and the entity `component/<id>` of each component created, extended or merged into, as it is now; \
+                an empty update when nothing changed",
+        ..SCENE_TOPICS[2]
+    },
+    SceneTopic {
+        holds: "the entity `candidates/<pose>` of the keyframe's candidates, one line each, with their pairs and \
+                components as JSON metadata (`pairs`: [[keyframe, j], ...], `components`); an empty update \
+                when there are none",
+        ..SCENE_TOPICS[3]
+    },
+];
+
+/// The schema of a channel of the live stream.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct LiveChannel {
+    /// Its topic.
+    pub topic: &'static str,
+    /// The encoding of its messages (`protobuf`).
+    pub message_encoding: &'static str,
+    /// Its schema's name (`foxglove.SceneUpdate`).
+    pub schema_name: String,
+    /// Its schema's encoding (`protobuf`).
+    pub schema_encoding: String,
+    /// Its schema: a serialized protobuf `FileDescriptorSet`.
+    pub schema_data: Vec<u8>,
+}
+
+/// A message of the live stream.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct LiveMessage {
+    /// Its channel: an index into [`LIVE_TOPICS`] and [`LiveScene::channels`].
+    pub channel: usize,
+    /// The keyframe's time, ns since the epoch (`None` for a time before 1970 or after 2038,
+    /// which the messages' timestamps cannot hold: they are 0 then).
+    pub log_time_ns: Option<u64>,
+    /// The message, encoded.
+    pub data: Vec<u8>,
+}
+
+/// The poses of a log being replayed, to draw what the online engine reports on them; see the
+/// [module](self).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LiveScene {
+    name: String,
+    frame_id: String,
+    positions: Vec<[f64; 3]>,
+    orientations_xyzw: Option<Vec<[f64; 4]>>,
+}
+
+impl LiveScene {
+    /// The scene of the log `name` whose poses are at `positions` (and `orientations_xyzw`,
+    /// when the log has them), in the order they will be pushed, in frame [`SCENE_FRAME`].
+    ///
+    /// # Errors
+    /// [`loops_core::Error::RowCountMismatch`] when `orientations_xyzw` has not one row per
+    /// position.
+    pub fn new(
+        name: &str,
+        positions: Vec<[f64; 3]>,
+        orientations_xyzw: Option<Vec<[f64; 4]>>,
+    ) -> loops_core::Result<Self> {
+        if let Some(rows) = orientations_xyzw.as_ref().map(Vec::len).filter(|&rows| rows != positions.len()) {
+            return Err(loops_core::Error::RowCountMismatch {
+                first: "positions",
+                first_rows: positions.len(),
+                second: "orientations",
+                second_rows: rows,
+            });
+        }
+        Ok(Self { name: name.to_owned(), frame_id: SCENE_FRAME.to_owned(), positions, orientations_xyzw })
+    }
+
+    /// The channels of the stream, one per topic of [`LIVE_TOPICS`], in order.
+    pub fn channels() -> Vec<LiveChannel> {
+        LIVE_TOPICS
+            .iter()
+            .map(|topic| {
+                let (schema_name, schema_encoding, schema_data) = match topic.schema {
+                    "foxglove.PosesInFrame" => foxglove_schema::<PosesInFrame>(),
+                    _ => foxglove_schema::<SceneUpdate>(),
+                };
+                LiveChannel {
+                    topic: topic.topic,
+                    message_encoding: "protobuf",
+                    schema_name,
+                    schema_encoding,
+                    schema_data,
+                }
+            })
+            .collect()
+    }
+
+    /// The messages of the keyframe that `update` reports (`engine`'s last push), with the
+    /// `candidates` the sampler offered for it: one per topic of [`LIVE_TOPICS`], in order (see
+    /// there). O(poses pushed so far + cells of the changed components' stretches).
+    ///
+    /// # Errors
+    /// [`loops_core::Error::IndexOutOfRange`] when `engine` holds more poses than the scene, or
+    /// `update` or `candidates` name a pose it does not hold.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::{MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions};
+    /// let square = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+    /// let positions: Vec<[f64; 3]> = (0..8).map(|i| [square[i % 4][0], square[i % 4][1], 0.0]).collect();
+    /// let scene = loops_io::LiveScene::new("square", positions.clone(), None)?;
+    /// let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 2, 1.0)?;
+    /// let mut sampler = OnlineSampler::new(OnlineSamplerOptions::default())?;
+    /// for (k, p) in positions.iter().enumerate() {
+    ///     let update = engine.push(k as f64, &p[..2])?;
+    ///     let candidates = sampler.offer(&engine, &update)?;
+    ///     let messages = scene.keyframe(&engine, &update, &candidates)?;
+    ///     assert_eq!(messages.len(), loops_io::LIVE_TOPICS.len());
+    /// }
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
+    pub fn keyframe(
+        &self,
+        engine: &OnlineLoops,
+        update: &Update,
+        candidates: &[Candidate],
+    ) -> loops_core::Result<Vec<LiveMessage>> {
+        let n = engine.len();
+        if n > self.positions.len() || update.pose >= n {
+            let index = n.max(update.pose + 1) - 1;
+            return Err(loops_core::Error::IndexOutOfRange { index, len: self.positions.len().min(n) });
+        }
+        let positions = &self.positions[..n];
+        let t_s = engine.timestamps_s()[update.pose];
+        let stamp = RosTime::of_seconds(t_s);
+        let timestamp = Some(stamp.map_or(Timestamp::new(0, 0), |s| Timestamp::new(s.sec.unsigned_abs(), s.nanosec)));
+        let frame_id = &self.frame_id;
+        let name = self.name.as_str();
+
+        let orientations = self.orientations_xyzw.as_deref().map(|q| &q[..n]);
+        let trajectory = poses_in_frame(frame_id, timestamp, positions, orientations);
+
+        let loop_duration_s =
+            (0..n).map(|pose| engine.loop_duration_s(pose)).collect::<loops_core::Result<Vec<_>>>()?;
+        let max_tau = loop_duration_s.iter().copied().fold(0.0, f64::max);
+        let tau = SceneUpdate {
+            deletions: Vec::new(),
+            entities: vec![tau_entity(frame_id, timestamp, name, positions, &loop_duration_s, max_tau)],
+        };
+
+        let deletions = update
+            .merged
+            .iter()
+            .map(|m| SceneEntityDeletion {
+                timestamp,
+                r#type: scene_entity_deletion::Type::MatchingId as i32,
+                id: format!("component/{}", m.retired),
+            })
+            .collect();
+        let mut changed: Vec<u32> = (update.created.iter().chain(&update.extended).copied())
+            .chain(update.merged.iter().map(|m| m.survivor))
+            .map(|id| engine.resolve(id))
+            .collect();
+        changed.sort_unstable();
+        changed.dedup();
+        let entities = changed
+            .into_iter()
+            .filter_map(|id| engine.component(id))
+            .map(|c| {
+                let component = SceneComponent {
+                    id: c.id as usize,
+                    trivial: c.trivial,
+                    sessions: [0, 0],
+                    poses: [c.i_range, c.j_range],
+                    closest_pair: c.closest_pair,
+                    closest_distance: c.closest_distance,
+                    area_s2: c.area_s2,
+                    pair_count: c.pair_count,
+                };
+                component_entity(frame_id, timestamp, [positions, positions], [name, name], &component)
+            })
+            .collect();
+        let components = SceneUpdate { deletions, entities };
+
+        let mut points = Vec::with_capacity(2 * candidates.len());
+        for c in candidates {
+            for pose in [c.keyframe, c.pair[0]] {
+                points.push(*positions.get(pose).ok_or(loops_core::Error::IndexOutOfRange { index: pose, len: n })?);
+            }
+        }
+        let entities = if candidates.is_empty() {
+            Vec::new()
+        } else {
+            let pairs: Vec<[usize; 2]> = candidates.iter().map(|c| [c.keyframe, c.pair[0]]).collect();
+            let ids: Vec<u32> = candidates.iter().map(|c| c.component).collect();
+            let metadata = vec![
+                ("pose", update.pose.to_string()),
+                ("count", candidates.len().to_string()),
+                ("pairs", serde_json::to_string(&pairs).expect("numbers")),
+                ("components", serde_json::to_string(&ids).expect("numbers")),
+            ];
+            vec![candidates_entity(frame_id, timestamp, format!("candidates/{}", update.pose), points, metadata)]
+        };
+        let candidates = SceneUpdate { deletions: Vec::new(), entities };
+
+        let log_time_ns = stamp.map(|s| s.ns());
+        // Encoding into a `Vec` cannot fail: it grows to fit.
+        let encoded = [protobuf(&trajectory), protobuf(&tau), protobuf(&components), protobuf(&candidates)];
+        let messages = encoded.into_iter().enumerate().map(|(channel, data)| LiveMessage {
+            channel,
+            log_time_ns,
+            data: data.expect("a Vec holds any message"),
+        });
+        Ok(messages.collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use foxglove::Decode;
+    use loops_core::MetricSpec;
+
+    use super::*;
+
+    #[test]
+    fn a_keyframe_past_the_scene_poses_is_an_error() {
+        let scene = LiveScene::new("two", vec![[0.0; 3], [1.0, 0.0, 0.0]], None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        for t in 0..2 {
+            let update = engine.push(f64::from(t), &[f64::from(t)]).unwrap();
+            assert_eq!(scene.keyframe(&engine, &update, &[]).unwrap().len(), LIVE_TOPICS.len());
+        }
+        let update = engine.push(2.0, &[2.0]).unwrap();
+        let error = scene.keyframe(&engine, &update, &[]).unwrap_err();
+        assert!(matches!(error, loops_core::Error::IndexOutOfRange { index: 2, len: 2 }), "{error}");
+        let rows = LiveScene::new("bad", vec![[0.0; 3]; 2], Some(vec![[0.0, 0.0, 0.0, 1.0]]));
+        assert!(matches!(rows, Err(loops_core::Error::RowCountMismatch { second_rows: 1, .. })));
+    }
+
+    #[test]
+    fn the_trajectory_grows_keyframe_by_keyframe() {
+        let positions: Vec<[f64; 3]> = (0..5).map(|k| [f64::from(k), 0.0, 0.0]).collect();
+        let scene = LiveScene::new("line", positions, None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        for k in 0..5 {
+            let update = engine.push(1.7e9 + f64::from(k), &[f64::from(k)]).unwrap();
+            let messages = scene.keyframe(&engine, &update, &[]).unwrap();
+            let poses = PosesInFrame::decode(messages[0].data.as_slice()).unwrap();
+            assert_eq!(poses.poses.len(), k as usize + 1);
+            assert_eq!(messages[0].log_time_ns, Some(1_700_000_000_000_000_000 + k as u64 * 1_000_000_000));
+            let candidates = SceneUpdate::decode(messages[3].data.as_slice()).unwrap();
+            assert!(candidates.entities.is_empty());
+        }
+    }
+}
