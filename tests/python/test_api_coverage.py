@@ -1242,6 +1242,7 @@ def test_sample_errors(traj, loops, clusters):
         il.sample(loops, "lio-sam", budget=1, seed=0, trajectory=traj, skip_trivial=True)
 
 
+@covers("DEFAULT_SAMPLER")
 def test_the_default_sampler_is_the_cores_everywhere():
     """``sample``, ``sample_fleet`` and the online sampler take the core's default when no
     sampler is named: closest-then-spread, its first pick in each component the closest pair."""

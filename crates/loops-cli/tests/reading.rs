@@ -292,7 +292,8 @@ fn info_tells_the_format_the_order_and_a_graphs_edges() {
             "{}\n  format: tum (from the extension)\n  160 poses, 3 coordinates each, with orientations, \
              over 159.000 s\n  1 timestamp(s) repeat the one before, the first at line 23 (20 s); --drop-duplicate-stamps \
              drops them\n{}\n  format: g2o (from the extension)\n  10 poses, 2 coordinates each, with \
-             orientations, over 9.000 s\n  timestamps strictly increasing\n  12 edges, 3 of them loop closures (between \
+             orientations, vertex ids 0 to 9 (no times: --rate-hz or --times gives seconds)\n  timestamps \
+             strictly increasing\n  12 edges, 3 of them loop closures (between \
              vertices more than one id apart)\n",
             tum.display(),
             g2o.display()

@@ -109,7 +109,7 @@ pub fn fleet_component_rows(
 /// let text = String::from_utf8(text).unwrap();
 /// assert!(text.starts_with("id,session_a,session_b,name_a,name_b,trivial,area_s2,"));
 /// // Tuesday's pose 1 (t = 101 s on its clock) passes Monday's pose 0, 0.5 away.
-/// assert!(text.lines().any(|line| line.ends_with(",0,1,monday,tuesday,false,0.25,1,1,0,0,0,1,1,0,0,101,101,0,1,0.5")));
+/// assert!(text.lines().any(|line| line.ends_with(",0,1,monday,tuesday,false,0.25,1,1,1,0,0,0,1,1,0,0,101,101,0,1,0.5")));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn fleet_components_to_csv<W: Write>(

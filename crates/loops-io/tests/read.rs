@@ -396,7 +396,7 @@ mod format {
         assert!(matches!(&error, IoError::UnknownFormat { extension: Some(e), .. } if e == "log"), "{error:?}");
         assert_eq!(
             after_path(&error, &file),
-            r#": cannot tell the file format from the extension ".log": expected .tum or .txt for tum, .csv for csv, .g2o or .graph for g2o, .mcap for mcap, .db3 or .yaml or .zstd or .lz4 for rosbag2, .bag for ros1, or name the format (tum, csv, kitti, euroc, g2o, tuc, mcap, rosbag2, ros1)"#
+            r#": cannot tell the file format from the extension ".log": expected .tum or .txt for tum, .csv for csv, .kitti for kitti, .g2o or .graph for g2o, .mcap for mcap, .db3 or .yaml or .zstd or .lz4 for rosbag2, .bag for ros1, or name the format (tum, csv, kitti, euroc, g2o, tuc, mcap, rosbag2, ros1)"#
         );
         let file = TempFile::new("poses", "");
         let error = read_trajectory(file.path(), None).unwrap_err();
