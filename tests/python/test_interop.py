@@ -278,7 +278,8 @@ def results():
 TABLES = {
     "Loops.components": (lambda r: r.loops.components, {
         "id": "int64", "trivial": "bool", "area_s2": "float64", "pair_count": "int64",
-        "run_count": "int64", "holes": "int64", "t_min_s": "float64", "t_max_s": "float64",
+        "pose_pair_count": "int64", "run_count": "int64", "holes": "int64",
+        "t_min_s": "float64", "t_max_s": "float64",
         "t_prime_min_s": "float64", "t_prime_max_s": "float64", "i_min": "int64",
         "i_max": "int64", "j_min": "int64", "j_max": "int64", "closest_i": "int64",
         "closest_j": "int64", "closest_distance": "float64",
@@ -357,6 +358,7 @@ def test_samples_to_pandas_equals_the_csv(results, tmp_path):
     frame = samples.to_pandas()
     assert list(frame.columns) == [
         "t", "t_prime", "i", "j", "component", "cluster", "detection", "distance",
+        "dx", "dy", "dz", "dqx", "dqy", "dqz", "dqw", "dtheta_rad",
     ]  # fmt: skip
     assert len(frame) == len(samples)
     path = tmp_path / "samples.csv"
