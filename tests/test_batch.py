@@ -97,7 +97,7 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     folder = batch["out"] / log.stem
     traj = il.read_trajectory(log)
     loops = il.find_loops(traj, gamma=GAMMA_M)
-    samples = il.sample(loops, "rho", budget=BUDGET, seed=SEED, trajectory=traj)
+    samples = il.sample(loops, il.DEFAULT_SAMPLER, budget=BUDGET, seed=SEED, trajectory=traj)
     quality = il.sample_quality(samples, loops, epsilon_s=30.0)
 
     # components.csv: every column of Loops.components, and samples per component.
@@ -127,7 +127,7 @@ def test_batch_numbers_equal_the_python_api(batch, k: int) -> None:
     np.testing.assert_array_equal(np.array(rows["i"], dtype=np.int64), samples.i)
     np.testing.assert_array_equal(np.array(rows["j"], dtype=np.int64), samples.j)
     np.testing.assert_array_equal(floats(rows["distance"]), samples.distance)
-    assert set(rows["sampler"]) == {"rho"}
+    assert set(rows["sampler"]) == {il.DEFAULT_SAMPLER}
 
     # loop_duration.csv: tau of every pose.
     durations = read_csv(folder / "loop_duration.csv")
@@ -157,7 +157,9 @@ def test_skip_trivial_run_equals_the_python_api(tmp_path: Path, batch, loops_cli
     folder = out / log.stem
     traj = il.read_trajectory(log)
     found = il.find_loops(traj, gamma=40.0)
-    samples = il.sample(found, "rho", budget=300, seed=5, trajectory=traj, skip_trivial=True)
+    samples = il.sample(
+        found, il.DEFAULT_SAMPLER, budget=300, seed=5, trajectory=traj, skip_trivial=True
+    )
     rows = read_csv(folder / "samples.csv")
     np.testing.assert_array_equal(np.array(rows["i"], dtype=np.int64), samples.i)
     np.testing.assert_array_equal(np.array(rows["j"], dtype=np.int64), samples.j)
@@ -182,7 +184,7 @@ def test_python_writes_the_files_of_loops_run(tmp_path: Path, batch, loops_cli: 
     folder = batch["out"] / log.stem
     traj = il.read_trajectory(log)
     loops = il.find_loops(traj, gamma=GAMMA_M)
-    samples = il.sample(loops, "rho", budget=BUDGET, seed=SEED, trajectory=traj)
+    samples = il.sample(loops, il.DEFAULT_SAMPLER, budget=BUDGET, seed=SEED, trajectory=traj)
     per_component = il.sample_quality(samples, loops).per_component
     loops.components_to_csv(tmp_path / "components.csv", samples_per_component=per_component)
     loops.loop_duration_to_csv(tmp_path / "loop_duration.csv", traj)

@@ -3,7 +3,7 @@
 - :func:`to_mcap`: an MCAP file for Foxglove (and, through ``ros2 bag play``, RViz), with the
   Foxglove layout beside it; ``loops run --mcap`` and ``loops fleet --mcap`` write the same.
 - :func:`to_rerun`: a Rerun recording (``.rrd``) of the same entities; needs ``rerun-sdk``
-  (``pip install 'inexact-loops[rerun]'``).
+  (``pip install '.[rerun]'`` in a checkout).
 - Live, while the log plays: ``loops replay LOG --serve`` (``python -m inexact_loops._cli
   replay ...``) serves the online engine's keyframes over Foxglove's WebSocket protocol on the
   first four topics below; the command is the way from Python too, since the server, its
@@ -114,8 +114,8 @@ def to_rerun(
         import rerun as rr
     except ImportError as err:  # pragma: no cover - exercised only without rerun-sdk
         raise ImportError(
-            "to_rerun needs rerun-sdk: pip install 'inexact-loops[rerun]' "
-            "(or pip install rerun-sdk)"
+            "to_rerun needs rerun-sdk: pip install rerun-sdk "
+            "(or, in a checkout, pip install '.[rerun]')"
         ) from err
     path = Path(path)
     if not overwrite and os.path.lexists(path):
