@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -227,6 +228,33 @@ def test_loops_run_mcap_holds_every_pose_component_and_candidate(logs, tmp_path)
     decoded = check_file(folder / "results.mcap", [log.stem])
     check_scene(decoded, [input_poses(log)], [log.stem], components, samples, [tau])
     assert len(components) > 5 and sum(r["trivial"] == "false" for r in components) > 0
+    check_colours_match_report(folder / "report.html", decoded, components)
+
+
+def check_colours_match_report(report: Path, decoded: dict, components: list[dict]) -> None:
+    """Each component has the colour of its swatch in the HTML report's table, in the
+    SceneUpdate and in the MarkerArray: one palette wherever the component is seen."""
+    html = report.read_text()
+    swatches = {
+        name: tuple(int(colour[k : k + 2], 16) for k in (0, 2, 4))
+        for name, colour in re.findall(r"\.(k\w+) \{ background: #([0-9a-f]{6}); \}", html)
+    }
+    assert "kt" in swatches and "k0" in swatches
+    classes = {i: k for k, i in re.findall(r'<i class="swatch (k\w+)"></i>(\d+)', html)}
+    (update,) = decoded["/loops/components"]
+    (markers,) = decoded["/loops/markers"]
+    by_id = {m.id: m for m in markers.markers if m.ns == "components"}
+    checked = 0
+    for entity, row in zip(update.entities, components, strict=True):
+        if row["id"] not in classes:
+            continue  # the table lists the largest components only
+        expected = swatches[classes[row["id"]]]
+        colour = entity.lines[0].color
+        assert tuple(round(255 * c) for c in (colour.r, colour.g, colour.b)) == expected, row
+        marker = by_id[3 * int(row["id"])].color
+        assert tuple(round(255 * c) for c in (marker.r, marker.g, marker.b)) == expected, row
+        checked += 1
+    assert checked > 0
 
 
 def test_loops_fleet_mcap_holds_every_session(logs, tmp_path):

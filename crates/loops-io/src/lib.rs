@@ -181,8 +181,8 @@ pub use read::{
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
 pub use scene::{
-    FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PLANE_PIXELS, RgbImage, SCENE_FRAME, SCENE_TOPICS, Scene, SceneCandidate,
-    SceneComponent, ScenePath, SceneTopic, scene_mcap_to, tau_rgba, write_scene_mcap,
+    COMPONENT_RGB, FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PLANE_PIXELS, RgbImage, SCENE_FRAME, SCENE_TOPICS, Scene,
+    SceneCandidate, SceneComponent, ScenePath, SceneTopic, TRIVIAL_RGB, scene_mcap_to, tau_rgba, write_scene_mcap,
 };
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
 pub use temp_copy::remove_temporary_files;

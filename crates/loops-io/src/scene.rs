@@ -174,34 +174,37 @@ pub struct Scene {
 const BACKGROUND_RGB: [u8; 3] = [32, 32, 32];
 /// The colour of candidate pairs: lines in 3-D, pixels on the plane.
 const CANDIDATE_RGBA: [f64; 4] = [1.0, 1.0, 1.0, 0.9];
-/// The colour of trivial components (a pose near its own time).
-const TRIVIAL_RGBA: [f64; 4] = [0.6, 0.6, 0.6, 0.35];
-/// Colours of non-trivial components, by id (Tableau 10 without grey).
-const COMPONENT_RGB: [[u8; 3]; 9] = [
-    [0x4e, 0x79, 0xa7],
+/// The colour of trivial components (a pose near its own time): [`TRIVIAL_RGB`], translucent.
+const TRIVIAL_ALPHA: f64 = 0.35;
+/// Colours of non-trivial components, by id modulo six: bright on a dark background and none
+/// of them red or white (the colours of samples and candidate pairs). The HTML report, the
+/// Foxglove/RViz scene and the live scene all colour component `k` with `COMPONENT_RGB[k % 6]`,
+/// so a component looks the same wherever it is seen.
+pub const COMPONENT_RGB: [[u8; 3]; 6] = [
     [0xf2, 0x8e, 0x2b],
-    [0xe1, 0x57, 0x59],
-    [0x76, 0xb7, 0xb2],
-    [0x59, 0xa1, 0x4f],
-    [0xed, 0xc9, 0x48],
-    [0xb0, 0x7a, 0xa1],
-    [0xff, 0x9d, 0xa7],
-    [0x9c, 0x75, 0x5f],
+    [0x8c, 0xd1, 0x7d],
+    [0x4f, 0xd1, 0xe8],
+    [0xf1, 0xce, 0x63],
+    [0xd4, 0xa6, 0xc8],
+    [0xb6, 0x99, 0x2d],
 ];
+/// The colour of trivial components, in the report and the scenes.
+pub const TRIVIAL_RGB: [u8; 3] = [0xc8, 0xd0, 0xdc];
 /// Line widths, in the frame's unit: paths, components, candidates.
 const PATH_WIDTH: f64 = 0.5;
 const COMPONENT_WIDTH: f64 = 1.5;
 const CANDIDATE_WIDTH: f64 = 0.3;
 
 impl SceneComponent {
-    /// Its colour, RGBA in [0, 1]: one of nine by id for a non-trivial component, a
-    /// translucent grey for a trivial one.
+    /// Its colour, RGBA in [0, 1]: [`COMPONENT_RGB`] by id for a non-trivial component,
+    /// [`TRIVIAL_RGB`] translucent for a trivial one.
     pub fn rgba(&self) -> [f64; 4] {
-        if self.trivial {
-            return TRIVIAL_RGBA;
-        }
-        let [r, g, b] = COMPONENT_RGB[self.id % COMPONENT_RGB.len()];
-        [f64::from(r) / 255.0, f64::from(g) / 255.0, f64::from(b) / 255.0, 1.0]
+        let ([r, g, b], alpha) = if self.trivial {
+            (TRIVIAL_RGB, TRIVIAL_ALPHA)
+        } else {
+            (COMPONENT_RGB[self.id % COMPONENT_RGB.len()], 1.0)
+        };
+        [f64::from(r) / 255.0, f64::from(g) / 255.0, f64::from(b) / 255.0, alpha]
     }
 }
 

@@ -4,20 +4,12 @@
 use std::fmt::Write as _;
 
 use loops_core::{LoopComponent, SamplerKind};
+// Outline colours of non-trivial and trivial components: those of the viewers' scenes, so a
+// component has one colour on the page and in Foxglove, RViz or Rerun.
+use loops_io::{COMPONENT_RGB as OUTLINE_COLOURS, TRIVIAL_RGB as TRIVIAL_COLOUR};
 use maud::{Markup, PreEscaped, html};
 
 use super::svg::{self, Marker, Rgb};
-
-/// Outline colours of non-trivial components: bright on the dark inside of S_γ, none of them
-/// red (the samples' colour there).
-const OUTLINE_COLOURS: [Rgb; 6] = [
-    [0xf2, 0x8e, 0x2b],
-    [0x8c, 0xd1, 0x7d],
-    [0x4f, 0xd1, 0xe8],
-    [0xf1, 0xce, 0x63],
-    [0xd4, 0xa6, 0xc8],
-    [0xb6, 0x99, 0x2d],
-];
 
 /// One colour per sampler (as `SamplerKind::ALL`): the four samplers of the paper far apart.
 const SAMPLER_COLOURS: [Rgb; 9] = [
@@ -69,9 +61,6 @@ pub(crate) fn session_colour(k: usize, n: usize) -> Rgb {
     let byte = |v: f64| ((v + m) * 255.0).round().clamp(0.0, 255.0) as u8;
     [byte(r), byte(g), byte(b)]
 }
-
-/// The colour of trivial components.
-const TRIVIAL_COLOUR: Rgb = [0xc8, 0xd0, 0xdc];
 
 /// The sampler's name as HTML: its symbol in the paper, and the name `--sampler` takes.
 pub(crate) fn sampler_name(kind: SamplerKind) -> Markup {
