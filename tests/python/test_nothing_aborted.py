@@ -245,6 +245,9 @@ def signalled(code: str) -> tuple[str, float, float]:
     """Runs `code` in a child, which prints "started" first; sends it SIGINT one second later.
     Returns its output once it exits (with code 0), when it said "started" and when the signal
     was sent (this process's monotonic clock)."""
+    # Ctrl-C as in a terminal: where the tests themselves run with SIGINT ignored (a shell's
+    # background job), the child would inherit that and never see the signal.
+    code = "import signal\nsignal.signal(signal.SIGINT, signal.default_int_handler)\n" + code
     child = subprocess.Popen(
         [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     )
