@@ -25,13 +25,30 @@ def slug(title: str, seen: dict[str, int]) -> str:
 
 
 def sections(text: str) -> list[tuple[int, str, str]]:
-    """Each heading (level, title) with the command that writes its section, or ''."""
-    found = []
+    """Each heading (level, title) with the command that writes its section: the first one its
+    text names; else its parent section's; else, before the first section a script owns
+    (``<!-- name -->``), the one the page's preamble names; else ''."""
+    found: list[tuple[int, str, str]] = []
     heads = list(HEADING.finditer(text))
+    first = heads[0].start() if heads else len(text)
+    preamble = COMMAND.search(text, 0, first)
+    owned_from = text.find("<!--")
+    parent = ""
     for index, head in enumerate(heads):
         end = heads[index + 1].start() if index + 1 < len(heads) else len(text)
+        level = len(head.group(1))
         command = COMMAND.search(text, head.end(), end)
-        found.append((len(head.group(1)), head.group(2), command.group(1) if command else ""))
+        if command:
+            name = command.group(1)
+        elif level > 2:
+            name = parent
+        elif preamble and (owned_from < 0 or head.start() < owned_from):
+            name = preamble.group(1)
+        else:
+            name = ""
+        if level == 2:
+            parent = name
+        found.append((level, head.group(2), name))
     return found
 
 
