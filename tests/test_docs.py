@@ -119,8 +119,17 @@ def data_entries() -> list[str]:
 
 def needs_data(path: Path) -> list[str]:
     """The data folders the runnable examples of ``path`` name (``kitti_odometry/...``)."""
-    names = {"kitti_odometry", "kitti_loop_gt", "tuc", "tum_rgbd", "mulran_kaist", "pose_graphs",
-             "euroc", "urbannav_hk", *data_entries()}  # fmt: skip
+    names = {
+        "kitti_odometry",
+        "kitti_loop_gt",
+        "tuc",
+        "tum_rgbd",
+        "mulran_kaist",
+        "pose_graphs",
+        "euroc",
+        "urbannav_hk",
+        *data_entries(),
+    }
     used = set()
     for block in blocks(path):
         if block.skip is None and block.language in ("python", "console"):
@@ -144,8 +153,12 @@ def readme_inputs(folder: Path, scripts: Path) -> None:
     """The README's "your own file" and "your bag": a synthetic drive as MCAP, and the same
     poses as a rosbag2 bag (nav_msgs/Odometry on /odom, sqlite3 storage)."""
     loops = [str(scripts / "loops")]
-    subprocess.run([*loops, "synth", "my_drive.mcap", "--duration-s", "900"], cwd=folder,
-                   check=True, capture_output=True)  # fmt: skip
+    subprocess.run(
+        [*loops, "synth", "my_drive.mcap", "--duration-s", "900"],
+        cwd=folder,
+        check=True,
+        capture_output=True,
+    )
     rosbag2 = pytest.importorskip("rosbags.rosbag2", reason="rosbags writes the README's bag")
     typesys = pytest.importorskip("rosbags.typesys")
     store = typesys.get_typestore(typesys.Stores.ROS2_HUMBLE)
@@ -166,7 +179,9 @@ def readme_inputs(folder: Path, scripts: Path) -> None:
             message = types["nav_msgs/msg/Odometry"](
                 header=header,
                 child_frame_id="base_link",
-                pose=types["geometry_msgs/msg/PoseWithCovariance"](pose=pose, covariance=covariance),
+                pose=types["geometry_msgs/msg/PoseWithCovariance"](
+                    pose=pose, covariance=covariance
+                ),
                 twist=types["geometry_msgs/msg/TwistWithCovariance"](
                     twist=types["geometry_msgs/msg/Twist"](
                         linear=types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
@@ -184,8 +199,9 @@ def run_commands(block: Block, where: str, folder: Path, scripts: Path) -> list[
     path = f"{scripts}{os.pathsep}{os.environ.get('PATH', '')}"
     env = {**os.environ, "PATH": path, "NO_COLOR": "1", "MPLBACKEND": "Agg"}
     for command, shown in block.commands:
-        done = subprocess.run(["sh", "-c", command], cwd=folder, env=env, capture_output=True,
-                              text=True, timeout=600)  # fmt: skip
+        done = subprocess.run(
+            ["sh", "-c", command], cwd=folder, env=env, capture_output=True, text=True, timeout=600
+        )
         printed = (done.stdout + done.stderr).splitlines()
         if done.returncode != 0:
             failures.append(f"{where}: `{command}` exited {done.returncode}:\n{done.stderr}")
@@ -281,8 +297,12 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     done = subprocess.run(
         [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
-        cwd=ROOT, capture_output=True, text=True, env=env, timeout=600,
-    )  # fmt: skip
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=600,
+    )
     assert done.returncode == 0, done.stderr[-5000:]
     assert "WARNING" not in done.stderr, done.stderr
     return out
@@ -352,8 +372,11 @@ def test_every_public_python_name_is_in_the_reference(site: Path) -> None:
     anchors = set()
     for page in api.rglob("index.html"):
         anchors |= set(re.findall(r'\bid="([^"]+)"', page.read_text()))
-    missing = [f"inexact_loops.{name}" for name in il.__all__ if f"inexact_loops.{name}" not in
-               anchors and name != "metrics"]  # fmt: skip
+    missing = [
+        f"inexact_loops.{name}"
+        for name in il.__all__
+        if f"inexact_loops.{name}" not in anchors and name != "metrics"
+    ]
     # Every public submodule (found by pkgutil, whether a module or a package): each public
     # name in its own page's reference, or re-exported and in the package's.
     submodules = [m.name for m in pkgutil.iter_modules(il.__path__) if not m.name.startswith("_")]
@@ -361,9 +384,10 @@ def test_every_public_python_name_is_in_the_reference(site: Path) -> None:
     for sub in submodules:
         module = importlib.import_module(f"inexact_loops.{sub}")
         names = getattr(module, "__all__", None) or [
-            n for n, v in vars(module).items()
+            n
+            for n, v in vars(module).items()
             if not n.startswith("_") and getattr(v, "__module__", None) == module.__name__
-        ]  # fmt: skip
+        ]
         missing += [
             f"inexact_loops.{sub}.{n}"
             for n in names
@@ -378,8 +402,9 @@ def test_every_command_and_option_is_in_the_cli_reference(site: Path, scripts: P
     page = html.unescape((site / "reference" / "cli" / "index.html").read_text())
 
     def help_of(*args: str, script: str = "loops") -> str:
-        done = subprocess.run([str(scripts / script), *args, "--help"], capture_output=True,
-                              text=True, check=True)  # fmt: skip
+        done = subprocess.run(
+            [str(scripts / script), *args, "--help"], capture_output=True, text=True, check=True
+        )
         return done.stdout
 
     top = help_of()
@@ -416,8 +441,9 @@ def chromium() -> str:
 def browse(*args: str) -> str:
     flags = ["--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars", "--mute-audio"]
     flags += ["--no-first-run", "--disable-extensions"]
-    done = subprocess.run([chromium(), *flags, *args], capture_output=True, text=True,
-                          timeout=180, check=True)  # fmt: skip
+    done = subprocess.run(
+        [chromium(), *flags, *args], capture_output=True, text=True, timeout=180, check=True
+    )
     return done.stdout
 
 

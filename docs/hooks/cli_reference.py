@@ -131,13 +131,14 @@ def page() -> str:
     listed = commands()
     out += [f"| [`loops {n}`](#loops-{n}) | {_cell(s)} |" for n, s in listed]
     out += [
-        "| [`loops-eval`](#loops-eval) | pose-graph evaluation of the samplers (the `maps` extra) |",
+        "| [`loops-eval`](#loops-eval) | pose-graph evaluation of the samplers (`maps` extra) |",
         "| [`loops-dask`](#loops-dask) | a fleet from tiles, here or on a Dask cluster |",
         "",
     ]
     for name, _ in listed:
         out += _command_section(name, help_text(name))
-    for name, module in (("loops-eval", "inexact_loops.evaluate"), ("loops-dask", "inexact_loops.dask")):
+    scripts = (("loops-eval", "inexact_loops.evaluate"), ("loops-dask", "inexact_loops.dask"))
+    for name, module in scripts:
         out += [f"## `{name}`", "", "```text", help_text(module=module).rstrip(), "```", ""]
     return "\n".join(out) + "\n"
 
