@@ -63,11 +63,11 @@ test-python: python
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
-	$(PYTHON) -m ruff check python tests benches examples docs
+	$(PYTHON) -m ruff check python tests benches examples docs/hooks docs/scripts
 
 fmt:
 	cargo fmt --all
-	$(PYTHON) -m ruff format python tests benches docs
+	$(PYTHON) -m ruff format python tests benches docs/hooks docs/scripts
 
 ## Copy the compiled module's docstrings into python/inexact_loops/_core.pyi (the stub IDEs
 ## show); tests/python/test_stubs.py fails until they are equal.
