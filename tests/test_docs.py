@@ -222,15 +222,11 @@ def test_every_example_runs(page: Path, tmp_path: Path, scripts: Path, monkeypat
     if not runnable:
         pytest.skip(f"{page.name} has no runnable example")
     # Without the public data sets, the blocks that read them are left out, saying so, and so
-    # are the Python blocks after one of them (they may use what it read).
+    # are the blocks after the first of them (they may use what it read or wrote).
     on_data = []
     if not DATA.is_dir():
-        tainted = False
-        for block in runnable:
-            tainted |= block.language == "python" and bool(needs_data(block))
-            if needs_data(block) or (tainted and block.language == "python"):
-                on_data.append(block)
-        runnable = [b for b in runnable if b not in on_data]
+        first = next((k for k, b in enumerate(runnable) if needs_data(b)), len(runnable))
+        runnable, on_data = runnable[:first], runnable[first:]
     if on_data:
         lines = ", ".join(str(b.line) for b in on_data)
         message = f"{page.name}: the examples at lines {lines} need {DATA}, which is absent"
