@@ -280,6 +280,17 @@ def test_skipped_examples_say_why_and_no_command_hides_in_a_shell_block() -> Non
     assert not problems, problems
 
 
+def test_readme_links_name_files_of_the_repository() -> None:
+    """The README is read on its own (on a forge, in a clone): its relative links name files of
+    the checkout, not pages that exist only in the built site."""
+    text = (ROOT / "README.md").read_text()
+    links = re.findall(r"\]\(([^)#]+)(?:#[^)]*)?\)|<img src=\"([^\"]+)\"", text)
+    targets = [a or b for a, b in links if not (a or b).startswith(("http:", "https:"))]
+    assert len(targets) > 15, targets
+    missing = [t for t in targets if not (ROOT / t).exists()]
+    assert not missing, missing
+
+
 def test_the_checker_fails_on_a_wrong_example(tmp_path: Path, scripts: Path) -> None:
     """The runner itself: a command that prints something else, or fails, is reported."""
     page = tmp_path / "page.md"
