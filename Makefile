@@ -3,7 +3,7 @@ PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 CARGO_TARGET_DIR ?= target
 
-.PHONY: demo test test-rust test-cpp test-python python lint bench compare fmt stubs
+.PHONY: demo test test-rust test-cpp test-python python lint bench compare fmt stubs docs
 
 ## Build the CLI and run it on the built-in 2.1 h urban drive; then a batch over three
 ## synthetic MCAP logs, with reports in demo/results/index.html.
@@ -43,10 +43,17 @@ test-cpp: python
 		$(CARGO_TARGET_DIR)/debug/libinexact_loops.a -lpthread -ldl -lm -o $(ONLINE_REPLAY)
 	ONLINE_REPLAY=$(ONLINE_REPLAY) $(PYTHON) -m pytest -q tests/python/test_capi.py
 
-## Build and install the Python package (release build) with its test dependencies.
+## Build and install the Python package (release build) with its test dependencies and the
+## documentation tools (tests/test_docs.py builds the site and runs its examples).
 python:
 	$(PIP) install --quiet --upgrade 'maturin>=1.9,<2'
-	$(PIP) install --quiet '.[test]'
+	$(PIP) install --quiet '.[test,docs]'
+
+## The documentation site, from docs/ and mkdocs.yml, into target/site (open
+## target/site/index.html). Warnings are errors; the command-line reference is generated from
+## the installed `loops`, the Python API from the package's docstrings and stubs.
+docs: python
+	NO_MKDOCS_2_WARNING=1 $(PYTHON) -m mkdocs build --strict
 
 test-python: python
 	$(PYTHON) -m mypy.stubtest inexact_loops._core
@@ -56,11 +63,11 @@ test-python: python
 lint:
 	cargo fmt --all -- --check
 	cargo clippy --workspace --all-targets -- -D warnings
-	$(PYTHON) -m ruff check python tests benches examples
+	$(PYTHON) -m ruff check python tests benches examples docs/hooks docs/scripts
 
 fmt:
 	cargo fmt --all
-	$(PYTHON) -m ruff format python tests benches
+	$(PYTHON) -m ruff format python tests benches docs/hooks docs/scripts
 
 ## Copy the compiled module's docstrings into python/inexact_loops/_core.pyi (the stub IDEs
 ## show); tests/python/test_stubs.py fails until they are equal.

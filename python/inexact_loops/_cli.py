@@ -7,8 +7,8 @@ and gives both the library and the command, with the binary's output and exit co
 a log of ``loops run`` failed; 2 on an error; 130 on Ctrl-C; 0 when stdout is closed early, as in
 ``loops demo | head``). A separate ``loops`` binary in the wheel would compile loops-core,
 loops-io and the command a second time in every build; calling the command through the module
-only adds the command's own code to it (the README's Install section gives the figures). Its one
-cost is start-up: Python and numpy are imported before the command runs.
+only adds the command's own code to it (docs/reference/python-behaviour.md gives the
+figures). Its one cost is start-up: Python and numpy are imported before the command runs.
 
 ``python -m inexact_loops._cli ARGS`` runs it too.
 """

@@ -135,7 +135,7 @@ def test_kitti_00_from_poses_and_times_equals_the_file_with_times(tmp_path, data
     expected = il.read_trajectory(path, axes=(0, 2))
     np.testing.assert_array_equal(traj.timestamps, raw[:, 0])
     np.testing.assert_array_equal(traj.positions, expected.positions)
-    # The README's 7 components of the paper's S_γ (no separation).
+    # The KITTI tutorial's 7 components of the paper's S_γ (no separation): 6 revisits, 1 trivial.
     assert len(il.find_loops(traj, gamma=6.0, separation=None).components["id"]) == 7
 
 

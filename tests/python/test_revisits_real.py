@@ -1,8 +1,8 @@
 """Revisits on real trajectories, from ../shared/data (skipped with a message when absent).
 
 These are regression checks on real data, against the figures ``benches/revisit_table.py``
-measured (README, "Revisits"), and against an independent computation: S_γ's cells from a
-k-d tree (``scipy.spatial.cKDTree.query_pairs``), the separation applied in numpy with
+measured (docs/how-to/gamma-and-separation.md), and against an independent computation: S_γ's
+cells from a k-d tree (``scipy.spatial.cKDTree.query_pairs``), the separation applied in numpy with
 ``il.path_length``, and 4-connected components of the upper-half lattice from
 ``scipy.sparse.csgraph.connected_components`` — no dense matrix, so whole runs fit.
 

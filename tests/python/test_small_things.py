@@ -15,7 +15,8 @@ ROOT = Path(__file__).parents[2]
 
 
 def test_install_lines_work_from_a_checkout():
-    files = [ROOT / "README.md", *sorted((ROOT / "python" / "inexact_loops").glob("*.py"))]
+    files = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    files += sorted((ROOT / "python" / "inexact_loops").rglob("*.py"))
     for path in files:
         for number, line in enumerate(path.read_text().splitlines(), 1):
             assert not re.search(r"pip install '?inexact-loops", line), (

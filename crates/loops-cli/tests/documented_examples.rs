@@ -1,9 +1,12 @@
-//! The commands the README and `--help` show run as shown. Every example that names a file of
-//! `../shared/data` (`kitti_odometry/00.txt`, `tum_rgbd/fr2_desk_groundtruth.txt`, ...) runs
-//! through `sh`, in a folder that holds the data under those names, and must succeed; the
-//! output the README shows under it (every line but `...`) must be in what it prints. Skipped,
-//! saying so, when the data is absent. The fleet example needs no data (it writes its own
-//! logs): it always runs.
+//! The commands the README, the documentation site (`docs/**/*.md`) and `--help` show run as
+//! shown. Every example that names a file of `../shared/data` (`kitti_odometry/00.txt`,
+//! `tum_rgbd/fr2_desk_groundtruth.txt`, ...) runs through `sh`, in a folder that holds the data
+//! under those names, and must succeed; the output shown under it must be in what it prints
+//! (a line `...` stands for any lines, and `...` within a line for any text). Skipped, saying
+//! so, when the data is absent. The fleet example of the documentation's getting-started page
+//! needs no data (it writes its own logs): it always runs. `tests/test_docs.py` runs every
+//! example of the documentation in order, page by page; this test runs the command line's own
+//! examples against the binary built here.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -22,7 +25,7 @@ fn real_data_dir() -> Option<PathBuf> {
     }
 }
 
-/// A documented command, where it is documented, and the output shown under it (README only).
+/// A documented command, where it is documented, and the output shown under it (not for `--help`).
 #[derive(Debug)]
 struct Example {
     command: String,
@@ -30,13 +33,33 @@ struct Example {
     shown: Vec<String>,
 }
 
-/// The `$ ...` lines of the README's console blocks, with the lines shown under each.
-fn readme_examples() -> Vec<Example> {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).expect("README");
+/// The Markdown files whose console blocks are examples: the README, then the site's pages.
+fn documented_files() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut files = vec![root.join("README.md")];
+    let mut folders = vec![root.join("docs")];
+    let mut pages = Vec::new();
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).expect("docs folder") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|e| e == "md") {
+                pages.push(path);
+            }
+        }
+    }
+    pages.sort();
+    files.extend(pages);
+    files
+}
+
+/// The `$ ...` lines of the console blocks of `text` (from `name`), with the lines shown under
+/// each.
+fn console_examples(text: &str, name: &str) -> Vec<Example> {
     let mut examples: Vec<Example> = Vec::new();
     let mut in_console = false;
-    for (index, line) in readme.lines().enumerate() {
+    for (index, line) in text.lines().enumerate() {
         if line.starts_with("```") {
             in_console = line == "```console";
             continue;
@@ -47,7 +70,7 @@ fn readme_examples() -> Vec<Example> {
         if let Some(command) = line.strip_prefix("$ ") {
             examples.push(Example {
                 command: command.to_owned(),
-                source: format!("README.md line {}", index + 1),
+                source: format!("{name} line {}", index + 1),
                 shown: Vec::new(),
             });
         } else if let Some(example) = examples.last_mut() {
@@ -57,38 +80,34 @@ fn readme_examples() -> Vec<Example> {
     examples
 }
 
-/// The commands of the README's "Fleets" section, "### Command line" (its console blocks, in
-/// order), with the lines shown under each: a sequence that runs in one folder.
-fn fleet_examples() -> Vec<Example> {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../README.md")).expect("README");
-    let (mut in_fleets, mut in_command_line, mut in_console) = (false, false, false);
-    let mut examples: Vec<Example> = Vec::new();
-    for (index, line) in readme.lines().enumerate() {
-        if line.starts_with("## ") {
-            in_fleets = line == "## Fleets";
-            in_command_line = false;
-        } else if line.starts_with("### ") {
-            in_command_line = in_fleets && line == "### Command line";
-        }
-        if line.starts_with("```") {
-            in_console = in_command_line && line == "```console";
-            continue;
-        }
-        if !in_console {
-            continue;
-        }
-        if let Some(command) = line.strip_prefix("$ ") {
-            let source = format!("README.md line {}", index + 1);
-            examples.push(Example { command: command.to_owned(), source, shown: Vec::new() });
-        } else if let Some(example) = examples.last_mut() {
-            example.shown.push(line.to_owned());
-        }
-    }
-    examples
+/// The console examples of the README and of every page of the documentation site.
+fn readme_examples() -> Vec<Example> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    documented_files()
+        .iter()
+        .flat_map(|path| {
+            let text = std::fs::read_to_string(path).expect("documentation page");
+            let name = path.strip_prefix(&root).unwrap_or(path).display().to_string();
+            console_examples(&text, &name)
+        })
+        .collect()
 }
 
-/// The README's fleet example (synthetic logs, no shared data) runs as shown: its commands in
+/// The commands of the getting-started page for fleets, section "One machine, command line"
+/// (its console blocks, in order), with the lines shown under each: a sequence that runs in one
+/// folder.
+fn fleet_examples() -> Vec<Example> {
+    let page = "docs/getting-started/fleet.md";
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(page))
+        .expect("the fleet page");
+    let section = text
+        .split("\n## ")
+        .find(|s| s.starts_with("One machine, command line"))
+        .expect("the section \"One machine, command line\"");
+    console_examples(section, page)
+}
+
+/// The documented fleet example (synthetic logs, no shared data) runs as shown: its commands in
 /// order in one folder, each succeeding and printing every line shown under it but `...`.
 #[test]
 fn the_fleet_example_runs_as_shown() {
@@ -127,15 +146,39 @@ fn run_example(example: &Example, dir: &Path) -> (std::process::ExitStatus, Vec<
     let failures = example
         .shown
         .iter()
-        .filter(|line| line.trim() != "..." && !printed.lines().any(|printed_line| printed_line == *line))
+        .filter(|line| !printed.lines().any(|printed_line| shown_as(line, printed_line)))
         .map(|line| {
             format!(
-                "{} ({}): the README shows {line:?}, which it does not print:\n{printed}",
+                "{} ({}): the documentation shows {line:?}, which it does not print:\n{printed}",
                 example.command, example.source
             )
         })
         .collect();
     (output.status, failures)
+}
+
+/// Whether `printed` is the line `shown`, where `...` in `shown` stands for any text (and a
+/// line that is only `...` for any line).
+fn shown_as(shown: &str, printed: &str) -> bool {
+    if shown.trim() == "..." {
+        return true;
+    }
+    let parts: Vec<&str> = shown.split("...").collect();
+    let (first, last) = (parts[0], parts[parts.len() - 1]);
+    if parts.len() == 1 {
+        return printed == shown;
+    }
+    if !printed.starts_with(first) || printed.len() < first.len() + last.len() || !printed.ends_with(last) {
+        return false;
+    }
+    let mut rest = &printed[first.len()..printed.len() - last.len()];
+    for part in &parts[1..parts.len() - 1] {
+        match rest.find(part) {
+            Some(at) => rest = &rest[at + part.len()..],
+            None => return false,
+        }
+    }
+    true
 }
 
 /// The lines after `Examples:` in `loops --help` and each command's `--help`.
@@ -204,15 +247,16 @@ fn every_documented_command_on_the_shared_data_runs() {
     }
     let _ = std::fs::remove_dir_all(&root);
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
-    // The README's KITTI 00, fr2_desk, Corridor and pose graph commands, and the help's.
-    let from_readme = examples.iter().filter(|e| e.source.starts_with("README")).count();
-    let from_help = examples.len() - from_readme;
-    assert!(from_readme >= 4 && from_help >= 5, "{from_readme} README and {from_help} help examples: {examples:#?}");
+    // The documentation's KITTI, fr2_desk, Corridor and pose graph commands, and the help's.
+    let from_docs = examples.iter().filter(|e| !e.source.starts_with("loops ")).count();
+    let from_help = examples.len() - from_docs;
+    assert!(from_docs >= 8 && from_help >= 5, "{from_docs} documented and {from_help} help examples: {examples:#?}");
 }
 
 #[test]
 fn the_examples_are_found() {
-    // The extraction itself: a README example and a help example that do name data files.
+    // The extraction itself: a documented example and a help example that do name data files,
+    // and the wildcard of shown output.
     let entries = vec!["kitti_odometry".to_owned(), "tuc".to_owned()];
     assert!(uses_data("loops components kitti_odometry/00.txt --axes 0,2 --gamma 6", &entries));
     assert!(uses_data("loops sample x.tum --detections 'tuc/SLAM/Corridor_Input.txt'", &entries));
@@ -222,5 +266,7 @@ fn the_examples_are_found() {
     assert!(readme.iter().any(|e| e.command.starts_with("loops components kitti_odometry/00.txt")), "{readme:#?}");
     let help = help_examples();
     assert!(help.iter().any(|e| e.command.starts_with("loops sample tuc/SLAM/Corridor_GT.txt")), "{help:#?}");
+    assert!(shown_as("a ... c", "a b c") && shown_as("...", "x") && shown_as("a b", "a b"));
+    assert!(!shown_as("a ... c", "a b d") && !shown_as("a ... c ... e", "a e c") && !shown_as("a b", "a b c"));
     assert!(help.iter().all(|e| !e.command.contains("--format tum --axes")), "{help:#?}");
 }

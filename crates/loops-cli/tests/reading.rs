@@ -238,7 +238,7 @@ fn kitti_00_with_a_times_file_equals_the_file_with_times() {
     ]);
     assert_eq!(got, expected);
     assert_eq!(got["poses"], 4541);
-    assert_eq!(got["components"].as_array().unwrap().len(), 7); // the README's 7 components of S_gamma
+    assert_eq!(got["components"].as_array().unwrap().len(), 7); // the KITTI tutorial's 6 revisits and 1 trivial component of S_gamma
 }
 
 #[test]
