@@ -396,8 +396,8 @@ class Separation:
     @staticmethod
     def for_gamma(gamma: float) -> Separation:
         """The default of :func:`find_loops` (``separation="auto"``) at threshold ``gamma``: a path
-        of 4 γ, no time separation; measured on real trajectories (README,
-        "Revisits").
+        of 4 γ, no time separation; measured on real trajectories (the guide
+        "Choose γ and the separation").
         """
     @property
     def path(self) -> float:

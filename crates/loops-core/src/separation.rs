@@ -82,7 +82,7 @@ impl Separation {
 
     /// The default for SLAM: at least [`DEFAULT_GAMMAS`](Self::DEFAULT_GAMMAS) · γ apart along
     /// the path, no time separation. Chosen from the table of separations measured on real
-    /// trajectories in the README ("Revisits").
+    /// trajectories in the documentation's guide "Choose γ and the separation".
     ///
     /// ```
     /// assert_eq!(loops_core::Separation::for_gamma(6.0).path, 24.0);

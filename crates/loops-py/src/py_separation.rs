@@ -44,8 +44,8 @@ impl Separation {
     }
 
     /// The default of :func:`find_loops` (``separation="auto"``) at threshold ``gamma``: a path
-    /// of 4 γ, no time separation; measured on real trajectories (README,
-    /// "Revisits").
+    /// of 4 γ, no time separation; measured on real trajectories (the guide
+    /// "Choose γ and the separation").
     #[staticmethod]
     fn for_gamma(gamma: f64) -> PyResult<Self> {
         loops_core::check_gamma(gamma).map_err(Failure::from)?;
