@@ -232,21 +232,56 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     let prefix = prefix_sums_by_session(widths, set.breaks())?;
 
     let mut tallies = try_filled(count as usize, Tally::empty(), "the loop components")?;
-    for (i, &w_i) in widths.iter().enumerate() {
-        if i.is_multiple_of(4096) {
-            interrupt.check()?;
+    let rows = widths.len();
+    // What each run adds is worked out in parallel, a batch of rows at a time; the tallies then
+    // add it up in row order, as one thread would, so the sums are the same on any number.
+    let mut terms: Vec<RunTerms> = Vec::new();
+    for batch in (0..rows).step_by(ROWS_PER_TALLY_BATCH) {
+        interrupt.check()?;
+        let batch = batch..(batch + ROWS_PER_TALLY_BATCH).min(rows);
+        let base = set.row_offset(batch.start);
+        terms.clear();
+        try_reserve(&mut terms, set.row_offset(batch.end) - base, "the loop components")?;
+        terms.resize(set.row_offset(batch.end) - base, RunTerms::default());
+        // Each task with the terms of its own rows' runs.
+        let mut tasks = Vec::new();
+        let mut rest = terms.as_mut_slice();
+        for start in batch.clone().step_by(ROWS_PER_TALLY_TASK) {
+            let end = (start + ROWS_PER_TALLY_TASK).min(batch.end);
+            let (slice, tail) = rest.split_at_mut(set.row_offset(end) - set.row_offset(start));
+            tasks.push((start..end, slice));
+            rest = tail;
         }
-        if i + 1 < widths.len() {
-            for_each_overlap(set, i..i + 1, |a, _| tallies[labels[a] as usize].overlaps += 1);
-        }
-        let offset = set.row_offset(i);
-        for (k, run) in set.row(i).iter().enumerate() {
-            let r = offset + k;
-            let tally = &mut tallies[labels[r] as usize];
-            let (a, b) = (run.start as usize, run.end as usize);
-            tally.add_run(i, [a, b], w_i * ((prefix[b] + widths[b]) - prefix[a]), w_i);
-            let j = set.closest_columns()[r] as usize;
-            tally.offer_closest(metric.distance_rank(traj.point(i), traj.point(j)), [i, j]);
+        tasks.into_par_iter().for_each(|(task, slice)| {
+            let offset = set.row_offset(task.start);
+            for i in task {
+                let w_i = widths[i];
+                let row_offset = set.row_offset(i);
+                for (k, run) in set.row(i).iter().enumerate() {
+                    let r = row_offset + k;
+                    let (a, b) = (run.start as usize, run.end as usize);
+                    let j = set.closest_columns()[r] as usize;
+                    slice[r - offset] = RunTerms {
+                        area_s2: w_i * ((prefix[b] + widths[b]) - prefix[a]),
+                        rank: metric.distance_rank(traj.point(i), traj.point(j)),
+                        overlaps: 0,
+                    };
+                }
+                if i + 1 < rows {
+                    for_each_overlap(set, i..i + 1, |a, _| slice[a - offset].overlaps += 1);
+                }
+            }
+        });
+        for i in batch {
+            let row_offset = set.row_offset(i);
+            for (k, run) in set.row(i).iter().enumerate() {
+                let r = row_offset + k;
+                let term = terms[r - base];
+                let tally = &mut tallies[labels[r] as usize];
+                tally.overlaps += u64::from(term.overlaps);
+                tally.add_run(i, [run.start as usize, run.end as usize], term.area_s2, widths[i]);
+                tally.offer_closest(term.rank, [i, set.closest_columns()[r] as usize]);
+            }
         }
     }
 
@@ -270,6 +305,25 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     }));
     Ok(Labelling { labels, components })
 }
+
+/// What one run adds to its component's tally, worked out in parallel before the tallies add
+/// it up in row order.
+#[derive(Debug, Clone, Copy, Default)]
+struct RunTerms {
+    /// Area of its cells, s².
+    area_s2: f64,
+    /// The metric's rank of its closest pair.
+    rank: f64,
+    /// Runs of the next row that share a column with it.
+    overlaps: u32,
+}
+
+/// Rows whose runs' terms are worked out before the tallies add them up: bounds the memory of
+/// the terms (24 bytes a run).
+const ROWS_PER_TALLY_BATCH: usize = 1 << 14;
+
+/// Rows whose runs' terms one rayon task works out.
+const ROWS_PER_TALLY_TASK: usize = 1 << 9;
 
 /// Rows whose runs are joined by one rayon task before the joins across tasks.
 pub(crate) const ROWS_PER_LABEL_TASK: usize = 1 << 14;

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
-use crate::memory::{try_collect, try_extend, try_reserve, try_with_capacity};
+use crate::memory::{try_collect, try_extend, try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
@@ -185,13 +185,14 @@ impl SublevelSet {
                 let mut block = Block::default();
                 let mut candidates = Vec::new();
                 scanner.candidates_for(rows.clone(), &mut candidates)?;
+                let mut far_until = try_filled(candidates.len(), f64::NEG_INFINITY, "the stretches of a row scan")?;
                 for i in rows.clone() {
                     interrupt.check()?;
                     block.make_room()?;
                     if i > rows.start && traj.same_point(i - 1, i) {
                         scanner.repeat_row(i, &mut block);
                     } else {
-                        scanner.scan_row(i, &candidates, &mut block);
+                        scanner.scan_row(i, &candidates, &mut far_until, &mut block);
                     }
                     block.row_lengths.push(block.runs.len());
                 }
@@ -594,10 +595,19 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         }
     }
 
-    pub(crate) fn scan_row(&self, i: usize, candidates: &[Leaf], out: &mut Block) {
+    /// Scans row `i` over the stretches `candidates` (from [`candidates_for`](Self::candidates_for))
+    /// into `out`: its runs and their closest columns.
+    ///
+    /// `far_until` (one entry per candidate, or empty) carries what earlier rows of the block
+    /// learnt about each stretch: a stretch whose ball lies farther than its reach from x_i by
+    /// a slack stays out of reach for every later row i′ with s_i′ − s_i below that slack (the
+    /// triangle inequality through x_i and the path between them), so those rows skip it
+    /// without measuring. The entry is the path length s up to which that holds.
+    pub(crate) fn scan_row(&self, i: usize, candidates: &[Leaf], far_until: &mut [f64], out: &mut Block) {
         let x_i = self.traj.point(i);
         let margin = self.arc.margin;
         let reach = self.gamma + margin;
+        let s_i = if far_until.is_empty() { 0.0 } else { self.arc.s[i] };
         let mut open: Option<(usize, usize)> = None;
         // Next column to examine; columns before it are decided (or not separated from i).
         let first = self.first_column(i);
@@ -610,7 +620,11 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                 continue;
             }
             let leaf = candidates[next];
+            let far = far_until.get_mut(next);
             next += 1;
+            if far.as_ref().is_some_and(|&&mut until| s_i < until) {
+                continue;
+            }
             let (lo, hi) = ((leaf.lo as usize).max(first), leaf.hi as usize);
             // Every pose of the stretch is within γ of x_i, known without measuring them.
             let mut whole = leaf.inside;
@@ -620,11 +634,19 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                     // Every pose of the stretch is the centre's point, bit for bit: δ from x_i
                     // to each of them is d, so d decides them all, exactly.
                     if d > self.gamma {
+                        if let Some(until) = far {
+                            *until = s_i + (d - self.gamma - 2.0 * margin);
+                        }
                         continue;
                     }
                     whole = true;
                 } else if d - leaf.radius > reach {
-                    // Poses of a stretch whose ball stays farther than γ from x_i are all outside.
+                    // Poses of a stretch whose ball stays farther than γ from x_i are all outside,
+                    // and stay so for the next rows while their path from x_i is shorter than the
+                    // slack (one margin more for the rounding of the slack and of s).
+                    if let Some(until) = far {
+                        *until = s_i + (d - leaf.radius - reach - margin);
+                    }
                     continue;
                 }
             }

@@ -563,7 +563,7 @@ impl OnlineLoops {
             let (lo, hi) = (covered as u32, n as u32 + 1);
             self.stretches.push(Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false, uniform: false });
         }
-        scanner.scan_row(n, &self.stretches, block);
+        scanner.scan_row(n, &self.stretches, &mut [], block);
     }
 
     /// Adds row n's runs (closest columns `closest`): joins them to row n − 1's by union-find,
