@@ -17,6 +17,11 @@
 //! rounding, as for any tiling; everything else exactly), and the store itself (its tiles,
 //! bit for bit) does not depend on the order of the updates.
 //!
+//! **Queries.** Which sessions pass within a radius of a place, and when
+//! ([`FleetStore::near`], a [`Place`] in the map plane); which sessions revisit a session
+//! ([`StoreLoops::revisits`], from the overlap matrix); the components the last update added
+//! ([`FleetStore::added_components`]).
+//!
 //! The store holds no poses: an update and a draw ask a *source* for the stored sessions they
 //! read (`FnMut(&StoreSession) -> Result<Trajectory>`), and check what comes back against the
 //! session's pose count and fingerprint. Where the poses live (a folder of tables, a cluster's
