@@ -2261,6 +2261,68 @@ class FleetStore:
         """The ids of the components the last update added: those of a session it added or
         replaced (with itself or another), int64, increasing.
         """
+    def near(self, place: npt.ArrayLike, *, radius: float | None = None) -> Table:
+        """Which sessions pass near a place, and when: per session, the maximal runs of
+        consecutive poses within ``radius`` of ``place`` (poses read from the store's pose
+        files). A place lies in the map plane of the positions' first two coordinates (x, y of
+        Euclidean points, SE(2) and SE(3) poses), with the plane's distance; a pose is within
+        ``radius`` of a polygon when inside it (even-odd rule) or within ``radius`` of its
+        boundary.
+
+        Args:
+            place: a point ``(x, y)`` or a polygon, an array of shape ``(n, 2)`` of its vertices
+                in order (n ≥ 3; the last joins the first).
+            radius: in the plane's unit (metres); ``None``: :attr:`gamma`.
+
+        Returns:
+            A :class:`~inexact_loops.Table` with a row per pass, in session order and time
+            order: ``session`` (index in :attr:`names`), ``name``, ``i_start``, ``i_end`` (its
+            first and last pose, both within the radius), ``t_start_s``, ``t_end_s`` (their
+            times on the session's clock).
+
+        Raises:
+            InvalidParameterError: a place of another shape, a polygon of fewer than 3
+                vertices, a coordinate that is not finite, a negative radius, sessions without
+                a map plane.
+
+        Example:
+            >>> import tempfile, numpy as np, inexact_loops as il
+            >>> x = np.arange(21) * 0.5
+            >>> store = il.FleetStore.open(tempfile.mkdtemp() + "/city")
+            >>> out = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+            >>> _ = store.update(add={"out": out}, gamma=1.0, separation=None)
+            >>> passes = store.near((5.0, 0.3), radius=1.0)
+            >>> passes["name"].tolist(), passes["i_start"].tolist(), passes["i_end"].tolist()
+            (['out'], [9], [11])
+            >>> store.near([(0, -1), (2, -1), (2, 1), (0, 1)])["t_end_s"].tolist()  # within γ
+            [6.0]
+        """
+    def revisits(self, session: _SessionKey) -> Table:
+        """The sessions that revisit ``session``: those sharing at least one loop component with
+        it (other than itself), read from the overlap matrix.
+
+        Args:
+            session: its name or index.
+
+        Returns:
+            A :class:`~inexact_loops.Table` with a row per revisiting session, in session
+            order: ``session`` (index in :attr:`names`), ``name``, ``components`` (shared),
+            ``pair_count`` (pose pairs within γ between the two), ``area_s2``, ``density``
+            (their block of :meth:`session_pairs`).
+
+        Raises:
+            KeyError: no session of that name. IndexError: an index out of range.
+
+        Example:
+            >>> import tempfile, numpy as np, inexact_loops as il
+            >>> x = np.arange(21) * 0.5
+            >>> store = il.FleetStore.open(tempfile.mkdtemp() + "/city")
+            >>> there = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+            >>> back = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+            >>> _ = store.update(add={"there": there, "back": back}, gamma=1.0, separation=None)
+            >>> store.revisits("there")["name"].tolist()
+            ['back']
+        """
     def session_pairs(self) -> Table:
         """The sparse overlap matrix as a :class:`~inexact_loops.Table`, as
         :meth:`FleetLoops.session_pairs`.

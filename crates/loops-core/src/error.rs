@@ -425,6 +425,12 @@ pub enum Error {
         /// What does not fit, naming the index.
         reason: String,
     },
+    /// A place on the map (a point or a polygon of a store's query) that is not one.
+    #[error("invalid place: {problem}")]
+    InvalidPlace {
+        /// What is wrong, naming the vertex and the value.
+        problem: String,
+    },
     /// Inputs that must come from one trajectory come from two (pose counts or timestamps differ).
     #[error(
         "the {what} and the loops come from different trajectories ({poses} and {loops_poses} poses; first difference at pose {index})"

@@ -69,6 +69,7 @@ mod measure;
 mod memory;
 mod metric;
 mod online;
+mod place;
 mod plane;
 mod pose;
 mod quality;
@@ -109,6 +110,7 @@ pub use online::{
     Candidate, Cap, ComponentId, Merge, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, PushStamp,
     RowRun, Update,
 };
+pub use place::{Pass, Place, check_radius, passes_near};
 pub use plane::{
     Border, PixelEdge, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments,
 };
@@ -122,8 +124,8 @@ pub use sample::{
 pub use separation::Separation;
 pub use spec::{MetricSpec, recorded_metric_name};
 pub use store::{
-    FleetStore, STORE_FORMAT_VERSION, SessionSource, StoreLoops, StoreSamples, StoreSession, StoreSettings,
-    StoreUpdate, StoredTile, session_fingerprint,
+    FleetStore, Revisit, STORE_FORMAT_VERSION, SessionSource, StoreLoops, StorePass, StoreSamples, StoreSession,
+    StoreSettings, StoreUpdate, StoredTile, session_fingerprint,
 };
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};

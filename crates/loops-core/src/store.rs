@@ -17,6 +17,11 @@
 //! rounding, as for any tiling; everything else exactly), and the store itself (its tiles,
 //! bit for bit) does not depend on the order of the updates.
 //!
+//! **Queries.** Which sessions pass within a radius of a place, and when
+//! ([`FleetStore::near`], a [`Place`] in the map plane); which sessions revisit a session
+//! ([`StoreLoops::revisits`], from the overlap matrix); the components the last update added
+//! ([`FleetStore::added_components`]).
+//!
 //! The store holds no poses: an update and a draw ask a *source* for the stored sessions they
 //! read (`FnMut(&StoreSession) -> Result<Trajectory>`), and check what comes back against the
 //! session's pose count and fingerprint. Where the poses live (a folder of tables, a cluster's
@@ -51,6 +56,7 @@ use rayon::prelude::*;
 use crate::draw::SampleWarning;
 use crate::error::{Error, Result};
 use crate::fleet::{FleetComponent, FleetSample, SessionPair};
+use crate::place::{Pass, Place, check_radius, passes_near};
 use crate::sample::{DrawCandidates, KeyedDraw, Sampler};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
@@ -568,6 +574,25 @@ impl FleetStore {
         loops.components_of(&changed)
     }
 
+    /// The passes of the stored sessions within `radius` of `place` (γ when `None`), in
+    /// session order and time order within a session: the poses of each session, read from
+    /// `source` one session at a time, as [`passes_near`](crate::passes_near) finds them.
+    /// O(poses × the place's vertices).
+    ///
+    /// # Errors
+    /// As [`passes_near`](crate::passes_near); [`Error::InvalidState`] for a session that
+    /// `source` gives with another content; `source`'s errors.
+    pub fn near(&self, place: &Place, radius: Option<f64>, source: &mut SessionSource<'_>) -> Result<Vec<StorePass>> {
+        let radius = radius.unwrap_or(self.settings.gamma);
+        check_radius(radius)?;
+        let mut passes = Vec::new();
+        for (session, s) in self.sessions.iter().enumerate() {
+            let trajectory = read_session(s, source)?;
+            passes.extend(passes_near(&trajectory, place, radius)?.into_iter().map(|pass| StorePass { session, pass }));
+        }
+        Ok(passes)
+    }
+
     /// The fleet's loops, merged from the stored summaries: O(the tiles' components and edge
     /// runs).
     ///
@@ -754,6 +779,26 @@ impl StoreLoops {
         self.merged.as_ref().map_or_else(Vec::new, |m| m.components().iter().map(|c| c.times_s).collect())
     }
 
+    /// The sessions that revisit session `session` (an index): those sharing at least one loop
+    /// component with it, other than itself, in session order, read from the overlap matrix.
+    /// O(session pairs).
+    pub fn revisits(&self, session: usize) -> Vec<Revisit> {
+        let mut revisits: Vec<Revisit> = self
+            .session_pairs
+            .iter()
+            .filter(|p| p.sessions[0] != p.sessions[1] && p.components > 0 && p.sessions.contains(&session))
+            .map(|p| Revisit {
+                session: p.sessions[0] + p.sessions[1] - session,
+                components: p.components,
+                pair_count: p.pair_count,
+                area_s2: p.area_s2,
+                density: p.density,
+            })
+            .collect();
+        revisits.sort_by_key(|r| r.session);
+        revisits
+    }
+
     /// The ids of the components of a session in `sessions` (indices), with itself or another:
     /// after an update, with the sessions it changed, the components it added.
     pub fn components_of(&self, sessions: &HashSet<usize>) -> Vec<usize> {
@@ -763,6 +808,31 @@ impl StoreLoops {
             .map(|c| c.id)
             .collect()
     }
+}
+
+/// A pass of a stored session near a place ([`FleetStore::near`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StorePass {
+    /// The session's index (name order).
+    pub session: usize,
+    /// Its poses and times.
+    pub pass: Pass,
+}
+
+/// A session that revisits another ([`StoreLoops::revisits`]): their block of the overlap
+/// matrix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Revisit {
+    /// The revisiting session's index.
+    pub session: usize,
+    /// Loop components the two share.
+    pub components: usize,
+    /// Pose pairs within γ between the two.
+    pub pair_count: u64,
+    /// Loop area α between the two, s².
+    pub area_s2: f64,
+    /// Loop density ρ between the two.
+    pub density: f64,
 }
 
 /// The samples of a store ([`FleetStore::samples`]).

@@ -4,11 +4,11 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use numpy::PyArray1;
+use numpy::{PyArray1, PyReadonlyArrayDyn};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{IntoPyDict, PyDict, PyList};
 
-use crate::convert::to_numpy;
+use crate::convert::{float64_column, int64_column, table, to_numpy};
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_fleet::{
@@ -422,6 +422,120 @@ impl FleetStore {
         to_numpy(py, added)
     }
 
+    /// Which sessions pass near a place, and when: per session, the maximal runs of
+    /// consecutive poses within ``radius`` of ``place`` (poses read from the store's pose
+    /// files). A place lies in the map plane of the positions' first two coordinates (x, y of
+    /// Euclidean points, SE(2) and SE(3) poses), with the plane's distance; a pose is within
+    /// ``radius`` of a polygon when inside it (even-odd rule) or within ``radius`` of its
+    /// boundary.
+    ///
+    /// Args:
+    ///     place: a point ``(x, y)`` or a polygon, an array of shape ``(n, 2)`` of its vertices
+    ///         in order (n ≥ 3; the last joins the first).
+    ///     radius: in the plane's unit (metres); ``None``: :attr:`gamma`.
+    ///
+    /// Returns:
+    ///     A :class:`~inexact_loops.Table` with a row per pass, in session order and time
+    ///     order: ``session`` (index in :attr:`names`), ``name``, ``i_start``, ``i_end`` (its
+    ///     first and last pose, both within the radius), ``t_start_s``, ``t_end_s`` (their
+    ///     times on the session's clock).
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a place of another shape, a polygon of fewer than 3
+    ///         vertices, a coordinate that is not finite, a negative radius, sessions without
+    ///         a map plane.
+    ///
+    /// Example:
+    ///     >>> import tempfile, numpy as np, inexact_loops as il
+    ///     >>> x = np.arange(21) * 0.5
+    ///     >>> store = il.FleetStore.open(tempfile.mkdtemp() + "/city")
+    ///     >>> out = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+    ///     >>> _ = store.update(add={"out": out}, gamma=1.0, separation=None)
+    ///     >>> passes = store.near((5.0, 0.3), radius=1.0)
+    ///     >>> passes["name"].tolist(), passes["i_start"].tolist(), passes["i_end"].tolist()
+    ///     (['out'], [9], [11])
+    ///     >>> store.near([(0, -1), (2, -1), (2, 1), (0, 1)])["t_end_s"].tolist()  # within γ
+    ///     [6.0]
+    #[pyo3(signature = (place, *, radius=None))]
+    fn near<'py>(
+        &self,
+        py: Python<'py>,
+        place: &Bound<'py, PyAny>,
+        radius: Option<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let place = place_of(place)?;
+        let names = self.names();
+        let passes = match &self.state {
+            None => {
+                radius.map(loops_core::check_radius).transpose().map_err(Failure::from)?;
+                Vec::new()
+            }
+            Some(state) => {
+                let stored = &state.stored;
+                detached(py, || {
+                    let mut source = |s: &loops_core::StoreSession| -> loops_core::Result<loops_core::Trajectory> {
+                        stored
+                            .poses(s)
+                            .map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
+                    };
+                    Ok(stored.store.near(&place, radius, &mut source)?)
+                })?
+            }
+        };
+        table(
+            py,
+            [
+                ("session", int64_column(py, &passes, |p| p.session)),
+                ("name", names_column(py, passes.iter().map(|p| names[p.session].as_str()))?),
+                ("i_start", int64_column(py, &passes, |p| p.pass.poses[0])),
+                ("i_end", int64_column(py, &passes, |p| p.pass.poses[1])),
+                ("t_start_s", float64_column(py, &passes, |p| p.pass.times_s[0])),
+                ("t_end_s", float64_column(py, &passes, |p| p.pass.times_s[1])),
+            ],
+        )
+    }
+
+    /// The sessions that revisit ``session``: those sharing at least one loop component with
+    /// it (other than itself), read from the overlap matrix.
+    ///
+    /// Args:
+    ///     session: its name or index.
+    ///
+    /// Returns:
+    ///     A :class:`~inexact_loops.Table` with a row per revisiting session, in session
+    ///     order: ``session`` (index in :attr:`names`), ``name``, ``components`` (shared),
+    ///     ``pair_count`` (pose pairs within γ between the two), ``area_s2``, ``density``
+    ///     (their block of :meth:`session_pairs`).
+    ///
+    /// Raises:
+    ///     KeyError: no session of that name. IndexError: an index out of range.
+    ///
+    /// Example:
+    ///     >>> import tempfile, numpy as np, inexact_loops as il
+    ///     >>> x = np.arange(21) * 0.5
+    ///     >>> store = il.FleetStore.open(tempfile.mkdtemp() + "/city")
+    ///     >>> there = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+    ///     >>> back = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+    ///     >>> _ = store.update(add={"there": there, "back": back}, gamma=1.0, separation=None)
+    ///     >>> store.revisits("there")["name"].tolist()
+    ///     ['back']
+    fn revisits<'py>(&self, py: Python<'py>, session: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let names = self.names();
+        let a = session_index_of(&names, session)?;
+        let revisits = self.state.as_ref().map_or_else(Vec::new, |s| s.loops.revisits(a));
+        table(
+            py,
+            [
+                ("session", int64_column(py, &revisits, |r| r.session)),
+                ("name", names_column(py, revisits.iter().map(|r| names[r.session].as_str()))?),
+                ("components", int64_column(py, &revisits, |r| r.components)),
+                ("pair_count", int64_column(py, &revisits, |r| r.pair_count as usize)),
+                ("area_s2", float64_column(py, &revisits, |r| r.area_s2)),
+                ("density", float64_column(py, &revisits, |r| r.density)),
+            ],
+        )
+    }
+
     /// The sparse overlap matrix as a :class:`~inexact_loops.Table`, as
     /// :meth:`FleetLoops.session_pairs`.
     fn session_pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -481,4 +595,31 @@ impl FleetStore {
         let samples = self.state.as_ref().map_or(&[][..], |s| &s.samples[..]);
         fleet_samples_table(py, samples, &self.names())
     }
+}
+
+/// A place from Python: a point ``(x, y)`` or polygon vertices of shape ``(n, 2)``.
+fn place_of(place: &Bound<'_, PyAny>) -> PyResult<loops_core::Place> {
+    let py = place.py();
+    let array = py.import("numpy")?.call_method1("asarray", (place, "float64")).map_err(|error| {
+        invalid_parameter(format!("FleetStore.near: place must be a point (x, y) or polygon vertices (n, 2): {error}"))
+    })?;
+    let array: PyReadonlyArrayDyn<'_, f64> = array.extract()?;
+    let values = array.as_array();
+    let shape = values.shape().to_vec();
+    let place = match shape[..] {
+        [2] => loops_core::Place::point([values[[0]], values[[1]]]),
+        [_, 2] => loops_core::Place::polygon(values.outer_iter().map(|v| [v[0], v[1]]).collect()),
+        _ => {
+            return Err(invalid_parameter(format!(
+                "FleetStore.near: place has shape {shape:?}; a point has shape (2,), a polygon (n, 2)"
+            )));
+        }
+    };
+    Ok(place.map_err(Failure::from)?)
+}
+
+/// A column of session names (numpy ``str``).
+fn names_column<'py, 'a>(py: Python<'py>, names: impl Iterator<Item = &'a str>) -> PyResult<Bound<'py, PyAny>> {
+    let kwargs = [("dtype", "str")].into_py_dict(py)?;
+    py.import("numpy")?.call_method("array", (PyList::new(py, names)?,), Some(&kwargs))
 }
