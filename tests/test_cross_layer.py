@@ -203,3 +203,44 @@ def test_cli_and_python_read_the_same_poses(tmp_path: Path, loops_binary: Path) 
     np.testing.assert_array_equal(read.timestamps, times)
     np.testing.assert_array_equal(read.positions, positions[:, [0, 2]])  # the plane x-z
     np.testing.assert_array_equal(read.positions[:, 1], 10 * np.sin(steps))
+
+
+def _header(path: Path) -> list[str]:
+    return path.read_text().splitlines()[0].split(",")
+
+
+def test_cli_csv_headers_are_the_python_columns(tmp_path: Path, loops_binary: Path) -> None:
+    """Each result table has one column list: the CLI's CSV header is the Python table's
+    columns, in order (less ``samples``, a count only the files carry; a fleet's components less
+    the joint component's ``pose_pair_count`` and ``run_count``, which a store or a tile merge
+    does not keep)."""
+    monday, tuesday = tmp_path / "monday.tum", tmp_path / "tuesday.tum"
+    write_tum(monday, il.urban_drive(duration_s=300.0, seed=1))
+    write_tum(tuesday, il.urban_drive(duration_s=300.0, seed=2))
+    out = tmp_path / "fleet"
+    subprocess.run(
+        [loops_binary, "fleet", monday, tuesday, "--gamma", "30", "--out", out],
+        check=True,
+        capture_output=True,
+    )
+    traj = il.read_trajectory(monday)
+    loops = il.find_loops(traj, gamma=30.0)
+    fleet = il.Fleet([monday, tuesday])
+    fleet_loops = il.find_fleet_loops(fleet, gamma=30.0)
+    joint_only = {"pose_pair_count", "run_count", "samples"}
+
+    assert list(loops.components) == [
+        c for c in _header(out / "monday" / "components.csv") if c != "samples"
+    ]
+    assert list(fleet_loops.components) == [
+        c for c in _header(out / "components.csv") if c not in joint_only
+    ]
+    assert list(fleet_loops.session_pairs()) == _header(out / "session_pairs.csv")
+    online = il.OnlineLoops(gamma=30.0, dim=traj.dim)
+    online.push_many(traj.timestamps, traj.positions)
+    online_columns = [c for c in online.components if c not in ("first_pose", "last_pose")]
+    assert online_columns == [
+        c
+        for c in _header(out / "monday" / "components.csv")
+        if c not in ("pose_pair_count", "samples")
+    ]
