@@ -82,17 +82,7 @@ class Results:
         the number of
         seeds, the median ATE and RPE and the ATE's spread (min, max, and the interquartile
         range), the median candidates, matches and wrong matches."""
-        keys = (
-            "dataset",
-            "sampler",
-            "source",
-            "on",
-            "separation",
-            "outlier_rate",
-            "verifier",
-            "rounds",
-            "budget",
-        )
+        keys = COLUMNS[: COLUMNS.index("budget") + 1]  # a run's conditions: dataset ... budget
         return [
             group
             | {"rpe_median_m": float(np.median([r["rpe_m"] for r in rows]))}
