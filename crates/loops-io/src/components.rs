@@ -196,19 +196,12 @@ impl ComponentExtent {
     ) -> Self {
         let [[i_min, i_max], [j_min, j_max]] = ranges;
         let [t, t_prime] = timestamps_s;
-        Self {
-            i_min,
-            i_max,
-            j_min,
-            j_max,
-            t_min_s: t[i_min],
-            t_max_s: t[i_max],
-            t_prime_min_s: t_prime[j_min],
-            t_prime_max_s: t_prime[j_max],
-            closest_i: closest_pair[0],
-            closest_j: closest_pair[1],
+        Self::from_times(
+            ranges,
+            closest_pair,
             closest_distance,
-        }
+            [[t[i_min], t[i_max]], [t_prime[j_min], t_prime[j_max]]],
+        )
     }
 }
 
