@@ -152,8 +152,8 @@ def on_cluster(paths: list[str], block: int | None) -> dict:
             samples = run.sample("rho", budget=BUDGET, seed=0)
         total_s = time.perf_counter() - started
         peaks = client.run(peak_mb)
-        runs_held = client.run(lambda: il_dask._runs_held)
-        counts = client.run(lambda: dict(il_dask._runs_counts)).values()
+        runs_held = client.run(lambda: il_dask._cache._runs_held)
+        counts = client.run(lambda: dict(il_dask._cache._runs_counts)).values()
         tasks: dict[str, list[float]] = {}
         for t in stream.data:
             prefix = t["key"].split("-")[0] + "-" + t["key"].split("-")[1]

@@ -1,6 +1,7 @@
 """The same input through the CLI, the Python API and the file reader gives the same answer."""
 
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -104,3 +105,142 @@ def test_mcap_through_python_and_cli(tmp_path: Path, loops_binary: Path) -> None
         assert np.all(np.diff(traj.timestamps) > 0)
         read += 1
     assert read == len(readable)
+
+
+def _write_drive(path: Path, t0: float, n: int, *, repeat: int, stretch: int) -> None:
+    """A TUM file of `n` poses on a circle from `t0`, pose `repeat` written twice (its stamp
+    repeated, the copy elsewhere) and the quaternion of pose `stretch` 0.4 % off unit length."""
+    lines = ["# timestamp tx ty tz qx qy qz qw"]
+    for k in range(n):
+        t, a = t0 + 0.5 * k, 0.3 * (t0 + k)
+        q = [0.0, 0.0, math.sin(a / 2), math.cos(a / 2)]
+        if k == stretch:
+            q = [1.004 * v for v in q]
+        row = [t, 10 * math.cos(a), 10 * math.sin(a), 0.01 * k, *q]
+        lines.append(" ".join(repr(float(v)) for v in row))
+        if k == repeat:
+            lines.append(f"{t!r} 99 99 99 0 0 0 1")
+    path.write_text("\n".join(lines) + "\n")
+
+
+def _cli_poses(folder: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The times and positions of a session as the CLI read them (its loop_duration.csv)."""
+    rows = np.genfromtxt(folder / "loop_duration.csv", delimiter=",", names=True)
+    return rows["t_s"], np.c_[rows["x"], rows["y"], rows["z"]]
+
+
+def test_cli_and_python_read_the_same_poses(tmp_path: Path, loops_binary: Path) -> None:
+    """The read options through both surfaces give the same poses: two files joined in time
+    order (given out of order), a repeated stamp dropped, a quaternion normalised within the
+    given tolerance, the SE(3) metric that needs the orientations, and a KITTI file by format,
+    rate and plane."""
+    early, late = tmp_path / "early.tum", tmp_path / "late.tum"
+    _write_drive(early, 0.0, 40, repeat=5, stretch=7)
+    _write_drive(late, 100.0, 40, repeat=30, stretch=3)
+    kitti = tmp_path / "poses.txt"
+    steps = np.linspace(0.0, 2 * np.pi, 30)
+    kitti.write_text(
+        "".join(
+            f"1 0 0 {10 * math.cos(a)!r} 0 1 0 {0.5 * a!r} 0 0 1 {10 * math.sin(a)!r}\n"
+            for a in steps.tolist()
+        )
+    )
+    metric = "se3(rotation_weight_m_per_rad=1)"
+    out = tmp_path / "out"
+    subprocess.run(
+        [
+            loops_binary,
+            "fleet",
+            "--session",
+            f"joined={late},{early}",
+            "--gamma",
+            "3",
+            "--out",
+            out,
+            "--drop-duplicate-stamps",
+            "--quaternion-tolerance",
+            "0.01",
+            "--metric",
+            metric,
+        ],
+        check=True,
+        capture_output=True,
+    )
+    with pytest.warns(il.DroppedInputWarning):
+        read = il.read_trajectory(
+            [late, early], drop_duplicate_stamps=True, quaternion_tolerance=0.01, metric=metric
+        )
+    times, positions = _cli_poses(out / "joined")
+    assert len(read) == len(times) == 80
+    np.testing.assert_array_equal(read.timestamps, times)
+    np.testing.assert_array_equal(read.positions[:, :3], positions)  # then the quaternion
+    np.testing.assert_allclose(np.linalg.norm(read.positions[:, 3:], axis=1), 1.0, atol=1e-12)
+    with pytest.raises(il.LoopsError, match="line 10"):  # the stretched quaternion, by default
+        il.read_trajectory(early, drop_duplicate_stamps=True, metric=metric)
+
+    out = tmp_path / "kitti"
+    subprocess.run(
+        [
+            loops_binary,
+            "run",
+            kitti,
+            "--gamma",
+            "3",
+            "--out",
+            out,
+            "--format",
+            "kitti",
+            "--rate-hz",
+            "10",
+            "--axes",
+            "0,2",
+        ],
+        check=True,
+        capture_output=True,
+    )
+    read = il.read_trajectory(kitti, format="kitti", rate_hz=10.0, axes=(0, 2))
+    times, positions = _cli_poses(out / "poses")
+    np.testing.assert_array_equal(read.timestamps, times)
+    np.testing.assert_array_equal(read.positions, positions[:, [0, 2]])  # the plane x-z
+    np.testing.assert_array_equal(read.positions[:, 1], 10 * np.sin(steps))
+
+
+def _header(path: Path) -> list[str]:
+    return path.read_text().splitlines()[0].split(",")
+
+
+def test_cli_csv_headers_are_the_python_columns(tmp_path: Path, loops_binary: Path) -> None:
+    """Each result table has one column list: the CLI's CSV header is the Python table's
+    columns, in order (less ``samples``, a count only the files carry; a fleet's components less
+    the joint component's ``pose_pair_count`` and ``run_count``, which a store or a tile merge
+    does not keep)."""
+    monday, tuesday = tmp_path / "monday.tum", tmp_path / "tuesday.tum"
+    write_tum(monday, il.urban_drive(duration_s=300.0, seed=1))
+    write_tum(tuesday, il.urban_drive(duration_s=300.0, seed=2))
+    out = tmp_path / "fleet"
+    subprocess.run(
+        [loops_binary, "fleet", monday, tuesday, "--gamma", "30", "--out", out],
+        check=True,
+        capture_output=True,
+    )
+    traj = il.read_trajectory(monday)
+    loops = il.find_loops(traj, gamma=30.0)
+    fleet = il.Fleet([monday, tuesday])
+    fleet_loops = il.find_fleet_loops(fleet, gamma=30.0)
+    joint_only = {"pose_pair_count", "run_count", "samples"}
+
+    assert list(loops.components) == [
+        c for c in _header(out / "monday" / "components.csv") if c != "samples"
+    ]
+    assert list(fleet_loops.components) == [
+        c for c in _header(out / "components.csv") if c not in joint_only
+    ]
+    assert list(fleet_loops.session_pairs()) == _header(out / "session_pairs.csv")
+    online = il.OnlineLoops(gamma=30.0, dim=traj.dim)
+    online.push_many(traj.timestamps, traj.positions)
+    online_columns = [c for c in online.components if c not in ("first_pose", "last_pose")]
+    assert online_columns == [
+        c
+        for c in _header(out / "monday" / "components.csv")
+        if c not in ("pose_pair_count", "samples")
+    ]

@@ -493,9 +493,10 @@ class Loops:
         (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
         set for a trivial one), ``pair_count`` (int64, cells, same rule), ``pose_pair_count`` (int64, pairs
         of distinct poses i < j: they sum to :attr:`pose_pair_count`), ``run_count``, ``holes`` (int64),
-        ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
-        ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
-        ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
+        ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``t_min_s``, ``t_max_s``,
+        ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds), ``closest_i``, ``closest_j``
+        (int64) and ``closest_distance`` (float64, the metric's unit): the columns of
+        ``components.csv``, in its order.
 
         Example:
             >>> import numpy as np, inexact_loops as il
@@ -714,8 +715,8 @@ class Loops:
         overwrite: bool = False,
     ) -> None:
         """Writes ``components.csv``, the file ``loops run`` writes: one row per component, by id,
-        with the columns of :attr:`components` (``id, trivial, area_s2, pair_count, run_count,
-        holes, i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
+        with the columns of :attr:`components` (``id, trivial, area_s2, pair_count, pose_pair_count,
+        run_count, holes, i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
         closest_i, closest_j, closest_distance``) and, with ``samples_per_component``, a last
         column ``samples``. Numbers are printed in the shortest form that reads back as the same
         float. Atomic (a temporary file renamed into place).

@@ -135,7 +135,8 @@ def test_every_surface_names_sessions_alike(bags, tmp_path):
     }
     for k, (way, expected) in enumerate(ways.items()):
         assert il.Fleet([way, tum]).names == [expected, "monday"], way
-        assert [name for name, _ in dask._named_sources([way, tum])] == [expected, "monday"], way
+        named = dask._tasks.named_sources([way, tum])
+        assert [name for name, _ in named] == [expected, "monday"], way
         out = tmp_path / f"out{k}"
         run = subprocess.run(
             [sys.executable, "-m", "inexact_loops._cli", "fleet", str(way), str(tum)]

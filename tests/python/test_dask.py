@@ -593,7 +593,7 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
 
 def runs_counts(client) -> dict[str, int]:
     """The draws from kept runs ("hits") and from rescans ("misses") of every worker so far."""
-    counts = client.run(lambda: dict(il_dask._runs_counts)).values()
+    counts = client.run(lambda: dict(il_dask._cache._runs_counts)).values()
     return {k: sum(c[k] for c in counts) for k in ("hits", "misses")}
 
 
@@ -617,7 +617,7 @@ def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypa
     hits = runs_counts(client)
     assert hits["hits"] > before["hits"], "no draw found its tile's runs"
     # Every kept run dropped between the scan and the draw: the draws rescan, the same samples.
-    client.run(il_dask._forget_runs)
+    client.run(il_dask._cache._forget_runs)
     sample(run)
     misses = runs_counts(client)
     assert misses["hits"] == hits["hits"], "runs were found after they were dropped"
@@ -625,13 +625,13 @@ def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypa
     # In this process: every draw a hit; with nothing kept (RUNS_KEPT = 0), every one a miss.
     for kept, field in ((il_dask.RUNS_KEPT, "hits"), (0, "misses")):
         monkeypatch.setattr(il_dask, "RUNS_KEPT", kept)
-        il_dask._forget_runs()
-        counted = dict(il_dask._runs_counts)
+        il_dask._cache._forget_runs()
+        counted = dict(il_dask._cache._runs_counts)
         sample(find_fleet_loops_dask(paths, 1.5, block=block))
         other = "misses" if field == "hits" else "hits"
-        assert il_dask._runs_counts[other] == counted[other], f"RUNS_KEPT = {kept}"
-        assert il_dask._runs_counts[field] > counted[field], f"RUNS_KEPT = {kept}"
-    il_dask._forget_runs()
+        assert il_dask._cache._runs_counts[other] == counted[other], f"RUNS_KEPT = {kept}"
+        assert il_dask._cache._runs_counts[field] > counted[field], f"RUNS_KEPT = {kept}"
+    il_dask._cache._forget_runs()
     # By hand: a tile's kept runs offer what its rescan offers, and only for that tile.
     sessions = [il.read_trajectory(p) for p in paths]
     starts = np.cumsum([0] + [len(t) for t in sessions])

@@ -20,6 +20,7 @@ import pytest
 
 import inexact_loops as il
 from inexact_loops import evaluate as ev
+from inexact_loops.evaluate import _poses
 
 #: The back-end tests: skipped, saying why, without GTSAM (conftest.py).
 needs_gtsam = pytest.mark.gtsam
@@ -40,7 +41,7 @@ def random_se3(n: int, seed: int) -> ev.Poses:
     m[0] = np.eye(4)
     for k in range(1, n):
         step = np.eye(4)
-        step[:3, :3] = ev._rot3(rng.normal(0.0, 0.1, 3))
+        step[:3, :3] = _poses.rot3(rng.normal(0.0, 0.1, 3))
         step[:3, 3] = [1.0 + rng.normal(0, 0.1), rng.normal(0, 0.1), rng.normal(0, 0.1)]
         m[k] = m[k - 1] @ step
     return ev.Poses(np.arange(n, dtype=float) * 0.1, m)
@@ -48,7 +49,7 @@ def random_se3(n: int, seed: int) -> ev.Poses:
 
 def lift(poses: ev.Poses) -> ev.Poses:
     """SE(2) poses as SE(3) at z = 0."""
-    return ev.Poses(poses.timestamps, ev._lift3(poses.matrices))
+    return ev.Poses(poses.timestamps, _poses._lift3(poses.matrices))
 
 
 EXACT = ev.DriftModel(
@@ -97,8 +98,8 @@ def test_rotations_equal_scipys():
     ours = poses.quaternions_xyzw
     assert np.allclose(ours, q * np.sign(q[:, 3:]))
     v = rotations.as_rotvec()
-    assert np.allclose(ev._rot3(v), rotations.as_matrix())
-    assert np.allclose(ev._rot3(np.zeros((1, 3))), np.eye(3))
+    assert np.allclose(_poses.rot3(v), rotations.as_matrix())
+    assert np.allclose(_poses.rot3(np.zeros((1, 3))), np.eye(3))
 
 
 def test_headings_follow_the_motion_and_hold_at_stops():

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import inexact_loops as il
-from inexact_loops import _fleet_evaluate
 from inexact_loops import evaluate as ev
+from inexact_loops.evaluate import _fleet, _poses
 
 #: The back-end tests: skipped, saying why, without GTSAM (conftest.py).
 needs_gtsam = pytest.mark.gtsam
@@ -56,7 +56,9 @@ def three_sessions(dim: int = 2) -> dict[str, ev.Poses]:
         "south": circuit((310.0, 160.0), 4.0),
     }
     if dim == 3:
-        sessions = {n: ev.Poses(p.timestamps, ev._lift3(p.matrices)) for n, p in sessions.items()}
+        sessions = {
+            n: ev.Poses(p.timestamps, _poses._lift3(p.matrices)) for n, p in sessions.items()
+        }
     return sessions
 
 
@@ -136,7 +138,7 @@ def test_fleet_errors_follow_their_definitions():
     assert errors.session_rms_m == pytest.approx(0.0, abs=1e-9)
     assert 0.5 < errors.ate_m < 3.0
     # Pairs involving east: error exactly 3 m; pairs of north with south: 0.
-    i, j = _fleet_evaluate._inter_pairs(list(refs.items()), 5.0)
+    i, j = _fleet._inter_pairs(list(refs.items()), 5.0)
     starts = starts_of(refs)
     east = (np.searchsorted(starts, i, side="right") == 2) | (
         np.searchsorted(starts, j, side="right") == 2

@@ -279,9 +279,9 @@ TABLES = {
     "Loops.components": (lambda r: r.loops.components, {
         "id": "int64", "trivial": "bool", "area_s2": "float64", "pair_count": "int64",
         "pose_pair_count": "int64", "run_count": "int64", "holes": "int64",
+        "i_min": "int64", "i_max": "int64", "j_min": "int64", "j_max": "int64",
         "t_min_s": "float64", "t_max_s": "float64",
-        "t_prime_min_s": "float64", "t_prime_max_s": "float64", "i_min": "int64",
-        "i_max": "int64", "j_min": "int64", "j_max": "int64", "closest_i": "int64",
+        "t_prime_min_s": "float64", "t_prime_max_s": "float64", "closest_i": "int64",
         "closest_j": "int64", "closest_distance": "float64",
     }),
     "Loops.runs": (lambda r: r.loops.runs(), {

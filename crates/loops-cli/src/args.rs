@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 use loops_core::{DEFAULT_EPSILON_S, Manifold, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory};
-use loops_io::{Format, PoseTable};
+use loops_io::PoseTable;
 
 /// The flags that say how to read a pose file, shared by every command that reads one.
 #[derive(Debug, Args)]
@@ -89,7 +89,10 @@ impl InputArgs {
         if let Some(times) = &self.times {
             options = options.timing(loops_io::Timing::TimesFile(times.clone()));
         }
-        Ok(options.chain_edges(self.chain_edges))
+        Ok(options
+            .chain_edges(self.chain_edges)
+            .drop_duplicate_stamps(self.drop_duplicate_stamps)
+            .quaternion_tolerance(self.quaternion_tolerance))
     }
 
     /// Reads `files` as one trajectory: the poses as read (orientations included) and the
@@ -100,57 +103,26 @@ impl InputArgs {
     /// and line). Each file's dropped duplicate stamps (--drop-duplicate-stamps) are one line
     /// on stderr, as is each pose graph chained from its edges (--chain-edges: dead reckoning).
     pub(crate) fn read_table(&self, files: &[PathBuf], spec: &MetricSpec) -> Result<(PoseTable, Trajectory)> {
-        let axes = self.plane()?;
-        let options = self.options()?;
-        let is_mcap = |file: &PathBuf| options.format.or_else(|| Format::detect(file)) == Some(Format::Mcap);
-        let mut tables = if files.len() > 1 && files.iter().all(is_mcap) {
-            vec![loops_io::read_mcap_files(files, &options.mcap)?]
-        } else {
-            let mut tables = Vec::with_capacity(files.len());
-            for file in files {
-                let (table, notes) = loops_io::read_trajectory_chaining(file, &options)?;
-                for warning in notes.warnings() {
-                    eprintln!("loops: warning: {warning}");
-                }
-                tables.push(table);
-            }
-            tables
-        };
-        for table in &mut tables {
-            if self.drop_duplicate_stamps {
-                let dropped = table.drop_duplicate_stamps();
-                if !dropped.is_empty() {
-                    let lines = dropped.lines_text().map_or(String::new(), |lines| format!(" ({lines})"));
-                    eprintln!(
-                        "loops: {}: --drop-duplicate-stamps dropped {} pose(s) whose timestamp repeats the one \
-                         before{lines}",
-                        dropped.path.display(),
-                        dropped.count
-                    );
-                }
-            }
-            if let Some(tolerance) = self.quaternion_tolerance {
-                table.normalize_orientations(tolerance).map_err(|error| self.hint(error))?;
-            }
+        let plane = self.plane()?;
+        // --axes with a metric of whole poses draws the maps only: checked, not measured.
+        let takes_plane = loops_io::metric_takes_plane(spec);
+        let read = loops_io::read_trajectories(files, &self.options()?, spec, plane.filter(|_| takes_plane))
+            .map_err(|error| self.hint(error))?;
+        for warning in read.notes.iter().flat_map(loops_io::ReadNotes::warnings) {
+            eprintln!("loops: warning: {warning}");
         }
-        let trajectory = |table: &PoseTable| -> Result<Trajectory> {
-            let axes = match axes {
-                Some(axes) if !loops_io::metric_takes_plane(spec) => {
-                    table.check_plane(axes)?;
-                    None
-                }
-                axes => axes,
-            };
-            table.to_trajectory_for(spec, axes).map_err(|error| self.hint(error))
-        };
-        if tables.len() > 1 {
-            for table in &tables {
-                trajectory(table)?;
-            }
+        for dropped in read.dropped.iter().filter(|dropped| !dropped.is_empty()) {
+            let lines = dropped.lines_text().map_or(String::new(), |lines| format!(" ({lines})"));
+            eprintln!(
+                "loops: {}: --drop-duplicate-stamps dropped {} pose(s) whose timestamp repeats the one before{lines}",
+                dropped.path.display(),
+                dropped.count
+            );
         }
-        let table = PoseTable::join(tables)?;
-        let traj = trajectory(&table)?;
-        Ok((table, traj))
+        if let Some(plane) = plane.filter(|_| !takes_plane) {
+            read.table.check_plane(plane)?;
+        }
+        Ok((read.table, read.trajectory))
     }
 
     /// The plane of `--axes`, if given: two position axes.

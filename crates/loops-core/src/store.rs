@@ -61,8 +61,8 @@ use crate::sample::{DrawCandidates, KeyedDraw, Sampler};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
+use crate::tile::draw::{TileDuration, draw_session_tile, scan_session_tile_with_duration, tile_requests};
 use crate::tile::{MergedLoops, SessionBlocks, Tile, TileMerge, TileSummary, plan_session_tiles_touching};
-use crate::tile_draw::{TileDuration, draw_session_tile, scan_session_tile_with_duration, tile_requests};
 use crate::trajectory::{Manifold, Trajectory};
 
 /// The version of a store's layout (its tables and their meaning); a store of another version
@@ -627,7 +627,7 @@ impl FleetStore {
         }
         let (mut own, mut other) = (Vec::new(), Vec::new());
         for (a, (s, start)) in self.sessions.iter().zip(self.starts()).enumerate() {
-            let (o, x) = crate::tile_draw::session_loop_duration(a, start, s.poses(), of_session[a].iter().copied())?;
+            let (o, x) = crate::tile::draw::session_loop_duration(a, start, s.poses(), of_session[a].iter().copied())?;
             own.extend(o);
             other.extend(x);
         }

@@ -157,6 +157,31 @@ pub struct ComponentExtent {
 }
 
 impl ComponentExtent {
+    /// The extent of a component whose pose ranges' times are known already: `times_s` is
+    /// `[[t_min, t_max], [t′_min, t′_max]]` (a fleet component's on its sessions' clocks).
+    pub fn from_times(
+        ranges: [[usize; 2]; 2],
+        closest_pair: [usize; 2],
+        closest_distance: f64,
+        times_s: [[f64; 2]; 2],
+    ) -> Self {
+        let [[i_min, i_max], [j_min, j_max]] = ranges;
+        let [[t_min_s, t_max_s], [t_prime_min_s, t_prime_max_s]] = times_s;
+        Self {
+            i_min,
+            i_max,
+            j_min,
+            j_max,
+            t_min_s,
+            t_max_s,
+            t_prime_min_s,
+            t_prime_max_s,
+            closest_i: closest_pair[0],
+            closest_j: closest_pair[1],
+            closest_distance,
+        }
+    }
+
     /// The extent of a component with the index ranges `[[i_min, i_max], [j_min, j_max]]`, its
     /// closest pair `[i, j]` at δ `closest_distance`, and the timestamps of the poses `i` index
     /// and of those `j` index (the same trajectory's twice, or two sessions').
@@ -171,19 +196,12 @@ impl ComponentExtent {
     ) -> Self {
         let [[i_min, i_max], [j_min, j_max]] = ranges;
         let [t, t_prime] = timestamps_s;
-        Self {
-            i_min,
-            i_max,
-            j_min,
-            j_max,
-            t_min_s: t[i_min],
-            t_max_s: t[i_max],
-            t_prime_min_s: t_prime[j_min],
-            t_prime_max_s: t_prime[j_max],
-            closest_i: closest_pair[0],
-            closest_j: closest_pair[1],
+        Self::from_times(
+            ranges,
+            closest_pair,
             closest_distance,
-        }
+            [[t[i_min], t[i_max]], [t_prime[j_min], t_prime[j_max]]],
+        )
     }
 }
 

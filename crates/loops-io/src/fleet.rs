@@ -179,20 +179,27 @@ pub struct SessionPairRow {
 /// # Panics
 /// When `loops` were found on another fleet (a session `fleet` does not have).
 pub fn session_pair_rows(fleet: &Fleet, loops: &FleetLoops) -> Vec<SessionPairRow> {
-    loops
-        .session_pairs()
-        .into_iter()
-        .map(|p| SessionPairRow {
-            session_a: p.sessions[0],
-            session_b: p.sessions[1],
-            name_a: fleet.names()[p.sessions[0]].clone(),
-            name_b: fleet.names()[p.sessions[1]].clone(),
-            components: p.components,
-            pair_count: p.pair_count,
-            area_s2: p.area_s2,
-            density: p.density,
-        })
-        .collect()
+    loops.session_pairs().iter().map(|pair| SessionPairRow::new(pair, fleet.names())).collect()
+}
+
+impl SessionPairRow {
+    /// The row of `pair`, its sessions named by `names` (the fleet's, in fleet order).
+    ///
+    /// # Panics
+    /// When `names` has no name for a session of `pair`.
+    pub fn new(pair: &loops_core::SessionPair, names: &[String]) -> Self {
+        let [a, b] = pair.sessions;
+        Self {
+            session_a: a,
+            session_b: b,
+            name_a: names[a].clone(),
+            name_b: names[b].clone(),
+            components: pair.components,
+            pair_count: pair.pair_count,
+            area_s2: pair.area_s2,
+            density: pair.density,
+        }
+    }
 }
 
 /// Writes `session_pairs.csv` to `out`: a header of [`SESSION_PAIR_COLUMNS`], then the

@@ -53,7 +53,8 @@
 //! are errors; [`PoseTable::drop_duplicate_stamps`] and [`DetectionTable::drop_outside_span`]
 //! drop them and say how many, as [`Dropped`]). Several files read as one trajectory:
 //! [`read_mcap_files`] merges MCAP files by time, [`PoseTable::join`] joins files that follow
-//! one another.
+//! one another; [`read_trajectories`] is the whole pipeline (formats, joining, dropped stamps,
+//! quaternion tolerance, the metric's trajectory) that the command line and Python share.
 //!
 //! ## Quickstart
 //! ```
@@ -175,8 +176,8 @@ pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
 pub use quality::QualitySummary;
 pub use read::{
-    ReadNotes, ReadOptions, format_of, read_pose_graph_with, read_trajectory, read_trajectory_chaining,
-    read_trajectory_with,
+    ReadNotes, ReadOptions, ReadPoses, format_of, read_pose_graph_with, read_trajectories, read_trajectory,
+    read_trajectory_chaining, read_trajectory_with,
 };
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
 pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};

@@ -2,14 +2,17 @@
 
 use std::path::Path;
 
+use loops_core::{MetricSpec, Trajectory};
+
 use crate::bag::{read_ros1, read_rosbag2};
 use crate::csv::parse_csv;
+use crate::dropped::Dropped;
 use crate::error::{IoError, Result};
 use crate::euroc::{looks_like_euroc, parse_euroc};
 use crate::format::Format;
 use crate::graph::{EdgeChain, PoseGraph, SkippedRecords, looks_like_graph, parse_pose_graph};
 use crate::kitti::parse_kitti;
-use crate::mcap::{McapOptions, read_mcap};
+use crate::mcap::{McapOptions, read_mcap, read_mcap_files};
 use crate::table::PoseTable;
 use crate::text::{self, Delimiter};
 use crate::timing::Timing;
@@ -41,6 +44,14 @@ pub struct ReadOptions {
     /// is dead reckoning; [`read_pose_graph_with`] says whether a file was chained
     /// ([`PoseGraph::chain`]). Without it such a file is an error that names this option.
     pub chain_edges: bool,
+    /// For [`read_trajectories`]: drop the poses whose timestamp repeats the one before
+    /// (keeping the first of each, [`PoseTable::drop_duplicate_stamps`]); without it they are
+    /// an error naming the line.
+    pub drop_duplicate_stamps: bool,
+    /// For [`read_trajectories`]: normalise quaternions within this distance of unit length
+    /// ([`PoseTable::normalize_orientations`]); `None` leaves the trajectory's own tolerance
+    /// ([`FILE_QUATERNION_TOLERANCE`](loops_core::FILE_QUATERNION_TOLERANCE)).
+    pub quaternion_tolerance: Option<f64>,
 }
 
 impl ReadOptions {
@@ -67,6 +78,108 @@ impl ReadOptions {
         self.chain_edges = chain_edges;
         self
     }
+
+    /// Drops repeated timestamps ([`drop_duplicate_stamps`](Self::drop_duplicate_stamps)).
+    pub fn drop_duplicate_stamps(mut self, drop: bool) -> Self {
+        self.drop_duplicate_stamps = drop;
+        self
+    }
+
+    /// Normalises quaternions within `tolerance` of unit length
+    /// ([`quaternion_tolerance`](Self::quaternion_tolerance)).
+    pub fn quaternion_tolerance(mut self, tolerance: Option<f64>) -> Self {
+        self.quaternion_tolerance = tolerance;
+        self
+    }
+}
+
+/// What [`read_trajectories`] read: the files' poses joined, the trajectory the metric takes
+/// from them, and what the caller should warn about.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct ReadPoses {
+    /// The poses of every file, joined in time order (orientations included).
+    pub table: PoseTable,
+    /// The trajectory the metric takes from [`table`](Self::table).
+    pub trajectory: Trajectory,
+    /// Each file's notes (dead reckoning, skipped records), in the order the files were given.
+    pub notes: Vec<ReadNotes>,
+    /// With [`ReadOptions::drop_duplicate_stamps`]: what was dropped of each table (empty ones
+    /// too), in the order they were read.
+    pub dropped: Vec<Dropped>,
+}
+
+/// Reads `paths` as one trajectory for `metric`, on the plane `axes` when given: the one read
+/// pipeline of the command line and the Python API.
+///
+/// Several MCAP files are merged by time ([`read_mcap_files`]: a recording split in parts);
+/// other files are read one by one ([`read_trajectory_chaining`], the format of each from
+/// `options.format` or its extension and first lines) and must follow one another in time
+/// ([`PoseTable::join`]). Each table then has its repeated stamps dropped
+/// (`options.drop_duplicate_stamps`) and its quaternions normalised
+/// (`options.quaternion_tolerance`); with several files each is converted first, so that an
+/// error names its file and line, then the joined table
+/// ([`PoseTable::to_trajectory_for`]).
+///
+/// # Errors
+/// As [`read_trajectory_chaining`], [`read_mcap_files`], [`PoseTable::normalize_orientations`],
+/// [`PoseTable::join`] (also for an empty `paths`) and [`PoseTable::to_trajectory_for`].
+///
+/// # Examples
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use loops_core::MetricSpec;
+/// use loops_io::{ReadOptions, read_trajectories};
+///
+/// let dir = std::env::temp_dir().join(format!("loops-io-doc-{}-many", std::process::id()));
+/// std::fs::create_dir_all(&dir)?;
+/// let (a, b) = (dir.join("a.csv"), dir.join("b.csv"));
+/// std::fs::write(&a, "t,x,y\n0,0,0\n1,1,0\n1,1,0\n")?;
+/// std::fs::write(&b, "t,x,y\n2,2,0\n3,3,0\n")?;
+/// let options = ReadOptions::default().drop_duplicate_stamps(true);
+/// let read = read_trajectories(&[&b, &a], &options, &MetricSpec::Euclidean, None)?;
+/// assert_eq!(read.trajectory.len(), 4);
+/// assert_eq!(read.dropped.iter().map(|d| d.count).sum::<usize>(), 1);
+/// # std::fs::remove_dir_all(&dir)?;
+/// # Ok(())
+/// # }
+/// ```
+pub fn read_trajectories<P: AsRef<Path>>(
+    paths: &[P],
+    options: &ReadOptions,
+    metric: &MetricSpec,
+    axes: Option<[usize; 2]>,
+) -> Result<ReadPoses> {
+    let is_mcap = |path: &P| options.format.or_else(|| Format::detect(path.as_ref())) == Some(Format::Mcap);
+    let mut notes = Vec::new();
+    let mut tables = if paths.len() > 1 && paths.iter().all(is_mcap) {
+        vec![read_mcap_files(paths, &options.mcap)?]
+    } else {
+        let mut tables = Vec::with_capacity(paths.len());
+        for path in paths {
+            let (table, note) = read_trajectory_chaining(path, options)?;
+            notes.push(note);
+            tables.push(table);
+        }
+        tables
+    };
+    let mut dropped = Vec::new();
+    for table in &mut tables {
+        if options.drop_duplicate_stamps {
+            dropped.push(table.drop_duplicate_stamps());
+        }
+        if let Some(tolerance) = options.quaternion_tolerance {
+            table.normalize_orientations(tolerance)?;
+        }
+    }
+    if tables.len() > 1 {
+        for table in &tables {
+            table.to_trajectory_for(metric, axes)?;
+        }
+    }
+    let table = PoseTable::join(tables)?;
+    let trajectory = table.to_trajectory_for(metric, axes)?;
+    Ok(ReadPoses { table, trajectory, notes, dropped })
 }
 
 /// Reads a pose graph as [`read_pose_graph`](crate::read_pose_graph) does, with the times of

@@ -278,3 +278,54 @@ pub(crate) fn data_frame<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     table(py, columns.into_iter().flatten())?.call_method0("to_pandas")
 }
+
+/// The measure columns of a components table ([`loops_io::MEASURE_COLUMNS`], named and ordered
+/// as in `components.csv`) of `rows`.
+pub(crate) fn measure_columns<'py>(
+    py: Python<'py>,
+    rows: &[loops_io::ComponentMeasures],
+) -> [(&'static str, Bound<'py, PyAny>); 6] {
+    let [trivial, area_s2, pair_count, pose_pair_count, run_count, holes] = loops_io::MEASURE_COLUMNS;
+    [
+        (trivial, bool_column(py, rows, |m| m.trivial)),
+        (area_s2, float64_column(py, rows, |m| m.area_s2)),
+        (pair_count, int64_column(py, rows, |m| m.pair_count as usize)),
+        (pose_pair_count, int64_column(py, rows, |m| m.pose_pair_count as usize)),
+        (run_count, int64_column(py, rows, |m| m.run_count)),
+        (holes, int64_column(py, rows, |m| m.holes as usize)),
+    ]
+}
+
+/// The extent columns of a components table ([`loops_io::EXTENT_COLUMNS`], named and ordered
+/// as in `components.csv`) of `rows`.
+pub(crate) fn extent_columns<'py>(
+    py: Python<'py>,
+    rows: &[loops_io::ComponentExtent],
+) -> [(&'static str, Bound<'py, PyAny>); 11] {
+    let [
+        i_min,
+        i_max,
+        j_min,
+        j_max,
+        t_min_s,
+        t_max_s,
+        t_prime_min_s,
+        t_prime_max_s,
+        closest_i,
+        closest_j,
+        closest_distance,
+    ] = loops_io::EXTENT_COLUMNS;
+    [
+        (i_min, int64_column(py, rows, |e| e.i_min)),
+        (i_max, int64_column(py, rows, |e| e.i_max)),
+        (j_min, int64_column(py, rows, |e| e.j_min)),
+        (j_max, int64_column(py, rows, |e| e.j_max)),
+        (t_min_s, float64_column(py, rows, |e| e.t_min_s)),
+        (t_max_s, float64_column(py, rows, |e| e.t_max_s)),
+        (t_prime_min_s, float64_column(py, rows, |e| e.t_prime_min_s)),
+        (t_prime_max_s, float64_column(py, rows, |e| e.t_prime_max_s)),
+        (closest_i, int64_column(py, rows, |e| e.closest_i)),
+        (closest_j, int64_column(py, rows, |e| e.closest_j)),
+        (closest_distance, float64_column(py, rows, |e| e.closest_distance)),
+    ]
+}

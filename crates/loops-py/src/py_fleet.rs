@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{IntoPyDict, PyBool, PyBytes, PyDict, PyList, PyString, PyTuple, PyType};
 
-use crate::convert::{bool_column, float64_column, int64_column, pose_index, table, to_numpy};
+use crate::convert::{bool_column, extent_columns, float64_column, int64_column, pose_index, table, to_numpy};
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::pickling::ReducedWith;
@@ -807,31 +807,29 @@ pub(crate) fn components_table<'py>(
     names: &[String],
     times: &[[[f64; 2]; 2]],
 ) -> PyResult<Bound<'py, PyAny>> {
-    table(
-        py,
-        [
-            ("id", int64_column(py, cs, |c| c.id)),
-            ("session_a", int64_column(py, cs, |c| c.sessions[0])),
-            ("session_b", int64_column(py, cs, |c| c.sessions[1])),
-            ("name_a", str_column(py, cs.iter().map(|c| names[c.sessions[0]].as_str()).collect())?),
-            ("name_b", str_column(py, cs.iter().map(|c| names[c.sessions[1]].as_str()).collect())?),
-            ("trivial", bool_column(py, cs, |c| c.trivial)),
-            ("area_s2", float64_column(py, cs, |c| c.area_s2)),
-            ("pair_count", int64_column(py, cs, |c| c.pair_count as usize)),
-            ("holes", int64_column(py, cs, |c| c.holes as usize)),
-            ("i_min", int64_column(py, cs, |c| c.poses[0][0])),
-            ("i_max", int64_column(py, cs, |c| c.poses[0][1])),
-            ("j_min", int64_column(py, cs, |c| c.poses[1][0])),
-            ("j_max", int64_column(py, cs, |c| c.poses[1][1])),
-            ("t_min_s", float64_column(py, times, |t| t[0][0])),
-            ("t_max_s", float64_column(py, times, |t| t[0][1])),
-            ("t_prime_min_s", float64_column(py, times, |t| t[1][0])),
-            ("t_prime_max_s", float64_column(py, times, |t| t[1][1])),
-            ("closest_i", int64_column(py, cs, |c| c.closest_pair[0])),
-            ("closest_j", int64_column(py, cs, |c| c.closest_pair[1])),
-            ("closest_distance", float64_column(py, cs, |c| c.closest_distance)),
-        ],
-    )
+    // The columns of a fleet's components.csv, in its order, less the joint component's
+    // pose_pair_count and run_count (a store's or a tile merge's components do not keep them).
+    let [id, session_a, session_b, name_a, name_b] = loops_io::FLEET_COMPONENT_COLUMNS[..5] else {
+        unreachable!("the block's columns")
+    };
+    let [trivial, area_s2, pair_count, _pose_pair_count, _run_count, holes] = loops_io::MEASURE_COLUMNS;
+    let extents: Vec<_> = cs
+        .iter()
+        .zip(times)
+        .map(|(c, &times)| loops_io::ComponentExtent::from_times(c.poses, c.closest_pair, c.closest_distance, times))
+        .collect();
+    let columns = [
+        (id, int64_column(py, cs, |c| c.id)),
+        (session_a, int64_column(py, cs, |c| c.sessions[0])),
+        (session_b, int64_column(py, cs, |c| c.sessions[1])),
+        (name_a, str_column(py, cs.iter().map(|c| names[c.sessions[0]].as_str()).collect())?),
+        (name_b, str_column(py, cs.iter().map(|c| names[c.sessions[1]].as_str()).collect())?),
+        (trivial, bool_column(py, cs, |c| c.trivial)),
+        (area_s2, float64_column(py, cs, |c| c.area_s2)),
+        (pair_count, int64_column(py, cs, |c| c.pair_count as usize)),
+        (holes, int64_column(py, cs, |c| c.holes as usize)),
+    ];
+    table(py, columns.into_iter().chain(extent_columns(py, &extents)))
 }
 
 /// The table of :meth:`FleetLoops.session_pairs` (see there).
@@ -840,17 +838,20 @@ pub(crate) fn session_pairs_table<'py>(
     ps: &[loops_core::SessionPair],
     names: &[String],
 ) -> PyResult<Bound<'py, PyAny>> {
+    let rows: Vec<_> = ps.iter().map(|pair| loops_io::SessionPairRow::new(pair, names)).collect();
+    let [session_a, session_b, name_a, name_b, components, pair_count, area_s2, density] =
+        loops_io::SESSION_PAIR_COLUMNS;
     table(
         py,
         [
-            ("session_a", int64_column(py, ps, |p| p.sessions[0])),
-            ("session_b", int64_column(py, ps, |p| p.sessions[1])),
-            ("name_a", str_column(py, ps.iter().map(|p| names[p.sessions[0]].as_str()).collect())?),
-            ("name_b", str_column(py, ps.iter().map(|p| names[p.sessions[1]].as_str()).collect())?),
-            ("components", int64_column(py, ps, |p| p.components)),
-            ("pair_count", int64_column(py, ps, |p| p.pair_count as usize)),
-            ("area_s2", float64_column(py, ps, |p| p.area_s2)),
-            ("density", float64_column(py, ps, |p| p.density)),
+            (session_a, int64_column(py, &rows, |r| r.session_a)),
+            (session_b, int64_column(py, &rows, |r| r.session_b)),
+            (name_a, str_column(py, rows.iter().map(|r| names[r.session_a].as_str()).collect())?),
+            (name_b, str_column(py, rows.iter().map(|r| names[r.session_b].as_str()).collect())?),
+            (components, int64_column(py, &rows, |r| r.components)),
+            (pair_count, int64_column(py, &rows, |r| r.pair_count as usize)),
+            (area_s2, float64_column(py, &rows, |r| r.area_s2)),
+            (density, float64_column(py, &rows, |r| r.density)),
         ],
     )
 }

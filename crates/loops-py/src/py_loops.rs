@@ -8,8 +8,8 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::convert::{
-    bool_column, float64_column, id_column, index_column, int64_column, pose_index, str_column, table, to_numpy,
-    try_column,
+    extent_columns, float64_column, id_column, index_column, int64_column, measure_columns, pose_index, str_column,
+    table, to_numpy, try_column,
 };
 use crate::detached;
 use crate::error::{Failure, value_error};
@@ -258,9 +258,10 @@ impl Loops {
     /// (bool), ``area_s2`` (float64, s²: the half t ≤ t′ for a non-trivial component, the whole
     /// set for a trivial one), ``pair_count`` (int64, cells, same rule), ``pose_pair_count`` (int64, pairs
     /// of distinct poses i < j: they sum to :attr:`pose_pair_count`), ``run_count``, ``holes`` (int64),
-    /// ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds),
-    /// ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``closest_i``,
-    /// ``closest_j`` (int64) and ``closest_distance`` (float64, the metric's unit).
+    /// ``i_min``, ``i_max``, ``j_min``, ``j_max`` (int64, index extents), ``t_min_s``, ``t_max_s``,
+    /// ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds), ``closest_i``, ``closest_j``
+    /// (int64) and ``closest_distance`` (float64, the metric's unit): the columns of
+    /// ``components.csv``, in its order.
     ///
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
@@ -271,31 +272,11 @@ impl Loops {
     ///     (dtype('int64'), [True, False], [199, 7])
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let cs = self.inner.components();
-        let t = self.inner.timestamps_s();
-        table(
-            py,
-            [
-                ("id", int64_column(py, cs, |c| c.id)),
-                ("trivial", bool_column(py, cs, |c| c.trivial)),
-                ("area_s2", float64_column(py, cs, |c| c.area_s2)),
-                ("pair_count", int64_column(py, cs, |c| c.pair_count as usize)),
-                ("pose_pair_count", int64_column(py, cs, |c| c.pose_pair_count as usize)),
-                ("run_count", int64_column(py, cs, |c| c.run_count)),
-                ("holes", int64_column(py, cs, |c| c.holes as usize)),
-                ("t_min_s", float64_column(py, cs, |c| t[c.i_range[0]])),
-                ("t_max_s", float64_column(py, cs, |c| t[c.i_range[1]])),
-                ("t_prime_min_s", float64_column(py, cs, |c| t[c.j_range[0]])),
-                ("t_prime_max_s", float64_column(py, cs, |c| t[c.j_range[1]])),
-                ("i_min", int64_column(py, cs, |c| c.i_range[0])),
-                ("i_max", int64_column(py, cs, |c| c.i_range[1])),
-                ("j_min", int64_column(py, cs, |c| c.j_range[0])),
-                ("j_max", int64_column(py, cs, |c| c.j_range[1])),
-                ("closest_i", int64_column(py, cs, |c| c.closest_pair[0])),
-                ("closest_j", int64_column(py, cs, |c| c.closest_pair[1])),
-                ("closest_distance", float64_column(py, cs, |c| c.closest_distance)),
-            ],
-        )
+        let rows = loops_io::component_rows(&self.inner, None);
+        let measures: Vec<_> = rows.iter().map(|row| row.measures).collect();
+        let extents: Vec<_> = rows.iter().map(|row| row.extent).collect();
+        let id = (loops_io::COMPONENT_COLUMNS[0], int64_column(py, &rows, |row| row.id));
+        table(py, std::iter::once(id).chain(measure_columns(py, &measures)).chain(extent_columns(py, &extents)))
     }
 
     /// The runs of S_γ's upper half (j ≥ i), row by row, as a :class:`~inexact_loops.Table` of
@@ -568,8 +549,8 @@ impl Loops {
     // tables the table's name first, as loops-io names the same writers.
 
     /// Writes ``components.csv``, the file ``loops run`` writes: one row per component, by id,
-    /// with the columns of :attr:`components` (``id, trivial, area_s2, pair_count, run_count,
-    /// holes, i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
+    /// with the columns of :attr:`components` (``id, trivial, area_s2, pair_count, pose_pair_count,
+    /// run_count, holes, i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
     /// closest_i, closest_j, closest_distance``) and, with ``samples_per_component``, a last
     /// column ``samples``. Numbers are printed in the shortest form that reads back as the same
     /// float. Atomic (a temporary file renamed into place).

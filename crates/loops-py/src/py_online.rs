@@ -8,7 +8,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyType};
 use serde::{Deserialize, Serialize};
 
-use crate::convert::{bool_column, float64_column, int64_column, real_array, table, timestamps_and_points, to_numpy};
+use crate::convert::{
+    bool_column, extent_columns, float64_column, int64_column, real_array, table, timestamps_and_points, to_numpy,
+};
 use crate::detached;
 use crate::error::{Failure, value_error};
 use crate::py_loops::Loops;
@@ -439,30 +441,27 @@ impl OnlineLoops {
         let this = self.engine.lock(py)?;
         let cs: Vec<&loops_core::OnlineComponent> = this.inner.components().map(|(_, c)| c).collect();
         let t = this.inner.timestamps_s();
-        table(
-            py,
-            [
-                ("id", int64_column(py, &cs, |c| c.id as usize)),
-                ("trivial", bool_column(py, &cs, |c| c.trivial)),
-                ("area_s2", float64_column(py, &cs, |c| c.area_s2)),
-                ("pair_count", int64_column(py, &cs, |c| c.pair_count as usize)),
-                ("run_count", int64_column(py, &cs, |c| c.run_count)),
-                ("holes", int64_column(py, &cs, |c| c.holes as usize)),
-                ("t_min_s", float64_column(py, &cs, |c| t[c.i_range[0]])),
-                ("t_max_s", float64_column(py, &cs, |c| t[c.i_range[1]])),
-                ("t_prime_min_s", float64_column(py, &cs, |c| t[c.j_range[0]])),
-                ("t_prime_max_s", float64_column(py, &cs, |c| t[c.j_range[1]])),
-                ("i_min", int64_column(py, &cs, |c| c.i_range[0])),
-                ("i_max", int64_column(py, &cs, |c| c.i_range[1])),
-                ("j_min", int64_column(py, &cs, |c| c.j_range[0])),
-                ("j_max", int64_column(py, &cs, |c| c.j_range[1])),
-                ("closest_i", int64_column(py, &cs, |c| c.closest_pair[0])),
-                ("closest_j", int64_column(py, &cs, |c| c.closest_pair[1])),
-                ("closest_distance", float64_column(py, &cs, |c| c.closest_distance)),
-                ("first_pose", int64_column(py, &cs, |c| c.first_pose)),
-                ("last_pose", int64_column(py, &cs, |c| c.last_pose)),
-            ],
-        )
+        // The columns of components.csv, in its order (less pose_pair_count, which the online
+        // engine does not count), then the online ones.
+        let id = loops_io::COMPONENT_COLUMNS[0];
+        let [trivial, area_s2, pair_count, _pose_pair_count, run_count, holes] = loops_io::MEASURE_COLUMNS;
+        let extents: Vec<_> = cs
+            .iter()
+            .map(|c| loops_io::ComponentExtent::new([c.i_range, c.j_range], c.closest_pair, c.closest_distance, [t; 2]))
+            .collect();
+        let measures = [
+            (id, int64_column(py, &cs, |c| c.id as usize)),
+            (trivial, bool_column(py, &cs, |c| c.trivial)),
+            (area_s2, float64_column(py, &cs, |c| c.area_s2)),
+            (pair_count, int64_column(py, &cs, |c| c.pair_count as usize)),
+            (run_count, int64_column(py, &cs, |c| c.run_count)),
+            (holes, int64_column(py, &cs, |c| c.holes as usize)),
+        ];
+        let online = [
+            ("first_pose", int64_column(py, &cs, |c| c.first_pose)),
+            ("last_pose", int64_column(py, &cs, |c| c.last_pose)),
+        ];
+        table(py, measures.into_iter().chain(extent_columns(py, &extents)).chain(online))
     }
 }
 

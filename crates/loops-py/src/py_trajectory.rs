@@ -696,40 +696,14 @@ pub(crate) fn read_trajectory(
         if let Some(times) = times {
             options = options.timing(loops_io::Timing::TimesFile(times));
         }
-        options = options.chain_edges(chain_edges);
-        let mut chains = Vec::new();
-        let mut skipped = Vec::new();
-        let is_mcap =
-            |path: &PathBuf| options.format.or_else(|| loops_io::Format::detect(path)) == Some(loops_io::Format::Mcap);
-        let mut tables = if paths.len() > 1 && paths.iter().all(is_mcap) {
-            vec![loops_io::read_mcap_files(&paths, &options.mcap)?]
-        } else {
-            let mut tables = Vec::with_capacity(paths.len());
-            for path in paths {
-                let (table, notes) = loops_io::read_trajectory_chaining(path, &options)?;
-                chains.extend(notes.chain);
-                skipped.extend(notes.skipped);
-                tables.push(table);
-            }
-            tables
-        };
-        let mut dropped = Vec::new();
-        for table in &mut tables {
-            if drop_duplicate_stamps {
-                dropped.push(table.drop_duplicate_stamps());
-            }
-            if let Some(tolerance) = quaternion_tolerance {
-                table.normalize_orientations(tolerance)?;
-            }
-        }
-        // Each file first, so that an error names its file and line.
-        if tables.len() > 1 {
-            for table in &tables {
-                trajectory_for(table, &spec, axes, Source::File)?;
-            }
-        }
-        let table = loops_io::PoseTable::join(tables)?;
-        Ok((trajectory_for(&table, &spec, axes, Source::File)?, dropped, (chains, skipped)))
+        options = options
+            .chain_edges(chain_edges)
+            .drop_duplicate_stamps(drop_duplicate_stamps)
+            .quaternion_tolerance(quaternion_tolerance);
+        let read = loops_io::read_trajectories(&paths, &options, &spec, axes.map(|(a, b)| [a, b]))?;
+        let chains = read.notes.iter().filter_map(|notes| notes.chain.clone()).collect::<Vec<_>>();
+        let skipped = read.notes.into_iter().filter_map(|notes| notes.skipped).collect::<Vec<_>>();
+        Ok::<_, Failure>((read.trajectory, read.dropped, (chains, skipped)))
     })?;
     let (chains, skipped) = chains;
     for chain in chains {

@@ -49,52 +49,24 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ._core import Fleet, FleetLoops, Separation, find_fleet_loops, sample_fleet, sampler_symbol
-from .errors import InvalidParameterError, LoopsWarning
-from .evaluate import (
-    BASELINES,
-    COLOURS,
-    SAMPLERS,
-    BackEnd,
-    DriftModel,
-    Matches,
-    Odometry,
-    Poses,
-    Verifier,
-    _check_rule,
-    _curves,
-    _finish_axes,
-    _gtsam,
-    _inverse,
-    _json_default,
-    _medians,
-    _noise,
-    _pose_value,
-    _read_csv,
-    _solve,
-    _summary_groups,
-    _write_csv,
-    ape_errors,
+from .._core import (
+    Fleet,
+    FleetLoops,
+    Separation,
+    find_fleet_loops,
+    sample_fleet,
+    sampler_symbol,
 )
-from .table import Table
-
-__all__ = [
-    "FLEET_COLUMNS",
-    "SESSION_COLUMNS",
-    "FleetErrors",
-    "FleetResults",
-    "FleetRule",
-    "choose_fleet_candidates",
-    "evaluate_fleet",
-    "evaluate_fleet_one",
-    "fleet_errors",
-    "fleet_references",
-    "optimize_fleet",
-    "place_sessions",
-    "plot_fleet_error_vs_matches",
-    "session_key",
-    "simulate_fleet_odometry",
-]
+from ..errors import InvalidParameterError, LoopsWarning
+from ..table import Table
+from ._backend import BackEnd, import_gtsam, noise_model, pose_value, solve_graph
+from ._candidates import BASELINES, SAMPLERS, check_rule
+from ._grid import json_default, medians, read_csv, summary_groups, write_csv
+from ._metrics import ape_errors
+from ._odometry import DriftModel, Odometry
+from ._plot import COLOURS, error_curves, finish_axes
+from ._poses import Poses, rigid_inverse
+from ._verifier import Matches, Verifier
 
 Sessions = Mapping[str, Poses]
 
@@ -223,13 +195,13 @@ class FleetRule:
     between_only: bool = False
 
     def __post_init__(self) -> None:
-        # An unknown sampler is no baseline: _check_rule names it.
+        # An unknown sampler is no baseline: check_rule names it.
         if self.between_only and self.sampler in BASELINES:
             raise InvalidParameterError(
                 f"FleetRule: {self.sampler} is a baseline, whose rule knows no components: "
                 "not with between_only"
             )
-        _check_rule("FleetRule", self.sampler, self.budget, self.gamma)
+        check_rule("FleetRule", self.sampler, self.budget, self.gamma)
 
 
 def _fleet_loops(references: Sessions, gamma: float, separation: bool) -> FleetLoops:
@@ -327,9 +299,9 @@ def place_sessions(
                 ej = estimates[sj].matrices[matches.j[k] - starts[sj]]
                 t = matches.relative[k]
                 if sj == b:  # pose j of session b in the frame of placed pose i
-                    proposals.append(offsets[si] @ ei @ t @ _inverse(ej))
+                    proposals.append(offsets[si] @ ei @ t @ rigid_inverse(ej))
                 else:  # pose i of session b: the inverse measurement
-                    proposals.append(offsets[sj] @ ej @ _inverse(t) @ _inverse(ei))
+                    proposals.append(offsets[sj] @ ej @ rigid_inverse(t) @ rigid_inverse(ei))
             if proposals and (best is None or len(proposals) > len(best[1])):
                 best = (b, proposals)
         if best is None:
@@ -372,7 +344,7 @@ def optimize_fleet(
         InvalidParameterError: no session, sessions of different dimensions, more than 52
             sessions, an anchor out of range.
     """
-    gtsam = _gtsam()
+    gtsam = import_gtsam()
     backend = backend or BackEnd()
     if not odometries:
         raise InvalidParameterError("optimize_fleet: no session")
@@ -396,26 +368,24 @@ def optimize_fleet(
         keys.extend(session_keys)
         guess = offsets[s] @ estimate.matrices
         if s == anchor:
-            noise = _noise(gtsam, dim, 1e-4, 1e-5)
-            graph.add(prior(session_keys[0], _pose_value(gtsam, odometry.start), noise))
+            noise = noise_model(gtsam, dim, 1e-4, 1e-5)
+            graph.add(prior(session_keys[0], pose_value(gtsam, odometry.start), noise))
         else:
-            noise = _noise(gtsam, dim, start_sigma_m, start_sigma_rad)
-            graph.add(prior(session_keys[0], _pose_value(gtsam, guess[0]), noise))
+            noise = noise_model(gtsam, dim, start_sigma_m, start_sigma_rad)
+            graph.add(prior(session_keys[0], pose_value(gtsam, guess[0]), noise))
         for k, step in enumerate(odometry.steps):
-            noise = _noise(
+            noise = noise_model(
                 gtsam, dim, odometry.translation_sigma_m[k], odometry.rotation_sigma_rad[k]
             )
-            graph.add(
-                between(session_keys[k], session_keys[k + 1], _pose_value(gtsam, step), noise)
-            )
+            graph.add(between(session_keys[k], session_keys[k + 1], pose_value(gtsam, step), noise))
         for key, m in zip(session_keys, guess, strict=True):
-            initial.insert(key, _pose_value(gtsam, m))
+            initial.insert(key, pose_value(gtsam, m))
     if matches is not None and len(matches):
         if matches.i.max(initial=0) >= starts[-1] or matches.j.max(initial=0) >= starts[-1]:
             raise InvalidParameterError(
                 f"optimize_fleet: a match past the last pose ({starts[-1]} poses in all)"
             )
-    matrices = _solve(gtsam, graph, initial, backend, dim, matches, keys)
+    matrices = solve_graph(gtsam, graph, initial, backend, dim, matches, keys)
     return [
         Poses(odometry.timestamps, matrices[starts[s] : starts[s + 1]])
         for s, odometry in enumerate(odometries)
@@ -503,7 +473,7 @@ def fleet_errors(
     joint = float(np.sqrt(np.mean(ape_errors(ref_joint, est_joint) ** 2)))
     i, j = pairs if pairs is not None else _inter_pairs(items, overlap_m)
     if len(i):
-        e = _inverse(ref_joint.relative(i, j)) @ est_joint.relative(i, j)
+        e = rigid_inverse(ref_joint.relative(i, j)) @ est_joint.relative(i, j)
         d = ref_joint.dim
         inter = float(np.sqrt(np.mean(np.linalg.norm(e[:, :d, d], axis=1) ** 2)))
     else:
@@ -574,7 +544,7 @@ class FleetResults:
         median candidates and matches (all and between sessions)."""
         keys = ("dataset", "sampler", "between_only", "separation", "outlier_rate", "budget")
         out = []
-        for group, rows in _summary_groups(self.rows, keys):
+        for group, rows in summary_groups(self.rows, keys):
             inter = np.array([r["inter_m"] for r in rows])
             finite = inter[np.isfinite(inter)]
             q = {
@@ -589,7 +559,7 @@ class FleetResults:
                     "inter_q75_m": q[0.75],
                     "session_ate_median_m": float(np.median([r["session_ate_m"] for r in rows])),
                 }
-                | _medians(
+                | medians(
                     rows,
                     (
                         "candidates",
@@ -608,9 +578,9 @@ class FleetResults:
     ) -> None:
         """Writes the rows as CSV (a header of :data:`FLEET_COLUMNS`), and the per-session rows
         to ``sessions_path`` when given."""
-        _write_csv(path, FLEET_COLUMNS, self.rows)
+        write_csv(path, FLEET_COLUMNS, self.rows)
         if sessions_path is not None:
-            _write_csv(sessions_path, SESSION_COLUMNS, self.sessions)
+            write_csv(sessions_path, SESSION_COLUMNS, self.sessions)
 
     def to_json(self, path: str | PathLike[str]) -> None:
         """Writes ``{"settings", "summary", "rows", "sessions"}`` as JSON (NaN as null)."""
@@ -621,7 +591,7 @@ class FleetResults:
             "sessions": self.sessions,
         }
         with open(path, "w") as f:
-            json.dump(_nan_to_none(document), f, indent=1, default=_json_default)
+            json.dump(_nan_to_none(document), f, indent=1, default=json_default)
             f.write("\n")
 
     @classmethod
@@ -631,7 +601,7 @@ class FleetResults:
         ints |= {"between_matches", "wrong", "placed"}
         bools = {"between_only", "separation"}
         floats = set(FLEET_COLUMNS) - ints - bools - {"dataset", "sampler"}
-        return cls(_read_csv(path, FLEET_COLUMNS, ints=ints, floats=floats, bools=bools))
+        return cls(read_csv(path, FLEET_COLUMNS, ints=ints, floats=floats, bools=bools))
 
     def extend(self, other: FleetResults) -> None:
         """Adds the rows of ``other`` (its per-session rows renumbered)."""
@@ -914,7 +884,7 @@ def plot_fleet_error_vs_matches(
     relative error) or ``"session_ate"`` (the sessions' own ATEs). ``select`` keeps the rows
     whose columns have these values. Needs matplotlib.
     """
-    ax, select, curves = _curves(results, ax, select, "between_only")
+    ax, select, curves = error_curves(results, ax, select, "between_only")
     column = {"ate": "ate", "inter": "inter", "session_ate": "session_ate"}[metric]
     for (name, between), points in curves:
         x = [s["budget"] for s in points]
@@ -943,123 +913,5 @@ def plot_fleet_error_vs_matches(
         "inter": "inter-session error (m)",
         "session_ate": "session ATE (m)",
     }[metric]
-    _finish_axes(ax, odometry, ylabel, title, legend)
+    finish_axes(ax, odometry, ylabel, title, legend)
     return ax
-
-
-# ---------------------------------------------------------------------------------------------
-# The command line: loops-eval --fleet
-# ---------------------------------------------------------------------------------------------
-
-
-def _plot_fleet_panels(results: FleetResults, path: str, *, title: str) -> None:
-    """:func:`plot_fleet_error_vs_matches`: a row per error (joint ATE, inter-session) and
-    separation, a column per outlier rate."""
-    from .evaluate import _save_panels
-
-    def draw(ax: Any, row: tuple[str, bool], outlier_rate: float) -> None:
-        metric, separation = row
-        plot_fleet_error_vs_matches(
-            results,
-            ax=ax,
-            metric=metric,  # type: ignore[arg-type]
-            select={"separation": separation, "outlier_rate": outlier_rate},
-            title=f"{title}: "
-            + ("joint ATE" if metric == "ate" else "inter-session error")
-            + (", revisits" if separation else ", S_gamma")
-            + f", {outlier_rate:.0%} wrong matches",
-        )
-
-    _save_panels(
-        results.rows,
-        path,
-        lambda runs: [
-            (m, sep)
-            for m in ("ate", "inter")
-            for sep in sorted({r["separation"] for r in runs}, reverse=True)
-        ],
-        draw,
-    )
-
-
-def _session_sources(paths: Sequence[str]) -> list[tuple[str, str]]:
-    import os
-
-    out: list[tuple[str, str]] = []
-    for text in paths:
-        name, sep, path = text.partition("=")
-        if not sep or os.path.exists(text):
-            name, path = os.path.splitext(os.path.basename(text))[0], text
-        if any(n == name for n, _ in out):
-            raise InvalidParameterError(
-                f"two sessions are named {name!r}: name them with NAME=FILE"
-            )
-        out.append((name, path))
-    return out
-
-
-def main_fleet(args: Any) -> None:
-    """``loops-eval --fleet``: :func:`evaluate_fleet` on the pose files given, one a session
-    (``args`` parsed by :func:`inexact_loops.evaluate.main`, which reports the errors)."""
-    import sys
-
-    from .evaluate import _csv_list, _read_options, _write_outputs
-
-    def both(value: str) -> list[bool]:
-        return [False, True] if value == "both" else [value == "on"]
-
-    if len(args.poses) < 2:
-        raise InvalidParameterError(
-            f"--fleet needs the pose files of at least two sessions, got {len(args.poses)}: "
-            "without --fleet, loops-eval evaluates one trajectory"
-        )
-    if args.odometry:
-        raise InvalidParameterError("--fleet takes no --odometry: each session's is simulated")
-    if args.on != "reference" or args.source != "exact":
-        raise InvalidParameterError(
-            "--fleet chooses candidates on the references' exact components: not with --on "
-            "estimate or --source detections (between sessions, the estimates share no frame "
-            "before the first match)"
-        )
-    options, axes = _read_options(args)
-    dim = 3 if args.se3 else 2
-    references = {
-        name: Poses.read(path, dim=dim, axes=axes, **options)  # type: ignore[arg-type]
-        for name, path in _session_sources(args.poses)
-    }
-    label = "+".join(references)
-    results = evaluate_fleet(
-        references,
-        gamma=args.gamma,
-        samplers=_csv_list(args.samplers, str),
-        budgets=_csv_list(args.budgets, int),
-        seeds=range(args.seeds),
-        between_only=both(args.between_only),
-        separations=[True, False] if args.separation == "both" else [args.separation == "on"],
-        outlier_rates=_csv_list(args.outliers, float),
-        backend=BackEnd(kernel=args.kernel),
-        anchor=args.anchor,
-        overlap_m=args.overlap_m,
-        keyframe_m=args.keyframe_m,
-        dataset=label,
-        progress=lambda r: print(
-            f"loops-eval: seed {r['seed']} {r['sampler']:>15} "
-            f"{'between' if r['between_only'] else 'all':>7} budget {r['budget']:>6}: "
-            f"{r['matches']:>5} matches ({r['between_matches']} between sessions, "
-            f"{r['wrong']} wrong), joint ATE {r['ate_m']:.3f} m, inter {r['inter_m']:.3f} m",
-            file=sys.stderr,
-        ),
-    )
-    _write_outputs(
-        args.out,
-        results,
-        ["results.csv", "sessions.csv"],
-        lambda path: _plot_fleet_panels(results, path, title=label),
-        lambda s: (
-            f"{s['sampler']:>15} {'between' if s['between_only'] else 'all':>7} "
-            f"sep={int(s['separation'])} out={s['outlier_rate']:.2f} "
-            f"budget {s['budget']:>6}: joint ATE {s['ate_median_m']:.3f} m "
-            f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}], "
-            f"inter {s['inter_median_m']:.3f} m"
-        ),
-    )

@@ -64,7 +64,12 @@
 //! # Ok::<(), loops_core::Error>(())
 //! ```
 
+pub(crate) mod draw;
+mod piece;
+
 use std::collections::HashMap;
+
+use self::piece::live_stretches;
 
 use crate::ball_tree::BallTree;
 use crate::component::{LoopComponent, ROWS_PER_LABEL_TASK, Tally, closer, for_each_overlap, label_runs};
@@ -75,7 +80,6 @@ use crate::sample::DrawStats;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::{ArcLength, Pruner, SublevelSet, check_gamma, try_path_length};
-use crate::tile_piece::live_stretches;
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
 
@@ -144,7 +148,7 @@ impl SessionBlocks {
         let (mut centres, mut radii) = (Vec::new(), Vec::new());
         for lo in (0..session.len()).step_by(block) {
             let hi = (lo + block).min(session.len());
-            let (centre, radius) = crate::tile_piece::pose_ball(session, lo, hi, metric);
+            let (centre, radius) = piece::pose_ball(session, lo, hi, metric);
             centres.extend_from_slice(session.point(centre));
             radii.push(radius);
         }
@@ -183,7 +187,7 @@ impl SessionBlocks {
         for lo in (0..self.len()).step_by(factor) {
             let hi = (lo + factor).min(self.len());
             let middle = centre(lo + (hi - lo) / 2);
-            let radius = crate::tile_piece::joined_radius(middle, (lo..hi).map(|k| (centre(k), self.radii[k])), metric);
+            let radius = piece::joined_radius(middle, (lo..hi).map(|k| (centre(k), self.radii[k])), metric);
             centres.extend_from_slice(middle);
             radii.push(radius);
         }
@@ -848,8 +852,8 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
         let [mut live_rows, mut live_columns] = live_stretches(session_a, r0..r1, session_b, c0..c1, metric, gamma);
         if live_rows.is_empty() || live_columns.is_empty() {
             // No pair within γ: one chunk of each side, which holds no cell either.
-            live_rows = std::iter::once(r0..(r0 + crate::tile_piece::CHUNK).min(r1)).collect();
-            live_columns = std::iter::once(c0..(c0 + crate::tile_piece::CHUNK).min(c1)).collect();
+            live_rows = std::iter::once(r0..(r0 + piece::CHUNK).min(r1)).collect();
+            live_columns = std::iter::once(c0..(c0 + piece::CHUNK).min(c1)).collect();
         }
         let parts: Vec<Trajectory> = live_rows
             .iter()

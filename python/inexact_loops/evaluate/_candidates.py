@@ -1,0 +1,260 @@
+"""Candidate pairs: a sampler or a baseline under a budget, chosen on the reference or the
+estimate, in one or several rounds."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from .._core import (
+    Separation,
+    cluster_detections,
+    draw_detections,
+    find_loops,
+    sample,
+)
+from ..errors import InvalidParameterError, LoopsWarning
+from ._poses import Poses
+from ._verifier import Matches
+
+#: The samplers of the paper and beyond (:func:`inexact_loops.sample`'s names).
+SAMPLERS: tuple[str, ...] = (
+    "one",
+    "rho",
+    "rho-dispersed",
+    "closest-first",
+    "closest-then-spread",
+    "alpha",
+)
+#: The candidate rules of deployed SLAM systems, under the same budget.
+BASELINES: tuple[str, ...] = ("lio-sam", "hdl-graph-slam", "cartographer", "time-gap")
+
+# ---------------------------------------------------------------------------------------------
+# Candidates
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class CandidateRule:
+    """How candidates are chosen: which sampler, how many, on what.
+
+    Attributes:
+        sampler: a name :func:`~inexact_loops.sample` takes (:data:`SAMPLERS`, :data:`BASELINES`).
+        budget: the number of candidates (scan matches to try).
+        gamma: gamma of the loops, metres (the revisit radius).
+        separation: keep only revisits, pairs at least 4 gamma apart along the path
+            (:meth:`~inexact_loops.Separation.for_gamma` of ``gamma``), as the samplers do by
+            default; ``False`` samples the paper's S_gamma.
+        source: ``"exact"`` samples the exact loop components; ``"detections"`` draws
+            detections from S_gamma at ``detection_rate`` and samples their epsilon-graph
+            clusters (``epsilon_s``), as the paper's experiment does. Baselines always use
+            ``"exact"`` (their own rule).
+        on: ``"reference"`` chooses on the reference; ``"estimate"`` on the odometry's own
+            estimate with gamma inflated to ``gamma_inflation * gamma`` (the separation stays
+            4 gamma of path): what a user without ground truth has, whose estimate has drifted.
+        gamma_inflation: the factor for ``on="estimate"`` (2 by default: a pair of poses up to
+            gamma apart stays a candidate while the estimate's error between them is below
+            gamma).
+        detection_rate: for ``source="detections"``.
+        epsilon_s: for ``source="detections"``.
+        rounds: for ``on="estimate"``: the budget spent in this many rounds, each chosen on
+            the estimate the matches of the rounds before corrected (:class:`Rounds`); 1: all
+            at once on the odometry's estimate.
+    """
+
+    sampler: str
+    budget: int
+    gamma: float
+    separation: bool = True
+    source: Literal["exact", "detections"] = "exact"
+    on: Literal["reference", "estimate"] = "reference"
+    gamma_inflation: float = 2.0
+    detection_rate: float = 0.01
+    epsilon_s: float = 30.0
+    rounds: int = 1
+
+    def __post_init__(self) -> None:
+        check_rule("CandidateRule", self.sampler, self.budget, self.gamma)
+        if self.source not in ("exact", "detections"):
+            raise InvalidParameterError(
+                f"CandidateRule: source {self.source!r}: exact or detections"
+            )
+        if self.on not in ("reference", "estimate"):
+            raise InvalidParameterError(f"CandidateRule: on {self.on!r}: reference or estimate")
+        if not (math.isfinite(self.gamma_inflation) and self.gamma_inflation >= 1):
+            raise InvalidParameterError(
+                f"CandidateRule: gamma_inflation = {self.gamma_inflation} must be >= 1"
+            )
+        if self.rounds < 1 or (self.rounds > 1 and self.on != "estimate"):
+            raise InvalidParameterError(
+                f"CandidateRule: rounds = {self.rounds}: at least 1, and more only with "
+                'on="estimate"'
+            )
+
+    @property
+    def is_baseline(self) -> bool:
+        """Whether the sampler is a deployed system's rule."""
+        return self.sampler in BASELINES
+
+
+def check_rule(kind: str, sampler: str, budget: int, gamma: float) -> None:
+    """The checks a candidate rule of either kind (``kind``, its class's name) makes of its
+    sampler, budget and gamma."""
+    if sampler not in SAMPLERS + BASELINES:
+        raise InvalidParameterError(
+            f"{kind}: unknown sampler {sampler!r}: expected one of "
+            + ", ".join(SAMPLERS + BASELINES)
+        )
+    if budget < 1:
+        raise InvalidParameterError(f"{kind}: budget = {budget} must be >= 1")
+    if not (math.isfinite(gamma) and gamma > 0):
+        raise InvalidParameterError(f"{kind}: gamma = {gamma} must be > 0")
+
+
+def choose_candidates(
+    poses: Poses, rule: CandidateRule, *, seed: int, gamma_inflation: float | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate pairs ``(i, j)``, i < j, chosen by ``rule`` on ``poses`` (the reference, or the
+    odometry's estimate for ``rule.on == "estimate"``: pass the poses the rule is to see).
+
+    Loops are found on the positions (Euclidean, metres) within ``rule.gamma`` times the
+    inflation (``gamma_inflation``, else ``rule.gamma_inflation`` on the estimate, 1 on the
+    reference); warnings of the samplers (a budget above the candidates, below the components)
+    are kept quiet: the returned count says it.
+    """
+
+    if gamma_inflation is None:
+        gamma_inflation = rule.gamma_inflation if rule.on == "estimate" else 1.0
+    gamma = rule.gamma * gamma_inflation
+    separation: Separation | None = Separation.for_gamma(rule.gamma) if rule.separation else None
+    traj = poses.to_trajectory()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LoopsWarning)
+        loops = find_loops(traj, gamma=gamma, separation=separation)
+        if loops.pair_count == 0:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        if rule.source == "detections" and not rule.is_baseline:
+            detections = draw_detections(loops, rate=rule.detection_rate, seed=seed)
+            if len(detections) == 0:
+                return np.zeros(0, np.int64), np.zeros(0, np.int64)
+            clusters = cluster_detections(detections, epsilon_s=rule.epsilon_s)
+            samples = sample(clusters, rule.sampler, budget=rule.budget, seed=seed, trajectory=traj)
+        else:
+            samples = sample(loops, rule.sampler, budget=rule.budget, seed=seed, trajectory=traj)
+    i, j = samples.i, samples.j
+    if i is None or j is None:  # pragma: no cover - samples on a trajectory always have pairs
+        raise RuntimeError("samples without pose indices")
+    return np.minimum(i, j), np.maximum(i, j)
+
+
+class Rounds:
+    """Candidates in rounds, for a pipeline without ground truth: choose some pairs on the
+    current estimate, match them, optimise, and choose the next ones on the corrected estimate.
+
+    The budget (``rule.budget``) is spent in ``rule.rounds`` rounds of equal shares (the last
+    takes what the others left). Round k chooses with ``rule``'s sampler on the estimate it is
+    given, gamma inflated by a factor that starts at ``rule.gamma_inflation`` and shrinks as the
+    estimate settles: after each round, ``1 + min(gamma_inflation - 1, c / gamma)``, with c the
+    median distance (metres) the last optimisation moved the poses. A pair is tried once: the
+    pairs of earlier rounds are left out (the sampler is asked for that many more, and a seeded
+    draw keeps the round's share). Each round's sampler seed is ``seed + round``.
+
+    Drive it with your own matcher and back end::
+
+        rounds = Rounds(CandidateRule("closest-then-spread", 1000, 15.0, on="estimate",
+                                      rounds=3), seed=0)
+        estimate = odometry_estimate
+        while not rounds.done:
+            i, j = rounds.choose(estimate)          # pairs to match, i < j
+            ...                                    # match them, add the loop factors
+            corrected = ...                        # optimise the pose graph
+            rounds.update(estimate, corrected)
+            estimate = corrected
+
+    Example:
+        >>> import numpy as np
+        >>> from inexact_loops.evaluate import CandidateRule, Poses, Rounds
+        >>> angle = np.linspace(0, 4 * np.pi, 400)
+        >>> xy = 50 * np.c_[np.cos(angle), np.sin(angle)]
+        >>> circle = Poses.from_positions(np.arange(400.0), xy)
+        >>> rounds = Rounds(CandidateRule("closest-then-spread", 30, 10.0, on="estimate", rounds=3),
+        ...                 seed=0)
+        >>> i, j = rounds.choose(circle)
+        >>> len(i), rounds.round, rounds.gamma_inflation
+        (10, 1, 2.0)
+        >>> rounds.update(circle, circle)               # nothing moved: gamma back to 10 m
+        >>> rounds.gamma_inflation
+        1.0
+    """
+
+    def __init__(self, rule: CandidateRule, *, seed: int) -> None:
+        if rule.on != "estimate":
+            raise InvalidParameterError('Rounds: the rule chooses on="estimate"')
+        self.rule = rule
+        self.seed = int(seed)
+        #: Rounds chosen so far.
+        self.round = 0
+        #: The inflation of gamma the next round uses.
+        self.gamma_inflation = float(rule.gamma_inflation)
+        self._tried: set[tuple[int, int]] = set()
+
+    @property
+    def done(self) -> bool:
+        """Whether every round is chosen (or the budget is spent)."""
+        return self.round >= self.rule.rounds or len(self._tried) >= self.rule.budget
+
+    @property
+    def tried(self) -> int:
+        """Pairs chosen so far."""
+        return len(self._tried)
+
+    def choose(self, estimate: Poses) -> tuple[np.ndarray, np.ndarray]:
+        """The next round's pairs ``(i, j)``, i < j, chosen on ``estimate``, none of them chosen
+        before; empty once :attr:`done`."""
+        if self.done:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        left = self.rule.budget - len(self._tried)
+        share = (
+            left if self.round == self.rule.rounds - 1 else left // (self.rule.rounds - self.round)
+        )
+        share = max(share, 1)
+        seed = self.seed + self.round
+        ask = dataclasses.replace(self.rule, budget=share + len(self._tried), rounds=1)
+        i, j = choose_candidates(estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation)
+        pairs = zip(i.tolist(), j.tolist(), strict=True)
+        fresh = np.array([p not in self._tried for p in pairs], bool)
+        i, j = i[fresh], j[fresh]
+        if len(i) > share:
+            rng = np.random.default_rng(np.random.SeedSequence([seed, 0x0C0]))
+            keep = np.sort(rng.choice(len(i), share, replace=False))
+            i, j = i[keep], j[keep]
+        self._tried.update(zip(i.tolist(), j.tolist(), strict=True))
+        self.round += 1
+        return i, j
+
+    def update(self, before: Poses, after: Poses) -> None:
+        """Tells the rounds how the last optimisation moved the estimate (``before`` to
+        ``after``, the same poses): the next round's gamma inflation."""
+        moved = np.linalg.norm(after.positions - before.positions, axis=1)
+        c = float(np.median(moved)) if len(moved) else 0.0
+        top = self.rule.gamma_inflation - 1.0
+        self.gamma_inflation = 1.0 + min(top, c / self.rule.gamma)
+
+
+def _concat_matches(parts: Sequence[Matches]) -> Matches:
+    """The matches of several rounds as one."""
+    return Matches(
+        np.concatenate([m.i for m in parts]),
+        np.concatenate([m.j for m in parts]),
+        np.concatenate([m.relative for m in parts]),
+        np.concatenate([m.translation_sigma_m for m in parts]),
+        np.concatenate([m.rotation_sigma_rad for m in parts]),
+        np.concatenate([m.wrong for m in parts]),
+        sum(m.tried for m in parts),
+    )
