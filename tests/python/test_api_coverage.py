@@ -52,6 +52,14 @@ ELSEWHERE = {
             "FleetStore.samples",
         )
     },
+    "FleetStore.near": (
+        "python/test_store_queries.py",
+        "test_near_a_polygon_matches_matplotlib_and_edge_distances",
+    ),
+    "FleetStore.revisits": (
+        "python/test_store_queries.py",
+        "test_revisits_match_the_components_table",
+    ),
     **{
         name: ("python/test_store.py", "test_random_adds_replacements_and_removals_equal_one_run")
         # (`update` is also a name of dict's, which the check leaves out.)
