@@ -2221,6 +2221,10 @@ class FleetStore:
     @property
     def path(self) -> Path:
         """The store's folder."""
+    def __reduce__(self) -> tuple[Callable[[str | PathLike[str]], FleetStore], tuple[Path]]:
+        """Pickles as its folder: unpickling opens the store there (:meth:`open`), in the state the
+        folder holds then, so a store crosses to another process (a process pool, a Dask worker)
+        that sees the same folder, without copying its tables."""
     @property
     def state_path(self) -> Path | None:
         """The folder of the current state (``path / "state-NNNNNN"``), whose ``.parquet`` tables

@@ -9,6 +9,8 @@ changes no file) ends with the answer of one run over the final sessions.
 from __future__ import annotations
 
 import json
+import multiprocessing
+import pickle
 from pathlib import Path
 
 import numpy as np
@@ -237,6 +239,35 @@ def test_settings_are_fixed_when_the_store_is_made(tmp_path: Path) -> None:
     (tmp_path / "theirs" / "notes.txt").write_text("mine")
     with pytest.raises(FileNotFoundError, match="no fleet store here"):
         il.FleetStore.open(tmp_path / "theirs")
+
+
+def open_and_describe(store: il.FleetStore) -> tuple[str, list[str], list[int]]:
+    """In a worker process: what it sees of a store it was sent."""
+    return str(store.path), store.names, store.components["pair_count"].tolist()
+
+
+def test_a_store_pickles_as_its_folder(tmp_path: Path) -> None:
+    t = np.arange(30.0)
+    line = il.Trajectory(t, np.c_[t, 0 * t])
+    store = il.FleetStore.open(tmp_path / "s")
+    store.update(add=[("a", line), ("b", line)], gamma=2.0, separation=None, block=8)
+    state = state_dir(tmp_path / "s")
+    for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
+        data = pickle.dumps(store, protocol)
+        assert len(data) < 1000  # the folder, not the tables
+        back = pickle.loads(data)
+        assert back.path == store.path and back.state_path == store.state_path == state
+        assert back.names == store.names and back.gamma == store.gamma
+        for key, column in store.components.items():
+            np.testing.assert_array_equal(back.components[key], column, err_msg=key)
+    # A process of its own opens the same folder.
+    with multiprocessing.get_context("spawn").Pool(1) as pool:
+        (seen,) = pool.map(open_and_describe, [store])
+    assert seen == open_and_describe(store)
+    # Unpickled later, it is the store the folder holds then.
+    data = pickle.dumps(store)
+    store.update(remove=["b"])
+    assert pickle.loads(data).names == ["a"]
 
 
 def test_the_dask_runner_cuts_sessions_by_the_core_block() -> None:

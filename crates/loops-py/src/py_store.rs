@@ -349,6 +349,13 @@ impl FleetStore {
         self.dir.clone()
     }
 
+    /// Pickles as its folder: unpickling opens the store there (:meth:`open`), in the state the
+    /// folder holds then, so a store crosses to another process (a process pool, a Dask worker)
+    /// that sees the same folder, without copying its tables.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (PathBuf,))> {
+        Ok((slf.get_type().getattr("open")?, (slf.borrow().dir.clone(),)))
+    }
+
     /// The folder of the current state (``path / "state-NNNNNN"``), whose ``.parquet`` tables
     /// are the store's; ``None`` before the first update.
     #[getter]
