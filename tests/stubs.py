@@ -41,10 +41,17 @@ def _runtime_doc(obj: object) -> str | None:
     return inspect.cleandoc(doc) if isinstance(doc, str) and doc.strip() else None
 
 
+def _is_overload(node: ast.stmt) -> bool:
+    """An ``@overload`` signature: the implementation's def after it carries the docstring."""
+    decorators = getattr(node, "decorator_list", [])
+    return any(isinstance(d, ast.Name) and d.id == "overload" for d in decorators)
+
+
 def items(tree: ast.Module, module: ModuleType) -> Iterator[Item]:
-    """The stub's public classes, functions, methods and properties that the module has."""
+    """The stub's public classes, functions, methods and properties that the module has
+    (``@overload`` signatures left out: the last def of the name has the docstring)."""
     for node in tree.body:
-        if not isinstance(node, _Def) or node.name.startswith("_"):
+        if not isinstance(node, _Def) or node.name.startswith("_") or _is_overload(node):
             continue
         obj = getattr(module, node.name, None)
         if obj is None:
@@ -52,7 +59,7 @@ def items(tree: ast.Module, module: ModuleType) -> Iterator[Item]:
         yield Item(node.name, node, _runtime_doc(obj))
         if isinstance(node, ast.ClassDef):
             for member in node.body:
-                if not isinstance(member, _Def) or member.name.startswith("_"):
+                if not isinstance(member, _Def) or member.name.startswith("_") or _is_overload(member):
                     continue
                 if member.name in vars(obj):  # its own, not inherited from object
                     runtime = getattr(obj, member.name)  # a static method's function
