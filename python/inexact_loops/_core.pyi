@@ -2385,11 +2385,13 @@ class FleetSamples:
     @property
     def table(self) -> Table:
         """The samples as a :class:`~inexact_loops.Table`, one row a sample in order of the fleet
-        index of the earlier pose: ``session_a`` (int64), ``name_a`` (str), ``i`` (int64, the
-        pose in session a), ``t_s`` (float64, seconds on session a's clock), then ``session_b``,
-        ``name_b``, ``j``, ``t_prime_s`` for the other pose (a ≤ b; a = b within a session), then
-        ``component`` (int64, the component id of :attr:`FleetLoops.components`, −1 for a
-        baseline's pair outside S_γ) and ``distance`` (float64, δ between the poses).
+        index of the earlier pose, with the columns of ``loops fleet``'s ``samples.csv`` in its
+        order (less ``sampler``: :attr:`sampler`): ``session_a`` and ``session_b`` (int64, the
+        sessions of the two poses, a ≤ b; a = b within a session), ``name_a`` and ``name_b``
+        (str), ``i`` and ``j`` (int64, the poses in sessions a and b), ``t_s`` and ``t_prime_s``
+        (float64, seconds, each on its session's clock), ``component`` (int64, the component id of
+        :attr:`FleetLoops.components`, −1 for a baseline's pair outside S_γ) and ``distance``
+        (float64, δ between the poses).
         """
     def to_pandas(self) -> pandas.DataFrame:
         """:attr:`table` as a ``pandas.DataFrame``.
@@ -2996,9 +2998,8 @@ class KeyedDraw:
             TypeError: an offer of another type.
         """
     def table(self) -> Table:
-        """The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
-        ``t_s``, ``session_b``, ``name_b``, ``j``, ``t_prime_s`` (each on its session's clock),
-        ``component``, ``distance``, in order of the pairs.
+        """The samples, as :attr:`FleetSamples.table` gives them (the columns of ``loops fleet``'s
+        ``samples.csv`` in its order, less ``sampler``), in order of the pairs.
 
         Raises:
             InvalidParameterError: before the draw is :attr:`done`.

@@ -6,9 +6,9 @@
 use std::sync::Arc;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyList, PyTuple, PyType};
+use pyo3::types::{PyBytes, PyTuple, PyType};
 
-use crate::convert::{float64_column, int64_column, table, to_numpy};
+use crate::convert::to_numpy;
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_separation::SeparationArg;
@@ -16,15 +16,6 @@ use crate::py_tile::{Tile, TileScan};
 use crate::py_trajectory::Trajectory;
 use crate::shared::Shared;
 use loops_core::{SampleSize, Sampler};
-
-/// A column of names as a numpy array of ``str``.
-fn names_column<'py>(py: Python<'py>, values: Vec<&str>) -> PyResult<Bound<'py, PyAny>> {
-    let numpy = py.import("numpy")?;
-    if values.is_empty() {
-        return numpy.call_method1("array", (PyList::empty(py), "<U1"));
-    }
-    numpy.call_method1("array", (PyList::new(py, values)?,))
-}
 
 /// A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
 /// the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
@@ -140,9 +131,8 @@ impl KeyedDraw {
         Ok(())
     }
 
-    /// The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
-    /// ``t_s``, ``session_b``, ``name_b``, ``j``, ``t_prime_s`` (each on its session's clock),
-    /// ``component``, ``distance``, in order of the pairs.
+    /// The samples, as :attr:`FleetSamples.table` gives them (the columns of ``loops fleet``'s
+    /// ``samples.csv`` in its order, less ``sampler``), in order of the pairs.
     ///
     /// Raises:
     ///     InvalidParameterError: before the draw is :attr:`done`.
@@ -161,28 +151,20 @@ impl KeyedDraw {
             self.skip_trivial,
         )?;
         let session_of = |f: usize| self.starts.partition_point(|&s| s <= f) - 1;
-        let located: Vec<([usize; 2], [usize; 2], &loops_core::DrawnPair)> = picks
+        let located: Vec<loops_core::FleetSample> = picks
             .iter()
             .map(|p| {
                 let (a, b) = (session_of(p.pair[0]), session_of(p.pair[1]));
-                ([a, b], [p.pair[0] - self.starts[a], p.pair[1] - self.starts[b]], p)
+                loops_core::FleetSample {
+                    sessions: [a, b],
+                    poses: [p.pair[0] - self.starts[a], p.pair[1] - self.starts[b]],
+                    times_s: p.times_s,
+                    component: Some(p.component),
+                    distance: Some(p.distance),
+                }
             })
             .collect();
-        table(
-            py,
-            [
-                ("session_a", int64_column(py, &located, |s| s.0[0])),
-                ("name_a", names_column(py, located.iter().map(|s| self.names[s.0[0]].as_str()).collect())?),
-                ("i", int64_column(py, &located, |s| s.1[0])),
-                ("t_s", float64_column(py, &located, |s| s.2.times_s[0])),
-                ("session_b", int64_column(py, &located, |s| s.0[1])),
-                ("name_b", names_column(py, located.iter().map(|s| self.names[s.0[1]].as_str()).collect())?),
-                ("j", int64_column(py, &located, |s| s.1[1])),
-                ("t_prime_s", float64_column(py, &located, |s| s.2.times_s[1])),
-                ("component", int64_column(py, &located, |s| s.2.component)),
-                ("distance", float64_column(py, &located, |s| s.2.distance)),
-            ],
-        )
+        crate::py_fleet::fleet_samples_table(py, &located, &self.names)
     }
 }
 
