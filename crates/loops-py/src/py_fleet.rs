@@ -21,7 +21,7 @@ use crate::py_metric::loops_metric;
 use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_samples::{Samples, baseline_params, sampler_of};
 use crate::py_separation::{Separation, SeparationArg};
-use crate::py_trajectory::{DriveOptions, Trajectory};
+use crate::py_trajectory::{DriveOptions, ReadArgs, Trajectory, read_trajectory_with};
 use loops_core::{FleetOptions, MetricSpec, Pruning, Sampler};
 
 /// Sessions — vehicles, days, robots — in one frame, each a :class:`Trajectory` with a name and
@@ -166,40 +166,18 @@ fn session_sources<'py>(sessions: &Bound<'py, PyAny>) -> PyResult<Vec<(String, S
 
 /// The sessions of `sessions` (what :class:`Fleet` takes), each read with the options given
 /// where it is a path: `Fleet`'s rule, for every surface that takes sessions.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn read_sessions(
     py: Python<'_>,
     sessions: &Bound<'_, PyAny>,
-    format: Option<String>,
-    axes: Option<(usize, usize)>,
     metric: Option<&Bound<'_, PyAny>>,
-    topic: Option<String>,
-    time: Option<String>,
-    frames: Option<(String, String)>,
-    rate_hz: Option<f64>,
-    drop_duplicate_stamps: bool,
-    quaternion_tolerance: Option<f64>,
+    read: &ReadArgs,
 ) -> PyResult<Vec<(String, Trajectory)>> {
     session_sources(sessions)?
         .into_iter()
         .map(|(name, source)| {
             let traj = match source {
                 SessionSource::Trajectory(traj) => traj,
-                SessionSource::Read(path) => crate::py_trajectory::read_trajectory(
-                    py,
-                    &path,
-                    format.clone(),
-                    axes,
-                    metric,
-                    topic.clone(),
-                    time.clone(),
-                    frames.clone(),
-                    rate_hz,
-                    None,
-                    drop_duplicate_stamps,
-                    quaternion_tolerance,
-                    false,
-                )?,
+                SessionSource::Read(path) => read_trajectory_with(py, &path, metric, read.clone())?,
             };
             Ok((name, traj))
         })
@@ -359,19 +337,18 @@ impl Fleet {
         drop_duplicate_stamps: bool,
         quaternion_tolerance: Option<f64>,
     ) -> PyResult<Self> {
-        let read = read_sessions(
-            py,
-            sessions,
+        let args = ReadArgs {
             format,
             axes,
-            metric,
             topic,
             time,
             frames,
             rate_hz,
             drop_duplicate_stamps,
             quaternion_tolerance,
-        )?;
+            ..ReadArgs::default()
+        };
+        let read = read_sessions(py, sessions, metric, &args)?;
         let mut named = Vec::with_capacity(read.len());
         let (mut plane_axes, mut metrics) = (Vec::new(), Vec::new());
         for (name, traj) in read {
