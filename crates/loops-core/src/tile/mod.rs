@@ -1404,7 +1404,6 @@ impl TileMerge {
                 };
                 let tally = c.tally();
                 tally.check().map_err(|problem| inconsistent(&problem))?;
-                let folded = tally.fold();
                 // The extents' times follow the extents (a trivial component's are mirrored).
                 let times_s = if c.trivial {
                     let times = [c.times_s[0][0], c.times_s[1][1]];
@@ -1412,19 +1411,7 @@ impl TileMerge {
                 } else {
                     c.times_s
                 };
-                let component = LoopComponent {
-                    id,
-                    trivial: c.trivial,
-                    area_s2: folded.area_s2,
-                    pair_count: folded.pair_count,
-                    pose_pair_count: tally.pose_pair_count(),
-                    run_count: c.runs as usize,
-                    holes: folded.holes(),
-                    i_range: folded.i_range,
-                    j_range: folded.j_range,
-                    closest_pair: c.closest,
-                    closest_distance: c.closest_distance,
-                };
+                let component = tally.loop_component(id, c.closest_distance);
                 let draw = DrawStats {
                     trivial: c.trivial,
                     rows: c.rows,
