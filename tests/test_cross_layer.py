@@ -237,9 +237,7 @@ def test_cli_csv_headers_are_the_python_columns(tmp_path: Path, loops_binary: Pa
     ]
     assert list(fleet_loops.session_pairs()) == _header(out / "session_pairs.csv")
     fleet_samples = il.sample_fleet(fleet_loops, budget=10, seed=0)
-    assert list(fleet_samples.table) == [
-        c for c in _header(out / "samples.csv") if c != "sampler"
-    ]
+    assert list(fleet_samples.table) == [c for c in _header(out / "samples.csv") if c != "sampler"]
     online = il.OnlineLoops(gamma=30.0, dim=traj.dim)
     online.push_many(traj.timestamps, traj.positions)
     online_columns = [c for c in online.components if c not in ("first_pose", "last_pose")]

@@ -2764,6 +2764,7 @@ def scan_tile(
     duration: Literal[True],
     runs: Literal[True],
 ) -> tuple[TileSummary, TileDuration, TileRuns]: ...
+@overload
 def scan_tile(
     tile: Tile,
     session_a: Trajectory,
