@@ -41,18 +41,41 @@ def _runtime_doc(obj: object) -> str | None:
     return inspect.cleandoc(doc) if isinstance(doc, str) and doc.strip() else None
 
 
+def _later_overloads(body: list[ast.stmt]) -> set[int]:
+    """The ``@overload`` signatures of ``body`` (by ``id``) that another def of the same name
+    follows: the last one carries the docstring (a stub has no implementation)."""
+    last: dict[str, ast.stmt] = {}
+    for node in body:
+        if isinstance(node, _Def):
+            last[node.name] = node
+    return {
+        id(node)
+        for node in body
+        if isinstance(node, _Def)
+        and last[node.name] is not node
+        and any(isinstance(d, ast.Name) and d.id == "overload" for d in node.decorator_list)
+    }
+
+
 def items(tree: ast.Module, module: ModuleType) -> Iterator[Item]:
-    """The stub's public classes, functions, methods and properties that the module has."""
+    """The stub's public classes, functions, methods and properties that the module has (of
+    ``@overload`` signatures, the last: it carries the docstring)."""
+    skipped = _later_overloads(tree.body)
     for node in tree.body:
-        if not isinstance(node, _Def) or node.name.startswith("_"):
+        if not isinstance(node, _Def) or node.name.startswith("_") or id(node) in skipped:
             continue
         obj = getattr(module, node.name, None)
         if obj is None:
             continue  # mypy.stubtest reports it
         yield Item(node.name, node, _runtime_doc(obj))
         if isinstance(node, ast.ClassDef):
+            later = _later_overloads(node.body)
             for member in node.body:
-                if not isinstance(member, _Def) or member.name.startswith("_"):
+                if (
+                    not isinstance(member, _Def)
+                    or member.name.startswith("_")
+                    or id(member) in later
+                ):
                     continue
                 if member.name in vars(obj):  # its own, not inherited from object
                     runtime = getattr(obj, member.name)  # a static method's function

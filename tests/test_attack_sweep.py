@@ -500,7 +500,7 @@ def objects():
     tile = tiles[0]
     a, b = tile.sessions
     kwargs = dict(starts=(int(starts[a]), int(starts[b])), gamma=30.0)
-    summary, duration = il.scan_tile_with_duration(tile, sessions[a], sessions[b], **kwargs)
+    summary, duration = il.scan_tile(tile, sessions[a], sessions[b], **kwargs, duration=True)
     summaries = [il.scan_tile(t, sessions[t.sessions[0]], sessions[t.sessions[1]],
                               starts=(int(starts[t.sessions[0]]), int(starts[t.sessions[1]])),
                               gamma=30.0)

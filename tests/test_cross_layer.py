@@ -213,7 +213,7 @@ def test_cli_csv_headers_are_the_python_columns(tmp_path: Path, loops_binary: Pa
     """Each result table has one column list: the CLI's CSV header is the Python table's
     columns, in order (less ``samples``, a count only the files carry; a fleet's components less
     the joint component's ``pose_pair_count`` and ``run_count``, which a store or a tile merge
-    does not keep)."""
+    does not keep; a fleet's samples less ``sampler``, the samples' own attribute)."""
     monday, tuesday = tmp_path / "monday.tum", tmp_path / "tuesday.tum"
     write_tum(monday, il.urban_drive(duration_s=300.0, seed=1))
     write_tum(tuesday, il.urban_drive(duration_s=300.0, seed=2))
@@ -236,6 +236,8 @@ def test_cli_csv_headers_are_the_python_columns(tmp_path: Path, loops_binary: Pa
         c for c in _header(out / "components.csv") if c not in joint_only
     ]
     assert list(fleet_loops.session_pairs()) == _header(out / "session_pairs.csv")
+    fleet_samples = il.sample_fleet(fleet_loops, budget=10, seed=0)
+    assert list(fleet_samples.table) == [c for c in _header(out / "samples.csv") if c != "sampler"]
     online = il.OnlineLoops(gamma=30.0, dim=traj.dim)
     online.push_many(traj.timestamps, traj.positions)
     online_columns = [c for c in online.components if c not in ("first_pose", "last_pose")]

@@ -7,7 +7,7 @@ them in ``crates/loops-py``, not here.
 from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
-from typing import Any, ClassVar, Literal, Protocol, final
+from typing import Any, ClassVar, Literal, Protocol, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -71,8 +71,6 @@ __all__ = [
     "DrawCandidates",
     "TileDuration",
     "draw_tile",
-    "scan_tile_kept",
-    "scan_tile_with_duration",
     "session_loop_duration",
     "log_name",
     "OutDir",
@@ -2387,11 +2385,13 @@ class FleetSamples:
     @property
     def table(self) -> Table:
         """The samples as a :class:`~inexact_loops.Table`, one row a sample in order of the fleet
-        index of the earlier pose: ``session_a`` (int64), ``name_a`` (str), ``i`` (int64, the
-        pose in session a), ``t_s`` (float64, seconds on session a's clock), then ``session_b``,
-        ``name_b``, ``j``, ``t_prime_s`` for the other pose (a ≤ b; a = b within a session), then
-        ``component`` (int64, the component id of :attr:`FleetLoops.components`, −1 for a
-        baseline's pair outside S_γ) and ``distance`` (float64, δ between the poses).
+        index of the earlier pose, with the columns of ``loops fleet``'s ``samples.csv`` in its
+        order (less ``sampler``: :attr:`sampler`): ``session_a`` and ``session_b`` (int64, the
+        sessions of the two poses, a ≤ b; a = b within a session), ``name_a`` and ``name_b``
+        (str), ``i`` and ``j`` (int64, the poses in sessions a and b), ``t_s`` and ``t_prime_s``
+        (float64, seconds, each on its session's clock), ``component`` (int64, the component id of
+        :attr:`FleetLoops.components`, −1 for a baseline's pair outside S_γ) and ``distance``
+        (float64, δ between the poses).
         """
     def to_pandas(self) -> pandas.DataFrame:
         """:attr:`table` as a ``pandas.DataFrame``.
@@ -2708,6 +2708,7 @@ class TileSummary:
     def edge_count(self) -> int:
         """Number of runs on the tile's edges."""
 
+@overload
 def scan_tile(
     tile: Tile,
     session_a: Trajectory,
@@ -2718,10 +2719,75 @@ def scan_tile(
     metric: _MetricName = None,
     separation: Separation | float | Literal["auto", "none"] | None = "auto",
     threads: int | None = None,
-) -> TileSummary:
+    duration: Literal[False] = False,
+    runs: Literal[False] = False,
+) -> TileSummary: ...
+@overload
+def scan_tile(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+    duration: Literal[True],
+    runs: Literal[False] = False,
+) -> tuple[TileSummary, TileDuration]: ...
+@overload
+def scan_tile(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+    duration: Literal[False] = False,
+    runs: Literal[True],
+) -> tuple[TileSummary, TileRuns]: ...
+@overload
+def scan_tile(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+    duration: Literal[True],
+    runs: Literal[True],
+) -> tuple[TileSummary, TileDuration, TileRuns]: ...
+@overload
+def scan_tile(
+    tile: Tile,
+    session_a: Trajectory,
+    session_b: Trajectory | None = None,
+    *,
+    starts: tuple[int, int],
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+    duration: bool = False,
+    runs: bool = False,
+) -> (
+    TileSummary
+    | tuple[TileSummary, TileDuration]
+    | tuple[TileSummary, TileRuns]
+    | tuple[TileSummary, TileDuration, TileRuns]
+):
     """Scans one tile from its two sessions alone — what a worker that read only those sessions
     can do — without the GIL: the same cells as :func:`find_fleet_loops` finds in the tile,
-    summarised for :func:`merge_tiles`.
+    summarised for :func:`merge_tiles`; from the same scan, as asked, the tile's share of the loop
+    duration τ (for :func:`session_loop_duration`) and its runs (for :func:`draw_tile` to offer a
+    draw's pairs without rescanning the tile).
 
     Args:
         tile: a :class:`Tile` of :func:`plan_tiles`.
@@ -2735,14 +2801,25 @@ def scan_tile(
         separation: within a session, as in :func:`find_fleet_loops` (``"auto"``: 4 γ of path;
             ``None``: none), measured over the whole session.
         threads: worker threads; ``None``: one per core.
+        duration: also return the tile's :class:`TileDuration`.
+        runs: also return the tile's :class:`TileRuns`.
 
     Returns:
-        :class:`TileSummary`.
+        :class:`TileSummary` alone, or with ``duration`` or ``runs`` a tuple of it and what was
+        asked, in that order: ``(TileSummary, TileDuration, TileRuns)`` with both.
 
     Raises:
         InvalidParameterError: a tile outside its sessions or below the diagonal, sessions of
             different dimensions or manifolds, an invalid γ or separation, a metric that does
             not fit the poses.
+
+    Examples:
+        >>> import inexact_loops as il
+        >>> drive = il.Trajectory([0.0, 1.0, 2.0, 3.0], [[0, 0], [5, 0], [5, 5], [0, 0.1]])
+        >>> tile = il.plan_tiles([il.session_blocks(drive, block=4)], gamma=0.5)[0]
+        >>> summary, share = il.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
+        >>> summary.component_count, share.tile == tile
+        (5, True)
     """
 
 @final
@@ -2922,9 +2999,8 @@ class KeyedDraw:
             TypeError: an offer of another type.
         """
     def table(self) -> Table:
-        """The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
-        ``t_s``, ``session_b``, ``name_b``, ``j``, ``t_prime_s`` (each on its session's clock),
-        ``component``, ``distance``, in order of the pairs.
+        """The samples, as :attr:`FleetSamples.table` gives them (the columns of ``loops fleet``'s
+        ``samples.csv`` in its order, less ``sampler``), in order of the pairs.
 
         Raises:
             InvalidParameterError: before the draw is :attr:`done`.
@@ -2968,8 +3044,8 @@ def draw_tile(
 ) -> DrawCandidates:
     """Rescans one tile from its two sessions, without the GIL, and offers its pairs to a pass of a
     :class:`KeyedDraw` (the arguments as :func:`scan_tile`'s, which the request's tile must have
-    been scanned with). Given the tile's ``runs`` (:func:`scan_tile_kept` with the same
-    arguments), it offers the same pairs from them without rescanning.
+    been scanned with). Given the tile's ``runs`` (:func:`scan_tile` with ``runs=True`` and the
+    same arguments), it offers the same pairs from them without rescanning.
 
     Args:
         request: a :class:`TileDrawRequest` of :meth:`KeyedDraw.requests`.
@@ -2987,7 +3063,7 @@ def draw_tile(
 @final
 class TileDuration:
     """What one tile's runs add to the loop duration τ of its rows and columns
-    (:func:`scan_tile_with_duration`); :func:`session_loop_duration` adds up a session's.
+    (:func:`scan_tile` with ``duration=True``); :func:`session_loop_duration` adds up a session's.
     Pickles as its bytes.
     """
 
@@ -2999,59 +3075,12 @@ class TileDuration:
     def tile(self) -> Tile:
         """The tile."""
 
-def scan_tile_with_duration(
-    tile: Tile,
-    session_a: Trajectory,
-    session_b: Trajectory | None = None,
-    *,
-    starts: tuple[int, int],
-    gamma: float,
-    metric: _MetricName = None,
-    separation: Separation | float | Literal["auto", "none"] | None = "auto",
-    threads: int | None = None,
-) -> tuple[TileSummary, TileDuration]:
-    """:func:`scan_tile`, and the tile's share of the loop duration τ from the same scan.
-
-    Args:
-        As :func:`scan_tile`.
-
-    Returns:
-        ``(TileSummary, TileDuration)``.
-
-    Raises:
-        As :func:`scan_tile`.
-    """
-
-def scan_tile_kept(
-    tile: Tile,
-    session_a: Trajectory,
-    session_b: Trajectory | None = None,
-    *,
-    starts: tuple[int, int],
-    gamma: float,
-    metric: _MetricName = None,
-    separation: Separation | float | Literal["auto", "none"] | None = "auto",
-    threads: int | None = None,
-) -> tuple[TileSummary, TileDuration, TileRuns]:
-    """:func:`scan_tile_with_duration` that also keeps the tile's runs, for :func:`draw_tile` to
-    offer a draw's pairs without rescanning the tile.
-
-    Args:
-        As :func:`scan_tile`.
-
-    Returns:
-        ``(TileSummary, TileDuration, TileRuns)``.
-
-    Raises:
-        As :func:`scan_tile`.
-    """
-
 @final
 class TileRuns:
-    """One tile's runs as its scan made them (:func:`scan_tile_kept`), with their provisional
-    labels: what :func:`draw_tile` reads of the tile when given them instead of rescanning it.
-    About 16 bytes a run; it holds no poses. Lives in the process that scanned the tile (it
-    does not pickle): a worker keeps it for the draws of its tiles.
+    """One tile's runs as its scan made them (:func:`scan_tile` with ``runs=True``), with their
+    provisional labels: what :func:`draw_tile` reads of the tile when given them instead of
+    rescanning it. About 16 bytes a run; it holds no poses. Lives in the process that scanned the
+    tile (it does not pickle): a worker keeps it for the draws of its tiles.
     """
 
     def __len__(self) -> int: ...
@@ -3069,7 +3098,7 @@ def session_loop_duration(
     session: int, *, start: int, poses: int, parts: list[TileDuration]
 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """The loop duration τ of one session from the shares of the tiles that hold its rows or
-    columns (:func:`scan_tile_with_duration`), as :meth:`FleetLoops.loop_duration` splits it.
+    columns (:func:`scan_tile` with ``duration=True``), as :meth:`FleetLoops.loop_duration` splits it.
 
     Args:
         session: the session's index in the fleet.

@@ -206,7 +206,6 @@ ELSEWHERE = {
             "TileDuration",
             "TileDuration.tile",
             "TileDuration.to_bytes",
-            "scan_tile_with_duration",
             "session_loop_duration",
         )
     },
@@ -217,7 +216,6 @@ ELSEWHERE = {
             "TileRuns.metric_name",
             "TileRuns.nbytes",
             "TileRuns.tile",
-            "scan_tile_kept",
         )
     },
     "Trajectory.from_evo": (

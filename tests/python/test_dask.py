@@ -642,7 +642,9 @@ def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypa
     for t, request in draw.requests():
         a, b = tiles[t].sessions
         kwargs = {"starts": (int(starts[a]), int(starts[b])), "gamma": 1.5}
-        summary, share, runs = il.scan_tile_kept(tiles[t], sessions[a], sessions[b], **kwargs)
+        summary, share, runs = il.scan_tile(
+            tiles[t], sessions[a], sessions[b], **kwargs, duration=True, runs=True
+        )
         assert (
             summary.to_bytes()
             == il.scan_tile(tiles[t], sessions[a], sessions[b], **kwargs).to_bytes()
@@ -655,7 +657,7 @@ def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypa
         assert kept.to_bytes() == rescanned.to_bytes()
         offered += len(kept)
         other = next(u for u in tiles if u != tiles[t] and u.sessions == tiles[t].sessions)
-        _, _, wrong = il.scan_tile_kept(other, sessions[a], sessions[b], **kwargs)
+        _, wrong = il.scan_tile(other, sessions[a], sessions[b], **kwargs, runs=True)
         with pytest.raises(il.InvalidParameterError, match="runs are of tile"):
             il.draw_tile(request, sessions[a], sessions[b], runs=wrong, **kwargs)
         with pytest.raises(il.InvalidParameterError, match="metric"):
@@ -692,13 +694,14 @@ def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
     shares = []
     for tile in il.plan_tiles(blocks, gamma=1.5):
         a, b = tile.sessions
-        _, share = il.scan_tile_with_duration(
+        _, share = il.scan_tile(
             tile,
             sessions[a],
             sessions[b],
             starts=(int(starts[a]), int(starts[b])),
             gamma=1.5,
             separation=None,
+            duration=True,
         )
         assert share.tile == tile
         shares.append(pickle.loads(pickle.dumps(il.TileDuration(share.to_bytes()))))

@@ -83,12 +83,7 @@ impl InputArgs {
         if let Some(format) = &self.format {
             options = options.format(format.parse()?);
         }
-        if let Some(rate) = self.rate_hz {
-            options = options.timing(loops_io::Timing::RateHz(rate));
-        }
-        if let Some(times) = &self.times {
-            options = options.timing(loops_io::Timing::TimesFile(times.clone()));
-        }
+        options = options.timing(loops_io::Timing::given(self.rate_hz, self.times.clone())?);
         Ok(options
             .chain_edges(self.chain_edges)
             .drop_duplicate_stamps(self.drop_duplicate_stamps)

@@ -154,6 +154,25 @@ impl Tally {
         self.pairs.saturating_sub(self.diagonal_cells)
     }
 
+    /// The component `id` these tallies report ([`fold`](Self::fold)), with δ at its closest
+    /// pair: what the batch labeller and the tile merge give.
+    pub(crate) fn loop_component(&self, id: usize, closest_distance: f64) -> LoopComponent {
+        let folded = self.fold();
+        LoopComponent {
+            id,
+            trivial: self.trivial,
+            area_s2: folded.area_s2,
+            pair_count: folded.pair_count,
+            pose_pair_count: self.pose_pair_count(),
+            run_count: self.runs as usize,
+            holes: folded.holes(),
+            i_range: folded.i_range,
+            j_range: folded.j_range,
+            closest_pair: self.closest.1,
+            closest_distance,
+        }
+    }
+
     /// An empty tally, before its first run.
     pub(crate) fn empty() -> Self {
         Self { rows: [usize::MAX, 0], columns: [usize::MAX, 0], closest: (f64::INFINITY, [0, 0]), ..Self::default() }
@@ -288,20 +307,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     let mut components = try_with_capacity(tallies.len(), "the loop components")?;
     components.extend(tallies.into_iter().enumerate().map(|(id, t)| {
         debug_assert!(t.check().is_ok(), "a component's tally: {:?}", t.check());
-        let folded = t.fold();
-        LoopComponent {
-            id,
-            trivial: t.trivial,
-            area_s2: folded.area_s2,
-            pair_count: folded.pair_count,
-            pose_pair_count: t.pose_pair_count(),
-            run_count: t.runs as usize,
-            holes: folded.holes(),
-            i_range: folded.i_range,
-            j_range: folded.j_range,
-            closest_pair: t.closest.1,
-            closest_distance: metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])),
-        }
+        t.loop_component(id, metric.distance(traj.point(t.closest.1[0]), traj.point(t.closest.1[1])))
     }));
     Ok(Labelling { labels, components })
 }

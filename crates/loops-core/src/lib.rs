@@ -127,14 +127,11 @@ pub use store::{
 };
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
-pub use tile::draw::{
-    TileDuration, TileRuns, draw_session_tile, draw_tile_runs, scan_session_tile_kept, scan_session_tile_with_duration,
-    session_loop_duration, tile_requests,
-};
+pub use tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs, session_loop_duration, tile_requests};
 pub use tile::{
-    EdgeRun, MergedComponent, MergedLoops, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileComponent, TileMerge,
-    TileSummary, merge_tiles, plan_session_tiles, plan_session_tiles_touching, plan_tiles, scan_session_tile,
-    scan_tile,
+    EdgeRun, MergedComponent, MergedLoops, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileComponent, TileKeep,
+    TileMerge, TileScan, TileSummary, merge_tiles, plan_session_tiles, plan_session_tiles_touching, plan_tiles,
+    scan_session_tile, scan_tile,
 };
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 pub use verdict::{PairVerdict, Verdict};

@@ -61,8 +61,10 @@ use crate::sample::{DrawCandidates, KeyedDraw, Sampler};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
-use crate::tile::draw::{TileDuration, draw_session_tile, scan_session_tile_with_duration, tile_requests};
-use crate::tile::{MergedLoops, SessionBlocks, Tile, TileMerge, TileSummary, plan_session_tiles_touching};
+use crate::tile::draw::{TileDuration, draw_session_tile, tile_requests};
+use crate::tile::{
+    MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching, scan_session_tile,
+};
 use crate::trajectory::{Manifold, Trajectory};
 
 /// The version of a store's layout (its tables and their meaning); a store of another version
@@ -507,15 +509,17 @@ impl FleetStore {
             .par_iter()
             .map(|tile| {
                 let [a, b] = tile.sessions;
-                let (summary, duration) = with_metric!(&settings.metric, m => scan_session_tile_with_duration(
+                let scan = with_metric!(&settings.metric, m => scan_session_tile(
                     [trajectory(a), trajectory(b)],
                     [starts[a], starts[b]],
                     m,
                     settings.gamma,
                     settings.separation,
                     tile,
+                    TileKeep::SUMMARY.with_duration(),
                 ))?;
-                Ok(StoredTile { summary, duration })
+                let duration = scan.duration.expect("kept with its duration");
+                Ok(StoredTile { summary: scan.summary, duration })
             })
             .collect::<Result<Vec<_>>>()?;
         report.tiles_scanned = scanned.len();

@@ -9,10 +9,9 @@ mod support;
 
 use loops_core::{
     DrawCandidates, DrawRequest, Euclidean, Fleet, FleetLoops, FleetOptions, KeyedDraw, SampleSize, Sampler,
-    SamplerKind, Separation, SessionBlocks, TileDuration, TileMerge, TileRuns, TileSummary, Trajectory,
+    SamplerKind, Separation, SessionBlocks, TileDuration, TileKeep, TileMerge, TileRuns, TileSummary, Trajectory,
     draw_session_tile, draw_tile_runs, find_fleet_loops, find_loops_separated, pair_key, plan_session_tiles,
-    sample_fleet, sample_loops, scan_session_tile_kept, scan_session_tile_with_duration, session_loop_duration,
-    tile_requests, with_threads,
+    sample_fleet, sample_loops, scan_session_tile, session_loop_duration, tile_requests, with_threads,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -80,11 +79,13 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
     for tile in &tiles {
         let [a, b] = tile.sessions;
         let pair = [&sessions[a], &sessions[b]];
-        let (summary, duration) =
-            scan_session_tile_with_duration(pair, [starts[a], starts[b]], &Euclidean, gamma, separation, tile).unwrap();
-        let (kept_summary, kept_duration, kept) =
-            scan_session_tile_kept(pair, [starts[a], starts[b]], &Euclidean, gamma, separation, tile).unwrap();
-        assert_eq!((&kept_summary, &kept_duration), (&summary, &duration), "{tile:?}: the scan that keeps its runs");
+        let scan =
+            |keep| scan_session_tile(pair, [starts[a], starts[b]], &Euclidean, gamma, separation, tile, keep).unwrap();
+        let timed = scan(TileKeep::SUMMARY.with_duration());
+        let (summary, duration) = (timed.summary, timed.duration.unwrap());
+        let kept = scan(TileKeep::SUMMARY.with_duration().with_runs());
+        assert_eq!((&kept.summary, &kept.duration), (&summary, &Some(duration.clone())), "{tile:?}: keeping its runs");
+        let kept = kept.runs.unwrap();
         assert_eq!(kept.tile(), tile);
         runs.insert(tile.clone(), kept);
         parts.push(TileMerge::new(TileSummary::from_bytes(&summary.to_bytes()).unwrap()).unwrap());

@@ -7,8 +7,8 @@
 mod support;
 
 use loops_core::{
-    Error, Euclidean, Fleet, FleetOptions, Metric, Separation, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileMerge,
-    TileSummary, Trajectory, find_fleet_loops, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
+    Error, Euclidean, Fleet, FleetOptions, Metric, Separation, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileKeep,
+    TileMerge, TileSummary, Trajectory, find_fleet_loops, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
 };
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
@@ -98,9 +98,20 @@ fn check_tree_cut(
             let [a, b] = tile.sessions;
             // The worker's view: its own copies of the two sessions, nothing else.
             let (own_a, own_b) = (sessions[a].clone(), sessions[b].clone());
-            let summary =
-                scan_session_tile([&own_a, &own_b], [starts[a], starts[b]], &Euclidean, gamma, separation, tile)
-                    .map_err(|e| e.to_string())?;
+            let scan = scan_session_tile(
+                [&own_a, &own_b],
+                [starts[a], starts[b]],
+                &Euclidean,
+                gamma,
+                separation,
+                tile,
+                TileKeep::SUMMARY,
+            )
+            .map_err(|e| e.to_string())?;
+            if scan.duration.is_some() || scan.runs.is_some() {
+                return Err(format!("tile {tile:?}: the summary-only scan kept more"));
+            }
+            let summary = scan.summary;
             let of_fleet = scan_tile(&fleet, &Euclidean, gamma, separation, tile).map_err(|e| e.to_string())?;
             if summary != of_fleet {
                 return Err(format!("tile {tile:?}: the scan from sessions differs from the fleet's"));
@@ -328,18 +339,21 @@ fn a_tile_merged_twice_is_refused() {
 fn session_tiles_check_their_sessions() {
     let (a, b) = (tour(30, 0.0, [0.0, 0.0]), tour(20, 0.0, [0.0, 0.0]));
     let tile = Tile { sessions: [0, 1], rows: 0..10, columns: 30..40 };
-    let scan =
-        |starts: [usize; 2], tile: &Tile| scan_session_tile([&a, &b], starts, &Euclidean, 1.0, Separation::NONE, tile);
+    let scan = |starts: [usize; 2], tile: &Tile| {
+        scan_session_tile([&a, &b], starts, &Euclidean, 1.0, Separation::NONE, tile, TileKeep::SUMMARY)
+    };
     assert!(scan([0, 30], &tile).is_ok());
     // Columns beyond session b, and session b's indices inside session a's.
     assert!(matches!(scan([0, 25], &tile), Err(Error::InvalidParameter { name: "tile", .. })));
     assert!(matches!(scan([0, 20], &Tile { columns: 20..30, ..tile.clone() }), Err(Error::InvalidParameter { .. })));
     let flat = Trajectory::new((0..20).map(f64::from).collect(), (0..20).map(f64::from).collect(), 1).unwrap();
-    let err = scan_session_tile([&a, &flat], [0, 30], &Euclidean, 1.0, Separation::NONE, &tile).unwrap_err();
+    let err = scan_session_tile([&a, &flat], [0, 30], &Euclidean, 1.0, Separation::NONE, &tile, TileKeep::SUMMARY)
+        .unwrap_err();
     assert!(err.to_string().contains("has 1 coordinates, session 0 has 2"), "{err}");
     // Within one session: one start, tiles on or above the diagonal.
     let own = Tile { sessions: [0, 0], rows: 10..20, columns: 0..10 };
-    assert!(scan_session_tile([&a, &a], [0, 0], &Euclidean, 1.0, Separation::NONE, &own).is_err());
+    let keep = TileKeep::SUMMARY.with_duration().with_runs();
+    assert!(scan_session_tile([&a, &a], [0, 0], &Euclidean, 1.0, Separation::NONE, &own, keep).is_err());
     let blocks = [SessionBlocks::new(&a, &Euclidean, 8).unwrap(), SessionBlocks::new(&b, &Euclidean, 9).unwrap()];
     assert!(plan_session_tiles(&blocks, &Euclidean, 1.0).unwrap_err().to_string().contains("same block size"));
     assert!(SessionBlocks::new(&a, &Euclidean, 0).is_err());

@@ -188,7 +188,7 @@ pub use scene::{
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
 pub use temp_copy::remove_temporary_files;
 pub use text::MAX_LINE_BYTES;
-pub use timing::Timing;
+pub use timing::{Timing, TimingConflict};
 pub use topic::{FramePairInfo, TopicInfo};
 pub use tuc::{LIBRSF_TAGS, read_tuc};
 pub use tum::read_tum;

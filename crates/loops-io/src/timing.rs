@@ -23,7 +23,36 @@ pub enum Timing {
     TimesFile(PathBuf),
 }
 
+/// A rate and a times file given together ([`Timing::given`]): both would time the poses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("rate_hz and times both give the poses' times: give one")]
+#[non_exhaustive]
+pub struct TimingConflict;
+
 impl Timing {
+    /// The timing of a reader's options: `rate_hz`, a `times` file, or neither (the file's own
+    /// times). Every surface (the CLI's `--rate-hz`/`--times`, Python's `rate_hz=`/`times=`)
+    /// takes its timing here.
+    ///
+    /// # Errors
+    /// [`TimingConflict`] when both are given.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_io::Timing;
+    /// assert_eq!(Timing::given(Some(10.0), None), Ok(Timing::RateHz(10.0)));
+    /// assert_eq!(Timing::given(None, None), Ok(Timing::FromFile));
+    /// assert!(Timing::given(Some(10.0), Some("times.txt".into())).is_err());
+    /// ```
+    pub fn given(rate_hz: Option<f64>, times: Option<PathBuf>) -> Result<Self, TimingConflict> {
+        match (rate_hz, times) {
+            (Some(_), Some(_)) => Err(TimingConflict),
+            (Some(rate_hz), None) => Ok(Self::RateHz(rate_hz)),
+            (None, Some(times)) => Ok(Self::TimesFile(times)),
+            (None, None) => Ok(Self::FromFile),
+        }
+    }
+
     /// Whether the times come from elsewhere than the pose file.
     pub(crate) fn is_given(&self) -> bool {
         !matches!(self, Self::FromFile)

@@ -240,9 +240,9 @@ pub(crate) fn bool_column<'py, R>(py: Python<'py>, rows: &[R], value: impl Fn(&R
 }
 
 /// A table column of names as a numpy array of `str` (dtype `<U…`; `<U1` when empty).
-pub(crate) fn str_column<'py>(
+pub(crate) fn str_column<'py, 'a>(
     py: Python<'py>,
-    values: impl Iterator<Item = &'static str>,
+    values: impl IntoIterator<Item = &'a str>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let list = pyo3::types::PyList::new(py, values)?;
     let numpy = py.import("numpy")?;

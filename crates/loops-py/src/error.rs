@@ -25,6 +25,7 @@ pub(crate) enum Failure {
     Write(loops_io::WriteError),
     OutDir(loops_io::out_dir::OutDirError),
     OutputOnInput(loops_io::out_dir::OutputOnInput),
+    Timing(loops_io::TimingConflict),
     Store(loops_io::store::StoreError),
     Panic(String),
 }
@@ -48,6 +49,12 @@ impl From<loops_io::out_dir::OutDirError> for Failure {
 impl From<loops_io::out_dir::OutputOnInput> for Failure {
     fn from(error: loops_io::out_dir::OutputOnInput) -> Self {
         Self::OutputOnInput(error)
+    }
+}
+
+impl From<loops_io::TimingConflict> for Failure {
+    fn from(error: loops_io::TimingConflict) -> Self {
+        Self::Timing(error)
     }
 }
 
@@ -109,6 +116,7 @@ impl From<Failure> for PyErr {
                 }
             }
             Failure::OutputOnInput(error) => InvalidParameterError::new_err(error.to_string()),
+            Failure::Timing(error) => InvalidParameterError::new_err(error.to_string()),
             Failure::Write(error) => {
                 let message = error.to_string();
                 match error {

@@ -10,7 +10,9 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{IntoPyDict, PyBool, PyBytes, PyDict, PyList, PyString, PyTuple, PyType};
 
-use crate::convert::{bool_column, extent_columns, float64_column, int64_column, pose_index, table, to_numpy};
+use crate::convert::{
+    bool_column, extent_columns, float64_column, int64_column, pose_index, str_column, table, to_numpy,
+};
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::pickling::ReducedWith;
@@ -19,7 +21,7 @@ use crate::py_metric::loops_metric;
 use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_samples::{Samples, baseline_params, sampler_of};
 use crate::py_separation::{Separation, SeparationArg};
-use crate::py_trajectory::{DriveOptions, Trajectory};
+use crate::py_trajectory::{DriveOptions, ReadArgs, Trajectory, read_trajectory_with};
 use loops_core::{FleetOptions, MetricSpec, Pruning, Sampler};
 
 /// Sessions — vehicles, days, robots — in one frame, each a :class:`Trajectory` with a name and
@@ -164,40 +166,18 @@ fn session_sources<'py>(sessions: &Bound<'py, PyAny>) -> PyResult<Vec<(String, S
 
 /// The sessions of `sessions` (what :class:`Fleet` takes), each read with the options given
 /// where it is a path: `Fleet`'s rule, for every surface that takes sessions.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn read_sessions(
     py: Python<'_>,
     sessions: &Bound<'_, PyAny>,
-    format: Option<String>,
-    axes: Option<(usize, usize)>,
     metric: Option<&Bound<'_, PyAny>>,
-    topic: Option<String>,
-    time: Option<String>,
-    frames: Option<(String, String)>,
-    rate_hz: Option<f64>,
-    drop_duplicate_stamps: bool,
-    quaternion_tolerance: Option<f64>,
+    read: &ReadArgs,
 ) -> PyResult<Vec<(String, Trajectory)>> {
     session_sources(sessions)?
         .into_iter()
         .map(|(name, source)| {
             let traj = match source {
                 SessionSource::Trajectory(traj) => traj,
-                SessionSource::Read(path) => crate::py_trajectory::read_trajectory(
-                    py,
-                    &path,
-                    format.clone(),
-                    axes,
-                    metric,
-                    topic.clone(),
-                    time.clone(),
-                    frames.clone(),
-                    rate_hz,
-                    None,
-                    drop_duplicate_stamps,
-                    quaternion_tolerance,
-                    false,
-                )?,
+                SessionSource::Read(path) => read_trajectory_with(py, &path, metric, read.clone())?,
             };
             Ok((name, traj))
         })
@@ -357,19 +337,18 @@ impl Fleet {
         drop_duplicate_stamps: bool,
         quaternion_tolerance: Option<f64>,
     ) -> PyResult<Self> {
-        let read = read_sessions(
-            py,
-            sessions,
+        let args = ReadArgs {
             format,
             axes,
-            metric,
             topic,
             time,
             frames,
             rate_hz,
             drop_duplicate_stamps,
             quaternion_tolerance,
-        )?;
+            ..ReadArgs::default()
+        };
+        let read = read_sessions(py, sessions, metric, &args)?;
         let mut named = Vec::with_capacity(read.len());
         let (mut plane_axes, mut metrics) = (Vec::new(), Vec::new());
         for (name, traj) in read {
@@ -564,12 +543,6 @@ pub(crate) struct FleetLoops {
     pub(crate) fleet: Py<Fleet>,
     /// The joint result as a `Loops`, copied on first use.
     loops: PyOnceLock<Py<Loops>>,
-}
-
-/// A numpy array of `str` (an empty one too).
-fn str_column<'py>(py: Python<'py>, values: Vec<&str>) -> PyResult<Bound<'py, PyAny>> {
-    let kwargs = [("dtype", "str")].into_py_dict(py)?;
-    py.import("numpy")?.call_method("array", (PyList::new(py, values)?,), Some(&kwargs))
 }
 
 impl FleetLoops {
@@ -822,8 +795,8 @@ pub(crate) fn components_table<'py>(
         (id, int64_column(py, cs, |c| c.id)),
         (session_a, int64_column(py, cs, |c| c.sessions[0])),
         (session_b, int64_column(py, cs, |c| c.sessions[1])),
-        (name_a, str_column(py, cs.iter().map(|c| names[c.sessions[0]].as_str()).collect())?),
-        (name_b, str_column(py, cs.iter().map(|c| names[c.sessions[1]].as_str()).collect())?),
+        (name_a, str_column(py, cs.iter().map(|c| names[c.sessions[0]].as_str()))?),
+        (name_b, str_column(py, cs.iter().map(|c| names[c.sessions[1]].as_str()))?),
         (trivial, bool_column(py, cs, |c| c.trivial)),
         (area_s2, float64_column(py, cs, |c| c.area_s2)),
         (pair_count, int64_column(py, cs, |c| c.pair_count as usize)),
@@ -846,8 +819,8 @@ pub(crate) fn session_pairs_table<'py>(
         [
             (session_a, int64_column(py, &rows, |r| r.session_a)),
             (session_b, int64_column(py, &rows, |r| r.session_b)),
-            (name_a, str_column(py, rows.iter().map(|r| names[r.session_a].as_str()).collect())?),
-            (name_b, str_column(py, rows.iter().map(|r| names[r.session_b].as_str()).collect())?),
+            (name_a, str_column(py, rows.iter().map(|r| names[r.session_a].as_str()))?),
+            (name_b, str_column(py, rows.iter().map(|r| names[r.session_b].as_str()))?),
             (components, int64_column(py, &rows, |r| r.components)),
             (pair_count, int64_column(py, &rows, |r| r.pair_count as usize)),
             (area_s2, float64_column(py, &rows, |r| r.area_s2)),
@@ -1085,11 +1058,13 @@ impl FleetSamples {
     }
 
     /// The samples as a :class:`~inexact_loops.Table`, one row a sample in order of the fleet
-    /// index of the earlier pose: ``session_a`` (int64), ``name_a`` (str), ``i`` (int64, the
-    /// pose in session a), ``t_s`` (float64, seconds on session a's clock), then ``session_b``,
-    /// ``name_b``, ``j``, ``t_prime_s`` for the other pose (a ≤ b; a = b within a session), then
-    /// ``component`` (int64, the component id of :attr:`FleetLoops.components`, −1 for a
-    /// baseline's pair outside S_γ) and ``distance`` (float64, δ between the poses).
+    /// index of the earlier pose, with the columns of ``loops fleet``'s ``samples.csv`` in its
+    /// order (less ``sampler``: :attr:`sampler`): ``session_a`` and ``session_b`` (int64, the
+    /// sessions of the two poses, a ≤ b; a = b within a session), ``name_a`` and ``name_b``
+    /// (str), ``i`` and ``j`` (int64, the poses in sessions a and b), ``t_s`` and ``t_prime_s``
+    /// (float64, seconds, each on its session's clock), ``component`` (int64, the component id of
+    /// :attr:`FleetLoops.components`, −1 for a baseline's pair outside S_γ) and ``distance``
+    /// (float64, δ between the poses).
     #[getter]
     fn table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         fleet_samples_table(py, &self.located, self.fleet.bind(py).get().inner.names())
@@ -1104,25 +1079,29 @@ impl FleetSamples {
     }
 }
 
-/// The table of :attr:`FleetSamples.table` (see there).
+/// The table of :attr:`FleetSamples.table` (see there): the columns of a fleet's samples.csv
+/// ([`loops_io::FLEET_SAMPLE_COLUMNS`]), in its order, less `sampler` (the samples' own
+/// attribute). Destructured so that a column added there does not compile here until it is.
 pub(crate) fn fleet_samples_table<'py>(
     py: Python<'py>,
     s: &[loops_core::FleetSample],
     names: &[String],
 ) -> PyResult<Bound<'py, PyAny>> {
+    let [session_a, session_b, name_a, name_b, i, j, t_s, t_prime_s, component, distance, _sampler] =
+        loops_io::FLEET_SAMPLE_COLUMNS;
     table(
         py,
         [
-            ("session_a", int64_column(py, s, |s| s.sessions[0])),
-            ("name_a", str_column(py, s.iter().map(|s| names[s.sessions[0]].as_str()).collect())?),
-            ("i", int64_column(py, s, |s| s.poses[0])),
-            ("t_s", float64_column(py, s, |s| s.times_s[0])),
-            ("session_b", int64_column(py, s, |s| s.sessions[1])),
-            ("name_b", str_column(py, s.iter().map(|s| names[s.sessions[1]].as_str()).collect())?),
-            ("j", int64_column(py, s, |s| s.poses[1])),
-            ("t_prime_s", float64_column(py, s, |s| s.times_s[1])),
-            ("component", to_numpy(py, s.iter().map(|s| s.component.map_or(-1, |c| c as i64)).collect()).into_any()),
-            ("distance", float64_column(py, s, |s| s.distance.unwrap_or(f64::NAN))),
+            (session_a, int64_column(py, s, |s| s.sessions[0])),
+            (session_b, int64_column(py, s, |s| s.sessions[1])),
+            (name_a, str_column(py, s.iter().map(|s| names[s.sessions[0]].as_str()))?),
+            (name_b, str_column(py, s.iter().map(|s| names[s.sessions[1]].as_str()))?),
+            (i, int64_column(py, s, |s| s.poses[0])),
+            (j, int64_column(py, s, |s| s.poses[1])),
+            (t_s, float64_column(py, s, |s| s.times_s[0])),
+            (t_prime_s, float64_column(py, s, |s| s.times_s[1])),
+            (component, to_numpy(py, s.iter().map(|s| s.component.map_or(-1, |c| c as i64)).collect()).into_any()),
+            (distance, float64_column(py, s, |s| s.distance.unwrap_or(f64::NAN))),
         ],
     )
 }

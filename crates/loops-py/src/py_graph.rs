@@ -14,7 +14,7 @@ use crate::detached;
 use crate::error::Failure;
 use crate::py_loops::Loops;
 use crate::py_metric::{MetricArg, loops_metric};
-use crate::py_trajectory::{Source, Trajectory, trajectory_for};
+use crate::py_trajectory::{ReadArgs, Source, Trajectory, trajectory_for};
 use loops_io::{GraphEdge, RelativePose};
 
 /// The information columns: the upper triangle of the 3 × 3 (2-D) or 6 × 6 (3-D) matrix, row by
@@ -372,17 +372,8 @@ pub(crate) fn read_pose_graph(
     quaternion_tolerance: Option<f64>,
 ) -> PyResult<PoseGraph> {
     let spec = MetricArg::spec_from_py(metric, "read_pose_graph")?;
-    if rate_hz.is_some() && times.is_some() {
-        return Err(crate::error::invalid_parameter("rate_hz and times both give the poses' times: give one".into()));
-    }
+    let options = ReadArgs { rate_hz, times, chain_edges, ..ReadArgs::default() }.options()?;
     let (graph, traj) = detached(py, move || {
-        let mut options = loops_io::ReadOptions::default().chain_edges(chain_edges);
-        if let Some(rate) = rate_hz {
-            options = options.timing(loops_io::Timing::RateHz(rate));
-        }
-        if let Some(times) = times {
-            options = options.timing(loops_io::Timing::TimesFile(times));
-        }
         let mut graph = loops_io::read_pose_graph_with(&path, &options)?;
         if let Some(tolerance) = quaternion_tolerance {
             graph.vertices.normalize_orientations(tolerance)?;

@@ -18,6 +18,7 @@ use crate::py_fleet::{
 use crate::py_metric::MetricArg;
 use crate::py_samples::sampler_of;
 use crate::py_separation::{Separation, SeparationArg};
+use crate::py_trajectory::ReadArgs;
 use loops_core::{FleetSample, StoreLoops, StoreSettings};
 use loops_io::store::{StoreConfig, StoreError, StoredFleet, read_samples, read_store, update_store};
 
@@ -279,19 +280,20 @@ impl FleetStore {
     ) -> PyResult<Bound<'py, PyDict>> {
         let sessions = match add {
             None => Vec::new(),
-            Some(add) => read_sessions(
-                py,
-                add,
-                format,
-                axes,
-                metric,
-                topic,
-                time,
-                frames,
-                rate_hz,
-                drop_duplicate_stamps,
-                quaternion_tolerance,
-            )?,
+            Some(add) => {
+                let args = ReadArgs {
+                    format,
+                    axes,
+                    topic,
+                    time,
+                    frames,
+                    rate_hz,
+                    drop_duplicate_stamps,
+                    quaternion_tolerance,
+                    ..ReadArgs::default()
+                };
+                read_sessions(py, add, metric, &args)?
+            }
         };
         let config = self.config(
             gamma,

@@ -1,5 +1,5 @@
 //! Tiles of a fleet's plane, for a cluster: `SessionBlocks` (`session_blocks`), `Tile`
-//! (`plan_tiles`) and `TileSummary` (`scan_tile`); their merges are in `py_tile_merge`.
+//! (`plan_tiles`) and `TileSummary`; the scan is in `py_tile_scan`, the merges in `py_tile_merge`.
 //! Summaries pickle as their bytes.
 
 use std::sync::Arc;
@@ -38,8 +38,7 @@ pub(crate) fn tile_metric(
     }
 }
 
-/// A scan (or draw) of one tile, from the arguments that `scan_tile`, `scan_tile_with_duration`,
-/// `scan_tile_kept` and `draw_tile` share: the two sessions (session a twice for a tile within
+/// A scan (or draw) of one tile, from the arguments that `scan_tile` and `draw_tile` share: the two sessions (session a twice for a tile within
 /// one session), their first fleet indices, γ, the separation at γ and the metric
 /// (`session_a`'s own unless given; only the core's metrics, so the engine's loops stay
 /// monomorphic).
@@ -375,53 +374,4 @@ impl TileSummary {
     fn edge_count(&self) -> usize {
         self.inner.edges.len()
     }
-}
-
-/// Scans one tile from its two sessions alone — what a worker that read only those sessions
-/// can do — without the GIL: the same cells as :func:`find_fleet_loops` finds in the tile,
-/// summarised for :func:`merge_tiles`.
-///
-/// Args:
-///     tile: a :class:`Tile` of :func:`plan_tiles`.
-///     session_a: the :class:`Trajectory` of session ``tile.sessions[0]``.
-///     session_b: that of session ``tile.sessions[1]``; ``None`` for a tile within one session.
-///     starts: the two sessions' first fleet indices ``(start_a, start_b)``: the poses of the
-///         sessions before each in the fleet (the same twice within one session).
-///     gamma: the distance threshold γ > 0.
-///     metric: a metric name or an ``inexact_loops.metrics`` object (not a callable); ``None``:
-///         ``session_a``'s own.
-///     separation: within a session, as in :func:`find_fleet_loops` (``"auto"``: 4 γ of path;
-///         ``None``: none), measured over the whole session.
-///     threads: worker threads; ``None``: one per core.
-///
-/// Returns:
-///     :class:`TileSummary`.
-///
-/// Raises:
-///     InvalidParameterError: a tile outside its sessions or below the diagonal, sessions of
-///         different dimensions or manifolds, an invalid γ or separation, a metric that does
-///         not fit the poses.
-#[pyfunction]
-#[pyo3(signature = (tile, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
-    threads=None))]
-#[pyo3(
-    text_signature = "(tile, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
-)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn scan_tile(
-    py: Python<'_>,
-    tile: &Tile,
-    session_a: &Trajectory,
-    session_b: Option<&Trajectory>,
-    starts: (usize, usize),
-    gamma: f64,
-    metric: Option<&Bound<'_, PyAny>>,
-    separation: SeparationArg,
-    threads: Option<usize>,
-) -> PyResult<TileSummary> {
-    let tile = tile.inner.clone();
-    let scan = TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile")?;
-    let inner = scan
-        .run(py, threads, move |s| s.metric.scan_session_tile(s.sessions(), s.starts, s.gamma, s.separation, &tile))?;
-    Ok(TileSummary { inner })
 }

@@ -1,29 +1,21 @@
 //! Samples and τ from tiles: `TiledFleetLoops.draw` (`KeyedDraw`), `TileDrawRequest`,
-//! `draw_tile` (`DrawCandidates`), `scan_tile_with_duration` (`TileDuration`), `scan_tile_kept`
-//! (`TileRuns`, in `py_tile_runs`) and `session_loop_duration`. The shipped objects pickle as their bytes.
+//! `draw_tile` (`DrawCandidates`, from a rescan or the `TileRuns` a scan kept) and
+//! `session_loop_duration` (from the scans' `TileDuration`s). The shipped objects pickle as their
+//! bytes.
 
 use std::sync::Arc;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyBytes, PyList, PyTuple, PyType};
+use pyo3::types::{PyBytes, PyTuple, PyType};
 
-use crate::convert::{float64_column, int64_column, table, to_numpy};
+use crate::convert::to_numpy;
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_separation::SeparationArg;
-use crate::py_tile::{Tile, TileScan, TileSummary};
+use crate::py_tile::{Tile, TileScan};
 use crate::py_trajectory::Trajectory;
 use crate::shared::Shared;
 use loops_core::{SampleSize, Sampler};
-
-/// A column of names as a numpy array of ``str``.
-fn names_column<'py>(py: Python<'py>, values: Vec<&str>) -> PyResult<Bound<'py, PyAny>> {
-    let numpy = py.import("numpy")?;
-    if values.is_empty() {
-        return numpy.call_method1("array", (PyList::empty(py), "<U1"));
-    }
-    numpy.call_method1("array", (PyList::new(py, values)?,))
-}
 
 /// A keyed draw of samples from a fleet's tiles (:meth:`TiledFleetLoops.draw`): the quotas from
 /// the merged statistics, then passes in which every tile asked (:meth:`requests`) offers its
@@ -139,9 +131,8 @@ impl KeyedDraw {
         Ok(())
     }
 
-    /// The samples, as :attr:`FleetSamples.table` gives them: ``session_a``, ``name_a``, ``i``,
-    /// ``t_s``, ``session_b``, ``name_b``, ``j``, ``t_prime_s`` (each on its session's clock),
-    /// ``component``, ``distance``, in order of the pairs.
+    /// The samples, as :attr:`FleetSamples.table` gives them (the columns of ``loops fleet``'s
+    /// ``samples.csv`` in its order, less ``sampler``), in order of the pairs.
     ///
     /// Raises:
     ///     InvalidParameterError: before the draw is :attr:`done`.
@@ -160,28 +151,20 @@ impl KeyedDraw {
             self.skip_trivial,
         )?;
         let session_of = |f: usize| self.starts.partition_point(|&s| s <= f) - 1;
-        let located: Vec<([usize; 2], [usize; 2], &loops_core::DrawnPair)> = picks
+        let located: Vec<loops_core::FleetSample> = picks
             .iter()
             .map(|p| {
                 let (a, b) = (session_of(p.pair[0]), session_of(p.pair[1]));
-                ([a, b], [p.pair[0] - self.starts[a], p.pair[1] - self.starts[b]], p)
+                loops_core::FleetSample {
+                    sessions: [a, b],
+                    poses: [p.pair[0] - self.starts[a], p.pair[1] - self.starts[b]],
+                    times_s: p.times_s,
+                    component: Some(p.component),
+                    distance: Some(p.distance),
+                }
             })
             .collect();
-        table(
-            py,
-            [
-                ("session_a", int64_column(py, &located, |s| s.0[0])),
-                ("name_a", names_column(py, located.iter().map(|s| self.names[s.0[0]].as_str()).collect())?),
-                ("i", int64_column(py, &located, |s| s.1[0])),
-                ("t_s", float64_column(py, &located, |s| s.2.times_s[0])),
-                ("session_b", int64_column(py, &located, |s| s.0[1])),
-                ("name_b", names_column(py, located.iter().map(|s| self.names[s.0[1]].as_str()).collect())?),
-                ("j", int64_column(py, &located, |s| s.1[1])),
-                ("t_prime_s", float64_column(py, &located, |s| s.2.times_s[1])),
-                ("component", int64_column(py, &located, |s| s.2.component)),
-                ("distance", float64_column(py, &located, |s| s.2.distance)),
-            ],
-        )
+        crate::py_fleet::fleet_samples_table(py, &located, &self.names)
     }
 }
 
@@ -270,8 +253,8 @@ impl DrawCandidates {
 
 /// Rescans one tile from its two sessions, without the GIL, and offers its pairs to a pass of a
 /// :class:`KeyedDraw` (the arguments as :func:`scan_tile`'s, which the request's tile must have
-/// been scanned with). Given the tile's ``runs`` (:func:`scan_tile_kept` with the same
-/// arguments), it offers the same pairs from them without rescanning.
+/// been scanned with). Given the tile's ``runs`` (:func:`scan_tile` with ``runs=True`` and the
+/// same arguments), it offers the same pairs from them without rescanning.
 ///
 /// Args:
 ///     request: a :class:`TileDrawRequest` of :meth:`KeyedDraw.requests`.
@@ -301,11 +284,11 @@ pub(crate) fn draw_tile(
     metric: Option<&Bound<'_, PyAny>>,
     separation: SeparationArg,
     threads: Option<usize>,
-    runs: Option<&crate::py_tile_runs::TileRuns>,
+    runs: Option<&crate::py_tile_scan::TileRuns>,
 ) -> PyResult<DrawCandidates> {
     let r = request.clone();
     let scan = TileScan::new(&r.tile, session_a, session_b, starts, gamma, metric, separation, "draw_tile")?;
-    let runs = runs.map(|runs| crate::py_tile_runs::runs_for(runs, &r.tile, scan.metric)).transpose()?;
+    let runs = runs.map(|runs| crate::py_tile_scan::runs_for(runs, &r.tile, scan.metric)).transpose()?;
     let inner = scan.run(py, threads, move |s| match runs {
         Some(runs) => s.metric.draw_tile_runs(s.sessions(), s.starts, &runs, &r.labels, &r.request),
         None => {
@@ -315,116 +298,8 @@ pub(crate) fn draw_tile(
     Ok(DrawCandidates { inner })
 }
 
-/// What one tile's runs add to the loop duration τ of its rows and columns
-/// (:func:`scan_tile_with_duration`); :func:`session_loop_duration` adds up a session's.
-/// Pickles as its bytes.
-#[pyclass(frozen, module = "inexact_loops._core")]
-#[derive(Debug, Clone)]
-pub(crate) struct TileDuration {
-    inner: loops_core::TileDuration,
-}
-
-crate::pickling::pickled_as_bytes!(
-    TileDuration,
-    loops_core::TileDuration,
-    "share",
-    "The share as bytes (a tag, the tile format version, then MessagePack)."
-);
-
-#[pymethods]
-impl TileDuration {
-    fn __repr__(&self) -> String {
-        format!("TileDuration({:?})", self.inner.tile)
-    }
-
-    /// The tile.
-    #[getter]
-    fn tile(&self) -> Tile {
-        Tile { inner: self.inner.tile.clone() }
-    }
-}
-
-/// :func:`scan_tile`, and the tile's share of the loop duration τ from the same scan.
-///
-/// Args:
-///     As :func:`scan_tile`.
-///
-/// Returns:
-///     ``(TileSummary, TileDuration)``.
-///
-/// Raises:
-///     As :func:`scan_tile`.
-#[pyfunction]
-#[pyo3(signature = (tile, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
-    threads=None))]
-#[pyo3(
-    text_signature = "(tile, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
-)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn scan_tile_with_duration(
-    py: Python<'_>,
-    tile: &Tile,
-    session_a: &Trajectory,
-    session_b: Option<&Trajectory>,
-    starts: (usize, usize),
-    gamma: f64,
-    metric: Option<&Bound<'_, PyAny>>,
-    separation: SeparationArg,
-    threads: Option<usize>,
-) -> PyResult<(TileSummary, TileDuration)> {
-    let tile = tile.inner.clone();
-    let scan =
-        TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile_with_duration")?;
-    let (summary, duration) = scan.run(py, threads, move |s| {
-        s.metric.scan_session_tile_with_duration(s.sessions(), s.starts, s.gamma, s.separation, &tile)
-    })?;
-    Ok((TileSummary { inner: summary }, TileDuration { inner: duration }))
-}
-
-/// :func:`scan_tile_with_duration` that also keeps the tile's runs, for :func:`draw_tile` to
-/// offer a draw's pairs without rescanning the tile.
-///
-/// Args:
-///     As :func:`scan_tile`.
-///
-/// Returns:
-///     ``(TileSummary, TileDuration, TileRuns)``.
-///
-/// Raises:
-///     As :func:`scan_tile`.
-#[pyfunction]
-#[pyo3(signature = (tile, session_a, session_b=None, *, starts, gamma, metric=None, separation=SeparationArg::Auto,
-    threads=None))]
-#[pyo3(
-    text_signature = "(tile, session_a, session_b=None, *, starts, gamma, metric=None, separation='auto', threads=None)"
-)]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn scan_tile_kept(
-    py: Python<'_>,
-    tile: &Tile,
-    session_a: &Trajectory,
-    session_b: Option<&Trajectory>,
-    starts: (usize, usize),
-    gamma: f64,
-    metric: Option<&Bound<'_, PyAny>>,
-    separation: SeparationArg,
-    threads: Option<usize>,
-) -> PyResult<(TileSummary, TileDuration, crate::py_tile_runs::TileRuns)> {
-    let tile = tile.inner.clone();
-    let scan = TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile_kept")?;
-    let metric = scan.metric;
-    let (summary, duration, runs) = scan.run(py, threads, move |s| {
-        s.metric.scan_session_tile_kept(s.sessions(), s.starts, s.gamma, s.separation, &tile)
-    })?;
-    Ok((
-        TileSummary { inner: summary },
-        TileDuration { inner: duration },
-        crate::py_tile_runs::TileRuns { inner: Arc::new(runs), metric },
-    ))
-}
-
 /// The loop duration τ of one session from the shares of the tiles that hold its rows or
-/// columns (:func:`scan_tile_with_duration`), as :meth:`FleetLoops.loop_duration` splits it.
+/// columns (:func:`scan_tile` with ``duration=True``), as :meth:`FleetLoops.loop_duration` splits it.
 ///
 /// Args:
 ///     session: the session's index in the fleet.
@@ -445,7 +320,7 @@ pub(crate) fn session_loop_duration<'py>(
     session: usize,
     start: usize,
     poses: usize,
-    parts: Vec<PyRef<'py, TileDuration>>,
+    parts: Vec<PyRef<'py, crate::py_tile_scan::TileDuration>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let parts: Vec<loops_core::TileDuration> = parts.iter().map(|p| p.inner.clone()).collect();
     let (own, other) = detached(py, move || Ok(loops_core::session_loop_duration(session, start, poses, &parts)?))?;

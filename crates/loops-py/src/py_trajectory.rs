@@ -670,36 +670,78 @@ pub(crate) fn read_trajectory(
     quaternion_tolerance: Option<f64>,
     chain_edges: bool,
 ) -> PyResult<Trajectory> {
-    let paths = paths_of(path)?;
-    let spec = MetricArg::spec_from_py(metric, "read_trajectory")?;
-    if rate_hz.is_some() && times.is_some() {
-        return Err(crate::error::invalid_parameter("rate_hz and times both give the poses' times: give one".into()));
-    }
-    let (inner, dropped, chains) = detached(py, move || {
+    let args = ReadArgs {
+        format,
+        axes,
+        topic,
+        time,
+        frames,
+        rate_hz,
+        times,
+        drop_duplicate_stamps,
+        quaternion_tolerance,
+        chain_edges,
+    };
+    read_trajectory_with(py, path, metric, args)
+}
+
+/// The keywords of :func:`read_trajectory` besides the path and the metric: how files are read,
+/// by `read_trajectory` and by every surface that reads sessions from paths (`Fleet`,
+/// `FleetStore.update`, through `py_fleet::read_sessions`).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ReadArgs {
+    pub(crate) format: Option<String>,
+    pub(crate) axes: Option<(usize, usize)>,
+    pub(crate) topic: Option<String>,
+    pub(crate) time: Option<String>,
+    pub(crate) frames: Option<(String, String)>,
+    pub(crate) rate_hz: Option<f64>,
+    pub(crate) times: Option<PathBuf>,
+    pub(crate) drop_duplicate_stamps: bool,
+    pub(crate) quaternion_tolerance: Option<f64>,
+    pub(crate) chain_edges: bool,
+}
+
+impl ReadArgs {
+    /// The reader's options: the one place these keywords become [`loops_io::ReadOptions`].
+    ///
+    /// # Errors
+    /// An unknown format or time source; both `rate_hz` and `times`.
+    pub(crate) fn options(self) -> Result<loops_io::ReadOptions, Failure> {
         let mut mcap = loops_io::McapOptions::default();
-        if let Some(topic) = topic {
+        if let Some(topic) = self.topic {
             mcap = mcap.topic(topic);
         }
-        if let Some(time) = time {
+        if let Some(time) = self.time {
             mcap = mcap.time(time.parse()?);
         }
-        if let Some((parent, child)) = frames {
+        if let Some((parent, child)) = self.frames {
             mcap = mcap.frames(parent, child);
         }
         let mut options = loops_io::ReadOptions::default().mcap(mcap);
-        if let Some(format) = format {
+        if let Some(format) = self.format {
             options = options.format(format.parse()?);
         }
-        if let Some(rate) = rate_hz {
-            options = options.timing(loops_io::Timing::RateHz(rate));
-        }
-        if let Some(times) = times {
-            options = options.timing(loops_io::Timing::TimesFile(times));
-        }
-        options = options
-            .chain_edges(chain_edges)
-            .drop_duplicate_stamps(drop_duplicate_stamps)
-            .quaternion_tolerance(quaternion_tolerance);
+        Ok(options
+            .timing(loops_io::Timing::given(self.rate_hz, self.times)?)
+            .chain_edges(self.chain_edges)
+            .drop_duplicate_stamps(self.drop_duplicate_stamps)
+            .quaternion_tolerance(self.quaternion_tolerance))
+    }
+}
+
+/// :func:`read_trajectory` of `path` (one path or a list) with `args`.
+pub(crate) fn read_trajectory_with(
+    py: Python<'_>,
+    path: &Bound<'_, PyAny>,
+    metric: Option<&Bound<'_, PyAny>>,
+    args: ReadArgs,
+) -> PyResult<Trajectory> {
+    let paths = paths_of(path)?;
+    let spec = MetricArg::spec_from_py(metric, "read_trajectory")?;
+    let axes = args.axes;
+    let options = args.options()?;
+    let (inner, dropped, chains) = detached(py, move || {
         let read = loops_io::read_trajectories(&paths, &options, &spec, axes.map(|(a, b)| [a, b]))?;
         let chains = read.notes.iter().filter_map(|notes| notes.chain.clone()).collect::<Vec<_>>();
         let skipped = read.notes.into_iter().filter_map(|notes| notes.skipped).collect::<Vec<_>>();

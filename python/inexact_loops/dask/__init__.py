@@ -25,8 +25,8 @@ the merged statistics, and each tile offers the few pairs asked of it
 tile only when they are gone (evicted, or the worker restarted). The samples are
 :func:`~inexact_loops.sample_fleet`'s, pair for pair, whatever the tiling, the workers and
 where the runs were found. Loop duration per pose (``loop_duration=True``) comes from each
-tile's share (:func:`~inexact_loops.scan_tile_with_duration`), added up per session. Every
-task's result depends on its inputs alone (kept runs only save work), so a worker that dies
+tile's share (:func:`~inexact_loops.scan_tile` with ``duration=True``), added up per session.
+Every task's result depends on its inputs alone (kept runs only save work), so a worker that dies
 takes nothing with it: Dask reruns its tasks and the answer is the same. A run never waits for
 ever: its tasks that wait for a worker are sent to the running ones, and when none can take
 them for :data:`NO_WORKER_TIMEOUT_S` the run raises :class:`ClusterError` and cancels them.

@@ -91,7 +91,7 @@ def scan_session_tiles(
     summaries, shares = [], []
     for tile, sources, starts in tiles:
         kwargs = _tile_kwargs(sources, options, starts, gamma, metric, separation, threads)
-        summary, share, runs = _core.scan_tile_kept(tile, **kwargs)
+        summary, share, runs = _core.scan_tile(tile, **kwargs, duration=True, runs=True)
         keep_runs((run_id, tile), group, runs)
         summaries.append(summary)
         shares.append(share)

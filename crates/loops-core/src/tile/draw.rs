@@ -7,7 +7,8 @@
 //!   components), and [`draw_session_tile`] rescans a tile and offers its pairs: the keyed pairs
 //!   below a threshold and the closest pair of requested rows. The draw takes the offers of every
 //!   tile and gives the samples of [`sample_fleet`](crate::sample_fleet), pair for pair.
-//! - **τ.** [`scan_session_tile_with_duration`] also returns the tile's share of τ
+//! - **τ.** [`scan_session_tile`](crate::scan_session_tile), kept with its duration
+//!   ([`TileKeep::duration`](crate::TileKeep::duration)), also returns the tile's share of τ
 //!   ([`TileDuration`]: what its runs add to each of its rows and columns), and
 //!   [`session_loop_duration`] adds up the shares of one session: `own` from the tiles within it,
 //!   `other` from the tiles with another session, as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
@@ -20,7 +21,7 @@ use crate::metric::Metric;
 use crate::sample::{DrawCandidates, DrawRequest, DrawRun, RunHolder, draw_candidates};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
-use crate::tile::{MergedLoops, ScannedTile, Tile, TileSummary, fleet_index, piece_row, scan_piece, summary_of};
+use crate::tile::{MergedLoops, ScannedTile, Tile, fleet_index, piece_row, scan_piece};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 
 /// The part of `request` each tile of `merged` must answer (by tile, as
@@ -41,8 +42,8 @@ pub fn tile_requests(merged: &MergedLoops, request: &DrawRequest) -> Vec<Option<
 
 /// A tile's runs as its scan made them, with their provisional labels: what a keyed draw of the
 /// tile reads ([`draw_tile_runs`]), kept where the tile was scanned
-/// ([`scan_session_tile_kept`]) so that the draw need not rescan it. Owns its runs (16 bytes a
-/// run), not the tile's poses.
+/// ([`scan_session_tile`](crate::scan_session_tile) with [`TileKeep::runs`](crate::TileKeep::runs))
+/// so that the draw need not rescan it. Owns its runs (16 bytes a run), not the tile's poses.
 #[derive(Debug, Clone)]
 pub struct TileRuns {
     tile: Tile,
@@ -59,7 +60,13 @@ pub struct TileRuns {
 }
 
 impl TileRuns {
-    fn new(scanned: ScannedTile<'_>, tile: &Tile, starts: [usize; 2], gamma: f64, separation: Separation) -> Self {
+    pub(super) fn new(
+        scanned: ScannedTile<'_>,
+        tile: &Tile,
+        starts: [usize; 2],
+        gamma: f64,
+        separation: Separation,
+    ) -> Self {
         let (provisional, components) =
             crate::component::label_runs(&scanned.set, crate::component::ROWS_PER_LABEL_TASK);
         let piece_len = scanned.piece.len();
@@ -204,8 +211,8 @@ pub fn draw_session_tile<M: Metric + ?Sized>(
 }
 
 /// [`draw_session_tile`] without the rescan: the pairs offered from `runs`, which
-/// [`scan_session_tile_kept`] made of the same tile with the same sessions, metric, γ and
-/// separation. The same offers as [`draw_session_tile`].
+/// [`scan_session_tile`](crate::scan_session_tile) kept of the same tile with the same sessions,
+/// metric, γ and separation. The same offers as [`draw_session_tile`].
 ///
 /// Time: O(offered pairs) and the diagonal runs of requested rows.
 ///
@@ -245,25 +252,6 @@ pub fn draw_tile_runs<M: Metric + ?Sized>(
     let diagonal = tile.sessions[0] == tile.sessions[1] && runs.separation.is_none();
     let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels };
     draw_candidates(&holder, request)
-}
-
-/// [`scan_session_tile_with_duration`] that also keeps the tile's runs for its draws
-/// ([`draw_tile_runs`]). O(the scan + the tile's runs, rows and columns).
-///
-/// # Errors
-/// As [`scan_session_tile`](crate::scan_session_tile).
-pub fn scan_session_tile_kept<M: Metric + ?Sized>(
-    sessions: [&Trajectory; 2],
-    starts: [usize; 2],
-    metric: &M,
-    gamma: f64,
-    separation: Separation,
-    tile: &Tile,
-) -> Result<(TileSummary, TileDuration, TileRuns)> {
-    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    let summary = summary_of(&scanned, metric, tile)?;
-    let duration = duration_of(&scanned, tile)?;
-    Ok((summary, duration, TileRuns::new(scanned, tile, starts, gamma, separation)))
 }
 
 /// What one tile's runs add to the loop duration τ (Side both, seconds) of its rows and of its
@@ -328,25 +316,8 @@ macro_rules! draw_bytes {
 draw_bytes!(DrawRequest, b"ILdr", "draw request");
 draw_bytes!(DrawCandidates, b"ILdc", "draw candidates");
 
-/// [`scan_session_tile`](crate::scan_session_tile) and the tile's share of τ from the same scan. O(the scan + the tile's
-/// rows and columns).
-///
-/// # Errors
-/// As [`scan_session_tile`](crate::scan_session_tile).
-pub fn scan_session_tile_with_duration<M: Metric + ?Sized>(
-    sessions: [&Trajectory; 2],
-    starts: [usize; 2],
-    metric: &M,
-    gamma: f64,
-    separation: Separation,
-    tile: &Tile,
-) -> Result<(TileSummary, TileDuration)> {
-    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    Ok((summary_of(&scanned, metric, tile)?, duration_of(&scanned, tile)?))
-}
-
 /// The share of τ of a scanned tile.
-fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<TileDuration> {
+pub(super) fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<TileDuration> {
     let widths = scanned.piece.cell_widths_s();
     let breaks: Vec<u32> = scanned.piece_starts[1..].iter().map(|&s| s as u32).collect();
     let prefix = prefix_sums_by_session(widths, &breaks)?;
@@ -380,9 +351,9 @@ fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<TileDuration> {
 }
 
 /// τ of session `session` (its first fleet index `start`, `poses` poses) from the shares of
-/// every tile that holds its rows or columns ([`scan_session_tile_with_duration`]), in any
-/// order: `(own, other)` per pose, seconds, as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
-/// splits them. Shares of tiles without the session are ignored.
+/// every tile that holds its rows or columns ([`scan_session_tile`](crate::scan_session_tile) with
+/// its duration), in any order: `(own, other)` per pose, seconds, as
+/// [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration) splits them. Shares of tiles without the session are ignored.
 ///
 /// # Errors
 /// [`Error::InconsistentTiles`] for a share whose rows or columns lie outside the session.
@@ -447,35 +418,5 @@ impl MetricSpec {
         request: &DrawRequest,
     ) -> Result<DrawCandidates> {
         with_metric!(self, m => draw_tile_runs(sessions, starts, m, runs, labels, request))
-    }
-
-    /// [`scan_session_tile_kept`] under this metric.
-    ///
-    /// # Errors
-    /// As [`scan_session_tile_kept`].
-    pub fn scan_session_tile_kept(
-        &self,
-        sessions: [&Trajectory; 2],
-        starts: [usize; 2],
-        gamma: f64,
-        separation: Separation,
-        tile: &Tile,
-    ) -> Result<(TileSummary, TileDuration, TileRuns)> {
-        with_metric!(self, m => scan_session_tile_kept(sessions, starts, m, gamma, separation, tile))
-    }
-
-    /// [`scan_session_tile_with_duration`] under this metric.
-    ///
-    /// # Errors
-    /// As [`scan_session_tile_with_duration`].
-    pub fn scan_session_tile_with_duration(
-        &self,
-        sessions: [&Trajectory; 2],
-        starts: [usize; 2],
-        gamma: f64,
-        separation: Separation,
-        tile: &Tile,
-    ) -> Result<(TileSummary, TileDuration)> {
-        with_metric!(self, m => scan_session_tile_with_duration(sessions, starts, m, gamma, separation, tile))
     }
 }

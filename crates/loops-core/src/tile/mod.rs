@@ -19,7 +19,8 @@
 //!   the bounding balls of its blocks), then [`plan_session_tiles`]. [`plan_tiles`] is the same
 //!   plan from a fleet in memory.
 //! - **Scan** a tile from its two sessions' trajectories and their first fleet indices:
-//!   [`scan_session_tile`]. [`scan_tile`] is the same scan of a fleet in memory.
+//!   [`scan_session_tile`], which also keeps, as [`TileKeep`] asks, the tile's share of τ and its
+//!   runs for the draws (see [`draw`]). [`scan_tile`] is the same scan of a fleet in memory.
 //! - **Merge** in a tree: a [`TileMerge`] is a partial merge of any set of tiles (one tile's
 //!   summary, or a merge of merges), keeping the statistics of its components with the joins
 //!   made so far and only the edge runs that face a tile it does not hold yet; merging merges
@@ -40,7 +41,7 @@
 //! # Examples
 //! ```
 //! use loops_core::{Euclidean, Separation, SessionBlocks, TileMerge, Trajectory};
-//! use loops_core::{plan_session_tiles, scan_session_tile};
+//! use loops_core::{TileKeep, plan_session_tiles, scan_session_tile};
 //! let out = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
 //! let back = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
 //! // Each reader describes its session; the plan needs nothing else.
@@ -51,8 +52,10 @@
 //! let mut parts = Vec::new();
 //! for tile in &tiles {
 //!     let [a, b] = tile.sessions;
+//!     let pair = [sessions[a], sessions[b]];
 //!     let summary =
-//!         scan_session_tile([sessions[a], sessions[b]], [starts[a], starts[b]], &Euclidean, 1.0, Separation::NONE, tile)?;
+//!         scan_session_tile(pair, [starts[a], starts[b]], &Euclidean, 1.0, Separation::NONE, tile, TileKeep::SUMMARY)?
+//!             .summary;
 //!     // What a worker ships back, and the merge reads.
 //!     parts.push(TileMerge::new(loops_core::TileSummary::from_bytes(&summary.to_bytes())?)?);
 //! }
@@ -69,6 +72,7 @@ mod piece;
 
 use std::collections::HashMap;
 
+use self::draw::{TileDuration, TileRuns, duration_of};
 use self::piece::live_stretches;
 
 use crate::ball_tree::BallTree;
@@ -436,8 +440,9 @@ impl MetricSpec {
         gamma: f64,
         separation: Separation,
         tile: &Tile,
-    ) -> Result<TileSummary> {
-        with_metric!(self, m => scan_session_tile(sessions, starts, m, gamma, separation, tile))
+        keep: TileKeep,
+    ) -> Result<TileScan> {
+        with_metric!(self, m => scan_session_tile(sessions, starts, m, gamma, separation, tile, keep))
     }
 }
 
@@ -682,7 +687,8 @@ pub fn scan_tile<M: Metric + ?Sized>(
         return Err(bad_tile(tile));
     }
     let starts = [fleet.starts()[a], fleet.starts()[b]];
-    scan_session_tile([fleet.session(a), fleet.session(b)], starts, metric, gamma, separation, tile)
+    let sessions = [fleet.session(a), fleet.session(b)];
+    Ok(scan_session_tile(sessions, starts, metric, gamma, separation, tile, TileKeep::SUMMARY)?.summary)
 }
 
 /// The error of a tile that does not lie in its sessions.
@@ -694,13 +700,63 @@ fn bad_tile(tile: &Tile) -> Error {
     }
 }
 
+/// What a tile scan keeps besides the tile's summary ([`scan_session_tile`]): nothing more by
+/// default ([`TileKeep::SUMMARY`]).
+///
+/// # Examples
+/// ```
+/// use loops_core::TileKeep;
+/// let keep = TileKeep::SUMMARY.with_duration().with_runs();
+/// assert!(keep.duration && keep.runs);
+/// ```
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct TileKeep {
+    /// The tile's share of the loop duration τ ([`TileDuration`]).
+    pub duration: bool,
+    /// The tile's runs with their provisional labels ([`TileRuns`]), for
+    /// [`draw_tile_runs`](crate::draw_tile_runs) to draw from without a rescan.
+    pub runs: bool,
+}
+
+impl TileKeep {
+    /// The summary only.
+    pub const SUMMARY: Self = Self { duration: false, runs: false };
+
+    /// Also the tile's share of τ.
+    #[must_use]
+    pub const fn with_duration(self) -> Self {
+        Self { duration: true, ..self }
+    }
+
+    /// Also the tile's runs.
+    #[must_use]
+    pub const fn with_runs(self) -> Self {
+        Self { runs: true, ..self }
+    }
+}
+
+/// One tile's scan ([`scan_session_tile`]): its summary, and what [`TileKeep`] asked for
+/// (`None` otherwise).
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct TileScan {
+    /// The statistics of the tile's provisional components and its edge runs.
+    pub summary: TileSummary,
+    /// The tile's share of τ, when [`TileKeep::duration`].
+    pub duration: Option<TileDuration>,
+    /// The tile's runs, when [`TileKeep::runs`].
+    pub runs: Option<TileRuns>,
+}
+
 /// Scans one tile from its two sessions alone: `sessions` are the trajectories of sessions a
 /// and b of `tile.sessions` (for a tile within one session, that session twice), `starts` their
 /// first fleet indices (the poses of the sessions before them in the fleet). What a worker that
-/// read only those two sessions needs; the result is [`scan_tile`]'s on the whole fleet.
+/// read only those two sessions needs; the summary is [`scan_tile`]'s on the whole fleet.
+/// `keep` says what else to return from the same scan: the tile's share of τ, its runs.
 ///
-/// Time O(the tile's runs and its poses' passes near each other), as the fleet engine; memory
-/// O(the tile's poses and runs); rows in parallel.
+/// Time O(the tile's runs and its poses' passes near each other), as the fleet engine, plus
+/// O(the tile's rows and columns) for τ; memory O(the tile's poses and runs); rows in parallel.
 ///
 /// # Errors
 /// [`Error::InvalidGamma`]; [`Error::InvalidSeparation`]; [`Error::InvalidParameter`] for a
@@ -714,9 +770,13 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
     gamma: f64,
     separation: Separation,
     tile: &Tile,
-) -> Result<TileSummary> {
+    keep: TileKeep,
+) -> Result<TileScan> {
     let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    summary_of(&scanned, metric, tile)
+    let summary = summary_of(&scanned, metric, tile)?;
+    let duration = if keep.duration { Some(duration_of(&scanned, tile)?) } else { None };
+    let runs = keep.runs.then(|| TileRuns::new(scanned, tile, starts, gamma, separation));
+    Ok(TileScan { summary, duration, runs })
 }
 
 /// The summary of a scanned tile.
@@ -1344,7 +1404,6 @@ impl TileMerge {
                 };
                 let tally = c.tally();
                 tally.check().map_err(|problem| inconsistent(&problem))?;
-                let folded = tally.fold();
                 // The extents' times follow the extents (a trivial component's are mirrored).
                 let times_s = if c.trivial {
                     let times = [c.times_s[0][0], c.times_s[1][1]];
@@ -1352,19 +1411,7 @@ impl TileMerge {
                 } else {
                     c.times_s
                 };
-                let component = LoopComponent {
-                    id,
-                    trivial: c.trivial,
-                    area_s2: folded.area_s2,
-                    pair_count: folded.pair_count,
-                    pose_pair_count: tally.pose_pair_count(),
-                    run_count: c.runs as usize,
-                    holes: folded.holes(),
-                    i_range: folded.i_range,
-                    j_range: folded.j_range,
-                    closest_pair: c.closest,
-                    closest_distance: c.closest_distance,
-                };
+                let component = tally.loop_component(id, c.closest_distance);
                 let draw = DrawStats {
                     trivial: c.trivial,
                     rows: c.rows,
