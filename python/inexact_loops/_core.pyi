@@ -3559,6 +3559,11 @@ class OnlineSampler:
             Give at most one.
         first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
             component has a pair to offer.
+        first_at_closest_approach: with ``first_on_appearance``, a component's first candidate
+            is the closest pair of its whole first pass (the closest approach), offered at the
+            keyframe after the path leaves it (so :attr:`Candidate.k` < :attr:`Candidate.keyframe`),
+            rather than the closest pair at the edge of γ as the component appears. It goes
+            beyond the cap.
         closest_in_row: the first of a row's draws for a component is its closest pair in the
             row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
             keyframe); ``False``: all uniform (the paper's σ_ρ).
@@ -3583,7 +3588,11 @@ class OnlineSampler:
         ...         print(c.keyframe, c.j, c.first)
         50 0 True
 
-    Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`').
+    Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`'). It
+    pickles with its state (buckets, the components P1 served, the pose it reached): pickled
+    with its :class:`OnlineLoops` (or offered the next update of the engine it followed), the
+    copy gives the candidates the original would; offered an update that does not start where
+    it stopped, it starts afresh.
     """
 
     def __new__(
@@ -3593,10 +3602,14 @@ class OnlineSampler:
         cap_per_minute: float | None = None,
         cap_per_metre: float | None = None,
         first_on_appearance: bool = True,
+        first_at_closest_approach: bool = False,
         closest_in_row: bool = True,
         separation: Separation | float | Literal["none"] | None = None,
         seed: int = 0,
     ) -> OnlineSampler: ...
+    def __reduce__(self) -> tuple[Callable[[bytes], OnlineSampler], tuple[bytes]]: ...
+    @classmethod
+    def _from_state(cls, state: bytes) -> OnlineSampler: ...
     def offer(self, online: OnlineLoops, update: Update) -> list[Candidate]:
         """The loop-closure candidates that ``update`` made possible, by keyframe, component and
         pose. Offer every update of ``online``, in order, once each (a sampler follows one
@@ -3633,6 +3646,11 @@ class OnlineSampler:
     def first_on_appearance(self) -> bool:
         """Whether a component's first appearance brings a candidate (P1 online)."""
     @property
+    def first_at_closest_approach(self) -> bool:
+        """Whether that candidate is the closest pair of the component's first pass, offered once
+        the pass is over.
+        """
+    @property
     def separation(self) -> Separation:
         """The separation the candidates keep (:class:`Separation`)."""
     @property
@@ -3641,14 +3659,16 @@ class OnlineSampler:
 
 @final
 class Candidate:
-    """A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
+    """A loop-closure candidate: the pair (``j``, ``k``), j < k ≤ keyframe, within γ, to match.
     Returned by :meth:`OnlineSampler.offer`.
 
     Args:
-        keyframe: the pose whose push made it possible (the later pose).
+        keyframe: the pose whose push offered it.
         j: the earlier pose.
+        k: the later pose (``None``: the keyframe; earlier only for a first candidate at the
+            closest approach, offered once the pass was over).
         component: its component's id at the keyframe.
-        distance: δ(x_j, x_keyframe), the metric's unit.
+        distance: δ(x_j, x_k), the metric's unit.
         first: emitted by the first-appearance rule rather than drawn.
 
     Example:
@@ -3659,7 +3679,14 @@ class Candidate:
     """
 
     def __new__(
-        cls, *, keyframe: int, j: int, component: int, distance: float, first: bool
+        cls,
+        *,
+        keyframe: int,
+        j: int,
+        component: int,
+        distance: float,
+        first: bool,
+        k: int | None = None,
     ) -> Candidate: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     def __eq__(self, other: object, /) -> bool: ...
@@ -3672,14 +3699,19 @@ class Candidate:
     def j(self) -> int:
         """The earlier pose of the pair."""
     @property
+    def k(self) -> int:
+        """The later pose of the pair: the keyframe, but for a first candidate at the closest
+        approach (offered once the pass was over).
+        """
+    @property
     def pair(self) -> tuple[int, int]:
-        """The pair ``(j, keyframe)``."""
+        """The pair ``(j, k)``."""
     @property
     def component(self) -> int:
         """Its component's id at the keyframe."""
     @property
     def distance(self) -> float:
-        """δ(x_j, x_keyframe), the metric's unit."""
+        """δ(x_j, x_k), the metric's unit."""
     @property
     def first(self) -> bool:
         """Whether the first-appearance rule (P1 online) emitted it, rather than a draw."""

@@ -119,6 +119,7 @@ ELSEWHERE = {
                 "OnlineSampler.cap_per_minute",
                 "OnlineSampler.cap_per_metre",
                 "OnlineSampler.first_on_appearance",
+                "OnlineSampler.first_at_closest_approach",
                 "OnlineSampler.separation",
                 "OnlineSampler.seed",
             ),
@@ -130,6 +131,7 @@ ELSEWHERE = {
                 "Candidate.distance",
                 "Candidate.first",
             ),
+            "test_a_candidate_offered_after_its_pair_says_both": ("Candidate.k",),
         }.items()
         for name in names
     },

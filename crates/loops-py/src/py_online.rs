@@ -107,6 +107,10 @@ struct OnlineState {
     rebuilt_len: usize,
     timestamps_s: Vec<f64>,
     coords: Vec<f64>,
+    /// Its rebuild count (older states: the one rebuild `rebuilt_len` implies, if any), so that
+    /// a sampler pickled with it goes on with the copy.
+    #[serde(default)]
+    rebuild_count: Option<u64>,
 }
 
 /// A pickled `Update`: the fields of the core's.
@@ -161,6 +165,7 @@ impl OnlineLoops {
             rebuilt_len: this.rebuilt_len,
             timestamps_s: this.inner.timestamps_s().to_vec(),
             coords: this.inner.trajectory().map_or_else(Vec::new, |traj| traj.coords().to_vec()),
+            rebuild_count: Some(this.inner.rebuild_count()),
         };
         crate::pickling::reduce(slf.as_any(), "OnlineLoops", &state)
     }
@@ -183,7 +188,21 @@ impl OnlineLoops {
             {
                 return Err(crate::pickling::invalid(py, "OnlineLoops", "its poses do not fit together"));
             }
+            // The clears and the rebuild that bring the count to the original's.
+            let implied = u64::from(rebuilt > 0);
+            let rebuild_count = state.rebuild_count.unwrap_or(implied);
+            // Each clear takes a moment: a count far beyond any real engine's is a forged one.
+            if rebuild_count < implied || rebuild_count - implied > 1 << 20 {
+                return Err(crate::pickling::invalid(
+                    py,
+                    "OnlineLoops",
+                    format!("its rebuild count {rebuild_count} does not fit its rebuilds"),
+                ));
+            }
             let inner = &mut this.inner;
+            for _ in implied..rebuild_count {
+                inner.clear();
+            }
             detached(py, move || {
                 if rebuilt > 0 {
                     let traj = loops_core::Trajectory::new(
