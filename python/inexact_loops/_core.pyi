@@ -747,7 +747,7 @@ class Loops:
             >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
             >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
             >>> open(path).read().splitlines()[2]
-            '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+            '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0,0,0,0,0,0,0'
         """
     def loop_duration_to_csv(
         self,
@@ -1304,7 +1304,9 @@ class Samples:
         trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
         ``distance`` (float64, NaN where not measured), ``score`` (float64; only when the
         detections had scores) — the getters of the same names — and, when any sample has one,
-        the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`).
+        the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`)
+        and where the two poses are, ``i_x, i_y, i_z, j_x, j_y, j_z`` (the trajectory's first three
+        coordinates, as ``samples.csv`` has them).
 
         Raises:
             ImportError: pandas is not installed (it is not a dependency of the library).
@@ -1318,8 +1320,9 @@ class Samples:
         """
     def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
-        distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad`` (the last eight: the relative
-        pose, :attr:`relative_poses`), then one line a sample; unknown values are empty fields.
+        distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad,i_x,i_y,i_z,j_x,j_y,j_z`` (then
+        the relative pose, :attr:`relative_poses`, and where the two poses are), then one line a
+        sample; unknown values are empty fields.
         Atomic (a temporary file renamed into place).
 
         Raises:
@@ -1333,7 +1336,7 @@ class Samples:
             >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
             >>> samples.to_csv(path)
             >>> open(path).read().splitlines()[1]
-            '0,3,,,,0,0,,,alpha,,,,,,,,'
+            '0,3,,,,0,0,,,alpha,,,,,,,,,,,,,,'
         """
     def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as one JSON object: ``sampler``, ``count``, ``groups``,

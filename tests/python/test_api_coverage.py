@@ -1390,6 +1390,7 @@ def test_samples_files_and_their_errors(tmp_path, clusters):
     assert lines[0] == ",".join(
         ["t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler"]
         + ["dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad"]
+        + ["i_x,i_y,i_z,j_x,j_y,j_z"]
     )
     assert len(lines) == 4
     assert np.isnan(samples.relative_poses).all(), "detections not placed: no guess"

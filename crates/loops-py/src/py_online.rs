@@ -9,7 +9,8 @@ use pyo3::types::{PyBytes, PyType};
 use serde::{Deserialize, Serialize};
 
 use crate::convert::{
-    bool_column, extent_columns, float64_column, int64_column, real_array, table, timestamps_and_points, to_numpy,
+    bool_column, closest_position_columns, extent_columns, float64_column, int64_column, real_array, table,
+    timestamps_and_points, to_numpy,
 };
 use crate::detached;
 use crate::error::{Failure, value_error};
@@ -368,7 +369,10 @@ impl OnlineLoops {
         let this = self.engine.lock(py)?;
         let inner = &this.inner;
         let loops = detached(py, move || Ok(inner.to_loops()?))?;
-        Ok(Loops { inner: Arc::new(loops) })
+        Ok(match inner.trajectory() {
+            Some(traj) => Loops::of_trajectory(loops, traj),
+            None => Loops { inner: Arc::new(loops), positions: None },
+        })
     }
 
     /// The loop duration τ of pose ``pose`` so far (paper, Eq. 6), seconds: how long the
@@ -468,6 +472,9 @@ impl OnlineLoops {
             .iter()
             .map(|c| loops_io::ComponentExtent::new([c.i_range, c.j_range], c.closest_pair, c.closest_distance, [t; 2]))
             .collect();
+        let points = this.inner.trajectory().map(loops_io::point_positions);
+        let positions: Vec<_> =
+            cs.iter().map(|c| loops_io::ClosestPositions::new(c.closest_pair, points.as_deref())).collect();
         let measures = [
             (id, int64_column(py, &cs, |c| c.id as usize)),
             (trivial, bool_column(py, &cs, |c| c.trivial)),
@@ -480,7 +487,14 @@ impl OnlineLoops {
             ("first_pose", int64_column(py, &cs, |c| c.first_pose)),
             ("last_pose", int64_column(py, &cs, |c| c.last_pose)),
         ];
-        table(py, measures.into_iter().chain(extent_columns(py, &extents)).chain(online))
+        table(
+            py,
+            measures
+                .into_iter()
+                .chain(extent_columns(py, &extents))
+                .chain(closest_position_columns(py, &positions))
+                .chain(online),
+        )
     }
 }
 
