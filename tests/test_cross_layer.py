@@ -1,7 +1,9 @@
 """The same input through the CLI, the Python API and the file reader gives the same answer."""
 
+import csv
 import json
 import math
+import pickle
 import subprocess
 import sys
 from pathlib import Path
@@ -246,3 +248,51 @@ def test_cli_csv_headers_are_the_python_columns(tmp_path: Path, loops_binary: Pa
         for c in _header(out / "monday" / "components.csv")
         if c not in ("pose_pair_count", "samples")
     ]
+
+
+def test_closest_pairs_and_samples_are_placed_on_their_poses(
+    tmp_path: Path, loops_binary: Path
+) -> None:
+    """``components.csv`` has the positions of each closest pair's poses and ``samples.csv``
+    those of each sample's, read off the log itself; Python's tables give the same values, and a
+    pickled result keeps them."""
+    traj = il.urban_drive(duration_s=900.0, seed=11)
+    tum = tmp_path / "drive.tum"
+    write_tum(tum, traj)
+    out = tmp_path / "out"
+    subprocess.run(
+        [loops_binary, "run", tum, "--gamma", "40", "--out", out],
+        check=True,
+        capture_output=True,
+    )
+    xyz = np.loadtxt(tum)[:, 1:4]
+    with open(next(out.rglob("components.csv"))) as file:
+        components = list(csv.DictReader(file))
+    with open(next(out.rglob("samples.csv"))) as file:
+        samples = list(csv.DictReader(file))
+    assert components and samples
+    axes = "xyz"
+    for row in components:
+        for end in "ij":
+            pose = int(row[f"closest_{end}"])
+            placed = [float(row[f"closest_{end}_{a}"]) for a in axes]
+            np.testing.assert_array_equal(placed, xyz[pose], err_msg=str(row))
+    for row in samples:
+        for end in "ij":
+            placed = [float(row[f"{end}_{a}"]) for a in axes]
+            np.testing.assert_array_equal(placed, xyz[int(row[end])], err_msg=str(row))
+    loops = il.find_loops(il.read_trajectory(tum), gamma=40.0)
+    table = loops.components
+    for end in "ij":
+        for k, a in enumerate(axes):
+            column = f"closest_{end}_{a}"
+            np.testing.assert_array_equal(
+                table[column], xyz[table[f"closest_{end}"], k], err_msg=column
+            )
+            np.testing.assert_array_equal(
+                pickle.loads(pickle.dumps(loops)).components[column], table[column]
+            )
+    frame = il.sample(loops, trajectory=il.read_trajectory(tum), budget=50, seed=1).to_pandas()
+    for end in "ij":
+        placed = frame[[f"{end}_{a}" for a in axes]].to_numpy()
+        np.testing.assert_array_equal(placed, xyz[frame[end].to_numpy()])

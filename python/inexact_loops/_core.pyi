@@ -302,8 +302,17 @@ class Trajectory:
         """
     @staticmethod
     def gnss_ecef(timestamps: npt.ArrayLike, lat_lon_height: npt.ArrayLike) -> Trajectory:
-        """GNSS fixes as WGS 84 Earth-centred positions relative to the first fix (metres), for the
-        ``euclidean`` metric; input as in :meth:`gnss`. A Euclidean trajectory (:attr:`manifold`).
+        """GNSS fixes as WGS 84 Earth-centred positions relative to the first fix, turned into the
+        first fix's east-north-up frame (metres east, north and up: plots and reports draw a
+        map), for the ``euclidean`` metric; input as in :meth:`gnss`. A rotation of ECEF, so
+        distances are the straight-line ones. A Euclidean trajectory (:attr:`manifold`).
+
+        Example:
+            >>> import inexact_loops as il
+            >>> traj = il.Trajectory.gnss_ecef([0.0, 1.0], [[48.0, 11.0, 500.0], [48.001, 11.0, 500.0]])
+            >>> east, north, up = traj.positions[1]  # 111 m north, a little down: the Earth curves
+            >>> round(float(north), 1), bool(abs(east) < 1e-6), bool(-0.01 < up < 0)
+            (111.2, True, True)
         """
     @staticmethod
     def descriptors(
@@ -736,7 +745,7 @@ class Loops:
             >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
             >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
             >>> open(path).read().splitlines()[2]
-            '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+            '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0,0,0,0,0,0,0'
         """
     def loop_duration_to_csv(
         self,
@@ -1293,7 +1302,9 @@ class Samples:
         trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
         ``distance`` (float64, NaN where not measured), ``score`` (float64; only when the
         detections had scores) — the getters of the same names — and, when any sample has one,
-        the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`).
+        the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`)
+        and where the two poses are, ``i_x, i_y, i_z, j_x, j_y, j_z`` (the trajectory's first three
+        coordinates, as ``samples.csv`` has them).
 
         Raises:
             ImportError: pandas is not installed (it is not a dependency of the library).
@@ -1307,8 +1318,9 @@ class Samples:
         """
     def to_csv(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
-        distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad`` (the last eight: the relative
-        pose, :attr:`relative_poses`), then one line a sample; unknown values are empty fields.
+        distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad,i_x,i_y,i_z,j_x,j_y,j_z`` (then
+        the relative pose, :attr:`relative_poses`, and where the two poses are), then one line a
+        sample; unknown values are empty fields.
         Atomic (a temporary file renamed into place).
 
         Raises:
@@ -1322,7 +1334,7 @@ class Samples:
             >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
             >>> samples.to_csv(path)
             >>> open(path).read().splitlines()[1]
-            '0,3,,,,0,0,,,alpha,,,,,,,,'
+            '0,3,,,,0,0,,,alpha,,,,,,,,,,,,,,'
         """
     def to_json(self, path: str | PathLike[str], *, overwrite: bool = False) -> None:
         """Writes the samples as one JSON object: ``sampler``, ``count``, ``groups``,
@@ -3588,6 +3600,11 @@ class OnlineSampler:
             Give at most one.
         first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
             component has a pair to offer.
+        first_at_closest_approach: with ``first_on_appearance``, a component's first candidate
+            is the closest pair of its whole first pass (the closest approach), offered at the
+            keyframe after the path leaves it (so :attr:`Candidate.k` < :attr:`Candidate.keyframe`),
+            rather than the closest pair at the edge of γ as the component appears. It goes
+            beyond the cap.
         closest_in_row: the first of a row's draws for a component is its closest pair in the
             row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
             keyframe); ``False``: all uniform (the paper's σ_ρ).
@@ -3612,7 +3629,11 @@ class OnlineSampler:
         ...         print(c.keyframe, c.j, c.first)
         50 0 True
 
-    Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`').
+    Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`'). It
+    pickles with its state (buckets, the components P1 served, the pose it reached): pickled
+    with its :class:`OnlineLoops` (or offered the next update of the engine it followed), the
+    copy gives the candidates the original would; offered an update that does not start where
+    it stopped, it starts afresh.
     """
 
     def __new__(
@@ -3622,10 +3643,14 @@ class OnlineSampler:
         cap_per_minute: float | None = None,
         cap_per_metre: float | None = None,
         first_on_appearance: bool = True,
+        first_at_closest_approach: bool = False,
         closest_in_row: bool = True,
         separation: Separation | float | Literal["none"] | None = None,
         seed: int = 0,
     ) -> OnlineSampler: ...
+    def __reduce__(self) -> tuple[Callable[[bytes], OnlineSampler], tuple[bytes]]: ...
+    @classmethod
+    def _from_state(cls, state: bytes) -> OnlineSampler: ...
     def offer(self, online: OnlineLoops, update: Update) -> list[Candidate]:
         """The loop-closure candidates that ``update`` made possible, by keyframe, component and
         pose. Offer every update of ``online``, in order, once each (a sampler follows one
@@ -3662,6 +3687,11 @@ class OnlineSampler:
     def first_on_appearance(self) -> bool:
         """Whether a component's first appearance brings a candidate (P1 online)."""
     @property
+    def first_at_closest_approach(self) -> bool:
+        """Whether that candidate is the closest pair of the component's first pass, offered once
+        the pass is over.
+        """
+    @property
     def separation(self) -> Separation:
         """The separation the candidates keep (:class:`Separation`)."""
     @property
@@ -3670,14 +3700,16 @@ class OnlineSampler:
 
 @final
 class Candidate:
-    """A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
+    """A loop-closure candidate: the pair (``j``, ``k``), j < k ≤ keyframe, within γ, to match.
     Returned by :meth:`OnlineSampler.offer`.
 
     Args:
-        keyframe: the pose whose push made it possible (the later pose).
+        keyframe: the pose whose push offered it.
         j: the earlier pose.
+        k: the later pose (``None``: the keyframe; earlier only for a first candidate at the
+            closest approach, offered once the pass was over).
         component: its component's id at the keyframe.
-        distance: δ(x_j, x_keyframe), the metric's unit.
+        distance: δ(x_j, x_k), the metric's unit.
         first: emitted by the first-appearance rule rather than drawn.
 
     Example:
@@ -3688,7 +3720,14 @@ class Candidate:
     """
 
     def __new__(
-        cls, *, keyframe: int, j: int, component: int, distance: float, first: bool
+        cls,
+        *,
+        keyframe: int,
+        j: int,
+        component: int,
+        distance: float,
+        first: bool,
+        k: int | None = None,
     ) -> Candidate: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     def __eq__(self, other: object, /) -> bool: ...
@@ -3701,14 +3740,19 @@ class Candidate:
     def j(self) -> int:
         """The earlier pose of the pair."""
     @property
+    def k(self) -> int:
+        """The later pose of the pair: the keyframe, but for a first candidate at the closest
+        approach (offered once the pass was over).
+        """
+    @property
     def pair(self) -> tuple[int, int]:
-        """The pair ``(j, keyframe)``."""
+        """The pair ``(j, k)``."""
     @property
     def component(self) -> int:
         """Its component's id at the keyframe."""
     @property
     def distance(self) -> float:
-        """δ(x_j, x_keyframe), the metric's unit."""
+        """δ(x_j, x_k), the metric's unit."""
     @property
     def first(self) -> bool:
         """Whether the first-appearance rule (P1 online) emitted it, rather than a draw."""

@@ -487,6 +487,8 @@ def test_the_getters_say_what_was_given():
     )
     assert (sampler.rate, sampler.cap_per_minute, sampler.cap_per_metre) == (0.25, None, 0.1)
     assert (sampler.first_on_appearance, sampler.seed) == (False, 9)
+    assert not sampler.first_at_closest_approach
+    assert il.OnlineSampler(first_at_closest_approach=True).first_at_closest_approach
     assert sampler.separation == il.Separation(path=3.0)
     assert "cap_per_metre=0.1" in repr(sampler)
     default = il.OnlineSampler()
@@ -523,6 +525,92 @@ def test_the_classes_pickle():
         assert c == candidate and hash(c) == hash(candidate) and c.pair == (2, 9)
     with pytest.raises(pickle.UnpicklingError, match="cannot unpickle OnlineLoops"):
         il.OnlineLoops._from_state(b"not a pickle")
-    # A sampler's state (its buckets, what it has emitted) lives in the core and does not pickle.
-    with pytest.raises(TypeError):
-        pickle.dumps(il.OnlineSampler())
+
+
+def test_a_pickled_sampler_draws_as_the_original():
+    """Pickled midway with its engine, a sampler gives the rest of the drive the candidates the
+    original gives; pickled alone, it goes on with the engine it followed."""
+    times, points = walk(19, 160)
+    kwargs = {"rate": 0.4, "cap_per_minute": 3.0, "seed": 5}
+
+    def pairs(candidates: list[il.Candidate]) -> list[tuple[int, int, int, bool]]:
+        return [(c.keyframe, c.j, c.component, c.first) for c in candidates]
+
+    online, sampler = il.OnlineLoops(gamma=2.0, dim=2), il.OnlineSampler(**kwargs)
+    online.push_many(times[:30], points[:30])
+    online.rebuild(il.Trajectory(times[:30], points[:30] * 1.01))
+    online.rebuild(il.Trajectory(times[:30], points[:30]))
+    sampler.offer(online, online.push_many(times[30:80], points[30:80]))
+    went_on = []
+    for protocol in range(2, pickle.HIGHEST_PROTOCOL + 1):
+        back_online, back_sampler = pickle.loads(pickle.dumps((online, sampler), protocol=protocol))
+        assert back_online.rebuild_count == online.rebuild_count == 2
+        rest = back_online.push_many(times[80:], points[80:])
+        went_on.append(pairs(back_sampler.offer(back_online, rest)))
+        # P1 served the components seen before the pickle: a new sampler serves them again.
+        fresh = pairs(il.OnlineSampler(**kwargs).offer(back_online, rest))
+        assert sum(c[3] for c in fresh) > sum(c[3] for c in went_on[-1])
+    alone = pickle.loads(pickle.dumps(sampler))
+    assert repr(alone) == repr(sampler)
+    rest = online.push_many(times[80:], points[80:])
+    expected = pairs(sampler.offer(online, rest))
+    assert went_on == [expected] * len(went_on)
+    assert pairs(alone.offer(online, rest)) == expected
+    with pytest.raises(pickle.UnpicklingError, match="cannot unpickle OnlineSampler"):
+        il.OnlineSampler._from_state(b"not a pickle")
+
+
+def test_a_candidate_offered_after_its_pair_says_both():
+    c = il.Candidate(keyframe=12, j=3, k=9, component=1, distance=0.5, first=True)
+    assert (c.keyframe, c.j, c.k, c.pair) == (12, 3, 9, (3, 9))
+    assert repr(c) == "Candidate(keyframe=12, j=3, component=1, distance=0.5, first=True, k=9)"
+    back = pickle.loads(pickle.dumps(c))
+    assert back == c and hash(back) == hash(c)
+    plain = il.Candidate(keyframe=12, j=3, component=1, distance=0.5, first=True)
+    assert plain.k == 12 and plain != c
+
+
+def test_first_candidates_at_the_closest_approach_on_kitti00(data_dir):
+    """KITTI 00 at γ = 6 m, revisits only (24 m of path apart): at its appearance a component's
+    first candidate lies near the edge of γ; at the closest approach it is the closest separated
+    pair of the component so far, by brute force over the lattice of the poses before its
+    keyframe (scipy's labelling), and its keyframe is after its pair."""
+    path = data_dir / "kitti_odometry" / "00.txt"
+    if not path.is_file():
+        pytest.skip(f"{path} is missing")
+    xz = np.loadtxt(path)[:, [4, 12]]
+    t = 0.1 * np.arange(len(xz))
+    gamma = 6.0
+    separation = il.Separation.for_gamma(gamma)
+
+    def firsts(at_closest: bool) -> list[il.Candidate]:
+        online = il.OnlineLoops(gamma=gamma, dim=2)
+        sampler = il.OnlineSampler(
+            rate=0.0, separation=separation, first_at_closest_approach=at_closest
+        )
+        out = []
+        for k in range(len(t)):
+            out += sampler.offer(online, online.push(t[k], xz[k]))
+        return out
+
+    at_edge, at_closest = firsts(False), firsts(True)
+    assert all(c.first for c in at_edge + at_closest)
+    # Every revisit but one still under way when the log ends.
+    assert len(at_closest) >= max(4, len(at_edge) - 1), (len(at_edge), len(at_closest))
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xz, axis=0), axis=1))])
+    for c in at_closest:
+        j, k, kf = c.j, c.k, c.keyframe
+        assert j < k < kf
+        d = cdist(xz[:kf], xz[:kf])
+        labels, _ = ndimage.label(d <= gamma)
+        separated = s[None, :kf] - s[:kf, None] >= separation.path
+        mine = (labels == labels[j, k]) & separated
+        assert c.distance == pytest.approx(d[mine].min(), abs=1e-9), c
+        assert c.distance == pytest.approx(d[j, k], abs=1e-12)
+    edge = np.median([c.distance for c in at_edge])
+    closest = np.median([c.distance for c in at_closest])
+    print(
+        f"KITTI 00, gamma 6 m: median first distance {edge:.2f} m at appearance, "
+        f"{closest:.2f} m at the closest approach ({len(at_closest)} components)"
+    )
+    assert closest < 0.5 * edge

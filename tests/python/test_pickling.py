@@ -113,7 +113,8 @@ def test_results_cross_process_boundaries_with_spawn(results):
 
 
 def state_of(value: object) -> tuple[object, bytes]:
-    restore, (state,) = value.__reduce__()
+    # A Loops found on a trajectory passes its poses' positions as a second argument.
+    restore, (state, *_) = value.__reduce__()
     assert isinstance(state, bytes)
     return restore, state
 

@@ -31,7 +31,7 @@ use crate::serve::LiveServer;
     loops replay drive.mcap --gamma 40 --serve --speed 1 --quiet    # live in Foxglove: ws://127.0.0.1:8765\n\n\
     Each line: {\"pose\": last pose pushed, \"t_s\", \"poses\": poses pushed at this keyframe,\n\
     \"latency_us\": push + offer, \"loop_duration_s\": tau of the pose so far, \"candidates\":\n\
-    [{\"keyframe\", \"j\", \"component\", \"distance\", \"first\"}], \"created\": [ids],\n\
+    [{\"keyframe\", \"j\", \"k\", \"component\", \"distance\", \"first\"}], \"created\": [ids],\n\
     \"merged\": [{\"pose\", \"retired\", \"survivor\"}], \"extended_count\"}.\n\
     Ctrl-C stops after the keyframe in progress and prints the figures so far (exit code 130)."
 )]
@@ -85,6 +85,11 @@ struct OnlineSamplerArgs {
     /// No candidate at a component's first appearance (P1 online): only the drawn ones.
     #[arg(long)]
     no_first: bool,
+    /// A component's first candidate at its closest approach: the closest pair of its first
+    /// pass, offered at the keyframe after the path leaves it (its "k" earlier than its
+    /// "keyframe"), rather than the closest pair at the edge of γ as it appears.
+    #[arg(long, conflicts_with = "no_first")]
+    first_at_closest_approach: bool,
     /// Every drawn candidate uniform in its row (the paper's σ_ρ), not the row's closest pair
     /// first (the default sampler's rule).
     #[arg(long)]
@@ -105,6 +110,7 @@ impl OnlineSamplerArgs {
             rate: self.rate,
             cap,
             first_on_appearance: !self.no_first,
+            first_at_closest_approach: self.first_at_closest_approach,
             closest_in_row: OnlineSamplerOptions::default().closest_in_row && !self.uniform_in_row,
             separation,
             seed: self.seed,
@@ -130,6 +136,7 @@ struct KeyframeLine<'a> {
 struct CandidateJson {
     keyframe: usize,
     j: usize,
+    k: usize,
     component: u32,
     distance: f64,
     first: bool,
@@ -156,6 +163,7 @@ impl KeyframeLine<'_> {
                 .map(|c| CandidateJson {
                     keyframe: c.keyframe,
                     j: c.pair[0],
+                    k: c.pair[1],
                     component: c.component,
                     distance: c.distance,
                     first: c.first,

@@ -104,6 +104,10 @@ pub(crate) fn sample(args: SampleArgs) -> Result<()> {
     } else {
         samples.set_relative_poses(|i, j| loops_core::relative_pose(&traj, i, j));
     }
+    // Where the poses are: the log's own positions, unless reading dropped or merged poses.
+    let positions =
+        if table.positions.len() == traj.len() { table.positions.clone() } else { loops_io::point_positions(&traj) };
+    samples.set_positions(|k| positions.get(k).copied());
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
     for warning in crate::run::warnings(&loops, &samples) {
         eprintln!("loops: warning: {warning}");

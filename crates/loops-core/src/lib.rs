@@ -112,7 +112,7 @@ pub use place::{Pass, Place, check_radius, passes_near};
 pub use plane::{
     Border, PixelEdge, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments,
 };
-pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE};
+pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE, enu_axes};
 pub use quality::{MissedComponent, SampleQuality, sample_quality};
 pub use relative::{RelativePose, relative_pose, se2_between, se3_between};
 pub use sample::{

@@ -78,6 +78,20 @@ fn normalised(index: usize, v: &[f64]) -> Result<Vec<f64>> {
     Ok(scaled.iter().map(|x| x / norm).collect())
 }
 
+/// The east, north and up axes, in ECEF coordinates, at geodetic latitude `lat_rad` and
+/// longitude `lon_rad`: the rows of the rotation from ECEF to the local east-north-up frame.
+///
+/// # Examples
+/// ```
+/// // On the equator at 0° longitude: east is ECEF y, north is z, up is x.
+/// assert_eq!(loops_core::enu_axes(0.0, 0.0), [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]);
+/// ```
+pub fn enu_axes(lat_rad: f64, lon_rad: f64) -> [[f64; 3]; 3] {
+    let (slat, clat) = lat_rad.sin_cos();
+    let (slon, clon) = lon_rad.sin_cos();
+    [[-slon, clon, 0.0], [-slat * clon, -slat * slon, clat], [clat * clon, clat * slon, slat]]
+}
+
 fn latitude_checked(index: usize, latitude_deg: f64) -> Result<f64> {
     if latitude_deg.abs() > 90.0 {
         return Err(Error::LatitudeOutOfRange { index, value_deg: latitude_deg });
@@ -241,24 +255,37 @@ impl Trajectory {
     }
 
     /// GNSS fixes as Earth-centred, Earth-fixed positions (WGS 84) relative to the first fix,
-    /// metres, for [`Euclidean`](crate::Euclidean): straight-line distances, exact at any range.
+    /// turned into the first fix's east-north-up frame ([`enu_axes`]): metres east, north and
+    /// up, so that a map of the trajectory is a map. A rotation of ECEF, for
+    /// [`Euclidean`](crate::Euclidean): straight-line distances, exact at any range.
     ///
     /// # Errors
     /// As [`Trajectory::gnss`].
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::Trajectory;
+    /// // 0.001° north of the first fix is about 111 m north of it, and a little down (the Earth curves).
+    /// let traj = Trajectory::gnss_ecef(vec![0.0, 1.0], &[[48.0, 11.0, 500.0], [48.001, 11.0, 500.0]])?;
+    /// let [east, north, up] = [traj.point(1)[0], traj.point(1)[1], traj.point(1)[2]];
+    /// assert!(east.abs() < 1e-9 && (north - 111.2).abs() < 0.1 && up < 0.0 && up > -0.01);
+    /// # Ok::<(), loops_core::Error>(())
+    /// ```
     pub fn gnss_ecef(timestamps_s: Vec<f64>, lat_lon_height: &[[f64; 3]]) -> Result<Self> {
         const A: f64 = 6_378_137.0;
         const F: f64 = 1.0 / 298.257_223_563;
         let e2 = F * (2.0 - F);
         let mut coords = Vec::with_capacity(3 * lat_lon_height.len());
-        let mut origin: Option<[f64; 3]> = None;
+        let mut origin: Option<([f64; 3], [[f64; 3]; 3])> = None;
         for (index, p) in lat_lon_height.iter().enumerate() {
             finite_row(index, p)?;
             let (lat, lon, h) = (latitude_checked(index, p[0])?.to_radians(), p[1].to_radians(), p[2]);
             let n = A / (1.0 - e2 * lat.sin().powi(2)).sqrt();
             let xyz =
                 [(n + h) * lat.cos() * lon.cos(), (n + h) * lat.cos() * lon.sin(), (n * (1.0 - e2) + h) * lat.sin()];
-            let o = *origin.get_or_insert(xyz);
-            coords.extend_from_slice(&[xyz[0] - o[0], xyz[1] - o[1], xyz[2] - o[2]]);
+            let (o, axes) = *origin.get_or_insert((xyz, enu_axes(lat, lon)));
+            let d = [xyz[0] - o[0], xyz[1] - o[1], xyz[2] - o[2]];
+            coords.extend(axes.map(|axis| axis[0] * d[0] + axis[1] * d[1] + axis[2] * d[2]));
         }
         Self::new(timestamps_s, coords, 3)
     }

@@ -79,6 +79,7 @@ fn options_strategy() -> impl Strategy<Value = OnlineSamplerOptions> {
             rate,
             cap,
             first_on_appearance,
+            first_at_closest_approach: false,
             closest_in_row,
             separation,
             seed,
@@ -404,5 +405,127 @@ fn an_update_is_offered_once_in_order_by_its_own_engine() {
         let mut fresh = OnlineLoops::new(MetricSpec::Euclidean, 2, 1.0).unwrap();
         let update = push(&mut fresh);
         assert_eq!(sampler.offer(&fresh, &update).unwrap(), expected);
+    }
+}
+
+#[test]
+fn a_saved_sampler_goes_on_as_the_original() {
+    let traj = drive(900.0, 4);
+    let options = OnlineSamplerOptions { rate: 0.3, cap: Cap::PerMinute(2.0), ..OnlineSamplerOptions::default() };
+    let (t, coords, dim) = (traj.timestamps_s(), traj.coords(), traj.dim());
+    let half = traj.len() / 2;
+    let mut online = OnlineLoops::new(MetricSpec::Euclidean, dim, 20.0).unwrap();
+    let mut sampler = OnlineSampler::new(options).unwrap();
+    let update = online.push_many(&t[..half], &coords[..dim * half]).unwrap();
+    sampler.offer(&online, &update).unwrap();
+    let bytes = rmp_serde::to_vec(&sampler).unwrap();
+    let mut copy: OnlineSampler = rmp_serde::from_slice(&bytes).unwrap();
+    // The copy follows a copy of the engine (another engine, at the same pose and rebuild count).
+    let mut other = online.clone();
+    let rest = |online: &mut OnlineLoops| online.push_many(&t[half..], &coords[dim * half..]).unwrap();
+    let (update, other_update) = (rest(&mut online), rest(&mut other));
+    let expected = sampler.offer(&online, &update).unwrap();
+    assert_eq!(copy.offer(&other, &other_update).unwrap(), expected);
+    // What it carried matters: P1 served the components it saw, which a new sampler serves again.
+    let mut third = online.clone();
+    let third_update = third.push(t[t.len() - 1] + 1.0, traj.point(traj.len() - 1)).unwrap();
+    let mut carried: OnlineSampler = rmp_serde::from_slice(&rmp_serde::to_vec(&sampler).unwrap()).unwrap();
+    let mut new = OnlineSampler::new(options).unwrap();
+    let fresh = new.offer(&third, &third_update).unwrap();
+    let went_on = carried.offer(&third, &third_update).unwrap();
+    assert!(fresh.iter().filter(|c| c.first).count() > went_on.iter().filter(|c| c.first).count(), "{fresh:?}");
+    // A saved sampler offered an update that does not start where it stopped starts afresh.
+    let mut restarted: OnlineSampler = rmp_serde::from_slice(&bytes).unwrap();
+    let mut anew = OnlineLoops::new(MetricSpec::Euclidean, dim, 20.0).unwrap();
+    let whole = anew.push_many(t, coords).unwrap();
+    let from_scratch = OnlineSampler::new(options).unwrap().offer(&anew, &whole).unwrap();
+    assert_eq!(restarted.offer(&anew, &whole).unwrap(), from_scratch);
+    // A forged state is refused, naming the component.
+    let mut forged: serde_json::Value = serde_json::to_value(&sampler).unwrap();
+    let states = forged["states"].as_array_mut().unwrap();
+    let k = states.iter().position(|s| !s.is_null()).unwrap();
+    states[k]["tokens"] = serde_json::json!(-1.0);
+    let refused = serde_json::from_value::<OnlineSampler>(forged).unwrap_err();
+    assert!(refused.to_string().contains(&format!("component {k}")), "{refused}");
+}
+
+/// A straight road east from the origin, a detour east, south and west, then a road north that
+/// passes the origin 3 m off: γ = 6 reaches the start of the road first 6 m before the closest
+/// approach.
+fn pass_by() -> Trajectory {
+    let leg = |from: [f64; 2], to: [f64; 2], steps: usize| {
+        (1..=steps).map(move |k| {
+            let f = k as f64 / steps as f64;
+            [from[0] + f * (to[0] - from[0]), from[1] + f * (to[1] - from[1])]
+        })
+    };
+    let mut points = vec![[0.0, 0.0]];
+    points.extend(leg([0.0, 0.0], [200.0, 0.0], 400));
+    points.extend(leg([200.0, 0.0], [200.0, -100.0], 200));
+    points.extend(leg([200.0, -100.0], [-3.0, -100.0], 406));
+    points.extend(leg([-3.0, -100.0], [-3.0, 100.0], 400));
+    let times = (0..points.len()).map(|k| k as f64 * 0.1).collect();
+    Trajectory::new(times, points.concat(), 2).unwrap()
+}
+
+#[test]
+fn the_first_candidate_at_the_closest_approach_is_the_pass_closest_pair() {
+    let traj = pass_by();
+    let separation = Separation::path(50.0);
+    let at_edge = OnlineSamplerOptions { rate: 0.0, separation, ..OnlineSamplerOptions::default() };
+    let at_closest = OnlineSamplerOptions { first_at_closest_approach: true, ..at_edge };
+    // The brute-force closest separated pair within γ, and the rows that reach the road east.
+    let s = path_length(&traj, &Euclidean);
+    let (mut closest, mut rows) = ((f64::INFINITY, [0, 0]), Vec::new());
+    for k in 0..traj.len() {
+        for j in 0..k {
+            let (a, b) = (traj.point(j), traj.point(k));
+            let d = (a[0] - b[0]).hypot(a[1] - b[1]);
+            if d <= 6.0 && s[k] - s[j] >= 50.0 {
+                if d < closest.0 {
+                    closest = (d, [j, k]);
+                }
+                rows.push(k);
+            }
+        }
+    }
+    let last_row = *rows.iter().max().unwrap();
+    assert!((closest.0 - 3.0).abs() < 1e-12, "{closest:?}");
+    let edge = run(&traj, 6.0, at_edge, &[1]).1;
+    assert_eq!(edge.len(), 1, "{edge:?}");
+    assert!(edge[0].distance > 5.5, "at the edge of γ: {:?}", edge[0]);
+    for chunks in [&[1][..], &[7, 1, 300], &[traj.len()]] {
+        let found = run(&traj, 6.0, at_closest, chunks).1;
+        assert_eq!(found.len(), 1, "{found:?}");
+        let c = found[0];
+        assert_eq!((c.pair, c.distance, c.first), (closest.1, closest.0, true), "{c:?}");
+        assert_eq!(c.keyframe, last_row + 1, "offered at the first row after the pass");
+    }
+    // The drive stops in the middle of the pass: no first candidate yet.
+    let cut =
+        Trajectory::new(traj.timestamps_s()[..last_row].to_vec(), traj.coords()[..2 * last_row].to_vec(), 2).unwrap();
+    assert!(run(&cut, 6.0, at_closest, &[1]).1.is_empty());
+}
+
+#[test]
+fn the_first_candidates_at_the_closest_approach_do_not_depend_on_batches() {
+    let traj = drive(1200.0, 6);
+    let options = OnlineSamplerOptions {
+        rate: 0.2,
+        cap: Cap::PerMinute(1.0),
+        first_at_closest_approach: true,
+        separation: Separation::for_gamma(20.0),
+        ..OnlineSamplerOptions::default()
+    };
+    let (online, one, _) = run(&traj, 20.0, options, &[1]);
+    assert_eq!(run(&traj, 20.0, options, &[5, 1, 97]).1, one);
+    let firsts: Vec<&Candidate> = one.iter().filter(|c| c.first).collect();
+    assert!(firsts.len() >= 3, "{firsts:?}");
+    for c in &firsts {
+        assert!(c.pair[0] < c.pair[1] && c.pair[1] < c.keyframe, "{c:?}");
+        let id = online.resolve(c.component);
+        // Never closer than the component's closest pair of the whole drive.
+        let closest = online.component(id).unwrap().closest_distance;
+        assert!(c.distance >= closest && c.distance <= 20.0, "{c:?}");
     }
 }

@@ -10,8 +10,15 @@ use crate::csv_rows::write_csv;
 use crate::error::WriteError;
 
 /// The columns of `components.csv`, without the optional `samples`: the names of the Python
-/// API's `Loops.components` columns. `id`, then [`MEASURE_COLUMNS`] and [`EXTENT_COLUMNS`].
-pub const COMPONENT_COLUMNS: [&str; 18] = columns(&[&["id"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
+/// API's `Loops.components` columns. `id`, then [`MEASURE_COLUMNS`], [`EXTENT_COLUMNS`] and
+/// [`CLOSEST_POSITION_COLUMNS`].
+pub const COMPONENT_COLUMNS: [&str; 24] =
+    columns(&[&["id"], &MEASURE_COLUMNS, &EXTENT_COLUMNS, &CLOSEST_POSITION_COLUMNS]);
+
+/// The columns of a [`ClosestPositions`]: where the closest pair's two poses are, x, y and z of
+/// pose `closest_i`, then of pose `closest_j` (the positions of `loop_duration.csv`).
+pub const CLOSEST_POSITION_COLUMNS: [&str; 6] =
+    ["closest_i_x", "closest_i_y", "closest_i_z", "closest_j_x", "closest_j_y", "closest_j_z"];
 
 /// The columns of a [`ComponentMeasures`], as every component table names them.
 pub const MEASURE_COLUMNS: [&str; 6] = ["trivial", "area_s2", "pair_count", "pose_pair_count", "run_count", "holes"];
@@ -57,10 +64,11 @@ pub(crate) const fn columns<const N: usize>(parts: &[&[&'static str]]) -> [&'sta
 /// `i` indexes poses by t, `j` by t′ (`i_min..=i_max` and `j_min..=j_max` are the component's
 /// index ranges); times are the poses' own timestamps, seconds. With the columns `B` of its
 /// block after its id, a row of another table: a fleet's
-/// ([`FleetComponentRow`](crate::FleetComponentRow), whose block is its two sessions).
+/// ([`FleetComponentRow`](crate::FleetComponentRow), whose block is its two sessions, and which
+/// has no positions, `P = ()`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
-pub struct ComponentRow<B = ()> {
+pub struct ComponentRow<B = (), P = ClosestPositions> {
     /// The component's id: its index in [`Loops::components`].
     pub id: usize,
     /// Its block's columns (none for a trajectory's).
@@ -72,6 +80,9 @@ pub struct ComponentRow<B = ()> {
     /// Its index ranges with their times, and its closest pair.
     #[serde(flatten)]
     pub extent: ComponentExtent,
+    /// Where its closest pair's poses are.
+    #[serde(flatten)]
+    pub positions: P,
     /// Samples drawn from the component, when a sampling is written with it (the column is
     /// left out otherwise).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -80,15 +91,54 @@ pub struct ComponentRow<B = ()> {
 
 impl ComponentRow<()> {
     /// The row of `component`, with the times of `timestamps_s` (the trajectory the loops
-    /// were found on) and, optionally, its number of samples.
+    /// were found on), the positions of its poses when known, and, optionally, its number of
+    /// samples.
     ///
     /// # Panics
-    /// When the component's indices are outside `timestamps_s` (loops of another trajectory).
-    pub fn new(component: &LoopComponent, timestamps_s: &[f64], samples: Option<u64>) -> Self {
+    /// When the component's indices are outside `timestamps_s` or `positions` (loops of another
+    /// trajectory).
+    pub fn new(
+        component: &LoopComponent,
+        timestamps_s: &[f64],
+        positions: Option<&[[f64; 3]]>,
+        samples: Option<u64>,
+    ) -> Self {
         let c = component;
         let extent =
             ComponentExtent::new([c.i_range, c.j_range], c.closest_pair, c.closest_distance, [timestamps_s; 2]);
-        Self { id: c.id, block: (), measures: ComponentMeasures::new(c), extent, samples }
+        let positions = ClosestPositions::new(c.closest_pair, positions);
+        Self { id: c.id, block: (), measures: ComponentMeasures::new(c), extent, positions, samples }
+    }
+}
+
+/// Where a component's closest pair is: the positions of its two poses, the columns
+/// [`CLOSEST_POSITION_COLUMNS`] (`None`: unknown, an empty field).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[non_exhaustive]
+pub struct ClosestPositions {
+    /// x of pose `closest_i`.
+    pub closest_i_x: Option<f64>,
+    /// y of pose `closest_i`.
+    pub closest_i_y: Option<f64>,
+    /// z of pose `closest_i`.
+    pub closest_i_z: Option<f64>,
+    /// x of pose `closest_j`.
+    pub closest_j_x: Option<f64>,
+    /// y of pose `closest_j`.
+    pub closest_j_y: Option<f64>,
+    /// z of pose `closest_j`.
+    pub closest_j_z: Option<f64>,
+}
+
+impl ClosestPositions {
+    /// The positions of the poses `closest_pair` among `positions` (none without them).
+    ///
+    /// # Panics
+    /// When an index is outside `positions`.
+    pub fn new(closest_pair: [usize; 2], positions: Option<&[[f64; 3]]>) -> Self {
+        let Some(positions) = positions else { return Self::default() };
+        let [[ix, iy, iz], [jx, jy, jz]] = closest_pair.map(|k| positions[k].map(Some));
+        Self { closest_i_x: ix, closest_i_y: iy, closest_i_z: iz, closest_j_x: jx, closest_j_y: jy, closest_j_z: jz }
     }
 }
 
@@ -206,15 +256,24 @@ impl ComponentExtent {
 }
 
 /// The rows of `components.csv`: one per component of `loops`, in id order, with the times of
-/// the trajectory they were found on. With `samples_per_component` (by component id, as
-/// [`SampleQuality::per_component`](loops_core::SampleQuality::per_component)), each row has its
-/// number of samples (0 for an id past its end). O(components).
-pub fn component_rows(loops: &Loops, samples_per_component: Option<&[u64]>) -> Vec<ComponentRow> {
+/// the trajectory they were found on and the `positions` of its poses, when known
+/// ([`point_positions`](crate::point_positions), or a log's own). With `samples_per_component`
+/// (by component id, as [`SampleQuality::per_component`](loops_core::SampleQuality::per_component)),
+/// each row has its number of samples (0 for an id past its end). O(components).
+///
+/// # Panics
+/// When `positions` has another length than the loops' trajectory.
+pub fn component_rows(
+    loops: &Loops,
+    positions: Option<&[[f64; 3]]>,
+    samples_per_component: Option<&[u64]>,
+) -> Vec<ComponentRow> {
     let t = loops.timestamps_s();
+    assert!(positions.is_none_or(|p| p.len() == t.len()), "positions of another trajectory");
     loops
         .components()
         .iter()
-        .map(|c| ComponentRow::new(c, t, samples_per_component.map(|s| s.get(c.id).copied().unwrap_or(0))))
+        .map(|c| ComponentRow::new(c, t, positions, samples_per_component.map(|s| s.get(c.id).copied().unwrap_or(0))))
         .collect()
 }
 
@@ -225,24 +284,33 @@ pub fn component_rows(loops: &Loops, samples_per_component: Option<&[u64]>) -> V
 /// # Errors
 /// What `out` returns.
 ///
+/// # Panics
+/// As [`component_rows`].
+///
 /// # Examples
 /// ```
 /// use loops_core::{Euclidean, Trajectory, find_loops};
 /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [1.0], [1.0], [0.0]])?;
 /// let loops = find_loops(&traj, &Euclidean, 0.5)?;
 /// let mut text = Vec::new();
-/// loops_io::components_to_csv(&loops, None, &mut text).unwrap();
+/// let positions = loops_io::point_positions(&traj);
+/// loops_io::components_to_csv(&loops, Some(&positions), None, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
 /// assert!(text.starts_with("id,trivial,area_s2,pair_count,pose_pair_count,run_count,holes,i_min,"));
 /// assert_eq!(text.lines().count(), 1 + loops.components().len());
 /// # Ok::<(), loops_core::Error>(())
 /// ```
-pub fn components_to_csv<W: Write>(loops: &Loops, samples_per_component: Option<&[u64]>, out: W) -> io::Result<()> {
+pub fn components_to_csv<W: Write>(
+    loops: &Loops,
+    positions: Option<&[[f64; 3]]>,
+    samples_per_component: Option<&[u64]>,
+    out: W,
+) -> io::Result<()> {
     let mut columns = COMPONENT_COLUMNS.to_vec();
     if samples_per_component.is_some() {
         columns.push("samples");
     }
-    write_csv(out, &columns, component_rows(loops, samples_per_component))
+    write_csv(out, &columns, component_rows(loops, positions, samples_per_component))
 }
 
 /// Writes `components.csv` ([`components_to_csv`]) to the file `path`, atomically
@@ -252,13 +320,17 @@ pub fn components_to_csv<W: Write>(loops: &Loops, samples_per_component: Option<
 /// # Errors
 /// [`WriteError::Exists`] when `path` exists and `overwrite` is false; [`WriteError::Write`]
 /// when it cannot be written.
+///
+/// # Panics
+/// As [`component_rows`].
 pub fn write_components(
     path: impl AsRef<Path>,
     loops: &Loops,
+    positions: Option<&[[f64; 3]]>,
     samples_per_component: Option<&[u64]>,
     overwrite: bool,
 ) -> Result<(), WriteError> {
-    write_atomically(path, overwrite, |file| components_to_csv(loops, samples_per_component, file))
+    write_atomically(path, overwrite, |file| components_to_csv(loops, positions, samples_per_component, file))
 }
 
 #[cfg(test)]
@@ -277,7 +349,8 @@ mod tests {
         (traj, loops)
     }
 
-    /// components.csv as `loops run` wrote it with `writeln!`.
+    /// components.csv as `loops run` wrote it with `writeln!`, the positions the trajectory's
+    /// points (1-D: y and z are 0).
     fn by_hand(traj: &Trajectory, loops: &Loops, samples: Option<&[u64]>) -> String {
         let t = traj.timestamps_s();
         let mut csv = COMPONENT_COLUMNS.join(",");
@@ -288,7 +361,7 @@ mod tests {
         for c in loops.components() {
             let _ = write!(
                 csv,
-                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},0,0,{},0,0",
                 c.id,
                 c.trivial,
                 c.area_s2,
@@ -307,6 +380,8 @@ mod tests {
                 c.closest_pair[0],
                 c.closest_pair[1],
                 c.closest_distance,
+                traj.point(c.closest_pair[0])[0],
+                traj.point(c.closest_pair[1])[0],
             );
             if let Some(samples) = samples {
                 let _ = write!(csv, ",{}", samples.get(c.id).copied().unwrap_or(0));
@@ -322,7 +397,7 @@ mod tests {
         assert!(loops.components().iter().any(|c| !c.trivial));
         for samples in [None, Some(&[3u64, 0][..])] {
             let mut out = Vec::new();
-            components_to_csv(&loops, samples, &mut out).unwrap();
+            components_to_csv(&loops, Some(&crate::point_positions(&traj)), samples, &mut out).unwrap();
             assert_eq!(String::from_utf8(out).unwrap(), by_hand(&traj, &loops, samples));
         }
     }
@@ -330,11 +405,16 @@ mod tests {
     #[test]
     fn the_columns_name_the_row_fields() {
         let (_, loops) = result();
-        let rows = component_rows(&loops, Some(&[1]));
+        let rows = component_rows(&loops, None, Some(&[1]));
         let mut expected: Vec<&str> = COMPONENT_COLUMNS.to_vec();
         expected.push("samples");
         assert_eq!(crate::csv_rows::inferred_columns(&rows[0]), expected);
         assert_eq!(rows[0].samples, Some(1));
         assert_eq!(rows.last().unwrap().samples, Some(0));
+        assert_eq!(rows[0].positions, ClosestPositions::default());
+        let mut unknown = Vec::new();
+        components_to_csv(&loops, None, None, &mut unknown).unwrap();
+        let unknown = String::from_utf8(unknown).unwrap();
+        assert!(unknown.lines().skip(1).all(|line| line.ends_with(",,,,,,")), "{unknown}");
     }
 }

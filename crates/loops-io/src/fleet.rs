@@ -36,7 +36,7 @@ pub const FLEET_COMPONENT_COLUMNS: [&str; 22] =
 /// its [`extent`](ComponentRow::extent), `i` indexes the poses of session `a` (the rows, t) and
 /// `j` those of session `b` (the columns, t′); its [`measures`](ComponentRow::measures) are the
 /// block's (trivial: it holds diagonal cells, within one session only).
-pub type FleetComponentRow = ComponentRow<SessionBlock>;
+pub type FleetComponentRow = ComponentRow<SessionBlock, ()>;
 
 /// The block of a fleet's component: its two sessions, by index and name. `session_a` and
 /// `session_b` are indices in the fleet everywhere (these files, the Python tables, the Parquet
@@ -81,6 +81,7 @@ pub fn fleet_component_rows(
                 // one in its sessions' poses).
                 measures: ComponentMeasures::new(&joint[c.id]),
                 extent: ComponentExtent::new(c.poses, c.closest_pair, c.closest_distance, times),
+                positions: (),
                 samples: samples_per_component.map(|s| s.get(c.id).copied().unwrap_or(0)),
             }
         })
@@ -578,7 +579,9 @@ mod tests {
 
     #[test]
     fn component_columns_follow_components_csv() {
-        assert_eq!(FLEET_COMPONENT_COLUMNS[5..], COMPONENT_COLUMNS[1..]);
+        // A log's columns but the closest pair's positions (each session has its own poses).
+        let positions = crate::CLOSEST_POSITION_COLUMNS.len();
+        assert_eq!(FLEET_COMPONENT_COLUMNS[5..], COMPONENT_COLUMNS[1..COMPONENT_COLUMNS.len() - positions]);
         let (fleet, loops) = fleet();
         let rows = fleet_component_rows(&fleet, &loops, Some(&[4]));
         let mut expected = FLEET_COMPONENT_COLUMNS.to_vec();

@@ -148,8 +148,8 @@ pub use crate::mcap::{McapOptions, TimeSource, read_mcap, read_mcap_files};
 pub use atomic::{StagedFiles, write_atomically};
 pub use bag::{list_frame_pairs, list_topics, log_name, read_ros1, read_rosbag2};
 pub use components::{
-    COMPONENT_COLUMNS, ComponentExtent, ComponentMeasures, ComponentRow, EXTENT_COLUMNS, MEASURE_COLUMNS,
-    component_rows, components_to_csv, write_components,
+    CLOSEST_POSITION_COLUMNS, COMPONENT_COLUMNS, ClosestPositions, ComponentExtent, ComponentMeasures, ComponentRow,
+    EXTENT_COLUMNS, MEASURE_COLUMNS, component_rows, components_to_csv, write_components,
 };
 pub use detections::{DetectionTable, read_detections};
 pub use dropped::Dropped;
@@ -180,7 +180,9 @@ pub use read::{
     read_trajectory_chaining, read_trajectory_with,
 };
 pub use report::{ComponentReport, LoopsReport, SeparationReport, loops_report_to_json, write_loops_report};
-pub use samples::{CSV_HEADER, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples};
+pub use samples::{
+    CSV_HEADER, SAMPLE_POSITION_COLUMNS, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples,
+};
 pub use scene::{
     COMPONENT_RGB, FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PLANE_PIXELS, RgbImage, SCENE_FRAME, SCENE_TOPICS, Scene,
     SceneCandidate, SceneComponent, ScenePath, SceneTopic, TRIVIAL_RGB, scene_mcap_to, tau_rgba, write_scene_mcap,

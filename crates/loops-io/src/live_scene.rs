@@ -210,14 +210,14 @@ impl LiveScene {
 
         let mut points = Vec::with_capacity(2 * candidates.len());
         for c in candidates {
-            for pose in [c.keyframe, c.pair[0]] {
+            for pose in [c.pair[1], c.pair[0]] {
                 points.push(*positions.get(pose).ok_or(loops_core::Error::IndexOutOfRange { index: pose, len: n })?);
             }
         }
         let entities = if candidates.is_empty() {
             Vec::new()
         } else {
-            let pairs: Vec<[usize; 2]> = candidates.iter().map(|c| [c.keyframe, c.pair[0]]).collect();
+            let pairs: Vec<[usize; 2]> = candidates.iter().map(|c| [c.pair[1], c.pair[0]]).collect();
             let ids: Vec<u32> = candidates.iter().map(|c| c.component).collect();
             let metadata = vec![
                 ("pose", update.pose.to_string()),

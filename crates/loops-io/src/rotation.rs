@@ -111,9 +111,7 @@ pub(crate) fn ecef_to_enu(origin: [f64; 3]) -> [[f64; 3]; 3] {
     if !lat.is_finite() {
         lat = 0.0;
     }
-    let (slat, clat) = lat.sin_cos();
-    let (slon, clon) = lon.sin_cos();
-    [[-slon, clon, 0.0], [-slat * clon, -slat * slon, clat], [clat * clon, clat * slon, slat]]
+    loops_core::enu_axes(lat, lon)
 }
 
 #[cfg(test)]

@@ -63,10 +63,11 @@ impl FromStr for SamplesFormat {
 /// unit, the detection's score, the sampler's name, and the relative pose the trajectory
 /// predicts from pose i to pose j ([`loops_core::relative_pose`]: the scan matcher's initial
 /// guess): `dx dy dz` (in the frame of pose i for SE(2) and SE(3); the coordinate difference
-/// for positions alone), `dqx dqy dqz dqw` (SE(2) and SE(3)) and `dtheta_rad` (SE(2)). No
-/// uncertainty column: trajectories hold no covariance.
-pub const CSV_HEADER: &str =
-    "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad";
+/// for positions alone), `dqx dqy dqz dqw` (SE(2) and SE(3)) and `dtheta_rad` (SE(2)), then where
+/// the two poses are: `i_x i_y i_z j_x j_y j_z` ([`Samples::set_positions`](loops_core::Samples::set_positions),
+/// the positions of `loop_duration.csv`). No uncertainty column: trajectories hold no covariance.
+pub const CSV_HEADER: &str = "t_s,t_prime_s,i,j,component,cluster,detection,distance,score,sampler,dx,dy,dz,dqx,dqy,\
+    dqz,dqw,dtheta_rad,i_x,i_y,i_z,j_x,j_y,j_z";
 
 /// Writes `samples` as CSV: [`CSV_HEADER`], then one line a sample in the samples' order
 /// ((t, t′) order). Unknown values (no pose pair, no component, no score, ...) are empty fields;
@@ -84,7 +85,7 @@ pub const CSV_HEADER: &str =
 /// let mut text = Vec::new();
 /// loops_io::samples_to_csv(&samples, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
-/// assert_eq!(text.lines().nth(1), Some("0,100,,,,0,0,,,one,,,,,,,,"));
+/// assert_eq!(text.lines().nth(1), Some("0,100,,,,0,0,,,one,,,,,,,,,,,,,,"));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn samples_to_csv<W: Write>(samples: &Samples, out: W) -> io::Result<()> {
@@ -133,34 +134,54 @@ pub struct SampleRow {
     pub dqw: Option<f64>,
     /// The heading change of the relative pose, radians in (−π, π], for SE(2).
     pub dtheta_rad: Option<f64>,
+    /// x of pose i, when its position is known.
+    pub i_x: Option<f64>,
+    /// y of pose i.
+    pub i_y: Option<f64>,
+    /// z of pose i.
+    pub i_z: Option<f64>,
+    /// x of pose j.
+    pub j_x: Option<f64>,
+    /// y of pose j.
+    pub j_y: Option<f64>,
+    /// z of pose j.
+    pub j_z: Option<f64>,
 }
 
+/// The columns of a sample's positions, the last of [`CSV_HEADER`]: x, y and z of pose i, then of
+/// pose j.
+pub const SAMPLE_POSITION_COLUMNS: [&str; 6] = ["i_x", "i_y", "i_z", "j_x", "j_y", "j_z"];
+
 /// The columns of [`SampleRow`], as the CSV header names them.
-const SAMPLE_COLUMNS: [&str; 18] = [
-    "t_s",
-    "t_prime_s",
-    "i",
-    "j",
-    "component",
-    "cluster",
-    "detection",
-    "distance",
-    "score",
-    "sampler",
-    "dx",
-    "dy",
-    "dz",
-    "dqx",
-    "dqy",
-    "dqz",
-    "dqw",
-    "dtheta_rad",
-];
+const SAMPLE_COLUMNS: [&str; 24] = crate::components::columns(&[
+    &[
+        "t_s",
+        "t_prime_s",
+        "i",
+        "j",
+        "component",
+        "cluster",
+        "detection",
+        "distance",
+        "score",
+        "sampler",
+        "dx",
+        "dy",
+        "dz",
+        "dqx",
+        "dqy",
+        "dqz",
+        "dqw",
+        "dtheta_rad",
+    ],
+    &SAMPLE_POSITION_COLUMNS,
+]);
 
 impl From<&Sample> for SampleRow {
     fn from(row: &Sample) -> Self {
         let guess = row.relative_pose;
         let rotation = guess.and_then(|g| g.rotation_xyzw);
+        let at = |pose: usize, axis: usize| row.positions.map(|p| p[pose][axis]);
         Self {
             t_s: row.t_s,
             t_prime_s: row.t_prime_s,
@@ -180,6 +201,12 @@ impl From<&Sample> for SampleRow {
             dqz: rotation.map(|q| q[2]),
             dqw: rotation.map(|q| q[3]),
             dtheta_rad: guess.and_then(|g| g.rotation_rad),
+            i_x: at(0, 0),
+            i_y: at(0, 1),
+            i_z: at(0, 2),
+            j_x: at(1, 0),
+            j_y: at(1, 1),
+            j_z: at(1, 2),
         }
     }
 }
@@ -279,7 +306,19 @@ mod tests {
         let text = String::from_utf8(text).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], CSV_HEADER);
-        assert_eq!(lines[1..], ["0,3,0,3,1,,,0,,alpha,0,0,0,,,,,", "1,2,1,2,2,,,0,,alpha,0,0,0,,,,,"]);
+        assert_eq!(lines[1..], ["0,3,0,3,1,,,0,,alpha,0,0,0,,,,,,,,,,,", "1,2,1,2,2,,,0,,alpha,0,0,0,,,,,,,,,,,"]);
+        // With the positions of the poses (x = the 1-D point, y = 10 + index).
+        let mut placed = samples();
+        let xs = [0.0, 1.0, 1.0, 0.0];
+        placed.set_positions(|k| Some([xs[k], 10.0 + k as f64, 0.0]));
+        let mut text = Vec::new();
+        samples_to_csv(&placed, &mut text).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[1..],
+            ["0,3,0,3,1,,,0,,alpha,0,0,0,,,,,,0,10,0,0,13,0", "1,2,1,2,2,,,0,,alpha,0,0,0,,,,,,1,11,0,1,12,0"]
+        );
     }
 
     #[test]

@@ -296,6 +296,25 @@ pub(crate) fn measure_columns<'py>(
     ]
 }
 
+/// The closest pair's position columns of a components table
+/// ([`loops_io::CLOSEST_POSITION_COLUMNS`], named and ordered as in `components.csv`) of `rows`,
+/// float64, NaN where unknown.
+pub(crate) fn closest_position_columns<'py>(
+    py: Python<'py>,
+    rows: &[loops_io::ClosestPositions],
+) -> [(&'static str, Bound<'py, PyAny>); 6] {
+    let [ix, iy, iz, jx, jy, jz] = loops_io::CLOSEST_POSITION_COLUMNS;
+    let value = |v: Option<f64>| v.unwrap_or(f64::NAN);
+    [
+        (ix, float64_column(py, rows, |p| value(p.closest_i_x))),
+        (iy, float64_column(py, rows, |p| value(p.closest_i_y))),
+        (iz, float64_column(py, rows, |p| value(p.closest_i_z))),
+        (jx, float64_column(py, rows, |p| value(p.closest_j_x))),
+        (jy, float64_column(py, rows, |p| value(p.closest_j_y))),
+        (jz, float64_column(py, rows, |p| value(p.closest_j_z))),
+    ]
+}
+
 /// The extent columns of a components table ([`loops_io::EXTENT_COLUMNS`], named and ordered
 /// as in `components.csv`) of `rows`.
 pub(crate) fn extent_columns<'py>(

@@ -651,8 +651,9 @@ impl FleetLoops {
     /// :attr:`components`. Made on first use (a copy of the runs), then kept.
     #[getter]
     fn loops(&self, py: Python<'_>) -> PyResult<Py<Loops>> {
-        let loops =
-            self.loops.get_or_try_init(py, || Py::new(py, Loops { inner: Arc::new(self.inner.loops().clone()) }))?;
+        let loops = self.loops.get_or_try_init(py, || {
+            Py::new(py, Loops { inner: Arc::new(self.inner.loops().clone()), positions: None })
+        })?;
         Ok(loops.clone_ref(py))
     }
 

@@ -8,8 +8,8 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::convert::{
-    extent_columns, float64_column, id_column, index_column, int64_column, measure_columns, pose_index, str_column,
-    table, to_numpy, try_column,
+    closest_position_columns, extent_columns, float64_column, id_column, index_column, int64_column, measure_columns,
+    pose_index, str_column, table, to_numpy, try_column,
 };
 use crate::detached;
 use crate::error::{Failure, value_error};
@@ -88,7 +88,7 @@ pub(crate) fn find_loops(
             MetricRef::Callable(callable) => loops_core::find_loops_separated(&traj, callable, gamma, separation),
         })?;
     crate::warning::warn_loops(py, &inner)?;
-    Ok(Loops { inner: Arc::new(inner) })
+    Ok(Loops::of_trajectory(inner, &trajectory.inner))
 }
 
 /// The cumulative path length of every pose under ``metric``: s_0 = 0, s_k = s_{k−1} + δ(x_{k−1},
@@ -128,9 +128,27 @@ pub(crate) fn path_length<'py>(
 /// components, and the loop duration, area and density over them. Returned by
 /// :func:`find_loops`.
 #[pyclass(frozen, eq, module = "inexact_loops._core")]
-#[derive(Debug, PartialEq)]
+#[derive(Debug)]
 pub(crate) struct Loops {
     pub(crate) inner: Arc<loops_core::Loops>,
+    /// Where the poses are ([`loops_io::point_positions`] of the trajectory they were found
+    /// on), for the closest pairs' positions in :attr:`components`; `None` where not known
+    /// (the loops of a fleet's sessions together).
+    pub(crate) positions: Option<Arc<Vec<[f64; 3]>>>,
+}
+
+/// Loops compare by their result: the positions come from the same trajectory or are unknown.
+impl PartialEq for Loops {
+    fn eq(&self, other: &Self) -> bool {
+        self.inner == other.inner
+    }
+}
+
+impl Loops {
+    /// `inner` found on `traj`, with its positions.
+    pub(crate) fn of_trajectory(inner: loops_core::Loops, traj: &loops_core::Trajectory) -> Self {
+        Self { inner: Arc::new(inner), positions: Some(Arc::new(loops_io::point_positions(traj))) }
+    }
 }
 
 impl Loops {
@@ -169,7 +187,39 @@ fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
     components.as_deref().map_or(Selection::All, Selection::Components)
 }
 
-crate::pickling::pickled!(Loops, loops_core::Loops, |value| Ok(Self { inner: Arc::new(value) }));
+#[pymethods]
+impl Loops {
+    /// Pickles as its core value's state and, when known, its positions' (a second argument,
+    /// so that a state without them reads as before).
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, pyo3::types::PyBytes>, Option<Bound<'py, pyo3::types::PyBytes>>))>
+    {
+        let this = slf.get();
+        let (from_state, (state,)) = crate::pickling::reduce(slf.as_any(), "Loops", this.inner.as_ref())?;
+        let positions = match &this.positions {
+            Some(p) => Some(crate::pickling::reduce(slf.as_any(), "LoopsPositions", p.as_slice())?.1.0),
+            None => None,
+        };
+        Ok((from_state, (state, positions)))
+    }
+
+    #[classmethod]
+    #[pyo3(signature = (state, positions=None))]
+    fn _from_state(cls: &Bound<'_, pyo3::types::PyType>, state: &[u8], positions: Option<&[u8]>) -> PyResult<Self> {
+        let py = cls.py();
+        crate::pickling::restoring(py, "Loops", || {
+            let inner: loops_core::Loops = crate::pickling::restore(py, "Loops", state)?;
+            let positions: Option<Vec<[f64; 3]>> =
+                positions.map(|p| crate::pickling::restore(py, "LoopsPositions", p)).transpose()?;
+            if positions.as_ref().is_some_and(|p| p.len() != inner.len()) {
+                return Err(crate::pickling::invalid(py, "Loops", "its positions are not one per pose"));
+            }
+            Ok(Self { inner: Arc::new(inner), positions: positions.map(Arc::new) })
+        })
+    }
+}
 
 #[pymethods]
 impl Loops {
@@ -272,11 +322,18 @@ impl Loops {
     ///     (dtype('int64'), [True, False], [199, 7])
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let rows = loops_io::component_rows(&self.inner, None);
+        let rows = loops_io::component_rows(&self.inner, self.positions.as_deref().map(Vec::as_slice), None);
         let measures: Vec<_> = rows.iter().map(|row| row.measures).collect();
         let extents: Vec<_> = rows.iter().map(|row| row.extent).collect();
+        let positions: Vec<_> = rows.iter().map(|row| row.positions).collect();
         let id = (loops_io::COMPONENT_COLUMNS[0], int64_column(py, &rows, |row| row.id));
-        table(py, std::iter::once(id).chain(measure_columns(py, &measures)).chain(extent_columns(py, &extents)))
+        table(
+            py,
+            std::iter::once(id)
+                .chain(measure_columns(py, &measures))
+                .chain(extent_columns(py, &extents))
+                .chain(closest_position_columns(py, &positions)),
+        )
     }
 
     /// The runs of S_γ's upper half (j ≥ i), row by row, as a :class:`~inexact_loops.Table` of
@@ -572,7 +629,7 @@ impl Loops {
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "components.csv")
     ///     >>> il.find_loops(traj, gamma=0.5, separation=None).components_to_csv(path)
     ///     >>> open(path).read().splitlines()[2]
-    ///     '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0'
+    ///     '1,false,0.25,1,1,1,0,0,0,3,3,0,0,3,3,0,3,0,0,0,0,0,0,0'
     #[pyo3(signature = (path, *, samples_per_component=None, overwrite=false))]
     fn components_to_csv(
         &self,
@@ -591,8 +648,10 @@ impl Loops {
             )));
         }
         let loops = Arc::clone(&self.inner);
+        let positions = self.positions.clone();
         detached(py, move || {
-            Ok(loops_io::write_components(&path, &loops, samples_per_component.as_deref(), overwrite)?)
+            let positions = positions.as_deref().map(Vec::as_slice);
+            Ok(loops_io::write_components(&path, &loops, positions, samples_per_component.as_deref(), overwrite)?)
         })
     }
 

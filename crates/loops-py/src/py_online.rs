@@ -9,7 +9,8 @@ use pyo3::types::{PyBytes, PyType};
 use serde::{Deserialize, Serialize};
 
 use crate::convert::{
-    bool_column, extent_columns, float64_column, int64_column, real_array, table, timestamps_and_points, to_numpy,
+    bool_column, closest_position_columns, extent_columns, float64_column, int64_column, real_array, table,
+    timestamps_and_points, to_numpy,
 };
 use crate::detached;
 use crate::error::{Failure, value_error};
@@ -107,6 +108,10 @@ struct OnlineState {
     rebuilt_len: usize,
     timestamps_s: Vec<f64>,
     coords: Vec<f64>,
+    /// Its rebuild count (older states: the one rebuild `rebuilt_len` implies, if any), so that
+    /// a sampler pickled with it goes on with the copy.
+    #[serde(default)]
+    rebuild_count: Option<u64>,
 }
 
 /// A pickled `Update`: the fields of the core's.
@@ -161,6 +166,7 @@ impl OnlineLoops {
             rebuilt_len: this.rebuilt_len,
             timestamps_s: this.inner.timestamps_s().to_vec(),
             coords: this.inner.trajectory().map_or_else(Vec::new, |traj| traj.coords().to_vec()),
+            rebuild_count: Some(this.inner.rebuild_count()),
         };
         crate::pickling::reduce(slf.as_any(), "OnlineLoops", &state)
     }
@@ -183,7 +189,21 @@ impl OnlineLoops {
             {
                 return Err(crate::pickling::invalid(py, "OnlineLoops", "its poses do not fit together"));
             }
+            // The clears and the rebuild that bring the count to the original's.
+            let implied = u64::from(rebuilt > 0);
+            let rebuild_count = state.rebuild_count.unwrap_or(implied);
+            // Each clear takes a moment: a count far beyond any real engine's is a forged one.
+            if rebuild_count < implied || rebuild_count - implied > 1 << 20 {
+                return Err(crate::pickling::invalid(
+                    py,
+                    "OnlineLoops",
+                    format!("its rebuild count {rebuild_count} does not fit its rebuilds"),
+                ));
+            }
             let inner = &mut this.inner;
+            for _ in implied..rebuild_count {
+                inner.clear();
+            }
             detached(py, move || {
                 if rebuilt > 0 {
                     let traj = loops_core::Trajectory::new(
@@ -349,7 +369,10 @@ impl OnlineLoops {
         let this = self.engine.lock(py)?;
         let inner = &this.inner;
         let loops = detached(py, move || Ok(inner.to_loops()?))?;
-        Ok(Loops { inner: Arc::new(loops) })
+        Ok(match inner.trajectory() {
+            Some(traj) => Loops::of_trajectory(loops, traj),
+            None => Loops { inner: Arc::new(loops), positions: None },
+        })
     }
 
     /// The loop duration τ of pose ``pose`` so far (paper, Eq. 6), seconds: how long the
@@ -449,6 +472,9 @@ impl OnlineLoops {
             .iter()
             .map(|c| loops_io::ComponentExtent::new([c.i_range, c.j_range], c.closest_pair, c.closest_distance, [t; 2]))
             .collect();
+        let points = this.inner.trajectory().map(loops_io::point_positions);
+        let positions: Vec<_> =
+            cs.iter().map(|c| loops_io::ClosestPositions::new(c.closest_pair, points.as_deref())).collect();
         let measures = [
             (id, int64_column(py, &cs, |c| c.id as usize)),
             (trivial, bool_column(py, &cs, |c| c.trivial)),
@@ -461,7 +487,14 @@ impl OnlineLoops {
             ("first_pose", int64_column(py, &cs, |c| c.first_pose)),
             ("last_pose", int64_column(py, &cs, |c| c.last_pose)),
         ];
-        table(py, measures.into_iter().chain(extent_columns(py, &extents)).chain(online))
+        table(
+            py,
+            measures
+                .into_iter()
+                .chain(extent_columns(py, &extents))
+                .chain(closest_position_columns(py, &positions))
+                .chain(online),
+        )
     }
 }
 

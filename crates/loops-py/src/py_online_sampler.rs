@@ -1,7 +1,7 @@
 //! `OnlineSampler` (loop-closure candidates per keyframe) and `Candidate`.
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
 
 use crate::error::{Failure, invalid_parameter};
 use crate::py_online::{OnlineLoops, Update};
@@ -25,6 +25,11 @@ use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 ///         Give at most one.
 ///     first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
 ///         component has a pair to offer.
+///     first_at_closest_approach: with ``first_on_appearance``, a component's first candidate
+///         is the closest pair of its whole first pass (the closest approach), offered at the
+///         keyframe after the path leaves it (so :attr:`Candidate.k` < :attr:`Candidate.keyframe`),
+///         rather than the closest pair at the edge of γ as the component appears. It goes
+///         beyond the cap.
 ///     closest_in_row: the first of a row's draws for a component is its closest pair in the
 ///         row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
 ///         keyframe); ``False``: all uniform (the paper's σ_ρ).
@@ -49,7 +54,11 @@ use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
 ///     ...         print(c.keyframe, c.j, c.first)
 ///     50 0 True
 ///
-/// Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`').
+/// Threads may share a sampler: its calls run one at a time (as :class:`OnlineLoops`'). It
+/// pickles with its state (buckets, the components P1 served, the pose it reached): pickled
+/// with its :class:`OnlineLoops` (or offered the next update of the engine it followed), the
+/// copy gives the candidates the original would; offered an update that does not start where
+/// it stopped, it starts afresh.
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct OnlineSampler {
@@ -64,14 +73,16 @@ struct SamplerState {
     inner: loops_core::OnlineSampler,
 }
 
-/// A loop-closure candidate: the pair (``j``, ``keyframe``), j < keyframe, within γ, to match.
+/// A loop-closure candidate: the pair (``j``, ``k``), j < k ≤ keyframe, within γ, to match.
 /// Returned by :meth:`OnlineSampler.offer`.
 ///
 /// Args:
-///     keyframe: the pose whose push made it possible (the later pose).
+///     keyframe: the pose whose push offered it.
 ///     j: the earlier pose.
+///     k: the later pose (``None``: the keyframe; earlier only for a first candidate at the
+///         closest approach, offered once the pass was over).
 ///     component: its component's id at the keyframe.
-///     distance: δ(x_j, x_keyframe), the metric's unit.
+///     distance: δ(x_j, x_k), the metric's unit.
 ///     first: emitted by the first-appearance rule rather than drawn.
 ///
 /// Example:
@@ -85,21 +96,29 @@ pub(crate) struct Candidate {
     inner: loops_core::Candidate,
 }
 
+impl OnlineSampler {
+    fn from_core(inner: loops_core::OnlineSampler) -> Self {
+        Self { options: *inner.options(), state: Shared::new(SamplerState { inner }) }
+    }
+}
+
 #[pymethods]
 impl OnlineSampler {
     #[new]
     #[pyo3(signature = (*, rate=OnlineSamplerOptions::default().rate, cap_per_minute=None, cap_per_metre=None,
         first_on_appearance=OnlineSamplerOptions::default().first_on_appearance,
+        first_at_closest_approach=OnlineSamplerOptions::default().first_at_closest_approach,
         closest_in_row=OnlineSamplerOptions::default().closest_in_row, separation=None,
         seed=OnlineSamplerOptions::default().seed))]
     #[pyo3(text_signature = "(*, rate=1.0, cap_per_minute=None, cap_per_metre=None, first_on_appearance=True, \
-        closest_in_row=True, separation=None, seed=0)")]
+        first_at_closest_approach=False, closest_in_row=True, separation=None, seed=0)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         rate: f64,
         cap_per_minute: Option<f64>,
         cap_per_metre: Option<f64>,
         first_on_appearance: bool,
+        first_at_closest_approach: bool,
         closest_in_row: bool,
         separation: Option<SeparationArg>,
         seed: u64,
@@ -123,9 +142,31 @@ impl OnlineSampler {
                 ));
             }
         };
-        let options = OnlineSamplerOptions { rate, cap, first_on_appearance, closest_in_row, separation, seed };
+        let options = OnlineSamplerOptions {
+            rate,
+            cap,
+            first_on_appearance,
+            first_at_closest_approach,
+            closest_in_row,
+            separation,
+            seed,
+        };
         let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
-        Ok(Self { options: *inner.options(), state: Shared::new(SamplerState { inner }) })
+        Ok(Self::from_core(inner))
+    }
+
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let this = slf.get().state.lock(slf.py())?;
+        crate::pickling::reduce(slf.as_any(), "OnlineSampler", &this.inner)
+    }
+
+    /// Unpickles the core's saved sampler, checked.
+    #[classmethod]
+    fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
+        crate::pickling::restoring(cls.py(), "OnlineSampler", || {
+            let inner: loops_core::OnlineSampler = crate::pickling::restore(cls.py(), "OnlineSampler", state)?;
+            Ok(Self::from_core(inner))
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -136,10 +177,11 @@ impl OnlineSampler {
             Cap::PerMetre(c) => format!(", cap_per_metre={c}"),
         };
         format!(
-            "OnlineSampler(rate={}{cap}, first_on_appearance={}, closest_in_row={}, separation=Separation(path={:?}, \
-             time_s={:?}), seed={})",
+            "OnlineSampler(rate={}{cap}, first_on_appearance={}, first_at_closest_approach={}, closest_in_row={}, \
+             separation=Separation(path={:?}, time_s={:?}), seed={})",
             o.rate,
             if o.first_on_appearance { "True" } else { "False" },
+            if o.first_at_closest_approach { "True" } else { "False" },
             if o.closest_in_row { "True" } else { "False" },
             o.separation.path,
             o.separation.time_s,
@@ -211,6 +253,13 @@ impl OnlineSampler {
         self.options.first_on_appearance
     }
 
+    /// Whether that candidate is the closest pair of the component's first pass, offered once
+    /// the pass is over.
+    #[getter]
+    fn first_at_closest_approach(&self) -> bool {
+        self.options.first_at_closest_approach
+    }
+
     /// The separation the candidates keep (:class:`Separation`).
     #[getter]
     fn separation(&self) -> Separation {
@@ -227,9 +276,10 @@ impl OnlineSampler {
 #[pymethods]
 impl Candidate {
     #[new]
-    #[pyo3(signature = (*, keyframe, j, component, distance, first))]
-    fn new(keyframe: usize, j: usize, component: ComponentId, distance: f64, first: bool) -> Self {
-        Self { inner: loops_core::Candidate { keyframe, pair: [j, keyframe], component, distance, first } }
+    #[pyo3(signature = (*, keyframe, j, component, distance, first, k=None))]
+    fn new(keyframe: usize, j: usize, component: ComponentId, distance: f64, first: bool, k: Option<usize>) -> Self {
+        let k = k.unwrap_or(keyframe);
+        Self { inner: loops_core::Candidate { keyframe, pair: [j, k], component, distance, first } }
     }
 
     /// Pickles as its constructor's keywords.
@@ -241,18 +291,27 @@ impl Candidate {
         kwargs.set_item("component", c.component)?;
         kwargs.set_item("distance", c.distance)?;
         kwargs.set_item("first", c.first)?;
+        kwargs.set_item("k", c.pair[1])?;
         Ok((PyTuple::empty(py), kwargs))
     }
 
     fn __hash__(&self) -> u64 {
         let c = &self.inner;
-        crate::pickling::hash_of(&[c.keyframe as u64, c.pair[0] as u64, u64::from(c.component), c.distance.to_bits()])
+        crate::pickling::hash_of(&[
+            c.keyframe as u64,
+            c.pair[0] as u64,
+            c.pair[1] as u64,
+            u64::from(c.component),
+            c.distance.to_bits(),
+        ])
     }
 
     fn __repr__(&self) -> String {
         let c = &self.inner;
+        // `k` only where it is not the keyframe, so the common candidate reads as before.
+        let k = if c.pair[1] == c.keyframe { String::new() } else { format!(", k={}", c.pair[1]) };
         format!(
-            "Candidate(keyframe={}, j={}, component={}, distance={:?}, first={})",
+            "Candidate(keyframe={}, j={}, component={}, distance={:?}, first={}{k})",
             c.keyframe,
             c.pair[0],
             c.component,
@@ -273,10 +332,17 @@ impl Candidate {
         self.inner.pair[0]
     }
 
-    /// The pair ``(j, keyframe)``.
+    /// The later pose of the pair: the keyframe, but for a first candidate at the closest
+    /// approach (offered once the pass was over).
+    #[getter]
+    fn k(&self) -> usize {
+        self.inner.pair[1]
+    }
+
+    /// The pair ``(j, k)``.
     #[getter]
     fn pair(&self) -> (usize, usize) {
-        (self.inner.pair[0], self.inner.keyframe)
+        (self.inner.pair[0], self.inner.pair[1])
     }
 
     /// Its component's id at the keyframe.
@@ -285,7 +351,7 @@ impl Candidate {
         self.inner.component
     }
 
-    /// δ(x_j, x_keyframe), the metric's unit.
+    /// δ(x_j, x_k), the metric's unit.
     #[getter]
     fn distance(&self) -> f64 {
         self.inner.distance

@@ -47,6 +47,8 @@ fn measured(
     MetricArg::or_default(metric, trajectory.default_metric())?.run(py, None, move |metric| {
         let mut samples = samples;
         samples.measure(&traj, metric.as_metric())?;
+        let positions = loops_io::point_positions(&traj);
+        samples.set_positions(|k| positions.get(k).copied());
         Ok(samples)
     })
 }
@@ -227,8 +229,12 @@ pub(crate) fn sample(
         };
         let traj = Arc::clone(&trajectory.inner);
         let metric = loops_metric(metric, &loops)?;
-        let samples = metric
-            .run(py, threads, move |metric| loops_core::sample_loops(&traj, metric.as_metric(), &loops, &spec))?;
+        let samples = metric.run(py, threads, move |metric| {
+            let mut samples = loops_core::sample_loops(&traj, metric.as_metric(), &loops, &spec)?;
+            let positions = loops_io::point_positions(&traj);
+            samples.set_positions(|k| positions.get(k).copied());
+            Ok(samples)
+        })?;
         crate::warning::warn_samples(py, &samples, skip_trivial)?;
         return Ok(Samples { inner: Arc::new(samples) });
     }
@@ -435,7 +441,9 @@ impl Samples {
     /// trajectory), ``component``, ``cluster``, ``detection`` (int64, −1 where none),
     /// ``distance`` (float64, NaN where not measured), ``score`` (float64; only when the
     /// detections had scores) — the getters of the same names — and, when any sample has one,
-    /// the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`).
+    /// the relative pose ``dx, dy, dz, dqx, dqy, dqz, dqw, dtheta_rad`` (:attr:`relative_poses`)
+    /// and where the two poses are, ``i_x, i_y, i_z, j_x, j_y, j_z`` (the trajectory's first three
+    /// coordinates, as ``samples.csv`` has them).
     ///
     /// Raises:
     ///     ImportError: pandas is not installed (it is not a dependency of the library).
@@ -449,6 +457,13 @@ impl Samples {
     fn to_pandas<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let guesses = self.inner.rows().iter().any(|s| s.relative_pose.is_some());
         let relative = if guesses { Some(self.relative_poses(py)?) } else { None };
+        let placed = self.inner.rows().iter().any(|s| s.positions.is_some());
+        let position_columns = loops_io::SAMPLE_POSITION_COLUMNS.into_iter().enumerate().map(|(k, name)| {
+            placed.then(|| {
+                let at = |s: &loops_core::Sample| s.positions.map_or(f64::NAN, |p| p[k / 3][k % 3]);
+                (name, to_numpy(py, self.inner.rows().iter().map(at).collect()).into_any())
+            })
+        });
         let relative_columns = RELATIVE_POSE_COLUMNS.iter().enumerate().map(|(k, &name)| {
             relative.as_ref().map(|matrix| {
                 let values: Vec<f64> = matrix.readonly().as_array().column(k).to_vec();
@@ -469,13 +484,15 @@ impl Samples {
                 self.score(py).map(|column| ("score", column.into_any())),
             ]
             .into_iter()
-            .chain(relative_columns),
+            .chain(relative_columns)
+            .chain(position_columns),
         )
     }
 
     /// Writes the samples as CSV: a header ``t_s,t_prime_s,i,j,component,cluster,detection,
-    /// distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad`` (the last eight: the relative
-    /// pose, :attr:`relative_poses`), then one line a sample; unknown values are empty fields.
+    /// distance,score,sampler,dx,dy,dz,dqx,dqy,dqz,dqw,dtheta_rad,i_x,i_y,i_z,j_x,j_y,j_z`` (then
+    /// the relative pose, :attr:`relative_poses`, and where the two poses are), then one line a
+    /// sample; unknown values are empty fields.
     /// Atomic (a temporary file renamed into place).
     ///
     /// Raises:
@@ -489,7 +506,7 @@ impl Samples {
     ///     >>> path = os.path.join(tempfile.mkdtemp(), "samples.csv")
     ///     >>> samples.to_csv(path)
     ///     >>> open(path).read().splitlines()[1]
-    ///     '0,3,,,,0,0,,,alpha,,,,,,,,'
+    ///     '0,3,,,,0,0,,,alpha,,,,,,,,,,,,,,'
     #[pyo3(signature = (path, *, overwrite=false))]
     fn to_csv(&self, py: Python<'_>, path: PathBuf, overwrite: bool) -> PyResult<()> {
         self.write(py, path, loops_io::SamplesFormat::Csv, overwrite)

@@ -335,8 +335,17 @@ impl Trajectory {
         wrap(py, move || loops_core::Trajectory::gnss(t, &p))
     }
 
-    /// GNSS fixes as WGS 84 Earth-centred positions relative to the first fix (metres), for the
-    /// ``euclidean`` metric; input as in :meth:`gnss`. A Euclidean trajectory (:attr:`manifold`).
+    /// GNSS fixes as WGS 84 Earth-centred positions relative to the first fix, turned into the
+    /// first fix's east-north-up frame (metres east, north and up: plots and reports draw a
+    /// map), for the ``euclidean`` metric; input as in :meth:`gnss`. A rotation of ECEF, so
+    /// distances are the straight-line ones. A Euclidean trajectory (:attr:`manifold`).
+    ///
+    /// Example:
+    ///     >>> import inexact_loops as il
+    ///     >>> traj = il.Trajectory.gnss_ecef([0.0, 1.0], [[48.0, 11.0, 500.0], [48.001, 11.0, 500.0]])
+    ///     >>> east, north, up = traj.positions[1]  # 111 m north, a little down: the Earth curves
+    ///     >>> round(float(north), 1), bool(abs(east) < 1e-6), bool(-0.01 < up < 0)
+    ///     (111.2, True, True)
     #[staticmethod]
     fn gnss_ecef(py: Python<'_>, timestamps: &Bound<'_, PyAny>, lat_lon_height: &Bound<'_, PyAny>) -> PyResult<Self> {
         let (t, p) = timestamps_and_rows::<3>(py, timestamps, lat_lon_height, "lat_lon_height")?;

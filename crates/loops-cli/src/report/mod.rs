@@ -279,9 +279,25 @@ mod tests {
         // Rows in id order, samples as counted.
         for (row, c) in rows.iter().zip(case.loops.components()) {
             let cells: Vec<&str> = row.split("<td>").skip(1).map(|c| c.split("</td>").next().unwrap()).collect();
-            assert_eq!(cells.len(), 14);
+            assert_eq!(cells.len(), 15);
             assert!(cells[0].ends_with(&format!("</i>{}", c.id)), "{}", cells[0]);
-            assert_eq!(cells[13], case.quality.per_component[c.id].to_string());
+            assert_eq!(cells[14], case.quality.per_component[c.id].to_string());
+            // Where its closest pair is, in the map's plane (x-y); a non-trivial one links to
+            // its ring on the map, which is at that pose.
+            let [x, y, _] = case.table.positions[c.closest_pair[0]];
+            let place = format!("({x:.1}, {y:.1})");
+            if c.trivial {
+                assert_eq!(cells[13], place);
+            } else {
+                let anchor = format!("map-component-{}", c.id);
+                assert_eq!(cells[13], format!("<a href=\"#{anchor}\">{place}</a>"));
+                let ring =
+                    &html[html.find(&format!("<g id=\"{anchor}\" class=\"component-ring\">")).expect("its ring")..];
+                let ring = &ring[..ring.find("</g>").unwrap()];
+                let [i, j] = c.closest_pair;
+                assert!(ring.contains(&format!("component {}: closest pair ({i}, {j})", c.id)), "{ring}");
+                assert!(ring.contains(&format!(">{}</text>", c.id)), "{ring}");
+            }
         }
         assert!(html.contains("data:image/png;base64,iVBORw0KGgo"));
         assert!(html.contains("<title>drive &lt;1&gt; &amp; co.tum — inexact loops</title>"));

@@ -2,13 +2,14 @@
 
 use maud::{Markup, html};
 
+use super::trajectory::{ring_anchor, ringed_components};
 use super::{ReportInput, swatch_class};
 
 /// The most rows shown; beyond it, the largest components by area.
 pub(super) const MAX_ROWS: usize = 5000;
 
 /// Column names (as in `components.csv`) and what they mean.
-const COLUMNS: [(&str, &str); 14] = [
+const COLUMNS: [(&str, &str); 15] = [
     ("id", "component id (order of first cell, row by row)"),
     ("trivial", "holds diagonal cells (i, i): its pairs are simple loops"),
     ("area_s2", "area in the (t, t′) plane, s² (the half with t ≤ t′)"),
@@ -22,6 +23,10 @@ const COLUMNS: [(&str, &str); 14] = [
     ("closest_i", "pose index i of the closest pair"),
     ("closest_j", "pose index j of the closest pair"),
     ("closest_distance", "δ at the closest pair"),
+    (
+        "where",
+        "position of pose i of the closest pair in the map's plane (components.csv: closest_i_x, closest_i_y, closest_i_z); a link to its ring on the map",
+    ),
     ("samples", "samples of the run's sampler in the component"),
 ];
 
@@ -39,6 +44,12 @@ pub(super) fn components_section(input: &ReportInput<'_>) -> Markup {
         shown.sort_unstable();
     }
     let nontrivial = components.iter().filter(|c| !c.trivial).count();
+    let ringed = ringed_components(input);
+    let [u, v] = input.plane;
+    let place = |i: usize| {
+        let p = input.table.positions.get(i)?;
+        Some(format!("({:.1}, {:.1})", p.get(u)?, p.get(v)?))
+    };
     html! {
         section.components {
             h2 { "Loop components" }
@@ -71,6 +82,13 @@ pub(super) fn components_section(input: &ReportInput<'_>) -> Markup {
                                 td { (c.closest_pair[0]) }
                                 td { (c.closest_pair[1]) }
                                 td { (format!("{:.3}", c.closest_distance)) }
+                                td {
+                                    @match (place(c.closest_pair[0]), ringed.binary_search(&id).is_ok()) {
+                                        (Some(p), true) => a href={ "#" (ring_anchor(id)) } { (p) },
+                                        (Some(p), false) => (p),
+                                        (None, _) => "—",
+                                    }
+                                }
                                 td { (input.quality.per_component.get(id).copied().unwrap_or(0)) }
                             }
                         }

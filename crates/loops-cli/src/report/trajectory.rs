@@ -18,6 +18,9 @@ pub(crate) const MAX_SEGMENTS: usize = 4000;
 /// The most sampled pairs the sampled-pairs figure draws.
 pub(super) const MAX_PAIRS_DRAWN: usize = 2000;
 
+/// The most components ringed on the loop-duration map (the largest non-trivial ones by area).
+pub(super) const MAX_RINGS: usize = 60;
+
 /// Colour levels of τ along the path (before coarsening to meet [`MAX_SEGMENTS`]).
 const COLOUR_LEVELS: usize = 48;
 
@@ -265,6 +268,8 @@ pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
     }
     plot.push_clipped(&paths);
     start_and_end(&mut plot, &pixels);
+    let ringed = ringed_components(input);
+    plot.push_clipped(&component_rings(input, &pixels, &ringed));
     map_axes(&mut plot, input.plane);
     plot.colour_bar(VIRIDIS, scale, "loop duration τ (s)", &[]);
     let plane = plane_name(input.plane);
@@ -272,10 +277,15 @@ pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
     let caption = format!(
         "<b>Trajectory coloured by loop duration.</b> {plane} positions of the {n} poses; colour is τ(t), the total time the \
          trajectory spends within γ = {gamma} of the pose (its own passage included), so revisited streets stand out. \
-         Drawn as {segments}{simplified}; open circle: start, square: end.{log}",
+         Drawn as {segments}{simplified}; open circle: start, square: end. Rings: the closest pair of {rings}, \
+         labelled with its id (the table's <i>where</i> links here).{log}",
         gamma = input.loops.gamma(),
         segments = plural(segments.len(), "segment", "segments"),
         simplified = if segments.len() + 1 < n { " (simplified to the figure's resolution)" } else { "" },
+        rings = match (ringed.len(), input.loops.components().iter().filter(|c| !c.trivial).count()) {
+            (shown, all) if shown < all => format!("the {shown} largest of the {all} non-trivial components"),
+            (shown, _) => format!("each non-trivial component ({shown})"),
+        },
         log = if scale.kind() == ScaleKind::Log {
             " The colour scale is logarithmic: a stop makes τ of its poses as long as the stop."
         } else {
@@ -283,6 +293,47 @@ pub(super) fn loop_duration_figure(input: &ReportInput<'_>) -> Markup {
         },
     );
     figure("loop-duration", &svg, PreEscaped(caption))
+}
+
+/// The components ringed on the map, by id: the [`MAX_RINGS`] largest non-trivial ones by area
+/// whose closest pair's pose i is on the map.
+pub(super) fn ringed_components(input: &ReportInput<'_>) -> Vec<usize> {
+    let components = input.loops.components();
+    let n = input.table.positions.len().min(input.loop_duration_s.len());
+    let mut ids: Vec<usize> = components.iter().filter(|c| !c.trivial && c.closest_pair[0] < n).map(|c| c.id).collect();
+    ids.sort_by(|&a, &b| components[b].area_s2.total_cmp(&components[a].area_s2).then(a.cmp(&b)));
+    ids.truncate(MAX_RINGS);
+    ids.sort_unstable();
+    ids
+}
+
+/// The anchor of component `id`'s ring on the map.
+pub(super) fn ring_anchor(id: usize) -> String {
+    format!("map-component-{id}")
+}
+
+/// A ring at the closest pair's pose i of each component of `ids`, labelled with its id, each a
+/// group the components table links to.
+fn component_rings(input: &ReportInput<'_>, pixels: &[(f64, f64)], ids: &[usize]) -> String {
+    let mut out = String::new();
+    for &id in ids {
+        let c = &input.loops.components()[id];
+        let Some(&(x, y)) = pixels.get(c.closest_pair[0]) else { continue };
+        let ring = format!("M{x:.1} {y:.1}m-6 0a6 6 0 1 0 12 0a6 6 0 1 0 -12 0");
+        let _ = write!(
+            out,
+            "<g id=\"{anchor}\" class=\"component-ring\"><title>component {id}: closest pair ({i}, {j}), δ = {d:.3}</title>\
+             <path d=\"{ring}\" class=\"ring-halo\"/><path d=\"{ring}\" class=\"ring\"/>\
+             <text x=\"{tx:.1}\" y=\"{ty:.1}\">{id}</text></g>",
+            anchor = ring_anchor(id),
+            i = c.closest_pair[0],
+            j = c.closest_pair[1],
+            d = c.closest_distance,
+            tx = x + 8.0,
+            ty = y - 8.0,
+        );
+    }
+    out
 }
 
 /// Figure: the sampled pairs, each a line between its two poses, over the trajectory in grey.

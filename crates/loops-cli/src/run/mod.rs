@@ -309,7 +309,12 @@ pub(crate) fn analyse(
 
     log.stage("sampling");
     let clock = Instant::now();
-    let samples = spec.sample_loops(traj, &loops, &settings.sampler)?;
+    let mut samples = spec.sample_loops(traj, &loops, &settings.sampler)?;
+    // Where the poses are in the files and the report: the log's own positions, unless reading
+    // dropped or merged poses.
+    let fits = table.positions.len() == traj.len();
+    let positions = if fits { table.positions.clone() } else { loops_io::point_positions(traj) };
+    samples.set_positions(|k| positions.get(k).copied());
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
     let comparison = compare_samplers(spec, traj, &loops, &settings.sampler, samples.len(), epsilon_s)?;
     seconds.sample = clock.elapsed().as_secs_f64();
@@ -366,7 +371,6 @@ pub(crate) fn analyse(
     let json = serde_json::to_string_pretty(&summary)? + "\n";
     let scene = if settings.mcap {
         // The log's own positions and orientations, unless reading dropped or merged poses.
-        let fits = table.positions.len() == traj.len();
         let positions = Some(table.positions.as_slice()).filter(|_| fits);
         let orientations = table.orientations_xyzw.as_deref().filter(|_| fits);
         Some(loops_io::Scene::of_trajectory(name, traj, positions, orientations, &loops, &samples)?)
@@ -376,7 +380,7 @@ pub(crate) fn analyse(
     write_folder(settings, name, |dir| {
         let file = |name: &str| dir.join(name);
         let per_component = Some(quality.per_component.as_slice());
-        written(|| loops_io::write_components(file("components.csv"), &loops, per_component, false))?;
+        written(|| loops_io::write_components(file("components.csv"), &loops, Some(&positions), per_component, false))?;
         written(|| loops_io::write_samples(&file("samples.csv"), &samples, SamplesFormat::Csv, false))?;
         written(|| {
             let t = traj.timestamps_s();

@@ -127,6 +127,11 @@ impl PushStamp {
     pub(crate) fn same_run(self, other: Self) -> bool {
         (self.engine, self.rebuilds) == (other.engine, other.rebuilds)
     }
+
+    /// The engine's rebuild count at the push.
+    pub(crate) fn rebuilds(self) -> u64 {
+        self.rebuilds
+    }
 }
 
 /// An engine's number for its [`PushStamp`]s, from a process-wide counter starting at 1 (0 is

@@ -16,6 +16,7 @@ use crate::spec::with_metric;
 /// unit's worth of candidates (at least one) and refills at the given rate, starting full. In
 /// any stretch of the drive, a component gets at most `max(1, c) + c · (length of the stretch)`
 /// candidates, the length in minutes or in metres (the metric's unit) of travel.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub enum Cap {
     /// No cap.
@@ -29,6 +30,7 @@ pub enum Cap {
 }
 
 /// What an [`OnlineSampler`] does.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OnlineSamplerOptions {
     /// σ_ρ: the expected number of candidates per component per pose (the paper's r), drawn
@@ -40,6 +42,14 @@ pub struct OnlineSamplerOptions {
     /// P1 online: a component's first candidate comes in the first row where it has a pair to
     /// offer (at its creation, for a component off the diagonal): the closest such pair.
     pub first_on_appearance: bool,
+    /// P1 at the closest approach: with [`first_on_appearance`](Self::first_on_appearance),
+    /// a component's first candidate is not its closest pair in the first row where it has a
+    /// pair to offer (at the edge of γ, as the path comes within reach) but its closest pair
+    /// over that whole pass: offered at the first row after it where the component has no pair
+    /// to offer (the path has left it), so its [`keyframe`](Candidate::keyframe) is later than
+    /// its pair. It goes beyond the cap (it takes a token if there is one). A pass still under
+    /// way when the drive stops has no first candidate yet.
+    pub first_at_closest_approach: bool,
     /// The first of a row's draws for a component is its closest pair in the row (the likeliest
     /// match), the others uniform; `false`: all uniform (the paper's σ_ρ). The default follows
     /// the default sampler ([`SamplerKind::DEFAULT`]): each row is one time of the component,
@@ -60,6 +70,7 @@ impl Default for OnlineSamplerOptions {
             rate: 1.0,
             cap: Cap::None,
             first_on_appearance: true,
+            first_at_closest_approach: false,
             closest_in_row: SamplerKind::DEFAULT.picks_closest_in_row(),
             separation: Separation::NONE,
             seed: 0,
@@ -67,16 +78,19 @@ impl Default for OnlineSamplerOptions {
     }
 }
 
-/// A loop-closure candidate: a pair (j, keyframe), j < keyframe, within γ.
+/// A loop-closure candidate: a pair (j, k), j < k ≤ keyframe, within γ, offered at the
+/// keyframe.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Candidate {
-    /// The pose whose push made it possible.
+    /// The pose whose push offered it: the pair's later pose, but for a first candidate at the
+    /// closest approach ([`OnlineSamplerOptions::first_at_closest_approach`]), offered once the
+    /// pass was over.
     pub keyframe: usize,
-    /// The pair `[j, keyframe]`, j < keyframe.
+    /// The pair `[j, k]`, j < k ≤ keyframe.
     pub pair: [usize; 2],
     /// Its component at the keyframe.
     pub component: ComponentId,
-    /// δ(x_j, x_keyframe), the metric's unit.
+    /// δ(x_j, x_k), the metric's unit.
     pub distance: f64,
     /// Emitted by the first-appearance rule (P1 online), not drawn.
     pub first: bool,
@@ -89,7 +103,9 @@ pub struct Candidate {
 /// ones only, with a [`Separation`]), in this order:
 /// 1. P1 online ([`first_on_appearance`](OnlineSamplerOptions::first_on_appearance)): the first
 ///    time the component (with every component merged into it) has such a pair, its closest
-///    one is a candidate, whatever the rate and the cap (a bucket starts full).
+///    one is a candidate, whatever the rate and the cap (a bucket starts full). At the closest
+///    approach ([`first_at_closest_approach`](OnlineSamplerOptions::first_at_closest_approach)),
+///    the closest pair of the rows of that first pass instead, offered at the row after it.
 /// 2. σ_ρ: ⌊r⌋ or ⌈r⌉ distinct pairs (⌈r⌉ with probability r − ⌊r⌋): with
 ///    [`closest_in_row`](OnlineSamplerOptions::closest_in_row) (the default) the first of them
 ///    the row's closest pair, the others uniformly among the rest; without it all uniformly;
@@ -106,6 +122,12 @@ pub struct Candidate {
 ///
 /// Cost per update: its runs plus the candidates, and a closest column (O(log n)) per component
 /// that P1 serves; memory a few words per component.
+///
+/// With the `serde` feature a sampler saves and reads back its state (options, buckets, what
+/// P1 served, the pose it has reached): the copy goes on as the original does. The engine it
+/// followed is not part of it (engines are known by a number of this process); the copy
+/// follows the first engine whose update it is offered, if that update starts at the pose
+/// after the last one offered, at the same rebuild count; any other starts it afresh.
 ///
 /// # Examples
 /// ```
@@ -129,20 +151,90 @@ pub struct Candidate {
 /// assert!(candidates.iter().all(|c| c.pair[1] == c.keyframe && c.distance <= 20.0));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(try_from = "SamplerState", into = "SamplerState")
+)]
 #[derive(Debug, Clone)]
 pub struct OnlineSampler {
     options: OnlineSamplerOptions,
     /// The push offered last: its engine and rebuild count are those the states were made for.
     offered: Option<PushStamp>,
+    /// Where the states continue: the pose after the last one offered and the engine's rebuild
+    /// count then. It decides alone for a copy read back, which knows no engine (`offered` is
+    /// `None`).
+    reached: Option<Reached>,
     /// By component id: `None` until the component has a pair to offer.
     states: Vec<Option<Bucket>>,
+    /// The components whose first pass is under way (they had a pair to offer in the last row
+    /// and P1 at the closest approach has still to serve them), increasing.
+    passing: Vec<ComponentId>,
+}
+
+/// The pose after the last one a sampler was offered, and its engine's rebuild count then.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Reached {
+    next_pose: usize,
+    rebuilds: u64,
+}
+
+/// What a saved [`OnlineSampler`] holds: everything but the engine it followed.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SamplerState {
+    options: OnlineSamplerOptions,
+    reached: Option<Reached>,
+    states: Vec<Option<Bucket>>,
+    passing: Vec<ComponentId>,
+}
+
+#[cfg(feature = "serde")]
+impl From<OnlineSampler> for SamplerState {
+    fn from(sampler: OnlineSampler) -> Self {
+        let OnlineSampler { options, offered: _, reached, states, passing } = sampler;
+        Self { options, reached, states, passing }
+    }
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<SamplerState> for OnlineSampler {
+    type Error = Error;
+
+    /// Checked as [`OnlineSampler::new`] checks the options; every bucket's tokens at least 0
+    /// and its clock a number.
+    fn try_from(state: SamplerState) -> Result<Self> {
+        let mut sampler = Self::new(state.options)?;
+        if let Some(index) =
+            state.states.iter().position(|b| b.is_some_and(|b| b.tokens.is_nan() || b.tokens < 0.0 || b.clock.is_nan()))
+        {
+            return Err(Error::InvalidState {
+                what: "OnlineSampler",
+                reason: format!("component {index} has a bucket with tokens below 0 or a clock that is not a number"),
+            });
+        }
+        if let Some(c) = state.passing.iter().find(|&&c| state.states.get(c as usize).is_none_or(|b| b.is_none())) {
+            return Err(Error::InvalidState {
+                what: "OnlineSampler",
+                reason: format!("component {c} is passing but has no bucket"),
+            });
+        }
+        sampler.reached = state.reached;
+        sampler.states = state.states;
+        sampler.passing = state.passing;
+        Ok(sampler)
+    }
 }
 
 /// What the sampler remembers of a component.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Bucket {
-    /// It had a candidate (P1 is served).
+    /// It had its first candidate (P1 is served).
     served: bool,
+    /// P1 at the closest approach: the closest pair of its first pass so far.
+    closest: Option<Closest>,
     /// Candidates it may still take (the cap's token bucket).
     tokens: f64,
     /// The clock (seconds or path length) the tokens were counted at.
@@ -175,7 +267,7 @@ impl OnlineSampler {
             _ => {}
         }
         options.separation.check()?;
-        Ok(Self { options, offered: None, states: Vec::new() })
+        Ok(Self { options, offered: None, reached: None, states: Vec::new(), passing: Vec::new() })
     }
 
     /// Its options.
@@ -198,10 +290,16 @@ impl OnlineSampler {
         if self.offered == Some(update.stamp) {
             return Err(Error::UpdateAlreadyOffered { first_pose, pose });
         }
-        if !self.offered.is_some_and(|offered| offered.same_run(update.stamp)) {
+        let continues = match self.offered {
+            Some(offered) => offered.same_run(update.stamp),
+            None => self.reached == Some(Reached { next_pose: first_pose, rebuilds: update.stamp.rebuilds() }),
+        };
+        if !continues {
             self.states.clear();
+            self.passing.clear();
         }
         self.offered = Some(update.stamp);
+        self.reached = Some(Reached { next_pose: pose + 1, rebuilds: update.stamp.rebuilds() });
         let mut candidates = Vec::new();
         let mut merges = update.merged.iter().peekable();
         let mut runs = &update.runs[..];
@@ -223,11 +321,17 @@ impl OnlineSampler {
 
     /// The candidates of row n (`row`: its runs, in column order).
     fn offer_row(&mut self, loops: &OnlineLoops, n: usize, row: &[RowRun], out: &mut Vec<Candidate>) {
-        let Some(last) = self.last_column(loops, n) else { return };
-        let mut components: Vec<ComponentId> = row.iter().map(|r| r.component).collect();
+        let start = out.len();
+        let Some(last) = self.last_column(loops, n) else {
+            self.close_passes(loops, n, &[], out);
+            return;
+        };
+        let mut components: Vec<ComponentId> =
+            row.iter().filter(|r| r.run.start as usize <= last).map(|r| r.component).collect();
         components.sort_unstable();
         components.dedup();
-        let start = out.len();
+        self.close_passes(loops, n, &components, out);
+        let at_closest = self.options.first_on_appearance && self.options.first_at_closest_approach;
         for c in components {
             // The component's pairs (j, n), j ≤ last, as column ranges.
             let available: Vec<(RowRun, usize)> = row
@@ -245,17 +349,26 @@ impl OnlineSampler {
             if self.states.len() <= slot {
                 self.states.resize(slot + 1, None);
             }
-            let mut bucket = self.states[slot].unwrap_or(Bucket { served: false, tokens: capacity, clock });
+            let mut bucket =
+                self.states[slot].unwrap_or(Bucket { served: false, closest: None, tokens: capacity, clock });
             bucket.refill(self.rate_per_unit(), capacity, clock);
             let mut columns: Vec<(usize, bool)> = Vec::new();
-            if self.options.first_on_appearance && !bucket.served {
-                columns.push((closest_available(loops, n, &available), true));
+            if at_closest && !bucket.served {
+                let (j, rank) = closest_available(loops, n, &available);
+                if bucket.closest.is_none_or(|best| rank < best.rank) {
+                    bucket.closest = Some(Closest { pair: [j, n], rank });
+                }
+                if let Err(at) = self.passing.binary_search(&c) {
+                    self.passing.insert(at, c);
+                }
+            } else if self.options.first_on_appearance && !bucket.served {
+                columns.push((closest_available(loops, n, &available).0, true));
             }
             let mut rng = keyed_rng(self.options.seed, n, c);
             let rate = self.options.rate;
             let mut draws = rate.floor() as u64 + u64::from(rng.random::<f64>() < rate.fract());
             if self.options.closest_in_row && draws > 0 {
-                let j = closest_available(loops, n, &available);
+                let j = closest_available(loops, n, &available).0;
                 if columns.iter().all(|&(taken, _)| taken != j) {
                     columns.push((j, false));
                 }
@@ -275,13 +388,37 @@ impl OnlineSampler {
                     }
                     bucket.tokens -= 1.0;
                 }
-                bucket.served = true;
+                bucket.served |= first;
                 let distance = loops.metric().distance(loops.poses().point(j), x_n);
                 out.push(Candidate { keyframe: n, pair: [j, n], component: c, distance, first });
             }
             self.states[slot] = Some(bucket);
         }
         out[start..].sort_by_key(|c| (c.component, c.pair[0]));
+    }
+
+    /// P1 at the closest approach: the components passing until row n that have no pair to offer
+    /// in it (`present`: those that have, increasing) get their first candidate, the closest
+    /// pair of their pass, offered at n.
+    fn close_passes(&mut self, loops: &OnlineLoops, n: usize, present: &[ComponentId], out: &mut Vec<Candidate>) {
+        let (rate, capacity) = (self.rate_per_unit(), self.capacity());
+        let clock = self.clock(loops, n);
+        let passing = std::mem::take(&mut self.passing);
+        for c in passing {
+            if present.binary_search(&c).is_ok() {
+                self.passing.push(c);
+                continue;
+            }
+            let Some(bucket) = self.states.get_mut(c as usize).and_then(Option::as_mut) else { continue };
+            let Some(Closest { pair: [j, k], .. }) = bucket.closest.take() else { continue };
+            bucket.refill(rate, capacity, clock);
+            if bucket.tokens >= 1.0 && !matches!(self.options.cap, Cap::None) {
+                bucket.tokens -= 1.0;
+            }
+            bucket.served = true;
+            let distance = loops.metric().distance(loops.poses().point(j), loops.poses().point(k));
+            out.push(Candidate { keyframe: n, pair: [j, k], component: c, distance, first: true });
+        }
     }
 
     /// The last column j < n whose pair (j, n) keeps the separation, if any.
@@ -327,19 +464,46 @@ impl OnlineSampler {
     fn merge(&mut self, loops: &OnlineLoops, n: usize, retired: ComponentId, survivor: ComponentId) {
         // Nothing moves when the retired one never had a pair to offer.
         let Some(mut gone) = self.states.get(retired as usize).copied().flatten() else { return };
-        let merged = match self.states[survivor as usize] {
+        let mut merged = match self.states[survivor as usize] {
             None => gone,
             Some(mut kept) => {
                 let clock = self.clock(loops, n);
                 let (rate, capacity) = (self.rate_per_unit(), self.capacity());
                 gone.refill(rate, capacity, clock);
                 kept.refill(rate, capacity, clock);
-                Bucket { served: gone.served || kept.served, tokens: gone.tokens.min(kept.tokens), clock }
+                let closest = match (gone.closest, kept.closest) {
+                    (Some(a), Some(b)) => Some(if b.rank <= a.rank { b } else { a }),
+                    (a, b) => a.or(b),
+                };
+                Bucket { served: gone.served || kept.served, closest, tokens: gone.tokens.min(kept.tokens), clock }
             }
         };
+        // One pass of the two: passing if either was, unless either was served.
+        if merged.served {
+            merged.closest = None;
+        }
+        let was_passing = [retired, survivor].map(|c| self.passing.binary_search(&c));
+        if let Ok(at) = was_passing[0] {
+            self.passing.remove(at);
+        }
+        match self.passing.binary_search(&survivor) {
+            Ok(at) if merged.served => {
+                self.passing.remove(at);
+            }
+            Err(at) if !merged.served && was_passing.iter().any(Result::is_ok) => self.passing.insert(at, survivor),
+            _ => {}
+        }
         // The survivor's id is the smaller, so its slot exists.
         self.states[survivor as usize] = Some(merged);
     }
+}
+
+/// The closest pair of a pass so far, and its rank under the metric.
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Closest {
+    pair: [usize; 2],
+    rank: f64,
 }
 
 impl Bucket {
@@ -375,9 +539,9 @@ fn column_at(available: &[(RowRun, usize)], k: u64) -> usize {
     unreachable!("k is below the number of pairs")
 }
 
-/// The available pair of row n closest to pose n: the earliest smallest rank, measured as the
-/// batch measures (j, n).
-fn closest_available(loops: &OnlineLoops, n: usize, available: &[(RowRun, usize)]) -> usize {
+/// The available pair of row n closest to pose n and its rank: the earliest smallest rank,
+/// measured as the batch measures (j, n).
+fn closest_available(loops: &OnlineLoops, n: usize, available: &[(RowRun, usize)]) -> (usize, f64) {
     let traj = loops.poses();
     with_metric!(&loops.metric(), m => {
         let mut best = (f64::INFINITY, usize::MAX);
@@ -390,6 +554,6 @@ fn closest_available(loops: &OnlineLoops, n: usize, available: &[(RowRun, usize)
                 best = (rank, j);
             }
         }
-        best.1
+        (best.1, best.0)
     })
 }

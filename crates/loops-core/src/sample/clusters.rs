@@ -126,6 +126,7 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
             distance: None,
             score: det.scores().map(|s| s[k]),
             relative_pose: None,
+            positions: None,
             sampler: kind,
         }
     });

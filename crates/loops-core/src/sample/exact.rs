@@ -123,6 +123,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
             distance: Some(metric.distance(traj.point(i), traj.point(j))),
             score: None,
             relative_pose: crate::relative_pose(traj, i, j),
+            positions: None,
             sampler: kind,
         }
     });

@@ -34,6 +34,10 @@ pub struct Sample {
     /// the scan matcher's initial guess. `None` without a pose pair, or on a manifold without
     /// such a guess. No uncertainty goes with it: trajectories hold no covariance.
     pub relative_pose: Option<crate::RelativePose>,
+    /// Where its two poses are, `[x, y, z]` of pose i then of pose j, when its caller said
+    /// ([`set_positions`](Samples::set_positions)).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub positions: Option<[[f64; 3]; 2]>,
     /// The sampler that chose it.
     pub sampler: SamplerKind,
 }
@@ -115,6 +119,16 @@ impl Samples {
     pub fn set_relative_poses(&mut self, mut guess: impl FnMut(usize, usize) -> Option<crate::RelativePose>) {
         for row in &mut self.rows {
             row.relative_pose = row.pair.and_then(|[i, j]| guess(i, j));
+        }
+    }
+
+    /// Sets the positions of the two poses of every sample with a pose pair `(i, j)` to
+    /// `position(i)` and `position(j)` (`None` when either is unknown): the positions a caller
+    /// draws its map with (a log's own, or the trajectory's first three coordinates).
+    /// O(samples) calls.
+    pub fn set_positions(&mut self, mut position: impl FnMut(usize) -> Option<[f64; 3]>) {
+        for row in &mut self.rows {
+            row.positions = row.pair.and_then(|[i, j]| Some([position(i)?, position(j)?]));
         }
     }
 
