@@ -44,18 +44,41 @@ struct Node {
     uniform: bool,
 }
 
+/// The ball of poses `lo..hi` of `traj` (not empty): its centre, the middle pose `lo + (hi −
+/// lo)/2`, and its radius, the largest distance from there to a pose of the range. The one
+/// rule for the hierarchy's leaves, a tile's chunks and a session's blocks
+/// ([`SessionBlocks`](crate::SessionBlocks)).
+pub(crate) fn pose_ball<M: Metric + ?Sized>(traj: &Trajectory, lo: usize, hi: usize, metric: &M) -> (usize, f64) {
+    let centre = lo + (hi - lo) / 2;
+    let radius = (lo..hi).map(|k| metric.distance(traj.point(centre), traj.point(k))).fold(0.0, f64::max);
+    (centre, radius)
+}
+
+/// The radius of a ball centred on `centre` that holds the balls `parts` ((centre, radius)
+/// each): the largest distance from `centre` to a part's centre plus its radius, so every point
+/// of the parts lies within it (triangle inequality). The one rule for the hierarchy's inner
+/// nodes, a tile's groups of chunks and
+/// [`SessionBlocks::coarsened`](crate::SessionBlocks::coarsened).
+pub(crate) fn joined_radius<'a, M: Metric + ?Sized>(
+    centre: &[f64],
+    parts: impl IntoIterator<Item = (&'a [f64], f64)>,
+    metric: &M,
+) -> f64 {
+    parts.into_iter().map(|(c, r)| metric.distance(centre, c) + r).fold(0.0, f64::max)
+}
+
 impl Node {
-    /// A leaf over poses `lo..hi` of `traj`: its centre the middle pose, its radius exact.
+    /// A leaf over poses `lo..hi` of `traj`: its centre the middle pose, its radius exact
+    /// ([`pose_ball`]).
     fn leaf<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, lo: usize, hi: usize) -> Self {
-        let centre = lo + (hi - lo) / 2;
-        let x_c = traj.point(centre);
-        let radius = (lo..hi).map(|k| metric.distance(x_c, traj.point(k))).fold(0.0, f64::max);
+        let (centre, radius) = pose_ball(traj, lo, hi, metric);
         let uniform = (lo..hi).all(|k| traj.same_point(k, centre));
         Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left: LEAF, right: LEAF, uniform }
     }
 
     /// The node over poses `a.lo..b.hi` whose children are `a` (at index `left`) and `b` (at
-    /// `right`): its centre the middle pose, its radius bounded from the children's.
+    /// `right`): its centre the middle pose, its radius bounded from the children's
+    /// ([`joined_radius`]).
     fn joined<M: Metric + ?Sized>(
         traj: &Trajectory,
         metric: &M,
@@ -64,11 +87,8 @@ impl Node {
     ) -> Self {
         let (lo, hi) = (a.lo as usize, b.hi as usize);
         let centre = lo + (hi - lo) / 2;
-        let x_c = traj.point(centre);
-        let radius = [a, b]
-            .iter()
-            .map(|child| metric.distance(x_c, traj.point(child.centre as usize)) + child.radius)
-            .fold(0.0, f64::max);
+        let children = [a, b].map(|child| (traj.point(child.centre as usize), child.radius));
+        let radius = joined_radius(traj.point(centre), children, metric);
         let uniform = a.uniform && b.uniform && traj.same_point(a.centre as usize, b.centre as usize);
         Node { lo: lo as u32, hi: hi as u32, centre: centre as u32, radius, left, right, uniform }
     }
@@ -91,6 +111,17 @@ pub(crate) struct Leaf {
 impl Leaf {
     fn of(node: &Node, inside: bool) -> Self {
         Leaf { lo: node.lo, hi: node.hi, centre: node.centre, radius: node.radius, inside, uniform: node.uniform }
+    }
+
+    /// Grows this stretch by `next` when both are inside stretches and `next` starts where this
+    /// one ends (the one rule that merges adjacent inside stretches); true when it did.
+    pub(crate) fn absorb(&mut self, next: &Leaf) -> bool {
+        let adjacent = self.inside && next.inside && self.hi == next.lo;
+        if adjacent {
+            self.hi = next.hi;
+            self.uniform = false;
+        }
+        adjacent
     }
 }
 
@@ -313,15 +344,11 @@ impl BallTree {
     ) -> Result<()> {
         out.clear();
         let mut grown = Ok(());
-        self.walk(metric, x, from, (reach, inside_reach), |node, inside| match out.last_mut() {
-            Some(last) if inside && last.inside && last.hi == node.lo => {
-                last.hi = node.hi;
-                last.uniform = false;
+        self.walk(metric, x, from, (reach, inside_reach), |node, inside| {
+            let leaf = Leaf::of(node, inside);
+            if out.last_mut().is_none_or(|last| !last.absorb(&leaf)) && grown.is_ok() {
+                grown = try_reserve(out, 1, "the stretches of a row scan").map(|()| out.push(leaf));
             }
-            _ if grown.is_ok() => {
-                grown = try_reserve(out, 1, "the stretches of a row scan").map(|()| out.push(Leaf::of(node, inside)));
-            }
-            _ => {}
         });
         grown
     }

@@ -150,9 +150,7 @@ impl ChunkIndex {
         let mut kept = 0;
         for k in 0..out.len() {
             let leaf = out[k];
-            if kept > 0 && leaf.inside && out[kept - 1].inside && out[kept - 1].hi == leaf.lo {
-                out[kept - 1].hi = leaf.hi;
-            } else {
+            if kept == 0 || !out[kept - 1].absorb(&leaf) {
                 out[kept] = leaf;
                 kept += 1;
             }

@@ -23,26 +23,7 @@ pub(crate) const CHUNK: usize = 64;
 /// Poses per group: chunks are compared only within groups whose balls meet.
 const GROUP: usize = 16 * CHUNK;
 
-/// The ball of poses `lo..hi` of `traj` (not empty): its centre, the middle pose `lo + (hi −
-/// lo)/2`, and its radius, the largest distance from there to a pose of the range. The one
-/// rule for a tile's chunks and a session's blocks ([`SessionBlocks`](crate::SessionBlocks)).
-pub(crate) fn pose_ball<M: Metric + ?Sized>(traj: &Trajectory, lo: usize, hi: usize, metric: &M) -> (usize, f64) {
-    let centre = lo + (hi - lo) / 2;
-    let radius = (lo..hi).map(|k| metric.distance(traj.point(centre), traj.point(k))).fold(0.0, f64::max);
-    (centre, radius)
-}
-
-/// The radius of a ball centred on `centre` that holds the balls `parts` ((centre, radius)
-/// each): the largest distance from `centre` to a part's centre plus its radius, so every point
-/// of the parts lies within it (triangle inequality). The one rule for a tile's groups of
-/// chunks and [`SessionBlocks::coarsened`](crate::SessionBlocks::coarsened).
-pub(crate) fn joined_radius<'a, M: Metric + ?Sized>(
-    centre: &[f64],
-    parts: impl IntoIterator<Item = (&'a [f64], f64)>,
-    metric: &M,
-) -> f64 {
-    parts.into_iter().map(|(c, r)| metric.distance(centre, c) + r).fold(0.0, f64::max)
-}
+pub(crate) use crate::ball_tree::{joined_radius, pose_ball};
 
 /// The bounding balls of `range` of `traj` cut every `size` poses: (range, centre pose, radius).
 fn balls<M: Metric + ?Sized>(
