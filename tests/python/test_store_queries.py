@@ -230,10 +230,13 @@ def test_the_command_line_queries_answer_as_python(fleet, tmp_path) -> None:
     store, sessions = fleet
     centre = sessions[store.names[1]].positions[40, :2]
     x, y = (float(v) for v in centre)
-    same_columns(cli_csv("near", store.path, "--point", f"{x!r},{y!r}", "--radius", 25), store.near(centre, radius=25.0))
+    same_columns(
+        cli_csv("near", store.path, "--point", f"{x!r},{y!r}", "--radius", 25),
+        store.near(centre, radius=25.0),
+    )
     vertices = centre + np.array([[-60.0, -40.0], [70.0, -30.0], [10.0, 80.0]])
-    polygon = [f"{a!r},{b!r}" for a, b in vertices]
-    same_columns(cli_csv("near", store.path, "--polygon", *polygon), store.near(vertices))
+    polygon = " ".join(f"{float(a)!r},{float(b)!r}" for a, b in vertices)
+    same_columns(cli_csv("near", store.path, "--polygon", polygon), store.near(vertices))
     for name in store.names:
         same_columns(cli_csv("revisits", store.path, name), store.revisits(name))
     added = cli_csv("added", store.path)
@@ -245,7 +248,7 @@ def test_the_command_line_queries_answer_as_python(fleet, tmp_path) -> None:
     args = ("store", "near", store.path, "--point", f"{x},{y}", "--csv", target)
     done = cli(*args)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines()[0].split() == ["session", "name", "i_start", "i_end", "t_start_s", "t_end_s"]
+    assert done.stdout.splitlines()[0].split() == list(store.near(centre).keys())
     written = target.read_bytes()
     assert len(pd.read_csv(target)) == len(store.near(centre)["session"]) > 0
     again = cli(*args)
@@ -260,10 +263,11 @@ def test_the_command_line_queries_answer_as_python(fleet, tmp_path) -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (("near", "--point", "1;2"), "--point \"1;2\": expected X,Y"),
+        (("near", "--point", "1;2"), '--point "1;2": expected X,Y'),
         (("near", "--point", "nan,0"), "point has x = NaN"),
+        (("near", "--polygon", "-1,0 1,0"), "at least 3 vertices, got 2"),
         (("near", "--point", "0,0", "--radius", "-1"), "radius = -1"),
-        (("revisits", "no-such-car"), "session \"no-such-car\" is not in the store"),
+        (("revisits", "no-such-car"), 'session "no-such-car" is not in the store'),
     ],
 )
 def test_the_command_line_names_bad_queries(fleet, args, message) -> None:

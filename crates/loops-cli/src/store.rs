@@ -18,7 +18,7 @@ use crate::{guard, out_dir};
 #[derive(Debug, Args)]
 #[command(after_help = "Examples:\n  \
     loops store near city --point 120,-40 --radius 15\n  \
-    loops store near city --polygon 0,0 100,0 100,50 0,50 --csv passes.csv\n  \
+    loops store near city --polygon \"0,0 100,0 100,50 0,50\" --csv passes.csv\n  \
     loops store revisits city car1-day03\n  \
     loops store added city --csv -")]
 pub(crate) struct StoreArgs {
@@ -60,16 +60,18 @@ struct CsvArgs {
 }
 
 #[derive(Debug, Args)]
+#[command(allow_negative_numbers = true)]
 struct NearArgs {
     /// The store's folder.
     store: PathBuf,
     /// The place is the point X,Y (map-plane coordinates, metres).
     #[arg(long, value_name = "X,Y", allow_hyphen_values = true, required_unless_present = "polygon")]
     point: Option<String>,
-    /// The place is the polygon of these vertices, in order (at least 3; the last joins the
-    /// first): a pose is near when inside it (even-odd rule) or within the radius of its edges.
-    #[arg(long, value_name = "X,Y", num_args = 3.., allow_hyphen_values = true, conflicts_with = "point")]
-    polygon: Vec<String>,
+    /// The place is the polygon of these vertices, in order, separated by spaces (at least 3;
+    /// the last joins the first): a pose is near when inside it (even-odd rule) or within the
+    /// radius of its edges.
+    #[arg(long, value_name = "\"X,Y X,Y X,Y ...\"", allow_hyphen_values = true, conflicts_with = "point")]
+    polygon: Option<String>,
     /// Within this distance of the place, metres (default: the store's gamma).
     #[arg(long, value_name = "METRES")]
     radius: Option<f64>,
@@ -119,11 +121,12 @@ fn xy(flag: &str, text: &str) -> Result<[f64; 2]> {
 }
 
 fn near(args: NearArgs) -> Result<()> {
-    let place = match &args.point {
-        Some(point) => loops_core::Place::point(xy("--point", point)?)?,
-        None => {
-            loops_core::Place::polygon(args.polygon.iter().map(|v| xy("--polygon", v)).collect::<Result<Vec<_>>>()?)?
-        }
+    let place = match (&args.point, &args.polygon) {
+        (Some(point), _) => loops_core::Place::point(xy("--point", point)?)?,
+        (None, Some(polygon)) => loops_core::Place::polygon(
+            polygon.split_whitespace().map(|v| xy("--polygon", v)).collect::<Result<Vec<_>>>()?,
+        )?,
+        (None, None) => bail!("give the place: --point X,Y or --polygon \"X,Y X,Y X,Y ...\""),
     };
     let stored = read(&args.store)?;
     let passes = stored.near(&place, args.radius)?;

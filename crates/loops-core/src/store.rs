@@ -8,8 +8,11 @@
 //! removed) keeps the tiles of every pair of unchanged sessions (moved to the new fleet
 //! indices: a tile depends on its two sessions alone), drops those of replaced and removed
 //! sessions, and scans only the tiles that hold a new or replaced session (new × old, new ×
-//! new). The answer is merged again from the stored summaries ([`FleetStore::loops`]), and
-//! samples are drawn by keys ([`FleetStore::samples`]), rescanning only the tiles a draw asks.
+//! new). The answer follows from what the store keeps besides: the merge of each session
+//! pair's tiles (components never join across pairs, so an update merges the pairs it scanned
+//! and moves the others; [`FleetStore::loops`] puts them together), τ of each session (the new
+//! tiles' shares added), and the runs of the tiles it scanned, from which samples are drawn by
+//! keys ([`FleetStore::samples`]) without a rescan.
 //!
 //! **Same answer as from scratch.** After any sequence of updates, the components, the overlap
 //! matrix, τ and the samples are those of [`find_fleet_loops`](crate::find_fleet_loops) and
