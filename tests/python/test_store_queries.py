@@ -3,12 +3,16 @@
 :meth:`FleetStore.near` against numpy distances to a point and, for polygons, against
 matplotlib's point-in-polygon test plus numpy distances to the edges; :meth:`FleetStore.revisits`
 against the store's components table read by DuckDB; :attr:`FleetStore.added` against the
-components of the added sessions by name (pandas).
+components of the added sessions by name (pandas). ``loops store near|revisits|added`` on the
+command line print and write (CSV) what Python answers.
 """
 
 from __future__ import annotations
 
+import io
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -196,3 +200,80 @@ def test_an_unknown_session_is_named(fleet) -> None:
         store.revisits("no-such-car")
     with pytest.raises(IndexError, match="99"):
         store.revisits(99)
+
+
+def cli(*args) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "inexact_loops._cli", *map(str, args)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+
+
+def cli_csv(*args):
+    """The CSV that ``loops store ... --csv -`` prints, as a DataFrame."""
+    done = cli("store", *args, "--csv", "-")
+    assert done.returncode == 0, done.stderr
+    return pd.read_csv(io.StringIO(done.stdout), keep_default_na=False)
+
+
+def same_columns(frame, table) -> None:
+    """The CSV's columns are the table's, with its values (floats to the bit)."""
+    assert list(frame.columns) == list(table.keys())
+    for column in frame.columns:
+        assert frame[column].tolist() == np.asarray(table[column]).tolist(), column
+
+
+@quiet
+def test_the_command_line_queries_answer_as_python(fleet, tmp_path) -> None:
+    store, sessions = fleet
+    centre = sessions[store.names[1]].positions[40, :2]
+    x, y = (float(v) for v in centre)
+    same_columns(
+        cli_csv("near", store.path, "--point", f"{x!r},{y!r}", "--radius", 25),
+        store.near(centre, radius=25.0),
+    )
+    vertices = centre + np.array([[-60.0, -40.0], [70.0, -30.0], [10.0, 80.0]])
+    polygon = " ".join(f"{float(a)!r},{float(b)!r}" for a, b in vertices)
+    same_columns(cli_csv("near", store.path, "--polygon", polygon), store.near(vertices))
+    for name in store.names:
+        same_columns(cli_csv("revisits", store.path, name), store.revisits(name))
+    added = cli_csv("added", store.path)
+    np.testing.assert_array_equal(added["id"].to_numpy(), store.added)
+    assert set(added["session_a"]) | set(added["session_b"]) >= set(store.last_update["added"])
+
+    # The table on stdout, the CSV to a file: never over one without --force, never in the store.
+    target = tmp_path / "passes.csv"
+    args = ("store", "near", store.path, "--point", f"{x},{y}", "--csv", target)
+    done = cli(*args)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.splitlines()[0].split() == list(store.near(centre).keys())
+    written = target.read_bytes()
+    assert len(pd.read_csv(target)) == len(store.near(centre)["session"]) > 0
+    again = cli(*args)
+    assert again.returncode == 2 and len(again.stderr.strip().splitlines()) == 1, again.stderr
+    assert target.read_bytes() == written
+    assert cli(*args, "--force").returncode == 0
+    inside = cli("store", "added", store.path, "--csv", Path(store.path) / "added.csv")
+    assert inside.returncode == 2 and "--csv" in inside.stderr, inside.stderr
+    assert not (Path(store.path) / "added.csv").exists()
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("near", "--point", "1;2"), '--point "1;2": expected X,Y'),
+        (("near", "--point", "nan,0"), "point has x = NaN"),
+        (("near", "--polygon", "-1,0 1,0"), "at least 3 vertices, got 2"),
+        (("near", "--point", "0,0", "--radius", "-1"), "radius = -1"),
+        (("revisits", "no-such-car"), 'session "no-such-car" is not in the store'),
+    ],
+)
+def test_the_command_line_names_bad_queries(fleet, args, message) -> None:
+    store, _ = fleet
+    query, *rest = args
+    done = cli("store", query, store.path, *rest)
+    assert done.returncode == 2
+    assert message in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1

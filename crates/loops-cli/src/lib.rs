@@ -24,6 +24,7 @@ mod report;
 mod run;
 mod sample;
 mod serve;
+mod store;
 mod synth;
 
 use std::ffi::OsString;
@@ -50,6 +51,7 @@ enum Command {
     Demo(demo::DemoArgs),
     Run(run::RunArgs),
     Fleet(fleet::FleetArgs),
+    Store(store::StoreArgs),
     Synth(synth::SynthArgs),
     Replay(replay::ReplayArgs),
 }
@@ -110,6 +112,7 @@ fn run(cli: Cli) -> Result<u8> {
         Command::Demo(args) => demo::demo(args),
         Command::Run(args) => return run::run(args),
         Command::Fleet(args) => return fleet::fleet(args),
+        Command::Store(args) => store::store(args),
         Command::Synth(args) => synth::synth(args),
         Command::Replay(args) => return replay::replay(args),
     };

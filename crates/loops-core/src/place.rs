@@ -118,10 +118,24 @@ pub struct Pass {
 pub fn passes_near(trajectory: &Trajectory, place: &Place, radius: f64) -> Result<Vec<Pass>> {
     check_radius(radius)?;
     check_plane(trajectory.manifold(), trajectory.dim())?;
-    let times = trajectory.timestamps_s();
     let mut passes = Vec::new();
+    passes_within(trajectory, place, radius, 0..trajectory.len(), &mut passes);
+    Ok(passes)
+}
+
+/// Appends to `passes` the maximal runs of poses within `radius` of `place` among the poses
+/// `range` of `trajectory` (checked as [`passes_near`] checks them): the passes of the whole
+/// trajectory that lie in `range`, when the poses just outside it are not near.
+pub(crate) fn passes_within(
+    trajectory: &Trajectory,
+    place: &Place,
+    radius: f64,
+    range: std::ops::Range<usize>,
+    passes: &mut Vec<Pass>,
+) {
+    let times = trajectory.timestamps_s();
     let mut open: Option<usize> = None;
-    for i in 0..trajectory.len() {
+    for i in range.clone() {
         let p = trajectory.point(i);
         let near = place.is_near([p[0], p[1]], radius);
         match (near, open) {
@@ -134,10 +148,9 @@ pub fn passes_near(trajectory: &Trajectory, place: &Place, radius: f64) -> Resul
         }
     }
     if let Some(start) = open {
-        let last = trajectory.len() - 1;
+        let last = range.end - 1;
         passes.push(Pass { poses: [start, last], times_s: [times[start], times[last]] });
     }
-    Ok(passes)
 }
 
 /// A radius is a finite distance of at least 0.
@@ -153,7 +166,7 @@ pub fn check_radius(radius: f64) -> Result<()> {
 }
 
 /// Points of `manifold` and `dim` coordinates have a map plane (their first two coordinates).
-fn check_plane(manifold: Manifold, dim: usize) -> Result<()> {
+pub(crate) fn check_plane(manifold: Manifold, dim: usize) -> Result<()> {
     let planar = match manifold {
         Manifold::Euclidean => dim >= 2,
         Manifold::Se2 | Manifold::Se3 => true,

@@ -8,8 +8,11 @@
 //! removed) keeps the tiles of every pair of unchanged sessions (moved to the new fleet
 //! indices: a tile depends on its two sessions alone), drops those of replaced and removed
 //! sessions, and scans only the tiles that hold a new or replaced session (new × old, new ×
-//! new). The answer is merged again from the stored summaries ([`FleetStore::loops`]), and
-//! samples are drawn by keys ([`FleetStore::samples`]), rescanning only the tiles a draw asks.
+//! new). The answer follows from what the store keeps besides: the merge of each session
+//! pair's tiles (components never join across pairs, so an update merges the pairs it scanned
+//! and moves the others; [`FleetStore::loops`] puts them together), τ of each session (the new
+//! tiles' shares added), and the runs of the tiles it scanned, from which samples are drawn by
+//! keys ([`FleetStore::samples`]) without a rescan.
 //!
 //! **Same answer as from scratch.** After any sequence of updates, the components, the overlap
 //! matrix, τ and the samples are those of [`find_fleet_loops`](crate::find_fleet_loops) and
@@ -50,18 +53,19 @@
 //! ```
 
 use std::collections::{BTreeMap, HashMap, HashSet};
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
 use crate::draw::SampleWarning;
 use crate::error::{Error, Result};
 use crate::fleet::{FleetComponent, FleetSample, SessionPair};
-use crate::place::{Pass, Place, check_radius, passes_near};
-use crate::sample::{DrawCandidates, KeyedDraw, Sampler};
+use crate::place::{Pass, Place, check_plane, check_radius, passes_within};
+use crate::sample::{ComponentRequest, DrawCandidates, DrawRequest, KeyedDraw, Sampler};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
-use crate::tile::draw::{TileDuration, draw_session_tile, tile_requests};
+use crate::tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs};
 use crate::tile::{
     MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching, scan_session_tile,
 };
@@ -194,36 +198,28 @@ impl StoredTile {
         &self.summary.tile
     }
 
-    /// The same tile with its sessions renumbered and its rows and columns moved by `shifts`
+    /// Renumbers the tile's sessions `sessions` and moves its rows and columns by `shifts`
     /// (fleet indices): what a rescan at the new place gives, since a tile reads its two
-    /// sessions alone.
-    fn moved(&self, sessions: [usize; 2], shifts: [isize; 2]) -> Self {
+    /// sessions alone. O(its components and edge runs).
+    fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
         let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
-        let range = |r: &std::ops::Range<usize>, side| at(r.start, side)..at(r.end, side);
+        let pair = |x: [usize; 2]| [at(x[0], 0), at(x[1], 1)];
         let old = &self.summary.tile;
-        let tile = Tile { sessions, rows: range(&old.rows, 0), columns: range(&old.columns, 1) };
-        let components = self
-            .summary
-            .components
-            .iter()
-            .map(|c| {
-                let mut c = c.clone();
-                c.rows = [at(c.rows[0], 0), at(c.rows[1], 0)];
-                c.columns = [at(c.columns[0], 1), at(c.columns[1], 1)];
-                c.closest = [at(c.closest[0], 0), at(c.closest[1], 1)];
-                c.first = [at(c.first[0], 0), at(c.first[1], 1)];
-                c
-            })
-            .collect();
-        let edges = self
-            .summary
-            .edges
-            .iter()
-            .map(|e| crate::tile::EdgeRun { row: at(e.row, 0), start: at(e.start, 1), end: at(e.end, 1), ..*e })
-            .collect();
-        let summary = TileSummary { tile: tile.clone(), components, edges };
-        let duration = TileDuration { tile, ..self.duration.clone() };
-        Self { summary, duration }
+        let tile = Tile {
+            sessions,
+            rows: at(old.rows.start, 0)..at(old.rows.end, 0),
+            columns: at(old.columns.start, 1)..at(old.columns.end, 1),
+        };
+        for c in &mut self.summary.components {
+            c.rows = [at(c.rows[0], 0), at(c.rows[1], 0)];
+            c.columns = [at(c.columns[0], 1), at(c.columns[1], 1)];
+            (c.closest, c.first) = (pair(c.closest), pair(c.first));
+        }
+        for e in &mut self.summary.edges {
+            (e.row, e.start, e.end) = (at(e.row, 0), at(e.start, 1), at(e.end, 1));
+        }
+        self.summary.tile = tile.clone();
+        self.duration.tile = tile;
     }
 }
 
@@ -257,12 +253,39 @@ impl StoreUpdate {
 }
 
 /// A fleet's loops kept up to date by session (see the module docs).
-#[derive(Debug, Clone, PartialEq)]
+///
+/// Besides its state (settings, sessions, tiles, the last update), a store keeps what its
+/// answer is made of, so that the answer after an update costs what the update changed: the
+/// merge of each session pair's tiles, τ of each session, and the runs of each tile it scanned
+/// (16 bytes a run, [`TileRuns::heap_bytes`]), which its draws read instead of rescanning. A
+/// store read back ([`from_parts`](Self::from_parts)) merges and adds τ again, and rescans
+/// the tiles a draw asks until an update scans them.
+#[derive(Debug, Clone)]
 pub struct FleetStore {
     settings: StoreSettings,
     sessions: Vec<StoreSession>,
     tiles: Vec<StoredTile>,
     last_update: StoreUpdate,
+    kept: Kept,
+}
+
+/// Two stores are equal when their states are: what each keeps of its answer follows from it.
+impl PartialEq for FleetStore {
+    fn eq(&self, other: &Self) -> bool {
+        (&self.settings, &self.sessions, &self.tiles, &self.last_update)
+            == (&other.settings, &other.sessions, &other.tiles, &other.last_update)
+    }
+}
+
+/// What a store keeps of its answer between updates, in the store's fleet indices.
+#[derive(Debug, Clone, Default)]
+struct Kept {
+    /// The merge of the tiles of each session pair with tiles, by pair (a, b).
+    merges: BTreeMap<[usize; 2], Arc<MergedLoops>>,
+    /// τ of each session, `(own, other)` per pose, seconds.
+    duration: Vec<(Vec<f64>, Vec<f64>)>,
+    /// The runs of each tile (by tile, as the store's tiles), where an update scanned it.
+    runs: Vec<Option<Arc<TileRuns>>>,
 }
 
 /// Where a store reads a stored session's poses.
@@ -275,7 +298,13 @@ impl FleetStore {
     /// As [`StoreSettings::check`].
     pub fn new(settings: StoreSettings) -> Result<Self> {
         settings.check()?;
-        Ok(Self { settings, sessions: Vec::new(), tiles: Vec::new(), last_update: StoreUpdate::default() })
+        Ok(Self {
+            settings,
+            sessions: Vec::new(),
+            tiles: Vec::new(),
+            last_update: StoreUpdate::default(),
+            kept: Kept::default(),
+        })
     }
 
     /// A store from its parts as saved (sessions in name order, tiles in plan order), checked:
@@ -318,7 +347,7 @@ impl FleetStore {
                 return Err(corrupt(format!("tile {k}: its share of τ is not of tile {:?}", t.summary.tile)));
             }
         }
-        let store = Self { settings, sessions, tiles, last_update };
+        let mut store = Self { settings, sessions, tiles, last_update, kept: Kept::default() };
         let plan = store.plan(&vec![true; store.sessions.len()])?;
         if let Some(k) =
             (0..plan.len().max(store.tiles.len())).find(|&k| plan.get(k) != store.tiles.get(k).map(StoredTile::tile))
@@ -331,6 +360,12 @@ impl FleetStore {
                 store.tiles.len()
             )));
         }
+        let all: Vec<usize> = (0..store.sessions.len()).collect();
+        store.kept = Kept {
+            merges: merges_of(store.tiles.iter())?,
+            duration: durations_of(&store.tiles, &store.starts(), &store.sessions, &all)?,
+            runs: vec![None; store.tiles.len()],
+        };
         Ok(store)
     }
 
@@ -459,7 +494,6 @@ impl FleetStore {
             }
         }
         let starts = starts_of(&sessions);
-        // Stored tiles of two unchanged sessions move to the new indices; the rest are dropped.
         let old_starts = self.starts();
         let mut now = vec![None; self.sessions.len()];
         for (k, b) in before.iter().enumerate() {
@@ -467,27 +501,32 @@ impl FleetStore {
                 now[b] = Some(k);
             }
         }
-        let mut tiles = Vec::with_capacity(self.tiles.len());
+        // Stored tiles of two unchanged sessions are kept; the others are dropped, and their
+        // unchanged sessions lose a tile.
+        let mut lost = vec![false; self.sessions.len()];
+        let mut kept_of: Vec<Vec<&TileDuration>> = vec![Vec::new(); self.sessions.len()];
         for t in &self.tiles {
             let [a, b] = t.tile().sessions;
-            match (now[a], now[b]) {
-                (Some(na), Some(nb)) => {
-                    let shift = |new: usize, old: usize| new as isize - old as isize;
-                    let shifts = [shift(starts[na], old_starts[a]), shift(starts[nb], old_starts[b])];
-                    tiles.push(if shifts == [0, 0] && [na, nb] == [a, b] {
-                        t.clone()
-                    } else {
-                        t.moved([na, nb], shifts)
-                    });
+            if now[a].is_none() || now[b].is_none() {
+                report.tiles_dropped += 1;
+                (lost[a], lost[b]) = (true, true);
+            } else {
+                kept_of[a].push(&t.duration);
+                if b != a {
+                    kept_of[b].push(&t.duration);
                 }
-                _ => report.tiles_dropped += 1,
             }
         }
-        report.tiles_kept = tiles.len();
+        report.tiles_kept = self.tiles.len() - report.tiles_dropped;
         // The tiles of changed sessions: plan, read the stored sessions they meet, scan.
         let touched: Vec<bool> = before.iter().map(Option::is_none).collect();
-        let candidate =
-            Self { settings: self.settings, sessions, tiles: Vec::new(), last_update: StoreUpdate::default() };
+        let candidate = Self {
+            settings: self.settings,
+            sessions,
+            tiles: Vec::new(),
+            last_update: StoreUpdate::default(),
+            kept: Kept::default(),
+        };
         let new_tiles = candidate.plan(&touched)?;
         let mut read: HashMap<usize, Trajectory> = HashMap::new();
         for tile in &new_tiles {
@@ -516,16 +555,93 @@ impl FleetStore {
                     settings.gamma,
                     settings.separation,
                     tile,
-                    TileKeep::SUMMARY.with_duration(),
+                    TileKeep::SUMMARY.with_duration().with_runs(),
                 ))?;
                 let duration = scan.duration.expect("kept with its duration");
-                Ok(StoredTile { summary: scan.summary, duration })
+                let runs = scan.runs.expect("kept with its runs");
+                Ok((StoredTile { summary: scan.summary, duration }, Arc::new(runs)))
             })
             .collect::<Result<Vec<_>>>()?;
         report.tiles_scanned = scanned.len();
-        tiles.extend(scanned);
+        // The merges of the session pairs of changed sessions: all their tiles are new.
+        let new_merges = merges_of(scanned.iter().map(|(t, _)| t))?;
+        // τ: what the new tiles add to each session, and what a session that lost a tile keeps.
+        let mut new_of: Vec<Vec<&TileDuration>> = vec![Vec::new(); candidate.sessions.len()];
+        for (t, _) in &scanned {
+            let [a, b] = t.tile().sessions;
+            new_of[a].push(&t.duration);
+            if b != a {
+                new_of[b].push(&t.duration);
+            }
+        }
+        let shares = |k: usize| -> Result<Option<(Vec<f64>, Vec<f64>)>> {
+            let poses = candidate.sessions[k].poses();
+            let new = || crate::tile::draw::session_loop_duration(k, starts[k], poses, new_of[k].iter().copied());
+            match before[k] {
+                Some(b) if lost[b] => {
+                    let (mut own, mut other) = new()?;
+                    let (o, x) =
+                        crate::tile::draw::session_loop_duration(b, old_starts[b], poses, kept_of[b].iter().copied())?;
+                    own.iter_mut().zip(o).for_each(|(y, v)| *y += v);
+                    other.iter_mut().zip(x).for_each(|(y, v)| *y += v);
+                    Ok(Some((own, other)))
+                }
+                Some(_) if new_of[k].is_empty() => Ok(None),
+                _ => new().map(Some),
+            }
+        };
+        let shares: Vec<Option<(Vec<f64>, Vec<f64>)>> =
+            (0..candidate.sessions.len()).into_par_iter().map(shares).collect::<Result<_>>()?;
+        drop((kept_of, new_of));
+
+        // Nothing fails from here: the kept state moves to the new fleet indices.
+        let shifts_of = |[a, b]: [usize; 2], [na, nb]: [usize; 2]| {
+            let shift = |new: usize, old: usize| new as isize - old as isize;
+            [shift(starts[na], old_starts[a]), shift(starts[nb], old_starts[b])]
+        };
+        let old = std::mem::take(&mut self.kept);
+        let mut tiles: Vec<(StoredTile, Option<Arc<TileRuns>>)> = Vec::with_capacity(report.tiles_kept + scanned.len());
+        for (mut t, mut runs) in std::mem::take(&mut self.tiles).into_iter().zip(old.runs) {
+            let [a, b] = t.tile().sessions;
+            let (Some(na), Some(nb)) = (now[a], now[b]) else { continue };
+            let shifts = shifts_of([a, b], [na, nb]);
+            if shifts != [0, 0] || [na, nb] != [a, b] {
+                t.move_to([na, nb], shifts);
+                if let Some(r) = &mut runs {
+                    Arc::make_mut(r).move_to([na, nb], shifts);
+                }
+            }
+            tiles.push((t, runs));
+        }
+        tiles.extend(scanned.into_iter().map(|(t, r)| (t, Some(r))));
         // Plan order: by row block, then column block (fleet indices order both).
-        tiles.sort_by_key(|t| (t.tile().rows.start, t.tile().columns.start));
+        tiles.sort_by_key(|(t, _)| (t.tile().rows.start, t.tile().columns.start));
+        let (tiles, runs): (Vec<StoredTile>, Vec<Option<Arc<TileRuns>>>) = tiles.into_iter().unzip();
+        let mut merges = new_merges;
+        for ([a, b], mut merge) in old.merges {
+            let (Some(na), Some(nb)) = (now[a], now[b]) else { continue };
+            let shifts = shifts_of([a, b], [na, nb]);
+            if shifts != [0, 0] || [na, nb] != [a, b] {
+                Arc::make_mut(&mut merge).move_to([na, nb], shifts);
+            }
+            merges.insert([na, nb], merge);
+        }
+        let mut old_duration: Vec<Option<(Vec<f64>, Vec<f64>)>> = old.duration.into_iter().map(Some).collect();
+        let duration = shares
+            .into_iter()
+            .zip(&before)
+            .map(|(share, b)| match (share, b.filter(|&b| !lost[b])) {
+                (Some(add), Some(b)) => {
+                    let (mut own, mut other) = old_duration[b].take().unwrap_or_default();
+                    own.iter_mut().zip(add.0).for_each(|(y, v)| *y += v);
+                    other.iter_mut().zip(add.1).for_each(|(y, v)| *y += v);
+                    (own, other)
+                }
+                (Some(whole), None) => whole,
+                (None, b) => b.and_then(|b| old_duration[b].take()).unwrap_or_default(),
+            })
+            .collect();
+        self.kept = Kept { merges, duration, runs };
         self.sessions = candidate.sessions;
         self.tiles = tiles;
         self.last_update = report;
@@ -579,9 +695,13 @@ impl FleetStore {
     }
 
     /// The passes of the stored sessions within `radius` of `place` (γ when `None`), in
-    /// session order and time order within a session: the poses of each session, read from
-    /// `source` one session at a time, as [`passes_near`](crate::passes_near) finds them.
-    /// O(poses × the place's vertices).
+    /// session order and time order within a session, as [`passes_near`](crate::passes_near)
+    /// finds them in each session's poses, read from `source` one session at a time.
+    ///
+    /// Under the Euclidean metric, whose distance bounds the distance in the map plane, the
+    /// stored blocks' bounding balls rule out the blocks far from the place: a session with no
+    /// block near is not read, and only the poses of the blocks near are looked at. Time:
+    /// O(blocks × the place's vertices + the poses of the blocks near × the place's vertices).
     ///
     /// # Errors
     /// As [`passes_near`](crate::passes_near); [`Error::InvalidState`] for a session that
@@ -591,14 +711,52 @@ impl FleetStore {
         check_radius(radius)?;
         let mut passes = Vec::new();
         for (session, s) in self.sessions.iter().enumerate() {
+            check_plane(s.manifold, s.blocks.dim)?;
+            let near = self.blocks_near(s, place, radius);
+            if !near.iter().any(|&n| n) {
+                continue;
+            }
             let trajectory = read_session(s, source)?;
-            passes.extend(passes_near(&trajectory, place, radius)?.into_iter().map(|pass| StorePass { session, pass }));
+            let mut found = Vec::new();
+            let mut k = 0;
+            while k < near.len() {
+                if !near[k] {
+                    k += 1;
+                    continue;
+                }
+                let first = k;
+                while k < near.len() && near[k] {
+                    k += 1;
+                }
+                let block = s.blocks.block;
+                passes_within(&trajectory, place, radius, first * block..(k * block).min(s.poses()), &mut found);
+            }
+            passes.extend(found.into_iter().map(|pass| StorePass { session, pass }));
         }
         Ok(passes)
     }
 
-    /// The fleet's loops, merged from the stored summaries: O(the tiles' components and edge
-    /// runs).
+    /// Whether each block of `session` may hold a pose within `radius` of `place` in the map
+    /// plane: every block under the Euclidean metric (which bounds the plane's distance) whose
+    /// ball reaches the place, every block under the others.
+    fn blocks_near(&self, session: &StoreSession, place: &Place, radius: f64) -> Vec<bool> {
+        let blocks = &session.blocks;
+        if !matches!(self.settings.metric, MetricSpec::Euclidean) {
+            return vec![true; blocks.len()];
+        }
+        (0..blocks.len())
+            .map(|k| {
+                let centre = &blocks.centres[k * blocks.dim..];
+                // A pose within `radius` lies within radius + r of the centre; the slack covers
+                // the rounding of both distances.
+                let reach = (radius + blocks.radii[k]) * (1.0 + 1e-9) + 1e-9;
+                place.distance([centre[0], centre[1]]) <= reach
+            })
+            .collect()
+    }
+
+    /// The fleet's loops, from the merges of each session pair's tiles that the store keeps (an
+    /// update merges the pairs it scanned): O(components log components + tiles).
     ///
     /// # Errors
     /// [`Error::InconsistentTiles`] for summaries that do not fit together (a corrupt store).
@@ -607,8 +765,7 @@ impl FleetStore {
         if self.tiles.is_empty() {
             return Ok(StoreLoops { merged: None, components: Vec::new(), session_pairs: Vec::new(), starts });
         }
-        let parts = self.tiles.iter().map(|t| TileMerge::new(t.summary.clone())).collect::<Result<Vec<_>>>()?;
-        let merged = TileMerge::merge(parts)?.finish()?;
+        let merged = MergedLoops::concat(self.kept.merges.values().map(Arc::as_ref));
         let components = merged.fleet_components(&starts)?;
         let spans: Vec<f64> = self.sessions.iter().map(|s| s.blocks.span_s).collect();
         let session_pairs = merged.session_pairs(&spans)?;
@@ -616,32 +773,25 @@ impl FleetStore {
     }
 
     /// τ of every pose, split as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
-    /// splits it: `(own, other)`, seconds, by fleet index. O(the tiles' rows and columns).
+    /// splits it: `(own, other)`, seconds, by fleet index, as the store keeps it (an update adds
+    /// the shares of its new tiles, and adds up again the sessions that lost a tile): O(poses).
     ///
     /// # Errors
     /// [`Error::InconsistentTiles`] for a share outside its session (a corrupt store).
     pub fn loop_duration(&self) -> Result<(Vec<f64>, Vec<f64>)> {
-        let mut of_session: Vec<Vec<&TileDuration>> = vec![Vec::new(); self.sessions.len()];
-        for t in &self.tiles {
-            let [a, b] = t.tile().sessions;
-            of_session[a].push(&t.duration);
-            if b != a {
-                of_session[b].push(&t.duration);
-            }
-        }
         let (mut own, mut other) = (Vec::new(), Vec::new());
-        for (a, (s, start)) in self.sessions.iter().zip(self.starts()).enumerate() {
-            let (o, x) = crate::tile::draw::session_loop_duration(a, start, s.poses(), of_session[a].iter().copied())?;
-            own.extend(o);
-            other.extend(x);
+        for (o, x) in &self.kept.duration {
+            own.extend_from_slice(o);
+            other.extend_from_slice(x);
         }
         Ok((own, other))
     }
 
     /// The samples of `sampler` (a sampler of components) over `loops` (this store's
     /// [`loops`](Self::loops)), by keyed draws: those of [`sample_fleet`](crate::sample_fleet)
-    /// over the store's sessions, with `between_only` as there. Rescans the tiles each pass
-    /// asks, reading their stored sessions from `source` (each once).
+    /// over the store's sessions, with `between_only` as there. Reads the tiles each pass asks
+    /// from the runs kept by the update that scanned them, or rescans those it has none of
+    /// (a store read back), reading their stored sessions from `source` (each once).
     ///
     /// # Errors
     /// As [`KeyedDraw::new`]; the scans' errors; [`Error::InvalidState`] for a session that
@@ -663,10 +813,18 @@ impl FleetStore {
         let mut read: HashMap<usize, Trajectory> = HashMap::new();
         let settings = self.settings;
         let starts = &loops.starts;
+        let stored: HashMap<&Tile, usize> = self.tiles.iter().enumerate().map(|(k, t)| (t.tile(), k)).collect();
+        // The tiles (of the merge) that hold each component.
+        let mut holders: Vec<Vec<usize>> = vec![Vec::new(); merged.components().len()];
+        for k in 0..merged.tiles().len() {
+            for &c in merged.tile_labels(k) {
+                if holders[c as usize].last() != Some(&k) {
+                    holders[c as usize].push(k);
+                }
+            }
+        }
         while let Some(request) = draw.request().cloned() {
-            let parts = tile_requests(merged, &request);
-            let asked: Vec<(usize, &crate::sample::DrawRequest)> =
-                parts.iter().enumerate().filter_map(|(k, p)| p.as_ref().map(|p| (k, p))).collect();
+            let asked = tile_parts(merged, &holders, &request);
             for &(k, _) in &asked {
                 for s in merged.tiles()[k].sessions {
                     if let std::collections::hash_map::Entry::Vacant(slot) = read.entry(s) {
@@ -676,19 +834,26 @@ impl FleetStore {
             }
             let offers = asked
                 .par_iter()
-                .map(|&(k, part)| {
+                .map(|(k, part)| {
+                    let k = *k;
                     let tile = &merged.tiles()[k];
                     let [a, b] = tile.sessions;
-                    with_metric!(&settings.metric, m => draw_session_tile(
-                        [&read[&a], &read[&b]],
-                        [starts[a], starts[b]],
-                        m,
-                        settings.gamma,
-                        settings.separation,
-                        tile,
-                        merged.tile_labels(k),
-                        part,
-                    ))
+                    let (sessions, at) = ([&read[&a], &read[&b]], [starts[a], starts[b]]);
+                    match stored.get(tile).and_then(|&t| self.kept.runs[t].as_ref()) {
+                        Some(runs) => with_metric!(&settings.metric, m => draw_tile_runs(
+                            sessions, at, m, runs, merged.tile_labels(k), part,
+                        )),
+                        None => with_metric!(&settings.metric, m => draw_session_tile(
+                            sessions,
+                            at,
+                            m,
+                            settings.gamma,
+                            settings.separation,
+                            tile,
+                            merged.tile_labels(k),
+                            part,
+                        )),
+                    }
                 })
                 .collect::<Result<Vec<DrawCandidates>>>()?;
             offers.into_iter().for_each(|o| draw.absorb(o));
@@ -717,6 +882,71 @@ impl FleetStore {
             warnings: draw.warnings().to_vec(),
         })
     }
+}
+
+/// The merges of the tiles of each session pair among `tiles` (all the tiles of each pair),
+/// by pair: pairs in parallel, each pair's tiles in plan order. O(their components and edge
+/// runs).
+fn merges_of<'a>(tiles: impl Iterator<Item = &'a StoredTile>) -> Result<BTreeMap<[usize; 2], Arc<MergedLoops>>> {
+    let mut of_pair: BTreeMap<[usize; 2], Vec<&StoredTile>> = BTreeMap::new();
+    for t in tiles {
+        of_pair.entry(t.tile().sessions).or_default().push(t);
+    }
+    of_pair
+        .into_par_iter()
+        .map(|(pair, mut tiles)| {
+            tiles.sort_by_key(|t| (t.tile().rows.start, t.tile().columns.start));
+            let parts = tiles.iter().map(|t| TileMerge::new(t.summary.clone())).collect::<Result<Vec<_>>>()?;
+            Ok((pair, Arc::new(TileMerge::merge(parts)?.finish()?)))
+        })
+        .collect()
+}
+
+/// τ of the sessions `which` (indices), `(own, other)` per pose, from all their tiles, in the
+/// order of `which`. O(their tiles' rows and columns).
+fn durations_of(
+    tiles: &[StoredTile],
+    starts: &[usize],
+    sessions: &[StoreSession],
+    which: &[usize],
+) -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
+    let wanted: HashSet<usize> = which.iter().copied().collect();
+    let mut of_session: HashMap<usize, Vec<&TileDuration>> = HashMap::new();
+    for t in tiles {
+        let [a, b] = t.tile().sessions;
+        for s in if a == b { vec![a] } else { vec![a, b] } {
+            if wanted.contains(&s) {
+                of_session.entry(s).or_default().push(&t.duration);
+            }
+        }
+    }
+    which
+        .par_iter()
+        .map(|&s| {
+            let parts = of_session.get(&s).into_iter().flatten().copied();
+            crate::tile::draw::session_loop_duration(s, starts[s], sessions[s].poses(), parts)
+        })
+        .collect()
+}
+
+/// The part of `request` each tile of `merged` that holds a component asked about must answer
+/// (by the merge's tile index, in tile order): what [`tile_requests`](crate::tile_requests)
+/// gives for the tiles it asks something, found from `holders` (the tiles of each component)
+/// rather than by going through every tile. O(the tiles of the components asked).
+fn tile_parts(merged: &MergedLoops, holders: &[Vec<usize>], request: &DrawRequest) -> Vec<(usize, DrawRequest)> {
+    let mut parts: BTreeMap<usize, Vec<ComponentRequest>> = BTreeMap::new();
+    for c in &request.components {
+        for &k in &holders[c.id] {
+            let rows = &merged.tiles()[k].rows;
+            let lo = c.rows.partition_point(|&r| r < rows.start);
+            let hi = c.rows.partition_point(|&r| r < rows.end);
+            let part = ComponentRequest { id: c.id, pool: c.pool, rows: c.rows[lo..hi].to_vec(), best: c.best };
+            if part.pool.is_some() || part.best || !part.rows.is_empty() {
+                parts.entry(k).or_default().push(part);
+            }
+        }
+    }
+    parts.into_iter().map(|(k, components)| (k, DrawRequest { seed: request.seed, components })).collect()
 }
 
 /// A stored session's poses from `source`, checked against what the store knows of it.

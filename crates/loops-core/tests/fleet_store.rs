@@ -165,7 +165,16 @@ fn random_updates(seed: u64, separation: Separation) {
     let parts = |tiles: Vec<loops_core::StoredTile>| {
         FleetStore::from_parts(*store.settings(), store.sessions().to_vec(), tiles, store.last_update().clone())
     };
-    assert_eq!(parts(store.tiles().to_vec()).unwrap(), store);
+    let read_back = parts(store.tiles().to_vec()).unwrap();
+    assert_eq!(read_back, store);
+    // What the store kept of its answer through the updates (the merges of its session pairs,
+    // moved; τ, added to; the runs of its tiles) is what a store read back makes again from
+    // the tiles alone (merging all, adding up τ, rescanning for the draws).
+    let (kept, again) = (store.loops().unwrap(), read_back.loops().unwrap());
+    assert_eq!(kept.components(), again.components(), "seed {seed}: kept merges");
+    assert_eq!(kept.session_pairs(), again.session_pairs(), "seed {seed}: kept merges");
+    assert_eq!(kept.component_times_s(), again.component_times_s(), "seed {seed}: kept merges");
+    check_against_scratch(&read_back, &current, &format!("seed {seed}: read back"));
     if store.tiles().len() > 1 {
         let mut fewer = store.tiles().to_vec();
         fewer.remove(fewer.len() / 2);
@@ -232,4 +241,43 @@ fn a_new_day_scans_its_own_tiles_only() {
     let update = store.update(day1, &[], &mut source).unwrap().clone();
     assert_eq!(update.tiles_kept + update.tiles_scanned, store.tiles().len());
     assert!(update.tiles_kept > 0 && update.tiles_scanned > 0, "{update:?}");
+}
+
+/// `near` rules out the blocks far from the place by their stored balls, reads no session
+/// with no block near, and finds the passes `passes_near` finds in every whole session, at
+/// random points and polygons of the city and beyond it, and at random radii.
+#[test]
+fn near_skips_far_blocks_and_finds_every_pass() {
+    let pool = versions();
+    let sessions: BTreeMap<String, Trajectory> = pool.iter().map(|(n, v)| (n.clone(), v[0].clone())).collect();
+    let mut store = FleetStore::new(StoreSettings { block: 16, ..settings(Separation::NONE) }).unwrap();
+    let all: Vec<(String, Trajectory)> = sessions.iter().map(|(n, t)| (n.clone(), t.clone())).collect();
+    store.update(all, &[], &mut source_of(&sessions)).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let (mut passes, mut skipped) = (0, 0);
+    for trial in 0..40 {
+        let mut xy = || [rng.random_range(-50.0..350.0), rng.random_range(-50.0..350.0)];
+        let place = if trial % 2 == 0 {
+            loops_core::Place::point(xy()).unwrap()
+        } else {
+            loops_core::Place::polygon((0..3 + trial % 4).map(|_| xy()).collect()).unwrap()
+        };
+        let radius = rng.random_range(0.0..30.0);
+        let mut read = 0;
+        let mut counting = |s: &StoreSession| {
+            read += 1;
+            Ok(sessions[&s.name].clone())
+        };
+        let got = store.near(&place, Some(radius), &mut counting).unwrap();
+        let want: Vec<(usize, loops_core::Pass)> = sessions
+            .values()
+            .enumerate()
+            .flat_map(|(k, t)| loops_core::passes_near(t, &place, radius).unwrap().into_iter().map(move |p| (k, p)))
+            .collect();
+        assert_eq!(got.iter().map(|p| (p.session, p.pass)).collect::<Vec<_>>(), want, "trial {trial}");
+        passes += want.len();
+        skipped += sessions.len() - read;
+    }
+    // The places are such that both happen: passes found, sessions not read.
+    assert!(passes > 20 && skipped > 20, "{passes} passes, {skipped} sessions not read");
 }

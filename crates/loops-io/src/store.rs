@@ -135,6 +135,23 @@ impl StoredFleet {
     pub fn table(&self, name: &str) -> PathBuf {
         self.dir.join(&self.state).join(name)
     }
+
+    /// The passes of the stored sessions within `radius` of `place` (γ when `None`), their
+    /// poses read from the pose files ([`FleetStore::near`]).
+    ///
+    /// # Errors
+    /// The core's errors on the place and radius, or on a pose file that cannot be read back.
+    pub fn near(&self, place: &loops_core::Place, radius: Option<f64>) -> Result<Vec<loops_core::StorePass>> {
+        let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
+            self.poses(s).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
+        };
+        Ok(self.store.near(place, radius, &mut source)?)
+    }
+
+    /// The sessions' names, in the store's order.
+    pub fn names(&self) -> Vec<&str> {
+        self.store.sessions().iter().map(|s| s.name.as_str()).collect()
+    }
 }
 
 /// `store.json`.
@@ -818,4 +835,151 @@ fn write_samples(path: &Path, samples: Option<&StoreSamples>, names: &[&str]) ->
             ("distance", f(&|s| s.distance.unwrap_or(f64::NAN))),
         ],
     )
+}
+
+/// The columns of the passes near a place ([`FleetStore::near`](loops_core::FleetStore::near)),
+/// a pass a row: the session's index and name, its first and last pose, their times.
+pub const PASS_COLUMNS: [&str; 6] = ["session", "name", "i_start", "i_end", "t_start_s", "t_end_s"];
+
+/// The columns of the sessions that revisit a session
+/// ([`StoreLoops::revisits`](loops_core::StoreLoops::revisits)), one a row.
+pub const REVISIT_COLUMNS: [&str; 6] = ["session", "name", "components", "pair_count", "area_s2", "density"];
+
+/// The columns of a list of a store's components (the components the last update added): as
+/// `components.parquet` names them.
+pub const STORE_COMPONENT_COLUMNS: [&str; 12] =
+    ["id", "session_a", "session_b", "a", "b", "trivial", "area_s2", "pair_count", "i_min", "i_max", "j_min", "j_max"];
+
+#[derive(Serialize)]
+struct PassRow<'a> {
+    session: usize,
+    name: &'a str,
+    i_start: usize,
+    i_end: usize,
+    t_start_s: f64,
+    t_end_s: f64,
+}
+
+#[derive(Serialize)]
+struct RevisitRow<'a> {
+    session: usize,
+    name: &'a str,
+    components: usize,
+    pair_count: u64,
+    area_s2: f64,
+    density: f64,
+}
+
+#[derive(Serialize)]
+struct ComponentRow<'a> {
+    id: usize,
+    session_a: &'a str,
+    session_b: &'a str,
+    a: usize,
+    b: usize,
+    trivial: bool,
+    area_s2: f64,
+    pair_count: u64,
+    i_min: usize,
+    i_max: usize,
+    j_min: usize,
+    j_max: usize,
+}
+
+/// The name of session `k`, or an `InvalidData` error for an index beyond `names`.
+fn name_of<'a>(names: &[&'a str], k: usize) -> std::io::Result<&'a str> {
+    names.get(k).copied().ok_or_else(|| {
+        std::io::Error::new(std::io::ErrorKind::InvalidData, format!("session {k} of {} sessions", names.len()))
+    })
+}
+
+/// Writes passes near a place as CSV ([`PASS_COLUMNS`]); `names` are the store's sessions'.
+///
+/// # Errors
+/// What `out` returns; `InvalidData` for a session beyond `names`.
+pub fn passes_to_csv<W: std::io::Write>(
+    passes: &[loops_core::StorePass],
+    names: &[&str],
+    out: W,
+) -> std::io::Result<()> {
+    let rows = passes
+        .iter()
+        .map(|p| {
+            Ok(PassRow {
+                session: p.session,
+                name: name_of(names, p.session)?,
+                i_start: p.pass.poses[0],
+                i_end: p.pass.poses[1],
+                t_start_s: p.pass.times_s[0],
+                t_end_s: p.pass.times_s[1],
+            })
+        })
+        .collect::<std::io::Result<Vec<_>>>()?;
+    crate::csv_rows::write_csv(out, &PASS_COLUMNS, rows)
+}
+
+/// Writes the sessions that revisit a session as CSV ([`REVISIT_COLUMNS`]).
+///
+/// # Errors
+/// What `out` returns; `InvalidData` for a session beyond `names`.
+pub fn revisits_to_csv<W: std::io::Write>(
+    revisits: &[loops_core::Revisit],
+    names: &[&str],
+    out: W,
+) -> std::io::Result<()> {
+    let rows = revisits
+        .iter()
+        .map(|r| {
+            Ok(RevisitRow {
+                session: r.session,
+                name: name_of(names, r.session)?,
+                components: r.components,
+                pair_count: r.pair_count,
+                area_s2: r.area_s2,
+                density: r.density,
+            })
+        })
+        .collect::<std::io::Result<Vec<_>>>()?;
+    crate::csv_rows::write_csv(out, &REVISIT_COLUMNS, rows)
+}
+
+/// Writes the components `ids` of `loops` as CSV ([`STORE_COMPONENT_COLUMNS`], poses within
+/// their sessions).
+///
+/// # Errors
+/// What `out` returns; `InvalidData` for an id beyond the components or a session beyond
+/// `names`.
+pub fn store_components_to_csv<W: std::io::Write>(
+    loops: &StoreLoops,
+    ids: &[usize],
+    names: &[&str],
+    out: W,
+) -> std::io::Result<()> {
+    let rows = ids
+        .iter()
+        .map(|&id| {
+            let c = loops.components().get(id).ok_or_else(|| {
+                std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!("component {id} of {}", loops.components().len()),
+                )
+            })?;
+            let [a, b] = c.sessions;
+            Ok(ComponentRow {
+                id,
+                session_a: name_of(names, a)?,
+                session_b: name_of(names, b)?,
+                a,
+                b,
+                trivial: c.trivial,
+                area_s2: c.area_s2,
+                pair_count: c.pair_count,
+                i_min: c.poses[0][0],
+                i_max: c.poses[0][1],
+                j_min: c.poses[1][0],
+                j_max: c.poses[1][1],
+            })
+        })
+        .collect::<std::io::Result<Vec<_>>>()?;
+    crate::csv_rows::write_csv(out, &STORE_COMPONENT_COLUMNS, rows)
 }

@@ -481,14 +481,7 @@ impl FleetStore {
             }
             Some(state) => {
                 let stored = &state.stored;
-                detached(py, || {
-                    let mut source = |s: &loops_core::StoreSession| -> loops_core::Result<loops_core::Trajectory> {
-                        stored
-                            .poses(s)
-                            .map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
-                    };
-                    Ok(stored.store.near(&place, radius, &mut source)?)
-                })?
+                detached(py, || Ok(stored.near(&place, radius)?))?
             }
         };
         table(

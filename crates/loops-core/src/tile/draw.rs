@@ -57,6 +57,8 @@ pub struct TileRuns {
     piece_len: usize,
     provisional: Vec<u32>,
     components: u32,
+    /// The first and last piece row of each provisional component.
+    spans: Vec<[u32; 2]>,
 }
 
 impl TileRuns {
@@ -71,6 +73,13 @@ impl TileRuns {
             crate::component::label_runs(&scanned.set, crate::component::ROWS_PER_LABEL_TASK);
         let piece_len = scanned.piece.len();
         let ScannedTile { piece_starts, rows, set, fleet_starts, .. } = scanned;
+        let mut spans = vec![[u32::MAX, 0]; components as usize];
+        for k in 0..set.rows().min(rows) {
+            for &p in &provisional[set.row_offset(k)..set.row_offset(k + 1)] {
+                let span = &mut spans[p as usize];
+                *span = [span[0].min(k as u32), span[1].max(k as u32)];
+            }
+        }
         Self {
             tile: tile.clone(),
             starts,
@@ -83,7 +92,27 @@ impl TileRuns {
             piece_len,
             provisional,
             components,
+            spans,
         }
+    }
+
+    /// The rows (fleet indices, sorted, apart) where the provisional components that `wanted`
+    /// accepts have runs: the rows a draw asking about them reads. O(components).
+    fn rows_of(&self, wanted: impl Fn(usize) -> bool) -> Vec<std::ops::Range<usize>> {
+        let mut spans: Vec<[u32; 2]> = (0..self.spans.len())
+            .filter(|&p| wanted(p) && self.spans[p][0] <= self.spans[p][1])
+            .map(|p| self.spans[p])
+            .collect();
+        spans.sort_unstable();
+        let mut rows: Vec<std::ops::Range<usize>> = Vec::new();
+        for [first, last] in spans {
+            let range = self.to_fleet(first as usize)..self.to_fleet(last as usize) + 1;
+            match rows.last_mut() {
+                Some(r) if range.start <= r.end => r.end = r.end.max(range.end),
+                _ => rows.push(range),
+            }
+        }
+        rows
     }
 
     /// The tile.
@@ -107,6 +136,24 @@ impl TileRuns {
     fn to_fleet(&self, k: usize) -> usize {
         fleet_index(&self.piece_starts, &self.fleet_starts, k)
     }
+
+    /// Renumbers the tile's sessions `sessions` and moves its rows and columns by `shifts`
+    /// (fleet indices): what a rescan at the new place keeps, since a tile reads its two
+    /// sessions alone. O(the tile's stretches).
+    pub(crate) fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
+        let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
+        let old = &self.tile;
+        self.tile = Tile {
+            sessions,
+            rows: at(old.rows.start, 0)..at(old.rows.end, 0),
+            columns: at(old.columns.start, 1)..at(old.columns.end, 1),
+        };
+        self.starts = [at(self.starts[0], 0), at(self.starts[1], 1)];
+        // The stretches of rows come first; within one session both sides move alike.
+        for (p, f) in self.piece_starts.iter().zip(&mut self.fleet_starts) {
+            *f = at(*f, usize::from(*p >= self.rows));
+        }
+    }
 }
 
 /// A tile's runs, for a keyed draw.
@@ -119,6 +166,8 @@ struct TileHolder<'a, M: Metric + ?Sized> {
     tile: &'a Tile,
     runs: &'a TileRuns,
     labels: &'a [u32],
+    /// The rows offered (those of the tile, or fewer).
+    rows: std::ops::Range<usize>,
 }
 
 impl<M: Metric + ?Sized> TileHolder<'_, M> {
@@ -134,7 +183,7 @@ impl<M: Metric + ?Sized> TileHolder<'_, M> {
 
 impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
     fn rows(&self) -> std::ops::Range<usize> {
-        self.tile.rows.clone()
+        self.rows.clone()
     }
 
     fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {
@@ -250,8 +299,14 @@ pub fn draw_tile_runs<M: Metric + ?Sized>(
         });
     }
     let diagonal = tile.sessions[0] == tile.sessions[1] && runs.separation.is_none();
-    let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels };
-    draw_candidates(&holder, request)
+    // Only the rows where the components asked about have runs can offer anything.
+    let asked: HashSet<usize> = request.components.iter().map(|c| c.id).collect();
+    let mut offers = DrawCandidates::default();
+    for rows in runs.rows_of(|p| asked.contains(&(labels[p] as usize))) {
+        let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels, rows };
+        offers.absorb(draw_candidates(&holder, request)?);
+    }
+    Ok(offers)
 }
 
 /// What one tile's runs add to the loop duration τ (Side both, seconds) of its rows and of its

@@ -1422,7 +1422,9 @@ impl TileMerge {
             })
             .collect::<Result<Vec<_>>>()?;
         let labels = self.labels.iter().map(|map| map.iter().map(|&l| ids[l as usize]).collect::<Vec<u32>>()).collect();
-        Ok(MergedLoops { components, tiles: self.tiles.clone(), labels })
+        let mut firsts: Vec<[usize; 2]> = self.components.iter().map(|m| m.stats.first).collect();
+        firsts.sort_unstable();
+        Ok(MergedLoops { components, tiles: self.tiles.clone(), labels, firsts })
     }
 
     /// The partial merge as bytes (as [`TileSummary::to_bytes`], another tag).
@@ -1464,9 +1466,62 @@ pub struct MergedLoops {
     components: Vec<MergedComponent>,
     tiles: Vec<Tile>,
     labels: Vec<Vec<u32>>,
+    /// The first cell (row-major, fleet indices) of each component, by id.
+    firsts: Vec<[usize; 2]>,
 }
 
 impl MergedLoops {
+    /// Renumbers the merge's session pair `sessions` and moves its rows and columns by
+    /// `shifts` (fleet indices): what merging the moved tiles gives, for a merge of the tiles
+    /// of one session pair. O(components + tiles).
+    pub(crate) fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
+        let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
+        let pair = |x: [usize; 2]| [at(x[0], 0), at(x[1], 1)];
+        for m in &mut self.components {
+            let c = &mut m.component;
+            c.i_range = [at(c.i_range[0], 0), at(c.i_range[1], 0)];
+            c.j_range = [at(c.j_range[0], 1), at(c.j_range[1], 1)];
+            c.closest_pair = pair(c.closest_pair);
+            m.draw.rows = [at(m.draw.rows[0], 0), at(m.draw.rows[1], 0)];
+            m.draw.closest_pair = pair(m.draw.closest_pair);
+            m.sessions = sessions;
+        }
+        for t in &mut self.tiles {
+            *t = Tile {
+                sessions,
+                rows: at(t.rows.start, 0)..at(t.rows.end, 0),
+                columns: at(t.columns.start, 1)..at(t.columns.end, 1),
+            };
+        }
+        self.firsts.iter_mut().for_each(|f| *f = pair(*f));
+    }
+
+    /// The merges of the tiles of distinct session pairs as one merge of all their tiles:
+    /// components never join across session pairs, so this is what [`TileMerge::merge`] and
+    /// [`TileMerge::finish`] of all the tiles give, with the components renumbered by first
+    /// cell and the tiles in the order of `parts`. O(components log components + tiles).
+    pub(crate) fn concat<'a>(parts: impl IntoIterator<Item = &'a Self>) -> Self {
+        let parts: Vec<&Self> = parts.into_iter().collect();
+        let mut order: Vec<(usize, usize)> =
+            parts.iter().enumerate().flat_map(|(p, m)| (0..m.components.len()).map(move |k| (p, k))).collect();
+        order.sort_unstable_by_key(|&(p, k)| parts[p].firsts[k]);
+        let mut ids: Vec<Vec<u32>> = parts.iter().map(|m| vec![0; m.components.len()]).collect();
+        let (mut components, mut firsts) = (Vec::with_capacity(order.len()), Vec::with_capacity(order.len()));
+        for (id, &(p, k)) in order.iter().enumerate() {
+            ids[p][k] = id as u32;
+            let mut m = parts[p].components[k].clone();
+            m.component.id = id;
+            components.push(m);
+            firsts.push(parts[p].firsts[k]);
+        }
+        let (mut tiles, mut labels) = (Vec::new(), Vec::new());
+        for (p, m) in parts.iter().enumerate() {
+            tiles.extend(m.tiles.iter().cloned());
+            labels.extend(m.labels.iter().map(|map| map.iter().map(|&l| ids[p][l as usize]).collect::<Vec<u32>>()));
+        }
+        Self { components, tiles, labels, firsts }
+    }
+
     /// The tiles merged, in the merge's order.
     pub fn tiles(&self) -> &[Tile] {
         &self.tiles
