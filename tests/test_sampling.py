@@ -502,7 +502,8 @@ def test_bad_budget_rate_and_sampler(small):
             il.sample(source, "sigma_rho", budget=10, seed=0, **extra)
         assert str(error.value) == (
             'unknown sampler "sigma_rho": expected one of one, rho, rho-dispersed, alpha, '
-            "closest-first, closest-then-spread, lio-sam, hdl-graph-slam, cartographer, time-gap"
+            "closest-first, closest-then-spread, nearest-then-uniform, lio-sam, hdl-graph-slam, "
+            "cartographer, time-gap"
         )
         with pytest.raises(il.InvalidParameterError, match="threads"):
             il.sample(source, "one", budget=1, seed=0, threads=0, **extra)

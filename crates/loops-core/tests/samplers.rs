@@ -10,13 +10,14 @@ use loops_core::{
     with_threads,
 };
 
-const SIGMAS: [SamplerKind; 6] = [
+const SIGMAS: [SamplerKind; 7] = [
     SamplerKind::One,
     SamplerKind::Rho,
     SamplerKind::RhoDispersed,
     SamplerKind::Alpha,
     SamplerKind::ClosestFirst,
     SamplerKind::ClosestThenSpread,
+    SamplerKind::NearestThenUniform,
 ];
 const BASELINES: [SamplerKind; 4] =
     [SamplerKind::LioSam, SamplerKind::HdlGraphSlam, SamplerKind::Cartographer, SamplerKind::TimeGap];
@@ -298,6 +299,92 @@ fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
     let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
     assert_eq!(samples.len(), groups.len() / 2);
     assert!(matches!(samples.warnings(), [SampleWarning::BudgetBelowGroups { .. }]));
+}
+
+/// Nearest-then-uniform: up to one row in six, all picks are closest pairs of rows (checked
+/// against every cell of the row), every component's closest pair among them, spread in
+/// proportion to the rows; beyond that, every component keeps those picks and
+/// the rest is shared in proportion to the pairs each has left, within one of its expectation.
+#[test]
+fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
+    let s = setup();
+    let components = s.loops.components();
+    let groups = samplable(&s.loops);
+    let mut rows: BTreeMap<usize, BTreeSet<usize>> = BTreeMap::new();
+    let mut pairs: BTreeMap<usize, u64> = BTreeMap::new();
+    // The cells off the diagonal of each (component, row), as column ranges.
+    let mut cells: BTreeMap<(usize, usize), Vec<(usize, usize)>> = BTreeMap::new();
+    for run in s.loops.runs() {
+        rows.entry(run.component).or_default().insert(run.row);
+        let first = run.start.max(run.row + 1);
+        if first <= run.end {
+            *pairs.entry(run.component).or_default() += (run.end - first + 1) as u64;
+            cells.entry((run.component, run.row)).or_default().push((first, run.end));
+        }
+    }
+    // The closest column of a row of a component, by brute force over its cells.
+    let closest = |c: usize, i: usize| {
+        cells[&(c, i)]
+            .iter()
+            .flat_map(|&(a, b)| a..=b)
+            .map(|j| Euclidean.distance(s.traj.point(i), s.traj.point(j)))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let span = |c: usize| (rows[&c].last().unwrap() - rows[&c].first().unwrap() + 1) as u64;
+    // One row in six at most gives its closest pair before the uniform picks.
+    let near = |c: usize| span(c).div_ceil(6).clamp(1, pairs[&c]);
+    let near_total: u64 = groups.iter().map(|&c| near(c)).sum();
+    let available: u64 = groups.iter().map(|&c| pairs[&c]).sum();
+    assert!(groups.len() < (near_total / 2) as usize && near_total < available);
+    let draw = |budget: u64, seed: u64| {
+        let sampler = Sampler::new(SamplerKind::NearestThenUniform, SampleSize::Budget(budget as usize), seed);
+        let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+        assert!(samples.warnings().is_empty(), "{:?}", samples.warnings());
+        assert_eq!(samples.len() as u64, budget);
+        let set: BTreeSet<[usize; 2]> = samples.rows().iter().map(|r| r.pair.unwrap()).collect();
+        assert_eq!(set.len() as u64, budget, "a pair twice");
+        samples
+    };
+    for seed in [0, 7] {
+        let samples = draw(near_total / 2, seed);
+        let mut counts: BTreeMap<usize, u64> = BTreeMap::new();
+        for r in samples.rows() {
+            let c = r.component.unwrap();
+            *counts.entry(c).or_default() += 1;
+            if !components[c].trivial {
+                let [i, _] = r.pair.unwrap();
+                assert_eq!(r.distance.unwrap(), closest(c, i), "{:?}: not its row's closest pair", r.pair);
+            }
+        }
+        assert_eq!(counts.len(), groups.len(), "P1 fails");
+        let picked: BTreeSet<[usize; 2]> = samples.rows().iter().map(|r| r.pair.unwrap()).collect();
+        for &c in groups.iter().filter(|&&c| !components[c].trivial) {
+            let [i, j] = components[c].closest_pair;
+            assert!(picked.contains(&[i.min(j), i.max(j)]), "component {c} without its closest pair");
+        }
+        // One each, then in proportion to the rows: no component far above its share.
+        let scale = (near_total / 2 - groups.len() as u64) as f64 / groups.iter().map(|&c| span(c)).sum::<u64>() as f64;
+        for (&c, &k) in &counts {
+            assert!(
+                k as f64 <= 2.5 + scale * span(c) as f64,
+                "component {c}: {k} picks, share {:.2}",
+                scale * span(c) as f64
+            );
+        }
+
+        let budget = near_total + (available - near_total) / 3;
+        let samples = draw(budget, seed);
+        let mut counts: BTreeMap<usize, u64> = BTreeMap::new();
+        for r in samples.rows() {
+            *counts.entry(r.component.unwrap()).or_default() += 1;
+        }
+        let left_total = (available - near_total) as f64;
+        for &c in &groups {
+            let uniform = counts[&c] - near(c);
+            let want = (budget - near_total) as f64 * (pairs[&c] - near(c)) as f64 / left_total;
+            assert!((uniform as f64 - want).abs() < 1.0, "component {c}: {uniform} uniform picks for {want:.2}");
+        }
+    }
 }
 
 /// On detection clusters, closest-first takes each cluster's best-scored detection first.

@@ -17,13 +17,14 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use support::fleets::tour;
 
-const SIGMAS: [SamplerKind; 6] = [
+const SIGMAS: [SamplerKind; 7] = [
     SamplerKind::One,
     SamplerKind::Rho,
     SamplerKind::RhoDispersed,
     SamplerKind::Alpha,
     SamplerKind::ClosestFirst,
     SamplerKind::ClosestThenSpread,
+    SamplerKind::NearestThenUniform,
 ];
 
 /// Random walks in a 30 m square that cross each other often, with stops (repeated poses).

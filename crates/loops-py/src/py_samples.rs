@@ -118,7 +118,9 @@ pub(crate) fn baseline_params(
 ///         detections or pairs), ``"closest-first"`` (each group's closest pair, or best-scored
 ///         detection, first; the rest as ``"rho-dispersed"``), ``"closest-then-spread"`` (the
 ///         default, :data:`DEFAULT_SAMPLER`: σ_ρ's counts, each group's first pick its closest
-///         pair, the rest as ``"rho-dispersed"``), or a baseline of a deployed SLAM system
+///         pair, the rest as ``"rho-dispersed"``), ``"nearest-then-uniform"`` (rows' closest
+///         pairs up to one row in six, then uniform over the pairs), or a baseline of a deployed
+///         SLAM system
 ///         (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
 ///         ``"time-gap"``.
 ///     rate: the sampler's own rate (c, r, or a probability in (0, 1] for σ_α and the

@@ -30,6 +30,7 @@ SAMPLERS: tuple[str, ...] = (
     "rho-dispersed",
     "closest-first",
     "closest-then-spread",
+    "nearest-then-uniform",
     "alpha",
 )
 #: The candidate rules of deployed SLAM systems, under the same budget.

@@ -24,6 +24,7 @@ COLOURS: Mapping[str, str] = {
     "rho-dispersed": "darkorange",
     "closest-first": "crimson",
     "closest-then-spread": "black",
+    "nearest-then-uniform": "teal",
     "alpha": "magenta",
     "lio-sam": "0.35",
     "hdl-graph-slam": "sienna",

@@ -72,6 +72,7 @@ pub(crate) fn sampler_name(kind: SamplerKind) -> Markup {
         SamplerKind::Alpha => "σ<sub>α</sub>",
         SamplerKind::ClosestFirst => "closest-first σ<sub>ρ</sub>",
         SamplerKind::ClosestThenSpread => "closest-then-spread σ<sub>ρ</sub>",
+        SamplerKind::NearestThenUniform => "nearest-then-uniform",
         SamplerKind::LioSam => "LIO-SAM",
         SamplerKind::HdlGraphSlam => "hdl_graph_slam",
         SamplerKind::Cartographer => "Cartographer",

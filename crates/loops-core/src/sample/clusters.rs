@@ -16,7 +16,8 @@ use crate::memory::try_collect;
 /// Samples detections, grouped by their ε-graph clusters (paper, Sec. 5.3–5.5): σ_1, σ_ρ, the
 /// dispersed σ_ρ, σ_α, closest-first (each cluster's best-scored detection first, the middle
 /// one of its middle row without scores; the rest as the dispersed σ_ρ), or closest-then-spread
-/// (σ_ρ's counts, picked as closest-first). "Trajectory points" of
+/// (σ_ρ's counts, picked as closest-first; nearest-then-uniform too: detections are a uniform
+/// draw already). "Trajectory points" of
 /// a cluster (σ_ρ) are its distinct times t.
 ///
 /// Within a group, picks are uniform without replacement (σ_1, σ_ρ) or spread evenly over the
@@ -101,7 +102,10 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
                 Ok(
                     if matches!(
                         kind,
-                        SamplerKind::RhoDispersed | SamplerKind::ClosestFirst | SamplerKind::ClosestThenSpread
+                        SamplerKind::RhoDispersed
+                            | SamplerKind::ClosestFirst
+                            | SamplerKind::ClosestThenSpread
+                            | SamplerKind::NearestThenUniform
                     ) {
                         let best_first = kind != SamplerKind::RhoDispersed;
                         disperse_detections(m, q, xs, scores, best_first, &mut rng)

@@ -10,14 +10,16 @@
 //! - **Quotas** per component come from statistics that merge from tiles: the number of pairs
 //!   off the diagonal, the first and last row, the closest pair (σ_1: 1 each; σ_ρ and the
 //!   dispersed samplers: the rows, `last − first + 1`, which is every row of a 4-connected
-//!   component). They are rounded at random with the sampler's own stream, in component order.
+//!   component; nearest-then-uniform: the rows, then the pairs). They are rounded at random
+//!   with the sampler's own stream, in component order.
 //! - **Uniform picks** (σ_1, σ_ρ, the rest of the dispersed samplers) are the `q` pairs of the
 //!   component with the smallest keys: a uniform draw without replacement. Each holder returns
 //!   its pairs with a key at most a threshold that leaves a few more than `q` in expectation;
 //!   should fewer come back, the threshold grows and the holders are asked again (the answer
 //!   does not depend on the threshold). σ_α takes the smallest keys over all components (a
 //!   budget), or every pair with a key below `p · 2⁶⁴` (a rate).
-//! - **Row picks** (the dispersed σ_ρ, closest-first and closest-then-spread) are the closest pair of chosen rows
+//! - **Row picks** (the dispersed σ_ρ, closest-first, closest-then-spread and the first picks of
+//!   nearest-then-uniform, whose others are uniform picks) are the closest pair of chosen rows
 //!   (stratified with an offset drawn from the component's own stream): each holder returns the
 //!   closest pair of its runs in those rows, and the closest of them wins (by the metric's rank,
 //!   then the column). A run on the diagonal offers the closest column after its farthest point
@@ -29,6 +31,7 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+use super::nearest::nearest_then_uniform_quotas;
 use super::{SamplerKind, group_rng};
 use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count};
 use crate::error::{Error, Result};
@@ -401,6 +404,8 @@ pub struct DrawnPair {
 struct Group {
     id: usize,
     quota: u64,
+    /// Of the quota, the closest pairs of rows (nearest-then-uniform; the quota for the others).
+    near: u64,
     /// The stratification offset (dispersed samplers).
     offset: f64,
     /// The pool threshold asked last.
@@ -504,26 +509,50 @@ impl KeyedDraw {
             check_count("samples", sampler.size, count, SAMPLE_BYTES)?;
             let groups = ids
                 .iter()
-                .map(|&id| Group { id, quota: 0, offset: 0.0, pool: Some(threshold), rows: Vec::new(), best: false })
+                .map(|&id| Group {
+                    id,
+                    quota: 0,
+                    near: 0,
+                    offset: 0.0,
+                    pool: Some(threshold),
+                    rows: Vec::new(),
+                    best: false,
+                })
                 .collect();
             (groups, Some(threshold))
         } else {
-            let rows = || ids.iter().map(|&c| stats[c].row_count() as f64).collect();
-            let quotas = sampler.group_quotas(rows, &caps, &mut rng, &mut warnings)?;
+            // (all picks, of which rows' closest pairs) per group.
+            let quotas: Vec<(u64, u64)> = if kind == SamplerKind::NearestThenUniform {
+                let rows: Vec<u64> = ids.iter().map(|&c| stats[c].row_count() as u64).collect();
+                let splits = nearest_then_uniform_quotas(&rows, &caps, sampler.size, &mut rng, &mut warnings);
+                let total = splits.iter().map(|s| s.total()).sum::<u64>();
+                check_count("samples", sampler.size, total as f64, SAMPLE_BYTES)?;
+                splits.into_iter().map(|s| (s.total(), s.near)).collect()
+            } else {
+                let rows = || ids.iter().map(|&c| stats[c].row_count() as f64).collect();
+                let quotas = sampler.group_quotas(rows, &caps, &mut rng, &mut warnings)?;
+                quotas.into_iter().map(|q| (q, q)).collect()
+            };
             let groups = ids
                 .iter()
                 .zip(quotas)
-                .map(|(&id, quota)| {
+                .map(|(&id, (quota, near))| {
                     let s = &stats[id];
                     let offset = group_rng(sampler.seed, id).random::<f64>();
                     let r0 = s.rows[0];
                     let count = s.row_count();
-                    let mut group = Group { id, quota, offset, pool: None, rows: Vec::new(), best: false };
+                    let mut group = Group { id, quota, near, offset, pool: None, rows: Vec::new(), best: false };
                     if quota == 0 {
                         return group;
                     }
                     match kind {
                         SamplerKind::One | SamplerKind::Rho => group.pool = Some(threshold_for(quota, s.pairs)),
+                        SamplerKind::NearestThenUniform => {
+                            (group.rows, group.best) = closest_then_stratified(s, near as usize, offset);
+                            if quota > near {
+                                group.pool = Some(threshold_for(quota, s.pairs));
+                            }
+                        }
                         _ if quota as usize > count => {
                             group.rows = (s.rows[0]..=s.rows[1]).collect();
                             group.pool = Some(threshold_for(quota - count as u64, s.pairs));
@@ -540,25 +569,8 @@ impl KeyedDraw {
                             group.rows = rows.into_keys().collect();
                         }
                         _ => {
-                            // Closest-first and closest-then-spread: the best row, then the
-                            // others stratified around it.
-                            let mut rows = BTreeMap::new();
-                            if !s.trivial {
-                                rows.insert(s.closest_pair[0], ());
-                            } else {
-                                group.best = true;
-                            }
-                            for idx in stratified(quota as usize - 1, count - 1, offset) {
-                                let r = r0 + idx;
-                                if s.trivial {
-                                    for row in [r.saturating_sub(1).max(r0), r, r + 1] {
-                                        rows.insert(row, ());
-                                    }
-                                } else {
-                                    rows.insert(if r >= s.closest_pair[0] { r + 1 } else { r }, ());
-                                }
-                            }
-                            group.rows = rows.into_keys().collect();
+                            // Closest-first and closest-then-spread.
+                            (group.rows, group.best) = closest_then_stratified(s, quota as usize, offset);
                         }
                     }
                     group
@@ -720,8 +732,25 @@ impl KeyedDraw {
             let mut chosen: Vec<DrawCandidate> = Vec::with_capacity(q);
             let mut seen: HashSet<[usize; 2]> = HashSet::new();
             let count = s.row_count();
+            // The component's closest pair, then `n` − 1 other rows stratified around its row.
+            let closest_then_rows = |chosen: &mut Vec<DrawCandidate>, seen: &mut HashSet<[usize; 2]>, n: usize| {
+                let best = if s.trivial {
+                    c.best.iter().find(|o| o.component == g.id)
+                } else {
+                    row_pick(g.id, s.closest_pair[0])
+                };
+                if let Some(best) = best {
+                    push(chosen, seen, Some(best));
+                    let b = best.pair[0];
+                    for idx in stratified(n - 1, count - 1, g.offset) {
+                        let r = s.rows[0] + idx;
+                        push(chosen, seen, offer_of(if r >= b { r + 1 } else { r }));
+                    }
+                }
+            };
             match self.kind {
                 SamplerKind::One | SamplerKind::Rho => {}
+                SamplerKind::NearestThenUniform => closest_then_rows(&mut chosen, &mut seen, g.near as usize),
                 _ if q > count => {
                     for row in s.rows[0]..=s.rows[1] {
                         push(&mut chosen, &mut seen, offer_of(row));
@@ -732,23 +761,8 @@ impl KeyedDraw {
                         push(&mut chosen, &mut seen, offer_of(s.rows[0] + idx));
                     }
                 }
-                _ => {
-                    // Closest-first and closest-then-spread: the component's closest pair,
-                    // then the other rows.
-                    let best = if s.trivial {
-                        c.best.iter().find(|o| o.component == g.id)
-                    } else {
-                        row_pick(g.id, s.closest_pair[0])
-                    };
-                    if let Some(best) = best {
-                        push(&mut chosen, &mut seen, Some(best));
-                        let b = best.pair[0];
-                        for idx in stratified(q - 1, count - 1, g.offset) {
-                            let r = s.rows[0] + idx;
-                            push(&mut chosen, &mut seen, offer_of(if r >= b { r + 1 } else { r }));
-                        }
-                    }
-                }
+                // Closest-first and closest-then-spread.
+                _ => closest_then_rows(&mut chosen, &mut seen, q),
             }
             // The rest from the pool, smallest keys first.
             for o in pool_of(g.id) {
@@ -765,6 +779,30 @@ impl KeyedDraw {
         }
         if short.is_empty() { Ok(sorted(picks)) } else { Err(short) }
     }
+}
+
+/// The rows whose closest pairs closest-first, closest-then-spread and nearest-then-uniform
+/// ask of component `s` for `n` (≥ 1, at most its rows) such picks: its closest pair's row (for
+/// a trivial component, the closest pair over all rows: the returned flag), then `n` − 1 rows
+/// stratified around it (a trivial component's neighbours too, which stand in for a row with no
+/// pair off the diagonal).
+fn closest_then_stratified(s: &DrawStats, n: usize, offset: f64) -> (Vec<usize>, bool) {
+    let r0 = s.rows[0];
+    let mut rows = BTreeMap::new();
+    if !s.trivial {
+        rows.insert(s.closest_pair[0], ());
+    }
+    for idx in stratified(n - 1, s.row_count() - 1, offset) {
+        let r = r0 + idx;
+        if s.trivial {
+            for row in [r.saturating_sub(1).max(r0), r, r + 1] {
+                rows.insert(row, ());
+            }
+        } else {
+            rows.insert(if r >= s.closest_pair[0] { r + 1 } else { r }, ());
+        }
+    }
+    (rows.into_keys().collect(), s.trivial)
 }
 
 /// Takes `offer` unless that pair is taken already.

@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 /// | `alpha` | σ_α ∈ O(α): uniform over all detections (or pairs of S_γ), no groups |
 /// | `closest-first` | one sample per group first, its closest pair (best score for detections: the likeliest match); the rest as `rho-dispersed` |
 /// | `closest-then-spread` | **the default**: σ_ρ's counts (at least one per group), the first of each group its closest pair, the rest spread along the group as `rho-dispersed` |
+/// | `nearest-then-uniform` | each group's closest pair, then rows' closest pairs spread along the groups up to one row in six, the rest of the budget uniform over each group's pairs |
 /// | `lio-sam`, `hdl-graph-slam`, `cartographer`, `time-gap` | baselines of deployed systems, see [`BaselineParams`] |
 ///
 /// A *group* is a detection cluster ([`sample_clusters`](crate::sample_clusters)) or an exact loop component
@@ -59,6 +60,14 @@ pub enum SamplerKind {
     /// share: the rest of the budget goes where the share is still lacking.
     #[default]
     ClosestThenSpread,
+    /// Rows' closest pairs first, then uniform picks: each group's closest pair (P1), then the
+    /// closest pairs of rows stratified along the groups in proportion to their rows (as
+    /// LIO-SAM matches each keyframe with its nearest revisit), up to one row in six of each
+    /// group; the budget beyond that uniform over each group's other pairs, in proportion to
+    /// them (as the time-gap rule draws over all pairs: spread in time along both poses of a
+    /// pair). On detection clusters, whose detections are a uniform draw already, it is
+    /// [`ClosestThenSpread`](Self::ClosestThenSpread).
+    NearestThenUniform,
     /// LIO-SAM: nearest keyframe within γ older than a time gap, searched at 1 Hz.
     LioSam,
     /// hdl_graph_slam: a keyframe within γ after a minimum travel, one per stretch of travel.
@@ -71,13 +80,14 @@ pub enum SamplerKind {
 
 impl SamplerKind {
     /// Every sampler, in the order of [`NAMES`](Self::NAMES).
-    pub const ALL: [Self; 10] = [
+    pub const ALL: [Self; 11] = [
         Self::One,
         Self::Rho,
         Self::RhoDispersed,
         Self::Alpha,
         Self::ClosestFirst,
         Self::ClosestThenSpread,
+        Self::NearestThenUniform,
         Self::LioSam,
         Self::HdlGraphSlam,
         Self::Cartographer,
@@ -89,11 +99,12 @@ impl SamplerKind {
     pub const DEFAULT: Self = Self::ClosestThenSpread;
 
     /// The accepted names.
-    pub const NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread, lio-sam, \
-                                     hdl-graph-slam, cartographer, time-gap";
+    pub const NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread, \
+                                     nearest-then-uniform, lio-sam, hdl-graph-slam, cartographer, time-gap";
 
     /// The samplers that work on detection clusters.
-    pub const CLUSTER_NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread";
+    pub const CLUSTER_NAMES: &'static str =
+        "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread, nearest-then-uniform";
 
     /// The name, as parsed.
     pub fn name(self) -> &'static str {
@@ -104,6 +115,7 @@ impl SamplerKind {
             Self::Alpha => "alpha",
             Self::ClosestFirst => "closest-first",
             Self::ClosestThenSpread => "closest-then-spread",
+            Self::NearestThenUniform => "nearest-then-uniform",
             Self::LioSam => "lio-sam",
             Self::HdlGraphSlam => "hdl-graph-slam",
             Self::Cartographer => "cartographer",
@@ -128,6 +140,7 @@ impl SamplerKind {
             Self::Alpha => "σ_α",
             Self::ClosestFirst => "closest-first σ_ρ",
             Self::ClosestThenSpread => "closest-then-spread σ_ρ",
+            Self::NearestThenUniform => "nearest-then-uniform",
             Self::LioSam => "LIO-SAM",
             Self::HdlGraphSlam => "hdl_graph_slam",
             Self::Cartographer => "Cartographer",
@@ -136,10 +149,10 @@ impl SamplerKind {
     }
 
     /// Whether the sampler takes a row's closest pair (the dispersed σ_ρ, closest-first,
-    /// closest-then-spread) rather than a uniform one: what the online sampler's
-    /// [`closest_in_row`](crate::OnlineSamplerOptions::closest_in_row) follows.
+    /// closest-then-spread, nearest-then-uniform) rather than a uniform one: what the online
+    /// sampler's [`closest_in_row`](crate::OnlineSamplerOptions::closest_in_row) follows.
     pub fn picks_closest_in_row(self) -> bool {
-        matches!(self, Self::RhoDispersed | Self::ClosestFirst | Self::ClosestThenSpread)
+        matches!(self, Self::RhoDispersed | Self::ClosestFirst | Self::ClosestThenSpread | Self::NearestThenUniform)
     }
 
     /// Whether this is a baseline of a deployed system (it needs the trajectory).
@@ -148,12 +161,17 @@ impl SamplerKind {
     }
 
     /// The baseline rule this sampler runs, with its parameters taken from `params`; `None` for
-    /// σ_1, σ_ρ, the dispersed σ_ρ, σ_α and the closest-first and closest-then-spread samplers.
+    /// σ_1, σ_ρ, the dispersed σ_ρ, σ_α and the closest-first, closest-then-spread and
+    /// nearest-then-uniform samplers.
     pub fn baseline(self, params: &BaselineParams) -> Option<Baseline> {
         match self {
-            Self::One | Self::Rho | Self::RhoDispersed | Self::Alpha | Self::ClosestFirst | Self::ClosestThenSpread => {
-                None
-            }
+            Self::One
+            | Self::Rho
+            | Self::RhoDispersed
+            | Self::Alpha
+            | Self::ClosestFirst
+            | Self::ClosestThenSpread
+            | Self::NearestThenUniform => None,
             Self::LioSam => Some(Baseline::LioSam(params.lio_sam)),
             Self::HdlGraphSlam => Some(Baseline::HdlGraphSlam(params.hdl_graph_slam)),
             Self::Cartographer => Some(Baseline::Cartographer(params.cartographer)),
@@ -194,7 +212,8 @@ impl SampleSize {
                     SamplerKind::Rho
                     | SamplerKind::RhoDispersed
                     | SamplerKind::ClosestFirst
-                    | SamplerKind::ClosestThenSpread => {
+                    | SamplerKind::ClosestThenSpread
+                    | SamplerKind::NearestThenUniform => {
                         (rate > 0.0, "a positive number of samples per group per trajectory point")
                     }
                     _ => (rate > 0.0 && rate <= 1.0, "a probability in (0, 1]"),
@@ -263,7 +282,7 @@ impl Sampler {
                 option: "skip_trivial",
                 to: format!("the {} baseline", self.kind),
                 reason: "a baseline keeps its own candidate rule (its time gap or travel); use one, rho, \
-                         rho-dispersed, alpha, closest-first or closest-then-spread",
+                         rho-dispersed, alpha, closest-first, closest-then-spread or nearest-then-uniform",
             });
         }
         Ok(())
@@ -273,7 +292,8 @@ impl Sampler {
     /// all but σ_1, which weighs every group 1) and its number of candidates (`caps`): the
     /// closest-first sampler takes each group's closest pair first and shares the rest by rows
     /// ([`first_then_quotas`]), the others (closest-then-spread too: its first pick counts
-    /// towards the group's share) share by weight ([`group_quotas`]).
+    /// towards the group's share; nearest-then-uniform on detection clusters, where it is
+    /// closest-then-spread) share by weight ([`group_quotas`]).
     ///
     /// # Errors
     /// [`Error::TooManySamples`] when the quotas make more samples than one call returns.
@@ -311,7 +331,7 @@ mod tests {
         assert_eq!(
             err.to_string(),
             "unknown sampler \"sigma_rho\": expected one of one, rho, rho-dispersed, alpha, closest-first, \
-             closest-then-spread, lio-sam, hdl-graph-slam, cartographer, time-gap"
+             closest-then-spread, nearest-then-uniform, lio-sam, hdl-graph-slam, cartographer, time-gap"
         );
     }
 }

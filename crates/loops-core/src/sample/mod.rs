@@ -7,13 +7,15 @@
 //! - [`sample_clusters`]: from the ε-graph clusters of detections (`clusters`);
 //! - [`sample_loops`]: from the exact loop components, or a baseline rule (`exact`);
 //! - the dispersed σ_ρ's even spread along a detection cluster (`disperse`);
-//! - keyed draws from the exact components, the same from tiles of a fleet (`keyed`).
+//! - keyed draws from the exact components, the same from tiles of a fleet (`keyed`);
+//! - the nearest-then-uniform sampler's counts: rows' closest pairs, then uniform (`nearest`).
 
 mod clusters;
 mod disperse;
 mod exact;
 mod keyed;
 mod kind;
+mod nearest;
 mod samples;
 
 use rand::SeedableRng;

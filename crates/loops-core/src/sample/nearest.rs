@@ -1,0 +1,205 @@
+//! The nearest-then-uniform sampler's counts: per component, how many of its picks are the
+//! closest pairs of its rows, and how many are uniform over its pairs.
+//!
+//! Small budgets go to rows' closest pairs, as LIO-SAM's rule matches each keyframe with its
+//! nearest revisit: each component's closest pair first (P1), then the closest pairs of rows
+//! spread along the components in proportion to their rows, up to one row in
+//! [`NEAR_ROW_STRIDE`] (the closest pairs of neighbouring rows are near copies of one scan
+//! match). Whatever the budget leaves beyond that is uniform over each component's pairs, in
+//! proportion to the pairs it has left, as the time-gap rule draws over all pairs: those
+//! spread in time along both poses of the pair, not along rows only.
+
+use rand::{Rng, RngExt};
+
+use crate::draw::{SampleSize, SampleWarning, first_then_quotas, group_quotas};
+
+/// One component's counts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Split {
+    /// Closest pairs of rows (the component's own closest pair first).
+    pub near: u64,
+    /// Uniform picks over the rest of its pairs.
+    pub uniform: u64,
+}
+
+impl Split {
+    /// All its picks.
+    pub fn total(self) -> u64 {
+        self.near + self.uniform
+    }
+}
+
+/// At most one row in this many gives its closest pair before the uniform picks start.
+///
+/// Chosen on the map evaluation (`benches/eval_grid.py`, KITTI 00/05/08 and MulRan KAIST 01
+/// with 2 m keyframes): one row in two left the closest pairs of neighbouring rows, near
+/// copies of one constraint, to take the budget that uniform picks used better at 10²; one in
+/// six is about the density of LIO-SAM's searches there (one a second at ~10 m/s).
+pub(crate) const NEAR_ROW_STRIDE: u64 = 6;
+
+/// Rows' closest pairs a component takes at most: one row in [`NEAR_ROW_STRIDE`] (at least
+/// one), no more than its pairs.
+pub(crate) fn near_cap(rows: u64, pairs: u64) -> u64 {
+    rows.div_ceil(NEAR_ROW_STRIDE).clamp(1, pairs.max(1))
+}
+
+/// The counts of each component with `rows` rows and `pairs` pairs (every one ≥ 1).
+///
+/// Budget `B`: with `N = Σ near_cap`, a budget up to `N` is all closest pairs of rows
+/// ([`first_then_quotas`] over the near caps, by rows: one per component first; below the
+/// number of components, one to that many, with a warning); beyond `N`, every component takes
+/// its near cap and `B − N` is shared in proportion to the pairs left (`pairs − near`),
+/// rounded systematically with one draw of `rng`, so that the counts sum to `B` exactly (all
+/// pairs, with a warning, for a budget above them). Rate `r`: σ_ρ's counts (`r · rows`, at
+/// least 1, at most the pairs), the first up to the near cap closest pairs of rows.
+pub(crate) fn nearest_then_uniform_quotas<R: Rng + ?Sized>(
+    rows: &[u64],
+    pairs: &[u64],
+    size: SampleSize,
+    rng: &mut R,
+    warnings: &mut Vec<SampleWarning>,
+) -> Vec<Split> {
+    debug_assert_eq!(rows.len(), pairs.len());
+    debug_assert!(pairs.iter().all(|&p| p >= 1));
+    let near: Vec<u64> = rows.iter().zip(pairs).map(|(&r, &p)| near_cap(r, p)).collect();
+    let weights: Vec<f64> = rows.iter().map(|&r| r as f64).collect();
+    match size {
+        SampleSize::Rate(_) => group_quotas(&weights, pairs, size, rng, warnings)
+            .into_iter()
+            .zip(&near)
+            .map(|(q, &n)| Split { near: q.min(n), uniform: q - q.min(n) })
+            .collect(),
+        SampleSize::Budget(budget) => {
+            let budget = budget as u64;
+            let near_total: u64 = near.iter().sum();
+            if budget <= near_total {
+                return first_then_quotas(&weights, &near, size, rng, warnings)
+                    .into_iter()
+                    .map(|near| Split { near, uniform: 0 })
+                    .collect();
+            }
+            let left: Vec<u64> = pairs.iter().zip(&near).map(|(&p, &n)| p - n).collect();
+            let available: u64 = left.iter().sum();
+            let rest = budget - near_total;
+            if rest >= available {
+                if rest > available {
+                    warnings.push(SampleWarning::BudgetAboveAvailable {
+                        budget: budget as usize,
+                        available: pairs.iter().sum(),
+                    });
+                }
+                return near.iter().zip(&left).map(|(&near, &uniform)| Split { near, uniform }).collect();
+            }
+            let uniform = systematic_shares(&left, rest, rng);
+            near.iter().zip(uniform).map(|(&near, uniform)| Split { near, uniform }).collect()
+        }
+    }
+}
+
+/// `total` (less than `Σ caps`) shared in proportion to `caps`, each share ⌊e⌋ or ⌈e⌉ of its
+/// expectation `e = total · cap / Σ caps` (so at most its cap), summing to `total`: systematic
+/// rounding with one uniform offset.
+fn systematic_shares<R: Rng + ?Sized>(caps: &[u64], total: u64, rng: &mut R) -> Vec<u64> {
+    let sum: u64 = caps.iter().sum();
+    debug_assert!(total < sum);
+    let offset: f64 = rng.random();
+    // Cumulative expectations in exact integer arithmetic: total · C_g / sum, C_g = Σ_{h ≤ g} cap_h.
+    let floor_at = |cumulative: u64| {
+        let scaled = u128::from(total) * u128::from(cumulative);
+        let whole = (scaled / u128::from(sum)) as u64;
+        let fraction = (scaled % u128::from(sum)) as f64 / sum as f64;
+        whole + u64::from(fraction + offset >= 1.0)
+    };
+    let mut cumulative = 0;
+    let mut before = floor_at(0);
+    caps.iter()
+        .map(|&cap| {
+            cumulative += cap;
+            let after = floor_at(cumulative);
+            let share = after - before;
+            before = after;
+            share
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    fn quotas(rows: &[u64], pairs: &[u64], size: SampleSize, seed: u64) -> (Vec<Split>, Vec<SampleWarning>) {
+        let mut warnings = Vec::new();
+        let q = nearest_then_uniform_quotas(rows, pairs, size, &mut ChaCha8Rng::seed_from_u64(seed), &mut warnings);
+        (q, warnings)
+    }
+
+    #[test]
+    fn small_budgets_are_closest_pairs_of_rows_one_per_component_first() {
+        // Near caps 50, 5, 1: N = 56.
+        let (rows, pairs) = ([300, 30, 1], [1000, 40, 3]);
+        for seed in 0..20 {
+            let (q, warnings) = quotas(&rows, &pairs, SampleSize::Budget(30), seed);
+            assert!(warnings.is_empty());
+            assert!(q.iter().all(|s| s.uniform == 0 && s.near >= 1), "{q:?}");
+            assert_eq!(q.iter().map(|s| s.near).sum::<u64>(), 30);
+            assert!(q[0].near <= 50 && q[1].near <= 5 && q[2].near == 1);
+            // Beyond the first: 27 in proportion to the rows (300 : 30 : 1, capped).
+            assert!((q[0].near as f64 - 25.5).abs() <= 1.0, "{q:?}");
+        }
+    }
+
+    #[test]
+    fn a_budget_below_the_components_covers_that_many() {
+        let (q, warnings) = quotas(&[100, 10, 1, 7], &[1000, 40, 3, 9], SampleSize::Budget(2), 3);
+        assert_eq!(q.iter().map(|s| s.total()).sum::<u64>(), 2);
+        assert!(q.iter().all(|s| s.near <= 1 && s.uniform == 0));
+        assert!(matches!(warnings[..], [SampleWarning::BudgetBelowGroups { budget: 2, groups: 4 }]));
+    }
+
+    #[test]
+    fn large_budgets_fill_one_row_in_six_then_share_by_the_pairs_left() {
+        let (rows, pairs) = ([300, 30, 1], [1000, 40, 3]);
+        let left = [950.0, 35.0, 2.0];
+        for seed in 0..20 {
+            let (q, warnings) = quotas(&rows, &pairs, SampleSize::Budget(456), seed);
+            assert!(warnings.is_empty());
+            assert_eq!(q.iter().map(|s| s.near).collect::<Vec<_>>(), [50, 5, 1]);
+            assert_eq!(q.iter().map(|s| s.total()).sum::<u64>(), 456);
+            for (s, l) in q.iter().zip(left) {
+                let expected = 400.0 * l / 987.0;
+                assert!((s.uniform as f64 - expected).abs() < 1.0, "{q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_budget_above_the_pairs_takes_them_all() {
+        let (q, warnings) = quotas(&[100, 10], &[1000, 40], SampleSize::Budget(2000), 0);
+        assert_eq!(q.iter().map(|s| s.total()).collect::<Vec<_>>(), [1000, 40]);
+        assert!(matches!(warnings[..], [SampleWarning::BudgetAboveAvailable { budget: 2000, available: 1040 }]));
+        let (q, warnings) = quotas(&[100, 10], &[1000, 40], SampleSize::Budget(1040), 0);
+        assert_eq!(q.iter().map(|s| s.total()).collect::<Vec<_>>(), [1000, 40]);
+        assert!(warnings.is_empty());
+    }
+
+    #[test]
+    fn rate_counts_are_sigma_rho_closest_pairs_first() {
+        let (q, _) = quotas(&[300, 30, 1], &[1000, 40, 3], SampleSize::Rate(2.0), 0);
+        assert_eq!(q.iter().map(|s| s.near).collect::<Vec<_>>(), [50, 5, 1]);
+        assert_eq!(q.iter().map(|s| s.total()).collect::<Vec<_>>(), [600, 40, 2]);
+    }
+
+    #[test]
+    fn systematic_shares_sum_and_stay_within_one_of_the_expectation() {
+        let caps = [3, 0, 17, 1, 250, 9];
+        for seed in 0..50 {
+            let shares = systematic_shares(&caps, 101, &mut ChaCha8Rng::seed_from_u64(seed));
+            assert_eq!(shares.iter().sum::<u64>(), 101);
+            for (&s, &c) in shares.iter().zip(&caps) {
+                assert!(s <= c && (s as f64 - 101.0 * c as f64 / 280.0).abs() < 1.0);
+            }
+        }
+    }
+}
