@@ -36,7 +36,10 @@ and :class:`OnlineSampler` picks loop-closure candidates at each keyframe.
 
 from . import metrics
 from ._core import (
+    BASELINE_NAMES,
+    DEFAULT_BUDGET,
     DEFAULT_SAMPLER,
+    SAMPLER_NAMES,
     Candidate,
     DetectionClusters,
     Detections,
@@ -153,7 +156,10 @@ __all__ = [
     "TiledFleetLoops",
     "Trajectory",
     "Update",
+    "BASELINE_NAMES",
+    "DEFAULT_BUDGET",
     "DEFAULT_SAMPLER",
+    "SAMPLER_NAMES",
     "__version__",
     "chain_polylines",
     "cluster_detections",

@@ -27,7 +27,10 @@ __all__ = [
     "SampleQuality",
     "Samples",
     "Trajectory",
+    "BASELINE_NAMES",
+    "DEFAULT_BUDGET",
     "DEFAULT_SAMPLER",
+    "SAMPLER_NAMES",
     "__version__",
     "chain_polylines",
     "cluster_detections",
@@ -81,6 +84,13 @@ __all__ = [
 
 __version__: str
 DEFAULT_SAMPLER: str
+#: The budget the command line and Dask draw with when neither a rate nor a budget is given.
+DEFAULT_BUDGET: int
+#: The names of the samplers that draw from loop components (the paper's and the project's).
+SAMPLER_NAMES: tuple[str, ...]
+#: The names of the baseline rules (LIO-SAM's, hdl_graph_slam's, Cartographer's, a time gap),
+#: which draw from whole trajectories.
+BASELINE_NAMES: tuple[str, ...]
 
 _Side = Literal["both", "begin", "end"]
 _SamplerName = Literal[

@@ -146,6 +146,13 @@ pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     module.add("DEFAULT_SAMPLER", loops_core::SamplerKind::DEFAULT.name())?;
+    module.add("DEFAULT_BUDGET", loops_core::SampleSize::DEFAULT_BUDGET)?;
+    let names = |baseline: bool| {
+        let kinds = loops_core::SamplerKind::ALL.into_iter().filter(|k| k.is_baseline() == baseline);
+        pyo3::types::PyTuple::new(module.py(), kinds.map(loops_core::SamplerKind::name).collect::<Vec<_>>())
+    };
+    module.add("SAMPLER_NAMES", names(false)?)?;
+    module.add("BASELINE_NAMES", names(true)?)?;
     module.add_class::<py_trajectory::Trajectory>()?;
     module.add_class::<py_loops::Loops>()?;
     module.add_class::<py_separation::Separation>()?;

@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import _console, _core
-from .._core import DEFAULT_SAMPLER
+from .._core import DEFAULT_BUDGET, DEFAULT_SAMPLER, SAMPLER_NAMES
 from ..errors import InvalidParameterError
 from . import _settings
 from ._output import path_inputs, run_fleet_dask
@@ -118,11 +118,12 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--sampler",
         default=DEFAULT_SAMPLER,
-        help="one, rho, rho-dispersed, alpha, closest-first or closest-then-spread "
-        f"[default: {DEFAULT_SAMPLER}]; none for no samples",
+        help=f"{', '.join(SAMPLER_NAMES)} [default: {DEFAULT_SAMPLER}]; none for no samples",
     )
     p.add_argument(
-        "--budget", type=int, help="exactly this many samples [default: 1000 without --rate]"
+        "--budget",
+        type=int,
+        help=f"exactly this many samples [default: {DEFAULT_BUDGET} without --rate]",
     )
     p.add_argument("--rate", type=float, help="the sampler's rate instead of a budget")
     p.add_argument("--seed", type=int, default=0, help="seed of the random choices [default: 0]")

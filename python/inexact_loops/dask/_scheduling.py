@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._core import DEFAULT_SAMPLER
+from .._core import DEFAULT_BUDGET, DEFAULT_SAMPLER
 from ..errors import InvalidParameterError, LoopsError
 from ..table import Table
 from . import _settings
@@ -312,18 +312,17 @@ class FleetRun:
         scan on its worker, and rescans a tile only where they are gone (:data:`RUNS_KEPT`).
 
         Args:
-            sampler: ``"one"``, ``"rho"``, ``"rho-dispersed"``, ``"alpha"``,
-                ``"closest-first"`` or ``"closest-then-spread"`` (the default,
+            sampler: a name of :data:`~inexact_loops.SAMPLER_NAMES` (the default,
                 :data:`~inexact_loops.DEFAULT_SAMPLER`; the baselines run over whole
                 trajectories: use :func:`sample_fleet`).
             rate, budget, seed, between_only, skip_trivial: as :func:`sample_fleet`
-                (neither rate nor budget: a budget of 1000).
+                (neither rate nor budget: :data:`~inexact_loops.DEFAULT_BUDGET`).
 
         Returns:
             :class:`Table` as :attr:`FleetSamples.table`.
         """
         if rate is None and budget is None:
-            budget = 1000
+            budget = DEFAULT_BUDGET
         started = time.perf_counter()
         draw = self._loops.draw(
             sampler,
