@@ -59,8 +59,8 @@ pub const SCENE_TOPICS: [SceneTopic; 6] = [
     SceneTopic {
         topic: "/loops/tau",
         schema: "foxglove.SceneUpdate",
-        holds: "a message per session, at its last pose's time, with an entity `tau/<session>`: its path as a line strip \
-                coloured by τ (red = the longest τ)",
+        holds: "a message per session, at its last pose's time, with an entity `tau/<session>`: its path as a \
+                line strip coloured by τ (red = the longest τ)",
     },
     SceneTopic {
         topic: "/loops/components",
@@ -71,13 +71,14 @@ pub const SCENE_TOPICS: [SceneTopic; 6] = [
     SceneTopic {
         topic: "/loops/candidates",
         schema: "foxglove.SceneUpdate",
-        holds: "a message per sampled pair, at its later pose's time, with an entity `candidate/<k>` (samples.csv's row k): \
-                the line between its poses",
+        holds: "a message per sampled pair, at its later pose's time, with an entity `candidate/<k>` \
+                (samples.csv's row k): the line between its poses",
     },
     SceneTopic {
         topic: "/loops/plane",
         schema: "foxglove.RawImage",
-        holds: "the (t, t′) plane, rgb8: t to the right, t′ up, each component in its colour, candidates white; at the first pose's time",
+        holds: "the (t, t′) plane, rgb8: t to the right, t′ up, each component in its colour, candidates white; \
+                at the first pose's time",
     },
     SceneTopic {
         topic: "/loops/markers",
