@@ -14,6 +14,7 @@ import json
 import re
 import subprocess
 import sys
+from decimal import Decimal
 from pathlib import Path
 
 import numpy as np
@@ -49,16 +50,31 @@ def loops_cli(*args: object, cwd: Path) -> subprocess.CompletedProcess[str]:
     )
 
 
-def read_messages(path: Path) -> dict[str, list[tuple[object, bytes]]]:
-    """Every message of the file by topic, with its schema, from the official reader."""
-    out: dict[str, list[tuple[object, bytes]]] = {}
+def read_messages(path: Path) -> dict[str, list[tuple[object, bytes, int]]]:
+    """Every message of the file by topic, in the file's order, with its schema and log time,
+    from the official reader."""
+    out: dict[str, list[tuple[object, bytes, int]]] = {}
     with open(path, "rb") as f:
         reader = make_reader(f)
         summary = reader.get_summary()
         assert summary is not None and summary.statistics is not None
-        for schema, channel, message in reader.iter_messages():
-            out.setdefault(channel.topic, []).append((schema, message.data))
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            assert message.publish_time == message.log_time
+            out.setdefault(channel.topic, []).append((schema, message.data, message.log_time))
     return out
+
+
+def stamp_ns(seconds: str) -> int:
+    """A time of the CSV files in nanoseconds: exact for at most 9 decimals (as printed), else
+    the value's nearest nanosecond."""
+    value = Decimal(seconds)
+    if value.as_tuple().exponent < -9:
+        value = Decimal(float(seconds))
+    return int(round(value * 10**9))
+
+
+def header_ns(header) -> int:
+    return header.stamp.sec * 10**9 + header.stamp.nanosec
 
 
 def read_table(path: Path) -> list[dict[str, str]]:
@@ -79,9 +95,12 @@ def input_poses(log: Path) -> np.ndarray:
 
 def check_file(path: Path, sessions: list[str]) -> dict[str, list]:
     """Checks the topics and schemas, decodes every message with the published classes, and
-    returns them by topic."""
+    returns them by topic, with their log times by topic under ``"times"``."""
     messages = read_messages(path)
     assert {topic: schemas[0][0].name for topic, schemas in messages.items()} == TOPICS
+    times = {topic: [t for _, _, t in rows] for topic, rows in messages.items()}
+    for topic, stamps in times.items():  # a timeline: in time order on each channel
+        assert stamps == sorted(stamps), topic
     for rows in messages.values():
         schema = rows[0][0]
         if schema.encoding == "protobuf":
@@ -96,15 +115,22 @@ def check_file(path: Path, sessions: list[str]) -> dict[str, list]:
     assert json.loads(metadata[0].metadata["sessions"]) == sessions
     store = get_typestore(Stores.ROS2_HUMBLE)
     return {
-        "/loops/trajectory": [PosesInFrame.FromString(d) for _, d in messages["/loops/trajectory"]],
-        "/loops/tau": [SceneUpdate.FromString(d) for _, d in messages["/loops/tau"]],
-        "/loops/components": [SceneUpdate.FromString(d) for _, d in messages["/loops/components"]],
-        "/loops/candidates": [SceneUpdate.FromString(d) for _, d in messages["/loops/candidates"]],
-        "/loops/plane": [RawImage.FromString(d) for _, d in messages["/loops/plane"]],
+        "/loops/trajectory": [
+            PosesInFrame.FromString(d) for _, d, _ in messages["/loops/trajectory"]
+        ],
+        "/loops/tau": [SceneUpdate.FromString(d) for _, d, _ in messages["/loops/tau"]],
+        "/loops/components": [
+            SceneUpdate.FromString(d) for _, d, _ in messages["/loops/components"]
+        ],
+        "/loops/candidates": [
+            SceneUpdate.FromString(d) for _, d, _ in messages["/loops/candidates"]
+        ],
+        "/loops/plane": [RawImage.FromString(d) for _, d, _ in messages["/loops/plane"]],
         "/loops/markers": [
             store.deserialize_cdr(d, "visualization_msgs/msg/MarkerArray")
-            for _, d in messages["/loops/markers"]
+            for _, d, _ in messages["/loops/markers"]
         ],
+        "times": times,
     }
 
 
@@ -128,28 +154,43 @@ def check_scene(
 ) -> None:
     """Every pose, component and candidate of the decoded file against the independent
     ``positions`` (one array per session), ``components.csv``, ``samples.csv`` and τ."""
+    times = decoded["times"]
+    # One τ message and one path message per session, at the same time (its last pose's).
+    tau_updates = decoded["/loops/tau"]
+    order = [sessions.index(u.entities[0].id.removeprefix("tau/")) for u in tau_updates]
+    assert sorted(order) == list(range(len(sessions)))
     trajectory = decoded["/loops/trajectory"]
-    assert len(trajectory) == len(sessions)
-    for message, expected in zip(trajectory, positions, strict=True):
+    assert len(trajectory) == len(sessions) and times["/loops/trajectory"] == times["/loops/tau"]
+    last_ns = dict(zip(order, times["/loops/trajectory"], strict=True))
+    for message, k in zip(trajectory, order, strict=True):
         got = np.array([[p.position.x, p.position.y, p.position.z] for p in message.poses])
-        np.testing.assert_array_equal(got, expected)
+        np.testing.assert_array_equal(got, positions[k])
 
-    (tau_update,) = decoded["/loops/tau"]
     max_tau = max(t.max() for t in tau)
-    for entity, name, expected in zip(tau_update.entities, sessions, tau, strict=True):
-        assert entity.id == f"tau/{name}"
+    for update, k in zip(tau_updates, order, strict=True):
+        (entity,) = update.entities
+        assert entity.id == f"tau/{sessions[k]}"
         (strip,) = entity.lines
         red = np.array([c.r for c in strip.colors])
-        np.testing.assert_allclose(red * max_tau, expected, atol=1e-9 * max_tau)
+        np.testing.assert_allclose(red * max_tau, tau[k], atol=1e-9 * max_tau)
 
-    (update,) = decoded["/loops/components"]
-    assert [e.id for e in update.entities] == [f"component/{row['id']}" for row in components]
-    (markers,) = decoded["/loops/markers"]
+    # Each component alone, at the time its second stretch begins (t′_min).
+    entities = {}
+    for update, at in zip(decoded["/loops/components"], times["/loops/components"], strict=True):
+        (entity,) = update.entities
+        entities[entity.id] = (entity, at)
+    assert sorted(entities) == sorted(f"component/{row['id']}" for row in components)
     by_ns: dict[str, dict[int, object]] = {}
-    for marker in markers.markers:
-        by_ns.setdefault(marker.ns, {})[marker.id] = marker
+    for markers in decoded["/loops/markers"]:
+        for marker in markers.markers:
+            assert marker.id not in by_ns.get(marker.ns, {})
+            by_ns.setdefault(marker.ns, {})[marker.id] = marker
     assert len(by_ns["components"]) == 3 * len(components)
-    for entity, row in zip(update.entities, components, strict=True):
+    for row in components:
+        entity, at = entities[f"component/{row['id']}"]
+        b = int(row["session_b"]) if "session_b" in row else 0
+        assert at == stamp_ns(row["t_prime_min_s"]) <= last_ns[b], row
+        assert entity.timestamp.seconds * 10**9 + entity.timestamp.nanos == at
         meta = {kv.key: kv.value for kv in entity.metadata}
         for key in ("i_min", "i_max", "j_min", "j_max", "closest_i", "closest_j", "pair_count"):
             assert int(meta[key]) == int(row[key]), key
@@ -179,18 +220,26 @@ def check_scene(
             assert marker.type == kind
             np.testing.assert_array_equal(points(marker), expected)
             assert marker.header.frame_id == "map"
+            assert header_ns(marker.header) == at
 
-    pairs = []
-    for row in samples:
+    # Each candidate alone, at its later pose's time (t′).
+    candidates = {}
+    for update, at in zip(decoded["/loops/candidates"], times["/loops/candidates"], strict=True):
+        (entity,) = update.entities
+        candidates[entity.id] = (entity, at)
+    assert len(candidates) == len(samples) == len(by_ns["candidates"]) > 0
+    for k, row in enumerate(samples):
         a, b = (int(row["session_a"]), int(row["session_b"])) if "session_a" in row else (0, 0)
-        pairs.append([positions[a][int(row["i"])], positions[b][int(row["j"])]])
-    expected_pairs = np.array(pairs).reshape(-1, 3)
-    (candidates,) = decoded["/loops/candidates"]
-    (line,) = candidates.entities[0].lines
-    assert line.type == 2  # LINE_LIST
-    np.testing.assert_array_equal(points(line), expected_pairs)
-    np.testing.assert_array_equal(points(by_ns["candidates"][0]), expected_pairs)
-    assert len(samples) > 0
+        pair = [positions[a][int(row["i"])], positions[b][int(row["j"])]]
+        entity, at = candidates[f"candidate/{k}"]
+        assert at == stamp_ns(row["t_prime_s"]) <= last_ns[b], row
+        if a == b:
+            assert stamp_ns(row["t_s"]) <= at
+        (line,) = entity.lines
+        assert line.type == 2  # LINE_LIST
+        np.testing.assert_array_equal(points(line), pair)
+        np.testing.assert_array_equal(points(by_ns["candidates"][k]), pair)
+        assert header_ns(by_ns["candidates"][k].header) == at
 
     (image,) = decoded["/loops/plane"]
     assert image.encoding == "rgb8" and image.step == 3 * image.width
@@ -241,11 +290,11 @@ def check_colours_match_report(report: Path, decoded: dict, components: list[dic
     }
     assert "kt" in swatches and "k0" in swatches
     classes = {i: k for k, i in re.findall(r'<i class="swatch (k\w+)"></i>(\d+)', html)}
-    (update,) = decoded["/loops/components"]
-    (markers,) = decoded["/loops/markers"]
-    by_id = {m.id: m for m in markers.markers if m.ns == "components"}
+    by_entity = {u.entities[0].id: u.entities[0] for u in decoded["/loops/components"]}
+    by_id = {m.id: m for a in decoded["/loops/markers"] for m in a.markers if m.ns == "components"}
     checked = 0
-    for entity, row in zip(update.entities, components, strict=True):
+    for row in components:
+        entity = by_entity[f"component/{row['id']}"]
         if row["id"] not in classes:
             continue  # the table lists the largest components only
         expected = swatches[classes[row["id"]]]

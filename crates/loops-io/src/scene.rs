@@ -54,33 +54,37 @@ pub const SCENE_TOPICS: [SceneTopic; 6] = [
     SceneTopic {
         topic: "/loops/trajectory",
         schema: "foxglove.PosesInFrame",
-        holds: "one message per session, in fleet order: every pose, position and orientation",
+        holds: "one message per session, at its last pose's time: every pose, position and orientation",
     },
     SceneTopic {
         topic: "/loops/tau",
         schema: "foxglove.SceneUpdate",
-        holds: "an entity `tau/<session>` per session: its path as a line strip coloured by τ (red = the longest τ)",
+        holds: "a message per session, at its last pose's time, with an entity `tau/<session>`: its path as a \
+                line strip coloured by τ (red = the longest τ)",
     },
     SceneTopic {
         topic: "/loops/components",
         schema: "foxglove.SceneUpdate",
-        holds: "an entity `component/<id>` per component: its two stretches of path and its closest pair, in its colour; \
-                the components.csv values as metadata",
+        holds: "a message per component, when its second stretch begins, with an entity `component/<id>`: \
+                its two stretches of path and its closest pair, in its colour; the components.csv values as metadata",
     },
     SceneTopic {
         topic: "/loops/candidates",
         schema: "foxglove.SceneUpdate",
-        holds: "an entity `candidates`: one line per sampled pair of poses, in samples.csv order",
+        holds: "a message per sampled pair, at its later pose's time, with an entity `candidate/<k>` \
+                (samples.csv's row k): the line between its poses",
     },
     SceneTopic {
         topic: "/loops/plane",
         schema: "foxglove.RawImage",
-        holds: "the (t, t′) plane, rgb8: t to the right, t′ up, each component in its colour, candidates white",
+        holds: "the (t, t′) plane, rgb8: t to the right, t′ up, each component in its colour, candidates white; \
+                at the first pose's time",
     },
     SceneTopic {
         topic: "/loops/markers",
         schema: "visualization_msgs/msg/MarkerArray",
-        holds: "the same for RViz (ROS 2 CDR): namespaces trajectory, tau, components (3 markers each), candidates",
+        holds: "the same for RViz (ROS 2 CDR), at the same times: namespaces trajectory, tau, \
+                components (3 markers each), candidates (id k)",
     },
 ];
 
@@ -471,9 +475,13 @@ fn plane_image(loops: &Loops, grid: &PlaneGrid, pairs: &[[usize; 2]]) -> loops_c
 }
 
 /// Writes `scene` as an MCAP file on the topics of [`SCENE_TOPICS`]: Foxglove's schemas
-/// (protobuf, each with its descriptor set) and a ROS 2 `MarkerArray` (CDR), one message each
-/// (one per session on `/loops/trajectory`), all at the first pose's time (0 when it is not a
-/// time of 1970 to 2038), with a metadata record `loops` naming the sessions. Every entity lives
+/// (protobuf, each with its descriptor set) and a ROS 2 `MarkerArray` (CDR), on a timeline
+/// in nanoseconds from the poses' times (each session's own clock; 0 for a time outside 1970
+/// to 2038): each session's path and τ at its last pose's time, each component at the time its
+/// second stretch begins (when the robot comes back), each candidate (entity `candidate/<k>`)
+/// at its later pose's time, the plane at the first pose's time; the MarkerArray holds the same
+/// markers at the same times. Messages are in time order, with a metadata record `loops`
+/// naming the sessions. Every entity lives
 /// until replaced (no lifetime). The file is chunked (zstd), indexed and written atomically; an
 /// existing file is replaced only with `overwrite`. O(poses + components + candidates + pixels).
 ///
@@ -529,15 +537,17 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
         .compression(Some(mcap::Compression::Zstd))
         .compression_threads(0)
         .create(BufWriter::new(out))?;
-    let stamp = scene.paths.first().and_then(|p| p.timestamps_s.first()).and_then(|&t| RosTime::of_seconds(t));
-    let stamp = stamp.unwrap_or(RosTime { sec: 0, nanosec: 0 });
-    let timestamp = Some(Timestamp::new(stamp.sec.unsigned_abs(), stamp.nanosec));
-    let mut sequence = 0;
-    let mut add = |writer: &mut mcap::Writer<BufWriter<W>>, channel_id: u16, data: &[u8]| {
-        let header = MessageHeader { channel_id, sequence, log_time: stamp.ns(), publish_time: stamp.ns() };
-        sequence += 1;
-        writer.write_to_known_channel(&header, data)
+    // Each message at the time its poses were reached, on its session's clock: 0 for a time
+    // outside 1970 to 2038.
+    let time = |session: usize, pose: usize| {
+        scene.paths[session]
+            .timestamps_s
+            .get(pose)
+            .and_then(|&t| RosTime::of_seconds(t))
+            .unwrap_or(RosTime { sec: 0, nanosec: 0 })
     };
+    let last = |session: usize| time(session, scene.paths[session].positions.len().saturating_sub(1));
+    let timestamp = |stamp: RosTime| Some(Timestamp::new(stamp.sec.unsigned_abs(), stamp.nanosec));
     let mut channels = Vec::new();
     for topic in &SCENE_TOPICS[..5] {
         let (schema, encoding, data) = match topic.schema {
@@ -551,56 +561,48 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
     let schema_id = writer.add_schema(SCENE_TOPICS[5].schema, "ros2msg", MARKER_ARRAY_SCHEMA.as_bytes())?;
     let markers_channel = writer.add_channel(schema_id, SCENE_TOPICS[5].topic, "cdr", &BTreeMap::new())?;
 
+    // Every message with its time and channel, written in time order at the end.
+    let mut messages: Vec<(RosTime, u16, Vec<u8>)> = Vec::new();
     let frame_id = &scene.frame_id;
-    for path in &scene.paths {
-        let orientations = path.orientations_xyzw.as_deref();
-        let message = poses_in_frame(frame_id, timestamp, &path.positions, orientations);
-        add(&mut writer, channels[0], &encoded(&message)?)?;
-    }
     let update = |entities: Vec<SceneEntity>| SceneUpdate { deletions: Vec::new(), entities };
     let max_tau = scene.max_loop_duration_s();
-    let tau = update(
-        scene
-            .paths
-            .iter()
-            .map(|p| tau_entity(frame_id, timestamp, &p.name, &p.positions, &p.loop_duration_s, max_tau))
-            .collect(),
-    );
-    add(&mut writer, channels[1], &encoded(&tau)?)?;
-    let components = update(
-        scene
-            .components
-            .iter()
-            .map(|c| {
-                let [a, b] = c.sessions;
-                let (paths, names) = ([&scene.paths[a], &scene.paths[b]], [&scene.paths[a].name, &scene.paths[b].name]);
-                component_entity(
-                    frame_id,
-                    timestamp,
-                    paths.map(|p| p.positions.as_slice()),
-                    names.map(String::as_str),
-                    c,
-                )
-            })
-            .collect(),
-    );
-    add(&mut writer, channels[2], &encoded(&components)?)?;
-    let candidate_points: Vec<[f64; 3]> = scene
-        .candidates
-        .iter()
-        .flat_map(|c| [scene.position(c.sessions[0], c.poses[0]), scene.position(c.sessions[1], c.poses[1])])
-        .collect();
-    let candidates = update(vec![candidates_entity(
-        frame_id,
-        timestamp,
-        "candidates".to_owned(),
-        candidate_points.clone(),
-        vec![("count", scene.candidates.len().to_string())],
-    )]);
-    add(&mut writer, channels[3], &encoded(&candidates)?)?;
+    let markers = SceneMarkers::new(scene);
+    for (k, path) in scene.paths.iter().enumerate() {
+        // The whole path, and its τ, at its last pose's time.
+        let stamp = last(k);
+        let orientations = path.orientations_xyzw.as_deref();
+        let poses = poses_in_frame(frame_id, timestamp(stamp), &path.positions, orientations);
+        messages.push((stamp, channels[0], encoded(&poses)?));
+        let entity =
+            tau_entity(frame_id, timestamp(stamp), &path.name, &path.positions, &path.loop_duration_s, max_tau);
+        messages.push((stamp, channels[1], encoded(&update(vec![entity]))?));
+        messages.push((stamp, markers_channel, markers.path(k, stamp)));
+    }
+    for (k, c) in scene.components.iter().enumerate() {
+        // When the robot comes back: the first pose of its second stretch.
+        let [a, b] = c.sessions;
+        let stamp = time(b, c.poses[1][0]);
+        let (paths, names) = ([&scene.paths[a], &scene.paths[b]], [&scene.paths[a].name, &scene.paths[b].name]);
+        let positions = paths.map(|p| p.positions.as_slice());
+        let entity = component_entity(frame_id, timestamp(stamp), positions, names.map(String::as_str), c);
+        messages.push((stamp, channels[2], encoded(&update(vec![entity]))?));
+        messages.push((stamp, markers_channel, markers.component(k, stamp)));
+    }
+    for (k, c) in scene.candidates.iter().enumerate() {
+        // At the later pose's time.
+        let stamp = time(c.sessions[1], c.poses[1]);
+        let points = vec![scene.position(c.sessions[0], c.poses[0]), scene.position(c.sessions[1], c.poses[1])];
+        let entity =
+            candidates_entity(frame_id, timestamp(stamp), format!("candidate/{k}"), points.clone(), Vec::new());
+        messages.push((stamp, channels[3], encoded(&update(vec![entity]))?));
+        messages.push((stamp, markers_channel, markers.candidate(k, points, stamp)));
+    }
+    // The plane sums up the whole run: from the first pose on.
+    let stamp = scene.paths.iter().enumerate().map(|(k, _)| time(k, 0)).min_by_key(|t| t.ns());
+    let stamp = stamp.unwrap_or(RosTime { sec: 0, nanosec: 0 });
     let plane = &scene.plane;
     let image = RawImage {
-        timestamp,
+        timestamp: timestamp(stamp),
         frame_id: "plane".to_owned(),
         width: plane.width as u32,
         height: plane.height as u32,
@@ -608,10 +610,14 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
         step: (plane.width * 3) as u32,
         data: plane.rgb.clone().into(),
     };
-    add(&mut writer, channels[4], &encoded(&image)?)?;
-    let mut data = Vec::new();
-    marker_array(&mut data, scene, stamp, &candidate_points);
-    add(&mut writer, markers_channel, &data)?;
+    messages.push((stamp, channels[4], encoded(&image)?));
+
+    messages.sort_by_key(|(stamp, _, _)| stamp.ns()); // stable: ties keep the order above
+    for (sequence, (stamp, channel_id, data)) in messages.into_iter().enumerate() {
+        let header =
+            MessageHeader { channel_id, sequence: sequence as u32, log_time: stamp.ns(), publish_time: stamp.ns() };
+        writer.write_to_known_channel(&header, &data)?;
+    }
 
     let names: Vec<&str> = scene.paths.iter().map(|p| p.name.as_str()).collect();
     let metadata = BTreeMap::from([
@@ -825,52 +831,72 @@ struct Marker<'a> {
     colors: &'a [[f64; 4]],
 }
 
-/// The scene as a `MarkerArray` in CDR, into `data`: namespace `trajectory` (id = session),
-/// `tau` (id = session, a colour per pose), `components` (ids 3k, 3k + 1: the stretches of
-/// component k; 3k + 2: its closest pair) and `candidates` (id 0: every pair, in order). Ids
+/// The scene's markers for RViz, one `MarkerArray` (CDR) a message: namespaces `trajectory`
+/// and `tau` (id = session, `tau` with a colour per pose), `components` (ids 3k, 3k + 1: the
+/// stretches of component k; 3k + 2: its closest pair) and `candidates` (id k: pair k). Ids
 /// past `i32::MAX` wrap (no scene has that many components).
-fn marker_array(data: &mut Vec<u8>, scene: &Scene, stamp: RosTime, candidate_points: &[[f64; 3]]) {
-    let max_tau = scene.max_loop_duration_s();
-    let tau_colors: Vec<Vec<[f64; 4]>> =
-        scene.paths.iter().map(|p| p.loop_duration_s.iter().map(|&t| tau_rgba(t, max_tau)).collect()).collect();
-    let stretches: Vec<[Vec<[f64; 3]>; 3]> = scene
-        .components
-        .iter()
-        .map(|c| {
-            let [a, b] = c.sessions;
-            [
-                scene.stretch(a, c.poses[0]),
-                scene.stretch(b, c.poses[1]),
-                vec![scene.position(a, c.closest_pair[0]), scene.position(b, c.closest_pair[1])],
-            ]
-        })
-        .collect();
-    let mut markers: Vec<Marker<'_>> = Vec::new();
-    for (k, p) in scene.paths.iter().enumerate() {
-        let (ns, id, width) = ("trajectory", k as i32, PATH_WIDTH);
-        markers.push(Marker { ns, id, kind: LINE_STRIP, width, rgba: [1.0; 4], points: &p.positions, colors: &[] });
-    }
-    for (k, p) in scene.paths.iter().enumerate() {
-        let (ns, id, width, colors) = ("tau", k as i32, PATH_WIDTH, tau_colors[k].as_slice());
-        markers.push(Marker { ns, id, kind: LINE_STRIP, width, rgba: [1.0; 4], points: &p.positions, colors });
-    }
-    for (c, lines) in scene.components.iter().zip(&stretches) {
-        for (k, points) in lines.iter().enumerate() {
-            let kind = if k == 2 { LINE_LIST } else { LINE_STRIP };
-            let id = (3 * c.id + k) as i32;
-            let (ns, width, rgba) = ("components", COMPONENT_WIDTH, c.rgba());
-            markers.push(Marker { ns, id, kind, width, rgba, points, colors: &[] });
-        }
-    }
-    let (ns, width, rgba) = ("candidates", CANDIDATE_WIDTH, CANDIDATE_RGBA);
-    markers.push(Marker { ns, id: 0, kind: LINE_LIST, width, rgba, points: candidate_points, colors: &[] });
+struct SceneMarkers<'a> {
+    scene: &'a Scene,
+    tau_colors: Vec<Vec<[f64; 4]>>,
+}
 
-    let mut cdr = CdrWriter::new(data);
+impl<'a> SceneMarkers<'a> {
+    fn new(scene: &'a Scene) -> Self {
+        let max_tau = scene.max_loop_duration_s();
+        let tau_colors =
+            scene.paths.iter().map(|p| p.loop_duration_s.iter().map(|&t| tau_rgba(t, max_tau)).collect()).collect();
+        Self { scene, tau_colors }
+    }
+
+    /// Session `k`'s path, white and coloured by τ.
+    fn path(&self, k: usize, stamp: RosTime) -> Vec<u8> {
+        let (points, colors) = (self.scene.paths[k].positions.as_slice(), self.tau_colors[k].as_slice());
+        let (id, width, rgba) = (k as i32, PATH_WIDTH, [1.0; 4]);
+        let markers = [
+            Marker { ns: "trajectory", id, kind: LINE_STRIP, width, rgba, points, colors: &[] },
+            Marker { ns: "tau", id, kind: LINE_STRIP, width, rgba, points, colors },
+        ];
+        marker_array(&self.scene.frame_id, stamp, &markers)
+    }
+
+    /// Component `k`'s two stretches and its closest pair.
+    fn component(&self, k: usize, stamp: RosTime) -> Vec<u8> {
+        let (scene, c) = (self.scene, &self.scene.components[k]);
+        let [a, b] = c.sessions;
+        let lines = [
+            scene.stretch(a, c.poses[0]),
+            scene.stretch(b, c.poses[1]),
+            vec![scene.position(a, c.closest_pair[0]), scene.position(b, c.closest_pair[1])],
+        ];
+        let markers: Vec<Marker<'_>> = lines
+            .iter()
+            .enumerate()
+            .map(|(part, points)| {
+                let kind = if part == 2 { LINE_LIST } else { LINE_STRIP };
+                let (ns, id, width, rgba) = ("components", (3 * c.id + part) as i32, COMPONENT_WIDTH, c.rgba());
+                Marker { ns, id, kind, width, rgba, points, colors: &[] }
+            })
+            .collect();
+        marker_array(&scene.frame_id, stamp, &markers)
+    }
+
+    /// Candidate `k`: the line between its two poses.
+    fn candidate(&self, k: usize, points: Vec<[f64; 3]>, stamp: RosTime) -> Vec<u8> {
+        let (ns, id, width, rgba) = ("candidates", k as i32, CANDIDATE_WIDTH, CANDIDATE_RGBA);
+        let marker = Marker { ns, id, kind: LINE_LIST, width, rgba, points: &points, colors: &[] };
+        marker_array(&self.scene.frame_id, stamp, &[marker])
+    }
+}
+
+/// `markers` as a `MarkerArray` in CDR, each stamped `stamp` in `frame_id`.
+fn marker_array(frame_id: &str, stamp: RosTime, markers: &[Marker<'_>]) -> Vec<u8> {
+    let mut data = Vec::new();
+    let mut cdr = CdrWriter::new(&mut data);
     cdr.u32(markers.len() as u32);
-    for marker in &markers {
+    for marker in markers {
         cdr.i32(stamp.sec);
         cdr.u32(stamp.nanosec);
-        cdr.string(&scene.frame_id);
+        cdr.string(frame_id);
         cdr.string(marker.ns);
         cdr.i32(marker.id);
         cdr.i32(marker.kind);
@@ -902,6 +928,7 @@ fn marker_array(data: &mut Vec<u8>, scene: &Scene, stamp: RosTime, candidate_poi
         cdr.u32(0); // and no data
         cdr.bool(false); // mesh_use_embedded_materials
     }
+    data
 }
 
 #[cfg(test)]
