@@ -302,8 +302,9 @@ fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
 }
 
 /// Nearest-then-uniform: up to one row in six, all picks are closest pairs of rows (checked
-/// against every cell of the row), every component's closest pair among them, spread in
-/// proportion to the rows; beyond that, every component keeps those picks and
+/// against every cell of the row), every component's closest pair among them, shared in
+/// proportion to the rows as σ_ρ shares them (below one per component too, where a long
+/// component may take two); beyond that, every component keeps those picks and
 /// the rest is shared in proportion to the pairs each has left, within one of its expectation.
 #[test]
 fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
@@ -362,15 +363,42 @@ fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
             let [i, j] = components[c].closest_pair;
             assert!(picked.contains(&[i.min(j), i.max(j)]), "component {c} without its closest pair");
         }
-        // One each, then in proportion to the rows: no component far above its share.
-        let scale = (near_total / 2 - groups.len() as u64) as f64 / groups.iter().map(|&c| span(c)).sum::<u64>() as f64;
+        // At least one each, then in proportion to the rows as σ_ρ: no component far above
+        // its share (the floors of one only lower the others' scale).
+        let scale = (near_total / 2) as f64 / groups.iter().map(|&c| span(c)).sum::<u64>() as f64;
         for (&c, &k) in &counts {
             assert!(
-                k as f64 <= 2.5 + scale * span(c) as f64,
+                k as f64 <= 2.0 + scale * span(c) as f64,
                 "component {c}: {k} picks, share {:.2}",
                 scale * span(c) as f64
             );
         }
+
+        // Fewer picks than components: shared by rows as σ_ρ shares them (a long component
+        // takes more than one, never more than its near cap), all closest pairs of rows.
+        let budget = groups.len() / 2;
+        let sampler = Sampler::new(SamplerKind::NearestThenUniform, SampleSize::Budget(budget), seed);
+        let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+        assert_eq!(samples.len(), budget);
+        assert!(matches!(samples.warnings(), [SampleWarning::BudgetBelowGroups { .. }]));
+        let mut counts: BTreeMap<usize, u64> = BTreeMap::new();
+        for r in samples.rows() {
+            let c = r.component.unwrap();
+            *counts.entry(c).or_default() += 1;
+            if !components[c].trivial {
+                let [i, _] = r.pair.unwrap();
+                assert_eq!(r.distance.unwrap(), closest(c, i), "{:?}: not its row's closest pair", r.pair);
+            }
+        }
+        let spans: u64 = groups.iter().map(|&c| span(c)).sum();
+        for (&c, &k) in &counts {
+            assert!(k <= near(c), "component {c}: {k} picks above its near cap {}", near(c));
+        }
+        let longest = *groups.iter().max_by_key(|&&c| span(c)).unwrap();
+        // Its share at least budget · span / Σ span (caps on others only raise it), floored.
+        let share = (budget as u64 * span(longest) / spans).min(near(longest));
+        assert!(share >= 2, "the setup gives no component two picks: {share}");
+        assert!(counts.get(&longest).copied().unwrap_or(0) >= share, "longest component below its share {share}");
 
         let budget = near_total + (available - near_total) / 3;
         let samples = draw(budget, seed);

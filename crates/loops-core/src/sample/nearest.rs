@@ -2,8 +2,8 @@
 //! closest pairs of its rows, and how many are uniform over its pairs.
 //!
 //! Small budgets go to rows' closest pairs, as LIO-SAM's rule matches each keyframe with its
-//! nearest revisit: each component's closest pair first (P1), then the closest pairs of rows
-//! spread along the components in proportion to their rows, up to one row in
+//! nearest revisit: each component's closest pair first (P1), the closest pairs of rows
+//! spread along the components in proportion to their rows (as σ_ρ shares its picks), up to one row in
 //! [`NEAR_ROW_STRIDE`] (the closest pairs of neighbouring rows are near copies of one scan
 //! match). Whatever the budget leaves beyond that is uniform over each component's pairs, in
 //! proportion to the pairs it has left, as the time-gap rule draws over all pairs: those
@@ -11,7 +11,7 @@
 
 use rand::{Rng, RngExt};
 
-use crate::draw::{SampleSize, SampleWarning, first_then_quotas, group_quotas};
+use crate::draw::{SampleSize, SampleWarning, group_quotas};
 
 /// One component's counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,10 +45,11 @@ pub(crate) fn near_cap(rows: u64, pairs: u64) -> u64 {
 
 /// The counts of each component with `rows` rows and `pairs` pairs (every one ≥ 1).
 ///
-/// Budget `B`: with `N = Σ near_cap`, a budget up to `N` is all closest pairs of rows
-/// ([`first_then_quotas`] over the near caps, by rows: one per component first; below the
-/// number of components, one to that many, with a warning); beyond `N`, every component takes
-/// its near cap and `B − N` is shared in proportion to the pairs left (`pairs − near`),
+/// Budget `B`: with `N = Σ near_cap`, a budget up to `N` is all closest pairs of rows shared
+/// by rows as σ_ρ shares its picks ([`group_quotas`] over the near caps: at least one per
+/// component when the budget has one for each, none below that, with a warning), so that a
+/// long component may take two or more where short ones take one; beyond `N`, every component
+/// takes its near cap and `B − N` is shared in proportion to the pairs left (`pairs − near`),
 /// rounded systematically with one draw of `rng`, so that the counts sum to `B` exactly (all
 /// pairs, with a warning, for a budget above them). Rate `r`: σ_ρ's counts (`r · rows`, at
 /// least 1, at most the pairs), the first up to the near cap closest pairs of rows.
@@ -73,7 +74,10 @@ pub(crate) fn nearest_then_uniform_quotas<R: Rng + ?Sized>(
             let budget = budget as u64;
             let near_total: u64 = near.iter().sum();
             if budget <= near_total {
-                return first_then_quotas(&weights, &near, size, rng, warnings)
+                // All closest pairs of rows, shared by rows as σ_ρ shares its picks: at least
+                // one each from a budget of one per component, and a long component may take
+                // two or more where short ones take one (none, below one per component).
+                return group_quotas(&weights, &near, size, rng, warnings)
                     .into_iter()
                     .map(|near| Split { near, uniform: 0 })
                     .collect();
@@ -136,7 +140,7 @@ mod tests {
     }
 
     #[test]
-    fn small_budgets_are_closest_pairs_of_rows_one_per_component_first() {
+    fn small_budgets_are_closest_pairs_of_rows_shared_by_rows_at_least_one_each() {
         // Near caps 50, 5, 1: N = 56.
         let (rows, pairs) = ([300, 30, 1], [1000, 40, 3]);
         for seed in 0..20 {
@@ -145,17 +149,45 @@ mod tests {
             assert!(q.iter().all(|s| s.uniform == 0 && s.near >= 1), "{q:?}");
             assert_eq!(q.iter().map(|s| s.near).sum::<u64>(), 30);
             assert!(q[0].near <= 50 && q[1].near <= 5 && q[2].near == 1);
-            // Beyond the first: 27 in proportion to the rows (300 : 30 : 1, capped).
-            assert!((q[0].near as f64 - 25.5).abs() <= 1.0, "{q:?}");
+            // max(1, s · rows) as σ_ρ: 330 s + 1 = 30, the long one's share 300 s = 26.4 (one
+            // first and then 27 by rows would give it 25.5).
+            assert!((q[0].near as f64 - 29.0 * 300.0 / 330.0).abs() < 1.0, "{q:?}");
         }
     }
 
     #[test]
-    fn a_budget_below_the_components_covers_that_many() {
-        let (q, warnings) = quotas(&[100, 10, 1, 7], &[1000, 40, 3, 9], SampleSize::Budget(2), 3);
+    fn a_budget_below_the_components_is_shared_by_rows() {
+        // Near caps 17, 2, 1, 2; rows 100 : 10 : 1 : 7 of 118.
+        let (rows, pairs) = ([100, 10, 1, 7], [1000, 40, 3, 9]);
+        let (q, warnings) = quotas(&rows, &pairs, SampleSize::Budget(2), 3);
+        assert!(q.iter().all(|s| s.uniform == 0));
+        // 2 · 100 / 118 = 1.69: the long component takes one or two, never none.
+        assert!(q[0].near >= 1 && q[0].near <= 2, "{q:?}");
         assert_eq!(q.iter().map(|s| s.total()).sum::<u64>(), 2);
-        assert!(q.iter().all(|s| s.near <= 1 && s.uniform == 0));
         assert!(matches!(warnings[..], [SampleWarning::BudgetBelowGroups { budget: 2, groups: 4 }]));
+        // Over seeds the long component's mean is its share, 1.69, where one pick per component
+        // would give it at most 1.
+        let mean = (0..400).map(|seed| quotas(&rows, &pairs, SampleSize::Budget(2), seed).0[0].near).sum::<u64>()
+            as f64
+            / 400.0;
+        assert!((mean - 200.0 / 118.0).abs() < 0.06, "{mean}");
+    }
+
+    #[test]
+    fn a_budget_below_the_components_stays_within_the_near_caps() {
+        // One long component and thirty one-row ones: 20 picks over 31 components; the long
+        // one's share, 20 · 60 / 90 = 13.3, is capped at its near cap, 60 / 6 = 10, and the
+        // other 10 go to ten of the one-row components.
+        let mut rows = vec![60];
+        rows.extend([1; 30]);
+        let mut pairs = vec![5000];
+        pairs.extend([2; 30]);
+        for seed in 0..20 {
+            let (q, _) = quotas(&rows, &pairs, SampleSize::Budget(20), seed);
+            assert_eq!(q[0].near, 10, "{q:?}");
+            assert_eq!(q.iter().map(|s| s.total()).sum::<u64>(), 20);
+            assert!(q[1..].iter().all(|s| s.near <= 1 && s.uniform == 0), "{q:?}");
+        }
     }
 
     #[test]
