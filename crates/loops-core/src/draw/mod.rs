@@ -23,15 +23,16 @@ pub(crate) use quota::{first_then_quotas, group_quotas};
 /// A larger request (a budget such as `u64::MAX` meant as "all of them" on hours of driving, or
 /// a rate that keeps tens of millions of pairs) is refused before anything is drawn with
 /// [`Error::TooManySamples`], which says how many samples it would make and how much memory they
-/// would take: its answer would cost gigabytes (a sample is about 250 bytes while it is built)
+/// would take: its answer would cost gigabytes (a sample is about 500 bytes while it is built)
 /// and minutes, and could exhaust memory. Ask for fewer, or split the work (by component, or by
 /// stretch of the trajectory).
 pub const MAX_SAMPLES: usize = 5_000_000;
 
 /// Bytes one sample takes while a sampler builds it, for the estimate of
-/// [`Error::TooManySamples`]: the row (128 bytes), half of it again for the sort, the drawn
-/// number, the pair and the index draw's scratch.
-pub(crate) const SAMPLE_BYTES: u64 = 256;
+/// [`Error::TooManySamples`]: the row (264 bytes, with both poses' positions), half of it again
+/// for the sort, the drawn number, the pair and the index draw's scratch. The sample module
+/// checks at compile time that its row fits this estimate.
+pub(crate) const SAMPLE_BYTES: u64 = 512;
 
 /// Bytes one drawn detection takes while it is drawn: t and t′, the pair, the drawn number.
 pub(crate) const DETECTION_BYTES: u64 = 40;

@@ -9,6 +9,9 @@ use crate::metric::Metric;
 use crate::spec::check_fits;
 use crate::trajectory::Trajectory;
 
+// The memory estimate of a draw that is too big counts at least one and a half rows a sample.
+const _: () = assert!(3 * size_of::<Sample>() as u64 / 2 <= crate::draw::SAMPLE_BYTES);
+
 /// One sampled loop: a candidate pair for the scan matcher.
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[derive(Debug, Clone, Copy, PartialEq)]
