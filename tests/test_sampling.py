@@ -419,6 +419,7 @@ def test_sample_files(drive, tmp_path):
         "score",
         "sampler",
         *["dx", "dy", "dz", "dqx", "dqy", "dqz", "dqw", "dtheta_rad"],
+        *["i_x", "i_y", "i_z", "j_x", "j_y", "j_z"],
     ]
     assert len(rows) == len(samples)
     np.testing.assert_array_equal([float(r["t_s"]) for r in rows], samples.t)
