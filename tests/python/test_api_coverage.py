@@ -1552,3 +1552,31 @@ def test_every_public_name_is_covered():
     assert not stale, f"tests for names that are not public: {stale}"
     for name, (file, test) in ELSEWHERE.items():
         assert f"def {test}(" in (TESTS.parent / file).read_text(), (name, file, test)
+
+
+@covers("DEFAULT_BUDGET", "SAMPLER_NAMES", "BASELINE_NAMES")
+def test_sampler_names_and_default_budget_come_from_the_core(loops_cli):
+    from inexact_loops.dask import _cli as dask_cli
+
+    traj = il.urban_drive(duration_s=300.0, seed=3)
+    loops = il.find_loops(traj, gamma=40.0)
+    assert set(il.SAMPLER_NAMES).isdisjoint(il.BASELINE_NAMES)
+    for name in il.SAMPLER_NAMES + il.BASELINE_NAMES:
+        il.sample(loops, name, budget=5, seed=0, trajectory=traj)
+    with pytest.raises(il.errors.LoopsError) as refused:
+        il.sample(loops, "no-such-sampler", budget=5, seed=0)
+    listed = re.findall(r"[a-z][a-z-]+", str(refused.value).split("expected", 1)[-1])
+    assert set(il.SAMPLER_NAMES + il.BASELINE_NAMES) <= set(listed), str(refused.value)
+    assert il.DEFAULT_SAMPLER in il.SAMPLER_NAMES
+
+    # loops-dask's help lists the samplers that draw from tiles, with the core's default budget.
+    helps = {a.dest: a.help for a in dask_cli._parser()._actions}
+    assert all(name in helps["sampler"] for name in il.SAMPLER_NAMES)
+    assert not any(name in helps["sampler"] for name in il.BASELINE_NAMES)
+    assert f"default: {il.DEFAULT_BUDGET} " in helps["budget"]
+
+    # The command line draws DEFAULT_BUDGET samples when given neither a rate nor a budget.
+    cli = subprocess.run(
+        [loops_cli, "sample", "--help"], capture_output=True, text=True, check=True
+    )
+    assert f"[default: {il.DEFAULT_BUDGET}" in " ".join(cli.stdout.split()), cli.stdout
