@@ -283,6 +283,8 @@ TABLES = {
         "t_min_s": "float64", "t_max_s": "float64",
         "t_prime_min_s": "float64", "t_prime_max_s": "float64", "closest_i": "int64",
         "closest_j": "int64", "closest_distance": "float64",
+        "closest_i_x": "float64", "closest_i_y": "float64", "closest_i_z": "float64",
+        "closest_j_x": "float64", "closest_j_y": "float64", "closest_j_z": "float64",
     }),
     "Loops.runs": (lambda r: r.loops.runs(), {
         "row": "int64", "start": "int64", "end": "int64", "component": "int64",
@@ -359,6 +361,7 @@ def test_samples_to_pandas_equals_the_csv(results, tmp_path):
     assert list(frame.columns) == [
         "t", "t_prime", "i", "j", "component", "cluster", "detection", "distance",
         "dx", "dy", "dz", "dqx", "dqy", "dqz", "dqw", "dtheta_rad",
+        "i_x", "i_y", "i_z", "j_x", "j_y", "j_z",
     ]  # fmt: skip
     assert len(frame) == len(samples)
     path = tmp_path / "samples.csv"
@@ -369,6 +372,8 @@ def test_samples_to_pandas_equals_the_csv(results, tmp_path):
     for column in ("i", "j", "component"):
         np.testing.assert_array_equal(frame[column], csv[column], err_msg=column)
     np.testing.assert_allclose(frame["distance"], csv["distance"], rtol=1e-12)
+    for column in ("i_x", "i_y", "i_z", "j_x", "j_y", "j_z"):
+        np.testing.assert_allclose(frame[column], csv[column], rtol=1e-12, err_msg=column)
     assert (frame["cluster"] == -1).all() and csv["cluster"].isna().all()
 
 
