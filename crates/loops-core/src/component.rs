@@ -256,7 +256,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     // What each run adds is worked out in parallel, a batch of rows at a time; the tallies then
     // add it up in row order, as one thread would, so the sums are the same on any number.
     let mut terms: Vec<RunTerms> = Vec::new();
-    drop(timer);
+    timer.finish();
     for batch in (0..rows).step_by(ROWS_PER_TALLY_BATCH) {
         interrupt.check()?;
         let batch = batch..(batch + ROWS_PER_TALLY_BATCH).min(rows);
@@ -294,7 +294,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
                 }
             }
         });
-        drop(timer);
+        timer.finish();
         let _timer = PhaseTimer::start("tally: sums in row order, serial");
         for i in batch {
             let row_offset = set.row_offset(i);
@@ -415,7 +415,7 @@ fn try_label_runs_in(
         for_each_overlap(set, stretch.start..stretch.end - 1, |a, b| forest.union(a, b));
     });
     interrupt.check()?;
-    drop(timer);
+    timer.finish();
     let _timer = PhaseTimer::start("label: joins across stretches and numbering, serial");
     let mut forest = MinRootForest::new(&mut parent, 0);
     for &start in starts.iter().skip(1) {
