@@ -6,9 +6,9 @@ use rayon::prelude::*;
 
 use crate::error::Result;
 use crate::interrupt::Interrupt;
-use crate::memory::{try_collect, try_filled, try_reserve, try_with_capacity};
+use crate::memory::{try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
-use crate::sublevel::{Run, SublevelSet};
+use crate::sublevel::{PhaseTimer, Run, SublevelSet};
 use crate::trajectory::{Trajectory, prefix_sums_by_session};
 use crate::union_find::{MinRootForest, number_sets};
 
@@ -247,6 +247,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     interrupt: &Interrupt,
 ) -> Result<Labelling> {
     let (labels, count) = try_label_runs(set, ROWS_PER_LABEL_TASK, interrupt)?;
+    let timer = PhaseTimer::start("tally: prefix sums and tallies, serial");
     let widths = traj.cell_widths_s();
     let prefix = prefix_sums_by_session(widths, set.breaks())?;
 
@@ -255,6 +256,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     // What each run adds is worked out in parallel, a batch of rows at a time; the tallies then
     // add it up in row order, as one thread would, so the sums are the same on any number.
     let mut terms: Vec<RunTerms> = Vec::new();
+    timer.finish();
     for batch in (0..rows).step_by(ROWS_PER_TALLY_BATCH) {
         interrupt.check()?;
         let batch = batch..(batch + ROWS_PER_TALLY_BATCH).min(rows);
@@ -271,6 +273,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
             tasks.push((start..end, slice));
             rest = tail;
         }
+        let timer = PhaseTimer::start("tally: terms, parallel");
         tasks.into_par_iter().for_each(|(task, slice)| {
             let offset = set.row_offset(task.start);
             for i in task {
@@ -291,6 +294,8 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
                 }
             }
         });
+        timer.finish();
+        let _timer = PhaseTimer::start("tally: sums in row order, serial");
         for i in batch {
             let row_offset = set.row_offset(i);
             for (k, run) in set.row(i).iter().enumerate() {
@@ -304,6 +309,7 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
         }
     }
 
+    let _timer = PhaseTimer::start("tally: components, serial");
     let mut components = try_with_capacity(tallies.len(), "the loop components")?;
     components.extend(tallies.into_iter().enumerate().map(|(id, t)| {
         debug_assert!(t.check().is_ok(), "a component's tally: {:?}", t.check());
@@ -331,8 +337,16 @@ const ROWS_PER_TALLY_BATCH: usize = 1 << 14;
 /// Rows whose runs' terms one rayon task works out.
 const ROWS_PER_TALLY_TASK: usize = 1 << 9;
 
-/// Rows whose runs are joined by one rayon task before the joins across tasks.
+/// Rows whose runs are joined by one rayon task before the joins across tasks, at most.
 pub(crate) const ROWS_PER_LABEL_TASK: usize = 1 << 14;
+
+/// Stretches of rows a thread labels, of about equal runs: rayon hands them out as threads come
+/// free, so a dense part of the drive does not leave the other threads waiting.
+const LABEL_TASKS_PER_THREAD: usize = 8;
+
+/// Runs of the smallest stretch of rows one task labels (the joins across stretches are serial,
+/// one pair of rows each).
+const MIN_RUNS_PER_LABEL_TASK: usize = 1 << 12;
 
 /// The component id of every run, ids numbered by first appearance (row-major), and the number
 /// of components.
@@ -353,18 +367,42 @@ pub(crate) fn label_runs(set: &SublevelSet, rows_per_task: usize) -> (Vec<u32>, 
 /// [`label_runs`], with the labels allocated fallibly and `interrupt` checked between
 /// stretches.
 fn try_label_runs(set: &SublevelSet, rows_per_task: usize, interrupt: &Interrupt) -> Result<(Vec<u32>, u32)> {
+    let runs_per_task =
+        set.runs().len().div_ceil(LABEL_TASKS_PER_THREAD * rayon::current_num_threads()).max(MIN_RUNS_PER_LABEL_TASK);
+    try_label_runs_in(set, (rows_per_task, runs_per_task), interrupt)
+}
+
+/// [`try_label_runs`] over stretches of at most `rows_per_task` rows that end at the row that
+/// takes them past `runs_per_task` runs.
+fn try_label_runs_in(
+    set: &SublevelSet,
+    (rows_per_task, runs_per_task): (usize, usize),
+    interrupt: &Interrupt,
+) -> Result<(Vec<u32>, u32)> {
     let run_count = set.runs().len();
     debug_assert!(run_count <= u32::MAX as usize, "run ids are u32");
+    let timer = PhaseTimer::start("label: stretches, parallel");
     let mut parent: Vec<u32> = Vec::new();
     try_reserve(&mut parent, run_count, "the component labels of the runs")?;
     parent.par_extend(0..run_count as u32);
     let rows = set.rows();
-    let starts: Vec<usize> = try_collect((0..rows).step_by(rows_per_task.max(1)), "the component labels of the runs")?;
+    // Stretches of about equal work (runs), several a thread, so that a part of the drive dense
+    // with revisits is shared out too: a stretch ends after `rows_per_task` rows or at the row
+    // that takes it past its share of the runs, whichever comes first.
+    let offsets = set.row_offsets();
+    let mut starts: Vec<usize> = Vec::new();
+    let mut start = 0;
+    while start < rows {
+        try_reserve(&mut starts, 1, "the component labels of the runs")?;
+        starts.push(start);
+        let by_runs = offsets.partition_point(|&offset| offset < offsets[start].saturating_add(runs_per_task));
+        start = by_runs.clamp(start + 1, (start + rows_per_task.max(1)).min(rows));
+    }
     // Each stretch of rows with its own slice of the parent array.
     let mut stretches = try_with_capacity(starts.len(), "the component labels of the runs")?;
     let mut rest = parent.as_mut_slice();
-    for &start in &starts {
-        let end = (start + rows_per_task.max(1)).min(rows);
+    for (k, &start) in starts.iter().enumerate() {
+        let end = starts.get(k + 1).copied().unwrap_or(rows);
         let (slice, tail) = rest.split_at_mut(set.row_offset(end) - set.row_offset(start));
         stretches.push((start..end, slice));
         rest = tail;
@@ -377,6 +415,8 @@ fn try_label_runs(set: &SublevelSet, rows_per_task: usize, interrupt: &Interrupt
         for_each_overlap(set, stretch.start..stretch.end - 1, |a, b| forest.union(a, b));
     });
     interrupt.check()?;
+    timer.finish();
+    let _timer = PhaseTimer::start("label: joins across stretches and numbering, serial");
     let mut forest = MinRootForest::new(&mut parent, 0);
     for &start in starts.iter().skip(1) {
         for_each_overlap(set, start - 1..start, |a, b| forest.union(a, b));
@@ -468,9 +508,12 @@ mod tests {
         let expected = reference_labels(&set);
         assert!(expected.iter().max().is_some_and(|&m| m > 3), "the walk should make several components");
         for rows_per_task in [1, 2, 3, 7, 64, 699, 700, 10_000] {
-            let (labels, count) = try_label_runs(&set, rows_per_task, &Interrupt::new()).unwrap();
-            assert_eq!(labels, expected, "{rows_per_task} rows a task");
-            assert_eq!(Some(count), expected.iter().max().map(|m| m + 1));
+            for runs_per_task in [1, 2, 5, 40, 300, usize::MAX] {
+                let stretches = (rows_per_task, runs_per_task);
+                let (labels, count) = try_label_runs_in(&set, stretches, &Interrupt::new()).unwrap();
+                assert_eq!(labels, expected, "{rows_per_task} rows, {runs_per_task} runs a task");
+                assert_eq!(Some(count), expected.iter().max().map(|m| m + 1));
+            }
         }
     }
 }

@@ -10,7 +10,7 @@ use crate::memory::{try_copy, try_reserve};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, recorded_metric_name, with_metric};
-use crate::sublevel::SublevelSet;
+use crate::sublevel::{PhaseTimer, SublevelSet};
 use crate::trajectory::{Timeline, Trajectory, cell_of, sealed};
 
 /// Something worth telling the user about a result that is still correct.
@@ -219,6 +219,7 @@ impl Loops {
     pub fn try_from_set<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: SublevelSet) -> Result<Self> {
         assert_eq!(set.rows(), traj.len(), "sublevel set and trajectory differ in length");
         let labelling = label_components(traj, metric, &set, &Interrupt::current())?;
+        let _timer = PhaseTimer::start("result: diagonal gaps and copies, serial");
         let n = traj.len();
         // A row whose first run does not reach column i + 1 breaks the diagonal (a metric that
         // breaks δ(x, x) = 0 may even leave the diagonal cell out).
@@ -414,6 +415,7 @@ impl Loops {
     /// # Errors
     /// [`Error::UnknownComponent`] for an id that does not exist.
     pub fn loop_duration(&self, selection: Selection<'_>, side: Side, scale: Scale) -> Result<Vec<f64>> {
+        let _timer = PhaseTimer::start("tau: loop durations, serial");
         let keep = self.selection_mask(selection)?;
         let rows = (0..self.len()).map(|i| (i, self.set.row(i)));
         let mut tau =

@@ -16,16 +16,6 @@ pub(crate) fn try_reserve<T>(vec: &mut Vec<T>, additional: usize, what: &'static
     vec.try_reserve(additional).map_err(|_| out_of_memory::<T>(vec.len().saturating_add(additional), what))
 }
 
-/// Appends `items` to `vec`, growing it fallibly.
-///
-/// # Errors
-/// As [`try_reserve`].
-pub(crate) fn try_extend<T: Clone>(vec: &mut Vec<T>, items: &[T], what: &'static str) -> Result<()> {
-    try_reserve(vec, items.len(), what)?;
-    vec.extend_from_slice(items);
-    Ok(())
-}
-
 /// An empty vector with room for `capacity` elements.
 ///
 /// # Errors

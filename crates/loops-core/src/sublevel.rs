@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
-use crate::memory::{try_collect, try_extend, try_filled, try_reserve, try_with_capacity};
+use crate::memory::{try_collect, try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
@@ -74,6 +74,52 @@ pub struct SublevelSet {
     breaks: Vec<u32>,
 }
 
+/// The wall and CPU time of one phase of the engine, written to stderr (`phase NAME WALL_MS
+/// CPU_MS`) when it is dropped, with the `phase-times` feature: profiles of the parallel split
+/// name the phases that run on one thread `serial`. The CPU time is the process's, summed over
+/// its threads (`/proc/self/task/*/schedstat`, Linux), so that a loaded machine, which stretches
+/// the wall time, does not change it. Nothing without the feature.
+#[derive(Debug)]
+pub(crate) struct PhaseTimer {
+    #[cfg(feature = "phase-times")]
+    phase: (&'static str, std::time::Instant, u64),
+}
+
+impl PhaseTimer {
+    /// Starts timing the phase `name`.
+    #[inline]
+    pub(crate) fn start(name: &'static str) -> Self {
+        let _ = name;
+        Self {
+            #[cfg(feature = "phase-times")]
+            phase: (name, std::time::Instant::now(), process_cpu_ns()),
+        }
+    }
+
+    /// Ends the phase here (the time is written as the timer is dropped).
+    #[inline]
+    pub(crate) fn finish(self) {}
+}
+
+/// CPU time of this process so far, nanoseconds: its threads' run time (0 where unknown).
+#[cfg(feature = "phase-times")]
+fn process_cpu_ns() -> u64 {
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else { return 0 };
+    let run_ns = |task: std::fs::DirEntry| -> Option<u64> {
+        std::fs::read_to_string(task.path().join("schedstat")).ok()?.split_whitespace().next()?.parse().ok()
+    };
+    tasks.filter_map(|task| task.ok().and_then(run_ns)).sum()
+}
+
+#[cfg(feature = "phase-times")]
+impl Drop for PhaseTimer {
+    fn drop(&mut self) {
+        let (name, start, cpu_ns) = self.phase;
+        let cpu_ms = process_cpu_ns().saturating_sub(cpu_ns) as f64 * 1e-6;
+        eprintln!("phase {name} {:.3} {cpu_ms:.3}", start.elapsed().as_secs_f64() * 1e3);
+    }
+}
+
 /// Rows handed to one rayon task at a time.
 const ROWS_PER_TASK: usize = 32;
 
@@ -135,6 +181,7 @@ impl SublevelSet {
         check_gamma(gamma)?;
         separation.check()?;
         traj.check_metric(metric)?;
+        let timer = PhaseTimer::start("prepare: arc length | ball tree (2 tasks)");
         let (arc, balls) = rayon::join(
             || ArcLength::new(traj, metric, !separation.is_none()),
             || BallTree::new(traj, metric, LEAF_SIZE),
@@ -143,6 +190,7 @@ impl SublevelSet {
         let first_columns = separation.first_columns(&arc.plain, traj.timestamps_s())?;
         arc.plain = Vec::new();
         let pruner = Pruner::Hierarchy(&balls);
+        timer.finish();
         Self::scan(traj, metric, gamma, separation, &arc, pruner, &first_columns, &[0], traj.len())
     }
 
@@ -211,6 +259,7 @@ impl SublevelSet {
         // grows to hundreds of MB, would otherwise leave every other thread idle), so the
         // per-block buffers never hold more than two batches of runs.
         let mut scanned = Vec::new();
+        let timer = PhaseTimer::start("scan: batches of blocks, parallel");
         for batch in block_rows.chunks(BLOCKS_PER_BATCH) {
             let previous = std::mem::take(&mut scanned);
             // The copy first: on one thread the order of work and allocation is that of a
@@ -219,11 +268,14 @@ impl SublevelSet {
             appended?;
             scanned = batch?;
         }
+        timer.finish();
+        let timer = PhaseTimer::start("scan: last batch's append, serial");
         set.append(scanned)?;
         let last = set.runs.len();
         set.row_offsets.resize(n + 1, last);
         set.runs.shrink_to_fit();
         set.closest.shrink_to_fit();
+        timer.finish();
         Ok(set)
     }
 
@@ -235,15 +287,36 @@ impl SublevelSet {
     }
 
     /// Appends the rows of scanned blocks, in order, growing the result fallibly; the first
-    /// block that failed ends it with its error.
+    /// block that failed ends it with its error. The room is taken and the runs are copied in
+    /// parallel, each block into its own part (the page faults of fresh pages dominate the
+    /// copy), so the last batch, which nothing else overlaps, is no serial phase.
     fn append(&mut self, blocks: Vec<Result<Block>>) -> Result<()> {
-        for block in blocks {
-            let block = block?;
-            let base = self.runs.len();
-            self.row_offsets.extend(block.row_lengths.iter().map(|len| base + len));
-            try_extend(&mut self.runs, &block.runs, "the runs of S_gamma")?;
-            try_extend(&mut self.closest, &block.closest, "the closest columns of S_gamma")?;
+        let blocks: Vec<Block> = blocks.into_iter().collect::<Result<_>>()?;
+        let added: usize = blocks.iter().map(|block| block.runs.len()).sum();
+        let rows: usize = blocks.iter().map(|block| block.row_lengths.len()).sum();
+        try_reserve(&mut self.runs, added, "the runs of S_gamma")?;
+        try_reserve(&mut self.closest, added, "the closest columns of S_gamma")?;
+        try_reserve(&mut self.row_offsets, rows, "the row offsets of S_gamma")?;
+        let base = self.runs.len();
+        let mut offset = base;
+        for block in &blocks {
+            self.row_offsets.extend(block.row_lengths.iter().map(|len| offset + len));
+            offset += block.runs.len();
         }
+        self.runs.par_extend(rayon::iter::repeat_n(Run { start: 0, end: 0 }, added));
+        self.closest.par_extend(rayon::iter::repeat_n(0, added));
+        let (mut runs, mut closest) = (&mut self.runs[base..], &mut self.closest[base..]);
+        let mut parts = try_with_capacity(blocks.len(), "the row blocks of S_gamma")?;
+        for block in &blocks {
+            let (runs_part, runs_rest) = std::mem::take(&mut runs).split_at_mut(block.runs.len());
+            let (closest_part, closest_rest) = std::mem::take(&mut closest).split_at_mut(block.runs.len());
+            parts.push((runs_part, closest_part, block));
+            (runs, closest) = (runs_rest, closest_rest);
+        }
+        parts.into_par_iter().for_each(|(runs, closest, block)| {
+            runs.copy_from_slice(&block.runs);
+            closest.copy_from_slice(&block.closest);
+        });
         Ok(())
     }
 
@@ -331,6 +404,11 @@ impl SublevelSet {
     /// Index of the first run of row `i` in [`runs`](Self::runs).
     pub(crate) fn row_offset(&self, i: usize) -> usize {
         self.row_offsets[i]
+    }
+
+    /// Index of the first run of every row in [`runs`](Self::runs), and the number of runs.
+    pub(crate) fn row_offsets(&self) -> &[usize] {
+        &self.row_offsets
     }
 
     /// A fleet's session starts after the first (empty for one trajectory).

@@ -333,3 +333,34 @@ fn separation_on_the_urban_drive_measures_fewer_distances() {
     assert!(revisits.upper_pairs() < all.upper_pairs());
     assert_eq!(revisits, SublevelSet::brute_force_separated(&traj, &Euclidean, gamma, separation).unwrap());
 }
+
+/// A drive long enough for several row batches, labelling stretches cut by their runs and a
+/// dense part: the same loops (runs, closest columns, labels, components) and the same τ on 1,
+/// 2 and 3 threads.
+#[test]
+fn a_drive_is_the_same_on_one_two_and_three_threads() {
+    use loops_core::{Scale, Selection, Side, UrbanDrive};
+    let dense = UrbanDrive { duration_s: 600.0, city_size_m: 200.0, ..UrbanDrive::default() }.generate().unwrap();
+    let drive = UrbanDrive { duration_s: 1800.0, ..UrbanDrive::default() }.generate().unwrap();
+    let (dense, drive) = (dense.trajectory, drive.trajectory);
+    let t0 = dense.timestamps_s()[dense.len() - 1] + 0.1;
+    let mut times = dense.timestamps_s().to_vec();
+    times.extend(drive.timestamps_s().iter().map(|t| t0 + t));
+    let coords = [dense.coords(), drive.coords()].concat();
+    let traj = Trajectory::new(times, coords, dense.dim()).unwrap();
+    let run = |threads| {
+        with_threads(Some(threads), || {
+            let loops = find_loops(&traj, &Euclidean, 40.0).unwrap();
+            let tau = loops.loop_duration(Selection::All, Side::Both, Scale::Seconds).unwrap();
+            (loops, tau)
+        })
+        .unwrap()
+    };
+    let one = run(1);
+    assert!(one.0.sublevel_set().runs().len() > 50_000, "runs enough for many stretches");
+    for threads in [2, 3] {
+        let other = run(threads);
+        assert!(one.0 == other.0, "{threads} threads: the loops differ");
+        assert!(one.1 == other.1, "{threads} threads: tau differs");
+    }
+}
