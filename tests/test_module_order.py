@@ -3,8 +3,9 @@
 A crate's top-level modules are the files and folders of its ``src/`` (``lib.rs`` and
 ``main.rs`` are the root, not a module). Module ``a`` imports module ``b`` when code of ``a``
 (outside its inline ``#[cfg(test)] mod tests``) names ``crate::b``, directly or inside a
-``use crate::{...}`` group. A cycle means two concepts are not in an order, which is the
-one rule of ARCHITECTURE.md for the crates' modules.
+``use crate::{...}`` group (comment lines, doc links included, are not code). A cycle means
+two concepts are not in an order, which is the one rule of ARCHITECTURE.md for the crates'
+modules.
 
 The Python package ``python/inexact_loops`` is held to the same rule, module by module
 (``inexact_loops.evaluate._poses``, a package by its ``__init__``): module ``a`` imports ``b``
@@ -36,12 +37,15 @@ PACKAGE = "inexact_loops"
 _TESTS = re.compile(r"#\[cfg\(test\)\]\s*mod tests\s*\{")
 _PATH = re.compile(r"\bcrate::(\w+)")
 _GROUP = re.compile(r"\bcrate::\{")
+_COMMENT = re.compile(r"^[ \t]*//.*$", re.M)
 
 
 def _without_tests(text: str) -> str:
-    """The text before an inline test module (always the last item of a file here)."""
+    """The code before an inline test module (always the last item of a file here), without
+    its comment lines: a doc link to a later module (``[`OnlineLoops`](crate::online::...)``
+    in ``error``) names it for the reader, and is no import."""
     found = _TESTS.search(text)
-    return text[: found.start()] if found else text
+    return _COMMENT.sub("", text[: found.start()] if found else text)
 
 
 def _group_names(text: str, start: int) -> list[str]:
@@ -296,6 +300,11 @@ def test_use_groups_name_their_first_segment() -> None:
 
 def test_inline_tests_do_not_count() -> None:
     text = "use crate::a::X;\n#[cfg(test)]\nmod tests {\n    use crate::b::Y;\n}\n"
+    assert _PATH.findall(_without_tests(text)) == ["a"]
+
+
+def test_doc_links_do_not_count() -> None:
+    text = "/// See [`Y`](crate::b::Y).\n//! [`c`]: crate::c\nfn f() -> crate::a::X { todo!() }\n"
     assert _PATH.findall(_without_tests(text)) == ["a"]
 
 

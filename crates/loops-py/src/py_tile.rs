@@ -22,7 +22,7 @@ use loops_core::MetricSpec;
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct SessionBlocks {
-    pub(crate) inner: loops_core::SessionBlocks,
+    pub(crate) inner: loops_core::tile::SessionBlocks,
     metric: MetricSpec,
 }
 
@@ -58,7 +58,7 @@ impl TileScan {
     /// an unknown metric.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
-        tile: &loops_core::Tile,
+        tile: &loops_core::tile::Tile,
         session_a: &Trajectory,
         session_b: Option<&Trajectory>,
         starts: (usize, usize),
@@ -105,7 +105,7 @@ impl SessionBlocks {
     #[new]
     #[pyo3(signature = (data, metric))]
     fn new(data: &[u8], metric: &str) -> PyResult<Self> {
-        let inner = loops_core::SessionBlocks::from_bytes(data).map_err(Failure::from)?;
+        let inner = loops_core::tile::SessionBlocks::from_bytes(data).map_err(Failure::from)?;
         let metric = metric.parse::<MetricSpec>().map_err(Failure::from)?;
         Ok(Self { inner, metric })
     }
@@ -229,7 +229,7 @@ pub(crate) fn session_blocks(
 #[pyclass(frozen, eq, hash, module = "inexact_loops._core")]
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub(crate) struct Tile {
-    pub(crate) inner: loops_core::Tile,
+    pub(crate) inner: loops_core::tile::Tile,
 }
 
 #[pymethods]
@@ -238,7 +238,7 @@ impl Tile {
     #[pyo3(signature = (sessions, rows, columns))]
     fn new(sessions: (usize, usize), rows: (usize, usize), columns: (usize, usize)) -> Self {
         Self {
-            inner: loops_core::Tile {
+            inner: loops_core::tile::Tile {
                 sessions: [sessions.0, sessions.1],
                 rows: rows.0..rows.1,
                 columns: columns.0..columns.1,
@@ -324,7 +324,7 @@ pub(crate) fn plan_tiles(
             metric.name()
         )));
     }
-    let blocks: Vec<loops_core::SessionBlocks> = sessions.iter().map(|s| s.inner.clone()).collect();
+    let blocks: Vec<loops_core::tile::SessionBlocks> = sessions.iter().map(|s| s.inner.clone()).collect();
     let tiles = detached(py, move || Ok(metric.plan_session_tiles(&blocks, gamma)?))?;
     Ok(tiles.into_iter().map(|inner| Tile { inner }).collect())
 }
@@ -335,12 +335,12 @@ pub(crate) fn plan_tiles(
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct TileSummary {
-    pub(crate) inner: loops_core::TileSummary,
+    pub(crate) inner: loops_core::tile::TileSummary,
 }
 
 crate::pickling::pickled_as_bytes!(
     TileSummary,
-    loops_core::TileSummary,
+    loops_core::tile::TileSummary,
     "summary",
     "The summary as bytes: a 4-byte tag, the format version, then the fields (MessagePack).",
     from_bytes
