@@ -12,21 +12,13 @@ use crate::convert::{
     bool_column, closest_position_columns, extent_columns, float64_column, int64_column, real_array, table,
     timestamps_and_points, to_numpy,
 };
-use crate::detached;
 use crate::error::{Failure, value_error};
 use crate::py_loops::Loops;
 use crate::py_metric::MetricArg;
 use crate::py_trajectory::Trajectory;
 use crate::shared::Shared;
+use crate::{attached, detached};
 use loops_core::online::ComponentId;
-
-/// Runs `f` with the GIL held (a push takes microseconds: releasing the GIL would cost more),
-/// turning a panic into `InternalError`.
-fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
-        .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
-        .map_err(PyErr::from)
-}
 
 /// The loops of a trajectory that grows pose by pose, as a SLAM front end sees it: S_γ, its
 /// loop components with their statistics, and the loop duration τ, kept up to date as poses

@@ -3,6 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
 
+use crate::attached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_online::{OnlineLoops, Update};
 use crate::py_separation::{Separation, SeparationArg};
@@ -215,11 +216,7 @@ impl OnlineSampler {
         let mut this = self.state.lock(py)?;
         let engine = online.engine.lock(py)?;
         // "Each update once, in order" is the core's rule (`loops_core::online::OnlineSampler::offer`).
-        let offered =
-            std::panic::AssertUnwindSafe(|| this.inner.offer(&engine.inner, &update.inner).map_err(Failure::from));
-        let candidates = std::panic::catch_unwind(offered)
-            .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
-            .map_err(PyErr::from)?;
+        let candidates = attached(|| Ok(this.inner.offer(&engine.inner, &update.inner)?))?;
         Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
     }
 
