@@ -178,7 +178,7 @@ impl SessionBlocks {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
-    ///     >>> coarse = il.session_blocks(drive, block=2).coarsened(3)
+    ///     >>> coarse = il.tiles.session_blocks(drive, block=2).coarsened(3)
     ///     >>> coarse.block, len(coarse), coarse.poses
     ///     (6, 2, 10)
     fn coarsened(&self, factor: usize) -> PyResult<Self> {
@@ -205,7 +205,7 @@ impl SessionBlocks {
 /// Example:
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
-///     >>> blocks = il.session_blocks(drive, block=4)
+///     >>> blocks = il.tiles.session_blocks(drive, block=4)
 ///     >>> blocks.poses, len(blocks), blocks.span_s, blocks.metric_name
 ///     (10, 3, 9.0, 'euclidean')
 #[pyfunction]
@@ -302,8 +302,8 @@ impl Tile {
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> out = il.Trajectory(np.arange(6.0), np.c_[np.arange(6.0), np.zeros(6)])
 ///     >>> far = il.Trajectory(np.arange(4.0), np.c_[np.arange(4.0), np.full(4, 100.0)])
-///     >>> blocks = [il.session_blocks(s, block=3) for s in (out, far)]
-///     >>> [t.sessions for t in il.plan_tiles(blocks, gamma=1.0)]  # far meets no one
+///     >>> blocks = [il.tiles.session_blocks(s, block=3) for s in (out, far)]
+///     >>> [t.sessions for t in il.tiles.plan_tiles(blocks, gamma=1.0)]  # far meets no one
 ///     [(0, 0), (0, 0), (0, 0), (1, 1), (1, 1), (1, 1)]
 #[pyfunction]
 #[pyo3(signature = (sessions, *, gamma, metric=None))]

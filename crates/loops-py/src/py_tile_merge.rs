@@ -121,10 +121,10 @@ impl TileMerge {
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> s = 0.2 * np.arange(40)  # a circle and a third, the second lap over the first
 ///     >>> drive = il.Trajectory(s, np.c_[np.cos(s), np.sin(s)])
-///     >>> blocks = [il.session_blocks(drive, block=8)]
-///     >>> tiles = il.plan_tiles(blocks, gamma=0.5)
-///     >>> parts = [il.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
-///     >>> merged = il.merge_tiles([il.merge_tiles(parts[:2]), *parts[2:]])
+///     >>> blocks = [il.tiles.session_blocks(drive, block=8)]
+///     >>> tiles = il.tiles.plan_tiles(blocks, gamma=0.5)
+///     >>> parts = [il.tiles.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
+///     >>> merged = il.tiles.merge_tiles([il.tiles.merge_tiles(parts[:2]), *parts[2:]])
 ///     >>> loops = merged.finish(blocks, names=["drive"])
 ///     >>> fleet = il.find_fleet_loops(il.Fleet({"drive": drive}), gamma=0.5, separation=None)
 ///     >>> loops.components["pair_count"].tolist() == fleet.components["pair_count"].tolist()

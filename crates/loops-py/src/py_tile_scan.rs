@@ -47,8 +47,8 @@ use loops_core::{MetricSpec, tile::TileKeep};
 /// Examples:
 ///     >>> import inexact_loops as il
 ///     >>> drive = il.Trajectory([0.0, 1.0, 2.0, 3.0], [[0, 0], [5, 0], [5, 5], [0, 0.1]])
-///     >>> tile = il.plan_tiles([il.session_blocks(drive, block=4)], gamma=0.5)[0]
-///     >>> summary, share = il.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
+///     >>> tile = il.tiles.plan_tiles([il.tiles.session_blocks(drive, block=4)], gamma=0.5)[0]
+///     >>> summary, share = il.tiles.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
 ///     >>> summary.component_count, share.tile == tile
 ///     (5, True)
 #[pyfunction]
