@@ -33,15 +33,15 @@
 //! # Examples
 //! ```
 //! use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops};
-//! use loops_core::store::{FleetStore, StoreSettings};
+//! use loops_core::store::{FleetStore, StoreSession, StoreSettings};
 //! use loops_core::{Euclidean, Trajectory};
 //! let line = |t0: f64, y: f64| Trajectory::from_points(vec![t0, t0 + 1.0, t0 + 2.0], &[[0.0, y], [5.0, y], [10.0, y]]);
 //! let (monday, tuesday) = (line(0.0, 0.0)?, line(100.0, 0.5)?);
 //! let mut store = FleetStore::new(StoreSettings { block: 2, ..StoreSettings::new(1.0) })?;
-//! let mut no_poses = |s: &loops_core::store::StoreSession| -> loops_core::Result<Trajectory> { unreachable!("{}", s.name) };
+//! let mut no_poses = |s: &StoreSession| -> loops_core::Result<Trajectory> { unreachable!("{}", s.name) };
 //! store.update(vec![("monday".into(), monday.clone())], &[], &mut no_poses)?;
 //! // Tuesday's tiles with Monday need Monday's poses: the source gives them.
-//! let mut source = |s: &loops_core::store::StoreSession| -> loops_core::Result<Trajectory> {
+//! let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
 //!     assert_eq!(s.name, "monday");
 //!     Ok(monday.clone())
 //! };

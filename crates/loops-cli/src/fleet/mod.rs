@@ -100,7 +100,12 @@ pub(crate) struct FleetArgs {
     remove: Vec<String>,
     /// With --store: poses per block of a session (tiles are blocks × blocks), fixed when the
     /// store is made.
-    #[arg(long, value_name = "POSES", requires = "store", default_value_t = loops_core::store::StoreSettings::DEFAULT_BLOCK)]
+    #[arg(
+        long,
+        value_name = "POSES",
+        requires = "store",
+        default_value_t = loops_core::store::StoreSettings::DEFAULT_BLOCK
+    )]
     block: usize,
     #[command(flatten)]
     results: ResultsArgs,

@@ -11,8 +11,9 @@
 //!   ([`TileKeep::duration`](crate::tile::TileKeep::duration)), also returns the tile's share of τ
 //!   ([`TileDuration`]: what its runs add to each of its rows and columns), and
 //!   [`session_loop_duration`] adds up the shares of one session: `own` from the tiles within it,
-//!   `other` from the tiles with another session, as [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration)
-//!   gives them (to rounding: the same widths, added in another order).
+//!   `other` from the tiles with another session, as
+//!   [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration) gives them (to
+//!   rounding: the same widths, added in another order).
 
 use std::collections::HashSet;
 
@@ -232,11 +233,12 @@ impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
     }
 }
 
-/// Rescans one tile (as [`scan_session_tile`](crate::tile::scan_session_tile)) and offers its pairs to a keyed draw: `labels`
-/// are the component ids of its provisional components ([`MergedLoops::tile_labels`]),
-/// `request` the part of the draw's request for this tile ([`tile_requests`]). A run on the
-/// diagonal that reaches the tile's last column is read on in the session, so that its return
-/// column is that of the whole run; the piece that continues it in the next tile offers nothing.
+/// Rescans one tile (as [`scan_session_tile`](crate::tile::scan_session_tile)) and offers its
+/// pairs to a keyed draw: `labels` are the component ids of its provisional components
+/// ([`MergedLoops::tile_labels`]), `request` the part of the draw's request for this tile
+/// ([`tile_requests`]). A run on the diagonal that reaches the tile's last column is read on in
+/// the session, so that its return column is that of the whole run; the piece that continues it
+/// in the next tile offers nothing.
 /// [`draw_tile_runs`] offers the same pairs from the runs its scan kept.
 ///
 /// Time: the tile's scan, plus O(offered pairs) and the diagonal runs of requested rows.
@@ -408,7 +410,8 @@ pub(super) fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<Tile
 /// τ of session `session` (its first fleet index `start`, `poses` poses) from the shares of
 /// every tile that holds its rows or columns ([`scan_session_tile`](crate::tile::scan_session_tile) with
 /// its duration), in any order: `(own, other)` per pose, seconds, as
-/// [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration) splits them. Shares of tiles without the session are ignored.
+/// [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration) splits them. Shares
+/// of tiles without the session are ignored.
 ///
 /// # Errors
 /// [`Error::InconsistentTiles`] for a share whose rows or columns lie outside the session.

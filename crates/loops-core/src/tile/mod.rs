@@ -1552,8 +1552,9 @@ impl MergedLoops {
         &self.components
     }
 
-    /// The components in the poses of their sessions, as [`FleetLoops::components`](crate::fleet::FleetLoops::components)
-    /// gives them; `starts` are the sessions' first fleet indices.
+    /// The components in the poses of their sessions, as
+    /// [`FleetLoops::components`](crate::fleet::FleetLoops::components) gives them; `starts` are
+    /// the sessions' first fleet indices.
     ///
     /// # Errors
     /// [`Error::InconsistentTiles`] for a component of a session `starts` does not reach.
