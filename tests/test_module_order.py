@@ -5,7 +5,9 @@ A crate's top-level modules are the files and folders of its ``src/`` (``lib.rs`
 (outside its inline ``#[cfg(test)] mod tests``) names ``crate::b``, directly or inside a
 ``use crate::{...}`` group (comment lines, doc links included, are not code). A cycle means
 two concepts are not in an order, which is the one rule of ARCHITECTURE.md for the crates'
-modules.
+modules. The parts of a folder module (``tile/draw.rs``, ``cluster/grid.rs``) are held to it
+too, among themselves: part ``a`` imports part ``b`` when it names ``super::b`` or
+``crate::<folder>::b``.
 
 The Python package ``python/inexact_loops`` is held to the same rule, module by module
 (``inexact_loops.evaluate._poses``, a package by its ``__init__``): module ``a`` imports ``b``
@@ -97,6 +99,32 @@ def imports(crate: str) -> dict[str, set[str]]:
             for group in _GROUP.finditer(text):
                 named.update(_group_names(text, group.end() - 1))
             graph[name].update(m for m in named if m in graph and m != name)
+    return graph
+
+
+def folder_modules(crate: str) -> dict[str, dict[str, Path]]:
+    """Folder module -> its parts: the files of ``src/<folder>/`` other than ``mod.rs`` (the
+    folder's root, as ``lib.rs`` is the crate's)."""
+    src = CRATES / crate / "src"
+    return {
+        folder.name: {path.stem: path for path in sorted(folder.glob("*.rs")) if path.stem != "mod"}
+        for folder in sorted(p for p in src.iterdir() if p.is_dir())
+    }
+
+
+def part_imports(crate: str, folder: str) -> dict[str, set[str]]:
+    """Part of a folder module -> the parts of the same folder it names: ``super::b``,
+    ``crate::<folder>::b``, or inside a ``use super::{...}`` group."""
+    parts = folder_modules(crate)[folder]
+    paths = re.compile(rf"\b(?:super|crate::{folder})::(\w+)")
+    groups = re.compile(rf"\b(?:super|crate::{folder})::\{{")
+    graph: dict[str, set[str]] = {name: set() for name in parts}
+    for name, path in parts.items():
+        text = _without_tests(path.read_text(encoding="utf-8"))
+        named = set(paths.findall(text))
+        for group in groups.finditer(text):
+            named.update(_group_names(text, group.end() - 1))
+        graph[name].update(m for m in named if m in graph and m != name)
     return graph
 
 
@@ -285,6 +313,16 @@ def test_python_imports_count_lazy_and_relative_ones(tmp_path: Path) -> None:
 def test_modules_form_no_cycle(crate: str) -> None:
     found = cycles(imports(crate))
     assert not found, f"module cycles in {crate}:\n{listing(crate)}"
+
+
+@pytest.mark.parametrize("crate", ALL_CRATES)
+def test_the_parts_of_folder_modules_form_no_cycle(crate: str) -> None:
+    found = {
+        folder: cycles(part_imports(crate, folder))
+        for folder in folder_modules(crate)
+        if cycles(part_imports(crate, folder))
+    }
+    assert not found, f"cycles among the parts of folder modules of {crate}: {found}"
 
 
 def test_a_cycle_is_found() -> None:
