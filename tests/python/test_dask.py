@@ -461,7 +461,9 @@ def test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail(tmp_path):
     with pytest.raises(ValueError, match="not a callable"):
         il.tiles.session_blocks(a, block=10, metric=lambda p, q: 0.0)
     with pytest.raises(il.InvalidParameterError, match="measured with"):
-        il.tiles.plan_tiles([blocks[0], il.tiles.session_blocks(b, block=10, metric="torus")], gamma=1.0)
+        il.tiles.plan_tiles(
+            [blocks[0], il.tiles.session_blocks(b, block=10, metric="torus")], gamma=1.0
+        )
     with pytest.raises(il.InvalidParameterError, match="2 names for 1 sessions"):
         il.tiles.merge_tiles([summary]).finish(blocks[:1], names=["a", "b"])
 
@@ -661,7 +663,9 @@ def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypa
         with pytest.raises(il.InvalidParameterError, match="runs are of tile"):
             il.tiles.draw_tile(request, sessions[a], sessions[b], runs=wrong, **kwargs)
         with pytest.raises(il.InvalidParameterError, match="metric"):
-            il.tiles.draw_tile(request, sessions[a], sessions[b], runs=runs, metric="chebyshev", **kwargs)
+            il.tiles.draw_tile(
+                request, sessions[a], sessions[b], runs=runs, metric="chebyshev", **kwargs
+            )
     assert offered > 0
     with pytest.raises(TypeError):
         pickle.dumps(runs)
