@@ -53,10 +53,12 @@ WRONG = [None, "x", "", b"\xff", [], [[1.0]], {}, object(), -1, 0, 2**70, -2**70
          np.full((3, 3), np.nan), np.zeros((2, 2, 2)), traj, loops, samples, lambda *a: "x"]
 
 def candidates():
-    for name in il.__all__:
-        value = getattr(il, name)
-        if callable(value) and not (isinstance(value, type) and issubclass(value, BaseException)):
-            yield name, value
+    for module, prefix in ((il, ""), (il.tiles, "tiles.")):
+        for name in module.__all__:
+            value = getattr(module, name)
+            error = isinstance(value, type) and issubclass(value, BaseException)
+            if callable(value) and not error:
+                yield prefix + name, value
     for obj in instances:
         for name in dir(obj):
             if name.startswith("_"):
@@ -494,18 +496,18 @@ def objects():
     online.push_many(np.arange(50.0), np.c_[np.cos(np.arange(50) / 5), np.sin(np.arange(50) / 5)])
     update = online.push(50.0, [1.0, 0.0])
     sessions = [fleet.session(n) for n in fleet.names]
-    blocks = [il.session_blocks(s, block=100) for s in sessions]
+    blocks = [il.tiles.session_blocks(s, block=100) for s in sessions]
     starts = np.cumsum([0] + [len(s) for s in sessions])
-    tiles = il.plan_tiles(blocks, gamma=30.0)
+    tiles = il.tiles.plan_tiles(blocks, gamma=30.0)
     tile = tiles[0]
     a, b = tile.sessions
     kwargs = dict(starts=(int(starts[a]), int(starts[b])), gamma=30.0)
-    summary, duration = il.scan_tile(tile, sessions[a], sessions[b], **kwargs, duration=True)
-    summaries = [il.scan_tile(t, sessions[t.sessions[0]], sessions[t.sessions[1]],
+    summary, duration = il.tiles.scan_tile(tile, sessions[a], sessions[b], **kwargs, duration=True)
+    summaries = [il.tiles.scan_tile(t, sessions[t.sessions[0]], sessions[t.sessions[1]],
                               starts=(int(starts[t.sessions[0]]), int(starts[t.sessions[1]])),
                               gamma=30.0)
                  for t in tiles]
-    merge = il.merge_tiles(summaries)
+    merge = il.tiles.merge_tiles(summaries)
     from inexact_loops.dask import find_fleet_loops_dask
     named = dict(zip(fleet.names, sessions))
     tiled = find_fleet_loops_dask(named, 30.0, block=100).loops

@@ -3,8 +3,11 @@
 A crate's top-level modules are the files and folders of its ``src/`` (``lib.rs`` and
 ``main.rs`` are the root, not a module). Module ``a`` imports module ``b`` when code of ``a``
 (outside its inline ``#[cfg(test)] mod tests``) names ``crate::b``, directly or inside a
-``use crate::{...}`` group. A cycle means two concepts are not in an order, which is the
-one rule of ARCHITECTURE.md for the crates' modules.
+``use crate::{...}`` group (comment lines, doc links included, are not code). A cycle means
+two concepts are not in an order, which is the one rule of ARCHITECTURE.md for the crates'
+modules. The parts of a folder module (``tile/draw.rs``, ``cluster/grid.rs``) are held to it
+too, among themselves: part ``a`` imports part ``b`` when it names ``super::b`` or
+``crate::<folder>::b``.
 
 The Python package ``python/inexact_loops`` is held to the same rule, module by module
 (``inexact_loops.evaluate._poses``, a package by its ``__init__``): module ``a`` imports ``b``
@@ -36,12 +39,15 @@ PACKAGE = "inexact_loops"
 _TESTS = re.compile(r"#\[cfg\(test\)\]\s*mod tests\s*\{")
 _PATH = re.compile(r"\bcrate::(\w+)")
 _GROUP = re.compile(r"\bcrate::\{")
+_COMMENT = re.compile(r"^[ \t]*//.*$", re.M)
 
 
 def _without_tests(text: str) -> str:
-    """The text before an inline test module (always the last item of a file here)."""
+    """The code before an inline test module (always the last item of a file here), without
+    its comment lines: a doc link to a later module (``[`OnlineLoops`](crate::online::...)``
+    in ``error``) names it for the reader, and is no import."""
     found = _TESTS.search(text)
-    return text[: found.start()] if found else text
+    return _COMMENT.sub("", text[: found.start()] if found else text)
 
 
 def _group_names(text: str, start: int) -> list[str]:
@@ -93,6 +99,32 @@ def imports(crate: str) -> dict[str, set[str]]:
             for group in _GROUP.finditer(text):
                 named.update(_group_names(text, group.end() - 1))
             graph[name].update(m for m in named if m in graph and m != name)
+    return graph
+
+
+def folder_modules(crate: str) -> dict[str, dict[str, Path]]:
+    """Folder module -> its parts: the files of ``src/<folder>/`` other than ``mod.rs`` (the
+    folder's root, as ``lib.rs`` is the crate's)."""
+    src = CRATES / crate / "src"
+    return {
+        folder.name: {path.stem: path for path in sorted(folder.glob("*.rs")) if path.stem != "mod"}
+        for folder in sorted(p for p in src.iterdir() if p.is_dir())
+    }
+
+
+def part_imports(crate: str, folder: str) -> dict[str, set[str]]:
+    """Part of a folder module -> the parts of the same folder it names: ``super::b``,
+    ``crate::<folder>::b``, or inside a ``use super::{...}`` group."""
+    parts = folder_modules(crate)[folder]
+    paths = re.compile(rf"\b(?:super|crate::{folder})::(\w+)")
+    groups = re.compile(rf"\b(?:super|crate::{folder})::\{{")
+    graph: dict[str, set[str]] = {name: set() for name in parts}
+    for name, path in parts.items():
+        text = _without_tests(path.read_text(encoding="utf-8"))
+        named = set(paths.findall(text))
+        for group in groups.finditer(text):
+            named.update(_group_names(text, group.end() - 1))
+        graph[name].update(m for m in named if m in graph and m != name)
     return graph
 
 
@@ -283,6 +315,16 @@ def test_modules_form_no_cycle(crate: str) -> None:
     assert not found, f"module cycles in {crate}:\n{listing(crate)}"
 
 
+@pytest.mark.parametrize("crate", ALL_CRATES)
+def test_the_parts_of_folder_modules_form_no_cycle(crate: str) -> None:
+    found = {
+        folder: cycles(part_imports(crate, folder))
+        for folder in folder_modules(crate)
+        if cycles(part_imports(crate, folder))
+    }
+    assert not found, f"cycles among the parts of folder modules of {crate}: {found}"
+
+
 def test_a_cycle_is_found() -> None:
     graph = {"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}
     assert cycles(graph) == [["a", "b", "c"]]
@@ -296,6 +338,11 @@ def test_use_groups_name_their_first_segment() -> None:
 
 def test_inline_tests_do_not_count() -> None:
     text = "use crate::a::X;\n#[cfg(test)]\nmod tests {\n    use crate::b::Y;\n}\n"
+    assert _PATH.findall(_without_tests(text)) == ["a"]
+
+
+def test_doc_links_do_not_count() -> None:
+    text = "/// See [`Y`](crate::b::Y).\n//! [`c`]: crate::c\nfn f() -> crate::a::X { todo!() }\n"
     assert _PATH.findall(_without_tests(text)) == ["a"]
 
 

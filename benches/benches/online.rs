@@ -4,7 +4,10 @@
 //! `benches/examples/online_latency.rs` prints the percentiles per push.
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
-use loops_core::{Cap, MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation, Trajectory};
+use loops_core::{
+    MetricSpec, Separation, Trajectory,
+    online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
+};
 use std::hint::black_box;
 
 /// Poses timed per iteration, pushed after all the others.

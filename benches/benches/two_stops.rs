@@ -5,7 +5,7 @@
 //! `benches/examples/two_stops.rs` prints the figures at 10⁴ to 10⁶ poses with the fleet engine.
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
-use loops_core::{Euclidean, MetricSpec, OnlineLoops, Separation, find_loops_separated, with_threads};
+use loops_core::{Euclidean, MetricSpec, Separation, find_loops_separated, online::OnlineLoops, with_threads};
 use std::hint::black_box;
 
 const POSES: usize = 100_000;

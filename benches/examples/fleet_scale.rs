@@ -21,7 +21,9 @@ use std::time::Instant;
 
 use loops_benches::peak_rss_mb;
 use loops_core::{
-    Districts, Euclidean, FleetOptions, Pruning, UrbanDrive, UrbanFleet, find_fleet_loops, find_loops, with_threads,
+    Districts, Euclidean, UrbanDrive, UrbanFleet, find_loops,
+    fleet::{FleetOptions, Pruning, find_fleet_loops},
+    with_threads,
 };
 
 fn main() {

@@ -16,7 +16,8 @@
 use std::time::Instant;
 
 use loops_core::{
-    Cap, Euclidean, MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation, Trajectory, find_loops,
+    Euclidean, MetricSpec, Separation, Trajectory, find_loops,
+    online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
     with_threads,
 };
 

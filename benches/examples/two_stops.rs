@@ -14,8 +14,10 @@ use std::time::Instant;
 
 use loops_benches::thread_cpu_s;
 use loops_core::{
-    Euclidean, Fleet, FleetOptions, MetricSpec, OnlineLoops, Separation, Trajectory, find_fleet_loops,
-    find_loops_separated, with_threads,
+    Euclidean, MetricSpec, Separation, Trajectory, find_loops_separated,
+    fleet::{Fleet, FleetOptions, find_fleet_loops},
+    online::OnlineLoops,
+    with_threads,
 };
 
 const GAMMA_M: f64 = 40.0;

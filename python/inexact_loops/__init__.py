@@ -28,13 +28,15 @@ Several sessions (vehicles, days, robots) in one frame form a :class:`Fleet`;
 :func:`find_fleet_loops` finds the loops within each session and between every two, and
 :meth:`FleetLoops.overlap_matrix` says how much each two sessions overlap. For fleets beyond one
 machine, :func:`inexact_loops.dask.find_fleet_loops_dask` gives the same answer from tiles
-(:func:`plan_tiles`, :func:`scan_tile`, :func:`merge_tiles`) scanned on a Dask cluster.
+scanned on a Dask cluster; :mod:`inexact_loops.tiles` holds the tiles' plumbing (plan, scan,
+merge, draw) for a scheduler of one's own.
 
 While the robot drives, :class:`OnlineLoops` keeps the loop components up to date pose by pose
 and :class:`OnlineSampler` picks loop-closure candidates at each keyframe.
 """
 
 from . import metrics
+from . import tiles as tiles  # a submodule of its own, not in __all__ (like dask)
 from ._core import (
     BASELINE_NAMES,
     DEFAULT_BUDGET,
@@ -43,12 +45,10 @@ from ._core import (
     Candidate,
     DetectionClusters,
     Detections,
-    DrawCandidates,
     Fleet,
     FleetLoops,
     FleetSamples,
     FleetStore,
-    KeyedDraw,
     Loops,
     OnlineLoops,
     OnlineSampler,
@@ -57,14 +57,7 @@ from ._core import (
     SampleQuality,
     Samples,
     Separation,
-    SessionBlocks,
-    Tile,
     TiledFleetLoops,
-    TileDrawRequest,
-    TileDuration,
-    TileMerge,
-    TileRuns,
-    TileSummary,
     Trajectory,
     Update,
     __version__,
@@ -73,15 +66,12 @@ from ._core import (
     component_outlines,
     distance_image,
     draw_detections,
-    draw_tile,
     find_fleet_loops,
     find_loops,
     isocontour,
     list_topics,
-    merge_tiles,
     outline_segments,
     path_length,
-    plan_tiles,
     read_detections,
     read_pose_graph,
     read_trajectory,
@@ -89,9 +79,6 @@ from ._core import (
     sample_fleet,
     sample_quality,
     sampler_symbol,
-    scan_tile,
-    session_blocks,
-    session_loop_duration,
     urban_drive,
     urban_fleet,
 )
@@ -119,7 +106,6 @@ __all__ = [
     "DetectionClusters",
     "Detections",
     "DiagonalBrokenWarning",
-    "DrawCandidates",
     "DroppedInputWarning",
     "EmptyResultWarning",
     "EmptySampleWarning",
@@ -130,7 +116,6 @@ __all__ = [
     "InternalError",
     "InvalidParameterError",
     "InvalidTrajectoryError",
-    "KeyedDraw",
     "Loops",
     "LoopsError",
     "LoopsIOError",
@@ -145,14 +130,7 @@ __all__ = [
     "SampleQuality",
     "Samples",
     "Separation",
-    "SessionBlocks",
     "Table",
-    "Tile",
-    "TileDrawRequest",
-    "TileDuration",
-    "TileMerge",
-    "TileRuns",
-    "TileSummary",
     "TiledFleetLoops",
     "Trajectory",
     "Update",
@@ -166,16 +144,13 @@ __all__ = [
     "component_outlines",
     "distance_image",
     "draw_detections",
-    "draw_tile",
     "find_fleet_loops",
     "find_loops",
     "isocontour",
     "list_topics",
-    "merge_tiles",
     "metrics",
     "outline_segments",
     "path_length",
-    "plan_tiles",
     "read_detections",
     "read_pose_graph",
     "read_trajectory",
@@ -183,9 +158,6 @@ __all__ = [
     "sample_fleet",
     "sample_quality",
     "sampler_symbol",
-    "scan_tile",
-    "session_blocks",
-    "session_loop_duration",
     "urban_drive",
     "urban_fleet",
 ]

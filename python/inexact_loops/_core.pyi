@@ -464,7 +464,9 @@ class Loops:
     def __eq__(self, other: object, /) -> bool: ...
     def __ne__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
-    def __reduce__(self) -> tuple[Callable[[bytes], Loops], tuple[bytes]]: ...
+    def __reduce__(
+        self,
+    ) -> tuple[Callable[[bytes, bytes | None], Loops], tuple[bytes, bytes | None]]: ...
     @classmethod
     def _from_state(cls, state: bytes, positions: bytes | None = None) -> Loops: ...
     def __len__(self) -> int: ...
@@ -2624,7 +2626,7 @@ class SessionBlocks:
         Example:
             >>> import numpy as np, inexact_loops as il
             >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
-            >>> coarse = il.session_blocks(drive, block=2).coarsened(3)
+            >>> coarse = il.tiles.session_blocks(drive, block=2).coarsened(3)
             >>> coarse.block, len(coarse), coarse.poses
             (6, 2, 10)
         """
@@ -2648,7 +2650,7 @@ def session_blocks(session: Trajectory, *, block: int, metric: _MetricName = Non
     Example:
         >>> import numpy as np, inexact_loops as il
         >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
-        >>> blocks = il.session_blocks(drive, block=4)
+        >>> blocks = il.tiles.session_blocks(drive, block=4)
         >>> blocks.poses, len(blocks), blocks.span_s, blocks.metric_name
         (10, 3, 9.0, 'euclidean')
     """
@@ -2704,8 +2706,8 @@ def plan_tiles(
         >>> import numpy as np, inexact_loops as il
         >>> out = il.Trajectory(np.arange(6.0), np.c_[np.arange(6.0), np.zeros(6)])
         >>> far = il.Trajectory(np.arange(4.0), np.c_[np.arange(4.0), np.full(4, 100.0)])
-        >>> blocks = [il.session_blocks(s, block=3) for s in (out, far)]
-        >>> [t.sessions for t in il.plan_tiles(blocks, gamma=1.0)]  # far meets no one
+        >>> blocks = [il.tiles.session_blocks(s, block=3) for s in (out, far)]
+        >>> [t.sessions for t in il.tiles.plan_tiles(blocks, gamma=1.0)]  # far meets no one
         [(0, 0), (0, 0), (0, 0), (1, 1), (1, 1), (1, 1)]
     """
 
@@ -2841,8 +2843,8 @@ def scan_tile(
     Examples:
         >>> import inexact_loops as il
         >>> drive = il.Trajectory([0.0, 1.0, 2.0, 3.0], [[0, 0], [5, 0], [5, 5], [0, 0.1]])
-        >>> tile = il.plan_tiles([il.session_blocks(drive, block=4)], gamma=0.5)[0]
-        >>> summary, share = il.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
+        >>> tile = il.tiles.plan_tiles([il.tiles.session_blocks(drive, block=4)], gamma=0.5)[0]
+        >>> summary, share = il.tiles.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
         >>> summary.component_count, share.tile == tile
         (5, True)
     """
@@ -2906,10 +2908,10 @@ def merge_tiles(parts: list[TileSummary | TileMerge]) -> TileMerge:
         >>> import numpy as np, inexact_loops as il
         >>> s = 0.2 * np.arange(40)  # a circle and a third, the second lap over the first
         >>> drive = il.Trajectory(s, np.c_[np.cos(s), np.sin(s)])
-        >>> blocks = [il.session_blocks(drive, block=8)]
-        >>> tiles = il.plan_tiles(blocks, gamma=0.5)
-        >>> parts = [il.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
-        >>> merged = il.merge_tiles([il.merge_tiles(parts[:2]), *parts[2:]])
+        >>> blocks = [il.tiles.session_blocks(drive, block=8)]
+        >>> tiles = il.tiles.plan_tiles(blocks, gamma=0.5)
+        >>> parts = [il.tiles.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
+        >>> merged = il.tiles.merge_tiles([il.tiles.merge_tiles(parts[:2]), *parts[2:]])
         >>> loops = merged.finish(blocks, names=["drive"])
         >>> fleet = il.find_fleet_loops(il.Fleet({"drive": drive}), gamma=0.5, separation=None)
         >>> loops.components["pair_count"].tolist() == fleet.components["pair_count"].tolist()

@@ -26,7 +26,7 @@ from scipy.spatial.transform import Rotation
 from sklearn.cluster import DBSCAN
 
 import inexact_loops as il
-from inexact_loops import metrics
+from inexact_loops import metrics, tiles
 
 TESTS = Path(__file__).parent
 
@@ -135,45 +135,45 @@ ELSEWHERE = {
         }.items()
         for name in names
     },
-    "SessionBlocks.coarsened": (
+    "tiles.SessionBlocks.coarsened": (
         "python/test_dask.py",
         "test_coarsened_blocks_are_cut_as_asked_and_pickle",
     ),
     **{
         name: ("python/test_dask.py", "test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail")
         for name in (
-            "SessionBlocks",
-            "SessionBlocks.block",
-            "SessionBlocks.metric_name",
-            "SessionBlocks.poses",
-            "SessionBlocks.span_s",
-            "SessionBlocks.to_bytes",
-            "Tile",
-            "Tile.columns",
-            "Tile.rows",
-            "Tile.sessions",
-            "TileMerge",
-            "TileMerge.component_count",
-            "TileMerge.from_bytes",
-            "TileMerge.open_edge_count",
-            "TileMerge.tile_count",
-            "TileMerge.to_bytes",
-            "TileSummary",
-            "TileSummary.component_count",
-            "TileSummary.edge_count",
-            "TileSummary.from_bytes",
-            "TileSummary.tile",
-            "TileSummary.to_bytes",
-            "merge_tiles",
-            "plan_tiles",
-            "scan_tile",
-            "session_blocks",
+            "tiles.SessionBlocks",
+            "tiles.SessionBlocks.block",
+            "tiles.SessionBlocks.metric_name",
+            "tiles.SessionBlocks.poses",
+            "tiles.SessionBlocks.span_s",
+            "tiles.SessionBlocks.to_bytes",
+            "tiles.Tile",
+            "tiles.Tile.columns",
+            "tiles.Tile.rows",
+            "tiles.Tile.sessions",
+            "tiles.TileMerge",
+            "tiles.TileMerge.component_count",
+            "tiles.TileMerge.from_bytes",
+            "tiles.TileMerge.open_edge_count",
+            "tiles.TileMerge.tile_count",
+            "tiles.TileMerge.to_bytes",
+            "tiles.TileSummary",
+            "tiles.TileSummary.component_count",
+            "tiles.TileSummary.edge_count",
+            "tiles.TileSummary.from_bytes",
+            "tiles.TileSummary.tile",
+            "tiles.TileSummary.to_bytes",
+            "tiles.merge_tiles",
+            "tiles.plan_tiles",
+            "tiles.scan_tile",
+            "tiles.session_blocks",
         )
     },
     **{
         name: ("python/test_dask.py", "test_in_process_equals_the_fleet")
         for name in (
-            "TileMerge.finish",
+            "tiles.TileMerge.finish",
             "TiledFleetLoops",
             "TiledFleetLoops.between_sessions",
             "TiledFleetLoops.components",
@@ -187,37 +187,37 @@ ELSEWHERE = {
         for name in (
             "TiledFleetLoops.draw",
             "TiledFleetLoops.tiles",
-            "KeyedDraw",
-            "KeyedDraw.absorb",
-            "KeyedDraw.available",
-            "KeyedDraw.done",
-            "KeyedDraw.groups",
-            "KeyedDraw.requests",
-            "KeyedDraw.table",
-            "KeyedDraw.warnings",
-            "TileDrawRequest",
-            "TileDrawRequest.tile",
-            "DrawCandidates",
-            "DrawCandidates.to_bytes",
-            "draw_tile",
+            "tiles.KeyedDraw",
+            "tiles.KeyedDraw.absorb",
+            "tiles.KeyedDraw.available",
+            "tiles.KeyedDraw.done",
+            "tiles.KeyedDraw.groups",
+            "tiles.KeyedDraw.requests",
+            "tiles.KeyedDraw.table",
+            "tiles.KeyedDraw.warnings",
+            "tiles.TileDrawRequest",
+            "tiles.TileDrawRequest.tile",
+            "tiles.DrawCandidates",
+            "tiles.DrawCandidates.to_bytes",
+            "tiles.draw_tile",
         )
     },
     **{
         name: ("python/test_dask.py", "test_loop_duration_from_tiles_equals_the_fleet")
         for name in (
-            "TileDuration",
-            "TileDuration.tile",
-            "TileDuration.to_bytes",
-            "session_loop_duration",
+            "tiles.TileDuration",
+            "tiles.TileDuration.tile",
+            "tiles.TileDuration.to_bytes",
+            "tiles.session_loop_duration",
         )
     },
     **{
         name: ("python/test_dask.py", "test_draws_from_kept_runs_or_rescans_are_the_same")
         for name in (
-            "TileRuns",
-            "TileRuns.metric_name",
-            "TileRuns.nbytes",
-            "TileRuns.tile",
+            "tiles.TileRuns",
+            "tiles.TileRuns.metric_name",
+            "tiles.TileRuns.nbytes",
+            "tiles.TileRuns.tile",
         )
     },
     "Trajectory.from_evo": (
@@ -380,7 +380,7 @@ def covers(*names: str) -> Callable[[Callable[..., None]], Callable[..., None]]:
 
 def public_names() -> set[str]:
     """``__all__``, the public attributes of its classes (not those of ``dict`` or ``object``),
-    and the metric classes."""
+    the same of :mod:`inexact_loops.tiles`, and the metric classes."""
     names = set()
     inherited = set(dir(dict)) | set(dir(object))
     for name in il.__all__:
@@ -389,6 +389,16 @@ def public_names() -> set[str]:
         if isinstance(obj, type) and not issubclass(obj, BaseException):
             names.update(
                 f"{name}.{attr}"
+                for attr in dir(obj)
+                if not attr.startswith("_") and attr not in inherited
+            )
+    # The tiles' plumbing, a submodule of its own: its names and their classes' attributes.
+    for name in tiles.__all__:
+        names.add(f"tiles.{name}")
+        obj = getattr(tiles, name)
+        if isinstance(obj, type):
+            names.update(
+                f"tiles.{name}.{attr}"
                 for attr in dir(obj)
                 if not attr.startswith("_") and attr not in inherited
             )
@@ -1580,3 +1590,13 @@ def test_sampler_names_and_default_budget_come_from_the_core(loops_cli):
         [loops_cli, "sample", "--help"], capture_output=True, text=True, check=True
     )
     assert f"[default: {il.DEFAULT_BUDGET}" in " ".join(cli.stdout.split()), cli.stdout
+
+
+def test_the_tile_plumbing_is_reached_through_its_submodule():
+    """The tiles' plan, scan, merge and draw are :mod:`inexact_loops.tiles`'s, not the
+    package's: the package keeps what a user calls."""
+    assert tiles.__all__ and set(tiles.__all__).isdisjoint(il.__all__)
+    for name in tiles.__all__:
+        assert not hasattr(il, name), name
+        assert getattr(tiles, name) is getattr(il._core, name), name
+    assert il.tiles is tiles

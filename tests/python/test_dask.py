@@ -179,7 +179,7 @@ def test_coarsened_blocks_are_cut_as_asked_and_pickle():
     rng = np.random.default_rng(4)
     xy = np.cumsum(rng.normal(0.0, 1.0, (101, 2)), axis=0)
     drive = il.Trajectory(np.arange(101.0), xy)
-    fine = il.session_blocks(drive, block=6)
+    fine = il.tiles.session_blocks(drive, block=6)
     for factor in (1, 2, 5, 17, 40):
         coarse = fine.coarsened(factor)
         assert (coarse.block, len(coarse), coarse.poses) == (
@@ -425,45 +425,47 @@ def test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail(tmp_path):
     x = np.arange(30) * 0.5
     a = il.Trajectory(np.arange(30.0), np.c_[x, 0 * x])
     b = il.Trajectory(np.arange(30.0), np.c_[x[::-1], 0 * x + 0.5])
-    blocks = [il.session_blocks(s, block=10) for s in (a, b)]
+    blocks = [il.tiles.session_blocks(s, block=10) for s in (a, b)]
     assert (len(blocks[0]), blocks[0].poses, blocks[0].block, blocks[0].span_s) == (3, 30, 10, 29.0)
     copy = pickle.loads(pickle.dumps(blocks[0]))
     assert copy.to_bytes() == blocks[0].to_bytes() and copy.metric_name == "euclidean"
-    tiles = il.plan_tiles(blocks, gamma=1.0)
+    tiles = il.tiles.plan_tiles(blocks, gamma=1.0)
     assert pickle.loads(pickle.dumps(tiles)) == tiles
     assert len({*tiles, *tiles}) == len(tiles)
     tile = next(t for t in tiles if t.sessions == (0, 1))
     assert tile.rows[1] - tile.rows[0] == 10 and tile.columns[0] >= 30
-    summary = il.scan_tile(tile, a, b, starts=(0, 30), gamma=1.0)
+    summary = il.tiles.scan_tile(tile, a, b, starts=(0, 30), gamma=1.0)
     assert summary.tile == tile and summary.component_count > 0 and summary.edge_count > 0
     again = pickle.loads(pickle.dumps(summary))
-    assert isinstance(again, il.TileSummary) and again.to_bytes() == summary.to_bytes()
-    assert il.TileSummary.from_bytes(summary.to_bytes()).to_bytes() == summary.to_bytes()
-    merged = il.merge_tiles([summary])
+    assert isinstance(again, il.tiles.TileSummary) and again.to_bytes() == summary.to_bytes()
+    assert il.tiles.TileSummary.from_bytes(summary.to_bytes()).to_bytes() == summary.to_bytes()
+    merged = il.tiles.merge_tiles([summary])
     assert (merged.tile_count, merged.component_count) == (1, summary.component_count)
     assert merged.open_edge_count == summary.edge_count, "one tile: every edge run still open"
-    assert il.TileMerge.from_bytes(merged.to_bytes()).to_bytes() == merged.to_bytes()
+    assert il.tiles.TileMerge.from_bytes(merged.to_bytes()).to_bytes() == merged.to_bytes()
     assert pickle.loads(pickle.dumps(merged)).to_bytes() == merged.to_bytes()
     with pytest.raises(il.InvalidParameterError, match="these are the bytes of a tile merge"):
-        il.TileSummary(merged.to_bytes())
+        il.tiles.TileSummary(merged.to_bytes())
     with pytest.raises(il.InvalidParameterError, match="invalid saved tile merge: .*bytes"):
-        il.TileMerge(merged.to_bytes()[:-3])
+        il.tiles.TileMerge(merged.to_bytes()[:-3])
     with pytest.raises(il.InvalidParameterError, match="each tile summarised once"):
-        il.merge_tiles([summary, summary])
+        il.tiles.merge_tiles([summary, summary])
     with pytest.raises(
         TypeError, match=r"parts\[1\] must be a TileSummary or a TileMerge, got int"
     ):
-        il.merge_tiles([summary, 3])
+        il.tiles.merge_tiles([summary, 3])
     with pytest.raises(TypeError, match="needs session_b"):
-        il.scan_tile(tile, a, starts=(0, 30), gamma=1.0)
+        il.tiles.scan_tile(tile, a, starts=(0, 30), gamma=1.0)
     with pytest.raises(il.InvalidParameterError, match="tile"):
-        il.scan_tile(tile, a, b, starts=(0, 25), gamma=1.0)
+        il.tiles.scan_tile(tile, a, b, starts=(0, 25), gamma=1.0)
     with pytest.raises(ValueError, match="not a callable"):
-        il.session_blocks(a, block=10, metric=lambda p, q: 0.0)
+        il.tiles.session_blocks(a, block=10, metric=lambda p, q: 0.0)
     with pytest.raises(il.InvalidParameterError, match="measured with"):
-        il.plan_tiles([blocks[0], il.session_blocks(b, block=10, metric="torus")], gamma=1.0)
+        il.tiles.plan_tiles(
+            [blocks[0], il.tiles.session_blocks(b, block=10, metric="torus")], gamma=1.0
+        )
     with pytest.raises(il.InvalidParameterError, match="2 names for 1 sessions"):
-        il.merge_tiles([summary]).finish(blocks[:1], names=["a", "b"])
+        il.tiles.merge_tiles([summary]).finish(blocks[:1], names=["a", "b"])
 
 
 def test_inputs_and_errors(tmp_path, client):
@@ -568,7 +570,7 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
             request = pickle.loads(pickle.dumps(request))
             assert request.tile == tiles[t]
             a, b = request.tile.sessions
-            offer = il.draw_tile(
+            offer = il.tiles.draw_tile(
                 request,
                 sessions[a],
                 sessions[b],
@@ -576,7 +578,7 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
                 gamma=1.5,
                 separation=separation,
             )
-            offers.append(il.DrawCandidates(offer.to_bytes()))
+            offers.append(il.tiles.DrawCandidates(offer.to_bytes()))
         by_hand.absorb(offers)
     assert by_hand.requests() == []
     assert_same_samples(by_hand.table(), theirs.table)
@@ -642,26 +644,28 @@ def test_draws_from_kept_runs_or_rescans_are_the_same(tmp_path, client, monkeypa
     for t, request in draw.requests():
         a, b = tiles[t].sessions
         kwargs = {"starts": (int(starts[a]), int(starts[b])), "gamma": 1.5}
-        summary, share, runs = il.scan_tile(
+        summary, share, runs = il.tiles.scan_tile(
             tiles[t], sessions[a], sessions[b], **kwargs, duration=True, runs=True
         )
         assert (
             summary.to_bytes()
-            == il.scan_tile(tiles[t], sessions[a], sessions[b], **kwargs).to_bytes()
+            == il.tiles.scan_tile(tiles[t], sessions[a], sessions[b], **kwargs).to_bytes()
         )
         assert share.tile == runs.tile == tiles[t]
         assert runs.metric_name == "euclidean" and "runs" in repr(runs)
         assert runs.nbytes >= 16 * len(runs)
-        kept = il.draw_tile(request, sessions[a], sessions[b], runs=runs, **kwargs)
-        rescanned = il.draw_tile(request, sessions[a], sessions[b], **kwargs)
+        kept = il.tiles.draw_tile(request, sessions[a], sessions[b], runs=runs, **kwargs)
+        rescanned = il.tiles.draw_tile(request, sessions[a], sessions[b], **kwargs)
         assert kept.to_bytes() == rescanned.to_bytes()
         offered += len(kept)
         other = next(u for u in tiles if u != tiles[t] and u.sessions == tiles[t].sessions)
-        _, wrong = il.scan_tile(other, sessions[a], sessions[b], **kwargs, runs=True)
+        _, wrong = il.tiles.scan_tile(other, sessions[a], sessions[b], **kwargs, runs=True)
         with pytest.raises(il.InvalidParameterError, match="runs are of tile"):
-            il.draw_tile(request, sessions[a], sessions[b], runs=wrong, **kwargs)
+            il.tiles.draw_tile(request, sessions[a], sessions[b], runs=wrong, **kwargs)
         with pytest.raises(il.InvalidParameterError, match="metric"):
-            il.draw_tile(request, sessions[a], sessions[b], runs=runs, metric="chebyshev", **kwargs)
+            il.tiles.draw_tile(
+                request, sessions[a], sessions[b], runs=runs, metric="chebyshev", **kwargs
+            )
     assert offered > 0
     with pytest.raises(TypeError):
         pickle.dumps(runs)
@@ -689,12 +693,12 @@ def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
         find_fleet_loops_dask(paths, 1.5, block=50).loop_duration(tiled.names[0])
     # The shares by hand, through their bytes.
     sessions = [il.read_trajectory(p) for p in paths]
-    blocks = [il.session_blocks(t, block=40) for t in sessions]
+    blocks = [il.tiles.session_blocks(t, block=40) for t in sessions]
     starts = np.cumsum([0] + [len(t) for t in sessions])
     shares = []
-    for tile in il.plan_tiles(blocks, gamma=1.5):
+    for tile in il.tiles.plan_tiles(blocks, gamma=1.5):
         a, b = tile.sessions
-        _, share = il.scan_tile(
+        _, share = il.tiles.scan_tile(
             tile,
             sessions[a],
             sessions[b],
@@ -704,8 +708,8 @@ def test_loop_duration_from_tiles_equals_the_fleet(tmp_path, client):
             duration=True,
         )
         assert share.tile == tile
-        shares.append(pickle.loads(pickle.dumps(il.TileDuration(share.to_bytes()))))
-    own, other = il.session_loop_duration(
+        shares.append(pickle.loads(pickle.dumps(il.tiles.TileDuration(share.to_bytes()))))
+    own, other = il.tiles.session_loop_duration(
         2, start=int(starts[2]), poses=len(sessions[2]), parts=shares
     )
     theirs = fleet.loop_duration(fleet.names[2])

@@ -460,7 +460,7 @@ def test_every_failure_of_unpickling_is_an_unpickling_error():
     with pytest.raises(pickle.UnpicklingError, match="cannot unpickle Separation: .*path"):
         restore(state.replace(float_at(2.0), float_at(-2.0)))
     fleet = il.urban_fleet(vehicles=2, duration_s=120.0, seed=2)
-    blocks = il.session_blocks(fleet.session(fleet.names[0]), block=50)
+    blocks = il.tiles.session_blocks(fleet.session(fleet.names[0]), block=50)
     restore, (data, metric) = blocks.__reduce__()
     with pytest.raises(pickle.UnpicklingError, match="cannot unpickle SessionBlocks: "):
         restore(data[:-5], metric)
@@ -469,10 +469,10 @@ def test_every_failure_of_unpickling_is_an_unpickling_error():
     ):
         restore(data, "x")
     with pytest.raises(il.InvalidParameterError):
-        il.SessionBlocks(data[:-5], metric)
+        il.tiles.SessionBlocks(data[:-5], metric)
     session = fleet.session(fleet.names[0])
-    tile = il.plan_tiles([blocks], gamma=30.0)[0]
-    summary = il.scan_tile(tile, session, starts=(0, 0), gamma=30.0)
+    tile = il.tiles.plan_tiles([blocks], gamma=30.0)[0]
+    summary = il.tiles.scan_tile(tile, session, starts=(0, 0), gamma=30.0)
     assert pickle.loads(pickle.dumps(summary)).to_bytes() == summary.to_bytes()
     restore, (data,) = summary.__reduce__()
     with pytest.raises(pickle.UnpicklingError, match="cannot unpickle TileSummary: "):

@@ -1,6 +1,6 @@
 //! The C ABI of inexact-loops' online engine, for SLAM front ends written in C or C++: loop
-//! components kept up to date while poses arrive ([`loops_core::OnlineLoops`]) and the
-//! loop-closure candidates of each keyframe ([`loops_core::OnlineSampler`]).
+//! components kept up to date while poses arrive ([`loops_core::online::OnlineLoops`]) and the
+//! loop-closure candidates of each keyframe ([`loops_core::online::OnlineSampler`]).
 //!
 //! The header is `include/inexact_loops.h`, generated from this crate by cbindgen (the test
 //! `tests/header.rs` fails when the committed header differs; `UPDATE_HEADER=1 cargo test -p
@@ -36,8 +36,8 @@ use std::ffi::{CStr, CString, c_char};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use loops_core::{
-    Candidate, Cap, Error, ErrorClass, MetricSpec, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions,
-    Separation, Trajectory, Update,
+    Error, ErrorClass, MetricSpec, Separation, Trajectory,
+    online::{Candidate, Cap, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
 };
 
 /// What a call of this library did: `Ok` (`LOOPS_STATUS_OK` in C), or why it did nothing (the message is
@@ -422,7 +422,7 @@ pub extern "C" fn loops_version() -> *const c_char {
 ///
 /// # Errors
 /// [`LoopsStatus::InvalidParameter`] for γ, the metric, and a `dim` the metric does not take
-/// or above 65,536 (`loops_core::OnlineLoops::MAX_DIM`).
+/// or above 65,536 (`loops_core::online::OnlineLoops::MAX_DIM`).
 ///
 /// # Safety
 /// `metric` is NULL or a NUL-terminated string; `out` is valid for writing a pointer.

@@ -6,7 +6,10 @@ use std::ffi::{CStr, CString};
 use std::ptr;
 
 use inexact_loops::*;
-use loops_core::{Cap, MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation};
+use loops_core::{
+    MetricSpec, Separation,
+    online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
+};
 
 fn last_error() -> String {
     // SAFETY: the library's string, valid until its next call on this thread.

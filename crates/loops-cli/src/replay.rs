@@ -11,7 +11,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use loops_core::{Candidate, Cap, Interrupt, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Trajectory, Update};
+use loops_core::{
+    Interrupt, Trajectory,
+    online::{Candidate, Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
+};
 use serde::Serialize;
 
 use crate::args::{EngineArgs, InputArgs};

@@ -1,12 +1,15 @@
 //! `loops fleet` and `loops synth --vehicles` end to end: the files written against
-//! `loops_core::find_fleet_loops` on the same logs, exit codes, one-line errors, and what
+//! `loops_core::fleet::find_fleet_loops` on the same logs, exit codes, one-line errors, and what
 //! `--force` may replace.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use loops_core::{Euclidean, Fleet, FleetOptions, Metric, Separation, find_fleet_loops};
+use loops_core::{
+    Euclidean, Metric, Separation,
+    fleet::{Fleet, FleetOptions, find_fleet_loops},
+};
 
 mod support;
 use support::{assert_one_line_error, laps_tum, loops, names, stderr, temp_dir, write_in};
@@ -41,7 +44,7 @@ fn synth_fleet(dir: &Path, vehicles: &str, days: &str, duration_s: &str) -> Vec<
 }
 
 /// The fleet of `files` as the core finds it: sessions named by stem, positions x, y, z.
-fn core_fleet(files: &[PathBuf], gamma: f64) -> (Fleet, loops_core::FleetLoops) {
+fn core_fleet(files: &[PathBuf], gamma: f64) -> (Fleet, loops_core::fleet::FleetLoops) {
     let sessions = files
         .iter()
         .map(|file| {

@@ -6,7 +6,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use loops_core::{Euclidean, Fleet, FleetOptions, Separation, find_fleet_loops};
+use loops_core::{
+    Euclidean, Separation,
+    fleet::{Fleet, FleetOptions, find_fleet_loops},
+};
 use loops_io::store::read_store;
 use rand::{RngExt, SeedableRng};
 

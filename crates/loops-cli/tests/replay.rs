@@ -5,7 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use loops_core::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation, UrbanDrive};
+use loops_core::{
+    Separation, UrbanDrive,
+    online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
+};
 use serde_json::Value;
 
 /// A folder with a 10 min synthetic drive as a TUM file (numbers written so they read back

@@ -10,8 +10,9 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use loops_core::{
-    Euclidean, Fleet, FleetOptions, FleetStore, Result, SampleSize, Sampler, SamplerKind, StoreSession, StoreSettings,
-    Trajectory, UrbanDrive, UrbanFleet, find_fleet_loops, sample_fleet,
+    Euclidean, Result, SampleSize, Sampler, SamplerKind, Trajectory, UrbanDrive, UrbanFleet,
+    fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet},
+    store::{FleetStore, StoreSession, StoreSettings},
 };
 
 fn main() -> Result<()> {

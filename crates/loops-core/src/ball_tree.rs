@@ -47,7 +47,7 @@ struct Node {
 /// The ball of poses `lo..hi` of `traj` (not empty): its centre, the middle pose `lo + (hi −
 /// lo)/2`, and its radius, the largest distance from there to a pose of the range. The one
 /// rule for the hierarchy's leaves, a tile's chunks and a session's blocks
-/// ([`SessionBlocks`](crate::SessionBlocks)).
+/// ([`SessionBlocks`](crate::tile::SessionBlocks)).
 pub(crate) fn pose_ball<M: Metric + ?Sized>(traj: &Trajectory, lo: usize, hi: usize, metric: &M) -> (usize, f64) {
     let centre = lo + (hi - lo) / 2;
     let radius = (lo..hi).map(|k| metric.distance(traj.point(centre), traj.point(k))).fold(0.0, f64::max);
@@ -58,7 +58,7 @@ pub(crate) fn pose_ball<M: Metric + ?Sized>(traj: &Trajectory, lo: usize, hi: us
 /// each): the largest distance from `centre` to a part's centre plus its radius, so every point
 /// of the parts lies within it (triangle inequality). The one rule for the hierarchy's inner
 /// nodes, a tile's groups of chunks and
-/// [`SessionBlocks::coarsened`](crate::SessionBlocks::coarsened).
+/// [`SessionBlocks::coarsened`](crate::tile::SessionBlocks::coarsened).
 pub(crate) fn joined_radius<'a, M: Metric + ?Sized>(
     centre: &[f64],
     parts: impl IntoIterator<Item = (&'a [f64], f64)>,

@@ -66,7 +66,7 @@ pub(crate) struct Labelling {
 /// times of its extents; all of them merge parts with [`absorb`](Self::absorb) and report with
 /// [`fold`](Self::fold).
 ///
-/// [`TileComponent`]: crate::TileComponent
+/// [`TileComponent`]: crate::tile::TileComponent
 #[derive(Debug, Clone, Default, PartialEq)]
 pub(crate) struct Tally {
     pub(crate) trivial: bool,

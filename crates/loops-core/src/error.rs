@@ -142,7 +142,7 @@ pub enum Error {
         max: usize,
     },
     /// Points of more coordinates than an online engine takes
-    /// ([`OnlineLoops::MAX_DIM`](crate::OnlineLoops::MAX_DIM)).
+    /// ([`OnlineLoops::MAX_DIM`](crate::online::OnlineLoops::MAX_DIM)).
     #[error("dim = {dim} is invalid: an online engine takes points of at most {max} coordinates")]
     DimensionTooLarge {
         /// The dimension given.
@@ -366,7 +366,7 @@ pub enum Error {
         /// End of the window, seconds from the first pose.
         end_s: f64,
     },
-    /// A [`PlaneGrid`](crate::PlaneGrid) used with a trajectory (or loops) other than its own.
+    /// A [`PlaneGrid`](crate::plane::PlaneGrid) used with a trajectory (or loops) other than its own.
     #[error("the plane grid was made for {grid_poses} poses, not {poses}")]
     PlaneGridMismatch {
         /// Poses of the trajectory the grid was made for.

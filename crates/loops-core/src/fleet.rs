@@ -47,7 +47,8 @@ const LEAF_SIZE: usize = 16;
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, Fleet, FleetOptions, Trajectory, find_fleet_loops};
+/// use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops};
+/// use loops_core::{Euclidean, Trajectory};
 /// let out = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
 /// let back = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
 /// let fleet = Fleet::new(vec![("monday".into(), out), ("tuesday".into(), back)])?;
@@ -498,7 +499,8 @@ impl FleetLoops {
     ///
     /// # Examples
     /// ```
-    /// use loops_core::{Euclidean, Fleet, FleetLoops, FleetOptions, Trajectory, find_fleet_loops};
+    /// use loops_core::fleet::{Fleet, FleetLoops, FleetOptions, find_fleet_loops};
+    /// use loops_core::{Euclidean, Trajectory};
     /// let out = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
     /// let back = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
     /// let fleet = Fleet::new(vec![("monday".into(), out), ("tuesday".into(), back)])?;

@@ -15,26 +15,42 @@
 //!   record their [`Manifold`] so that its metric measures them by default and no other does.
 //! - A seeded synthetic urban drive for demos and benchmarks: [`UrbanDrive`].
 //! - Online, while the robot drives: S_γ, its components and τ updated pose by pose at a cost
-//!   that follows the answer ([`OnlineLoops`], equal to the batch), and loop-closure candidates
-//!   per keyframe with σ_ρ, a cap, P1 online and the revisit separation ([`OnlineSampler`]).
-//!
+//!   that follows the answer ([`online::OnlineLoops`], equal to the batch), and loop-closure
+//!   candidates per keyframe with σ_ρ, a cap, P1 online and the revisit separation
+//!   ([`online::OnlineSampler`]).
+//! - Fleets of sessions in one frame ([`fleet`]), cut into tiles that other machines scan and
+//!   a tree of merges joins ([`tile`]), and kept up to date as sessions come and go ([`store`]).
 //! - Figures' data on the (t, t′) plane: the pairwise distance π_ξ on a grid of poses for any
-//!   metric, the component of every pixel, the outlines ∂Ω and isocontours: [`PlaneGrid`],
-//!   [`distance_image`], [`Loops::label_image`], [`component_outlines`], [`isocontour`].
+//!   metric, the component of every pixel, the outlines ∂Ω and isocontours: [`plane`],
+//!   [`Loops::label_image`].
 //!
 //! What it does not do: read files (that is `loops-io`), talk to Python or a terminal.
 //!
+//! ## Public surface in two tiers
+//! The root holds what a user of one trajectory calls: [`find_loops`] with its options and
+//! results, [`Trajectory`] and its poses, the metrics and manifolds, the samplers' entry points
+//! ([`sample_loops`], [`sample_clusters`], [`Sampler`], [`SamplerKind`], [`SampleSize`]) and
+//! their results, detections, baselines and quality, the synthetic drives, threads, interrupts
+//! and [`Error`]. An engine that a user picks on purpose is a public module, and its names are
+//! reached through it, never flat from the root: [`fleet`] (several sessions in one frame),
+//! [`tile`] (a fleet's plane in tiles: plan, scan, merge, draw, bytes), [`store`] (a fleet kept
+//! up to date), [`online`] (pose by pose), [`plane`] (images and outlines of the (t, t′)
+//! plane) and [`sample`] (the samplers' keyed draws and their requests, for tiles and
+//! clusters). A name belongs to the root when a program on one trajectory needs it (the
+//! samplers' entry points are re-exported there from [`sample`]); every other public name is
+//! reached through its module only.
+//!
 //! ## Module order
-//! The private modules follow the paper, and each uses only modules before it (no cycles):
+//! The modules follow the paper, and each uses only modules before it (no cycles):
 //! `trajectory` (ξ, time cells, [`Timeline`]) → `metric` (δ) → `manifold` and `pose` (metrics
 //! and points on manifolds) → `spec` ([`MetricSpec`]) → `sublevel` (S_γ, [`check_gamma`]) →
-//! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → `plane` (π_ξ and ∂Ω on a
-//! [`PlaneGrid`]) → `verdict` (where given pairs fall: [`Loops::pair_verdicts`]) → `draw` ([`SampleSize`],
-//! uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph, [`check_epsilon_s`]) →
-//! `baseline` ([`Baseline`]) → `sample` (σ_1, σ_ρ, σ_α) → `quality` (P1, P2, P3); `online`
-//! ([`OnlineLoops`] and [`OnlineSampler`], after `loops` and `draw`); `synth`,
-//! `ball_tree`, `union_find`, `memory` (fallible allocation of the big buffers) and
-//! `interrupt` ([`Interrupt`]) are helpers. Every public item is re-exported here.
+//! `component` (Ω) → `measure` (τ, α, ρ) → `loops` ([`find_loops`]) → [`plane`] (π_ξ and ∂Ω on
+//! a grid of poses) → `verdict` (where given pairs fall: [`Loops::pair_verdicts`]) → `draw`
+//! ([`SampleSize`], uniform draws over S_γ) → `detection` (D) → `cluster` (the ε graph,
+//! [`check_epsilon_s`]) → `baseline` ([`Baseline`]) → [`sample`] (σ_1, σ_ρ, σ_α) → `quality`
+//! (P1, P2, P3); [`online`] (after `loops` and `draw`); [`fleet`], [`tile`] and [`store`]
+//! (after `loops` and `sample`); `synth`, `ball_tree`, `union_find`, `memory` (fallible
+//! allocation of the big buffers) and `interrupt` ([`Interrupt`]) are helpers.
 //!
 //! ## Quickstart
 //! ```
@@ -61,27 +77,27 @@ mod component;
 mod detection;
 mod draw;
 mod error;
-mod fleet;
+pub mod fleet;
 mod interrupt;
 mod loops;
 mod manifold;
 mod measure;
 mod memory;
 mod metric;
-mod online;
+pub mod online;
 mod place;
-mod plane;
+pub mod plane;
 mod pose;
 mod quality;
 mod relative;
-mod sample;
+pub mod sample;
 mod separation;
 mod spatial;
 mod spec;
-mod store;
+pub mod store;
 mod sublevel;
 mod synth;
-mod tile;
+pub mod tile;
 mod trajectory;
 mod union_find;
 mod verdict;
@@ -92,10 +108,6 @@ pub use component::LoopComponent;
 pub use detection::{Detection, Detections};
 pub use draw::{MAX_SAMPLES, SampleSize, SampleWarning};
 pub use error::{Error, ErrorClass, MetricMisfit, Result, TooManySamples};
-pub use fleet::{
-    FLEET_CLOCK_GAP_S, Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SessionPair,
-    check_fleet_tables, find_fleet_loops, sample_fleet,
-};
 pub use interrupt::Interrupt;
 pub use loops::{LabelledRun, Loops, Warning, find_loops, find_loops_separated};
 pub use manifold::{
@@ -104,35 +116,15 @@ pub use manifold::{
 };
 pub use measure::{Scale, Selection, Side};
 pub use metric::{Euclidean, Metric};
-pub use online::{
-    Candidate, Cap, ComponentId, Merge, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, PushStamp,
-    RowRun, Update,
-};
 pub use place::{Pass, Place, check_radius, passes_near};
-pub use plane::{
-    Border, PixelEdge, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments,
-};
 pub use pose::{FILE_QUATERNION_TOLERANCE, QUATERNION_TOLERANCE, enu_axes};
 pub use quality::{MissedComponent, SampleQuality, sample_quality};
 pub use relative::{RelativePose, relative_pose, se2_between, se3_between};
-pub use sample::{
-    ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, DrawStats, DrawnPair, KeyedDraw, Sample, Sampler,
-    SamplerKind, Samples, draw_stats, pair_key, sample_clusters, sample_loops,
-};
+pub use sample::{Sample, Sampler, SamplerKind, Samples, sample_clusters, sample_loops};
 pub use separation::Separation;
 pub use spec::{MetricSpec, recorded_metric_name};
-pub use store::{
-    FleetStore, Revisit, STORE_FORMAT_VERSION, SessionSource, StoreLoops, StorePass, StoreSamples, StoreSession,
-    StoreSettings, StoreUpdate, StoredTile, session_fingerprint,
-};
 pub use sublevel::{Run, SublevelSet, check_gamma, path_length};
 pub use synth::{Districts, SyntheticDrive, UrbanDrive, UrbanFleet};
-pub use tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs, session_loop_duration, tile_requests};
-pub use tile::{
-    EdgeRun, MergedComponent, MergedLoops, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileComponent, TileKeep,
-    TileMerge, TileScan, TileSummary, merge_tiles, plan_session_tiles, plan_session_tiles_touching, plan_tiles,
-    scan_session_tile, scan_tile,
-};
 pub use trajectory::{MAX_MAGNITUDE, MAX_POSES, Manifold, Timeline, Trajectory};
 pub use verdict::{PairVerdict, Verdict};
 

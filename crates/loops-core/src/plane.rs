@@ -42,7 +42,8 @@ use crate::trajectory::{Timeline, Trajectory};
 ///
 /// # Examples
 /// ```
-/// use loops_core::{PlaneGrid, Trajectory};
+/// use loops_core::plane::PlaneGrid;
+/// use loops_core::Trajectory;
 /// let traj = Trajectory::from_points((0..10).map(f64::from).collect(), &[[0.0]; 10])?;
 /// let all = PlaneGrid::new(&traj, None, 100)?;
 /// assert_eq!(all.columns(), &[0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
@@ -206,7 +207,8 @@ fn pose_edges(inside: &[f64], t0: f64, [a, b]: [f64; 2]) -> Vec<f64> {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, PlaneGrid, Trajectory, distance_image};
+/// use loops_core::plane::{PlaneGrid, distance_image};
+/// use loops_core::{Euclidean, Trajectory};
 /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0], [3.0], [1.0]])?;
 /// let grid = PlaneGrid::new(&traj, None, 10)?;
 /// let image = distance_image(&traj, &Euclidean, &grid)?;
@@ -238,7 +240,8 @@ impl MetricSpec {
     ///
     /// # Examples
     /// ```
-    /// use loops_core::{MetricSpec, PlaneGrid, Trajectory};
+    /// use loops_core::plane::PlaneGrid;
+    /// use loops_core::{MetricSpec, Trajectory};
     /// // Rotations about z by 0, 90° and 180°.
     /// let s = std::f64::consts::FRAC_1_SQRT_2;
     /// let traj = Trajectory::so3(vec![0.0, 1.0, 2.0], &[[0.0, 0.0, 0.0, 1.0], [0.0, 0.0, s, s], [0.0, 0.0, 1.0, 0.0]])?;
@@ -265,7 +268,8 @@ impl Loops {
     ///
     /// # Examples
     /// ```
-    /// use loops_core::{Euclidean, PlaneGrid, Trajectory, find_loops};
+    /// use loops_core::plane::PlaneGrid;
+    /// use loops_core::{Euclidean, Trajectory, find_loops};
     /// // Out and back on a line: the end comes back to the start.
     /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0, 3.0], &[[0.0], [5.0], [5.0], [0.0]])?;
     /// let loops = find_loops(&traj, &Euclidean, 1.0)?;
@@ -364,7 +368,7 @@ impl std::str::FromStr for Border {
     ///
     /// # Examples
     /// ```
-    /// use loops_core::Border;
+    /// use loops_core::plane::Border;
     /// assert_eq!("open".parse::<Border>()?, Border::Open);
     /// assert!("ajar".parse::<Border>().is_err());
     /// # Ok::<(), loops_core::Error>(())
@@ -405,7 +409,7 @@ fn check_image(len: usize, width: usize, height: usize) -> Result<()> {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Border, outline_segments};
+/// use loops_core::plane::{Border, outline_segments};
 /// // One labelled pixel in the middle of a 3 × 3 image: its four sides.
 /// let mut labels = vec![None; 9];
 /// labels[4] = Some(7);
@@ -460,7 +464,7 @@ pub fn outline_segments(labels: &[Option<u32>], width: usize, height: usize, bor
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Border, component_outlines};
+/// use loops_core::plane::{Border, component_outlines};
 /// // A 2 × 1 component in a 3 × 2 image.
 /// let labels = [Some(4), Some(4), None, None, None, None];
 /// let outlines = component_outlines(&labels, 3, 2, Border::Closed)?;
@@ -490,7 +494,7 @@ pub fn component_outlines(
 ///
 /// # Examples
 /// ```
-/// use loops_core::chain_polylines;
+/// use loops_core::plane::chain_polylines;
 /// // A unit square given out of order, and an open path.
 /// let square = chain_polylines(&[[0, 1], [2, 3], [1, 2], [3, 0]]);
 /// assert_eq!(square, [vec![0, 1, 2, 3, 0]]);
@@ -545,7 +549,7 @@ pub fn chain_polylines<V: Copy + Ord>(edges: &[[V; 2]]) -> Vec<Vec<V>> {
 ///
 /// # Examples
 /// ```
-/// use loops_core::isocontour;
+/// use loops_core::plane::isocontour;
 /// // A cone of height 0 at (4.5, 4.5) in a 9 × 9 image: its level-2.5 contour is one circle.
 /// let values: Vec<f64> = (0..81).map(|k| ((k % 9) as f64 - 4.0).hypot((k / 9) as f64 - 4.0)).collect();
 /// let lines = isocontour(&values, 9, 9, 2.5)?;

@@ -108,7 +108,7 @@ pub(crate) use with_metric;
 /// else `custom(NAME)`, a metric of the caller's own (a Python callable, a type of your own),
 /// which no spec parses as. A saved result read back can so tell a metric it can rebuild by
 /// name from one it cannot, and a name that is neither is refused as corrupt
-/// ([`check_recorded_metric_name`]).
+/// (`check_recorded_metric_name`, inside the crate).
 ///
 /// # Examples
 /// ```

@@ -1,5 +1,5 @@
 //! A fleet's loops kept up to date as sessions come, are corrected and go: [`FleetStore`], the
-//! state of a fleet's tiles (see [`tile`](crate::TileSummary)) that an update changes at the
+//! state of a fleet's tiles (see [`tile`](crate::tile::TileSummary)) that an update changes at the
 //! cost of the sessions it changes.
 //!
 //! The store holds its sessions (name, content fingerprint, blocks: what planning needs) in
@@ -15,8 +15,8 @@
 //! keys ([`FleetStore::samples`]) without a rescan.
 //!
 //! **Same answer as from scratch.** After any sequence of updates, the components, the overlap
-//! matrix, τ and the samples are those of [`find_fleet_loops`](crate::find_fleet_loops) and
-//! [`sample_fleet`](crate::sample_fleet) over the store's sessions in name order (areas to
+//! matrix, τ and the samples are those of [`find_fleet_loops`](crate::fleet::find_fleet_loops) and
+//! [`sample_fleet`](crate::fleet::sample_fleet) over the store's sessions in name order (areas to
 //! rounding, as for any tiling; everything else exactly), and the store itself (its tiles,
 //! bit for bit) does not depend on the order of the updates.
 //!
@@ -32,14 +32,16 @@
 //!
 //! # Examples
 //! ```
-//! use loops_core::{Euclidean, Fleet, FleetOptions, FleetStore, StoreSettings, Trajectory, find_fleet_loops};
+//! use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops};
+//! use loops_core::store::{FleetStore, StoreSession, StoreSettings};
+//! use loops_core::{Euclidean, Trajectory};
 //! let line = |t0: f64, y: f64| Trajectory::from_points(vec![t0, t0 + 1.0, t0 + 2.0], &[[0.0, y], [5.0, y], [10.0, y]]);
 //! let (monday, tuesday) = (line(0.0, 0.0)?, line(100.0, 0.5)?);
 //! let mut store = FleetStore::new(StoreSettings { block: 2, ..StoreSettings::new(1.0) })?;
-//! let mut no_poses = |s: &loops_core::StoreSession| -> loops_core::Result<Trajectory> { unreachable!("{}", s.name) };
+//! let mut no_poses = |s: &StoreSession| -> loops_core::Result<Trajectory> { unreachable!("{}", s.name) };
 //! store.update(vec![("monday".into(), monday.clone())], &[], &mut no_poses)?;
 //! // Tuesday's tiles with Monday need Monday's poses: the source gives them.
-//! let mut source = |s: &loops_core::StoreSession| -> loops_core::Result<Trajectory> {
+//! let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
 //!     assert_eq!(s.name, "monday");
 //!     Ok(monday.clone())
 //! };
@@ -158,7 +160,8 @@ impl StoreSession {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Trajectory, session_fingerprint};
+/// use loops_core::store::session_fingerprint;
+/// use loops_core::Trajectory;
 /// let a = Trajectory::from_points(vec![0.0, 1.0], &[[0.0, 0.0], [1.0, 0.0]])?;
 /// let b = Trajectory::from_points(vec![0.0, 1.0], &[[0.0, 0.0], [1.0, 1e-12]])?;
 /// assert_eq!(session_fingerprint(&a), session_fingerprint(&a.clone()));
@@ -772,7 +775,7 @@ impl FleetStore {
         Ok(StoreLoops { merged: Some(merged), components, session_pairs, starts })
     }
 
-    /// τ of every pose, split as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
+    /// τ of every pose, split as [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration)
     /// splits it: `(own, other)`, seconds, by fleet index, as the store keeps it (an update adds
     /// the shares of its new tiles, and adds up again the sessions that lost a tile): O(poses).
     ///
@@ -788,7 +791,7 @@ impl FleetStore {
     }
 
     /// The samples of `sampler` (a sampler of components) over `loops` (this store's
-    /// [`loops`](Self::loops)), by keyed draws: those of [`sample_fleet`](crate::sample_fleet)
+    /// [`loops`](Self::loops)), by keyed draws: those of [`sample_fleet`](crate::fleet::sample_fleet)
     /// over the store's sessions, with `between_only` as there. Reads the tiles each pass asks
     /// from the runs kept by the update that scanned them, or rescans those it has none of
     /// (a store read back), reading their stored sessions from `source` (each once).
@@ -930,7 +933,7 @@ fn durations_of(
 }
 
 /// The part of `request` each tile of `merged` that holds a component asked about must answer
-/// (by the merge's tile index, in tile order): what [`tile_requests`](crate::tile_requests)
+/// (by the merge's tile index, in tile order): what [`tile_requests`](crate::tile::tile_requests)
 /// gives for the tiles it asks something, found from `holders` (the tiles of each component)
 /// rather than by going through every tile. O(the tiles of the components asked).
 fn tile_parts(merged: &MergedLoops, holders: &[Vec<usize>], request: &DrawRequest) -> Vec<(usize, DrawRequest)> {
@@ -997,12 +1000,12 @@ pub struct StoreLoops {
 
 impl StoreLoops {
     /// The components in their sessions' poses, by id (as
-    /// [`FleetLoops::components`](crate::FleetLoops::components)).
+    /// [`FleetLoops::components`](crate::fleet::FleetLoops::components)).
     pub fn components(&self) -> &[FleetComponent] {
         &self.components
     }
 
-    /// The sparse overlap matrix (as [`FleetLoops::session_pairs`](crate::FleetLoops::session_pairs)).
+    /// The sparse overlap matrix (as [`FleetLoops::session_pairs`](crate::fleet::FleetLoops::session_pairs)).
     pub fn session_pairs(&self) -> &[SessionPair] {
         &self.session_pairs
     }

@@ -216,7 +216,7 @@ impl UrbanFleet {
     /// of threads).
     ///
     /// # Errors
-    /// As [`drives`](Self::drives); [`Fleet::new`](crate::Fleet::new)'s, checked before any
+    /// As [`drives`](Self::drives); [`Fleet::new`](crate::fleet::Fleet::new)'s, checked before any
     /// session is generated: [`Error::TooManyPoses`] for more poses in all than one trajectory
     /// may hold, [`Error::OutOfMemory`] when the joint trajectory does not fit in memory.
     pub fn generate(&self) -> Result<crate::fleet::Fleet> {

@@ -156,7 +156,7 @@ pub(crate) mod sealed {
 /// Something that carries the timestamps of a trajectory's poses: a [`Trajectory`], or the
 /// [`Loops`](crate::Loops) found on one. Detections given by times are placed on its poses,
 /// detections given by pose indices take their times from it, and a
-/// [`PlaneGrid`](crate::PlaneGrid) picks its poses.
+/// [`PlaneGrid`](crate::plane::PlaneGrid) picks its poses.
 ///
 /// Sealed: the timestamps are known to be finite, strictly increasing and at least two.
 pub trait Timeline: sealed::Sealed {

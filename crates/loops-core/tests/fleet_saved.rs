@@ -3,8 +3,8 @@
 //! are an error naming what is wrong.
 
 use loops_core::{
-    Error, Euclidean, Fleet, FleetLoops, FleetOptions, Pruning, Separation, Trajectory, UrbanDrive, UrbanFleet,
-    find_fleet_loops, find_loops,
+    Error, Euclidean, Separation, Trajectory, UrbanDrive, UrbanFleet, find_loops,
+    fleet::{Fleet, FleetLoops, FleetOptions, Pruning, find_fleet_loops},
 };
 
 fn line(t0: f64, from: f64, to: f64, y: f64, n: usize) -> Trajectory {

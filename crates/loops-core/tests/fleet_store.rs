@@ -6,8 +6,9 @@
 use std::collections::{BTreeMap, HashMap};
 
 use loops_core::{
-    Euclidean, Fleet, FleetOptions, FleetStore, Result, SampleSize, Sampler, SamplerKind, Separation, StoreSession,
-    StoreSettings, Trajectory, UrbanDrive, UrbanFleet, find_fleet_loops, sample_fleet,
+    Euclidean, Result, SampleSize, Sampler, SamplerKind, Separation, Trajectory, UrbanDrive, UrbanFleet,
+    fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet},
+    store::{FleetStore, StoreSession, StoreSettings},
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -56,7 +57,7 @@ fn check_against_scratch(store: &FleetStore, sessions: &BTreeMap<String, Traject
     assert_eq!(loops.components().len(), want.len(), "{context}: component count");
     for (g, w) in loops.components().iter().zip(&want) {
         assert!(close(g.area_s2, w.area_s2), "{context}: area of {w:?}: {}", g.area_s2);
-        let g = loops_core::FleetComponent { area_s2: w.area_s2, ..g.clone() };
+        let g = loops_core::fleet::FleetComponent { area_s2: w.area_s2, ..g.clone() };
         assert_eq!(&g, w, "{context}: component");
     }
     let want = scratch.session_pairs();
@@ -162,7 +163,7 @@ fn random_updates(seed: u64, separation: Separation) {
     assert!(store.tiles() == at_once.tiles(), "seed {seed}: the stored tiles depend on the order of the updates");
     assert!(scans > 0, "seed {seed}");
     // Parts read back are accepted; a missing tile is not.
-    let parts = |tiles: Vec<loops_core::StoredTile>| {
+    let parts = |tiles: Vec<loops_core::store::StoredTile>| {
         FleetStore::from_parts(*store.settings(), store.sessions().to_vec(), tiles, store.last_update().clone())
     };
     let read_back = parts(store.tiles().to_vec()).unwrap();

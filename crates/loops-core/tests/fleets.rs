@@ -8,8 +8,9 @@ mod support;
 use std::collections::{HashMap, VecDeque};
 
 use loops_core::{
-    Euclidean, Fleet, FleetOptions, Metric, Pruning, SampleSize, Sampler, SamplerKind, Separation, Trajectory,
-    find_fleet_loops, find_loops, find_loops_separated, merge_tiles, plan_tiles, sample_fleet, scan_tile,
+    Euclidean, Metric, SampleSize, Sampler, SamplerKind, Separation, Trajectory, find_loops, find_loops_separated,
+    fleet::{Fleet, FleetOptions, Pruning, find_fleet_loops, sample_fleet},
+    tile::{merge_tiles, plan_tiles, scan_tile},
 };
 use proptest::prelude::*;
 use support::fleets::{adversarial_fleet, random_fleet, tour};

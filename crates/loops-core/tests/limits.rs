@@ -4,9 +4,10 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use loops_core::{
-    Detections, Error, Euclidean, Interrupt, MAX_SAMPLES, Metric, PlaneGrid, SampleSize, Sampler, SamplerKind,
-    TooManySamples, Trajectory, UrbanDrive, cluster_detections, distance_image, find_loops, sample_clusters,
-    sample_loops, with_threads,
+    Detections, Error, Euclidean, Interrupt, MAX_SAMPLES, Metric, SampleSize, Sampler, SamplerKind, TooManySamples,
+    Trajectory, UrbanDrive, cluster_detections, find_loops,
+    plane::{PlaneGrid, distance_image},
+    sample_clusters, sample_loops, with_threads,
 };
 
 /// A robot parked for `n` poses: every pair is within γ, so S_γ has n(n − 1)/2 off-diagonal

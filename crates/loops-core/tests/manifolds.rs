@@ -10,9 +10,11 @@ mod support;
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI, SQRT_2, TAU};
 
 use loops_core::{
-    Angular, EARTH_RADIUS_M, Error, Euclidean, Haversine, Loops, Manifold, Metric, MetricSpec, PlaneGrid,
-    RotationDistance, SampleSize, Sampler, SamplerKind, Se2, Se3, Se3Rotation, Separation, So3, Sphere, SublevelSet,
-    Torus, Trajectory, distance_image, find_loops, sample_loops,
+    Angular, EARTH_RADIUS_M, Error, Euclidean, Haversine, Loops, Manifold, Metric, MetricSpec, RotationDistance,
+    SampleSize, Sampler, SamplerKind, Se2, Se3, Se3Rotation, Separation, So3, Sphere, SublevelSet, Torus, Trajectory,
+    find_loops,
+    plane::{PlaneGrid, distance_image},
+    sample_loops,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestRunner};

@@ -10,8 +10,8 @@ mod support;
 use std::path::{Path, PathBuf};
 
 use loops_core::{
-    ComponentId, Error, Loops, MetricSpec, OnlineComponent, OnlineLoops, RotationDistance, Run, Scale, Se2, Se3,
-    Selection, Side, Sphere, Trajectory, Update,
+    Error, Loops, MetricSpec, RotationDistance, Run, Scale, Se2, Se3, Selection, Side, Sphere, Trajectory,
+    online::{ComponentId, OnlineComponent, OnlineLoops, Update},
 };
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;

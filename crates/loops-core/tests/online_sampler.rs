@@ -6,8 +6,9 @@
 mod support;
 
 use loops_core::{
-    Candidate, Cap, ComponentId, Euclidean, MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation,
-    Trajectory, Update, UrbanDrive, path_length,
+    Euclidean, MetricSpec, Separation, Trajectory, UrbanDrive,
+    online::{Candidate, Cap, ComponentId, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
+    path_length,
 };
 use proptest::prelude::*;
 use support::{any_case, config};

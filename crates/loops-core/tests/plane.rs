@@ -8,8 +8,8 @@ mod support;
 use std::collections::BTreeMap;
 
 use loops_core::{
-    Border, Euclidean, Metric, MetricSpec, PlaneGrid, RotationDistance, Se3, So3, Timeline, Trajectory, UrbanDrive,
-    chain_polylines, component_outlines, distance_image, find_loops, isocontour, outline_segments,
+    Euclidean, Metric, MetricSpec, RotationDistance, Se3, So3, Timeline, Trajectory, UrbanDrive, find_loops,
+    plane::{Border, PlaneGrid, chain_polylines, component_outlines, distance_image, isocontour, outline_segments},
 };
 use proptest::prelude::*;
 use support::{DenseLoops, OUTSIDE, any_case, config};

@@ -3,8 +3,8 @@
 //! that panics later.
 
 use loops_core::{
-    Detections, Euclidean, Loops, PlaneGrid, SampleQuality, SampleSize, Sampler, SamplerKind, Samples, Trajectory,
-    UrbanDrive, cluster_detections, find_loops, sample_clusters, sample_loops, sample_quality,
+    Detections, Euclidean, Loops, SampleQuality, SampleSize, Sampler, SamplerKind, Samples, Trajectory, UrbanDrive,
+    cluster_detections, find_loops, plane::PlaneGrid, sample_clusters, sample_loops, sample_quality,
 };
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -64,9 +64,10 @@ fn every_result_reads_back_equal() {
     round_trip(&PlaneGrid::new(&traj, None, 64).unwrap());
     // A fleet: the joint trajectory's time cells end at every session, and its S_gamma breaks.
     let later = UrbanDrive { duration_s: 300.0, seed: 5, ..UrbanDrive::default() }.generate().unwrap();
-    let fleet = loops_core::Fleet::new(vec![("a".into(), traj), ("b".into(), later.trajectory)]).unwrap();
+    let fleet = loops_core::fleet::Fleet::new(vec![("a".into(), traj), ("b".into(), later.trajectory)]).unwrap();
     let fleet_loops =
-        loops_core::find_fleet_loops(&fleet, &Euclidean, 40.0, &loops_core::FleetOptions::default()).unwrap();
+        loops_core::fleet::find_fleet_loops(&fleet, &Euclidean, 40.0, &loops_core::fleet::FleetOptions::default())
+            .unwrap();
     round_trip(fleet.joint());
     round_trip(fleet_loops.loops());
 }

@@ -8,10 +8,15 @@
 mod support;
 
 use loops_core::{
-    DrawCandidates, DrawRequest, Euclidean, Fleet, FleetLoops, FleetOptions, KeyedDraw, SampleSize, Sampler,
-    SamplerKind, Separation, SessionBlocks, TileDuration, TileKeep, TileMerge, TileRuns, TileSummary, Trajectory,
-    draw_session_tile, draw_tile_runs, find_fleet_loops, find_loops_separated, pair_key, plan_session_tiles,
-    sample_fleet, sample_loops, scan_session_tile, session_loop_duration, tile_requests, with_threads,
+    Euclidean, SampleSize, Sampler, SamplerKind, Separation, Trajectory, find_loops_separated,
+    fleet::{Fleet, FleetLoops, FleetOptions, find_fleet_loops, sample_fleet},
+    sample::{DrawCandidates, DrawRequest, KeyedDraw, pair_key},
+    sample_loops,
+    tile::{
+        SessionBlocks, TileDuration, TileKeep, TileMerge, TileRuns, TileSummary, draw_session_tile, draw_tile_runs,
+        plan_session_tiles, scan_session_tile, session_loop_duration, tile_requests,
+    },
+    with_threads,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -59,11 +64,11 @@ fn adversarial() -> Vec<Trajectory> {
 
 /// The fleet's tiles, scanned (with their shares of τ) and merged in one step through bytes.
 struct Tiled {
-    merged: loops_core::MergedLoops,
+    merged: loops_core::tile::MergedLoops,
     durations: Vec<TileDuration>,
     starts: Vec<usize>,
     /// Each tile's runs as its scan kept them.
-    runs: std::collections::HashMap<loops_core::Tile, TileRuns>,
+    runs: std::collections::HashMap<loops_core::tile::Tile, TileRuns>,
 }
 
 fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: usize) -> Tiled {

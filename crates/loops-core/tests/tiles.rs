@@ -7,8 +7,12 @@
 mod support;
 
 use loops_core::{
-    Error, Euclidean, Fleet, FleetOptions, Metric, Separation, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileKeep,
-    TileMerge, TileSummary, Trajectory, find_fleet_loops, plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
+    Error, Euclidean, Metric, Separation, Trajectory,
+    fleet::{Fleet, FleetOptions, find_fleet_loops},
+    tile::{
+        SessionBlocks, TILE_FORMAT_VERSION, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles, plan_tiles,
+        scan_session_tile, scan_tile,
+    },
 };
 use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
@@ -129,7 +133,7 @@ fn check_tree_cut(
         }
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-10 * (y.abs() + 1.0);
         for ((m, g), e) in merged.components().iter().zip(&got).zip(&expected) {
-            let exact = |c: &loops_core::FleetComponent| {
+            let exact = |c: &loops_core::fleet::FleetComponent| {
                 (c.id, c.sessions, c.trivial, c.pair_count, c.holes, c.poses, c.closest_pair, c.closest_distance)
             };
             if exact(g) != exact(e) || !close(g.area_s2, e.area_s2) {

@@ -15,8 +15,10 @@ mod support;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 
 use loops_core::{
-    Euclidean, Fleet, FleetOptions, Metric, MetricSpec, OnlineLoops, Pruning, Run, Separation, SublevelSet, Trajectory,
-    find_fleet_loops, find_loops, path_length,
+    Euclidean, Metric, MetricSpec, Run, Separation, SublevelSet, Trajectory, find_loops,
+    fleet::{Fleet, FleetOptions, Pruning, find_fleet_loops},
+    online::OnlineLoops,
+    path_length,
 };
 use support::check_against_dense;
 

@@ -12,7 +12,10 @@
 use std::io::{self, Write};
 use std::path::Path;
 
-use loops_core::{Error, Fleet, FleetLoops, FleetSample, Samples};
+use loops_core::{
+    Error, Samples,
+    fleet::{Fleet, FleetLoops, FleetSample},
+};
 
 use crate::atomic::write_atomically;
 use crate::components::{ComponentExtent, ComponentMeasures, ComponentRow, EXTENT_COLUMNS, MEASURE_COLUMNS, columns};
@@ -31,7 +34,7 @@ use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
 pub const FLEET_COMPONENT_COLUMNS: [&str; 22] =
     columns(&[&["id", "session_a", "session_b", "name_a", "name_b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
 
-/// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::FleetComponent) with
+/// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::fleet::FleetComponent) with
 /// the names of its sessions and the times of its pose ranges, each on its session's clock: in
 /// its [`extent`](ComponentRow::extent), `i` indexes the poses of session `a` (the rows, t) and
 /// `j` those of session `b` (the columns, t′); its [`measures`](ComponentRow::measures) are the
@@ -100,7 +103,8 @@ pub fn fleet_component_rows(
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, Fleet, FleetOptions, Trajectory, find_fleet_loops};
+/// use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops};
+/// use loops_core::{Euclidean, Trajectory};
 /// let monday = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
 /// let tuesday = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
 /// let fleet = Fleet::new(vec![("monday".into(), monday), ("tuesday".into(), tuesday)])?;
@@ -151,7 +155,7 @@ pub const SESSION_PAIR_COLUMNS: [&str; 8] =
     ["session_a", "session_b", "name_a", "name_b", "components", "pair_count", "area_s2", "density"];
 
 /// One row of `session_pairs.csv`, one entry of the sparse session-overlap matrix: a
-/// [`SessionPair`](loops_core::SessionPair) with its sessions' names.
+/// [`SessionPair`](loops_core::fleet::SessionPair) with its sessions' names.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct SessionPairRow {
@@ -188,7 +192,7 @@ impl SessionPairRow {
     ///
     /// # Panics
     /// When `names` has no name for a session of `pair`.
-    pub fn new(pair: &loops_core::SessionPair, names: &[String]) -> Self {
+    pub fn new(pair: &loops_core::fleet::SessionPair, names: &[String]) -> Self {
         let [a, b] = pair.sessions;
         Self {
             session_a: a,
@@ -214,7 +218,8 @@ impl SessionPairRow {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, Fleet, FleetOptions, Trajectory, find_fleet_loops};
+/// use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops};
+/// use loops_core::{Euclidean, Trajectory};
 /// let monday = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
 /// let tuesday = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
 /// let fleet = Fleet::new(vec![("monday".into(), monday), ("tuesday".into(), tuesday)])?;
@@ -282,7 +287,7 @@ pub struct FleetSampleRow {
     pub sampler: &'static str,
 }
 
-/// The rows of a fleet's samples: `samples` of [`sample_fleet`](loops_core::sample_fleet) on
+/// The rows of a fleet's samples: `samples` of [`sample_fleet`](loops_core::fleet::sample_fleet) on
 /// `fleet` ([`Fleet::localize`]), in the samples' order. O(samples · log sessions).
 ///
 /// # Errors
@@ -322,7 +327,8 @@ fn invalid(error: Error) -> io::Error {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, Fleet, FleetOptions, SampleSize, Sampler, SamplerKind, Trajectory, find_fleet_loops, sample_fleet};
+/// use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet};
+/// use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind, Trajectory};
 /// let monday = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
 /// let tuesday = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
 /// let fleet = Fleet::new(vec![("monday".into(), monday), ("tuesday".into(), tuesday)])?;
@@ -499,7 +505,8 @@ pub fn fleet_g2o_edges_text(tables: &[&PoseTable], samples: &[FleetSample], opti
 /// # Examples
 /// ```
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-/// use loops_core::{Euclidean, Fleet, FleetOptions, SampleSize, Sampler, SamplerKind, find_fleet_loops, sample_fleet};
+/// use loops_core::fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet};
+/// use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind};
 /// use loops_io::{G2oOptions, read_tum, write_fleet_g2o_edges};
 /// let dir = std::env::temp_dir().join(format!("loops-io-doc-{}-fleet-g2o", std::process::id()));
 /// std::fs::create_dir_all(&dir)?;
@@ -536,7 +543,8 @@ pub fn write_fleet_g2o_edges(
 #[cfg(test)]
 mod tests {
     use loops_core::{
-        Euclidean, FleetOptions, Metric, SampleSize, Sampler, SamplerKind, Trajectory, find_fleet_loops, sample_fleet,
+        Euclidean, Metric, SampleSize, Sampler, SamplerKind, Trajectory,
+        fleet::{FleetOptions, find_fleet_loops, sample_fleet},
     };
 
     use super::*;

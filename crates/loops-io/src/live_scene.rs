@@ -6,7 +6,7 @@
 //! (`loops replay --serve` serves them over Foxglove's WebSocket protocol): this crate stays
 //! free of a network stack.
 
-use loops_core::{Candidate, OnlineLoops, Update};
+use loops_core::online::{Candidate, OnlineLoops, Update};
 
 use foxglove::messages::{PosesInFrame, SceneEntityDeletion, SceneUpdate, Timestamp, scene_entity_deletion};
 
@@ -131,7 +131,8 @@ impl LiveScene {
     ///
     /// # Examples
     /// ```
-    /// use loops_core::{MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions};
+    /// use loops_core::online::{OnlineLoops, OnlineSampler, OnlineSamplerOptions};
+    /// use loops_core::MetricSpec;
     /// let square = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
     /// let positions: Vec<[f64; 3]> = (0..8).map(|i| [square[i % 4][0], square[i % 4][1], 0.0]).collect();
     /// let scene = loops_io::LiveScene::new("square", positions.clone(), None)?;

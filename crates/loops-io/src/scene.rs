@@ -23,7 +23,11 @@ use foxglove::messages::{
     Color, KeyValuePair, LinePrimitive, Point3, Pose, PosesInFrame, Quaternion, RawImage, SceneEntity, SceneUpdate,
     Timestamp, Vector3, line_primitive,
 };
-use loops_core::{Fleet, FleetLoops, Loops, PlaneGrid, Samples, Scale, Selection, Side, Trajectory};
+use loops_core::{
+    Loops, Samples, Scale, Selection, Side, Trajectory,
+    fleet::{Fleet, FleetLoops},
+    plane::PlaneGrid,
+};
 use mcap::records::MessageHeader;
 
 use crate::atomic::write_atomically;

@@ -20,7 +20,7 @@
 //!
 //! Indices `a`, `b` are sessions in name order; `i`, `j` poses within them; times on each
 //! session's own clock. `summary`, `duration` and `blocks` are the bytes the tiles ship as
-//! ([`loops_core::TileSummary::to_bytes`]). `added` marks the components of the sessions the
+//! ([`loops_core::tile::TileSummary::to_bytes`]). `added` marks the components of the sessions the
 //! last update added or replaced.
 //!
 //! **Atomic.** An update reads the current state, builds the whole new state in the store's
@@ -35,8 +35,10 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use loops_core::{
-    FleetSample, FleetStore, MetricSpec, SampleSize, Sampler, SamplerKind, Separation, SessionBlocks, StoreLoops,
-    StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile, TileDuration, TileSummary, Trajectory,
+    MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory,
+    fleet::FleetSample,
+    store::{FleetStore, StoreLoops, StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile},
+    tile::{SessionBlocks, TileDuration, TileSummary},
 };
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
 use parquet::file::properties::WriterProperties;
@@ -141,7 +143,7 @@ impl StoredFleet {
     ///
     /// # Errors
     /// The core's errors on the place and radius, or on a pose file that cannot be read back.
-    pub fn near(&self, place: &loops_core::Place, radius: Option<f64>) -> Result<Vec<loops_core::StorePass>> {
+    pub fn near(&self, place: &loops_core::Place, radius: Option<f64>) -> Result<Vec<loops_core::store::StorePass>> {
         let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
             self.poses(s).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
         };
@@ -227,7 +229,7 @@ impl From<UpdateFile> for StoreUpdate {
 fn settings_file(config: &StoreConfig, update: &StoreUpdate) -> SettingsFile {
     let s = &config.settings;
     SettingsFile {
-        version: loops_core::STORE_FORMAT_VERSION,
+        version: loops_core::store::STORE_FORMAT_VERSION,
         metric: s.metric.name(),
         gamma: s.gamma,
         separation_path: s.separation.path,
@@ -253,11 +255,11 @@ fn settings_file(config: &StoreConfig, update: &StoreUpdate) -> SettingsFile {
 
 fn config_of(file: &SettingsFile, path: &Path) -> Result<StoreConfig> {
     let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
-    if file.version != loops_core::STORE_FORMAT_VERSION {
+    if file.version != loops_core::store::STORE_FORMAT_VERSION {
         return Err(corrupt(format!(
             "store format version {}; this build reads version {}",
             file.version,
-            loops_core::STORE_FORMAT_VERSION
+            loops_core::store::STORE_FORMAT_VERSION
         )));
     }
     let metric: MetricSpec = file.metric.parse().map_err(|e| corrupt(format!("metric: {e}")))?;
@@ -296,14 +298,14 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     }
     let pointer: Pointer = read_json(&pointer_path)?;
     let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
-    if pointer.format != STORE_FORMAT || pointer.version != loops_core::STORE_FORMAT_VERSION {
+    if pointer.format != STORE_FORMAT || pointer.version != loops_core::store::STORE_FORMAT_VERSION {
         return Err(corrupt(
             &pointer_path,
             format!(
                 "format {:?} version {}, not {STORE_FORMAT:?} version {}",
                 pointer.format,
                 pointer.version,
-                loops_core::STORE_FORMAT_VERSION
+                loops_core::store::STORE_FORMAT_VERSION
             ),
         ));
     }
@@ -499,8 +501,11 @@ pub fn update_store(
     let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
     let state = format!("state-{generation:06}");
     out.place(&staged, &state, true)?;
-    let pointer =
-        Pointer { format: STORE_FORMAT.to_owned(), version: loops_core::STORE_FORMAT_VERSION, state: state.clone() };
+    let pointer = Pointer {
+        format: STORE_FORMAT.to_owned(),
+        version: loops_core::store::STORE_FORMAT_VERSION,
+        state: state.clone(),
+    };
     let pointer_staged = out.staging_path();
     let json = serde_json::to_string_pretty(&pointer).map_err(std::io::Error::other).map(|j| (j + "\n").into_bytes());
     write_synced(&pointer_staged, json)?;
@@ -731,7 +736,7 @@ fn write_sessions(path: &Path, store: &FleetStore) -> Result<()> {
 
 fn write_tiles(path: &Path, store: &FleetStore) -> Result<()> {
     let t = store.tiles();
-    let tile = |f: &dyn Fn(&loops_core::Tile) -> usize| ints(t.iter().map(|x| f(x.tile())));
+    let tile = |f: &dyn Fn(&loops_core::tile::Tile) -> usize| ints(t.iter().map(|x| f(x.tile())));
     write_table(
         path,
         vec![
@@ -748,11 +753,16 @@ fn write_tiles(path: &Path, store: &FleetStore) -> Result<()> {
     )
 }
 
-fn write_components(path: &Path, loops: &loops_core::StoreLoops, names: &[&str], added: &HashSet<usize>) -> Result<()> {
+fn write_components(
+    path: &Path,
+    loops: &loops_core::store::StoreLoops,
+    names: &[&str],
+    added: &HashSet<usize>,
+) -> Result<()> {
     let c = loops.components();
     let times = loops.component_times_s();
-    let f = |g: &dyn Fn(&loops_core::FleetComponent) -> f64| Column::Float(c.iter().map(g).collect());
-    let u = |g: &dyn Fn(&loops_core::FleetComponent) -> usize| ints(c.iter().map(g));
+    let f = |g: &dyn Fn(&loops_core::fleet::FleetComponent) -> f64| Column::Float(c.iter().map(g).collect());
+    let u = |g: &dyn Fn(&loops_core::fleet::FleetComponent) -> usize| ints(c.iter().map(g));
     let time = |g: &dyn Fn(&[[f64; 2]; 2]) -> f64| Column::Float(times.iter().map(g).collect());
     write_table(
         path,
@@ -782,7 +792,7 @@ fn write_components(path: &Path, loops: &loops_core::StoreLoops, names: &[&str],
     )
 }
 
-fn write_session_pairs(path: &Path, loops: &loops_core::StoreLoops, names: &[&str]) -> Result<()> {
+fn write_session_pairs(path: &Path, loops: &loops_core::store::StoreLoops, names: &[&str]) -> Result<()> {
     let p = loops.session_pairs();
     write_table(
         path,
@@ -818,8 +828,8 @@ fn write_loop_duration(path: &Path, store: &FleetStore, own: &[f64], other: &[f6
 
 fn write_samples(path: &Path, samples: Option<&StoreSamples>, names: &[&str]) -> Result<()> {
     let rows = samples.map_or(&[][..], |s| &s.rows[..]);
-    let f = |g: &dyn Fn(&loops_core::FleetSample) -> f64| Column::Float(rows.iter().map(g).collect());
-    let u = |g: &dyn Fn(&loops_core::FleetSample) -> usize| ints(rows.iter().map(g));
+    let f = |g: &dyn Fn(&loops_core::fleet::FleetSample) -> f64| Column::Float(rows.iter().map(g).collect());
+    let u = |g: &dyn Fn(&loops_core::fleet::FleetSample) -> usize| ints(rows.iter().map(g));
     write_table(
         path,
         vec![
@@ -837,12 +847,12 @@ fn write_samples(path: &Path, samples: Option<&StoreSamples>, names: &[&str]) ->
     )
 }
 
-/// The columns of the passes near a place ([`FleetStore::near`](loops_core::FleetStore::near)),
+/// The columns of the passes near a place ([`FleetStore::near`](loops_core::store::FleetStore::near)),
 /// a pass a row: the session's index and name, its first and last pose, their times.
 pub const PASS_COLUMNS: [&str; 6] = ["session", "name", "i_start", "i_end", "t_start_s", "t_end_s"];
 
 /// The columns of the sessions that revisit a session
-/// ([`StoreLoops::revisits`](loops_core::StoreLoops::revisits)), one a row.
+/// ([`StoreLoops::revisits`](loops_core::store::StoreLoops::revisits)), one a row.
 pub const REVISIT_COLUMNS: [&str; 6] = ["session", "name", "components", "pair_count", "area_s2", "density"];
 
 /// The columns of a list of a store's components (the components the last update added): as
@@ -898,7 +908,7 @@ fn name_of<'a>(names: &[&'a str], k: usize) -> std::io::Result<&'a str> {
 /// # Errors
 /// What `out` returns; `InvalidData` for a session beyond `names`.
 pub fn passes_to_csv<W: std::io::Write>(
-    passes: &[loops_core::StorePass],
+    passes: &[loops_core::store::StorePass],
     names: &[&str],
     out: W,
 ) -> std::io::Result<()> {
@@ -923,7 +933,7 @@ pub fn passes_to_csv<W: std::io::Write>(
 /// # Errors
 /// What `out` returns; `InvalidData` for a session beyond `names`.
 pub fn revisits_to_csv<W: std::io::Write>(
-    revisits: &[loops_core::Revisit],
+    revisits: &[loops_core::store::Revisit],
     names: &[&str],
     out: W,
 ) -> std::io::Result<()> {

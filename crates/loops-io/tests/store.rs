@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use loops_core::{
-    FleetStore, SampleSize, Sampler, SamplerKind, StoreSession, StoreSettings, Trajectory, UrbanDrive, UrbanFleet,
+    SampleSize, Sampler, SamplerKind, Trajectory, UrbanDrive, UrbanFleet,
+    store::{FleetStore, StoreSession, StoreSettings},
 };
 use loops_io::store::{StoreConfig, read_samples, read_store, update_store};
 

@@ -27,7 +27,9 @@ const PANIC_EXIT_CODE: u8 = 101;
 pub(crate) fn run_cli(py: Python<'_>, args: Vec<OsString>) -> u8 {
     let argv: Vec<OsString> = std::iter::once(OsString::from("loops")).chain(args).collect();
     py.detach(|| {
-        // The panic's message is printed by the hook, as in the binary.
+        // Not `detached`: the command reports its own errors on stderr and answers with an exit
+        // code, as the binary does, and handles SIGINT itself; a panic becomes the binary's
+        // exit code 101 (its message printed by the hook, as in the binary), not an exception.
         std::panic::catch_unwind(|| loops_cli::main(argv)).unwrap_or(PANIC_EXIT_CODE)
     })
 }

@@ -59,8 +59,9 @@ use pyo3::prelude::*;
 /// How often the calling thread looks for Python signals (Ctrl-C) while Rust computes.
 const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
-/// Runs `f` without the GIL and turns its error, or a panic, into a Python exception: the one
-/// way bindings call into Rust.
+/// Runs `f` without the GIL and turns its error, or a panic, into a Python exception: the way
+/// bindings call into the core. A call too short to be worth releasing the GIL (a push of one
+/// pose) goes through [`attached`] instead; both stop a panic with [`guarded`].
 ///
 /// `f` runs on a worker thread under a [`loops_core::Interrupt`] while the calling thread waits
 /// without the GIL and, every 50 ms, lets Python run its signal handlers
@@ -77,16 +78,9 @@ pub(crate) fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, er
             move || {
                 // On the process's default pool, which a forked child makes anew (see
                 // `loops_core::with_threads`).
-                let result = interrupt.run(|| {
-                    loops_core::with_threads(None, || std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)))
-                });
+                let result = interrupt.run(|| loops_core::with_threads(None, || guarded(f)));
                 done.finish();
-                match result {
-                    Ok(done) => {
-                        done.unwrap_or_else(|payload| Err(error::Failure::Panic(panic_message(payload.as_ref()))))
-                    }
-                    Err(error) => Err(error::Failure::from(error)),
-                }
+                result.unwrap_or_else(|error| Err(error::Failure::from(error)))
             }
         };
         let worker = std::thread::Builder::new()
@@ -107,6 +101,21 @@ pub(crate) fn detached<T: Send>(py: Python<'_>, f: impl FnOnce() -> Result<T, er
         signal?;
         result.map_err(PyErr::from)
     })
+}
+
+/// Runs `f` with the GIL held and turns its error, or a panic, into a Python exception: for the
+/// calls that take microseconds (an online push, an offer to the online sampler), where
+/// releasing the GIL and starting a worker would cost more than the call. Anything longer goes
+/// through [`detached`], so that Ctrl-C and other Python threads are not held up.
+pub(crate) fn attached<T>(f: impl FnOnce() -> Result<T, error::Failure>) -> PyResult<T> {
+    guarded(f).map_err(PyErr::from)
+}
+
+/// Runs `f`, turning a panic into [`error::Failure::Panic`]: the one guard under [`detached`]
+/// and [`attached`], so that no panic reaches Python.
+fn guarded<T>(f: impl FnOnce() -> Result<T, error::Failure>) -> Result<T, error::Failure> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
+        .unwrap_or_else(|payload| Err(error::Failure::Panic(panic_message(payload.as_ref()))))
 }
 
 /// Whether the worker of [`detached`] has finished, and a way to wait for it.
@@ -134,7 +143,7 @@ impl Done {
 }
 
 /// The text of a panic's payload.
-pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| (*s).to_owned())

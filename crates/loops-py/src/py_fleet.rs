@@ -22,7 +22,10 @@ use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_samples::{Samples, baseline_params, sampler_of};
 use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::{DriveOptions, ReadArgs, Trajectory, read_trajectory_with};
-use loops_core::{FleetOptions, MetricSpec, Pruning, Sampler};
+use loops_core::{
+    MetricSpec, Sampler,
+    fleet::{FleetOptions, Pruning},
+};
 
 /// Sessions — vehicles, days, robots — in one frame, each a :class:`Trajectory` with a name and
 /// its own clock: the input of :func:`find_fleet_loops`.
@@ -64,7 +67,7 @@ use loops_core::{FleetOptions, MetricSpec, Pruning, Sampler};
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct Fleet {
-    pub(crate) inner: Arc<loops_core::Fleet>,
+    pub(crate) inner: Arc<loops_core::fleet::Fleet>,
     /// Per session, what its `Trajectory` carries beside the poses: the plane it was read on and
     /// the metric it was read for.
     plane_axes: Vec<Option<(usize, usize)>>,
@@ -306,7 +309,8 @@ impl Fleet {
                 spec.validate(traj).map_err(|e| invalid(format!("session {name:?}: {e}")))?;
                 specs.push(Some(spec));
             }
-            let inner = py.detach(move || loops_core::Fleet::new(sessions)).map_err(|e| invalid(e.to_string()))?;
+            let inner =
+                py.detach(move || loops_core::fleet::Fleet::new(sessions)).map_err(|e| invalid(e.to_string()))?;
             Ok(Self { inner: Arc::new(inner), plane_axes, metrics: specs })
         })
     }
@@ -359,7 +363,7 @@ impl Fleet {
         let inner = detached(py, move || {
             // A trajectory no one else holds (one just read) moves into the fleet uncopied.
             let sessions = named.into_iter().map(|(name, traj)| (name, Arc::unwrap_or_clone(traj))).collect::<Vec<_>>();
-            Ok(loops_core::Fleet::new(sessions)?)
+            Ok(loops_core::fleet::Fleet::new(sessions)?)
         })?;
         Ok(Self { inner: Arc::new(inner), plane_axes, metrics })
     }
@@ -524,7 +528,7 @@ pub(crate) fn find_fleet_loops(
     let inner_fleet = Arc::clone(&fleet.get().inner);
     let inner = metric.run(py, threads, move |metric| match metric {
         MetricRef::Spec(spec) => spec.find_fleet_loops(&inner_fleet, gamma, &options),
-        MetricRef::Callable(callable) => loops_core::find_fleet_loops(&inner_fleet, callable, gamma, &options),
+        MetricRef::Callable(callable) => loops_core::fleet::find_fleet_loops(&inner_fleet, callable, gamma, &options),
     })?;
     crate::warning::warn_loops(py, inner.loops())?;
     Ok(FleetLoops { inner: Arc::new(inner), fleet: fleet.unbind(), loops: PyOnceLock::new() })
@@ -539,7 +543,7 @@ pub(crate) fn find_fleet_loops(
 /// :class:`Loops` does.
 #[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct FleetLoops {
-    pub(crate) inner: Arc<loops_core::FleetLoops>,
+    pub(crate) inner: Arc<loops_core::fleet::FleetLoops>,
     pub(crate) fleet: Py<Fleet>,
     /// The joint result as a `Loops`, copied on first use.
     loops: PyOnceLock<Py<Loops>>,
@@ -568,8 +572,9 @@ impl FleetLoops {
             let invalid = |e: loops_core::Error| crate::pickling::invalid(py, "FleetLoops", e);
             let pruning = pruning.parse().map_err(invalid)?;
             let inner_fleet = Arc::clone(&fleet.get().inner);
-            let inner =
-                py.detach(move || loops_core::FleetLoops::from_loops(&inner_fleet, loops, pruning)).map_err(invalid)?;
+            let inner = py
+                .detach(move || loops_core::fleet::FleetLoops::from_loops(&inner_fleet, loops, pruning))
+                .map_err(invalid)?;
             Ok(Self { inner: Arc::new(inner), fleet: fleet.clone().unbind(), loops: PyOnceLock::new() })
         })
     }
@@ -777,7 +782,7 @@ pub(crate) fn loop_duration_table<'py>(
 /// of their extents on their sessions' clocks (`[[t_min, t_max], [t′_min, t′_max]]`).
 pub(crate) fn components_table<'py>(
     py: Python<'py>,
-    cs: &[loops_core::FleetComponent],
+    cs: &[loops_core::fleet::FleetComponent],
     names: &[String],
     times: &[[[f64; 2]; 2]],
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -809,7 +814,7 @@ pub(crate) fn components_table<'py>(
 /// The table of :meth:`FleetLoops.session_pairs` (see there).
 pub(crate) fn session_pairs_table<'py>(
     py: Python<'py>,
-    ps: &[loops_core::SessionPair],
+    ps: &[loops_core::fleet::SessionPair],
     names: &[String],
 ) -> PyResult<Bound<'py, PyAny>> {
     let rows: Vec<_> = ps.iter().map(|pair| loops_io::SessionPairRow::new(pair, names)).collect();
@@ -834,7 +839,7 @@ pub(crate) fn session_pairs_table<'py>(
 pub(crate) fn overlap_matrix<'py>(
     py: Python<'py>,
     n: usize,
-    pairs: &[loops_core::SessionPair],
+    pairs: &[loops_core::fleet::SessionPair],
     sparse: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     if sparse {
@@ -942,7 +947,7 @@ pub(crate) fn sample_fleet(
     let fleet = Arc::clone(&loops.fleet_ref().inner);
     let inner = Arc::clone(&loops.inner);
     let (samples, located) = metric.run(py, threads, move |metric| {
-        let samples = loops_core::sample_fleet(&fleet, metric.as_metric(), &inner, &spec, between_only)?;
+        let samples = loops_core::fleet::sample_fleet(&fleet, metric.as_metric(), &inner, &spec, between_only)?;
         let located = fleet.localize(&samples)?;
         Ok((samples, located))
     })?;
@@ -957,7 +962,7 @@ pub(crate) fn sample_fleet(
 #[derive(Debug)]
 pub(crate) struct FleetSamples {
     pub(crate) samples: Py<Samples>,
-    located: Vec<loops_core::FleetSample>,
+    located: Vec<loops_core::fleet::FleetSample>,
     fleet: Py<Fleet>,
 }
 
@@ -1085,7 +1090,7 @@ impl FleetSamples {
 /// attribute). Destructured so that a column added there does not compile here until it is.
 pub(crate) fn fleet_samples_table<'py>(
     py: Python<'py>,
-    s: &[loops_core::FleetSample],
+    s: &[loops_core::fleet::FleetSample],
     names: &[String],
 ) -> PyResult<Bound<'py, PyAny>> {
     let [session_a, session_b, name_a, name_b, i, j, t_s, t_prime_s, component, distance, _sampler] =

@@ -792,10 +792,10 @@ impl TimelineArg {
 #[pyclass(frozen, eq, module = "inexact_loops._core")]
 #[derive(Debug, PartialEq)]
 pub(crate) struct PlaneGrid {
-    pub(crate) inner: Arc<loops_core::PlaneGrid>,
+    pub(crate) inner: Arc<loops_core::plane::PlaneGrid>,
 }
 
-crate::pickling::pickled!(PlaneGrid, loops_core::PlaneGrid, |value| Ok(Self { inner: Arc::new(value) }));
+crate::pickling::pickled!(PlaneGrid, loops_core::plane::PlaneGrid, |value| Ok(Self { inner: Arc::new(value) }));
 
 #[pymethods]
 impl PlaneGrid {
@@ -813,7 +813,8 @@ impl PlaneGrid {
     ) -> PyResult<Self> {
         let timeline = TimelineArg::from_py(trajectory_or_loops)?;
         let window = window_s.map(|((a, b), (c, d))| ([a, b], [c, d]));
-        let inner = detached(py, move || Ok(loops_core::PlaneGrid::new(timeline.timeline(), window, max_pixels)?))?;
+        let inner =
+            detached(py, move || Ok(loops_core::plane::PlaneGrid::new(timeline.timeline(), window, max_pixels)?))?;
         Ok(Self { inner: Arc::new(inner) })
     }
 

@@ -12,21 +12,13 @@ use crate::convert::{
     bool_column, closest_position_columns, extent_columns, float64_column, int64_column, real_array, table,
     timestamps_and_points, to_numpy,
 };
-use crate::detached;
 use crate::error::{Failure, value_error};
 use crate::py_loops::Loops;
 use crate::py_metric::MetricArg;
 use crate::py_trajectory::Trajectory;
 use crate::shared::Shared;
-use loops_core::ComponentId;
-
-/// Runs `f` with the GIL held (a push takes microseconds: releasing the GIL would cost more),
-/// turning a panic into `InternalError`.
-fn attached<T>(f: impl FnOnce() -> Result<T, Failure>) -> PyResult<T> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f))
-        .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
-        .map_err(PyErr::from)
-}
+use crate::{attached, detached};
+use loops_core::online::ComponentId;
 
 /// The loops of a trajectory that grows pose by pose, as a SLAM front end sees it: S_γ, its
 /// loop components with their statistics, and the loop duration τ, kept up to date as poses
@@ -76,7 +68,7 @@ pub(crate) struct OnlineLoops {
 /// What an `OnlineLoops` changes as poses are pushed.
 #[derive(Debug)]
 pub(crate) struct Engine {
-    pub(crate) inner: loops_core::OnlineLoops,
+    pub(crate) inner: loops_core::online::OnlineLoops,
     /// The number of poses the last rebuild started from (0: none, or cleared): a pickle
     /// replays the same rebuild and pushes.
     rebuilt_len: usize,
@@ -96,7 +88,7 @@ pub(crate) struct Engine {
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug)]
 pub(crate) struct Update {
-    pub(crate) inner: Arc<loops_core::Update>,
+    pub(crate) inner: Arc<loops_core::online::Update>,
 }
 
 /// What a pickled `OnlineLoops` holds: enough to replay it exactly.
@@ -153,7 +145,7 @@ impl OnlineLoops {
     #[pyo3(signature = (*, gamma, dim, metric=None))]
     fn new(gamma: f64, dim: usize, metric: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let spec = MetricArg::spec_from_py(metric, "OnlineLoops")?;
-        let inner = loops_core::OnlineLoops::new(spec, dim, gamma).map_err(Failure::from)?;
+        let inner = loops_core::online::OnlineLoops::new(spec, dim, gamma).map_err(Failure::from)?;
         Ok(Self::from_engine(Engine { inner, rebuilt_len: 0 }))
     }
 
@@ -180,7 +172,7 @@ impl OnlineLoops {
             let state: OnlineState = crate::pickling::restore(py, "OnlineLoops", state)?;
             let spec: loops_core::MetricSpec = state.metric.parse().map_err(Failure::from)?;
             let mut this = Engine {
-                inner: loops_core::OnlineLoops::new(spec, state.dim, state.gamma).map_err(Failure::from)?,
+                inner: loops_core::online::OnlineLoops::new(spec, state.dim, state.gamma).map_err(Failure::from)?,
                 rebuilt_len: state.rebuilt_len,
             };
             let (rebuilt, dim) = (state.rebuilt_len, state.dim);
@@ -462,7 +454,7 @@ impl OnlineLoops {
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let this = self.engine.lock(py)?;
-        let cs: Vec<&loops_core::OnlineComponent> = this.inner.components().map(|(_, c)| c).collect();
+        let cs: Vec<&loops_core::online::OnlineComponent> = this.inner.components().map(|(_, c)| c).collect();
         let t = this.inner.timestamps_s();
         // The columns of components.csv, in its order (less pose_pair_count, which the online
         // engine does not count), then the online ones.
@@ -519,13 +511,13 @@ impl Update {
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
         crate::pickling::restoring(cls.py(), "Update", || {
             let s: UpdateState = crate::pickling::restore(cls.py(), "Update", state)?;
-            let inner = loops_core::Update {
+            let inner = loops_core::online::Update {
                 first_pose: s.first_pose,
                 pose: s.pose,
                 runs: s
                     .runs
                     .into_iter()
-                    .map(|(row, start, end, component, closest)| loops_core::RowRun {
+                    .map(|(row, start, end, component, closest)| loops_core::online::RowRun {
                         row,
                         run: loops_core::Run { start, end },
                         component,
@@ -537,10 +529,10 @@ impl Update {
                 merged: s
                     .merged
                     .into_iter()
-                    .map(|(pose, retired, survivor)| loops_core::Merge { pose, retired, survivor })
+                    .map(|(pose, retired, survivor)| loops_core::online::Merge { pose, retired, survivor })
                     .collect(),
                 loop_duration_s: s.loop_duration_s,
-                stamp: loops_core::PushStamp::default(),
+                stamp: loops_core::online::PushStamp::default(),
             };
             Ok(Self { inner: Arc::new(inner) })
         })

@@ -3,11 +3,12 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyTuple, PyType};
 
+use crate::attached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_online::{OnlineLoops, Update};
 use crate::py_separation::{Separation, SeparationArg};
 use crate::shared::Shared;
-use loops_core::{Cap, ComponentId, OnlineSamplerOptions};
+use loops_core::online::{Cap, ComponentId, OnlineSamplerOptions};
 
 /// Picks loop-closure candidates from each :class:`Update` of an :class:`OnlineLoops`, as a
 /// front end needs them while the robot drives: σ_ρ online (each component's pairs in the new
@@ -70,7 +71,7 @@ pub(crate) struct OnlineSampler {
 /// What an `OnlineSampler` changes as updates are offered.
 #[derive(Debug)]
 struct SamplerState {
-    inner: loops_core::OnlineSampler,
+    inner: loops_core::online::OnlineSampler,
 }
 
 /// A loop-closure candidate: the pair (``j``, ``k``), j < k ≤ keyframe, within γ, to match.
@@ -93,11 +94,11 @@ struct SamplerState {
 #[pyclass(frozen, eq, module = "inexact_loops._core")]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Candidate {
-    inner: loops_core::Candidate,
+    inner: loops_core::online::Candidate,
 }
 
 impl OnlineSampler {
-    fn from_core(inner: loops_core::OnlineSampler) -> Self {
+    fn from_core(inner: loops_core::online::OnlineSampler) -> Self {
         Self { options: *inner.options(), state: Shared::new(SamplerState { inner }) }
     }
 }
@@ -151,7 +152,7 @@ impl OnlineSampler {
             separation,
             seed,
         };
-        let inner = loops_core::OnlineSampler::new(options).map_err(Failure::from)?;
+        let inner = loops_core::online::OnlineSampler::new(options).map_err(Failure::from)?;
         Ok(Self::from_core(inner))
     }
 
@@ -164,7 +165,7 @@ impl OnlineSampler {
     #[classmethod]
     fn _from_state(cls: &Bound<'_, PyType>, state: &[u8]) -> PyResult<Self> {
         crate::pickling::restoring(cls.py(), "OnlineSampler", || {
-            let inner: loops_core::OnlineSampler = crate::pickling::restore(cls.py(), "OnlineSampler", state)?;
+            let inner: loops_core::online::OnlineSampler = crate::pickling::restore(cls.py(), "OnlineSampler", state)?;
             Ok(Self::from_core(inner))
         })
     }
@@ -214,12 +215,8 @@ impl OnlineSampler {
         // The sampler, then the engine: the one order in which two objects are held together.
         let mut this = self.state.lock(py)?;
         let engine = online.engine.lock(py)?;
-        // "Each update once, in order" is the core's rule (`loops_core::OnlineSampler::offer`).
-        let offered =
-            std::panic::AssertUnwindSafe(|| this.inner.offer(&engine.inner, &update.inner).map_err(Failure::from));
-        let candidates = std::panic::catch_unwind(offered)
-            .unwrap_or_else(|payload| Err(Failure::Panic(crate::panic_message(payload.as_ref()))))
-            .map_err(PyErr::from)?;
+        // "Each update once, in order" is the core's rule (`loops_core::online::OnlineSampler::offer`).
+        let candidates = attached(|| Ok(this.inner.offer(&engine.inner, &update.inner)?))?;
         Ok(candidates.into_iter().map(|inner| Candidate { inner }).collect())
     }
 
@@ -279,7 +276,7 @@ impl Candidate {
     #[pyo3(signature = (*, keyframe, j, component, distance, first, k=None))]
     fn new(keyframe: usize, j: usize, component: ComponentId, distance: f64, first: bool, k: Option<usize>) -> Self {
         let k = k.unwrap_or(keyframe);
-        Self { inner: loops_core::Candidate { keyframe, pair: [j, k], component, distance, first } }
+        Self { inner: loops_core::online::Candidate { keyframe, pair: [j, k], component, distance, first } }
     }
 
     /// Pickles as its constructor's keywords.

@@ -20,7 +20,7 @@ use crate::error::{Failure, value_error};
 use crate::py_loops::PlaneGrid;
 use crate::py_metric::{MetricArg, MetricRef};
 use crate::py_trajectory::Trajectory;
-use loops_core::{Border, SamplerKind};
+use loops_core::{SamplerKind, plane::Border};
 
 /// The pairwise distance π(t, t′) = δ(ξ(t), ξ(t′)) on a grid: ``image[b, a]`` is δ between the
 /// column pose ``grid.columns[a]`` and the row pose ``grid.rows[b]``, in the metric's unit, for
@@ -62,7 +62,7 @@ pub(crate) fn distance_image<'py>(
     let image =
         MetricArg::or_default(metric, trajectory.default_metric())?.run(py, threads, |metric| match metric {
             MetricRef::Spec(spec) => spec.distance_image(&traj, &plane),
-            MetricRef::Callable(callable) => loops_core::distance_image(&traj, callable, &plane),
+            MetricRef::Callable(callable) => loops_core::plane::distance_image(&traj, callable, &plane),
         })?;
     to_numpy(py, image).reshape([grid.inner.height(), grid.inner.width()])
 }
@@ -142,7 +142,7 @@ pub(crate) fn outline_segments<'py>(
 ) -> PyResult<EdgesAndSides<'py>> {
     let border: Border = border.parse().map_err(Failure::from)?;
     let (labels, width, height) = self::labels(py, labels)?;
-    let edges = detached(py, move || Ok(loops_core::outline_segments(&labels, width, height, border)?))?;
+    let edges = detached(py, move || Ok(loops_core::plane::outline_segments(&labels, width, height, border)?))?;
     let vertices = edges.iter().flat_map(|e| [e.start, e.end]).flatten().map(i64::from).collect();
     let sides = edges.iter().flat_map(|e| e.sides).map(|c| c.map_or(-1, i64::from)).collect();
     Ok((to_numpy(py, vertices).reshape([edges.len(), 2, 2])?, to_numpy(py, sides).reshape([edges.len(), 2])?))
@@ -178,7 +178,7 @@ pub(crate) fn component_outlines<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let border: Border = border.parse().map_err(Failure::from)?;
     let (labels, width, height) = self::labels(py, labels)?;
-    let outlines = detached(py, move || Ok(loops_core::component_outlines(&labels, width, height, border)?))?;
+    let outlines = detached(py, move || Ok(loops_core::plane::component_outlines(&labels, width, height, border)?))?;
     let dict = PyDict::new(py);
     for (id, lines) in outlines {
         let lines = lines.into_iter().map(|line| points(py, &line)).collect::<PyResult<Vec<_>>>()?;
@@ -225,13 +225,13 @@ pub(crate) fn chain_polylines<'py>(py: Python<'py>, edges: &Bound<'_, PyAny>) ->
     match shape[..] {
         [_, 2] => {
             let edges: Vec<[i64; 2]> = values.chunks_exact(2).map(|e| [vertex(e[0]), vertex(e[1])]).collect();
-            let lines = detached(py, move || Ok(loops_core::chain_polylines(&edges)))?;
+            let lines = detached(py, move || Ok(loops_core::plane::chain_polylines(&edges)))?;
             Ok(lines.into_iter().map(|line| to_numpy(py, line).into_any()).collect())
         }
         [_, 2, 2] => {
             let edges: Vec<[[i64; 2]; 2]> =
                 values.chunks_exact(4).map(|e| [[vertex(e[0]), vertex(e[1])], [vertex(e[2]), vertex(e[3])]]).collect();
-            let lines = detached(py, move || Ok(loops_core::chain_polylines(&edges)))?;
+            let lines = detached(py, move || Ok(loops_core::plane::chain_polylines(&edges)))?;
             lines
                 .into_iter()
                 .map(|line| {
@@ -272,7 +272,7 @@ pub(crate) fn isocontour<'py>(
     level: f64,
 ) -> PyResult<Vec<Bound<'py, PyArray2<f64>>>> {
     let (values, width, height) = image(py, values, "values", false)?;
-    let lines = detached(py, move || Ok(loops_core::isocontour(&values, width, height, level)?))?;
+    let lines = detached(py, move || Ok(loops_core::plane::isocontour(&values, width, height, level)?))?;
     lines
         .into_iter()
         .map(|line| to_numpy(py, line.iter().flatten().copied().collect()).reshape([line.len(), 2]))

@@ -1,4 +1,4 @@
-//! `FleetStore`: a fleet store on disk (`loops_io::store` over `loops_core::FleetStore`), its
+//! `FleetStore`: a fleet store on disk (`loops_io::store` over `loops_core::store::FleetStore`), its
 //! updates and its tables.
 
 use std::path::PathBuf;
@@ -19,7 +19,10 @@ use crate::py_metric::MetricArg;
 use crate::py_samples::sampler_of;
 use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::ReadArgs;
-use loops_core::{FleetSample, StoreLoops, StoreSettings};
+use loops_core::{
+    fleet::FleetSample,
+    store::{StoreLoops, StoreSettings},
+};
 use loops_io::store::{StoreConfig, StoreError, StoredFleet, read_samples, read_store, update_store};
 
 /// A fleet's loops kept in a folder and updated at the cost of the new data: each
@@ -169,7 +172,7 @@ impl FleetStore {
 }
 
 /// `update`'s report as a dict.
-fn update_dict<'py>(py: Python<'py>, update: &loops_core::StoreUpdate) -> PyResult<Bound<'py, PyDict>> {
+fn update_dict<'py>(py: Python<'py>, update: &loops_core::store::StoreUpdate) -> PyResult<Bound<'py, PyDict>> {
     let dict = PyDict::new(py);
     dict.set_item("added", &update.added)?;
     dict.set_item("replaced", &update.replaced)?;
@@ -408,7 +411,7 @@ impl FleetStore {
     /// ``tiles_dropped`` (int).
     #[getter]
     fn last_update<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let empty = loops_core::StoreUpdate::default();
+        let empty = loops_core::store::StoreUpdate::default();
         update_dict(py, self.state.as_ref().map_or(&empty, |s| s.stored.store.last_update()))
     }
 

@@ -22,7 +22,7 @@ use loops_core::MetricSpec;
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct SessionBlocks {
-    pub(crate) inner: loops_core::SessionBlocks,
+    pub(crate) inner: loops_core::tile::SessionBlocks,
     metric: MetricSpec,
 }
 
@@ -58,7 +58,7 @@ impl TileScan {
     /// an unknown metric.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
-        tile: &loops_core::Tile,
+        tile: &loops_core::tile::Tile,
         session_a: &Trajectory,
         session_b: Option<&Trajectory>,
         starts: (usize, usize),
@@ -105,7 +105,7 @@ impl SessionBlocks {
     #[new]
     #[pyo3(signature = (data, metric))]
     fn new(data: &[u8], metric: &str) -> PyResult<Self> {
-        let inner = loops_core::SessionBlocks::from_bytes(data).map_err(Failure::from)?;
+        let inner = loops_core::tile::SessionBlocks::from_bytes(data).map_err(Failure::from)?;
         let metric = metric.parse::<MetricSpec>().map_err(Failure::from)?;
         Ok(Self { inner, metric })
     }
@@ -178,7 +178,7 @@ impl SessionBlocks {
     /// Example:
     ///     >>> import numpy as np, inexact_loops as il
     ///     >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
-    ///     >>> coarse = il.session_blocks(drive, block=2).coarsened(3)
+    ///     >>> coarse = il.tiles.session_blocks(drive, block=2).coarsened(3)
     ///     >>> coarse.block, len(coarse), coarse.poses
     ///     (6, 2, 10)
     fn coarsened(&self, factor: usize) -> PyResult<Self> {
@@ -205,7 +205,7 @@ impl SessionBlocks {
 /// Example:
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> drive = il.Trajectory(np.arange(10.0), np.c_[np.arange(10.0), np.zeros(10)])
-///     >>> blocks = il.session_blocks(drive, block=4)
+///     >>> blocks = il.tiles.session_blocks(drive, block=4)
 ///     >>> blocks.poses, len(blocks), blocks.span_s, blocks.metric_name
 ///     (10, 3, 9.0, 'euclidean')
 #[pyfunction]
@@ -229,7 +229,7 @@ pub(crate) fn session_blocks(
 #[pyclass(frozen, eq, hash, module = "inexact_loops._core")]
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub(crate) struct Tile {
-    pub(crate) inner: loops_core::Tile,
+    pub(crate) inner: loops_core::tile::Tile,
 }
 
 #[pymethods]
@@ -238,7 +238,7 @@ impl Tile {
     #[pyo3(signature = (sessions, rows, columns))]
     fn new(sessions: (usize, usize), rows: (usize, usize), columns: (usize, usize)) -> Self {
         Self {
-            inner: loops_core::Tile {
+            inner: loops_core::tile::Tile {
                 sessions: [sessions.0, sessions.1],
                 rows: rows.0..rows.1,
                 columns: columns.0..columns.1,
@@ -302,8 +302,8 @@ impl Tile {
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> out = il.Trajectory(np.arange(6.0), np.c_[np.arange(6.0), np.zeros(6)])
 ///     >>> far = il.Trajectory(np.arange(4.0), np.c_[np.arange(4.0), np.full(4, 100.0)])
-///     >>> blocks = [il.session_blocks(s, block=3) for s in (out, far)]
-///     >>> [t.sessions for t in il.plan_tiles(blocks, gamma=1.0)]  # far meets no one
+///     >>> blocks = [il.tiles.session_blocks(s, block=3) for s in (out, far)]
+///     >>> [t.sessions for t in il.tiles.plan_tiles(blocks, gamma=1.0)]  # far meets no one
 ///     [(0, 0), (0, 0), (0, 0), (1, 1), (1, 1), (1, 1)]
 #[pyfunction]
 #[pyo3(signature = (sessions, *, gamma, metric=None))]
@@ -324,7 +324,7 @@ pub(crate) fn plan_tiles(
             metric.name()
         )));
     }
-    let blocks: Vec<loops_core::SessionBlocks> = sessions.iter().map(|s| s.inner.clone()).collect();
+    let blocks: Vec<loops_core::tile::SessionBlocks> = sessions.iter().map(|s| s.inner.clone()).collect();
     let tiles = detached(py, move || Ok(metric.plan_session_tiles(&blocks, gamma)?))?;
     Ok(tiles.into_iter().map(|inner| Tile { inner }).collect())
 }
@@ -335,12 +335,12 @@ pub(crate) fn plan_tiles(
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct TileSummary {
-    pub(crate) inner: loops_core::TileSummary,
+    pub(crate) inner: loops_core::tile::TileSummary,
 }
 
 crate::pickling::pickled_as_bytes!(
     TileSummary,
-    loops_core::TileSummary,
+    loops_core::tile::TileSummary,
     "summary",
     "The summary as bytes: a 4-byte tag, the format version, then the fields (MessagePack).",
     from_bytes

@@ -24,8 +24,8 @@ use loops_core::{SampleSize, Sampler};
 /// it: its calls run one at a time.
 #[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct KeyedDraw {
-    inner: Shared<loops_core::KeyedDraw>,
-    merged: Arc<loops_core::MergedLoops>,
+    inner: Shared<loops_core::sample::KeyedDraw>,
+    merged: Arc<loops_core::tile::MergedLoops>,
     names: Vec<String>,
     starts: Vec<usize>,
     skip_trivial: bool,
@@ -35,7 +35,7 @@ pub(crate) struct KeyedDraw {
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn plan_draw(
     py: Python<'_>,
-    (merged, starts, names): (&Arc<loops_core::MergedLoops>, &[usize], &[String]),
+    (merged, starts, names): (&Arc<loops_core::tile::MergedLoops>, &[usize], &[String]),
     sampler: Option<&str>,
     rate: Option<f64>,
     budget: Option<usize>,
@@ -52,7 +52,7 @@ pub(crate) fn plan_draw(
         let stats = merged.draw_stats();
         let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
-        Ok(loops_core::KeyedDraw::new(&spec, &stats, &keep)?)
+        Ok(loops_core::sample::KeyedDraw::new(&spec, &stats, &keep)?)
     })?;
     Ok(KeyedDraw { inner: Shared::new(inner), merged: kept, names: names.to_vec(), starts, skip_trivial })
 }
@@ -100,7 +100,7 @@ impl KeyedDraw {
     fn requests(&self, py: Python<'_>) -> PyResult<Vec<(usize, TileDrawRequest)>> {
         let Some(request) = self.inner.lock(py)?.request().cloned() else { return Ok(Vec::new()) };
         let merged = Arc::clone(&self.merged);
-        let parts = detached(py, move || Ok(loops_core::tile_requests(&merged, &request)))?;
+        let parts = detached(py, move || Ok(loops_core::tile::tile_requests(&merged, &request)))?;
         Ok(parts
             .into_iter()
             .enumerate()
@@ -151,11 +151,11 @@ impl KeyedDraw {
             self.skip_trivial,
         )?;
         let session_of = |f: usize| self.starts.partition_point(|&s| s <= f) - 1;
-        let located: Vec<loops_core::FleetSample> = picks
+        let located: Vec<loops_core::fleet::FleetSample> = picks
             .iter()
             .map(|p| {
                 let (a, b) = (session_of(p.pair[0]), session_of(p.pair[1]));
-                loops_core::FleetSample {
+                loops_core::fleet::FleetSample {
                     sessions: [a, b],
                     poses: [p.pair[0] - self.starts[a], p.pair[1] - self.starts[b]],
                     times_s: p.times_s,
@@ -173,9 +173,9 @@ impl KeyedDraw {
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct TileDrawRequest {
-    tile: loops_core::Tile,
+    tile: loops_core::tile::Tile,
     labels: Vec<u32>,
-    request: loops_core::DrawRequest,
+    request: loops_core::sample::DrawRequest,
 }
 
 #[pymethods]
@@ -190,7 +190,7 @@ impl TileDrawRequest {
             return Err(invalid_parameter(format!("{} bytes of labels are not 4 bytes each", labels.len())));
         }
         let labels = labels.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
-        let request = loops_core::DrawRequest::from_bytes(request).map_err(Failure::from)?;
+        let request = loops_core::sample::DrawRequest::from_bytes(request).map_err(Failure::from)?;
         Ok(Self { tile: tile.inner.clone(), labels, request })
     }
 
@@ -225,12 +225,12 @@ impl TileDrawRequest {
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct DrawCandidates {
-    inner: loops_core::DrawCandidates,
+    inner: loops_core::sample::DrawCandidates,
 }
 
 crate::pickling::pickled_as_bytes!(
     DrawCandidates,
-    loops_core::DrawCandidates,
+    loops_core::sample::DrawCandidates,
     "offers",
     "The offers as bytes (a tag, the tile format version, then MessagePack)."
 );
@@ -322,7 +322,8 @@ pub(crate) fn session_loop_duration<'py>(
     poses: usize,
     parts: Vec<PyRef<'py, crate::py_tile_scan::TileDuration>>,
 ) -> PyResult<Bound<'py, PyTuple>> {
-    let parts: Vec<loops_core::TileDuration> = parts.iter().map(|p| p.inner.clone()).collect();
-    let (own, other) = detached(py, move || Ok(loops_core::session_loop_duration(session, start, poses, &parts)?))?;
+    let parts: Vec<loops_core::tile::TileDuration> = parts.iter().map(|p| p.inner.clone()).collect();
+    let (own, other) =
+        detached(py, move || Ok(loops_core::tile::session_loop_duration(session, start, poses, &parts)?))?;
     PyTuple::new(py, [to_numpy(py, own).into_any(), to_numpy(py, other).into_any()])
 }

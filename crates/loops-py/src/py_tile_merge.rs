@@ -20,12 +20,12 @@ use crate::py_tile::{SessionBlocks, Tile, TileSummary};
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct TileMerge {
-    inner: loops_core::TileMerge,
+    inner: loops_core::tile::TileMerge,
 }
 
 crate::pickling::pickled_as_bytes!(
     TileMerge,
-    loops_core::TileMerge,
+    loops_core::tile::TileMerge,
     "merge",
     "The merge as bytes (as :meth:`TileSummary.to_bytes`, another tag).",
     from_bytes
@@ -121,10 +121,10 @@ impl TileMerge {
 ///     >>> import numpy as np, inexact_loops as il
 ///     >>> s = 0.2 * np.arange(40)  # a circle and a third, the second lap over the first
 ///     >>> drive = il.Trajectory(s, np.c_[np.cos(s), np.sin(s)])
-///     >>> blocks = [il.session_blocks(drive, block=8)]
-///     >>> tiles = il.plan_tiles(blocks, gamma=0.5)
-///     >>> parts = [il.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
-///     >>> merged = il.merge_tiles([il.merge_tiles(parts[:2]), *parts[2:]])
+///     >>> blocks = [il.tiles.session_blocks(drive, block=8)]
+///     >>> tiles = il.tiles.plan_tiles(blocks, gamma=0.5)
+///     >>> parts = [il.tiles.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None) for t in tiles]
+///     >>> merged = il.tiles.merge_tiles([il.tiles.merge_tiles(parts[:2]), *parts[2:]])
 ///     >>> loops = merged.finish(blocks, names=["drive"])
 ///     >>> fleet = il.find_fleet_loops(il.Fleet({"drive": drive}), gamma=0.5, separation=None)
 ///     >>> loops.components["pair_count"].tolist() == fleet.components["pair_count"].tolist()
@@ -148,9 +148,9 @@ pub(crate) fn merge_tiles(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyRes
     }
     let inner = detached(py, move || {
         for (k, summary) in summaries {
-            merges[k] = Some(loops_core::TileMerge::new(summary)?);
+            merges[k] = Some(loops_core::tile::TileMerge::new(summary)?);
         }
-        Ok(loops_core::TileMerge::merge(merges.into_iter().flatten().collect())?)
+        Ok(loops_core::tile::TileMerge::merge(merges.into_iter().flatten().collect())?)
     })?;
     Ok(TileMerge { inner })
 }
@@ -162,17 +162,17 @@ pub(crate) fn merge_tiles(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyRes
 #[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct TiledFleetLoops {
     pub(crate) names: Vec<String>,
-    components: Vec<loops_core::FleetComponent>,
+    components: Vec<loops_core::fleet::FleetComponent>,
     times: Vec<[[f64; 2]; 2]>,
-    pairs: Vec<loops_core::SessionPair>,
+    pairs: Vec<loops_core::fleet::SessionPair>,
     /// The merge and the sessions' first fleet indices, for keyed draws of samples
     /// (`py_tile_draw`); not pickled (an unpickled result draws no samples).
-    pub(crate) merged: Option<(std::sync::Arc<loops_core::MergedLoops>, Vec<usize>)>,
+    pub(crate) merged: Option<(std::sync::Arc<loops_core::tile::MergedLoops>, Vec<usize>)>,
 }
 
 impl TiledFleetLoops {
     /// The merge and the sessions' first fleet indices, or why not.
-    pub(crate) fn merge(&self) -> PyResult<(&std::sync::Arc<loops_core::MergedLoops>, &[usize])> {
+    pub(crate) fn merge(&self) -> PyResult<(&std::sync::Arc<loops_core::tile::MergedLoops>, &[usize])> {
         self.merged.as_ref().map(|(m, s)| (m, s.as_slice())).ok_or_else(|| {
             invalid_parameter(
                 "this TiledFleetLoops was read from a pickle, which keeps its tables but not the merge: draw \
@@ -184,7 +184,8 @@ impl TiledFleetLoops {
 }
 
 /// What a pickled `TiledFleetLoops` holds: names, components, their times, session pairs.
-type TiledState = (Vec<String>, Vec<loops_core::FleetComponent>, Vec<[[f64; 2]; 2]>, Vec<loops_core::SessionPair>);
+type TiledState =
+    (Vec<String>, Vec<loops_core::fleet::FleetComponent>, Vec<[[f64; 2]; 2]>, Vec<loops_core::fleet::SessionPair>);
 
 #[pymethods]
 impl TiledFleetLoops {
@@ -199,7 +200,7 @@ impl TiledFleetLoops {
         crate::pickling::restoring(cls.py(), "TiledFleetLoops", || {
             let py = cls.py();
             let (names, components, times, pairs): TiledState = crate::pickling::restore(py, "TiledFleetLoops", state)?;
-            loops_core::check_fleet_tables(names.len(), &components, &times, &pairs)
+            loops_core::fleet::check_fleet_tables(names.len(), &components, &times, &pairs)
                 .map_err(crate::error::Failure::from)?;
             Ok(Self { names, components, times, pairs, merged: None })
         })

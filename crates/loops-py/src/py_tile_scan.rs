@@ -12,7 +12,7 @@ use crate::error::invalid_parameter;
 use crate::py_separation::SeparationArg;
 use crate::py_tile::{Tile, TileScan, TileSummary};
 use crate::py_trajectory::Trajectory;
-use loops_core::{MetricSpec, TileKeep};
+use loops_core::{MetricSpec, tile::TileKeep};
 
 /// Scans one tile from its two sessions alone — what a worker that read only those sessions
 /// can do — without the GIL: the same cells as :func:`find_fleet_loops` finds in the tile,
@@ -47,8 +47,8 @@ use loops_core::{MetricSpec, TileKeep};
 /// Examples:
 ///     >>> import inexact_loops as il
 ///     >>> drive = il.Trajectory([0.0, 1.0, 2.0, 3.0], [[0, 0], [5, 0], [5, 5], [0, 0.1]])
-///     >>> tile = il.plan_tiles([il.session_blocks(drive, block=4)], gamma=0.5)[0]
-///     >>> summary, share = il.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
+///     >>> tile = il.tiles.plan_tiles([il.tiles.session_blocks(drive, block=4)], gamma=0.5)[0]
+///     >>> summary, share = il.tiles.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
 ///     >>> summary.component_count, share.tile == tile
 ///     (5, True)
 #[pyfunction]
@@ -104,12 +104,12 @@ pub(crate) fn scan_tile<'py>(
 #[pyclass(frozen, module = "inexact_loops._core")]
 #[derive(Debug, Clone)]
 pub(crate) struct TileDuration {
-    pub(crate) inner: loops_core::TileDuration,
+    pub(crate) inner: loops_core::tile::TileDuration,
 }
 
 crate::pickling::pickled_as_bytes!(
     TileDuration,
-    loops_core::TileDuration,
+    loops_core::tile::TileDuration,
     "share",
     "The share as bytes (a tag, the tile format version, then MessagePack)."
 );
@@ -133,7 +133,7 @@ impl TileDuration {
 /// tile (it does not pickle): a worker keeps it for the draws of its tiles.
 #[pyclass(frozen, module = "inexact_loops._core")]
 pub(crate) struct TileRuns {
-    pub(crate) inner: Arc<loops_core::TileRuns>,
+    pub(crate) inner: Arc<loops_core::tile::TileRuns>,
     pub(crate) metric: MetricSpec,
 }
 
@@ -170,9 +170,9 @@ impl TileRuns {
 /// The runs to draw `tile` from, checked against the draw's tile and metric.
 pub(crate) fn runs_for(
     runs: &TileRuns,
-    tile: &loops_core::Tile,
+    tile: &loops_core::tile::Tile,
     metric: MetricSpec,
-) -> PyResult<Arc<loops_core::TileRuns>> {
+) -> PyResult<Arc<loops_core::tile::TileRuns>> {
     if runs.inner.tile() != tile {
         return Err(invalid_parameter(format!(
             "draw_tile: the runs are of tile {:?}, the request of tile {tile:?}",

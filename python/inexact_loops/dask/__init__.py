@@ -11,21 +11,22 @@ its two sessions are read, and merges the tiles' summaries in a tree of reductio
     samples = loops.sample(budget=500, seed=0)                       # sample_fleet's samples
 
 What travels: the client sends paths, tiles and options, never poses. One task per session
-reads it and returns its pose count, span and block balls (:class:`~inexact_loops.SessionBlocks`,
-a few bytes per block); the client plans the tiles from those alone; each tile's task reads its
+reads it and returns its pose count, span and block balls
+(:class:`~inexact_loops.tiles.SessionBlocks`, a few bytes per block; the tiles' plumbing is
+:mod:`inexact_loops.tiles`); the client plans the tiles from those alone; each tile's task reads its
 two sessions (each worker keeps the last few it read) and returns a
-:class:`~inexact_loops.TileSummary` (statistics of its provisional components and the runs on
-its edges); merge tasks combine groups of summaries into :class:`~inexact_loops.TileMerge`
+:class:`~inexact_loops.tiles.TileSummary` (statistics of its provisional components and the runs on
+its edges); merge tasks combine groups of summaries into :class:`~inexact_loops.tiles.TileMerge`
 objects, which keep only the edge runs still facing unmerged tiles, level by level, until one
 is left; the client finishes it into the components and the overlap matrix. Samples are drawn
-by keys (:class:`~inexact_loops.KeyedDraw`): the client works out each component's quota from
+by keys (:class:`~inexact_loops.tiles.KeyedDraw`): the client works out each component's quota from
 the merged statistics, and each tile offers the few pairs asked of it
-(:func:`~inexact_loops.draw_tile`) from the runs its scan kept on the worker that scanned it
+(:func:`~inexact_loops.tiles.draw_tile`) from the runs its scan kept on the worker that scanned it
 (:data:`RUNS_KEPT`; the draws of a scan task's tiles are sent to that worker), rescanning the
 tile only when they are gone (evicted, or the worker restarted). The samples are
 :func:`~inexact_loops.sample_fleet`'s, pair for pair, whatever the tiling, the workers and
 where the runs were found. Loop duration per pose (``loop_duration=True``) comes from each
-tile's share (:func:`~inexact_loops.scan_tile` with ``duration=True``), added up per session.
+tile's share (:func:`~inexact_loops.tiles.scan_tile` with ``duration=True``), added up per session.
 Every task's result depends on its inputs alone (kept runs only save work), so a worker that dies
 takes nothing with it: Dask reruns its tasks and the answer is the same. A run never waits for
 ever: its tasks that wait for a worker are sent to the running ones, and when none can take

@@ -10,12 +10,13 @@ import threading
 from typing import Any
 
 from .. import _core
+from ..tiles import TileRuns
 from . import _settings
 from ._parquet import read_pose_parquet
 
 #: The tiles' runs a worker keeps, most recently used last: (run id, tile) -> (the scan task's
 #: group, TileRuns).
-_runs: collections.OrderedDict[Any, tuple[int, _core.TileRuns]] = collections.OrderedDict()
+_runs: collections.OrderedDict[Any, tuple[int, TileRuns]] = collections.OrderedDict()
 _runs_held = 0
 #: This process's draws of a tile from kept runs ("hits") and from rescans ("misses").
 _runs_counts = {"hits": 0, "misses": 0}
@@ -69,7 +70,7 @@ def _read_session(source: Any, options: tuple[tuple[str, Any], ...]) -> _core.Tr
     return traj
 
 
-def keep_runs(key: Any, group: int, runs: _core.TileRuns) -> None:
+def keep_runs(key: Any, group: int, runs: TileRuns) -> None:
     """Keeps a tile's runs (scanned by the task of ``group``) for its draws (up to
     :data:`RUNS_KEPT` bytes in all)."""
     global _runs_held
@@ -101,7 +102,7 @@ def _runs_limit() -> int:
     return int(_settings.RUNS_KEPT_SHARE * memory)
 
 
-def kept_runs(key: Any) -> _core.TileRuns | None:
+def kept_runs(key: Any) -> TileRuns | None:
     """A tile's kept runs, or ``None``; counted as a hit or a miss."""
     with _runs_lock:
         kept = _runs.get(key)

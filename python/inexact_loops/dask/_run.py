@@ -9,6 +9,7 @@ from typing import Any
 
 from .. import _core
 from ..errors import InvalidParameterError
+from ..tiles import SessionBlocks, plan_tiles
 from . import _settings
 from ._cache import READ_OPTIONS, as_hashable, load_session, read_uncached
 from ._scheduling import FleetRun, Runner, one_line
@@ -219,7 +220,7 @@ def find_fleet_loops_dask(
     stats["block"] = block
     stats["read_s"] = clock_s() - started
     started = clock_s()
-    tiles = _core.plan_tiles(blocks, gamma=gamma, metric=metric)
+    tiles = plan_tiles(blocks, gamma=gamma, metric=metric)
     starts = _starts(blocks)
     metric_name = blocks[0].metric_name
     stats["plan_s"] = clock_s() - started
@@ -312,7 +313,7 @@ def _session_times_getter(
     return times
 
 
-def _starts(blocks: Sequence[_core.SessionBlocks]) -> list[int]:
+def _starts(blocks: Sequence[SessionBlocks]) -> list[int]:
     """The sessions' first fleet indices."""
     starts, total = [], 0
     for b in blocks:

@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import InvalidParameterError
+from ..tiles import Tile, draw_tile, merge_tiles, scan_tile, session_blocks, session_loop_duration
 from . import _settings
 from ._cache import keep_runs, kept_runs, load_session
 from ._parquet import atomic, import_pyarrow
@@ -30,14 +31,14 @@ def describe_session(
     """Task: read one session, return what planning needs of it (or its error, as data)."""
     try:
         traj = load_session(source, options)
-        return _core.session_blocks(traj, block=block, metric=metric), traj.manifold, traj.dim
+        return session_blocks(traj, block=block, metric=metric), traj.manifold, traj.dim
     except (OSError, ValueError, TypeError) as error:
         return Failed(error)
 
 
 def _separation(value: Any) -> Any:
     """A separation as shipped (``"auto"``, ``None``, a path length or ``(path, time_s)``), for
-    :func:`inexact_loops.scan_tile`."""
+    :func:`inexact_loops.tiles.scan_tile`."""
     if isinstance(value, tuple):
         return _core.Separation(path=value[0], time_s=value[1])
     return value
@@ -74,7 +75,7 @@ def _tile_kwargs(
 
 
 def scan_session_tiles(
-    tiles: list[tuple[_core.Tile, tuple[Any, Any], tuple[int, int]]],
+    tiles: list[tuple[Tile, tuple[Any, Any], tuple[int, int]]],
     options: tuple[tuple[str, Any], ...],
     gamma: float,
     metric: str,
@@ -91,13 +92,13 @@ def scan_session_tiles(
     summaries, shares = [], []
     for tile, sources, starts in tiles:
         kwargs = _tile_kwargs(sources, options, starts, gamma, metric, separation, threads)
-        summary, share, runs = _core.scan_tile(tile, **kwargs, duration=True, runs=True)
+        summary, share, runs = scan_tile(tile, **kwargs, duration=True, runs=True)
         keep_runs((run_id, tile), group, runs)
         summaries.append(summary)
         shares.append(share)
     if not duration:
-        return _core.merge_tiles(summaries)
-    return _core.merge_tiles(summaries), shares
+        return merge_tiles(summaries)
+    return merge_tiles(summaries), shares
 
 
 def draw_session_tiles(
@@ -113,7 +114,7 @@ def draw_session_tiles(
     order), from the runs their scan kept in this process under ``(run_id, tile)``, or from a
     rescan where they are not kept."""
     return [
-        _core.draw_tile(
+        draw_tile(
             request,
             **_tile_kwargs(sources, options, starts, gamma, metric, separation, threads),
             runs=kept_runs((run_id, request.tile)),
@@ -167,7 +168,7 @@ def interleaved(items: list[Any], workers: list[Any]) -> list[Any]:
     return out
 
 
-def tile_groups(tiles: Sequence[_core.Tile], block: int) -> list[list[int]]:
+def tile_groups(tiles: Sequence[Tile], block: int) -> list[list[int]]:
     """The tiles of a plan in tasks: consecutive tiles of one row block (the plan lists a row
     block's tiles together), so that a task reads the row session once and the scheduler sees
     a task per block rather than per tile."""
@@ -189,7 +190,7 @@ def tile_share(scan: Any, k: int) -> Any:
 
 def merge_parts(*parts: Any) -> Any:
     """Task: one merge of the tree."""
-    return _core.merge_tiles(list(parts))
+    return merge_tiles(list(parts))
 
 
 def session_tau(
@@ -197,7 +198,7 @@ def session_tau(
 ) -> Any:
     """Task: a session's tau from its tiles' shares; written as Parquet into ``folder`` (on
     the worker: the poses' tau never travels) or returned."""
-    own, other = _core.session_loop_duration(session, start=start, poses=poses, parts=list(parts))
+    own, other = session_loop_duration(session, start=start, poses=poses, parts=list(parts))
     if folder is None:
         return own, other
     pa = import_pyarrow()

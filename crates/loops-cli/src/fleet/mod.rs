@@ -18,7 +18,8 @@ use std::time::Instant;
 use anyhow::{Result, anyhow, bail};
 use clap::Args;
 use loops_core::{
-    Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning, SampleQuality, Samples, Trajectory,
+    SampleQuality, Samples, Trajectory,
+    fleet::{Fleet, FleetComponent, FleetLoops, FleetOptions, FleetSample, Pruning},
     sample_quality,
 };
 use loops_io::{G2oOptions, PoseTable, QualitySummary};
@@ -99,7 +100,12 @@ pub(crate) struct FleetArgs {
     remove: Vec<String>,
     /// With --store: poses per block of a session (tiles are blocks × blocks), fixed when the
     /// store is made.
-    #[arg(long, value_name = "POSES", requires = "store", default_value_t = loops_core::StoreSettings::DEFAULT_BLOCK)]
+    #[arg(
+        long,
+        value_name = "POSES",
+        requires = "store",
+        default_value_t = loops_core::store::StoreSettings::DEFAULT_BLOCK
+    )]
     block: usize,
     #[command(flatten)]
     results: ResultsArgs,
@@ -353,7 +359,7 @@ fn fleet_store(args: &FleetArgs, dir: &Path) -> Result<u8> {
     }
     out_dir::refuse_outputs_on_inputs([("--store", Some(dir))], &inputs)?;
     let config = loops_io::store::StoreConfig {
-        settings: loops_core::StoreSettings { metric: spec, gamma, separation, block: args.block },
+        settings: loops_core::store::StoreSettings { metric: spec, gamma, separation, block: args.block },
         sampler: Some((sampler, args.between_only)),
     };
     config.settings.check()?;

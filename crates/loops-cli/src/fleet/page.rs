@@ -19,7 +19,10 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use loops_core::{Fleet, FleetComponent, SampleQuality, SamplerKind, SessionPair};
+use loops_core::{
+    SampleQuality, SamplerKind,
+    fleet::{Fleet, FleetComponent, SessionPair},
+};
 use maud::{Markup, PreEscaped, html};
 use percent_encoding::utf8_percent_encode;
 
@@ -55,9 +58,9 @@ pub(crate) struct FleetReportInput<'a> {
     pub tables: &'a [loops_io::PoseTable],
     /// The plane the map draws: two position axes.
     pub plane: [usize; 2],
-    /// Its components, with sessions and poses ([`FleetLoops::components`](loops_core::FleetLoops::components)).
+    /// Its components, with sessions and poses ([`FleetLoops::components`](loops_core::fleet::FleetLoops::components)).
     pub components: &'a [FleetComponent],
-    /// The sparse overlap matrix ([`FleetLoops::session_pairs`](loops_core::FleetLoops::session_pairs)).
+    /// The sparse overlap matrix ([`FleetLoops::session_pairs`](loops_core::fleet::FleetLoops::session_pairs)).
     pub pairs: &'a [SessionPair],
     /// Their sampler.
     pub sampler: SamplerKind,
@@ -583,8 +586,9 @@ fn sessions_section(input: &FleetReportInput<'_>) -> Markup {
 #[cfg(test)]
 mod tests {
     use loops_core::{
-        DEFAULT_EPSILON_S, Euclidean, FleetOptions, SampleSize, Sampler, Separation, Trajectory, UrbanDrive,
-        UrbanFleet, find_fleet_loops, sample_fleet, sample_quality,
+        DEFAULT_EPSILON_S, Euclidean, SampleSize, Sampler, Separation, Trajectory, UrbanDrive, UrbanFleet,
+        fleet::{FleetOptions, find_fleet_loops, sample_fleet},
+        sample_quality,
     };
     use loops_io::{PoseTable, QualitySummary};
 

@@ -13,7 +13,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use loops_core::{Border, PlaneGrid, component_outlines, isocontour};
+use loops_core::plane::{Border, PlaneGrid, component_outlines, isocontour};
 
 use super::png::PaletteImage;
 use super::svg::{self, ICE, Plot, Rect, Rgb, Scale, px};

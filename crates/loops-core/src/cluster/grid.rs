@@ -2,75 +2,13 @@
 //! have a pair within ε (bounding boxes, probes, then a bichromatic search).
 
 use super::sort::SortedPoints;
-use super::{Point, distance2, within};
+use super::{Bbox, Point, distance2, within};
 use crate::union_find::MinRootForest;
 
 /// Pairs of points compared one by one below this many.
 pub(super) const BRUTE_PAIRS: usize = 64;
 /// Pairs tried before the recursive search when linking two groups.
 pub(super) const PROBE: u32 = 8;
-
-/// An axis-aligned bounding box of points, with corners that are point coordinates.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Bbox {
-    pub(super) x: [f64; 2],
-    pub(super) y: [f64; 2],
-}
-
-impl Bbox {
-    pub(super) fn of(points: &[Point]) -> Self {
-        let mut b = Self { x: [f64::INFINITY, f64::NEG_INFINITY], y: [f64::INFINITY, f64::NEG_INFINITY] };
-        for p in points {
-            b.x = [b.x[0].min(p[0]), b.x[1].max(p[0])];
-            b.y = [b.y[0].min(p[1]), b.y[1].max(p[1])];
-        }
-        b
-    }
-
-    /// A lower bound, as evaluated by [`within`], of the squared distance of any pair across
-    /// the two boxes (rounding is monotone, so each pair's evaluated value is at least this).
-    pub(super) fn min_gap2(&self, other: &Self) -> f64 {
-        let gap = |a: [f64; 2], b: [f64; 2]| {
-            if b[0] > a[1] {
-                b[0] - a[1]
-            } else if a[0] > b[1] {
-                a[0] - b[1]
-            } else {
-                0.0
-            }
-        };
-        let (gx, gy) = (gap(self.x, other.x), gap(self.y, other.y));
-        gx * gx + gy * gy
-    }
-
-    /// An upper bound, as evaluated, of the squared distance of any pair across the boxes.
-    pub(super) fn max_gap2(&self, other: &Self) -> f64 {
-        let span = |a: [f64; 2], b: [f64; 2]| (b[1] - a[0]).max(a[1] - b[0]);
-        let (sx, sy) = (span(self.x, other.x), span(self.y, other.y));
-        sx * sx + sy * sy
-    }
-
-    /// A lower bound of the squared distance from `p` to any point in the box.
-    pub(super) fn point_gap2(&self, p: Point) -> f64 {
-        let gap = |v: f64, a: [f64; 2]| {
-            if v < a[0] {
-                a[0] - v
-            } else if v > a[1] {
-                v - a[1]
-            } else {
-                0.0
-            }
-        };
-        let (gx, gy) = (gap(p[0], self.x), gap(p[1], self.y));
-        gx * gx + gy * gy
-    }
-
-    /// The squared diagonal, as evaluated: no pair inside is farther apart.
-    pub(super) fn diagonal2(&self) -> f64 {
-        let (w, h) = (self.x[1] - self.x[0], self.y[1] - self.y[0]);
-        w * w + h * h
-    }
-}
 
 /// A set of points known to be connected: a whole cell, or one point of a cell that failed the
 /// diameter check.

@@ -3,8 +3,7 @@
 
 use rayon::prelude::*;
 
-use super::grid::Bbox;
-use super::{Point, SMALL};
+use super::{Bbox, Point, SMALL};
 
 /// Points are sorted by a counting sort over the whole grid when it has at most this many cells
 /// per point (plus [`COUNTING_SORT_MIN_CELLS`]).

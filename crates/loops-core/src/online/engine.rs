@@ -55,7 +55,8 @@ pub type ComponentId = u32;
 /// 1.9 laps of a circle of radius 10 m, 200 poses a lap, pushed pose by pose: the second lap
 /// runs along the first, one component off the diagonal.
 /// ```
-/// use loops_core::{Euclidean, MetricSpec, OnlineLoops, find_loops};
+/// use loops_core::online::OnlineLoops;
+/// use loops_core::{Euclidean, MetricSpec, find_loops};
 /// let mut online = OnlineLoops::new(MetricSpec::Euclidean, 2, 2.0)?;
 /// for k in 0..380 {
 ///     let angle = std::f64::consts::TAU * k as f64 / 200.0;

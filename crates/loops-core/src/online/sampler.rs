@@ -131,7 +131,8 @@ pub struct Candidate {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Cap, MetricSpec, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Separation, UrbanDrive};
+/// use loops_core::online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions};
+/// use loops_core::{MetricSpec, Separation, UrbanDrive};
 /// let drive = UrbanDrive { duration_s: 900.0, seed: 3, ..UrbanDrive::default() }.generate()?;
 /// let traj = &drive.trajectory;
 /// let mut online = OnlineLoops::new(MetricSpec::Euclidean, traj.dim(), 20.0)?;

@@ -140,7 +140,8 @@ type Picked = ([u32; 2], Option<usize>);
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, Trajectory, draw_stats, find_loops};
+/// use loops_core::sample::draw_stats;
+/// use loops_core::{Euclidean, Trajectory, find_loops};
 /// let traj = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0], [5.0], [0.0]])?;
 /// let loops = find_loops(&traj, &Euclidean, 1.0)?;
 /// let stats = draw_stats(&loops);

@@ -421,12 +421,13 @@ struct Group {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, KeyedDraw, SampleSize, Sampler, SamplerKind, UrbanDrive, find_loops, sample_loops};
+/// use loops_core::sample::KeyedDraw;
+/// use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind, UrbanDrive, find_loops, sample_loops};
 /// let drive = UrbanDrive { duration_s: 600.0, ..UrbanDrive::default() }.generate()?;
 /// let loops = find_loops(&drive.trajectory, &Euclidean, 40.0)?;
 /// let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(50), 3);
 /// // sample_loops runs the passes over the loops in memory; tiles of a fleet run the same.
-/// let draw = KeyedDraw::new(&sampler, &loops_core::draw_stats(&loops), &|_| true)?;
+/// let draw = KeyedDraw::new(&sampler, &loops_core::sample::draw_stats(&loops), &|_| true)?;
 /// assert_eq!(draw.groups(), sample_loops(&drive.trajectory, &Euclidean, &loops, &sampler)?.groups());
 /// # Ok::<(), loops_core::Error>(())
 /// ```

@@ -150,7 +150,7 @@ impl SamplerKind {
 
     /// Whether the sampler takes a row's closest pair (the dispersed σ_ρ, closest-first,
     /// closest-then-spread, nearest-then-uniform) rather than a uniform one: what the online
-    /// sampler's [`closest_in_row`](crate::OnlineSamplerOptions::closest_in_row) follows.
+    /// sampler's [`closest_in_row`](crate::online::OnlineSamplerOptions::closest_in_row) follows.
     pub fn picks_closest_in_row(self) -> bool {
         matches!(self, Self::RhoDispersed | Self::ClosestFirst | Self::ClosestThenSpread | Self::NearestThenUniform)
     }

@@ -1,18 +1,19 @@
 //! What tiles give besides components: keyed draws of samples and the loop duration τ, each
 //! from one tile's rescan or scan, equal to the fleet's in memory.
 //!
-//! - **Samples.** After the merge, a [`KeyedDraw`](crate::KeyedDraw) over the merged statistics
+//! - **Samples.** After the merge, a [`KeyedDraw`](crate::sample::KeyedDraw) over the merged statistics
 //!   ([`MergedLoops::draw_stats`]) asks for a few pairs per component; [`tile_requests`] cuts the
 //!   request into what each tile holds ([`MergedLoops::tile_labels`] names its provisional
 //!   components), and [`draw_session_tile`] rescans a tile and offers its pairs: the keyed pairs
 //!   below a threshold and the closest pair of requested rows. The draw takes the offers of every
-//!   tile and gives the samples of [`sample_fleet`](crate::sample_fleet), pair for pair.
-//! - **τ.** [`scan_session_tile`](crate::scan_session_tile), kept with its duration
-//!   ([`TileKeep::duration`](crate::TileKeep::duration)), also returns the tile's share of τ
+//!   tile and gives the samples of [`sample_fleet`](crate::fleet::sample_fleet), pair for pair.
+//! - **τ.** [`scan_session_tile`](crate::tile::scan_session_tile), kept with its duration
+//!   ([`TileKeep::duration`](crate::tile::TileKeep::duration)), also returns the tile's share of τ
 //!   ([`TileDuration`]: what its runs add to each of its rows and columns), and
 //!   [`session_loop_duration`] adds up the shares of one session: `own` from the tiles within it,
-//!   `other` from the tiles with another session, as [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration)
-//!   gives them (to rounding: the same widths, added in another order).
+//!   `other` from the tiles with another session, as
+//!   [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration) gives them (to
+//!   rounding: the same widths, added in another order).
 
 use std::collections::HashSet;
 
@@ -42,7 +43,7 @@ pub fn tile_requests(merged: &MergedLoops, request: &DrawRequest) -> Vec<Option<
 
 /// A tile's runs as its scan made them, with their provisional labels: what a keyed draw of the
 /// tile reads ([`draw_tile_runs`]), kept where the tile was scanned
-/// ([`scan_session_tile`](crate::scan_session_tile) with [`TileKeep::runs`](crate::TileKeep::runs))
+/// ([`scan_session_tile`](crate::tile::scan_session_tile) with [`TileKeep::runs`](crate::tile::TileKeep::runs))
 /// so that the draw need not rescan it. Owns its runs (16 bytes a run), not the tile's poses.
 #[derive(Debug, Clone)]
 pub struct TileRuns {
@@ -232,17 +233,18 @@ impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
     }
 }
 
-/// Rescans one tile (as [`scan_session_tile`](crate::scan_session_tile)) and offers its pairs to a keyed draw: `labels`
-/// are the component ids of its provisional components ([`MergedLoops::tile_labels`]),
-/// `request` the part of the draw's request for this tile ([`tile_requests`]). A run on the
-/// diagonal that reaches the tile's last column is read on in the session, so that its return
-/// column is that of the whole run; the piece that continues it in the next tile offers nothing.
+/// Rescans one tile (as [`scan_session_tile`](crate::tile::scan_session_tile)) and offers its
+/// pairs to a keyed draw: `labels` are the component ids of its provisional components
+/// ([`MergedLoops::tile_labels`]), `request` the part of the draw's request for this tile
+/// ([`tile_requests`]). A run on the diagonal that reaches the tile's last column is read on in
+/// the session, so that its return column is that of the whole run; the piece that continues it
+/// in the next tile offers nothing.
 /// [`draw_tile_runs`] offers the same pairs from the runs its scan kept.
 ///
 /// Time: the tile's scan, plus O(offered pairs) and the diagonal runs of requested rows.
 ///
 /// # Errors
-/// As [`scan_session_tile`](crate::scan_session_tile); [`Error::InconsistentTiles`] for labels of another tile.
+/// As [`scan_session_tile`](crate::tile::scan_session_tile); [`Error::InconsistentTiles`] for labels of another tile.
 #[allow(clippy::too_many_arguments)]
 pub fn draw_session_tile<M: Metric + ?Sized>(
     sessions: [&Trajectory; 2],
@@ -260,7 +262,7 @@ pub fn draw_session_tile<M: Metric + ?Sized>(
 }
 
 /// [`draw_session_tile`] without the rescan: the pairs offered from `runs`, which
-/// [`scan_session_tile`](crate::scan_session_tile) kept of the same tile with the same sessions,
+/// [`scan_session_tile`](crate::tile::scan_session_tile) kept of the same tile with the same sessions,
 /// metric, γ and separation. The same offers as [`draw_session_tile`].
 ///
 /// Time: O(offered pairs) and the diagonal runs of requested rows.
@@ -324,7 +326,7 @@ pub struct TileDuration {
 }
 
 impl TileDuration {
-    /// As bytes (a tag, [`TILE_FORMAT_VERSION`](crate::TILE_FORMAT_VERSION), MessagePack).
+    /// As bytes (a tag, [`TILE_FORMAT_VERSION`](crate::tile::TILE_FORMAT_VERSION), MessagePack).
     #[cfg(feature = "serde")]
     pub fn to_bytes(&self) -> Vec<u8> {
         crate::tile::encode(*b"ILtd", self)
@@ -406,9 +408,10 @@ pub(super) fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<Tile
 }
 
 /// τ of session `session` (its first fleet index `start`, `poses` poses) from the shares of
-/// every tile that holds its rows or columns ([`scan_session_tile`](crate::scan_session_tile) with
+/// every tile that holds its rows or columns ([`scan_session_tile`](crate::tile::scan_session_tile) with
 /// its duration), in any order: `(own, other)` per pose, seconds, as
-/// [`FleetLoops::loop_duration`](crate::FleetLoops::loop_duration) splits them. Shares of tiles without the session are ignored.
+/// [`FleetLoops::loop_duration`](crate::fleet::FleetLoops::loop_duration) splits them. Shares
+/// of tiles without the session are ignored.
 ///
 /// # Errors
 /// [`Error::InconsistentTiles`] for a share whose rows or columns lie outside the session.

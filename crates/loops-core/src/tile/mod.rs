@@ -20,28 +20,28 @@
 //!   plan from a fleet in memory.
 //! - **Scan** a tile from its two sessions' trajectories and their first fleet indices:
 //!   [`scan_session_tile`], which also keeps, as [`TileKeep`] asks, the tile's share of τ and its
-//!   runs for the draws (see [`draw`]). [`scan_tile`] is the same scan of a fleet in memory.
+//!   runs for the draws (see [`draw_session_tile`]). [`scan_tile`] is the same scan of a fleet in memory.
 //! - **Merge** in a tree: a [`TileMerge`] is a partial merge of any set of tiles (one tile's
 //!   summary, or a merge of merges), keeping the statistics of its components with the joins
 //!   made so far and only the edge runs that face a tile it does not hold yet; merging merges
 //!   joins across them. The order and grouping do not matter. [`TileMerge::finish`] gives the
 //!   fleet's components with their session pairs ([`MergedLoops`]: the overlap matrix, the
 //!   components in session poses); [`merge_tiles`] is the one-step merge of summaries.
-//! - **Ship** as bytes: [`TileSummary::to_bytes`], [`TileMerge::to_bytes`] and
-//!   [`SessionBlocks::to_bytes`], with the `serde` feature (MessagePack, as the Python bindings
+//! - **Ship** as bytes: `TileSummary::to_bytes`, `TileMerge::to_bytes` and
+//!   `SessionBlocks::to_bytes`, with the `serde` feature (MessagePack, as the Python bindings
 //!   pickle results, after a 4-byte tag and a format version; decoding checks the tag, the
 //!   version, that every byte is used and that labels and tiles refer to what exists, and says
 //!   which of these failed).
 //!
 //! Exactness: the components, their cells, runs, holes, extents, closest pairs and first cells
-//! are those of [`find_fleet_loops`](crate::find_fleet_loops) for any tiling and any merge tree.
+//! are those of [`find_fleet_loops`](crate::fleet::find_fleet_loops) for any tiling and any merge tree.
 //! Areas are sums of floating-point products taken in another order (and over runs cut in
 //! pieces), so they agree to rounding (a relative 10⁻¹², checked by the tests), not bit for bit.
 //!
 //! # Examples
 //! ```
-//! use loops_core::{Euclidean, Separation, SessionBlocks, TileMerge, Trajectory};
-//! use loops_core::{TileKeep, plan_session_tiles, scan_session_tile};
+//! use loops_core::tile::{SessionBlocks, TileKeep, TileMerge, plan_session_tiles, scan_session_tile};
+//! use loops_core::{Euclidean, Separation, Trajectory};
 //! let out = Trajectory::from_points(vec![0.0, 1.0, 2.0], &[[0.0, 0.0], [5.0, 0.0], [10.0, 0.0]])?;
 //! let back = Trajectory::from_points(vec![100.0, 101.0], &[[10.0, 0.5], [0.0, 0.5]])?;
 //! // Each reader describes its session; the plan needs nothing else.
@@ -57,7 +57,7 @@
 //!         scan_session_tile(pair, [starts[a], starts[b]], &Euclidean, 1.0, Separation::NONE, tile, TileKeep::SUMMARY)?
 //!             .summary;
 //!     // What a worker ships back, and the merge reads.
-//!     parts.push(TileMerge::new(loops_core::TileSummary::from_bytes(&summary.to_bytes())?)?);
+//!     parts.push(TileMerge::new(loops_core::tile::TileSummary::from_bytes(&summary.to_bytes())?)?);
 //! }
 //! let merged = TileMerge::merge(parts)?.finish()?;
 //! let between: Vec<_> = merged.components().iter().filter(|c| c.sessions == [0, 1]).collect();
@@ -72,7 +72,8 @@ mod piece;
 
 use std::collections::HashMap;
 
-use self::draw::{TileDuration, TileRuns, duration_of};
+use self::draw::duration_of;
+pub use self::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs, session_loop_duration, tile_requests};
 use self::piece::live_stretches;
 
 use crate::ball_tree::BallTree;
@@ -90,8 +91,8 @@ use crate::union_find::{MinRootForest, number_sets};
 /// Poses per leaf of a tile's ball hierarchy.
 const LEAF_SIZE: usize = 16;
 
-/// The version of the byte format of [`TileSummary::to_bytes`], [`TileMerge::to_bytes`] and
-/// [`SessionBlocks::to_bytes`]; bytes of another version are refused.
+/// The version of the byte format of `TileSummary::to_bytes`, `TileMerge::to_bytes` and
+/// `SessionBlocks::to_bytes` (with the `serde` feature); bytes of another version are refused.
 pub const TILE_FORMAT_VERSION: u16 = 2;
 
 /// Rows `rows` of session `sessions[0]` against columns `columns` of session `sessions[1]`,
@@ -171,7 +172,8 @@ impl SessionBlocks {
     ///
     /// # Example
     /// ```
-    /// use loops_core::{Euclidean, SessionBlocks, Trajectory};
+    /// use loops_core::tile::SessionBlocks;
+    /// use loops_core::{Euclidean, Trajectory};
     /// let x: Vec<f64> = (0..10).map(f64::from).collect();
     /// let drive = Trajectory::new(x.clone(), x.iter().flat_map(|&x| [x, 0.0]).collect(), 2).unwrap();
     /// let fine = SessionBlocks::new(&drive, &Euclidean, 2).unwrap();
@@ -290,7 +292,8 @@ pub fn plan_session_tiles<M: Metric + ?Sized>(sessions: &[SessionBlocks], metric
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, SessionBlocks, Trajectory, plan_session_tiles, plan_session_tiles_touching};
+/// use loops_core::tile::{SessionBlocks, plan_session_tiles, plan_session_tiles_touching};
+/// use loops_core::{Euclidean, Trajectory};
 /// let line = |t0: f64, y: f64| Trajectory::from_points(vec![t0, t0 + 1.0], &[[0.0, y], [1.0, y]]);
 /// let blocks: Vec<SessionBlocks> =
 ///     [line(0.0, 0.0)?, line(10.0, 0.5)?, line(20.0, 9.0)?].iter().map(|s| SessionBlocks::new(s, &Euclidean, 2)).collect::<Result<_, _>>()?;
@@ -666,7 +669,7 @@ impl TileSummary {
     }
 }
 
-/// Scans one tile of `fleet`: the same cells as [`find_fleet_loops`](crate::find_fleet_loops)
+/// Scans one tile of `fleet`: the same cells as [`find_fleet_loops`](crate::fleet::find_fleet_loops)
 /// gives in the tile's rows and columns, summarised (see the module docs). Reads only the
 /// tile's poses, plus the row session's path length and clock when a separation is given
 /// (so that separated columns are those of the whole session, whatever the tiling). The same
@@ -705,7 +708,7 @@ fn bad_tile(tile: &Tile) -> Error {
 ///
 /// # Examples
 /// ```
-/// use loops_core::TileKeep;
+/// use loops_core::tile::TileKeep;
 /// let keep = TileKeep::SUMMARY.with_duration().with_runs();
 /// assert!(keep.duration && keep.runs);
 /// ```
@@ -715,7 +718,7 @@ pub struct TileKeep {
     /// The tile's share of the loop duration τ ([`TileDuration`]).
     pub duration: bool,
     /// The tile's runs with their provisional labels ([`TileRuns`]), for
-    /// [`draw_tile_runs`](crate::draw_tile_runs) to draw from without a rescan.
+    /// [`draw_tile_runs`] to draw from without a rescan.
     pub runs: bool,
 }
 
@@ -1070,7 +1073,9 @@ struct Cut {
 ///
 /// # Examples
 /// ```
-/// use loops_core::{Euclidean, Fleet, Separation, TileMerge, Trajectory, merge_tiles, plan_tiles, scan_tile};
+/// use loops_core::fleet::Fleet;
+/// use loops_core::tile::{TileMerge, merge_tiles, plan_tiles, scan_tile};
+/// use loops_core::{Euclidean, Separation, Trajectory};
 /// let xs: Vec<[f64; 2]> = (0..40).map(|k| [(k as f64 * 0.3).sin() * 3.0, (k as f64 * 0.2).cos() * 3.0]).collect();
 /// let fleet = Fleet::new(vec![("a".into(), Trajectory::from_points((0..40).map(f64::from).collect(), &xs)?)])?;
 /// let tiles = plan_tiles(&fleet, &Euclidean, 1.0, 7)?;
@@ -1379,7 +1384,7 @@ impl TileMerge {
     }
 
     /// The fleet's components from the merge of every tile of a plan, numbered as
-    /// [`find_fleet_loops`](crate::find_fleet_loops) numbers them (by first cell, row-major),
+    /// [`find_fleet_loops`](crate::fleet::find_fleet_loops) numbers them (by first cell, row-major),
     /// with their session pairs. Edge runs still open (facing tiles the plan left out) are
     /// ignored. O(components log components).
     ///
@@ -1449,14 +1454,14 @@ impl TileMerge {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MergedComponent {
     /// The component in fleet indices: the component of
-    /// [`FleetLoops::loops`](crate::FleetLoops::loops) with this id.
+    /// [`FleetLoops::loops`](crate::fleet::FleetLoops::loops) with this id.
     pub component: LoopComponent,
     /// Its block (a, b), a ≤ b.
     pub sessions: [usize; 2],
     /// The times of its extents: `[[t(i_range[0]), t(i_range[1])], [t′(j_range[0]),
     /// t′(j_range[1])]]`, seconds, each on its session's own clock.
     pub times_s: [[f64; 2]; 2],
-    /// What a keyed draw of samples needs of it ([`KeyedDraw`](crate::KeyedDraw)).
+    /// What a keyed draw of samples needs of it ([`KeyedDraw`](crate::sample::KeyedDraw)).
     pub draw: DrawStats,
 }
 
@@ -1547,8 +1552,9 @@ impl MergedLoops {
         &self.components
     }
 
-    /// The components in the poses of their sessions, as [`FleetLoops::components`](crate::FleetLoops::components)
-    /// gives them; `starts` are the sessions' first fleet indices.
+    /// The components in the poses of their sessions, as
+    /// [`FleetLoops::components`](crate::fleet::FleetLoops::components) gives them; `starts` are
+    /// the sessions' first fleet indices.
     ///
     /// # Errors
     /// [`Error::InconsistentTiles`] for a component of a session `starts` does not reach.
@@ -1574,7 +1580,7 @@ impl MergedLoops {
             .collect()
     }
 
-    /// The sparse overlap matrix, as [`FleetLoops::session_pairs`](crate::FleetLoops::session_pairs)
+    /// The sparse overlap matrix, as [`FleetLoops::session_pairs`](crate::fleet::FleetLoops::session_pairs)
     /// gives it; `spans_s` are the sessions' spans ([`SessionBlocks::span_s`]).
     ///
     /// # Errors
@@ -1591,7 +1597,7 @@ impl MergedLoops {
 
 /// Merges the summaries of tiles that cover a fleet's plane (every tile [`plan_tiles`] makes,
 /// scanned by [`scan_tile`], in any order) into the fleet's loop components, numbered as
-/// [`find_fleet_loops`](crate::find_fleet_loops) numbers them (by first cell, row-major): the
+/// [`find_fleet_loops`](crate::fleet::find_fleet_loops) numbers them (by first cell, row-major): the
 /// merge of all of them in one [`TileMerge::merge`].
 ///
 /// The merge is a union-find over the provisional components, O(components + edge runs).
