@@ -2085,7 +2085,10 @@ class FleetLoops:
         ``i_max`` (poses of session a), ``j_min``, ``j_max`` (poses of session b), int64;
         ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds, each
         on its session's clock); ``closest_i``, ``closest_j`` (int64, poses of sessions a and
-        b) and ``closest_distance`` (float64, the metric's unit).
+        b) and ``closest_distance`` (float64, the metric's unit); ``closest_i_x``,
+        ``closest_i_y``, ``closest_i_z``, ``closest_j_x``, ``closest_j_y``, ``closest_j_z``
+        (float64: where pose ``closest_i`` of session a and pose ``closest_j`` of session b are,
+        their points' first three coordinates, 0 past a point's dimension).
         """
     def between_sessions(self) -> npt.NDArray[np.int64]:
         """The ids of the components between two different sessions, int64, increasing."""
