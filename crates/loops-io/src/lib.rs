@@ -166,7 +166,7 @@ pub use fleet::{
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, SkippedRecords, read_pose_graph};
 pub use kitti::{ROTATION_MATRIX_TOLERANCE, read_kitti};
-pub use live_scene::{LIVE_TOPICS, LiveChannel, LiveMessage, LiveScene};
+pub use live_scene::{LIVE_PLANE_POSES, LIVE_TOPICS, LiveChannel, LiveMessage, LiveScene};
 pub use loop_duration::{
     LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
     write_loop_duration,
@@ -184,8 +184,9 @@ pub use samples::{
     CSV_HEADER, SAMPLE_POSITION_COLUMNS, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples,
 };
 pub use scene::{
-    COMPONENT_RGB, FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PLANE_PIXELS, RgbImage, SCENE_FRAME, SCENE_TOPICS, Scene,
-    SceneCandidate, SceneComponent, ScenePath, SceneTopic, TRIVIAL_RGB, scene_mcap_to, tau_rgba, write_scene_mcap,
+    COMPONENT_RGB, FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PATH_STEP_POSES, PATH_STEPS, PLANE_PIXELS, RgbImage,
+    SCENE_FRAME, SCENE_TOPICS, Scene, SceneCandidate, SceneComponent, ScenePath, SceneTopic, TRIVIAL_RGB, path_steps,
+    scene_mcap_merged_to, scene_mcap_to, tau_rgba, write_scene_mcap, write_scene_mcap_merged,
 };
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
 pub use temp_copy::remove_temporary_files;

@@ -93,7 +93,7 @@ struct SamplerState {
 #[pyclass(frozen, eq, module = "inexact_loops._core")]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Candidate {
-    inner: loops_core::Candidate,
+    pub(crate) inner: loops_core::Candidate,
 }
 
 impl OnlineSampler {
