@@ -276,7 +276,15 @@ def check_growing_paths(
         for marker in markers.markers:
             np.testing.assert_array_equal(points(marker), positions[k][:count])
     assert held == [len(p) for p in positions], "the last message holds the whole path"
-    assert all(0 < m <= 100 for m in messages), messages  # loops_io::PATH_STEPS
+    assert messages == [path_steps(len(p)) for p in positions], messages
+
+
+def path_steps(n: int) -> int:
+    """The number of path messages of a session of ``n`` poses, as documented: one every
+    ⌈n / m⌉ poses for m = 2 · 200,000 // n, between 1 and 100 (``loops_io::path_steps``)."""
+    most = min(max(2 * 200_000 // n, 1), 100)
+    stride = -(-n // most)
+    return -(-n // stride)
 
 
 def seconds_ns(seconds: np.ndarray) -> np.ndarray:
