@@ -398,6 +398,9 @@ pub(crate) fn analyse(
         if let Some(scene) = &scene {
             if settings.merge_log {
                 let log = Path::new(source);
+                if !log.is_file() {
+                    bail!("--merge-log merges one MCAP file a log; {source} is not one");
+                }
                 written(|| loops_io::write_scene_mcap_merged(file(MCAP_FILES[0]), scene, log, false))?;
             } else {
                 written(|| loops_io::write_scene_mcap(file(MCAP_FILES[0]), scene, false))?;
