@@ -627,8 +627,8 @@ impl<'a> MergedLog<'a> {
     fn read(bytes: &'a [u8]) -> mcap::McapResult<Self> {
         let mut log = Self { schemas: BTreeMap::new(), channels: BTreeMap::new(), messages: Vec::new() };
         if let Some(summary) = mcap::Summary::read(bytes)? {
-            log.schemas.extend(summary.schemas.into_iter());
-            log.channels.extend(summary.channels.into_iter());
+            log.schemas.extend(summary.schemas);
+            log.channels.extend(summary.channels);
         }
         for message in mcap::MessageStream::new(bytes)? {
             let message = message?;

@@ -132,7 +132,10 @@ impl LiveServer {
         let scene = loops_io::LiveScene::new(&self.name, loops_io::point_positions(traj), None).map_err(value_error)?;
         let messages = scene.keyframe(&engine.inner, &update.inner, &candidates).map_err(value_error)?;
         drop(engine);
-        self.with_server(|server| Ok(server.send(&messages)))
+        self.with_server(|server| {
+            server.send(&messages);
+            Ok(())
+        })
     }
 
     /// Sends the (t, t′) plane of the poses ``online`` holds (at the end of a log: the plane
@@ -146,7 +149,10 @@ impl LiveServer {
         let scene = loops_io::LiveScene::new(&self.name, loops_io::point_positions(traj), None).map_err(value_error)?;
         let plane = scene.plane(&engine.inner).map_err(value_error)?;
         drop(engine);
-        self.with_server(|server| Ok(server.send(&Vec::from_iter(plane))))
+        self.with_server(|server| {
+            server.send(&Vec::from_iter(plane));
+            Ok(())
+        })
     }
 
     /// Stops the server: its clients are told, its port is closed. Closing twice does nothing.
