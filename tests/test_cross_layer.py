@@ -296,3 +296,37 @@ def test_closest_pairs_and_samples_are_placed_on_their_poses(
     for end in "ij":
         placed = frame[[f"{end}_{a}" for a in axes]].to_numpy()
         np.testing.assert_array_equal(placed, xyz[frame[end].to_numpy()])
+
+
+def test_fleet_closest_pairs_are_placed_on_their_sessions_poses(
+    tmp_path: Path, loops_binary: Path
+) -> None:
+    """A fleet's ``components.csv`` and :attr:`FleetLoops.components` place each closest pair on
+    its two sessions' poses, read off the logs themselves: pose ``closest_i`` of session
+    ``session_a``, pose ``closest_j`` of session ``session_b``."""
+    logs = [tmp_path / "monday.tum", tmp_path / "tuesday.tum"]
+    for seed, log in enumerate(logs, start=1):
+        write_tum(log, il.urban_drive(duration_s=600.0, seed=seed))
+    out = tmp_path / "fleet"
+    subprocess.run(
+        [loops_binary, "fleet", *logs, "--gamma", "30", "--out", out],
+        check=True,
+        capture_output=True,
+    )
+    xyz = [np.loadtxt(log)[:, 1:4] for log in logs]
+    with open(out / "components.csv") as file:
+        rows = list(csv.DictReader(file))
+    assert any(row["session_a"] != row["session_b"] for row in rows), "loops between sessions"
+    axes = "xyz"
+    for row in rows:
+        for end, side in (("i", "a"), ("j", "b")):
+            pose = xyz[int(row[f"session_{side}"])][int(row[f"closest_{end}"])]
+            placed = [float(row[f"closest_{end}_{a}"]) for a in axes]
+            np.testing.assert_array_equal(placed, pose, err_msg=str(row))
+    table = il.find_fleet_loops(il.Fleet(logs), gamma=30.0).components
+    for end, side in (("i", "a"), ("j", "b")):
+        poses = zip(table[f"session_{side}"], table[f"closest_{end}"], strict=True)
+        expected = np.array([xyz[session][pose] for session, pose in poses])
+        for k, a in enumerate(axes):
+            column = f"closest_{end}_{a}"
+            np.testing.assert_array_equal(table[column], expected[:, k], err_msg=column)

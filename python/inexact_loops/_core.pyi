@@ -80,6 +80,7 @@ __all__ = [
     "refuse_output_on_input",
     "Scene",
     "scene",
+    "LiveServer",
 ]
 
 __version__: str
@@ -2087,7 +2088,10 @@ class FleetLoops:
         ``i_max`` (poses of session a), ``j_min``, ``j_max`` (poses of session b), int64;
         ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds, each
         on its session's clock); ``closest_i``, ``closest_j`` (int64, poses of sessions a and
-        b) and ``closest_distance`` (float64, the metric's unit).
+        b) and ``closest_distance`` (float64, the metric's unit); ``closest_i_x``,
+        ``closest_i_y``, ``closest_i_z``, ``closest_j_x``, ``closest_j_y``, ``closest_j_z``
+        (float64: where pose ``closest_i`` of session a and pose ``closest_j`` of session b are,
+        their points' first three coordinates, 0 past a point's dimension).
         """
     def between_sessions(self) -> npt.NDArray[np.int64]:
         """The ids of the components between two different sessions, int64, increasing."""
@@ -3889,6 +3893,68 @@ class Scene:
     @property
     def frame_id(self) -> str:
         """The frame every entity is in."""
+
+@final
+class LiveServer:
+    """A server of the live scene over Foxglove's WebSocket protocol, on the topics and in the
+    schemas of ``loops replay --serve`` (see :mod:`inexact_loops.viewers`); made by
+    :func:`inexact_loops.viewers.serve`. Each :meth:`send` sends one keyframe's messages to the
+    clients subscribed then (no history is kept: :meth:`wait_for_client` first).
+    :meth:`close` (or leaving a ``with`` block) stops it and closes its port.
+    """
+
+    def __new__(cls, address: str = "127.0.0.1:0", *, name: str = "live") -> LiveServer:
+        """Starts serving on ``address`` (``HOST:PORT``; port 0: a free port, see
+        :attr:`address`), the log named ``name`` (the τ entity's id, ``tau/<name>``).
+
+        Raises:
+            ValueError: an address that is not ``HOST:PORT``.
+            OSError: when the address cannot be bound (taken, or not this machine's).
+        """
+    @property
+    def address(self) -> str:
+        """Where it serves, ``HOST:PORT`` (the port picked for port 0); a client connects to
+        ``ws://HOST:PORT``.
+        """
+    @property
+    def port(self) -> int:
+        """Its port."""
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` was called."""
+    def wait_for_client(self, timeout_s: float | None = None) -> bool:
+        """Waits until a client has subscribed to every channel, or a second after a client's first
+        subscription (Foxglove subscribes only to what its panels show), at most ``timeout_s``
+        seconds (``None``: no limit). The GIL is released while it waits; Ctrl-C stops it
+        (``KeyboardInterrupt``).
+
+        Returns:
+            ``True`` when a client is there, ``False`` after ``timeout_s``.
+        """
+    def send(self, online: OnlineLoops, update: Update, candidates: list[Candidate] = ...) -> None:
+        """Sends the keyframe that ``update`` reports (``online``'s last push) with the
+        ``candidates`` an :class:`OnlineSampler` offered for it: the path so far, τ along it,
+        the components it changed, its candidates, the ROS ``MarkerArray`` of the same, and the
+        (t, t′) plane each time the poses pass a multiple of 100. Nothing before the second pose
+        (one pose draws nothing).
+
+        Raises:
+            ValueError: when the server is closed, or ``update`` or ``candidates`` name a pose
+                ``online`` does not hold.
+        """
+    def send_plane(self, online: OnlineLoops) -> None:
+        """Sends the (t, t′) plane of the poses ``online`` holds (at the end of a log: the plane
+        of all of it); nothing before the second pose.
+
+        Raises:
+            ValueError: when the server is closed.
+        """
+    def close(self) -> None:
+        """Stops the server: its clients are told, its port is closed. Closing twice does nothing."""
+    def __enter__(self) -> LiveServer: ...
+    def __exit__(
+        self, _kind: object = None, _value: object = None, _traceback: object = None
+    ) -> None: ...
 
 def scene(
     loops: Loops | FleetLoops,

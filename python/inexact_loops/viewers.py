@@ -4,10 +4,10 @@
   Foxglove layout beside it; ``loops run --mcap`` and ``loops fleet --mcap`` write the same.
 - :func:`to_rerun`: a Rerun recording (``.rrd``) of the same entities; needs ``rerun-sdk``
   (``pip install '.[rerun]'`` in a checkout).
-- Live, while the log plays: ``loops replay LOG --serve`` (``python -m inexact_loops._cli
-  replay ...``) serves the online engine's keyframes over Foxglove's WebSocket protocol on the
-  first four topics below; the command is the way from Python too, since the server, its
-  start-up wait and its shutdown on Ctrl-C belong to one process that owns the replay.
+- Live, while the log plays: ``loops replay LOG --serve`` serves the online engine's keyframes
+  over Foxglove's WebSocket protocol on the topics below (the plane every 100 poses and at the
+  end); from Python, :func:`serve` starts the same server for the keyframes of an
+  :class:`~inexact_loops.OnlineLoops` you push (a log's poses, or a robot's as they come).
 
 Both draw one :class:`~inexact_loops._core.Scene`, built in Rust (:func:`scene`): a path per
 session with τ along it as a colour, every loop component (its two stretches of path and its
@@ -18,13 +18,17 @@ MCAP topics:
 ======================  ====================================  ==================================
 topic                   schema                                holds
 ======================  ====================================  ==================================
-``/loops/trajectory``   ``foxglove.PosesInFrame``             every pose, one message a session
-``/loops/tau``          ``foxglove.SceneUpdate``              each path coloured by τ
+``/loops/trajectory``   ``foxglove.PosesInFrame``             the path so far, as the log plays
+``/loops/tau``          ``foxglove.SceneUpdate``              the path so far coloured by τ
 ``/loops/components``   ``foxglove.SceneUpdate``              ``component/<id>``: 3 lines each
 ``/loops/candidates``   ``foxglove.SceneUpdate``              one line a candidate pair
 ``/loops/plane``        ``foxglove.RawImage``                 the (t, t′) plane, rgb8
 ``/loops/markers``      ``visualization_msgs/msg/MarkerArray``  the same for RViz (ROS 2 CDR)
 ======================  ====================================  ==================================
+
+In the file, each session's path and τ grow as the log plays: up to 100 messages a session,
+each at a pose's time with every pose up to it, the last with the whole path (a long path gets
+fewer, so that the repeated poses stay within about 200,000 a session).
 
 Rerun entities: ``loops/trajectory/<session>`` (points), ``loops/tau/<session>`` (points
 coloured by τ), ``loops/components/<id>`` (line strips and the components.csv values),
@@ -48,9 +52,9 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ._core import Scene, scene
+from ._core import LiveServer, Scene, scene
 
-__all__ = ["LAYOUT_FILE", "Scene", "scene", "to_mcap", "to_rerun"]
+__all__ = ["LAYOUT_FILE", "LiveServer", "Scene", "scene", "serve", "to_mcap", "to_rerun"]
 
 #: The name of the Foxglove layout file written beside an MCAP file.
 LAYOUT_FILE = "foxglove-layout.json"
@@ -90,6 +94,42 @@ def to_mcap(
     made = scene(loops, samples, trajectory, name=name)
     made.to_mcap(path, overwrite=overwrite)
     _write_new(layout, made.foxglove_layout.encode(), overwrite)
+
+
+def serve(address: str = "127.0.0.1:0", *, name: str = "live") -> LiveServer:
+    """Start a live server for Foxglove, as ``loops replay --serve`` does, and return it.
+
+    Connect Foxglove to ``ws://`` + :attr:`LiveServer.address` (Open connection, Foxglove
+    WebSocket). Push poses into an :class:`~inexact_loops.OnlineLoops` and hand each update, with
+    an :class:`~inexact_loops.OnlineSampler`'s candidates, to :meth:`LiveServer.send`; Foxglove
+    shows the path, τ, the components and the candidates as they come, on the topics of the
+    module's table. Stopping the server (:meth:`LiveServer.close`, or leaving the ``with``
+    block) tells the clients and closes its port.
+
+    Args:
+        address: ``HOST:PORT`` to listen on; port 0 picks a free port.
+        name: the log's name (the τ entity's id, ``tau/<name>``).
+
+    Raises:
+        ValueError: an address that is not ``HOST:PORT``.
+        OSError: the address cannot be bound (a port taken, or not this machine's).
+
+    Example:
+        >>> import inexact_loops as il
+        >>> from inexact_loops import viewers
+        >>> traj = il.urban_drive(duration_s=60.0)
+        >>> online = il.OnlineLoops(gamma=40.0, dim=traj.dim)
+        >>> sampler = il.OnlineSampler()
+        >>> with viewers.serve("127.0.0.1:0", name="drive") as server:
+        ...     _ = server.wait_for_client(timeout_s=0.0)  # no Foxglove here: start at once
+        ...     for t, point in zip(traj.timestamps, traj.positions):
+        ...         update = online.push(t, point)
+        ...         server.send(online, update, sampler.offer(online, update))
+        ...     server.send_plane(online)
+        >>> server.closed
+        True
+    """
+    return LiveServer(address, name=name)
 
 
 def to_rerun(

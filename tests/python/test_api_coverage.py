@@ -26,7 +26,7 @@ from scipy.spatial.transform import Rotation
 from sklearn.cluster import DBSCAN
 
 import inexact_loops as il
-from inexact_loops import metrics, tiles
+from inexact_loops import metrics, tiles, viewers
 
 TESTS = Path(__file__).parent
 
@@ -35,6 +35,18 @@ COVERED: dict[str, list[str]] = {}
 
 #: Public names tested in other files: name -> (file, test function).
 ELSEWHERE = {
+    **{
+        f"viewers.{name}": ("python/test_viewers.py", "test_python_to_mcap_equals_the_csv_files")
+        for name in ("LAYOUT_FILE", "Scene", "scene", "to_mcap")
+    },
+    "viewers.to_rerun": ("python/test_viewers.py", "test_rerun_recording_holds_the_same_entities"),
+    **{
+        f"viewers.LiveServer.{name}": (
+            "python/test_viewers_live.py",
+            "test_python_serve_sends_each_keyframe_and_closing_frees_the_port",
+        )
+        for name in ("address", "wait_for_client", "send", "send_plane")
+    },
     **{
         name: (
             "python/test_store.py",
@@ -404,6 +416,10 @@ def public_names() -> set[str]:
             )
     names.update(f"metrics.{name}" for name in metrics.__all__)
     names.add("metrics.Metric.spec")
+    names.update(f"viewers.{name}" for name in viewers.__all__)
+    names.update(
+        f"viewers.LiveServer.{attr}" for attr in dir(viewers.LiveServer) if not attr.startswith("_")
+    )
     return names
 
 
@@ -1600,3 +1616,37 @@ def test_the_tile_plumbing_is_reached_through_its_submodule():
         assert not hasattr(il, name), name
         assert getattr(tiles, name) is getattr(il._core, name), name
     assert il.tiles is tiles
+
+
+@covers("viewers.serve", "viewers.LiveServer", "viewers.LiveServer.port")
+@covers("viewers.LiveServer.close", "viewers.LiveServer.closed")
+def test_live_server_errors_name_the_address_and_closing_frees_the_port():
+    """The loopback test of the messages is in test_viewers_live.py; here, its errors."""
+    import socket
+
+    with raises(ValueError, "not-an-address", "HOST:PORT"):
+        viewers.serve("not-an-address")
+    server = viewers.serve("127.0.0.1:0", name="drive")
+    assert not server.closed and server.address == f"127.0.0.1:{server.port}"
+    assert "serving" in repr(server)
+    with raises(OSError, f"127.0.0.1:{server.port}"):
+        viewers.serve(server.address)  # the port is taken
+    socket.create_connection(("127.0.0.1", server.port), timeout=5).close()
+    online = il.OnlineLoops(gamma=1.0, dim=1)
+    first = online.push(0.0, 0.0)
+    server.send(online, first)  # one pose draws nothing
+    with raises(ValueError, "timeout_s = -1"):
+        server.wait_for_client(timeout_s=-1.0)
+    assert server.wait_for_client(timeout_s=0.0) is False  # no client
+    server.close()
+    server.close()  # twice: nothing
+    assert server.closed and "closed" in repr(server)
+    with raises(ValueError, "closed"):
+        server.send(online, online.push(1.0, 0.5))
+    with pytest.raises(OSError):
+        socket.create_connection(("127.0.0.1", server.port), timeout=5).close()
+    with viewers.serve() as held:
+        port = held.port
+    assert held.closed
+    with pytest.raises(OSError):
+        socket.create_connection(("127.0.0.1", port), timeout=5).close()

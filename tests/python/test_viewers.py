@@ -147,32 +147,18 @@ def points(line) -> np.ndarray:
 def check_scene(
     decoded: dict[str, list],
     positions: list[np.ndarray],
+    stamps_ns: list[np.ndarray],
     sessions: list[str],
     components: list[dict[str, str]],
     samples: list[dict[str, str]],
     tau: list[np.ndarray],
 ) -> None:
     """Every pose, component and candidate of the decoded file against the independent
-    ``positions`` (one array per session), ``components.csv``, ``samples.csv`` and τ."""
+    ``positions`` and their times ``stamps_ns`` (one array per session), ``components.csv``,
+    ``samples.csv`` and τ."""
     times = decoded["times"]
-    # One τ message and one path message per session, at the same time (its last pose's).
-    tau_updates = decoded["/loops/tau"]
-    order = [sessions.index(u.entities[0].id.removeprefix("tau/")) for u in tau_updates]
-    assert sorted(order) == list(range(len(sessions)))
-    trajectory = decoded["/loops/trajectory"]
-    assert len(trajectory) == len(sessions) and times["/loops/trajectory"] == times["/loops/tau"]
-    last_ns = dict(zip(order, times["/loops/trajectory"], strict=True))
-    for message, k in zip(trajectory, order, strict=True):
-        got = np.array([[p.position.x, p.position.y, p.position.z] for p in message.poses])
-        np.testing.assert_array_equal(got, positions[k])
-
-    max_tau = max(t.max() for t in tau)
-    for update, k in zip(tau_updates, order, strict=True):
-        (entity,) = update.entities
-        assert entity.id == f"tau/{sessions[k]}"
-        (strip,) = entity.lines
-        red = np.array([c.r for c in strip.colors])
-        np.testing.assert_allclose(red * max_tau, tau[k], atol=1e-9 * max_tau)
+    check_growing_paths(decoded, positions, stamps_ns, sessions, tau)
+    last_ns = [int(s[-1]) for s in stamps_ns]
 
     # Each component alone, at the time its second stretch begins (t′_min).
     entities = {}
@@ -183,6 +169,8 @@ def check_scene(
     by_ns: dict[str, dict[int, object]] = {}
     for markers in decoded["/loops/markers"]:
         for marker in markers.markers:
+            if marker.ns in ("trajectory", "tau"):
+                continue  # the path as it grows (check_growing_paths)
             assert marker.id not in by_ns.get(marker.ns, {})
             by_ns.setdefault(marker.ns, {})[marker.id] = marker
     assert len(by_ns["components"]) == 3 * len(components)
@@ -246,6 +234,65 @@ def check_scene(
     assert len(image.data) == image.height * image.step > 0
 
 
+def check_growing_paths(
+    decoded: dict[str, list],
+    positions: list[np.ndarray],
+    stamps_ns: list[np.ndarray],
+    sessions: list[str],
+    tau: list[np.ndarray],
+) -> None:
+    """Each session's path and τ grow as the log plays: each message, at a pose's time, holds
+    exactly the poses up to that time (PosesInFrame, the τ strip and the MarkerArray's
+    trajectory and tau markers), each adds poses, the last holds them all; at most
+    ``PATH_STEPS`` messages a session."""
+    times = decoded["times"]["/loops/trajectory"]
+    trajectory, tau_updates = decoded["/loops/trajectory"], decoded["/loops/tau"]
+    assert decoded["times"]["/loops/tau"] == times
+    path_markers = [
+        (a, header_ns(a.markers[0].header))
+        for a in decoded["/loops/markers"]
+        if a.markers[0].ns in ("trajectory", "tau")
+    ]
+    assert [at for _, at in path_markers] == times
+    max_tau = max(t.max() for t in tau)
+    held = [0] * len(sessions)
+    messages = [0] * len(sessions)
+    for message, update, (markers, _), at in zip(
+        trajectory, tau_updates, path_markers, times, strict=True
+    ):
+        (entity,) = update.entities
+        k = sessions.index(entity.id.removeprefix("tau/"))
+        count = int(np.searchsorted(stamps_ns[k], at, side="right"))
+        assert count > held[k], "each message adds poses"
+        held[k], messages[k] = count, messages[k] + 1
+        assert message.timestamp.seconds * 10**9 + message.timestamp.nanos == at
+        got = np.array([[p.position.x, p.position.y, p.position.z] for p in message.poses])
+        np.testing.assert_array_equal(got, positions[k][:count])
+        (strip,) = entity.lines
+        np.testing.assert_array_equal(points(strip), positions[k][:count])
+        red = np.array([c.r for c in strip.colors])
+        np.testing.assert_allclose(red * max_tau, tau[k][:count], atol=1e-9 * max_tau)
+        assert [(m.ns, m.id) for m in markers.markers] == [("trajectory", k), ("tau", k)]
+        for marker in markers.markers:
+            np.testing.assert_array_equal(points(marker), positions[k][:count])
+    assert held == [len(p) for p in positions], "the last message holds the whole path"
+    assert messages == [path_steps(len(p)) for p in positions], messages
+
+
+def path_steps(n: int) -> int:
+    """The number of path messages of a session of ``n`` poses, as documented: one every
+    ⌈n / m⌉ poses for m = 2 · 200,000 // n, between 1 and 100 (``loops_io::path_steps``)."""
+    most = min(max(2 * 200_000 // n, 1), 100)
+    stride = -(-n // most)
+    return -(-n // stride)
+
+
+def seconds_ns(seconds: np.ndarray) -> np.ndarray:
+    """Times in seconds as the writer stamps them: each float's shortest decimal, to the
+    nanosecond (:func:`stamp_ns`)."""
+    return np.array([stamp_ns(repr(float(t))) for t in seconds], dtype=np.int64)
+
+
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("logs")
@@ -274,8 +321,9 @@ def test_loops_run_mcap_holds_every_pose_component_and_candidate(logs, tmp_path)
     components = read_table(folder / "components.csv")
     samples = read_table(folder / "samples.csv")
     tau = np.array([float(r["loop_duration_s"]) for r in read_table(folder / "loop_duration.csv")])
+    times = seconds_ns(np.array([r["t_s"] for r in read_table(folder / "loop_duration.csv")]))
     decoded = check_file(folder / "results.mcap", [log.stem])
-    check_scene(decoded, [input_poses(log)], [log.stem], components, samples, [tau])
+    check_scene(decoded, [input_poses(log)], [times], [log.stem], components, samples, [tau])
     assert len(components) > 5 and sum(r["trivial"] == "false" for r in components) > 0
     check_colours_match_report(folder / "report.html", decoded, components)
 
@@ -334,8 +382,13 @@ def test_loops_fleet_mcap_holds_every_session(logs, tmp_path):
     table = il.find_fleet_loops(fleet, gamma=40.0).loop_duration()
     total = np.asarray(table["own_s"]) + np.asarray(table["other_s"])
     tau = [total[np.asarray(table["session"]) == k] for k in range(len(names))]
+    times = [
+        seconds_ns(np.array([r["t_s"] for r in read_table(out / name / "loop_duration.csv")]))
+        for name in names
+    ]
     decoded = check_file(out / "results.mcap", names)
-    check_scene(decoded, [input_poses(p) for p in fleet_logs], names, components, samples, tau)
+    poses = [input_poses(p) for p in fleet_logs]
+    check_scene(decoded, poses, times, names, components, samples, tau)
     assert any(r["session_a"] != r["session_b"] for r in components)
     assert any(r["session_a"] != r["session_b"] for r in samples)
     for name in names:  # each session's folder, as `loops run` writes it
@@ -353,10 +406,53 @@ def test_python_to_mcap_equals_the_csv_files(tmp_path):
     positions = xyz(traj)
     components = read_table(tmp_path / "components.csv")
     tau = loops.loop_duration()
-    check_scene(
-        decoded, [positions], ["urban"], components, read_table(tmp_path / "samples.csv"), [tau]
-    )
+    samples_table = read_table(tmp_path / "samples.csv")
+    times = [seconds_ns(np.asarray(traj.timestamps))]
+    check_scene(decoded, [positions], times, ["urban"], components, samples_table, [tau])
     assert (tmp_path / viewers.LAYOUT_FILE).is_file()
+
+
+def mcap_records(path: Path) -> tuple[object, list[tuple[int, int, int, int, bytes]]]:
+    """The summary and every message (channel id, sequence, log time, publish time, data) of
+    an MCAP file, in the file's order, from the official reader."""
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        summary = reader.get_summary()
+        messages = [
+            (c.id, m.sequence, m.log_time, m.publish_time, m.data)
+            for _, c, m in reader.iter_messages(log_time_order=False)
+        ]
+    return summary, messages
+
+
+def test_merge_log_keeps_the_logs_schemas_channels_and_messages(logs, tmp_path):
+    """``--merge-log``: results.mcap holds the user's log as it was (its schemas and channels
+    under their ids, byte for byte, every message with its times and sequence) beside the
+    scene's topics, all in log-time order; without ``--mcap`` it is a usage error."""
+    (log,) = sorted((logs / "drives").glob("*.mcap"))
+    out = tmp_path / "merged"
+    args = ("run", log, "--gamma", 40, "--budget", 50, "--out", out, "--quiet")
+    refused = loops_cli(*args, "--merge-log", cwd=tmp_path)
+    assert refused.returncode == 2 and "--mcap" in refused.stderr, refused.stderr
+    done = loops_cli(*args, "--mcap", "--merge-log", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    theirs, their_messages = mcap_records(log)
+    merged, messages = mcap_records(out / log.stem / "results.mcap")
+    for id_, schema in theirs.schemas.items():
+        got = merged.schemas[id_]
+        assert (got.name, got.encoding, got.data) == (schema.name, schema.encoding, schema.data)
+    for id_, channel in theirs.channels.items():
+        got = merged.channels[id_]
+        fields = ("topic", "schema_id", "message_encoding", "metadata")
+        assert [getattr(got, f) for f in fields] == [getattr(channel, f) for f in fields]
+    kept = [m for m in messages if m[0] in theirs.channels]
+    assert sorted(kept) == sorted(their_messages) and len(their_messages) > 100
+    topics = {c.topic for c in merged.channels.values()}
+    assert topics == set(TOPICS) | {c.topic for c in theirs.channels.values()}
+    ours = [m for m in messages if merged.channels[m[0]].topic in TOPICS]
+    assert len(ours) + len(kept) == len(messages) and ours
+    stamps = [m[2] for m in messages]
+    assert stamps == sorted(stamps), "one timeline"
 
 
 def test_existing_files_are_not_replaced_without_force(tmp_path):

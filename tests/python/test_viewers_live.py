@@ -2,9 +2,10 @@
 by a client of our own on loopback that speaks the protocol's v1 (``foxglove.websocket.v1``,
 which Foxglove's SDK serves under its new name ``foxglove.sdk.v1``) with
 the ``websockets`` package and decodes the messages with Foxglove's published protobuf classes
-(``foxglove-schemas-protobuf``). Every keyframe of the log is checked against the JSON lines of
-a replay without ``--serve``, the poses against the log's text, and the components left at the
-end against :class:`inexact_loops.OnlineLoops` pushed the same poses.
+(``foxglove-schemas-protobuf``) and the ROS 2 ``MarkerArray`` with ``rosbags``. Every keyframe
+of the log is checked against the JSON lines of a replay without ``--serve``, the poses against
+the log's text, the components left at the end against :class:`inexact_loops.OnlineLoops`
+pushed the same poses, and the (t, t′) plane against the pairs within γ by brute force.
 """
 
 from __future__ import annotations
@@ -23,17 +24,26 @@ import pytest
 
 websockets = pytest.importorskip("websockets")
 from foxglove_schemas_protobuf.PosesInFrame_pb2 import PosesInFrame  # noqa: E402
+from foxglove_schemas_protobuf.RawImage_pb2 import RawImage  # noqa: E402
 from foxglove_schemas_protobuf.SceneUpdate_pb2 import SceneUpdate  # noqa: E402
+from rosbags.typesys import Stores, get_typestore  # noqa: E402
 from websockets.asyncio.client import connect  # noqa: E402
 
 import inexact_loops as il  # noqa: E402
+from inexact_loops import viewers  # noqa: E402
 
 TOPICS = {
     "/loops/trajectory": "foxglove.PosesInFrame",
     "/loops/tau": "foxglove.SceneUpdate",
     "/loops/components": "foxglove.SceneUpdate",
     "/loops/candidates": "foxglove.SceneUpdate",
+    "/loops/plane": "foxglove.RawImage",
+    "/loops/markers": "visualization_msgs/msg/MarkerArray",
 }
+#: The topics with a message at every keyframe (the plane: every 100 poses, and at the end).
+EVERY_KEYFRAME = [t for t in TOPICS if t != "/loops/plane"]
+#: The plane's colour outside S_γ (the scene's background).
+BACKGROUND_RGB = (32, 32, 32)
 GAMMA = 3.0
 #: The whole exchange ends well before this (seconds); a hang fails instead of blocking.
 DEADLINE_S = 120
@@ -129,18 +139,26 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
     assert code == 0, stderr
     assert info["op"] == "serverInfo" and info["name"].startswith("loops replay")
     assert {t: c["schemaName"] for t, c in channels.items()} == TOPICS
-    assert {c["encoding"] for c in channels.values()} == {"protobuf"}
-    assert all(len(m) == len(keyframes) for m in messages.values()), {
+    encodings = {t: (c["encoding"], c["schemaEncoding"]) for t, c in channels.items()}
+    assert encodings.pop("/loops/markers") == ("cdr", "ros2msg")
+    assert set(encodings.values()) == {("protobuf", "protobuf")}
+    assert all(len(messages[t]) == len(keyframes) for t in EVERY_KEYFRAME), {
         t: len(m) for t, m in messages.items()
     }
+    # 48 poses: no multiple of 100, so one plane, the whole log's, after the last keyframe.
+    assert [t for t, _ in messages["/loops/plane"]] == [round(rows[-1, 0] * 1e9)]
+    check_plane(RawImage.FromString(messages["/loops/plane"][0][1]), rows)
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    markers: dict[tuple[str, int], object] = {}
 
     # The components' entities, as Foxglove keeps them: updated by id, removed by deletions.
     live: dict[str, SceneUpdate.SceneEntity] = {}
     for k, line in enumerate(keyframes):
         n = line["pose"] + 1
         stamp_ns = round(rows[line["pose"], 0] * 1e9)
-        for topic in TOPICS:
+        for topic in EVERY_KEYFRAME:
             assert messages[topic][k][0] == stamp_ns, (topic, k)
+        check_markers(store, messages["/loops/markers"][k][1], markers, line, rows)
         poses = PosesInFrame.FromString(messages["/loops/trajectory"][k][1])
         assert poses.frame_id == "map" and len(poses.poses) == n
         got = np.array([[p.position.x, p.position.y, p.position.z] for p in poses.poses])
@@ -182,12 +200,138 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
     online.push_many(rows[:, 0], rows[:, 1:4])
     table = online.components
     assert sorted(live) == sorted(f"component/{i}" for i in table["id"].tolist())
+    assert sorted(i for ns, i in markers if ns == "components") == sorted(
+        3 * i + part for i in table["id"].tolist() for part in range(3)
+    )
     for row in range(len(table["id"])):
         meta = {m.key: m.value for m in live[f"component/{table['id'][row]}"].metadata}
         for column in ("i_min", "i_max", "j_min", "j_max", "pair_count"):
             assert int(meta[column]) == int(table[column][row]), column
 
     # The server is gone: nothing listens on its port.
+    with pytest.raises(OSError):
+        socket.create_connection(("127.0.0.1", port), timeout=5).close()
+
+
+def check_markers(store, data: bytes, markers: dict, line: dict, rows: np.ndarray) -> None:
+    """The keyframe's MarkerArray (decoded by ``rosbags``): the path so far (``trajectory`` and
+    ``tau``, id 0), the components' markers as RViz keeps them (``markers``, by namespace and
+    id: ADD replaces, DELETE removes) and the keyframe's candidates (id = its pose)."""
+    array = store.deserialize_cdr(data, "visualization_msgs/msg/MarkerArray")
+    n = line["pose"] + 1
+    path = {m.ns: m for m in array.markers if m.ns in ("trajectory", "tau")}
+    assert sorted(path) == ["tau", "trajectory"]
+    for marker in path.values():
+        assert marker.id == 0 and marker.header.frame_id == "map"
+        got = np.array([[p.x, p.y, p.z] for p in marker.points])
+        np.testing.assert_allclose(got, rows[:n, 1:4], atol=1e-9)
+    assert len(path["tau"].colors) == n
+    deleted = {m.id for m in array.markers if m.ns == "components" and m.action == 2}
+    assert deleted == {3 * m["retired"] + part for m in line["merged"] for part in range(3)}
+    for marker in array.markers:
+        if marker.ns == "components":
+            if marker.action == 2:
+                markers.pop((marker.ns, marker.id), None)
+            else:
+                markers[(marker.ns, marker.id)] = marker
+    candidates = [m for m in array.markers if m.ns == "candidates"]
+    if not line["candidates"]:
+        assert not candidates
+        return
+    (marker,) = candidates
+    assert marker.id == line["pose"] and marker.type == 5  # LINE_LIST
+    ends = np.array([[p.x, p.y, p.z] for p in marker.points]).reshape(-1, 2, 3)
+    for (a, b), c in zip(ends, line["candidates"], strict=True):
+        np.testing.assert_allclose([a, b], rows[[c["keyframe"], c["j"]], 1:4], atol=1e-9)
+
+
+def check_plane(image: RawImage, rows: np.ndarray) -> None:
+    """The (t, t′) plane of the whole log, one pixel a pose (t to the right, t′ up): coloured
+    exactly where the two poses lie within γ, by brute force over the log's positions."""
+    n = len(rows)
+    assert (image.encoding, image.width, image.height, image.step) == ("rgb8", n, n, 3 * n)
+    rgb = np.frombuffer(image.data, dtype=np.uint8).reshape(n, n, 3)[::-1]  # row 0: first t′
+    coloured = (rgb != BACKGROUND_RGB).any(axis=2)
+    xyz = rows[:, 1:4]
+    within = np.linalg.norm(xyz[:, None, :] - xyz[None, :, :], axis=2) <= GAMMA
+    np.testing.assert_array_equal(coloured, within)
+
+
+async def listen_to_python_server(rows: np.ndarray) -> tuple[dict[str, list], list, int]:
+    """Starts :func:`viewers.serve`, subscribes a client to every channel, pushes ``rows``
+    into an :class:`il.OnlineLoops` one pose a keyframe with an :class:`il.OnlineSampler`'s
+    candidates, sends each and then the plane, reads every message, and closes the server:
+    the messages by topic, the candidates offered at each keyframe, and the port."""
+    server = viewers.serve("127.0.0.1:0", name="square")
+    port = server.port
+    messages: dict[str, list] = {topic: [] for topic in TOPICS}
+    offered = []
+    offers = ["foxglove.sdk.v1", "foxglove.websocket.v1"]
+    async with connect(f"ws://{server.address}", subprotocols=offers, proxy=None) as ws:
+        assert json.loads(await ws.recv())["op"] == "serverInfo"
+        channels: dict[str, dict] = {}
+        while len(channels) < len(TOPICS):
+            message = json.loads(await ws.recv())
+            channels.update({c["topic"]: c for c in message["channels"]})
+        assert {t: c["schemaName"] for t, c in channels.items()} == TOPICS
+        by_subscription = {k: c["topic"] for k, c in enumerate(channels.values())}
+        subscriptions = [
+            {"id": k, "channelId": channels[t]["id"]} for k, t in by_subscription.items()
+        ]
+        await ws.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
+        assert await asyncio.to_thread(server.wait_for_client, 30.0)
+        online, sampler = il.OnlineLoops(gamma=GAMMA, dim=3), il.OnlineSampler()
+        for t, *point in rows:
+            update = online.push(t, point)
+            candidates = sampler.offer(online, update)
+            offered.append([c.pair for c in candidates])
+            server.send(online, update, candidates)
+        server.send_plane(online)
+        # A keyframe from the second pose on: a message on each topic but the plane; then the
+        # plane of all 48 poses.
+        expected = (len(rows) - 1) * len(EVERY_KEYFRAME) + 1
+        while sum(len(m) for m in messages.values()) < expected:
+            frame = await ws.recv()
+            if isinstance(frame, str):
+                continue
+            subscription, log_time = struct.unpack_from("<IQ", frame, 1)
+            messages[by_subscription[subscription]].append((log_time, frame[13:]))
+        server.close()
+        with pytest.raises(websockets.ConnectionClosed):
+            while True:  # nothing more, then the server's close
+                frame = await ws.recv()
+                assert isinstance(frame, str), "no message after the last"
+    assert server.closed
+    return messages, offered, port
+
+
+def test_python_serve_sends_each_keyframe_and_closing_frees_the_port(tmp_path: Path):
+    rows = write_log(tmp_path / "square.tum")
+    messages, offered, port = asyncio.run(
+        asyncio.wait_for(listen_to_python_server(rows), DEADLINE_S)
+    )
+    n = len(rows)
+    assert all(len(messages[t]) == n - 1 for t in EVERY_KEYFRAME)
+    assert sum(map(len, offered)) > 0
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    for k in range(n - 1):
+        stamp_ns = round(rows[k + 1, 0] * 1e9)
+        assert all(messages[t][k][0] == stamp_ns for t in EVERY_KEYFRAME)
+        poses = PosesInFrame.FromString(messages["/loops/trajectory"][k][1])
+        got = np.array([[p.position.x, p.position.y, p.position.z] for p in poses.poses])
+        np.testing.assert_allclose(got, rows[: k + 2, 1:4], atol=1e-9)
+        (tau,) = SceneUpdate.FromString(messages["/loops/tau"][k][1]).entities
+        assert tau.id == "tau/square"
+        candidates = SceneUpdate.FromString(messages["/loops/candidates"][k][1]).entities
+        pairs = [json.loads({m.key: m.value for m in e.metadata}["pairs"]) for e in candidates]
+        assert [tuple(p) for e in pairs for p in e] == [(k_, j) for j, k_ in offered[k + 1]]
+        markers = store.deserialize_cdr(
+            messages["/loops/markers"][k][1], "visualization_msgs/msg/MarkerArray"
+        )
+        assert len(markers.markers[0].points) == k + 2
+    ((at, image),) = messages["/loops/plane"]
+    assert at == round(rows[-1, 0] * 1e9)
+    check_plane(RawImage.FromString(image), rows)
     with pytest.raises(OSError):
         socket.create_connection(("127.0.0.1", port), timeout=5).close()
 

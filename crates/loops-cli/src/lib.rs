@@ -33,6 +33,7 @@ use std::io::Write;
 use anyhow::Result;
 use clap::error::ErrorKind;
 use clap::{CommandFactory, Parser, Subcommand};
+pub use serve::LiveServer;
 
 /// Find, measure and sample inexact loops (loop closures) in robot trajectories.
 #[derive(Debug, Parser)]

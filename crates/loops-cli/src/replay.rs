@@ -60,8 +60,9 @@ pub(crate) struct ReplayArgs {
     /// Serve the keyframes live over Foxglove's WebSocket protocol on ADDR:PORT (port 0: a free
     /// one; the address is printed on stderr): in Foxglove, Open connection, Foxglove WebSocket.
     /// The replay starts when a client subscribes; the server closes at the end of the log
-    /// (after its clients leave, 2 s at most) or on Ctrl-C. Topics: /loops/trajectory,
-    /// /loops/tau, /loops/components, /loops/candidates, as in `loops run --mcap`.
+    /// (after its clients leave, 2 s at most) or on Ctrl-C. Topics as in `loops run --mcap`:
+    /// /loops/trajectory, /loops/tau, /loops/components, /loops/candidates and /loops/markers
+    /// (ROS 2 MarkerArray) at each keyframe, /loops/plane every 100 poses and at the end.
     #[arg(long, value_name = "ADDR:PORT", num_args = 0..=1, default_missing_value = "127.0.0.1:8765")]
     serve: Option<String>,
     /// With --serve: keep serving after the end of the log, until Ctrl-C.
@@ -256,8 +257,10 @@ pub(crate) fn replay(args: ReplayArgs) -> Result<u8> {
     .and_then(|replayed| replayed)
     .with_context(|| format!("replaying {source}"));
     let figures = match live {
-        Some((server, _)) => {
+        Some((server, scene)) => {
             if replayed.is_ok() && !stop.is_interrupted() {
+                // The plane of the whole log, whatever multiple of poses the last one was.
+                server.send(&Vec::from_iter(scene.plane(&engine)?));
                 if args.hold {
                     eprintln!("loops replay: the log is over; serving until Ctrl-C");
                 }

@@ -47,9 +47,10 @@ pub(crate) const MAX_BACKLOG: usize = 1 << 16;
 /// How often the waits look at Ctrl-C.
 const POLL: Duration = Duration::from_millis(20);
 
-/// A running server with the live scene's channels.
+/// A running server with the live scene's channels (also the Python package's
+/// `viewers.serve`).
 #[derive(Debug)]
-pub(crate) struct LiveServer {
+pub struct LiveServer {
     /// The channels' context: the server holds it weakly, so it lives here.
     context: Arc<Context>,
     handle: foxglove::WebSocketServerHandle,
@@ -85,7 +86,7 @@ impl LiveServer {
     ///
     /// # Errors
     /// When the address cannot be bound (taken, or not this machine's).
-    pub(crate) fn start(address: SocketAddr, messages: usize) -> Result<Self> {
+    pub fn start(address: SocketAddr, messages: usize) -> Result<Self> {
         let context = Context::new();
         let channels = LiveScene::channels()
             .into_iter()
@@ -111,7 +112,7 @@ impl LiveServer {
     }
 
     /// The address it serves on (with the port picked for port 0).
-    pub(crate) fn address(&self) -> SocketAddr {
+    pub fn address(&self) -> SocketAddr {
         self.address
     }
 
@@ -122,19 +123,28 @@ impl LiveServer {
             if stop.is_interrupted() {
                 return false;
             }
-            {
-                let state = self.subscriptions.0.lock().unwrap_or_else(PoisonError::into_inner);
-                let all = state.channels.values().any(|channels| channels.len() >= self.channels.len());
-                if all || state.first.is_some_and(|first| first.elapsed() >= SUBSCRIBE_SETTLE) {
-                    return true;
-                }
+            if self.has_client() {
+                return true;
             }
             std::thread::sleep(POLL);
         }
     }
 
+    /// Whether a client has subscribed to every channel, or [`SUBSCRIBE_SETTLE`] passed since a
+    /// client's first subscription: the replay may start.
+    pub fn has_client(&self) -> bool {
+        let state = self.subscriptions.0.lock().unwrap_or_else(PoisonError::into_inner);
+        let all = state.channels.values().any(|channels| channels.len() >= self.channels.len());
+        all || state.first.is_some_and(|first| first.elapsed() >= SUBSCRIBE_SETTLE)
+    }
+
+    /// The number of clients connected.
+    pub fn client_count(&self) -> usize {
+        self.handle.client_count()
+    }
+
     /// Sends `messages` to the clients subscribed to their channels.
-    pub(crate) fn send(&self, messages: &[LiveMessage]) {
+    pub fn send(&self, messages: &[LiveMessage]) {
         for message in messages {
             let meta = PartialMetadata { log_time: message.log_time_ns };
             self.channels[message.channel].log_with_meta(&message.data, meta);
@@ -151,7 +161,7 @@ impl LiveServer {
     }
 
     /// Stops the server: the clients are told, its port is closed.
-    pub(crate) fn close(self) {
+    pub fn close(self) {
         for channel in &self.channels {
             channel.close();
         }

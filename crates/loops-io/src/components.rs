@@ -64,8 +64,8 @@ pub(crate) const fn columns<const N: usize>(parts: &[&[&'static str]]) -> [&'sta
 /// `i` indexes poses by t, `j` by t′ (`i_min..=i_max` and `j_min..=j_max` are the component's
 /// index ranges); times are the poses' own timestamps, seconds. With the columns `B` of its
 /// block after its id, a row of another table: a fleet's
-/// ([`FleetComponentRow`](crate::FleetComponentRow), whose block is its two sessions, and which
-/// has no positions, `P = ()`).
+/// ([`FleetComponentRow`](crate::FleetComponentRow), whose block is its two sessions; `P = ()`
+/// for a table without positions).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 #[non_exhaustive]
 pub struct ComponentRow<B = (), P = ClosestPositions> {
@@ -137,7 +137,14 @@ impl ClosestPositions {
     /// When an index is outside `positions`.
     pub fn new(closest_pair: [usize; 2], positions: Option<&[[f64; 3]]>) -> Self {
         let Some(positions) = positions else { return Self::default() };
-        let [[ix, iy, iz], [jx, jy, jz]] = closest_pair.map(|k| positions[k].map(Some));
+        Self::of_poses(closest_pair.map(|k| Some(positions[k])))
+    }
+
+    /// The positions of the closest pair's poses `closest_i` and `closest_j` (`None`: unknown),
+    /// wherever they come from: one trajectory's ([`ClosestPositions::new`]) or two sessions'
+    /// ([`fleet_closest_positions`](crate::fleet_closest_positions)).
+    pub fn of_poses(poses: [Option<[f64; 3]>; 2]) -> Self {
+        let [[ix, iy, iz], [jx, jy, jz]] = poses.map(|p| p.map_or([None; 3], |p| p.map(Some)));
         Self { closest_i_x: ix, closest_i_y: iy, closest_i_z: iz, closest_j_x: jx, closest_j_y: jy, closest_j_z: jz }
     }
 }

@@ -18,7 +18,10 @@ use loops_core::{
 };
 
 use crate::atomic::write_atomically;
-use crate::components::{ComponentExtent, ComponentMeasures, ComponentRow, EXTENT_COLUMNS, MEASURE_COLUMNS, columns};
+use crate::components::{
+    CLOSEST_POSITION_COLUMNS, ClosestPositions, ComponentExtent, ComponentMeasures, ComponentRow, EXTENT_COLUMNS,
+    MEASURE_COLUMNS, columns,
+};
 use crate::csv_rows::write_csv;
 use crate::error::{IoError, Result, WriteError};
 use crate::json::write_json;
@@ -30,16 +33,40 @@ use crate::write::{EdgeKind, G2oOptions, edge_line, pose_of, vertex_line};
 /// sessions by index, `session_a` and `session_b`, then by name, `name_a` and `name_b`), then
 /// the columns of `components.csv` but `id` (see
 /// [`COMPONENT_COLUMNS`](crate::COMPONENT_COLUMNS)), with `i` indexing poses of session `a` and
-/// `j` poses of session `b`.
-pub const FLEET_COMPONENT_COLUMNS: [&str; 22] =
-    columns(&[&["id", "session_a", "session_b", "name_a", "name_b"], &MEASURE_COLUMNS, &EXTENT_COLUMNS]);
+/// `j` poses of session `b` (the closest pair's positions: pose `closest_i` of session `a`,
+/// pose `closest_j` of session `b`).
+pub const FLEET_COMPONENT_COLUMNS: [&str; 28] = columns(&[
+    &["id", "session_a", "session_b", "name_a", "name_b"],
+    &MEASURE_COLUMNS,
+    &EXTENT_COLUMNS,
+    &CLOSEST_POSITION_COLUMNS,
+]);
 
 /// One row of a fleet's `components.csv`: a [`FleetComponent`](loops_core::fleet::FleetComponent) with
 /// the names of its sessions and the times of its pose ranges, each on its session's clock: in
 /// its [`extent`](ComponentRow::extent), `i` indexes the poses of session `a` (the rows, t) and
 /// `j` those of session `b` (the columns, t′); its [`measures`](ComponentRow::measures) are the
-/// block's (trivial: it holds diagonal cells, within one session only).
-pub type FleetComponentRow = ComponentRow<SessionBlock, ()>;
+/// block's (trivial: it holds diagonal cells, within one session only); its
+/// [`positions`](ComponentRow::positions) are those of pose `closest_i` of session `a` and pose
+/// `closest_j` of session `b`.
+pub type FleetComponentRow = ComponentRow<SessionBlock>;
+
+/// Where fleet component `component`'s closest pair is: pose `closest_pair[0]` of session `a`
+/// and pose `closest_pair[1]` of session `b`, among `positions`, one list per session (each
+/// session's [`point_positions`](crate::point_positions), or its log's own); unknown without
+/// them. O(1).
+///
+/// # Panics
+/// When a session or pose is outside `positions`.
+pub fn fleet_closest_positions(
+    component: &loops_core::FleetComponent,
+    positions: Option<&[Vec<[f64; 3]>]>,
+) -> ClosestPositions {
+    let Some(positions) = positions else { return ClosestPositions::default() };
+    let [a, b] = component.sessions;
+    let [i, j] = component.closest_pair;
+    ClosestPositions::of_poses([Some(positions[a][i]), Some(positions[b][j])])
+}
 
 /// The block of a fleet's component: its two sessions, by index and name. `session_a` and
 /// `session_b` are indices in the fleet everywhere (these files, the Python tables, the Parquet
@@ -58,15 +85,18 @@ pub struct SessionBlock {
 }
 
 /// The rows of a fleet's `components.csv`: one per component of `loops` (found on `fleet`), in
-/// id order. With `samples_per_component` (by component id, as
+/// id order, with the closest pair's `positions` ([`fleet_closest_positions`]; one list per
+/// session, or unknown). With `samples_per_component` (by component id, as
 /// [`SampleQuality::per_component`](loops_core::SampleQuality::per_component) of the joint
 /// result), each row has its number of samples (0 for an id past its end). O(components).
 ///
 /// # Panics
-/// When `loops` were found on another fleet (a session or pose `fleet` does not have).
+/// When `loops` were found on another fleet (a session or pose `fleet` or `positions` does not
+/// have).
 pub fn fleet_component_rows(
     fleet: &Fleet,
     loops: &FleetLoops,
+    positions: Option<&[Vec<[f64; 3]>]>,
     samples_per_component: Option<&[u64]>,
 ) -> Vec<FleetComponentRow> {
     let joint = loops.loops().components();
@@ -84,7 +114,7 @@ pub fn fleet_component_rows(
                 // one in its sessions' poses).
                 measures: ComponentMeasures::new(&joint[c.id]),
                 extent: ComponentExtent::new(c.poses, c.closest_pair, c.closest_distance, times),
-                positions: (),
+                positions: fleet_closest_positions(&c, positions),
                 samples: samples_per_component.map(|s| s.get(c.id).copied().unwrap_or(0)),
             }
         })
@@ -92,8 +122,9 @@ pub fn fleet_component_rows(
 }
 
 /// Writes a fleet's `components.csv` to `out`: a header of [`FLEET_COMPONENT_COLUMNS`] (and
-/// `samples` with `samples_per_component`), then the [`fleet_component_rows`]. Numbers are
-/// printed as in `components.csv`. O(components).
+/// `samples` with `samples_per_component`), then the [`fleet_component_rows`] (the closest
+/// pair's positions among `positions`, one list per session; empty fields without). Numbers
+/// are printed as in `components.csv`. O(components).
 ///
 /// # Errors
 /// What `out` returns.
@@ -110,16 +141,20 @@ pub fn fleet_component_rows(
 /// let fleet = Fleet::new(vec![("monday".into(), monday), ("tuesday".into(), tuesday)])?;
 /// let loops = find_fleet_loops(&fleet, &Euclidean, 1.0, &FleetOptions::default())?;
 /// let mut text = Vec::new();
-/// loops_io::fleet_components_to_csv(&fleet, &loops, None, &mut text).unwrap();
+/// let positions: Vec<_> = (0..fleet.len()).map(|a| loops_io::point_positions(fleet.session(a))).collect();
+/// loops_io::fleet_components_to_csv(&fleet, &loops, Some(&positions), None, &mut text).unwrap();
 /// let text = String::from_utf8(text).unwrap();
 /// assert!(text.starts_with("id,session_a,session_b,name_a,name_b,trivial,area_s2,"));
-/// // Tuesday's pose 1 (t = 101 s on its clock) passes Monday's pose 0, 0.5 away.
-/// assert!(text.lines().any(|line| line.ends_with(",0,1,monday,tuesday,false,0.25,1,1,1,0,0,0,1,1,0,0,101,101,0,1,0.5")));
+/// // Tuesday's pose 1 (t = 101 s on its clock, at (0, 0.5)) passes Monday's pose 0, 0.5 away.
+/// assert!(
+///     text.lines().any(|line| line.ends_with(",0,1,monday,tuesday,false,0.25,1,1,1,0,0,0,1,1,0,0,101,101,0,1,0.5,0,0,0,0,0.5,0"))
+/// );
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn fleet_components_to_csv<W: Write>(
     fleet: &Fleet,
     loops: &FleetLoops,
+    positions: Option<&[Vec<[f64; 3]>]>,
     samples_per_component: Option<&[u64]>,
     out: W,
 ) -> io::Result<()> {
@@ -127,7 +162,7 @@ pub fn fleet_components_to_csv<W: Write>(
     if samples_per_component.is_some() {
         columns.push("samples");
     }
-    write_csv(out, &columns, fleet_component_rows(fleet, loops, samples_per_component))
+    write_csv(out, &columns, fleet_component_rows(fleet, loops, positions, samples_per_component))
 }
 
 /// Writes a fleet's `components.csv` ([`fleet_components_to_csv`]) to the file `path`,
@@ -144,10 +179,13 @@ pub fn write_fleet_components(
     path: impl AsRef<Path>,
     fleet: &Fleet,
     loops: &FleetLoops,
+    positions: Option<&[Vec<[f64; 3]>]>,
     samples_per_component: Option<&[u64]>,
     overwrite: bool,
 ) -> Result<(), WriteError> {
-    write_atomically(path, overwrite, |file| fleet_components_to_csv(fleet, loops, samples_per_component, file))
+    write_atomically(path, overwrite, |file| {
+        fleet_components_to_csv(fleet, loops, positions, samples_per_component, file)
+    })
 }
 
 /// The columns of `session_pairs.csv`.
@@ -587,11 +625,10 @@ mod tests {
 
     #[test]
     fn component_columns_follow_components_csv() {
-        // A log's columns but the closest pair's positions (each session has its own poses).
-        let positions = crate::CLOSEST_POSITION_COLUMNS.len();
-        assert_eq!(FLEET_COMPONENT_COLUMNS[5..], COMPONENT_COLUMNS[1..COMPONENT_COLUMNS.len() - positions]);
+        // A log's columns after the block, the closest pair's positions included.
+        assert_eq!(FLEET_COMPONENT_COLUMNS[5..], COMPONENT_COLUMNS[1..]);
         let (fleet, loops) = fleet();
-        let rows = fleet_component_rows(&fleet, &loops, Some(&[4]));
+        let rows = fleet_component_rows(&fleet, &loops, None, Some(&[4]));
         let mut expected = FLEET_COMPONENT_COLUMNS.to_vec();
         expected.push("samples");
         assert_eq!(crate::csv_rows::inferred_columns(&rows[0]), expected);
@@ -601,7 +638,8 @@ mod tests {
     #[test]
     fn rows_name_sessions_and_their_own_clocks() {
         let (fleet, loops) = fleet();
-        let rows = fleet_component_rows(&fleet, &loops, None);
+        let positions: Vec<_> = (0..fleet.len()).map(|a| crate::point_positions(fleet.session(a))).collect();
+        let rows = fleet_component_rows(&fleet, &loops, Some(&positions), None);
         assert_eq!(rows.len(), loops.loops().components().len());
         for row in &rows {
             let c = &loops.components()[row.id];
@@ -614,6 +652,12 @@ mod tests {
             assert_eq!(row.extent.t_min_s, fleet.session(block.session_a).timestamps_s()[row.extent.i_min]);
             assert_eq!(row.extent.t_prime_max_s, fleet.session(block.session_b).timestamps_s()[row.extent.j_max]);
             assert_eq!(row.measures.run_count, loops.loops().components()[row.id].run_count);
+            // The closest pair's positions: pose closest_i of session a, closest_j of session b.
+            let [a, b] = [block.session_a, block.session_b].map(|s| fleet.session(s));
+            let (i, j) = (a.point(row.extent.closest_i), b.point(row.extent.closest_j));
+            let p = &row.positions;
+            assert_eq!([p.closest_i_x, p.closest_i_y, p.closest_i_z], [Some(i[0]), Some(i[1]), Some(0.0)]);
+            assert_eq!([p.closest_j_x, p.closest_j_y, p.closest_j_z], [Some(j[0]), Some(j[1]), Some(0.0)]);
         }
         // The way back meets the way out in one band: every pair within γ, every pose of the
         // way back, on its own clock from 500 s.
@@ -628,9 +672,14 @@ mod tests {
         let i_max = pairs.iter().map(|p| p[0]).max().unwrap();
         assert_eq!((between[0].extent.i_max, between[0].extent.t_max_s), (i_max, i_max as f64));
         let mut text = Vec::new();
-        fleet_components_to_csv(&fleet, &loops, None, &mut text).unwrap();
+        fleet_components_to_csv(&fleet, &loops, Some(&positions), None, &mut text).unwrap();
         let text = String::from_utf8(text).unwrap();
         assert_eq!(text.lines().count(), 1 + rows.len());
+        // The way back's closest pose (4 - 0.25 j, 0.2) lies on the way out's (0.25 i, 0).
+        let row = between[0];
+        let [i, j] = [row.extent.closest_i as f64, row.extent.closest_j as f64];
+        assert_eq!(row.positions.closest_i_x, Some(0.25 * i));
+        assert_eq!((row.positions.closest_j_x, row.positions.closest_j_y), (Some(4.0 - 0.25 * j), Some(0.2)));
         assert!(text.contains(",0,1,out,\"back, \"\"quoted\"\"\",false,"), "{text}");
     }
 

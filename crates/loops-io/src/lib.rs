@@ -158,15 +158,15 @@ pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError
 pub use euroc::read_euroc;
 pub use fleet::{
     FLEET_COMPONENT_COLUMNS, FLEET_SAMPLE_COLUMNS, FleetComponentRow, FleetSampleRow, GTSAM_ROBOT_LETTERS,
-    SESSION_PAIR_COLUMNS, SessionBlock, SessionPairRow, fleet_component_rows, fleet_components_to_csv,
-    fleet_g2o_edges_text, fleet_sample_rows, fleet_samples_to_csv, fleet_samples_to_json, gtsam_symbol_key,
-    session_pair_rows, session_pairs_to_csv, write_fleet_components, write_fleet_g2o_edges, write_fleet_samples,
-    write_session_pairs,
+    SESSION_PAIR_COLUMNS, SessionBlock, SessionPairRow, fleet_closest_positions, fleet_component_rows,
+    fleet_components_to_csv, fleet_g2o_edges_text, fleet_sample_rows, fleet_samples_to_csv, fleet_samples_to_json,
+    gtsam_symbol_key, session_pair_rows, session_pairs_to_csv, write_fleet_components, write_fleet_g2o_edges,
+    write_fleet_samples, write_session_pairs,
 };
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, SkippedRecords, read_pose_graph};
 pub use kitti::{ROTATION_MATRIX_TOLERANCE, read_kitti};
-pub use live_scene::{LIVE_TOPICS, LiveChannel, LiveMessage, LiveScene};
+pub use live_scene::{LIVE_PLANE_POSES, LIVE_TOPICS, LiveChannel, LiveMessage, LiveScene};
 pub use loop_duration::{
     LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
     write_loop_duration,
@@ -184,8 +184,9 @@ pub use samples::{
     CSV_HEADER, SAMPLE_POSITION_COLUMNS, SampleRow, SamplesFormat, samples_to_csv, samples_to_json, write_samples,
 };
 pub use scene::{
-    COMPONENT_RGB, FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PLANE_PIXELS, RgbImage, SCENE_FRAME, SCENE_TOPICS, Scene,
-    SceneCandidate, SceneComponent, ScenePath, SceneTopic, TRIVIAL_RGB, scene_mcap_to, tau_rgba, write_scene_mcap,
+    COMPONENT_RGB, FOXGLOVE_LAYOUT, FOXGLOVE_LAYOUT_FILE, PATH_STEP_POSES, PATH_STEPS, PLANE_PIXELS, RgbImage,
+    SCENE_FRAME, SCENE_TOPICS, Scene, SceneCandidate, SceneComponent, ScenePath, SceneTopic, TRIVIAL_RGB, path_steps,
+    scene_mcap_merged_to, scene_mcap_to, tau_rgba, write_scene_mcap, write_scene_mcap_merged,
 };
 pub use table::{MessageRef, MessageSources, PoseTable, metric_takes_plane, seconds_of_ns};
 pub use temp_copy::remove_temporary_files;

@@ -2,24 +2,30 @@
 //! messages of a live stream on the topics and in the schemas of the scene's MCAP file
 //! ([`SCENE_TOPICS`]), built by the same code. A [`LiveScene`] holds the log's poses; at each
 //! keyframe, [`LiveScene::keyframe`] turns the engine's [`Update`] and the sampler's
-//! [`Candidate`]s into one message per topic of [`LIVE_TOPICS`]. Sending them is the caller's
-//! (`loops replay --serve` serves them over Foxglove's WebSocket protocol): this crate stays
-//! free of a network stack.
+//! [`Candidate`]s into the messages of [`LIVE_TOPICS`]; [`LiveScene::plane`] gives the (t, t′)
+//! plane at the end. Sending them is the caller's (`loops replay --serve` serves them over
+//! Foxglove's WebSocket protocol): this crate stays free of a network stack.
 
 use loops_core::online::{Candidate, OnlineLoops, Update};
 
-use foxglove::messages::{PosesInFrame, SceneEntityDeletion, SceneUpdate, Timestamp, scene_entity_deletion};
+use foxglove::messages::{PosesInFrame, RawImage, SceneEntityDeletion, SceneUpdate, Timestamp, scene_entity_deletion};
 
 use crate::cdr_write::RosTime;
 use crate::scene::{
-    SCENE_FRAME, SCENE_TOPICS, SceneComponent, SceneTopic, candidates_entity, component_entity, foxglove_schema,
-    poses_in_frame, protobuf, tau_entity,
+    MARKER_ARRAY_SCHEMA, Marker, SCENE_FRAME, SCENE_TOPICS, SceneComponent, SceneTopic, candidate_marker,
+    candidates_entity, component_deletions, component_entity, component_markers, foxglove_schema, loops_plane,
+    marker_array, path_markers, plane_raw_image, poses_in_frame, protobuf, tau_entity, tau_rgba,
 };
 
-/// The topics of the live stream, in channel order: the first four of [`SCENE_TOPICS`] (the
-/// plane image and the ROS `MarkerArray` are left to the MCAP file). Each keyframe sends one
-/// message on each, in this order.
-pub const LIVE_TOPICS: [SceneTopic; 4] = [
+/// The live stream sends the (t, t′) plane each time the poses pushed pass a multiple of this
+/// many (and [`LiveScene::plane`] at the end): the image is made anew from the engine's
+/// snapshot, O(runs + poses + pixels), so not at every keyframe.
+pub const LIVE_PLANE_POSES: usize = 100;
+
+/// The topics of the live stream, in channel order: those of [`SCENE_TOPICS`], under the same
+/// names and schemas. Each keyframe sends one message on each, in this order, but the plane,
+/// sent every [`LIVE_PLANE_POSES`] poses.
+pub const LIVE_TOPICS: [SceneTopic; 6] = [
     SceneTopic { holds: "every pose pushed so far, position and orientation", ..SCENE_TOPICS[0] },
     SceneTopic {
         holds: "the entity `tau/<log>`: the path so far coloured by τ so far (red = the longest)",
@@ -37,7 +43,23 @@ pub const LIVE_TOPICS: [SceneTopic; 4] = [
                 when there are none",
         ..SCENE_TOPICS[3]
     },
+    SceneTopic {
+        holds: "the (t, t′) plane of the poses so far, rgb8 (t to the right, t′ up, each component in its colour), \
+                each time the poses pass a multiple of 100 (LIVE_PLANE_POSES) and at the end",
+        ..SCENE_TOPICS[4]
+    },
+    SceneTopic {
+        holds: "the same for RViz (ROS 2 CDR), a MarkerArray a keyframe: namespaces trajectory and tau (id 0, \
+                the path so far), components (3 markers each, DELETE for one merged into another), candidates \
+                (id = the keyframe's pose, one line a candidate)",
+        ..SCENE_TOPICS[5]
+    },
 ];
+
+/// The channels of [`LIVE_TOPICS`] by role.
+const TRAJECTORY: usize = 0;
+const PLANE: usize = 4;
+const MARKERS: usize = 5;
 
 /// The schema of a channel of the live stream.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -101,29 +123,46 @@ impl LiveScene {
         Ok(Self { name: name.to_owned(), frame_id: SCENE_FRAME.to_owned(), positions, orientations_xyzw })
     }
 
-    /// The channels of the stream, one per topic of [`LIVE_TOPICS`], in order.
+    /// The channels of the stream, one per topic of [`LIVE_TOPICS`], in order: Foxglove's
+    /// schemas in protobuf, the `MarkerArray` in CDR with its `ros2msg` schema.
     pub fn channels() -> Vec<LiveChannel> {
         LIVE_TOPICS
             .iter()
             .map(|topic| {
                 let (schema_name, schema_encoding, schema_data) = match topic.schema {
                     "foxglove.PosesInFrame" => foxglove_schema::<PosesInFrame>(),
-                    _ => foxglove_schema::<SceneUpdate>(),
+                    "foxglove.RawImage" => foxglove_schema::<RawImage>(),
+                    "foxglove.SceneUpdate" => foxglove_schema::<SceneUpdate>(),
+                    ros => (ros.to_owned(), "ros2msg".to_owned(), MARKER_ARRAY_SCHEMA.as_bytes().to_vec()),
                 };
-                LiveChannel {
-                    topic: topic.topic,
-                    message_encoding: "protobuf",
-                    schema_name,
-                    schema_encoding,
-                    schema_data,
-                }
+                let message_encoding = if schema_encoding == "ros2msg" { "cdr" } else { "protobuf" };
+                LiveChannel { topic: topic.topic, message_encoding, schema_name, schema_encoding, schema_data }
             })
             .collect()
     }
 
+    /// The (t, t′) plane of the poses `engine` holds, as the message of the plane's channel
+    /// (`None` before the second pose): each component in its colour, as in the scene's file
+    /// (the candidates are on their own topic). O(runs + poses + pixels).
+    ///
+    /// # Errors
+    /// What [`OnlineLoops::to_loops`] returns ([`loops_core::Error::OutOfMemory`],
+    /// [`loops_core::Error::Interrupted`]).
+    pub fn plane(&self, engine: &OnlineLoops) -> loops_core::Result<Option<LiveMessage>> {
+        if engine.len() < 2 {
+            return Ok(None);
+        }
+        let stamp = RosTime::of_seconds(engine.timestamps_s()[engine.len() - 1]);
+        let image = plane_raw_image(Some(timestamp(stamp)), &loops_plane(&engine.to_loops()?, &[])?);
+        let data = protobuf(&image).expect("a Vec holds any message");
+        Ok(Some(LiveMessage { channel: PLANE, log_time_ns: stamp.map(|s| s.ns()), data }))
+    }
+
     /// The messages of the keyframe that `update` reports (`engine`'s last push), with the
     /// `candidates` the sampler offered for it: one per topic of [`LIVE_TOPICS`], in order (see
-    /// there). O(poses pushed so far + cells of the changed components' stretches).
+    /// there), the plane only when the poses pass a multiple of [`LIVE_PLANE_POSES`]. O(poses
+    /// pushed so far + cells of the changed components' stretches), and [`LiveScene::plane`]'s
+    /// with the plane.
     ///
     /// # Errors
     /// [`loops_core::Error::IndexOutOfRange`] when `engine` holds more poses than the scene, or
@@ -142,7 +181,8 @@ impl LiveScene {
     ///     let update = engine.push(k as f64, &p[..2])?;
     ///     let candidates = sampler.offer(&engine, &update)?;
     ///     let messages = scene.keyframe(&engine, &update, &candidates)?;
-    ///     assert_eq!(messages.len(), loops_io::LIVE_TOPICS.len());
+    ///     assert_eq!(messages.len(), loops_io::LIVE_TOPICS.len() - 1); // the plane: every 100 poses
+    ///     assert_eq!(messages.last().unwrap().channel, 5); // the MarkerArray
     /// }
     /// # Ok::<(), loops_core::Error>(())
     /// ```
@@ -160,7 +200,7 @@ impl LiveScene {
         let positions = &self.positions[..n];
         let t_s = engine.timestamps_s()[update.pose];
         let stamp = RosTime::of_seconds(t_s);
-        let timestamp = Some(stamp.map_or(Timestamp::new(0, 0), |s| Timestamp::new(s.sec.unsigned_abs(), s.nanosec)));
+        let timestamp = Some(timestamp(stamp));
         let frame_id = &self.frame_id;
         let name = self.name.as_str();
 
@@ -174,6 +214,10 @@ impl LiveScene {
             deletions: Vec::new(),
             entities: vec![tau_entity(frame_id, timestamp, name, positions, &loop_duration_s, max_tau)],
         };
+
+        let tau_colors: Vec<[f64; 4]> = loop_duration_s.iter().map(|&t| tau_rgba(t, max_tau)).collect();
+        let mut markers: Vec<Marker<'_>> = path_markers(0, positions, &tau_colors).into();
+        markers.extend(update.merged.iter().flat_map(|m| component_deletions(m.retired as usize)));
 
         let deletions = update
             .merged
@@ -204,6 +248,7 @@ impl LiveScene {
                     area_s2: c.area_s2,
                     pair_count: c.pair_count,
                 };
+                markers.extend(component_markers(&component, [positions, positions]));
                 component_entity(frame_id, timestamp, [positions, positions], [name, name], &component)
             })
             .collect();
@@ -226,6 +271,7 @@ impl LiveScene {
                 ("pairs", serde_json::to_string(&pairs).expect("numbers")),
                 ("components", serde_json::to_string(&ids).expect("numbers")),
             ];
+            markers.push(candidate_marker(update.pose, points.clone()));
             vec![candidates_entity(frame_id, timestamp, format!("candidates/{}", update.pose), points, metadata)]
         };
         let candidates = SceneUpdate { deletions: Vec::new(), entities };
@@ -233,13 +279,28 @@ impl LiveScene {
         let log_time_ns = stamp.map(|s| s.ns());
         // Encoding into a `Vec` cannot fail: it grows to fit.
         let encoded = [protobuf(&trajectory), protobuf(&tau), protobuf(&components), protobuf(&candidates)];
-        let messages = encoded.into_iter().enumerate().map(|(channel, data)| LiveMessage {
-            channel,
-            log_time_ns,
-            data: data.expect("a Vec holds any message"),
-        });
-        Ok(messages.collect())
+        let mut messages: Vec<LiveMessage> = encoded
+            .into_iter()
+            .enumerate()
+            .map(|(channel, data)| LiveMessage {
+                channel: TRAJECTORY + channel,
+                log_time_ns,
+                data: data.expect("a Vec holds any message"),
+            })
+            .collect();
+        // The plane when the poses pass a multiple of LIVE_PLANE_POSES.
+        if update.first_pose / LIVE_PLANE_POSES < n / LIVE_PLANE_POSES {
+            messages.extend(self.plane(engine)?);
+        }
+        let data = marker_array(frame_id, stamp.unwrap_or(RosTime { sec: 0, nanosec: 0 }), &markers);
+        messages.push(LiveMessage { channel: MARKERS, log_time_ns, data });
+        Ok(messages)
     }
+}
+
+/// `stamp` as a Foxglove timestamp (0 for none).
+fn timestamp(stamp: Option<RosTime>) -> Timestamp {
+    stamp.map_or(Timestamp::new(0, 0), |s| Timestamp::new(s.sec.unsigned_abs(), s.nanosec))
 }
 
 #[cfg(test)]
@@ -255,13 +316,41 @@ mod tests {
         let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
         for t in 0..2 {
             let update = engine.push(f64::from(t), &[f64::from(t)]).unwrap();
-            assert_eq!(scene.keyframe(&engine, &update, &[]).unwrap().len(), LIVE_TOPICS.len());
+            assert_eq!(scene.keyframe(&engine, &update, &[]).unwrap().len(), LIVE_TOPICS.len() - 1);
         }
         let update = engine.push(2.0, &[2.0]).unwrap();
         let error = scene.keyframe(&engine, &update, &[]).unwrap_err();
         assert!(matches!(error, loops_core::Error::IndexOutOfRange { index: 2, len: 2 }), "{error}");
         let rows = LiveScene::new("bad", vec![[0.0; 3]; 2], Some(vec![[0.0, 0.0, 0.0, 1.0]]));
         assert!(matches!(rows, Err(loops_core::Error::RowCountMismatch { second_rows: 1, .. })));
+    }
+
+    #[test]
+    fn the_plane_comes_every_hundred_poses_with_the_markers_at_every_keyframe() {
+        let positions: Vec<[f64; 3]> = (0..250).map(|k| [f64::from(k % 10), 0.0, 0.0]).collect();
+        let scene = LiveScene::new("back and forth", positions.clone(), None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        let mut planes = Vec::new();
+        for (k, p) in positions.iter().enumerate() {
+            let update = engine.push(k as f64, &p[..1]).unwrap();
+            let messages = scene.keyframe(&engine, &update, &[]).unwrap();
+            let channels: Vec<usize> = messages.iter().map(|m| m.channel).collect();
+            if channels.contains(&PLANE) {
+                planes.push(k + 1);
+                assert_eq!(channels, [0, 1, 2, 3, PLANE, MARKERS]);
+            } else {
+                assert_eq!(channels, [0, 1, 2, 3, MARKERS]);
+            }
+        }
+        assert_eq!(planes, [100, 200]);
+        let last = scene.plane(&engine).unwrap().unwrap();
+        let image = RawImage::decode(last.data.as_slice()).unwrap();
+        assert_eq!((image.encoding.as_str(), image.width, image.height), ("rgb8", 250, 250));
+        assert_eq!(last.log_time_ns, Some(249_000_000_000));
+        let one = LiveScene::new("one", vec![[0.0; 3]], None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        engine.push(0.0, &[0.0]).unwrap();
+        assert!(one.plane(&engine).unwrap().is_none(), "no plane before the second pose");
     }
 
     #[test]

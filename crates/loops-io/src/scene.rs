@@ -17,6 +17,7 @@
 use std::collections::BTreeMap;
 use std::io::{self, BufWriter, Seek, Write};
 use std::path::Path;
+use std::sync::Arc;
 
 use foxglove::Encode;
 use foxglove::messages::{
@@ -38,6 +39,35 @@ use crate::loop_duration::point_positions;
 /// The most pixels a side of the plane image ([`Scene::plane`]).
 pub const PLANE_PIXELS: usize = 512;
 
+/// The most updates of one session's path and τ in the scene's MCAP file ([`path_steps`]).
+pub const PATH_STEPS: usize = 100;
+
+/// About the most poses that one session's path updates hold together, past the path's own
+/// poses ([`path_steps`]): each update repeats the path so far, so a long path gets fewer
+/// updates. About 200 bytes a pose in the three topics (PosesInFrame, τ strip, MarkerArray)
+/// before compression: some 40 MB a session at most.
+pub const PATH_STEP_POSES: usize = 200_000;
+
+/// The last pose of each update of a path of `n` poses, increasing, the last `n - 1` (none for
+/// an empty path): one update every `⌈n / m⌉` poses, for `m` the most updates, at most
+/// [`PATH_STEPS`], whose repeated prefixes hold about [`PATH_STEP_POSES`] poses. In all, the
+/// updates hold at most `PATH_STEP_POSES + n + PATH_STEPS²` poses. O(updates).
+///
+/// # Examples
+/// ```
+/// assert_eq!(loops_io::path_steps(10), [0, 1, 2, 3, 4, 5, 6, 7, 8, 9]);
+/// assert_eq!(loops_io::path_steps(1000).len(), loops_io::PATH_STEPS);
+/// assert_eq!(loops_io::path_steps(4_000_000), [3_999_999]); // too long to repeat: whole, once
+/// ```
+pub fn path_steps(n: usize) -> Vec<usize> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let most = (2 * PATH_STEP_POSES / n).clamp(1, PATH_STEPS);
+    let stride = n.div_ceil(most);
+    (1..=n.div_ceil(stride)).map(|m| (m * stride).min(n) - 1).collect()
+}
+
 /// The frame every entity is in, unless [`Scene::frame_id`] says otherwise.
 pub const SCENE_FRAME: &str = "map";
 
@@ -58,13 +88,14 @@ pub const SCENE_TOPICS: [SceneTopic; 6] = [
     SceneTopic {
         topic: "/loops/trajectory",
         schema: "foxglove.PosesInFrame",
-        holds: "one message per session, at its last pose's time: every pose, position and orientation",
+        holds: "the path as the log plays: per session, at most 100 messages (path_steps), each at a pose's time \
+                with every pose up to it, position and orientation; the last, at its last pose, the whole path",
     },
     SceneTopic {
         topic: "/loops/tau",
         schema: "foxglove.SceneUpdate",
-        holds: "a message per session, at its last pose's time, with an entity `tau/<session>`: its path as a \
-                line strip coloured by τ (red = the longest τ)",
+        holds: "with each message of /loops/trajectory, an entity `tau/<session>`: the path so far as a line \
+                strip coloured by τ (red = the longest τ)",
     },
     SceneTopic {
         topic: "/loops/components",
@@ -308,7 +339,7 @@ impl Scene {
             }
         }
         let pairs: Vec<[usize; 2]> = candidates.iter().map(|c| c.poses).collect();
-        let plane = plane_image(loops, &PlaneGrid::new(loops, None, PLANE_PIXELS)?, &pairs)?;
+        let plane = loops_plane(loops, &pairs)?;
         let frame_id = SCENE_FRAME.to_owned();
         Ok(Self { frame_id, paths: vec![path], components, candidates, plane })
     }
@@ -382,7 +413,7 @@ impl Scene {
             .map(|s| SceneCandidate { sessions: s.sessions, poses: s.poses, component: s.component })
             .collect();
         let joint_pairs: Vec<[usize; 2]> = samples.rows().iter().filter_map(|s| s.pair).collect();
-        let plane = plane_image(joint, &PlaneGrid::new(joint, None, PLANE_PIXELS)?, &joint_pairs)?;
+        let plane = loops_plane(joint, &joint_pairs)?;
         Ok(Self { frame_id: SCENE_FRAME.to_owned(), paths, components, candidates, plane })
     }
 
@@ -394,11 +425,6 @@ impl Scene {
     /// The position of pose `pose` of session `session`.
     fn position(&self, session: usize, pose: usize) -> [f64; 3] {
         self.paths[session].positions[pose]
-    }
-
-    /// The line strip of poses `first..=last` of `session`.
-    fn stretch(&self, session: usize, [first, last]: [usize; 2]) -> Vec<[f64; 3]> {
-        self.paths[session].positions[first..=last].to_vec()
     }
 
     /// Why the scene cannot be drawn: an index outside its paths (a scene built by hand).
@@ -481,7 +507,9 @@ fn plane_image(loops: &Loops, grid: &PlaneGrid, pairs: &[[usize; 2]]) -> loops_c
 /// Writes `scene` as an MCAP file on the topics of [`SCENE_TOPICS`]: Foxglove's schemas
 /// (protobuf, each with its descriptor set) and a ROS 2 `MarkerArray` (CDR), on a timeline
 /// in nanoseconds from the poses' times (each session's own clock; 0 for a time outside 1970
-/// to 2038): each session's path and τ at its last pose's time, each component at the time its
+/// to 2038): each session's path and τ as the log plays, in steps ([`path_steps`]: at each
+/// step's last pose, the path up to that pose; at most [`PATH_STEPS`] steps a session, the last
+/// at its last pose, the whole path), each component at the time its
 /// second stretch begins (when the robot comes back), each candidate (entity `candidate/<k>`)
 /// at its later pose's time, the plane at the first pose's time; the MarkerArray holds the same
 /// markers at the same times. Messages are in time order, with a metadata record `loops`
@@ -519,6 +547,42 @@ pub fn write_scene_mcap(path: impl AsRef<Path>, scene: &Scene, overwrite: bool) 
     write_atomically(path, overwrite, |file| scene_mcap_to(file, scene))
 }
 
+/// Writes `scene` as [`write_scene_mcap`] does, with the user's MCAP log at `log` merged in
+/// ([`scene_mcap_merged_to`]: its schemas, channels and messages as they are), to the file
+/// `path`, atomically; an existing file is replaced only with `overwrite`, and never when it is
+/// the log itself (or a link to it). The log is read whole into memory.
+///
+/// # Errors
+/// [`WriteError::Exists`] as [`write_scene_mcap`]; [`WriteError::Write`] when `path` is the log
+/// ([`io::ErrorKind::InvalidInput`]), when the log cannot be read or is not MCAP
+/// ([`io::ErrorKind::InvalidData`], naming it), or when `path` cannot be written. Nothing is
+/// written then.
+pub fn write_scene_mcap_merged(
+    path: impl AsRef<Path>,
+    scene: &Scene,
+    log: &Path,
+    overwrite: bool,
+) -> Result<(), WriteError> {
+    let path = path.as_ref();
+    let failed = |error: io::Error| WriteError::Write { path: path.to_path_buf(), error };
+    crate::out_dir::refuse_output_on_input("the results MCAP", path, &[log.to_path_buf()])
+        .map_err(|error| failed(io::Error::new(io::ErrorKind::InvalidInput, error.to_string())))?;
+    let bytes = std::fs::read(log)
+        .map_err(|error| failed(io::Error::new(error.kind(), format!("reading {}: {error}", log.display()))))?;
+    // Read before the file is made, so that a bad log leaves nothing behind.
+    let merged = MergedLog::read(&bytes).map_err(|error| {
+        failed(io::Error::new(io::ErrorKind::InvalidData, format!("merging {}: {error}", log.display())))
+    })?;
+    scene.check().map_err(|message| failed(io::Error::new(io::ErrorKind::InvalidInput, message)))?;
+    let mut merged = Some(merged);
+    write_atomically(path, overwrite, |file| {
+        write_scene(file, scene, merged.take()).map_err(|error| match error {
+            mcap::McapError::Io(error) => error,
+            error => io::Error::other(error),
+        })
+    })
+}
+
 /// Writes `scene` as [`write_scene_mcap`] does, into `out` (a file of an output folder that
 /// another rule places: [`OutDir::write_file`](crate::out_dir::OutDir::write_file)).
 ///
@@ -526,21 +590,87 @@ pub fn write_scene_mcap(path: impl AsRef<Path>, scene: &Scene, overwrite: bool) 
 /// What `out` returns; an [`io::ErrorKind::InvalidInput`] error for a scene built by hand whose
 /// indices fall outside its paths (nothing is written then).
 pub fn scene_mcap_to<W: Write + Seek>(out: W, scene: &Scene) -> io::Result<()> {
+    scene_mcap_merged_to(out, scene, None)
+}
+
+/// Writes `scene` as [`scene_mcap_to`] does, with the user's MCAP log `log` (its bytes, as read
+/// from its file `log.0`) merged in, so that the loops play back over their data: its schemas
+/// and channels under their own ids and contents, byte for byte (the scene's take the ids left
+/// free), and each of its messages with its data, log time, publish time and sequence, in time
+/// order among the scene's. Its attachments and metadata records are left out.
+/// O(the log's bytes + the scene's messages).
+///
+/// # Errors
+/// What `out` returns; an [`io::ErrorKind::InvalidData`] error naming `log.0` when the log is
+/// not a readable MCAP file; [`io::ErrorKind::InvalidInput`] as [`scene_mcap_to`].
+pub fn scene_mcap_merged_to<W: Write + Seek>(out: W, scene: &Scene, log: Option<(&Path, &[u8])>) -> io::Result<()> {
     scene.check().map_err(|message| io::Error::new(io::ErrorKind::InvalidInput, message))?;
-    write_scene(out, scene).map_err(|error| match error {
+    let merged = match log {
+        Some((path, bytes)) => Some(MergedLog::read(bytes).map_err(|error| {
+            io::Error::new(io::ErrorKind::InvalidData, format!("merging {}: {error}", path.display()))
+        })?),
+        None => None,
+    };
+    write_scene(out, scene, merged).map_err(|error| match error {
         mcap::McapError::Io(error) => error,
         error => io::Error::other(error),
     })
 }
 
-/// Writes the scene's MCAP file into `out`.
-fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
+/// A user's MCAP log to merge into the scene's file: its schemas and channels by id, and its
+/// messages (channel id, sequence, log time, publish time, data), in the file's order.
+struct MergedLog<'a> {
+    schemas: BTreeMap<u16, Arc<mcap::Schema<'a>>>,
+    channels: BTreeMap<u16, Arc<mcap::Channel<'a>>>,
+    messages: Vec<mcap::Message<'a>>,
+}
+
+impl<'a> MergedLog<'a> {
+    /// Reads `bytes`, an MCAP file: every channel and schema its summary lists (used or not),
+    /// and those of its messages.
+    fn read(bytes: &'a [u8]) -> mcap::McapResult<Self> {
+        let mut log = Self { schemas: BTreeMap::new(), channels: BTreeMap::new(), messages: Vec::new() };
+        if let Some(summary) = mcap::Summary::read(bytes)? {
+            log.schemas.extend(summary.schemas);
+            log.channels.extend(summary.channels);
+        }
+        for message in mcap::MessageStream::new(bytes)? {
+            let message = message?;
+            let channel = &message.channel;
+            if let Some(schema) = &channel.schema {
+                log.schemas.entry(schema.id).or_insert_with(|| Arc::clone(schema));
+            }
+            log.channels.entry(channel.id).or_insert_with(|| Arc::clone(channel));
+            log.messages.push(message);
+        }
+        Ok(log)
+    }
+}
+
+/// Writes the scene's MCAP file into `out`, with `log` merged in.
+fn write_scene<W: Write + Seek>(out: W, scene: &Scene, log: Option<MergedLog<'_>>) -> mcap::McapResult<()> {
     let mut writer = mcap::WriteOptions::new()
         .profile("")
         .library(concat!("loops-io ", env!("CARGO_PKG_VERSION")))
         .compression(Some(mcap::Compression::Zstd))
         .compression_threads(0)
         .create(BufWriter::new(out))?;
+    // The log's schemas and channels first, under their own ids.
+    if let Some(log) = &log {
+        for schema in log.schemas.values() {
+            writer.add_schema_with_id(schema.id, &schema.name, &schema.encoding, &schema.data)?;
+        }
+        for channel in log.channels.values() {
+            let schema_id = channel.schema.as_ref().map_or(0, |s| s.id);
+            writer.add_channel_with_id(
+                channel.id,
+                schema_id,
+                &channel.topic,
+                &channel.message_encoding,
+                &channel.metadata,
+            )?;
+        }
+    }
     // Each message at the time its poses were reached, on its session's clock: 0 for a time
     // outside 1970 to 2038.
     let time = |session: usize, pose: usize| {
@@ -550,7 +680,6 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
             .and_then(|&t| RosTime::of_seconds(t))
             .unwrap_or(RosTime { sec: 0, nanosec: 0 })
     };
-    let last = |session: usize| time(session, scene.paths[session].positions.len().saturating_sub(1));
     let timestamp = |stamp: RosTime| Some(Timestamp::new(stamp.sec.unsigned_abs(), stamp.nanosec));
     let mut channels = Vec::new();
     for topic in &SCENE_TOPICS[..5] {
@@ -572,15 +701,17 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
     let max_tau = scene.max_loop_duration_s();
     let markers = SceneMarkers::new(scene);
     for (k, path) in scene.paths.iter().enumerate() {
-        // The whole path, and its τ, at its last pose's time.
-        let stamp = last(k);
-        let orientations = path.orientations_xyzw.as_deref();
-        let poses = poses_in_frame(frame_id, timestamp(stamp), &path.positions, orientations);
-        messages.push((stamp, channels[0], encoded(&poses)?));
-        let entity =
-            tau_entity(frame_id, timestamp(stamp), &path.name, &path.positions, &path.loop_duration_s, max_tau);
-        messages.push((stamp, channels[1], encoded(&update(vec![entity]))?));
-        messages.push((stamp, markers_channel, markers.path(k, stamp)));
+        // The path, and its τ, as the log plays: at each step's last pose, the poses so far.
+        for last in path_steps(path.positions.len()) {
+            let stamp = time(k, last);
+            let (positions, tau) = (&path.positions[..=last], &path.loop_duration_s[..=last]);
+            let orientations = path.orientations_xyzw.as_deref().map(|q| &q[..=last]);
+            let poses = poses_in_frame(frame_id, timestamp(stamp), positions, orientations);
+            messages.push((stamp, channels[0], encoded(&poses)?));
+            let entity = tau_entity(frame_id, timestamp(stamp), &path.name, positions, tau, max_tau);
+            messages.push((stamp, channels[1], encoded(&update(vec![entity]))?));
+            messages.push((stamp, markers_channel, markers.path(k, last, stamp)));
+        }
     }
     for (k, c) in scene.components.iter().enumerate() {
         // When the robot comes back: the first pose of its second stretch.
@@ -604,23 +735,30 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
     // The plane sums up the whole run: from the first pose on.
     let stamp = scene.paths.iter().enumerate().map(|(k, _)| time(k, 0)).min_by_key(|t| t.ns());
     let stamp = stamp.unwrap_or(RosTime { sec: 0, nanosec: 0 });
-    let plane = &scene.plane;
-    let image = RawImage {
-        timestamp: timestamp(stamp),
-        frame_id: "plane".to_owned(),
-        width: plane.width as u32,
-        height: plane.height as u32,
-        encoding: "rgb8".to_owned(),
-        step: (plane.width * 3) as u32,
-        data: plane.rgb.clone().into(),
-    };
-    messages.push((stamp, channels[4], encoded(&image)?));
+    messages.push((stamp, channels[4], encoded(&plane_raw_image(timestamp(stamp), &scene.plane))?));
 
-    messages.sort_by_key(|(stamp, _, _)| stamp.ns()); // stable: ties keep the order above
-    for (sequence, (stamp, channel_id, data)) in messages.into_iter().enumerate() {
-        let header =
-            MessageHeader { channel_id, sequence: sequence as u32, log_time: stamp.ns(), publish_time: stamp.ns() };
-        writer.write_to_known_channel(&header, &data)?;
+    let mut headers: Vec<(MessageHeader, &[u8])> = messages
+        .iter()
+        .enumerate()
+        .map(|(sequence, (stamp, channel_id, data))| {
+            let (channel_id, sequence) = (*channel_id, sequence as u32);
+            (MessageHeader { channel_id, sequence, log_time: stamp.ns(), publish_time: stamp.ns() }, data.as_slice())
+        })
+        .collect();
+    if let Some(log) = &log {
+        headers.extend(log.messages.iter().map(|m| {
+            let header = MessageHeader {
+                channel_id: m.channel.id,
+                sequence: m.sequence,
+                log_time: m.log_time,
+                publish_time: m.publish_time,
+            };
+            (header, &*m.data)
+        }));
+    }
+    headers.sort_by_key(|(header, _)| header.log_time); // stable: ties keep the order above
+    for (header, data) in headers {
+        writer.write_to_known_channel(&header, data)?;
     }
 
     let names: Vec<&str> = scene.paths.iter().map(|p| p.name.as_str()).collect();
@@ -632,6 +770,28 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene) -> mcap::McapResult<()> {
     writer.finish()?;
     writer.into_inner().flush()?;
     Ok(())
+}
+
+/// The plane image `plane` as a Foxglove `RawImage` (rgb8, frame `plane`).
+pub(crate) fn plane_raw_image(timestamp: Option<Timestamp>, plane: &RgbImage) -> RawImage {
+    RawImage {
+        timestamp,
+        frame_id: "plane".to_owned(),
+        width: plane.width as u32,
+        height: plane.height as u32,
+        encoding: "rgb8".to_owned(),
+        step: (plane.width * 3) as u32,
+        data: plane.rgb.clone().into(),
+    }
+}
+
+/// The (t, t′) plane image of `loops` ([`Scene::plane`]): at most [`PLANE_PIXELS`] a side,
+/// each component in its colour, the pixels of `pairs` white.
+///
+/// # Errors
+/// As [`Loops::label_image`].
+pub(crate) fn loops_plane(loops: &Loops, pairs: &[[usize; 2]]) -> loops_core::Result<RgbImage> {
+    plane_image(loops, &PlaneGrid::new(loops, None, PLANE_PIXELS)?, pairs)
 }
 
 /// `message` in its encoding (protobuf).
@@ -786,7 +946,7 @@ fn line(kind: line_primitive::Type, points: Vec<[f64; 3]>, rgba: Option<[f64; 4]
 
 /// `visualization_msgs/msg/MarkerArray` (ROS 2 Humble and later, with textures and mesh
 /// files), with the definitions it uses.
-const MARKER_ARRAY_SCHEMA: &str = "visualization_msgs/Marker[] markers\n\
+pub(crate) const MARKER_ARRAY_SCHEMA: &str = "visualization_msgs/Marker[] markers\n\
 ================================================================================\n\
 MSG: visualization_msgs/Marker\n\
 int32 ARROW=0\nint32 CUBE=1\nint32 SPHERE=2\nint32 CYLINDER=3\nint32 LINE_STRIP=4\nint32 LINE_LIST=5\n\
@@ -824,21 +984,75 @@ MSG: visualization_msgs/MeshFile\nstring filename\nuint8[] data\n";
 const LINE_STRIP: i32 = 4;
 const LINE_LIST: i32 = 5;
 
-/// One marker of the array: a line of `kind` through `points`, in `rgba` or per point `colors`.
-struct Marker<'a> {
+/// `visualization_msgs/msg/Marker`'s actions ADD and DELETE.
+const ADD: i32 = 0;
+const DELETE: i32 = 2;
+
+/// One marker of the array: a line of `kind` through `points`, in `rgba` or per point `colors`
+/// (`action` [`DELETE`]: the marker `ns`/`id` removed, its other fields unused).
+pub(crate) struct Marker<'a> {
     ns: &'a str,
     id: i32,
     kind: i32,
+    action: i32,
     width: f64,
     rgba: [f64; 4],
-    points: &'a [[f64; 3]],
+    points: Vec<[f64; 3]>,
     colors: &'a [[f64; 4]],
 }
 
+/// The markers of a path (id `id`: its session) through `points`: namespace `trajectory`,
+/// white, and `tau`, a colour per pose (`tau_colors`, [`tau_rgba`]).
+pub(crate) fn path_markers<'a>(id: usize, points: &[[f64; 3]], tau_colors: &'a [[f64; 4]]) -> [Marker<'a>; 2] {
+    let (id, width, rgba) = (id as i32, PATH_WIDTH, [1.0; 4]);
+    let line =
+        |ns, colors| Marker { ns, id, kind: LINE_STRIP, action: ADD, width, rgba, points: points.to_vec(), colors };
+    [line("trajectory", &[]), line("tau", tau_colors)]
+}
+
+/// The markers of component `c` (namespace `components`, ids 3 · id, 3 · id + 1: its two
+/// stretches; 3 · id + 2: its closest pair), in its colour; `positions` are the paths of its
+/// two sessions (`c.sessions`). Ids past `i32::MAX` wrap (no scene has that many components).
+pub(crate) fn component_markers(c: &SceneComponent, positions: [&[[f64; 3]]; 2]) -> [Marker<'static>; 3] {
+    let [[i0, i1], [j0, j1]] = c.poses;
+    let lines = [
+        positions[0][i0..=i1].to_vec(),
+        positions[1][j0..=j1].to_vec(),
+        vec![positions[0][c.closest_pair[0]], positions[1][c.closest_pair[1]]],
+    ];
+    let mut part = 0;
+    lines.map(|points| {
+        let kind = if part == 2 { LINE_LIST } else { LINE_STRIP };
+        let id = (3 * c.id + part) as i32;
+        part += 1;
+        Marker { ns: "components", id, kind, action: ADD, width: COMPONENT_WIDTH, rgba: c.rgba(), points, colors: &[] }
+    })
+}
+
+/// The deletions of component `id`'s markers ([`component_markers`]): merged into another.
+pub(crate) fn component_deletions(id: usize) -> [Marker<'static>; 3] {
+    [0, 1, 2].map(|part| Marker {
+        ns: "components",
+        id: (3 * id + part) as i32,
+        kind: LINE_STRIP,
+        action: DELETE,
+        width: 0.0,
+        rgba: [0.0; 4],
+        points: Vec::new(),
+        colors: &[],
+    })
+}
+
+/// The marker `id` of namespace `candidates`: a line per pair of `points` (two a pair), in the
+/// candidates' colour.
+pub(crate) fn candidate_marker(id: usize, points: Vec<[f64; 3]>) -> Marker<'static> {
+    let (width, rgba) = (CANDIDATE_WIDTH, CANDIDATE_RGBA);
+    Marker { ns: "candidates", id: id as i32, kind: LINE_LIST, action: ADD, width, rgba, points, colors: &[] }
+}
+
 /// The scene's markers for RViz, one `MarkerArray` (CDR) a message: namespaces `trajectory`
-/// and `tau` (id = session, `tau` with a colour per pose), `components` (ids 3k, 3k + 1: the
-/// stretches of component k; 3k + 2: its closest pair) and `candidates` (id k: pair k). Ids
-/// past `i32::MAX` wrap (no scene has that many components).
+/// and `tau` (id = session, [`path_markers`]), `components` ([`component_markers`]) and
+/// `candidates` (id k: pair k, [`candidate_marker`]).
 struct SceneMarkers<'a> {
     scene: &'a Scene,
     tau_colors: Vec<Vec<[f64; 4]>>,
@@ -852,48 +1066,27 @@ impl<'a> SceneMarkers<'a> {
         Self { scene, tau_colors }
     }
 
-    /// Session `k`'s path, white and coloured by τ.
-    fn path(&self, k: usize, stamp: RosTime) -> Vec<u8> {
-        let (points, colors) = (self.scene.paths[k].positions.as_slice(), self.tau_colors[k].as_slice());
-        let (id, width, rgba) = (k as i32, PATH_WIDTH, [1.0; 4]);
-        let markers = [
-            Marker { ns: "trajectory", id, kind: LINE_STRIP, width, rgba, points, colors: &[] },
-            Marker { ns: "tau", id, kind: LINE_STRIP, width, rgba, points, colors },
-        ];
+    /// Session `k`'s path up to pose `last`, white and coloured by τ.
+    fn path(&self, k: usize, last: usize, stamp: RosTime) -> Vec<u8> {
+        let markers = path_markers(k, &self.scene.paths[k].positions[..=last], &self.tau_colors[k][..=last]);
         marker_array(&self.scene.frame_id, stamp, &markers)
     }
 
     /// Component `k`'s two stretches and its closest pair.
     fn component(&self, k: usize, stamp: RosTime) -> Vec<u8> {
         let (scene, c) = (self.scene, &self.scene.components[k]);
-        let [a, b] = c.sessions;
-        let lines = [
-            scene.stretch(a, c.poses[0]),
-            scene.stretch(b, c.poses[1]),
-            vec![scene.position(a, c.closest_pair[0]), scene.position(b, c.closest_pair[1])],
-        ];
-        let markers: Vec<Marker<'_>> = lines
-            .iter()
-            .enumerate()
-            .map(|(part, points)| {
-                let kind = if part == 2 { LINE_LIST } else { LINE_STRIP };
-                let (ns, id, width, rgba) = ("components", (3 * c.id + part) as i32, COMPONENT_WIDTH, c.rgba());
-                Marker { ns, id, kind, width, rgba, points, colors: &[] }
-            })
-            .collect();
-        marker_array(&scene.frame_id, stamp, &markers)
+        let positions = c.sessions.map(|a| scene.paths[a].positions.as_slice());
+        marker_array(&scene.frame_id, stamp, &component_markers(c, positions))
     }
 
     /// Candidate `k`: the line between its two poses.
     fn candidate(&self, k: usize, points: Vec<[f64; 3]>, stamp: RosTime) -> Vec<u8> {
-        let (ns, id, width, rgba) = ("candidates", k as i32, CANDIDATE_WIDTH, CANDIDATE_RGBA);
-        let marker = Marker { ns, id, kind: LINE_LIST, width, rgba, points: &points, colors: &[] };
-        marker_array(&self.scene.frame_id, stamp, &[marker])
+        marker_array(&self.scene.frame_id, stamp, &[candidate_marker(k, points)])
     }
 }
 
 /// `markers` as a `MarkerArray` in CDR, each stamped `stamp` in `frame_id`.
-fn marker_array(frame_id: &str, stamp: RosTime, markers: &[Marker<'_>]) -> Vec<u8> {
+pub(crate) fn marker_array(frame_id: &str, stamp: RosTime, markers: &[Marker<'_>]) -> Vec<u8> {
     let mut data = Vec::new();
     let mut cdr = CdrWriter::new(&mut data);
     cdr.u32(markers.len() as u32);
@@ -904,7 +1097,7 @@ fn marker_array(frame_id: &str, stamp: RosTime, markers: &[Marker<'_>]) -> Vec<u
         cdr.string(marker.ns);
         cdr.i32(marker.id);
         cdr.i32(marker.kind);
-        cdr.i32(0); // ADD
+        cdr.i32(marker.action);
         cdr.f64s(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]); // pose
         cdr.f64s(&[marker.width, 0.0, 0.0]); // scale: x is the line width
         cdr.f32s(&marker.rgba.map(|v| v as f32));
@@ -912,7 +1105,7 @@ fn marker_array(frame_id: &str, stamp: RosTime, markers: &[Marker<'_>]) -> Vec<u
         cdr.u32(0);
         cdr.bool(false); // frame_locked
         cdr.u32(marker.points.len() as u32);
-        for point in marker.points {
+        for point in &marker.points {
             cdr.f64s(point);
         }
         cdr.u32(marker.colors.len() as u32);
@@ -938,6 +1131,67 @@ fn marker_array(frame_id: &str, stamp: RosTime, markers: &[Marker<'_>]) -> Vec<u
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn path_steps_grow_to_the_whole_path_within_their_bound() {
+        for n in [1, 2, 99, 100, 101, 1000, 1999, 2000, 2001, 4541, 72_000, 399_999, 400_001, 3_000_000] {
+            let steps = path_steps(n);
+            assert!(!steps.is_empty() && steps.len() <= PATH_STEPS, "{n}: {} steps", steps.len());
+            assert_eq!(*steps.last().unwrap(), n - 1, "{n}: the last step holds the whole path");
+            // One step every `stride` poses, the last at the path's end.
+            let stride = steps[0] + 1;
+            assert!(steps[..steps.len() - 1].iter().enumerate().all(|(m, &last)| last + 1 == (m + 1) * stride));
+            assert!(n - 1 - steps[steps.len().saturating_sub(2)] <= stride || steps.len() == 1, "{n}");
+            let held: usize = steps.iter().map(|&last| last + 1).sum();
+            assert!(held <= PATH_STEP_POSES + n + PATH_STEPS * PATH_STEPS, "{n}: {held} poses");
+        }
+        assert!(path_steps(0).is_empty());
+        assert_eq!(path_steps(4541).len(), PATH_STEPS.min(2 * PATH_STEP_POSES / 4541)); // KITTI 00
+    }
+
+    /// A small scene: a square driven twice, its loops and four samples.
+    fn square() -> Scene {
+        use loops_core::{Euclidean, SampleSize, Sampler, SamplerKind, find_loops, sample_loops};
+        let corners = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
+        let points: Vec<[f64; 2]> = (0..8).map(|i| corners[i % 4]).collect();
+        let traj = Trajectory::from_points((0..8).map(|k| 1.7e9 + f64::from(k)).collect(), &points).unwrap();
+        let loops = find_loops(&traj, &Euclidean, 1.0).unwrap();
+        let sampler = Sampler::new(SamplerKind::One, SampleSize::Budget(4), 7);
+        let samples = sample_loops(&traj, &Euclidean, &loops, &sampler).unwrap();
+        Scene::of_trajectory("square", &traj, None, None, &loops, &samples).unwrap()
+    }
+
+    #[test]
+    fn a_merged_log_keeps_its_records_and_is_never_written_onto() {
+        let dir = std::env::temp_dir().join(format!("loops-io-merge-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (log, merged) = (dir.join("log.mcap"), dir.join("merged.mcap"));
+        let scene = square();
+        write_scene_mcap(&log, &scene, false).unwrap();
+        let before = std::fs::read(&log).unwrap();
+        // Onto the log itself: refused, whatever `overwrite` says; the log is untouched.
+        for overwrite in [false, true] {
+            let error = write_scene_mcap_merged(&log, &scene, &log, overwrite).unwrap_err();
+            assert!(error.to_string().contains("log.mcap"), "{error}");
+        }
+        assert_eq!(std::fs::read(&log).unwrap(), before);
+        // Merged: the log's channels under their ids, with every message; the scene's too.
+        write_scene_mcap_merged(&merged, &scene, &log, false).unwrap();
+        let bytes = std::fs::read(&merged).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let original = mcap::Summary::read(&before).unwrap().unwrap();
+        for (id, channel) in &original.channels {
+            assert_eq!(summary.channels[id].topic, channel.topic);
+        }
+        let count = |b: &[u8]| mcap::MessageStream::new(b).unwrap().count();
+        assert_eq!(count(&bytes), 2 * count(&before), "the log's messages and the scene's, equal here");
+        // A log that is not MCAP: a one-line error naming it, and no file.
+        let bad = dir.join("bad.mcap");
+        std::fs::write(&bad, b"not an mcap file").unwrap();
+        let error = write_scene_mcap_merged(dir.join("none.mcap"), &scene, &bad, false).unwrap_err();
+        assert!(error.to_string().contains("bad.mcap") && !dir.join("none.mcap").exists(), "{error}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn the_layout_names_every_foxglove_topic() {

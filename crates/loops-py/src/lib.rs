@@ -32,6 +32,7 @@ mod py_clusters;
 mod py_detections;
 mod py_fleet;
 mod py_graph;
+mod py_live;
 mod py_loops;
 mod py_metric;
 mod py_online;
@@ -216,6 +217,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_online::OnlineLoops>()?;
     module.add_class::<py_online::Update>()?;
     module.add_class::<py_online_sampler::OnlineSampler>()?;
+    module.add_class::<py_live::LiveServer>()?;
     module.add_class::<py_online_sampler::Candidate>()?;
     module.add_class::<py_out_dir::OutDir>()?;
     module.add_function(wrap_pyfunction!(py_out_dir::refuse_output_on_input, module)?)?;

@@ -11,7 +11,8 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{IntoPyDict, PyBool, PyBytes, PyDict, PyList, PyString, PyTuple, PyType};
 
 use crate::convert::{
-    bool_column, extent_columns, float64_column, int64_column, pose_index, str_column, table, to_numpy,
+    bool_column, closest_position_columns, extent_columns, float64_column, int64_column, pose_index, str_column, table,
+    to_numpy,
 };
 use crate::detached;
 use crate::error::{Failure, invalid_parameter};
@@ -671,7 +672,10 @@ impl FleetLoops {
     /// ``i_max`` (poses of session a), ``j_min``, ``j_max`` (poses of session b), int64;
     /// ``t_min_s``, ``t_max_s``, ``t_prime_min_s``, ``t_prime_max_s`` (float64, seconds, each
     /// on its session's clock); ``closest_i``, ``closest_j`` (int64, poses of sessions a and
-    /// b) and ``closest_distance`` (float64, the metric's unit).
+    /// b) and ``closest_distance`` (float64, the metric's unit); ``closest_i_x``,
+    /// ``closest_i_y``, ``closest_i_z``, ``closest_j_x``, ``closest_j_y``, ``closest_j_z``
+    /// (float64: where pose ``closest_i`` of session a and pose ``closest_j`` of session b are,
+    /// their points' first three coordinates, 0 past a point's dimension).
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let fleet = &self.fleet_ref().inner;
@@ -684,7 +688,10 @@ impl FleetLoops {
                 [[time(a, c.poses[0][0]), time(a, c.poses[0][1])], [time(b, c.poses[1][0]), time(b, c.poses[1][1])]]
             })
             .collect();
-        components_table(py, &cs, fleet.names(), &times)
+        let positions: Vec<Vec<[f64; 3]>> =
+            (0..fleet.len()).map(|a| loops_io::point_positions(fleet.session(a))).collect();
+        let closest: Vec<_> = cs.iter().map(|c| loops_io::fleet_closest_positions(c, Some(&positions))).collect();
+        components_table(py, &cs, fleet.names(), &times, &closest)
     }
 
     /// The ids of the components between two different sessions, int64, increasing.
@@ -779,12 +786,14 @@ pub(crate) fn loop_duration_table<'py>(
 }
 
 /// The table of :attr:`FleetLoops.components` (see there) of fleet components with the times
-/// of their extents on their sessions' clocks (`[[t_min, t_max], [t′_min, t′_max]]`).
+/// of their extents on their sessions' clocks (`[[t_min, t_max], [t′_min, t′_max]]`) and the
+/// positions of their closest pairs (`closest`, one per component; NaN for all when empty).
 pub(crate) fn components_table<'py>(
     py: Python<'py>,
     cs: &[loops_core::fleet::FleetComponent],
     names: &[String],
     times: &[[[f64; 2]; 2]],
+    closest: &[loops_io::ClosestPositions],
 ) -> PyResult<Bound<'py, PyAny>> {
     // The columns of a fleet's components.csv, in its order, less the joint component's
     // pose_pair_count and run_count (a store's or a tile merge's components do not keep them).
@@ -808,7 +817,9 @@ pub(crate) fn components_table<'py>(
         (pair_count, int64_column(py, cs, |c| c.pair_count as usize)),
         (holes, int64_column(py, cs, |c| c.holes as usize)),
     ];
-    table(py, columns.into_iter().chain(extent_columns(py, &extents)))
+    let unknown = vec![loops_io::ClosestPositions::default(); if closest.is_empty() { cs.len() } else { 0 }];
+    let closest = if closest.is_empty() { &unknown } else { closest };
+    table(py, columns.into_iter().chain(extent_columns(py, &extents)).chain(closest_position_columns(py, closest)))
 }
 
 /// The table of :meth:`FleetLoops.session_pairs` (see there).

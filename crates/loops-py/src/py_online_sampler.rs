@@ -94,7 +94,7 @@ struct SamplerState {
 #[pyclass(frozen, eq, module = "inexact_loops._core")]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Candidate {
-    inner: loops_core::online::Candidate,
+    pub(crate) inner: loops_core::online::Candidate,
 }
 
 impl OnlineSampler {

@@ -421,8 +421,8 @@ impl FleetStore {
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let names = self.names();
         match &self.state {
-            None => components_table(py, &[], &names, &[]),
-            Some(s) => components_table(py, s.loops.components(), &names, &s.loops.component_times_s()),
+            None => components_table(py, &[], &names, &[], &[]),
+            Some(s) => components_table(py, s.loops.components(), &names, &s.loops.component_times_s(), &[]),
         }
     }
 

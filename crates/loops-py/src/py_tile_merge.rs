@@ -290,7 +290,7 @@ impl TiledFleetLoops {
     /// The loop components, as :attr:`FleetLoops.components` (the same columns).
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        components_table(py, &self.components, &self.names, &self.times)
+        components_table(py, &self.components, &self.names, &self.times, &[])
     }
 
     /// The ids of the components between two different sessions, int64, increasing.

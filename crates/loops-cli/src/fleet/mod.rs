@@ -254,8 +254,9 @@ pub(crate) fn fleet(args: FleetArgs) -> Result<u8> {
         let clock = Instant::now();
         let components = loops.components();
         let pairs = loops.session_pairs();
-        let g2o = write_fleet_files(&out, &fleet, &loops, &samples, &quality, &tables, &localized)?;
-        write_fleet_scene(&out, results.mcap, &fleet, &loops, &samples, &tables)?;
+        let positions = session_positions(&fleet, &tables);
+        let g2o = write_fleet_files(&out, &fleet, &loops, &samples, &quality, &tables, &positions, &localized)?;
+        write_fleet_scene(&out, results.mcap, &fleet, &loops, &samples, &positions)?;
         seconds.stages.write = clock.elapsed().as_secs_f64();
         let between = components.iter().filter(|c| c.sessions[0] != c.sessions[1]).count();
         let between_covered = components
@@ -475,13 +476,16 @@ fn write_fleet_files(
     samples: &Samples,
     quality: &SampleQuality,
     tables: &[PoseTable],
+    positions: &[Vec<[f64; 3]>],
     localized: &[FleetSample],
 ) -> Result<bool> {
     let write = |name: &str, fill: &dyn Fn(&mut std::fs::File) -> std::io::Result<()>| -> Result<()> {
         out_dir::write_file(out, name, fill)
     };
     let per_component = Some(quality.per_component.as_slice());
-    write("components.csv", &|file| loops_io::fleet_components_to_csv(fleet, loops, per_component, file))?;
+    write("components.csv", &|file| {
+        loops_io::fleet_components_to_csv(fleet, loops, Some(positions), per_component, file)
+    })?;
     write("session_pairs.csv", &|file| loops_io::session_pairs_to_csv(fleet, loops, file))?;
     write("samples.csv", &|file| loops_io::fleet_samples_to_csv(fleet, samples, file))?;
     if fleet.len() <= loops_io::GTSAM_ROBOT_LETTERS.len() {
@@ -511,19 +515,33 @@ fn write_fleet_scene(
     fleet: &Fleet,
     loops: &FleetLoops,
     samples: &Samples,
-    tables: &[PoseTable],
+    positions: &[Vec<[f64; 3]>],
 ) -> Result<()> {
     let [results, layout] = crate::run::MCAP_FILES;
     if !mcap {
         guard::with_writes(|_| out.remove(results).and_then(|_| out.remove(layout)))?;
         return Ok(());
     }
-    // The logs' own positions, where reading kept every pose.
-    let fits = tables.iter().enumerate().all(|(a, table)| table.positions.len() == fleet.session(a).len());
-    let positions: Vec<Vec<[f64; 3]>> = tables.iter().map(|table| table.positions.clone()).collect();
-    let scene = loops_io::Scene::of_fleet(fleet, Some(positions.as_slice()).filter(|_| fits), loops, samples)?;
+    let scene = loops_io::Scene::of_fleet(fleet, Some(positions), loops, samples)?;
     out_dir::write_file(out, results, |file| loops_io::scene_mcap_to(file, &scene))?;
     out_dir::write_file(out, layout, |file| file.write_all(loops_io::FOXGLOVE_LAYOUT.as_bytes()))
+}
+
+/// Where each session's poses are in the files and the scene: its log's own positions, unless
+/// reading dropped or merged poses (then its trajectory's points), as for a single log.
+fn session_positions(fleet: &Fleet, tables: &[PoseTable]) -> Vec<Vec<[f64; 3]>> {
+    tables
+        .iter()
+        .enumerate()
+        .map(|(a, table)| {
+            let session = fleet.session(a);
+            if table.positions.len() == session.len() {
+                table.positions.clone()
+            } else {
+                loops_io::point_positions(session)
+            }
+        })
+        .collect()
 }
 
 /// Per session: its poses, span, components within and between, and the samples touching it.

@@ -99,6 +99,8 @@ pub(crate) struct Settings<'a> {
     pub(crate) separation: Separation,
     /// Whether to write results.mcap and foxglove-layout.json (--mcap).
     pub(crate) mcap: bool,
+    /// Whether results.mcap holds the log itself too (--merge-log).
+    pub(crate) merge_log: bool,
     /// --out, and the folder held (which knows whether --force was given).
     pub(crate) out_path: &'a Path,
     pub(crate) out: &'a OutDir,
@@ -116,6 +118,7 @@ impl<'a> Settings<'a> {
             sampler,
             separation,
             mcap: results.mcap,
+            merge_log: results.merge_log,
             out_path: &results.out,
             out,
         }
@@ -199,6 +202,11 @@ pub(crate) struct ResultsArgs {
     /// each report.
     #[arg(long)]
     pub(crate) mcap: bool,
+    /// With --mcap, merge each MCAP log into its own results.mcap (its schemas, channels and
+    /// messages as they are; a fleet: each session's folder), so that the loops play back over
+    /// the recorded data.
+    #[arg(long, requires = "mcap")]
+    pub(crate) merge_log: bool,
 }
 
 impl ResultsArgs {
@@ -388,7 +396,15 @@ pub(crate) fn analyse(
         })?;
         write_file(&file("report.html"), html.as_bytes(), false)?;
         if let Some(scene) = &scene {
-            written(|| loops_io::write_scene_mcap(file(MCAP_FILES[0]), scene, false))?;
+            if settings.merge_log {
+                let log = Path::new(source);
+                if !log.is_file() {
+                    bail!("--merge-log merges one MCAP file a log; {source} is not one");
+                }
+                written(|| loops_io::write_scene_mcap_merged(file(MCAP_FILES[0]), scene, log, false))?;
+            } else {
+                written(|| loops_io::write_scene_mcap(file(MCAP_FILES[0]), scene, false))?;
+            }
             write_file(&file(MCAP_FILES[1]), loops_io::FOXGLOVE_LAYOUT.as_bytes(), false)?;
         }
         write_file(&file(LOG_SUMMARY), json.as_bytes(), false)
