@@ -59,7 +59,7 @@ pub type FleetComponentRow = ComponentRow<SessionBlock>;
 /// # Panics
 /// When a session or pose is outside `positions`.
 pub fn fleet_closest_positions(
-    component: &loops_core::FleetComponent,
+    component: &loops_core::fleet::FleetComponent,
     positions: Option<&[Vec<[f64; 3]>]>,
 ) -> ClosestPositions {
     let Some(positions) = positions else { return ClosestPositions::default() };

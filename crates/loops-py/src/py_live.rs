@@ -126,7 +126,7 @@ impl LiveServer {
         update: &Update,
         candidates: Vec<PyRef<'_, Candidate>>,
     ) -> PyResult<()> {
-        let candidates: Vec<loops_core::Candidate> = candidates.iter().map(|c| c.inner).collect();
+        let candidates: Vec<loops_core::online::Candidate> = candidates.iter().map(|c| c.inner).collect();
         let engine = online.engine.lock(py)?;
         let Some(traj) = engine.inner.trajectory() else { return Ok(()) };
         let scene = loops_io::LiveScene::new(&self.name, loops_io::point_positions(traj), None).map_err(value_error)?;
