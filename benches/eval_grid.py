@@ -25,8 +25,9 @@ adds the rows of other grids to the table). Each of ``--contenders`` (default: t
 sampler and closest-then-spread, the default before it) gets its ratio to the best and to the
 nearer of the LIO-SAM and hdl_graph_slam rules per cell, and whether it meets the bar, side by
 side. A cell's medians are over the seeds every sampler of the cell ran; with ``--most-seeds``,
-over the seeds of the samplers that ran the most (more seeds added for some samplers only,
-``--first-seed 3 --seeds 2 --samplers ...``), the others left out of that cell.
+over the seeds the contenders and the two rules all ran (more seeds added for some samplers
+only, ``--first-seed 3 --seeds 2 --samplers ...``), the samplers without all of them left out
+of that cell.
 """
 
 from __future__ import annotations
@@ -107,7 +108,8 @@ def arguments() -> argparse.Namespace:
     parser.add_argument(
         "--most-seeds",
         action="store_true",
-        help="per cell, only the samplers that ran the most seeds, over those seeds",
+        help="per cell, the seeds the contenders and the rules all ran, and only the samplers "
+        "that ran them all",
     )
     parser.add_argument(
         "--also", default="", help="comma-separated folders whose rows.csv join the table"
@@ -161,8 +163,9 @@ def report(
     and the ratio of each sampler's to it;
     then, per contender, its ratio to the best and to the nearer rival rule, and whether it
     meets the bar; the cells each contender meets. ``brief``: the best sampler's name instead
-    of every sampler's ratio. ``most_seeds``: per cell, only the samplers that ran the most
-    seeds, over the seeds they all ran (the column "of" says how many samplers that leaves)."""
+    of every sampler's ratio. ``most_seeds``: per cell, the seeds the contenders and the rules
+    all ran, and only the samplers that ran them all (the columns "samplers" and "of" say how
+    many that leaves, of how many)."""
     by_seed: dict[tuple, dict[str, dict[int, float]]] = defaultdict(lambda: defaultdict(dict))
     for r in rows:
         if r["sampler"] != "odometry":
@@ -172,9 +175,10 @@ def report(
     compared: dict[tuple, int] = {}
     for key, runs in by_seed.items():
         if most_seeds:
-            most = max(len(v) for v in runs.values())
+            core = [set(runs[n]) for n in [*contenders, *RIVALS] if n in runs]
+            seeds = set.intersection(*core) if core else set()
             compared[key] = len(runs)
-            runs = {n: v for n, v in runs.items() if len(v) == most}
+            runs = {n: v for n, v in runs.items() if seeds <= set(v)}
         common = set.intersection(*(set(v) for v in runs.values()))
         ate[key] = {n: [v[s] for s in sorted(common)] for n, v in runs.items()}
     names = [n for n in ev.SAMPLERS + ev.BASELINES if any(n in c for c in ate.values())]
