@@ -11,7 +11,7 @@ Usage::
         [--on reference,estimate,rounds] [--rounds 3] \\
         [--verifiers distance-aware,steep,blind] [--outliers 0,0.1] \\
         [--samplers default,closest-first,...] [--contenders NAME,...] [--existing-blocks]
-        [--report-only]
+        [--first-seed N] [--report-only] [--most-seeds]
 
 Datasets are those of ``map_eval.py`` (``urban``, ``kitti00``, ``kitti05``, ``kitti08``,
 ``kaist01``: the same keyframes and gamma), plus ``urbanN``: the urban drive of seed N (a drive
@@ -22,8 +22,12 @@ as it finishes and a second invocation skips the samplers of a block already the
 adding a sampler to ``--samplers`` runs that one alone); the table goes to
 ``OUT/ratios.md`` (``--report-only``: the table alone, from ``rows.csv``; ``--also DIR,...``
 adds the rows of other grids to the table). Each of ``--contenders`` (default: the default
-sampler and nearest-then-uniform) gets its ratio to the best and to the nearer of the LIO-SAM
-and hdl_graph_slam rules per cell, and whether it meets the bar, side by side.
+sampler and closest-then-spread, the default before it) gets its ratio to the best and to the
+nearer of the LIO-SAM and hdl_graph_slam rules per cell, and whether it meets the bar, side by
+side. A cell's medians are over the seeds every sampler of the cell ran; with ``--most-seeds``,
+over the seeds the contenders and the two rules all ran (more seeds added for some samplers
+only, ``--first-seed 3 --seeds 2 --samplers ...``), the samplers without all of them left out
+of that cell.
 """
 
 from __future__ import annotations
@@ -47,8 +51,8 @@ from inexact_loops import evaluate as ev  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = il.DEFAULT_SAMPLER
-#: The sampler the table sets beside the default.
-CHALLENGER = "nearest-then-uniform"
+#: The sampler the table sets beside the default: the default before it.
+PREVIOUS = "closest-then-spread"
 #: The rules the default must beat in every cell.
 RIVALS = ("lio-sam", "hdl-graph-slam")
 #: The bar: the default's median ATE at most this many times the best one's.
@@ -89,7 +93,7 @@ def arguments() -> argparse.Namespace:
     parser.add_argument("--samplers", default=",".join(ev.SAMPLERS + ev.BASELINES))
     parser.add_argument(
         "--contenders",
-        default=",".join(dict.fromkeys([DEFAULT, CHALLENGER])),
+        default=",".join(dict.fromkeys([DEFAULT, PREVIOUS])),
         help="samplers whose ratios and bar the table shows, side by side",
     )
     parser.add_argument("--report-only", action="store_true")
@@ -100,6 +104,12 @@ def arguments() -> argparse.Namespace:
         "--existing-blocks",
         action="store_true",
         help="run only blocks rows.csv has already (to add a sampler to a grid)",
+    )
+    parser.add_argument(
+        "--most-seeds",
+        action="store_true",
+        help="per cell, the seeds the contenders and the rules all ran, and only the samplers "
+        "that ran them all",
     )
     parser.add_argument(
         "--also", default="", help="comma-separated folders whose rows.csv join the table"
@@ -146,24 +156,36 @@ def run(args: argparse.Namespace, rows_path: Path) -> None:
                         )
 
 
-def report(rows: list[dict], contenders: list[str], *, brief: bool = False) -> str:
+def report(
+    rows: list[dict], contenders: list[str], *, brief: bool = False, most_seeds: bool = False
+) -> str:
     """The markdown table: per cell (over the seeds all its samplers ran), the best median ATE
     and the ratio of each sampler's to it;
     then, per contender, its ratio to the best and to the nearer rival rule, and whether it
     meets the bar; the cells each contender meets. ``brief``: the best sampler's name instead
-    of every sampler's ratio."""
+    of every sampler's ratio. ``most_seeds``: per cell, the seeds the contenders and the rules
+    all ran, and only the samplers that ran them all (the columns "samplers" and "of" say how
+    many that leaves, of how many)."""
     by_seed: dict[tuple, dict[str, dict[int, float]]] = defaultdict(lambda: defaultdict(dict))
     for r in rows:
         if r["sampler"] != "odometry":
             by_seed[cell_key(r)][r["sampler"]][int(r["seed"])] = float(r["ate_m"])
     # Per cell, the seeds every sampler of the cell has: the medians compare like with like.
     ate: dict[tuple, dict[str, list[float]]] = {}
+    compared: dict[tuple, int] = {}
     for key, runs in by_seed.items():
+        if most_seeds:
+            core = [set(runs[n]) for n in [*contenders, *RIVALS] if n in runs]
+            seeds = set.intersection(*core) if core else set()
+            compared[key] = len(runs)
+            runs = {n: v for n, v in runs.items() if seeds <= set(v)}
         common = set.intersection(*(set(v) for v in runs.values()))
         ate[key] = {n: [v[s] for s in sorted(common)] for n, v in runs.items()}
     names = [n for n in ev.SAMPLERS + ev.BASELINES if any(n in c for c in ate.values())]
     contenders = [c for c in contenders if c in names]
-    head = ["dataset", "on", "verifier", "wrong", "budget", "seeds", "best (m)"]
+    head = ["dataset", "on", "verifier", "wrong", "budget", "seeds"]
+    head += ["samplers", "of"] if most_seeds else []
+    head += ["best (m)"]
     tail = [f"{c}: {what}" for c in contenders for what in ("best", "rules", "meets")]
     middle = ["best sampler"] if brief else [il.sampler_symbol(n) for n in names]
     lines = [
@@ -183,12 +205,16 @@ def report(rows: list[dict], contenders: list[str], *, brief: bool = False) -> s
         verdicts = []
         for c in contenders:
             mine = medians.get(c, np.nan)
-            ok = mine <= WITHIN * best and mine < rival
+            # A cell without either rule (left out by --most-seeds) cannot be met.
+            ok = mine <= WITHIN * best and mine < rival < np.inf
             met[c] += ok
-            verdicts += [f"{mine / best:.2f}", f"{mine / rival:.2f}", "yes" if ok else "no"]
+            rules = f"{mine / rival:.2f}" if rival < np.inf else "–"
+            verdicts += [f"{mine / best:.2f}", rules, "yes" if ok else "no"]
         d, on, verifier, outlier_rate, budget = key
+        of = f"{len(medians)} | {compared[key]} | " if most_seeds else ""
         lines.append(
-            f"| {d} | {on} | {verifier} | {outlier_rate:.0%} | {budget} | {seeds} | {best:.2f} | "
+            f"| {d} | {on} | {verifier} | {outlier_rate:.0%} | {budget} | {seeds} | "
+            + f"{of}{best:.2f} | "
             + " | ".join(cells + verdicts)
             + " |"
         )
@@ -216,7 +242,7 @@ def main() -> None:
     rows = common.read_rows(rows_path, ev.Results)
     for folder in filter(None, args.also.split(",")):
         rows += common.read_rows(Path(folder) / "rows.csv", ev.Results)
-    text = report(rows, args.contenders.split(","), brief=args.brief)
+    text = report(rows, args.contenders.split(","), brief=args.brief, most_seeds=args.most_seeds)
     (out / "ratios.md").write_text(text)
     print(text)
 

@@ -1286,8 +1286,8 @@ def test_sample_errors(traj, loops, clusters):
 @covers("DEFAULT_SAMPLER")
 def test_the_default_sampler_is_the_cores_everywhere():
     """``sample``, ``sample_fleet`` and the online sampler take the core's default when no
-    sampler is named: closest-then-spread, its first pick in each component the closest pair."""
-    assert il.DEFAULT_SAMPLER == "closest-then-spread"
+    sampler is named: nearest-then-uniform, whose picks include each component's closest pair."""
+    assert il.DEFAULT_SAMPLER == "nearest-then-uniform"
     drive = il.urban_drive(duration_s=1200.0, seed=4)
     found = il.find_loops(drive, gamma=40.0)
     plain = il.sample(found, budget=200, seed=3, trajectory=drive)
@@ -1317,7 +1317,8 @@ def test_sample_skip_trivial_draws_from_the_non_trivial_components_only():
     trivial = set(table["id"][table["trivial"]].tolist())
     nontrivial = set(table["id"][~table["trivial"]].tolist())
     assert trivial and len(nontrivial) > 5
-    for sampler in ["one", "rho", "rho-dispersed", "alpha", "closest-first", "closest-then-spread"]:
+    samplers = ["one", "rho", "rho-dispersed", "alpha", "closest-first", "closest-then-spread"]
+    for sampler in [*samplers, "nearest-then-uniform"]:
         plain = il.sample(found, sampler, budget=300, seed=3, trajectory=drive)
         only = il.sample(found, sampler, budget=300, seed=3, trajectory=drive, skip_trivial=True)
         assert set(plain.component.tolist()) & trivial, sampler

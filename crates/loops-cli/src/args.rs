@@ -246,11 +246,11 @@ pub(crate) fn separation_line(separation: Separation, gamma: f64) -> String {
 /// How to sample: the flags `loops sample` and `loops run` share, with the core's defaults.
 #[derive(Debug, Args)]
 pub(crate) struct SamplingArgs {
-    /// The sampler: closest-then-spread (σ_ρ's counts, each component's closest pair first,
-    /// the rest spread along it), one (σ_1), rho (σ_ρ), rho-dispersed, alpha (σ_α),
-    /// closest-first (each component's closest pair, then as rho-dispersed),
-    /// nearest-then-uniform (rows' closest pairs up to one row in six, then uniform), or a
-    /// SLAM baseline: lio-sam, hdl-graph-slam, cartographer, time-gap.
+    /// The sampler: nearest-then-uniform (each component's closest pair, then rows' closest
+    /// pairs up to one row in six, the rest uniform), one (σ_1), rho (σ_ρ), rho-dispersed,
+    /// alpha (σ_α), closest-first (each component's closest pair, then as rho-dispersed),
+    /// closest-then-spread (σ_ρ's counts, each component's closest pair first, the rest
+    /// spread along it), or a SLAM baseline: lio-sam, hdl-graph-slam, cartographer, time-gap.
     #[arg(long, default_value_t = SamplerKind::DEFAULT.name().to_owned())]
     pub(crate) sampler: String,
     /// Exactly this many samples (at least one per component when it allows) [default: 1000

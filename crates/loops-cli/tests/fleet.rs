@@ -72,7 +72,7 @@ fn fleet_files_agree_with_the_core() {
     let stdout = String::from_utf8_lossy(&output.stdout);
     let err = stderr(&output);
     assert!(
-        err.contains(" poses, gamma 40 (euclidean), sampler closest-then-spread (budget 300), results to "),
+        err.contains(" poses, gamma 40 (euclidean), sampler nearest-then-uniform (budget 300), results to "),
         "{err}"
     );
     assert!(err.contains("separation: path >= 160 (the default"), "{err}");

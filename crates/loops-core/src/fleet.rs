@@ -652,8 +652,8 @@ pub fn sample_fleet<M: Metric + ?Sized>(
         return Err(Error::NotApplicable {
             option: "sampling between sessions only",
             to: format!("the {} baseline", sampler.kind.name()),
-            reason: "a baseline's rule knows no components; use one, rho, rho-dispersed, alpha, closest-first or \
-                     closest-then-spread",
+            reason: "a baseline's rule knows no components; use nearest-then-uniform (the default), one, rho, \
+                     rho-dispersed, alpha, closest-first or closest-then-spread",
         });
     }
     let blocks = &loops.blocks;

@@ -226,13 +226,11 @@ fn closest_first_takes_every_closest_pair_then_disperses() {
     }
 }
 
-/// Closest-then-spread (the default): every component's closest pair first when the budget
+/// Closest-then-spread: every component's closest pair first when the budget
 /// covers the components, then σ_ρ's counts, in proportion to the rows (the first pick counts
 /// towards them, unlike closest-first's one-plus-a-share), spread one per row.
 #[test]
 fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
-    assert_eq!(SamplerKind::default(), SamplerKind::DEFAULT);
-    assert_eq!(SamplerKind::DEFAULT, SamplerKind::ClosestThenSpread);
     let s = setup();
     let components = s.loops.components();
     let groups = samplable(&s.loops);
@@ -301,13 +299,15 @@ fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
     assert!(matches!(samples.warnings(), [SampleWarning::BudgetBelowGroups { .. }]));
 }
 
-/// Nearest-then-uniform: up to one row in six, all picks are closest pairs of rows (checked
+/// Nearest-then-uniform (the default): up to one row in six, all picks are closest pairs of rows (checked
 /// against every cell of the row), every component's closest pair among them, shared in
 /// proportion to the rows as σ_ρ shares them (below one per component too, where a long
 /// component may take two); beyond that, every component keeps those picks and
 /// the rest is shared in proportion to the pairs each has left, within one of its expectation.
 #[test]
 fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
+    assert_eq!(SamplerKind::default(), SamplerKind::DEFAULT);
+    assert_eq!(SamplerKind::DEFAULT, SamplerKind::NearestThenUniform);
     let s = setup();
     let components = s.loops.components();
     let groups = samplable(&s.loops);

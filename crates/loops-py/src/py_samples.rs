@@ -116,13 +116,12 @@ pub(crate) fn baseline_params(
 ///         point), ``"rho-dispersed"`` (σ_ρ's counts spread evenly along each group, each the
 ///         row's closest pair, or best-scored detection), ``"alpha"`` (σ_α: uniform over all
 ///         detections or pairs), ``"closest-first"`` (each group's closest pair, or best-scored
-///         detection, first; the rest as ``"rho-dispersed"``), ``"closest-then-spread"`` (the
-///         default, :data:`DEFAULT_SAMPLER`: σ_ρ's counts, each group's first pick its closest
-///         pair, the rest as ``"rho-dispersed"``), ``"nearest-then-uniform"`` (rows' closest
-///         pairs up to one row in six, then uniform over the pairs), or a baseline of a deployed
-///         SLAM system
-///         (``Loops`` only): ``"lio-sam"``, ``"hdl-graph-slam"``, ``"cartographer"``,
-///         ``"time-gap"``.
+///         detection, first; the rest as ``"rho-dispersed"``), ``"closest-then-spread"`` (σ_ρ's
+///         counts, each group's first pick its closest pair, the rest as ``"rho-dispersed"``),
+///         ``"nearest-then-uniform"`` (the default, :data:`DEFAULT_SAMPLER`: each group's
+///         closest pair, then rows' closest pairs up to one row in six, the rest uniform over
+///         the pairs), or a baseline of a deployed SLAM system (``Loops`` only): ``"lio-sam"``,
+///         ``"hdl-graph-slam"``, ``"cartographer"``, ``"time-gap"``.
 ///     rate: the sampler's own rate (c, r, or a probability in (0, 1] for σ_α and the
 ///         baselines); or
 ///     budget: exactly this many samples (fewer only when fewer exist, with a warning); every

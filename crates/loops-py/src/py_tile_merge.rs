@@ -220,8 +220,8 @@ impl TiledFleetLoops {
     /// Plans a keyed draw of samples (see :class:`KeyedDraw`): the same samples as
     /// :func:`sample_fleet` on the same sessions, with the samplers of components (``"one"``,
     /// ``"rho"``, ``"rho-dispersed"``, ``"alpha"``, ``"closest-first"``,
-    /// ``"closest-then-spread"``; not the baselines,
-    /// whose rules run over whole trajectories).
+    /// ``"closest-then-spread"``, ``"nearest-then-uniform"``; not the baselines, whose rules
+    /// run over whole trajectories).
     ///
     /// Args:
     ///     sampler: the sampler's name (``None``: :data:`DEFAULT_SAMPLER`).

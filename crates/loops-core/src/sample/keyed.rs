@@ -470,15 +470,16 @@ impl KeyedDraw {
     ///
     /// # Errors
     /// As [`sample_loops`](crate::sample_loops) for the samplers of components (`one`, `rho`,
-    /// `rho-dispersed`, `alpha`, `closest-first`, `closest-then-spread`); [`Error::NotApplicable`] for a baseline.
+    /// `rho-dispersed`, `alpha`, `closest-first`, `closest-then-spread`, `nearest-then-uniform`);
+    /// [`Error::NotApplicable`] for a baseline.
     pub fn new(sampler: &Sampler, stats: &[DrawStats], keep: &dyn Fn(usize) -> bool) -> Result<Self> {
         let kind = sampler.kind;
         if kind.is_baseline() {
             return Err(Error::NotApplicable {
                 option: "a keyed draw",
                 to: format!("the {kind} baseline"),
-                reason: "a baseline's rule runs over the whole trajectory; use one, rho, rho-dispersed, alpha, \
-                         closest-first or closest-then-spread",
+                reason: "a baseline's rule runs over the whole trajectory; use nearest-then-uniform (the default), \
+                         one, rho, rho-dispersed, alpha, closest-first or closest-then-spread",
             });
         }
         sampler.size.validate(kind)?;

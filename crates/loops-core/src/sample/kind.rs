@@ -18,8 +18,8 @@ use crate::error::{Error, Result};
 /// | `rho-dispersed` | σ_ρ's counts, spread evenly along each group (stratified over its rows), each the row's closest pair (best score for detections) |
 /// | `alpha` | σ_α ∈ O(α): uniform over all detections (or pairs of S_γ), no groups |
 /// | `closest-first` | one sample per group first, its closest pair (best score for detections: the likeliest match); the rest as `rho-dispersed` |
-/// | `closest-then-spread` | **the default**: σ_ρ's counts (at least one per group), the first of each group its closest pair, the rest spread along the group as `rho-dispersed` |
-/// | `nearest-then-uniform` | each group's closest pair, then rows' closest pairs spread along the groups up to one row in six, the rest of the budget uniform over each group's pairs |
+/// | `closest-then-spread` | σ_ρ's counts (at least one per group), the first of each group its closest pair, the rest spread along the group as `rho-dispersed` |
+/// | `nearest-then-uniform` | **the default**: each group's closest pair, then rows' closest pairs spread along the groups up to one row in six, the rest of the budget uniform over each group's pairs |
 /// | `lio-sam`, `hdl-graph-slam`, `cartographer`, `time-gap` | baselines of deployed systems, see [`BaselineParams`] |
 ///
 /// A *group* is a detection cluster ([`sample_clusters`](crate::sample_clusters)) or an exact loop component
@@ -51,22 +51,23 @@ pub enum SamplerKind {
     /// best-scored one), then the rest of the budget as [`RhoDispersed`](Self::RhoDispersed):
     /// in proportion to the rows, spread along each group, each the row's closest pair.
     ClosestFirst,
-    /// The default ([`DEFAULT`](Self::DEFAULT)): σ_ρ's counts per group (at least one each
-    /// when the budget allows, P1; in proportion to the rows beyond that, P2 and P3); the first
-    /// of each group its closest pair (the likeliest match, the best-scored detection), the
-    /// others the closest pairs of rows stratified along the group. At a budget near the number
-    /// of groups it is closest-first; at large budgets it is the dispersed σ_ρ, whose counts
-    /// give a small group no more than its share. A group's first sample counts towards its
-    /// share: the rest of the budget goes where the share is still lacking.
-    #[default]
+    /// σ_ρ's counts per group (at least one each when the budget allows, P1; in proportion to
+    /// the rows beyond that, P2 and P3); the first of each group its closest pair (the
+    /// likeliest match, the best-scored detection), the others the closest pairs of rows
+    /// stratified along the group. At a budget near the number of groups it is closest-first;
+    /// at large budgets it is the dispersed σ_ρ, whose counts give a small group no more than
+    /// its share. A group's first sample counts towards its share: the rest of the budget goes
+    /// where the share is still lacking. The default before `nearest-then-uniform`.
     ClosestThenSpread,
-    /// Rows' closest pairs first, then uniform picks: each group's closest pair (P1), then the
-    /// closest pairs of rows stratified along the groups in proportion to their rows (as
-    /// LIO-SAM matches each keyframe with its nearest revisit), up to one row in six of each
-    /// group; the budget beyond that uniform over each group's other pairs, in proportion to
-    /// them (as the time-gap rule draws over all pairs: spread in time along both poses of a
-    /// pair). On detection clusters, whose detections are a uniform draw already, it is
+    /// The default ([`DEFAULT`](Self::DEFAULT)): rows' closest pairs first, then uniform
+    /// picks. Each group's closest pair (P1), then the closest pairs of rows stratified along
+    /// the groups in proportion to their rows (as LIO-SAM matches each keyframe with its
+    /// nearest revisit), up to one row in six of each group; the budget beyond that uniform
+    /// over each group's other pairs, in proportion to them (as the time-gap rule draws over
+    /// all pairs: spread in time along both poses of a pair). On detection clusters, whose
+    /// detections are a uniform draw already, it is
     /// [`ClosestThenSpread`](Self::ClosestThenSpread).
+    #[default]
     NearestThenUniform,
     /// LIO-SAM: nearest keyframe within γ older than a time gap, searched at 1 Hz.
     LioSam,
@@ -96,7 +97,7 @@ impl SamplerKind {
 
     /// The sampler used when none is named: by the command line, Python, Dask, fleets and
     /// (its per-keyframe rule) the online sampler.
-    pub const DEFAULT: Self = Self::ClosestThenSpread;
+    pub const DEFAULT: Self = Self::NearestThenUniform;
 
     /// The accepted names.
     pub const NAMES: &'static str = "one, rho, rho-dispersed, alpha, closest-first, closest-then-spread, \
