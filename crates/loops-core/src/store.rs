@@ -73,9 +73,10 @@ use crate::tile::{
 };
 use crate::trajectory::{Manifold, Trajectory};
 
-/// The version of a store's layout (its tables and their meaning); a store of another version
-/// is refused when read back.
-pub const STORE_FORMAT_VERSION: u16 = 1;
+/// The version of a store's layout (its tables and their meaning). Version 2 adds what a
+/// store keeps of its answer (the merge of each session pair's tiles, the runs of each tile);
+/// a store of version 1 reads back without them, one of a later version is refused.
+pub const STORE_FORMAT_VERSION: u16 = 2;
 
 /// What a store's answer depends on, fixed when the store is made.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -261,8 +262,9 @@ impl StoreUpdate {
 /// answer is made of, so that the answer after an update costs what the update changed: the
 /// merge of each session pair's tiles, τ of each session, and the runs of each tile it scanned
 /// (16 bytes a run, [`TileRuns::heap_bytes`]), which its draws read instead of rescanning. A
-/// store read back ([`from_parts`](Self::from_parts)) merges and adds τ again, and rescans
-/// the tiles a draw asks until an update scans them.
+/// store read back with them ([`from_saved`](Self::from_saved)) only adds τ up again; one
+/// read back from its state alone ([`from_parts`](Self::from_parts)) merges again, and
+/// rescans the tiles a draw asks until an update scans them.
 #[derive(Debug, Clone)]
 pub struct FleetStore {
     settings: StoreSettings,
@@ -324,6 +326,75 @@ impl FleetStore {
         tiles: Vec<StoredTile>,
         last_update: StoreUpdate,
     ) -> Result<Self> {
+        let mut store = Self::checked(settings, sessions, tiles, last_update)?;
+        store.kept.merges = merges_of(store.tiles.iter())?;
+        Ok(store)
+    }
+
+    /// A store from its parts and what it keeps of its answer as saved
+    /// ([`kept_merges`](Self::kept_merges), [`kept_runs`](Self::kept_runs)): as
+    /// [`from_parts`](Self::from_parts), but it neither merges again nor rescans a tile that
+    /// has its runs to draw. Checks, besides, that the merges are those of the session pairs
+    /// of the tiles (each over its pair's tiles in plan order), and each tile's runs are of
+    /// that tile, scanned with the store's γ and separation from its sessions' places.
+    /// O(blocks log blocks + tiles + components).
+    ///
+    /// # Errors
+    /// As [`from_parts`](Self::from_parts), [`Error::InvalidState`] naming the merge or runs
+    /// that do not fit.
+    pub fn from_saved(
+        settings: StoreSettings,
+        sessions: Vec<StoreSession>,
+        tiles: Vec<StoredTile>,
+        last_update: StoreUpdate,
+        merges: Vec<([usize; 2], MergedLoops)>,
+        runs: Vec<Option<TileRuns>>,
+    ) -> Result<Self> {
+        let mut store = Self::checked(settings, sessions, tiles, last_update)?;
+        let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
+        let mut of_pair: BTreeMap<[usize; 2], Vec<&Tile>> = BTreeMap::new();
+        for t in &store.tiles {
+            of_pair.entry(t.tile().sessions).or_default().push(t.tile());
+        }
+        if merges.len() != of_pair.len() {
+            return Err(corrupt(format!("{} merges for the {} session pairs with tiles", merges.len(), of_pair.len())));
+        }
+        let mut kept = BTreeMap::new();
+        for (pair, merge) in merges {
+            let Some(tiles) = of_pair.get(&pair) else {
+                return Err(corrupt(format!("a merge of sessions {pair:?}, which have no tiles")));
+            };
+            if merge.tiles().iter().ne(tiles.iter().copied()) || merge.components().iter().any(|c| c.sessions != pair) {
+                return Err(corrupt(format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len())));
+            }
+            if kept.insert(pair, Arc::new(merge)).is_some() {
+                return Err(corrupt(format!("two merges of sessions {pair:?}")));
+            }
+        }
+        if runs.len() != store.tiles.len() {
+            return Err(corrupt(format!("runs of {} tiles for {} tiles", runs.len(), store.tiles.len())));
+        }
+        let starts = store.starts();
+        let wanted = (settings.gamma, settings.separation);
+        for (k, (r, t)) in runs.iter().zip(&store.tiles).enumerate() {
+            let Some(r) = r else { continue };
+            let [a, b] = t.tile().sessions;
+            if r.tile() != t.tile() || r.scanned_with() != wanted || r.starts() != [starts[a], starts[b]] {
+                return Err(corrupt(format!("the runs of tile {k} are not of tile {:?} under this store", t.tile())));
+            }
+        }
+        store.kept.merges = kept;
+        store.kept.runs = runs.into_iter().map(|r| r.map(Arc::new)).collect();
+        Ok(store)
+    }
+
+    /// What is checked of parts as saved, and τ added up: a store without its merges.
+    fn checked(
+        settings: StoreSettings,
+        sessions: Vec<StoreSession>,
+        tiles: Vec<StoredTile>,
+        last_update: StoreUpdate,
+    ) -> Result<Self> {
         settings.check()?;
         let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
         for (k, s) in sessions.iter().enumerate() {
@@ -365,11 +436,24 @@ impl FleetStore {
         }
         let all: Vec<usize> = (0..store.sessions.len()).collect();
         store.kept = Kept {
-            merges: merges_of(store.tiles.iter())?,
+            merges: BTreeMap::new(),
             duration: durations_of(&store.tiles, &store.starts(), &store.sessions, &all)?,
             runs: vec![None; store.tiles.len()],
         };
         Ok(store)
+    }
+
+    /// The merge of each session pair's tiles that the store keeps, by pair (a, b), a ≤ b:
+    /// what [`from_saved`](Self::from_saved) takes back.
+    pub fn kept_merges(&self) -> impl Iterator<Item = ([usize; 2], &MergedLoops)> {
+        self.kept.merges.iter().map(|(pair, m)| (*pair, m.as_ref()))
+    }
+
+    /// The runs of each tile the store keeps, by tile (as [`tiles`](Self::tiles)); `None` for
+    /// a tile it would rescan to draw (a store read back without them): what
+    /// [`from_saved`](Self::from_saved) takes back.
+    pub fn kept_runs(&self) -> impl Iterator<Item = Option<&TileRuns>> {
+        self.kept.runs.iter().map(Option::as_deref)
     }
 
     /// The settings.
@@ -808,12 +892,14 @@ impl FleetStore {
     ) -> Result<StoreSamples> {
         let Some(merged) = &loops.merged else {
             let draw = KeyedDraw::new(sampler, &[], &|_| true)?;
-            return Ok(StoreSamples { rows: Vec::new(), groups: 0, available: 0, warnings: draw.warnings().to_vec() });
+            let warnings = draw.warnings().to_vec();
+            return Ok(StoreSamples { rows: Vec::new(), groups: 0, available: 0, warnings, tiles_rescanned: 0 });
         };
         let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
         let mut draw = KeyedDraw::new(sampler, &merged.draw_stats(), &keep)?;
         let mut read: HashMap<usize, Trajectory> = HashMap::new();
+        let mut tiles_rescanned = 0;
         let settings = self.settings;
         let starts = &loops.starts;
         let stored: HashMap<&Tile, usize> = self.tiles.iter().enumerate().map(|(k, t)| (t.tile(), k)).collect();
@@ -835,6 +921,8 @@ impl FleetStore {
                     }
                 }
             }
+            let runs_of = |k: usize| stored.get(&merged.tiles()[k]).and_then(|&t| self.kept.runs[t].as_ref());
+            tiles_rescanned += asked.iter().filter(|(k, _)| runs_of(*k).is_none()).count();
             let offers = asked
                 .par_iter()
                 .map(|(k, part)| {
@@ -842,7 +930,7 @@ impl FleetStore {
                     let tile = &merged.tiles()[k];
                     let [a, b] = tile.sessions;
                     let (sessions, at) = ([&read[&a], &read[&b]], [starts[a], starts[b]]);
-                    match stored.get(tile).and_then(|&t| self.kept.runs[t].as_ref()) {
+                    match runs_of(k) {
                         Some(runs) => with_metric!(&settings.metric, m => draw_tile_runs(
                             sessions, at, m, runs, merged.tile_labels(k), part,
                         )),
@@ -883,6 +971,7 @@ impl FleetStore {
             groups: draw.groups(),
             available: draw.available(),
             warnings: draw.warnings().to_vec(),
+            tiles_rescanned,
         })
     }
 }
@@ -1083,4 +1172,7 @@ pub struct StoreSamples {
     pub available: u64,
     /// Warnings of the quotas.
     pub warnings: Vec<SampleWarning>,
+    /// Tiles the draw scanned again, having no runs of them (tile passes, counted once per
+    /// pass that asked): 0 where every tile asked has its runs kept.
+    pub tiles_rescanned: usize,
 }

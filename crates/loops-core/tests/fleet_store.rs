@@ -8,6 +8,7 @@ use std::collections::{BTreeMap, HashMap};
 use loops_core::{
     Euclidean, Result, SampleSize, Sampler, SamplerKind, Separation, Trajectory, UrbanDrive, UrbanFleet,
     fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet},
+    tile::{MergedLoops, TileRuns},
     store::{FleetStore, StoreSession, StoreSettings},
 };
 use rand::{RngExt, SeedableRng};
@@ -176,6 +177,42 @@ fn random_updates(seed: u64, separation: Separation) {
     assert_eq!(kept.session_pairs(), again.session_pairs(), "seed {seed}: kept merges");
     assert_eq!(kept.component_times_s(), again.component_times_s(), "seed {seed}: kept merges");
     check_against_scratch(&read_back, &current, &format!("seed {seed}: read back"));
+    // What the store kept, through its bytes, taken back: the same answer, drawn without a scan.
+    let merges: Vec<([usize; 2], MergedLoops)> =
+        store.kept_merges().map(|(p, m)| (p, MergedLoops::from_bytes(&m.to_bytes()).unwrap())).collect();
+    let runs: Vec<Option<TileRuns>> = store
+        .kept_runs()
+        .map(|r| Some(TileRuns::from_bytes(&r.expect("every tile scanned").to_bytes()).unwrap()))
+        .collect();
+    let saved = |merges: Vec<([usize; 2], MergedLoops)>, runs: Vec<Option<TileRuns>>| {
+        let (settings, sessions, tiles) = (*store.settings(), store.sessions().to_vec(), store.tiles().to_vec());
+        FleetStore::from_saved(settings, sessions, tiles, store.last_update().clone(), merges, runs)
+    };
+    let taken = saved(merges.clone(), runs.clone()).unwrap();
+    check_against_scratch(&taken, &current, &format!("seed {seed}: taken back"));
+    let loops = taken.loops().unwrap();
+    for (sampler, between_only) in samplers() {
+        let drawn = taken.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
+        assert_eq!(drawn.tiles_rescanned, 0, "seed {seed}: {:?}", sampler.kind);
+        let again = read_back.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
+        assert!(again.tiles_rescanned > 0 || again.rows.is_empty(), "seed {seed}: a store without runs rescans");
+    }
+    if merges.len() > 1 {
+        let err = saved(merges[1..].to_vec(), runs.clone()).unwrap_err().to_string();
+        assert!(err.contains("merges for the"), "{err}");
+        let mut swapped = merges.clone();
+        let first = swapped[0].1.clone();
+        swapped[0].1 = swapped[1].1.clone();
+        swapped[1].1 = first;
+        let err = saved(swapped, runs.clone()).unwrap_err().to_string();
+        assert!(err.contains("is not of their"), "{err}");
+    }
+    if runs.len() > 1 {
+        let mut swapped = runs.clone();
+        swapped.swap(0, 1);
+        let err = saved(merges.clone(), swapped).unwrap_err().to_string();
+        assert!(err.contains("the runs of tile 0 are not of tile"), "{err}");
+    }
     if store.tiles().len() > 1 {
         let mut fewer = store.tiles().to_vec();
         fewer.remove(fewer.len() / 2);

@@ -4,11 +4,13 @@
 //! ```text
 //! DIR/
 //!   loops-store.json      the ownership marker (out_dir::STORE)
-//!   store.json            {"format": "inexact-loops fleet store", "version": 1, "state": "state-000003"}
+//!   store.json            {"format": "inexact-loops fleet store", "version": 2, "state": "state-000003"}
 //!   state-000003/         the current state, complete
 //!     settings.json       metric, gamma, separation, block, sampler, what the last update did
 //!     sessions.parquet    session, name, fingerprint, poses, t_first_s, t_last_s, span_s, dim, manifold, blocks
 //!     tiles.parquet       a, b, rows_start, rows_end, columns_start, columns_end, components, summary, duration
+//!     tile_runs.parquet   tile, a, b, run_count, runs          (version 2)
+//!     merges.parquet      a, b, tiles, components, merge       (version 2)
 //!     components.parquet  id, session_a, session_b, a, b, trivial, area_s2, pair_count, run_count, holes,
 //!                         i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
 //!                         closest_i, closest_j, closest_distance, added
@@ -22,6 +24,14 @@
 //! session's own clock. `summary`, `duration` and `blocks` are the bytes the tiles ship as
 //! ([`loops_core::tile::TileSummary::to_bytes`]). `added` marks the components of the sessions the
 //! last update added or replaced.
+//!
+//! **What the answer is made of** (version 2). `tile_runs.parquet` holds the runs of each tile
+//! (`tile` its row in `tiles.parquet`; [`loops_core::tile::TileRuns::to_bytes`], about 16 bytes a run),
+//! and `merges.parquet` the merge of each session pair's tiles
+//! ([`loops_core::tile::MergedLoops::to_bytes`]). A store read back with them draws its samples and
+//! makes its next update without scanning a stored tile or merging a stored pair again
+//! ([`FleetStore::from_saved`]). A store of version 1 (without them) still reads: it merges
+//! again on reading and rescans the tiles its first draw asks; its next update writes version 2.
 //!
 //! **Atomic.** An update reads the current state, builds the whole new state in the store's
 //! scratch folder (pose files of unchanged sessions are hard links), moves it into place under
@@ -38,7 +48,7 @@ use loops_core::{
     MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory,
     fleet::FleetSample,
     store::{FleetStore, StoreLoops, StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile},
-    tile::{SessionBlocks, TileDuration, TileSummary},
+    tile::{MergedLoops, SessionBlocks, TileDuration, TileRuns, TileSummary},
 };
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
 use parquet::file::properties::WriterProperties;
@@ -255,11 +265,12 @@ fn settings_file(config: &StoreConfig, update: &StoreUpdate) -> SettingsFile {
 
 fn config_of(file: &SettingsFile, path: &Path) -> Result<StoreConfig> {
     let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
-    if file.version != loops_core::store::STORE_FORMAT_VERSION {
+    if !READABLE_VERSIONS.contains(&file.version) {
         return Err(corrupt(format!(
-            "store format version {}; this build reads version {}",
+            "store format version {}; this build reads versions {} to {}",
             file.version,
-            loops_core::store::STORE_FORMAT_VERSION
+            READABLE_VERSIONS.start(),
+            READABLE_VERSIONS.end()
         )));
     }
     let metric: MetricSpec = file.metric.parse().map_err(|e| corrupt(format!("metric: {e}")))?;
@@ -298,7 +309,7 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     }
     let pointer: Pointer = read_json(&pointer_path)?;
     let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
-    if pointer.format != STORE_FORMAT || pointer.version != loops_core::store::STORE_FORMAT_VERSION {
+    if pointer.format != STORE_FORMAT || !READABLE_VERSIONS.contains(&pointer.version) {
         return Err(corrupt(
             &pointer_path,
             format!(
@@ -346,8 +357,58 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         })
         .collect::<std::result::Result<Vec<_>, String>>()
         .map_err(|reason| corrupt(&tiles_path, reason))?;
-    let store = FleetStore::from_parts(config.settings, sessions, tiles, file.last_update.into())?;
+    let last_update = file.last_update.into();
+    let store = if file.version < 2 {
+        FleetStore::from_parts(config.settings, sessions, tiles, last_update)?
+    } else {
+        let (merges, runs) = read_kept(&state, tiles.len())?;
+        FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?
+    };
     Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
+}
+
+/// The versions of the layout this build reads: those without what the answer is made of
+/// (1), and the current one.
+const READABLE_VERSIONS: std::ops::RangeInclusive<u16> = 1..=loops_core::store::STORE_FORMAT_VERSION;
+
+/// What a state keeps of its answer: the merges (`merges.parquet`) and the runs of each of its
+/// `tiles` tiles (`tile_runs.parquet`).
+fn read_kept(state: &Path, tiles: usize) -> Result<KeptParts> {
+    let merges_path = state.join("merges.parquet");
+    let merges = read_rows(&merges_path)?
+        .iter()
+        .enumerate()
+        .map(|(k, row)| -> std::result::Result<([usize; 2], MergedLoops), String> {
+            let row_of = |e: String| format!("row {k}: {e}");
+            let pair = [cell_index(row, 0).map_err(row_of)?, cell_index(row, 1).map_err(row_of)?];
+            let merge = MergedLoops::from_bytes(row.bytes(4).map_err(row_of)?).map_err(|e| row_of(e.to_string()))?;
+            Ok((pair, merge))
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| StoreError::Corrupt { path: merges_path.clone(), reason })?;
+    let runs_path = state.join("tile_runs.parquet");
+    let mut runs: Vec<Option<TileRuns>> = vec![None; tiles];
+    for (k, row) in read_rows(&runs_path)?.iter().enumerate() {
+        let corrupt =
+            |reason: String| StoreError::Corrupt { path: runs_path.clone(), reason: format!("row {k}: {reason}") };
+        let tile = cell_index(row, 0).map_err(corrupt)?;
+        let parsed = TileRuns::from_bytes(row.bytes(4).map_err(corrupt)?).map_err(|e| corrupt(e.to_string()))?;
+        match runs.get_mut(tile) {
+            Some(slot @ None) => *slot = Some(parsed),
+            Some(Some(_)) => return Err(corrupt(format!("tile {tile} has runs twice"))),
+            None => return Err(corrupt(format!("tile {tile} of {tiles} tiles"))),
+        }
+    }
+    Ok((merges, runs))
+}
+
+/// The merges and runs a state keeps ([`FleetStore::from_saved`]).
+type KeptParts = (Vec<([usize; 2], MergedLoops)>, Vec<Option<TileRuns>>);
+
+/// Cell `i` of a row as an index (a non-negative INT64).
+fn cell_index(row: &Row, i: usize) -> std::result::Result<usize, String> {
+    let value = row.get_long(i).map_err(|e| format!("column {i}: {e}"))?;
+    usize::try_from(value).map_err(|_| format!("column {i}: {value} is not an index"))
 }
 
 /// The samples of the store's current state (`samples.parquet`), in its order: those
@@ -486,6 +547,8 @@ pub fn update_store(
     let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
     write_sessions(&staged.join("sessions.parquet"), &store)?;
     write_tiles(&staged.join("tiles.parquet"), &store)?;
+    write_tile_runs(&staged.join("tile_runs.parquet"), &store)?;
+    write_merges(&staged.join("merges.parquet"), &store)?;
     let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
     write_components(&staged.join("components.parquet"), &loops, &names, &added)?;
     write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names)?;
@@ -753,12 +816,37 @@ fn write_tiles(path: &Path, store: &FleetStore) -> Result<()> {
     )
 }
 
-fn write_components(
-    path: &Path,
-    loops: &loops_core::store::StoreLoops,
-    names: &[&str],
-    added: &HashSet<usize>,
-) -> Result<()> {
+/// `tile_runs.parquet`: the runs of each tile that has them, by its row in `tiles.parquet`.
+fn write_tile_runs(path: &Path, store: &FleetStore) -> Result<()> {
+    let runs: Vec<(usize, &TileRuns)> = store.kept_runs().enumerate().filter_map(|(k, r)| Some((k, r?))).collect();
+    write_table(
+        path,
+        vec![
+            ("tile", ints(runs.iter().map(|(k, _)| *k))),
+            ("a", ints(runs.iter().map(|(_, r)| r.tile().sessions[0]))),
+            ("b", ints(runs.iter().map(|(_, r)| r.tile().sessions[1]))),
+            ("run_count", ints(runs.iter().map(|(_, r)| r.run_count()))),
+            ("runs", Column::Bytes(runs.iter().map(|(_, r)| r.to_bytes()).collect())),
+        ],
+    )
+}
+
+/// `merges.parquet`: the merge of each session pair's tiles, by pair.
+fn write_merges(path: &Path, store: &FleetStore) -> Result<()> {
+    let merges: Vec<([usize; 2], &MergedLoops)> = store.kept_merges().collect();
+    write_table(
+        path,
+        vec![
+            ("a", ints(merges.iter().map(|(p, _)| p[0]))),
+            ("b", ints(merges.iter().map(|(p, _)| p[1]))),
+            ("tiles", ints(merges.iter().map(|(_, m)| m.tiles().len()))),
+            ("components", ints(merges.iter().map(|(_, m)| m.components().len()))),
+            ("merge", Column::Bytes(merges.iter().map(|(_, m)| m.to_bytes()).collect())),
+        ],
+    )
+}
+
+fn write_components(path: &Path, loops: &loops_core::store::StoreLoops, names: &[&str], added: &HashSet<usize>) -> Result<()> {
     let c = loops.components();
     let times = loops.component_times_s();
     let f = |g: &dyn Fn(&loops_core::fleet::FleetComponent) -> f64| Column::Float(c.iter().map(g).collect());

@@ -124,3 +124,100 @@ fn a_refused_update_changes_no_file() {
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&theirs);
 }
+
+/// Samples, bit for bit.
+fn sample_bits(rows: &[loops_core::fleet::FleetSample]) -> Vec<([usize; 4], [u64; 3], Option<usize>)> {
+    rows.iter()
+        .map(|s| {
+            let distance = s.distance.map_or(u64::MAX, f64::to_bits);
+            (
+                [s.sessions[0], s.sessions[1], s.poses[0], s.poses[1]],
+                [s.times_s[0].to_bits(), s.times_s[1].to_bits(), distance],
+                s.component,
+            )
+        })
+        .collect()
+}
+
+/// A store's answer, bit for bit: components, the overlap matrix, τ, and the samples of
+/// `config()`'s sampler with the number of tiles the draw rescanned.
+fn answer(store: &FleetStore, source: &mut loops_core::store::SessionSource<'_>) -> (String, Vec<u64>, usize) {
+    let loops = store.loops().unwrap();
+    let (own, other) = store.loop_duration().unwrap();
+    let (sampler, between_only) = config().sampler.unwrap();
+    let samples = store.samples(&loops, &sampler, between_only, source).unwrap();
+    let mut bits: Vec<u64> = own.iter().chain(&other).map(|v| v.to_bits()).collect();
+    for c in loops.components() {
+        bits.extend([c.area_s2.to_bits(), c.closest_distance.to_bits()]);
+    }
+    for p in loops.session_pairs() {
+        bits.extend([p.area_s2.to_bits(), p.density.to_bits()]);
+    }
+    let text = format!("{:?}\n{:?}\n{:?}", loops.components(), loops.session_pairs(), sample_bits(&samples.rows));
+    (text, bits, samples.tiles_rescanned)
+}
+
+#[test]
+fn a_reopened_store_draws_and_updates_as_kept_in_memory_without_a_scan() {
+    let dir = temp("reopened");
+    let all = sessions();
+    let by_name: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
+    let mut source = |s: &StoreSession| Ok(by_name[&s.name].clone());
+    let (day0, day1): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|(n, _)| n.ends_with("day0"));
+    // Kept in memory: the store the first update made, updated in process.
+    let mut memory = update_store(&dir, Some(&config()), day0.clone(), &[]).unwrap().stored.store;
+    // From scratch: one update of the same sessions into an empty store.
+    let scratch = |sessions: &[(String, Trajectory)]| {
+        let mut store = FleetStore::new(config().settings).unwrap();
+        store.update(sessions.to_vec(), &[], &mut |s: &StoreSession| Ok(by_name[&s.name].clone())).unwrap();
+        store
+    };
+    let reopened = read_store(&dir).unwrap();
+    let (got, got_bits, rescanned) = answer(&reopened.store, &mut source);
+    assert_eq!(rescanned, 0, "the reopened store rescans no tile to draw");
+    let (kept, kept_bits, _) = answer(&memory, &mut source);
+    let (fresh, fresh_bits, _) = answer(&scratch(&day0), &mut source);
+    assert!(got == kept && got_bits == kept_bits, "reopened against kept in memory");
+    assert!(got == fresh && got_bits == fresh_bits, "reopened against from scratch");
+    // The next update, from the folder (read back, then updated), against memory and scratch.
+    let report = update_store(&dir, None, day1.clone(), &[]).unwrap();
+    assert_eq!(report.stored.store.last_update().tiles_kept, memory.tiles().len());
+    assert_eq!(report.samples.as_ref().unwrap().tiles_rescanned, 0, "the update's draw rescans no stored tile");
+    memory.update(day1.clone(), &[], &mut source).unwrap();
+    let (got, got_bits, _) = answer(&read_store(&dir).unwrap().store, &mut source);
+    let (kept, kept_bits, _) = answer(&memory, &mut source);
+    let (fresh, fresh_bits, _) = answer(&scratch(&all), &mut source);
+    assert!(got == kept && got_bits == kept_bits, "updated from the folder against kept in memory");
+    assert!(got == fresh && got_bits == fresh_bits, "updated from the folder against from scratch");
+    assert_eq!(
+        sample_bits(&read_samples(&read_store(&dir).unwrap()).unwrap()),
+        sample_bits(&report.samples.unwrap().rows)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_store_of_the_first_layout_still_reads() {
+    // Version 1 had no merges or runs: drop them and mark the state so.
+    let dir = temp("version-1");
+    let all = sessions();
+    update_store(&dir, Some(&config()), all.clone(), &[]).unwrap();
+    let now = read_store(&dir).unwrap();
+    let state = dir.join(&now.state);
+    for name in ["merges.parquet", "tile_runs.parquet"] {
+        std::fs::remove_file(state.join(name)).unwrap();
+    }
+    for file in [dir.join("store.json"), state.join("settings.json")] {
+        let text = std::fs::read_to_string(&file).unwrap().replace("\"version\": 2", "\"version\": 1");
+        std::fs::write(&file, text).unwrap();
+    }
+    let old = read_store(&dir).unwrap();
+    assert!(old.store.kept_runs().all(|r| r.is_none()));
+    let by_name: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
+    let mut source = |s: &StoreSession| Ok(by_name[&s.name].clone());
+    let (got, got_bits, rescanned) = answer(&old.store, &mut source);
+    assert!(rescanned > 0, "a store without runs rescans to draw");
+    let (want, want_bits, _) = answer(&now.store, &mut source);
+    assert!(got == want && got_bits == want_bits);
+    let _ = std::fs::remove_dir_all(&dir);
+}

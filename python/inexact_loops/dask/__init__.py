@@ -37,12 +37,15 @@ differs from the others') is left out with a one-line error in :attr:`FleetRun.f
 rest of the fleet is computed without it (``on_error="raise"`` raises instead).
 
 :func:`run_fleet_dask` writes the tables as Parquet into an output folder (the command
-``loops-dask``, :func:`main`, is its command line).
+``loops-dask``, :func:`main`, is its command line). :func:`update_store` updates a fleet store
+(:class:`inexact_loops.FleetStore`) on a worker, which scans, merges and writes its tables
+there: the client holds O(sessions) (``loops-dask --store DIR``).
 
 The package's modules, each importing only those above it: ``_settings`` (the tunables:
 :data:`DEFAULT_BLOCK`, :data:`RUNS_KEPT` ..., set here and read when used), ``_parquet``,
 ``_cache`` (what a worker keeps), ``_tasks``, ``_scheduling`` (:class:`FleetRun`), ``_run``
-(:func:`find_fleet_loops_dask`), ``_output`` (:func:`run_fleet_dask`) and ``_cli``.
+(:func:`find_fleet_loops_dask`), ``_output`` (:func:`run_fleet_dask`), ``_store``
+(:func:`update_store`) and ``_cli``.
 
 Requires ``dask[distributed]`` only with ``client=``, and pyarrow for Parquet
 (``pip install '.[dask]'`` in a checkout).
@@ -62,6 +65,7 @@ from ._output import run_fleet_dask
 from ._parquet import read_pose_parquet, write_pose_parquet
 from ._run import find_fleet_loops_dask
 from ._scheduling import ClusterError, FleetRun, local_client
+from ._store import update_store
 
 __all__ = [
     "DEFAULT_BLOCK",
@@ -74,6 +78,7 @@ __all__ = [
     "main",
     "read_pose_parquet",
     "run_fleet_dask",
+    "update_store",
     "write_pose_parquet",
 ]
 
@@ -94,6 +99,7 @@ for _obj in (
     local_client,
     find_fleet_loops_dask,
     run_fleet_dask,
+    update_store,
     main,
     read_pose_parquet,
     write_pose_parquet,

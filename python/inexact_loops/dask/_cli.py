@@ -17,6 +17,7 @@ from . import _settings
 from ._output import path_inputs, run_fleet_dask
 from ._parquet import atomic
 from ._scheduling import one_line
+from ._store import update_store
 
 # ---------------------------------------------------------------------------------------------
 # The command line: loops-dask
@@ -37,9 +38,12 @@ def _parser() -> argparse.ArgumentParser:
             "  loops-dask fleet/*.mcap --gamma 40 --out results\n"
             "  loops-dask fleet/*.mcap --gamma 40 --scheduler tcp://10.0.0.5:8786 \\\n"
             "      --out /shared/results\n"
+            "  loops-dask day31/*.mcap --store /shared/city --scheduler tcp://10.0.0.5:8786\n"
             "\nIn --out: components.parquet, session_pairs.parquet, samples.parquet,\n"
             "failures.parquet (sessions left out, with their error),\n"
             "loop_duration/<session>.parquet, summary.json.\n"
+            "With --store DIR instead of --out: the logs are added to (or replace sessions\n"
+            "of) the fleet store in DIR, updated by a worker (see `loops fleet --store`).\n"
             "Exit code 0; 1 when a session was left out; 2 on an error."
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -92,7 +96,9 @@ def _parser() -> argparse.ArgumentParser:
         help="how far from unit length a quaternion may be",
     )
     p.add_argument(
-        "--gamma", type=float, required=True, help="the distance threshold γ, in the metric's unit"
+        "--gamma",
+        type=float,
+        help="the distance threshold γ, in the metric's unit (with --store: only to make it)",
     )
     p.add_argument("--metric", help="the metric (as `loops fleet`); default: the sessions' own")
     p.add_argument(
@@ -149,7 +155,19 @@ def _parser() -> argparse.ArgumentParser:
         default=_settings.DEFAULT_FAN_IN,
         help=f"summaries per merge task [default: {_settings.DEFAULT_FAN_IN}]",
     )
-    p.add_argument("--out", required=True, metavar="DIR", help="the folder for the results")
+    p.add_argument("--out", metavar="DIR", help="the folder for the results")
+    p.add_argument(
+        "--store",
+        metavar="DIR",
+        help="update the fleet store in DIR instead (made by the first update, with --gamma)",
+    )
+    p.add_argument(
+        "--remove",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="with --store: remove the stored session NAME",
+    )
     p.add_argument(
         "--force",
         action="store_true",
@@ -171,6 +189,95 @@ def _pair(text: str | None, what: str, kind: Callable[[str], Any]) -> Any:
     if len(parts) != 2:
         raise InvalidParameterError(f"--{what} {text!r}: give two values separated by a comma")
     return tuple(kind(p) for p in parts)
+
+
+def _separation(args: argparse.Namespace) -> Any:
+    if args.no_separation:
+        return None
+    if args.separation_path is not None or args.separation_time is not None:
+        return _core.Separation(
+            path=args.separation_path or 0.0, time_s=args.separation_time or 0.0
+        )
+    return "auto"
+
+
+def _client(args: argparse.Namespace) -> Any:
+    """The client of ``--scheduler``, or ``None``."""
+    if not args.scheduler:
+        return None
+    try:
+        from distributed import Client  # type: ignore[import-untyped, import-not-found, unused-ignore]
+    except ImportError as error:
+        raise InvalidParameterError(
+            f"--scheduler needs dask.distributed: pip install '.[dask]' in a checkout ({error})"
+        ) from None
+    return Client(args.scheduler)
+
+
+def _update_store(args: argparse.Namespace, sessions: dict[str, Any]) -> int:
+    """``--store DIR``: the update of the store, on a worker of ``--scheduler`` or here."""
+    if args.out is not None:
+        raise InvalidParameterError("--store and --out: give one")
+    if not sessions and not args.remove:
+        raise InvalidParameterError("no sessions: give LOG files, --session NAME=FILE or --remove")
+    # The settings go only with --gamma: a store keeps those it was made with.
+    settings: dict[str, Any] = {}
+    if args.gamma is not None:
+        sampler = None if args.sampler == "none" else args.sampler
+        settings = {
+            "gamma": args.gamma,
+            "metric": args.metric,
+            "separation": _separation(args),
+            "block": args.block,
+            "sampler": sampler,
+        }
+        if sampler is not None:
+            settings.update(
+                budget=args.budget,
+                rate=args.rate,
+                seed=args.seed,
+                skip_trivial=args.skip_trivial,
+                between_only=args.between_only,
+            )
+    read = {
+        "format": args.format,
+        "axes": _pair(args.axes, "axes", int),
+        "topic": args.topic,
+        "time": args.time,
+        "frames": _pair(args.frames, "frames", str),
+        "rate_hz": args.rate_hz,
+        "drop_duplicate_stamps": args.drop_duplicate_stamps,
+        "quaternion_tolerance": args.quaternion_tolerance,
+    }
+    client = _client(args)
+    try:
+        summary = update_store(
+            args.store,
+            add=sessions or None,
+            remove=args.remove or None,
+            client=client,
+            threads=args.threads,
+            **settings,
+            **read,
+        )
+    finally:
+        if client is not None:
+            client.close()
+    text = json.dumps(summary, indent=2, default=float)
+    if args.json == "-":
+        print(text)
+    elif args.json:
+        atomic(Path(args.json), lambda tmp: Path(tmp).write_text(text + "\n"))
+    if not args.quiet and args.json != "-":
+        u = summary["last_update"]
+        where = args.scheduler or "this machine"
+        print(
+            f"loops-dask: store {args.store}: {len(u['added'])} added, {len(u['replaced'])} "
+            f"replaced, {len(u['removed'])} removed; {u['tiles_scanned']} tiles scanned, "
+            f"{u['tiles_kept']} kept on {where}; {summary['components']} components "
+            f"({summary['added_components']} of the changed sessions)"
+        )
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -196,16 +303,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise InvalidParameterError(f"two sessions are named {name!r}")
             parts = files.split(",")
             sessions[name] = parts[0] if len(parts) == 1 else parts
+        if args.store is not None:
+            return _update_store(args, sessions)
+        if args.out is None or args.gamma is None:
+            raise InvalidParameterError("give --out DIR and --gamma (or --store DIR)")
+        if args.remove:
+            raise InvalidParameterError("--remove goes with --store")
         if not sessions:
             raise InvalidParameterError("no sessions: give LOG files or --session NAME=FILE")
-        if args.no_separation:
-            separation: Any = None
-        elif args.separation_path is not None or args.separation_time is not None:
-            separation = _core.Separation(
-                path=args.separation_path or 0.0, time_s=args.separation_time or 0.0
-            )
-        else:
-            separation = "auto"
+        separation = _separation(args)
         sampler = None if args.sampler == "none" else args.sampler
         if args.json and args.json != "-":
             _core.refuse_output_on_input("--json", Path(args.json), path_inputs(sessions))
@@ -213,16 +319,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 raise InvalidParameterError(
                     f"--json {args.json} exists; pass --force to replace it"
                 )
-        client = None
-        if args.scheduler:
-            try:
-                from distributed import Client  # type: ignore[import-untyped, import-not-found, unused-ignore]
-            except ImportError as error:
-                raise InvalidParameterError(
-                    "--scheduler needs dask.distributed: "
-                    f"pip install '.[dask]' in a checkout ({error})"
-                ) from None
-            client = Client(args.scheduler)
+        client = _client(args)
         try:
             summary = run_fleet_dask(
                 sessions,

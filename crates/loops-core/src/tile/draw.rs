@@ -45,7 +45,9 @@ pub fn tile_requests(merged: &MergedLoops, request: &DrawRequest) -> Vec<Option<
 /// tile reads ([`draw_tile_runs`]), kept where the tile was scanned
 /// ([`scan_session_tile`](crate::tile::scan_session_tile) with [`TileKeep::runs`](crate::tile::TileKeep::runs))
 /// so that the draw need not rescan it. Owns its runs (16 bytes a run), not the tile's poses.
-#[derive(Debug, Clone)]
+/// A fleet store saves them beside its tiles ([`to_bytes`](Self::to_bytes)).
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TileRuns {
     tile: Tile,
     starts: [usize; 2],
@@ -121,6 +123,16 @@ impl TileRuns {
         &self.tile
     }
 
+    /// γ and the separation it was scanned with.
+    pub(crate) fn scanned_with(&self) -> (f64, Separation) {
+        (self.gamma, self.separation)
+    }
+
+    /// The first fleet index of its two sessions.
+    pub(crate) fn starts(&self) -> [usize; 2] {
+        self.starts
+    }
+
     /// Its runs.
     pub fn run_count(&self) -> usize {
         self.provisional.len()
@@ -136,6 +148,64 @@ impl TileRuns {
 
     fn to_fleet(&self, k: usize) -> usize {
         fleet_index(&self.piece_starts, &self.fleet_starts, k)
+    }
+
+    /// The runs as bytes (a tag, [`TILE_FORMAT_VERSION`](crate::TILE_FORMAT_VERSION),
+    /// MessagePack): 16 bytes a run and 8 a row, about [`heap_bytes`](Self::heap_bytes).
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        crate::tile::encode(*b"ILtr", self)
+    }
+
+    /// The runs from [`to_bytes`](Self::to_bytes), checked to fit together (labels of its
+    /// components, each run's label, the stretches of rows within its piece).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"tile runs"`) for other bytes or parts that do not fit.
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let runs: Self = crate::tile::decode(*b"ILtr", "tile runs", bytes)?;
+        runs.check().map_err(|reason| Error::InvalidState { what: "tile runs", reason })?;
+        Ok(runs)
+    }
+
+    /// Its parts fit together: what a draw indexes by is in range.
+    #[cfg(feature = "serde")]
+    fn check(&self) -> std::result::Result<(), String> {
+        let set = &self.set;
+        let runs = set.row_offset(set.rows());
+        if self.provisional.len() != runs {
+            return Err(format!("{} labels for {runs} runs", self.provisional.len()));
+        }
+        if self.spans.len() != self.components as usize {
+            return Err(format!("{} spans for {} components", self.spans.len(), self.components));
+        }
+        if let Some(p) = self.provisional.iter().find(|&&p| p >= self.components) {
+            return Err(format!("label {p} of {} components", self.components));
+        }
+        if let Some(s) = self.spans.iter().find(|s| s[0] <= s[1] && s[1] as usize >= set.rows()) {
+            return Err(format!("a component spans rows {s:?} of {} rows", set.rows()));
+        }
+        let starts = &self.piece_starts;
+        if starts.len() != self.fleet_starts.len()
+            || starts.first().is_some_and(|&s| s != 0)
+            || starts.windows(2).any(|w| w[0] >= w[1])
+            || starts.last().is_some_and(|&s| s >= self.piece_len.max(1))
+        {
+            return Err(format!("stretches {starts:?} of a piece of {} poses", self.piece_len));
+        }
+        if self.rows > self.piece_len || set.rows() > self.piece_len {
+            return Err(format!(
+                "{} rows ({} in its set) of a piece of {} poses",
+                self.rows,
+                set.rows(),
+                self.piece_len
+            ));
+        }
+        if let Some(k) = (0..set.rows()).find(|&k| set.row(k).iter().any(|r| r.end as usize >= self.piece_len)) {
+            return Err(format!("row {k} has a run beyond the piece's {} poses", self.piece_len));
+        }
+        Ok(())
     }
 
     /// Renumbers the tile's sessions `sessions` and moves its rows and columns by `shifts`

@@ -1452,6 +1452,7 @@ impl TileMerge {
 
 /// A fleet's loop component from merged tiles.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct MergedComponent {
     /// The component in fleet indices: the component of
     /// [`FleetLoops::loops`](crate::fleet::FleetLoops::loops) with this id.
@@ -1467,6 +1468,7 @@ pub struct MergedComponent {
 
 /// The fleet's loop components from merged tiles ([`TileMerge::finish`]), by id.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct MergedLoops {
     components: Vec<MergedComponent>,
     tiles: Vec<Tile>,
@@ -1476,6 +1478,36 @@ pub struct MergedLoops {
 }
 
 impl MergedLoops {
+    /// The merge as bytes (a tag, [`TILE_FORMAT_VERSION`], MessagePack): what a fleet store
+    /// saves of each session pair, so that a store read back need not merge again.
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        encode(*b"ILml", self)
+    }
+
+    /// The merge from [`to_bytes`](Self::to_bytes), checked to fit together (a label list a
+    /// tile, labels of its components, a first cell a component).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"merged loops"`) for other bytes or parts that do not
+    /// fit.
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let merged: Self = decode(*b"ILml", "merged loops", bytes)?;
+        let n = merged.components.len();
+        let problem = if merged.labels.len() != merged.tiles.len() {
+            Some(format!("{} label lists for {} tiles", merged.labels.len(), merged.tiles.len()))
+        } else if merged.firsts.len() != n {
+            Some(format!("{} first cells for {n} components", merged.firsts.len()))
+        } else {
+            merged.labels.iter().flatten().find(|&&c| c as usize >= n).map(|c| format!("label {c} of {n} components"))
+        };
+        match problem {
+            Some(reason) => Err(Error::InvalidState { what: "merged loops", reason }),
+            None => Ok(merged),
+        }
+    }
+
     /// Renumbers the merge's session pair `sessions` and moves its rows and columns by
     /// `shifts` (fleet indices): what merging the moved tiles gives, for a merge of the tiles
     /// of one session pair. O(components + tiles).
@@ -1612,7 +1644,13 @@ pub fn merge_tiles(summaries: &[TileSummary]) -> Result<Vec<LoopComponent>> {
 
 /// The tags of the byte formats, and what each holds.
 #[cfg(feature = "serde")]
-const TAGS: [([u8; 4], &str); 3] = [(*b"ILsb", "session blocks"), (*b"ILts", "tile summary"), (*b"ILtm", "tile merge")];
+const TAGS: [([u8; 4], &str); 5] = [
+    (*b"ILsb", "session blocks"),
+    (*b"ILts", "tile summary"),
+    (*b"ILtm", "tile merge"),
+    (*b"ILtr", "tile runs"),
+    (*b"ILml", "merged loops"),
+];
 
 /// `value` after its tag and the format version.
 #[cfg(feature = "serde")]

@@ -1,0 +1,101 @@
+"""A fleet store kept up to date on a Dask cluster: :func:`update_store`."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import Any
+
+from .. import _core
+from ..errors import InvalidParameterError
+
+
+def update_store(
+    path: str | os.PathLike[str],
+    *,
+    add: Any = None,
+    remove: Any = None,
+    client: Any = None,
+    **options: Any,
+) -> dict[str, Any]:
+    """Adds, replaces and removes sessions of the fleet store in the folder ``path``
+    (:meth:`inexact_loops.FleetStore.update`), on a worker of a Dask cluster or in this process.
+
+    The update is the store's own (:meth:`~inexact_loops.FleetStore.update`: it scans only the
+    tiles that hold an added or replaced session, merges them into the kept session pairs, draws
+    the samples from the kept runs, and writes the new state atomically); this function only
+    says where it runs. With ``client=``, one task on the cluster reads the new logs and the
+    store's files, scans, merges and writes every table there: the client sends paths and names
+    and gets back the summary below, O(sessions), never the components, the tiles or the poses.
+    A worker that dies during the update leaves the store as it was (the state is swapped in one
+    rename), and Dask runs the task again on another worker: the store ends in the new state.
+
+    Args:
+        path: the store's folder (missing or empty: the first update makes the store there).
+        add: sessions as :meth:`~inexact_loops.FleetStore.update` takes them. With ``client=``
+            they must be paths the workers reach (a dict ``{name: path}``, ``(name, path)``
+            pairs or paths named by their stem), as in :func:`find_fleet_loops_dask`.
+        remove: names of stored sessions to remove.
+        client: a ``dask.distributed.Client``; ``None``: in this process, without Dask.
+        options: the settings, sampler, ``threads`` and reading keywords of
+            :meth:`~inexact_loops.FleetStore.update` (``threads=None``: one per core of the
+            worker).
+
+    Returns:
+        ``{"path", "state_path", "names", "components", "added_components", "samples",
+        "last_update"}``: the store's folder and current state, its sessions' names, its
+        component count, the components of the sessions the update added or replaced, the
+        sample count, and :attr:`~inexact_loops.FleetStore.last_update`.
+
+    Raises:
+        TypeError: a :class:`~inexact_loops.Trajectory` in ``add`` with ``client=``.
+        InvalidParameterError, OSError, LoopsIOError: as
+            :meth:`~inexact_loops.FleetStore.update` (a corrupt log, a setting other than the
+            store's ...), raised here from the worker; the store is then unchanged.
+
+    Example:
+        >>> import numpy as np, tempfile, inexact_loops as il
+        >>> from inexact_loops.dask import update_store
+        >>> x = np.arange(21) * 0.5
+        >>> monday = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+        >>> folder = tempfile.mkdtemp() + "/store"
+        >>> summary = update_store(folder, add={"monday": monday}, gamma=1.0, block=8)
+        >>> summary["names"], summary["last_update"]["added"]
+        (['monday'], ['monday'])
+    """
+    if client is not None:
+        values = add.values() if isinstance(add, Mapping) else (add or [])
+        for value in values:
+            item = value[1] if isinstance(value, tuple) and len(value) == 2 else value
+            if isinstance(item, _core.Trajectory):
+                raise TypeError(
+                    "a session of add= is a Trajectory: with client=, workers read every "
+                    "session from a path (the client ships no poses): write it to a file, or "
+                    "run without client="
+                )
+    if remove is not None and isinstance(remove, str):
+        raise InvalidParameterError(f"remove = {remove!r} is invalid: give a list of session names")
+    folder = os.fspath(path)
+    if client is None:
+        return store_update_task(folder, add, remove, options)
+    future = client.submit(store_update_task, folder, add, remove, options, pure=False)
+    return future.result()
+
+
+def store_update_task(
+    folder: str, add: Any, remove: Any, options: dict[str, Any]
+) -> dict[str, Any]:
+    """Task: the update, where it runs, and its summary (O(sessions))."""
+    from .. import FleetStore
+
+    store = FleetStore.open(folder)
+    update = store.update(add=add, remove=remove, **options)
+    return {
+        "path": os.fspath(store.path),
+        "state_path": os.fspath(store.state_path),
+        "names": list(store.names),
+        "components": len(store.components["id"]),
+        "added_components": len(store.added),
+        "samples": len(store.samples["i"]) if store.sampler is not None else None,
+        "last_update": dict(update),
+    }
