@@ -8,8 +8,8 @@ use std::collections::{BTreeMap, HashMap};
 use loops_core::{
     Euclidean, Result, SampleSize, Sampler, SamplerKind, Separation, Trajectory, UrbanDrive, UrbanFleet,
     fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet},
-    tile::{MergedLoops, TileRuns},
     store::{FleetStore, StoreSession, StoreSettings},
+    tile::{MergedLoops, TileRuns},
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -846,7 +846,12 @@ fn write_merges(path: &Path, store: &FleetStore) -> Result<()> {
     )
 }
 
-fn write_components(path: &Path, loops: &loops_core::store::StoreLoops, names: &[&str], added: &HashSet<usize>) -> Result<()> {
+fn write_components(
+    path: &Path,
+    loops: &loops_core::store::StoreLoops,
+    names: &[&str],
+    added: &HashSet<usize>,
+) -> Result<()> {
     let c = loops.components();
     let times = loops.component_times_s();
     let f = |g: &dyn Fn(&loops_core::fleet::FleetComponent) -> f64| Column::Float(c.iter().map(g).collect());
