@@ -86,7 +86,7 @@ def store_update_task(
     folder: str, add: Any, remove: Any, options: dict[str, Any]
 ) -> dict[str, Any]:
     """Task: the update, where it runs, and its summary (O(sessions))."""
-    from .. import FleetStore
+    from .._core import FleetStore
 
     store = FleetStore.open(folder)
     update = store.update(add=add, remove=remove, **options)
