@@ -493,8 +493,10 @@ def test_bad_budget_rate_and_sampler(small):
             il.sample(source, "rho", budget=0, seed=0, **extra)
         with pytest.raises(il.InvalidParameterError, match="not both"):
             il.sample(source, "rho", rate=0.1, budget=10, seed=0, **extra)
-        with pytest.raises(il.InvalidParameterError, match="give rate or budget"):
-            il.sample(source, "rho", seed=0, **extra)
+        # Neither a rate nor a budget: the command line's default budget.
+        neither = il.sample(source, "rho", seed=0, **extra)
+        assert neither == il.sample(source, "rho", budget=il.DEFAULT_BUDGET, seed=0, **extra)
+        assert neither != il.sample(source, "rho", budget=3, seed=0, **extra)
         with pytest.raises(il.InvalidParameterError, match="rate = 1.5 is invalid"):
             il.sample(source, "alpha", rate=1.5, seed=0, **extra)
         with pytest.raises(il.InvalidParameterError, match="rate = -1 is invalid"):

@@ -1604,7 +1604,7 @@ def sample(
             baselines); or
         budget: exactly this many samples (fewer only when fewer exist, with a warning); every
             sampler but σ_α and the baselines keeps at least one per group whenever the budget
-            allows it (P1). Give one.
+            allows it (P1). Give at most one; neither draws :data:`DEFAULT_BUDGET`.
         seed: the seed (ChaCha8): the same samples on every machine and thread count.
         trajectory: the :class:`Trajectory` the loops were found on (required for ``Loops``);
             with clusters, optional: the samples are then placed on it and their distances
@@ -1624,7 +1624,7 @@ def sample(
 
     Raises:
         InvalidParameterError: an unknown sampler (the message lists the names), a baseline on
-            clusters, rate and budget both or neither, a budget of 0, a rate out of range, a
+            clusters, both rate and budget, a budget of 0, a rate out of range, a
             trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline; a
             budget or rate that makes more than 5,000,000 samples (the message says how many
             and how much memory they would take), refused before anything is drawn.
@@ -2953,7 +2953,8 @@ class TiledFleetLoops:
 
         Args:
             sampler: the sampler's name (``None``: :data:`DEFAULT_SAMPLER`).
-            rate, budget: as :func:`sample_fleet` (exactly one).
+            rate, budget: as :func:`sample_fleet` (at most one; neither:
+                :data:`DEFAULT_BUDGET`).
             seed: the seed.
             between_only: only the components between two sessions.
             skip_trivial: leave out the trivial components.
@@ -2962,8 +2963,8 @@ class TiledFleetLoops:
             :class:`KeyedDraw`.
 
         Raises:
-            InvalidParameterError: an unknown sampler, a baseline, both or neither of rate and
-                budget, a budget of 0, a rate out of range, a result read from a pickle (which
+            InvalidParameterError: an unknown sampler, a baseline, both rate and budget, a
+                budget of 0, a rate out of range, a result read from a pickle (which
                 holds no merge); ``TooManySamplesError`` as :func:`sample_fleet`.
         """
     @property

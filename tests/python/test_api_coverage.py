@@ -1245,8 +1245,9 @@ def test_sample_errors(traj, loops, clusters):
         il.sample(clusters, "best", budget=1, seed=0)
     with raises(il.InvalidParameterError, '"lio-sam"', "one, rho, rho-dispersed, alpha"):
         il.sample(clusters, "lio-sam", budget=1, seed=0)
-    with raises(il.InvalidParameterError, "rate or budget"):
-        il.sample(clusters, "one", seed=0)
+    assert il.sample(clusters, "one", seed=0) == il.sample(
+        clusters, "one", budget=il.DEFAULT_BUDGET, seed=0
+    )
     with raises(il.InvalidParameterError, "budget = 0"):
         il.sample(clusters, "one", budget=0, seed=0)
     with raises(il.InvalidParameterError, "rate = 2", "(0, 1]"):

@@ -593,6 +593,14 @@ def test_samples_on_the_cluster_equal_sample_fleet(tmp_path, client, separation)
         unpickled.draw("rho", budget=10, seed=0)
     many = tiled.loops.draw("one", budget=10_000_000, seed=0)
     assert any("candidates" in w for w in many.warnings), many.warnings
+    # Neither a rate nor a budget: the core's default budget, as sample_fleet takes it.
+    default = tiled.loops.draw(seed=2)
+    assert (default.groups, default.available) == (
+        tiled.loops.draw(il.DEFAULT_SAMPLER, budget=il.DEFAULT_BUDGET, seed=2).groups,
+        il.sample_fleet(loops, seed=2).samples.available,
+    )
+    with pytest.raises(il.InvalidParameterError, match="rate"):
+        tiled.loops.draw(rate=0.5, budget=10, seed=0)
 
 
 def runs_counts(client) -> dict[str, int]:

@@ -269,7 +269,7 @@ const char *loops_version(void);
  *
  * # Errors
  * [`LoopsStatus::InvalidParameter`] for γ, the metric, and a `dim` the metric does not take
- * or above 65,536 (`loops_core::OnlineLoops::MAX_DIM`).
+ * or above 65,536 (`loops_core::online::OnlineLoops::MAX_DIM`).
  *
  * # Safety
  * `metric` is NULL or a NUL-terminated string; `out` is valid for writing a pointer.

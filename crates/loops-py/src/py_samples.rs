@@ -59,7 +59,8 @@ pub(crate) fn sampler_kind(sampler: Option<&str>) -> PyResult<SamplerKind> {
     Ok(sampler.map(str::parse).transpose().map_err(Failure::from)?.unwrap_or(SamplerKind::DEFAULT))
 }
 
-/// The sampler named `sampler` ([`sampler_kind`]), drawing `rate` or `budget` (one of them) with
+/// The sampler named `sampler` ([`sampler_kind`]), drawing `rate` or `budget` (at most one of
+/// them; neither: [`SampleSize::DEFAULT_BUDGET`], as on the command line) with
 /// `seed`, from the keywords of the functions that sample; the baselines' parameters are the
 /// library defaults.
 pub(crate) fn sampler_of(
@@ -70,7 +71,7 @@ pub(crate) fn sampler_of(
     skip_trivial: bool,
 ) -> PyResult<Sampler> {
     let kind = sampler_kind(sampler)?;
-    let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
+    let size = SampleSize::or_default(rate, budget).map_err(Failure::from)?;
     Ok(Sampler { skip_trivial, ..Sampler::new(kind, size, seed) })
 }
 
@@ -126,7 +127,7 @@ pub(crate) fn baseline_params(
 ///         baselines); or
 ///     budget: exactly this many samples (fewer only when fewer exist, with a warning); every
 ///         sampler but σ_α and the baselines keeps at least one per group whenever the budget
-///         allows it (P1). Give one.
+///         allows it (P1). Give at most one; neither draws :data:`DEFAULT_BUDGET`.
 ///     seed: the seed (ChaCha8): the same samples on every machine and thread count.
 ///     trajectory: the :class:`Trajectory` the loops were found on (required for ``Loops``);
 ///         with clusters, optional: the samples are then placed on it and their distances
@@ -146,7 +147,7 @@ pub(crate) fn baseline_params(
 ///
 /// Raises:
 ///     InvalidParameterError: an unknown sampler (the message lists the names), a baseline on
-///         clusters, rate and budget both or neither, a budget of 0, a rate out of range, a
+///         clusters, both rate and budget, a budget of 0, a rate out of range, a
 ///         trajectory that is not the loops', ``skip_trivial`` with clusters or a baseline; a
 ///         budget or rate that makes more than 5,000,000 samples (the message says how many
 ///         and how much memory they would take), refused before anything is drawn.

@@ -44,7 +44,7 @@ pub(crate) fn plan_draw(
     skip_trivial: bool,
 ) -> PyResult<KeyedDraw> {
     let kind = crate::py_samples::sampler_kind(sampler)?;
-    let size = SampleSize::from_rate_or_budget(rate, budget).map_err(Failure::from)?;
+    let size = SampleSize::or_default(rate, budget).map_err(Failure::from)?;
     let spec = Sampler { skip_trivial, ..Sampler::new(kind, size, seed) };
     let (merged, starts) = (Arc::clone(merged), starts.to_vec());
     let kept = Arc::clone(&merged);

@@ -225,7 +225,8 @@ impl TiledFleetLoops {
     ///
     /// Args:
     ///     sampler: the sampler's name (``None``: :data:`DEFAULT_SAMPLER`).
-    ///     rate, budget: as :func:`sample_fleet` (exactly one).
+    ///     rate, budget: as :func:`sample_fleet` (at most one; neither:
+    ///         :data:`DEFAULT_BUDGET`).
     ///     seed: the seed.
     ///     between_only: only the components between two sessions.
     ///     skip_trivial: leave out the trivial components.
@@ -234,8 +235,8 @@ impl TiledFleetLoops {
     ///     :class:`KeyedDraw`.
     ///
     /// Raises:
-    ///     InvalidParameterError: an unknown sampler, a baseline, both or neither of rate and
-    ///         budget, a budget of 0, a rate out of range, a result read from a pickle (which
+    ///     InvalidParameterError: an unknown sampler, a baseline, both rate and budget, a
+    ///         budget of 0, a rate out of range, a result read from a pickle (which
     ///         holds no merge); ``TooManySamplesError`` as :func:`sample_fleet`.
     #[pyo3(signature = (sampler=None, *, rate=None, budget=None, seed, between_only=false, skip_trivial=false))]
     #[allow(clippy::too_many_arguments)]

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._core import DEFAULT_BUDGET, DEFAULT_SAMPLER
+from .._core import DEFAULT_SAMPLER
 from ..errors import InvalidParameterError, LoopsError
 from ..table import Table
 from . import _settings
@@ -321,8 +321,6 @@ class FleetRun:
         Returns:
             :class:`Table` as :attr:`FleetSamples.table`.
         """
-        if rate is None and budget is None:
-            budget = DEFAULT_BUDGET
         started = time.perf_counter()
         draw = self._loops.draw(
             sampler,
