@@ -238,16 +238,7 @@ impl LiveScene {
             .into_iter()
             .filter_map(|id| engine.component(id))
             .map(|c| {
-                let component = SceneComponent {
-                    id: c.id as usize,
-                    trivial: c.trivial,
-                    sessions: [0, 0],
-                    poses: [c.i_range, c.j_range],
-                    closest_pair: c.closest_pair,
-                    closest_distance: c.closest_distance,
-                    area_s2: c.area_s2,
-                    pair_count: c.pair_count,
-                };
+                let component = SceneComponent::from(c);
                 markers.extend(component_markers(&component, [positions, positions]));
                 component_entity(frame_id, timestamp, [positions, positions], [name, name], &component)
             })

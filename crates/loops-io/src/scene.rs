@@ -168,6 +168,38 @@ pub struct SceneComponent {
     pub pair_count: u64,
 }
 
+impl From<&loops_core::LoopComponent> for SceneComponent {
+    /// A component of one trajectory (`sessions` `[0, 0]`).
+    fn from(c: &loops_core::LoopComponent) -> Self {
+        Self {
+            id: c.id,
+            trivial: c.trivial,
+            sessions: [0, 0],
+            poses: [c.i_range, c.j_range],
+            closest_pair: c.closest_pair,
+            closest_distance: c.closest_distance,
+            area_s2: c.area_s2,
+            pair_count: c.pair_count,
+        }
+    }
+}
+
+impl From<&loops_core::online::OnlineComponent> for SceneComponent {
+    /// A component of the online engine, as it stands (`sessions` `[0, 0]`).
+    fn from(c: &loops_core::online::OnlineComponent) -> Self {
+        Self {
+            id: c.id as usize,
+            trivial: c.trivial,
+            sessions: [0, 0],
+            poses: [c.i_range, c.j_range],
+            closest_pair: c.closest_pair,
+            closest_distance: c.closest_distance,
+            area_s2: c.area_s2,
+            pair_count: c.pair_count,
+        }
+    }
+}
+
 /// A sampled candidate pair as the scene draws it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -315,20 +347,7 @@ impl Scene {
             orientations_xyzw: orientations_xyzw.map(<[_]>::to_vec),
             loop_duration_s: loops.loop_duration(Selection::All, Side::Both, Scale::Seconds)?,
         };
-        let components = loops
-            .components()
-            .iter()
-            .map(|c| SceneComponent {
-                id: c.id,
-                trivial: c.trivial,
-                sessions: [0, 0],
-                poses: [c.i_range, c.j_range],
-                closest_pair: c.closest_pair,
-                closest_distance: c.closest_distance,
-                area_s2: c.area_s2,
-                pair_count: c.pair_count,
-            })
-            .collect();
+        let components = loops.components().iter().map(SceneComponent::from).collect();
         let mut candidates = Vec::with_capacity(samples.len());
         for sample in samples.rows() {
             if let Some(pair) = sample.pair {
@@ -469,17 +488,7 @@ fn plane_image(loops: &Loops, grid: &PlaneGrid, pairs: &[[usize; 2]]) -> loops_c
         .components()
         .iter()
         .map(|c| {
-            let component = SceneComponent {
-                id: c.id,
-                trivial: c.trivial,
-                sessions: [0, 0],
-                poses: [c.i_range, c.j_range],
-                closest_pair: c.closest_pair,
-                closest_distance: c.closest_distance,
-                area_s2: c.area_s2,
-                pair_count: c.pair_count,
-            };
-            component.rgba().map(|v| (v * 255.0).round() as u8)[..3].try_into().expect("three channels")
+            SceneComponent::from(c).rgba().map(|v| (v * 255.0).round() as u8)[..3].try_into().expect("three channels")
         })
         .collect();
     let mut rgb = vec![0; width * height * 3];
