@@ -7,7 +7,7 @@ them in ``crates/loops-py``, not here.
 from collections.abc import Callable
 from os import PathLike
 from pathlib import Path
-from typing import Any, ClassVar, Literal, Protocol, final, overload
+from typing import Any, ClassVar, Literal, Protocol, final
 
 import numpy as np
 import numpy.typing as npt
@@ -2738,63 +2738,6 @@ class TileSummary:
     def edge_count(self) -> int:
         """Number of runs on the tile's edges."""
 
-@overload
-def scan_tile(
-    tile: Tile,
-    session_a: Trajectory,
-    session_b: Trajectory | None = None,
-    *,
-    starts: tuple[int, int],
-    gamma: float,
-    metric: _MetricName = None,
-    separation: Separation | float | Literal["auto", "none"] | None = "auto",
-    threads: int | None = None,
-    duration: Literal[False] = False,
-    runs: Literal[False] = False,
-) -> TileSummary: ...
-@overload
-def scan_tile(
-    tile: Tile,
-    session_a: Trajectory,
-    session_b: Trajectory | None = None,
-    *,
-    starts: tuple[int, int],
-    gamma: float,
-    metric: _MetricName = None,
-    separation: Separation | float | Literal["auto", "none"] | None = "auto",
-    threads: int | None = None,
-    duration: Literal[True],
-    runs: Literal[False] = False,
-) -> tuple[TileSummary, TileDuration]: ...
-@overload
-def scan_tile(
-    tile: Tile,
-    session_a: Trajectory,
-    session_b: Trajectory | None = None,
-    *,
-    starts: tuple[int, int],
-    gamma: float,
-    metric: _MetricName = None,
-    separation: Separation | float | Literal["auto", "none"] | None = "auto",
-    threads: int | None = None,
-    duration: Literal[False] = False,
-    runs: Literal[True],
-) -> tuple[TileSummary, TileRuns]: ...
-@overload
-def scan_tile(
-    tile: Tile,
-    session_a: Trajectory,
-    session_b: Trajectory | None = None,
-    *,
-    starts: tuple[int, int],
-    gamma: float,
-    metric: _MetricName = None,
-    separation: Separation | float | Literal["auto", "none"] | None = "auto",
-    threads: int | None = None,
-    duration: Literal[True],
-    runs: Literal[True],
-) -> tuple[TileSummary, TileDuration, TileRuns]: ...
-@overload
 def scan_tile(
     tile: Tile,
     session_a: Trajectory,
