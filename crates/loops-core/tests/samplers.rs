@@ -346,8 +346,8 @@ fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
         assert_eq!(set.len() as u64, budget, "a pair twice");
         samples
     };
-    for seed in [0, 7] {
-        let samples = draw(near_total / 2, seed);
+    // Picks per component; each non-trivial pick is its row's closest pair.
+    let rows_closest_counts = |samples: &Samples| {
         let mut counts: BTreeMap<usize, u64> = BTreeMap::new();
         for r in samples.rows() {
             let c = r.component.unwrap();
@@ -357,6 +357,11 @@ fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
                 assert_eq!(r.distance.unwrap(), closest(c, i), "{:?}: not its row's closest pair", r.pair);
             }
         }
+        counts
+    };
+    for seed in [0, 7] {
+        let samples = draw(near_total / 2, seed);
+        let counts = rows_closest_counts(&samples);
         assert_eq!(counts.len(), groups.len(), "P1 fails");
         let picked: BTreeSet<[usize; 2]> = samples.rows().iter().map(|r| r.pair.unwrap()).collect();
         for &c in groups.iter().filter(|&&c| !components[c].trivial) {
@@ -381,15 +386,7 @@ fn nearest_then_uniform_takes_rows_closest_pairs_then_uniform_picks() {
         let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
         assert_eq!(samples.len(), budget);
         assert!(matches!(samples.warnings(), [SampleWarning::BudgetBelowGroups { .. }]));
-        let mut counts: BTreeMap<usize, u64> = BTreeMap::new();
-        for r in samples.rows() {
-            let c = r.component.unwrap();
-            *counts.entry(c).or_default() += 1;
-            if !components[c].trivial {
-                let [i, _] = r.pair.unwrap();
-                assert_eq!(r.distance.unwrap(), closest(c, i), "{:?}: not its row's closest pair", r.pair);
-            }
-        }
+        let counts = rows_closest_counts(&samples);
         let spans: u64 = groups.iter().map(|&c| span(c)).sum();
         for (&c, &k) in &counts {
             assert!(k <= near(c), "component {c}: {k} picks above its near cap {}", near(c));
