@@ -174,7 +174,7 @@ pub use loop_duration::{
 pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_mcap};
 pub use message::{DecodeError, DecodedPose, decode_poses};
 pub use pose_type::{MessageEncoding, PoseType};
-pub use quality::QualitySummary;
+pub use quality::{COMPARED_SAMPLERS, QualitySummary, compare_samplers};
 pub use read::{
     ReadNotes, ReadOptions, ReadPoses, format_of, read_pose_graph_with, read_trajectories, read_trajectory,
     read_trajectory_chaining, read_trajectory_with,

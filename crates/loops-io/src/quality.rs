@@ -1,7 +1,42 @@
 //! The quality of a sampling in a results summary: [`QualitySummary`], the counts and measures
-//! of a [`SampleQuality`] without its per-sample lists.
+//! of a [`SampleQuality`] without its per-sample lists; and [`compare_samplers`], the paper's
+//! samplers side by side at a run's sample count, which the reports draw.
 
-use loops_core::{SampleQuality, SamplerKind};
+use loops_core::{
+    Loops, MetricSpec, Result, SampleQuality, SampleSize, Sampler, SamplerKind, Trajectory, sample_quality,
+};
+
+/// The samplers a report compares at a run's sample count: σ_1, σ_ρ and σ_α (the run's own is
+/// added when it is not among them).
+pub const COMPARED_SAMPLERS: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::Alpha];
+
+/// Each of [`COMPARED_SAMPLERS`], and `run`'s own kind, drawn with `run`'s seed and options at a
+/// budget of `count` samples (at least 1), with its quality under the detection window
+/// `epsilon_s`: the samples-per-component figure of a report.
+///
+/// # Errors
+/// As [`MetricSpec::sample_loops`] and [`sample_quality`].
+pub fn compare_samplers(
+    spec: &MetricSpec,
+    traj: &Trajectory,
+    loops: &Loops,
+    run: &Sampler,
+    count: usize,
+    epsilon_s: f64,
+) -> Result<Vec<(SamplerKind, SampleQuality)>> {
+    let mut kinds = COMPARED_SAMPLERS.to_vec();
+    if !kinds.contains(&run.kind) {
+        kinds.push(run.kind);
+    }
+    kinds
+        .into_iter()
+        .map(|kind| {
+            let sampler = Sampler { kind, size: SampleSize::Budget(count.max(1)), ..run.clone() };
+            let samples = spec.sample_loops(traj, loops, &sampler)?;
+            Ok((kind, sample_quality(&samples, loops, epsilon_s)?))
+        })
+        .collect()
+}
 
 /// The counts and measures of a [`SampleQuality`] (P1, P2, P3), named for the sampler, as
 /// `summary.json` holds them; the per-component and per-sample lists are left out.
@@ -47,5 +82,39 @@ impl QualitySummary {
             median_spacing_s: quality.median_spacing_s,
             p3_slope: quality.p3_slope,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use loops_core::{Euclidean, Separation, find_loops_separated};
+
+    /// Two laps of a circle: one revisit.
+    fn two_laps() -> (Trajectory, Loops) {
+        let n = 400;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 * 0.1).collect();
+        let xy: Vec<[f64; 2]> = t.iter().map(|&s| [10.0 * (s * 0.314).cos(), 10.0 * (s * 0.314).sin()]).collect();
+        let traj = Trajectory::from_points(t, &xy).unwrap();
+        let loops = find_loops_separated(&traj, &Euclidean, 1.0, Separation::for_gamma(1.0)).unwrap();
+        (traj, loops)
+    }
+
+    #[test]
+    fn the_comparison_holds_the_paper_samplers_and_the_runs_own_at_its_count() {
+        let (traj, loops) = two_laps();
+        let spec = MetricSpec::Euclidean;
+        let run = Sampler::new(SamplerKind::DEFAULT, SampleSize::Budget(7), 3);
+        let compared = compare_samplers(&spec, &traj, &loops, &run, 5, 1.0).unwrap();
+        let kinds: Vec<SamplerKind> = compared.iter().map(|(kind, _)| *kind).collect();
+        assert_eq!(kinds, [SamplerKind::One, SamplerKind::Rho, SamplerKind::Alpha, SamplerKind::DEFAULT]);
+        for (kind, quality) in &compared {
+            assert_eq!(quality.samples, 5, "{kind:?} drew {} samples, not the run's 5", quality.samples);
+        }
+        // A run with one of the paper's samplers adds nothing, and no count still draws one.
+        let rho = Sampler { kind: SamplerKind::Rho, ..run };
+        let compared = compare_samplers(&spec, &traj, &loops, &rho, 0, 1.0).unwrap();
+        assert_eq!(compared.len(), COMPARED_SAMPLERS.len());
+        assert!(compared.iter().all(|(_, quality)| quality.samples == 1));
     }
 }

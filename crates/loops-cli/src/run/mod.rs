@@ -17,10 +17,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use loops_core::{
-    Loops, MetricSpec, SampleQuality, SampleSize, Sampler, SamplerKind, Scale, Selection, Separation, Side, Trajectory,
-    sample_quality,
-};
+use loops_core::{MetricSpec, Sampler, Scale, Selection, Separation, Side, Trajectory, sample_quality};
 use loops_io::{PoseTable, QualitySummary, SamplesFormat, WriteError};
 use rayon::prelude::*;
 
@@ -39,9 +36,6 @@ const LOG_SUMMARY: &str = "summary.json";
 /// The files of each log's folder, and those --mcap adds.
 const LOG_FILES: [&str; 5] = ["components.csv", "samples.csv", "loop_duration.csv", "summary.json", "report.html"];
 pub(crate) const MCAP_FILES: [&str; 2] = ["results.mcap", loops_io::FOXGLOVE_LAYOUT_FILE];
-
-/// The samplers of the samples-per-component figure (the run's own is added when not among them).
-const COMPARED: [SamplerKind; 3] = [SamplerKind::One, SamplerKind::Rho, SamplerKind::Alpha];
 
 /// Process many pose logs: per log its components, samples, loop durations, a summary and
 /// an HTML report, in a folder of its own; for the batch an index page and a summary.
@@ -324,7 +318,7 @@ pub(crate) fn analyse(
     let positions = if fits { table.positions.clone() } else { loops_io::point_positions(traj) };
     samples.set_positions(|k| positions.get(k).copied());
     let quality = sample_quality(&samples, &loops, epsilon_s)?;
-    let comparison = compare_samplers(spec, traj, &loops, &settings.sampler, samples.len(), epsilon_s)?;
+    let comparison = loops_io::compare_samplers(spec, traj, &loops, &settings.sampler, samples.len(), epsilon_s)?;
     seconds.sample = clock.elapsed().as_secs_f64();
 
     log.stage("writing");
@@ -426,29 +420,6 @@ pub(crate) fn outcome(name: &str, source: &str, done: Result<LogSummary>, log: p
             LogOutcome { name, source, ok: false, error: Some(message), summary: None }
         }
     }
-}
-
-/// Every compared sampler at the run's sample count and seed: the samples-per-component figure.
-fn compare_samplers(
-    spec: &MetricSpec,
-    traj: &Trajectory,
-    loops: &Loops,
-    run: &Sampler,
-    count: usize,
-    epsilon_s: f64,
-) -> Result<Vec<(SamplerKind, SampleQuality)>> {
-    let mut kinds: Vec<SamplerKind> = COMPARED.to_vec();
-    if !kinds.contains(&run.kind) {
-        kinds.push(run.kind);
-    }
-    kinds
-        .into_iter()
-        .map(|kind| {
-            let sampler = Sampler { kind, size: SampleSize::Budget(count.max(1)), ..run.clone() };
-            let samples = spec.sample_loops(traj, loops, &sampler)?;
-            Ok((kind, sample_quality(&samples, loops, epsilon_s)?))
-        })
-        .collect()
 }
 
 /// Writes one log's files into a staging folder (`write`), then moves it into place as
