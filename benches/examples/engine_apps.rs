@@ -56,7 +56,8 @@ fn main() {
                 start_spread_s: 3600.0,
             };
             let fleet = spec.generate().expect("valid fleet");
-            let options = FleetOptions { pruning: arg(6).parse::<Pruning>().expect("pruning"), ..FleetOptions::default() };
+            let options =
+                FleetOptions { pruning: arg(6).parse::<Pruning>().expect("pruning"), ..FleetOptions::default() };
             let reps = args.get(7).and_then(|r| r.parse().ok()).unwrap_or(3);
             (
                 reps,
