@@ -24,10 +24,10 @@ adding a sampler to ``--samplers`` runs that one alone); the table goes to
 adds the rows of other grids to the table). Each of ``--contenders`` (default: the default
 sampler and closest-then-spread, the default before it) gets its ratio to the best and to the
 nearer of the LIO-SAM and hdl_graph_slam rules per cell, and whether it meets the bar, side by
-side. A cell's medians are over the seeds every sampler of the cell ran; with ``--most-seeds``,
-over the seeds the contenders and the two rules all ran (more seeds added for some samplers
-only, ``--first-seed 3 --seeds 2 --samplers ...``), the samplers without all of them left out
-of that cell.
+side ("–" in a cell it did not run, which its count leaves out). A cell's medians are over
+the seeds every sampler of the cell ran; with ``--most-seeds``, over the seeds the contenders
+and the two rules all ran (more seeds added for some samplers only, ``--first-seed 3 --seeds 2
+--samplers ...``), the samplers without all of them left out of that cell.
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ import argparse
 import os
 import sys
 from collections import defaultdict
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -193,6 +194,9 @@ def report(
         "|" + "---|" * (len(head) + len(middle) + len(tail)),
     ]
     met = dict.fromkeys(contenders, 0)
+    ran = dict.fromkeys(contenders, 0)
+    # Per cell, each contender's verdict (None where it did not run): the summary's counts.
+    verdict_of: dict[tuple, dict[str, bool | None]] = {}
     for key in sorted(ate):
         medians = {n: float(np.median(v)) for n, v in ate[key].items()}
         best = min(medians.values())
@@ -203,11 +207,18 @@ def report(
         if brief:
             cells = [il.sampler_symbol(min(medians, key=lambda n: medians[n]))]
         verdicts = []
+        verdict_of[key] = dict.fromkeys(contenders)
         for c in contenders:
-            mine = medians.get(c, np.nan)
+            if c not in medians:
+                # A contender the cell did not run: no verdict, and not counted.
+                verdicts += ["–", "–", "–"]
+                continue
+            mine = medians[c]
             # A cell without either rule (left out by --most-seeds) cannot be met.
             ok = mine <= WITHIN * best and mine < rival < np.inf
             met[c] += ok
+            ran[c] += 1
+            verdict_of[key][c] = bool(ok)
             rules = f"{mine / rival:.2f}" if rival < np.inf else "–"
             verdicts += [f"{mine / best:.2f}", rules, "yes" if ok else "no"]
         d, on, verifier, outlier_rate, budget = key
@@ -223,13 +234,41 @@ def report(
         lines.append(
             f"{c}{' (the default)' if c == DEFAULT else ''} meets the bar (at most {WITHIN:.2f}x "
             f"the best median ATE, below the LIO-SAM and hdl_graph_slam rules) in {met[c]} of "
-            f"{len(ate)} cells."
+            f"the {ran[c]} cells it ran (of {len(ate)})."
         )
     lines.append("")
     lines.append(
         '"rules": the ratio to the nearer of the LIO-SAM and hdl_graph_slam rules (below 1: ahead).'
     )
+    lines += ["", *summary(verdict_of, contenders)]
     return "\n".join(lines) + "\n"
+
+
+def summary(verdict_of: dict[tuple, dict[str, bool | None]], contenders: list[str]) -> list[str]:
+    """The cells each contender meets, of those it ran, in all and by budget, dataset,
+    candidates' source and verifier model: a markdown table."""
+    groups: list[tuple[str, Callable[[tuple], bool]]] = [("all", lambda k: True)]
+    names: list[tuple[int, Callable[[object], str]]] = [
+        (4, lambda v: f"budget {v}"),
+        (0, str),
+        (1, lambda v: "candidates in rounds" if v == "rounds" else f"candidates on the {v}"),
+        (2, lambda v: f"{v} verifier"),
+        (3, lambda v: f"{v:.0%} wrong matches"),
+    ]
+    for i, name in names:
+        for value in sorted({k[i] for k in verdict_of}):
+            groups.append((name(value), lambda k, i=i, v=value: k[i] == v))
+    head = "| cells meeting the bar (of those run) | " + " | ".join(
+        f"{c}{' (the default)' if c == DEFAULT else ''}" for c in contenders
+    )
+    lines = [head + " |", "|---|" + "---|" * len(contenders)]
+    for label, inside in groups:
+        counts = []
+        for c in contenders:
+            run = [v[c] for k, v in verdict_of.items() if inside(k) and v[c] is not None]
+            counts.append(f"{sum(run)} of {len(run)}")
+        lines.append(f"| {label} | " + " | ".join(counts) + " |")
+    return lines
 
 
 def main() -> None:
