@@ -579,8 +579,12 @@ fn pass_by() -> Trajectory {
 fn the_first_candidate_at_the_closest_approach_is_the_pass_closest_pair() {
     let traj = pass_by();
     let separation = Separation::path(50.0);
-    let at_edge =
-        OnlineSamplerOptions { rate: 0.0, separation, first_offer: FirstOffer::AtEdge, ..OnlineSamplerOptions::default() };
+    let at_edge = OnlineSamplerOptions {
+        rate: 0.0,
+        separation,
+        first_offer: FirstOffer::AtEdge,
+        ..OnlineSamplerOptions::default()
+    };
     let at_closest = OnlineSamplerOptions { first_offer: FirstOffer::AtClosestApproach, ..at_edge };
     // The brute-force closest separated pair within γ, and the rows that reach the road east.
     let s = path_length(&traj, &Euclidean);
