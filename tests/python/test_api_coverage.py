@@ -144,7 +144,10 @@ ELSEWHERE = {
                 "Candidate.distance",
                 "Candidate.first",
             ),
-            "test_a_candidate_offered_after_its_pair_says_both": ("Candidate.k", "Candidate.improves"),
+            "test_a_candidate_offered_after_its_pair_says_both": (
+                "Candidate.k",
+                "Candidate.improves",
+            ),
         }.items()
         for name in names
     },

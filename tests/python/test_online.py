@@ -492,8 +492,12 @@ def test_the_getters_say_what_was_given():
     assert sampler.first_offer == "edge-then-closest"
     for where in ("edge", "closest-approach", "edge-then-closest"):
         assert il.OnlineSampler(first_offer=where).first_offer == where
-        assert f"first_offer={where!r}".replace("'", '"') in repr(il.OnlineSampler(first_offer=where))
-    with pytest.raises(il.InvalidParameterError, match="unknown first offer .closest.: expected one of edge, "):
+        assert f"first_offer={where!r}".replace("'", '"') in repr(
+            il.OnlineSampler(first_offer=where)
+        )
+    with pytest.raises(
+        il.InvalidParameterError, match="unknown first offer .closest.: expected one of edge, "
+    ):
         il.OnlineSampler(first_offer="closest")
     assert sampler.separation == il.Separation(path=3.0)
     assert "cap_per_metre=0.1" in repr(sampler)
@@ -575,7 +579,9 @@ def test_a_candidate_offered_after_its_pair_says_both():
     plain = il.Candidate(keyframe=12, j=3, component=1, distance=0.5, first=True)
     assert plain.k == 12 and plain != c
     assert plain.improves is None and c.improves is None
-    better = il.Candidate(keyframe=20, j=4, k=15, component=1, distance=0.1, first=False, improves=(3, 9))
+    better = il.Candidate(
+        keyframe=20, j=4, k=15, component=1, distance=0.1, first=False, improves=(3, 9)
+    )
     assert better.improves == (3, 9)
     assert repr(better) == (
         "Candidate(keyframe=20, j=4, component=1, distance=0.1, first=False, k=15, improves=(3, 9))"
@@ -640,12 +646,12 @@ def test_first_candidates_at_the_closest_approach_on_kitti00(data_dir):
         assert late[(c.keyframe, c.pair)].distance == c.distance, c
         lags.append(c.keyframe - first.keyframe)
     # Every pass that ended improved unless its edge pair was its closest.
-    assert len(improvements) == sum(
-        1 for c in at_closest if c.pair not in by_pair
-    ), "an improvement for every pass whose closest pair was not its edge pair"
+    assert len(improvements) == sum(1 for c in at_closest if c.pair not in by_pair), (
+        "an improvement for every pass whose closest pair was not its edge pair"
+    )
+    better = [c.distance for c in improvements]
     print(
-        f"edge then closest: {len(improvements)} improvements, median {np.median([c.distance for c in improvements]):.2f} m, "
-        f"{np.median(lags):.0f} keyframes after the first (p90 {np.percentile(lags, 90):.0f}); "
-        f"edge p90 {np.percentile([c.distance for c in at_edge], 90):.2f} m, "
-        f"improvement p90 {np.percentile([c.distance for c in improvements], 90):.2f} m; lags {sorted(lags)}"
+        f"edge then closest: {len(improvements)} improvements, median {np.median(better):.2f} m "
+        f"(p90 {np.percentile(better, 90):.2f} m), {np.median(lags):.0f} keyframes after the "
+        f"first (p90 {np.percentile(lags, 90):.0f}); lags {sorted(lags)}"
     )
