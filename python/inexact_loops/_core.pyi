@@ -3562,11 +3562,14 @@ class OnlineSampler:
             Give at most one.
         first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
             component has a pair to offer.
-        first_at_closest_approach: with ``first_on_appearance``, a component's first candidate
-            is the closest pair of its whole first pass (the closest approach), offered at the
-            keyframe after the path leaves it (so :attr:`Candidate.k` < :attr:`Candidate.keyframe`),
-            rather than the closest pair at the edge of γ as the component appears. It goes
-            beyond the cap.
+        first_offer: where that candidate goes: ``"edge-then-closest"`` (the default: the
+            closest pair at the edge of γ as the component appears, and once the path has left
+            it the closest pair of that first pass, the closest approach, as a second candidate
+            whose :attr:`Candidate.improves` names the first; none when the first was already
+            the closest), ``"edge"`` (the edge candidate only) or ``"closest-approach"`` (only
+            the closest approach, offered at the keyframe after the path leaves it, beyond the
+            cap). A candidate at the closest approach has :attr:`Candidate.k` <
+            :attr:`Candidate.keyframe`.
         closest_in_row: the first of a row's draws for a component is its closest pair in the
             row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
             keyframe); ``False``: all uniform (the paper's σ_ρ).
@@ -3605,7 +3608,7 @@ class OnlineSampler:
         cap_per_minute: float | None = None,
         cap_per_metre: float | None = None,
         first_on_appearance: bool = True,
-        first_at_closest_approach: bool = False,
+        first_offer: Literal["edge-then-closest", "edge", "closest-approach"] = "edge-then-closest",
         closest_in_row: bool = True,
         separation: Separation | float | Literal["none"] | None = None,
         seed: int = 0,
@@ -3649,10 +3652,8 @@ class OnlineSampler:
     def first_on_appearance(self) -> bool:
         """Whether a component's first appearance brings a candidate (P1 online)."""
     @property
-    def first_at_closest_approach(self) -> bool:
-        """Whether that candidate is the closest pair of the component's first pass, offered once
-        the pass is over.
-        """
+    def first_offer(self) -> Literal["edge-then-closest", "edge", "closest-approach"]:
+        """Where that candidate goes: ``"edge-then-closest"``, ``"edge"`` or ``"closest-approach"``."""
     @property
     def separation(self) -> Separation:
         """The separation the candidates keep (:class:`Separation`)."""
@@ -3668,11 +3669,13 @@ class Candidate:
     Args:
         keyframe: the pose whose push offered it.
         j: the earlier pose.
-        k: the later pose (``None``: the keyframe; earlier only for a first candidate at the
-            closest approach, offered once the pass was over).
+        k: the later pose (``None``: the keyframe; earlier only for a candidate at the closest
+            approach, offered once the pass was over).
         component: its component's id at the keyframe.
         distance: δ(x_j, x_k), the metric's unit.
         first: emitted by the first-appearance rule rather than drawn.
+        improves: for the closest approach of a component's first pass, the pair of the first
+            candidate it improves (offered at the edge of γ); ``None`` otherwise.
 
     Example:
         >>> import inexact_loops as il
@@ -3690,6 +3693,7 @@ class Candidate:
         distance: float,
         first: bool,
         k: int | None = None,
+        improves: tuple[int, int] | None = None,
     ) -> Candidate: ...
     def __getnewargs_ex__(self) -> tuple[tuple[()], dict[str, Any]]: ...
     def __eq__(self, other: object, /) -> bool: ...
@@ -3703,8 +3707,8 @@ class Candidate:
         """The earlier pose of the pair."""
     @property
     def k(self) -> int:
-        """The later pose of the pair: the keyframe, but for a first candidate at the closest
-        approach (offered once the pass was over).
+        """The later pose of the pair: the keyframe, but for a candidate at the closest approach
+        (offered once the pass was over).
         """
     @property
     def pair(self) -> tuple[int, int]:
@@ -3718,6 +3722,12 @@ class Candidate:
     @property
     def first(self) -> bool:
         """Whether the first-appearance rule (P1 online) emitted it, rather than a draw."""
+    @property
+    def improves(self) -> tuple[int, int] | None:
+        """For the closest approach that improves a component's first candidate (offered at the
+        edge of γ, ``first_offer="edge-then-closest"``): that candidate's pair ``(j, k)``; else
+        ``None``.
+        """
 
 @final
 class OutDir:

@@ -133,7 +133,13 @@ CASES = [
         ["--gamma", "40", "--rate", "0.05", "--cap-per-minute", "2", "--separation-path", "160"],
         40.0,
         "euclidean",
-        {"rate": 0.05, "cap_per_minute": 2.0, "separation": il.Separation(path=160.0)},
+        # The example uses the first version of the C sampler: first candidates at the edge.
+        {
+            "rate": 0.05,
+            "cap_per_minute": 2.0,
+            "separation": il.Separation(path=160.0),
+            "first_offer": "edge",
+        },
     ),
     (
         [

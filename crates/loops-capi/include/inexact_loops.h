@@ -66,6 +66,30 @@ typedef enum LoopsCapKind {
 } LoopsCapKind;
 
 /**
+ * Where a sampler puts a component's first candidate: the values of
+ * [`LoopsSamplerOptionsV2`]'s `first_offer`. A component's first pass is the keyframes from
+ * the first one where it has a pair to offer to the last one before the path leaves it.
+ */
+typedef enum LoopsFirstOffer {
+  /**
+   * The closest pair of the first keyframe where the component has a pair to offer, at once
+   * (at the edge of γ: about γ apart).
+   */
+  LOOPS_FIRST_OFFER_AT_EDGE = 0,
+  /**
+   * The closest pair of the whole first pass, offered at the keyframe after it (its `k`
+   * before its `keyframe`), beyond the cap.
+   */
+  LOOPS_FIRST_OFFER_AT_CLOSEST_APPROACH = 1,
+  /**
+   * Both: the edge candidate at once, and once the pass is over its closest pair as a second
+   * candidate that names the first in `improves_j`, `improves_k` (none when the first was
+   * that pair). The library's default.
+   */
+  LOOPS_FIRST_OFFER_EDGE_THEN_CLOSEST = 2,
+} LoopsFirstOffer;
+
+/**
  * One trajectory's online loops: poses pushed one at a time or in batches, the loop
  * components kept up to date. Made by [`loops_online_new`], freed by [`loops_online_free`].
  */
@@ -219,6 +243,23 @@ typedef struct LoopsSamplerOptions {
 } LoopsSamplerOptions;
 
 /**
+ * The options of a sampler made by [`loops_sampler_new_v2`]: those of
+ * [`LoopsSamplerOptions`] and where the first candidate goes;
+ * [`loops_sampler_options_default_v2`] fills in the library's defaults.
+ */
+typedef struct LoopsSamplerOptionsV2 {
+  /**
+   * The options of the first version.
+   */
+  struct LoopsSamplerOptions base;
+  /**
+   * One of [`LoopsFirstOffer`]'s values (`LOOPS_FIRST_OFFER_EDGE_THEN_CLOSEST`, ...); any
+   * other is refused with [`LoopsStatus::InvalidParameter`].
+   */
+  uint32_t first_offer;
+} LoopsSamplerOptionsV2;
+
+/**
  * A loop-closure candidate: the pair (j, keyframe), j < keyframe, within γ.
  */
 typedef struct LoopsCandidate {
@@ -243,6 +284,51 @@ typedef struct LoopsCandidate {
    */
   bool first;
 } LoopsCandidate;
+
+/**
+ * A loop-closure candidate of a [`loops_sampler_new_v2`] sampler: the pair (j, k),
+ * j < k ≤ keyframe, within γ.
+ */
+typedef struct LoopsCandidateV2 {
+  /**
+   * The keyframe whose offer gave it: `k`, but for a candidate at the closest approach,
+   * offered once the pass was over.
+   */
+  size_t keyframe;
+  /**
+   * The earlier pose of the pair.
+   */
+  size_t j;
+  /**
+   * The later pose of the pair.
+   */
+  size_t k;
+  /**
+   * Its component's id at the keyframe.
+   */
+  uint32_t component;
+  /**
+   * δ(x_j, x_k), the metric's unit.
+   */
+  double distance;
+  /**
+   * Emitted by the first-appearance rule rather than drawn.
+   */
+  bool first;
+  /**
+   * It is the closest approach that improves the component's first candidate, whose pair is
+   * (`improves_j`, `improves_k`) (both 0 otherwise).
+   */
+  bool improves;
+  /**
+   * The earlier pose of the pair it improves.
+   */
+  size_t improves_j;
+  /**
+   * The later pose of the pair it improves.
+   */
+  size_t improves_k;
+} LoopsCandidateV2;
 
 #ifdef __cplusplus
 extern "C" {
@@ -394,8 +480,38 @@ enum LoopsStatus loops_online_loop_duration(const struct LoopsOnline *online,
 enum LoopsStatus loops_sampler_options_default(struct LoopsSamplerOptions *options);
 
 /**
+ * Fills `*options` with the library's defaults: those of [`loops_sampler_options_default`]
+ * and the first candidate at the edge, then improved at the closest approach
+ * (`LOOPS_FIRST_OFFER_EDGE_THEN_CLOSEST`).
+ *
+ * # Safety
+ * `options` is valid for writing a [`LoopsSamplerOptionsV2`].
+ */
+enum LoopsStatus loops_sampler_options_default_v2(struct LoopsSamplerOptionsV2 *options);
+
+/**
+ * Makes a candidate sampler with `*options` (NULL: the library's defaults, as
+ * [`loops_sampler_options_default_v2`]); on success `*out` is a new handle for
+ * [`loops_sampler_free`]. Read its candidates with [`loops_sampler_offer_v2`] and
+ * [`loops_sampler_candidates_v2`] (the first version's refuse a first offer other than
+ * `LOOPS_FIRST_OFFER_AT_EDGE`).
+ *
+ * # Errors
+ * As [`loops_sampler_new`], and a `first_offer` that is not one of [`LoopsFirstOffer`]'s
+ * values.
+ *
+ * # Safety
+ * `options` is NULL or valid for reading a [`LoopsSamplerOptionsV2`]; `out` is valid for
+ * writing a pointer.
+ */
+enum LoopsStatus loops_sampler_new_v2(const struct LoopsSamplerOptionsV2 *options,
+                                      struct LoopsSampler **out);
+
+/**
  * Makes a candidate sampler with `*options` (NULL: the defaults); on success `*out` is a new
- * handle for [`loops_sampler_free`].
+ * handle for [`loops_sampler_free`]. Its first candidates are offered at the edge of γ
+ * (`LOOPS_FIRST_OFFER_AT_EDGE`), where a [`LoopsCandidate`] can name their pairs: for the
+ * library's default, the closest approach as an improvement, use [`loops_sampler_new_v2`].
  *
  * # Errors
  * [`LoopsStatus::InvalidParameter`] for a `cap_kind` that is not one of [`LoopsCapKind`]'s
@@ -439,6 +555,23 @@ enum LoopsStatus loops_sampler_offer(struct LoopsSampler *sampler,
                                      size_t *count);
 
 /**
+ * [`loops_sampler_offer`] for a sampler of any version, its candidates as [`LoopsCandidateV2`]:
+ * the same order and count.
+ *
+ * # Errors
+ * As [`loops_sampler_offer`].
+ *
+ * # Safety
+ * `sampler` and `online` are live handles; `out` is valid for writing `capacity`
+ * [`LoopsCandidateV2`]s; `count` is valid for writing a `size_t`.
+ */
+enum LoopsStatus loops_sampler_offer_v2(struct LoopsSampler *sampler,
+                                        const struct LoopsOnline *online,
+                                        struct LoopsCandidateV2 *out,
+                                        size_t capacity,
+                                        size_t *count);
+
+/**
  * The candidates of the sampler's last offer from index `offset` on: the first `min(capacity,
  * n − offset)` written to `out`, that number to `*written` (0 when `offset` ≥ n).
  *
@@ -451,6 +584,19 @@ enum LoopsStatus loops_sampler_candidates(const struct LoopsSampler *sampler,
                                           struct LoopsCandidate *out,
                                           size_t capacity,
                                           size_t *written);
+
+/**
+ * [`loops_sampler_candidates`] for a sampler of any version, as [`LoopsCandidateV2`].
+ *
+ * # Safety
+ * `sampler` is a live handle; `out` is valid for writing `capacity` [`LoopsCandidateV2`]s;
+ * `written` is valid for writing a `size_t`.
+ */
+enum LoopsStatus loops_sampler_candidates_v2(const struct LoopsSampler *sampler,
+                                             size_t offset,
+                                             struct LoopsCandidateV2 *out,
+                                             size_t capacity,
+                                             size_t *written);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -37,7 +37,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use loops_core::{
     Error, ErrorClass, MetricSpec, Separation, Trajectory,
-    online::{Candidate, Cap, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
+    online::{Candidate, Cap, FirstOffer, OnlineComponent, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
 };
 
 /// What a call of this library did: `Ok` (`LOOPS_STATUS_OK` in C), or why it did nothing (the message is
@@ -103,6 +103,37 @@ pub struct LoopsSamplerOptions {
     pub seed: u64,
 }
 
+/// Where a sampler puts a component's first candidate: the values of
+/// [`LoopsSamplerOptionsV2`]'s `first_offer`. A component's first pass is the keyframes from
+/// the first one where it has a pair to offer to the last one before the path leaves it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoopsFirstOffer {
+    /// The closest pair of the first keyframe where the component has a pair to offer, at once
+    /// (at the edge of γ: about γ apart).
+    AtEdge = 0,
+    /// The closest pair of the whole first pass, offered at the keyframe after it (its `k`
+    /// before its `keyframe`), beyond the cap.
+    AtClosestApproach = 1,
+    /// Both: the edge candidate at once, and once the pass is over its closest pair as a second
+    /// candidate that names the first in `improves_j`, `improves_k` (none when the first was
+    /// that pair). The library's default.
+    EdgeThenClosest = 2,
+}
+
+/// The options of a sampler made by [`loops_sampler_new_v2`]: those of
+/// [`LoopsSamplerOptions`] and where the first candidate goes;
+/// [`loops_sampler_options_default_v2`] fills in the library's defaults.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoopsSamplerOptionsV2 {
+    /// The options of the first version.
+    pub base: LoopsSamplerOptions,
+    /// One of [`LoopsFirstOffer`]'s values (`LOOPS_FIRST_OFFER_EDGE_THEN_CLOSEST`, ...); any
+    /// other is refused with [`LoopsStatus::InvalidParameter`].
+    pub first_offer: u32,
+}
+
 /// What a push changed, in counts (the candidates come from [`loops_sampler_offer`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -137,6 +168,33 @@ pub struct LoopsCandidate {
     pub distance: f64,
     /// Emitted by the first-appearance rule rather than drawn.
     pub first: bool,
+}
+
+/// A loop-closure candidate of a [`loops_sampler_new_v2`] sampler: the pair (j, k),
+/// j < k ≤ keyframe, within γ.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LoopsCandidateV2 {
+    /// The keyframe whose offer gave it: `k`, but for a candidate at the closest approach,
+    /// offered once the pass was over.
+    pub keyframe: usize,
+    /// The earlier pose of the pair.
+    pub j: usize,
+    /// The later pose of the pair.
+    pub k: usize,
+    /// Its component's id at the keyframe.
+    pub component: u32,
+    /// δ(x_j, x_k), the metric's unit.
+    pub distance: f64,
+    /// Emitted by the first-appearance rule rather than drawn.
+    pub first: bool,
+    /// It is the closest approach that improves the component's first candidate, whose pair is
+    /// (`improves_j`, `improves_k`) (both 0 otherwise).
+    pub improves: bool,
+    /// The earlier pose of the pair it improves.
+    pub improves_j: usize,
+    /// The later pose of the pair it improves.
+    pub improves_k: usize,
 }
 
 /// A live loop component's statistics so far (as the batch `find_loops` gives them for the
@@ -326,6 +384,23 @@ impl LoopsCandidate {
     }
 }
 
+impl LoopsCandidateV2 {
+    fn of(candidate: &Candidate) -> Self {
+        let [improves_j, improves_k] = candidate.improves.unwrap_or_default();
+        Self {
+            keyframe: candidate.keyframe,
+            j: candidate.pair[0],
+            k: candidate.pair[1],
+            component: candidate.component,
+            distance: candidate.distance,
+            first: candidate.first,
+            improves: candidate.improves.is_some(),
+            improves_j,
+            improves_k,
+        }
+    }
+}
+
 impl LoopsComponent {
     fn of(c: &OnlineComponent) -> Self {
         Self {
@@ -378,8 +453,52 @@ impl LoopsSamplerOptions {
             first_on_appearance: self.first_on_appearance,
             separation: Separation { path: self.separation_path, time_s: self.separation_time_s },
             seed: self.seed,
+            // A `LoopsCandidate` names its pair by the keyframe: the first candidate is offered
+            // at the edge, where its pair ends. Samplers of `loops_sampler_new_v2` choose.
+            first_offer: FirstOffer::AtEdge,
             // The C options keep their layout: a row's pick is the default sampler's.
             ..OnlineSamplerOptions::default()
+        })
+    }
+}
+
+impl LoopsSamplerOptionsV2 {
+    fn of(options: &OnlineSamplerOptions) -> Self {
+        Self { base: LoopsSamplerOptions::of(options), first_offer: LoopsFirstOffer::of(options.first_offer) as u32 }
+    }
+
+    fn to_core(self) -> Result<OnlineSamplerOptions, Failure> {
+        let first_offer = LoopsFirstOffer::checked(self.first_offer)?.to_core();
+        Ok(OnlineSamplerOptions { first_offer, ..self.base.to_core()? })
+    }
+}
+
+impl LoopsFirstOffer {
+    const ALL: [Self; 3] = [Self::AtEdge, Self::AtClosestApproach, Self::EdgeThenClosest];
+
+    fn of(first_offer: FirstOffer) -> Self {
+        match first_offer {
+            FirstOffer::AtEdge => Self::AtEdge,
+            FirstOffer::AtClosestApproach => Self::AtClosestApproach,
+            FirstOffer::EdgeThenClosest => Self::EdgeThenClosest,
+        }
+    }
+
+    fn to_core(self) -> FirstOffer {
+        match self {
+            Self::AtEdge => FirstOffer::AtEdge,
+            Self::AtClosestApproach => FirstOffer::AtClosestApproach,
+            Self::EdgeThenClosest => FirstOffer::EdgeThenClosest,
+        }
+    }
+
+    /// The value whose number is `value`, checked: a C enum may hold any integer.
+    fn checked(value: u32) -> Result<Self, Failure> {
+        Self::ALL.into_iter().find(|&kind| kind as u32 == value).ok_or_else(|| {
+            Failure::Parameter(format!(
+                "first_offer = {value} is invalid: LOOPS_FIRST_OFFER_AT_EDGE (0), \
+                 LOOPS_FIRST_OFFER_AT_CLOSEST_APPROACH (1) or LOOPS_FIRST_OFFER_EDGE_THEN_CLOSEST (2)"
+            ))
         })
     }
 }
@@ -644,8 +763,56 @@ pub unsafe extern "C" fn loops_sampler_options_default(options: *mut LoopsSample
     })
 }
 
+/// Fills `*options` with the library's defaults: those of [`loops_sampler_options_default`]
+/// and the first candidate at the edge, then improved at the closest approach
+/// (`LOOPS_FIRST_OFFER_EDGE_THEN_CLOSEST`).
+///
+/// # Safety
+/// `options` is valid for writing a [`LoopsSamplerOptionsV2`].
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn loops_sampler_options_default_v2(options: *mut LoopsSamplerOptionsV2) -> LoopsStatus {
+    entry("loops_sampler_options_default_v2", || {
+        let options = unsafe { exclusive(options, "options") }?;
+        *options = LoopsSamplerOptionsV2::of(&OnlineSamplerOptions::default());
+        Ok(())
+    })
+}
+
+/// Makes a candidate sampler with `*options` (NULL: the library's defaults, as
+/// [`loops_sampler_options_default_v2`]); on success `*out` is a new handle for
+/// [`loops_sampler_free`]. Read its candidates with [`loops_sampler_offer_v2`] and
+/// [`loops_sampler_candidates_v2`] (the first version's refuse a first offer other than
+/// `LOOPS_FIRST_OFFER_AT_EDGE`).
+///
+/// # Errors
+/// As [`loops_sampler_new`], and a `first_offer` that is not one of [`LoopsFirstOffer`]'s
+/// values.
+///
+/// # Safety
+/// `options` is NULL or valid for reading a [`LoopsSamplerOptionsV2`]; `out` is valid for
+/// writing a pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn loops_sampler_new_v2(
+    options: *const LoopsSamplerOptionsV2,
+    out: *mut *mut LoopsSampler,
+) -> LoopsStatus {
+    entry("loops_sampler_new_v2", || {
+        let out = unsafe { exclusive(out, "out") }?;
+        // SAFETY: NULL or a valid options struct, the caller's promise.
+        let options = match unsafe { options.as_ref() } {
+            Some(options) => options.to_core()?,
+            None => OnlineSamplerOptions::default(),
+        };
+        let inner = OnlineSampler::new(options)?;
+        *out = Box::into_raw(Box::new(LoopsSampler { inner, candidates: Vec::new() }));
+        Ok(())
+    })
+}
+
 /// Makes a candidate sampler with `*options` (NULL: the defaults); on success `*out` is a new
-/// handle for [`loops_sampler_free`].
+/// handle for [`loops_sampler_free`]. Its first candidates are offered at the edge of γ
+/// (`LOOPS_FIRST_OFFER_AT_EDGE`), where a [`LoopsCandidate`] can name their pairs: for the
+/// library's default, the closest approach as an improvement, use [`loops_sampler_new_v2`].
 ///
 /// # Errors
 /// [`LoopsStatus::InvalidParameter`] for a `cap_kind` that is not one of [`LoopsCapKind`]'s
@@ -664,7 +831,7 @@ pub unsafe extern "C" fn loops_sampler_new(
         // SAFETY: NULL or a valid options struct, the caller's promise.
         let options = match unsafe { options.as_ref() } {
             Some(options) => options.to_core()?,
-            None => OnlineSamplerOptions::default(),
+            None => LoopsSamplerOptions::of(&OnlineSamplerOptions::default()).to_core()?,
         };
         let inner = OnlineSampler::new(options)?;
         *out = Box::into_raw(Box::new(LoopsSampler { inner, candidates: Vec::new() }));
@@ -709,24 +876,82 @@ pub unsafe extern "C" fn loops_sampler_offer(
 ) -> LoopsStatus {
     entry("loops_sampler_offer", || {
         let sampler = unsafe { exclusive(sampler, "sampler") }?;
-        let online = unsafe { reference(online, "online") }?;
-        let count = unsafe { exclusive(count, "count") }?;
-        if capacity > 0 && out.is_null() {
-            return Err(Failure::Null("out"));
-        }
-        let Some(update) = &online.last else {
-            return Err(Failure::Parameter(
-                "nothing to offer: no pose was pushed since the engine was made, rebuilt or cleared".to_owned(),
-            ));
-        };
-        sampler.candidates = sampler.inner.offer(&online.inner, update)?;
-        for (k, candidate) in sampler.candidates.iter().take(capacity).enumerate() {
-            // SAFETY: k < capacity, within the caller's buffer.
-            unsafe { out.add(k).write(LoopsCandidate::of(candidate)) };
-        }
-        *count = sampler.candidates.len();
-        Ok(())
+        sampler.check_first_version("loops_sampler_offer_v2")?;
+        // SAFETY: as promised by the caller.
+        unsafe { offer_into(sampler, online, out, capacity, count, LoopsCandidate::of) }
     })
+}
+
+/// [`loops_sampler_offer`] for a sampler of any version, its candidates as [`LoopsCandidateV2`]:
+/// the same order and count.
+///
+/// # Errors
+/// As [`loops_sampler_offer`].
+///
+/// # Safety
+/// `sampler` and `online` are live handles; `out` is valid for writing `capacity`
+/// [`LoopsCandidateV2`]s; `count` is valid for writing a `size_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn loops_sampler_offer_v2(
+    sampler: *mut LoopsSampler,
+    online: *const LoopsOnline,
+    out: *mut LoopsCandidateV2,
+    capacity: usize,
+    count: *mut usize,
+) -> LoopsStatus {
+    entry("loops_sampler_offer_v2", || {
+        let sampler = unsafe { exclusive(sampler, "sampler") }?;
+        // SAFETY: as promised by the caller.
+        unsafe { offer_into(sampler, online, out, capacity, count, LoopsCandidateV2::of) }
+    })
+}
+
+/// The body of the offers: `online`'s last push offered to `sampler`, its candidates written as
+/// `T`.
+///
+/// # Safety
+/// As [`loops_sampler_offer`], for `T`.
+unsafe fn offer_into<T>(
+    sampler: &mut LoopsSampler,
+    online: *const LoopsOnline,
+    out: *mut T,
+    capacity: usize,
+    count: *mut usize,
+    convert: fn(&Candidate) -> T,
+) -> Result<(), Failure> {
+    let online = unsafe { reference(online, "online") }?;
+    let count = unsafe { exclusive(count, "count") }?;
+    if capacity > 0 && out.is_null() {
+        return Err(Failure::Null("out"));
+    }
+    let Some(update) = &online.last else {
+        return Err(Failure::Parameter(
+            "nothing to offer: no pose was pushed since the engine was made, rebuilt or cleared".to_owned(),
+        ));
+    };
+    sampler.candidates = sampler.inner.offer(&online.inner, update)?;
+    for (k, candidate) in sampler.candidates.iter().take(capacity).enumerate() {
+        // SAFETY: k < capacity, within the caller's buffer.
+        unsafe { out.add(k).write(convert(candidate)) };
+    }
+    *count = sampler.candidates.len();
+    Ok(())
+}
+
+impl LoopsSampler {
+    /// Refuses a sampler whose candidates a [`LoopsCandidate`] cannot hold (a pair that ends
+    /// before its keyframe, an improvement), naming the function that reads them.
+    fn check_first_version(&self, instead: &str) -> Result<(), Failure> {
+        let options = self.inner.options();
+        if options.first_on_appearance && options.first_offer != FirstOffer::AtEdge {
+            return Err(Failure::Parameter(format!(
+                "this sampler's first offer is {}, whose candidates a LoopsCandidate cannot hold: read them with \
+                 {instead}",
+                options.first_offer
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// The candidates of the sampler's last offer from index `offset` on: the first `min(capacity,
@@ -745,17 +970,54 @@ pub unsafe extern "C" fn loops_sampler_candidates(
 ) -> LoopsStatus {
     entry("loops_sampler_candidates", || {
         let sampler = unsafe { reference(sampler, "sampler") }?;
-        let written = unsafe { exclusive(written, "written") }?;
-        if capacity > 0 && out.is_null() {
-            return Err(Failure::Null("out"));
-        }
-        let rest = sampler.candidates.get(offset..).unwrap_or(&[]);
-        let n = rest.len().min(capacity);
-        for (k, candidate) in rest[..n].iter().enumerate() {
-            // SAFETY: k < capacity, within the caller's buffer.
-            unsafe { out.add(k).write(LoopsCandidate::of(candidate)) };
-        }
-        *written = n;
-        Ok(())
+        sampler.check_first_version("loops_sampler_candidates_v2")?;
+        // SAFETY: as promised by the caller.
+        unsafe { candidates_into(sampler, offset, out, capacity, written, LoopsCandidate::of) }
     })
+}
+
+/// [`loops_sampler_candidates`] for a sampler of any version, as [`LoopsCandidateV2`].
+///
+/// # Safety
+/// `sampler` is a live handle; `out` is valid for writing `capacity` [`LoopsCandidateV2`]s;
+/// `written` is valid for writing a `size_t`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn loops_sampler_candidates_v2(
+    sampler: *const LoopsSampler,
+    offset: usize,
+    out: *mut LoopsCandidateV2,
+    capacity: usize,
+    written: *mut usize,
+) -> LoopsStatus {
+    entry("loops_sampler_candidates_v2", || {
+        let sampler = unsafe { reference(sampler, "sampler") }?;
+        // SAFETY: as promised by the caller.
+        unsafe { candidates_into(sampler, offset, out, capacity, written, LoopsCandidateV2::of) }
+    })
+}
+
+/// The body of the candidate reads: from `offset` on, written as `T`.
+///
+/// # Safety
+/// As [`loops_sampler_candidates`], for `T`.
+unsafe fn candidates_into<T>(
+    sampler: &LoopsSampler,
+    offset: usize,
+    out: *mut T,
+    capacity: usize,
+    written: *mut usize,
+    convert: fn(&Candidate) -> T,
+) -> Result<(), Failure> {
+    let written = unsafe { exclusive(written, "written") }?;
+    if capacity > 0 && out.is_null() {
+        return Err(Failure::Null("out"));
+    }
+    let rest = sampler.candidates.get(offset..).unwrap_or(&[]);
+    let n = rest.len().min(capacity);
+    for (k, candidate) in rest[..n].iter().enumerate() {
+        // SAFETY: k < capacity, within the caller's buffer.
+        unsafe { out.add(k).write(convert(candidate)) };
+    }
+    *written = n;
+    Ok(())
 }

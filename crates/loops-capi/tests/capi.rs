@@ -8,7 +8,7 @@ use std::ptr;
 use inexact_loops::*;
 use loops_core::{
     MetricSpec, Separation,
-    online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
+    online::{Cap, FirstOffer, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
 };
 
 fn last_error() -> String {
@@ -247,6 +247,7 @@ fn candidates_equal_the_rust_apis_whatever_the_buffer() {
         rate: 0.3,
         cap: Cap::PerMinute(4.0),
         first_on_appearance: true,
+        first_offer: FirstOffer::AtEdge,
         separation: Separation::NONE,
         seed: 7,
         ..OnlineSamplerOptions::default()
@@ -403,4 +404,146 @@ fn an_engine_made_where_a_freed_one_was_is_a_new_engine_to_a_sampler() {
     // The allocator gave a freed engine's address to the next one at least once (else this test
     // proves nothing about addresses).
     assert!(reused > 0, "no engine was made at a freed engine's address");
+}
+
+/// A road east, a detour, and a road north that passes its start 3 m off, 0.5 m a pose: the
+/// component of the second road appears at the edge of γ = 6, closest 3 m off.
+fn pass_by() -> (Vec<f64>, Vec<f64>) {
+    let mut coords = Vec::new();
+    let mut leg = |from: [f64; 2], to: [f64; 2], steps: usize| {
+        for k in 1..=steps {
+            let f = k as f64 / steps as f64;
+            coords.extend([from[0] + f * (to[0] - from[0]), from[1] + f * (to[1] - from[1]), 0.0]);
+        }
+    };
+    leg([0.5, 0.0], [0.0, 0.0], 1);
+    leg([0.0, 0.0], [100.0, 0.0], 200);
+    leg([100.0, 0.0], [100.0, -50.0], 100);
+    leg([100.0, -50.0], [-3.0, -50.0], 206);
+    leg([-3.0, -50.0], [-3.0, 50.0], 200);
+    let times = (0..coords.len() / 3).map(|k| k as f64 * 0.5).collect();
+    (times, coords)
+}
+
+#[test]
+fn the_second_version_reads_the_improvements() {
+    // Its defaults are the core's.
+    let mut options = LoopsSamplerOptionsV2 { base: default_options(), first_offer: 99 };
+    assert_eq!(unsafe { loops_sampler_options_default_v2(&mut options) }, LoopsStatus::Ok);
+    assert_eq!(options.base, default_options());
+    assert_eq!(options.first_offer, LoopsFirstOffer::EdgeThenClosest as u32);
+    let core = OnlineSamplerOptions::default();
+    assert_eq!(core.first_offer, FirstOffer::EdgeThenClosest);
+    // A value outside the enum is refused.
+    let mut s = ptr::null_mut();
+    let bad = LoopsSamplerOptionsV2 { first_offer: 7, ..options };
+    assert_eq!(unsafe { loops_sampler_new_v2(&bad, &mut s) }, LoopsStatus::InvalidParameter);
+    assert!(last_error().contains("first_offer = 7"), "{}", last_error());
+    assert!(s.is_null());
+    // Its candidates are the Rust API's, improvements included.
+    options.base = LoopsSamplerOptions { rate: 0.0, separation_path: 50.0, ..options.base };
+    let (times, coords) = pass_by();
+    let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 3, 6.0).unwrap();
+    let mut rust =
+        OnlineSampler::new(OnlineSamplerOptions { rate: 0.0, separation: Separation::path(50.0), ..core }).unwrap();
+    let o = online("euclidean", 3, 6.0);
+    assert_eq!(unsafe { loops_sampler_new_v2(&options, &mut s) }, LoopsStatus::Ok, "{}", last_error());
+    let (mut expected, mut found) = (Vec::new(), Vec::new());
+    let mut buffer = [LoopsCandidateV2::default(); 1];
+    for (k, &t) in times.iter().enumerate() {
+        let update = engine.push(t, &coords[3 * k..3 * k + 3]).unwrap();
+        expected.extend(rust.offer(&engine, &update).unwrap());
+        assert_eq!(unsafe { loops_online_push(o, t, coords[3 * k..].as_ptr(), 3, ptr::null_mut()) }, LoopsStatus::Ok);
+        let mut count = 0;
+        let status = unsafe { loops_sampler_offer_v2(s, o, buffer.as_mut_ptr(), 1, &mut count) };
+        assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
+        found.extend_from_slice(&buffer[..count.min(1)]);
+        for offset in 1..count {
+            let mut written = 0;
+            let status = unsafe { loops_sampler_candidates_v2(s, offset, buffer.as_mut_ptr(), 1, &mut written) };
+            assert_eq!((status, written), (LoopsStatus::Ok, 1));
+            found.push(buffer[0]);
+        }
+        // The first version's read cannot hold them, and says which to use.
+        let mut old = LoopsCandidate::default();
+        let status = unsafe { loops_sampler_candidates(s, 0, &mut old, 1, &mut count) };
+        assert_eq!(status, LoopsStatus::InvalidParameter);
+        assert!(last_error().contains("loops_sampler_candidates_v2"), "{}", last_error());
+    }
+    assert_eq!(expected.len(), 2, "the edge, then the closest approach: {expected:?}");
+    let as_v2: Vec<LoopsCandidateV2> = expected
+        .iter()
+        .map(|c| LoopsCandidateV2 {
+            keyframe: c.keyframe,
+            j: c.pair[0],
+            k: c.pair[1],
+            component: c.component,
+            distance: c.distance,
+            first: c.first,
+            improves: c.improves.is_some(),
+            improves_j: c.improves.map_or(0, |p| p[0]),
+            improves_k: c.improves.map_or(0, |p| p[1]),
+        })
+        .collect();
+    assert_eq!(found, as_v2);
+    let [edge, closest] = [found[0], found[1]];
+    assert!(edge.first && edge.distance > 5.5 && !edge.improves, "{edge:?}");
+    assert!(!closest.first && closest.improves && (closest.distance - 3.0).abs() < 1e-9, "{closest:?}");
+    assert_eq!((closest.improves_j, closest.improves_k), (edge.j, edge.k));
+    assert!(closest.k < closest.keyframe);
+    unsafe {
+        loops_sampler_free(s);
+        loops_online_free(o);
+    }
+}
+
+#[test]
+fn the_first_version_offers_at_the_edge() {
+    // Its candidates name their pair by the keyframe: a sampler of `loops_sampler_new`, with
+    // options or NULL, offers its first candidates at the edge and no improvement.
+    let (times, coords) = pass_by();
+    let base = LoopsSamplerOptions { rate: 0.0, separation_path: 50.0, ..default_options() };
+    let options = LoopsSamplerOptionsV2 { base, first_offer: LoopsFirstOffer::AtEdge as u32 };
+    for made in [0, 1] {
+        let o = online("euclidean", 3, 6.0);
+        let mut s = ptr::null_mut();
+        let status = if made == 0 {
+            unsafe { loops_sampler_new(&base, &mut s) }
+        } else {
+            unsafe { loops_sampler_new_v2(&options, &mut s) }
+        };
+        assert_eq!(status, LoopsStatus::Ok);
+        let mut all = Vec::new();
+        for (k, &t) in times.iter().enumerate() {
+            assert_eq!(
+                unsafe { loops_online_push(o, t, coords[3 * k..].as_ptr(), 3, ptr::null_mut()) },
+                LoopsStatus::Ok
+            );
+            let mut buffer = [LoopsCandidate::default(); 4];
+            let mut count = 0;
+            let status = unsafe { loops_sampler_offer(s, o, buffer.as_mut_ptr(), 4, &mut count) };
+            assert_eq!(status, LoopsStatus::Ok, "{}", last_error());
+            all.extend_from_slice(&buffer[..count]);
+        }
+        assert_eq!(all.len(), 1, "{all:?}");
+        assert!(all[0].first && all[0].distance > 5.5, "{all:?}");
+        unsafe {
+            loops_sampler_free(s);
+            loops_online_free(o);
+        }
+    }
+    // The first version's offer refuses a sampler whose first offer waits, and changes nothing.
+    let o = online("euclidean", 3, 6.0);
+    let mut s = ptr::null_mut();
+    assert_eq!(unsafe { loops_sampler_new_v2(ptr::null(), &mut s) }, LoopsStatus::Ok);
+    assert_eq!(unsafe { loops_online_push(o, 0.0, [0.0; 3].as_ptr(), 3, ptr::null_mut()) }, LoopsStatus::Ok);
+    let mut count = 0;
+    let status = unsafe { loops_sampler_offer(s, o, ptr::null_mut(), 0, &mut count) };
+    assert_eq!(status, LoopsStatus::InvalidParameter);
+    assert!(last_error().contains("edge-then-closest"), "{}", last_error());
+    assert_eq!(unsafe { loops_sampler_offer_v2(s, o, ptr::null_mut(), 0, &mut count) }, LoopsStatus::Ok);
+    unsafe {
+        loops_sampler_free(s);
+        loops_online_free(o);
+    }
 }

@@ -34,7 +34,8 @@ use crate::serve::LiveServer;
     loops replay drive.mcap --gamma 40 --serve --speed 1 --quiet    # live in Foxglove: ws://127.0.0.1:8765\n\n\
     Each line: {\"pose\": last pose pushed, \"t_s\", \"poses\": poses pushed at this keyframe,\n\
     \"latency_us\": push + offer, \"loop_duration_s\": tau of the pose so far, \"candidates\":\n\
-    [{\"keyframe\", \"j\", \"k\", \"component\", \"distance\", \"first\"}], \"created\": [ids],\n\
+    [{\"keyframe\", \"j\", \"k\", \"component\", \"distance\", \"first\", \"improves\": [j, k] of the\n\
+    first candidate, on its improvement only}], \"created\": [ids],\n\
     \"merged\": [{\"pose\", \"retired\", \"survivor\"}], \"extended_count\"}.\n\
     Ctrl-C stops after the keyframe in progress and prints the figures so far (exit code 130)."
 )]
@@ -89,11 +90,14 @@ struct OnlineSamplerArgs {
     /// No candidate at a component's first appearance (P1 online): only the drawn ones.
     #[arg(long)]
     no_first: bool,
-    /// A component's first candidate at its closest approach: the closest pair of its first
-    /// pass, offered at the keyframe after the path leaves it (its "k" earlier than its
-    /// "keyframe"), rather than the closest pair at the edge of γ as it appears.
-    #[arg(long, conflicts_with = "no_first")]
-    first_at_closest_approach: bool,
+    /// Where a component's first candidate goes: edge-then-closest (the closest pair at the
+    /// edge of γ as it appears, then, at the keyframe after the path leaves it, the closest pair
+    /// of that pass, its "improves" naming the first; none when the first was the closest),
+    /// edge (the edge one only) or closest-approach (the pass's closest pair only, late). A
+    /// candidate at the closest approach has its "k" earlier than its "keyframe".
+    #[arg(long, value_name = "WHERE", default_value_t = OnlineSamplerOptions::default().first_offer.name().to_owned(),
+        conflicts_with = "no_first")]
+    first_offer: String,
     /// Every drawn candidate uniform in its row (the paper's σ_ρ), not the row's closest pair
     /// first (the default sampler's rule).
     #[arg(long)]
@@ -104,21 +108,21 @@ struct OnlineSamplerArgs {
 }
 
 impl OnlineSamplerArgs {
-    fn options(&self, separation: loops_core::Separation) -> OnlineSamplerOptions {
+    fn options(&self, separation: loops_core::Separation) -> Result<OnlineSamplerOptions> {
         let cap = match (self.cap_per_minute, self.cap_per_metre) {
             (Some(c), _) => Cap::PerMinute(c),
             (None, Some(c)) => Cap::PerMetre(c),
             (None, None) => Cap::None,
         };
-        OnlineSamplerOptions {
+        Ok(OnlineSamplerOptions {
             rate: self.rate,
             cap,
             first_on_appearance: !self.no_first,
-            first_at_closest_approach: self.first_at_closest_approach,
+            first_offer: self.first_offer.parse()?,
             closest_in_row: OnlineSamplerOptions::default().closest_in_row && !self.uniform_in_row,
             separation,
             seed: self.seed,
-        }
+        })
     }
 }
 
@@ -144,6 +148,9 @@ struct CandidateJson {
     component: u32,
     distance: f64,
     first: bool,
+    /// Only on the closest approach that improves a first candidate: that one's pair.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    improves: Option<[usize; 2]>,
 }
 
 #[derive(Debug, Serialize)]
@@ -171,6 +178,7 @@ impl KeyframeLine<'_> {
                     component: c.component,
                     distance: c.distance,
                     first: c.first,
+                    improves: c.improves,
                 })
                 .collect(),
             created: &update.created,
@@ -223,7 +231,7 @@ pub(crate) fn replay(args: ReplayArgs) -> Result<u8> {
         None => None,
     };
     let separation = args.engine.separation()?;
-    let mut sampler = OnlineSampler::new(args.sampler.options(separation))?;
+    let mut sampler = OnlineSampler::new(args.sampler.options(separation)?)?;
     let source = crate::args::source_name(&args.files);
     let (table, traj) = args.input.read_table(&args.files, &spec)?;
     let mut engine = OnlineLoops::new(spec, traj.dim(), args.engine.gamma)?;
@@ -309,6 +317,7 @@ struct Figures {
     poses: usize,
     candidates: usize,
     first_candidates: usize,
+    improvements: usize,
     wall: Duration,
     interrupted: bool,
 }
@@ -332,6 +341,7 @@ fn run(
         poses: 0,
         candidates: 0,
         first_candidates: 0,
+        improvements: 0,
         wall: Duration::ZERO,
         interrupted: false,
     };
@@ -358,6 +368,7 @@ fn run(
         figures.poses = keyframe + 1;
         figures.candidates += candidates.len();
         figures.first_candidates += candidates.iter().filter(|c| c.first).count();
+        figures.improvements += candidates.iter().filter(|c| c.improves.is_some()).count();
         if let Some((server, scene)) = pace.live {
             server.send(&scene.keyframe(engine, &update, &candidates)?);
         }
@@ -393,11 +404,12 @@ impl Figures {
         let how = if self.interrupted { "interrupted after" } else { "replayed" };
         eprintln!(
             "loops replay: {how} {} poses of {source} in {} keyframes: {} candidates ({} at a component's first \
-             appearance), {components} live components, {runs} runs",
+             appearance, {} improving one at its closest approach), {components} live components, {runs} runs",
             self.poses,
             self.latencies.len(),
             self.candidates,
             self.first_candidates,
+            self.improvements,
         );
         eprintln!(
             "latency per keyframe (push + offer): p50 {}, p99 {}, max {}; {} poses/s pushed ({:.3} s busy, {:.3} s \

@@ -7,7 +7,7 @@ use std::process::{Command, Output};
 
 use loops_core::{
     Separation, UrbanDrive,
-    online::{Cap, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
+    online::{Cap, FirstOffer, OnlineLoops, OnlineSampler, OnlineSamplerOptions},
 };
 use serde_json::Value;
 
@@ -140,6 +140,50 @@ fn each_keyframes_line_parses_and_its_candidates_are_the_rust_apis() {
     ));
     let options = OnlineSamplerOptions { rate: 0.01, first_on_appearance: false, ..OnlineSamplerOptions::default() };
     assert_same(&candidates(&plain), &rust_candidates(&times, &points, options));
+
+    // The improvements carry the pair they improve, and --first-offer edge has none.
+    let mut core = OnlineLoops::new(loops_core::MetricSpec::Euclidean, 3, 40.0).unwrap();
+    let mut sampler = OnlineSampler::new(OnlineSamplerOptions {
+        rate: 0.05,
+        cap: Cap::PerMinute(2.0),
+        separation: Separation::for_gamma(40.0),
+        seed: 3,
+        ..OnlineSamplerOptions::default()
+    })
+    .unwrap();
+    let mut improvements = Vec::new();
+    for (t, p) in times.iter().zip(&points) {
+        let update = core.push(*t, p).unwrap();
+        let offered = sampler.offer(&core, &update).unwrap();
+        improvements
+            .extend(offered.iter().filter_map(|c| c.improves.map(|i| (c.keyframe as u64, c.pair[1] as u64, i))));
+    }
+    let printed: Vec<(u64, u64, [usize; 2])> = parsed
+        .iter()
+        .flat_map(|line| line["candidates"].as_array().unwrap().clone())
+        .filter(|c| c.get("improves").is_some())
+        .map(|c| {
+            let i = c["improves"].as_array().unwrap();
+            let i = [i[0].as_u64().unwrap() as usize, i[1].as_u64().unwrap() as usize];
+            (c["keyframe"].as_u64().unwrap(), c["k"].as_u64().unwrap(), i)
+        })
+        .collect();
+    assert!(!improvements.is_empty());
+    assert_eq!(printed, improvements);
+    let edge = lines(&loops(&dir, &[&args[..], &["--first-offer", "edge"]].concat()));
+    let at_edge = OnlineSamplerOptions {
+        rate: 0.05,
+        cap: Cap::PerMinute(2.0),
+        separation: Separation::for_gamma(40.0),
+        seed: 3,
+        first_offer: FirstOffer::AtEdge,
+        ..OnlineSamplerOptions::default()
+    };
+    assert_same(&candidates(&edge), &rust_candidates(&times, &points, at_edge));
+    assert!(edge.iter().all(|line| line["candidates"].as_array().unwrap().iter().all(|c| c.get("improves").is_none())));
+    let unknown = loops(&dir, &[&args[..], &["--first-offer", "middle"]].concat());
+    assert!(!unknown.status.success());
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("edge-then-closest"));
 
     // --quiet: the figures only.
     let quiet = loops(&dir, &[&args[..], &["--quiet"]].concat());

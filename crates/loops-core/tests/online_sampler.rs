@@ -7,7 +7,7 @@ mod support;
 
 use loops_core::{
     Euclidean, MetricSpec, Separation, Trajectory, UrbanDrive,
-    online::{Candidate, Cap, ComponentId, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
+    online::{Candidate, Cap, ComponentId, FirstOffer, OnlineLoops, OnlineSampler, OnlineSamplerOptions, Update},
     path_length,
 };
 use proptest::prelude::*;
@@ -80,7 +80,7 @@ fn options_strategy() -> impl Strategy<Value = OnlineSamplerOptions> {
             rate,
             cap,
             first_on_appearance,
-            first_at_closest_approach: false,
+            first_offer: FirstOffer::AtEdge,
             closest_in_row,
             separation,
             seed,
@@ -204,7 +204,111 @@ proptest! {
         let (_, batched, _) = run(&case.traj, case.gamma, options, &chunks);
         prop_assert_eq!(&single, &batched);
         check_candidates(&case.traj, case.gamma, &options, &single, &updates)?;
+        for first_offer in [FirstOffer::EdgeThenClosest, FirstOffer::AtClosestApproach] {
+            let options = OnlineSamplerOptions { first_offer, ..options };
+            let (_, one, _) = run(&case.traj, case.gamma, options, &[1]);
+            prop_assert_eq!(&one, &run(&case.traj, case.gamma, options, &chunks).1);
+            if first_offer == FirstOffer::EdgeThenClosest {
+                check_improvements(&case.traj, &options, &one, &single, &updates)?;
+            }
+        }
     }
+}
+
+/// The offered rows by component root as of the row (merges replayed in order), and each
+/// merge's pose with the two roots it joined.
+#[allow(clippy::type_complexity)]
+fn rows_by_root(
+    traj: &Trajectory,
+    updates: &[Update],
+    separation: Separation,
+) -> (Vec<(usize, ComponentId, Vec<[usize; 2]>)>, Vec<(usize, [ComponentId; 2])>) {
+    fn root(lineage: &[u32], mut id: u32) -> u32 {
+        while lineage[id as usize] != id {
+            id = lineage[id as usize];
+        }
+        id
+    }
+    let grow = |lineage: &mut Vec<u32>, id: u32| {
+        while lineage.len() <= id as usize {
+            lineage.push(lineage.len() as u32);
+        }
+    };
+    let (mut lineage, mut rows, mut joins) = (Vec::new(), Vec::new(), Vec::new());
+    let mut merges = updates.iter().flat_map(|u| &u.merged).peekable();
+    for (n, id, spans) in offers(traj, updates, separation) {
+        grow(&mut lineage, id);
+        while let Some(m) = merges.next_if(|m| m.pose <= n) {
+            grow(&mut lineage, m.retired.max(m.survivor));
+            let (a, b) = (root(&lineage, m.retired), root(&lineage, m.survivor));
+            lineage[a as usize] = b;
+            joins.push((m.pose, [a, b]));
+        }
+        rows.push((n, root(&lineage, id), spans));
+    }
+    (rows, joins)
+}
+
+/// With the edge then the closest approach (`with`): without its improvements the stream is
+/// the edge one (`edge`); every improvement names an earlier first candidate and comes after
+/// it; where no merge touches the pass, brute force over the offered pairs: the rows from the
+/// first candidate's to the one before the improvement's all offer the component and the
+/// improvement's row does not, the improvement is the closest pair of those rows (earliest on
+/// ties) and closer than the first; a first candidate whose pass ends before the drive does
+/// gets an improvement exactly when its pair is not the pass's closest. Returns the
+/// improvements checked by brute force.
+fn check_improvements(
+    traj: &Trajectory,
+    options: &OnlineSamplerOptions,
+    with: &[Candidate],
+    edge: &[Candidate],
+    updates: &[Update],
+) -> Result<usize, TestCaseError> {
+    let kept: Vec<Candidate> = with.iter().filter(|c| c.improves.is_none()).copied().collect();
+    prop_assert_eq!(&kept, edge, "the improvements are the only difference");
+    let (rows, joins) = rows_by_root(traj, updates, options.separation);
+    let root_at = |n: usize, id: ComponentId| rows.iter().find(|r| r.0 == n && r.1 == id).is_some();
+    let distance = |[j, k]: [usize; 2]| MetricSpec::Euclidean.distance(traj.point(j), traj.point(k));
+    let mut checked = 0;
+    for f in with.iter().filter(|c| c.first) {
+        let improvements: Vec<&Candidate> = with.iter().filter(|c| c.improves == Some(f.pair)).collect();
+        prop_assert!(improvements.len() <= 1, "{:?}", improvements);
+        let id = f.component; // a root as of its row: the engine's ids are resolved
+        prop_assert!(root_at(f.keyframe, id), "{:?}", f);
+        // The pass: rows from the first one on that offer the component.
+        let end = (f.keyframe..traj.len()).find(|&n| !root_at(n, id));
+        let window_end = end.unwrap_or(traj.len());
+        if joins.iter().any(|&(pose, pair)| pose >= f.keyframe && pose <= window_end && pair.contains(&id)) {
+            continue; // a merge joins another pass: not brute-forced
+        }
+        let Some(end) = end else {
+            prop_assert!(improvements.is_empty(), "a pass still under way improved: {:?}", improvements);
+            continue;
+        };
+        let mut best = (f64::INFINITY, [0, 0]);
+        for (n, _, spans) in rows.iter().filter(|r| r.1 == id && (f.keyframe..end).contains(&r.0)) {
+            for j in spans.iter().flat_map(|&[a, b]| a..=b) {
+                let d = distance([j, *n]);
+                if d < best.0 {
+                    best = (d, [j, *n]);
+                }
+            }
+        }
+        if best.1 == f.pair || best.0 == f.distance {
+            prop_assert!(improvements.is_empty(), "the first was the closest: {:?} {:?}", f, improvements);
+        } else {
+            prop_assert_eq!(improvements.len(), 1, "no improvement for {:?}, closest {:?}", f, best);
+            let c = improvements[0];
+            prop_assert_eq!((c.keyframe, c.pair, c.distance, c.first), (end, best.1, best.0, false), "{:?}", c);
+            prop_assert!(c.component == id && c.distance < f.distance);
+            checked += 1;
+        }
+    }
+    for c in with.iter().filter(|c| c.improves.is_some()) {
+        prop_assert!(c.pair[1] < c.keyframe && !c.first, "{:?}", c);
+        prop_assert!(with.iter().any(|f| f.first && Some(f.pair) == c.improves && f.keyframe < c.keyframe), "{:?}", c);
+    }
+    Ok(checked)
 }
 
 #[test]
@@ -231,7 +335,9 @@ fn the_urban_drive_with_every_rule() {
         let (online, single, updates) = run(&traj, gamma, options, &[1]);
         let (_, batched, _) = run(&traj, gamma, options, &[1, 10, 100]);
         assert_eq!(single, batched);
-        check_candidates(&traj, gamma, &options, &single, &updates).unwrap();
+        // The rules of the edge offer; the improvements are checked on their own.
+        let at_edge: Vec<Candidate> = single.iter().filter(|c| c.improves.is_none()).copied().collect();
+        check_candidates(&traj, gamma, &options, &at_edge, &updates).unwrap();
         // P1 on the final components: every component that offers a pair has a candidate.
         let loops = online.to_loops().unwrap();
         let offered = offers(&traj, &updates, options.separation);
@@ -473,8 +579,13 @@ fn pass_by() -> Trajectory {
 fn the_first_candidate_at_the_closest_approach_is_the_pass_closest_pair() {
     let traj = pass_by();
     let separation = Separation::path(50.0);
-    let at_edge = OnlineSamplerOptions { rate: 0.0, separation, ..OnlineSamplerOptions::default() };
-    let at_closest = OnlineSamplerOptions { first_at_closest_approach: true, ..at_edge };
+    let at_edge = OnlineSamplerOptions {
+        rate: 0.0,
+        separation,
+        first_offer: FirstOffer::AtEdge,
+        ..OnlineSamplerOptions::default()
+    };
+    let at_closest = OnlineSamplerOptions { first_offer: FirstOffer::AtClosestApproach, ..at_edge };
     // The brute-force closest separated pair within γ, and the rows that reach the road east.
     let s = path_length(&traj, &Euclidean);
     let (mut closest, mut rows) = ((f64::INFINITY, [0, 0]), Vec::new());
@@ -509,12 +620,68 @@ fn the_first_candidate_at_the_closest_approach_is_the_pass_closest_pair() {
 }
 
 #[test]
+fn the_default_offers_the_edge_then_improves_it_at_the_closest_approach() {
+    let traj = pass_by();
+    let separation = Separation::path(50.0);
+    let options = OnlineSamplerOptions { rate: 0.0, separation, ..OnlineSamplerOptions::default() };
+    assert_eq!(options.first_offer, FirstOffer::EdgeThenClosest);
+    let edge = run(&traj, 6.0, OnlineSamplerOptions { first_offer: FirstOffer::AtEdge, ..options }, &[1]).1;
+    let closest =
+        run(&traj, 6.0, OnlineSamplerOptions { first_offer: FirstOffer::AtClosestApproach, ..options }, &[1]).1;
+    for chunks in [&[1][..], &[7, 1, 300], &[traj.len()]] {
+        let found = run(&traj, 6.0, options, chunks).1;
+        assert_eq!(found.len(), 2, "{found:?}");
+        assert_eq!(found[0], edge[0], "the edge candidate at once");
+        let improvement = Candidate { first: false, improves: Some(edge[0].pair), ..closest[0] };
+        assert_eq!(found[1], improvement, "then the closest approach, once the pass is over");
+    }
+    // A path that reaches γ and turns back at once: the edge pair is the pass's closest, and
+    // is not offered twice.
+    let mut points: Vec<[f64; 2]> = (0..traj.len()).map(|k| [traj.point(k)[0], traj.point(k)[1]]).collect();
+    points.truncate(1007); // ... the detour back to (-3, -100)
+    points.extend((0..=189).map(|k| [0.0, -100.3 + 0.5 * k as f64])); // north to (0, -5.8)
+    points.extend((1..=200).map(|k| [0.5 * k as f64, -6.3])); // and east, beyond γ of the road
+    let times = (0..points.len()).map(|k| k as f64 * 0.1).collect();
+    let back = Trajectory::new(times, points.concat(), 2).unwrap();
+    let found = run(&back, 6.0, options, &[1]).1;
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].first && (found[0].distance - 5.8).abs() < 1e-9, "{found:?}");
+}
+
+#[test]
+fn the_default_differs_from_the_edge_only_by_its_improvements() {
+    let traj = drive(1200.0, 5);
+    let gamma = 20.0;
+    for options in [
+        OnlineSamplerOptions { rate: 0.2, ..OnlineSamplerOptions::default() },
+        OnlineSamplerOptions {
+            rate: 2.0,
+            cap: Cap::PerMinute(3.0),
+            separation: Separation::for_gamma(gamma),
+            seed: 9,
+            ..OnlineSamplerOptions::default()
+        },
+        OnlineSamplerOptions { rate: 0.0, separation: Separation::for_gamma(gamma), ..OnlineSamplerOptions::default() },
+    ] {
+        let (_, with, updates) = run(&traj, gamma, options, &[1]);
+        for chunks in [&[1, 10, 100][..], &[traj.len()]] {
+            assert_eq!(run(&traj, gamma, options, chunks).1, with);
+        }
+        let edge = run(&traj, gamma, OnlineSamplerOptions { first_offer: FirstOffer::AtEdge, ..options }, &[3]).1;
+        let checked = check_improvements(&traj, &options, &with, &edge, &updates).unwrap();
+        let improvements = with.iter().filter(|c| c.improves.is_some()).count();
+        // A few passes meet a merge, and are not brute-forced.
+        assert!(checked >= 3 && 4 * checked >= 3 * improvements, "{improvements} improvements, {checked} checked");
+    }
+}
+
+#[test]
 fn the_first_candidates_at_the_closest_approach_do_not_depend_on_batches() {
     let traj = drive(1200.0, 6);
     let options = OnlineSamplerOptions {
         rate: 0.2,
         cap: Cap::PerMinute(1.0),
-        first_at_closest_approach: true,
+        first_offer: FirstOffer::AtClosestApproach,
         separation: Separation::for_gamma(20.0),
         ..OnlineSamplerOptions::default()
     };

@@ -8,7 +8,7 @@ use crate::error::{Failure, invalid_parameter};
 use crate::py_online::{OnlineLoops, Update};
 use crate::py_separation::{Separation, SeparationArg};
 use crate::shared::Shared;
-use loops_core::online::{Cap, ComponentId, OnlineSamplerOptions};
+use loops_core::online::{Cap, ComponentId, FirstOffer, OnlineSamplerOptions};
 
 /// Picks loop-closure candidates from each :class:`Update` of an :class:`OnlineLoops`, as a
 /// front end needs them while the robot drives: σ_ρ online (each component's pairs in the new
@@ -26,11 +26,14 @@ use loops_core::online::{Cap, ComponentId, OnlineSamplerOptions};
 ///         Give at most one.
 ///     first_on_appearance: P1 online: a candidate (the closest pair) in the first row where a
 ///         component has a pair to offer.
-///     first_at_closest_approach: with ``first_on_appearance``, a component's first candidate
-///         is the closest pair of its whole first pass (the closest approach), offered at the
-///         keyframe after the path leaves it (so :attr:`Candidate.k` < :attr:`Candidate.keyframe`),
-///         rather than the closest pair at the edge of γ as the component appears. It goes
-///         beyond the cap.
+///     first_offer: where that candidate goes: ``"edge-then-closest"`` (the default: the
+///         closest pair at the edge of γ as the component appears, and once the path has left
+///         it the closest pair of that first pass, the closest approach, as a second candidate
+///         whose :attr:`Candidate.improves` names the first; none when the first was already
+///         the closest), ``"edge"`` (the edge candidate only) or ``"closest-approach"`` (only
+///         the closest approach, offered at the keyframe after the path leaves it, beyond the
+///         cap). A candidate at the closest approach has :attr:`Candidate.k` <
+///         :attr:`Candidate.keyframe`.
 ///     closest_in_row: the first of a row's draws for a component is its closest pair in the
 ///         row, the others uniform (the default sampler's rule, :data:`DEFAULT_SAMPLER`, per
 ///         keyframe); ``False``: all uniform (the paper's σ_ρ).
@@ -80,11 +83,13 @@ struct SamplerState {
 /// Args:
 ///     keyframe: the pose whose push offered it.
 ///     j: the earlier pose.
-///     k: the later pose (``None``: the keyframe; earlier only for a first candidate at the
-///         closest approach, offered once the pass was over).
+///     k: the later pose (``None``: the keyframe; earlier only for a candidate at the closest
+///         approach, offered once the pass was over).
 ///     component: its component's id at the keyframe.
 ///     distance: δ(x_j, x_k), the metric's unit.
 ///     first: emitted by the first-appearance rule rather than drawn.
+///     improves: for the closest approach of a component's first pass, the pair of the first
+///         candidate it improves (offered at the edge of γ); ``None`` otherwise.
 ///
 /// Example:
 ///     >>> import inexact_loops as il
@@ -108,18 +113,18 @@ impl OnlineSampler {
     #[new]
     #[pyo3(signature = (*, rate=OnlineSamplerOptions::default().rate, cap_per_minute=None, cap_per_metre=None,
         first_on_appearance=OnlineSamplerOptions::default().first_on_appearance,
-        first_at_closest_approach=OnlineSamplerOptions::default().first_at_closest_approach,
+        first_offer=OnlineSamplerOptions::default().first_offer.name(),
         closest_in_row=OnlineSamplerOptions::default().closest_in_row, separation=None,
         seed=OnlineSamplerOptions::default().seed))]
     #[pyo3(text_signature = "(*, rate=1.0, cap_per_minute=None, cap_per_metre=None, first_on_appearance=True, \
-        first_at_closest_approach=False, closest_in_row=True, separation=None, seed=0)")]
+        first_offer='edge-then-closest', closest_in_row=True, separation=None, seed=0)")]
     #[allow(clippy::too_many_arguments)]
     fn new(
         rate: f64,
         cap_per_minute: Option<f64>,
         cap_per_metre: Option<f64>,
         first_on_appearance: bool,
-        first_at_closest_approach: bool,
+        first_offer: &str,
         closest_in_row: bool,
         separation: Option<SeparationArg>,
         seed: u64,
@@ -143,15 +148,9 @@ impl OnlineSampler {
                 ));
             }
         };
-        let options = OnlineSamplerOptions {
-            rate,
-            cap,
-            first_on_appearance,
-            first_at_closest_approach,
-            closest_in_row,
-            separation,
-            seed,
-        };
+        let first_offer: FirstOffer = first_offer.parse().map_err(Failure::from)?;
+        let options =
+            OnlineSamplerOptions { rate, cap, first_on_appearance, first_offer, closest_in_row, separation, seed };
         let inner = loops_core::online::OnlineSampler::new(options).map_err(Failure::from)?;
         Ok(Self::from_core(inner))
     }
@@ -178,11 +177,11 @@ impl OnlineSampler {
             Cap::PerMetre(c) => format!(", cap_per_metre={c}"),
         };
         format!(
-            "OnlineSampler(rate={}{cap}, first_on_appearance={}, first_at_closest_approach={}, closest_in_row={}, \
+            "OnlineSampler(rate={}{cap}, first_on_appearance={}, first_offer={:?}, closest_in_row={}, \
              separation=Separation(path={:?}, time_s={:?}), seed={})",
             o.rate,
             if o.first_on_appearance { "True" } else { "False" },
-            if o.first_at_closest_approach { "True" } else { "False" },
+            o.first_offer.name(),
             if o.closest_in_row { "True" } else { "False" },
             o.separation.path,
             o.separation.time_s,
@@ -250,11 +249,10 @@ impl OnlineSampler {
         self.options.first_on_appearance
     }
 
-    /// Whether that candidate is the closest pair of the component's first pass, offered once
-    /// the pass is over.
+    /// Where that candidate goes: ``"edge-then-closest"``, ``"edge"`` or ``"closest-approach"``.
     #[getter]
-    fn first_at_closest_approach(&self) -> bool {
-        self.options.first_at_closest_approach
+    fn first_offer(&self) -> &'static str {
+        self.options.first_offer.name()
     }
 
     /// The separation the candidates keep (:class:`Separation`).
@@ -273,10 +271,19 @@ impl OnlineSampler {
 #[pymethods]
 impl Candidate {
     #[new]
-    #[pyo3(signature = (*, keyframe, j, component, distance, first, k=None))]
-    fn new(keyframe: usize, j: usize, component: ComponentId, distance: f64, first: bool, k: Option<usize>) -> Self {
+    #[pyo3(signature = (*, keyframe, j, component, distance, first, k=None, improves=None))]
+    fn new(
+        keyframe: usize,
+        j: usize,
+        component: ComponentId,
+        distance: f64,
+        first: bool,
+        k: Option<usize>,
+        improves: Option<(usize, usize)>,
+    ) -> Self {
         let k = k.unwrap_or(keyframe);
-        Self { inner: loops_core::online::Candidate { keyframe, pair: [j, k], component, distance, first } }
+        let improves = improves.map(|(a, b)| [a, b]);
+        Self { inner: loops_core::online::Candidate { keyframe, pair: [j, k], component, distance, first, improves } }
     }
 
     /// Pickles as its constructor's keywords.
@@ -289,6 +296,7 @@ impl Candidate {
         kwargs.set_item("distance", c.distance)?;
         kwargs.set_item("first", c.first)?;
         kwargs.set_item("k", c.pair[1])?;
+        kwargs.set_item("improves", c.improves.map(|[a, b]| (a, b)))?;
         Ok((PyTuple::empty(py), kwargs))
     }
 
@@ -307,8 +315,9 @@ impl Candidate {
         let c = &self.inner;
         // `k` only where it is not the keyframe, so the common candidate reads as before.
         let k = if c.pair[1] == c.keyframe { String::new() } else { format!(", k={}", c.pair[1]) };
+        let improves = c.improves.map_or(String::new(), |[a, b]| format!(", improves=({a}, {b})"));
         format!(
-            "Candidate(keyframe={}, j={}, component={}, distance={:?}, first={}{k})",
+            "Candidate(keyframe={}, j={}, component={}, distance={:?}, first={}{k}{improves})",
             c.keyframe,
             c.pair[0],
             c.component,
@@ -329,8 +338,8 @@ impl Candidate {
         self.inner.pair[0]
     }
 
-    /// The later pose of the pair: the keyframe, but for a first candidate at the closest
-    /// approach (offered once the pass was over).
+    /// The later pose of the pair: the keyframe, but for a candidate at the closest approach
+    /// (offered once the pass was over).
     #[getter]
     fn k(&self) -> usize {
         self.inner.pair[1]
@@ -358,5 +367,13 @@ impl Candidate {
     #[getter]
     fn first(&self) -> bool {
         self.inner.first
+    }
+
+    /// For the closest approach that improves a component's first candidate (offered at the
+    /// edge of γ, ``first_offer="edge-then-closest"``): that candidate's pair ``(j, k)``; else
+    /// ``None``.
+    #[getter]
+    fn improves(&self) -> Option<(usize, usize)> {
+        self.inner.improves.map(|[a, b]| (a, b))
     }
 }

@@ -14,4 +14,4 @@ mod engine;
 mod sampler;
 
 pub use engine::{ComponentId, Merge, OnlineComponent, OnlineLoops, PushStamp, RowRun, Update};
-pub use sampler::{Candidate, Cap, OnlineSampler, OnlineSamplerOptions};
+pub use sampler::{Candidate, Cap, FirstOffer, OnlineSampler, OnlineSamplerOptions};

@@ -42,14 +42,10 @@ pub struct OnlineSamplerOptions {
     /// P1 online: a component's first candidate comes in the first row where it has a pair to
     /// offer (at its creation, for a component off the diagonal): the closest such pair.
     pub first_on_appearance: bool,
-    /// P1 at the closest approach: with [`first_on_appearance`](Self::first_on_appearance),
-    /// a component's first candidate is not its closest pair in the first row where it has a
-    /// pair to offer (at the edge of γ, as the path comes within reach) but its closest pair
-    /// over that whole pass: offered at the first row after it where the component has no pair
-    /// to offer (the path has left it), so its [`keyframe`](Candidate::keyframe) is later than
-    /// its pair. It goes beyond the cap (it takes a token if there is one). A pass still under
-    /// way when the drive stops has no first candidate yet.
-    pub first_at_closest_approach: bool,
+    /// Where P1's candidate goes (with [`first_on_appearance`](Self::first_on_appearance)): at
+    /// the edge of γ, at the closest approach of the component's first pass, or the edge at once
+    /// and the closest approach as an improvement once the pass is over (the default).
+    pub first_offer: FirstOffer,
     /// The first of a row's draws for a component is its closest pair in the row (the likeliest
     /// match), the others uniform; `false`: all uniform (the paper's σ_ρ). The default follows
     /// the default sampler ([`SamplerKind::DEFAULT`]): each row is one time of the component,
@@ -70,7 +66,7 @@ impl Default for OnlineSamplerOptions {
             rate: 1.0,
             cap: Cap::None,
             first_on_appearance: true,
-            first_at_closest_approach: false,
+            first_offer: FirstOffer::DEFAULT,
             closest_in_row: SamplerKind::DEFAULT.picks_closest_in_row(),
             separation: Separation::NONE,
             seed: 0,
@@ -78,13 +74,85 @@ impl Default for OnlineSamplerOptions {
     }
 }
 
+/// Where P1 online puts a component's first candidate. A component's first pass is the rows in
+/// a row where it has a pair to offer, from its first such row to the row before the first one
+/// where it has none (the path has left it again).
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FirstOffer {
+    /// `"edge"`: the closest pair of the first row where the component has a pair to offer, at
+    /// once: as the path comes within γ, the pair is about γ apart (a poor initial guess for a
+    /// scan matcher).
+    AtEdge,
+    /// `"closest-approach"`: the closest pair of the whole first pass instead, offered at the
+    /// first row after it (so the candidate's [`keyframe`](Candidate::keyframe) is later than
+    /// its pair). It goes beyond the cap (it takes a token if there is one). A pass still under
+    /// way when the drive stops has no first candidate yet.
+    AtClosestApproach,
+    /// `"edge-then-closest"`: the edge candidate at once, and once the pass is over its closest
+    /// pair as a second candidate that [`improves`](Candidate::improves) it, unless the edge
+    /// candidate was that pair already. The improvement is not drawn and takes no token (the
+    /// first one was counted): the other candidates are those of [`AtEdge`](Self::AtEdge).
+    EdgeThenClosest,
+}
+
+impl FirstOffer {
+    /// The default: no latency for the first candidate, the best pair once the pass is over.
+    pub const DEFAULT: Self = Self::EdgeThenClosest;
+
+    /// Every kind, in the order of [`NAMES`](Self::NAMES).
+    pub const ALL: [Self; 3] = [Self::AtEdge, Self::AtClosestApproach, Self::EdgeThenClosest];
+
+    /// The names, as parsed.
+    pub const NAMES: &'static str = "edge, closest-approach, edge-then-closest";
+
+    /// The name, as parsed.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::AtEdge => "edge",
+            Self::AtClosestApproach => "closest-approach",
+            Self::EdgeThenClosest => "edge-then-closest",
+        }
+    }
+
+    /// Whether the sampler follows a component's first pass to its closest pair.
+    fn follows_pass(self) -> bool {
+        !matches!(self, Self::AtEdge)
+    }
+}
+
+impl Default for FirstOffer {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+impl std::fmt::Display for FirstOffer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for FirstOffer {
+    type Err = Error;
+
+    /// `"edge"`, `"closest-approach"` or `"edge-then-closest"`.
+    fn from_str(name: &str) -> Result<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name).ok_or_else(|| Error::UnknownName {
+            kind: "first offer",
+            name: name.to_owned(),
+            expected: Self::NAMES,
+        })
+    }
+}
+
 /// A loop-closure candidate: a pair (j, k), j < k ≤ keyframe, within γ, offered at the
 /// keyframe.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Candidate {
-    /// The pose whose push offered it: the pair's later pose, but for a first candidate at the
-    /// closest approach ([`OnlineSamplerOptions::first_at_closest_approach`]), offered once the
-    /// pass was over.
+    /// The pose whose push offered it: the pair's later pose, but for a candidate at the
+    /// closest approach ([`FirstOffer::AtClosestApproach`], and the improvements of
+    /// [`FirstOffer::EdgeThenClosest`]), offered once the pass was over.
     pub keyframe: usize,
     /// The pair `[j, k]`, j < k ≤ keyframe.
     pub pair: [usize; 2],
@@ -94,6 +162,10 @@ pub struct Candidate {
     pub distance: f64,
     /// Emitted by the first-appearance rule (P1 online), not drawn.
     pub first: bool,
+    /// For an improvement of [`FirstOffer::EdgeThenClosest`]: the pair of the first candidate it
+    /// improves (offered earlier, at the edge of γ); this one is the closest pair of that first
+    /// pass. It is not `first` and may have been drawn already in its row.
+    pub improves: Option<[usize; 2]>,
 }
 
 /// Picks loop-closure candidates from each [`Update`] of an [`OnlineLoops`]: the paper's σ_ρ
@@ -104,8 +176,10 @@ pub struct Candidate {
 /// 1. P1 online ([`first_on_appearance`](OnlineSamplerOptions::first_on_appearance)): the first
 ///    time the component (with every component merged into it) has such a pair, its closest
 ///    one is a candidate, whatever the rate and the cap (a bucket starts full). At the closest
-///    approach ([`first_at_closest_approach`](OnlineSamplerOptions::first_at_closest_approach)),
-///    the closest pair of the rows of that first pass instead, offered at the row after it.
+///    approach ([`FirstOffer::AtClosestApproach`]), the closest pair of the rows of that first
+///    pass instead, offered at the row after it; with [`FirstOffer::EdgeThenClosest`] (the
+///    default) both: the edge one at once, and the pass's closest pair at the row after it as an
+///    improvement, unless it is the same pair.
 /// 2. σ_ρ: ⌊r⌋ or ⌈r⌉ distinct pairs (⌈r⌉ with probability r − ⌊r⌋): with
 ///    [`closest_in_row`](OnlineSamplerOptions::closest_in_row) (the default) the first of them
 ///    the row's closest pair, the others uniformly among the rest; without it all uniformly;
@@ -149,7 +223,11 @@ pub struct Candidate {
 ///     candidates.extend(sampler.offer(&online, &update)?);
 /// }
 /// assert!(!candidates.is_empty());
-/// assert!(candidates.iter().all(|c| c.pair[1] == c.keyframe && c.distance <= 20.0));
+/// assert!(candidates.iter().all(|c| c.pair[1] <= c.keyframe && c.distance <= 20.0));
+/// // A component's first candidate comes at the edge of γ; once the pass is over, the closest
+/// // pair of the pass follows, naming the pair it improves.
+/// let improved = candidates.iter().filter(|c| c.improves.is_some());
+/// assert!(improved.clone().all(|c| c.pair[1] < c.keyframe && !c.first));
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 #[cfg_attr(
@@ -169,7 +247,7 @@ pub struct OnlineSampler {
     /// By component id: `None` until the component has a pair to offer.
     states: Vec<Option<Bucket>>,
     /// The components whose first pass is under way (they had a pair to offer in the last row
-    /// and P1 at the closest approach has still to serve them), increasing.
+    /// and P1 at the closest approach has still to offer its closest pair), increasing.
     passing: Vec<ComponentId>,
 }
 
@@ -234,7 +312,8 @@ impl TryFrom<SamplerState> for OnlineSampler {
 struct Bucket {
     /// It had its first candidate (P1 is served).
     served: bool,
-    /// P1 at the closest approach: the closest pair of its first pass so far.
+    /// P1 at the closest approach: the closest pair of its first pass so far, while the pass is
+    /// under way.
     closest: Option<Closest>,
     /// Candidates it may still take (the cap's token bucket).
     tokens: f64,
@@ -332,7 +411,7 @@ impl OnlineSampler {
         components.sort_unstable();
         components.dedup();
         self.close_passes(loops, n, &components, out);
-        let at_closest = self.options.first_on_appearance && self.options.first_at_closest_approach;
+        let first_offer = self.options.first_on_appearance.then_some(self.options.first_offer);
         for c in components {
             // The component's pairs (j, n), j ≤ last, as column ranges.
             let available: Vec<(RowRun, usize)> = row
@@ -354,16 +433,24 @@ impl OnlineSampler {
                 self.states[slot].unwrap_or(Bucket { served: false, closest: None, tokens: capacity, clock });
             bucket.refill(self.rate_per_unit(), capacity, clock);
             let mut columns: Vec<(usize, bool)> = Vec::new();
-            if at_closest && !bucket.served {
+            // A first pass starts where P1 is not served yet, and goes on while it is followed.
+            let in_first_pass = !bucket.served || bucket.closest.is_some();
+            if let Some(first_offer) = first_offer.filter(|_| in_first_pass) {
                 let (j, rank) = closest_available(loops, n, &available);
-                if bucket.closest.is_none_or(|best| rank < best.rank) {
-                    bucket.closest = Some(Closest { pair: [j, n], rank });
+                if first_offer != FirstOffer::AtClosestApproach && !bucket.served {
+                    columns.push((j, true));
                 }
-                if let Err(at) = self.passing.binary_search(&c) {
-                    self.passing.insert(at, c);
+                if first_offer.follows_pass() {
+                    let improves = (first_offer == FirstOffer::EdgeThenClosest).then_some([j, n]);
+                    match &mut bucket.closest {
+                        Some(best) if rank < best.rank => (best.pair, best.rank) = ([j, n], rank),
+                        Some(_) => {}
+                        None => bucket.closest = Some(Closest { pair: [j, n], rank, improves }),
+                    }
+                    if let Err(at) = self.passing.binary_search(&c) {
+                        self.passing.insert(at, c);
+                    }
                 }
-            } else if self.options.first_on_appearance && !bucket.served {
-                columns.push((closest_available(loops, n, &available).0, true));
             }
             let mut rng = keyed_rng(self.options.seed, n, c);
             let rate = self.options.rate;
@@ -391,7 +478,7 @@ impl OnlineSampler {
                 }
                 bucket.served |= first;
                 let distance = loops.metric().distance(loops.poses().point(j), x_n);
-                out.push(Candidate { keyframe: n, pair: [j, n], component: c, distance, first });
+                out.push(Candidate { keyframe: n, pair: [j, n], component: c, distance, first, improves: None });
             }
             self.states[slot] = Some(bucket);
         }
@@ -411,14 +498,20 @@ impl OnlineSampler {
                 continue;
             }
             let Some(bucket) = self.states.get_mut(c as usize).and_then(Option::as_mut) else { continue };
-            let Some(Closest { pair: [j, k], .. }) = bucket.closest.take() else { continue };
-            bucket.refill(rate, capacity, clock);
-            if bucket.tokens >= 1.0 && !matches!(self.options.cap, Cap::None) {
-                bucket.tokens -= 1.0;
+            let Some(Closest { pair: [j, k], improves, .. }) = bucket.closest.take() else { continue };
+            if improves == Some([j, k]) {
+                continue; // The edge candidate was the closest pair already.
             }
-            bucket.served = true;
+            if improves.is_none() {
+                bucket.refill(rate, capacity, clock);
+                if bucket.tokens >= 1.0 && !matches!(self.options.cap, Cap::None) {
+                    bucket.tokens -= 1.0;
+                }
+                bucket.served = true;
+            }
             let distance = loops.metric().distance(loops.poses().point(j), loops.poses().point(k));
-            out.push(Candidate { keyframe: n, pair: [j, k], component: c, distance, first: true });
+            let first = improves.is_none();
+            out.push(Candidate { keyframe: n, pair: [j, k], component: c, distance, first, improves });
         }
     }
 
@@ -460,12 +553,13 @@ impl OnlineSampler {
         }
     }
 
-    /// `retired` merged into `survivor` at pose n: P1 is served if it was for either, and the
-    /// bucket is the smaller of the two.
+    /// `retired` merged into `survivor` at pose n: P1 is served if it was for either, the first
+    /// pass is over if it was for either (else the closer of the two passes' pairs goes on), and
+    /// the bucket is the smaller of the two.
     fn merge(&mut self, loops: &OnlineLoops, n: usize, retired: ComponentId, survivor: ComponentId) {
         // Nothing moves when the retired one never had a pair to offer.
         let Some(mut gone) = self.states.get(retired as usize).copied().flatten() else { return };
-        let mut merged = match self.states[survivor as usize] {
+        let merged = match self.states[survivor as usize] {
             None => gone,
             Some(mut kept) => {
                 let clock = self.clock(loops, n);
@@ -473,25 +567,22 @@ impl OnlineSampler {
                 gone.refill(rate, capacity, clock);
                 kept.refill(rate, capacity, clock);
                 let closest = match (gone.closest, kept.closest) {
+                    _ if gone.pass_over() || kept.pass_over() => None,
                     (Some(a), Some(b)) => Some(if b.rank <= a.rank { b } else { a }),
                     (a, b) => a.or(b),
                 };
                 Bucket { served: gone.served || kept.served, closest, tokens: gone.tokens.min(kept.tokens), clock }
             }
         };
-        // One pass of the two: passing if either was, unless either was served.
-        if merged.served {
-            merged.closest = None;
-        }
-        let was_passing = [retired, survivor].map(|c| self.passing.binary_search(&c));
-        if let Ok(at) = was_passing[0] {
+        // A component is passing exactly when its pass has a closest pair.
+        if let Ok(at) = self.passing.binary_search(&retired) {
             self.passing.remove(at);
         }
         match self.passing.binary_search(&survivor) {
-            Ok(at) if merged.served => {
+            Ok(at) if merged.closest.is_none() => {
                 self.passing.remove(at);
             }
-            Err(at) if !merged.served && was_passing.iter().any(Result::is_ok) => self.passing.insert(at, survivor),
+            Err(at) if merged.closest.is_some() => self.passing.insert(at, survivor),
             _ => {}
         }
         // The survivor's id is the smaller, so its slot exists.
@@ -505,9 +596,17 @@ impl OnlineSampler {
 struct Closest {
     pair: [usize; 2],
     rank: f64,
+    /// With [`FirstOffer::EdgeThenClosest`]: the pair of the first candidate, offered at the edge.
+    #[cfg_attr(feature = "serde", serde(default))]
+    improves: Option<[usize; 2]>,
 }
 
 impl Bucket {
+    /// Its first pass is over: P1 served and no pass followed.
+    fn pass_over(&self) -> bool {
+        self.served && self.closest.is_none()
+    }
+
     /// Adds the tokens earned since its clock, up to `capacity`.
     fn refill(&mut self, rate_per_unit: f64, capacity: f64, clock: f64) {
         if clock > self.clock {
