@@ -82,7 +82,8 @@ PLAUSIBLE = {
     "separation": [il.Separation(time_s=10.0), None],
     "epsilon_s": [1.0, -1.0, float("inf")],
     "axes": [(0, 1), (0, 0), (5, 9), ()],
-    "path": ["x", "/dev/null", "/nonexistent/x"],
+    # "null" links to /dev/null (made by the test): a writer must write into it, not replace it.
+    "path": ["x", "null", "/nonexistent/x"],
     "dim": [2, 0, 2**16 + 1, 2**62],
 }
 # Calls that would legitimately run long get only modest numbers.
@@ -140,6 +141,7 @@ print(json.dumps({"counts": counts, "bad": bad[:20], "names": len(names)}))
 
 def test_wrong_types_and_values_through_the_whole_api_raise_one_line_errors(tmp_path: Path) -> None:
     # In a folder of its own: a writer given a wrong but valid path ("x") writes there.
+    (tmp_path / "null").symlink_to("/dev/null")
     child = subprocess.run(
         [sys.executable, "-c", textwrap.dedent(WRONG_CALLS), str(SEED), "20"],
         capture_output=True,
@@ -159,6 +161,8 @@ def test_wrong_types_and_values_through_the_whole_api_raise_one_line_errors(tmp_
     assert counts["panics"] == 0 and counts["foreign"] == 0 and counts["multi_line"] == 0, report[
         "bad"
     ]
+    # A writer given the link wrote into the device; none put a file in the link's place.
+    assert (tmp_path / "null").is_symlink() and (tmp_path / "null").is_char_device()
 
 
 @pytest.fixture(scope="module")

@@ -78,6 +78,7 @@ __all__ = [
     "log_name",
     "OutDir",
     "refuse_output_on_input",
+    "write_file",
     "Scene",
     "scene",
     "LiveServer",
@@ -3796,6 +3797,18 @@ def refuse_output_on_input(
 
     Raises:
         InvalidParameterError: naming both paths.
+    """
+
+def write_file(path: str | PathLike[str], data: bytes, *, overwrite: bool = False) -> None:
+    """Writes ``data`` to the file ``path`` whole or not at all: loops-io's one atomic writer, as
+    every file of the package is written (a temporary file beside it, synced, renamed into
+    place). An existing ``path`` is replaced only with ``overwrite``; a stream (``/dev/null``,
+    ``/dev/stdout``, a FIFO, or a link to one) is written into, never replaced.
+
+    Raises:
+        FileExistsError: ``path`` exists and ``overwrite`` is false.
+        OSError: the folder is missing or not writable, the disk is full, or ``path`` is a block
+            device or a socket.
     """
 
 @final

@@ -49,10 +49,11 @@ Example:
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 from typing import Any
 
-from ._core import LiveServer, Scene, scene
+from ._core import LiveServer, Scene, scene, write_file
 
 __all__ = ["LAYOUT_FILE", "LiveServer", "Scene", "scene", "serve", "to_mcap", "to_rerun"]
 
@@ -93,7 +94,7 @@ def to_mcap(
                 raise FileExistsError(f"{existing} exists; pass overwrite=True to replace it")
     made = scene(loops, samples, trajectory, name=name)
     made.to_mcap(path, overwrite=overwrite)
-    _write_new(layout, made.foxglove_layout.encode(), overwrite)
+    write_file(layout, made.foxglove_layout.encode(), overwrite=overwrite)
 
 
 def serve(address: str = "127.0.0.1:0", *, name: str = "live") -> LiveServer:
@@ -161,17 +162,14 @@ def to_rerun(
     if not overwrite and os.path.lexists(path):
         raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
     made = scene(loops, samples, trajectory, name=name)
-    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:
+    with tempfile.TemporaryDirectory(prefix="loops-rerun-") as scratch:
+        partial = Path(scratch) / "recording.rrd"
         rec = rr.RecordingStream("inexact-loops", recording_id=f"loops-{path.stem}")
         rec.save(partial)
         _log_scene(rr, rec, made)
         rec.flush()
         rec.disconnect()
-        _move_new(partial, path, overwrite)
-    finally:
-        if os.path.lexists(partial):
-            os.unlink(partial)
+        write_file(path, partial.read_bytes(), overwrite=overwrite)
 
 
 def _log_scene(rr: Any, rec: Any, made: Scene) -> None:
@@ -214,24 +212,3 @@ def _log_scene(rr: Any, rec: Any, made: Scene) -> None:
     ]
     rec.log("loops/candidates", rr.LineStrips3D(pairs, colors=[[1.0, 1.0, 1.0, 0.9]]), static=True)
     rec.log("loops/plane", rr.Image(made.plane), static=True)
-
-
-def _write_new(path: Path, data: bytes, overwrite: bool) -> None:
-    """Writes ``data`` to ``path`` through a temporary file beside it."""
-    partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
-    try:
-        partial.write_bytes(data)
-        _move_new(partial, path, overwrite)
-    finally:
-        if os.path.lexists(partial):
-            os.unlink(partial)
-
-
-def _move_new(partial: Path, path: Path, overwrite: bool) -> None:
-    """Moves ``partial`` to ``path``; without ``overwrite`` never onto an existing file (a
-    hard link fails when ``path`` exists, even one made meanwhile)."""
-    if overwrite:
-        os.replace(partial, path)
-    else:
-        os.link(partial, path)
-        os.unlink(partial)

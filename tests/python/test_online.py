@@ -570,6 +570,45 @@ def test_a_pickled_sampler_draws_as_the_original():
         il.OnlineSampler._from_state(b"not a pickle")
 
 
+# `pickle.dumps(il.OnlineSampler(rate=0.0, first_at_closest_approach=flag, seed=3))` by the
+# version before `first_offer`, for flag False and True; and of a Candidate of that version.
+_SAVED_BEFORE_FIRST_OFFER = {
+    "edge": (
+        "800495a1000000000000008c086275696c74696e73948c07676574617474729493948c13696e6578"
+        "6163745f6c6f6f70732e5f636f7265948c0d4f6e6c696e6553616d706c65729493948c0b5f66726f"
+        "6d5f73746174659486945294434894ad696e65786163745f6c6f6f707301ad4f6e6c696e6553616d"
+        "706c65729497cb0000000000000000a44e6f6e65c3c2c392cb0000000000000000cb000000000000"
+        "000003c0909094859452942e"
+    ),
+    "closest-approach": (
+        "800495a1000000000000008c086275696c74696e73948c07676574617474729493948c13696e6578"
+        "6163745f6c6f6f70732e5f636f7265948c0d4f6e6c696e6553616d706c65729493948c0b5f66726f"
+        "6d5f73746174659486945294434894ad696e65786163745f6c6f6f707301ad4f6e6c696e6553616d"
+        "706c65729497cb0000000000000000a44e6f6e65c3c3c392cb0000000000000000cb000000000000"
+        "000003c0909094859452942e"
+    ),
+}
+_CANDIDATE_BEFORE_FIRST_OFFER = (
+    "80049570000000000000008c13696e65786163745f6c6f6f70732e5f636f7265948c0943616e6469"
+    "64617465949394297d94288c086b65796672616d65944b0c8c016a944b038c09636f6d706f6e656e"
+    "74944b018c0864697374616e636594473fe00000000000008c05666972737494888c016b944b0975"
+    "92942e"
+)
+
+
+def test_a_sampler_pickled_before_first_offer_reads_back_as_it_was():
+    """A sampler saved with the earlier flag keeps offering where it did: the flag's False is
+    the edge and True the closest approach, not the new default; a saved candidate reads back
+    without an improvement."""
+    for offer, state in _SAVED_BEFORE_FIRST_OFFER.items():
+        back = pickle.loads(bytes.fromhex(state))
+        assert back.first_offer == offer
+        assert repr(back) == repr(il.OnlineSampler(rate=0.0, first_offer=offer, seed=3))
+    candidate = pickle.loads(bytes.fromhex(_CANDIDATE_BEFORE_FIRST_OFFER))
+    assert candidate == il.Candidate(keyframe=12, j=3, k=9, component=1, distance=0.5, first=True)
+    assert candidate.improves is None
+
+
 def test_a_candidate_offered_after_its_pair_says_both():
     c = il.Candidate(keyframe=12, j=3, k=9, component=1, distance=0.5, first=True)
     assert (c.keyframe, c.j, c.k, c.pair) == (12, 3, 9, (3, 9))

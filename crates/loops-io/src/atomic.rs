@@ -18,12 +18,18 @@ use crate::error::WriteError;
 /// (`persist_noclobber`: another writer that creates `path` meanwhile wins). With `overwrite`,
 /// `path` is replaced.
 ///
+/// A `path` that is a stream rather than a file — a FIFO or a character device such as
+/// `/dev/null` or `/dev/stdout`, or a link to one — is written into, not replaced (a rename
+/// would put a file where the device was): its content is filled into an anonymous temporary
+/// file first and copied in when every step succeeded, `overwrite` or not, as nothing is
+/// replaced. A block device or a socket is refused.
+///
 /// The temporary file is removed when `fill` or a later step fails.
 ///
 /// # Errors
 /// [`WriteError::Exists`] when `path` exists and `overwrite` is false; [`WriteError::Write`]
-/// when `path` names no file, its directory is missing or not writable, the disk is full, or
-/// `fill` fails (with `fill`'s error).
+/// when `path` names no file, is a block device or a socket, its directory is missing or not
+/// writable, the disk is full, or `fill` fails (with `fill`'s error).
 ///
 /// # Examples
 /// ```
@@ -148,13 +154,60 @@ struct Staged {
     overwrite: bool,
     /// Whether `path` existed when staged (it is then replaced, never removed).
     existed: bool,
-    temporary: tempfile::NamedTempFile,
+    temporary: Temporary,
+}
+
+/// Where a staged file's content waits.
+#[derive(Debug)]
+enum Temporary {
+    /// Beside the file, renamed into place.
+    Beside(tempfile::NamedTempFile),
+    /// Anywhere, copied into the stream `path` names.
+    ForStream(File),
+}
+
+/// What an existing `path` is, following links.
+enum Existing {
+    /// Nothing, a file, a folder or a broken link: the rename's rules apply.
+    Replaceable,
+    /// A FIFO or a character device: written into.
+    Stream,
+    /// A block device or a socket, named for the message.
+    Refused(&'static str),
+}
+
+impl Existing {
+    #[cfg(unix)]
+    fn of(path: &Path) -> Self {
+        use std::os::unix::fs::FileTypeExt;
+        match std::fs::metadata(path).map(|m| m.file_type()) {
+            Ok(kind) if kind.is_fifo() || kind.is_char_device() => Self::Stream,
+            Ok(kind) if kind.is_block_device() => Self::Refused("a block device"),
+            Ok(kind) if kind.is_socket() => Self::Refused("a socket"),
+            _ => Self::Replaceable,
+        }
+    }
+
+    #[cfg(not(unix))]
+    fn of(_path: &Path) -> Self {
+        Self::Replaceable
+    }
 }
 
 impl Staged {
     fn new(path: &Path, overwrite: bool, fill: impl FnOnce(&mut File) -> io::Result<()>) -> Result<Self, WriteError> {
         let failed = |error: io::Error| WriteError::Write { path: path.to_path_buf(), error };
         let existed = path.symlink_metadata().is_ok();
+        match Existing::of(path) {
+            Existing::Refused(what) => return Err(failed(io::Error::other(format!("it is {what}, not a file")))),
+            Existing::Stream => {
+                let mut temporary = tempfile::tempfile().map_err(failed)?;
+                fill(&mut temporary).map_err(failed)?;
+                let (path, dir) = (path.to_path_buf(), PathBuf::new());
+                return Ok(Self { path, dir, overwrite, existed, temporary: Temporary::ForStream(temporary) });
+            }
+            Existing::Replaceable => {}
+        }
         if !overwrite && existed {
             return Err(WriteError::Exists { path: path.to_path_buf() });
         }
@@ -170,14 +223,18 @@ impl Staged {
         std::fs::metadata(dir).map_err(failed)?;
         let mut temporary = builder.tempfile_in(dir).map_err(failed)?;
         fill(temporary.as_file_mut()).and_then(|()| temporary.as_file().sync_all()).map_err(failed)?;
+        let temporary = Temporary::Beside(temporary);
         Ok(Self { path: path.to_path_buf(), dir: dir.to_path_buf(), overwrite, existed, temporary })
     }
 
     fn persist(self) -> Result<(), WriteError> {
         let path = self.path;
         let failed = |error: io::Error| WriteError::Write { path: path.clone(), error };
-        let placed =
-            if self.overwrite { self.temporary.persist(&path) } else { self.temporary.persist_noclobber(&path) };
+        let temporary = match self.temporary {
+            Temporary::Beside(temporary) => temporary,
+            Temporary::ForStream(mut content) => return copy_into_stream(&mut content, &path).map_err(failed),
+        };
+        let placed = if self.overwrite { temporary.persist(&path) } else { temporary.persist_noclobber(&path) };
         match placed {
             Ok(_) => {}
             // The temporary file is removed as the error drops.
@@ -188,6 +245,16 @@ impl Staged {
         }
         sync_directory(&self.dir).map_err(failed)
     }
+}
+
+/// Copies `content`, from its start, into the stream `path` names (opened for writing, neither
+/// created nor truncated).
+fn copy_into_stream(content: &mut File, path: &Path) -> io::Result<()> {
+    use std::io::{Seek, Write};
+    content.seek(io::SeekFrom::Start(0))?;
+    let mut stream = std::fs::OpenOptions::new().write(true).open(path)?;
+    io::copy(content, &mut stream)?;
+    stream.flush()
 }
 
 /// Makes the rename into `dir` durable: fsync of the directory (Unix; elsewhere nothing to do).
@@ -229,6 +296,44 @@ mod tests {
         assert!(matches!(error, WriteError::Write { .. }));
         assert_eq!(fs::read_to_string(&path).unwrap(), "two");
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A stream is written into and stays what it was: a FIFO (read by a thread), `/dev/null`
+    /// through a link (a rename would replace the link, or the device itself when named); a
+    /// socket is refused and left.
+    #[cfg(unix)]
+    #[test]
+    fn streams_are_written_into_never_replaced() {
+        use std::os::unix::fs::FileTypeExt;
+        let dir = scratch("streams");
+        let fifo = dir.join("pipe");
+        assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || fs::read(fifo).unwrap())
+        };
+        write_atomically(&fifo, false, |file| file.write_all(b"through the pipe\n")).unwrap();
+        assert_eq!(reader.join().unwrap(), b"through the pipe\n");
+        assert!(fs::metadata(&fifo).unwrap().file_type().is_fifo());
+
+        let null = dir.join("null");
+        std::os::unix::fs::symlink("/dev/null", &null).unwrap();
+        for overwrite in [false, true] {
+            write_atomically(&null, overwrite, |file| file.write_all(b"gone")).unwrap();
+            let mut files = StagedFiles::new();
+            files.stage(&null, overwrite, |file| file.write_all(b"gone too")).unwrap();
+            files.persist().unwrap();
+            assert!(fs::symlink_metadata(&null).unwrap().file_type().is_symlink(), "the link was replaced");
+            assert!(fs::metadata(&null).unwrap().file_type().is_char_device());
+        }
+
+        let socket = dir.join("socket");
+        let _listener = std::os::unix::net::UnixListener::bind(&socket).unwrap();
+        let error = write_atomically(&socket, true, |file| file.write_all(b"no")).unwrap_err();
+        assert!(error.to_string().contains("it is a socket, not a file"), "{error}");
+        assert!(fs::metadata(&socket).unwrap().file_type().is_socket());
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 3, "a temporary file was left");
         fs::remove_dir_all(&dir).unwrap();
     }
 

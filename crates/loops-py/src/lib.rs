@@ -13,7 +13,7 @@
 //! (`SessionBlocks`, `Tile`, `TileSummary`, `TileMerge`, `TiledFleetLoops`: a fleet's tiles for a
 //! cluster), `py_online` (`OnlineLoops`, `Update`: loops while poses arrive) and
 //! `py_online_sampler` (`OnlineSampler`, `Candidate`: loop-closure candidates per keyframe);
-//! `py_out_dir` (`OutDir`, `refuse_output_on_input`: loops-io's output folder, for
+//! `py_out_dir` (`OutDir`, `refuse_output_on_input`, `write_file`: loops-io's output folder, for
 //! `inexact_loops.dask`); `py_scene` (`Scene`, `scene`: the results for Foxglove, RViz and
 //! Rerun).
 //! Below them:
@@ -221,6 +221,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_online_sampler::Candidate>()?;
     module.add_class::<py_out_dir::OutDir>()?;
     module.add_function(wrap_pyfunction!(py_out_dir::refuse_output_on_input, module)?)?;
+    module.add_function(wrap_pyfunction!(py_out_dir::write_file, module)?)?;
     module.add_class::<py_scene::Scene>()?;
     module.add_function(wrap_pyfunction!(py_scene::scene, module)?)?;
     Ok(())

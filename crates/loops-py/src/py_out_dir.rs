@@ -142,3 +142,21 @@ impl OutDir {
 pub(crate) fn refuse_output_on_input(what: &str, output: PathBuf, inputs: Vec<PathBuf>) -> PyResult<()> {
     Ok(out_dir::refuse_output_on_input(what, &output, &inputs).map_err(Failure::from)?)
 }
+
+/// Writes ``data`` to the file ``path`` whole or not at all: loops-io's one atomic writer, as
+/// every file of the package is written (a temporary file beside it, synced, renamed into
+/// place). An existing ``path`` is replaced only with ``overwrite``; a stream (``/dev/null``,
+/// ``/dev/stdout``, a FIFO, or a link to one) is written into, never replaced.
+///
+/// Raises:
+///     FileExistsError: ``path`` exists and ``overwrite`` is false.
+///     OSError: the folder is missing or not writable, the disk is full, or ``path`` is a block
+///         device or a socket.
+#[pyfunction]
+#[pyo3(signature = (path, data, *, overwrite=false))]
+pub(crate) fn write_file(py: Python<'_>, path: PathBuf, data: &[u8], overwrite: bool) -> PyResult<()> {
+    use std::io::Write;
+    crate::detached(py, || {
+        loops_io::write_atomically(&path, overwrite, |file| file.write_all(data)).map_err(Failure::from)
+    })
+}

@@ -128,14 +128,12 @@ def write_pose_parquet(path: str | os.PathLike[str], trajectory: Any) -> None:
 
 
 def atomic(path: Path, write: Callable[[str], None]) -> None:
-    """Writes ``path`` through a temporary file in its folder (``.NAME.XXXXXX.tmp``), renamed
-    into place: a reader sees the old file or the new one, never half of one."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    """Writes ``path`` whole or not at all: ``write`` fills a scratch file (named by the string
+    it is given), whose bytes go through loops-io's one atomic writer
+    (:func:`inexact_loops._core.write_file`), replacing ``path``: a reader sees the old file or
+    the new one, never half of one, and a stream such as ``/dev/null`` is written into, never
+    replaced."""
+    with tempfile.TemporaryDirectory(prefix="loops-") as scratch:
+        tmp = os.path.join(scratch, path.name or "file")
         write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+        _core.write_file(path, Path(tmp).read_bytes(), overwrite=True)

@@ -44,7 +44,13 @@ pub struct OnlineSamplerOptions {
     pub first_on_appearance: bool,
     /// Where P1's candidate goes (with [`first_on_appearance`](Self::first_on_appearance)): at
     /// the edge of γ, at the closest approach of the component's first pass, or the edge at once
-    /// and the closest approach as an improvement once the pass is over (the default).
+    /// and the closest approach as an improvement once the pass is over (the default). A state
+    /// saved before this setting held `first_at_closest_approach`, a flag in its place, and
+    /// reads back as what it did: `false` the edge, `true` the closest approach.
+    #[cfg_attr(
+        feature = "serde",
+        serde(alias = "first_at_closest_approach", deserialize_with = "first_offer_or_flag")
+    )]
     pub first_offer: FirstOffer,
     /// The first of a row's draws for a component is its closest pair in the row (the likeliest
     /// match), the others uniform; `false`: all uniform (the paper's σ_ρ). The default follows
@@ -72,6 +78,22 @@ impl Default for OnlineSamplerOptions {
             seed: 0,
         }
     }
+}
+
+/// A [`FirstOffer`], or the flag `first_at_closest_approach` that states saved before it held.
+#[cfg(feature = "serde")]
+fn first_offer_or_flag<'de, D: serde::Deserializer<'de>>(deserializer: D) -> std::result::Result<FirstOffer, D::Error> {
+    #[derive(serde::Deserialize)]
+    #[serde(untagged)]
+    enum Saved {
+        Offer(FirstOffer),
+        Flag(bool),
+    }
+    Ok(match <Saved as serde::Deserialize>::deserialize(deserializer)? {
+        Saved::Offer(offer) => offer,
+        Saved::Flag(false) => FirstOffer::AtEdge,
+        Saved::Flag(true) => FirstOffer::AtClosestApproach,
+    })
 }
 
 /// Where P1 online puts a component's first candidate. A component's first pass is the rows in
