@@ -375,6 +375,32 @@ mod tests {
     }
 
     #[test]
+    fn the_plane_draws_every_candidate_sent_white() {
+        use loops_core::online::{OnlineSampler, OnlineSamplerOptions};
+        let positions: Vec<[f64; 3]> = (0..120).map(|k| [f64::from(k % 10), 0.0, 0.0]).collect();
+        let mut scene = LiveScene::new("back and forth", positions.clone(), None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        let mut sampler = OnlineSampler::new(OnlineSamplerOptions::default()).unwrap();
+        let mut sent = std::collections::BTreeSet::new();
+        for (k, p) in positions.iter().enumerate() {
+            let update = engine.push(k as f64, &p[..1]).unwrap();
+            let candidates = sampler.offer(&engine, &update).unwrap();
+            sent.extend(candidates.iter().flat_map(|c| [c.pair, [c.pair[1], c.pair[0]]]));
+            scene.keyframe(&engine, &update, &candidates).unwrap();
+        }
+        assert!(!sent.is_empty());
+        let image = RawImage::decode(scene.plane(&engine).unwrap().unwrap().data.as_slice()).unwrap();
+        let n = positions.len();
+        assert_eq!((image.width as usize, image.height as usize), (n, n));
+        // Pixel (t, t′) at column t, row n - 1 - t′ (t′ up).
+        let white: std::collections::BTreeSet<[usize; 2]> = (0..n * n)
+            .filter(|&at| image.data[3 * at..3 * at + 3] == [255, 255, 255])
+            .map(|at| [at % n, n - 1 - at / n])
+            .collect();
+        assert_eq!(white, sent);
+    }
+
+    #[test]
     fn the_trajectory_grows_keyframe_by_keyframe() {
         let positions: Vec<[f64; 3]> = (0..5).map(|k| [f64::from(k), 0.0, 0.0]).collect();
         let mut scene = LiveScene::new("line", positions, None).unwrap();
