@@ -3910,7 +3910,8 @@ class LiveServer:
         """
     def send_plane(self, online: OnlineLoops) -> None:
         """Sends the (t, t′) plane of the poses ``online`` holds (at the end of a log: the plane
-        of all of it); nothing before the second pose.
+        of all of it), each component in its colour and the candidates sent so far white, as in
+        the MCAP file; nothing before the second pose.
 
         Raises:
             ValueError: when the server is closed.

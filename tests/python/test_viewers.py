@@ -455,6 +455,79 @@ def test_merge_log_keeps_the_logs_schemas_channels_and_messages(logs, tmp_path):
     assert stamps == sorted(stamps), "one timeline"
 
 
+def write_log_with_attachments(path: Path) -> tuple[list[tuple], list[tuple]]:
+    """A JSON pose log (foxglove.PoseInFrame on /pose: two laps of a 40 m square) written by
+    the official ``mcap`` writer with two attachments and two metadata records; those as
+    (name, media type, log time, create time, data) and (name, {key: value})."""
+    from mcap.writer import CompressionType, Writer
+
+    attachments = [
+        ("calibration.yaml", "application/yaml", 5, 7, b"camera: {fx: 525.0}\n"),
+        ("map.bin", "application/octet-stream", 9, 0, bytes(range(256)) * 3),
+    ]
+    metadata = [
+        ("robot", {"name": "rover-1", "firmware": "2.4.1"}),
+        ("operator", {"shift": "night"}),
+    ]
+    side = np.linspace(0.0, 40.0, 20, endpoint=False)
+    lap = np.concatenate([np.c_[side, 0 * side], np.c_[40 + 0 * side, side]])
+    lap = np.concatenate([lap, np.c_[40 - side, 40 + 0 * side], np.c_[0 * side, 40 - side]])
+    xy = np.tile(lap, (2, 1))
+    with open(path, "wb") as stream:
+        writer = Writer(stream, compression=CompressionType.NONE)
+        writer.start()
+        schema = writer.register_schema(
+            name="foxglove.PoseInFrame", encoding="jsonschema", data=b'{"type": "object"}'
+        )
+        pose = writer.register_channel(topic="/pose", message_encoding="json", schema_id=schema)
+        for k, (x, y) in enumerate(xy):
+            stamp_ns = 10**9 + k * 10**8
+            message = {
+                "timestamp": {"sec": stamp_ns // 10**9, "nsec": stamp_ns % 10**9},
+                "frame_id": "map",
+                "pose": {
+                    "position": {"x": float(x), "y": float(y), "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            }
+            data = json.dumps(message).encode()
+            writer.add_message(pose, log_time=stamp_ns, publish_time=stamp_ns, data=data)
+        for name, media_type, log_time, create_time, data in attachments:
+            writer.add_attachment(
+                create_time=create_time,
+                log_time=log_time,
+                name=name,
+                media_type=media_type,
+                data=data,
+            )
+        for name, record in metadata:
+            writer.add_metadata(name, record)
+        writer.finish()
+    return attachments, metadata
+
+
+def test_merge_log_keeps_the_logs_attachments_and_metadata(tmp_path):
+    """``--merge-log`` copies the log's attachments and metadata records as they are (read back
+    with the official ``mcap`` reader), in the log's order, beside the scene's ``loops`` record."""
+    log = tmp_path / "drive.mcap"
+    attachments, metadata = write_log_with_attachments(log)
+    out = tmp_path / "merged"
+    done = loops_cli(
+        "run", log, "--gamma", 2, "--budget", 10, "--out", out, "--mcap", "--merge-log",
+        "--quiet", cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    with open(out / log.stem / "results.mcap", "rb") as f:
+        reader = make_reader(f)
+        got = [
+            (a.name, a.media_type, a.log_time, a.create_time, bytes(a.data))
+            for a in reader.iter_attachments()
+        ]
+        records = [(m.name, dict(m.metadata)) for m in reader.iter_metadata()]
+    assert got == attachments
+    assert records[:-1] == metadata and records[-1][0] == "loops"
+
+
 def test_existing_files_are_not_replaced_without_force(tmp_path):
     traj = il.urban_drive(duration_s=300.0)
     loops = il.find_loops(traj, gamma=40.0)

@@ -5,7 +5,8 @@ the ``websockets`` package and decodes the messages with Foxglove's published pr
 (``foxglove-schemas-protobuf``) and the ROS 2 ``MarkerArray`` with ``rosbags``. Every keyframe
 of the log is checked against the JSON lines of a replay without ``--serve``, the poses against
 the log's text, the components left at the end against :class:`inexact_loops.OnlineLoops`
-pushed the same poses, and the (t, t′) plane against the pairs within γ by brute force.
+pushed the same poses, and the (t, t′) plane against the pairs within γ by brute force, with
+every candidate's pixel white.
 """
 
 from __future__ import annotations
@@ -42,8 +43,9 @@ TOPICS = {
 }
 #: The topics with a message at every keyframe (the plane: every 100 poses, and at the end).
 EVERY_KEYFRAME = [t for t in TOPICS if t != "/loops/plane"]
-#: The plane's colour outside S_γ (the scene's background).
+#: The plane's colour outside S_γ (the scene's background), and of the candidates' pixels.
 BACKGROUND_RGB = (32, 32, 32)
+CANDIDATE_RGB = (255, 255, 255)
 GAMMA = 3.0
 #: The whole exchange ends well before this (seconds); a hang fails instead of blocking.
 DEADLINE_S = 120
@@ -147,7 +149,8 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
     }
     # 48 poses: no multiple of 100, so one plane, the whole log's, after the last keyframe.
     assert [t for t, _ in messages["/loops/plane"]] == [round(rows[-1, 0] * 1e9)]
-    check_plane(RawImage.FromString(messages["/loops/plane"][0][1]), rows)
+    sent = [(c["keyframe"], c["j"]) for k in keyframes for c in k["candidates"]]
+    check_plane(RawImage.FromString(messages["/loops/plane"][0][1]), rows, sent)
     store = get_typestore(Stores.ROS2_HUMBLE)
     markers: dict[tuple[str, int], object] = {}
 
@@ -245,9 +248,10 @@ def check_markers(store, data: bytes, markers: dict, line: dict, rows: np.ndarra
         np.testing.assert_allclose([a, b], rows[[c["keyframe"], c["j"]], 1:4], atol=1e-9)
 
 
-def check_plane(image: RawImage, rows: np.ndarray) -> None:
+def check_plane(image: RawImage, rows: np.ndarray, pairs: list[tuple[int, int]]) -> None:
     """The (t, t′) plane of the whole log, one pixel a pose (t to the right, t′ up): coloured
-    exactly where the two poses lie within γ, by brute force over the log's positions."""
+    exactly where the two poses lie within γ, by brute force over the log's positions, and
+    white exactly at the candidates ``pairs`` sent (pose indices) and their mirrors."""
     n = len(rows)
     assert (image.encoding, image.width, image.height, image.step) == ("rgb8", n, n, 3 * n)
     rgb = np.frombuffer(image.data, dtype=np.uint8).reshape(n, n, 3)[::-1]  # row 0: first t′
@@ -255,6 +259,12 @@ def check_plane(image: RawImage, rows: np.ndarray) -> None:
     xyz = rows[:, 1:4]
     within = np.linalg.norm(xyz[:, None, :] - xyz[None, :, :], axis=2) <= GAMMA
     np.testing.assert_array_equal(coloured, within)
+    assert pairs, "no candidate to see on the plane"
+    candidate = np.zeros((n, n), dtype=bool)
+    for i, j in pairs:
+        candidate[i, j] = candidate[j, i] = True
+    white = (rgb == CANDIDATE_RGB).all(axis=2)
+    np.testing.assert_array_equal(white, candidate)
 
 
 async def listen_to_python_server(rows: np.ndarray) -> tuple[dict[str, list], list, int]:
@@ -331,7 +341,7 @@ def test_python_serve_sends_each_keyframe_and_closing_frees_the_port(tmp_path: P
         assert len(markers.markers[0].points) == k + 2
     ((at, image),) = messages["/loops/plane"]
     assert at == round(rows[-1, 0] * 1e9)
-    check_plane(RawImage.FromString(image), rows)
+    check_plane(RawImage.FromString(image), rows, [tuple(p) for k in offered for p in k])
     with pytest.raises(OSError):
         socket.create_connection(("127.0.0.1", port), timeout=5).close()
 

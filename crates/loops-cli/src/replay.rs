@@ -237,7 +237,7 @@ pub(crate) fn replay(args: ReplayArgs) -> Result<u8> {
     let mut engine = OnlineLoops::new(spec, traj.dim(), args.engine.gamma)?;
     let stop = Interrupt::new();
     let _stop_guard = guard::stop_on_interrupt(stop.clone());
-    let live = match serve_address {
+    let mut live = match serve_address {
         Some(address) => {
             let batches = keyframes(traj.timestamps_s(), every_s).len();
             let server = LiveServer::start(address, batches * loops_io::LIVE_TOPICS.len())?;
@@ -257,9 +257,9 @@ pub(crate) fn replay(args: ReplayArgs) -> Result<u8> {
         }
         None => None,
     };
-    let pace = Pace { speed: args.speed, live: live.as_ref() };
+    let mut pace = Pace { speed: args.speed, live: live.as_mut() };
     let replayed = loops_core::with_threads(args.engine.threads, || {
-        run(&traj, &mut engine, &mut sampler, every_s, args.quiet, &pace, &stop)
+        run(&traj, &mut engine, &mut sampler, every_s, args.quiet, &mut pace, &stop)
     })
     .map_err(anyhow::Error::from)
     .and_then(|replayed| replayed)
@@ -289,7 +289,7 @@ struct Pace<'a> {
     /// Play at this many times the log's clock, or as fast as it goes.
     speed: Option<f64>,
     /// The server and the scene whose messages it sends.
-    live: Option<&'a (LiveServer, loops_io::LiveScene)>,
+    live: Option<&'a mut (LiveServer, loops_io::LiveScene)>,
 }
 
 impl Pace<'_> {
@@ -330,7 +330,7 @@ fn run(
     sampler: &mut OnlineSampler,
     every_s: f64,
     quiet: bool,
-    pace: &Pace<'_>,
+    pace: &mut Pace<'_>,
     stop: &Interrupt,
 ) -> Result<Figures> {
     let times = traj.timestamps_s();
@@ -345,7 +345,7 @@ fn run(
         wall: Duration::ZERO,
         interrupted: false,
     };
-    if let Some((server, _)) = pace.live
+    if let Some((server, _)) = pace.live.as_deref()
         && !server.wait_for_client(stop)
     {
         figures.interrupted = true;
@@ -369,7 +369,7 @@ fn run(
         figures.candidates += candidates.len();
         figures.first_candidates += candidates.iter().filter(|c| c.first).count();
         figures.improvements += candidates.iter().filter(|c| c.improves.is_some()).count();
-        if let Some((server, scene)) = pace.live {
+        if let Some((server, scene)) = pace.live.as_deref_mut() {
             server.send(&scene.keyframe(engine, &update, &candidates)?);
         }
         if !quiet {

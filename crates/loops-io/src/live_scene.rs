@@ -2,8 +2,8 @@
 //! messages of a live stream on the topics and in the schemas of the scene's MCAP file
 //! ([`SCENE_TOPICS`]), built by the same code. A [`LiveScene`] holds the log's poses; at each
 //! keyframe, [`LiveScene::keyframe`] turns the engine's [`Update`] and the sampler's
-//! [`Candidate`]s into the messages of [`LIVE_TOPICS`]; [`LiveScene::plane`] gives the (t, t′)
-//! plane at the end. Sending them is the caller's (`loops replay --serve` serves them over
+//! [`Candidate`]s into the messages of [`LIVE_TOPICS`] and keeps the candidates' pairs;
+//! [`LiveScene::plane`] gives the (t, t′) plane with them at the end, drawn as the file's. Sending them is the caller's (`loops replay --serve` serves them over
 //! Foxglove's WebSocket protocol): this crate stays free of a network stack.
 
 use loops_core::online::{Candidate, OnlineLoops, Update};
@@ -44,8 +44,8 @@ pub const LIVE_TOPICS: [SceneTopic; 6] = [
         ..SCENE_TOPICS[3]
     },
     SceneTopic {
-        holds: "the (t, t′) plane of the poses so far, rgb8 (t to the right, t′ up, each component in its colour), \
-                each time the poses pass a multiple of 100 (LIVE_PLANE_POSES) and at the end",
+        holds: "the (t, t′) plane of the poses so far, rgb8 (t to the right, t′ up, each component in its colour, \
+                the candidates sent so far white), each time the poses pass a multiple of 100 (LIVE_PLANE_POSES) and at the end",
         ..SCENE_TOPICS[4]
     },
     SceneTopic {
@@ -90,14 +90,16 @@ pub struct LiveMessage {
     pub data: Vec<u8>,
 }
 
-/// The poses of a log being replayed, to draw what the online engine reports on them; see the
-/// [module](self).
+/// The poses of a log being replayed, to draw what the online engine reports on them, and the
+/// pairs of the candidates sent so far, for the plane; see the [module](self).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LiveScene {
     name: String,
     frame_id: String,
     positions: Vec<[f64; 3]>,
     orientations_xyzw: Option<Vec<[f64; 4]>>,
+    /// The pose pairs of every candidate of [`LiveScene::keyframe`] so far, in order.
+    pairs: Vec<[usize; 2]>,
 }
 
 impl LiveScene {
@@ -112,6 +114,28 @@ impl LiveScene {
         positions: Vec<[f64; 3]>,
         orientations_xyzw: Option<Vec<[f64; 4]>>,
     ) -> loops_core::Result<Self> {
+        let mut scene = Self {
+            name: name.to_owned(),
+            frame_id: SCENE_FRAME.to_owned(),
+            positions: Vec::new(),
+            orientations_xyzw: None,
+            pairs: Vec::new(),
+        };
+        scene.set_poses(positions, orientations_xyzw)?;
+        Ok(scene)
+    }
+
+    /// Replaces the scene's poses by `positions` (and `orientations_xyzw`): those pushed so far,
+    /// when they come as the robot drives rather than from a log read first. The candidates'
+    /// pairs are kept.
+    ///
+    /// # Errors
+    /// [`loops_core::Error::RowCountMismatch`] as [`LiveScene::new`]; the scene is unchanged.
+    pub fn set_poses(
+        &mut self,
+        positions: Vec<[f64; 3]>,
+        orientations_xyzw: Option<Vec<[f64; 4]>>,
+    ) -> loops_core::Result<()> {
         if let Some(rows) = orientations_xyzw.as_ref().map(Vec::len).filter(|&rows| rows != positions.len()) {
             return Err(loops_core::Error::RowCountMismatch {
                 first: "positions",
@@ -120,7 +144,8 @@ impl LiveScene {
                 second_rows: rows,
             });
         }
-        Ok(Self { name: name.to_owned(), frame_id: SCENE_FRAME.to_owned(), positions, orientations_xyzw })
+        (self.positions, self.orientations_xyzw) = (positions, orientations_xyzw);
+        Ok(())
     }
 
     /// The channels of the stream, one per topic of [`LIVE_TOPICS`], in order: Foxglove's
@@ -142,8 +167,9 @@ impl LiveScene {
     }
 
     /// The (t, t′) plane of the poses `engine` holds, as the message of the plane's channel
-    /// (`None` before the second pose): each component in its colour, as in the scene's file
-    /// (the candidates are on their own topic). O(runs + poses + pixels).
+    /// (`None` before the second pose), drawn as the scene's file draws it: each component in
+    /// its colour, the pixels of the candidates sent so far (and their mirrors) white.
+    /// O(runs + poses + candidates + pixels).
     ///
     /// # Errors
     /// What [`OnlineLoops::to_loops`] returns ([`loops_core::Error::OutOfMemory`],
@@ -153,14 +179,17 @@ impl LiveScene {
             return Ok(None);
         }
         let stamp = RosTime::of_seconds(engine.timestamps_s()[engine.len() - 1]);
-        let image = plane_raw_image(Some(timestamp(stamp)), &loops_plane(&engine.to_loops()?, &[])?);
+        // Pairs of a longer run than the engine's (another engine's) are left out.
+        let pairs: Vec<[usize; 2]> = self.pairs.iter().copied().filter(|p| p[0].max(p[1]) < engine.len()).collect();
+        let image = plane_raw_image(Some(timestamp(stamp)), &loops_plane(&engine.to_loops()?, &pairs)?);
         let data = protobuf(&image).expect("a Vec holds any message");
         Ok(Some(LiveMessage { channel: PLANE, log_time_ns: stamp.map(|s| s.ns()), data }))
     }
 
     /// The messages of the keyframe that `update` reports (`engine`'s last push), with the
     /// `candidates` the sampler offered for it: one per topic of [`LIVE_TOPICS`], in order (see
-    /// there), the plane only when the poses pass a multiple of [`LIVE_PLANE_POSES`]. O(poses
+    /// there), the plane only when the poses pass a multiple of [`LIVE_PLANE_POSES`]. The
+    /// candidates' pairs are kept for the plane. O(poses
     /// pushed so far + cells of the changed components' stretches), and [`LiveScene::plane`]'s
     /// with the plane.
     ///
@@ -174,7 +203,7 @@ impl LiveScene {
     /// use loops_core::MetricSpec;
     /// let square = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]];
     /// let positions: Vec<[f64; 3]> = (0..8).map(|i| [square[i % 4][0], square[i % 4][1], 0.0]).collect();
-    /// let scene = loops_io::LiveScene::new("square", positions.clone(), None)?;
+    /// let mut scene = loops_io::LiveScene::new("square", positions.clone(), None)?;
     /// let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 2, 1.0)?;
     /// let mut sampler = OnlineSampler::new(OnlineSamplerOptions::default())?;
     /// for (k, p) in positions.iter().enumerate() {
@@ -187,7 +216,7 @@ impl LiveScene {
     /// # Ok::<(), loops_core::Error>(())
     /// ```
     pub fn keyframe(
-        &self,
+        &mut self,
         engine: &OnlineLoops,
         update: &Update,
         candidates: &[Candidate],
@@ -255,6 +284,7 @@ impl LiveScene {
             Vec::new()
         } else {
             let pairs: Vec<[usize; 2]> = candidates.iter().map(|c| [c.pair[1], c.pair[0]]).collect();
+            self.pairs.extend(&pairs);
             let ids: Vec<u32> = candidates.iter().map(|c| c.component).collect();
             let metadata = vec![
                 ("pose", update.pose.to_string()),
@@ -303,7 +333,7 @@ mod tests {
 
     #[test]
     fn a_keyframe_past_the_scene_poses_is_an_error() {
-        let scene = LiveScene::new("two", vec![[0.0; 3], [1.0, 0.0, 0.0]], None).unwrap();
+        let mut scene = LiveScene::new("two", vec![[0.0; 3], [1.0, 0.0, 0.0]], None).unwrap();
         let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
         for t in 0..2 {
             let update = engine.push(f64::from(t), &[f64::from(t)]).unwrap();
@@ -319,7 +349,7 @@ mod tests {
     #[test]
     fn the_plane_comes_every_hundred_poses_with_the_markers_at_every_keyframe() {
         let positions: Vec<[f64; 3]> = (0..250).map(|k| [f64::from(k % 10), 0.0, 0.0]).collect();
-        let scene = LiveScene::new("back and forth", positions.clone(), None).unwrap();
+        let mut scene = LiveScene::new("back and forth", positions.clone(), None).unwrap();
         let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
         let mut planes = Vec::new();
         for (k, p) in positions.iter().enumerate() {
@@ -345,9 +375,35 @@ mod tests {
     }
 
     #[test]
+    fn the_plane_draws_every_candidate_sent_white() {
+        use loops_core::online::{OnlineSampler, OnlineSamplerOptions};
+        let positions: Vec<[f64; 3]> = (0..120).map(|k| [f64::from(k % 10), 0.0, 0.0]).collect();
+        let mut scene = LiveScene::new("back and forth", positions.clone(), None).unwrap();
+        let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
+        let mut sampler = OnlineSampler::new(OnlineSamplerOptions::default()).unwrap();
+        let mut sent = std::collections::BTreeSet::new();
+        for (k, p) in positions.iter().enumerate() {
+            let update = engine.push(k as f64, &p[..1]).unwrap();
+            let candidates = sampler.offer(&engine, &update).unwrap();
+            sent.extend(candidates.iter().flat_map(|c| [c.pair, [c.pair[1], c.pair[0]]]));
+            scene.keyframe(&engine, &update, &candidates).unwrap();
+        }
+        assert!(!sent.is_empty());
+        let image = RawImage::decode(scene.plane(&engine).unwrap().unwrap().data.as_slice()).unwrap();
+        let n = positions.len();
+        assert_eq!((image.width as usize, image.height as usize), (n, n));
+        // Pixel (t, t′) at column t, row n - 1 - t′ (t′ up).
+        let white: std::collections::BTreeSet<[usize; 2]> = (0..n * n)
+            .filter(|&at| image.data[3 * at..3 * at + 3] == [255, 255, 255])
+            .map(|at| [at % n, n - 1 - at / n])
+            .collect();
+        assert_eq!(white, sent);
+    }
+
+    #[test]
     fn the_trajectory_grows_keyframe_by_keyframe() {
         let positions: Vec<[f64; 3]> = (0..5).map(|k| [f64::from(k), 0.0, 0.0]).collect();
-        let scene = LiveScene::new("line", positions, None).unwrap();
+        let mut scene = LiveScene::new("line", positions, None).unwrap();
         let mut engine = OnlineLoops::new(MetricSpec::Euclidean, 1, 0.5).unwrap();
         for k in 0..5 {
             let update = engine.push(1.7e9 + f64::from(k), &[f64::from(k)]).unwrap();

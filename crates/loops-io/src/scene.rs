@@ -606,8 +606,9 @@ pub fn scene_mcap_to<W: Write + Seek>(out: W, scene: &Scene) -> io::Result<()> {
 /// from its file `log.0`) merged in, so that the loops play back over their data: its schemas
 /// and channels under their own ids and contents, byte for byte (the scene's take the ids left
 /// free), and each of its messages with its data, log time, publish time and sequence, in time
-/// order among the scene's. Its attachments and metadata records are left out.
-/// O(the log's bytes + the scene's messages).
+/// order among the scene's; its attachments (name, media type, times, data) and metadata
+/// records (name, keys, values) as they are, in the file's order, before the scene's metadata
+/// record `loops`. O(the log's bytes + the scene's messages).
 ///
 /// # Errors
 /// What `out` returns; an [`io::ErrorKind::InvalidData`] error naming `log.0` when the log is
@@ -626,19 +627,28 @@ pub fn scene_mcap_merged_to<W: Write + Seek>(out: W, scene: &Scene, log: Option<
     })
 }
 
-/// A user's MCAP log to merge into the scene's file: its schemas and channels by id, and its
-/// messages (channel id, sequence, log time, publish time, data), in the file's order.
+/// A user's MCAP log to merge into the scene's file: its schemas and channels by id, its
+/// messages (channel id, sequence, log time, publish time, data), attachments and metadata
+/// records, each in the file's order.
 struct MergedLog<'a> {
     schemas: BTreeMap<u16, Arc<mcap::Schema<'a>>>,
     channels: BTreeMap<u16, Arc<mcap::Channel<'a>>>,
     messages: Vec<mcap::Message<'a>>,
+    attachments: Vec<mcap::Attachment<'a>>,
+    metadata: Vec<mcap::records::Metadata>,
 }
 
 impl<'a> MergedLog<'a> {
     /// Reads `bytes`, an MCAP file: every channel and schema its summary lists (used or not),
     /// and those of its messages.
     fn read(bytes: &'a [u8]) -> mcap::McapResult<Self> {
-        let mut log = Self { schemas: BTreeMap::new(), channels: BTreeMap::new(), messages: Vec::new() };
+        let mut log = Self {
+            schemas: BTreeMap::new(),
+            channels: BTreeMap::new(),
+            messages: Vec::new(),
+            attachments: Vec::new(),
+            metadata: Vec::new(),
+        };
         if let Some(summary) = mcap::Summary::read(bytes)? {
             log.schemas.extend(summary.schemas);
             log.channels.extend(summary.channels);
@@ -651,6 +661,20 @@ impl<'a> MergedLog<'a> {
             }
             log.channels.entry(channel.id).or_insert_with(|| Arc::clone(channel));
             log.messages.push(message);
+        }
+        // Attachments and metadata are top-level records, never inside a chunk.
+        for record in mcap::read::LinearReader::new(bytes)? {
+            match record? {
+                mcap::records::Record::Attachment { header, data, .. } => log.attachments.push(mcap::Attachment {
+                    log_time: header.log_time,
+                    create_time: header.create_time,
+                    name: header.name,
+                    media_type: header.media_type,
+                    data,
+                }),
+                mcap::records::Record::Metadata(metadata) => log.metadata.push(metadata),
+                _ => {}
+            }
         }
         Ok(log)
     }
@@ -770,6 +794,14 @@ fn write_scene<W: Write + Seek>(out: W, scene: &Scene, log: Option<MergedLog<'_>
         writer.write_to_known_channel(&header, data)?;
     }
 
+    if let Some(log) = &log {
+        for attachment in &log.attachments {
+            writer.attach(attachment)?;
+        }
+        for metadata in &log.metadata {
+            writer.write_metadata(metadata)?;
+        }
+    }
     let names: Vec<&str> = scene.paths.iter().map(|p| p.name.as_str()).collect();
     let metadata = BTreeMap::from([
         ("sessions".to_owned(), serde_json::to_string(&names).expect("strings")),

@@ -28,6 +28,8 @@ const POLL: Duration = Duration::from_millis(20);
 #[derive(Debug)]
 pub(crate) struct LiveServer {
     name: String,
+    /// The poses pushed so far and the candidates sent, for the plane.
+    scene: Mutex<loops_io::LiveScene>,
     address: SocketAddr,
     /// `None` once closed.
     server: Mutex<Option<loops_cli::LiveServer>>,
@@ -59,7 +61,8 @@ impl LiveServer {
         let server =
             loops_cli::LiveServer::start(parsed, BACKLOG).map_err(|error| PyOSError::new_err(format!("{error:#}")))?;
         let address = server.address();
-        Ok(Self { name: name.to_owned(), address, server: Mutex::new(Some(server)) })
+        let scene = loops_io::LiveScene::new(name, Vec::new(), None).map_err(value_error)?;
+        Ok(Self { name: name.to_owned(), scene: Mutex::new(scene), address, server: Mutex::new(Some(server)) })
     }
 
     /// Where it serves, ``HOST:PORT`` (the port picked for port 0); a client connects to
@@ -129,8 +132,10 @@ impl LiveServer {
         let candidates: Vec<loops_core::online::Candidate> = candidates.iter().map(|c| c.inner).collect();
         let engine = online.engine.lock(py)?;
         let Some(traj) = engine.inner.trajectory() else { return Ok(()) };
-        let scene = loops_io::LiveScene::new(&self.name, loops_io::point_positions(traj), None).map_err(value_error)?;
+        let mut scene = self.scene.lock().unwrap_or_else(PoisonError::into_inner);
+        scene.set_poses(loops_io::point_positions(traj), None).map_err(value_error)?;
         let messages = scene.keyframe(&engine.inner, &update.inner, &candidates).map_err(value_error)?;
+        drop(scene);
         drop(engine);
         self.with_server(|server| {
             server.send(&messages);
@@ -139,15 +144,18 @@ impl LiveServer {
     }
 
     /// Sends the (t, t′) plane of the poses ``online`` holds (at the end of a log: the plane
-    /// of all of it); nothing before the second pose.
+    /// of all of it), each component in its colour and the candidates sent so far white, as in
+    /// the MCAP file; nothing before the second pose.
     ///
     /// Raises:
     ///     ValueError: when the server is closed.
     fn send_plane(&self, py: Python<'_>, online: &OnlineLoops) -> PyResult<()> {
         let engine = online.engine.lock(py)?;
         let Some(traj) = engine.inner.trajectory() else { return Ok(()) };
-        let scene = loops_io::LiveScene::new(&self.name, loops_io::point_positions(traj), None).map_err(value_error)?;
+        let mut scene = self.scene.lock().unwrap_or_else(PoisonError::into_inner);
+        scene.set_poses(loops_io::point_positions(traj), None).map_err(value_error)?;
         let plane = scene.plane(&engine.inner).map_err(value_error)?;
+        drop(scene);
         drop(engine);
         self.with_server(|server| {
             server.send(&Vec::from_iter(plane));

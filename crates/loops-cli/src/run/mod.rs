@@ -196,9 +196,9 @@ pub(crate) struct ResultsArgs {
     /// each report.
     #[arg(long)]
     pub(crate) mcap: bool,
-    /// With --mcap, merge each MCAP log into its own results.mcap (its schemas, channels and
-    /// messages as they are; a fleet: each session's folder), so that the loops play back over
-    /// the recorded data.
+    /// With --mcap, merge each MCAP log into its own results.mcap (its schemas, channels,
+    /// messages, attachments and metadata as they are; a fleet: each session's folder), so that
+    /// the loops play back over the recorded data.
     #[arg(long, requires = "mcap")]
     pub(crate) merge_log: bool,
 }
