@@ -2136,6 +2136,71 @@ class FleetLoops:
         """
 
 @final
+class StoreUpdatePlan:
+    """"""
+    def __new__(
+        cls,
+        path: str | PathLike[str],
+        *,
+        add: dict[str, _SessionSource]
+        | list[tuple[str, _SessionSource]]
+        | list[str | PathLike[str]]
+        | list[tuple[str, _SessionSource] | str | PathLike[str]]
+        | None = None,
+        remove: list[str] | None = None,
+        gamma: float | None = None,
+        metric: str | _MetricLike | None = None,
+        separation: Separation | float | Literal["auto", "none"] | None = "auto",
+        block: int | None = None,
+        sampler: _SamplerName | str | None = None,
+        rate: float | None = None,
+        budget: int | None = None,
+        seed: int | None = None,
+        between_only: bool = False,
+        skip_trivial: bool = False,
+        format: str | None = None,
+        axes: tuple[int, int] | None = None,
+        topic: str | None = None,
+        time: Literal["header", "log", "publish"] | str | None = None,
+        frames: tuple[str, str] | None = None,
+        rate_hz: float | None = None,
+        drop_duplicate_stamps: bool = False,
+        quaternion_tolerance: float | None = None,
+    ) -> StoreUpdatePlan:
+        """"""
+    def __len__(self) -> int:
+        """"""
+    @property
+    def tile_sessions(self) -> list[tuple[str, str]]:
+        """"""
+    @property
+    def last_update(self) -> dict[str, Any]:
+        """"""
+    def scan(
+        self,
+        tiles: list[int],
+        *,
+        add: dict[str, _SessionSource]
+        | list[tuple[str, _SessionSource]]
+        | list[str | PathLike[str]]
+        | list[tuple[str, _SessionSource] | str | PathLike[str]]
+        | None = None,
+        metric: str | _MetricLike | None = None,
+        threads: int | None = None,
+        format: str | None = None,
+        axes: tuple[int, int] | None = None,
+        topic: str | None = None,
+        time: Literal["header", "log", "publish"] | str | None = None,
+        frames: tuple[str, str] | None = None,
+        rate_hz: float | None = None,
+        drop_duplicate_stamps: bool = False,
+        quaternion_tolerance: float | None = None,
+    ) -> list[bytes]:
+        """"""
+    def __reduce__(self) -> tuple[Callable[[bytes], StoreUpdatePlan], tuple[bytes]]: ...
+    @classmethod
+    def _from_state(cls, state: bytes) -> StoreUpdatePlan: ...
+
 class FleetStore:
     """A fleet's loops kept in a folder and updated at the cost of the new data: each
     :meth:`update` adds sessions (replacing those of the same name) and removes others,
@@ -2211,6 +2276,7 @@ class FleetStore:
         rate_hz: float | None = None,
         drop_duplicate_stamps: bool = False,
         quaternion_tolerance: float | None = None,
+        scanned: list[bytes] | None = None,
     ) -> dict[str, Any]:
         """Adds the sessions ``add`` (replacing stored ones of the same name) and removes the
         sessions named in ``remove``, in one update written atomically; a session given with the
