@@ -203,7 +203,7 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
         local_client() as client,
     ):
         for trial in range(6):
-            client.wait_for_workers(2, timeout=120)
+            client.wait_for_workers(1, timeout=120)
             target = "store_scan_task" if trial % 2 == 0 else "store_update_task"
             folder = tmp_path / f"killed{trial}"
             update_store(folder, add=first, client=client, **SETTINGS)
@@ -242,7 +242,7 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
                 assert not changed, f"trial {trial}: the old state, changed: {changed}"
                 outcomes.append("old")
                 # The next update ends in the new state.
-                client.wait_for_workers(2, timeout=120)
+                client.wait_for_workers(1, timeout=120)
                 update_store(folder, add=second, client=client)
             else:
                 outcomes.append("new")

@@ -727,6 +727,12 @@ impl StoreUpdatePlan {
         block=None, sampler=None, rate=None, budget=None, seed=None, between_only=false, skip_trivial=false,
         format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, drop_duplicate_stamps=false,
         quaternion_tolerance=None))]
+    #[pyo3(
+        text_signature = "(path, *, add=None, remove=None, gamma=None, metric=None, separation='auto', block=None, \
+                          sampler=None, rate=None, budget=None, seed=None, between_only=False, skip_trivial=False, \
+                          format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, \
+                          drop_duplicate_stamps=False, quaternion_tolerance=None)"
+    )]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,

@@ -82,8 +82,12 @@ def update_store(
                 )
     if remove is not None and isinstance(remove, str):
         raise InvalidParameterError(f"remove = {remove!r} is invalid: give a list of session names")
-    if groups is not None and (isinstance(groups, bool) or not isinstance(groups, int) or groups < 1):
-        raise InvalidParameterError(f"groups = {groups!r} is invalid: give a positive number of scan tasks")
+    if groups is not None and (
+        isinstance(groups, bool) or not isinstance(groups, int) or groups < 1
+    ):
+        raise InvalidParameterError(
+            f"groups = {groups!r} is invalid: give a positive number of scan tasks"
+        )
     folder = os.fspath(path)
     if client is None:
         return store_update_task(folder, add, remove, options)
