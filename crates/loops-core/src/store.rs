@@ -436,7 +436,7 @@ impl UpdatePlan {
         let starts = starts_of(&sessions);
         Ok(Self {
             id: id.finish(),
-            settings: settings,
+            settings,
             put: given.into_values().collect(),
             remove: report.removed.clone(),
             sessions,

@@ -29,8 +29,8 @@ def update_store(
     ``client=``, a task plans the update from the store's small tables, one task per group of
     tiles scans them (spread over the workers, each reading only the logs and pose files its
     tiles hold), and one task applies the scans and writes every table. The scanned tiles go
-    from worker to worker: the client sends paths and names and gets back the tile groups and
-    the summary below, O(sessions + tiles to scan), never the components, the tiles or the
+    from worker to worker: the client sends paths and names and gets back the number of tiles
+    to scan and the summary below, O(sessions), never the components, the tiles or the
     poses. A worker that dies during the update leaves the store as it was (the state is
     swapped in one rename), and Dask runs its tasks again on another worker: the store ends in
     the new state.
@@ -96,10 +96,12 @@ def update_store(
     plan_options = {k: v for k, v in options.items() if k != "threads"}
     scan_options = {k: v for k, v in options.items() if k in _SCAN_KEYWORDS}
     plan = client.submit(store_plan_task, folder, add, remove, plan_options, pure=False)
-    tile_groups = client.submit(store_groups_task, plan, groups, pure=False).result()
+    # The client learns only how many scan tasks to submit; each finds its own tiles.
+    count = client.submit(len, plan, pure=False).result()
+    count = min(groups, count)
     scans = [
-        client.submit(store_scan_task, plan, tiles, add, scan_options, pure=False)
-        for tiles in tile_groups
+        client.submit(store_scan_task, plan, g, count, add, scan_options, pure=False)
+        for g in range(count)
     ]
     apply = client.submit(store_update_task, folder, add, remove, options, scans, pure=False)
     return apply.result()
@@ -130,17 +132,19 @@ def store_plan_task(folder: str, add: Any, remove: Any, options: dict[str, Any])
     return StoreUpdatePlan(folder, add=add, remove=remove, **options)
 
 
-def store_groups_task(plan: Any, groups: int) -> list[list[int]]:
-    """Task: the plan's tiles in at most ``groups`` groups of about as many tiles, each
-    group's tiles together by session pair (so a group reads few sessions)."""
+def tile_group(plan: Any, group: int, count: int) -> list[int]:
+    """The tiles of group ``group`` of ``count``: the plan's tiles ordered by session pair (so
+    that a group reads few sessions), cut into ``count`` runs of about as many tiles."""
     order = sorted(range(len(plan)), key=lambda k: (plan.tile_sessions[k], k))
-    count = min(groups, len(order))
-    return [order[g * len(order) // count : (g + 1) * len(order) // count] for g in range(count)]
+    return order[group * len(order) // count : (group + 1) * len(order) // count]
 
 
-def store_scan_task(plan: Any, tiles: list[int], add: Any, options: dict[str, Any]) -> list[bytes]:
-    """Task: the scans of the plan's tiles ``tiles`` (reading only the sessions they hold)."""
-    return plan.scan(tiles, add=add, **options)
+def store_scan_task(
+    plan: Any, group: int, count: int, add: Any, options: dict[str, Any]
+) -> list[bytes]:
+    """Task: the scans of the plan's tiles of group ``group`` of ``count`` (reading only the
+    sessions they hold)."""
+    return plan.scan(tile_group(plan, group, count), add=add, **options)
 
 
 def store_update_task(
