@@ -526,7 +526,7 @@ pub fn plan_store_update(
         (head.config.settings, head.sessions, Some(dir.join(&head.pointer.state).join("poses")))
     } else {
         let Some(given) = config else { return Err(StoreError::NotAStore { path: dir.to_path_buf() }) };
-        given.settings.check().map_err(loops_core::Error::from)?;
+        given.settings.check()?;
         (given.settings, Vec::new(), None)
     };
     let sessions = put
