@@ -371,7 +371,7 @@ fn an_update_by_its_steps_is_the_update() {
     assert_eq!(store, before);
     // A plan made before another update is refused.
     let mut moved = store.clone();
-    moved.remove(&[fixed.clone()]).unwrap();
+    moved.remove(std::slice::from_ref(fixed)).unwrap();
     let stale = moved.apply_update(&plan, scanned.clone()).unwrap_err().to_string();
     assert!(stale.contains("is not of this store's state"), "{stale}");
 
