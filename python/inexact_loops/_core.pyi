@@ -2158,10 +2158,10 @@ class StoreUpdatePlan:
         >>> _ = il.FleetStore.open(folder).update(add={"monday": monday}, gamma=1.0, block=8)
         >>> plan = il.StoreUpdatePlan(folder, add={"tuesday": tuesday})
         >>> len(plan), plan.tile_sessions[0]
-        (5, ('monday', 'tuesday'))
+        (10, ('monday', 'tuesday'))
         >>> scanned = [b for k in range(len(plan)) for b in plan.scan([k], add={"tuesday": tuesday})]
         >>> il.FleetStore.open(folder).update(add={"tuesday": tuesday}, scanned=scanned)["tiles_scanned"]
-        5
+        10
     """
     def __new__(
         cls,

@@ -706,10 +706,10 @@ fn read_add(
 ///     >>> _ = il.FleetStore.open(folder).update(add={"monday": monday}, gamma=1.0, block=8)
 ///     >>> plan = il.StoreUpdatePlan(folder, add={"tuesday": tuesday})
 ///     >>> len(plan), plan.tile_sessions[0]
-///     (5, ('monday', 'tuesday'))
+///     (10, ('monday', 'tuesday'))
 ///     >>> scanned = [b for k in range(len(plan)) for b in plan.scan([k], add={"tuesday": tuesday})]
 ///     >>> il.FleetStore.open(folder).update(add={"tuesday": tuesday}, scanned=scanned)["tiles_scanned"]
-///     5
+///     10
 #[pyclass(module = "inexact_loops._core", frozen)]
 pub(crate) struct StoreUpdatePlan {
     inner: StorePlan,
