@@ -51,6 +51,7 @@ __all__ = [
     "Fleet",
     "FleetLoops",
     "FleetStore",
+    "StoreUpdatePlan",
     "FleetSamples",
     "find_fleet_loops",
     "sample_fleet",
@@ -2137,6 +2138,117 @@ class FleetLoops:
         """
 
 @final
+class StoreUpdatePlan:
+    """The plan of an update of the fleet store in the folder ``path``, made from the store's
+    small tables (settings and sessions; no tile is read): the tiles the update must scan, each
+    of which :meth:`scan` scans on its own, on any machine that reads the new sessions and the
+    store's folder; :meth:`FleetStore.update` with ``scanned=`` then applies them and writes the
+    new state. The three steps are those :meth:`FleetStore.update` makes in one process;
+    :func:`inexact_loops.dask.update_store` spreads the scans over a cluster's workers.
+
+    The arguments are :meth:`FleetStore.update`'s (the same for the plan, the scans and the
+    update). A plan holds no poses and no stored tile (O(sessions + blocks + tiles to scan)),
+    and pickles.
+
+    Example:
+        >>> import tempfile, numpy as np, inexact_loops as il
+        >>> x = np.arange(21) * 0.5
+        >>> monday = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+        >>> tuesday = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+        >>> folder = tempfile.mkdtemp() + "/city"
+        >>> _ = il.FleetStore.open(folder).update(add={"monday": monday}, gamma=1.0, block=8)
+        >>> plan = il.StoreUpdatePlan(folder, add={"tuesday": tuesday})
+        >>> len(plan), plan.tile_sessions[0]
+        (10, ('monday', 'tuesday'))
+        >>> scanned = [b for k in range(len(plan)) for b in plan.scan([k], add={"tuesday": tuesday})]
+        >>> il.FleetStore.open(folder).update(add={"tuesday": tuesday}, scanned=scanned)["tiles_scanned"]
+        10
+    """
+    def __new__(
+        cls,
+        path: str | PathLike[str],
+        *,
+        add: dict[str, _SessionSource]
+        | list[tuple[str, _SessionSource]]
+        | list[str | PathLike[str]]
+        | list[tuple[str, _SessionSource] | str | PathLike[str]]
+        | None = None,
+        remove: list[str] | None = None,
+        gamma: float | None = None,
+        metric: str | _MetricLike | None = None,
+        separation: Separation | float | Literal["auto", "none"] | None = "auto",
+        block: int | None = None,
+        sampler: _SamplerName | str | None = None,
+        rate: float | None = None,
+        budget: int | None = None,
+        seed: int | None = None,
+        between_only: bool = False,
+        skip_trivial: bool = False,
+        format: str | None = None,
+        axes: tuple[int, int] | None = None,
+        topic: str | None = None,
+        time: Literal["header", "log", "publish"] | str | None = None,
+        frames: tuple[str, str] | None = None,
+        rate_hz: float | None = None,
+        drop_duplicate_stamps: bool = False,
+        quaternion_tolerance: float | None = None,
+    ) -> StoreUpdatePlan:
+        """"""
+    def __len__(self) -> int:
+        """"""
+    @property
+    def tile_sessions(self) -> list[tuple[str, str]]:
+        """The names of the two sessions of each tile to scan (the same name twice for a tile of
+        one session), in tile order.
+        """
+    @property
+    def last_update(self) -> dict[str, Any]:
+        """What the update will do, by name (``added``, ``replaced``, ``unchanged``, ``removed``)
+        and ``tiles_scanned``; the other counts are set when it is applied.
+        """
+    def scan(
+        self,
+        tiles: list[int],
+        *,
+        add: dict[str, _SessionSource]
+        | list[tuple[str, _SessionSource]]
+        | list[str | PathLike[str]]
+        | list[tuple[str, _SessionSource] | str | PathLike[str]]
+        | None = None,
+        metric: str | _MetricLike | None = None,
+        threads: int | None = None,
+        format: str | None = None,
+        axes: tuple[int, int] | None = None,
+        topic: str | None = None,
+        time: Literal["header", "log", "publish"] | str | None = None,
+        frames: tuple[str, str] | None = None,
+        rate_hz: float | None = None,
+        drop_duplicate_stamps: bool = False,
+        quaternion_tolerance: float | None = None,
+    ) -> list[bytes]:
+        """Scans the tiles ``tiles`` (indices, ``range(len(plan))``) of the plan: the sessions the
+        update adds or replaces that they hold are read from ``add`` (the plan's, or only those
+        sessions), the stored ones from the store's pose files; each is checked against the
+        plan (its fingerprint) before the scan.
+
+        Args:
+            tiles: indices of the plan's tiles.
+            add, metric, format, ...: as given to the plan.
+            threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+
+        Returns:
+            One ``bytes`` per tile, in the order of ``tiles``: what ``FleetStore.update(scanned=)``
+            takes.
+
+        Raises:
+            InvalidParameterError: a tile out of range, a session to scan not in ``add``, or poses
+                that are not those planned.
+            OSError, LoopsIOError: a file that cannot be read.
+        """
+    def __reduce__(self) -> tuple[Callable[[bytes], StoreUpdatePlan], tuple[bytes]]: ...
+    @classmethod
+    def _from_state(cls, state: bytes) -> StoreUpdatePlan: ...
+
 class FleetStore:
     """A fleet's loops kept in a folder and updated at the cost of the new data: each
     :meth:`update` adds sessions (replacing those of the same name) and removes others,
@@ -2212,6 +2324,7 @@ class FleetStore:
         rate_hz: float | None = None,
         drop_duplicate_stamps: bool = False,
         quaternion_tolerance: float | None = None,
+        scanned: list[bytes] | None = None,
     ) -> dict[str, Any]:
         """Adds the sessions ``add`` (replacing stored ones of the same name) and removes the
         sessions named in ``remove``, in one update written atomically; a session given with the
@@ -2235,6 +2348,10 @@ class FleetStore:
             threads: worker threads; ``None`` uses one per core. Results do not depend on it.
             format, axes, topic, time, frames, rate_hz, drop_duplicate_stamps,
                 quaternion_tolerance: how paths are read, as in :class:`Fleet`.
+            scanned: the update's new tiles scanned elsewhere (:meth:`StoreUpdatePlan.scan` of
+                every tile of the :class:`StoreUpdatePlan` with the same arguments, in any
+                order); ``None``: scanned here. The update then checks that they are exactly its
+                plan's tiles, of this state, and scans nothing.
 
         Returns:
             :attr:`last_update`.

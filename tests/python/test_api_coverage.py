@@ -65,6 +65,15 @@ ELSEWHERE = {
             "FleetStore.samples",
         )
     },
+    **{
+        name: ("python/test_store.py", "test_an_update_by_its_steps_writes_the_update_here")
+        for name in (
+            "StoreUpdatePlan",
+            "StoreUpdatePlan.scan",
+            "StoreUpdatePlan.tile_sessions",
+            "StoreUpdatePlan.last_update",
+        )
+    },
     "FleetStore.near": (
         "python/test_store_queries.py",
         "test_near_a_polygon_matches_matplotlib_and_edge_distances",

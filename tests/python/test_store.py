@@ -274,3 +274,40 @@ def test_the_dask_runner_cuts_sessions_by_the_core_block() -> None:
     """One constant: the Dask runner's default block is the core's object, not a copy."""
     dask_runner = pytest.importorskip("inexact_loops.dask")
     assert dask_runner.DEFAULT_BLOCK is il.FleetStore.DEFAULT_BLOCK
+
+
+def table_bytes(folder: Path) -> dict[str, bytes]:
+    """Every table of the current state, as its file's bytes."""
+    return {p.name: p.read_bytes() for p in sorted(state_dir(folder).glob("*.parquet"))}
+
+
+@quiet
+def test_an_update_by_its_steps_writes_the_update_here(tmp_path: Path) -> None:
+    """Plan (pickled, as a cluster ships it), each tile scanned on its own in reverse order,
+    then the update with the scans: every table is the one-step update's, byte for byte; a
+    missing scan, or scans of a plan of another state, are refused and change no file."""
+    given = sessions()
+    names = sorted(given)
+    first = {n: given[n] for n in names[:3]}
+    second = {n: given[n] for n in names[3:]}
+    here, steps = tmp_path / "here", tmp_path / "steps"
+    for folder in (here, steps):
+        il.FleetStore.open(folder).update(add=first, gamma=GAMMA, block=BLOCK, **SAMPLING)
+    il.FleetStore.open(here).update(add=second)
+
+    plan = pickle.loads(pickle.dumps(il.StoreUpdatePlan(steps, add=second)))
+    assert len(plan) > 1 and plan.last_update["added"] == names[3:]
+    assert all(a in second or b in second for a, b in plan.tile_sessions)
+    # Each scan reads only the new sessions its tile holds.
+    scanned = [b for k in reversed(range(len(plan))) for b in plan.scan([k], add=second)]
+    before = table_bytes(steps)
+    store = il.FleetStore.open(steps)
+    with pytest.raises(il.errors.LoopsError, match="was not scanned"):
+        store.update(add=second, scanned=scanned[1:])
+    other = il.StoreUpdatePlan(steps, add={names[3]: given[names[3]]})
+    with pytest.raises(il.errors.LoopsError, match="was scanned for plan"):
+        store.update(add=second, scanned=scanned[1:] + other.scan([0], add=second))
+    assert table_bytes(steps) == before
+    update = store.update(add=second, scanned=scanned)
+    assert update["tiles_scanned"] == len(plan)
+    assert table_bytes(steps) == table_bytes(here)

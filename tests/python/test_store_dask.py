@@ -1,8 +1,10 @@
 """The fleet store updated on a Dask ``LocalCluster`` of 2 worker processes
-(:func:`inexact_loops.dask.update_store`) against the store updated in this process and one
-made at once from the final sessions: every table of every state, bit for bit (pyarrow reads
-them), after a seeded random sequence of adds, replacements and removals; a corrupt log refused
-on the worker changes no file; a worker killed mid-update leaves the old state or the new one.
+(:func:`inexact_loops.dask.update_store`: a plan task, scan tasks spread over the workers, an
+apply task) against the store updated in this process and one made at once from the final
+sessions: every table of every state, bit for bit (pyarrow reads them), after a seeded random
+sequence of adds, replacements and removals; the scans run on both workers (the scheduler's
+task stream); a corrupt log refused on the worker changes no file; a worker killed during the
+scans or the apply leaves the old state or the new one.
 """
 
 from __future__ import annotations
@@ -148,6 +150,30 @@ def test_random_updates_on_the_cluster_equal_in_process_and_from_scratch(tmp_pat
     assert_same_tables(on_cluster, scratch, ANSWER, drop=("added",))
 
 
+@quiet
+def test_scans_run_on_both_workers_and_equal_the_update_here(tmp_path, client):
+    """The scan tasks of one update land on both workers (the scheduler's record of where
+    each task ran), and the store they make is the in-process update's, bit for bit."""
+    from distributed import get_task_stream
+
+    files = pool(tmp_path / "logs")
+    names = sorted(files)
+    first = {n: str(files[n][0]) for n in names[:2]}
+    second = {n: str(files[n][0]) for n in names[2:]}
+    here, there = tmp_path / "here", tmp_path / "there"
+    update_store(here, add=first, **SETTINGS)
+    update_store(there, add=first, client=client, **SETTINGS)
+    want = update_store(here, add=second)
+    with get_task_stream(client) as stream:
+        got = update_store(there, add=second, client=client, groups=8)
+    assert got["last_update"] == want["last_update"]
+    assert got["last_update"]["tiles_scanned"] >= 8
+    scans = [t for t in stream.data if str(t["key"]).startswith("store_scan_task")]
+    assert len(scans) == 8
+    assert len({t["worker"] for t in scans}) == 2, [t["worker"] for t in scans]
+    assert_same_tables(there, here)
+
+
 def test_trajectories_are_refused_with_a_client(client):
     line = il.Trajectory(np.arange(5.0), np.c_[np.arange(5.0), np.zeros(5)])
     with pytest.raises(TypeError, match="workers read every session from a path"):
@@ -156,9 +182,10 @@ def test_trajectories_are_refused_with_a_client(client):
 
 @quiet
 def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
-    """Each trial SIGKILLs the worker running an update at a seeded moment, on a cluster that
-    does not run the task again: the store is the old state or the new one, never a mix, and
-    the next update ends in the new state."""
+    """Each trial SIGKILLs a worker while it runs a scan task (even trials) or the apply task
+    (odd trials), a seeded moment after the task starts, on a cluster that does not run a task
+    again: the store is the old state or the new one, never a mix, and the next update ends in
+    the new state."""
     import dask
 
     files = pool(tmp_path / "logs")
@@ -168,17 +195,16 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
     # The new state as an update in this process writes it.
     here = tmp_path / "here"
     update_store(here, add=first, **SETTINGS)
-    started = time.perf_counter()
     update_store(here, add=second)
-    seconds = time.perf_counter() - started
     rng = np.random.default_rng(4)
-    outcomes = []
+    outcomes, hit = [], []
     with (
         dask.config.set({"distributed.scheduler.allowed-failures": 0}),
         local_client() as client,
     ):
         for trial in range(6):
             client.wait_for_workers(1, timeout=120)
+            target = "store_scan_task" if trial % 2 == 0 else "store_update_task"
             folder = tmp_path / f"killed{trial}"
             update_store(folder, add=first, client=client, **SETTINGS)
             old_files = files_of(folder)
@@ -193,15 +219,20 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
 
             thread = threading.Thread(target=run)
             thread.start()
-            # Wait until a worker holds the task, then kill it at a seeded moment.
+            # Wait until a worker runs a task of the target kind, then kill it a moment later.
             deadline = time.monotonic() + 60
             busy: list[str] = []
             while not busy and time.monotonic() < deadline and thread.is_alive():
-                busy = [w for w, tasks in client.processing().items() if tasks]
-                time.sleep(0.005)
+                busy = [
+                    w
+                    for w, keys in client.processing().items()
+                    if any(str(k).startswith(target) for k in keys)
+                ]
+                time.sleep(0.002)
             if busy:
-                time.sleep(float(rng.uniform(0.0, 1.2 * seconds)))
+                time.sleep(float(rng.uniform(0.0, 0.05)))
                 os.kill(pids[busy[0]], signal.SIGKILL)
+                hit.append(target)
             thread.join(120)
             assert not thread.is_alive()
             now = files_of(folder)
@@ -211,6 +242,7 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
                 assert not changed, f"trial {trial}: the old state, changed: {changed}"
                 outcomes.append("old")
                 # The next update ends in the new state.
+                client.wait_for_workers(1, timeout=120)
                 update_store(folder, add=second, client=client)
             else:
                 outcomes.append("new")
@@ -219,3 +251,4 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
                 "a finished update left the old state"
             )
     assert "old" in outcomes, outcomes
+    assert {"store_scan_task", "store_update_task"} <= set(hit), hit

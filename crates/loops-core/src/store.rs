@@ -80,8 +80,10 @@ pub const STORE_FORMAT_VERSION: u16 = 2;
 
 /// What a store's answer depends on, fixed when the store is made.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StoreSettings {
-    /// The metric δ.
+    /// The metric δ (in serde, by its text form).
+    #[cfg_attr(feature = "serde", serde(with = "metric_text"))]
     pub metric: MetricSpec,
     /// γ, in the metric's unit.
     pub gamma: f64,
@@ -170,20 +172,45 @@ impl StoreSession {
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn session_fingerprint(trajectory: &Trajectory) -> u64 {
-    // SplitMix64's finaliser over each 64-bit word, chained.
+    let mut h = Fingerprint::new(0x6c6f_6f70_732d_7374);
+    trajectory.manifold().name().bytes().for_each(|b| h.eat(u64::from(b)));
+    h.eat(trajectory.dim() as u64);
+    h.eat(trajectory.len() as u64);
+    trajectory.timestamps_s().iter().for_each(|t| h.eat(t.to_bits()));
+    trajectory.coords().iter().for_each(|x| h.eat(x.to_bits()));
+    h.finish()
+}
+
+/// A 64-bit fingerprint of a sequence of words: SplitMix64's finaliser over each, chained.
+struct Fingerprint(u64);
+
+impl Fingerprint {
     fn mix(mut z: u64) -> u64 {
         z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
         z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
         z ^ (z >> 31)
     }
-    let mut h = mix(0x6c6f_6f70_732d_7374);
-    let mut eat = |word: u64| h = mix(h ^ word).wrapping_add(0x9E37_79B9_7F4A_7C15);
-    trajectory.manifold().name().bytes().for_each(|b| eat(u64::from(b)));
-    eat(trajectory.dim() as u64);
-    eat(trajectory.len() as u64);
-    trajectory.timestamps_s().iter().for_each(|t| eat(t.to_bits()));
-    trajectory.coords().iter().for_each(|x| eat(x.to_bits()));
-    h
+
+    fn new(seed: u64) -> Self {
+        Self(Self::mix(seed))
+    }
+
+    fn eat(&mut self, word: u64) {
+        self.0 = Self::mix(self.0 ^ word).wrapping_add(0x9E37_79B9_7F4A_7C15);
+    }
+
+    /// The settings' metric (by its text form), γ, separation and block.
+    fn eat_settings(&mut self, settings: &StoreSettings) {
+        settings.metric.to_string().bytes().for_each(|b| self.eat(u64::from(b)));
+        self.eat(settings.gamma.to_bits());
+        self.eat(settings.separation.path.to_bits());
+        self.eat(settings.separation.time_s.to_bits());
+        self.eat(settings.block as u64);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
 }
 
 /// A tile of a store: its summary and its share of τ, in the store's fleet indices.
@@ -253,6 +280,313 @@ impl StoreUpdate {
         let mut names: Vec<&str> = self.added.iter().chain(&self.replaced).map(String::as_str).collect();
         names.sort_unstable();
         names
+    }
+}
+
+/// The plan of a store's update ([`FleetStore::plan_update`]): the sessions after it, where
+/// each was before, and the tiles to scan, each of which [`scan_tile`](Self::scan_tile) scans
+/// on its own (on any machine that reads its two sessions), for
+/// [`FleetStore::apply_update`] to put together. It holds no poses and no stored tile:
+/// O(sessions + blocks + the tiles to scan), what a cluster ships to its workers (with the
+/// `serde` feature).
+///
+/// # Examples
+/// ```
+/// use loops_core::store::{FleetStore, StoreSession, StoreSettings};
+/// use loops_core::Trajectory;
+/// let line = |t0: f64, y: f64| Trajectory::from_points(vec![t0, t0 + 1.0, t0 + 2.0], &[[0.0, y], [5.0, y], [10.0, y]]);
+/// let (monday, tuesday) = (line(0.0, 0.0)?, line(100.0, 0.5)?);
+/// let settings = StoreSettings { block: 2, ..StoreSettings::new(1.0) };
+/// let mut store = FleetStore::new(settings)?;
+/// let mut no_poses = |s: &StoreSession| -> loops_core::Result<Trajectory> { unreachable!("{}", s.name) };
+/// store.update(vec![("monday".into(), monday.clone())], &[], &mut no_poses)?;
+/// // Tuesday, step by step: plan, scan each tile (anywhere), apply.
+/// let plan = store.plan_update(vec![StoreSession::new("tuesday".into(), &tuesday, &settings)?], &[])?;
+/// let poses = |s: usize| if plan.sessions()[s].name == "monday" { &monday } else { &tuesday };
+/// let scanned = (0..plan.tiles().len())
+///     .map(|k| {
+///         let [a, b] = plan.tiles()[k].sessions;
+///         plan.scan_tile(k, [poses(a), poses(b)])
+///     })
+///     .collect::<loops_core::Result<Vec<_>>>()?;
+/// assert_eq!(store.apply_update(&plan, scanned)?.added, ["tuesday"]);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct UpdatePlan {
+    id: u64,
+    settings: StoreSettings,
+    put: Vec<StoreSession>,
+    remove: Vec<String>,
+    sessions: Vec<StoreSession>,
+    starts: Vec<usize>,
+    before: Vec<Option<usize>>,
+    report: StoreUpdate,
+    tiles: Vec<Tile>,
+}
+
+impl UpdatePlan {
+    /// The plan of an update of a store with the settings `settings` and the sessions
+    /// `stored` (in name order, as [`FleetStore::sessions`]): [`FleetStore::plan_update`], from
+    /// a store's small tables alone (a cluster plans without reading its tiles).
+    ///
+    /// # Errors
+    /// As [`FleetStore::plan_update`]; [`Error::InvalidState`] for stored sessions out of name
+    /// order or with blocks that do not fit the settings.
+    pub fn new(
+        settings: StoreSettings,
+        stored: &[StoreSession],
+        put: Vec<StoreSession>,
+        remove: &[String],
+    ) -> Result<Self> {
+        check_sessions(&settings, stored)?;
+        let index = |name: &str| stored.binary_search_by(|s| s.name.as_str().cmp(name)).ok();
+        let mut given: BTreeMap<String, StoreSession> = BTreeMap::new();
+        for session in put {
+            if given.contains_key(&session.name) {
+                return Err(Error::DuplicateSession { name: session.name });
+            }
+            if session.blocks.block != settings.block {
+                return Err(Error::InvalidParameter {
+                    name: "block",
+                    value: session.blocks.block as f64,
+                    expected: "the store's poses per block",
+                });
+            }
+            given.insert(session.name.clone(), session);
+        }
+        let mut removed = BTreeMap::new();
+        for name in remove {
+            let Some(k) = index(name) else {
+                return Err(Error::StoreSession { name: name.clone(), problem: "is not in the store (to remove)" });
+            };
+            if given.contains_key(name) {
+                return Err(Error::StoreSession { name: name.clone(), problem: "is both given and removed" });
+            }
+            removed.insert(name.clone(), k);
+        }
+        let mut report = StoreUpdate::default();
+        let mut changed: BTreeMap<&str, &StoreSession> = BTreeMap::new();
+        for (name, session) in &given {
+            match index(name).map(|k| &stored[k]) {
+                Some(old) if old.fingerprint == session.fingerprint && old.poses() == session.poses() => {
+                    report.unchanged.push(name.clone());
+                }
+                Some(_) => {
+                    report.replaced.push(name.clone());
+                    changed.insert(name, session);
+                }
+                None => {
+                    report.added.push(name.clone());
+                    changed.insert(name, session);
+                }
+            }
+        }
+        report.removed = removed.keys().cloned().collect();
+        // The new sessions in name order, with where each was before (unchanged ones).
+        let mut next: BTreeMap<&str, (StoreSession, Option<usize>)> = BTreeMap::new();
+        for (k, s) in stored.iter().enumerate() {
+            if !removed.contains_key(&s.name) && !changed.contains_key(s.name.as_str()) {
+                next.insert(&s.name, (s.clone(), Some(k)));
+            }
+        }
+        for (name, session) in &changed {
+            next.insert(name, ((*session).clone(), None));
+        }
+        let (sessions, before): (Vec<StoreSession>, Vec<Option<usize>>) = next.into_values().unzip();
+        if let Some(first) = sessions.first() {
+            for s in &sessions {
+                let mismatch =
+                    |problem: String, what| Error::SessionMismatch { session: s.name.clone(), problem, what };
+                if s.blocks.dim != first.blocks.dim {
+                    let problem =
+                        format!("has {} coordinates, session {:?} has {}", s.blocks.dim, first.name, first.blocks.dim);
+                    return Err(mismatch(problem, "dimension"));
+                }
+                if s.manifold != first.manifold {
+                    let problem =
+                        format!("lies on {}, session {:?} on {}", s.manifold.name(), first.name, first.manifold.name());
+                    return Err(mismatch(problem, "manifold"));
+                }
+            }
+        }
+        let touched: Vec<bool> = before.iter().map(Option::is_none).collect();
+        let tiles = if sessions.is_empty() {
+            Vec::new()
+        } else {
+            let blocks: Vec<SessionBlocks> = sessions.iter().map(|s| s.blocks.clone()).collect();
+            with_metric!(&settings.metric, m => plan_session_tiles_touching(&blocks, m, settings.gamma, &touched))?
+        };
+        report.tiles_scanned = tiles.len();
+        // What the plan is of: the store's sessions, what is given and removed.
+        let mut id = Fingerprint::new(0x706c_616e_2d73_7473);
+        id.eat_settings(&settings);
+        for s in stored.iter().chain(given.values()) {
+            s.name.bytes().for_each(|b| id.eat(u64::from(b)));
+            id.eat(0xff);
+            id.eat(s.fingerprint);
+            id.eat(s.poses() as u64);
+        }
+        id.eat(u64::MAX);
+        for name in &report.removed {
+            name.bytes().for_each(|b| id.eat(u64::from(b)));
+            id.eat(0xff);
+        }
+        let starts = starts_of(&sessions);
+        Ok(Self {
+            id: id.finish(),
+            settings,
+            put: given.into_values().collect(),
+            remove: report.removed.clone(),
+            sessions,
+            starts,
+            before,
+            report,
+            tiles,
+        })
+    }
+
+    /// A fingerprint of what the plan is of (the store's settings and sessions, what is given
+    /// and removed): the tiles scanned for it carry it.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The store's settings.
+    pub fn settings(&self) -> &StoreSettings {
+        &self.settings
+    }
+
+    /// The sessions after the update, in name order (the indices of [`tiles`](Self::tiles)).
+    pub fn sessions(&self) -> &[StoreSession] {
+        &self.sessions
+    }
+
+    /// Whether session `s` (an index of [`sessions`](Self::sessions)) is added or replaced
+    /// (its poses are those given), rather than read from the store.
+    pub fn is_new(&self, s: usize) -> bool {
+        self.before[s].is_none()
+    }
+
+    /// The tiles to scan, in plan order.
+    pub fn tiles(&self) -> &[Tile] {
+        &self.tiles
+    }
+
+    /// What the update will do, by name (its tile counts but the scanned one are set when it
+    /// is applied).
+    pub fn report(&self) -> &StoreUpdate {
+        &self.report
+    }
+
+    /// Checks that `trajectory` is session `s`'s (its pose count and fingerprint): what a
+    /// worker that read it from a file checks before scanning. O(poses).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] for other poses.
+    pub fn check_session(&self, s: usize, trajectory: &Trajectory) -> Result<()> {
+        read_session(&self.sessions[s], &mut |_| Ok(trajectory.clone())).map(drop)
+    }
+
+    /// Scans tile `k` of the plan from the poses of its two sessions (`sessions`: those of
+    /// `tiles()[k].sessions`, in that order; the same for a tile of one session): its summary,
+    /// its share of τ and its runs, as the store keeps them. Independent of every other tile;
+    /// the scan [`FleetStore::update`] makes. Time: that of
+    /// [`scan_session_tile`](crate::tile::scan_session_tile).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for `k` out of range; [`Error::InvalidState`] for poses of
+    /// another count than the sessions'; the scan's errors.
+    pub fn scan_tile(&self, k: usize, sessions: [&Trajectory; 2]) -> Result<ScannedTile> {
+        let Some(tile) = self.tiles.get(k) else {
+            return Err(Error::InvalidParameter { name: "tile", value: k as f64, expected: "a tile of the plan" });
+        };
+        let [a, b] = tile.sessions;
+        for (s, t) in [a, b].into_iter().zip(sessions) {
+            if t.len() != self.sessions[s].poses() {
+                return Err(Error::InvalidState {
+                    what: "store update",
+                    reason: format!(
+                        "{} poses given for session {:?}, which has {}",
+                        t.len(),
+                        self.sessions[s].name,
+                        self.sessions[s].poses()
+                    ),
+                });
+            }
+        }
+        let settings = &self.settings;
+        let scan = with_metric!(&settings.metric, m => scan_session_tile(
+            sessions,
+            [self.starts[a], self.starts[b]],
+            m,
+            settings.gamma,
+            settings.separation,
+            tile,
+            TileKeep::SUMMARY.with_duration().with_runs(),
+        ))?;
+        let duration = scan.duration.expect("kept with its duration");
+        let runs = scan.runs.expect("kept with its runs");
+        Ok(ScannedTile { plan: self.id, index: k, tile: StoredTile { summary: scan.summary, duration }, runs })
+    }
+}
+
+/// A tile of an [`UpdatePlan`], scanned ([`UpdatePlan::scan_tile`]): what
+/// [`FleetStore::apply_update`] takes, bytes to ship between machines with the `serde`
+/// feature ([`to_bytes`](Self::to_bytes)).
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ScannedTile {
+    plan: u64,
+    index: usize,
+    tile: StoredTile,
+    runs: TileRuns,
+}
+
+impl ScannedTile {
+    /// Its index in the plan's tiles.
+    pub fn index(&self) -> usize {
+        self.index
+    }
+
+    /// The scanned tile as bytes (a tag, the tile format version, MessagePack): its plan's
+    /// id, its index, its summary, share of τ and runs; about their sizes together.
+    #[cfg(feature = "serde")]
+    pub fn to_bytes(&self) -> Vec<u8> {
+        crate::tile::encode(*b"ILsc", self)
+    }
+
+    /// From [`to_bytes`](Self::to_bytes), checked to fit together.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"scanned tile"`) for other bytes or parts that do not fit.
+    #[cfg(feature = "serde")]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        let scanned: Self = crate::tile::decode(*b"ILsc", "scanned tile", bytes)?;
+        let corrupt = |reason: String| Error::InvalidState { what: "scanned tile", reason };
+        scanned.tile.summary.check().map_err(corrupt)?;
+        scanned.runs.check().map_err(corrupt)?;
+        let d = &scanned.tile.duration;
+        if d.rows.len() != d.tile.rows.len() || d.columns.len() != d.tile.columns.len() {
+            return Err(corrupt(format!("its share of τ is not of tile {:?}", d.tile)));
+        }
+        Ok(scanned)
+    }
+}
+
+/// A metric in serde by its text form ([`MetricSpec`]'s `Display` and `FromStr`).
+#[cfg(feature = "serde")]
+mod metric_text {
+    use crate::spec::MetricSpec;
+
+    pub(super) fn serialize<S: serde::Serializer>(metric: &MetricSpec, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(metric)
+    }
+
+    pub(super) fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<MetricSpec, D::Error> {
+        let text = <String as serde::Deserialize>::deserialize(d)?;
+        text.parse().map_err(serde::de::Error::custom)
     }
 }
 
@@ -395,24 +729,8 @@ impl FleetStore {
         tiles: Vec<StoredTile>,
         last_update: StoreUpdate,
     ) -> Result<Self> {
-        settings.check()?;
+        check_sessions(&settings, &sessions)?;
         let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
-        for (k, s) in sessions.iter().enumerate() {
-            if k > 0 && sessions[k - 1].name >= s.name {
-                return Err(corrupt(format!(
-                    "session {k} {:?} is not after {:?} in name order",
-                    s.name,
-                    sessions[k - 1].name
-                )));
-            }
-            s.blocks.check().map_err(|p| corrupt(format!("session {k} {:?}: {p}", s.name)))?;
-            if s.blocks.block != settings.block {
-                return Err(corrupt(format!(
-                    "session {k} {:?} is cut into blocks of {} poses, the store into blocks of {}",
-                    s.name, s.blocks.block, settings.block
-                )));
-            }
-        }
         for (k, t) in tiles.iter().enumerate() {
             t.summary.check().map_err(|p| corrupt(format!("tile {k}: {p}")))?;
             let d = &t.duration;
@@ -501,6 +819,10 @@ impl FleetStore {
     /// drops those of replaced and removed sessions. A session given with the content it has
     /// in the store (same fingerprint) changes nothing. On an error the store is unchanged.
     ///
+    /// The update is its three steps, here in one process: [`plan_update`](Self::plan_update),
+    /// [`UpdatePlan::scan_tile`] of each planned tile (in parallel), and
+    /// [`apply_update`](Self::apply_update); a cluster runs the same steps on its workers.
+    ///
     /// Time: the scans of the new tiles (rows in parallel, tiles in parallel), plus O(stored
     /// tiles) to move them when a new name sorts before stored ones, plus O(blocks log blocks)
     /// to plan.
@@ -517,71 +839,102 @@ impl FleetStore {
         remove: &[String],
         source: &mut SessionSource<'_>,
     ) -> Result<&StoreUpdate> {
-        let mut given: BTreeMap<String, (StoreSession, Trajectory)> = BTreeMap::new();
-        for (name, trajectory) in put {
-            if given.contains_key(&name) {
-                return Err(Error::DuplicateSession { name });
+        let sessions = put
+            .iter()
+            .map(|(name, trajectory)| StoreSession::new(name.clone(), trajectory, &self.settings))
+            .collect::<Result<Vec<_>>>()?;
+        let plan = self.plan_update(sessions, remove)?;
+        let given: HashMap<&str, &Trajectory> = put.iter().map(|(name, t)| (name.as_str(), t)).collect();
+        let mut read: HashMap<usize, Trajectory> = HashMap::new();
+        for tile in &plan.tiles {
+            for s in tile.sessions {
+                if plan.before[s].is_some() && !read.contains_key(&s) {
+                    read.insert(s, read_session(&plan.sessions[s], source)?);
+                }
             }
-            let session = StoreSession::new(name.clone(), &trajectory, &self.settings)?;
-            given.insert(name, (session, trajectory));
         }
-        let mut removed = BTreeMap::new();
-        for name in remove {
-            let Some(k) = self.session_index(name) else {
-                return Err(Error::StoreSession { name: name.clone(), problem: "is not in the store (to remove)" });
+        let trajectory = |s: usize| -> &Trajectory {
+            match plan.before[s] {
+                Some(_) => &read[&s],
+                None => given[plan.sessions[s].name.as_str()],
+            }
+        };
+        let scanned = (0..plan.tiles.len())
+            .into_par_iter()
+            .map(|k| {
+                let [a, b] = plan.tiles[k].sessions;
+                plan.scan_tile(k, [trajectory(a), trajectory(b)])
+            })
+            .collect::<Result<Vec<_>>>()?;
+        self.apply_update(&plan, scanned)
+    }
+
+    /// The plan of an update that adds or replaces the sessions `put` (by name; each
+    /// [`StoreSession::new`] of its trajectory) and removes the sessions `remove`: the
+    /// sessions after it, and the tiles it must scan ([`UpdatePlan::tiles`]), each of which
+    /// [`UpdatePlan::scan_tile`] scans on its own. Reads the store's sessions alone:
+    /// O(sessions + blocks log blocks); the plan is as small (no poses, no tiles kept).
+    ///
+    /// # Errors
+    /// As [`update`](Self::update), but for the reading of sessions.
+    pub fn plan_update(&self, put: Vec<StoreSession>, remove: &[String]) -> Result<UpdatePlan> {
+        UpdatePlan::new(self.settings, &self.sessions, put, remove)
+    }
+
+    /// Applies the update that `plan` (this store's [`plan_update`](Self::plan_update)) plans,
+    /// with `scanned` its tiles ([`UpdatePlan::scan_tile`] of each, in any order): keeps the
+    /// tiles of every pair of unchanged sessions, moved to their new fleet indices, drops those
+    /// of replaced and removed sessions, merges the session pairs of the new tiles, and adds
+    /// their shares of τ. On an error the store is unchanged. Time: O(the new tiles'
+    /// components and edge runs + stored tiles + poses of the sessions that lost a tile), plus
+    /// O(blocks log blocks) to check the plan.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"store update"`) for a plan that is not this store's
+    /// (made from another state, or altered) and for scanned tiles that are not exactly the
+    /// plan's (one missing, twice, of another plan, or not of its tile); as
+    /// [`plan_update`](Self::plan_update).
+    pub fn apply_update(&mut self, plan: &UpdatePlan, scanned: Vec<ScannedTile>) -> Result<&StoreUpdate> {
+        let wrong = |reason: String| Error::InvalidState { what: "store update", reason };
+        if self.plan_update(plan.put.clone(), &plan.remove)? != *plan {
+            return Err(wrong(format!("plan {:016x} is not of this store's state (planned from another)", plan.id)));
+        }
+        let mut slots: Vec<Option<ScannedTile>> = vec![None; plan.tiles.len()];
+        for s in scanned {
+            if s.plan != plan.id {
+                return Err(wrong(format!(
+                    "tile {} was scanned for plan {:016x}, not {:016x}",
+                    s.index, s.plan, plan.id
+                )));
+            }
+            let k = s.index;
+            let Some(tile) = plan.tiles.get(k) else {
+                return Err(wrong(format!("tile {k} scanned, of {} tiles planned", plan.tiles.len())));
             };
-            if given.contains_key(name) {
-                return Err(Error::StoreSession { name: name.clone(), problem: "is both given and removed" });
+            let [a, b] = tile.sessions;
+            let fits = s.tile.tile() == tile
+                && s.tile.duration.tile == *tile
+                && s.runs.tile() == tile
+                && s.runs.scanned_with() == (plan.settings.gamma, plan.settings.separation)
+                && s.runs.starts() == [plan.starts[a], plan.starts[b]];
+            if !fits {
+                return Err(wrong(format!("the scan of tile {k} is not of tile {tile:?} under this store")));
             }
-            removed.insert(name.clone(), k);
-        }
-        let mut report = StoreUpdate::default();
-        let mut changed: BTreeMap<String, (StoreSession, Trajectory)> = BTreeMap::new();
-        for (name, (session, trajectory)) in given {
-            match self.session_index(&name).map(|k| &self.sessions[k]) {
-                Some(old) if old.fingerprint == session.fingerprint && old.poses() == session.poses() => {
-                    report.unchanged.push(name);
-                }
-                Some(_) => {
-                    report.replaced.push(name.clone());
-                    changed.insert(name, (session, trajectory));
-                }
-                None => {
-                    report.added.push(name.clone());
-                    changed.insert(name, (session, trajectory));
-                }
+            if slots[k].replace(s).is_some() {
+                return Err(wrong(format!("tile {k} scanned twice")));
             }
         }
-        report.removed = removed.keys().cloned().collect();
-        // The new sessions in name order, with where each was before (unchanged ones).
-        let mut next: BTreeMap<&str, (StoreSession, Option<usize>)> = BTreeMap::new();
-        for (k, s) in self.sessions.iter().enumerate() {
-            if !removed.contains_key(&s.name) && !changed.contains_key(&s.name) {
-                next.insert(&s.name, (s.clone(), Some(k)));
-            }
+        if let Some(k) = slots.iter().position(Option::is_none) {
+            return Err(wrong(format!(
+                "tile {k} of the {} planned ({:?}) was not scanned",
+                plan.tiles.len(),
+                plan.tiles[k]
+            )));
         }
-        for (name, (session, _)) in &changed {
-            next.insert(name, (session.clone(), None));
-        }
-        let (sessions, before): (Vec<StoreSession>, Vec<Option<usize>>) = next.into_values().unzip();
-        if let Some(first) = sessions.first() {
-            for s in &sessions {
-                let mismatch =
-                    |problem: String, what| Error::SessionMismatch { session: s.name.clone(), problem, what };
-                if s.blocks.dim != first.blocks.dim {
-                    let problem =
-                        format!("has {} coordinates, session {:?} has {}", s.blocks.dim, first.name, first.blocks.dim);
-                    return Err(mismatch(problem, "dimension"));
-                }
-                if s.manifold != first.manifold {
-                    let problem =
-                        format!("lies on {}, session {:?} on {}", s.manifold.name(), first.name, first.manifold.name());
-                    return Err(mismatch(problem, "manifold"));
-                }
-            }
-        }
-        let starts = starts_of(&sessions);
-        let old_starts = self.starts();
+        let scanned: Vec<(StoredTile, Arc<TileRuns>)> =
+            slots.into_iter().flatten().map(|s| (s.tile, Arc::new(s.runs))).collect();
+        let mut report = plan.report.clone();
+        let (starts, old_starts, before) = (&plan.starts, self.starts(), &plan.before);
         let mut now = vec![None; self.sessions.len()];
         for (k, b) in before.iter().enumerate() {
             if let Some(b) = *b {
@@ -605,55 +958,10 @@ impl FleetStore {
             }
         }
         report.tiles_kept = self.tiles.len() - report.tiles_dropped;
-        // The tiles of changed sessions: plan, read the stored sessions they meet, scan.
-        let touched: Vec<bool> = before.iter().map(Option::is_none).collect();
-        let candidate = Self {
-            settings: self.settings,
-            sessions,
-            tiles: Vec::new(),
-            last_update: StoreUpdate::default(),
-            kept: Kept::default(),
-        };
-        let new_tiles = candidate.plan(&touched)?;
-        let mut read: HashMap<usize, Trajectory> = HashMap::new();
-        for tile in &new_tiles {
-            for s in tile.sessions {
-                if touched[s] || read.contains_key(&s) {
-                    continue;
-                }
-                read.insert(s, read_session(&candidate.sessions[s], source)?);
-            }
-        }
-        let trajectory = |s: usize| -> &Trajectory {
-            match changed.get(&candidate.sessions[s].name) {
-                Some((_, t)) => t,
-                None => &read[&s],
-            }
-        };
-        let settings = self.settings;
-        let scanned = new_tiles
-            .par_iter()
-            .map(|tile| {
-                let [a, b] = tile.sessions;
-                let scan = with_metric!(&settings.metric, m => scan_session_tile(
-                    [trajectory(a), trajectory(b)],
-                    [starts[a], starts[b]],
-                    m,
-                    settings.gamma,
-                    settings.separation,
-                    tile,
-                    TileKeep::SUMMARY.with_duration().with_runs(),
-                ))?;
-                let duration = scan.duration.expect("kept with its duration");
-                let runs = scan.runs.expect("kept with its runs");
-                Ok((StoredTile { summary: scan.summary, duration }, Arc::new(runs)))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        report.tiles_scanned = scanned.len();
         // The merges of the session pairs of changed sessions: all their tiles are new.
         let new_merges = merges_of(scanned.iter().map(|(t, _)| t))?;
         // τ: what the new tiles add to each session, and what a session that lost a tile keeps.
-        let mut new_of: Vec<Vec<&TileDuration>> = vec![Vec::new(); candidate.sessions.len()];
+        let mut new_of: Vec<Vec<&TileDuration>> = vec![Vec::new(); plan.sessions.len()];
         for (t, _) in &scanned {
             let [a, b] = t.tile().sessions;
             new_of[a].push(&t.duration);
@@ -662,7 +970,7 @@ impl FleetStore {
             }
         }
         let shares = |k: usize| -> Result<Option<(Vec<f64>, Vec<f64>)>> {
-            let poses = candidate.sessions[k].poses();
+            let poses = plan.sessions[k].poses();
             let new = || crate::tile::draw::session_loop_duration(k, starts[k], poses, new_of[k].iter().copied());
             match before[k] {
                 Some(b) if lost[b] => {
@@ -678,7 +986,7 @@ impl FleetStore {
             }
         };
         let shares: Vec<Option<(Vec<f64>, Vec<f64>)>> =
-            (0..candidate.sessions.len()).into_par_iter().map(shares).collect::<Result<_>>()?;
+            (0..plan.sessions.len()).into_par_iter().map(shares).collect::<Result<_>>()?;
         drop((kept_of, new_of));
 
         // Nothing fails from here: the kept state moves to the new fleet indices.
@@ -716,7 +1024,7 @@ impl FleetStore {
         let mut old_duration: Vec<Option<(Vec<f64>, Vec<f64>)>> = old.duration.into_iter().map(Some).collect();
         let duration = shares
             .into_iter()
-            .zip(&before)
+            .zip(before)
             .map(|(share, b)| match (share, b.filter(|&b| !lost[b])) {
                 (Some(add), Some(b)) => {
                     let (mut own, mut other) = old_duration[b].take().unwrap_or_default();
@@ -729,7 +1037,7 @@ impl FleetStore {
             })
             .collect();
         self.kept = Kept { merges, duration, runs };
-        self.sessions = candidate.sessions;
+        self.sessions = plan.sessions.clone();
         self.tiles = tiles;
         self.last_update = report;
         Ok(&self.last_update)
@@ -974,6 +1282,29 @@ impl FleetStore {
             tiles_rescanned,
         })
     }
+}
+
+/// The settings are valid, and `sessions` in name order with blocks of the settings' size.
+fn check_sessions(settings: &StoreSettings, sessions: &[StoreSession]) -> Result<()> {
+    settings.check()?;
+    let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
+    for (k, s) in sessions.iter().enumerate() {
+        if k > 0 && sessions[k - 1].name >= s.name {
+            return Err(corrupt(format!(
+                "session {k} {:?} is not after {:?} in name order",
+                s.name,
+                sessions[k - 1].name
+            )));
+        }
+        s.blocks.check().map_err(|p| corrupt(format!("session {k} {:?}: {p}", s.name)))?;
+        if s.blocks.block != settings.block {
+            return Err(corrupt(format!(
+                "session {k} {:?} is cut into blocks of {} poses, the store into blocks of {}",
+                s.name, s.blocks.block, settings.block
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The merges of the tiles of each session pair among `tiles` (all the tiles of each pair),

@@ -8,7 +8,7 @@ use std::collections::{BTreeMap, HashMap};
 use loops_core::{
     Euclidean, Result, SampleSize, Sampler, SamplerKind, Separation, Trajectory, UrbanDrive, UrbanFleet,
     fleet::{Fleet, FleetOptions, find_fleet_loops, sample_fleet},
-    store::{FleetStore, StoreSession, StoreSettings},
+    store::{FleetStore, ScannedTile, StoreSession, StoreSettings},
     tile::{MergedLoops, TileRuns},
 };
 use rand::{RngExt, SeedableRng};
@@ -318,4 +318,77 @@ fn near_skips_far_blocks_and_finds_every_pass() {
     }
     // The places are such that both happen: passes found, sessions not read.
     assert!(passes > 20 && skipped > 20, "{passes} passes, {skipped} sessions not read");
+}
+
+/// An update by its steps — plan, each tile scanned on its own in any order and shipped as
+/// bytes, apply — gives the store that `update` gives, bit for bit (its tiles, kept merges and
+/// runs); apply refuses a plan of another state and scans that are not exactly the plan's,
+/// leaving the store as it was.
+#[test]
+fn an_update_by_its_steps_is_the_update() {
+    let pool = versions();
+    let all: HashMap<String, Trajectory> = pool.iter().map(|(n, v)| (n.clone(), v[0].clone())).collect();
+    let mut source = |s: &StoreSession| Ok(all[&s.name].clone());
+    let (day0, day1): (Vec<_>, Vec<_>) =
+        pool.iter().map(|(n, v)| (n.clone(), v[0].clone())).partition(|(n, _)| n.ends_with("day0"));
+    let settings = settings(Separation::NONE);
+    let mut store = FleetStore::new(settings).unwrap();
+    store.update(day0, &[], &mut source).unwrap();
+    // Day 1, with a day-0 session corrected.
+    let (fixed, _) = pool.iter().find(|(n, _)| n.ends_with("day0")).unwrap();
+    let mut put = day1.clone();
+    put.push((fixed.clone(), pool[fixed][1].clone()));
+    let mut whole = store.clone();
+    whole.update(put.clone(), &[], &mut source).unwrap();
+
+    let given: Vec<StoreSession> =
+        put.iter().map(|(n, t)| StoreSession::new(n.clone(), t, &settings).unwrap()).collect();
+    let plan = store.plan_update(given.clone(), &[]).unwrap();
+    assert_eq!(plan.tiles().len(), whole.last_update().tiles_scanned);
+    let poses = |s: usize| poses_of(&plan, s, &put, &all);
+    let mut scanned: Vec<ScannedTile> = (0..plan.tiles().len())
+        .rev()
+        .map(|k| {
+            let [a, b] = plan.tiles()[k].sessions;
+            let scan = plan.scan_tile(k, [&poses(a), &poses(b)]).unwrap();
+            ScannedTile::from_bytes(&scan.to_bytes()).unwrap()
+        })
+        .collect();
+    let before = store.clone();
+    let wrong =
+        |store: &mut FleetStore, scanned: Vec<ScannedTile>| store.apply_update(&plan, scanned).unwrap_err().to_string();
+    let missing = wrong(&mut store, scanned[1..].to_vec());
+    assert!(missing.contains("was not scanned"), "{missing}");
+    let twice = wrong(&mut store, [scanned.clone(), vec![scanned[0].clone()]].concat());
+    assert!(twice.contains("scanned twice"), "{twice}");
+    let other_plan = store.plan_update(given[..1].to_vec(), &[]).unwrap();
+    let [a, b] = other_plan.tiles()[0].sessions;
+    let (pa, pb) = (poses_of(&other_plan, a, &put, &all), poses_of(&other_plan, b, &put, &all));
+    let foreign = other_plan.scan_tile(0, [&pa, &pb]).unwrap();
+    let foreign = wrong(&mut store, [scanned[1..].to_vec(), vec![foreign]].concat());
+    assert!(foreign.contains("was scanned for plan"), "{foreign}");
+    assert!(ScannedTile::from_bytes(&scanned[0].to_bytes()[..40]).is_err());
+    assert_eq!(store, before);
+    // A plan made before another update is refused.
+    let mut moved = store.clone();
+    moved.remove(std::slice::from_ref(fixed)).unwrap();
+    let stale = moved.apply_update(&plan, scanned.clone()).unwrap_err().to_string();
+    assert!(stale.contains("is not of this store's state"), "{stale}");
+
+    scanned.reverse();
+    store.apply_update(&plan, scanned).unwrap();
+    assert_eq!(store, whole);
+    assert!(store.kept_merges().eq(whole.kept_merges()));
+    assert!(store.kept_runs().eq(whole.kept_runs()));
+}
+
+/// The poses of session `s` of `plan`: given, or stored.
+fn poses_of(
+    plan: &loops_core::store::UpdatePlan,
+    s: usize,
+    put: &[(String, Trajectory)],
+    all: &HashMap<String, Trajectory>,
+) -> Trajectory {
+    let name = &plan.sessions()[s].name;
+    put.iter().find(|(n, _)| n == name).map_or_else(|| all[name].clone(), |(_, t)| t.clone())
 }

@@ -47,7 +47,10 @@ use std::sync::Arc;
 use loops_core::{
     MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory,
     fleet::FleetSample,
-    store::{FleetStore, StoreLoops, StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile},
+    store::{
+        FleetStore, ScannedTile, StoreLoops, StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile,
+        UpdatePlan,
+    },
     tile::{MergedLoops, SessionBlocks, TileDuration, TileRuns, TileSummary},
 };
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
@@ -303,6 +306,40 @@ fn pose_file(session: &StoreSession) -> String {
 /// [`StoreError::NotAStore`]; [`StoreError::Io`] or [`StoreError::Corrupt`] naming the file
 /// that cannot be read back; [`StoreError::Core`] for tables that do not fit together.
 pub fn read_store(dir: &Path) -> Result<StoredFleet> {
+    let Head { pointer, file, config, sessions } = read_head(dir)?;
+    let state = dir.join(&pointer.state);
+    let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    let tiles_path = state.join("tiles.parquet");
+    let tiles = read_rows(&tiles_path)?
+        .iter()
+        .enumerate()
+        .map(|(k, row)| -> std::result::Result<StoredTile, String> {
+            let summary = TileSummary::from_bytes(row.bytes(7)?).map_err(|e| format!("row {k}: {e}"))?;
+            let duration = TileDuration::from_bytes(row.bytes(8)?).map_err(|e| format!("row {k}: {e}"))?;
+            Ok(StoredTile { summary, duration })
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| corrupt(&tiles_path, reason))?;
+    let last_update = file.last_update.into();
+    let store = if file.version < 2 {
+        FleetStore::from_parts(config.settings, sessions, tiles, last_update)?
+    } else {
+        let (merges, runs) = read_kept(&state, tiles.len())?;
+        FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?
+    };
+    Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
+}
+
+/// What a state's small files say: `store.json`, `settings.json` and `sessions.parquet`.
+struct Head {
+    pointer: Pointer,
+    file: SettingsFile,
+    config: StoreConfig,
+    sessions: Vec<StoreSession>,
+}
+
+/// Reads the store's pointer, its current state's settings and sessions: O(sessions + blocks).
+fn read_head(dir: &Path) -> Result<Head> {
     let pointer_path = dir.join("store.json");
     if !pointer_path.is_file() {
         return Err(StoreError::NotAStore { path: dir.to_path_buf() });
@@ -346,25 +383,7 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         })
         .collect::<std::result::Result<Vec<_>, String>>()
         .map_err(|reason| corrupt(&sessions_path, reason))?;
-    let tiles_path = state.join("tiles.parquet");
-    let tiles = read_rows(&tiles_path)?
-        .iter()
-        .enumerate()
-        .map(|(k, row)| -> std::result::Result<StoredTile, String> {
-            let summary = TileSummary::from_bytes(row.bytes(7)?).map_err(|e| format!("row {k}: {e}"))?;
-            let duration = TileDuration::from_bytes(row.bytes(8)?).map_err(|e| format!("row {k}: {e}"))?;
-            Ok(StoredTile { summary, duration })
-        })
-        .collect::<std::result::Result<Vec<_>, String>>()
-        .map_err(|reason| corrupt(&tiles_path, reason))?;
-    let last_update = file.last_update.into();
-    let store = if file.version < 2 {
-        FleetStore::from_parts(config.settings, sessions, tiles, last_update)?
-    } else {
-        let (merges, runs) = read_kept(&state, tiles.len())?;
-        FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?
-    };
-    Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
+    Ok(Head { pointer, file, config, sessions })
 }
 
 /// The versions of the layout this build reads: those without what the answer is made of
@@ -472,6 +491,134 @@ pub fn update_store(
     put: Vec<(String, Trajectory)>,
     remove: &[String],
 ) -> Result<StoreReport> {
+    update_with(dir, config, put, remove, None)
+}
+
+/// An update of the store in a folder, planned ([`plan_store_update`]) from its small tables:
+/// the core's plan and where the stored sessions' poses are. O(sessions + blocks + the tiles
+/// to scan); it ships between machines with serde.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StorePlan {
+    /// What the update will do and the tiles it scans.
+    pub plan: UpdatePlan,
+    /// The pose files of the state it was planned from (`None` for a store not yet made).
+    pub poses: Option<PathBuf>,
+}
+
+/// The plan of the update that [`update_store`] makes with the same arguments, from the
+/// store's pointer, settings and sessions alone (no tile is read): what a cluster plans
+/// first, then scans tile by tile ([`scan_store_tiles`]) and applies
+/// ([`update_store_scanned`]). O(poses given + sessions + blocks log blocks).
+///
+/// # Errors
+/// As [`update_store`], but for those of the scans and the writing.
+pub fn plan_store_update(
+    dir: &Path,
+    config: Option<&StoreConfig>,
+    put: &[(String, Trajectory)],
+    remove: &[String],
+) -> Result<StorePlan> {
+    let (settings, stored, poses) = if dir.join("store.json").is_file() {
+        let head = read_head(dir)?;
+        if let Some(given) = config {
+            check_same(dir, &head.config, given)?;
+        }
+        (head.config.settings, head.sessions, Some(dir.join(&head.pointer.state).join("poses")))
+    } else {
+        let Some(given) = config else { return Err(StoreError::NotAStore { path: dir.to_path_buf() }) };
+        given.settings.check()?;
+        (given.settings, Vec::new(), None)
+    };
+    let sessions = put
+        .iter()
+        .map(|(name, t)| StoreSession::new(name.clone(), t, &settings))
+        .collect::<loops_core::Result<Vec<_>>>()?;
+    Ok(StorePlan { plan: UpdatePlan::new(settings, &stored, sessions, remove)?, poses })
+}
+
+/// Scans the tiles `tiles` (indices of the plan's tiles) of a planned update, each read
+/// session once: a session the update adds or replaces from `put` (those of the plan's
+/// update; others may be left out), a stored one from the pose files of the state planned
+/// from; each checked against the plan before it is scanned. Tiles in parallel.
+///
+/// # Errors
+/// [`StoreError::Core`] for a tile out of range, a session missing from `put`, or poses that
+/// are not the planned session's; [`StoreError::Io`] or [`StoreError::Corrupt`] for a pose
+/// file that cannot be read back.
+pub fn scan_store_tiles(
+    planned: &StorePlan,
+    tiles: &[usize],
+    put: &[(String, Trajectory)],
+) -> Result<Vec<ScannedTile>> {
+    use rayon::prelude::*;
+    let plan = &planned.plan;
+    let mut read: std::collections::BTreeMap<usize, Trajectory> = std::collections::BTreeMap::new();
+    for &k in tiles {
+        let Some(tile) = plan.tiles().get(k) else {
+            return Err(loops_core::Error::InvalidParameter {
+                name: "tile",
+                value: k as f64,
+                expected: "a tile of the plan",
+            }
+            .into());
+        };
+        for s in tile.sessions {
+            if read.contains_key(&s) {
+                continue;
+            }
+            let session = &plan.sessions()[s];
+            let trajectory = if plan.is_new(s) {
+                let Some((_, t)) = put.iter().find(|(name, _)| *name == session.name) else {
+                    return Err(loops_core::Error::StoreSession {
+                        name: session.name.clone(),
+                        problem: "is not given to scan",
+                    }
+                    .into());
+                };
+                t.clone()
+            } else {
+                let folder = planned.poses.clone().unwrap_or_default();
+                read_poses(&folder.join(pose_file(session)))?
+            };
+            plan.check_session(s, &trajectory)?;
+            read.insert(s, trajectory);
+        }
+    }
+    tiles
+        .par_iter()
+        .map(|&k| {
+            let [a, b] = plan.tiles()[k].sessions;
+            Ok(plan.scan_tile(k, [&read[&a], &read[&b]])?)
+        })
+        .collect()
+}
+
+/// [`update_store`] with the tiles of its plan scanned elsewhere ([`scan_store_tiles`] of
+/// every tile of [`plan_store_update`] with the same arguments): plans again (checking that
+/// the scans are of this plan, from this state), applies them ([`FleetStore::apply_update`]),
+/// draws and writes the new state atomically, as [`update_store`] does.
+///
+/// # Errors
+/// As [`update_store`]; [`StoreError::Core`] for scans of another plan or state, or not
+/// every tile of the plan's (the store is then unchanged).
+pub fn update_store_scanned(
+    dir: &Path,
+    config: Option<&StoreConfig>,
+    put: Vec<(String, Trajectory)>,
+    remove: &[String],
+    scanned: Vec<ScannedTile>,
+) -> Result<StoreReport> {
+    update_with(dir, config, put, remove, Some(scanned))
+}
+
+/// [`update_store`], with the new tiles scanned here (`None`) or given.
+fn update_with(
+    dir: &Path,
+    config: Option<&StoreConfig>,
+    put: Vec<(String, Trajectory)>,
+    remove: &[String],
+    scanned: Option<Vec<ScannedTile>>,
+) -> Result<StoreReport> {
     let exists = dir.join(STORE.marker).is_file();
     if !exists {
         crate::out_dir::refuse_non_empty(dir, false, STORE)?;
@@ -511,7 +658,17 @@ pub fn update_store(
         let path = poses_dir.as_ref().map(|p| p.join(pose_file(s))).unwrap_or_default();
         read_poses(&path).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
     };
-    store.update(put, remove, &mut source)?;
+    match scanned {
+        None => store.update(put, remove, &mut source)?,
+        Some(scanned) => {
+            let sessions = put
+                .iter()
+                .map(|(name, t)| StoreSession::new(name.clone(), t, store.settings()))
+                .collect::<loops_core::Result<Vec<_>>>()?;
+            let plan = store.plan_update(sessions, remove)?;
+            store.apply_update(&plan, scanned)?
+        }
+    };
     let loops = store.loops()?;
     let samples = match &config.sampler {
         Some((sampler, between_only)) => Some(store.samples(&loops, sampler, *between_only, &mut source)?),

@@ -191,6 +191,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<py_fleet::Fleet>()?;
     module.add_class::<py_fleet::FleetLoops>()?;
     module.add_class::<py_store::FleetStore>()?;
+    module.add_class::<py_store::StoreUpdatePlan>()?;
     module.add_class::<py_fleet::FleetSamples>()?;
     module.add_function(wrap_pyfunction!(py_fleet::find_fleet_loops, module)?)?;
     module.add_function(wrap_pyfunction!(py_fleet::sample_fleet, module)?)?;

@@ -176,8 +176,20 @@ pub(crate) fn read_sessions(
     metric: Option<&Bound<'_, PyAny>>,
     read: &ReadArgs,
 ) -> PyResult<Vec<(String, Trajectory)>> {
+    read_sessions_if(py, sessions, metric, read, |_| true)
+}
+
+/// [`read_sessions`] of the sessions whose names `wanted` accepts; the others are not read.
+pub(crate) fn read_sessions_if(
+    py: Python<'_>,
+    sessions: &Bound<'_, PyAny>,
+    metric: Option<&Bound<'_, PyAny>>,
+    read: &ReadArgs,
+    wanted: impl Fn(&str) -> bool,
+) -> PyResult<Vec<(String, Trajectory)>> {
     session_sources(sessions)?
         .into_iter()
+        .filter(|(name, _)| wanted(name))
         .map(|(name, source)| {
             let traj = match source {
                 SessionSource::Trajectory(traj) => traj,

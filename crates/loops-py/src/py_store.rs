@@ -13,7 +13,7 @@ use crate::detached;
 use crate::error::{Failure, invalid_parameter};
 use crate::py_fleet::{
     common_metric, components_table, fleet_samples_table, loop_duration_table, overlap_matrix, read_sessions,
-    session_index_of, session_pairs_table,
+    read_sessions_if, session_index_of, session_pairs_table,
 };
 use crate::py_metric::MetricArg;
 use crate::py_samples::sampler_of;
@@ -21,9 +21,12 @@ use crate::py_separation::{Separation, SeparationArg};
 use crate::py_trajectory::ReadArgs;
 use loops_core::{
     fleet::FleetSample,
-    store::{StoreLoops, StoreSettings},
+    store::{ScannedTile, StoreLoops, StoreSettings},
 };
-use loops_io::store::{StoreConfig, StoreError, StoredFleet, read_samples, read_store, update_store};
+use loops_io::store::{
+    StoreConfig, StoreError, StorePlan, StoredFleet, plan_store_update, read_samples, read_store, scan_store_tiles,
+    update_store, update_store_scanned,
+};
 
 /// A fleet's loops kept in a folder and updated at the cost of the new data: each
 /// :meth:`update` adds sessions (replacing those of the same name) and removes others,
@@ -92,17 +95,7 @@ impl State {
 }
 
 impl FleetStore {
-    fn names(&self) -> Vec<String> {
-        self.state
-            .as_ref()
-            .map_or_else(Vec::new, |s| s.stored.store.sessions().iter().map(|s| s.name.clone()).collect())
-    }
-
-    fn settings(&self) -> Option<&StoreSettings> {
-        self.state.as_ref().map(|s| s.stored.store.settings())
-    }
-
-    /// The settings of an update: `None` without `gamma` (the store's own), else all of them.
+    /// The settings of an update of this store ([`update_config`]).
     #[allow(clippy::too_many_arguments)]
     fn config(
         &self,
@@ -118,57 +111,103 @@ impl FleetStore {
         skip_trivial: bool,
         sessions: &[(String, crate::py_trajectory::Trajectory)],
     ) -> PyResult<Option<StoreConfig>> {
-        let Some(gamma) = gamma else {
-            let given = metric.is_some()
-                || block.is_some()
-                || sampler.is_some()
-                || rate.is_some()
-                || budget.is_some()
-                || seed.is_some()
-                || between_only
-                || skip_trivial;
-            if given || self.state.is_none() {
-                return Err(invalid_parameter(format!(
-                    "FleetStore.update: {}: give gamma= with the other settings (metric=, separation=, block=, \
-                     sampler=, ...), or no setting to keep the store's",
-                    if self.state.is_none() {
-                        format!("{} holds no store yet, which needs its settings", self.dir.display())
-                    } else {
-                        "a store's settings are given whole".to_owned()
-                    }
-                )));
-            }
-            return Ok(None);
-        };
-        let metric = match metric {
-            Some(_) => MetricArg::spec_from_py(metric, "FleetStore.update")?,
-            None => {
-                let of_sessions = sessions
-                    .iter()
-                    .map(|(name, t)| (name.as_str(), t.metric.unwrap_or_else(|| t.inner.default_metric())));
-                match (common_metric(of_sessions)?, self.settings()) {
-                    (Some(metric), _) => metric,
-                    (None, Some(settings)) => settings.metric,
-                    (None, None) => loops_core::MetricSpec::default(),
-                }
-            }
-        };
-        let sampler = match (sampler, seed) {
-            (Some(name), Some(seed)) => Some((sampler_of(Some(name), rate, budget, seed, skip_trivial)?, between_only)),
-            (Some(_), None) => return Err(invalid_parameter("FleetStore.update: sampler= needs seed=".to_owned())),
-            (None, _) if rate.is_some() || budget.is_some() || seed.is_some() || between_only || skip_trivial => {
-                return Err(invalid_parameter(
-                    "FleetStore.update: rate=, budget=, seed=, between_only= and skip_trivial= go with sampler="
-                        .to_owned(),
-                ));
-            }
-            (None, _) => None,
-        };
-        let block = block.unwrap_or(StoreSettings::DEFAULT_BLOCK);
-        let settings = StoreSettings { metric, gamma, separation: separation.at(gamma), block };
-        settings.check().map_err(Failure::from)?;
-        Ok(Some(StoreConfig { settings, sampler }))
+        let store = self.state.as_ref().map(|s| s.stored.store.settings());
+        update_config(
+            &self.dir,
+            self.state.is_some(),
+            store,
+            gamma,
+            metric,
+            separation,
+            block,
+            sampler,
+            rate,
+            budget,
+            seed,
+            between_only,
+            skip_trivial,
+            sessions,
+        )
     }
+
+    fn names(&self) -> Vec<String> {
+        self.state
+            .as_ref()
+            .map_or_else(Vec::new, |s| s.stored.store.sessions().iter().map(|s| s.name.clone()).collect())
+    }
+
+    fn settings(&self) -> Option<&StoreSettings> {
+        self.state.as_ref().map(|s| s.stored.store.settings())
+    }
+}
+
+/// The settings of an update of the store in `dir` (`exists`: made; `store`: its settings, where
+/// read): `None` without `gamma` (the store's own), else all of them.
+#[allow(clippy::too_many_arguments)]
+fn update_config(
+    dir: &std::path::Path,
+    exists: bool,
+    store: Option<&StoreSettings>,
+    gamma: Option<f64>,
+    metric: Option<&Bound<'_, PyAny>>,
+    separation: SeparationArg,
+    block: Option<usize>,
+    sampler: Option<&str>,
+    rate: Option<f64>,
+    budget: Option<usize>,
+    seed: Option<u64>,
+    between_only: bool,
+    skip_trivial: bool,
+    sessions: &[(String, crate::py_trajectory::Trajectory)],
+) -> PyResult<Option<StoreConfig>> {
+    let Some(gamma) = gamma else {
+        let given = metric.is_some()
+            || block.is_some()
+            || sampler.is_some()
+            || rate.is_some()
+            || budget.is_some()
+            || seed.is_some()
+            || between_only
+            || skip_trivial;
+        if given || !exists {
+            return Err(invalid_parameter(format!(
+                "FleetStore.update: {}: give gamma= with the other settings (metric=, separation=, block=, \
+                     sampler=, ...), or no setting to keep the store's",
+                if !exists {
+                    format!("{} holds no store yet, which needs its settings", dir.display())
+                } else {
+                    "a store's settings are given whole".to_owned()
+                }
+            )));
+        }
+        return Ok(None);
+    };
+    let metric = match metric {
+        Some(_) => MetricArg::spec_from_py(metric, "FleetStore.update")?,
+        None => {
+            let of_sessions =
+                sessions.iter().map(|(name, t)| (name.as_str(), t.metric.unwrap_or_else(|| t.inner.default_metric())));
+            match (common_metric(of_sessions)?, store) {
+                (Some(metric), _) => metric,
+                (None, Some(settings)) => settings.metric,
+                (None, None) => loops_core::MetricSpec::default(),
+            }
+        }
+    };
+    let sampler = match (sampler, seed) {
+        (Some(name), Some(seed)) => Some((sampler_of(Some(name), rate, budget, seed, skip_trivial)?, between_only)),
+        (Some(_), None) => return Err(invalid_parameter("FleetStore.update: sampler= needs seed=".to_owned())),
+        (None, _) if rate.is_some() || budget.is_some() || seed.is_some() || between_only || skip_trivial => {
+            return Err(invalid_parameter(
+                "FleetStore.update: rate=, budget=, seed=, between_only= and skip_trivial= go with sampler=".to_owned(),
+            ));
+        }
+        (None, _) => None,
+    };
+    let block = block.unwrap_or(StoreSettings::DEFAULT_BLOCK);
+    let settings = StoreSettings { metric, gamma, separation: separation.at(gamma), block };
+    settings.check().map_err(Failure::from)?;
+    Ok(Some(StoreConfig { settings, sampler }))
 }
 
 /// `update`'s report as a dict.
@@ -235,6 +274,10 @@ impl FleetStore {
     ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
     ///     format, axes, topic, time, frames, rate_hz, drop_duplicate_stamps,
     ///         quaternion_tolerance: how paths are read, as in :class:`Fleet`.
+    ///     scanned: the update's new tiles scanned elsewhere (:meth:`StoreUpdatePlan.scan` of
+    ///         every tile of the :class:`StoreUpdatePlan` with the same arguments, in any
+    ///         order); ``None``: scanned here. The update then checks that they are exactly its
+    ///         plan's tiles, of this state, and scans nothing.
     ///
     /// Returns:
     ///     :attr:`last_update`.
@@ -248,12 +291,12 @@ impl FleetStore {
     #[pyo3(signature = (*, add=None, remove=None, gamma=None, metric=None, separation=SeparationArg::Auto, block=None,
         sampler=None, rate=None, budget=None, seed=None, between_only=false, skip_trivial=false, threads=None,
         format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, drop_duplicate_stamps=false,
-        quaternion_tolerance=None))]
+        quaternion_tolerance=None, scanned=None))]
     #[pyo3(
         text_signature = "($self, *, add=None, remove=None, gamma=None, metric=None, separation='auto', block=None, \
                           sampler=None, rate=None, budget=None, seed=None, between_only=False, skip_trivial=False, \
                           threads=None, format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, \
-                          drop_duplicate_stamps=False, quaternion_tolerance=None)"
+                          drop_duplicate_stamps=False, quaternion_tolerance=None, scanned=None)"
     )]
     #[allow(clippy::too_many_arguments)]
     fn update<'py>(
@@ -280,24 +323,20 @@ impl FleetStore {
         rate_hz: Option<f64>,
         drop_duplicate_stamps: bool,
         quaternion_tolerance: Option<f64>,
+        scanned: Option<Vec<Vec<u8>>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let sessions = match add {
-            None => Vec::new(),
-            Some(add) => {
-                let args = ReadArgs {
-                    format,
-                    axes,
-                    topic,
-                    time,
-                    frames,
-                    rate_hz,
-                    drop_duplicate_stamps,
-                    quaternion_tolerance,
-                    ..ReadArgs::default()
-                };
-                read_sessions(py, add, metric, &args)?
-            }
+        let args = ReadArgs {
+            format,
+            axes,
+            topic,
+            time,
+            frames,
+            rate_hz,
+            drop_duplicate_stamps,
+            quaternion_tolerance,
+            ..ReadArgs::default()
         };
+        let sessions = read_add(py, add, metric, &args)?;
         let config = self.config(
             gamma,
             metric,
@@ -316,7 +355,12 @@ impl FleetStore {
         let remove = remove.unwrap_or_default();
         let dir = self.dir.clone();
         let state = detached(py, move || {
-            let report = loops_core::with_threads(threads, || update_store(&dir, config.as_ref(), put, &remove))??;
+            let scanned = scanned.map(|s| s.iter().map(|b| ScannedTile::from_bytes(b)).collect::<Result<Vec<_>, _>>());
+            let report = loops_core::with_threads(threads, || match scanned {
+                None => update_store(&dir, config.as_ref(), put, &remove),
+                Some(Ok(scanned)) => update_store_scanned(&dir, config.as_ref(), put, &remove, scanned),
+                Some(Err(e)) => Err(e.into()),
+            })??;
             State::new(report.stored, Some(report.loops), Some(report.samples.map(|s| s.rows).unwrap_or_default()))
         })?;
         let update = update_dict(py, state.stored.store.last_update())?;
@@ -628,3 +672,231 @@ fn names_column<'py, 'a>(py: Python<'py>, names: impl Iterator<Item = &'a str>) 
     let kwargs = [("dtype", "str")].into_py_dict(py)?;
     py.import("numpy")?.call_method("array", (PyList::new(py, names)?,), Some(&kwargs))
 }
+
+/// The sessions of `add` (as :class:`Fleet` takes them), read with `args`.
+fn read_add(
+    py: Python<'_>,
+    add: Option<&Bound<'_, PyAny>>,
+    metric: Option<&Bound<'_, PyAny>>,
+    args: &ReadArgs,
+) -> PyResult<Vec<(String, crate::py_trajectory::Trajectory)>> {
+    match add {
+        None => Ok(Vec::new()),
+        Some(add) => read_sessions(py, add, metric, args),
+    }
+}
+
+/// The plan of an update of the fleet store in the folder ``path``, made from the store's
+/// small tables (settings and sessions; no tile is read): the tiles the update must scan, each
+/// of which :meth:`scan` scans on its own, on any machine that reads the new sessions and the
+/// store's folder; :meth:`FleetStore.update` with ``scanned=`` then applies them and writes the
+/// new state. The three steps are those :meth:`FleetStore.update` makes in one process;
+/// :func:`inexact_loops.dask.update_store` spreads the scans over a cluster's workers.
+///
+/// The arguments are :meth:`FleetStore.update`'s (the same for the plan, the scans and the
+/// update). A plan holds no poses and no stored tile (O(sessions + blocks + tiles to scan)),
+/// and pickles.
+///
+/// Example:
+///     >>> import tempfile, numpy as np, inexact_loops as il
+///     >>> x = np.arange(21) * 0.5
+///     >>> monday = il.Trajectory(np.arange(21.0), np.c_[x, 0 * x])
+///     >>> tuesday = il.Trajectory(100 + np.arange(21.0), np.c_[x[::-1], 0 * x + 0.5])
+///     >>> folder = tempfile.mkdtemp() + "/city"
+///     >>> _ = il.FleetStore.open(folder).update(add={"monday": monday}, gamma=1.0, block=8)
+///     >>> plan = il.StoreUpdatePlan(folder, add={"tuesday": tuesday})
+///     >>> len(plan), plan.tile_sessions[0]
+///     (10, ('monday', 'tuesday'))
+///     >>> scanned = [b for k in range(len(plan)) for b in plan.scan([k], add={"tuesday": tuesday})]
+///     >>> il.FleetStore.open(folder).update(add={"tuesday": tuesday}, scanned=scanned)["tiles_scanned"]
+///     10
+#[pyclass(module = "inexact_loops._core", frozen)]
+pub(crate) struct StoreUpdatePlan {
+    inner: StorePlan,
+}
+
+#[pymethods]
+impl StoreUpdatePlan {
+    /// Plans the update of the store in ``path`` that :meth:`FleetStore.update` makes with the
+    /// same arguments.
+    ///
+    /// Raises:
+    ///     As :meth:`FleetStore.update`.
+    #[new]
+    #[pyo3(signature = (path, *, add=None, remove=None, gamma=None, metric=None, separation=SeparationArg::Auto,
+        block=None, sampler=None, rate=None, budget=None, seed=None, between_only=false, skip_trivial=false,
+        format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, drop_duplicate_stamps=false,
+        quaternion_tolerance=None))]
+    #[pyo3(
+        text_signature = "(path, *, add=None, remove=None, gamma=None, metric=None, separation='auto', block=None, \
+                          sampler=None, rate=None, budget=None, seed=None, between_only=False, skip_trivial=False, \
+                          format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, \
+                          drop_duplicate_stamps=False, quaternion_tolerance=None)"
+    )]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        path: PathBuf,
+        add: Option<&Bound<'_, PyAny>>,
+        remove: Option<Vec<String>>,
+        gamma: Option<f64>,
+        metric: Option<&Bound<'_, PyAny>>,
+        separation: SeparationArg,
+        block: Option<usize>,
+        sampler: Option<&str>,
+        rate: Option<f64>,
+        budget: Option<usize>,
+        seed: Option<u64>,
+        between_only: bool,
+        skip_trivial: bool,
+        format: Option<String>,
+        axes: Option<(usize, usize)>,
+        topic: Option<String>,
+        time: Option<String>,
+        frames: Option<(String, String)>,
+        rate_hz: Option<f64>,
+        drop_duplicate_stamps: bool,
+        quaternion_tolerance: Option<f64>,
+    ) -> PyResult<Self> {
+        let args = ReadArgs {
+            format,
+            axes,
+            topic,
+            time,
+            frames,
+            rate_hz,
+            drop_duplicate_stamps,
+            quaternion_tolerance,
+            ..ReadArgs::default()
+        };
+        let sessions = read_add(py, add, metric, &args)?;
+        let exists = path.join("store.json").is_file();
+        let config = update_config(
+            &path,
+            exists,
+            None,
+            gamma,
+            metric,
+            separation,
+            block,
+            sampler,
+            rate,
+            budget,
+            seed,
+            between_only,
+            skip_trivial,
+            &sessions,
+        )?;
+        let put: Vec<(String, loops_core::Trajectory)> =
+            sessions.into_iter().map(|(name, t)| (name, Arc::unwrap_or_clone(t.inner))).collect();
+        let remove = remove.unwrap_or_default();
+        let inner = detached(py, move || Ok(plan_store_update(&path, config.as_ref(), &put, &remove)?))?;
+        Ok(Self { inner })
+    }
+
+    /// The number of tiles to scan.
+    fn __len__(&self) -> usize {
+        self.inner.plan.tiles().len()
+    }
+
+    fn __repr__(&self) -> String {
+        let report = self.inner.plan.report();
+        format!(
+            "StoreUpdatePlan({} tiles to scan, {} added, {} replaced, {} removed)",
+            self.inner.plan.tiles().len(),
+            report.added.len(),
+            report.replaced.len(),
+            report.removed.len()
+        )
+    }
+
+    /// The names of the two sessions of each tile to scan (the same name twice for a tile of
+    /// one session), in tile order.
+    #[getter]
+    fn tile_sessions(&self) -> Vec<(String, String)> {
+        let plan = &self.inner.plan;
+        let name = |s: usize| plan.sessions()[s].name.clone();
+        plan.tiles().iter().map(|t| (name(t.sessions[0]), name(t.sessions[1]))).collect()
+    }
+
+    /// What the update will do, by name (``added``, ``replaced``, ``unchanged``, ``removed``)
+    /// and ``tiles_scanned``; the other counts are set when it is applied.
+    #[getter]
+    fn last_update<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        update_dict(py, self.inner.plan.report())
+    }
+
+    /// Scans the tiles ``tiles`` (indices, ``range(len(plan))``) of the plan: the sessions the
+    /// update adds or replaces that they hold are read from ``add`` (the plan's, or only those
+    /// sessions), the stored ones from the store's pose files; each is checked against the
+    /// plan (its fingerprint) before the scan.
+    ///
+    /// Args:
+    ///     tiles: indices of the plan's tiles.
+    ///     add, metric, format, ...: as given to the plan.
+    ///     threads: worker threads; ``None`` uses one per core. Results do not depend on it.
+    ///
+    /// Returns:
+    ///     One ``bytes`` per tile, in the order of ``tiles``: what ``FleetStore.update(scanned=)``
+    ///     takes.
+    ///
+    /// Raises:
+    ///     InvalidParameterError: a tile out of range, a session to scan not in ``add``, or poses
+    ///         that are not those planned.
+    ///     OSError, LoopsIOError: a file that cannot be read.
+    #[pyo3(signature = (tiles, *, add=None, metric=None, threads=None, format=None, axes=None, topic=None,
+        time=None, frames=None, rate_hz=None, drop_duplicate_stamps=false, quaternion_tolerance=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn scan<'py>(
+        &self,
+        py: Python<'py>,
+        tiles: Vec<usize>,
+        add: Option<&Bound<'py, PyAny>>,
+        metric: Option<&Bound<'py, PyAny>>,
+        threads: Option<usize>,
+        format: Option<String>,
+        axes: Option<(usize, usize)>,
+        topic: Option<String>,
+        time: Option<String>,
+        frames: Option<(String, String)>,
+        rate_hz: Option<f64>,
+        drop_duplicate_stamps: bool,
+        quaternion_tolerance: Option<f64>,
+    ) -> PyResult<Vec<Bound<'py, pyo3::types::PyBytes>>> {
+        let args = ReadArgs {
+            format,
+            axes,
+            topic,
+            time,
+            frames,
+            rate_hz,
+            drop_duplicate_stamps,
+            quaternion_tolerance,
+            ..ReadArgs::default()
+        };
+        // Only the sessions given anew that the tiles hold are read.
+        let plan = &self.inner.plan;
+        let mut needed = std::collections::HashSet::new();
+        for &k in &tiles {
+            for s in plan.tiles().get(k).map_or([0; 2], |t| t.sessions) {
+                if plan.tiles().get(k).is_some() && plan.is_new(s) {
+                    needed.insert(plan.sessions()[s].name.clone());
+                }
+            }
+        }
+        let read = match add {
+            None => Vec::new(),
+            Some(add) => read_sessions_if(py, add, metric, &args, |name| needed.contains(name))?,
+        };
+        let put: Vec<(String, loops_core::Trajectory)> =
+            read.into_iter().map(|(name, t)| (name, Arc::unwrap_or_clone(t.inner))).collect();
+        let planned = &self.inner;
+        let scanned = detached(py, move || {
+            let scanned = loops_core::with_threads(threads, || scan_store_tiles(planned, &tiles, &put))??;
+            Ok(scanned.iter().map(ScannedTile::to_bytes).collect::<Vec<_>>())
+        })?;
+        Ok(scanned.iter().map(|b| pyo3::types::PyBytes::new(py, b)).collect())
+    }
+}
+
+crate::pickling::pickled!(StoreUpdatePlan, StorePlan, |value| Ok(StoreUpdatePlan { inner: value }));

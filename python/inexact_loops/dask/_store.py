@@ -16,6 +16,7 @@ def update_store(
     add: Any = None,
     remove: Any = None,
     client: Any = None,
+    groups: int | None = None,
     **options: Any,
 ) -> dict[str, Any]:
     """Adds, replaces and removes sessions of the fleet store in the folder ``path``
@@ -23,12 +24,16 @@ def update_store(
 
     The update is the store's own (:meth:`~inexact_loops.FleetStore.update`: it scans only the
     tiles that hold an added or replaced session, merges them into the kept session pairs, draws
-    the samples from the kept runs, and writes the new state atomically); this function only
-    says where it runs. With ``client=``, one task on the cluster reads the new logs and the
-    store's files, scans, merges and writes every table there: the client sends paths and names
-    and gets back the summary below, O(sessions), never the components, the tiles or the poses.
-    A worker that dies during the update leaves the store as it was (the state is swapped in one
-    rename), and Dask runs the task again on another worker: the store ends in the new state.
+    the samples from the kept runs, and writes the new state atomically), in its three steps
+    (:class:`~inexact_loops.StoreUpdatePlan`); this function only says where each runs. With
+    ``client=``, a task plans the update from the store's small tables, one task per group of
+    tiles scans them (spread over the workers, each reading only the logs and pose files its
+    tiles hold), and one task applies the scans and writes every table. The scanned tiles go
+    from worker to worker: the client sends paths and names and gets back the number of tiles
+    to scan and the summary below, O(sessions), never the components, the tiles or the
+    poses. A worker that dies during the update leaves the store as it was (the state is
+    swapped in one rename), and Dask runs its tasks again on another worker: the store ends in
+    the new state.
 
     Args:
         path: the store's folder (missing or empty: the first update makes the store there).
@@ -37,6 +42,8 @@ def update_store(
             pairs or paths named by their stem), as in :func:`find_fleet_loops_dask`.
         remove: names of stored sessions to remove.
         client: a ``dask.distributed.Client``; ``None``: in this process, without Dask.
+        groups: with ``client=``, the number of scan tasks (tiles are grouped by session pair,
+            each group about as many tiles); ``None``: four per worker.
         options: the settings, sampler, ``threads`` and reading keywords of
             :meth:`~inexact_loops.FleetStore.update` (``threads=None``: one per core of the
             worker).
@@ -75,21 +82,85 @@ def update_store(
                 )
     if remove is not None and isinstance(remove, str):
         raise InvalidParameterError(f"remove = {remove!r} is invalid: give a list of session names")
+    if groups is not None and (
+        isinstance(groups, bool) or not isinstance(groups, int) or groups < 1
+    ):
+        raise InvalidParameterError(
+            f"groups = {groups!r} is invalid: give a positive number of scan tasks"
+        )
     folder = os.fspath(path)
     if client is None:
         return store_update_task(folder, add, remove, options)
-    future = client.submit(store_update_task, folder, add, remove, options, pure=False)
-    return future.result()
+    if groups is None:
+        groups = 4 * max(1, len(client.scheduler_info().get("workers", {})))
+    plan_options = {k: v for k, v in options.items() if k != "threads"}
+    scan_options = {k: v for k, v in options.items() if k in _SCAN_KEYWORDS}
+    plan = client.submit(store_plan_task, folder, add, remove, plan_options, pure=False)
+    # The client learns only how many scan tasks to submit; each finds its own tiles.
+    count = client.submit(len, plan, pure=False).result()
+    count = min(groups, count)
+    scans = [
+        client.submit(store_scan_task, plan, g, count, add, scan_options, pure=False)
+        for g in range(count)
+    ]
+    apply = client.submit(store_update_task, folder, add, remove, options, scans, pure=False)
+    return apply.result()
+
+
+#: The keywords of :meth:`~inexact_loops.FleetStore.update` that a scan takes (how the new
+#: sessions are read, and the threads).
+_SCAN_KEYWORDS = frozenset(
+    (
+        "metric",
+        "threads",
+        "format",
+        "axes",
+        "topic",
+        "time",
+        "frames",
+        "rate_hz",
+        "drop_duplicate_stamps",
+        "quaternion_tolerance",
+    )
+)
+
+
+def store_plan_task(folder: str, add: Any, remove: Any, options: dict[str, Any]) -> Any:
+    """Task: the update's plan, from the store's small tables (O(sessions + tiles to scan))."""
+    from .._core import StoreUpdatePlan
+
+    return StoreUpdatePlan(folder, add=add, remove=remove, **options)
+
+
+def tile_group(plan: Any, group: int, count: int) -> list[int]:
+    """The tiles of group ``group`` of ``count``: the plan's tiles ordered by session pair (so
+    that a group reads few sessions), cut into ``count`` runs of about as many tiles."""
+    order = sorted(range(len(plan)), key=lambda k: (plan.tile_sessions[k], k))
+    return order[group * len(order) // count : (group + 1) * len(order) // count]
+
+
+def store_scan_task(
+    plan: Any, group: int, count: int, add: Any, options: dict[str, Any]
+) -> list[bytes]:
+    """Task: the scans of the plan's tiles of group ``group`` of ``count`` (reading only the
+    sessions they hold)."""
+    return plan.scan(tile_group(plan, group, count), add=add, **options)
 
 
 def store_update_task(
-    folder: str, add: Any, remove: Any, options: dict[str, Any]
+    folder: str,
+    add: Any,
+    remove: Any,
+    options: dict[str, Any],
+    scans: list[list[bytes]] | None = None,
 ) -> dict[str, Any]:
-    """Task: the update, where it runs, and its summary (O(sessions))."""
+    """Task: the update, where it runs (its tiles scanned here, or given as the scan tasks'
+    results), and its summary (O(sessions))."""
     from .._core import FleetStore
 
     store = FleetStore.open(folder)
-    update = store.update(add=add, remove=remove, **options)
+    scanned = None if scans is None else [tile for group in scans for tile in group]
+    update = store.update(add=add, remove=remove, scanned=scanned, **options)
     return {
         "path": os.fspath(store.path),
         "state_path": os.fspath(store.state_path),

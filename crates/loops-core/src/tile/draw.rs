@@ -171,7 +171,7 @@ impl TileRuns {
 
     /// Its parts fit together: what a draw indexes by is in range.
     #[cfg(feature = "serde")]
-    fn check(&self) -> std::result::Result<(), String> {
+    pub(crate) fn check(&self) -> std::result::Result<(), String> {
         let set = &self.set;
         let runs = set.row_offset(set.rows());
         if self.provisional.len() != runs {
