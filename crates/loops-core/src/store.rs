@@ -314,6 +314,7 @@ impl StoreUpdate {
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(try_from = "PlanFields"))]
 pub struct UpdatePlan {
     id: u64,
     settings: StoreSettings,
@@ -324,6 +325,44 @@ pub struct UpdatePlan {
     before: Vec<Option<usize>>,
     report: StoreUpdate,
     tiles: Vec<Tile>,
+}
+
+/// A saved [`UpdatePlan`] as read, before [`UpdatePlan::check_shape`].
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct PlanFields {
+    id: u64,
+    settings: StoreSettings,
+    put: Vec<StoreSession>,
+    remove: Vec<String>,
+    sessions: Vec<StoreSession>,
+    starts: Vec<usize>,
+    before: Vec<Option<usize>>,
+    report: StoreUpdate,
+    tiles: Vec<Tile>,
+}
+
+#[cfg(feature = "serde")]
+impl TryFrom<PlanFields> for UpdatePlan {
+    type Error = Error;
+
+    /// Checked by [`UpdatePlan::check_shape`]: a plan shipped between machines, or forged,
+    /// cannot make a scan read past its sessions.
+    fn try_from(f: PlanFields) -> Result<Self> {
+        let plan = Self {
+            id: f.id,
+            settings: f.settings,
+            put: f.put,
+            remove: f.remove,
+            sessions: f.sessions,
+            starts: f.starts,
+            before: f.before,
+            report: f.report,
+            tiles: f.tiles,
+        };
+        plan.check_shape()?;
+        Ok(plan)
+    }
 }
 
 impl UpdatePlan {
@@ -445,6 +484,41 @@ impl UpdatePlan {
             report,
             tiles,
         })
+    }
+
+    /// The plan holds together: one start and one origin per session, the starts the sessions'
+    /// running pose counts, and every tile well formed on poses of its two sessions. O(sessions
+    /// + tiles).
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] naming the first part that does not fit.
+    fn check_shape(&self) -> Result<()> {
+        let fail = |reason: String| Err(Error::InvalidState { what: "store update plan", reason });
+        let n = self.sessions.len();
+        if self.starts.len() != n || self.before.len() != n {
+            return fail(format!("{n} sessions but {} starts and {} origins", self.starts.len(), self.before.len()));
+        }
+        let mut start = 0usize;
+        for (s, session) in self.sessions.iter().enumerate() {
+            if self.starts[s] != start {
+                return fail(format!("session {s} starts at pose {}, not {start}", self.starts[s]));
+            }
+            start = start.saturating_add(session.poses());
+        }
+        let span = |s: usize| self.starts[s]..self.starts[s] + self.sessions[s].poses();
+        for (k, tile) in self.tiles.iter().enumerate() {
+            let [a, b] = tile.sessions;
+            let fits = b < n
+                && tile.is_well_formed()
+                && span(a).start <= tile.rows.start
+                && tile.rows.end <= span(a).end
+                && span(b).start <= tile.columns.start
+                && tile.columns.end <= span(b).end;
+            if !fits {
+                return fail(format!("tile {k} ({tile:?}) does not lie on the poses of its sessions"));
+            }
+        }
+        Ok(())
     }
 
     /// A fingerprint of what the plan is of (the store's settings and sessions, what is given

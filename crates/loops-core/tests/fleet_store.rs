@@ -375,6 +375,23 @@ fn an_update_by_its_steps_is_the_update() {
     let stale = moved.apply_update(&plan, scanned.clone()).unwrap_err().to_string();
     assert!(stale.contains("is not of this store's state"), "{stale}");
 
+    // A plan read back holds together; a forged one whose tile or start leaves its sessions
+    // is refused as it is read, before a scan could read past them.
+    let saved = serde_json::to_value(&plan).unwrap();
+    let read: loops_core::store::UpdatePlan = serde_json::from_value(saved.clone()).unwrap();
+    assert_eq!(read, plan);
+    let forged = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut value = saved.clone();
+        edit(&mut value);
+        serde_json::from_value::<loops_core::store::UpdatePlan>(value).unwrap_err().to_string()
+    };
+    let far = forged(&|v| v["tiles"][0]["sessions"][1] = serde_json::json!(99));
+    assert!(far.contains("tile 0") && far.contains("does not lie on the poses"), "{far}");
+    let long = forged(&|v| v["tiles"][0]["rows"]["end"] = serde_json::json!(1_000_000_000u64));
+    assert!(long.contains("tile 0"), "{long}");
+    let start = forged(&|v| v["starts"][1] = serde_json::json!(7));
+    assert!(start.contains("session 1 starts at pose 7"), "{start}");
+
     scanned.reverse();
     store.apply_update(&plan, scanned).unwrap();
     assert_eq!(store, whole);

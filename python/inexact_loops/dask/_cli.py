@@ -43,7 +43,8 @@ def _parser() -> argparse.ArgumentParser:
             "failures.parquet (sessions left out, with their error),\n"
             "loop_duration/<session>.parquet, summary.json.\n"
             "With --store DIR instead of --out: the logs are added to (or replace sessions\n"
-            "of) the fleet store in DIR, updated by a worker (see `loops fleet --store`).\n"
+            "of) the fleet store in DIR: its new tiles scanned across the workers, then\n"
+            "merged and written by one (see `loops fleet --store`).\n"
             "Exit code 0; 1 when a session was left out; 2 on an error."
         ),
         formatter_class=argparse.RawDescriptionHelpFormatter,

@@ -111,7 +111,7 @@ pub struct Tile {
 
 impl Tile {
     /// Non-empty ranges, a ≤ b, on or above the diagonal within one session.
-    fn is_well_formed(&self) -> bool {
+    pub(crate) fn is_well_formed(&self) -> bool {
         let [a, b] = self.sessions;
         a <= b
             && self.rows.start < self.rows.end
