@@ -2249,6 +2249,7 @@ class StoreUpdatePlan:
     @classmethod
     def _from_state(cls, state: bytes) -> StoreUpdatePlan: ...
 
+@final
 class FleetStore:
     """A fleet's loops kept in a folder and updated at the cost of the new data: each
     :meth:`update` adds sessions (replacing those of the same name) and removes others,
