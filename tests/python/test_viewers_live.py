@@ -149,7 +149,7 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
     }
     # 48 poses: no multiple of 100, so one plane, the whole log's, after the last keyframe.
     assert [t for t, _ in messages["/loops/plane"]] == [round(rows[-1, 0] * 1e9)]
-    sent = [(c["keyframe"], c["j"]) for k in keyframes for c in k["candidates"]]
+    sent = [(c["k"], c["j"]) for k in keyframes for c in k["candidates"]]
     check_plane(RawImage.FromString(messages["/loops/plane"][0][1]), rows, sent)
     store = get_typestore(Stores.ROS2_HUMBLE)
     markers: dict[tuple[str, int], object] = {}
@@ -192,11 +192,11 @@ def test_replay_serves_every_keyframe_to_a_foxglove_client(tmp_path: Path):
         (entity,) = candidates.entities
         meta = {m.key: m.value for m in entity.metadata}
         assert entity.id == f"candidates/{line['pose']}"
-        assert json.loads(meta["pairs"]) == [[c["keyframe"], c["j"]] for c in line["candidates"]]
+        assert json.loads(meta["pairs"]) == [[c["k"], c["j"]] for c in line["candidates"]]
         assert json.loads(meta["components"]) == [c["component"] for c in line["candidates"]]
         ends = np.array([[p.x, p.y, p.z] for p in entity.lines[0].points]).reshape(-1, 2, 3)
         for (a, b), c in zip(ends, line["candidates"], strict=True):
-            np.testing.assert_allclose([a, b], rows[[c["keyframe"], c["j"]], 1:4], atol=1e-9)
+            np.testing.assert_allclose([a, b], rows[[c["k"], c["j"]], 1:4], atol=1e-9)
 
     # The entities left are the live components of the engine pushed the same poses.
     online = il.OnlineLoops(gamma=GAMMA, dim=3)
@@ -245,7 +245,7 @@ def check_markers(store, data: bytes, markers: dict, line: dict, rows: np.ndarra
     assert marker.id == line["pose"] and marker.type == 5  # LINE_LIST
     ends = np.array([[p.x, p.y, p.z] for p in marker.points]).reshape(-1, 2, 3)
     for (a, b), c in zip(ends, line["candidates"], strict=True):
-        np.testing.assert_allclose([a, b], rows[[c["keyframe"], c["j"]], 1:4], atol=1e-9)
+        np.testing.assert_allclose([a, b], rows[[c["k"], c["j"]], 1:4], atol=1e-9)
 
 
 def check_plane(image: RawImage, rows: np.ndarray, pairs: list[tuple[int, int]]) -> None:
