@@ -99,8 +99,22 @@ def update_store(
     # The client learns only how many scan tasks to submit; each finds its own tiles.
     count = client.submit(len, plan, pure=False).result()
     count = min(groups, count)
+    # Spread the groups over the workers in turn: left to data locality, every scan would go
+    # to the worker that holds the plan. A preference, not a rule, so that a worker lost
+    # meanwhile leaves its groups to the others.
+    workers = sorted(client.scheduler_info().get("workers", {})) or [None]
     scans = [
-        client.submit(store_scan_task, plan, g, count, add, scan_options, pure=False)
+        client.submit(
+            store_scan_task,
+            plan,
+            g,
+            count,
+            add,
+            scan_options,
+            pure=False,
+            workers=None if workers[0] is None else [workers[g % len(workers)]],
+            allow_other_workers=True,
+        )
         for g in range(count)
     ]
     apply = client.submit(store_update_task, folder, add, remove, options, scans, pure=False)
