@@ -92,6 +92,13 @@ pub fn mutate(data: &[u8], mutations: &[Mutation]) -> Vec<u8> {
     data
 }
 
+/// A name part no other call of this run uses: the process and a counter of calls.
+fn unique() -> String {
+    static CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    format!("{}-{call}", std::process::id())
+}
+
 /// Runs the Python fixture `script` (`$PYTHON script ARGS... FOLDER`, the arguments from `args`,
 /// called only when it runs) into `dir` unless `dir` holds a `manifest.json` already, and returns
 /// `dir`'s manifest. `None` ([`skip`]: a failure under CI) when Python cannot run or the script
@@ -103,7 +110,8 @@ pub fn python_fixtures(
     args: impl FnOnce() -> Vec<OsString>,
 ) -> Option<(PathBuf, Value)> {
     if !dir.join("manifest.json").is_file() {
-        let building = dir.with_extension(format!("tmp{}", std::process::id()));
+        // One folder per call: tests of one process build the same fixtures on several threads.
+        let building = dir.with_extension(format!("tmp{}", unique()));
         let _ = std::fs::remove_dir_all(&building);
         let output = match Command::new(python()).arg(script).args(args()).arg(&building).output() {
             Ok(output) => output,
@@ -165,7 +173,7 @@ pub fn bag_fixtures(name: &str, poses: &[BagPose]) -> Option<(PathBuf, Value)> {
     lines.hash(&mut hasher);
     let root = Path::new(env!("CARGO_TARGET_TMPDIR"));
     let dir = root.join(format!("bag-fixtures-{name}-{:016x}", hasher.finish()));
-    let poses_file = root.join(format!("bag-poses-{name}-{}.txt", std::process::id()));
+    let poses_file = root.join(format!("bag-poses-{name}-{}.txt", unique()));
     let fixtures = python_fixtures("the bag tests", &script, dir, || {
         std::fs::write(&poses_file, lines).expect("poses file");
         vec![poses_file.clone().into()]
