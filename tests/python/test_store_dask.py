@@ -231,7 +231,9 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
                 time.sleep(0.002)
             if busy:
                 time.sleep(float(rng.uniform(0.0, 0.05)))
-                os.kill(pids[busy[0]], signal.SIGKILL)
+                # A worker the nanny restarted after `pids` was taken is asked for its pid now.
+                pid = pids.get(busy[0]) or client.run(os.getpid, workers=[busy[0]])[busy[0]]
+                os.kill(pid, signal.SIGKILL)
                 hit.append(target)
             thread.join(120)
             assert not thread.is_alive()
