@@ -102,19 +102,16 @@ def update_store(
     # Spread the groups over the workers in turn: left to data locality, every scan would go
     # to the worker that holds the plan. A preference, not a rule, so that a worker lost
     # meanwhile leaves its groups to the others.
-    workers = sorted(client.scheduler_info().get("workers", {})) or [None]
+    workers = sorted(client.scheduler_info().get("workers", {}))
+
+    def placed(g: int) -> dict[str, Any]:
+        """Where group ``g`` prefers to run: nowhere in particular while no worker is known."""
+        if not workers:
+            return {}
+        return {"workers": [workers[g % len(workers)]], "allow_other_workers": True}
+
     scans = [
-        client.submit(
-            store_scan_task,
-            plan,
-            g,
-            count,
-            add,
-            scan_options,
-            pure=False,
-            workers=None if workers[0] is None else [workers[g % len(workers)]],
-            allow_other_workers=True,
-        )
+        client.submit(store_scan_task, plan, g, count, add, scan_options, pure=False, **placed(g))
         for g in range(count)
     ]
     apply = client.submit(store_update_task, folder, add, remove, options, scans, pure=False)
