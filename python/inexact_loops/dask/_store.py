@@ -8,6 +8,7 @@ from typing import Any
 
 from .. import _core
 from ..errors import InvalidParameterError
+from ._cache import READ_OPTIONS
 
 
 def update_store(
@@ -120,20 +121,7 @@ def update_store(
 
 #: The keywords of :meth:`~inexact_loops.FleetStore.update` that a scan takes (how the new
 #: sessions are read, and the threads).
-_SCAN_KEYWORDS = frozenset(
-    (
-        "metric",
-        "threads",
-        "format",
-        "axes",
-        "topic",
-        "time",
-        "frames",
-        "rate_hz",
-        "drop_duplicate_stamps",
-        "quaternion_tolerance",
-    )
-)
+_SCAN_KEYWORDS = frozenset(("metric", "threads", *READ_OPTIONS))
 
 
 def store_plan_task(folder: str, add: Any, remove: Any, options: dict[str, Any]) -> Any:
