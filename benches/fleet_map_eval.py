@@ -10,7 +10,7 @@ Usage::
         [--budgets 10,100,1000] [--report-only] [--no-write] [--output BENCHMARKS.md]
 
 Needs the ``inexact_loops`` wheel with the ``maps`` extra (GTSAM) and matplotlib. A modest grid
-(about 40 minutes on 2 busy cores): every run appends its row to ``OUT/rows.csv``, a second
+(about 45 minutes on 2 busy cores): every run appends its row to ``OUT/rows.csv``, a second
 invocation skips the blocks already there, and ``--report-only`` redraws the report:
 ``OUT/summary.csv``, ``docs/fleet_map_eval.png`` and the section ``<!-- fleet_map_eval -->``
 of BENCHMARKS.md (``--no-write`` prints it instead).
