@@ -419,7 +419,7 @@ def test_loops_eval_fleet_command(tmp_path):
     assert "closest-first" in done.stdout and "inter" in done.stdout
     # Options a fleet does not take: one line, exit code 2.
     for extra, message in (
-        (["--on", "estimate"], "--fleet chooses candidates on the references"),
+        (["--source", "detections"], "not with --source detections"),
         (["--odometry", files[0]], "--fleet takes no --odometry"),
     ):
         bad = subprocess.run(
@@ -427,6 +427,17 @@ def test_loops_eval_fleet_command(tmp_path):
         )
         assert bad.returncode == 2 and message in bad.stderr
         assert len(bad.stderr.strip().splitlines()) == 1
+    # On the estimates, in rounds, every start known.
+    rounds = subprocess.run(
+        [*cmd[:-1], str(tmp_path / "r"), "--on", "both", "--rounds", "2", "--known-starts"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert rounds.returncode == 0, rounds.stderr
+    rows = ev.FleetResults.from_csv(tmp_path / "r" / "results.csv").rows
+    conditions = {(r["starts"], r["on"], r["rounds"]) for r in rows if r["sampler"] != "odometry"}
+    assert conditions == {("known", "reference", 1), ("known", "estimate", 2)}
     same = subprocess.run(
         [*cmd[:4], files[0], files[0], *cmd[4 + len(files) : -1], str(tmp_path / "y")],
         capture_output=True,
