@@ -208,7 +208,7 @@ class _RoundsRule:
         if len(fresh) > share:
             rng = np.random.default_rng(np.random.SeedSequence([seed, 0x0C0]))
             fresh = fresh[np.sort(rng.choice(len(fresh), share, replace=False))]
-        self._tried.update(pairs[k] for k in fresh)
+        self._tried.update(pairs[int(k)] for k in fresh)
         self.round += 1
         return fresh
 
