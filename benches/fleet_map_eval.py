@@ -10,7 +10,7 @@ Usage::
         [--budgets 10,100,1000] [--report-only] [--no-write] [--output BENCHMARKS.md]
 
 Needs the ``inexact_loops`` wheel with the ``maps`` extra (GTSAM) and matplotlib. A modest grid
-(about 10 minutes on 2 busy cores): every run appends its row to ``OUT/rows.csv``, a second
+(about 45 minutes on 2 busy cores): every run appends its row to ``OUT/rows.csv``, a second
 invocation skips the blocks already there, and ``--report-only`` redraws the report:
 ``OUT/summary.csv``, ``docs/fleet_map_eval.png`` and the section ``<!-- fleet_map_eval -->``
 of BENCHMARKS.md (``--no-write`` prints it instead).
@@ -38,6 +38,17 @@ session). Errors (:func:`fleet_errors`): the joint ATE (one alignment of all ses
 sessions' own ATEs (RMS over the sessions), and the inter-session error (evo's RPE over the
 pose pairs of two sessions within gamma of each other). The odometry alone is the reference
 line.
+
+Without ground truth (the second part): the candidates chosen on the sessions' drifted
+estimates (``FleetRule(on="estimate")``, gamma inflated 2x, pairs between sessions only where
+they share a frame), all at once or in 3 rounds (:class:`FleetRounds`: each round on the
+estimates the matches before it corrected), against the same samplers on the references, at
+the budgets of ``ESTIMATE_BUDGETS`` (within ``--budgets``), no wrong matches, for the default
+sampler and the best rules of the first part (``ESTIMATE_RULES``). There every session's
+odometry starts at its reference's first pose (``known_starts``, as with a fix at the start):
+with unknown starts the estimates of two sessions share no frame before a match between them,
+which place recognition, not a sampler on poses, has to find; the default sampler in rounds
+with unknown starts shows what that costs.
 """
 
 from __future__ import annotations
@@ -73,6 +84,20 @@ SAMPLERS = ("one", "rho", "rho-dispersed", "closest-first", "alpha")
 OUTLIER_RATES = (0.0, 0.1)
 MODES = (False, True)  # between_only
 
+#: The second part's rules (sampler, between_only): the default sampler, and the best rules of
+#: the first part at 100 and 1000 matches; run in this order.
+ESTIMATE_RULES = (
+    (il.DEFAULT_SAMPLER, False),
+    ("closest-first", True),
+    ("rho-dispersed", False),
+)
+ESTIMATE_BUDGETS = (100, 1000)
+#: (starts, on, rounds) of the second part; the last for the default sampler only.
+CONDITIONS = (("known", "reference", 1), ("known", "estimate", 1), ("known", "estimate", 3))
+UNKNOWN_ROUNDS = ("unknown", "estimate", 3)
+#: The first part's condition.
+FIRST = ("unknown", "reference", 1)
+
 
 def load(name: str, data: Path) -> dict[str, ev.Poses] | None:
     label, _, step = DATASETS[name]
@@ -100,26 +125,69 @@ def run(args: argparse.Namespace) -> None:
         SECTION,
         ev.FleetResults,
         ev.FLEET_COLUMNS,
-        lambda r: (r["dataset"], int(r["seed"]), float(r["outlier_rate"])),
+        lambda r: (
+            r["dataset"],
+            int(r["seed"]),
+            float(r["outlier_rate"]),
+            (r["starts"], r["on"], int(r["rounds"])),
+            r["sampler"],
+            r["between_only"],
+        ),
+        lambda r: (r["dataset"], int(r["seed"]), r["starts"]),
     )
+
+    def block(
+        name: str,
+        seed: int,
+        outlier_rate: float,
+        condition: tuple[str, str, int],
+        samplers: tuple[str, ...],
+        budgets: list[int],
+        modes: tuple[bool, ...] = MODES,
+    ) -> None:
+        """The runs of ``samplers`` in ``modes`` (between_only) not all in the rows yet, under
+        one condition."""
+        starts, on, rounds = condition
+        todo = [
+            s
+            for s in samplers
+            if any((name, seed, outlier_rate, condition, s, m) not in runs.done for m in modes)
+        ]
+        references = sessions[name]
+        if not todo or references is None or not budgets:
+            return
+        runs.block(
+            ev.evaluate_fleet,
+            references,
+            dataset=name,
+            seed=seed,
+            outlier_rate=outlier_rate,
+            what=f", {starts} starts, on the {on}, {rounds} round(s), {', '.join(todo)} {modes}",
+            odometry=(name, seed, starts),
+            budgets=budgets,
+            gamma=DATASETS[name][1],
+            samplers=todo,
+            between_only=modes,
+            on=(on,),
+            rounds=rounds,
+            known_starts=starts == "known",
+        )
+
     for seed in range(args.seeds):
         for name in names:
-            references = sessions[name]
-            if references is None:
-                continue
             for outlier_rate in OUTLIER_RATES:
-                if (name, seed, outlier_rate) in runs.done:
-                    continue
-                runs.block(
-                    ev.evaluate_fleet,
-                    references,
-                    dataset=name,
-                    seed=seed,
-                    outlier_rate=outlier_rate,
-                    gamma=DATASETS[name][1],
-                    samplers=SAMPLERS,
-                    between_only=MODES,
-                )
+                block(name, seed, outlier_rate, FIRST, SAMPLERS, runs.budgets)
+    second = [b for b in runs.budgets if b in ESTIMATE_BUDGETS]
+    for sampler, between in ESTIMATE_RULES:
+        for seed in range(args.seeds):
+            for name in names:
+                for condition in CONDITIONS:
+                    block(name, seed, 0.0, condition, (sampler,), second, (between,))
+    # Last: the default sampler with unknown starts, on the references and in rounds.
+    for seed in range(args.seeds):
+        for name in names:
+            for condition in (FIRST, UNKNOWN_ROUNDS):
+                block(name, seed, 0.0, condition, (il.DEFAULT_SAMPLER,), second, (False,))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -137,6 +205,19 @@ def datasets_of(results: ev.FleetResults) -> list[str]:
     return [n for n in DATASETS if any(r["dataset"] == n for r in results.rows)]
 
 
+def condition(r: dict) -> tuple[str, str, int]:
+    """The (starts, on, rounds) of a row or summary row; the odometry alone's is its starts'
+    with the first part's rest."""
+    if r["sampler"] == "odometry":
+        return (r["starts"], "reference", 1)
+    return (r["starts"], r["on"], int(r["rounds"]))
+
+
+def first_part(results: ev.FleetResults) -> ev.FleetResults:
+    """The rows of the first part (unknown starts, candidates on the references)."""
+    return ev.FleetResults([r for r in results.rows if condition(r) == FIRST])
+
+
 def table(
     results: ev.FleetResults, summary: list[dict], outlier_rate: float, budgets: list[int]
 ) -> list[str]:
@@ -146,7 +227,9 @@ def table(
     cells_of = {
         (s["dataset"], s["sampler"], s["between_only"], s["budget"]): s
         for s in summary
-        if s["outlier_rate"] == outlier_rate and s["sampler"] != "odometry"
+        if s["outlier_rate"] == outlier_rate
+        and s["sampler"] != "odometry"
+        and condition(s) == FIRST
     }
     odometry = {
         n: [r for r in results.rows if r["dataset"] == n and r["sampler"] == "odometry"]
@@ -180,7 +263,7 @@ def table(
 def relative(results: ev.FleetResults, budgets: list[int], column: str) -> list[str]:
     """Per sampler and mode, budget and outlier rate: the geometric mean over the datasets of
     its median error (``column``: ate or inter) over the best one's at that budget."""
-    summary = [s for s in results.summary() if s["sampler"] != "odometry"]
+    summary = [s for s in results.summary() if s["sampler"] in SAMPLERS and condition(s) == FIRST]
     rows = [
         (
             label(sampler, between),
@@ -199,7 +282,7 @@ def figure(results: ev.FleetResults, path: Path) -> None:
     names = datasets_of(results)
     fig, axes = common.figure_rows(len(names), 3.1, 0.9)
     for row, n in enumerate(names):
-        sub = ev.FleetResults([r for r in results.rows if r["dataset"] == n])
+        sub = ev.FleetResults([r for r in first_part(results).rows if r["dataset"] == n])
         for col, metric in enumerate(("ate", "inter")):
             ev.plot_fleet_error_vs_matches(
                 sub,
@@ -222,11 +305,94 @@ def figure(results: ev.FleetResults, path: Path) -> None:
     )
 
 
+def estimate_tables(results: ev.FleetResults, budgets: list[int]) -> list[str]:
+    """The second part: per rule (``ESTIMATE_RULES``), dataset and budget, the median joint ATE
+    [min–max] on the references, then on the estimates at once and in 3 rounds with their
+    ratios to the references' (known starts); then the default sampler in rounds with unknown
+    starts against the same on the references. Nothing before the second part has run."""
+    summary = {
+        (s["dataset"], s["sampler"], s["between_only"], s["budget"], condition(s)): s
+        for s in results.summary()
+        if s["sampler"] != "odometry" and s["outlier_rate"] == 0.0
+    }
+    if all(k[4] == FIRST for k in summary):
+        return []
+    names = datasets_of(results)
+    columns = [(n, b) for n in names for b in budgets if b in ESTIMATE_BUDGETS]
+    header = "| sampler | candidates on | " + " | ".join(
+        f"{DATASETS[n][0]}, {b}" for n, b in columns
+    )
+    ratios: dict[tuple[str, int], list[float]] = {}
+
+    def row(sampler: str, between: bool, text: str, cond: tuple, base: tuple | None) -> str:
+        """A table row: per column the cell of ``cond``, with its ratio to ``base``'s."""
+        cells = []
+        for n, b in columns:
+            s = summary.get((n, sampler, between, b, cond))
+            if s is None:
+                cells.append("–")
+                continue
+            cell = f"{s['ate_median_m']:.2f} [{s['ate_min_m']:.2f}–{s['ate_max_m']:.2f}]"
+            r = summary.get((n, sampler, between, b, base)) if base else None
+            if r is not None:
+                ratio = s["ate_median_m"] / r["ate_median_m"]
+                ratios.setdefault(cond, []).append(ratio)
+                cell += f" (**{ratio:.2f}×**)"
+            cells.append(cell)
+        return f"| {label(sampler, between)} | {text} | " + " | ".join(cells) + " |"
+
+    known = [header + " |", "|---|---|" + "---|" * len(columns)]
+    for sampler, between in ESTIMATE_RULES:
+        on_refs = CONDITIONS[0]
+        known += [
+            row(sampler, between, "references", on_refs, None),
+            row(sampler, between, "estimates, at once", CONDITIONS[1], on_refs),
+            row(sampler, between, "estimates, 3 rounds", CONDITIONS[2], on_refs),
+        ]
+    unknown = [
+        header + " |",
+        "|---|---|" + "---|" * len(columns),
+        row(il.DEFAULT_SAMPLER, False, "references", FIRST, None),
+        row(il.DEFAULT_SAMPLER, False, "estimates, 3 rounds", UNKNOWN_ROUNDS, FIRST),
+    ]
+    overall = []
+    for cond, text in ((CONDITIONS[1], "at once"), (CONDITIONS[2], "in 3 rounds")):
+        r = ratios.get(cond, [])
+        if r:
+            overall.append(
+                f"{text}, median {np.median(r):.2f}×, worst {max(r):.2f}×, "
+                f"{sum(x <= 1.5 for x in r)} of {len(r)} cells within 1.5×"
+            )
+    return [
+        "**Without ground truth: candidates on the estimates.** Every session's odometry starts "
+        "at its reference's first pose (known starts, as with a fix at the start), no wrong "
+        "matches; candidates on the references, or on the drifted estimates (γ inflated 2×, "
+        "pairs between sessions only where they share a frame) all at once or in 3 rounds "
+        "(`ev.FleetRounds`: each round chosen on the estimates the matches before it corrected), "
+        "the same total budget. Cells: the median joint ATE in metres over the seeds [min–max] "
+        "and, on the estimates, its ratio to the same rule's on the references.",
+        "",
+        *known,
+        "",
+        "Estimates over references: " + "; ".join(overall) + ".",
+        "",
+        "With unknown starts (only the first session's known), the estimates of two sessions "
+        "share no frame before a match between them, which place recognition has to find: the "
+        "default sampler in 3 rounds finds pairs within sessions only, and the other sessions "
+        "stay where their own frames put them (ratio to the same on the references):",
+        "",
+        *unknown,
+        "",
+    ]
+
+
 def section(results: ev.FleetResults, budgets: list[int], command: str) -> str:
-    summary = results.summary()
+    estimate = estimate_tables(results, budgets)
     seeds = sorted({r["seed"] for r in results.rows})
     runs = [r for r in results.rows if r["sampler"] != "odometry"]
     minutes = sum(r["seconds"] for r in results.rows) / 60
+    results = first_part(results)
+    summary = results.summary()
     lines = [
         "## Do the samples make better maps? The fleet case",
         "",
@@ -261,6 +427,7 @@ def section(results: ev.FleetResults, budgets: list[int], command: str) -> str:
         "",
         *relative(results, budgets, "inter"),
         "",
+        *estimate,
         "Per condition and sampler, with the sessions' own ATEs and the matches within and "
         "between sessions: "
         "[benches/fleet_map_eval/summary.csv](benches/fleet_map_eval/summary.csv).",

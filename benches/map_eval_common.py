@@ -57,6 +57,12 @@ def appender(path: Path, columns: Sequence[str]) -> Callable[[dict], None]:
     return write
 
 
+def _header(path: Path) -> list[str]:
+    """The header of the CSV file ``path``."""
+    with open(path, newline="") as f:
+        return next(csv.reader(f), [])
+
+
 def read_rows(path: Path, results_class: Any) -> list[dict]:
     """The rows of ``path`` (``results_class.from_csv``); none when it does not exist."""
     if not path.exists():
@@ -81,15 +87,18 @@ class Runs:
         results_class: Any,
         columns: Sequence[str],
         block_key: Callable[[dict], tuple],
+        odometry_key: Callable[[dict], tuple] = lambda r: (r["dataset"], int(r["seed"])),
     ) -> None:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         self.name = name
         self.rows = read_rows(out / "rows.csv", results_class)
+        if self.rows and _header(out / "rows.csv") != list(columns):
+            # Rows of an older header: rewritten with today's columns (their defaults filled
+            # in by the reader), so that the new rows append below the right header.
+            results_class(self.rows).to_csv(out / "rows.csv")
         self.done = {block_key(r) for r in self.rows}
-        self.odometry_done = {
-            (r["dataset"], int(r["seed"])) for r in self.rows if r["sampler"] == "odometry"
-        }
+        self.odometry_done = {odometry_key(r) for r in self.rows if r["sampler"] == "odometry"}
         self.write = appender(out / "rows.csv", columns)
         self.budgets = [int(b) for b in args.budgets.split(",")]
         self.started = time.perf_counter()
@@ -103,23 +112,27 @@ class Runs:
         seed: int,
         outlier_rate: float,
         what: str = "",
+        odometry: tuple | None = None,
+        budgets: list[int] | None = None,
         **options: Any,
     ) -> None:
         """Runs ``evaluate(reference, **options)`` on one dataset, seed and outlier rate at
-        every budget, its rows appended as they come (the odometry alone once per dataset and
-        seed), and says how long it took (``what`` names the block further)."""
+        every budget (``budgets``, default ``--budgets``), its rows appended as they come (the
+        odometry alone once per ``odometry`` key, default the dataset and seed), and says how
+        long it took (``what`` names the block further)."""
         start = time.perf_counter()
+        key = odometry or (dataset, seed)
         results = evaluate(
             reference,
-            budgets=self.budgets,
+            budgets=budgets or self.budgets,
             seeds=[seed],
             outlier_rates=(outlier_rate,),
             dataset=dataset,
-            include_odometry=(dataset, seed) not in self.odometry_done,
+            include_odometry=key not in self.odometry_done,
             progress=self.write,
             **options,
         )
-        self.odometry_done.add((dataset, seed))
+        self.odometry_done.add(key)
         print(
             f"{self.name}: {dataset} seed {seed} outliers {outlier_rate}{what}: "
             f"{len(results.rows)} runs in {time.perf_counter() - start:.0f} s "

@@ -419,7 +419,7 @@ def test_loops_eval_fleet_command(tmp_path):
     assert "closest-first" in done.stdout and "inter" in done.stdout
     # Options a fleet does not take: one line, exit code 2.
     for extra, message in (
-        (["--on", "estimate"], "--fleet chooses candidates on the references"),
+        (["--source", "detections"], "not with --source detections"),
         (["--odometry", files[0]], "--fleet takes no --odometry"),
     ):
         bad = subprocess.run(
@@ -427,6 +427,17 @@ def test_loops_eval_fleet_command(tmp_path):
         )
         assert bad.returncode == 2 and message in bad.stderr
         assert len(bad.stderr.strip().splitlines()) == 1
+    # On the estimates, in rounds, every start known.
+    rounds = subprocess.run(
+        [*cmd[:-1], str(tmp_path / "r"), "--on", "both", "--rounds", "2", "--known-starts"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert rounds.returncode == 0, rounds.stderr
+    rows = ev.FleetResults.from_csv(tmp_path / "r" / "results.csv").rows
+    conditions = {(r["starts"], r["on"], r["rounds"]) for r in rows if r["sampler"] != "odometry"}
+    assert conditions == {("known", "reference", 1), ("known", "estimate", 2)}
     same = subprocess.run(
         [*cmd[:4], files[0], files[0], *cmd[4 + len(files) : -1], str(tmp_path / "y")],
         capture_output=True,
@@ -454,3 +465,178 @@ def test_mulran_kaist_drives_as_a_fleet(data_dir):
     # The two drives cover the same campus: hundreds of keyframe pairs between them.
     assert merged.inter_pairs > 300
     assert merged.ate_m < 0.1 * alone.ate_m and merged.inter_m < 0.1 * alone.inter_m
+
+
+# ---------------------------------------------------------------------------------------------
+# Candidates in rounds on the sessions' estimates
+# ---------------------------------------------------------------------------------------------
+
+
+def pair_set(chosen: tuple[np.ndarray, ...]) -> set[tuple[int, int, int, int]]:
+    return set(zip(*(x.tolist() for x in chosen), strict=True))
+
+
+def drifted_estimates(seed: int = 0) -> tuple[dict[str, ev.Poses], list[ev.Poses]]:
+    """:func:`three_sessions` and their odometry's estimates, drifted by a heading bias, all
+    starting at their references' first poses (one frame)."""
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(
+        refs,
+        seed=seed,
+        drift=ev.DriftModel(heading_bias_rad_per_m=2e-3),
+        known_starts=True,
+    )
+    return refs, [odos[n].estimate for n in refs]
+
+
+def test_fleet_rounds_choose_on_the_estimates_they_are_given():
+    """A round's pairs move when the estimates move: on drifted estimates most of them are not
+    the pairs the references give; pairs join two sessions only where they share a frame."""
+    refs, drifted = drifted_estimates()
+    on_refs = [refs[n] for n in refs]
+    assert np.median(np.linalg.norm(drifted[2].positions - on_refs[2].positions, axis=1)) > 10
+    rule = ev.FleetRule("closest-first", 90, 5.0, on="estimate", rounds=3)
+    a = pair_set(ev.FleetRounds(rule, seed=1).choose(on_refs))
+    b = pair_set(ev.FleetRounds(rule, seed=1).choose(drifted))
+    assert len(a) == len(b) == 30
+    assert len(a & b) < 15, f"{len(a & b)} of 30 pairs the same on drifted estimates"
+    assert any(p[0] != p[2] for p in a), "no pair between sessions in one frame"
+    # Each session in a frame of its own: pairs within sessions only; two sharing one: between
+    # those two only.
+    alone = ev.FleetRounds(rule, seed=1).choose(on_refs, frames=[0, 1, 2])
+    assert len(alone[0]) and (alone[0] == alone[2]).all()
+    two = pair_set(ev.FleetRounds(rule, seed=1).choose(on_refs, frames=[5, 5, 7]))
+    assert {(p[0], p[2]) for p in two if p[0] != p[2]} == {(0, 1)}
+    # Pairs are (session_a, i, session_b, j): session_a <= session_b, i < j within a session,
+    # indices within their sessions.
+    for sa, i, sb, j in a | b:
+        assert sa <= sb and (sa < sb or i < j)
+        assert 0 <= i < len(on_refs[sa]) and 0 <= j < len(on_refs[sb])
+
+
+def test_fleet_rounds_are_seeded_never_exceed_the_budget_nor_repeat_a_pair():
+    """The same seed and estimates give the same rounds; across rounds on moving estimates no
+    pair comes twice and the pairs never exceed the budget, which the rounds spend; gamma's
+    inflation shrinks as the estimates settle."""
+    refs, drifted = drifted_estimates()
+    on_refs = [refs[n] for n in refs]
+    rule = ev.FleetRule("closest-first", 100, 5.0, on="estimate", rounds=4)
+    # Arrays of matrices are sessions too.
+    assert pair_set(ev.FleetRounds(rule, seed=0).choose([p.matrices for p in on_refs])) == (
+        pair_set(ev.FleetRounds(rule, seed=0).choose(on_refs))
+    )
+
+    def drive(seed: int) -> tuple[list[set], ev.FleetRounds]:
+        rounds, estimates, chosen = ev.FleetRounds(rule, seed=seed), drifted, []
+        while not rounds.done:
+            chosen.append(pair_set(rounds.choose(estimates)))
+            rounds.update(estimates, on_refs)
+            estimates = on_refs
+        return chosen, rounds
+
+    first, rounds = drive(3)
+    again, _ = drive(3)
+    assert first == again
+    assert first != drive(4)[0]
+    assert [len(c) for c in first] == [25, 25, 25, 25]
+    union = set().union(*first)
+    assert len(union) == sum(len(c) for c in first) == rounds.tried == 100
+    assert rounds.round == 4 and rounds.gamma_inflation == 1.0
+    assert all(len(x) == 0 for x in rounds.choose(on_refs))  # done: nothing more
+    # A budget above the pairs there are: every round offers only pairs not tried before.
+    small = ev.FleetRule("closest-first", 100000, 5.0, on="estimate", rounds=3)
+    rounds, seen, total = ev.FleetRounds(small, seed=0), set(), 0
+    while not rounds.done:
+        new = pair_set(rounds.choose(on_refs))
+        assert not new & seen
+        seen |= new
+        total += len(new)
+    assert total == len(seen) == rounds.tried <= 100000
+
+
+def test_fleet_rounds_check_their_sessions():
+    """Bad input is one line naming the session: an empty session, sessions of another number
+    or size than the first round's, frames of another length."""
+    refs, drifted = drifted_estimates()
+    rule = ev.FleetRule("closest-first", 30, 5.0, on="estimate", rounds=3)
+    empty = np.zeros((0, 3, 3))
+    cases = [
+        (lambda r: r.choose([drifted[0], empty, drifted[2]]), "session 1 has no pose"),
+        (lambda r: r.choose([drifted[0], drifted[1], np.zeros((5, 4))]), "session 2: "),
+        (lambda r: r.choose([]), "no session"),
+        (lambda r: r.choose(drifted, frames=[0, 0]), "session 2"),
+    ]
+    for call, text in cases:
+        with pytest.raises(il.InvalidParameterError, match=text) as caught:
+            call(ev.FleetRounds(rule, seed=0))
+        assert len(str(caught.value).splitlines()) == 1
+    rounds = ev.FleetRounds(rule, seed=0)
+    rounds.choose(drifted)
+    for call, text in [
+        (lambda: rounds.choose(drifted[:2]), "session 2 is missing"),
+        (lambda: rounds.choose([*drifted, drifted[0]]), "session 3 is new"),
+        (lambda: rounds.choose([drifted[0], drifted[1].take(range(10)), drifted[2]]), "session 1"),
+        (lambda: rounds.update(drifted, drifted[:2]), "session 2 is missing"),
+    ]:
+        with pytest.raises(il.InvalidParameterError, match=text) as caught:
+            call()
+        assert len(str(caught.value).splitlines()) == 1
+    with pytest.raises(il.InvalidParameterError, match='on="estimate"'):
+        ev.FleetRounds(ev.FleetRule("closest-first", 30, 5.0), seed=0)
+    with pytest.raises(il.InvalidParameterError, match="rounds = 2"):
+        ev.FleetRule("closest-first", 30, 5.0, rounds=2)
+
+
+def test_old_fleet_rows_read_as_candidates_on_the_references(tmp_path):
+    """Rows written before the starts, on and rounds columns read as what they were: unknown
+    starts, candidates on the references, one round."""
+    old = [c for c in ev.FLEET_COLUMNS if c not in ("starts", "on", "rounds")]
+    row = {c: 0 for c in old} | {"dataset": "d", "sampler": "one", "between_only": "False"}
+    path = tmp_path / "old.csv"
+    path.write_text(",".join(old) + "\n" + ",".join(str(row[c]) for c in old) + "\n")
+    (read,) = ev.FleetResults.from_csv(path).rows
+    assert (read["starts"], read["on"], read["rounds"]) == ("unknown", "reference", 1)
+
+
+@needs_gtsam
+def test_fleet_rounds_in_the_evaluation_match_more_of_their_candidates(tmp_path):
+    """On drifted estimates with known starts, later rounds choose on the corrected estimates:
+    more of the same budget are revisits the verifier accepts, and the map is no worse than
+    with all of them chosen at once. With unknown starts nothing ties the sessions: no pair
+    between them. The grid's rows say where and in how many rounds, and survive CSV."""
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(
+        refs, seed=0, drift=ev.DriftModel(heading_bias_rad_per_m=1e-3), known_starts=True
+    )
+    ate, matched = {}, {}
+    for rounds in (1, 3):
+        rule = ev.FleetRule("closest-first", 60, 5.0, on="estimate", rounds=rounds)
+        estimates, matches, pairs, _ = ev.evaluate_fleet_one(
+            refs, odos, rule, seed=0, known_starts=True
+        )
+        assert matches is not None and len(pairs[0]) <= 60
+        ate[rounds] = ev.fleet_errors(refs, estimates, overlap_m=5.0).ate_m
+        matched[rounds] = len(matches)
+    assert matched[3] > matched[1], matched
+    assert ate[3] <= ate[1] * 1.05, ate
+    unknown = ev.simulate_fleet_odometry(refs, seed=0)
+    rule = ev.FleetRule("closest-first", 60, 5.0, on="estimate", rounds=3)
+    _, _, (i, j), placed = ev.evaluate_fleet_one(refs, unknown, rule, seed=0)
+    within, between = split(i, j, starts_of(refs))
+    assert within.all() and placed == 1
+    results = ev.evaluate_fleet(
+        refs,
+        gamma=5.0,
+        samplers=["closest-first"],
+        budgets=[30],
+        seeds=[0],
+        between_only=(False,),
+        on=("reference", "estimate"),
+        rounds=2,
+        known_starts=True,
+    )
+    conditions = [(r["starts"], r["on"], r["rounds"]) for r in results.rows]
+    assert conditions == [("known", "", 0), ("known", "reference", 1), ("known", "estimate", 2)]
+    results.to_csv(tmp_path / "rows.csv")
+    again = ev.FleetResults.from_csv(tmp_path / "rows.csv").rows
+    assert again == [{k: r[k] for k in ev.FLEET_COLUMNS} for r in results.rows]

@@ -28,6 +28,7 @@ The fleet case -- several sessions in one frame, each with its own odometry and 
 start, candidates from :func:`~inexact_loops.sample_fleet` (within and between sessions, or
 between only), a multi-session GTSAM graph, the joint and inter-session errors -- is
 :func:`evaluate_fleet` (``loops-eval --fleet``), with :func:`evaluate_fleet_one`,
+:class:`FleetRounds` (candidates in rounds on the sessions' estimates),
 :func:`optimize_fleet`, :func:`fleet_errors` and :func:`plot_fleet_error_vs_matches`; its
 method is in the docstring of ``inexact_loops.evaluate._fleet``.
 
@@ -63,6 +64,7 @@ from ._fleet import (
     SESSION_COLUMNS,
     FleetErrors,
     FleetResults,
+    FleetRounds,
     FleetRule,
     choose_fleet_candidates,
     evaluate_fleet,
@@ -98,6 +100,7 @@ __all__ = [
     "DriftModel",
     "FleetErrors",
     "FleetResults",
+    "FleetRounds",
     "FleetRule",
     "Matches",
     "Odometry",

@@ -86,17 +86,7 @@ class CandidateRule:
             raise InvalidParameterError(
                 f"CandidateRule: source {self.source!r}: exact or detections"
             )
-        if self.on not in ("reference", "estimate"):
-            raise InvalidParameterError(f"CandidateRule: on {self.on!r}: reference or estimate")
-        if not (math.isfinite(self.gamma_inflation) and self.gamma_inflation >= 1):
-            raise InvalidParameterError(
-                f"CandidateRule: gamma_inflation = {self.gamma_inflation} must be >= 1"
-            )
-        if self.rounds < 1 or (self.rounds > 1 and self.on != "estimate"):
-            raise InvalidParameterError(
-                f"CandidateRule: rounds = {self.rounds}: at least 1, and more only with "
-                'on="estimate"'
-            )
+        check_on("CandidateRule", self.on, self.gamma_inflation, self.rounds)
 
     @property
     def is_baseline(self) -> bool:
@@ -116,6 +106,19 @@ def check_rule(kind: str, sampler: str, budget: int, gamma: float) -> None:
         raise InvalidParameterError(f"{kind}: budget = {budget} must be >= 1")
     if not (math.isfinite(gamma) and gamma > 0):
         raise InvalidParameterError(f"{kind}: gamma = {gamma} must be > 0")
+
+
+def check_on(kind: str, on: str, gamma_inflation: float, rounds: int) -> None:
+    """The checks a candidate rule of either kind (``kind``, its class's name) makes of where it
+    chooses, its inflation of gamma and its rounds."""
+    if on not in ("reference", "estimate"):
+        raise InvalidParameterError(f"{kind}: on {on!r}: reference or estimate")
+    if not (math.isfinite(gamma_inflation) and gamma_inflation >= 1):
+        raise InvalidParameterError(f"{kind}: gamma_inflation = {gamma_inflation} must be >= 1")
+    if rounds < 1 or (rounds > 1 and on != "estimate"):
+        raise InvalidParameterError(
+            f'{kind}: rounds = {rounds}: at least 1, and more only with on="estimate"'
+        )
 
 
 def choose_candidates(
@@ -154,7 +157,69 @@ def choose_candidates(
     return np.minimum(i, j), np.maximum(i, j)
 
 
-class Rounds:
+class _RoundsRule:
+    """The rule of candidates in rounds, whatever a pair is: the budget's shares, the rounds'
+    seeds, the pairs already tried and the inflation of gamma. :class:`Rounds` (one
+    trajectory) and :class:`~inexact_loops.evaluate.FleetRounds` (a fleet) are this rule with
+    their own way of choosing, so that both spend a budget alike.
+
+    The budget is spent in ``rounds`` rounds of equal shares (the last takes what the others
+    left). Round k asks its sampler, with seed ``seed + k``, for its share plus the pairs
+    already tried, leaves those out, and keeps the share by a seeded draw. The inflation of
+    gamma starts at ``gamma_inflation`` and, after each round, is ``1 + min(gamma_inflation - 1,
+    c / gamma)``, with c the median distance (metres) the last optimisation moved the poses.
+    """
+
+    def __init__(
+        self, *, budget: int, rounds: int, gamma: float, gamma_inflation: float, seed: int
+    ) -> None:
+        self._budget, self._rounds, self._gamma = int(budget), int(rounds), float(gamma)
+        self._top = float(gamma_inflation) - 1.0
+        #: The first round's seed.
+        self.seed = int(seed)
+        #: Rounds chosen so far.
+        self.round = 0
+        #: The inflation of gamma the next round uses.
+        self.gamma_inflation = float(gamma_inflation)
+        self._tried: set[tuple[int, ...]] = set()
+
+    @property
+    def done(self) -> bool:
+        """Whether every round is chosen (or the budget is spent)."""
+        return self.round >= self._rounds or len(self._tried) >= self._budget
+
+    @property
+    def tried(self) -> int:
+        """Pairs chosen so far."""
+        return len(self._tried)
+
+    def _next_round(self) -> tuple[int, int]:
+        """The next round's share of the budget and its seed; the sampler is asked for the
+        share plus :attr:`tried` pairs."""
+        left = self._budget - len(self._tried)
+        share = left if self.round == self._rounds - 1 else left // (self._rounds - self.round)
+        return max(share, 1), self.seed + self.round
+
+    def _keep(self, pairs: Sequence[tuple[int, ...]], share: int, seed: int) -> np.ndarray:
+        """The indices (ascending) of the ``pairs`` the sampler returned that the round keeps:
+        those not tried before, thinned to ``share`` by a draw of ``seed``; they count as tried
+        from now on, and the round is done."""
+        fresh = np.flatnonzero(np.array([p not in self._tried for p in pairs], bool))
+        if len(fresh) > share:
+            rng = np.random.default_rng(np.random.SeedSequence([seed, 0x0C0]))
+            fresh = fresh[np.sort(rng.choice(len(fresh), share, replace=False))]
+        self._tried.update(pairs[int(k)] for k in fresh)
+        self.round += 1
+        return fresh
+
+    def _settle(self, moved_m: np.ndarray) -> None:
+        """The next round's inflation of gamma from the distances (metres) the last
+        optimisation moved the poses."""
+        c = float(np.median(moved_m)) if len(moved_m) else 0.0
+        self.gamma_inflation = 1.0 + min(self._top, c / self._gamma)
+
+
+class Rounds(_RoundsRule):
     """Candidates in rounds, for a pipeline without ground truth: choose some pairs on the
     current estimate, match them, optimise, and choose the next ones on the corrected estimate.
 
@@ -164,7 +229,16 @@ class Rounds:
     estimate settles: after each round, ``1 + min(gamma_inflation - 1, c / gamma)``, with c the
     median distance (metres) the last optimisation moved the poses. A pair is tried once: the
     pairs of earlier rounds are left out (the sampler is asked for that many more, and a seeded
-    draw keeps the round's share). Each round's sampler seed is ``seed + round``.
+    draw keeps the round's share). Each round's sampler seed is ``seed + round``. A fleet's
+    :class:`~inexact_loops.evaluate.FleetRounds` follows the same rule.
+
+    Attributes:
+        rule: the candidate rule.
+        seed: the first round's seed.
+        round: rounds chosen so far.
+        gamma_inflation: the inflation of gamma the next round uses.
+        done: whether every round is chosen (or the budget is spent).
+        tried: pairs chosen so far.
 
     Drive it with your own matcher and back end::
 
@@ -197,55 +271,30 @@ class Rounds:
     def __init__(self, rule: CandidateRule, *, seed: int) -> None:
         if rule.on != "estimate":
             raise InvalidParameterError('Rounds: the rule chooses on="estimate"')
+        super().__init__(
+            budget=rule.budget,
+            rounds=rule.rounds,
+            gamma=rule.gamma,
+            gamma_inflation=rule.gamma_inflation,
+            seed=seed,
+        )
         self.rule = rule
-        self.seed = int(seed)
-        #: Rounds chosen so far.
-        self.round = 0
-        #: The inflation of gamma the next round uses.
-        self.gamma_inflation = float(rule.gamma_inflation)
-        self._tried: set[tuple[int, int]] = set()
-
-    @property
-    def done(self) -> bool:
-        """Whether every round is chosen (or the budget is spent)."""
-        return self.round >= self.rule.rounds or len(self._tried) >= self.rule.budget
-
-    @property
-    def tried(self) -> int:
-        """Pairs chosen so far."""
-        return len(self._tried)
 
     def choose(self, estimate: Poses) -> tuple[np.ndarray, np.ndarray]:
         """The next round's pairs ``(i, j)``, i < j, chosen on ``estimate``, none of them chosen
         before; empty once :attr:`done`."""
         if self.done:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        left = self.rule.budget - len(self._tried)
-        share = (
-            left if self.round == self.rule.rounds - 1 else left // (self.rule.rounds - self.round)
-        )
-        share = max(share, 1)
-        seed = self.seed + self.round
-        ask = dataclasses.replace(self.rule, budget=share + len(self._tried), rounds=1)
+        share, seed = self._next_round()
+        ask = dataclasses.replace(self.rule, budget=share + self.tried, rounds=1)
         i, j = choose_candidates(estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation)
-        pairs = zip(i.tolist(), j.tolist(), strict=True)
-        fresh = np.array([p not in self._tried for p in pairs], bool)
-        i, j = i[fresh], j[fresh]
-        if len(i) > share:
-            rng = np.random.default_rng(np.random.SeedSequence([seed, 0x0C0]))
-            keep = np.sort(rng.choice(len(i), share, replace=False))
-            i, j = i[keep], j[keep]
-        self._tried.update(zip(i.tolist(), j.tolist(), strict=True))
-        self.round += 1
-        return i, j
+        keep = self._keep(list(zip(i.tolist(), j.tolist(), strict=True)), share, seed)
+        return i[keep], j[keep]
 
     def update(self, before: Poses, after: Poses) -> None:
         """Tells the rounds how the last optimisation moved the estimate (``before`` to
         ``after``, the same poses): the next round's gamma inflation."""
-        moved = np.linalg.norm(after.positions - before.positions, axis=1)
-        c = float(np.median(moved)) if len(moved) else 0.0
-        top = self.rule.gamma_inflation - 1.0
-        self.gamma_inflation = 1.0 + min(top, c / self.rule.gamma)
+        self._settle(np.linalg.norm(after.positions - before.positions, axis=1))
 
 
 def _concat_matches(parts: Sequence[Matches]) -> Matches:

@@ -220,10 +220,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "fleets",
         "--fleet reads each pose file as a session of one fleet (NAME=FILE names it; a file "
         "alone is named by its stem), all in one world frame, and evaluates the multi-session "
-        "map: each session's odometry starts in its own frame, only the anchor's start is known, "
-        "candidates come from sample_fleet; it writes results.csv, sessions.csv (each session's "
-        "own ATE per run), results.json and error_vs_matches.png (joint ATE and inter-session "
-        "error). Not with --odometry, --on estimate or --source detections.",
+        "map: each session's odometry starts in its own frame, only the anchor's start is known "
+        "(every session's with --known-starts), candidates come from sample_fleet, on the "
+        "references or (--on estimate, --rounds) on the sessions' estimates; it writes "
+        "results.csv, sessions.csv (each session's own ATE per run), results.json and "
+        "error_vs_matches.png (joint ATE and inter-session error). Not with --odometry or "
+        "--source detections.",
     )
     fleet.add_argument("--fleet", action="store_true", help="the pose files are a fleet's sessions")
     fleet.add_argument(
@@ -233,6 +235,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="sample the components between sessions only (on), every component (off), or both",
     )
     fleet.add_argument("--anchor", help="the session whose start is known (default: the first)")
+    fleet.add_argument(
+        "--known-starts",
+        action="store_true",
+        help="every session's odometry starts at its reference's first pose (all in the map's "
+        "frame); otherwise only the anchor's, and on the estimates two sessions have pairs "
+        "between them only once matches placed them",
+    )
     fleet.add_argument(
         "--overlap-m",
         type=float,
@@ -374,11 +383,9 @@ def main_fleet(args: Any) -> None:
         )
     if args.odometry:
         raise InvalidParameterError("--fleet takes no --odometry: each session's is simulated")
-    if args.on != "reference" or args.source != "exact":
+    if args.source != "exact":
         raise InvalidParameterError(
-            "--fleet chooses candidates on the references' exact components: not with --on "
-            "estimate or --source detections (between sessions, the estimates share no frame "
-            "before the first match)"
+            "--fleet chooses candidates on the exact components: not with --source detections"
         )
     options, axes = _read_options(args)
     dim = 3 if args.se3 else 2
@@ -395,6 +402,10 @@ def main_fleet(args: Any) -> None:
         seeds=range(args.seeds),
         between_only=both(args.between_only),
         separations=[True, False] if args.separation == "both" else [args.separation == "on"],
+        on=["reference", "estimate"] if args.on == "both" else [args.on],
+        rounds=args.rounds,
+        gamma_inflation=args.gamma_inflation,
+        known_starts=args.known_starts,
         outlier_rates=_csv_list(args.outliers, float),
         backend=BackEnd(kernel=args.kernel),
         anchor=args.anchor,
@@ -403,7 +414,8 @@ def main_fleet(args: Any) -> None:
         dataset=label,
         progress=lambda r: print(
             f"loops-eval: seed {r['seed']} {r['sampler']:>15} "
-            f"{'between' if r['between_only'] else 'all':>7} budget {r['budget']:>6}: "
+            f"{'between' if r['between_only'] else 'all':>7} {r['on'] or '-':>9} "
+            f"budget {r['budget']:>6}: "
             f"{r['matches']:>5} matches ({r['between_matches']} between sessions, "
             f"{r['wrong']} wrong), joint ATE {r['ate_m']:.3f} m, inter {r['inter_m']:.3f} m",
             file=sys.stderr,
@@ -416,6 +428,7 @@ def main_fleet(args: Any) -> None:
         lambda path: _plot_fleet_panels(results, path, title=label),
         lambda s: (
             f"{s['sampler']:>15} {'between' if s['between_only'] else 'all':>7} "
+            f"on={s['on']} rounds={s['rounds']} "
             f"sep={int(s['separation'])} out={s['outlier_rate']:.2f} "
             f"budget {s['budget']:>6}: joint ATE {s['ate_median_m']:.3f} m "
             f"[{s['ate_min_m']:.3f}, {s['ate_max_m']:.3f}], "

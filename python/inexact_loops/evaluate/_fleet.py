@@ -12,11 +12,14 @@ world frame. What a fleet adds to the single trajectory:
    weak prior at its initial guess (1 km and pi rad by default), which fixes the gauge of a
    session that no match ties to the others and is negligible against a match.
 2. **Candidates between sessions.** :func:`choose_fleet_candidates` samples the fleet's loops
-   (:func:`~inexact_loops.find_fleet_loops` on the references' positions, then
+   (:func:`~inexact_loops.find_fleet_loops` on the positions, then
    :func:`~inexact_loops.sample_fleet`): over all components within and between sessions, or
-   with ``between_only`` over the components between sessions only. Candidates are chosen on
-   the references: between sessions the estimates share no frame before the first match (that
-   is place recognition's job), so "candidates on the estimate" has no fleet counterpart here.
+   with ``between_only`` over the components between sessions only. On the references, or
+   (``FleetRule(on="estimate")``) on the sessions' estimates, with gamma inflated and in rounds
+   (:class:`FleetRounds`): only sessions that share a frame have pairs between them there --
+   before the first match between two sessions of unknown starts, their estimates share none
+   (that is place recognition's job); with ``known_starts`` every session's odometry starts at
+   its reference's first pose (a fix at the start), so that all share the map's frame.
 3. **The same verifier** (:class:`~inexact_loops.evaluate.Verifier`), on the pair's true
    relative pose, whichever sessions the poses belong to.
 4. **A multi-robot pose graph** (:func:`optimize_fleet`, GTSAM): pose j of the s-th session is
@@ -60,7 +63,14 @@ from .._core import (
 from ..errors import InvalidParameterError, LoopsWarning
 from ..table import Table
 from ._backend import BackEnd, import_gtsam, noise_model, pose_value, solve_graph
-from ._candidates import BASELINES, SAMPLERS, check_rule
+from ._candidates import (
+    BASELINES,
+    SAMPLERS,
+    _concat_matches,
+    _RoundsRule,
+    check_on,
+    check_rule,
+)
 from ._grid import json_default, medians, read_csv, summary_groups, write_csv
 from ._metrics import ape_errors
 from ._odometry import DriftModel, Odometry
@@ -69,6 +79,9 @@ from ._poses import Poses, rigid_inverse
 from ._verifier import Matches, Verifier
 
 Sessions = Mapping[str, Poses]
+#: A fleet's estimates as :class:`FleetRounds` takes them: per session a :class:`Poses` or an
+#: array (matrices or positions), in a list or by name.
+_Estimates = Sequence[Poses | np.ndarray] | Mapping[str, Poses | np.ndarray]
 
 
 def _checked(references: Sessions) -> list[tuple[str, Poses]]:
@@ -154,11 +167,13 @@ def simulate_fleet_odometry(
     seed: int,
     drift: DriftModel | None = None,
     anchor: str | None = None,
+    known_starts: bool = False,
 ) -> dict[str, Odometry]:
     """Each session's odometry simulated by ``drift`` (the default :class:`DriftModel`) with its
     own seed (drawn from ``seed`` and the session's index), starting at the identity of its own
     frame -- except the anchor's (the first session unless named), which starts at its
-    reference's first pose."""
+    reference's first pose; with ``known_starts`` every session starts at its reference's
+    first pose (all in the map's frame)."""
     items = _checked(references)
     drift = drift or DriftModel()
     a = _anchor_index([n for n, _ in items], anchor)
@@ -166,7 +181,7 @@ def simulate_fleet_odometry(
     for s, (name, poses) in enumerate(items):
         session_seed = int(np.random.SeedSequence([int(seed), s]).generate_state(1)[0])
         odometry = drift.simulate(poses, seed=session_seed)
-        if s != a:
+        if s != a and not known_starts:
             odometry = dataclasses.replace(odometry, start=np.eye(poses.dim + 1))
         out[name] = odometry
     return out
@@ -186,6 +201,14 @@ class FleetRule:
             samplers do by default; pairs of two sessions are always kept.
         between_only: spend the budget on the components between sessions only (map merging);
             otherwise one sampling covers every component, within and between sessions.
+        on: ``"reference"`` chooses on the references; ``"estimate"`` on the sessions'
+            estimates, gamma inflated to ``gamma_inflation * gamma`` (the separation stays
+            4 gamma of path), pairs between two sessions only where they share a frame
+            (:class:`FleetRounds`).
+        gamma_inflation: the factor for ``on="estimate"`` (as in
+            :class:`~inexact_loops.evaluate.CandidateRule`).
+        rounds: for ``on="estimate"``: the budget spent in this many rounds, each chosen on the
+            estimates the matches of the rounds before corrected (:class:`FleetRounds`).
     """
 
     sampler: str
@@ -193,6 +216,9 @@ class FleetRule:
     gamma: float
     separation: bool = True
     between_only: bool = False
+    on: Literal["reference", "estimate"] = "reference"
+    gamma_inflation: float = 2.0
+    rounds: int = 1
 
     def __post_init__(self) -> None:
         # An unknown sampler is no baseline: check_rule names it.
@@ -202,30 +228,72 @@ class FleetRule:
                 "not with between_only"
             )
         check_rule("FleetRule", self.sampler, self.budget, self.gamma)
+        check_on("FleetRule", self.on, self.gamma_inflation, self.rounds)
 
 
-def _fleet_loops(references: Sessions, gamma: float, separation: bool) -> FleetLoops:
-    fleet = Fleet({n: p.to_trajectory() for n, p in references.items()})
+def _fleet_loops(
+    sessions: Sessions, gamma: float, separation: bool, *, separation_gamma: float | None = None
+) -> FleetLoops:
+    """The fleet loops of ``sessions`` within ``gamma``, the separation (when asked) that of
+    ``separation_gamma`` (default: ``gamma``)."""
+    fleet = Fleet({n: p.to_trajectory() for n, p in sessions.items()})
+    within = Separation.for_gamma(separation_gamma or gamma) if separation else None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", LoopsWarning)
-        return find_fleet_loops(
-            fleet, gamma=gamma, separation=Separation.for_gamma(gamma) if separation else None
-        )
+        return find_fleet_loops(fleet, gamma=gamma, separation=within)
+
+
+def _frames_apart(sessions: Sessions, frames: Sequence[int], gap_m: float) -> dict[str, Poses]:
+    """``sessions`` with those of different ``frames`` (a label per session) moved apart along
+    the first axis, the frames' extents more than ``gap_m`` apart, so that no pair between
+    sessions of different frames is within ``gap_m``; sessions of one frame keep their places
+    relative to each other."""
+    labels = {f: k for k, f in enumerate(dict.fromkeys(frames))}
+    if len(labels) == 1:
+        return dict(sessions)
+    first = np.concatenate([p.positions[:, 0] for p in sessions.values()])
+    step = float(first.max() - first.min()) + 2.0 * gap_m
+    out = {}
+    for (name, poses), frame in zip(sessions.items(), frames, strict=True):
+        m = poses.matrices.copy()
+        m[:, 0, poses.dim] += labels[frame] * step
+        out[name] = Poses(poses.timestamps, m)
+    return out
 
 
 def choose_fleet_candidates(
-    references: Sessions, rule: FleetRule, *, seed: int, loops: FleetLoops | None = None
+    sessions: Sessions,
+    rule: FleetRule,
+    *,
+    seed: int,
+    loops: FleetLoops | None = None,
+    gamma_inflation: float | None = None,
+    frames: Sequence[int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Candidate pairs ``(i, j)``, i < j, in *fleet indices* (the sessions' poses one after
-    another, in the order of ``references``), chosen by ``rule`` on the references' positions.
+    another, in the order of ``sessions``), chosen by ``rule`` on the sessions' positions (the
+    references, or the estimates for ``rule.on == "estimate"``: pass the poses the rule is to
+    see).
 
-    ``loops``: the references' :func:`~inexact_loops.find_fleet_loops` at ``rule.gamma`` and
-    separation, when already found (it does not depend on the sampler, budget or seed).
-    Warnings of the samplers are kept quiet: the returned count says it.
+    Loops are found within ``rule.gamma`` times the inflation (``gamma_inflation``, else
+    ``rule.gamma_inflation`` on the estimate, 1 on the references); ``frames``: a label per
+    session, sessions of different labels sharing no frame (no pair between them); default:
+    all in one frame. ``loops``: the :func:`~inexact_loops.find_fleet_loops` of these poses at
+    that gamma and separation, when already found (it does not depend on the sampler, budget
+    or seed). Warnings of the samplers are kept quiet: the returned count says it.
     """
-    _checked(references)
+    items = _checked(sessions)
     if loops is None:
-        loops = _fleet_loops(references, rule.gamma, rule.separation)
+        if gamma_inflation is None:
+            gamma_inflation = rule.gamma_inflation if rule.on == "estimate" else 1.0
+        gamma = rule.gamma * gamma_inflation
+        if frames is not None:
+            if len(frames) != len(items):
+                raise InvalidParameterError(
+                    f"choose_fleet_candidates: {len(frames)} frames for {len(items)} sessions"
+                )
+            sessions = _frames_apart(sessions, frames, gamma)
+        loops = _fleet_loops(sessions, gamma, rule.separation, separation_gamma=rule.gamma)
     empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
     if loops.loops.pair_count == 0:
         return empty
@@ -239,6 +307,184 @@ def choose_fleet_candidates(
     if i is None or j is None:
         return empty
     return np.minimum(i, j), np.maximum(i, j)
+
+
+def _session_list(
+    kind: str, sessions: Sequence[Poses | np.ndarray] | Mapping[str, Poses | np.ndarray]
+) -> list[tuple[str, Poses]]:
+    """The sessions as ``(name, poses)`` (``s0``, ``s1``, ... for a list): a :class:`Poses`
+    as it is, an array of matrices ``(n, 3, 3)`` or ``(n, 4, 4)`` or of positions ``(n, 2)``
+    (:meth:`Poses.from_positions`) on a clock of a pose a second; a one-line error naming the
+    first session that is empty or of another shape."""
+    named = (
+        list(sessions.items())
+        if isinstance(sessions, Mapping)
+        else [(f"s{k}", p) for k, p in enumerate(sessions)]
+    )
+    if not named:
+        raise InvalidParameterError(f"{kind}: no session")
+    items = []
+    for k, (name, poses) in enumerate(named):
+        if len(poses) == 0:
+            raise InvalidParameterError(f"{kind}: session {k} has no pose")
+        if not isinstance(poses, Poses):
+            a = np.asarray(poses, dtype=float)
+            clock = np.arange(len(a), dtype=float)
+            try:
+                if a.ndim == 3:
+                    poses = Poses(clock, a)
+                else:
+                    poses = Poses.from_positions(clock, a)
+            except (ValueError, InvalidParameterError) as e:
+                raise InvalidParameterError(f"{kind}: session {k}: {e}") from None
+        items.append((name, poses))
+    return _checked(dict(items))
+
+
+class FleetRounds(_RoundsRule):
+    """Candidates in rounds for a fleet, for a pipeline without ground truth: choose some pairs
+    on the sessions' current estimates, match them, optimise the multi-session graph, and choose
+    the next ones on the corrected estimates.
+
+    The rule is :class:`~inexact_loops.evaluate.Rounds`'s: the budget (``rule.budget``, over
+    the whole fleet) in ``rule.rounds`` equal shares, gamma inflated by a factor that starts at
+    ``rule.gamma_inflation`` and shrinks as the optimisation stops moving the poses (the median
+    over every pose of every session), each round's sampler seed ``seed + round``, no pair
+    twice. A round samples the estimates' fleet loops with :func:`~inexact_loops.sample_fleet`
+    (``rule.sampler``, ``rule.between_only``), as :func:`choose_fleet_candidates` does.
+
+    Sessions that do not share a frame have no pair between them: pass ``frames``, a label per
+    session (equal labels: one frame), to :meth:`choose` -- before the first match between two
+    sessions whose starts are unknown, each is in its own frame; after your back end has placed
+    them (:func:`place_sessions`), they share the anchor's. By default all share one frame.
+
+    Attributes:
+        rule: the fleet's candidate rule (``on="estimate"``).
+        seed: the first round's seed.
+        round: rounds chosen so far.
+        gamma_inflation: the inflation of gamma the next round uses.
+        done: whether every round is chosen (or the budget is spent).
+        tried: pairs chosen so far.
+
+    Drive it with your own matcher and back end::
+
+        rounds = FleetRounds(FleetRule(DEFAULT_SAMPLER, 1000, 15.0, on="estimate", rounds=3),
+                             seed=0)
+        estimates = [odometry.estimate for odometry in sessions]   # one Poses per session
+        frames = [0, 1, 2]                                  # each session in its own frame
+        while not rounds.done:
+            a, i, b, j = rounds.choose(estimates, frames=frames)   # pose i of session a ...
+            ...                                   # match them, add the loop factors
+            corrected = ...                       # optimise the multi-session graph
+            rounds.update(estimates, corrected)
+            estimates, frames = corrected, ...    # the frames your back end put them in
+
+    Example:
+        >>> import numpy as np
+        >>> from inexact_loops.evaluate import FleetRounds, FleetRule, Poses
+        >>> angle = np.linspace(0, 4 * np.pi, 200)
+        >>> lap = Poses.from_positions(np.arange(200.0), 50 * np.c_[np.cos(angle), np.sin(angle)])
+        >>> rounds = FleetRounds(FleetRule("closest-first", 30, 10.0, on="estimate", rounds=3),
+        ...                      seed=0)
+        >>> a, i, b, j = rounds.choose([lap, lap])          # two sessions in one frame
+        >>> len(a), rounds.round, bool((a != b).any())
+        (10, 1, True)
+        >>> a, i, b, j = rounds.choose([lap, lap], frames=[0, 1])   # in frames of their own
+        >>> bool((a == b).all())
+        True
+        >>> rounds.update([lap, lap], [lap, lap])           # nothing moved: gamma back to 10 m
+        >>> rounds.gamma_inflation
+        1.0
+    """
+
+    def __init__(self, rule: FleetRule, *, seed: int) -> None:
+        if rule.on != "estimate":
+            raise InvalidParameterError('FleetRounds: the rule chooses on="estimate"')
+        super().__init__(
+            budget=rule.budget,
+            rounds=rule.rounds,
+            gamma=rule.gamma,
+            gamma_inflation=rule.gamma_inflation,
+            seed=seed,
+        )
+        self.rule = rule
+        self._sizes: list[int] | None = None
+
+    def _sessions(self, kind: str, estimates: _Estimates) -> dict[str, Poses]:
+        """``estimates`` checked against the sessions of the first round (their number and
+        sizes): a one-line error naming the first session that differs."""
+        items = _session_list(kind, estimates)
+        sizes = [len(p) for _, p in items]
+        if self._sizes is None:
+            self._sizes = sizes
+        for k in range(max(len(sizes), len(self._sizes))):
+            if k >= len(sizes) or k >= len(self._sizes):
+                raise InvalidParameterError(
+                    f"{kind}: {len(sizes)} sessions, the rounds began with {len(self._sizes)} "
+                    f"(session {k} is {'missing' if k >= len(sizes) else 'new'})"
+                )
+            if sizes[k] != self._sizes[k]:
+                raise InvalidParameterError(
+                    f"{kind}: session {k} has {sizes[k]} poses, the rounds began with "
+                    f"{self._sizes[k]}"
+                )
+        return dict(items)
+
+    def choose(
+        self, estimates: _Estimates, *, frames: Sequence[int] | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The next round's pairs ``(session_a, i, session_b, j)`` -- pose i of the
+        session_a-th session and pose j of the session_b-th, session_a <= session_b and i < j
+        within a session -- chosen on ``estimates`` (per session, in the order of the first
+        round, a :class:`Poses`, or an array of its matrices ``(n, 3, 3)`` / ``(n, 4, 4)`` or
+        of its positions ``(n, 2)``, on a clock of a pose a second), none of them chosen
+        before; empty once :attr:`done`.
+
+        ``frames``: a label per session; only sessions of equal labels (one frame) have pairs
+        between them. Default: all in one frame.
+
+        Raises:
+            InvalidParameterError: no session, an empty session, sessions of another number or
+                size than the first round's, ``frames`` of another length (each naming the
+                session index).
+        """
+        sessions = self._sessions("FleetRounds.choose", estimates)
+        if frames is not None and len(frames) != len(sessions):
+            raise InvalidParameterError(
+                f"FleetRounds.choose: {len(frames)} frames for {len(sessions)} sessions "
+                f"(session {min(len(frames), len(sessions))} has "
+                f"{'none' if len(frames) < len(sessions) else 'no estimate'})"
+            )
+        empty = np.zeros(0, np.int64)
+        if self.done:
+            return empty, empty, empty, empty
+        share, seed = self._next_round()
+        ask = dataclasses.replace(self.rule, budget=share + self.tried, rounds=1)
+        i, j = choose_fleet_candidates(
+            sessions, ask, seed=seed, gamma_inflation=self.gamma_inflation, frames=frames
+        )
+        starts = _starts(list(sessions.items()))
+        a = np.searchsorted(starts, i, side="right") - 1
+        b = np.searchsorted(starts, j, side="right") - 1
+        i, j = i - starts[a], j - starts[b]
+        pairs = list(zip(a.tolist(), i.tolist(), b.tolist(), j.tolist(), strict=True))
+        keep = self._keep(pairs, share, seed)
+        return a[keep], i[keep], b[keep], j[keep]
+
+    def update(self, before: _Estimates, after: _Estimates) -> None:
+        """Tells the rounds how the last optimisation moved the estimates (``before`` to
+        ``after``, the same sessions and poses): the next round's gamma inflation.
+
+        Raises:
+            InvalidParameterError: as :meth:`choose`, for either.
+        """
+        old = self._sessions("FleetRounds.update", before)
+        new = self._sessions("FleetRounds.update", after)
+        moved = [
+            np.linalg.norm(q.positions - p.positions, axis=1)
+            for p, q in zip(old.values(), new.values(), strict=True)
+        ]
+        self._settle(np.concatenate(moved))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -491,6 +737,9 @@ FLEET_COLUMNS: tuple[str, ...] = (
     "sampler",
     "between_only",
     "separation",
+    "starts",
+    "on",
+    "rounds",
     "outlier_rate",
     "budget",
     "seed",
@@ -517,7 +766,10 @@ class FleetResults:
     """Rows of a fleet evaluation, one per run, and per run and session.
 
     Columns (:data:`FLEET_COLUMNS`): ``dataset``; ``sampler`` (``"odometry"`` for the odometry
-    alone); ``between_only`` and ``separation`` (bool); ``outlier_rate``; ``budget``; ``seed``;
+    alone); ``between_only`` and ``separation`` (bool); ``starts`` (``unknown``: only the
+    anchor's, or ``known``: every session's); ``on`` (``reference`` / ``estimate``, empty for
+    the odometry alone); ``rounds`` (the candidates' rounds, 0 for the odometry alone);
+    ``outlier_rate``; ``budget``; ``seed``;
     ``candidates`` and ``between_candidates`` (pairs the sampler returned, of them between two
     sessions); ``matches`` and ``between_matches`` (accepted by the verifier); ``wrong`` (of the
     matches); ``placed`` (sessions that matches placed in the initial guess, the anchor
@@ -538,11 +790,12 @@ class FleetResults:
         return Table({c: np.asarray([r[c] for r in self.rows]) for c in FLEET_COLUMNS})
 
     def summary(self) -> list[dict[str, Any]]:
-        """Per (dataset, sampler, between_only, separation, outlier_rate, budget): the number of
+        """Per (dataset, sampler, between_only, separation, starts, on, rounds, outlier_rate,
+        budget): the number of
         seeds, the median joint ATE with its spread (quartiles, min, max), the median
         inter-session error with its quartiles, the median of the sessions' own ATEs, and the
         median candidates and matches (all and between sessions)."""
-        keys = ("dataset", "sampler", "between_only", "separation", "outlier_rate", "budget")
+        keys = FLEET_COLUMNS[: FLEET_COLUMNS.index("budget") + 1]
         out = []
         for group, rows in summary_groups(self.rows, keys):
             inter = np.array([r["inter_m"] for r in rows])
@@ -597,10 +850,10 @@ class FleetResults:
     @classmethod
     def from_csv(cls, path: str | PathLike[str]) -> FleetResults:
         """Reads rows written by :meth:`to_csv` (not the per-session rows)."""
-        ints = {"budget", "seed", "candidates", "between_candidates", "matches"}
+        ints = {"budget", "seed", "candidates", "between_candidates", "matches", "rounds"}
         ints |= {"between_matches", "wrong", "placed"}
         bools = {"between_only", "separation"}
-        floats = set(FLEET_COLUMNS) - ints - bools - {"dataset", "sampler"}
+        floats = set(FLEET_COLUMNS) - ints - bools - {"dataset", "sampler", "starts", "on"}
         return cls(read_csv(path, FLEET_COLUMNS, ints=ints, floats=floats, bools=bools))
 
     def extend(self, other: FleetResults) -> None:
@@ -630,9 +883,14 @@ def evaluate_fleet_one(
     backend: BackEnd | None = None,
     anchor: str | None = None,
     loops: FleetLoops | None = None,
+    known_starts: bool = False,
 ) -> tuple[list[Poses], Matches | None, tuple[np.ndarray, np.ndarray], int]:
-    """One fleet run: candidates by ``rule`` (``None``: the odometry alone) on the references,
-    verified against them, and the multi-session pose graph optimised.
+    """One fleet run: candidates by ``rule`` (``None``: the odometry alone) on the references
+    or the estimates, verified against the references, and the multi-session pose graph
+    optimised; on the estimates in ``rule.rounds`` rounds (:class:`FleetRounds`), each verified
+    and optimised before the next. There, sessions share a frame once matches placed them
+    (:func:`place_sessions`), or all from the start with ``known_starts`` (the odometries start
+    at the references' first poses: :func:`simulate_fleet_odometry`).
 
     Returns the optimised poses of each session (in the order of ``references``), the matches
     and the candidate pairs (fleet indices), and the number of sessions placed by matches (the
@@ -655,31 +913,65 @@ def evaluate_fleet_one(
     if rule is None:
         return optimize_fleet(odos, None, backend, anchor=a), None, empty, 1
     verifier = verifier or Verifier()
+    joint = _joint(items)
+    starts = _starts(items)
+    if rule.on == "estimate":
+        rounds = FleetRounds(rule, seed=seed)
+        estimates = [o.estimate for o in odos]
+        parts: list[Matches] = []
+        chosen: list[tuple[np.ndarray, np.ndarray]] = []
+        placed = [k == a for k in range(len(odos))]
+        while not rounds.done:
+            frames = None if known_starts else [0 if p else k + 1 for k, p in enumerate(placed)]
+            sa, pi, sb, pj = rounds.choose(estimates, frames=frames)
+            i, j = starts[sa] + pi, starts[sb] + pj
+            parts.append(verifier.verify(joint, i, j, seed=seed))
+            chosen.append((i, j))
+            matches = _concat_matches(parts)
+            _, placed = place_sessions([o.estimate for o in odos], matches, anchor=a)
+            corrected = optimize_fleet(odos, matches, backend, anchor=a)
+            rounds.update(estimates, corrected)
+            estimates = corrected
+        pairs = (np.concatenate([c[0] for c in chosen]), np.concatenate([c[1] for c in chosen]))
+        return estimates, _concat_matches(parts), pairs, int(sum(placed))
     i, j = choose_fleet_candidates(references, rule, seed=seed, loops=loops)
-    matches = verifier.verify(_joint(items), i, j, seed=seed)
+    matches = verifier.verify(joint, i, j, seed=seed)
     _, placed = place_sessions([o.estimate for o in odos], matches, anchor=a)
     return optimize_fleet(odos, matches, backend, anchor=a), matches, (i, j), int(sum(placed))
 
 
 def _fleet_grid(
     outlier_rates: Sequence[float],
+    on: Sequence[Literal["reference", "estimate"]],
     separations: Sequence[bool],
     between_only: Sequence[bool],
     samplers: Sequence[str],
     budgets: Sequence[int],
     gamma: float,
+    rounds: int,
+    gamma_inflation: float,
 ) -> Iterable[tuple[float, FleetRule]]:
     for outlier_rate in outlier_rates:
-        for separation in separations:
-            for between in between_only:
-                for name in samplers:
-                    if between and name in BASELINES:
-                        continue
-                    for budget in budgets:
-                        yield (
-                            outlier_rate,
-                            FleetRule(name, int(budget), gamma, bool(separation), bool(between)),
-                        )
+        for where in on:
+            for separation in separations:
+                for between in between_only:
+                    for name in samplers:
+                        if between and name in BASELINES:
+                            continue
+                        for budget in budgets:
+                            yield (
+                                outlier_rate,
+                                FleetRule(
+                                    name,
+                                    int(budget),
+                                    gamma,
+                                    bool(separation),
+                                    bool(between),
+                                    on=where,
+                                    gamma_inflation=gamma_inflation,
+                                    rounds=rounds if where == "estimate" else 1,
+                                ),
+                            )
 
 
 def evaluate_fleet(
@@ -692,6 +984,10 @@ def evaluate_fleet(
     seeds: Iterable[int] = range(5),
     between_only: Sequence[bool] = (False, True),
     separations: Sequence[bool] = (True,),
+    on: Sequence[Literal["reference", "estimate"]] = ("reference",),
+    rounds: int = 1,
+    gamma_inflation: float = 2.0,
+    known_starts: bool = False,
     outlier_rates: Sequence[float] = (0.0,),
     verifier: Verifier | None = None,
     backend: BackEnd | None = None,
@@ -720,6 +1016,12 @@ def evaluate_fleet(
         between_only: ``False`` (one sampling over every component), ``True`` (the components
             between sessions only), or both.
         separations: the revisit separation within sessions: ``True``, ``False`` or both.
+        on: ``"reference"``, ``"estimate"`` or both (:class:`FleetRule`).
+        rounds, gamma_inflation: as in :class:`FleetRule` (``rounds`` for the runs on the
+            estimates).
+        known_starts: every session's simulated odometry starts at its reference's first pose
+            (all in the map's frame; :func:`simulate_fleet_odometry`); otherwise only the
+            anchor's does. Not with your own ``odometry``, whose starts are yours.
         outlier_rates: the verifier's ``outlier_rate`` values to run.
         verifier, backend: as in :func:`evaluate`.
         anchor: the session whose start is known (default: the first).
@@ -749,6 +1051,12 @@ def evaluate_fleet(
         else (DriftModel() if odometry is None else None)
     )
     a = _anchor_index(names, anchor)
+    if known_starts and drift is None:
+        raise InvalidParameterError(
+            "evaluate_fleet: known_starts simulates the odometry; a given odometry's starts "
+            "are its own"
+        )
+    starts_label = "known" if known_starts else "unknown"
     pairs = _inter_pairs(items, overlap)
     starts = _starts(items)
     results = FleetResults(
@@ -761,6 +1069,8 @@ def evaluate_fleet(
             "overlap_m": overlap,
             "inter_pairs": len(pairs[0]),
             "odometry": dataclasses.asdict(drift) if drift else "given",
+            "starts": starts_label,
+            "gamma_inflation": gamma_inflation,
             "verifier": dataclasses.asdict(verifier),
             "backend": dataclasses.asdict(backend),
         }
@@ -787,6 +1097,9 @@ def evaluate_fleet(
             "sampler": rule.sampler if rule else "odometry",
             "between_only": rule.between_only if rule else False,
             "separation": rule.separation if rule else False,
+            "starts": starts_label,
+            "on": rule.on if rule else "",
+            "rounds": rule.rounds if rule else 0,
             "outlier_rate": float(outlier_rate),
             "budget": rule.budget if rule else 0,
             "candidates": len(candidates[0]),
@@ -823,7 +1136,9 @@ def evaluate_fleet(
 
     for seed in seeds:
         if drift is not None:
-            odos = simulate_fleet_odometry(refs, seed=int(seed), drift=drift, anchor=names[a])
+            odos = simulate_fleet_odometry(
+                refs, seed=int(seed), drift=drift, anchor=names[a], known_starts=known_starts
+            )
         else:
             assert isinstance(odometry, Mapping)
             odos = dict(odometry)
@@ -844,7 +1159,15 @@ def evaluate_fleet(
             empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
             record(base, None, 0.0, empty, None, 1, odo_errors, start)
         for outlier_rate, rule in _fleet_grid(
-            outlier_rates, separations, between_only, samplers, budgets, gamma
+            outlier_rates,
+            on,
+            separations,
+            between_only,
+            samplers,
+            budgets,
+            gamma,
+            rounds,
+            gamma_inflation,
         ):
             start = time.perf_counter()
             estimates, matches, (i, j), placed = evaluate_fleet_one(
@@ -855,7 +1178,8 @@ def evaluate_fleet(
                 verifier=dataclasses.replace(verifier, outlier_rate=outlier_rate),
                 backend=backend,
                 anchor=names[a],
-                loops=loops_for(rule.separation),
+                loops=loops_for(rule.separation) if rule.on == "reference" else None,
+                known_starts=known_starts,
             )
             assert matches is not None
             errors = fleet_errors(refs, estimates, overlap_m=overlap, pairs=pairs)

@@ -156,7 +156,12 @@ def write_csv(
 
 
 #: Values of columns that older result files lack.
-_MISSING: Mapping[str, str] = {"verifier": "distance-aware", "rounds": "1"}
+_MISSING: Mapping[str, str] = {
+    "verifier": "distance-aware",
+    "rounds": "1",
+    "starts": "unknown",
+    "on": "reference",
+}
 
 
 def read_csv(
@@ -177,7 +182,7 @@ def read_csv(
             row: dict[str, Any] = {}
             for c in columns:
                 # Files written before a column existed: its value for them.
-                v = raw.get(c) or _MISSING.get(c, "")
+                v = raw[c] if c in raw else _MISSING.get(c, "")
                 if c in ints:
                     row[c] = int(v)
                 elif c in floats:
