@@ -457,7 +457,7 @@ impl SublevelSet {
 }
 
 /// The runs of scanned rows, with their closest columns.
-#[derive(Default)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct Block {
     pub(crate) runs: Vec<Run>,
     pub(crate) closest: Vec<u32>,
@@ -654,6 +654,16 @@ fn rounding_margin(total: f64, largest_step: f64, scale: f64) -> f64 {
     64.0 * f64::EPSILON * (total + largest_step + scale + 1.0)
 }
 
+/// The reaches `(reach, inside_reach)` of a walk of the hierarchy centred on a pose within
+/// `radius` of every row it serves, with `margin` the rounding margin of those rows: a pose
+/// farther than `reach` from the centre is farther than γ from every row, and one within
+/// `inside_reach` is within γ of every row, with room for the rounding of the three distances of
+/// the triangle inequality. The one rule for the batch's blocks and the online engine's carried
+/// stretches.
+pub(crate) fn walk_reach(gamma: f64, radius: f64, margin: f64) -> (f64, f64) {
+    (gamma + radius + 2.0 * margin, gamma - radius - 3.0 * margin)
+}
+
 /// Where a row scan finds the stretches of the path that may come within γ.
 #[derive(Clone, Copy)]
 pub(crate) enum Pruner<'a> {
@@ -694,10 +704,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
     pub(crate) fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) -> Result<()> {
         let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
         let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
-        let margin = self.arc.margin;
-        // A pose within `inside_reach` of the centre is within γ of every row, with room for the
-        // rounding of the three distances of the triangle inequality.
-        let reach = (self.gamma + radius + 2.0 * margin, self.gamma - radius - 3.0 * margin);
+        let reach = walk_reach(self.gamma, radius, self.arc.margin);
         // The first columns grow with the row, so the block's first row has the smallest.
         let from = self.first_column(rows.start);
         match self.pruner {
