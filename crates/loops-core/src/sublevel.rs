@@ -930,6 +930,22 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         self.closest_of(i, lo.min(guess), hi.max(guess))
     }
 
+    /// The closest column of the run `a..=b` of row `i` (columns j ≥ i) of a set known whole,
+    /// unscanned (the online engine's snapshot turns its rows into the batch's), as
+    /// [`closest_of_scanned`](Self::closest_of_scanned) finds it from one distance at the run's
+    /// first column: the columns just outside the run, a − 1 and b + 1, are farther than γ (a
+    /// run ends where the set does), and bound the columns near them from below just as a
+    /// measured exit would.
+    pub(crate) fn closest_of_run(&self, i: usize, a: usize, b: usize) -> usize {
+        if a == i || b - a + 1 >= TREE_CLOSEST_LEN {
+            return self.closest_of(i, a, b);
+        }
+        let d = self.metric.distance(self.traj.point(i), self.traj.point(a));
+        let run = OpenRun::entered(a, d, b);
+        let exit = (b + 1 < self.traj.len()).then_some((b + 1, self.gamma));
+        self.closest_of_scanned(i, run, exit)
+    }
+
     /// The closest column of the run `a..=b` of row `i` ([`closest_column`]).
     fn closest_of(&self, i: usize, a: usize, b: usize) -> usize {
         let balls = match self.pruner {

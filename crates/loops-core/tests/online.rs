@@ -408,8 +408,10 @@ fn back_and_forth_on_a_line_and_repeated_circuits() {
 /// carried stretches pile up. A drive that takes every one of these ways, on the integer
 /// lattice so that many pairs lie at exactly γ: laps of a square and a parallel one exactly γ
 /// off, a stop, jumps far beyond γ and to exactly γ, slow circles whose far side is just within
-/// γ, a stay a million metres away (the margin grows tenfold) and a way back over the laps.
-/// Every row against the brute force's, and the snapshot against the batch.
+/// γ, laps of a small square within γ of each other (the run ending on the diagonal holds the
+/// last pose's point again and again), a stay a million metres away (the margin grows tenfold)
+/// and a way back over the laps. Every row, closest columns included, against the brute
+/// force's, and the snapshot against the batch.
 #[test]
 fn carried_stretches_take_every_way_and_stay_exact() {
     let gamma = 10.0;
@@ -443,6 +445,13 @@ fn carried_stretches_take_every_way_and_stay_exact() {
         let angle = std::f64::consts::TAU * k as f64 / 70.0;
         [20.0 + 4.7 * angle.cos(), 20.0 + 4.7 * angle.sin()]
     }));
+    // Laps of a square of side 4, all within γ of each other, with a stop in each: the run
+    // that ends on the diagonal holds earlier poses at the very point of the last one, and its
+    // closest column is the earliest of them.
+    for _ in 0..6 {
+        points.extend(square(4.0, 50.0, 50.0));
+        points.extend(std::iter::repeat_n([54.0, 54.0], 5));
+    }
     // A stay far away, where the rounding margin is larger, then back over the laps.
     points.extend((0..100).map(|k| [1e6 + k as f64, 1e6]));
     points.extend(square(40.0, 0.0, 10.0));

@@ -984,12 +984,20 @@ impl OnlineLoops {
         let (row_offsets, runs) = transpose_runs(n, |k| &self.runs[self.row_offsets[k]..self.row_offsets[k + 1]])?;
         let interrupt = Interrupt::current();
         with_metric!(&self.metric, m => {
+            let scanner = RowScanner {
+                traj: &self.traj,
+                metric: m,
+                arc: &self.arc,
+                pruner: Pruner::Hierarchy(&self.balls),
+                gamma: self.gamma,
+                first_columns: &[],
+                starts: &[0],
+            };
             let mut closest = try_with_capacity(runs.len(), "the closest columns of S_gamma")?;
             for i in 0..n {
                 interrupt.check()?;
                 for run in &runs[row_offsets[i]..row_offsets[i + 1]] {
-                    let span = (run.start as usize, run.end as usize);
-                    closest.push(closest_column(m, &self.traj, &self.balls, self.arc.margin, i, span) as u32);
+                    closest.push(scanner.closest_of_run(i, run.start as usize, run.end as usize) as u32);
                 }
             }
             let set = SublevelSet::from_rows(self.gamma, row_offsets, runs, closest);
