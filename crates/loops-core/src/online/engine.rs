@@ -48,7 +48,8 @@ pub type ComponentId = u32;
 ///
 /// # Cost
 /// A push costs the row's share of the batch's work: a walk of the ball hierarchy (a forest of
-/// at most log₂(n / 16) + 1 perfect trees, grown leaf by leaf like a binary counter), the
+/// at most log₂(n / 16) + 1 perfect trees, grown leaf by leaf like a binary counter), shared by
+/// the pushes within γ/4 of the pose it was centred on as a batch's block shares one, the
 /// arc-length skipping scan of the stretches it could not rule out, and for every run of the new
 /// row one closest column (O(log n) for long runs), one union with the previous row's runs and
 /// O(log n) for τ. Memory is the trajectory, 24 bytes a pose, and 12 bytes a run.
