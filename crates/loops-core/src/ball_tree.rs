@@ -174,9 +174,11 @@ impl BallTree {
     /// it with the last tree while the two are the same size, as a binary counter carries: the
     /// joined node is the one [`new`](Self::new) builds over the same poses (centre at the middle
     /// pose, radius bounded from the children's). O(1) metric evaluations amortised per pose.
-    pub(crate) fn push_leaf<M: Metric + ?Sized>(&mut self, traj: &Trajectory, metric: &M, hi: usize) {
+    /// Returns the leaf's node, for [`near_spans_under`](Self::near_spans_under).
+    pub(crate) fn push_leaf<M: Metric + ?Sized>(&mut self, traj: &Trajectory, metric: &M, hi: usize) -> u32 {
         let lo = self.covered();
         debug_assert!(lo < hi && hi <= traj.len());
+        let leaf = self.nodes.len() as u32;
         self.push_node(traj, Node::leaf(traj, metric, lo, hi));
         while let [.., left, right] = self.roots[..] {
             let (a, b) = (self.nodes[left as usize], self.nodes[right as usize]);
@@ -186,6 +188,7 @@ impl BallTree {
             self.roots.truncate(self.roots.len() - 2);
             self.push_node(traj, Node::joined(traj, metric, (&a, left), (&b, right)));
         }
+        leaf
     }
 
     /// Appends `node` as the last root, with its centre's coordinates.
@@ -344,12 +347,27 @@ impl BallTree {
     ) -> Result<()> {
         out.clear();
         let mut grown = Ok(());
-        self.walk(metric, x, from, (reach, inside_reach), |node, inside| {
-            let leaf = Leaf::of(node, inside);
-            if out.last_mut().is_none_or(|last| !last.absorb(&leaf)) && grown.is_ok() {
-                grown = try_reserve(out, 1, "the stretches of a row scan").map(|()| out.push(leaf));
-            }
-        });
+        self.walk(metric, x, from, (reach, inside_reach), |node, inside| push_merged(out, node, inside, &mut grown));
+        grown
+    }
+
+    /// [`near_spans`](Self::near_spans) under the node `root` only (the leaf just pushed, say),
+    /// appended to `out` after the stretches it holds, which end by `root`'s first pose, and
+    /// merged with them as `near_spans` merges.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) when the stretches do not fit in memory.
+    pub(crate) fn append_near_spans<M: Metric + ?Sized>(
+        &self,
+        root: u32,
+        metric: &M,
+        x: &[f64],
+        reach: (f64, f64),
+        out: &mut Vec<Leaf>,
+    ) -> Result<()> {
+        debug_assert!(out.last().is_none_or(|last| last.hi <= self.nodes[root as usize].lo));
+        let mut grown = Ok(());
+        self.walk_from(root, metric, x, 0, reach, |node, inside| push_merged(out, node, inside, &mut grown));
         grown
     }
 
@@ -497,6 +515,15 @@ impl BallTree {
                 stack.push(node.left);
             }
         }
+    }
+}
+
+/// Appends the stretch of `node` to `out`, merged into the last one when both are inside
+/// stretches that meet ([`Leaf::absorb`]); `grown` keeps the first failure to make room.
+fn push_merged(out: &mut Vec<Leaf>, node: &Node, inside: bool, grown: &mut Result<()>) {
+    let leaf = Leaf::of(node, inside);
+    if out.last_mut().is_none_or(|last| !last.absorb(&leaf)) && grown.is_ok() {
+        *grown = try_reserve(out, 1, "the stretches of a row scan").map(|()| out.push(leaf));
     }
 }
 

@@ -457,7 +457,7 @@ impl SublevelSet {
 }
 
 /// The runs of scanned rows, with their closest columns.
-#[derive(Default)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct Block {
     pub(crate) runs: Vec<Run>,
     pub(crate) closest: Vec<u32>,
@@ -654,6 +654,16 @@ fn rounding_margin(total: f64, largest_step: f64, scale: f64) -> f64 {
     64.0 * f64::EPSILON * (total + largest_step + scale + 1.0)
 }
 
+/// The reaches `(reach, inside_reach)` of a walk of the hierarchy centred on a pose within
+/// `radius` of every row it serves, with `margin` the rounding margin of those rows: a pose
+/// farther than `reach` from the centre is farther than γ from every row, and one within
+/// `inside_reach` is within γ of every row, with room for the rounding of the three distances of
+/// the triangle inequality. The one rule for the batch's blocks and the online engine's carried
+/// stretches.
+pub(crate) fn walk_reach(gamma: f64, radius: f64, margin: f64) -> (f64, f64) {
+    (gamma + radius + 2.0 * margin, gamma - radius - 3.0 * margin)
+}
+
 /// Where a row scan finds the stretches of the path that may come within γ.
 #[derive(Clone, Copy)]
 pub(crate) enum Pruner<'a> {
@@ -694,10 +704,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
     pub(crate) fn candidates_for(&self, rows: std::ops::Range<usize>, out: &mut Vec<Leaf>) -> Result<()> {
         let centre = self.traj.point(rows.start + (rows.end - rows.start) / 2);
         let radius = rows.clone().map(|i| self.metric.distance(centre, self.traj.point(i))).fold(0.0, f64::max);
-        let margin = self.arc.margin;
-        // A pose within `inside_reach` of the centre is within γ of every row, with room for the
-        // rounding of the three distances of the triangle inequality.
-        let reach = (self.gamma + radius + 2.0 * margin, self.gamma - radius - 3.0 * margin);
+        let reach = walk_reach(self.gamma, radius, self.arc.margin);
         // The first columns grow with the row, so the block's first row has the smallest.
         let from = self.first_column(rows.start);
         match self.pruner {
@@ -921,6 +928,22 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             _ => b,
         };
         self.closest_of(i, lo.min(guess), hi.max(guess))
+    }
+
+    /// The closest column of the run `a..=b` of row `i` (columns j ≥ i) of a set known whole,
+    /// unscanned (the online engine's snapshot turns its rows into the batch's), as
+    /// [`closest_of_scanned`](Self::closest_of_scanned) finds it from one distance at the run's
+    /// first column: the columns just outside the run, a − 1 and b + 1, are farther than γ (a
+    /// run ends where the set does), and bound the columns near them from below just as a
+    /// measured exit would.
+    pub(crate) fn closest_of_run(&self, i: usize, a: usize, b: usize) -> usize {
+        if a == i || b - a + 1 >= TREE_CLOSEST_LEN {
+            return self.closest_of(i, a, b);
+        }
+        let d = self.metric.distance(self.traj.point(i), self.traj.point(a));
+        let run = OpenRun::entered(a, d, b);
+        let exit = (b + 1 < self.traj.len()).then_some((b + 1, self.gamma));
+        self.closest_of_scanned(i, run, exit)
     }
 
     /// The closest column of the run `a..=b` of row `i` ([`closest_column`]).

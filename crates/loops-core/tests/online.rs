@@ -402,6 +402,79 @@ fn back_and_forth_on_a_line_and_repeated_circuits() {
     }
 }
 
+/// A push reuses the stretches of an earlier walk of the ball hierarchy while the pose stays
+/// near that walk's centre (the leaves pushed since appended, stretches found far carried by
+/// path length), and walks again when it leaves, when the rounding margin grows or when the
+/// carried stretches pile up. A drive that takes every one of these ways, on the integer
+/// lattice so that many pairs lie at exactly γ: laps of a square and a parallel one exactly γ
+/// off, a stop, jumps far beyond γ and to exactly γ, slow circles whose far side is just within
+/// γ, laps of a small square within γ of each other (the run ending on the diagonal holds the
+/// last pose's point again and again), a stay a million metres away (the margin grows tenfold)
+/// and a way back over the laps. Every row, closest columns included, against the brute
+/// force's, and the snapshot against the batch.
+#[test]
+fn carried_stretches_take_every_way_and_stay_exact() {
+    let gamma = 10.0;
+    let mut points: Vec<[f64; 2]> = Vec::new();
+    let square = |side: f64, x0: f64, y0: f64| -> Vec<[f64; 2]> {
+        let s = side as usize;
+        (0..4 * s)
+            .map(|k| {
+                let t = (k % s) as f64;
+                match k / s {
+                    0 => [x0 + t, y0],
+                    1 => [x0 + side, y0 + t],
+                    2 => [x0 + side - t, y0 + side],
+                    _ => [x0, y0 + side - t],
+                }
+            })
+            .collect()
+    };
+    points.extend(square(40.0, 0.0, 0.0));
+    points.extend(square(40.0, 0.0, 0.0));
+    // A lap exactly γ inside the first (its corners γ√2 off), entered by one jump of γ.
+    points.extend(square(20.0, 10.0, 10.0));
+    // A stop of 300 poses, then a jump of 1000 γ and back, then one of exactly γ.
+    points.extend(std::iter::repeat_n([10.0, 10.0], 300));
+    points.extend(std::iter::repeat_n([10_010.0, 10.0], 20));
+    points.push([10.0, 10.0]);
+    points.push([16.0, 18.0]);
+    // Slow circles of radius 4.7 around (20, 20): their far side is within γ but not within the
+    // carried walk's inner reach.
+    points.extend((0..700).map(|k| {
+        let angle = std::f64::consts::TAU * k as f64 / 70.0;
+        [20.0 + 4.7 * angle.cos(), 20.0 + 4.7 * angle.sin()]
+    }));
+    // Laps of a square of side 4, all within γ of each other, with a stop in each: the run
+    // that ends on the diagonal holds earlier poses at the very point of the last one, and its
+    // closest column is the earliest of them.
+    for _ in 0..6 {
+        points.extend(square(4.0, 50.0, 50.0));
+        points.extend(std::iter::repeat_n([54.0, 54.0], 5));
+    }
+    // A stay far away, where the rounding margin is larger, then back over the laps.
+    points.extend((0..100).map(|k| [1e6 + k as f64, 1e6]));
+    points.extend(square(40.0, 0.0, 10.0));
+    points.extend(square(40.0, 0.0, 0.0));
+    let times: Vec<f64> = (0..points.len()).map(|k| k as f64 * 0.1).collect();
+    let traj = Trajectory::from_points(times, &points).unwrap();
+    let dim = traj.dim();
+    for chunk in [1, 5] {
+        let mut online = OnlineLoops::new(MetricSpec::Euclidean, dim, gamma).unwrap();
+        for first in (0..traj.len()).step_by(chunk) {
+            let end = (first + chunk).min(traj.len());
+            let update =
+                online.push_many(&traj.timestamps_s()[first..end], &traj.coords()[first * dim..end * dim]).unwrap();
+            for n in first..end {
+                let row: Vec<(Run, usize)> =
+                    update.runs.iter().filter(|r| r.row == n).map(|r| (r.run, r.closest)).collect();
+                assert_eq!(row, brute_row(&traj, &MetricSpec::Euclidean, gamma, n), "row {n}, pushes of {chunk}");
+            }
+        }
+        check_final(&online, &traj, MetricSpec::Euclidean, gamma).unwrap();
+    }
+}
+
 #[test]
 fn bad_poses_are_refused_naming_the_pose_and_change_nothing() {
     let mut online = OnlineLoops::new(MetricSpec::Euclidean, 2, 1.0).unwrap();

@@ -10,7 +10,9 @@ use crate::loops::Loops;
 use crate::memory::{try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::spec::{MetricSpec, with_metric};
-use crate::sublevel::{ArcLength, Block, LEAF_SIZE, Pruner, RowScanner, Run, SublevelSet, check_gamma, closest_column};
+use crate::sublevel::{
+    ArcLength, Block, LEAF_SIZE, Pruner, RowScanner, Run, SublevelSet, check_gamma, closest_column, walk_reach,
+};
 use crate::trajectory::{MAX_POSES, Manifold, Trajectory, validate_coordinates, validate_timestamps};
 use crate::union_find::MinRootForest;
 
@@ -46,7 +48,8 @@ pub type ComponentId = u32;
 ///
 /// # Cost
 /// A push costs the row's share of the batch's work: a walk of the ball hierarchy (a forest of
-/// at most log₂(n / 16) + 1 perfect trees, grown leaf by leaf like a binary counter), the
+/// at most log₂(n / 16) + 1 perfect trees, grown leaf by leaf like a binary counter), shared by
+/// the pushes within γ/4 of the pose it was centred on as a batch's block shares one, the
 /// arc-length skipping scan of the stretches it could not rule out, and for every run of the new
 /// row one closest column (O(log n) for long runs), one union with the previous row's runs and
 /// O(log n) for τ. Memory is the trajectory, 24 bytes a pose, and 12 bytes a run.
@@ -106,8 +109,42 @@ pub struct OnlineLoops {
     serial: Serial,
     /// Pushes since it was made, rebuilt or cleared.
     pushes: u64,
-    /// Scratch: the stretches a row scan visits, and the scanned runs.
+    /// The stretches of the last walk of the hierarchy, carried to the next pushes.
+    near: NearStretches,
+    /// Scratch: the runs of the row being added and their closest columns.
+    row: Block,
+}
+
+/// How far, as a fraction of γ, a pose may be from the centre of the last walk of the ball
+/// hierarchy for that walk's stretches to serve its row. A wider walk serves more rows but
+/// hands each more stretches to rule out.
+const CARRY_FRACTION: f64 = 0.25;
+
+/// The stretches of one walk of the ball hierarchy, carried from push to push as the batch
+/// carries a block's: the walk is centred on a pose x_c and reaches γ + R beyond it (R =
+/// [`CARRY_FRACTION`] · γ), so by the triangle inequality its stretches hold every pose within
+/// γ of any later pose x_n with δ(x_c, x_n) ≤ R ([`walk_reach`], the batch's rule for a block of
+/// radius R); the leaves pushed since are appended as they come, each kept when its ball
+/// reaches as far. A pose farther than R from the centre, a rounding margin grown past the
+/// walk's, or the stretches grown to twice the walk's (a robot circling near the centre: the
+/// new leaves are not merged as a fresh walk would merge them) walk again from the pose.
+#[derive(Debug, Clone, Default)]
+struct NearStretches {
+    /// The pose the walk was centred on; `None` before the first walk.
+    centre: Option<usize>,
+    /// The rounding margin the walk allows for: twice the engine's when it walked.
+    margin: f64,
+    /// The walk's `(reach, inside_reach)`.
+    reach: (f64, f64),
+    /// The stretches, in pose order, to the last leaf pushed.
     stretches: Vec<Leaf>,
+    /// For each stretch, the path length s up to which it is known to stay out of reach
+    /// ([`RowScanner::scan_row`]'s `far_until`).
+    far_until: Vec<f64>,
+    /// How many stretches the walk gave.
+    walked: usize,
+    /// The leaves pushed since the stretches were last brought up to date.
+    new_leaves: Vec<u32>,
 }
 
 /// Which push of which engine an [`Update`] reports: the engine (a number drawn for it when it
@@ -267,6 +304,42 @@ impl OnlineComponent {
     }
 }
 
+impl NearStretches {
+    /// Brings the stretches up to row `n` of `scanner` (the engine's, over `balls`): the leaves
+    /// pushed since, when pose n is still within reach of the walk's centre, else a new walk
+    /// centred on pose n.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`] when the stretches do not fit in memory.
+    fn update<M: Metric + ?Sized>(&mut self, scanner: &RowScanner<'_, M>, balls: &BallTree, n: usize) -> Result<()> {
+        let (traj, radius) = (scanner.traj, CARRY_FRACTION * scanner.gamma);
+        // Measured as the batch measures a block's radius: from the centre to the row.
+        let carried = self.centre.is_some_and(|c| {
+            scanner.arc.margin <= self.margin
+                && self.stretches.len() <= 2 * self.walked + 8
+                && scanner.metric.distance(traj.point(c), traj.point(n)) <= radius
+        });
+        if carried {
+            let centre = traj.point(self.centre.unwrap_or(n));
+            for &leaf in &self.new_leaves {
+                balls.append_near_spans(leaf, scanner.metric, centre, self.reach, &mut self.stretches)?;
+            }
+        } else {
+            self.centre = Some(n);
+            self.margin = 2.0 * scanner.arc.margin;
+            self.reach = walk_reach(scanner.gamma, radius, self.margin);
+            balls.near_spans(scanner.metric, traj.point(n), 0, self.reach, &mut self.stretches)?;
+            self.walked = self.stretches.len();
+            self.far_until.clear();
+        }
+        self.new_leaves.clear();
+        let missing = self.stretches.len() + 1 - self.far_until.len();
+        try_reserve(&mut self.far_until, missing, "the stretches of a row scan")?;
+        self.far_until.resize(self.stretches.len(), f64::NEG_INFINITY);
+        Ok(())
+    }
+}
+
 /// A run of a new row n: the columns `run.start..=run.end` (all ≤ n) within γ of pose n.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RowRun {
@@ -390,7 +463,8 @@ impl OnlineLoops {
             rebuilds,
             serial,
             pushes: 0,
-            stretches: Vec::new(),
+            near: NearStretches::default(),
+            row: Block::default(),
         }
     }
 
@@ -452,9 +526,12 @@ impl OnlineLoops {
     /// Scans and joins the row of pose `n` (in the trajectory already).
     fn add_row<M: Metric + ?Sized>(&mut self, metric: &M, n: usize, update: &mut Update) {
         self.grow(metric, n);
-        let mut block = Block::default();
+        let mut block = std::mem::take(&mut self.row);
+        block.runs.clear();
+        block.closest.clear();
         self.scan_row(&Swapped(metric), n, &mut block);
         self.join_row(metric, n, &block.runs, &block.closest, Some(update));
+        self.row = block;
     }
 
     /// Checks the new poses as [`Trajectory::new`] and the metric check them, naming each by
@@ -509,7 +586,10 @@ impl OnlineLoops {
         self.later_tau_s.push();
         self.own_tau_s.push(0.0);
         if n + 1 - self.balls.covered() == LEAF_SIZE {
-            self.balls.push_leaf(&self.traj, metric, n + 1);
+            let leaf = self.balls.push_leaf(&self.traj, metric, n + 1);
+            if self.near.centre.is_some() {
+                self.near.new_leaves.push(leaf);
+            }
         }
         if n >= 1 {
             self.settle_row(n - 1);
@@ -562,14 +642,21 @@ impl OnlineLoops {
         };
         // The stretches near one pose are few; a push has no way back from half-added rows,
         // so running out of memory here is not an error to return.
-        scanner.candidates_for(n..n + 1, &mut self.stretches).unwrap_or_else(|error| panic!("{error}"));
-        // The poses after the last leaf: one stretch that no ball rules out.
+        self.near.update(&scanner, &self.balls, n).unwrap_or_else(|error| panic!("{error}"));
+        let near = &mut self.near;
+        // The poses after the last leaf: one stretch that no ball rules out, for this row only.
         let covered = self.balls.covered();
-        if covered <= n {
+        let tail = covered <= n;
+        if tail {
             let (lo, hi) = (covered as u32, n as u32 + 1);
-            self.stretches.push(Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false, uniform: false });
+            near.stretches.push(Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false, uniform: false });
+            near.far_until.push(f64::NEG_INFINITY);
         }
-        scanner.scan_row(n, &self.stretches, &mut [], block);
+        scanner.scan_row(n, &near.stretches, &mut near.far_until, block);
+        if tail {
+            near.stretches.pop();
+            near.far_until.pop();
+        }
     }
 
     /// Adds row n's runs (closest columns `closest`): joins them to row n − 1's by union-find,
@@ -898,12 +985,20 @@ impl OnlineLoops {
         let (row_offsets, runs) = transpose_runs(n, |k| &self.runs[self.row_offsets[k]..self.row_offsets[k + 1]])?;
         let interrupt = Interrupt::current();
         with_metric!(&self.metric, m => {
+            let scanner = RowScanner {
+                traj: &self.traj,
+                metric: m,
+                arc: &self.arc,
+                pruner: Pruner::Hierarchy(&self.balls),
+                gamma: self.gamma,
+                first_columns: &[],
+                starts: &[0],
+            };
             let mut closest = try_with_capacity(runs.len(), "the closest columns of S_gamma")?;
             for i in 0..n {
                 interrupt.check()?;
                 for run in &runs[row_offsets[i]..row_offsets[i + 1]] {
-                    let span = (run.start as usize, run.end as usize);
-                    closest.push(closest_column(m, &self.traj, &self.balls, self.arc.margin, i, span) as u32);
+                    closest.push(scanner.closest_of_run(i, run.start as usize, run.end as usize) as u32);
                 }
             }
             let set = SublevelSet::from_rows(self.gamma, row_offsets, runs, closest);
