@@ -387,9 +387,24 @@ impl BallTree {
         (lo, hi): (usize, usize),
         margin: f64,
     ) -> usize {
+        self.closest_in_range_within(metric, traj, x, (lo, hi), margin, f64::INFINITY)
+    }
+
+    /// [`closest_in_range`](Self::closest_in_range) knowing that some pose of `lo..=hi` lies
+    /// `within` of `x` (as the metric measures δ): balls farther than that by more than `margin`
+    /// are skipped from the start, before any pose is ranked.
+    pub(crate) fn closest_in_range_within<M: Metric + ?Sized>(
+        &self,
+        metric: &M,
+        traj: &Trajectory,
+        x: &[f64],
+        (lo, hi): (usize, usize),
+        margin: f64,
+        within: f64,
+    ) -> usize {
         let dim = traj.dim();
         // (rank, distance, pose) of the best so far.
-        let mut best = (f64::INFINITY, f64::INFINITY, lo);
+        let mut best = (f64::INFINITY, within, lo);
         let mut stack: Vec<u32> = Vec::with_capacity(64);
         stack.extend(self.roots.iter().rev());
         while let Some(index) = stack.pop() {
@@ -405,7 +420,7 @@ impl BallTree {
                 // Every pose of the range ranks as pose `a`: the earliest of them is the one.
                 let rank = metric.distance_rank(x, traj.point(a));
                 if rank < best.0 {
-                    best = (rank, metric.distance(x, traj.point(a)), a);
+                    best = (rank, metric.distance(x, traj.point(a)).min(best.1), a);
                     if rank <= 0.0 {
                         return a;
                     }
@@ -420,7 +435,7 @@ impl BallTree {
             let k = a + metric.closest_in(x, &traj.coords()[a * dim..b * dim]);
             let rank = metric.distance_rank(x, traj.point(k));
             if rank < best.0 {
-                best = (rank, metric.distance(x, traj.point(k)), k);
+                best = (rank, metric.distance(x, traj.point(k)).min(best.1), k);
                 if rank <= 0.0 {
                     return k;
                 }
@@ -581,6 +596,30 @@ mod tests {
                     let expected = lo + Euclidean.closest_in(x, &traj.coords()[2 * lo..2 * (hi + 1)]);
                     let found = tree.closest_in_range(&Euclidean, &traj, x, (lo, hi), 1e-12);
                     assert_eq!(found, expected, "seed {seed}, range {lo}..={hi}, x {x:?}");
+                }
+            }
+        }
+    }
+
+    /// Knowing a pose's δ from the start: that of any pose of the range, the least one exactly
+    /// (every other pose at it is a tie that only its index decides), or the least one lowered
+    /// by the margin it is allowed to be off by.
+    #[test]
+    fn closest_in_range_within_a_known_distance_is_the_linear_scan() {
+        let margin = 1e-12;
+        for seed in 0..20 {
+            let traj = tied_trajectory(1500, seed);
+            let tree = BallTree::new(&traj, &Euclidean, 16).unwrap();
+            for (k, lo) in (0..traj.len()).step_by(37).enumerate() {
+                let hi = (lo + 40 + 97 * k).min(traj.len() - 1);
+                for x in [traj.point((lo * 7 + 3) % traj.len()), &[0.5, 0.5][..], &[1.0, 1.0][..]] {
+                    let expected = lo + Euclidean.closest_in(x, &traj.coords()[2 * lo..2 * (hi + 1)]);
+                    let least = Euclidean.distance(x, traj.point(expected));
+                    let other = Euclidean.distance(x, traj.point(lo + (hi - lo) * (seed as usize % 7) / 6));
+                    for within in [other, least, least - 0.5 * margin] {
+                        let found = tree.closest_in_range_within(&Euclidean, &traj, x, (lo, hi), margin, within);
+                        assert_eq!(found, expected, "seed {seed}, range {lo}..={hi}, x {x:?}, within {within}");
+                    }
                 }
             }
         }

@@ -881,19 +881,21 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         closest.push(column as u32);
     }
 
-    /// The closest column of a scanned run (fewer than [`TREE_CLOSEST_LEN`] cells), as
-    /// [`closest_of`](Self::closest_of) finds it, over the columns that the distances the scan
-    /// measured leave open. With d* the least δ measured inside the run (by the scan, and once
-    /// more where the bounds below meet), δ(x_i, x_k) ≥ d − |s_k − s_j| for a column j measured
-    /// at d (the triangle inequality through the path between them) puts every column whose
-    /// bound from the run's first column, or from the column after it that ended it, exceeds d*
-    /// by more than the rounding margin strictly farther than the column of d*: neither the
-    /// least rank nor the earliest of its ties is there. A pass by x_i at a few metres leaves
-    /// the columns within a few metres of path of the closest one (on the 2.1 h urban drive,
-    /// 22 of a run's 95 cells); a run the scan entered without measuring leaves the whole run.
+    /// The closest column of a scanned run, as [`closest_of`](Self::closest_of) finds it, over the
+    /// columns that the distances the scan measured leave open. With d* the least δ measured inside
+    /// the run (by the scan, and once more where the bounds below meet), δ(x_i, x_k) ≥ d − |s_k −
+    /// s_j| for a column j measured at d (the triangle inequality through the path between them)
+    /// puts every column whose bound from the run's first column, or from the column after it that
+    /// ended it, exceeds d* by more than the rounding margin strictly farther than the column of
+    /// d*: neither the least rank nor the earliest of its ties is there. A pass by x_i at a few
+    /// metres leaves the columns within a few metres of path of the closest one (on the 2.1 h urban
+    /// drive, 22 of a run's 95 cells); a run the scan entered without measuring leaves the whole
+    /// run. Where [`TREE_CLOSEST_LEN`] columns or more stay open (a slow pass: hundreds of cells in
+    /// a few metres of path), the ball hierarchy searches them knowing d*, so that it skips every
+    /// ball farther than that from the start instead of ranking the first leaves it reaches.
     fn closest_of_scanned(&self, i: usize, run: OpenRun, exit: Option<(usize, f64)>) -> usize {
         let (a, b) = (run.start, run.end);
-        let Some((guess, least)) = run.least.filter(|_| a != i && b - a + 1 < TREE_CLOSEST_LEN) else {
+        let Some((guess, least)) = run.least.filter(|_| a != i) else {
             return self.closest_of(i, a, b);
         };
         let s = &self.arc.s;
@@ -927,7 +929,15 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             }
             _ => b,
         };
-        self.closest_of(i, lo.min(guess), hi.max(guess))
+        let (lo, hi) = (lo.min(guess), hi.max(guess));
+        if hi - lo + 1 >= TREE_CLOSEST_LEN {
+            let balls = match self.pruner {
+                Pruner::Hierarchy(balls) | Pruner::Chunks(balls, _) => balls,
+            };
+            let x_i = self.traj.point(i);
+            return balls.closest_in_range_within(self.metric, self.traj, x_i, (lo, hi), slack, least);
+        }
+        self.closest_of(i, lo, hi)
     }
 
     /// The closest column of the run `a..=b` of row `i` (columns j ≥ i) of a set known whole,

@@ -67,6 +67,35 @@ fn passes_on_the_plane() {
     }
 }
 
+/// Slow passes, whose runs hold hundreds of cells in a few metres of path, so that the columns
+/// the scan's bounds leave open go to the ball hierarchy: a fast pass along y = 0, then a crawl
+/// at 5 cm a step along y = 4 and back over the same points (every pose of the way back ties
+/// with one of the way out, in another ball, and the earlier must win), with a stop of 300
+/// poses at one point where it comes closest to some rows, and a creep of 400 steps of 1 nm,
+/// where the path length barely grows; then a crawl at y = 2, closer than the first for
+/// some rows and farther for others. The closest column of a long run lies between the
+/// stretches its bounds rule out.
+#[test]
+fn slow_passes_with_stops_and_creeps() {
+    let mut points: Vec<[f64; 2]> = (0..=60).map(|k| [-30.0 + k as f64, 0.0]).collect();
+    let crawl = |from: i32, to: i32| -> Vec<i32> {
+        if from <= to { (from..=to).collect() } else { (to..=from).rev().collect() }
+    };
+    // x = k × 5 cm, the same bits on the way out and back.
+    let at = |k: i32, y: f64| [f64::from(k) * 0.05, y];
+    points.extend(crawl(-500, 40).into_iter().map(|k| at(k, 4.0)));
+    points.extend(std::iter::repeat_n(at(40, 4.0), 300));
+    points.extend((1..=400).map(|k| [2.0 + f64::from(k) * 1e-9, 4.0]));
+    points.extend(crawl(40, 200).into_iter().map(|k| at(k, 4.0)));
+    points.extend(crawl(200, -500).into_iter().map(|k| at(k, 4.0)));
+    points.extend(crawl(-300, 300).into_iter().map(|k| at(k, 2.0 + 0.001 * f64::from(k % 3))));
+    let traj = Trajectory::from_points(times(points.len()), &points).unwrap();
+    for gamma in [12.0, 6.0] {
+        let long = check(&format!("slow passes, gamma {gamma}"), &traj, &Euclidean, gamma);
+        assert!(long > 100, "gamma {gamma}: {long} long runs");
+    }
+}
+
 /// Laps around a torus of two angles: the first angle winds through ±π again and again at
 /// steps of π/16 (half a step apart on alternate laps), the second oscillates, so passes cross
 /// the wrap and lie midway between poses of other passes.
