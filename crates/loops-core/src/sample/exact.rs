@@ -175,7 +175,7 @@ struct LoopsHolder<'a, M: Metric + ?Sized> {
 
 impl<M: Metric + ?Sized> RunHolder for LoopsHolder<'_, M> {
     fn rows(&self) -> Vec<std::ops::Range<usize>> {
-        vec![0..self.loops.len()]
+        std::iter::once(0..self.loops.len()).collect()
     }
 
     fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {
