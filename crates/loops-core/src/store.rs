@@ -913,20 +913,20 @@ impl FleetStore {
         remove: &[String],
         source: &mut SessionSource<'_>,
     ) -> Result<&StoreUpdate> {
-        let sessions = put
-            .iter()
+        // In parallel; the first error in the order given.
+        let sessions: Vec<Result<StoreSession>> = put
+            .par_iter()
             .map(|(name, trajectory)| StoreSession::new(name.clone(), trajectory, &self.settings))
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
+        let sessions = sessions.into_iter().collect::<Result<Vec<_>>>()?;
         let plan = self.plan_update(sessions, remove)?;
         let given: HashMap<&str, &Trajectory> = put.iter().map(|(name, t)| (name.as_str(), t)).collect();
-        let mut read: HashMap<usize, Trajectory> = HashMap::new();
-        for tile in &plan.tiles {
-            for s in tile.sessions {
-                if plan.before[s].is_some() && !read.contains_key(&s) {
-                    read.insert(s, read_session(&plan.sessions[s], source)?);
-                }
-            }
-        }
+        let mut stored: Vec<usize> =
+            plan.tiles.iter().flat_map(|t| t.sessions).filter(|&s| plan.before[s].is_some()).collect();
+        stored.sort_unstable();
+        stored.dedup();
+        let read: HashMap<usize, Trajectory> =
+            stored.iter().copied().zip(read_sessions(&plan.sessions, &stored, source)?).collect();
         let trajectory = |s: usize| -> &Trajectory {
             match plan.before[s] {
                 Some(_) => &read[&s],
@@ -1248,7 +1248,8 @@ impl FleetStore {
     /// # Errors
     /// [`Error::InconsistentTiles`] for a share outside its session (a corrupt store).
     pub fn loop_duration(&self) -> Result<(Vec<f64>, Vec<f64>)> {
-        let (mut own, mut other) = (Vec::new(), Vec::new());
+        let poses = self.sessions.iter().map(StoreSession::poses).sum();
+        let (mut own, mut other) = (Vec::with_capacity(poses), Vec::with_capacity(poses));
         for (o, x) in &self.kept.duration {
             own.extend_from_slice(o);
             other.extend_from_slice(x);
@@ -1296,13 +1297,12 @@ impl FleetStore {
         }
         while let Some(request) = draw.request().cloned() {
             let asked = tile_parts(merged, &holders, &request);
-            for &(k, _) in &asked {
-                for s in merged.tiles()[k].sessions {
-                    if let std::collections::hash_map::Entry::Vacant(slot) = read.entry(s) {
-                        slot.insert(read_session(&self.sessions[s], source)?);
-                    }
-                }
-            }
+            let mut unread: Vec<usize> =
+                asked.iter().flat_map(|&(k, _)| merged.tiles()[k].sessions).filter(|s| !read.contains_key(s)).collect();
+            unread.sort_unstable();
+            unread.dedup();
+            let trajectories = read_sessions(&self.sessions, &unread, source)?;
+            read.extend(unread.into_iter().zip(trajectories));
             let runs_of = |k: usize| stored.get(&merged.tiles()[k]).and_then(|&t| self.kept.runs[t].as_ref());
             tiles_rescanned += asked.iter().filter(|(k, _)| runs_of(*k).is_none()).count();
             let offers = asked
@@ -1449,7 +1449,13 @@ fn tile_parts(merged: &MergedLoops, holders: &[Vec<usize>], request: &DrawReques
 /// A stored session's poses from `source`, checked against what the store knows of it.
 fn read_session(session: &StoreSession, source: &mut SessionSource<'_>) -> Result<Trajectory> {
     let trajectory = source(session)?;
-    if trajectory.len() != session.poses() || session_fingerprint(&trajectory) != session.fingerprint {
+    check_read(session, &trajectory)?;
+    Ok(trajectory)
+}
+
+/// `trajectory` has the pose count and fingerprint of `session`.
+fn check_read(session: &StoreSession, trajectory: &Trajectory) -> Result<()> {
+    if trajectory.len() != session.poses() || session_fingerprint(trajectory) != session.fingerprint {
         return Err(Error::InvalidState {
             what: "fleet store",
             reason: format!(
@@ -1461,7 +1467,24 @@ fn read_session(session: &StoreSession, source: &mut SessionSource<'_>) -> Resul
             ),
         });
     }
-    Ok(trajectory)
+    Ok(())
+}
+
+/// The poses of `sessions[s]` for each `s` of `which`, from `source` (called in that order),
+/// each checked as [`read_session`] checks it, the checks in parallel; the first that fails,
+/// in that order, is the error.
+fn read_sessions(
+    sessions: &[StoreSession],
+    which: &[usize],
+    source: &mut SessionSource<'_>,
+) -> Result<Vec<Trajectory>> {
+    let mut read = Vec::with_capacity(which.len());
+    for &s in which {
+        read.push(source(&sessions[s])?);
+    }
+    let checks: Vec<Result<()>> = which.par_iter().zip(&read).map(|(&s, t)| check_read(&sessions[s], t)).collect();
+    checks.into_iter().collect::<Result<()>>()?;
+    Ok(read)
 }
 
 /// The first fleet index of each session.

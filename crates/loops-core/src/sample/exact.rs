@@ -174,8 +174,8 @@ struct LoopsHolder<'a, M: Metric + ?Sized> {
 }
 
 impl<M: Metric + ?Sized> RunHolder for LoopsHolder<'_, M> {
-    fn rows(&self) -> std::ops::Range<usize> {
-        0..self.loops.len()
+    fn rows(&self) -> Vec<std::ops::Range<usize>> {
+        std::iter::once(0..self.loops.len()).collect()
     }
 
     fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun)) {

@@ -25,7 +25,7 @@
 //!   then the column). A run on the diagonal offers the closest column after its farthest point
 //!   (a return along the same way); a tile reads past its last column to find the run's end.
 
-use std::collections::{BTreeMap, HashMap, HashSet};
+use std::collections::{BTreeMap, HashSet};
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -78,12 +78,10 @@ fn keys_at_most(seed: u64, row: usize, lo: usize, hi: usize, threshold: u64, out
     let width = hi - lo + 1;
     let mask = if width == 64 { u64::MAX } else { ((1u64 << width) - 1) << (lo - base) };
     let mut stream = KeyStream::new(seed, row, block);
-    let mut words = [0u64; 64];
     let (mut less, mut equal) = (0u64, mask);
     let mut level = 0;
     while level < 64 && equal != 0 {
         let w = stream.next_word();
-        words[level] = w;
         if (threshold >> (63 - level)) & 1 == 1 {
             less |= equal & !w;
             equal &= w;
@@ -96,9 +94,9 @@ fn keys_at_most(seed: u64, row: usize, lo: usize, hi: usize, threshold: u64, out
     if hits == 0 {
         return;
     }
-    for word in words.iter_mut().skip(level) {
-        *word = stream.next_word();
-    }
+    // Few blocks have a key below a threshold: their words are drawn again, in full.
+    let mut stream = KeyStream::new(seed, row, block);
+    let words: [u64; 64] = std::array::from_fn(|_| stream.next_word());
     while hits != 0 {
         let p = hits.trailing_zeros() as usize;
         hits &= hits - 1;
@@ -264,8 +262,8 @@ pub(crate) struct DrawRun {
 
 /// Whoever holds runs: the whole trajectory in memory, or one tile.
 pub(crate) trait RunHolder: Sync {
-    /// The rows held (indices of the runs).
-    fn rows(&self) -> std::ops::Range<usize>;
+    /// The rows held (indices of the runs), in stretches, sorted and apart.
+    fn rows(&self) -> Vec<std::ops::Range<usize>>;
     /// The runs of row `i`, in column order.
     fn for_each_run(&self, i: usize, f: &mut dyn FnMut(DrawRun));
     /// δ and the metric's rank of pair (i, j).
@@ -299,10 +297,17 @@ fn return_column(holder: &dyn RunHolder, i: usize, start: usize, end: usize) -> 
 /// [`Error::Interrupted`] when the [`Interrupt`] installed on this thread is interrupted: it is
 /// looked at before every row.
 pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> Result<DrawCandidates> {
-    let index: HashMap<usize, &ComponentRequest> = request.components.iter().map(|c| (c.id, c)).collect();
-    let rows = holder.rows();
-    let chunks: Vec<std::ops::Range<usize>> =
-        (rows.start..rows.end).step_by(ROWS_PER_TASK).map(|s| s..(s + ROWS_PER_TASK).min(rows.end)).collect();
+    // The request by component id, looked up once a run.
+    let mut index: Vec<&ComponentRequest> = request.components.iter().collect();
+    index.sort_unstable_by_key(|c| c.id);
+    let find = |id: usize| index.binary_search_by_key(&id, |c| c.id).ok().map(|k| index[k]);
+    let chunks: Vec<std::ops::Range<usize>> = holder
+        .rows()
+        .into_iter()
+        .flat_map(|rows| {
+            (rows.start..rows.end).step_by(ROWS_PER_TASK).map(move |s| s..(s + ROWS_PER_TASK).min(rows.end))
+        })
+        .collect();
     let interrupt = Interrupt::current();
     let parts: Vec<DrawCandidates> = chunks
         .into_par_iter()
@@ -315,7 +320,7 @@ pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> 
                 interrupt.check()?;
                 let mut row_best: BTreeMap<usize, DrawCandidate> = BTreeMap::new();
                 holder.for_each_run(i, &mut |run| {
-                    let Some(req) = index.get(&run.component) else { return };
+                    let Some(req) = find(run.component) else { return };
                     let c = run.component;
                     if let Some(threshold) = req.pool {
                         let first = run.start.max(i + 1);
@@ -406,7 +411,7 @@ struct Group {
     quota: u64,
     /// Of the quota, the closest pairs of rows (nearest-then-uniform; the quota for the others).
     near: u64,
-    /// The stratification offset (dispersed samplers).
+    /// The stratification offset (dispersed samplers; 0 for a group without picks).
     offset: f64,
     /// The pool threshold asked last.
     pool: Option<u64>,
@@ -540,13 +545,15 @@ impl KeyedDraw {
                 .zip(quotas)
                 .map(|(&id, (quota, near))| {
                     let s = &stats[id];
-                    let offset = group_rng(sampler.seed, id).random::<f64>();
-                    let r0 = s.rows[0];
-                    let count = s.row_count();
-                    let mut group = Group { id, quota, near, offset, pool: None, rows: Vec::new(), best: false };
+                    let mut group = Group { id, quota, near, offset: 0.0, pool: None, rows: Vec::new(), best: false };
                     if quota == 0 {
                         return group;
                     }
+                    // Only a group with picks reads its offset: the others skip its stream.
+                    let offset = group_rng(sampler.seed, id).random::<f64>();
+                    group.offset = offset;
+                    let r0 = s.rows[0];
+                    let count = s.row_count();
                     match kind {
                         SamplerKind::One | SamplerKind::Rho => group.pool = Some(threshold_for(quota, s.pairs)),
                         SamplerKind::NearestThenUniform => {
@@ -824,4 +831,39 @@ fn sorted(mut picks: Vec<DrawnPair>) -> Vec<DrawnPair> {
 /// `q` row indices of `rows`, stratified: ⌊(k + offset) · rows / q⌋.
 fn stratified(q: usize, rows: usize, offset: f64) -> impl Iterator<Item = usize> {
     (0..q).map(move |k| (((k as f64 + offset) * rows as f64 / q as f64) as usize).min(rows.saturating_sub(1)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The key of (row, column) as the module defines it, word by word: bit 63 − ℓ is bit
+    /// `column mod 64` of the ℓ-th word of the block's stream.
+    fn key_by_definition(seed: u64, row: usize, column: usize) -> u64 {
+        let mut stream = KeyStream::new(seed, row, column / KEY_BLOCK);
+        (0..64).fold(0u64, |key, l| key | (((stream.next_word() >> (column % KEY_BLOCK)) & 1) << (63 - l)))
+    }
+
+    #[test]
+    fn run_keys_are_the_keys_at_most_the_threshold() {
+        let mut hits = 0;
+        for (seed, row, start, end) in [(1, 0, 1, 1), (7, 5, 3, 200), (9, 1000, 60, 70), (3, 42, 128, 255)] {
+            let keys: Vec<u64> = (start..=end).map(|j| key_by_definition(seed, row, j)).collect();
+            let mut sorted = keys.clone();
+            sorted.sort_unstable();
+            // Thresholds at, between and around the keys themselves, and the extremes.
+            let mut thresholds = vec![0, 1, u64::MAX / 1000, u64::MAX / 3, u64::MAX];
+            thresholds.extend([sorted[0], sorted[sorted.len() / 2], sorted[sorted.len() - 1].saturating_sub(1)]);
+            for threshold in thresholds {
+                let want: Vec<(usize, u64)> =
+                    (start..=end).zip(keys.iter().copied()).filter(|&(_, k)| k <= threshold).collect();
+                let mut got = Vec::new();
+                run_keys(seed, row, start, end, threshold, &mut |j, k| got.push((j, k)));
+                assert_eq!(got, want, "seed {seed} row {row} {start}..={end} threshold {threshold:#x}");
+                hits += got.len();
+            }
+            assert_eq!(pair_key(seed, row, end), keys[keys.len() - 1]);
+        }
+        assert!(hits > 100, "{hits}");
+    }
 }

@@ -237,8 +237,8 @@ struct TileHolder<'a, M: Metric + ?Sized> {
     tile: &'a Tile,
     runs: &'a TileRuns,
     labels: &'a [u32],
-    /// The rows offered (those of the tile, or fewer).
-    rows: std::ops::Range<usize>,
+    /// The rows offered (those of the tile, or fewer), in stretches sorted and apart.
+    rows: Vec<std::ops::Range<usize>>,
 }
 
 impl<M: Metric + ?Sized> TileHolder<'_, M> {
@@ -253,7 +253,7 @@ impl<M: Metric + ?Sized> TileHolder<'_, M> {
 }
 
 impl<M: Metric + ?Sized> RunHolder for TileHolder<'_, M> {
-    fn rows(&self) -> std::ops::Range<usize> {
+    fn rows(&self) -> Vec<std::ops::Range<usize>> {
         self.rows.clone()
     }
 
@@ -373,12 +373,10 @@ pub fn draw_tile_runs<M: Metric + ?Sized>(
     let diagonal = tile.sessions[0] == tile.sessions[1] && runs.separation.is_none();
     // Only the rows where the components asked about have runs can offer anything.
     let asked: HashSet<usize> = request.components.iter().map(|c| c.id).collect();
-    let mut offers = DrawCandidates::default();
-    for rows in runs.rows_of(|p| asked.contains(&(labels[p] as usize))) {
-        let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels, rows };
-        offers.absorb(draw_candidates(&holder, request)?);
-    }
-    Ok(offers)
+    // One pass over all of them: one index of the request, one set of tasks.
+    let rows = runs.rows_of(|p| asked.contains(&(labels[p] as usize)));
+    let holder = TileHolder { sessions, starts, metric, gamma: runs.gamma, diagonal, tile, runs, labels, rows };
+    draw_candidates(&holder, request)
 }
 
 /// What one tile's runs add to the loop duration τ (Side both, seconds) of its rows and of its

@@ -1538,24 +1538,36 @@ impl MergedLoops {
     /// [`TileMerge::finish`] of all the tiles give, with the components renumbered by first
     /// cell and the tiles in the order of `parts`. O(components log components + tiles).
     pub(crate) fn concat<'a>(parts: impl IntoIterator<Item = &'a Self>) -> Self {
+        use rayon::prelude::*;
         let parts: Vec<&Self> = parts.into_iter().collect();
-        let mut order: Vec<(usize, usize)> =
-            parts.iter().enumerate().flat_map(|(p, m)| (0..m.components.len()).map(move |k| (p, k))).collect();
-        order.sort_unstable_by_key(|&(p, k)| parts[p].firsts[k]);
+        // Each component's first cell, with where it is: a direct key (no lookup through the
+        // parts while sorting). First cells are apart, so the order is that of any sort.
+        let mut order: Vec<([usize; 2], u32, u32)> = parts
+            .iter()
+            .enumerate()
+            .flat_map(|(p, m)| m.firsts.iter().enumerate().map(move |(k, &first)| (first, p as u32, k as u32)))
+            .collect();
+        order.par_sort_unstable_by_key(|&(first, _, _)| first);
         let mut ids: Vec<Vec<u32>> = parts.iter().map(|m| vec![0; m.components.len()]).collect();
-        let (mut components, mut firsts) = (Vec::with_capacity(order.len()), Vec::with_capacity(order.len()));
-        for (id, &(p, k)) in order.iter().enumerate() {
-            ids[p][k] = id as u32;
-            let mut m = parts[p].components[k].clone();
-            m.component.id = id;
-            components.push(m);
-            firsts.push(parts[p].firsts[k]);
+        for (id, &(_, p, k)) in order.iter().enumerate() {
+            ids[p as usize][k as usize] = id as u32;
         }
-        let (mut tiles, mut labels) = (Vec::new(), Vec::new());
-        for (p, m) in parts.iter().enumerate() {
-            tiles.extend(m.tiles.iter().cloned());
-            labels.extend(m.labels.iter().map(|map| map.iter().map(|&l| ids[p][l as usize]).collect::<Vec<u32>>()));
-        }
+        let components: Vec<MergedComponent> = order
+            .par_iter()
+            .enumerate()
+            .map(|(id, &(_, p, k))| {
+                let mut m = parts[p as usize].components[k as usize].clone();
+                m.component.id = id;
+                m
+            })
+            .collect();
+        let firsts = order.into_iter().map(|(first, _, _)| first).collect();
+        let tiles = parts.iter().flat_map(|m| m.tiles.iter().cloned()).collect();
+        let labels = parts
+            .par_iter()
+            .zip(ids.par_iter())
+            .flat_map_iter(|(m, ids)| m.labels.iter().map(|map| map.iter().map(|&l| ids[l as usize]).collect()))
+            .collect();
         Self { components, tiles, labels, firsts }
     }
 
@@ -1591,25 +1603,23 @@ impl MergedLoops {
     /// # Errors
     /// [`Error::InconsistentTiles`] for a component of a session `starts` does not reach.
     pub fn fleet_components(&self, starts: &[usize]) -> Result<Vec<FleetComponent>> {
-        self.components
-            .iter()
-            .map(|m| {
-                let [a, b] = m.sessions;
-                let c = &m.component;
-                let fits = b < starts.len()
-                    && starts[a] <= c.i_range[0].min(c.i_range[1]).min(c.closest_pair[0])
-                    && starts[b] <= c.j_range[0].min(c.j_range[1]).min(c.closest_pair[1]);
-                if !fits {
-                    return Err(Error::InconsistentTiles {
-                        problem: format!(
-                            "component {} of sessions {:?} does not lie at the starts given",
-                            c.id, m.sessions
-                        ),
-                    });
-                }
-                Ok(localize(c, m.sessions, starts))
-            })
-            .collect()
+        use rayon::prelude::*;
+        let fits = |m: &MergedComponent| {
+            let ([a, b], c) = (m.sessions, &m.component);
+            b < starts.len()
+                && starts[a] <= c.i_range[0].min(c.i_range[1]).min(c.closest_pair[0])
+                && starts[b] <= c.j_range[0].min(c.j_range[1]).min(c.closest_pair[1])
+        };
+        if let Some(k) = self.components.par_iter().position_first(|m| !fits(m)) {
+            let m = &self.components[k];
+            return Err(Error::InconsistentTiles {
+                problem: format!(
+                    "component {} of sessions {:?} does not lie at the starts given",
+                    m.component.id, m.sessions
+                ),
+            });
+        }
+        Ok(self.components.par_iter().map(|m| localize(&m.component, m.sessions, starts)).collect())
     }
 
     /// The sparse overlap matrix, as [`FleetLoops::session_pairs`](crate::fleet::FleetLoops::session_pairs)
