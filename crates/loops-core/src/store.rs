@@ -492,6 +492,7 @@ impl UpdatePlan {
     ///
     /// # Errors
     /// [`Error::InvalidState`] naming the first part that does not fit.
+    #[cfg(feature = "serde")]
     fn check_shape(&self) -> Result<()> {
         let fail = |reason: String| Err(Error::InvalidState { what: "store update plan", reason });
         let n = self.sessions.len();
