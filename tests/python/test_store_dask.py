@@ -254,3 +254,48 @@ def test_a_worker_killed_mid_update_leaves_the_old_or_the_new_state(tmp_path):
             )
     assert "old" in outcomes, outcomes
     assert {"store_scan_task", "store_update_task"} <= set(hit), hit
+
+
+@quiet
+def test_an_apply_run_again_after_its_result_was_lost_writes_nothing(tmp_path):
+    """When a worker dies holding the apply task's result, after the task wrote the new state,
+    the scheduler runs the plan, the scans and the apply again (the client still wants the
+    result): the store already holds the update, so the second apply writes nothing and
+    reports the update it repeats. Run here by the tasks' own functions, in the order the
+    scheduler runs them; an apply not told what the plan changes (``changes=None``, as before)
+    wrote a further state of an empty update there, which marked no component as added."""
+    from inexact_loops.dask._store import (
+        plan_summary,
+        store_plan_task,
+        store_scan_task,
+        store_update_task,
+    )
+
+    files = pool(tmp_path / "logs")
+    names = sorted(files)
+    first = {n: str(files[n][0]) for n in names[:3]}
+    second = {n: str(files[n][0]) for n in names[3:]}
+    second[names[0]] = str(files[names[0]][1])  # one session replaced too
+    folder = tmp_path / "store"
+    update_store(folder, add=first, **SETTINGS)
+
+    def tasks(count: int | None = None):
+        plan = store_plan_task(str(folder), second, None, {})
+        tiles, changes = plan_summary(plan)
+        count = tiles if count is None else count  # the client's count, fixed at the first run
+        scans = [store_scan_task(plan, g, count, second, {}) for g in range(count)]
+        return count, changes, scans
+
+    count, changes, scans = tasks()
+    assert changes["added"] == names[3:] and changes["replaced"] == [names[0]]
+    done = store_update_task(str(folder), second, None, {}, scans, changes)
+    assert done["added_components"] > 0
+    after = files_of(folder)
+    _, _, scans_again = tasks(count)
+    again = store_update_task(str(folder), second, None, {}, scans_again, changes)
+    assert files_of(folder) == after
+    assert again == done
+    here = tmp_path / "here"
+    update_store(here, add=first, **SETTINGS)
+    update_store(here, add=second)
+    assert_same_tables(folder, here)

@@ -97,8 +97,9 @@ def update_store(
     plan_options = {k: v for k, v in options.items() if k != "threads"}
     scan_options = {k: v for k, v in options.items() if k in _SCAN_KEYWORDS}
     plan = client.submit(store_plan_task, folder, add, remove, plan_options, pure=False)
-    # The client learns only how many scan tasks to submit; each finds its own tiles.
-    count = client.submit(len, plan, pure=False).result()
+    # The client learns only how many scan tasks to submit (each finds its own tiles) and the
+    # names the update changes (O(sessions)).
+    count, changes = client.submit(plan_summary, plan, pure=False).result()
     count = min(groups, count)
     # Spread the groups over the workers in turn: left to data locality, every scan would go
     # to the worker that holds the plan. A preference, not a rule, so that a worker lost
@@ -115,8 +116,20 @@ def update_store(
         client.submit(store_scan_task, plan, g, count, add, scan_options, pure=False, **placed(g))
         for g in range(count)
     ]
-    apply = client.submit(store_update_task, folder, add, remove, options, scans, pure=False)
+    apply = client.submit(
+        store_update_task, folder, add, remove, options, scans, changes, pure=False
+    )
     return apply.result()
+
+
+def plan_summary(plan: Any) -> tuple[int, dict[str, list[str]]]:
+    """Task: the number of tiles a plan scans, and the sessions it adds, replaces and removes."""
+    update = plan.last_update
+    return len(plan), {k: list(update[k]) for k in _CHANGES}
+
+
+#: What an update changes, by name (the keys of :attr:`StoreUpdatePlan.last_update`).
+_CHANGES = ("added", "replaced", "removed")
 
 
 #: The keywords of :meth:`~inexact_loops.FleetStore.update` that a scan takes (how the new
@@ -152,14 +165,41 @@ def store_update_task(
     remove: Any,
     options: dict[str, Any],
     scans: list[list[bytes]] | None = None,
+    changes: dict[str, list[str]] | None = None,
 ) -> dict[str, Any]:
     """Task: the update, where it runs (its tiles scanned here, or given as the scan tasks'
-    results), and its summary (O(sessions))."""
-    from .._core import FleetStore
+    results), and its summary (O(sessions)).
+
+    ``changes``: the sessions the plan adds, replaces and removes. When they are already in
+    the store as the update leaves them, this task is a run again of one whose result was lost
+    with its worker after it wrote the new state (the scheduler recomputes a lost result): it
+    writes nothing, and the summary is that of the update it repeats, not of an empty update
+    that would mark no component as added."""
+    from .._core import FleetStore, StoreUpdatePlan
 
     store = FleetStore.open(folder)
+    if changes is not None and any(changes.values()) and _maybe_done(store, changes):
+        # The removals are done (by the names); are the sessions given the stored ones?
+        options_plan = {k: v for k, v in options.items() if k != "threads"}
+        given = [*changes["added"], *changes["replaced"]]
+        now = StoreUpdatePlan(folder, add=add, **options_plan).last_update if given else {}
+        if not any(now.get(k) for k in _CHANGES):
+            return _summary(store, dict(store.last_update))
     scanned = None if scans is None else [tile for group in scans for tile in group]
     update = store.update(add=add, remove=remove, scanned=scanned, **options)
+    return _summary(store, dict(update))
+
+
+def _maybe_done(store: Any, changes: dict[str, list[str]]) -> bool:
+    """Whether the store holds every session the update adds or replaces and none it removes
+    (from the names alone; the plan then compares their content)."""
+    names = set(store.names)
+    kept = [*changes["added"], *changes["replaced"]]
+    return all(n in names for n in kept) and not any(n in names for n in changes["removed"])
+
+
+def _summary(store: Any, update: dict[str, Any]) -> dict[str, Any]:
+    """The summary of ``update`` on ``store`` as it now is (O(sessions))."""
     return {
         "path": os.fspath(store.path),
         "state_path": os.fspath(store.state_path),
@@ -167,5 +207,5 @@ def store_update_task(
         "components": len(store.components["id"]),
         "added_components": len(store.added),
         "samples": len(store.samples["i"]) if store.sampler is not None else None,
-        "last_update": dict(update),
+        "last_update": update,
     }
