@@ -94,7 +94,7 @@ def update_store(
         return store_update_task(folder, add, remove, options)
     if groups is None:
         groups = 4 * max(1, len(client.scheduler_info().get("workers", {})))
-    plan_options = {k: v for k, v in options.items() if k != "threads"}
+    plan_options = _plan_options(options)
     scan_options = {k: v for k, v in options.items() if k in _SCAN_KEYWORDS}
     plan = client.submit(store_plan_task, folder, add, remove, plan_options, pure=False)
     # The client learns only how many scan tasks to submit (each finds its own tiles) and the
@@ -120,6 +120,12 @@ def update_store(
         store_update_task, folder, add, remove, options, scans, changes, pure=False
     )
     return apply.result()
+
+
+def _plan_options(options: dict[str, Any]) -> dict[str, Any]:
+    """The keywords of :meth:`~inexact_loops.FleetStore.update` that a plan takes (all but the
+    threads)."""
+    return {k: v for k, v in options.items() if k != "threads"}
 
 
 def plan_summary(plan: Any) -> tuple[int, dict[str, list[str]]]:
@@ -180,9 +186,9 @@ def store_update_task(
     store = FleetStore.open(folder)
     if changes is not None and any(changes.values()) and _maybe_done(store, changes):
         # The removals are done (by the names); are the sessions given the stored ones?
-        options_plan = {k: v for k, v in options.items() if k != "threads"}
-        given = [*changes["added"], *changes["replaced"]]
-        now = StoreUpdatePlan(folder, add=add, **options_plan).last_update if given else {}
+        now: dict[str, Any] = {}
+        if changes["added"] or changes["replaced"]:
+            now = StoreUpdatePlan(folder, add=add, **_plan_options(options)).last_update
         if not any(now.get(k) for k in _CHANGES):
             return _summary(store, dict(store.last_update))
     scanned = None if scans is None else [tile for group in scans for tile in group]

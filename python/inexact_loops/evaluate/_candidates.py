@@ -8,7 +8,7 @@ import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -170,17 +170,21 @@ class _RoundsRule:
     c / gamma)``, with c the median distance (metres) the last optimisation moved the poses.
     """
 
-    def __init__(
-        self, *, budget: int, rounds: int, gamma: float, gamma_inflation: float, seed: int
-    ) -> None:
-        self._budget, self._rounds, self._gamma = int(budget), int(rounds), float(gamma)
-        self._top = float(gamma_inflation) - 1.0
+    def __init__(self, rule: Any, *, seed: int) -> None:
+        """``rule``: a :class:`CandidateRule` or a fleet's rule, ``on="estimate"``."""
+        if rule.on != "estimate":
+            raise InvalidParameterError(f'{type(self).__name__}: the rule chooses on="estimate"')
+        #: The candidate rule.
+        self.rule = rule
+        self._budget, self._rounds = int(rule.budget), int(rule.rounds)
+        self._gamma = float(rule.gamma)
+        self._top = float(rule.gamma_inflation) - 1.0
         #: The first round's seed.
         self.seed = int(seed)
         #: Rounds chosen so far.
         self.round = 0
         #: The inflation of gamma the next round uses.
-        self.gamma_inflation = float(gamma_inflation)
+        self.gamma_inflation = float(rule.gamma_inflation)
         self._tried: set[tuple[int, ...]] = set()
 
     @property
@@ -268,17 +272,7 @@ class Rounds(_RoundsRule):
         1.0
     """
 
-    def __init__(self, rule: CandidateRule, *, seed: int) -> None:
-        if rule.on != "estimate":
-            raise InvalidParameterError('Rounds: the rule chooses on="estimate"')
-        super().__init__(
-            budget=rule.budget,
-            rounds=rule.rounds,
-            gamma=rule.gamma,
-            gamma_inflation=rule.gamma_inflation,
-            seed=seed,
-        )
-        self.rule = rule
+    rule: CandidateRule
 
     def choose(self, estimate: Poses) -> tuple[np.ndarray, np.ndarray]:
         """The next round's pairs ``(i, j)``, i < j, chosen on ``estimate``, none of them chosen

@@ -397,17 +397,10 @@ class FleetRounds(_RoundsRule):
         1.0
     """
 
+    rule: FleetRule
+
     def __init__(self, rule: FleetRule, *, seed: int) -> None:
-        if rule.on != "estimate":
-            raise InvalidParameterError('FleetRounds: the rule chooses on="estimate"')
-        super().__init__(
-            budget=rule.budget,
-            rounds=rule.rounds,
-            gamma=rule.gamma,
-            gamma_inflation=rule.gamma_inflation,
-            seed=seed,
-        )
-        self.rule = rule
+        super().__init__(rule, seed=seed)
         self._sizes: list[int] | None = None
 
     def _sessions(self, kind: str, estimates: _Estimates) -> dict[str, Poses]:
