@@ -42,6 +42,21 @@ pub trait Metric: Sync {
     /// δ(a, b), in the metric's unit (metres for positions). `a` and `b` have the checked dimension.
     fn distance(&self, a: &[f64], b: &[f64]) -> f64;
 
+    /// δ(a, b) between 2-D points: [`distance`](Self::distance)'s value bit for bit. The
+    /// engine's row scan calls it on trajectories of dimension 2, reading the points as arrays
+    /// (no slice to build and check a distance). Defaults to `distance`; a metric overrides it
+    /// only with the same arithmetic.
+    #[inline]
+    fn distance_2d(&self, a: &[f64; 2], b: &[f64; 2]) -> f64 {
+        self.distance(a, b)
+    }
+
+    /// δ(a, b) between 3-D points, as [`distance_2d`](Self::distance_2d) for dimension 3.
+    #[inline]
+    fn distance_3d(&self, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+        self.distance(a, b)
+    }
+
     /// The size of δ's absolute rounding error, in ulps of this value, on `traj`'s points: the
     /// engine widens its triangle-inequality margin by 64 ulps of it. Defaults to the largest
     /// absolute coordinate (right for metrics computed from coordinate differences); metrics
@@ -107,6 +122,16 @@ impl Metric for Euclidean {
     #[inline]
     fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
         squared_l2(a, b).sqrt()
+    }
+
+    #[inline]
+    fn distance_2d(&self, a: &[f64; 2], b: &[f64; 2]) -> f64 {
+        squared_l2_2d(a, b).sqrt()
+    }
+
+    #[inline]
+    fn distance_3d(&self, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+        squared_l2_3d(a, b).sqrt()
     }
 
     #[inline]
@@ -185,10 +210,22 @@ pub(crate) fn dim_error<M: Metric + ?Sized>(metric: &M, expected: &str, found: u
 fn squared_l2(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());
     match (a, b) {
-        ([ax, ay], [bx, by]) => (ax - bx).powi(2) + (ay - by).powi(2),
-        ([ax, ay, az], [bx, by, bz]) => (ax - bx).powi(2) + (ay - by).powi(2) + (az - bz).powi(2),
+        (&[ax, ay], &[bx, by]) => squared_l2_2d(&[ax, ay], &[bx, by]),
+        (&[ax, ay, az], &[bx, by, bz]) => squared_l2_3d(&[ax, ay, az], &[bx, by, bz]),
         _ => a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum(),
     }
+}
+
+/// δ² between 2-D points, summed in coordinate order (every Euclidean path of dimension 2).
+#[inline]
+fn squared_l2_2d(&[ax, ay]: &[f64; 2], &[bx, by]: &[f64; 2]) -> f64 {
+    (ax - bx).powi(2) + (ay - by).powi(2)
+}
+
+/// δ² between 3-D points, summed in coordinate order (every Euclidean path of dimension 3).
+#[inline]
+fn squared_l2_3d(&[ax, ay, az]: &[f64; 3], &[bx, by, bz]: &[f64; 3]) -> f64 {
+    (ax - bx).powi(2) + (ay - by).powi(2) + (az - bz).powi(2)
 }
 
 #[cfg(test)]
@@ -202,6 +239,30 @@ mod tests {
         assert_eq!(Euclidean.distance(&[1.0, 1.0, 1.0, 1.0], &[0.0, 0.0, 0.0, 0.0]), 2.0);
         assert_eq!(Euclidean.distance_rank(&[0.0, 0.0], &[3.0, 4.0]), 25.0);
         assert!(Euclidean.check_dim(0).is_err());
+    }
+
+    #[test]
+    fn fixed_size_distances_are_the_slices_bit_for_bit() {
+        // Coordinates of many magnitudes, where a different order of the sum would round
+        // differently in some pairs.
+        let mut state = 0x2545_F491_4F6C_DD1D_u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let mantissa = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            mantissa * 10f64.powi((state % 13) as i32 - 4)
+        };
+        for _ in 0..10_000 {
+            let (a, b) = ([next(), next(), next()], [next(), next(), next()]);
+            let expected = a.iter().zip(&b).map(|(x, y)| (x - y) * (x - y)).fold(0.0, |s, t| s + t).sqrt();
+            assert_eq!(Euclidean.distance_3d(&a, &b).to_bits(), expected.to_bits());
+            assert_eq!(Euclidean.distance(&a, &b).to_bits(), expected.to_bits());
+            let (a, b) = ([a[0], a[1]], [b[0], b[1]]);
+            let expected = ((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1])).sqrt();
+            assert_eq!(Euclidean.distance_2d(&a, &b).to_bits(), expected.to_bits());
+            assert_eq!(Euclidean.distance(&a, &b).to_bits(), expected.to_bits());
+        }
     }
 
     #[test]

@@ -722,7 +722,38 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
     /// triangle inequality through x_i and the path between them), so those rows skip it
     /// without measuring. The entry is the path length s up to which that holds.
     pub(crate) fn scan_row(&self, i: usize, candidates: &[Leaf], far_until: &mut [f64], out: &mut Block) {
-        let x_i = self.traj.point(i);
+        // The points as arrays of their dimension, read once a row: a distance then builds and
+        // checks no slices (the metric's fixed-size δ, bit for bit its `distance`).
+        let coords = self.traj.coords();
+        match self.traj.dim() {
+            2 => {
+                let points = coords.as_chunks::<2>().0;
+                let x_i = points[i];
+                self.scan_row_by(i, |j| self.metric.distance_2d(&x_i, &points[j]), candidates, far_until, out);
+            }
+            3 => {
+                let points = coords.as_chunks::<3>().0;
+                let x_i = points[i];
+                self.scan_row_by(i, |j| self.metric.distance_3d(&x_i, &points[j]), candidates, far_until, out);
+            }
+            _ => {
+                let x_i = self.traj.point(i);
+                let distance_to = |j| self.metric.distance(x_i, self.traj.point(j));
+                self.scan_row_by(i, distance_to, candidates, far_until, out);
+            }
+        }
+    }
+
+    /// [`scan_row`](Self::scan_row) with `distance_to(j)` = δ(x_i, x_j).
+    #[inline(always)]
+    fn scan_row_by(
+        &self,
+        i: usize,
+        distance_to: impl Fn(usize) -> f64,
+        candidates: &[Leaf],
+        far_until: &mut [f64],
+        out: &mut Block,
+    ) {
         let margin = self.arc.margin;
         let reach = self.gamma + margin;
         let s_i = if far_until.is_empty() { 0.0 } else { self.arc.s[i] };
@@ -747,7 +778,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             // Every pose of the stretch is within γ of x_i, known without measuring them.
             let mut whole = leaf.inside;
             if !leaf.inside {
-                let d = self.metric.distance(x_i, self.traj.point(leaf.centre as usize));
+                let d = distance_to(leaf.centre as usize);
                 if leaf.uniform {
                     // Every pose of the stretch is the centre's point, bit for bit: δ from x_i
                     // to each of them is d, so d decides them all, exactly.
@@ -790,7 +821,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                 continue;
             }
             while j < hi {
-                let d = self.metric.distance(x_i, self.traj.point(j));
+                let d = distance_to(j);
                 if d <= self.gamma {
                     // Every k up to here has δ(x_i, x_k) ≤ d + (s_k − s_j) ≤ γ − margin.
                     let k = self.arc.last_within(j, self.gamma - d - margin);

@@ -1095,6 +1095,16 @@ impl<M: Metric + ?Sized> Metric for Swapped<'_, M> {
     }
 
     #[inline]
+    fn distance_2d(&self, a: &[f64; 2], b: &[f64; 2]) -> f64 {
+        self.0.distance_2d(b, a)
+    }
+
+    #[inline]
+    fn distance_3d(&self, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+        self.0.distance_3d(b, a)
+    }
+
+    #[inline]
     fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
         self.0.distance_rank(b, a)
     }
