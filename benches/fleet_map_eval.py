@@ -375,7 +375,8 @@ def estimate_tables(results: ev.FleetResults, budgets: list[int]) -> list[str]:
 
     lines = [
         "**Without ground truth: candidates on the estimates.** Every session's odometry starts "
-        "at its reference's first pose (known starts, as with a fix at the start); candidates on "
+        "at its reference's first pose and the back end holds it there (known starts, as with "
+        "a fix at the start: no match moves a session); candidates on "
         "the references, or on the drifted estimates (γ inflated 2×, pairs between sessions only "
         "where they share a frame) all at once or in 3 rounds (`ev.FleetRounds`: each round "
         "chosen on the estimates the matches before it corrected), the same total budget; no "
