@@ -24,10 +24,18 @@ from harness import write_section
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def arguments(doc: str, name: str, datasets: Sequence[str], *, seeds: int, budgets: str):
+def arguments(
+    doc: str,
+    name: str,
+    datasets: Sequence[str],
+    *,
+    seeds: int,
+    budgets: str,
+    extra: Callable[[argparse.ArgumentParser], None] | None = None,
+):
     """The command line of the map evaluation ``name``: ``--data``, ``--out`` (default
     ``benches/<name>``), ``--datasets``, ``--seeds``, ``--budgets``, ``--report-only``,
-    ``--output`` and ``--no-write``."""
+    ``--output`` and ``--no-write``, and the options ``extra`` adds."""
     parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
     parser.add_argument("--out", default=str(ROOT / "benches" / name))
@@ -39,6 +47,8 @@ def arguments(doc: str, name: str, datasets: Sequence[str], *, seeds: int, budge
     parser.add_argument(
         "--no-write", action="store_true", help="print the section, write no report"
     )
+    if extra is not None:
+        extra(parser)
     return parser.parse_args()
 
 
@@ -240,10 +250,11 @@ def main(
     budgets: str,
     run: Callable[[argparse.Namespace], None],
     report: Callable[[argparse.Namespace], None],
+    extra: Callable[[argparse.ArgumentParser], None] | None = None,
 ) -> None:
-    """The map evaluation ``name``'s command (:func:`arguments`): ``run`` the grid (but with
-    ``--report-only``), then ``report``."""
-    args = arguments(doc, name, datasets, seeds=seeds, budgets=budgets)
+    """The map evaluation ``name``'s command (:func:`arguments`, with the options ``extra``
+    adds): ``run`` the grid (but with ``--report-only``), then ``report``."""
+    args = arguments(doc, name, datasets, seeds=seeds, budgets=budgets, extra=extra)
     if not args.report_only:
         run(args)
     report(args)

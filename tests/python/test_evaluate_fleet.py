@@ -640,3 +640,27 @@ def test_fleet_rounds_in_the_evaluation_match_more_of_their_candidates(tmp_path)
     results.to_csv(tmp_path / "rows.csv")
     again = ev.FleetResults.from_csv(tmp_path / "rows.csv").rows
     assert again == [{k: r[k] for k in ev.FLEET_COLUMNS} for r in results.rows]
+
+
+@needs_gtsam
+@pytest.mark.parametrize("on", ["reference", "estimate"])
+def test_known_starts_hold_every_session_where_its_start_is(on):
+    """With known starts every session's first pose is known in the map's frame, as with a fix
+    at the start: the back end holds each there, and matches between sessions, wrong ones too,
+    do not move a session's start. Here every match is wrong (the verifier's outlier rate 1):
+    the map is the odometry alone's, each session's first pose its reference's (to 1 cm), and
+    its joint ATE no larger. Before, the wrong matches placed the sessions (a weak prior at the
+    guess they made) and moved them by metres."""
+    refs = three_sessions()
+    odos = ev.simulate_fleet_odometry(refs, seed=3, known_starts=True)
+    alone, _, _, _ = ev.evaluate_fleet_one(refs, odos, None, seed=3, known_starts=True)
+    rule = ev.FleetRule("closest-first", 12, 5.0, between_only=True, on=on)
+    estimates, matches, (i, j), _ = ev.evaluate_fleet_one(
+        refs, odos, rule, seed=3, verifier=ev.Verifier(outlier_rate=1.0), known_starts=True
+    )
+    _, between = split(i, j, starts_of(refs))
+    assert matches is not None and matches.wrong.all() and between.sum() >= 4
+    for reference, estimate in zip(refs.values(), estimates, strict=True):
+        assert np.linalg.norm(estimate.positions[0] - reference.positions[0]) < 0.01
+    wrong = ev.fleet_errors(refs, estimates, overlap_m=5.0).ate_m
+    assert wrong <= ev.fleet_errors(refs, alone, overlap_m=5.0).ate_m * 1.01 + 0.01

@@ -564,6 +564,7 @@ def optimize_fleet(
     anchor: int = 0,
     start_sigma_m: float = 1000.0,
     start_sigma_rad: float = math.pi,
+    known_starts: bool = False,
 ) -> list[Poses]:
     """The multi-session pose graph of ``odometries`` (one per session) and ``matches`` (in
     fleet indices: the sessions' poses one after another) optimised by ``backend`` (GTSAM).
@@ -571,9 +572,12 @@ def optimize_fleet(
     Pose j of the s-th session is :func:`session_key` (s, j). The anchor's first pose has a
     tight prior at its odometry's start (the map's frame); every other session's first pose a
     weak one (``start_sigma_m`` per axis, ``start_sigma_rad``) at its initial guess, which
-    :func:`place_sessions` makes from the matches. Odometry factors are Gaussian; the loop
-    factors -- within and between sessions -- take the back end's robust kernel (GNC: odometry
-    and priors known to be right).
+    :func:`place_sessions` makes from the matches. With ``known_starts`` every session's start
+    is known (its odometry's start, in the map's frame, as with a fix at the start): each first
+    pose has the anchor's tight prior at it, and the initial guess is the estimates as they are
+    (no match moves a session, so wrong matches between sessions cannot displace one). Odometry
+    factors are Gaussian; the loop factors -- within and between sessions -- take the back
+    end's robust kernel (GNC: odometry and priors known to be right).
 
     Returns:
         the optimised poses of each session, in order.
@@ -597,7 +601,10 @@ def optimize_fleet(
     between = gtsam.BetweenFactorPose2 if dim == 2 else gtsam.BetweenFactorPose3
     prior = gtsam.PriorFactorPose2 if dim == 2 else gtsam.PriorFactorPose3
     estimates = [o.estimate for o in odometries]
-    offsets, _ = place_sessions(estimates, matches, anchor=anchor)
+    if known_starts:
+        offsets = [np.eye(dim + 1) for _ in estimates]
+    else:
+        offsets, _ = place_sessions(estimates, matches, anchor=anchor)
     graph = gtsam.NonlinearFactorGraph()
     initial = gtsam.Values()
     starts = np.r_[0, np.cumsum([len(e) for e in estimates])]
@@ -606,7 +613,7 @@ def optimize_fleet(
         session_keys = [session_key(s, k) for k in range(len(estimate))]
         keys.extend(session_keys)
         guess = offsets[s] @ estimate.matrices
-        if s == anchor:
+        if s == anchor or known_starts:
             noise = noise_model(gtsam, dim, 1e-4, 1e-5)
             graph.add(prior(session_keys[0], pose_value(gtsam, odometry.start), noise))
         else:
@@ -883,7 +890,8 @@ def evaluate_fleet_one(
     optimised; on the estimates in ``rule.rounds`` rounds (:class:`FleetRounds`), each verified
     and optimised before the next. There, sessions share a frame once matches placed them
     (:func:`place_sessions`), or all from the start with ``known_starts`` (the odometries start
-    at the references' first poses: :func:`simulate_fleet_odometry`).
+    at the references' first poses: :func:`simulate_fleet_odometry`), where the back end holds
+    every session at its start too (:func:`optimize_fleet`).
 
     Returns the optimised poses of each session (in the order of ``references``), the matches
     and the candidate pairs (fleet indices), and the number of sessions placed by matches (the
@@ -904,7 +912,8 @@ def evaluate_fleet_one(
     a = _anchor_index(names, anchor)
     empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
     if rule is None:
-        return optimize_fleet(odos, None, backend, anchor=a), None, empty, 1
+        alone = optimize_fleet(odos, None, backend, anchor=a, known_starts=known_starts)
+        return alone, None, empty, 1
     verifier = verifier or Verifier()
     joint = _joint(items)
     starts = _starts(items)
@@ -922,7 +931,7 @@ def evaluate_fleet_one(
             chosen.append((i, j))
             matches = _concat_matches(parts)
             _, placed = place_sessions([o.estimate for o in odos], matches, anchor=a)
-            corrected = optimize_fleet(odos, matches, backend, anchor=a)
+            corrected = optimize_fleet(odos, matches, backend, anchor=a, known_starts=known_starts)
             rounds.update(estimates, corrected)
             estimates = corrected
         pairs = (np.concatenate([c[0] for c in chosen]), np.concatenate([c[1] for c in chosen]))
@@ -930,7 +939,8 @@ def evaluate_fleet_one(
     i, j = choose_fleet_candidates(references, rule, seed=seed, loops=loops)
     matches = verifier.verify(joint, i, j, seed=seed)
     _, placed = place_sessions([o.estimate for o in odos], matches, anchor=a)
-    return optimize_fleet(odos, matches, backend, anchor=a), matches, (i, j), int(sum(placed))
+    estimates = optimize_fleet(odos, matches, backend, anchor=a, known_starts=known_starts)
+    return estimates, matches, (i, j), int(sum(placed))
 
 
 def _fleet_grid(
@@ -1139,7 +1149,13 @@ def evaluate_fleet(
                 odos = {n: o.take(keep[n]) if n in keep else o for n, o in odos.items()}
         start = time.perf_counter()
         alone, _, _, _ = evaluate_fleet_one(
-            refs, odos, None, seed=int(seed), backend=backend, anchor=names[a]
+            refs,
+            odos,
+            None,
+            seed=int(seed),
+            backend=backend,
+            anchor=names[a],
+            known_starts=known_starts,
         )
         odo_errors = fleet_errors(refs, alone, overlap_m=overlap, pairs=pairs)
         base = {
