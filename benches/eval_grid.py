@@ -16,7 +16,8 @@ Usage::
 Datasets are those of ``map_eval.py`` (``urban``, ``kitti00``, ``kitti05``, ``kitti08``,
 ``kaist01``: the same keyframes and gamma), plus ``urbanN``: the urban drive of seed N (a drive
 the benchmarks never use). ``--on rounds`` is ``on="estimate"`` with the budget spent in
-``--rounds`` rounds (:class:`inexact_loops.evaluate.Rounds`). Verifier models are
+``--rounds`` rounds (:class:`inexact_loops.evaluate.Rounds`; ``--rounds-order time``: round r
+on the pairs whose later pose is in the r-th stretch of the path). Verifier models are
 :data:`inexact_loops.evaluate.VERIFIER_MODELS`. Every run appends its row to ``OUT/rows.csv``
 as it finishes and a second invocation skips the samplers of a block already there (so that
 adding a sampler to ``--samplers`` runs that one alone); the table goes to
@@ -89,6 +90,13 @@ def arguments() -> argparse.Namespace:
     parser.add_argument("--first-seed", type=int, default=0, help="seeds FIRST..FIRST+SEEDS-1")
     parser.add_argument("--on", default="reference,estimate")
     parser.add_argument("--rounds", type=int, default=3, help="rounds of --on rounds")
+    parser.add_argument(
+        "--rounds-order",
+        choices=("any", "time"),
+        default="any",
+        help="--on rounds: each round over the whole estimate (any), or round r on the pairs "
+        "whose later pose is in the r-th stretch of the path (time, as an online front end)",
+    )
     parser.add_argument("--verifiers", default="distance-aware")
     parser.add_argument("--outliers", default="0")
     parser.add_argument("--samplers", default=",".join(ev.SAMPLERS + ev.BASELINES))
@@ -149,6 +157,7 @@ def run(args: argparse.Namespace, rows_path: Path) -> None:
                             seeds=[seed],
                             on=["reference" if on == "reference" else "estimate"],
                             rounds=args.rounds if on == "rounds" else 1,
+                            rounds_order=args.rounds_order,
                             outlier_rates=[rate],
                             verifier=verifier,
                             dataset=name,

@@ -606,6 +606,52 @@ def test_rounds_choose_on_the_estimate_they_are_given():
         ev.CandidateRule("rho", 10, 8.0, rounds=2)
 
 
+def test_rounds_in_time_order_choose_each_stretch_of_the_path_in_turn():
+    """Rounds in time order: round r's pairs all have their later pose in the r-th of R
+    stretches of equal path length (measured here by summing the steps), each pair a revisit
+    of the estimate it was chosen on (within the inflated gamma, 4 gamma of path apart), the
+    round's whole share spent on them, the budget spent in all, and the same pairs for the
+    same seed."""
+    reference = circuit(laps=3.0, n=600)
+    drifted = ev.DriftModel(heading_bias_rad_per_m=2e-3).simulate(reference, seed=0).estimate
+    rule = ev.CandidateRule(
+        "nearest-then-uniform", 60, 8.0, on="estimate", rounds=3, rounds_order="time"
+    )
+    steps = np.linalg.norm(np.diff(drifted.positions, axis=0), axis=1)
+    path = np.r_[0.0, np.cumsum(steps)]
+    edges = path[-1] * np.array([0.0, 1 / 3, 2 / 3, np.inf])
+
+    def drive(seed: int) -> list[list[tuple[int, int]]]:
+        rounds, estimate, chosen = ev.Rounds(rule, seed=seed), drifted, []
+        while not rounds.done:
+            inflation = rounds.gamma_inflation
+            i, j = rounds.choose(estimate)
+            r = rounds.round - 1
+            assert len(i) == 20, f"round {r}: {len(i)} pairs of a share of 20"
+            assert (i < j).all()
+            assert ((path[j] >= edges[r]) & (path[j] < edges[r + 1])).all(), f"round {r}"
+            d = np.linalg.norm(estimate.positions[i] - estimate.positions[j], axis=1)
+            assert (d <= 8.0 * inflation + 1e-9).all() and (path[j] - path[i] >= 32.0).all()
+            chosen.append(list(zip(i.tolist(), j.tolist(), strict=True)))
+            rounds.update(estimate, reference)
+            estimate = reference  # the next rounds choose on the corrected estimate
+        assert rounds.tried == sum(map(len, chosen)) == 60
+        return chosen
+
+    first = drive(seed=1)
+    assert drive(seed=1) == first
+    assert drive(seed=2) != first
+    # Later rounds reach back: some pairs tie the stretch to the earlier laps.
+    assert any(path[i] < edges[1] for i, _ in first[2])
+    for bad in (
+        dict(rounds_order="lap"),
+        dict(sampler="lio-sam", rounds_order="time"),
+        dict(source="detections", rounds_order="time"),
+    ):
+        with pytest.raises(il.InvalidParameterError, match="rounds_order"):
+            dataclasses.replace(rule, **bad)
+
+
 @needs_gtsam
 def test_rounds_in_the_evaluation_match_more_of_their_candidates():
     """Candidates in rounds on a drifted estimate: later rounds choose on the corrected

@@ -14,9 +14,11 @@ import numpy as np
 
 from .._core import (
     Separation,
+    Trajectory,
     cluster_detections,
     draw_detections,
     find_loops,
+    path_length,
     sample,
 )
 from ..errors import InvalidParameterError, LoopsWarning
@@ -67,6 +69,11 @@ class CandidateRule:
         rounds: for ``on="estimate"``: the budget spent in this many rounds, each chosen on
             the estimate the matches of the rounds before corrected (:class:`Rounds`); 1: all
             at once on the odometry's estimate.
+        rounds_order: ``"any"``: each round chooses over the whole estimate; ``"time"``: as an
+            online front end does, round r chooses only pairs whose later pose lies in the r-th
+            stretch of the path (equal shares of its length), on the estimate the earlier
+            rounds corrected; in rounds, not with a baseline or ``source="detections"``, which
+            read the poses' times.
     """
 
     sampler: str
@@ -79,6 +86,7 @@ class CandidateRule:
     detection_rate: float = 0.01
     epsilon_s: float = 30.0
     rounds: int = 1
+    rounds_order: Literal["any", "time"] = "any"
 
     def __post_init__(self) -> None:
         check_rule("CandidateRule", self.sampler, self.budget, self.gamma)
@@ -87,6 +95,16 @@ class CandidateRule:
                 f"CandidateRule: source {self.source!r}: exact or detections"
             )
         check_on("CandidateRule", self.on, self.gamma_inflation, self.rounds)
+        if self.rounds_order not in ("any", "time"):
+            raise InvalidParameterError(
+                f"CandidateRule: rounds_order {self.rounds_order!r}: any or time"
+            )
+        time_rounds = self.rounds_order == "time" and self.rounds > 1
+        if time_rounds and (self.is_baseline or self.source != "exact"):
+            raise InvalidParameterError(
+                f'CandidateRule: rounds_order="time" with {self.sampler!r} on {self.source!r}: '
+                'only a sampler of SAMPLERS on source="exact"'
+            )
 
     @property
     def is_baseline(self) -> bool:
@@ -122,7 +140,12 @@ def check_on(kind: str, on: str, gamma_inflation: float, rounds: int) -> None:
 
 
 def choose_candidates(
-    poses: Poses, rule: CandidateRule, *, seed: int, gamma_inflation: float | None = None
+    poses: Poses,
+    rule: CandidateRule,
+    *,
+    seed: int,
+    gamma_inflation: float | None = None,
+    later_in: tuple[int, int] | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Candidate pairs ``(i, j)``, i < j, chosen by ``rule`` on ``poses`` (the reference, or the
     odometry's estimate for ``rule.on == "estimate"``: pass the poses the rule is to see).
@@ -130,14 +153,18 @@ def choose_candidates(
     Loops are found on the positions (Euclidean, metres) within ``rule.gamma`` times the
     inflation (``gamma_inflation``, else ``rule.gamma_inflation`` on the estimate, 1 on the
     reference); warnings of the samplers (a budget above the candidates, below the components)
-    are kept quiet: the returned count says it.
+    are kept quiet: the returned count says it. ``later_in=(a, b)``: only the pairs whose later
+    pose j lies in ``a <= j < b`` (:func:`_later_in`), the whole budget spent on them.
     """
 
     if gamma_inflation is None:
         gamma_inflation = rule.gamma_inflation if rule.on == "estimate" else 1.0
     gamma = rule.gamma * gamma_inflation
     separation: Separation | None = Separation.for_gamma(rule.gamma) if rule.separation else None
-    traj = poses.to_trajectory()
+    if later_in is None:
+        traj = poses.to_trajectory()
+    else:
+        traj, separation = _later_in(poses.positions, *later_in, separation)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", LoopsWarning)
         loops = find_loops(traj, gamma=gamma, separation=separation)
@@ -155,6 +182,23 @@ def choose_candidates(
     if i is None or j is None:  # pragma: no cover - samples on a trajectory always have pairs
         raise RuntimeError("samples without pose indices")
     return np.minimum(i, j), np.maximum(i, j)
+
+
+def _later_in(
+    positions: np.ndarray, a: int, b: int, separation: Separation | None
+) -> tuple[Trajectory, Separation]:
+    """A trajectory and separation whose loops are exactly those of ``positions[:b]`` (under
+    ``separation``) with the later pose j in ``a <= j < b``, so that a sampler spends its whole
+    budget on them (the library has no window of its own). The poses keep their positions; their
+    times become a clock under which a time separation of ``a + 1`` parts the pairs before
+    ``a``: poses k < a tick 1 s apart (any two at most a - 1 s apart), poses k >= a tick
+    ``2 a + 2`` s apart (any pair with j >= a at least that far apart). The times are pose
+    indices, not seconds: no sampler that reads times may be used on it."""
+    k = np.arange(b, dtype=float)
+    tick = 2.0 * a + 2.0
+    clock = np.where(k < a, k, a + (k - a + 1) * tick)
+    path = separation.path if separation is not None else 0.0
+    return Trajectory(clock, positions[:b]), Separation(path=path, time_s=a + 1.0)
 
 
 class _RoundsRule:
@@ -186,6 +230,19 @@ class _RoundsRule:
         #: The inflation of gamma the next round uses.
         self.gamma_inflation = float(rule.gamma_inflation)
         self._tried: set[tuple[int, ...]] = set()
+        #: ``"any"`` (each round over the whole estimate) or ``"time"`` (one stretch each).
+        self.order: str = getattr(rule, "rounds_order", "any")
+        self._bounds: np.ndarray | None = None
+
+    def _window(self, path_m: np.ndarray) -> tuple[int, int]:
+        """The poses ``a <= j < b`` the next round's later poses lie in, for ``order="time"``:
+        the stretches split the path (``path_m``, the cumulative path length of the first
+        estimate the rounds see) into ``rounds`` equal lengths, fixed from then on."""
+        if self._bounds is None:
+            edges = path_m[-1] * np.arange(1, self._rounds) / self._rounds
+            inner = np.searchsorted(path_m, edges, side="left")
+            self._bounds = np.r_[0, inner, len(path_m)].astype(np.int64)
+        return int(self._bounds[self.round]), int(self._bounds[self.round + 1])
 
     @property
     def done(self) -> bool:
@@ -233,8 +290,12 @@ class Rounds(_RoundsRule):
     estimate settles: after each round, ``1 + min(gamma_inflation - 1, c / gamma)``, with c the
     median distance (metres) the last optimisation moved the poses. A pair is tried once: the
     pairs of earlier rounds are left out (the sampler is asked for that many more, and a seeded
-    draw keeps the round's share). Each round's sampler seed is ``seed + round``. A fleet's
-    :class:`~inexact_loops.evaluate.FleetRounds` follows the same rule.
+    draw keeps the round's share). Each round's sampler seed is ``seed + round``. With
+    ``rule.rounds_order="time"``, as an online front end: round r chooses only pairs whose
+    later pose lies in the r-th of ``rule.rounds`` stretches of equal path length (of the first
+    estimate), its whole share on them, so that a pair's two poses differ mostly by the drift
+    since the part the earlier rounds corrected. A fleet's
+    :class:`~inexact_loops.evaluate.FleetRounds` follows the same rule (in any order).
 
     Attributes:
         rule: the candidate rule.
@@ -280,8 +341,17 @@ class Rounds(_RoundsRule):
         if self.done:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         share, seed = self._next_round()
-        ask = dataclasses.replace(self.rule, budget=share + self.tried, rounds=1)
-        i, j = choose_candidates(estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation)
+        if self.order == "time":
+            # Pairs of earlier rounds end before this stretch: the share is all the sampler
+            # is asked for, on the loops of the estimate whose later pose is in the stretch.
+            window = self._window(path_length(estimate.to_trajectory()))
+            ask = dataclasses.replace(self.rule, budget=share, rounds=1)
+            i, j = choose_candidates(
+                estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation, later_in=window
+            )
+        else:
+            ask = dataclasses.replace(self.rule, budget=share + self.tried, rounds=1)
+            i, j = choose_candidates(estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation)
         keep = self._keep(list(zip(i.tolist(), j.tolist(), strict=True)), share, seed)
         return i[keep], j[keep]
 

@@ -250,6 +250,7 @@ def _grid(
     detection_samplers: Sequence[str],
     budgets: Sequence[int],
     rounds: int = 1,
+    rounds_order: Literal["any", "time"] = "any",
     **rule: Any,
 ) -> Iterable[tuple[float, CandidateRule]]:
     """The runs of :func:`evaluate`, in its order: detections only for ``detection_samplers``
@@ -275,6 +276,7 @@ def _grid(
                                     source=source,
                                     on=where,
                                     rounds=rounds if where == "estimate" else 1,
+                                    rounds_order=rounds_order,
                                     **rule,
                                 ),
                             )
@@ -297,6 +299,7 @@ def evaluate(
     backend: BackEnd | None = None,
     gamma_inflation: float = 2.0,
     rounds: int = 1,
+    rounds_order: Literal["any", "time"] = "any",
     detection_rate: float = 0.01,
     epsilon_s: float = 30.0,
     rpe_delta_m: float = 100.0,
@@ -324,8 +327,9 @@ def evaluate(
         verifier: the verifier (its ``outlier_rate`` is replaced by each of ``outlier_rates``),
             or the name of one of :data:`VERIFIER_MODELS`.
         backend: the back end.
-        gamma_inflation, rounds, detection_rate, epsilon_s: as in :class:`CandidateRule`
-            (``rounds`` for the runs on the estimate).
+        gamma_inflation, rounds, rounds_order, detection_rate, epsilon_s: as in
+            :class:`CandidateRule` (``rounds`` and ``rounds_order`` for the runs on the
+            estimate; ``rounds_order="time"`` in rounds refuses the baselines).
         rpe_delta_m: the RPE's path delta (metres, pairs from the reference).
         dataset: a name for the rows.
         include_odometry: add a row per seed for the odometry alone (sampler ``"odometry"``).
@@ -360,6 +364,7 @@ def evaluate(
             "verifier": dataclasses.asdict(verifier),
             "backend": dataclasses.asdict(backend),
             "gamma_inflation": gamma_inflation,
+            "rounds_order": rounds_order,
             "detection_rate": detection_rate,
             "epsilon_s": epsilon_s,
             "rpe_delta_m": rpe_delta_m,
@@ -418,6 +423,7 @@ def evaluate(
             detection_samplers,
             budgets,
             rounds,
+            rounds_order,
             gamma=gamma,
             gamma_inflation=gamma_inflation,
             detection_rate=detection_rate,
