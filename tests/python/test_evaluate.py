@@ -650,6 +650,19 @@ def test_rounds_in_time_order_choose_each_stretch_of_the_path_in_turn():
     ):
         with pytest.raises(il.InvalidParameterError, match="rounds_order"):
             dataclasses.replace(rule, **bad)
+    # The evaluation hands the order to its rules: a baseline in time-ordered rounds refuses.
+    with pytest.raises(il.InvalidParameterError, match="rounds_order"):
+        ev.evaluate(
+            reference,
+            gamma=8.0,
+            samplers=["lio-sam"],
+            budgets=[10],
+            seeds=[0],
+            on=["estimate"],
+            rounds=3,
+            rounds_order="time",
+            include_odometry=False,
+        )
 
 
 @needs_gtsam
