@@ -172,6 +172,16 @@ def test_scans_run_on_both_workers_and_equal_the_update_here(tmp_path, client):
     assert len(scans) == 8
     assert len({t["worker"] for t in scans}) == 2, [t["worker"] for t in scans]
     assert_same_tables(there, here)
+    # Run again (yesterday's update, and one of nothing): nothing changed, nothing written.
+    written = {str(p): (p.stat().st_mtime_ns, p.read_bytes()) for p in there.rglob("*") if p.is_file()}
+    folder_time = there.stat().st_mtime_ns
+    for add in (second, None):
+        again = update_store(there, add=add, client=client)
+        assert not again["last_update"]["changed"], again
+        assert again["state_path"] == got["state_path"]
+        assert again["added_components"] == got["added_components"]
+        files_now = {str(p): (p.stat().st_mtime_ns, p.read_bytes()) for p in there.rglob("*") if p.is_file()}
+        assert files_now == written and there.stat().st_mtime_ns == folder_time
 
 
 def test_trajectories_are_refused_with_a_client(client):
