@@ -964,7 +964,8 @@ impl FleetStore {
                 plan.scan_tile(k, [trajectory(a), trajectory(b)])
             })
             .collect::<Result<Vec<_>>>()?;
-        self.apply_update(&plan, scanned)
+        // Planned from this state just now: no need to plan again to check it.
+        self.apply_planned(&plan, scanned)
     }
 
     /// The plan of an update that adds or replaces the sessions `put` (by name; each
@@ -996,10 +997,21 @@ impl FleetStore {
     /// plan's (one missing, twice, of another plan, or not of its tile); as
     /// [`plan_update`](Self::plan_update).
     pub fn apply_update(&mut self, plan: &UpdatePlan, scanned: Vec<ScannedTile>) -> Result<StoreUpdate> {
-        let wrong = |reason: String| Error::InvalidState { what: "store update", reason };
         if self.plan_update(plan.put.clone(), &plan.remove)? != *plan {
-            return Err(wrong(format!("plan {:016x} is not of this store's state (planned from another)", plan.id)));
+            return Err(Error::InvalidState {
+                what: "store update",
+                reason: format!("plan {:016x} is not of this store's state (planned from another)", plan.id),
+            });
         }
+        self.apply_planned(plan, scanned)
+    }
+
+    /// [`apply_update`](Self::apply_update) of a plan known to be of this store's state (made
+    /// from it, and the store not changed since): the scans are checked against it, the plan
+    /// is not made again. O(the new tiles' components and edge runs + stored tiles + poses of
+    /// the sessions that lost a tile).
+    fn apply_planned(&mut self, plan: &UpdatePlan, scanned: Vec<ScannedTile>) -> Result<StoreUpdate> {
+        let wrong = |reason: String| Error::InvalidState { what: "store update", reason };
         let mut slots: Vec<Option<ScannedTile>> = vec![None; plan.tiles.len()];
         for s in scanned {
             if s.plan != plan.id {
@@ -1316,7 +1328,13 @@ impl FleetStore {
         let mut tiles_rescanned = 0;
         let settings = self.settings;
         let starts = &loops.starts;
-        let stored: HashMap<&Tile, usize> = self.tiles.iter().enumerate().map(|(k, t)| (t.tile(), k)).collect();
+        // The stored tile of a tile of the merge: the stored tiles are in plan order, by first
+        // row, then first column.
+        let stored = |tile: &Tile| {
+            let key = |t: &StoredTile| (t.tile().rows.start, t.tile().columns.start);
+            let k = self.tiles.binary_search_by_key(&(tile.rows.start, tile.columns.start), key).ok()?;
+            (self.tiles[k].tile() == tile).then_some(k)
+        };
         // The tiles (of the merge) that hold each component.
         let mut holders: Vec<Vec<usize>> = vec![Vec::new(); merged.components().len()];
         for k in 0..merged.tiles().len() {
@@ -1334,7 +1352,7 @@ impl FleetStore {
             unread.dedup();
             let trajectories = read_sessions(&self.sessions, &unread, source)?;
             read.extend(unread.into_iter().zip(trajectories));
-            let runs_of = |k: usize| stored.get(&merged.tiles()[k]).and_then(|&t| self.kept.runs[t].as_ref());
+            let runs_of = |k: usize| stored(&merged.tiles()[k]).and_then(|t| self.kept.runs[t].as_ref());
             tiles_rescanned += asked.iter().filter(|(k, _)| runs_of(*k).is_none()).count();
             let offers = asked
                 .par_iter()
