@@ -125,7 +125,8 @@ fn an_update_that_changes_nothing_writes_nothing() {
     let written = update_store(&dir, None, day1.clone(), &[]).unwrap();
     let before = times_and_bytes(&dir);
     std::thread::sleep(std::time::Duration::from_millis(20));
-    let again: [(Option<StoreConfig>, Vec<(String, Trajectory)>); 4] =
+    type Again = (Option<StoreConfig>, Vec<(String, Trajectory)>);
+    let again: [Again; 4] =
         [(None, vec![]), (Some(config()), vec![]), (None, day1.clone()), (Some(config()), all.clone())];
     for (config, put) in again {
         let report = update_store(&dir, config.as_ref(), put.clone(), &[]).unwrap();
