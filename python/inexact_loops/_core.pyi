@@ -2203,8 +2203,9 @@ class StoreUpdatePlan:
         """
     @property
     def last_update(self) -> dict[str, Any]:
-        """What the update will do, by name (``added``, ``replaced``, ``unchanged``, ``removed``)
-        and ``tiles_scanned``; the other counts are set when it is applied.
+        """What the update will do, by name (``added``, ``replaced``, ``unchanged``, ``removed``),
+        ``tiles_scanned``, and ``changed`` (False: the update writes nothing); the other counts
+        are set when it is applied.
         """
     def scan(
         self,
@@ -2355,7 +2356,11 @@ class FleetStore:
                 plan's tiles, of this state, and scans nothing.
 
         Returns:
-            :attr:`last_update`.
+            What this update did, as :attr:`last_update` holds it. An update of a store that
+            changes nothing (nothing given or removed, or every session given stored with this
+            content) says ``changed`` False and writes nothing: no new state, no file or time of
+            the folder touched, and :attr:`last_update` still that of the last update that
+            changed the store.
 
         Raises:
             InvalidParameterError: no ``gamma`` for a new store; settings other than the store's;
@@ -2399,9 +2404,10 @@ class FleetStore:
         """The name of the store's sampler; ``None`` for a store without samples."""
     @property
     def last_update(self) -> dict[str, Any]:
-        """What the last update did: a dict of ``added``, ``replaced``, ``unchanged``,
-        ``removed`` (session names, each in name order) and ``tiles_scanned``, ``tiles_kept``,
-        ``tiles_dropped`` (int).
+        """What the last update that changed the store did: a dict of ``added``, ``replaced``,
+        ``unchanged``, ``removed`` (session names, each in name order), ``tiles_scanned``,
+        ``tiles_kept``, ``tiles_dropped`` (int) and ``changed`` (bool: whether it added,
+        replaced or removed a session).
         """
     @property
     def components(self) -> Table:

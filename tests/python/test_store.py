@@ -276,6 +276,45 @@ def test_the_dask_runner_cuts_sessions_by_the_core_block() -> None:
     assert dask_runner.DEFAULT_BLOCK is il.FleetStore.DEFAULT_BLOCK
 
 
+def times_and_bytes(folder: Path) -> dict[str, tuple[int, bytes | None]]:
+    """The folder and everything under it: each modification time, and each file's bytes."""
+    paths = [folder, *folder.rglob("*")]
+    return {str(p): (p.stat().st_mtime_ns, p.read_bytes() if p.is_file() else None) for p in paths}
+
+
+@quiet
+def test_an_update_that_changes_nothing_writes_nothing(tmp_path: Path) -> None:
+    """Nothing given, or the stored sessions given again (as a rerun of yesterday's update
+    gives them), in process or by the Dask runner without a cluster: nothing is written (no new
+    state, no file or time of the folder touched), the summary says so, and the store's last
+    update is still the one that changed it."""
+    from inexact_loops.dask import update_store
+
+    pool = sessions()
+    folder = tmp_path / "store"
+    store = il.FleetStore.open(folder)
+    first = dict(list(pool.items())[:3])
+    store.update(add=first, gamma=GAMMA, block=BLOCK, **SAMPLING)
+    done = store.update(add=dict(list(pool.items())[3:]))
+    before, state, added = times_and_bytes(folder), store.state_path, store.added.tolist()
+    samples = store.samples.to_pandas()
+    assert done["changed"] and done == store.last_update
+    for add in (None, first, pool):
+        update = store.update(add=add)
+        assert not update["changed"] and update["tiles_scanned"] == 0
+        assert update["unchanged"] == sorted(add or [])
+        assert store.last_update == done and store.state_path == state
+        assert store.added.tolist() == added
+        assert store.samples.to_pandas().equals(samples)
+        assert times_and_bytes(folder) == before, "an update that changes nothing wrote"
+        again = il.FleetStore.open(folder)
+        assert again.last_update == done and again.state_path == state
+    summary = update_store(folder, add=first)
+    assert not summary["last_update"]["changed"]
+    assert summary["added_components"] == len(added)
+    assert times_and_bytes(folder) == before, "an update that changes nothing wrote"
+
+
 def table_bytes(folder: Path) -> dict[str, bytes]:
     """Every table of the current state, as its file's bytes."""
     return {p.name: p.read_bytes() for p in sorted(state_dir(folder).glob("*.parquet"))}

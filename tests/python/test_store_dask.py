@@ -83,6 +83,12 @@ def table_bits(folder: Path, name: str, drop: tuple[str, ...] = ()) -> dict[str,
     return out
 
 
+def times_and_bytes(folder: Path) -> dict[str, tuple[int, bytes | None]]:
+    """The folder and everything under it: each modification time, and each file's bytes."""
+    paths = [folder, *folder.rglob("*")]
+    return {str(p): (p.stat().st_mtime_ns, p.read_bytes() if p.is_file() else None) for p in paths}
+
+
 def files_of(folder: Path) -> dict[str, bytes]:
     return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
 
@@ -172,6 +178,14 @@ def test_scans_run_on_both_workers_and_equal_the_update_here(tmp_path, client):
     assert len(scans) == 8
     assert len({t["worker"] for t in scans}) == 2, [t["worker"] for t in scans]
     assert_same_tables(there, here)
+    # Run again (yesterday's update, and one of nothing): nothing changed, nothing written.
+    written = times_and_bytes(there)
+    for add in (second, None):
+        again = update_store(there, add=add, client=client)
+        assert not again["last_update"]["changed"], again
+        assert again["state_path"] == got["state_path"]
+        assert again["added_components"] == got["added_components"]
+        assert times_and_bytes(there) == written
 
 
 def test_trajectories_are_refused_with_a_client(client):
@@ -299,3 +313,22 @@ def test_an_apply_run_again_after_its_result_was_lost_writes_nothing(tmp_path):
     update_store(here, add=first, **SETTINGS)
     update_store(here, add=second)
     assert_same_tables(folder, here)
+
+
+@quiet
+def test_loops_dask_says_in_one_line_that_a_day_given_again_changes_nothing(tmp_path, capsys):
+    """``loops-dask --store`` run again with a day already stored: one line says nothing
+    changed, and nothing is written (every file and time as it was)."""
+    from inexact_loops.dask._cli import main
+
+    files = pool(tmp_path / "logs")
+    day = [str(files[n][0]) for n in sorted(files) if n.endswith("day0")]
+    folder = tmp_path / "store"
+    assert main([*day, "--store", str(folder), "--gamma", "40", "--block", "300"]) == 0
+    capsys.readouterr()
+    written = times_and_bytes(folder)
+    assert main([*day, "--store", str(folder)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("\n") == 1, out
+    assert "nothing changed, nothing written: 3 stored as given" in out, out
+    assert times_and_bytes(folder) == written

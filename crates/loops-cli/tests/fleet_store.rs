@@ -77,6 +77,19 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     out
 }
 
+/// The modification time of `dir` and of everything under it, the marker included.
+fn times(dir: &Path) -> BTreeMap<PathBuf, std::time::SystemTime> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(path) = stack.pop() {
+        out.insert(path.clone(), std::fs::metadata(&path).unwrap().modified().unwrap());
+        if path.is_dir() {
+            stack.extend(std::fs::read_dir(&path).unwrap().map(|e| e.unwrap().path()));
+        }
+    }
+    out
+}
+
 #[test]
 fn a_store_grown_by_the_day_agrees_with_the_core() {
     let dir = temp_dir("days");
@@ -88,9 +101,22 @@ fn a_store_grown_by_the_day_agrees_with_the_core() {
         assert!(String::from_utf8_lossy(&output.stdout).contains("added car0-day"), "{}", stderr(&output));
         assert_eq!(stored(&store), core_components(&files[..2 * day + 2]), "day {day}");
     }
-    // Again: nothing to scan.
-    let output = store_run(&store, &files[..2], &[]);
-    assert!(String::from_utf8_lossy(&output.stdout).contains("unchanged car0-day0, car1-day0; 0 tiles scanned"));
+    // Again (yesterday's run once more): nothing changed, one line, nothing written (no file,
+    // no time).
+    let (before, then) = (snapshot(&store), times(&store));
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    for (again, said) in [
+        (&files[..2], "2 stored as given (car0-day0, car1-day0)"),
+        (&files[4..], "2 stored as given (car0-day2, car1-day2)"),
+    ] {
+        let output = store_run(&store, again, &[]);
+        assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        assert_eq!(stdout.lines().count(), 1, "{stdout}");
+        assert!(stdout.contains(&format!("nothing changed, nothing written: {said}; 6 sessions")), "{stdout}");
+        assert_eq!(snapshot(&store), before);
+        assert!(times(&store) == then, "an update that changes nothing touched the store");
+    }
     // A session removed.
     let output = store_run(&store, &[], &["--remove", "car0-day1"]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));

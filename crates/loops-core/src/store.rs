@@ -275,6 +275,20 @@ pub struct StoreUpdate {
 }
 
 impl StoreUpdate {
+    /// Whether the update adds, replaces and removes nothing (every session given is stored
+    /// with that content, and none is removed): it leaves the store exactly as it was, its
+    /// [`FleetStore::last_update`] included, and a store on disk writes nothing for it.
+    ///
+    /// # Examples
+    /// ```
+    /// use loops_core::store::StoreUpdate;
+    /// assert!(StoreUpdate { unchanged: vec!["monday".into()], ..StoreUpdate::default() }.changes_nothing());
+    /// assert!(!StoreUpdate { removed: vec!["monday".into()], ..StoreUpdate::default() }.changes_nothing());
+    /// ```
+    pub fn changes_nothing(&self) -> bool {
+        self.added.is_empty() && self.replaced.is_empty() && self.removed.is_empty()
+    }
+
     /// The sessions whose tiles the update scanned: added and replaced, in name order.
     pub fn changed(&self) -> Vec<&str> {
         let mut names: Vec<&str> = self.added.iter().chain(&self.replaced).map(String::as_str).collect();
@@ -553,6 +567,12 @@ impl UpdatePlan {
     /// is applied).
     pub fn report(&self) -> &StoreUpdate {
         &self.report
+    }
+
+    /// Whether the update changes nothing ([`StoreUpdate::changes_nothing`]): it has no tile
+    /// to scan, and [`FleetStore::apply_update`] leaves the store as it was.
+    pub fn changes_nothing(&self) -> bool {
+        self.report.changes_nothing()
     }
 
     /// Checks that `trajectory` is session `s`'s (its pose count and fingerprint): what a
@@ -864,7 +884,7 @@ impl FleetStore {
         &self.tiles
     }
 
-    /// What the last update did.
+    /// What the last update that changed the store did (one that changes nothing leaves it).
     pub fn last_update(&self) -> &StoreUpdate {
         &self.last_update
     }
@@ -892,7 +912,10 @@ impl FleetStore {
     /// update: scans only the tiles that hold an added or replaced session (reading the stored
     /// sessions they meet from `source`, each once), keeps the tiles of every other pair, and
     /// drops those of replaced and removed sessions. A session given with the content it has
-    /// in the store (same fingerprint) changes nothing. On an error the store is unchanged.
+    /// in the store (same fingerprint) changes nothing; an update that changes nothing
+    /// ([`StoreUpdate::changes_nothing`]) leaves the store exactly as it was, its
+    /// [`last_update`](Self::last_update) included. Returns what the update did. On an error
+    /// the store is unchanged.
     ///
     /// The update is its three steps, here in one process: [`plan_update`](Self::plan_update),
     /// [`UpdatePlan::scan_tile`] of each planned tile (in parallel), and
@@ -913,7 +936,7 @@ impl FleetStore {
         put: Vec<(String, Trajectory)>,
         remove: &[String],
         source: &mut SessionSource<'_>,
-    ) -> Result<&StoreUpdate> {
+    ) -> Result<StoreUpdate> {
         // In parallel; the first error in the order given.
         let sessions: Vec<Result<StoreSession>> = put
             .par_iter()
@@ -941,7 +964,8 @@ impl FleetStore {
                 plan.scan_tile(k, [trajectory(a), trajectory(b)])
             })
             .collect::<Result<Vec<_>>>()?;
-        self.apply_update(&plan, scanned)
+        // Planned from this state just now: no need to plan again to check it.
+        self.apply_planned(&plan, scanned)
     }
 
     /// The plan of an update that adds or replaces the sessions `put` (by name; each
@@ -960,7 +984,10 @@ impl FleetStore {
     /// with `scanned` its tiles ([`UpdatePlan::scan_tile`] of each, in any order): keeps the
     /// tiles of every pair of unchanged sessions, moved to their new fleet indices, drops those
     /// of replaced and removed sessions, merges the session pairs of the new tiles, and adds
-    /// their shares of τ. On an error the store is unchanged. Time: O(the new tiles'
+    /// their shares of τ; a plan that changes nothing ([`UpdatePlan::changes_nothing`]) leaves
+    /// the store exactly as it was. Returns what the update did (then also
+    /// [`last_update`](Self::last_update) but for a plan that changes nothing). On an error the
+    /// store is unchanged. Time: O(the new tiles'
     /// components and edge runs + stored tiles + poses of the sessions that lost a tile), plus
     /// O(blocks log blocks) to check the plan.
     ///
@@ -969,11 +996,22 @@ impl FleetStore {
     /// (made from another state, or altered) and for scanned tiles that are not exactly the
     /// plan's (one missing, twice, of another plan, or not of its tile); as
     /// [`plan_update`](Self::plan_update).
-    pub fn apply_update(&mut self, plan: &UpdatePlan, scanned: Vec<ScannedTile>) -> Result<&StoreUpdate> {
-        let wrong = |reason: String| Error::InvalidState { what: "store update", reason };
+    pub fn apply_update(&mut self, plan: &UpdatePlan, scanned: Vec<ScannedTile>) -> Result<StoreUpdate> {
         if self.plan_update(plan.put.clone(), &plan.remove)? != *plan {
-            return Err(wrong(format!("plan {:016x} is not of this store's state (planned from another)", plan.id)));
+            return Err(Error::InvalidState {
+                what: "store update",
+                reason: format!("plan {:016x} is not of this store's state (planned from another)", plan.id),
+            });
         }
+        self.apply_planned(plan, scanned)
+    }
+
+    /// [`apply_update`](Self::apply_update) of a plan known to be of this store's state (made
+    /// from it, and the store not changed since): the scans are checked against it, the plan
+    /// is not made again. O(the new tiles' components and edge runs + stored tiles + poses of
+    /// the sessions that lost a tile).
+    fn apply_planned(&mut self, plan: &UpdatePlan, scanned: Vec<ScannedTile>) -> Result<StoreUpdate> {
+        let wrong = |reason: String| Error::InvalidState { what: "store update", reason };
         let mut slots: Vec<Option<ScannedTile>> = vec![None; plan.tiles.len()];
         for s in scanned {
             if s.plan != plan.id {
@@ -1006,9 +1044,13 @@ impl FleetStore {
                 plan.tiles[k]
             )));
         }
+        let mut report = plan.report.clone();
+        if plan.changes_nothing() {
+            report.tiles_kept = self.tiles.len();
+            return Ok(report);
+        }
         let scanned: Vec<(StoredTile, Arc<TileRuns>)> =
             slots.into_iter().flatten().map(|s| (s.tile, Arc::new(s.runs))).collect();
-        let mut report = plan.report.clone();
         let (starts, old_starts, before) = (&plan.starts, self.starts(), &plan.before);
         let mut now = vec![None; self.sessions.len()];
         for (k, b) in before.iter().enumerate() {
@@ -1114,15 +1156,15 @@ impl FleetStore {
         self.kept = Kept { merges, duration, runs };
         self.sessions = plan.sessions.clone();
         self.tiles = tiles;
-        self.last_update = report;
-        Ok(&self.last_update)
+        self.last_update = report.clone();
+        Ok(report)
     }
 
     /// Adds new sessions ([`update`](Self::update)).
     ///
     /// # Errors
     /// [`Error::StoreSession`] for a name already in the store; as [`update`](Self::update).
-    pub fn add(&mut self, sessions: Vec<(String, Trajectory)>, source: &mut SessionSource<'_>) -> Result<&StoreUpdate> {
+    pub fn add(&mut self, sessions: Vec<(String, Trajectory)>, source: &mut SessionSource<'_>) -> Result<StoreUpdate> {
         if let Some((name, _)) = sessions.iter().find(|(name, _)| self.session_index(name).is_some()) {
             return Err(Error::StoreSession { name: name.clone(), problem: "is already in the store (replace it)" });
         }
@@ -1137,7 +1179,7 @@ impl FleetStore {
         &mut self,
         sessions: Vec<(String, Trajectory)>,
         source: &mut SessionSource<'_>,
-    ) -> Result<&StoreUpdate> {
+    ) -> Result<StoreUpdate> {
         if let Some((name, _)) = sessions.iter().find(|(name, _)| self.session_index(name).is_none()) {
             return Err(Error::StoreSession { name: name.clone(), problem: "is not in the store (add it)" });
         }
@@ -1148,7 +1190,7 @@ impl FleetStore {
     ///
     /// # Errors
     /// As [`update`](Self::update).
-    pub fn remove(&mut self, names: &[String]) -> Result<&StoreUpdate> {
+    pub fn remove(&mut self, names: &[String]) -> Result<StoreUpdate> {
         let mut unread = |s: &StoreSession| -> Result<Trajectory> {
             Err(Error::StoreSession { name: s.name.clone(), problem: "was read by a removal" })
         };
@@ -1286,7 +1328,13 @@ impl FleetStore {
         let mut tiles_rescanned = 0;
         let settings = self.settings;
         let starts = &loops.starts;
-        let stored: HashMap<&Tile, usize> = self.tiles.iter().enumerate().map(|(k, t)| (t.tile(), k)).collect();
+        // The stored tile of a tile of the merge: the stored tiles are in plan order, by first
+        // row, then first column.
+        let stored = |tile: &Tile| {
+            let key = |t: &StoredTile| (t.tile().rows.start, t.tile().columns.start);
+            let k = self.tiles.binary_search_by_key(&(tile.rows.start, tile.columns.start), key).ok()?;
+            (self.tiles[k].tile() == tile).then_some(k)
+        };
         // The tiles (of the merge) that hold each component.
         let mut holders: Vec<Vec<usize>> = vec![Vec::new(); merged.components().len()];
         for k in 0..merged.tiles().len() {
@@ -1304,7 +1352,7 @@ impl FleetStore {
             unread.dedup();
             let trajectories = read_sessions(&self.sessions, &unread, source)?;
             read.extend(unread.into_iter().zip(trajectories));
-            let runs_of = |k: usize| stored.get(&merged.tiles()[k]).and_then(|&t| self.kept.runs[t].as_ref());
+            let runs_of = |k: usize| stored(&merged.tiles()[k]).and_then(|t| self.kept.runs[t].as_ref());
             tiles_rescanned += asked.iter().filter(|(k, _)| runs_of(*k).is_none()).count();
             let offers = asked
                 .par_iter()

@@ -266,6 +266,33 @@ fn refused_updates_change_nothing() {
     assert_eq!(store, before);
 }
 
+/// An update that changes nothing (nothing given, nothing removed, or stored sessions given
+/// again with the same content) leaves the store exactly as it was, what the last update that
+/// changed it did included, and says so; so does the plan applied step by step.
+#[test]
+fn an_update_that_changes_nothing_leaves_the_store_as_it_was() {
+    let pool = versions();
+    let mut store = FleetStore::new(settings(Separation::NONE)).unwrap();
+    let first: Vec<(String, Trajectory)> = pool.iter().take(3).map(|(n, v)| (n.clone(), v[0].clone())).collect();
+    let current: BTreeMap<String, Trajectory> = first.iter().cloned().collect();
+    store.update(first.clone(), &[], &mut source_of(&current)).unwrap();
+    let before = store.clone();
+    let names: Vec<String> = first.iter().map(|(n, _)| n.clone()).collect();
+    for put in [vec![], first.clone(), first[1..].to_vec()] {
+        let given: Vec<String> = put.iter().map(|(n, _)| n.clone()).collect();
+        let update = store.update(put, &[], &mut source_of(&current)).unwrap().clone();
+        assert!(update.added.is_empty() && update.replaced.is_empty() && update.removed.is_empty(), "{update:?}");
+        assert_eq!((update.unchanged, update.tiles_scanned), (given, 0));
+        assert_eq!(store, before, "an update that changes nothing changed the store");
+        assert_eq!(store.last_update().added, names);
+    }
+    let sessions = first.iter().map(|(n, t)| StoreSession::new(n.clone(), t, store.settings()).unwrap()).collect();
+    let plan = store.plan_update(sessions, &[]).unwrap();
+    assert!(plan.changes_nothing() && plan.tiles().is_empty());
+    assert!(store.apply_update(&plan, Vec::new()).unwrap().changes_nothing());
+    assert_eq!(store, before);
+}
+
 /// Adding the last day scans only its tiles: far fewer than all.
 #[test]
 fn a_new_day_scans_its_own_tiles_only() {

@@ -549,8 +549,9 @@ pub fn refuse_non_empty(out: &Path, force: bool, tool: Tool) -> Result<(), OutDi
     }
 }
 
-/// Locks `out` for this process, or says who holds it.
-fn lock(out: &Path, tool: Tool) -> Result<File, OutDirError> {
+/// Locks `out` for this process, or says who holds it: writes nothing (what a command that
+/// may leave the folder as it is holds while it reads).
+pub(crate) fn lock(out: &Path, tool: Tool) -> Result<File, OutDirError> {
     #[cfg(unix)]
     let file = File::open(out).map_err(io_error("opening", out))?;
     #[cfg(not(unix))]

@@ -463,6 +463,10 @@ pub fn read_samples(stored: &StoredFleet) -> Result<Vec<FleetSample>> {
 /// What [`update_store`] did.
 #[derive(Debug, Clone)]
 pub struct StoreReport {
+    /// What this update did. When it changes nothing ([`StoreUpdate::changes_nothing`]),
+    /// nothing was written: the folder, its files and their times are as they were, and the
+    /// store's own `last_update` is still that of the last update that changed it.
+    pub update: StoreUpdate,
     /// The store as it now is.
     pub stored: StoredFleet,
     /// Components in all, and those the update added.
@@ -471,7 +475,8 @@ pub struct StoreReport {
     pub added_components: usize,
     /// The loops written (`components.parquet`, `session_pairs.parquet`).
     pub loops: StoreLoops,
-    /// The samples written (`samples.parquet`), if the store has a sampler.
+    /// The samples written (`samples.parquet`), if the store has a sampler; `None` too when
+    /// nothing was written (they are then the table's, [`read_samples`]).
     pub samples: Option<StoreSamples>,
 }
 
@@ -479,7 +484,10 @@ pub struct StoreReport {
 /// making the store when the folder is missing or empty (with `config`, which must then be
 /// given; for an existing store, `config` when given must be the store's own). Scans only the
 /// new tiles ([`FleetStore::update`]), then writes the new state atomically (see the module
-/// docs).
+/// docs). An update of an existing store that changes nothing
+/// ([`StoreUpdate::changes_nothing`]: nothing given or removed, or every session given stored
+/// with the same content) writes nothing: no new state, no file or time of the folder touched
+/// ([`StoreReport::update`] says so).
 ///
 /// # Errors
 /// [`StoreError::OutDir`] for a folder that holds anything but a store, or a store in use;
@@ -619,6 +627,9 @@ fn update_with(
     remove: &[String],
     scanned: Option<Vec<ScannedTile>>,
 ) -> Result<StoreReport> {
+    if let Some(report) = unchanged(dir, config, &put, remove, scanned.as_ref())? {
+        return Ok(report);
+    }
     let exists = dir.join(STORE.marker).is_file();
     if !exists {
         crate::out_dir::refuse_non_empty(dir, false, STORE)?;
@@ -658,7 +669,7 @@ fn update_with(
         let path = poses_dir.as_ref().map(|p| p.join(pose_file(s))).unwrap_or_default();
         read_poses(&path).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
     };
-    match scanned {
+    let update = match scanned {
         None => store.update(put, remove, &mut source)?,
         Some(scanned) => {
             let sessions = put
@@ -734,6 +745,7 @@ fn update_with(
         out.remove(&old)?;
     }
     let report = StoreReport {
+        update,
         components: loops.components().len(),
         added_components: added.len(),
         samples,
@@ -741,6 +753,50 @@ fn update_with(
         stored: StoredFleet { dir: dir.to_path_buf(), state, store, config },
     };
     Ok(report)
+}
+
+/// The report of an update of the existing store in `dir` that changes nothing (planned from
+/// its small tables under the folder's lock, which writes nothing), the store read as it is;
+/// `None` for one that changes something, a store not yet made, or a folder that a killed
+/// update left pieces in (the update that writes tidies it). The plan is checked as
+/// [`update_store`] checks it (a `config` other than the store's, a name given twice or
+/// removed but not stored are errors), and so are scans given for it: it has none.
+fn unchanged(
+    dir: &Path,
+    config: Option<&StoreConfig>,
+    put: &[(String, Trajectory)],
+    remove: &[String],
+    scanned: Option<&Vec<ScannedTile>>,
+) -> Result<Option<StoreReport>> {
+    if !dir.join(STORE.marker).is_file() || !dir.join("store.json").is_file() {
+        return Ok(None);
+    }
+    let _lock = crate::out_dir::lock(dir, STORE)?;
+    let planned = plan_store_update(dir, config, put, remove)?;
+    if !planned.plan.changes_nothing() {
+        return Ok(None);
+    }
+    let mut stored = read_store(dir)?;
+    // What a killed update left (a scratch folder, another state) is tidied by writing.
+    let mut entries: Vec<String> = std::fs::read_dir(dir)
+        .and_then(|list| list.map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned())).collect())
+        .map_err(|error| StoreError::Io { what: "listing", path: dir.to_path_buf(), error })?;
+    entries.sort_unstable();
+    let mut clean = vec![STORE.marker.to_owned(), stored.state.clone(), "store.json".to_owned()];
+    clean.sort_unstable();
+    if entries != clean {
+        return Ok(None);
+    }
+    let update = stored.store.apply_update(&planned.plan, scanned.cloned().unwrap_or_default())?;
+    let loops = stored.store.loops()?;
+    Ok(Some(StoreReport {
+        update,
+        components: loops.components().len(),
+        added_components: stored.store.added_components(&loops).len(),
+        samples: None,
+        loops,
+        stored,
+    }))
 }
 
 /// A state folder's name: `state-` and digits.

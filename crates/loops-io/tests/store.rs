@@ -9,7 +9,7 @@ use loops_core::{
     SampleSize, Sampler, SamplerKind, Trajectory, UrbanDrive, UrbanFleet,
     store::{FleetStore, StoreSession, StoreSettings},
 };
-use loops_io::store::{StoreConfig, read_samples, read_store, update_store};
+use loops_io::store::{StoreConfig, read_samples, read_store, update_store, update_store_scanned};
 
 fn sessions() -> Vec<(String, Trajectory)> {
     let spec = UrbanFleet {
@@ -93,6 +93,57 @@ fn a_store_reads_back_as_written() {
     let (sampler, between_only) = config().sampler.unwrap();
     assert_eq!(&memory.samples(&loops, &sampler, between_only, &mut source).unwrap().rows, drawn);
     assert_eq!(report.added_components, read.store.added_components(&loops).len());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every entry under `dir` (and `dir` itself) with its modification time, and each file's bytes.
+fn times_and_bytes(dir: &Path) -> BTreeMap<PathBuf, (std::time::SystemTime, Option<Vec<u8>>)> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(path) = stack.pop() {
+        let time = std::fs::metadata(&path).unwrap().modified().unwrap();
+        let bytes = if path.is_dir() {
+            stack.extend(std::fs::read_dir(&path).unwrap().map(|e| e.unwrap().path()));
+            None
+        } else {
+            Some(std::fs::read(&path).unwrap())
+        };
+        out.insert(path, (time, bytes));
+    }
+    out
+}
+
+/// An update that changes nothing (nothing given, the stored sessions given again, or scans of
+/// no tile) writes nothing: no new state, every file and time of the folder as it was, and the
+/// store's last update still the one that changed it; the report says nothing changed.
+#[test]
+fn an_update_that_changes_nothing_writes_nothing() {
+    let dir = temp("unchanged");
+    let all = sessions();
+    let (day0, day1): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|(n, _)| n.ends_with("day0"));
+    update_store(&dir, Some(&config()), day0.clone(), &[]).unwrap();
+    let written = update_store(&dir, None, day1.clone(), &[]).unwrap();
+    let before = times_and_bytes(&dir);
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    type Again = (Option<StoreConfig>, Vec<(String, Trajectory)>);
+    let again: [Again; 4] =
+        [(None, vec![]), (Some(config()), vec![]), (None, day1.clone()), (Some(config()), all.clone())];
+    for (config, put) in again {
+        let report = update_store(&dir, config.as_ref(), put.clone(), &[]).unwrap();
+        assert!(report.update.changes_nothing() && report.update.tiles_scanned == 0, "{:?}", report.update);
+        assert_eq!(report.update.unchanged.len(), put.len());
+        assert_eq!(report.stored.state, "state-000002", "a new state for an update that changes nothing");
+        assert_eq!(report.stored.store.last_update(), written.stored.store.last_update());
+        assert_eq!(report.components, written.components);
+        assert_eq!(report.added_components, written.added_components);
+        assert!(times_and_bytes(&dir) == before, "an update that changes nothing touched the folder");
+    }
+    let report = update_store_scanned(&dir, None, day1, &[], Vec::new()).unwrap();
+    assert!(report.update.changes_nothing());
+    assert!(times_and_bytes(&dir) == before, "an update that changes nothing touched the folder");
+    // Its refusals are those of any update, and write nothing either.
+    assert!(update_store(&dir, None, vec![], &["nobody".to_owned()]).is_err());
+    assert!(times_and_bytes(&dir) == before);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -220,6 +220,7 @@ fn update_dict<'py>(py: Python<'py>, update: &loops_core::store::StoreUpdate) ->
     dict.set_item("tiles_scanned", update.tiles_scanned)?;
     dict.set_item("tiles_kept", update.tiles_kept)?;
     dict.set_item("tiles_dropped", update.tiles_dropped)?;
+    dict.set_item("changed", !update.changes_nothing())?;
     Ok(dict)
 }
 
@@ -280,7 +281,11 @@ impl FleetStore {
     ///         plan's tiles, of this state, and scans nothing.
     ///
     /// Returns:
-    ///     :attr:`last_update`.
+    ///     What this update did, as :attr:`last_update` holds it. An update of a store that
+    ///     changes nothing (nothing given or removed, or every session given stored with this
+    ///     content) says ``changed`` False and writes nothing: no new state, no file or time of
+    ///     the folder touched, and :attr:`last_update` still that of the last update that
+    ///     changed the store.
     ///
     /// Raises:
     ///     InvalidParameterError: no ``gamma`` for a new store; settings other than the store's;
@@ -361,9 +366,13 @@ impl FleetStore {
                 Some(Ok(scanned)) => update_store_scanned(&dir, config.as_ref(), put, &remove, scanned),
                 Some(Err(e)) => Err(e.into()),
             })??;
-            State::new(report.stored, Some(report.loops), Some(report.samples.map(|s| s.rows).unwrap_or_default()))
+            // Samples written with the state, else (nothing written) read from its table.
+            let written = !report.update.changes_nothing();
+            let samples = written.then(|| report.samples.map(|s| s.rows).unwrap_or_default());
+            Ok::<_, Failure>((State::new(report.stored, Some(report.loops), samples)?, report.update))
         })?;
-        let update = update_dict(py, state.stored.store.last_update())?;
+        let (state, update) = state;
+        let update = update_dict(py, &update)?;
         self.state = Some(state);
         Ok(update)
     }
@@ -450,9 +459,10 @@ impl FleetStore {
         self.state.as_ref().and_then(|s| s.stored.config.sampler.as_ref().map(|(sampler, _)| sampler.kind.name()))
     }
 
-    /// What the last update did: a dict of ``added``, ``replaced``, ``unchanged``,
-    /// ``removed`` (session names, each in name order) and ``tiles_scanned``, ``tiles_kept``,
-    /// ``tiles_dropped`` (int).
+    /// What the last update that changed the store did: a dict of ``added``, ``replaced``,
+    /// ``unchanged``, ``removed`` (session names, each in name order), ``tiles_scanned``,
+    /// ``tiles_kept``, ``tiles_dropped`` (int) and ``changed`` (bool: whether it added,
+    /// replaced or removed a session).
     #[getter]
     fn last_update<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let empty = loops_core::store::StoreUpdate::default();
@@ -819,8 +829,9 @@ impl StoreUpdatePlan {
         plan.tiles().iter().map(|t| (name(t.sessions[0]), name(t.sessions[1]))).collect()
     }
 
-    /// What the update will do, by name (``added``, ``replaced``, ``unchanged``, ``removed``)
-    /// and ``tiles_scanned``; the other counts are set when it is applied.
+    /// What the update will do, by name (``added``, ``replaced``, ``unchanged``, ``removed``),
+    /// ``tiles_scanned``, and ``changed`` (False: the update writes nothing); the other counts
+    /// are set when it is applied.
     #[getter]
     fn last_update<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         update_dict(py, self.inner.plan.report())

@@ -272,6 +272,13 @@ def _update_store(args: argparse.Namespace, sessions: dict[str, Any]) -> int:
     if not args.quiet and args.json != "-":
         u = summary["last_update"]
         where = args.scheduler or "this machine"
+        if not u["changed"]:
+            print(
+                f"loops-dask: store {args.store}: nothing changed, nothing written: "
+                f"{len(u['unchanged'])} stored as given; {len(summary['names'])} sessions, "
+                f"{summary['components']} components"
+            )
+            return 0
         print(
             f"loops-dask: store {args.store}: {len(u['added'])} added, {len(u['replaced'])} "
             f"replaced, {len(u['removed'])} removed; {u['tiles_scanned']} tiles scanned, "

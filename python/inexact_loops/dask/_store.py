@@ -53,7 +53,9 @@ def update_store(
         ``{"path", "state_path", "names", "components", "added_components", "samples",
         "last_update"}``: the store's folder and current state, its sessions' names, its
         component count, the components of the sessions the update added or replaced, the
-        sample count, and :attr:`~inexact_loops.FleetStore.last_update`.
+        sample count, and what the update did (as
+        :attr:`~inexact_loops.FleetStore.last_update` holds it; ``"changed"`` False for an
+        update that changes nothing, which writes nothing).
 
     Raises:
         TypeError: a :class:`~inexact_loops.Trajectory` in ``add`` with ``client=``.
@@ -176,6 +178,9 @@ def store_update_task(
     """Task: the update, where it runs (its tiles scanned here, or given as the scan tasks'
     results), and its summary (O(sessions)).
 
+    An update that changes nothing writes nothing, and its summary says so
+    (``last_update["changed"]`` False): the store's rule (:meth:`FleetStore.update`).
+
     ``changes``: the sessions the plan adds, replaces and removes. When they are already in
     the store as the update leaves them, this task is a run again of one whose result was lost
     with its worker after it wrote the new state (the scheduler recomputes a lost result): it
@@ -185,11 +190,10 @@ def store_update_task(
 
     store = FleetStore.open(folder)
     if changes is not None and any(changes.values()) and _maybe_done(store, changes):
-        # The removals are done (by the names); are the sessions given the stored ones?
-        now: dict[str, Any] = {}
-        if changes["added"] or changes["replaced"]:
-            now = StoreUpdatePlan(folder, add=add, **_plan_options(options)).last_update
-        if not any(now.get(k) for k in _CHANGES):
+        # The removals are done (by the names); the rest changes nothing when the sessions
+        # given are the stored ones (the store's own rule, which also writes nothing for it).
+        now = StoreUpdatePlan(folder, add=add, **_plan_options(options)).last_update
+        if not now["changed"]:
             return _summary(store, dict(store.last_update))
     scanned = None if scans is None else [tile for group in scans for tile in group]
     update = store.update(add=add, remove=remove, scanned=scanned, **options)

@@ -373,7 +373,22 @@ fn fleet_store(args: &FleetArgs, dir: &Path) -> Result<u8> {
             .collect::<Result<_>>()?;
         Ok(loops_io::store::update_store(dir, Some(&config), put, &args.remove)?)
     })??;
-    let update = report.stored.store.last_update();
+    let update = &report.update;
+    if update.changes_nothing() {
+        if !args.results.quiet {
+            println!(
+                "loops: store {}: nothing changed, nothing written: {} stored as given ({}); {} sessions, {} \
+                 components, {:.2} s",
+                dir.display(),
+                update.unchanged.len(),
+                update.unchanged.join(", "),
+                report.stored.store.sessions().len(),
+                report.components,
+                start.elapsed().as_secs_f64()
+            );
+        }
+        return Ok(0);
+    }
     let list = |what: &str, names: &[String]| (!names.is_empty()).then(|| format!("{what} {}", names.join(", ")));
     let done: Vec<String> = [
         list("added", &update.added),
@@ -389,7 +404,7 @@ fn fleet_store(args: &FleetArgs, dir: &Path) -> Result<u8> {
             "loops: store {}: {}; {} tiles scanned, {} kept, {} dropped; {} sessions, {} components ({} of the \
              sessions changed), {} samples, {:.2} s",
             dir.display(),
-            if done.is_empty() { "nothing to do".to_owned() } else { done.join("; ") },
+            done.join("; "),
             update.tiles_scanned,
             update.tiles_kept,
             update.tiles_dropped,
