@@ -550,6 +550,20 @@ def test_loops_eval_command(tmp_path):
     )
     assert missing.returncode == 2 and "nowhere.tum" in missing.stderr
     assert len(missing.stderr.strip().splitlines()) == 1
+    # Rounds in time order: recorded in the settings; a baseline cannot take them (one line).
+    timed = [*cmd[:-1], str(tmp_path / "t"), "--on", "estimate", "--rounds", "2"]
+    timed += ["--rounds-order", "time", "--budgets", "20", "--seeds", "1"]
+    done = subprocess.run(timed, capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    settings = json.loads((tmp_path / "t" / "results.json").read_text())["settings"]
+    assert settings["rounds_order"] == "time"
+    rows = ev.Results.from_csv(tmp_path / "t" / "results.csv").rows
+    assert {(r["on"], r["rounds"]) for r in rows if r["sampler"] != "odometry"} == {("estimate", 2)}
+    timed[timed.index("closest-first,rho")] = "lio-sam"
+    timed[timed.index(str(tmp_path / "t"))] = str(tmp_path / "b")
+    bad = subprocess.run(timed, capture_output=True, text=True, check=False)
+    assert bad.returncode == 2 and 'rounds_order="time"' in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1
 
 
 def test_verifier_models_follow_their_laws():

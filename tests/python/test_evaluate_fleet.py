@@ -421,6 +421,7 @@ def test_loops_eval_fleet_command(tmp_path):
     for extra, message in (
         (["--source", "detections"], "not with --source detections"),
         (["--odometry", files[0]], "--fleet takes no --odometry"),
+        (["--rounds-order", "time"], "not with --rounds-order time"),
     ):
         bad = subprocess.run(
             [*cmd[:-1], str(tmp_path / "x"), *extra], capture_output=True, text=True, check=False

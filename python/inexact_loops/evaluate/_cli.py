@@ -208,6 +208,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         "estimate the earlier rounds' matches corrected (default 1: all at once)",
     )
     parser.add_argument(
+        "--rounds-order",
+        default="any",
+        choices=["any", "time"],
+        help="with --rounds: each round over the whole estimate (any), or round r on the r-th "
+        "stretch of the path only, as an online front end (time; samplers, not baselines)",
+    )
+    parser.add_argument(
         "--verifier",
         default="distance-aware",
         choices=list(VERIFIER_MODELS),
@@ -298,6 +305,7 @@ def _main_one(args: Any) -> None:
         backend=BackEnd(kernel=args.kernel),
         gamma_inflation=args.gamma_inflation,
         rounds=args.rounds,
+        rounds_order=args.rounds_order,
         dataset=os.path.basename(args.poses[0]),
         progress=lambda r: print(
             f"loops-eval: seed {r['seed']} {r['sampler']:>15} {r['on'] or '':>9} "
@@ -386,6 +394,11 @@ def main_fleet(args: Any) -> None:
     if args.source != "exact":
         raise InvalidParameterError(
             "--fleet chooses candidates on the exact components: not with --source detections"
+        )
+    if args.rounds_order != "any":
+        raise InvalidParameterError(
+            f"--fleet chooses each round over every session: not with --rounds-order "
+            f"{args.rounds_order}"
         )
     options, axes = _read_options(args)
     dim = 3 if args.se3 else 2

@@ -405,16 +405,10 @@ def evaluate(
         if progress:
             progress(row)
 
-    for seed in seeds:
-        odo = drift.simulate(reference, seed=seed) if drift else odometry
-        assert isinstance(odo, Odometry)
-        start = time.perf_counter()
-        # The pose graph of the odometry alone is solved by dead reckoning.
-        odo_ate, odo_rpe = errors(odo.estimate)
-        base = {"dataset": dataset, "seed": int(seed), "odometry_ate_m": odo_ate}
-        if include_odometry:
-            record(base, None, 0.0, 0, None, odo_ate, odo_rpe, start)
-        for outlier_rate, rule in _grid(
+    # Every rule is made (and checked) before the first run: a bad combination is refused
+    # before any work.
+    grid = list(
+        _grid(
             outlier_rates,
             on,
             separations,
@@ -428,7 +422,18 @@ def evaluate(
             gamma_inflation=gamma_inflation,
             detection_rate=detection_rate,
             epsilon_s=epsilon_s,
-        ):
+        )
+    )
+    for seed in seeds:
+        odo = drift.simulate(reference, seed=seed) if drift else odometry
+        assert isinstance(odo, Odometry)
+        start = time.perf_counter()
+        # The pose graph of the odometry alone is solved by dead reckoning.
+        odo_ate, odo_rpe = errors(odo.estimate)
+        base = {"dataset": dataset, "seed": int(seed), "odometry_ate_m": odo_ate}
+        if include_odometry:
+            record(base, None, 0.0, 0, None, odo_ate, odo_rpe, start)
+        for outlier_rate, rule in grid:
             start = time.perf_counter()
             estimate, matches, pairs = evaluate_one(
                 reference,
