@@ -245,14 +245,9 @@ mod tests {
     fn fixed_size_distances_are_the_slices_bit_for_bit() {
         // Coordinates of many magnitudes, where a different order of the sum would round
         // differently in some pairs.
-        let mut state = 0x2545_F491_4F6C_DD1D_u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            let mantissa = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
-            mantissa * 10f64.powi((state % 13) as i32 - 4)
-        };
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut next = || (rng.random::<f64>() - 0.5) * 10f64.powi(rng.random_range(-4..9));
         for _ in 0..10_000 {
             let (a, b) = ([next(), next(), next()], [next(), next(), next()]);
             let expected = a.iter().zip(&b).map(|(x, y)| (x - y) * (x - y)).fold(0.0, |s, t| s + t).sqrt();

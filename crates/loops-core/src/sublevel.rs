@@ -1123,26 +1123,21 @@ mod tests {
     #[test]
     fn gallops_are_the_linear_scans() {
         // Steps of every kind: stops (0), creeps, walks, jumps; budgets around each s_k.
-        let mut state = 0x9E37_79B9_7F4A_7C15_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         for _ in 0..50 {
             let mut x = 0.0;
             let xs: Vec<f64> = (0..200)
                 .map(|_| {
-                    x += [0.0, 1e-9, 0.3, 1.0, 1.1, 40.0][(next() % 6) as usize];
+                    x += [0.0, 1e-9, 0.3, 1.0, 1.1, 40.0][rng.random_range(0..6)];
                     x
                 })
                 .collect();
             let arc = ArcLength::new(&line(&xs), &Euclidean, false).unwrap();
             let s = &arc.s;
             for _ in 0..200 {
-                let j = (next() % 200) as usize;
-                let length = (next() % 4000) as f64 / 40.0 - 5.0;
+                let j = rng.random_range(0..200);
+                let length = f64::from(rng.random_range(0..4000_u32)) / 40.0 - 5.0;
                 let within = (j..s.len()).take_while(|&k| s[k] <= s[j] + length).last().unwrap_or(j);
                 assert_eq!(arc.last_within(j, length), if length < 0.0 { j } else { within });
                 let beyond = (j + 1..s.len()).find(|&k| s[k] >= s[j] + length).unwrap_or(s.len());

@@ -234,11 +234,12 @@ class _RoundsRule:
         self.order: str = getattr(rule, "rounds_order", "any")
         self._bounds: np.ndarray | None = None
 
-    def _window(self, path_m: np.ndarray) -> tuple[int, int]:
+    def _window(self, estimate: Poses) -> tuple[int, int]:
         """The poses ``a <= j < b`` the next round's later poses lie in, for ``order="time"``:
-        the stretches split the path (``path_m``, the cumulative path length of the first
-        estimate the rounds see) into ``rounds`` equal lengths, fixed from then on."""
+        the stretches split the path of the first estimate the rounds see into ``rounds``
+        equal lengths, fixed from then on."""
         if self._bounds is None:
+            path_m = np.asarray(path_length(estimate.to_trajectory()))
             edges = path_m[-1] * np.arange(1, self._rounds) / self._rounds
             inner = np.searchsorted(path_m, edges, side="left")
             self._bounds = np.r_[0, inner, len(path_m)].astype(np.int64)
@@ -344,7 +345,7 @@ class Rounds(_RoundsRule):
         if self.order == "time":
             # Pairs of earlier rounds end before this stretch: the share is all the sampler
             # is asked for, on the loops of the estimate whose later pose is in the stretch.
-            window = self._window(path_length(estimate.to_trajectory()))
+            window = self._window(estimate)
             ask = dataclasses.replace(self.rule, budget=share, rounds=1)
             i, j = choose_candidates(
                 estimate, ask, seed=seed, gamma_inflation=self.gamma_inflation, later_in=window
