@@ -27,7 +27,8 @@ fn main() -> Result<()> {
     let fleet = spec.generate()?;
     let gamma = 10.0;
     let settings = StoreSettings { gamma, ..StoreSettings::new(gamma) };
-    let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(500), 7);
+    let budget = std::env::args().nth(4).and_then(|a| a.parse().ok()).unwrap_or(500);
+    let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(budget), 7);
     let sessions: Vec<(String, Trajectory)> =
         (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
     let all: HashMap<String, Trajectory> = sessions.iter().cloned().collect();
@@ -43,25 +44,28 @@ fn main() -> Result<()> {
     // seconds of each part).
     let answer = |store: &FleetStore,
                   source: &mut dyn FnMut(&StoreSession) -> Result<Trajectory>|
-     -> Result<(usize, [f64; 3])> {
+     -> Result<(usize, [f64; 3], [usize; 2])> {
         let clock = Instant::now();
         let loops = store.loops()?;
         let merge = clock.elapsed().as_secs_f64();
         store.loop_duration()?;
         let tau = clock.elapsed().as_secs_f64() - merge;
-        store.samples(&loops, &sampler, false, source)?;
+        let drawn = store.samples(&loops, &sampler, false, source)?;
         let draw = clock.elapsed().as_secs_f64() - merge - tau;
-        Ok((loops.components().len(), [merge, tau, draw]))
+        Ok((loops.components().len(), [merge, tau, draw], [drawn.tiles_read, drawn.tiles_asked]))
     };
 
+    // Days 1 to 30, each drawn after its update as a daily run does: the store keeps what the
+    // draw found in the tiles the next update leaves alone.
     let mut store = FleetStore::new(settings)?;
     for d in 0..days - 1 {
         store.update(day(d), &[], &mut source)?;
+        store.samples(&store.loops()?, &sampler, false, &mut source)?;
     }
     let clock = Instant::now();
     let update = store.update(day(days - 1), &[], &mut source)?.clone();
     let scanned = clock.elapsed().as_secs_f64();
-    let (components, parts) = answer(&store, &mut source)?;
+    let (components, parts, read) = answer(&store, &mut source)?;
     let incremental = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
@@ -90,6 +94,12 @@ fn main() -> Result<()> {
         update.tiles_scanned,
         update.tiles_kept,
         100.0 * update.tiles_scanned as f64 / store.tiles().len() as f64
+    );
+    println!(
+        "day {days}'s draw read {} of the {} tiles it asked (the others from the draw of day {})",
+        read[0],
+        read[1],
+        days - 1
     );
     println!("scan only:           day {days} / all days at once = {:.3}", scanned / at_once_scan);
     println!("scan+merge+tau+draw: day {days} / all days at once = {:.3}", incremental / whole);

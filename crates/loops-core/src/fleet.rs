@@ -29,7 +29,7 @@ use crate::loops::Loops;
 use crate::measure::{Scale, Selection, Side};
 use crate::memory::{try_collect, try_with_capacity};
 use crate::metric::Metric;
-use crate::sample::{Sampler, Samples, sample_loops_where};
+use crate::sample::{KeyLayout, Sampler, Samples, sample_loops_where};
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
 use crate::spec::{MetricSpec, with_metric};
@@ -658,7 +658,8 @@ pub fn sample_fleet<M: Metric + ?Sized>(
     }
     let blocks = &loops.blocks;
     let keep = move |c: usize| !between_only || blocks[c][0] != blocks[c][1];
-    sample_loops_where(fleet.joint(), metric, &loops.loops, sampler, &keep)
+    let keys = KeyLayout::sessions(fleet.starts(), fleet.names());
+    sample_loops_where(fleet.joint(), metric, &loops.loops, sampler, &keep, keys)
 }
 
 #[cfg(test)]

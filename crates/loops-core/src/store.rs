@@ -55,7 +55,7 @@
 //! ```
 
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 
@@ -63,7 +63,9 @@ use crate::draw::SampleWarning;
 use crate::error::{Error, Result};
 use crate::fleet::{FleetComponent, FleetSample, SessionPair};
 use crate::place::{Pass, Place, check_plane, check_radius, passes_within};
-use crate::sample::{ComponentRequest, DrawCandidates, DrawRequest, KeyedDraw, Sampler};
+use crate::sample::{
+    ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, KeyLayout, KeyedDraw, Sampler, SamplerKind,
+};
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
@@ -720,6 +722,77 @@ struct Kept {
     duration: Vec<(Vec<f64>, Vec<f64>)>,
     /// The runs of each tile (by tile, as the store's tiles), where an update scanned it.
     runs: Vec<Option<Arc<TileRuns>>>,
+    /// What the last draws found of uniform picks, by tile and component: those of the last
+    /// draw of each of the last [`POOL_SEEDS`] seeds, most recent last.
+    pools: Arc<Mutex<Vec<(u64, Pools)>>>,
+}
+
+/// What one draw found in the tiles, by tile and component.
+type Pools = HashMap<PoolKey, PoolEntry>;
+
+/// A tile's part of a draw's pass, with the components whose pools it must find (their id, what
+/// the draw asked — threshold and count — and the key it keeps them under).
+type TilePart = (usize, DrawRequest, Vec<(usize, (u64, u64), PoolKey)>);
+
+/// Seeds whose draws a store keeps what they found in its tiles.
+const POOL_SEEDS: usize = 4;
+
+/// A component's pairs in one tile with a key at most a threshold, as a draw found them: the
+/// next draw (after an update, which moves fleet indices but not the sessions' own) answers
+/// from it every tile of two sessions it left alone. Keyed by content, never by place: the
+/// seed, the tile's sessions (salt of the name and fingerprint of the poses) and first row and
+/// column in their own indices, and the component's first and last row and closest pair in
+/// them, with its number of pairs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct PoolKey {
+    seed: u64,
+    sessions: [(u64, u64); 2],
+    tile: [usize; 2],
+    component: ([usize; 2], [usize; 2], u64),
+    /// The fields mixed into one word: what the map hashes (a draw looks up every tile of
+    /// every component it asks).
+    digest: u64,
+}
+
+impl PoolKey {
+    fn new(seed: u64, sessions: [(u64, u64); 2], tile: [usize; 2], component: ([usize; 2], [usize; 2], u64)) -> Self {
+        let (rows, closest, pairs) = component;
+        let words = [seed, sessions[0].0, sessions[0].1, sessions[1].0, sessions[1].1, tile[0] as u64, tile[1] as u64]
+            .into_iter()
+            .chain([rows[0] as u64, rows[1] as u64, closest[0] as u64, closest[1] as u64, pairs]);
+        let mut digest = Fingerprint::new(0x706F_6F6C);
+        words.for_each(|w| digest.eat(w));
+        Self { seed, sessions, tile, component, digest: digest.finish() }
+    }
+}
+
+impl std::hash::Hash for PoolKey {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        state.write_u64(self.digest);
+    }
+}
+
+/// Of the pairs (in the tile's sessions' own indices) with a key at most `threshold`, the `keep`
+/// smallest (all of them when fewer), by key.
+#[derive(Debug, Clone)]
+struct PoolEntry {
+    threshold: u64,
+    keep: u64,
+    pairs: Vec<DrawCandidate>,
+}
+
+impl PoolEntry {
+    /// Whether it holds the `keep` smallest keys at most `threshold`.
+    fn answers(&self, threshold: u64, keep: u64) -> bool {
+        self.threshold >= threshold && (self.keep >= keep || (self.pairs.len() as u64) < self.keep)
+    }
+}
+
+/// The threshold and count a tile's pairs are looked up with when a draw asks `(threshold,
+/// keep)`: twice as many expected pairs, so that a quota grown by a later update still reads
+/// them from the cache.
+fn pool_slack(threshold: u64, keep: u64) -> (u64, u64) {
+    (threshold.saturating_mul(2), keep.saturating_mul(2).saturating_add(2))
 }
 
 /// Where a store reads a stored session's poses.
@@ -852,6 +925,7 @@ impl FleetStore {
             merges: BTreeMap::new(),
             duration: durations_of(&store.tiles, &store.starts(), &store.sessions, &all)?,
             runs: vec![None; store.tiles.len()],
+            pools: Arc::default(),
         };
         Ok(store)
     }
@@ -1153,7 +1227,7 @@ impl FleetStore {
                 (None, b) => b.and_then(|b| old_duration[b].take()).unwrap_or_default(),
             })
             .collect();
-        self.kept = Kept { merges, duration, runs };
+        self.kept = Kept { merges, duration, runs, pools: old.pools };
         self.sessions = plan.sessions.clone();
         self.tiles = tiles;
         self.last_update = report.clone();
@@ -1306,6 +1380,13 @@ impl FleetStore {
     /// from the runs kept by the update that scanned them, or rescans those it has none of
     /// (a store read back), reading their stored sessions from `source` (each once).
     ///
+    /// The store keeps what the draws of its last few seeds found of uniform picks, per tile
+    /// and component, in the sessions' own indices (pairs are keyed by session:
+    /// [`KeyLayout`]): a draw after an update reads a tile again only for the components whose
+    /// pools it lacks (those of the new tiles, and those whose quota grew past what was kept),
+    /// and does not read the sessions of the tiles it needs nothing more from. The samples are
+    /// the same with or without it; σ_α keeps nothing (it asks a share of every component).
+    ///
     /// # Errors
     /// As [`KeyedDraw::new`]; the scans' errors; [`Error::InvalidState`] for a session that
     /// `source` gives with another content; `source`'s errors.
@@ -1319,13 +1400,24 @@ impl FleetStore {
         let Some(merged) = &loops.merged else {
             let draw = KeyedDraw::new(sampler, &[], &|_| true)?;
             let warnings = draw.warnings().to_vec();
-            return Ok(StoreSamples { rows: Vec::new(), groups: 0, available: 0, warnings, tiles_rescanned: 0 });
+            return Ok(StoreSamples {
+                rows: Vec::new(),
+                groups: 0,
+                available: 0,
+                warnings,
+                tiles_rescanned: 0,
+                tiles_read: 0,
+                tiles_asked: 0,
+            });
         };
         let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
-        let mut draw = KeyedDraw::new(sampler, &merged.draw_stats(), &keep)?;
+        let names: Vec<&str> = self.sessions.iter().map(|s| s.name.as_str()).collect();
+        let keys = KeyLayout::sessions(&loops.starts, &names);
+        let stats = merged.draw_stats();
+        let mut draw = KeyedDraw::new(sampler, &stats, &keep)?.with_keys(keys);
         let mut read: HashMap<usize, Trajectory> = HashMap::new();
-        let mut tiles_rescanned = 0;
+        let (mut tiles_rescanned, mut tiles_read, mut tiles_asked) = (0, 0, 0);
         let settings = self.settings;
         let starts = &loops.starts;
         // The stored tile of a tile of the merge: the stored tiles are in plan order, by first
@@ -1344,19 +1436,90 @@ impl FleetStore {
                 }
             }
         }
+        // What the last draw of this seed found, and what this one finds (kept after it).
+        let identity: Vec<(u64, u64)> =
+            self.sessions.iter().map(|s| (KeyLayout::salt(&s.name), s.fingerprint)).collect();
+        let pool_key = |k: usize, c: usize| {
+            let tile = &merged.tiles()[k];
+            let [a, b] = tile.sessions;
+            let s = &stats[c];
+            PoolKey::new(
+                sampler.seed,
+                [identity[a], identity[b]],
+                [tile.rows.start - starts[a], tile.columns.start - starts[b]],
+                // (A trivial component's closest pair is not its own: any word will do.)
+                (
+                    [s.rows[0].wrapping_sub(starts[a]), s.rows[1].wrapping_sub(starts[a])],
+                    [s.closest_pair[0].wrapping_sub(starts[a]), s.closest_pair[1].wrapping_sub(starts[b])],
+                    s.pairs,
+                ),
+            )
+        };
+        // σ_α asks every component for a share of its pairs: a cache would hold that share of
+        // them all, so it reads the tiles each time.
+        let caching = sampler.kind != SamplerKind::Alpha;
+        let mut last = {
+            let mut pools = self.kept.pools.lock().unwrap_or_else(|e| e.into_inner());
+            pools.iter().position(|(seed, _)| *seed == sampler.seed).map(|k| pools.remove(k).1).unwrap_or_default()
+        };
+        let mut found = Pools::new();
         while let Some(request) = draw.request().cloned() {
-            let asked = tile_parts(merged, &holders, &request);
-            let mut unread: Vec<usize> =
-                asked.iter().flat_map(|&(k, _)| merged.tiles()[k].sessions).filter(|s| !read.contains_key(s)).collect();
+            // Each tile's part: the uniform picks the cache holds are answered here; the rest
+            // (row picks, and pools it lacks, looked up with a slack) by the tile's runs.
+            let mut cached = DrawCandidates::default();
+            let mut asked: Vec<TilePart> = Vec::new();
+            let parts = tile_parts(merged, &holders, &request);
+            tiles_asked += parts.len();
+            for (k, mut part) in parts {
+                let [a, b] = merged.tiles()[k].sessions;
+                let mut missed = Vec::new();
+                part.components.retain_mut(|c| {
+                    let Some(threshold) = c.pool.filter(|_| caching) else { return true };
+                    let key = pool_key(k, c.id);
+                    // An entry moves from the last draw's to this one's the first time it is read.
+                    if !found.contains_key(&key)
+                        && let Some((key, entry)) = last.remove_entry(&key)
+                    {
+                        found.insert(key, entry);
+                    }
+                    match found.get(&key).filter(|e| e.answers(threshold, c.keep)) {
+                        Some(entry) => {
+                            let below = entry.pairs.iter().filter(|p| p.key <= threshold).take(c.keep as usize);
+                            cached.pool.extend(below.map(|p| DrawCandidate {
+                                component: c.id,
+                                pair: [p.pair[0] + starts[a], p.pair[1] + starts[b]],
+                                ..*p
+                            }));
+                            c.pool = None;
+                            c.best || !c.rows.is_empty()
+                        }
+                        None => {
+                            missed.push((c.id, (threshold, c.keep), key));
+                            let wider = pool_slack(threshold, c.keep);
+                            (c.pool, c.keep) = (Some(wider.0), wider.1);
+                            true
+                        }
+                    }
+                });
+                if !part.components.is_empty() {
+                    asked.push((k, part, missed));
+                }
+            }
+            let mut unread: Vec<usize> = asked
+                .iter()
+                .flat_map(|(k, _, _)| merged.tiles()[*k].sessions)
+                .filter(|s| !read.contains_key(s))
+                .collect();
             unread.sort_unstable();
             unread.dedup();
             let trajectories = read_sessions(&self.sessions, &unread, source)?;
             read.extend(unread.into_iter().zip(trajectories));
             let runs_of = |k: usize| stored(&merged.tiles()[k]).and_then(|t| self.kept.runs[t].as_ref());
-            tiles_rescanned += asked.iter().filter(|(k, _)| runs_of(*k).is_none()).count();
+            tiles_rescanned += asked.iter().filter(|(k, _, _)| runs_of(*k).is_none()).count();
+            tiles_read += asked.len();
             let offers = asked
                 .par_iter()
-                .map(|(k, part)| {
+                .map(|(k, part, _)| {
                     let k = *k;
                     let tile = &merged.tiles()[k];
                     let [a, b] = tile.sessions;
@@ -1378,8 +1541,46 @@ impl FleetStore {
                     }
                 })
                 .collect::<Result<Vec<DrawCandidates>>>()?;
-            offers.into_iter().for_each(|o| draw.absorb(o));
+            draw.absorb(cached);
+            for ((k, part, missed), mut offer) in asked.into_iter().zip(offers) {
+                let [a, b] = merged.tiles()[k].sessions;
+                if caching {
+                    // The offers (sorted by component, then key) as the cache keeps them.
+                    let mut by_component: HashMap<usize, Vec<DrawCandidate>> = HashMap::new();
+                    for p in &offer.pool {
+                        let local = DrawCandidate { pair: [p.pair[0] - starts[a], p.pair[1] - starts[b]], ..*p };
+                        by_component.entry(p.component).or_default().push(local);
+                    }
+                    let wider: HashMap<usize, (u64, u64)> =
+                        part.components.iter().map(|r| (r.id, (r.pool.unwrap_or(0), r.keep))).collect();
+                    let asked_at: HashMap<usize, (u64, u64)> = missed.iter().map(|&(c, asked, _)| (c, asked)).collect();
+                    for (c, _, key) in missed {
+                        let (threshold, keep) = wider[&c];
+                        found.insert(
+                            key,
+                            PoolEntry { threshold, keep, pairs: by_component.remove(&c).unwrap_or_default() },
+                        );
+                    }
+                    // The draw gets what it asked: at most its threshold, its count.
+                    let mut taken: (usize, u64) = (usize::MAX, 0);
+                    offer.pool.retain(|p| {
+                        if taken.0 != p.component {
+                            taken = (p.component, 0);
+                        }
+                        let (threshold, keep) = asked_at[&p.component];
+                        taken.1 += u64::from(p.key <= threshold);
+                        p.key <= threshold && taken.1 <= keep
+                    });
+                }
+                draw.absorb(offer);
+            }
             draw.complete();
+        }
+        if caching {
+            let mut pools = self.kept.pools.lock().unwrap_or_else(|e| e.into_inner());
+            pools.push((sampler.seed, found));
+            let over = pools.len().saturating_sub(POOL_SEEDS);
+            pools.drain(..over);
         }
         let rows = draw
             .picks()
@@ -1403,6 +1604,8 @@ impl FleetStore {
             available: draw.available(),
             warnings: draw.warnings().to_vec(),
             tiles_rescanned,
+            tiles_read,
+            tiles_asked,
         })
     }
 }
@@ -1486,13 +1689,20 @@ fn tile_parts(merged: &MergedLoops, holders: &[Vec<usize>], request: &DrawReques
             let rows = &merged.tiles()[k].rows;
             let lo = c.rows.partition_point(|&r| r < rows.start);
             let hi = c.rows.partition_point(|&r| r < rows.end);
-            let part = ComponentRequest { id: c.id, pool: c.pool, rows: c.rows[lo..hi].to_vec(), best: c.best };
+            let part =
+                ComponentRequest { id: c.id, pool: c.pool, keep: c.keep, rows: c.rows[lo..hi].to_vec(), best: c.best };
             if part.pool.is_some() || part.best || !part.rows.is_empty() {
                 parts.entry(k).or_default().push(part);
             }
         }
     }
-    parts.into_iter().map(|(k, components)| (k, DrawRequest { seed: request.seed, components })).collect()
+    parts
+        .into_iter()
+        .map(|(k, components)| {
+            let keys = request.keys.narrowed(merged.tiles()[k].sessions);
+            (k, DrawRequest { seed: request.seed, keys, components })
+        })
+        .collect()
 }
 
 /// A stored session's poses from `source`, checked against what the store knows of it.
@@ -1652,4 +1862,34 @@ pub struct StoreSamples {
     /// Tiles the draw scanned again, having no runs of them (tile passes, counted once per
     /// pass that asked): 0 where every tile asked has its runs kept.
     pub tiles_rescanned: usize,
+    /// Tiles the draw read (from their kept runs or a rescan), counted once per pass that
+    /// asked; the others it asked were answered by what an earlier draw with the seed found
+    /// in them.
+    pub tiles_read: usize,
+    /// Tiles the draw asked (once per pass).
+    pub tiles_asked: usize,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entry(threshold: u64, keep: u64, pairs: usize) -> PoolEntry {
+        let pair = DrawCandidate { component: 0, pair: [0, 1], key: 0, rank: 0.0, distance: 0.0, times_s: [0.0; 2] };
+        PoolEntry { threshold, keep, pairs: vec![pair; pairs] }
+    }
+
+    /// An entry answers a lower threshold for as many pairs as it kept; more only when it kept
+    /// all it found; never a higher threshold.
+    #[test]
+    fn a_pool_entry_answers_what_it_holds_only() {
+        let full = entry(1000, 4, 4);
+        assert!(full.answers(1000, 4) && full.answers(10, 1));
+        assert!(!full.answers(1000, 5), "it may have left out smaller keys than a fifth");
+        assert!(!full.answers(1001, 1));
+        let all = entry(1000, 4, 3);
+        assert!(all.answers(500, 40), "it holds every key at most its threshold");
+        assert_eq!(pool_slack(100, 3), (200, 8));
+        assert_eq!(pool_slack(u64::MAX, u64::MAX), (u64::MAX, u64::MAX));
+    }
 }

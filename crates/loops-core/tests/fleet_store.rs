@@ -41,14 +41,15 @@ fn samplers() -> Vec<(Sampler, bool)> {
     ]
 }
 
-/// The store's answer against the from-scratch one over `sessions` (name → trajectory).
-fn check_against_scratch(store: &FleetStore, sessions: &BTreeMap<String, Trajectory>, context: &str) {
+/// The store's answer against the from-scratch one over `sessions` (name → trajectory); the
+/// number of tiles its draws answered from what earlier draws found in them.
+fn check_against_scratch(store: &FleetStore, sessions: &BTreeMap<String, Trajectory>, context: &str) -> usize {
     let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
     assert_eq!(names, sessions.keys().map(String::as_str).collect::<Vec<_>>(), "{context}: sessions");
     let loops = store.loops().unwrap();
     if sessions.is_empty() {
         assert!(loops.components().is_empty() && loops.session_pairs().is_empty(), "{context}");
-        return;
+        return 0;
     }
     let settings = store.settings();
     let fleet = Fleet::new(sessions.iter().map(|(n, t)| (n.clone(), t.clone())).collect()).unwrap();
@@ -74,14 +75,17 @@ fn check_against_scratch(store: &FleetStore, sessions: &BTreeMap<String, Traject
         assert!(got.iter().zip(want.iter()).all(|(g, w)| close(*g, *w)), "{context}: τ");
     }
     let mut source = source_of(sessions);
+    let mut cached = 0;
     for (sampler, between_only) in samplers() {
         let got = store.samples(&loops, &sampler, between_only, &mut source).unwrap();
+        cached += got.tiles_asked - got.tiles_read;
         let samples = sample_fleet(&fleet, &Euclidean, &scratch, &sampler, between_only).unwrap();
         let want = fleet.localize(&samples).unwrap();
         assert_eq!(got.rows, want, "{context}: samples of {:?} {:?}", sampler.kind, sampler.size);
         assert_eq!((got.groups, got.available), (samples.groups(), samples.available()), "{context}");
         assert_eq!(got.warnings, samples.warnings(), "{context}");
     }
+    cached
 }
 
 /// A source that gives each stored session's poses from `sessions`.
@@ -102,7 +106,7 @@ fn random_updates(seed: u64, separation: Separation) {
     let mut store = FleetStore::new(settings(separation)).unwrap();
     // What the store should hold: name → version.
     let mut held: BTreeMap<String, usize> = BTreeMap::new();
-    let mut scans = 0;
+    let (mut scans, mut cached) = (0, 0);
     for step in 0..9 {
         let absent: Vec<&String> = names.iter().filter(|n| !held.contains_key(*n)).collect();
         let present: Vec<String> = held.keys().cloned().collect();
@@ -153,8 +157,10 @@ fn random_updates(seed: u64, separation: Separation) {
         let changed: Vec<usize> = update.changed().iter().map(|n| store.session_index(n).unwrap()).collect();
         let touching = store.tiles().iter().filter(|t| t.tile().sessions.iter().any(|s| changed.contains(s))).count();
         assert_eq!(update.tiles_scanned, touching, "seed {seed} step {step}: {update:?}");
-        check_against_scratch(&store, &current, &format!("seed {seed} step {step} ({kind}, {update:?})"));
+        cached += check_against_scratch(&store, &current, &format!("seed {seed} step {step} ({kind}, {update:?})"));
     }
+    // The draws after an update answered tiles it left alone from what the draws before found.
+    assert!(cached > 0, "seed {seed}: no tile answered from an earlier draw");
     // The same tiles as a store made in one update, bit for bit.
     let current: BTreeMap<String, Trajectory> = held.iter().map(|(n, &v)| (n.clone(), pool[n][v].clone())).collect();
     let mut at_once = FleetStore::new(settings(separation)).unwrap();
@@ -194,8 +200,11 @@ fn random_updates(seed: u64, separation: Separation) {
     for (sampler, between_only) in samplers() {
         let drawn = taken.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
         assert_eq!(drawn.tiles_rescanned, 0, "seed {seed}: {:?}", sampler.kind);
-        let again = read_back.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
+        // A store read back again, which has drawn nothing yet.
+        let fresh = parts(store.tiles().to_vec()).unwrap();
+        let again = fresh.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
         assert!(again.tiles_rescanned > 0 || again.rows.is_empty(), "seed {seed}: a store without runs rescans");
+        assert_eq!((again.rows, again.tiles_read), (drawn.rows, drawn.tiles_asked), "seed {seed}");
     }
     if merges.len() > 1 {
         let err = saved(merges[1..].to_vec(), runs.clone()).unwrap_err().to_string();
@@ -435,4 +444,40 @@ fn poses_of(
 ) -> Trajectory {
     let name = &plan.sessions()[s].name;
     put.iter().find(|(n, _)| n == name).map_or_else(|| all[name].clone(), |(_, t)| t.clone())
+}
+
+/// What a draw finds in the tiles answers later draws of its seed only where it holds what they
+/// ask: draws of one seed with budgets going up and down, between the updates of a store, each
+/// equal to the draw over the fleet from scratch, some tiles answered from earlier draws.
+#[test]
+fn draws_of_one_seed_reuse_what_they_found_only_where_it_answers() {
+    let pool = versions();
+    let mut store = FleetStore::new(settings(Separation::NONE)).unwrap();
+    let mut held: BTreeMap<String, Trajectory> = BTreeMap::new();
+    let (mut cached, mut draws) = (0, 0);
+    for (step, (name, v)) in pool.iter().enumerate() {
+        held.insert(name.clone(), v[0].clone());
+        store.update(vec![(name.clone(), v[0].clone())], &[], &mut source_of(&held)).unwrap();
+        let fleet = Fleet::new(held.iter().map(|(n, t)| (n.clone(), t.clone())).collect()).unwrap();
+        let scratch = find_fleet_loops(&fleet, &Euclidean, GAMMA_M, &FleetOptions::default()).unwrap();
+        let loops = store.loops().unwrap();
+        // σ_1 at one pair a component, then six: thresholds the first draw's slack covers, but
+        // more pairs than it kept.
+        let sizes = [
+            (SamplerKind::Rho, SampleSize::Budget(40)),
+            (SamplerKind::Rho, SampleSize::Budget(400)),
+            (SamplerKind::One, SampleSize::Rate(1.0)),
+            (SamplerKind::One, SampleSize::Rate(6.0)),
+            (SamplerKind::NearestThenUniform, SampleSize::Budget(200)),
+        ];
+        for (kind, size) in sizes {
+            let sampler = Sampler::new(kind, size, 3);
+            let got = store.samples(&loops, &sampler, false, &mut source_of(&held)).unwrap();
+            let want = fleet.localize(&sample_fleet(&fleet, &Euclidean, &scratch, &sampler, false).unwrap()).unwrap();
+            assert_eq!(got.rows, want, "step {step}: {kind:?} {size:?}");
+            cached += got.tiles_asked - got.tiles_read;
+            draws += 1;
+        }
+    }
+    assert!(cached > 0 && draws > 8, "{cached} tiles answered from earlier draws in {draws} draws");
 }

@@ -10,7 +10,7 @@ mod support;
 use loops_core::{
     Euclidean, SampleSize, Sampler, SamplerKind, Separation, Trajectory, find_loops_separated,
     fleet::{Fleet, FleetLoops, FleetOptions, find_fleet_loops, sample_fleet},
-    sample::{DrawCandidates, DrawRequest, KeyedDraw, pair_key},
+    sample::{DrawCandidates, DrawRequest, KeyLayout, KeyedDraw, pair_key},
     sample_loops,
     tile::{
         SessionBlocks, TileDuration, TileKeep, TileMerge, TileRuns, TileSummary, draw_session_tile, draw_tile_runs,
@@ -124,7 +124,9 @@ fn draw_from_tiles(
     let stats = t.merged.draw_stats();
     let blocks: Vec<[usize; 2]> = t.merged.components().iter().map(|m| m.sessions).collect();
     let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
-    let mut draw = KeyedDraw::new(sampler, &stats, &keep).unwrap();
+    let names: Vec<String> = (0..sessions.len()).map(|k| format!("s{k}")).collect();
+    let keys = KeyLayout::sessions(&t.starts, &names);
+    let mut draw = KeyedDraw::new(sampler, &stats, &keep).unwrap().with_keys(keys);
     let mut passes = 0;
     while let Some(request) = draw.request().cloned() {
         passes += 1;
@@ -250,23 +252,80 @@ fn adversarial_fleets_draw_from_tiles_as_in_memory() {
     }
 }
 
-/// A fleet of one session is that session (on another clock): the same pairs for every sampler
-/// of components.
+/// A fleet of one session is that session (on another clock): the same groups, pairs available
+/// and quotas for every sampler of components (σ_α: the same count under a budget), and the same pairs for those that pick rows'
+/// closest pairs only; uniform picks differ, since a fleet keys its pairs by session name.
 #[test]
 fn a_fleet_of_one_samples_as_the_session_alone() {
     let drive = walks(3).remove(0);
     let fleet = Fleet::new(vec![("only".into(), drive.clone())]).unwrap();
     let loops = find_fleet_loops(&fleet, &Euclidean, 1.5, &FleetOptions::default()).unwrap();
     let alone = find_loops_separated(&drive, &Euclidean, 1.5, Separation::NONE).unwrap();
+    let mut uniform_differs = 0;
     for sampler in samplers() {
         let a = sample_fleet(&fleet, &Euclidean, &loops, &sampler, false).unwrap();
         let b = sample_loops(&drive, &Euclidean, &alone, &sampler).unwrap();
         let key = |s: &loops_core::Samples| -> Vec<_> {
             s.rows().iter().map(|r| (r.pair, r.component, r.distance.map(f64::to_bits))).collect()
         };
+        let per_component = |s: &loops_core::Samples| {
+            let mut counts = std::collections::BTreeMap::new();
+            s.rows().iter().for_each(|r| *counts.entry(r.component).or_insert(0) += 1);
+            counts
+        };
+        let what = format!("{:?} {:?}", sampler.kind, sampler.size);
         assert!(!b.is_empty());
-        assert_eq!(key(&a), key(&b), "{:?} {:?}", sampler.kind, sampler.size);
+        assert_eq!((a.groups(), a.available()), (b.groups(), b.available()), "{what}");
+        if sampler.kind == SamplerKind::Alpha {
+            // A budget's count; a rate's is random.
+            if let SampleSize::Budget(_) = sampler.size {
+                assert_eq!(a.len(), b.len(), "{what}");
+            }
+        } else {
+            assert_eq!(per_component(&a), per_component(&b), "{what}");
+        }
+        // Budgets below the components' rows: no uniform pick.
+        let rows_only = matches!(
+            sampler.kind,
+            SamplerKind::RhoDispersed | SamplerKind::ClosestFirst | SamplerKind::ClosestThenSpread
+        ) && matches!(sampler.size, SampleSize::Budget(b) if b <= 40);
+        if rows_only {
+            assert_eq!(key(&a), key(&b), "{what}");
+        } else if key(&a) != key(&b) {
+            uniform_differs += 1;
+        }
     }
+    assert!(uniform_differs > 0, "the session's name keys no uniform pick");
+}
+
+/// A fleet keys a pair by its sessions' names and its own poses: moving the sessions (others
+/// added or removed before them) leaves the key, another name gives another; one trajectory's
+/// keys are `pair_key`'s.
+#[test]
+fn fleet_keys_follow_the_sessions_not_their_place() {
+    let single = KeyLayout::default();
+    for (i, j) in [(0, 1), (5, 70), (63, 64), (1000, 1300)] {
+        assert_eq!(single.pair_key(4, i, j), pair_key(4, i, j));
+    }
+    let here = KeyLayout::sessions(&[0, 100, 250], &["a", "b", "c"]);
+    let moved = KeyLayout::sessions(&[0, 40, 160, 310], &["0", "a", "b", "c"]);
+    let renamed = KeyLayout::sessions(&[0, 100, 250], &["a", "x", "c"]);
+    let (mut same, mut other) = (0, 0);
+    for (i, j) in [(3, 120), (110, 130), (120, 260), (99, 100), (5, 7), (260, 299)] {
+        let shift = |f: usize| if f >= 100 { f + 60 } else { f + 40 };
+        assert_eq!(here.pair_key(9, i, j), moved.pair_key(9, shift(i), shift(j)), "({i}, {j})");
+        same += 1;
+        let in_b = (100..250).contains(&i) || (100..250).contains(&j);
+        if in_b {
+            assert_ne!(here.pair_key(9, i, j), renamed.pair_key(9, i, j), "({i}, {j})");
+            other += 1;
+        } else {
+            assert_eq!(here.pair_key(9, i, j), renamed.pair_key(9, i, j), "({i}, {j})");
+        }
+    }
+    assert_eq!((same, other), (6, 4));
+    // Two sessions' pairs at the same own indices have other keys.
+    assert_ne!(here.pair_key(9, 3, 20), here.pair_key(9, 103, 120));
 }
 
 /// Keys are uniform: the share of keys below a threshold is the threshold's fraction, and

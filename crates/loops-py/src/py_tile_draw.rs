@@ -48,11 +48,12 @@ pub(crate) fn plan_draw(
     let spec = Sampler { skip_trivial, ..Sampler::new(kind, size, seed) };
     let (merged, starts) = (Arc::clone(merged), starts.to_vec());
     let kept = Arc::clone(&merged);
+    let keys = loops_core::sample::KeyLayout::sessions(&starts, names);
     let inner = detached(py, move || {
         let stats = merged.draw_stats();
         let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
-        Ok(loops_core::sample::KeyedDraw::new(&spec, &stats, &keep)?)
+        Ok(loops_core::sample::KeyedDraw::new(&spec, &stats, &keep)?.with_keys(keys))
     })?;
     Ok(KeyedDraw { inner: Shared::new(inner), merged: kept, names: names.to_vec(), starts, skip_trivial })
 }

@@ -3,7 +3,7 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::keyed::{DrawRun, DrawStats, KeyedDraw, RunHolder, draw_candidates};
+use super::keyed::{DrawRun, DrawStats, KeyLayout, KeyedDraw, RunHolder, draw_candidates};
 use super::{Sample, Sampler, Samples};
 use crate::baseline::baseline_pairs;
 use crate::error::Result;
@@ -68,17 +68,18 @@ pub fn sample_loops<M: Metric + ?Sized>(
     loops: &Loops,
     sampler: &Sampler,
 ) -> Result<Samples> {
-    sample_loops_where(traj, metric, loops, sampler, &|_| true)
+    sample_loops_where(traj, metric, loops, sampler, &|_| true, KeyLayout::default())
 }
 
 /// [`sample_loops`] over the components `keep` accepts only (a fleet's components between
-/// sessions); the baselines ignore it.
+/// sessions), pairs keyed by `keys` (a fleet's by session); the baselines ignore both.
 pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
     traj: &Trajectory,
     metric: &M,
     loops: &Loops,
     sampler: &Sampler,
     keep: &(dyn Fn(usize) -> bool + Sync),
+    keys: KeyLayout,
 ) -> Result<Samples> {
     loops.check_trajectory(traj)?;
     check_fits(metric, traj)?;
@@ -98,7 +99,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
         }
         (_, None) => {
             let stats = draw_stats(loops);
-            let mut draw = KeyedDraw::new(sampler, &stats, &wanted)?;
+            let mut draw = KeyedDraw::new(sampler, &stats, &wanted)?.with_keys(keys);
             let holder = LoopsHolder { traj, metric, loops };
             while let Some(request) = draw.request().cloned() {
                 draw.absorb(draw_candidates(&holder, &request)?);

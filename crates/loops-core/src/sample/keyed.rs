@@ -5,7 +5,10 @@
 //! stream keyed by (seed, i, ⌊j / 64⌋) (SplitMix64, bit-sliced over the 64 columns of the block,
 //! so that the keys at most a threshold come out of a few words per block without visiting
 //! every cell). Whoever holds a run of a component — the whole trajectory in memory, or one tile
-//! of a fleet on another machine — finds the same keys for its cells. From them:
+//! of a fleet on another machine — finds the same keys for its cells. In a fleet the indices are
+//! each session's own, salted by a hash of its name ([`KeyLayout`]): a pair keeps its key when
+//! sessions are added or removed around it, so that a fleet store can keep what a draw found in
+//! the tiles an update leaves alone. From the keys:
 //!
 //! - **Quotas** per component come from statistics that merge from tiles: the number of pairs
 //!   off the diagonal, the first and last row, the closest pair (σ_1: 1 each; σ_ρ and the
@@ -14,9 +17,10 @@
 //!   with the sampler's own stream, in component order.
 //! - **Uniform picks** (σ_1, σ_ρ, the rest of the dispersed samplers) are the `q` pairs of the
 //!   component with the smallest keys: a uniform draw without replacement. Each holder returns
-//!   its pairs with a key at most a threshold that leaves a few more than `q` in expectation;
-//!   should fewer come back, the threshold grows and the holders are asked again (the answer
-//!   does not depend on the threshold). σ_α takes the smallest keys over all components (a
+//!   the `q` smallest of its pairs with a key at most a threshold that leaves a few more than
+//!   `q` in expectation (the component's `q` smallest are among them); should fewer come back
+//!   in all, the threshold grows and the holders are asked again (the answer does not depend
+//!   on the threshold). σ_α takes the smallest keys over all components (a
 //!   budget), or every pair with a key below `p · 2⁶⁴` (a rate).
 //! - **Row picks** (the dispersed σ_ρ, closest-first, closest-then-spread and the first picks of
 //!   nearest-then-uniform, whose others are uniform picks) are the closest pair of chosen rows
@@ -53,13 +57,14 @@ fn mix(mut z: u64) -> u64 {
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
-/// The stream of the keys of row `row`, columns `64 · block ..`, under `seed`.
+/// The stream of the keys of row `row`, columns `64 · block ..`, under `seed` (row and block as
+/// [`KeyLayout`] names them).
 struct KeyStream(u64);
 
 impl KeyStream {
-    fn new(seed: u64, row: usize, block: usize) -> Self {
-        let s = mix(mix(seed.wrapping_add(GOLDEN)) ^ (row as u64).wrapping_mul(GOLDEN));
-        Self(mix(s ^ (block as u64).wrapping_add(0x6B65_7965_645F_6472)))
+    fn new(seed: u64, row: u64, block: u64) -> Self {
+        let s = mix(mix(seed.wrapping_add(GOLDEN)) ^ row.wrapping_mul(GOLDEN));
+        Self(mix(s ^ block.wrapping_add(0x6B65_7965_645F_6472)))
     }
 
     fn next_word(&mut self) -> u64 {
@@ -68,15 +73,25 @@ impl KeyStream {
     }
 }
 
-/// Calls `out(column, key)` for every column of `lo..=hi` (one block of 64) of row `row` whose
-/// key is at most `threshold`, in increasing column order. The key's bit 63 − ℓ is bit
-/// `column mod 64` of the stream's ℓ-th word.
-fn keys_at_most(seed: u64, row: usize, lo: usize, hi: usize, threshold: u64, out: &mut impl FnMut(usize, u64)) {
+/// Calls `out(column, key)` for every column of `lo..=hi` (one block of 64, in the columns'
+/// own indices) of row `row` whose key is at most `threshold`, in increasing column order; the
+/// block's stream is that of `salt + block`. The key's bit 63 − ℓ is bit `column mod 64` of the
+/// stream's ℓ-th word.
+fn keys_at_most(
+    seed: u64,
+    row: u64,
+    salt: u64,
+    lo: usize,
+    hi: usize,
+    threshold: u64,
+    out: &mut impl FnMut(usize, u64),
+) {
     let block = lo / KEY_BLOCK;
     debug_assert!(hi / KEY_BLOCK == block && lo <= hi);
     let base = block * KEY_BLOCK;
     let width = hi - lo + 1;
     let mask = if width == 64 { u64::MAX } else { ((1u64 << width) - 1) << (lo - base) };
+    let block = salt.wrapping_add(block as u64);
     let mut stream = KeyStream::new(seed, row, block);
     let (mut less, mut equal) = (0u64, mask);
     let mut level = 0;
@@ -106,21 +121,106 @@ fn keys_at_most(seed: u64, row: usize, lo: usize, hi: usize, threshold: u64, out
 }
 
 /// Calls `out(column, key)` for the columns `start..=end` of row `row` with a key at most
-/// `threshold`.
-fn run_keys(seed: u64, row: usize, start: usize, end: usize, threshold: u64, out: &mut impl FnMut(usize, u64)) {
-    let mut lo = start;
-    while lo <= end {
-        let hi = end.min((lo / KEY_BLOCK + 1) * KEY_BLOCK - 1);
-        keys_at_most(seed, row, lo, hi, threshold, out);
-        lo = hi + 1;
+/// `threshold`, indices as `layout` keys them.
+fn run_keys(
+    seed: u64,
+    layout: &KeyLayout,
+    row: usize,
+    start: usize,
+    end: usize,
+    threshold: u64,
+    out: &mut impl FnMut(usize, u64),
+) {
+    let ((row_key, _), _, _) = layout.origin(row);
+    let mut from = start;
+    while from <= end {
+        // The columns of one session at a time: each has its own blocks.
+        let ((_, salt), first, next) = layout.origin(from);
+        let to = next.map_or(end, |n| end.min(n - 1));
+        let (mut lo, last) = (from - first, to - first);
+        while lo <= last {
+            let hi = last.min((lo / KEY_BLOCK + 1) * KEY_BLOCK - 1);
+            keys_at_most(seed, row_key, salt, lo, hi, threshold, &mut |j, key| out(first + j, key));
+            lo = hi + 1;
+        }
+        from = to + 1;
     }
 }
 
-/// The key of pair (i, j) under `seed` (for tests and checks: O(1) per pair).
+/// The key of pair (i, j) of one trajectory under `seed` (for tests and checks: O(1) per pair).
 pub fn pair_key(seed: u64, i: usize, j: usize) -> u64 {
-    let mut key = 0;
-    keys_at_most(seed, i, j, j, u64::MAX, &mut |_, k| key = k);
-    key
+    KeyLayout::default().pair_key(seed, i, j)
+}
+
+/// How the indices of pairs are keyed: those of one trajectory as they are, or a fleet's by
+/// session, each session's own indices salted by a hash of its name, so that adding or
+/// removing sessions (which moves the fleet indices of the sessions after them) leaves every
+/// other pair's key as it was. A fleet of one session keys like its trajectory only when the
+/// salt is 0: its keys are of its name too.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct KeyLayout {
+    /// Per session (in fleet order): its first fleet index and its salt. Empty: one
+    /// trajectory, unsalted.
+    sessions: Vec<(usize, u64)>,
+}
+
+impl KeyLayout {
+    /// The keys of a fleet whose sessions start at `starts` (fleet indices, increasing) and are
+    /// named `names`.
+    ///
+    /// # Panics
+    /// When `starts` and `names` differ in length (a caller's bug).
+    pub fn sessions<S: AsRef<str>>(starts: &[usize], names: &[S]) -> Self {
+        assert_eq!(starts.len(), names.len(), "one name per session");
+        Self { sessions: starts.iter().zip(names).map(|(&s, n)| (s, Self::salt(n.as_ref()))).collect() }
+    }
+
+    /// The salt of a session's indices: a 64-bit hash of its name (FNV-1a, then SplitMix64's
+    /// output function) with its low 32 bits clear, so that a session's rows and blocks (up to
+    /// 2³² poses) are apart from every other session's.
+    pub fn salt(name: &str) -> u64 {
+        let fnv = name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0100_0000_01B3));
+        mix(fnv) & !0xFFFF_FFFF
+    }
+
+    /// The part for a tile of sessions `sessions` (indices into this layout): those two only.
+    pub fn narrowed(&self, sessions: [usize; 2]) -> Self {
+        if self.sessions.is_empty() {
+            return Self::default();
+        }
+        let [a, b] = sessions;
+        let mut kept = vec![self.sessions[a]];
+        if b != a {
+            kept.push(self.sessions[b]);
+        }
+        kept.sort_unstable();
+        Self { sessions: kept }
+    }
+
+    /// Whether this is one trajectory's (unsalted) keying.
+    pub fn is_single(&self) -> bool {
+        self.sessions.is_empty()
+    }
+
+    /// The key of pair (i, j) under `seed` (O(1)).
+    pub fn pair_key(&self, seed: u64, i: usize, j: usize) -> u64 {
+        let mut key = 0;
+        run_keys(seed, self, i, j, j, u64::MAX, &mut |_, k| key = k);
+        key
+    }
+
+    /// Index `f` as keyed: (the row key of `f`, the salt of its session), the first fleet index
+    /// of its session, and the first of the next one, if any.
+    fn origin(&self, f: usize) -> ((u64, u64), usize, Option<usize>) {
+        if self.sessions.is_empty() {
+            return ((f as u64, 0), 0, None);
+        }
+        let k = self.sessions.partition_point(|&(s, _)| s <= f).max(1) - 1;
+        let (start, salt) = self.sessions[k];
+        let local = f.saturating_sub(start) as u64;
+        ((salt.wrapping_add(local), salt), start, self.sessions.get(k + 1).map(|&(s, _)| s))
+    }
 }
 
 /// What a keyed draw needs of one loop component: statistics that merge from tiles.
@@ -152,6 +252,10 @@ pub struct ComponentRequest {
     pub id: usize,
     /// Every pair off the diagonal with a key at most this.
     pub pool: Option<u64>,
+    /// Of the pool, the pairs with the smallest keys a holder need offer: the component's
+    /// quota (its smallest keys over all holders are among those of each), or `u64::MAX`
+    /// (σ_α, which takes the smallest over all components).
+    pub keep: u64,
     /// The closest pair of each of these rows (sorted).
     pub rows: Vec<usize>,
     /// The closest pair over all its rows.
@@ -164,13 +268,16 @@ pub struct ComponentRequest {
 pub struct DrawRequest {
     /// The sampler's seed.
     pub seed: u64,
+    /// How the pairs' indices are keyed.
+    pub keys: KeyLayout,
     /// The components asked about, by id.
     pub components: Vec<ComponentRequest>,
 }
 
 impl DrawRequest {
-    /// The part of the request about these components, and rows in `rows` only.
-    pub fn restricted(&self, ids: &HashSet<usize>, rows: std::ops::Range<usize>) -> Self {
+    /// The part of the request about these components, and rows in `rows` only, for a tile of
+    /// sessions `sessions` (its keys narrowed to those: [`KeyLayout::narrowed`]).
+    pub fn restricted(&self, ids: &HashSet<usize>, rows: std::ops::Range<usize>, sessions: [usize; 2]) -> Self {
         let components = self
             .components
             .iter()
@@ -178,11 +285,11 @@ impl DrawRequest {
             .map(|c| {
                 let lo = c.rows.partition_point(|&r| r < rows.start);
                 let hi = c.rows.partition_point(|&r| r < rows.end);
-                ComponentRequest { id: c.id, pool: c.pool, rows: c.rows[lo..hi].to_vec(), best: c.best }
+                ComponentRequest { id: c.id, pool: c.pool, keep: c.keep, rows: c.rows[lo..hi].to_vec(), best: c.best }
             })
             .filter(|c| c.pool.is_some() || c.best || !c.rows.is_empty())
             .collect();
-        Self { seed: self.seed, components }
+        Self { seed: self.seed, keys: self.keys.narrowed(sessions), components }
     }
 
     /// Nothing is asked.
@@ -235,6 +342,18 @@ impl DrawCandidates {
         self.pool.extend(other.pool);
         self.rows.extend(other.rows);
         self.best.extend(other.best);
+    }
+
+    /// Of the pool (reduced), the `keep(component)` smallest keys of each component.
+    pub(crate) fn keep_smallest(&mut self, keep: &dyn Fn(usize) -> u64) {
+        let mut run: (usize, u64) = (usize::MAX, 0);
+        self.pool.retain(|o| {
+            if run.0 != o.component {
+                run = (o.component, 0);
+            }
+            run.1 += 1;
+            run.1 <= keep(o.component)
+        });
     }
 
     /// One offer per (component, row) and per component; the pool sorted by (component, key).
@@ -325,7 +444,7 @@ pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> 
                     if let Some(threshold) = req.pool {
                         let first = run.start.max(i + 1);
                         if first <= run.end {
-                            run_keys(request.seed, i, first, run.end, threshold, &mut |j, key| {
+                            run_keys(request.seed, &request.keys, i, first, run.end, threshold, &mut |j, key| {
                                 let (distance, _) = holder.measure(i, j);
                                 let times_s = holder.times_s(i, j);
                                 out.pool.push(DrawCandidate {
@@ -387,6 +506,7 @@ pub(crate) fn draw_candidates(holder: &dyn RunHolder, request: &DrawRequest) -> 
         all.best.extend(part.best);
     }
     all.reduce();
+    all.keep_smallest(&|id| find(id).map_or(u64::MAX, |c| c.keep));
     Ok(all)
 }
 
@@ -441,6 +561,7 @@ pub struct KeyedDraw {
     kind: SamplerKind,
     size: SampleSize,
     seed: u64,
+    keys: KeyLayout,
     stats: Vec<DrawStats>,
     groups: Vec<Group>,
     /// σ_α's threshold (all groups share it).
@@ -591,6 +712,7 @@ impl KeyedDraw {
             kind,
             size: sampler.size,
             seed: sampler.seed,
+            keys: KeyLayout::default(),
             stats: stats.to_vec(),
             groups,
             alpha,
@@ -604,15 +726,36 @@ impl KeyedDraw {
         Ok(draw)
     }
 
+    /// The draw with pairs keyed by `keys` (a fleet's sessions: [`KeyLayout::sessions`]); one
+    /// trajectory's keys without it.
+    pub fn with_keys(mut self, keys: KeyLayout) -> Self {
+        self.keys = keys;
+        if self.pending.is_some() {
+            self.pending = Some(self.request_all());
+        }
+        self
+    }
+
+    /// How many of a group's pool a holder need offer.
+    fn keep(&self, g: &Group) -> u64 {
+        if self.alpha.is_some() { u64::MAX } else { g.quota }
+    }
+
     /// Every group's current request.
     fn request_all(&self) -> DrawRequest {
         let components = self
             .groups
             .iter()
             .filter(|g| g.pool.is_some() || g.best || !g.rows.is_empty())
-            .map(|g| ComponentRequest { id: g.id, pool: g.pool, rows: g.rows.clone(), best: g.best })
+            .map(|g| ComponentRequest {
+                id: g.id,
+                pool: g.pool,
+                keep: self.keep(g),
+                rows: g.rows.clone(),
+                best: g.best,
+            })
             .collect();
-        DrawRequest { seed: self.seed, components }
+        DrawRequest { seed: self.seed, keys: self.keys.clone(), components }
     }
 
     /// The sampler.
@@ -680,9 +823,15 @@ impl KeyedDraw {
                     .groups
                     .iter()
                     .filter(|g| short.contains(&g.id) || self.alpha.is_some())
-                    .map(|g| ComponentRequest { id: g.id, pool: g.pool, rows: Vec::new(), best: false })
+                    .map(|g| ComponentRequest {
+                        id: g.id,
+                        pool: g.pool,
+                        keep: self.keep(g),
+                        rows: Vec::new(),
+                        best: false,
+                    })
                     .collect();
-                self.pending = Some(DrawRequest { seed: self.seed, components });
+                self.pending = Some(DrawRequest { seed: self.seed, keys: self.keys.clone(), components });
             }
         }
     }
@@ -840,7 +989,7 @@ mod tests {
     /// The key of (row, column) as the module defines it, word by word: bit 63 − ℓ is bit
     /// `column mod 64` of the ℓ-th word of the block's stream.
     fn key_by_definition(seed: u64, row: usize, column: usize) -> u64 {
-        let mut stream = KeyStream::new(seed, row, column / KEY_BLOCK);
+        let mut stream = KeyStream::new(seed, row as u64, (column / KEY_BLOCK) as u64);
         (0..64).fold(0u64, |key, l| key | (((stream.next_word() >> (column % KEY_BLOCK)) & 1) << (63 - l)))
     }
 
@@ -858,7 +1007,7 @@ mod tests {
                 let want: Vec<(usize, u64)> =
                     (start..=end).zip(keys.iter().copied()).filter(|&(_, k)| k <= threshold).collect();
                 let mut got = Vec::new();
-                run_keys(seed, row, start, end, threshold, &mut |j, k| got.push((j, k)));
+                run_keys(seed, &KeyLayout::default(), row, start, end, threshold, &mut |j, k| got.push((j, k)));
                 assert_eq!(got, want, "seed {seed} row {row} {start}..={end} threshold {threshold:#x}");
                 hits += got.len();
             }

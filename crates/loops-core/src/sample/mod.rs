@@ -25,7 +25,7 @@ pub use clusters::sample_clusters;
 pub(crate) use exact::sample_loops_where;
 pub use exact::{draw_stats, sample_loops};
 pub use keyed::{
-    ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, DrawStats, DrawnPair, KeyedDraw, pair_key,
+    ComponentRequest, DrawCandidate, DrawCandidates, DrawRequest, DrawStats, DrawnPair, KeyLayout, KeyedDraw, pair_key,
 };
 pub(crate) use keyed::{DrawRun, RunHolder, draw_candidates};
 pub use kind::{Sampler, SamplerKind};

@@ -35,7 +35,7 @@ pub fn tile_requests(merged: &MergedLoops, request: &DrawRequest) -> Vec<Option<
         .enumerate()
         .map(|(t, tile)| {
             let ids: HashSet<usize> = merged.tile_labels(t).iter().map(|&c| c as usize).collect();
-            let part = request.restricted(&ids, tile.rows.clone());
+            let part = request.restricted(&ids, tile.rows.clone(), tile.sessions);
             (!part.is_empty()).then_some(part)
         })
         .collect()
