@@ -737,6 +737,18 @@ type TilePart = (usize, DrawRequest, Vec<(usize, (u64, u64), PoolKey)>);
 /// Seeds whose draws a store keeps what they found in its tiles.
 const POOL_SEEDS: usize = 4;
 
+/// A checksum of saved bytes (the store's fingerprint mixing, eight bytes a word).
+#[cfg(feature = "serde")]
+fn checksum(bytes: &[u8]) -> u64 {
+    let mut f = Fingerprint::new(bytes.len() as u64);
+    for chunk in bytes.chunks(8) {
+        let mut word = [0u8; 8];
+        word[..chunk.len()].copy_from_slice(chunk);
+        f.eat(u64::from_le_bytes(word));
+    }
+    f.finish()
+}
+
 /// A component's pairs in one tile with a key at most a threshold, as a draw found them: the
 /// next draw (after an update, which moves fleet indices but not the sessions' own) answers
 /// from it every tile of two sessions it left alone. Keyed by content, never by place: the
@@ -744,6 +756,7 @@ const POOL_SEEDS: usize = 4;
 /// column in their own indices, and the component's first and last row and closest pair in
 /// them, with its number of pairs.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct PoolKey {
     seed: u64,
     sessions: [(u64, u64); 2],
@@ -775,6 +788,7 @@ impl std::hash::Hash for PoolKey {
 /// Of the pairs (in the tile's sessions' own indices) with a key at most `threshold`, the `keep`
 /// smallest (all of them when fewer), by key.
 #[derive(Debug, Clone)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct PoolEntry {
     threshold: u64,
     keep: u64,
@@ -941,6 +955,61 @@ impl FleetStore {
     /// [`from_saved`](Self::from_saved) takes back.
     pub fn kept_runs(&self) -> impl Iterator<Item = Option<&TileRuns>> {
         self.kept.runs.iter().map(Option::as_deref)
+    }
+
+    /// What the store keeps of its last draws ([`samples`](Self::samples)), as bytes to save
+    /// beside its tiles: per seed (oldest first), what the draw found in the tiles, tagged,
+    /// versioned and ending in a checksum. [`keep_draws`](Self::keep_draws) takes them back.
+    #[cfg(feature = "serde")]
+    pub fn kept_draws(&self) -> Vec<(u64, Vec<u8>)> {
+        let pools = self.kept.pools.lock().unwrap_or_else(|e| e.into_inner());
+        pools
+            .iter()
+            .map(|(seed, found)| {
+                let mut entries: Vec<(&PoolKey, &PoolEntry)> = found.iter().collect();
+                entries.sort_by_key(|(k, _)| (k.sessions, k.tile, k.component));
+                let mut bytes = crate::tile::encode(*b"ILdw", &entries);
+                let check = checksum(&bytes);
+                bytes.extend_from_slice(&check.to_le_bytes());
+                (*seed, bytes)
+            })
+            .collect()
+    }
+
+    /// Takes back what [`kept_draws`](Self::kept_draws) gave (a store read back): its next
+    /// draws of those seeds read again only the tiles these do not answer. What they hold is
+    /// keyed by content, so draws of another store's sessions are never taken for this one's.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"fleet store draws"`) for bytes that are not such a
+    /// draw, or whose checksum does not match; nothing is kept then.
+    #[cfg(feature = "serde")]
+    pub fn keep_draws(&self, draws: &[(u64, &[u8])]) -> Result<()> {
+        let what = "fleet store draws";
+        let mut kept = Vec::with_capacity(draws.len());
+        for (k, &(seed, bytes)) in draws.iter().enumerate() {
+            let corrupt = |reason: String| Error::InvalidState { what, reason: format!("draw {k}: {reason}") };
+            let Some((body, check)) = bytes.split_last_chunk::<8>() else {
+                return Err(corrupt(format!("{} bytes, fewer than its checksum", bytes.len())));
+            };
+            if checksum(body) != u64::from_le_bytes(*check) {
+                return Err(corrupt("its checksum does not match its bytes".into()));
+            }
+            let entries: Vec<(PoolKey, PoolEntry)> =
+                crate::tile::decode(*b"ILdw", what, body).map_err(|e| corrupt(e.to_string()))?;
+            let found: Pools = entries
+                .into_iter()
+                .map(|(key, entry)| (PoolKey::new(key.seed, key.sessions, key.tile, key.component), entry))
+                .collect();
+            if found.keys().any(|key| key.seed != seed) {
+                return Err(corrupt(format!("it holds pools of another seed than {seed}")));
+            }
+            kept.push((seed, found));
+        }
+        let over = kept.len().saturating_sub(POOL_SEEDS);
+        kept.drain(..over);
+        *self.kept.pools.lock().unwrap_or_else(|e| e.into_inner()) = kept;
+        Ok(())
     }
 
     /// The settings.
@@ -1577,6 +1646,10 @@ impl FleetStore {
             draw.complete();
         }
         if caching {
+            // A draw that asked no uniform pick (row picks only) leaves the seed's as they were.
+            if found.is_empty() {
+                found = last;
+            }
             let mut pools = self.kept.pools.lock().unwrap_or_else(|e| e.into_inner());
             pools.push((sampler.seed, found));
             let over = pools.len().saturating_sub(POOL_SEEDS);

@@ -11,6 +11,7 @@
 //!     tiles.parquet       a, b, rows_start, rows_end, columns_start, columns_end, components, summary, duration
 //!     tile_runs.parquet   tile, a, b, run_count, runs          (version 2)
 //!     merges.parquet      a, b, tiles, components, merge       (version 2)
+//!     draws.parquet       seed, draw                           (version 2, optional)
 //!     components.parquet  id, session_a, session_b, a, b, trivial, area_s2, pair_count, run_count, holes,
 //!                         i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
 //!                         closest_i, closest_j, closest_distance, added
@@ -32,6 +33,10 @@
 //! makes its next update without scanning a stored tile or merging a stored pair again
 //! ([`FleetStore::from_saved`]). A store of version 1 (without them) still reads: it merges
 //! again on reading and rescans the tiles its first draw asks; its next update writes version 2.
+//! `draws.parquet` holds what the last draws found of uniform picks in the tiles, per seed
+//! ([`FleetStore::kept_draws`]; the seed as the INT64 of its bits): the next update's draw of a
+//! seed there reads again only the tiles and components they do not answer. A state without it
+//! (written before it) draws as before.
 //!
 //! **Atomic.** An update reads the current state, builds the whole new state in the store's
 //! scratch folder (pose files of unchanged sessions are hard links), moves it into place under
@@ -325,7 +330,9 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         FleetStore::from_parts(config.settings, sessions, tiles, last_update)?
     } else {
         let (merges, runs) = read_kept(&state, tiles.len())?;
-        FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?
+        let store = FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?;
+        read_draws(&state.join("draws.parquet"), &store)?;
+        store
     };
     Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
 }
@@ -419,6 +426,21 @@ fn read_kept(state: &Path, tiles: usize) -> Result<KeptParts> {
         }
     }
     Ok((merges, runs))
+}
+
+/// What the last draws of a state found (`draws.parquet`, where there is one), given to `store`.
+fn read_draws(path: &Path, store: &FleetStore) -> Result<()> {
+    if !path.exists() {
+        return Ok(());
+    }
+    let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    let rows = read_rows(path)?;
+    let mut draws = Vec::with_capacity(rows.len());
+    for (k, row) in rows.iter().enumerate() {
+        let seed = row.get_long(0).map_err(|e| corrupt(format!("row {k}: column 0: {e}")))? as u64;
+        draws.push((seed, row.bytes(1).map_err(|e| corrupt(format!("row {k}: {e}")))?));
+    }
+    store.keep_draws(&draws).map_err(|e| corrupt(e.to_string()))
 }
 
 /// The merges and runs a state keeps ([`FleetStore::from_saved`]).
@@ -717,6 +739,7 @@ fn update_with(
     write_tiles(&staged.join("tiles.parquet"), &store)?;
     write_tile_runs(&staged.join("tile_runs.parquet"), &store)?;
     write_merges(&staged.join("merges.parquet"), &store)?;
+    write_draws(&staged.join("draws.parquet"), &store)?;
     let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
     write_components(&staged.join("components.parquet"), &loops, &names, &added)?;
     write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names)?;
@@ -1040,6 +1063,18 @@ fn write_tile_runs(path: &Path, store: &FleetStore) -> Result<()> {
             ("b", ints(runs.iter().map(|(_, r)| r.tile().sessions[1]))),
             ("run_count", ints(runs.iter().map(|(_, r)| r.run_count()))),
             ("runs", Column::Bytes(runs.iter().map(|(_, r)| r.to_bytes()).collect())),
+        ],
+    )
+}
+
+/// `draws.parquet`: what the store's last draws found in its tiles, by seed.
+fn write_draws(path: &Path, store: &FleetStore) -> Result<()> {
+    let draws = store.kept_draws();
+    write_table(
+        path,
+        vec![
+            ("seed", Column::Int(draws.iter().map(|(seed, _)| *seed as i64).collect())),
+            ("draw", Column::Bytes(draws.into_iter().map(|(_, bytes)| bytes).collect())),
         ],
     )
 }

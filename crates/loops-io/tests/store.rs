@@ -244,6 +244,20 @@ fn a_reopened_store_draws_and_updates_as_kept_in_memory_without_a_scan() {
         sample_bits(&read_samples(&read_store(&dir).unwrap()).unwrap()),
         sample_bits(&report.samples.unwrap().rows)
     );
+    // The folder keeps what the update's draw found: read back, the same draw answers tiles
+    // from it (and gives the same samples, compared above); a damaged copy is refused by name.
+    let reread = read_store(&dir).unwrap();
+    let (sampler, between_only) = config().sampler.unwrap();
+    let drawn = reread.store.samples(&reread.store.loops().unwrap(), &sampler, between_only, &mut source).unwrap();
+    assert!(drawn.tiles_read < drawn.tiles_asked, "{} of {} tiles read", drawn.tiles_read, drawn.tiles_asked);
+    let draws = dir.join(&reread.state).join("draws.parquet");
+    std::fs::write(&draws, b"not parquet").unwrap();
+    let err = read_store(&dir).unwrap_err().to_string();
+    assert!(err.contains("draws.parquet"), "{err}");
+    std::fs::remove_file(&draws).unwrap();
+    let without = read_store(&dir).unwrap();
+    let drawn = without.store.samples(&without.store.loops().unwrap(), &sampler, between_only, &mut source).unwrap();
+    assert_eq!(drawn.tiles_read, drawn.tiles_asked, "a state without draws reads every tile asked");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
