@@ -1,9 +1,10 @@
-//! A fleet store built day by day: the cost of adding one more day against computing the whole
-//! fleet again, as a store made at once and as `find_fleet_loops` + `sample_fleet`. Prints
-//! ratios (BENCHMARKS.md records them).
+//! A fleet store built day by day, drawn after every day as a daily run does: the cost of
+//! adding one more day against computing the whole fleet again, as a store made at once and as
+//! `find_fleet_loops` + `sample_fleet`. σ_ρ with a budget (500 by default). Prints ratios
+//! (BENCHMARKS.md records them).
 //!
 //! ```text
-//! cargo run --release -p loops-core --example store_days -- [VEHICLES] [DAYS] [DURATION_S]
+//! cargo run --release -p loops-core --example store_days -- [VEHICLES] [DAYS] [DURATION_S] [BUDGET]
 //! ```
 
 use std::collections::HashMap;
