@@ -752,13 +752,15 @@ fn checksum(bytes: &[u8]) -> u64 {
 /// A component's pairs in one tile with a key at most a threshold, as a draw found them: the
 /// next draw (after an update, which moves fleet indices but not the sessions' own) answers
 /// from it every tile of two sessions it left alone. Keyed by content, never by place: the
-/// seed, the tile's sessions (salt of the name and fingerprint of the poses) and first row and
-/// column in their own indices, and the component's first and last row and closest pair in
-/// them, with its number of pairs.
+/// seed, the store's settings, the tile's sessions (salt of the name and fingerprint of the
+/// poses) and first row and column in their own indices, and the component's first and last row
+/// and closest pair in them, with its number of pairs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 struct PoolKey {
     seed: u64,
+    /// The store's settings (metric, γ, separation, block), mixed into one word.
+    settings: u64,
     sessions: [(u64, u64); 2],
     tile: [usize; 2],
     component: ([usize; 2], [usize; 2], u64),
@@ -768,14 +770,20 @@ struct PoolKey {
 }
 
 impl PoolKey {
-    fn new(seed: u64, sessions: [(u64, u64); 2], tile: [usize; 2], component: ([usize; 2], [usize; 2], u64)) -> Self {
+    fn new(
+        (seed, settings): (u64, u64),
+        sessions: [(u64, u64); 2],
+        tile: [usize; 2],
+        component: ([usize; 2], [usize; 2], u64),
+    ) -> Self {
         let (rows, closest, pairs) = component;
-        let words = [seed, sessions[0].0, sessions[0].1, sessions[1].0, sessions[1].1, tile[0] as u64, tile[1] as u64]
+        let words = [seed, settings, sessions[0].0, sessions[0].1, sessions[1].0, sessions[1].1]
             .into_iter()
-            .chain([rows[0] as u64, rows[1] as u64, closest[0] as u64, closest[1] as u64, pairs]);
+            .chain([tile[0] as u64, tile[1] as u64, rows[0] as u64, rows[1] as u64])
+            .chain([closest[0] as u64, closest[1] as u64, pairs]);
         let mut digest = Fingerprint::new(0x706F_6F6C);
         words.for_each(|w| digest.eat(w));
-        Self { seed, sessions, tile, component, digest: digest.finish() }
+        Self { seed, settings, sessions, tile, component, digest: digest.finish() }
     }
 }
 
@@ -999,7 +1007,9 @@ impl FleetStore {
                 crate::tile::decode(*b"ILdw", what, body).map_err(|e| corrupt(e.to_string()))?;
             let found: Pools = entries
                 .into_iter()
-                .map(|(key, entry)| (PoolKey::new(key.seed, key.sessions, key.tile, key.component), entry))
+                .map(|(key, entry)| {
+                    (PoolKey::new((key.seed, key.settings), key.sessions, key.tile, key.component), entry)
+                })
                 .collect();
             if found.keys().any(|key| key.seed != seed) {
                 return Err(corrupt(format!("it holds pools of another seed than {seed}")));
@@ -1508,12 +1518,17 @@ impl FleetStore {
         // What the last draw of this seed found, and what this one finds (kept after it).
         let identity: Vec<(u64, u64)> =
             self.sessions.iter().map(|s| (KeyLayout::salt(&s.name), s.fingerprint)).collect();
+        let settings_word = {
+            let mut f = Fingerprint::new(0x7365_7474);
+            f.eat_settings(&self.settings);
+            f.finish()
+        };
         let pool_key = |k: usize, c: usize| {
             let tile = &merged.tiles()[k];
             let [a, b] = tile.sessions;
             let s = &stats[c];
             PoolKey::new(
-                sampler.seed,
+                (sampler.seed, settings_word),
                 [identity[a], identity[b]],
                 [tile.rows.start - starts[a], tile.columns.start - starts[b]],
                 // (A trivial component's closest pair is not its own: any word will do.)
