@@ -2,8 +2,8 @@
 //! each tile offering its pairs after a rescan or from the runs its scan kept, give `sample_fleet`'s samples pair for pair for
 //! 1, 2 and 7 tiles per session pair and any thread count, for every sampler of components,
 //! budgets and rates, between sessions only or not, trivial components skipped or not; a fleet
-//! of one session samples as the session alone; τ from the tiles' shares is
-//! `FleetLoops::loop_duration`'s.
+//! of one session has the session's groups, quotas and row picks; a fleet's keys follow its
+//! sessions' names, not their place; τ from the tiles' shares is `FleetLoops::loop_duration`'s.
 
 mod support;
 

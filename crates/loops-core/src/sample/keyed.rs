@@ -155,8 +155,8 @@ pub fn pair_key(seed: u64, i: usize, j: usize) -> u64 {
 /// How the indices of pairs are keyed: those of one trajectory as they are, or a fleet's by
 /// session, each session's own indices salted by a hash of its name, so that adding or
 /// removing sessions (which moves the fleet indices of the sessions after them) leaves every
-/// other pair's key as it was. A fleet of one session keys like its trajectory only when the
-/// salt is 0: its keys are of its name too.
+/// other pair's key as it was. A fleet of one session keys its pairs by its name too, so its
+/// uniform picks are not those of the session alone.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct KeyLayout {
