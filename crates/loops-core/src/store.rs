@@ -731,8 +731,9 @@ struct Kept {
 type Pools = HashMap<PoolKey, PoolEntry>;
 
 /// A tile's part of a draw's pass, with the components whose pools it must find (their id, what
-/// the draw asked — threshold and count — and the key it keeps them under).
-type TilePart = (usize, DrawRequest, Vec<(usize, (u64, u64), PoolKey)>);
+/// the draw asked and what the tile is asked — each a threshold and a count — and the key they
+/// are kept under).
+type TilePart = (usize, DrawRequest, Vec<(usize, [(u64, u64); 2], PoolKey)>);
 
 /// Seeds whose draws a store keeps what they found in its tiles.
 const POOL_SEEDS: usize = 4;
@@ -1578,8 +1579,8 @@ impl FleetStore {
                             c.best || !c.rows.is_empty()
                         }
                         None => {
-                            missed.push((c.id, (threshold, c.keep), key));
                             let wider = pool_slack(threshold, c.keep);
+                            missed.push((c.id, [(threshold, c.keep), wider], key));
                             (c.pool, c.keep) = (Some(wider.0), wider.1);
                             true
                         }
@@ -1626,7 +1627,7 @@ impl FleetStore {
                 })
                 .collect::<Result<Vec<DrawCandidates>>>()?;
             draw.absorb(cached);
-            for ((k, part, missed), mut offer) in asked.into_iter().zip(offers) {
+            for ((k, _, missed), mut offer) in asked.into_iter().zip(offers) {
                 let [a, b] = merged.tiles()[k].sessions;
                 if caching {
                     // The offers (sorted by component, then key) as the cache keeps them.
@@ -1635,26 +1636,15 @@ impl FleetStore {
                         let local = DrawCandidate { pair: [p.pair[0] - starts[a], p.pair[1] - starts[b]], ..*p };
                         by_component.entry(p.component).or_default().push(local);
                     }
-                    let wider: HashMap<usize, (u64, u64)> =
-                        part.components.iter().map(|r| (r.id, (r.pool.unwrap_or(0), r.keep))).collect();
-                    let asked_at: HashMap<usize, (u64, u64)> = missed.iter().map(|&(c, asked, _)| (c, asked)).collect();
-                    for (c, _, key) in missed {
-                        let (threshold, keep) = wider[&c];
-                        found.insert(
-                            key,
-                            PoolEntry { threshold, keep, pairs: by_component.remove(&c).unwrap_or_default() },
-                        );
+                    let asked_at: HashMap<usize, (u64, u64)> =
+                        missed.iter().map(|&(c, [asked, _], _)| (c, asked)).collect();
+                    for (c, [_, (threshold, keep)], key) in missed {
+                        let pairs = by_component.remove(&c).unwrap_or_default();
+                        found.insert(key, PoolEntry { threshold, keep, pairs });
                     }
                     // The draw gets what it asked: at most its threshold, its count.
-                    let mut taken: (usize, u64) = (usize::MAX, 0);
-                    offer.pool.retain(|p| {
-                        if taken.0 != p.component {
-                            taken = (p.component, 0);
-                        }
-                        let (threshold, keep) = asked_at[&p.component];
-                        taken.1 += u64::from(p.key <= threshold);
-                        p.key <= threshold && taken.1 <= keep
-                    });
+                    offer.pool.retain(|p| p.key <= asked_at[&p.component].0);
+                    offer.keep_smallest(&|c| asked_at[&c].1);
                 }
                 draw.absorb(offer);
             }

@@ -198,11 +198,6 @@ impl KeyLayout {
         Self { sessions: kept }
     }
 
-    /// Whether this is one trajectory's (unsalted) keying.
-    pub fn is_single(&self) -> bool {
-        self.sessions.is_empty()
-    }
-
     /// The key of pair (i, j) under `seed` (O(1)).
     pub fn pair_key(&self, seed: u64, i: usize, j: usize) -> u64 {
         let mut key = 0;
