@@ -1495,7 +1495,7 @@ impl FleetStore {
         let names: Vec<&str> = self.sessions.iter().map(|s| s.name.as_str()).collect();
         let keys = KeyLayout::sessions(&loops.starts, &names);
         let stats = merged.draw_stats();
-        let mut draw = KeyedDraw::new(sampler, &stats, &keep)?.with_keys(keys);
+        let mut draw = KeyedDraw::with_keys(sampler, &stats, &keep, keys)?;
         let mut read: HashMap<usize, Trajectory> = HashMap::new();
         let (mut tiles_rescanned, mut tiles_read, mut tiles_asked) = (0, 0, 0);
         let settings = self.settings;

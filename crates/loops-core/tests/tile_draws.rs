@@ -126,7 +126,7 @@ fn draw_from_tiles(
     let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
     let names: Vec<String> = (0..sessions.len()).map(|k| format!("s{k}")).collect();
     let keys = KeyLayout::sessions(&t.starts, &names);
-    let mut draw = KeyedDraw::new(sampler, &stats, &keep).unwrap().with_keys(keys);
+    let mut draw = KeyedDraw::with_keys(sampler, &stats, &keep, keys).unwrap();
     let mut passes = 0;
     while let Some(request) = draw.request().cloned() {
         passes += 1;

@@ -53,7 +53,7 @@ pub(crate) fn plan_draw(
         let stats = merged.draw_stats();
         let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
-        Ok(loops_core::sample::KeyedDraw::new(&spec, &stats, &keep)?.with_keys(keys))
+        Ok(loops_core::sample::KeyedDraw::with_keys(&spec, &stats, &keep, keys)?)
     })?;
     Ok(KeyedDraw { inner: Shared::new(inner), merged: kept, names: names.to_vec(), starts, skip_trivial })
 }

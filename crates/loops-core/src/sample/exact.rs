@@ -99,7 +99,7 @@ pub(crate) fn sample_loops_where<M: Metric + ?Sized>(
         }
         (_, None) => {
             let stats = draw_stats(loops);
-            let mut draw = KeyedDraw::new(sampler, &stats, &wanted)?.with_keys(keys);
+            let mut draw = KeyedDraw::with_keys(sampler, &stats, &wanted, keys)?;
             let holder = LoopsHolder { traj, metric, loops };
             while let Some(request) = draw.request().cloned() {
                 draw.absorb(draw_candidates(&holder, &request)?);

@@ -13,8 +13,10 @@
 //! - **Quotas** per component come from statistics that merge from tiles: the number of pairs
 //!   off the diagonal, the first and last row, the closest pair (σ_1: 1 each; σ_ρ and the
 //!   dispersed samplers: the rows, `last − first + 1`, which is every row of a 4-connected
-//!   component; nearest-then-uniform: the rows, then the pairs). They are rounded at random
-//!   with the sampler's own stream, in component order.
+//!   component; nearest-then-uniform: the rows, then the pairs). They are rounded at random by
+//!   each component's permanent random number, a hash of the cell that names it (its closest
+//!   pair) under the seed: a component keeps its rounding when others come or go, so that a
+//!   fleet store's next draw asks again only where quotas moved.
 //! - **Uniform picks** (σ_1, σ_ρ, the rest of the dispersed samplers) are the `q` pairs of the
 //!   component with the smallest keys: a uniform draw without replacement. Each holder returns
 //!   the `q` smallest of its pairs with a key at most a threshold that leaves a few more than
@@ -24,19 +26,17 @@
 //!   budget), or every pair with a key below `p · 2⁶⁴` (a rate).
 //! - **Row picks** (the dispersed σ_ρ, closest-first, closest-then-spread and the first picks of
 //!   nearest-then-uniform, whose others are uniform picks) are the closest pair of chosen rows
-//!   (stratified with an offset drawn from the component's own stream): each holder returns the
+//!   (stratified with an offset drawn from the component's own word, as its permanent number): each holder returns the
 //!   closest pair of its runs in those rows, and the closest of them wins (by the metric's rank,
 //!   then the column). A run on the diagonal offers the closest column after its farthest point
 //!   (a return along the same way); a tile reads past its last column to find the run's end.
 
 use std::collections::{BTreeMap, HashSet};
 
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+use super::SamplerKind;
 use super::nearest::nearest_then_uniform_quotas;
-use super::{SamplerKind, group_rng};
 use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
@@ -56,6 +56,17 @@ fn mix(mut z: u64) -> u64 {
 }
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// The stream of components' own words ([`KeyLayout::component_word`]), apart from the keys'.
+const COMPONENT_TAG: u64 = 0x636F_6D70_6F6E_656E;
+
+/// The stream of the stratification offsets, drawn from the components' words.
+const OFFSET_TAG: u64 = 0x6F66_6673_6574_7321;
+
+/// A word as a uniform number in [0, 1) (its top 53 bits).
+fn unit(word: u64) -> f64 {
+    (word >> 11) as f64 / (1u64 << 53) as f64
+}
 
 /// The stream of the keys of row `row`, columns `64 · block ..`, under `seed` (row and block as
 /// [`KeyLayout`] names them).
@@ -203,6 +214,22 @@ impl KeyLayout {
         let mut key = 0;
         run_keys(seed, self, i, j, j, u64::MAX, &mut |_, k| key = k);
         key
+    }
+
+    /// A component's own random word under `seed`: a hash (another stream than the pairs'
+    /// keys) of the cell that names it — its closest pair, or the diagonal cell of its first
+    /// row for a trivial component (whose closest pair a tile does not know) — in its sessions'
+    /// own indices, with the two sessions' salts combined (XOR: none within one session, so
+    /// that a fleet of one session rounds and spreads as the session alone). The same for any
+    /// holder, any order of the sessions and any other components.
+    fn component_word(&self, seed: u64, s: &DrawStats) -> u64 {
+        let [i, j] = if s.trivial { [s.rows[0]; 2] } else { s.closest_pair };
+        let ((row, row_salt), _, _) = self.origin(i);
+        let ((column, column_salt), _, _) = self.origin(j);
+        let local = |key: u64, salt: u64| key.wrapping_sub(salt);
+        let h = mix(mix(seed ^ COMPONENT_TAG) ^ (row_salt ^ column_salt));
+        let h = mix(h.wrapping_add(local(row, row_salt).wrapping_mul(GOLDEN)));
+        mix(h ^ local(column, column_salt).wrapping_mul(0xD6E8_FEB8_6659_FD93))
     }
 
     /// Index `f` as keyed: (the row key of `f`, the salt of its session), the first fleet index
@@ -594,6 +621,20 @@ impl KeyedDraw {
     /// `rho-dispersed`, `alpha`, `closest-first`, `closest-then-spread`, `nearest-then-uniform`);
     /// [`Error::NotApplicable`] for a baseline.
     pub fn new(sampler: &Sampler, stats: &[DrawStats], keep: &dyn Fn(usize) -> bool) -> Result<Self> {
+        Self::with_keys(sampler, stats, keep, KeyLayout::default())
+    }
+
+    /// As [`new`](Self::new), with pairs and components keyed by `keys` (a fleet's sessions:
+    /// [`KeyLayout::sessions`]).
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn with_keys(
+        sampler: &Sampler,
+        stats: &[DrawStats],
+        keep: &dyn Fn(usize) -> bool,
+        keys: KeyLayout,
+    ) -> Result<Self> {
         let kind = sampler.kind;
         if kind.is_baseline() {
             return Err(Error::NotApplicable {
@@ -610,7 +651,10 @@ impl KeyedDraw {
         let caps: Vec<u64> = ids.iter().map(|&c| stats[c].pairs).collect();
         let available: u64 = caps.iter().sum();
         let mut warnings = Vec::new();
-        let mut rng = ChaCha8Rng::seed_from_u64(sampler.seed);
+        // Each component's own word: its permanent random number (rounding its quota) and its
+        // stratification offset, whatever else the draw holds.
+        let words: Vec<u64> = ids.iter().map(|&c| keys.component_word(sampler.seed, &stats[c])).collect();
+        let prn: Vec<f64> = words.iter().map(|&w| unit(w)).collect();
         let (groups, alpha) = if kind == SamplerKind::Alpha {
             let (count, threshold) = match sampler.size {
                 SampleSize::Rate(rate) => {
@@ -647,26 +691,26 @@ impl KeyedDraw {
             // (all picks, of which rows' closest pairs) per group.
             let quotas: Vec<(u64, u64)> = if kind == SamplerKind::NearestThenUniform {
                 let rows: Vec<u64> = ids.iter().map(|&c| stats[c].row_count() as u64).collect();
-                let splits = nearest_then_uniform_quotas(&rows, &caps, sampler.size, &mut rng, &mut warnings);
+                let splits = nearest_then_uniform_quotas(&rows, &caps, sampler.size, &prn, &mut warnings);
                 let total = splits.iter().map(|s| s.total()).sum::<u64>();
                 check_count("samples", sampler.size, total as f64, SAMPLE_BYTES)?;
                 splits.into_iter().map(|s| (s.total(), s.near)).collect()
             } else {
                 let rows = || ids.iter().map(|&c| stats[c].row_count() as f64).collect();
-                let quotas = sampler.group_quotas(rows, &caps, &mut rng, &mut warnings)?;
+                let quotas = sampler.group_quotas(rows, &caps, &prn, &mut warnings)?;
                 quotas.into_iter().map(|q| (q, q)).collect()
             };
             let groups = ids
                 .iter()
                 .zip(quotas)
-                .map(|(&id, (quota, near))| {
+                .zip(&words)
+                .map(|((&id, (quota, near)), &word)| {
                     let s = &stats[id];
                     let mut group = Group { id, quota, near, offset: 0.0, pool: None, rows: Vec::new(), best: false };
                     if quota == 0 {
                         return group;
                     }
-                    // Only a group with picks reads its offset: the others skip its stream.
-                    let offset = group_rng(sampler.seed, id).random::<f64>();
+                    let offset = unit(mix(word ^ OFFSET_TAG));
                     group.offset = offset;
                     let r0 = s.rows[0];
                     let count = s.row_count();
@@ -707,7 +751,7 @@ impl KeyedDraw {
             kind,
             size: sampler.size,
             seed: sampler.seed,
-            keys: KeyLayout::default(),
+            keys,
             stats: stats.to_vec(),
             groups,
             alpha,
@@ -719,16 +763,6 @@ impl KeyedDraw {
         };
         draw.pending = Some(draw.request_all());
         Ok(draw)
-    }
-
-    /// The draw with pairs keyed by `keys` (a fleet's sessions: [`KeyLayout::sessions`]); one
-    /// trajectory's keys without it.
-    pub fn with_keys(mut self, keys: KeyLayout) -> Self {
-        self.keys = keys;
-        if self.pending.is_some() {
-            self.pending = Some(self.request_all());
-        }
-        self
     }
 
     /// How many of a group's pool a holder need offer.

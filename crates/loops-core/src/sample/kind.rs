@@ -3,8 +3,6 @@
 use std::fmt;
 use std::str::FromStr;
 
-use rand::Rng;
-
 use crate::baseline::{Baseline, BaselineParams};
 use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count, first_then_quotas, group_quotas};
 use crate::error::{Error, Result};
@@ -294,15 +292,16 @@ impl Sampler {
     /// closest-first sampler takes each group's closest pair first and shares the rest by rows
     /// ([`first_then_quotas`]), the others (closest-then-spread too: its first pick counts
     /// towards the group's share; nearest-then-uniform on detection clusters, where it is
-    /// closest-then-spread) share by weight ([`group_quotas`]).
+    /// closest-then-spread) share by weight ([`group_quotas`]); `prn` holds each group's
+    /// permanent random number, which rounds its quota.
     ///
     /// # Errors
     /// [`Error::TooManySamples`] when the quotas make more samples than one call returns.
-    pub(crate) fn group_quotas<R: Rng + ?Sized>(
+    pub(crate) fn group_quotas(
         &self,
         rows: impl FnOnce() -> Vec<f64>,
         caps: &[u64],
-        rng: &mut R,
+        prn: &[f64],
         warnings: &mut Vec<SampleWarning>,
     ) -> Result<Vec<u64>> {
         let weights = match self.kind {
@@ -310,9 +309,9 @@ impl Sampler {
             _ => rows(),
         };
         let quotas = if self.kind == SamplerKind::ClosestFirst {
-            first_then_quotas(&weights, caps, self.size, rng, warnings)
+            first_then_quotas(&weights, caps, self.size, prn, warnings)
         } else {
-            group_quotas(&weights, caps, self.size, rng, warnings)
+            group_quotas(&weights, caps, self.size, prn, warnings)
         };
         check_count("samples", self.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
         Ok(quotas)

@@ -9,9 +9,7 @@
 //! proportion to the pairs it has left, as the time-gap rule draws over all pairs: those
 //! spread in time along both poses of the pair, not along rows only.
 
-use rand::{Rng, RngExt};
-
-use crate::draw::{SampleSize, SampleWarning, group_quotas};
+use crate::draw::{SampleSize, SampleWarning, group_quotas, order_sample};
 
 /// One component's counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,14 +48,15 @@ pub(crate) fn near_cap(rows: u64, pairs: u64) -> u64 {
 /// component when the budget has one for each, none below that, with a warning), so that a
 /// long component may take two or more where short ones take one; beyond `N`, every component
 /// takes its near cap and `B − N` is shared in proportion to the pairs left (`pairs − near`),
-/// rounded systematically with one draw of `rng`, so that the counts sum to `B` exactly (all
-/// pairs, with a warning, for a budget above them). Rate `r`: σ_ρ's counts (`r · rows`, at
-/// least 1, at most the pairs), the first up to the near cap closest pairs of rows.
-pub(crate) fn nearest_then_uniform_quotas<R: Rng + ?Sized>(
+/// rounded by the components' permanent random numbers `prn` ([`order_shares`]), so that the
+/// counts sum to `B` exactly (all pairs, with a warning, for a budget above them). Rate `r`:
+/// σ_ρ's counts (`r · rows`, at least 1, at most the pairs), the first up to the near cap
+/// closest pairs of rows.
+pub(crate) fn nearest_then_uniform_quotas(
     rows: &[u64],
     pairs: &[u64],
     size: SampleSize,
-    rng: &mut R,
+    prn: &[f64],
     warnings: &mut Vec<SampleWarning>,
 ) -> Vec<Split> {
     debug_assert_eq!(rows.len(), pairs.len());
@@ -65,7 +64,7 @@ pub(crate) fn nearest_then_uniform_quotas<R: Rng + ?Sized>(
     let near: Vec<u64> = rows.iter().zip(pairs).map(|(&r, &p)| near_cap(r, p)).collect();
     let weights: Vec<f64> = rows.iter().map(|&r| r as f64).collect();
     match size {
-        SampleSize::Rate(_) => group_quotas(&weights, pairs, size, rng, warnings)
+        SampleSize::Rate(_) => group_quotas(&weights, pairs, size, prn, warnings)
             .into_iter()
             .zip(&near)
             .map(|(q, &n)| Split { near: q.min(n), uniform: q - q.min(n) })
@@ -77,7 +76,7 @@ pub(crate) fn nearest_then_uniform_quotas<R: Rng + ?Sized>(
                 // All closest pairs of rows, shared by rows as σ_ρ shares its picks: at least
                 // one each from a budget of one per component, and a long component may take
                 // two or more where short ones take one (none, below one per component).
-                return group_quotas(&weights, &near, size, rng, warnings)
+                return group_quotas(&weights, &near, size, prn, warnings)
                     .into_iter()
                     .map(|near| Split { near, uniform: 0 })
                     .collect();
@@ -94,37 +93,28 @@ pub(crate) fn nearest_then_uniform_quotas<R: Rng + ?Sized>(
                 }
                 return near.iter().zip(&left).map(|(&near, &uniform)| Split { near, uniform }).collect();
             }
-            let uniform = systematic_shares(&left, rest, rng);
+            let uniform = order_shares(&left, rest, prn);
             near.iter().zip(uniform).map(|(&near, uniform)| Split { near, uniform }).collect()
         }
     }
 }
 
 /// `total` (less than `Σ caps`) shared in proportion to `caps`, each share ⌊e⌋ or ⌈e⌉ of its
-/// expectation `e = total · cap / Σ caps` (so at most its cap), summing to `total`: systematic
-/// rounding with one uniform offset.
-fn systematic_shares<R: Rng + ?Sized>(caps: &[u64], total: u64, rng: &mut R) -> Vec<u64> {
+/// expectation `e = total · cap / Σ caps` (so at most its cap), summing to `total`: the floors
+/// in exact integer arithmetic, then one more for the groups that Pareto order sampling of the
+/// fractional parts picks by `prn` ([`order_sample`]).
+fn order_shares(caps: &[u64], total: u64, prn: &[f64]) -> Vec<u64> {
     let sum: u64 = caps.iter().sum();
     debug_assert!(total < sum);
-    let offset: f64 = rng.random();
-    // Cumulative expectations in exact integer arithmetic: total · C_g / sum, C_g = Σ_{h ≤ g} cap_h.
-    let floor_at = |cumulative: u64| {
-        let scaled = u128::from(total) * u128::from(cumulative);
-        let whole = (scaled / u128::from(sum)) as u64;
-        let fraction = (scaled % u128::from(sum)) as f64 / sum as f64;
-        whole + u64::from(fraction + offset >= 1.0)
-    };
-    let mut cumulative = 0;
-    let mut before = floor_at(0);
-    caps.iter()
-        .map(|&cap| {
-            cumulative += cap;
-            let after = floor_at(cumulative);
-            let share = after - before;
-            before = after;
-            share
-        })
-        .collect()
+    let scaled = |cap: u64| u128::from(total) * u128::from(cap);
+    let mut shares: Vec<u64> = caps.iter().map(|&cap| (scaled(cap) / u128::from(sum)) as u64).collect();
+    let fractions: Vec<f64> = caps.iter().map(|&cap| (scaled(cap) % u128::from(sum)) as f64 / sum as f64).collect();
+    // The fractions sum to the integer left over: order sampling picks exactly that many.
+    let left = total - shares.iter().sum::<u64>();
+    for g in order_sample(&fractions, left, prn) {
+        shares[g] += 1;
+    }
+    shares
 }
 
 #[cfg(test)]
@@ -133,9 +123,12 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
+    use crate::draw::uniforms;
+
     fn quotas(rows: &[u64], pairs: &[u64], size: SampleSize, seed: u64) -> (Vec<Split>, Vec<SampleWarning>) {
         let mut warnings = Vec::new();
-        let q = nearest_then_uniform_quotas(rows, pairs, size, &mut ChaCha8Rng::seed_from_u64(seed), &mut warnings);
+        let prn = uniforms(&mut ChaCha8Rng::seed_from_u64(seed), rows.len());
+        let q = nearest_then_uniform_quotas(rows, pairs, size, &prn, &mut warnings);
         (q, warnings)
     }
 
@@ -224,14 +217,20 @@ mod tests {
     }
 
     #[test]
-    fn systematic_shares_sum_and_stay_within_one_of_the_expectation() {
+    fn order_shares_sum_and_stay_within_one_of_the_expectation() {
         let caps = [3, 0, 17, 1, 250, 9];
-        for seed in 0..50 {
-            let shares = systematic_shares(&caps, 101, &mut ChaCha8Rng::seed_from_u64(seed));
+        let mut mean = [0.0; 6];
+        for seed in 0..4000 {
+            let shares = order_shares(&caps, 101, &uniforms(&mut ChaCha8Rng::seed_from_u64(seed), caps.len()));
             assert_eq!(shares.iter().sum::<u64>(), 101);
-            for (&s, &c) in shares.iter().zip(&caps) {
+            for (g, (&s, &c)) in shares.iter().zip(&caps).enumerate() {
                 assert!(s <= c && (s as f64 - 101.0 * c as f64 / 280.0).abs() < 1.0);
+                mean[g] += s as f64 / 4000.0;
             }
+        }
+        // Over permanent numbers, each share's mean is about its expectation.
+        for (g, &c) in caps.iter().enumerate() {
+            assert!((mean[g] - 101.0 * c as f64 / 280.0).abs() < 0.03, "{g}: {mean:?}");
         }
     }
 }
