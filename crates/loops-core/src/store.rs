@@ -722,18 +722,31 @@ struct Kept {
     duration: Vec<(Vec<f64>, Vec<f64>)>,
     /// The runs of each tile (by tile, as the store's tiles), where an update scanned it.
     runs: Vec<Option<Arc<TileRuns>>>,
-    /// What the last draws found of uniform picks, by tile and component: those of the last
-    /// draw of each of the last [`POOL_SEEDS`] seeds, most recent last.
+    /// What the last draws found of uniform and row picks, by tile and component: those of the
+    /// last draw of each of the last [`POOL_SEEDS`] seeds, most recent last.
     pools: Arc<Mutex<Vec<(u64, Pools)>>>,
 }
 
 /// What one draw found in the tiles, by tile and component.
-type Pools = HashMap<PoolKey, PoolEntry>;
+type Pools = HashMap<PoolKey, Found>;
 
-/// A tile's part of a draw's pass, with the components whose pools it must find (their id, what
-/// the draw asked and what the tile is asked — each a threshold and a count — and the key they
-/// are kept under).
-type TilePart = (usize, DrawRequest, Vec<(usize, [(u64, u64); 2], PoolKey)>);
+/// A tile's part of a draw's pass, with what it is asked to find for the cache (by component).
+type TilePart = (usize, DrawRequest, Vec<Missed>);
+
+/// What a tile is asked for one component that the cache did not answer, and the key its
+/// answer is kept under.
+#[derive(Debug)]
+struct Missed {
+    component: usize,
+    /// The pool: what the draw asked and what the tile is asked (wider), each a threshold and
+    /// a count.
+    pool: Option<[(u64, u64); 2]>,
+    /// Rows whose closest pair is asked (fleet indices).
+    rows: Vec<usize>,
+    /// The closest pair over all rows.
+    best: bool,
+    key: PoolKey,
+}
 
 /// Seeds whose draws a store keeps what they found in its tiles.
 const POOL_SEEDS: usize = 4;
@@ -792,6 +805,19 @@ impl std::hash::Hash for PoolKey {
     fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
         state.write_u64(self.digest);
     }
+}
+
+/// What draws found of one component in one tile (pairs in the tile's sessions' own indices):
+/// its pool, the closest pair of the rows they asked (none where the tile has no pair in that
+/// row), and its closest pair over all rows, where asked. Each answers the next draw that asks
+/// the same: a component's rows and offset follow from its own cells, so a draw after an
+/// update asks the same rows of a component it left alone.
+#[derive(Debug, Clone, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+struct Found {
+    pool: Option<PoolEntry>,
+    rows: BTreeMap<usize, Option<DrawCandidate>>,
+    best: Option<Option<DrawCandidate>>,
 }
 
 /// Of the pairs (in the tile's sessions' own indices) with a key at most `threshold`, the `keep`
@@ -975,7 +1001,7 @@ impl FleetStore {
         pools
             .iter()
             .map(|(seed, found)| {
-                let mut entries: Vec<(&PoolKey, &PoolEntry)> = found.iter().collect();
+                let mut entries: Vec<(&PoolKey, &Found)> = found.iter().collect();
                 entries.sort_by_key(|(k, _)| (k.sessions, k.tile, k.component));
                 let mut bytes = crate::tile::encode(*b"ILdw", &entries);
                 let check = checksum(&bytes);
@@ -1004,7 +1030,7 @@ impl FleetStore {
             if checksum(body) != u64::from_le_bytes(*check) {
                 return Err(corrupt("its checksum does not match its bytes".into()));
             }
-            let entries: Vec<(PoolKey, PoolEntry)> =
+            let entries: Vec<(PoolKey, Found)> =
                 crate::tile::decode(*b"ILdw", what, body).map_err(|e| corrupt(e.to_string()))?;
             let found: Pools = entries
                 .into_iter()
@@ -1460,15 +1486,18 @@ impl FleetStore {
     /// from the runs kept by the update that scanned them, or rescans those it has none of
     /// (a store read back), reading their stored sessions from `source` (each once).
     ///
-    /// The store keeps what the draws of its last few seeds found of uniform picks, per tile
-    /// and component, in the sessions' own indices (pairs are keyed by session:
-    /// [`KeyLayout`]): a draw after an update reads a tile again only for the components whose
-    /// pools it lacks (those of the new tiles, and those whose quota grew past what was kept),
-    /// and does not read the sessions of the tiles it needs nothing more from. The samples are
-    /// the same with or without it; σ_α keeps nothing (it asks a share of every component).
+    /// The store keeps what the draws of its last few seeds found, per tile and component, in
+    /// the sessions' own indices (pairs are keyed by session: [`KeyLayout`]): the uniform
+    /// picks' pools and the closest pairs of the rows asked. A draw after an update reads a tile
+    /// again only for the components it lacks an answer of (those of the new tiles, those whose
+    /// quota grew past what was kept, those whose quota or rows moved), and does not read the
+    /// sessions of the tiles it needs nothing more from. Quotas and rows follow from each
+    /// component's own cells (its permanent random number), so a day's sessions move few of
+    /// them. The samples are the same with or without it; σ_α keeps nothing (it asks a share of
+    /// every component).
     ///
     /// # Errors
-    /// As [`KeyedDraw::new`]; the scans' errors; [`Error::InvalidState`] for a session that
+    /// As [`KeyedDraw::with_keys`]; the scans' errors; [`Error::InvalidState`] for a session that
     /// `source` gives with another content; `source`'s errors.
     pub fn samples(
         &self,
@@ -1549,8 +1578,8 @@ impl FleetStore {
         };
         let mut found = Pools::new();
         while let Some(request) = draw.request().cloned() {
-            // Each tile's part: the uniform picks the cache holds are answered here; the rest
-            // (row picks, and pools it lacks, looked up with a slack) by the tile's runs.
+            // Each tile's part: what the cache holds is answered here; the rest (the rows and
+            // pools it lacks, pools looked up with a slack) by the tile's runs.
             let mut cached = DrawCandidates::default();
             let mut asked: Vec<TilePart> = Vec::new();
             let parts = tile_parts(merged, &holders, &request);
@@ -1558,8 +1587,12 @@ impl FleetStore {
             for (k, mut part) in parts {
                 let [a, b] = merged.tiles()[k].sessions;
                 let mut missed = Vec::new();
+                let global =
+                    |p: &DrawCandidate| DrawCandidate { pair: [p.pair[0] + starts[a], p.pair[1] + starts[b]], ..*p };
                 part.components.retain_mut(|c| {
-                    let Some(threshold) = c.pool.filter(|_| caching) else { return true };
+                    if !caching {
+                        return true;
+                    }
                     let key = pool_key(k, c.id);
                     // An entry moves from the last draw's to this one's the first time it is read.
                     if !found.contains_key(&key)
@@ -1567,24 +1600,46 @@ impl FleetStore {
                     {
                         found.insert(key, entry);
                     }
-                    match found.get(&key).filter(|e| e.answers(threshold, c.keep)) {
-                        Some(entry) => {
-                            let below = entry.pairs.iter().filter(|p| p.key <= threshold).take(c.keep as usize);
-                            cached.pool.extend(below.map(|p| DrawCandidate {
-                                component: c.id,
-                                pair: [p.pair[0] + starts[a], p.pair[1] + starts[b]],
-                                ..*p
-                            }));
-                            c.pool = None;
-                            c.best || !c.rows.is_empty()
-                        }
-                        None => {
-                            let wider = pool_slack(threshold, c.keep);
-                            missed.push((c.id, [(threshold, c.keep), wider], key));
-                            (c.pool, c.keep) = (Some(wider.0), wider.1);
-                            true
+                    let entry = found.get(&key);
+                    let mut miss = Missed { component: c.id, pool: None, rows: Vec::new(), best: false, key };
+                    if let Some(threshold) = c.pool {
+                        match entry.and_then(|e| e.pool.as_ref()).filter(|e| e.answers(threshold, c.keep)) {
+                            Some(pool) => {
+                                let below = pool.pairs.iter().filter(|p| p.key <= threshold).take(c.keep as usize);
+                                cached.pool.extend(below.map(|p| DrawCandidate { component: c.id, ..global(p) }));
+                                c.pool = None;
+                            }
+                            None => {
+                                let wider = pool_slack(threshold, c.keep);
+                                miss.pool = Some([(threshold, c.keep), wider]);
+                                (c.pool, c.keep) = (Some(wider.0), wider.1);
+                            }
                         }
                     }
+                    c.rows.retain(|&r| match entry.and_then(|e| e.rows.get(&(r - starts[a]))) {
+                        Some(answer) => {
+                            cached.rows.extend(answer.iter().map(|p| DrawCandidate { component: c.id, ..global(p) }));
+                            false
+                        }
+                        None => true,
+                    });
+                    miss.rows.clone_from(&c.rows);
+                    if c.best {
+                        match entry.and_then(|e| e.best) {
+                            Some(answer) => {
+                                cached
+                                    .best
+                                    .extend(answer.iter().map(|p| DrawCandidate { component: c.id, ..global(p) }));
+                                c.best = false;
+                            }
+                            None => miss.best = true,
+                        }
+                    }
+                    let ask = c.pool.is_some() || c.best || !c.rows.is_empty();
+                    if ask {
+                        missed.push(miss);
+                    }
+                    ask
                 });
                 if !part.components.is_empty() {
                     asked.push((k, part, missed));
@@ -1630,17 +1685,35 @@ impl FleetStore {
             for ((k, _, missed), mut offer) in asked.into_iter().zip(offers) {
                 let [a, b] = merged.tiles()[k].sessions;
                 if caching {
-                    // The offers (sorted by component, then key) as the cache keeps them.
-                    let mut by_component: HashMap<usize, Vec<DrawCandidate>> = HashMap::new();
+                    // The offers as the cache keeps them: pools by component (sorted by key),
+                    // rows by component and row, in the sessions' own indices.
+                    let local = |p: &DrawCandidate| DrawCandidate {
+                        pair: [p.pair[0] - starts[a], p.pair[1] - starts[b]],
+                        ..*p
+                    };
+                    let mut pools: HashMap<usize, Vec<DrawCandidate>> = HashMap::new();
                     for p in &offer.pool {
-                        let local = DrawCandidate { pair: [p.pair[0] - starts[a], p.pair[1] - starts[b]], ..*p };
-                        by_component.entry(p.component).or_default().push(local);
+                        pools.entry(p.component).or_default().push(local(p));
                     }
+                    let rows: HashMap<(usize, usize), DrawCandidate> =
+                        offer.rows.iter().map(|p| ((p.component, p.pair[0]), local(p))).collect();
+                    let best: HashMap<usize, DrawCandidate> =
+                        offer.best.iter().map(|p| (p.component, local(p))).collect();
                     let asked_at: HashMap<usize, (u64, u64)> =
-                        missed.iter().map(|&(c, [asked, _], _)| (c, asked)).collect();
-                    for (c, [_, (threshold, keep)], key) in missed {
-                        let pairs = by_component.remove(&c).unwrap_or_default();
-                        found.insert(key, PoolEntry { threshold, keep, pairs });
+                        missed.iter().filter_map(|m| Some((m.component, m.pool?[0]))).collect();
+                    for m in missed {
+                        let c = m.component;
+                        let entry = found.entry(m.key).or_default();
+                        if let Some([_, (threshold, keep)]) = m.pool {
+                            let pairs = pools.remove(&c).unwrap_or_default();
+                            entry.pool = Some(PoolEntry { threshold, keep, pairs });
+                        }
+                        for r in m.rows {
+                            entry.rows.insert(r - starts[a], rows.get(&(c, r)).copied());
+                        }
+                        if m.best {
+                            entry.best = Some(best.get(&c).copied());
+                        }
                     }
                     // The draw gets what it asked: at most its threshold, its count.
                     offer.pool.retain(|p| p.key <= asked_at[&p.component].0);
@@ -1651,9 +1724,14 @@ impl FleetStore {
             draw.complete();
         }
         if caching {
-            // A draw that asked no uniform pick (row picks only) leaves the seed's as they were.
-            if found.is_empty() {
-                found = last;
+            // What earlier draws of the seed found and this one did not read stays while its
+            // two sessions do (another sampler or budget may ask it again); what a session
+            // replaced or removed held goes. The entries are what draws asked, never all pairs.
+            let live: HashSet<(u64, u64)> = identity.iter().copied().collect();
+            for (key, entry) in last {
+                if key.sessions.iter().all(|s| live.contains(s)) {
+                    found.entry(key).or_insert(entry);
+                }
             }
             let mut pools = self.kept.pools.lock().unwrap_or_else(|e| e.into_inner());
             pools.push((sampler.seed, found));

@@ -33,7 +33,8 @@
 //! makes its next update without scanning a stored tile or merging a stored pair again
 //! ([`FleetStore::from_saved`]). A store of version 1 (without them) still reads: it merges
 //! again on reading and rescans the tiles its first draw asks; its next update writes version 2.
-//! `draws.parquet` holds what the last draws found of uniform picks in the tiles, per seed
+//! `draws.parquet` holds what the last draws found in the tiles (uniform picks' pools, rows'
+//! closest pairs), per seed
 //! ([`FleetStore::kept_draws`]; the seed as the INT64 of its bits): the next update's draw of a
 //! seed there reads again only the tiles and components they do not answer. A state without it
 //! (written before it) draws as before.
