@@ -1,10 +1,11 @@
 //! A fleet store built day by day, drawn after every day as a daily run does: the cost of
 //! adding one more day against computing the whole fleet again, as a store made at once and as
-//! `find_fleet_loops` + `sample_fleet`. σ_ρ with a budget (500 by default). Prints ratios
+//! `find_fleet_loops` + `sample_fleet`. A budget (500 by default) of σ_ρ, or of the sampler
+//! named last (`nearest-then-uniform`, the default of the command line, ...). Prints ratios
 //! (BENCHMARKS.md records them).
 //!
 //! ```text
-//! cargo run --release -p loops-core --example store_days -- [VEHICLES] [DAYS] [DURATION_S] [BUDGET]
+//! cargo run --release -p loops-core --example store_days -- [VEHICLES] [DAYS] [DURATION_S] [BUDGET] [SAMPLER]
 //! ```
 
 use std::collections::HashMap;
@@ -29,7 +30,8 @@ fn main() -> Result<()> {
     let gamma = 10.0;
     let settings = StoreSettings { gamma, ..StoreSettings::new(gamma) };
     let budget = std::env::args().nth(4).and_then(|a| a.parse().ok()).unwrap_or(500);
-    let sampler = Sampler::new(SamplerKind::Rho, SampleSize::Budget(budget), 7);
+    let kind: SamplerKind = std::env::args().nth(5).map_or(Ok(SamplerKind::Rho), |a| a.parse())?;
+    let sampler = Sampler::new(kind, SampleSize::Budget(budget), 7);
     let sessions: Vec<(String, Trajectory)> =
         (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
     let all: HashMap<String, Trajectory> = sessions.iter().cloned().collect();
