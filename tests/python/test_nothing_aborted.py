@@ -441,3 +441,43 @@ def test_ctrl_c_stops_push_many_and_keeps_the_poses_before():
     _, kept, same, duration = lines[1].split()
     assert 0 < int(kept) < 30_000 and same == "True" and duration == "True", out
     assert lines[2] == f"went on {int(kept) + 10}", out
+
+
+def test_ctrl_c_stops_a_call_waiting_for_another_threads_and_gives_up_its_turn():
+    # A thread pushes 5,000 points in 256 dimensions (seconds, and a thread other than the main
+    # one is not interrupted); the main thread's call waits for the engine meanwhile, and Ctrl-C
+    # raises KeyboardInterrupt in it. The calls after it are served once the push is done: the
+    # interrupted call's turn is given up, not kept for ever.
+    code = textwrap.dedent(
+        """
+        import threading, time
+        import numpy as np
+        import inexact_loops as il
+        rng = np.random.default_rng(0)
+        points = rng.normal(size=(5_000, 256))
+        online = il.OnlineLoops(gamma=1.0, dim=256)
+        pushing = threading.Thread(target=online.push_many, args=(np.arange(5_000) * 0.1, points))
+        pushing.start()
+        time.sleep(0.2)
+        print("started", flush=True)
+        start = time.monotonic()
+        try:
+            online.components
+            print("finished", len(online), flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", time.monotonic() - start, flush=True)
+        pushed = []
+        later = threading.Thread(target=lambda: pushed.append(len(online)), daemon=True)
+        later.start()
+        later.join(120)
+        pushing.join(120)
+        print("after", pushed, len(online), flush=True)
+        """
+    )
+    out, sent, started = signalled(code)
+    lines = out.splitlines()
+    if lines[0].startswith("finished "):
+        pytest.skip(f"the push ended before the signal: {out}")
+    assert lines[0].startswith("interrupted "), out
+    assert float(lines[0].split()[1]) - (sent - started) < 10, out
+    assert lines[1] == "after [5000] 5000", out
