@@ -748,6 +748,12 @@ struct Missed {
     key: PoolKey,
 }
 
+/// The tag of a store's saved draws ([`FleetStore::kept_draws`]).
+const DRAWS_TAG: [u8; 4] = *b"ILdr";
+
+/// The tag of saved draws that held pools only, before rows' closest pairs were kept too.
+const POOLS_ONLY_TAG: &[u8; 4] = b"ILdw";
+
 /// Seeds whose draws a store keeps what they found in its tiles.
 const POOL_SEEDS: usize = 4;
 
@@ -1003,7 +1009,7 @@ impl FleetStore {
             .map(|(seed, found)| {
                 let mut entries: Vec<(&PoolKey, &Found)> = found.iter().collect();
                 entries.sort_by_key(|(k, _)| (k.sessions, k.tile, k.component));
-                let mut bytes = crate::tile::encode(*b"ILdw", &entries);
+                let mut bytes = crate::tile::encode(DRAWS_TAG, &entries);
                 let check = checksum(&bytes);
                 bytes.extend_from_slice(&check.to_le_bytes());
                 (*seed, bytes)
@@ -1014,6 +1020,10 @@ impl FleetStore {
     /// Takes back what [`kept_draws`](Self::kept_draws) gave (a store read back): its next
     /// draws of those seeds read again only the tiles these do not answer. What they hold is
     /// keyed by content, so draws of another store's sessions are never taken for this one's.
+    ///
+    /// A draw saved by a build that kept pools only (tag `ILdw`) is passed over: draws are what
+    /// a store may find again, and the next draw of that seed reads its tiles as a store
+    /// without them does.
     ///
     /// # Errors
     /// [`Error::InvalidState`] (`what`: `"fleet store draws"`) for bytes that are not such a
@@ -1030,8 +1040,11 @@ impl FleetStore {
             if checksum(body) != u64::from_le_bytes(*check) {
                 return Err(corrupt("its checksum does not match its bytes".into()));
             }
+            if body.starts_with(POOLS_ONLY_TAG) {
+                continue;
+            }
             let entries: Vec<(PoolKey, Found)> =
-                crate::tile::decode(*b"ILdw", what, body).map_err(|e| corrupt(e.to_string()))?;
+                crate::tile::decode(DRAWS_TAG, what, body).map_err(|e| corrupt(e.to_string()))?;
             let found: Pools = entries
                 .into_iter()
                 .map(|(key, entry)| {
@@ -2033,6 +2046,22 @@ mod tests {
     fn entry(threshold: u64, keep: u64, pairs: usize) -> PoolEntry {
         let pair = DrawCandidate { component: 0, pair: [0, 1], key: 0, rank: 0.0, distance: 0.0, times_s: [0.0; 2] };
         PoolEntry { threshold, keep, pairs: vec![pair; pairs] }
+    }
+
+    /// Draws saved when a store kept pools only are passed over, not refused: the store reads
+    /// back and keeps nothing of them; bytes of that tag with a bad checksum are still refused.
+    #[cfg(feature = "serde")]
+    #[test]
+    fn draws_saved_with_pools_only_are_passed_over() {
+        let store = FleetStore::new(StoreSettings::new(5.0)).unwrap();
+        let mut old = POOLS_ONLY_TAG.to_vec();
+        old.extend_from_slice(&[2, 0, 0x90]);
+        old.extend_from_slice(&checksum(&old).to_le_bytes());
+        store.keep_draws(&[(7, old.as_slice())]).unwrap();
+        assert!(store.kept_draws().is_empty());
+        let last = old.len() - 1;
+        old[last] ^= 1;
+        assert!(store.keep_draws(&[(7, old.as_slice())]).is_err());
     }
 
     /// An entry answers a lower threshold for as many pairs as it kept; more only when it kept
