@@ -730,28 +730,17 @@ struct Kept {
 /// What one draw found in the tiles, by tile and component.
 type Pools = HashMap<PoolKey, Found>;
 
-/// A tile's part of a draw's pass, with what it is asked to find for the cache (by component).
-type TilePart = (usize, DrawRequest, Vec<Missed>);
-
-/// What a tile is asked for one component that the cache did not answer, and the key its
-/// answer is kept under.
-#[derive(Debug)]
-struct Missed {
-    component: usize,
-    /// The pool: what the draw asked and what the tile is asked (wider), each a threshold and
-    /// a count.
-    pool: Option<[(u64, u64); 2]>,
-    /// Rows whose closest pair is asked (fleet indices).
-    rows: Vec<usize>,
-    /// The closest pair over all rows.
-    best: bool,
-    key: PoolKey,
-}
+/// A tile's part of a draw's pass, and for each component it asks (in the same order) what the
+/// cache did not answer: the key its answer is kept under and, where the tile is asked a pool
+/// (with a slack), the threshold and count the draw asked.
+type TilePart = (usize, DrawRequest, Vec<(PoolKey, Option<(u64, u64)>)>);
 
 /// The tag of a store's saved draws ([`FleetStore::kept_draws`]).
+#[cfg(feature = "serde")]
 const DRAWS_TAG: [u8; 4] = *b"ILdr";
 
 /// The tag of saved draws that held pools only, before rows' closest pairs were kept too.
+#[cfg(feature = "serde")]
 const POOLS_ONLY_TAG: &[u8; 4] = b"ILdw";
 
 /// Seeds whose draws a store keeps what they found in its tiles.
@@ -1600,8 +1589,12 @@ impl FleetStore {
             for (k, mut part) in parts {
                 let [a, b] = merged.tiles()[k].sessions;
                 let mut missed = Vec::new();
-                let global =
-                    |p: &DrawCandidate| DrawCandidate { pair: [p.pair[0] + starts[a], p.pair[1] + starts[b]], ..*p };
+                // A cached offer as this draw has it: its fleet indices, this draw's component id.
+                let global = |p: &DrawCandidate, component: usize| DrawCandidate {
+                    component,
+                    pair: [p.pair[0] + starts[a], p.pair[1] + starts[b]],
+                    ..*p
+                };
                 part.components.retain_mut(|c| {
                     if !caching {
                         return true;
@@ -1614,43 +1607,37 @@ impl FleetStore {
                         found.insert(key, entry);
                     }
                     let entry = found.get(&key);
-                    let mut miss = Missed { component: c.id, pool: None, rows: Vec::new(), best: false, key };
+                    let mut asked_pool = None;
                     if let Some(threshold) = c.pool {
                         match entry.and_then(|e| e.pool.as_ref()).filter(|e| e.answers(threshold, c.keep)) {
                             Some(pool) => {
                                 let below = pool.pairs.iter().filter(|p| p.key <= threshold).take(c.keep as usize);
-                                cached.pool.extend(below.map(|p| DrawCandidate { component: c.id, ..global(p) }));
+                                cached.pool.extend(below.map(|p| global(p, c.id)));
                                 c.pool = None;
                             }
                             None => {
+                                asked_pool = Some((threshold, c.keep));
                                 let wider = pool_slack(threshold, c.keep);
-                                miss.pool = Some([(threshold, c.keep), wider]);
                                 (c.pool, c.keep) = (Some(wider.0), wider.1);
                             }
                         }
                     }
                     c.rows.retain(|&r| match entry.and_then(|e| e.rows.get(&(r - starts[a]))) {
                         Some(answer) => {
-                            cached.rows.extend(answer.iter().map(|p| DrawCandidate { component: c.id, ..global(p) }));
+                            cached.rows.extend(answer.iter().map(|p| global(p, c.id)));
                             false
                         }
                         None => true,
                     });
-                    miss.rows.clone_from(&c.rows);
-                    if c.best {
-                        match entry.and_then(|e| e.best) {
-                            Some(answer) => {
-                                cached
-                                    .best
-                                    .extend(answer.iter().map(|p| DrawCandidate { component: c.id, ..global(p) }));
-                                c.best = false;
-                            }
-                            None => miss.best = true,
-                        }
+                    if c.best
+                        && let Some(answer) = entry.and_then(|e| e.best)
+                    {
+                        cached.best.extend(answer.iter().map(|p| global(p, c.id)));
+                        c.best = false;
                     }
                     let ask = c.pool.is_some() || c.best || !c.rows.is_empty();
                     if ask {
-                        missed.push(miss);
+                        missed.push((key, asked_pool));
                     }
                     ask
                 });
@@ -1695,7 +1682,7 @@ impl FleetStore {
                 })
                 .collect::<Result<Vec<DrawCandidates>>>()?;
             draw.absorb(cached);
-            for ((k, _, missed), mut offer) in asked.into_iter().zip(offers) {
+            for ((k, part, missed), mut offer) in asked.into_iter().zip(offers) {
                 let [a, b] = merged.tiles()[k].sessions;
                 if caching {
                     // The offers as the cache keeps them: pools by component (sorted by key),
@@ -1712,19 +1699,20 @@ impl FleetStore {
                         offer.rows.iter().map(|p| ((p.component, p.pair[0]), local(p))).collect();
                     let best: HashMap<usize, DrawCandidate> =
                         offer.best.iter().map(|p| (p.component, local(p))).collect();
-                    let asked_at: HashMap<usize, (u64, u64)> =
-                        missed.iter().filter_map(|m| Some((m.component, m.pool?[0]))).collect();
-                    for m in missed {
-                        let c = m.component;
-                        let entry = found.entry(m.key).or_default();
-                        if let Some([_, (threshold, keep)]) = m.pool {
+                    // What the tile was asked (pools with their slack) is what the cache keeps.
+                    let mut asked_at: HashMap<usize, (u64, u64)> = HashMap::new();
+                    for (request, (key, asked_pool)) in part.components.iter().zip(missed) {
+                        let c = request.id;
+                        let entry = found.entry(key).or_default();
+                        if let (Some(threshold), Some(asked)) = (request.pool, asked_pool) {
                             let pairs = pools.remove(&c).unwrap_or_default();
-                            entry.pool = Some(PoolEntry { threshold, keep, pairs });
+                            entry.pool = Some(PoolEntry { threshold, keep: request.keep, pairs });
+                            asked_at.insert(c, asked);
                         }
-                        for r in m.rows {
+                        for &r in &request.rows {
                             entry.rows.insert(r - starts[a], rows.get(&(c, r)).copied());
                         }
-                        if m.best {
+                        if request.best {
                             entry.best = Some(best.get(&c).copied());
                         }
                     }

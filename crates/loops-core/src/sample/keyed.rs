@@ -26,9 +26,9 @@
 //!   budget), or every pair with a key below `p · 2⁶⁴` (a rate).
 //! - **Row picks** (the dispersed σ_ρ, closest-first, closest-then-spread and the first picks of
 //!   nearest-then-uniform, whose others are uniform picks) are the closest pair of chosen rows
-//!   (stratified with an offset drawn from the component's own word, as its permanent number): each holder returns the
-//!   closest pair of its runs in those rows, and the closest of them wins (by the metric's rank,
-//!   then the column). A run on the diagonal offers the closest column after its farthest point
+//!   (stratified with an offset drawn from the component's own word, as its permanent number):
+//!   each holder returns the closest pair of its runs in those rows, and the closest of them
+//!   wins (by the metric's rank, then the column). A run on the diagonal offers the closest column after its farthest point
 //!   (a return along the same way); a tile reads past its last column to find the run's end.
 
 use std::collections::{BTreeMap, HashSet};
