@@ -71,7 +71,7 @@ use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
 use crate::tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs};
 use crate::tile::{
-    MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching, scan_session_tile,
+    MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching, scan_session_tiles,
 };
 use crate::trajectory::{Manifold, Trajectory};
 
@@ -596,36 +596,64 @@ impl UpdatePlan {
     /// [`Error::InvalidParameter`] for `k` out of range; [`Error::InvalidState`] for poses of
     /// another count than the sessions'; the scan's errors.
     pub fn scan_tile(&self, k: usize, sessions: [&Trajectory; 2]) -> Result<ScannedTile> {
-        let Some(tile) = self.tiles.get(k) else {
-            return Err(Error::InvalidParameter { name: "tile", value: k as f64, expected: "a tile of the plan" });
-        };
-        let [a, b] = tile.sessions;
-        for (s, t) in [a, b].into_iter().zip(sessions) {
-            if t.len() != self.sessions[s].poses() {
-                return Err(Error::InvalidState {
-                    what: "store update",
-                    reason: format!(
-                        "{} poses given for session {:?}, which has {}",
-                        t.len(),
-                        self.sessions[s].name,
-                        self.sessions[s].poses()
-                    ),
-                });
+        let mut scanned = self.scan_tiles(&[k], |_| Ok(sessions))?;
+        Ok(scanned.remove(0))
+    }
+
+    /// [`scan_tile`](Self::scan_tile) of each tile `ks` of the plan, in parallel, the scans in
+    /// the order of `ks`: `sessions(k)` gives the poses of tile k's two sessions. What
+    /// [`FleetStore::update`] scans; a worker given a group of tiles scans them so too. The
+    /// balls that bound each side of a tile are made once per session block and shared by the
+    /// tiles of the group that read it ([`scan_session_tile`](crate::tile::scan_session_tile)
+    /// makes them for its tile alone): the scans are those of [`scan_tile`](Self::scan_tile).
+    ///
+    /// # Errors
+    /// As [`scan_tile`](Self::scan_tile), the first in the order of `ks`; `sessions`' errors.
+    pub fn scan_tiles<'a>(
+        &self,
+        ks: &[usize],
+        mut sessions: impl FnMut(usize) -> Result<[&'a Trajectory; 2]>,
+    ) -> Result<Vec<ScannedTile>> {
+        let mut jobs = Vec::with_capacity(ks.len());
+        for &k in ks {
+            let Some(tile) = self.tiles.get(k) else {
+                return Err(Error::InvalidParameter { name: "tile", value: k as f64, expected: "a tile of the plan" });
+            };
+            let [a, b] = tile.sessions;
+            let given = sessions(k)?;
+            for (s, t) in [a, b].into_iter().zip(given) {
+                if t.len() != self.sessions[s].poses() {
+                    return Err(Error::InvalidState {
+                        what: "store update",
+                        reason: format!(
+                            "{} poses given for session {:?}, which has {}",
+                            t.len(),
+                            self.sessions[s].name,
+                            self.sessions[s].poses()
+                        ),
+                    });
+                }
             }
+            jobs.push((tile, given, [self.starts[a], self.starts[b]]));
         }
         let settings = &self.settings;
-        let scan = with_metric!(&settings.metric, m => scan_session_tile(
-            sessions,
-            [self.starts[a], self.starts[b]],
+        let keep = TileKeep::SUMMARY.with_duration().with_runs();
+        let scans = with_metric!(&settings.metric, m => scan_session_tiles(
+            &jobs,
             m,
             settings.gamma,
             settings.separation,
-            tile,
-            TileKeep::SUMMARY.with_duration().with_runs(),
+            keep,
         ))?;
-        let duration = scan.duration.expect("kept with its duration");
-        let runs = scan.runs.expect("kept with its runs");
-        Ok(ScannedTile { plan: self.id, index: k, tile: StoredTile { summary: scan.summary, duration }, runs })
+        Ok(ks
+            .iter()
+            .zip(scans)
+            .map(|(&k, scan)| {
+                let duration = scan.duration.expect("kept with its duration");
+                let runs = scan.runs.expect("kept with its runs");
+                ScannedTile { plan: self.id, index: k, tile: StoredTile { summary: scan.summary, duration }, runs }
+            })
+            .collect())
     }
 }
 
@@ -665,7 +693,7 @@ impl ScannedTile {
         scanned.tile.summary.check().map_err(corrupt)?;
         scanned.runs.check().map_err(corrupt)?;
         let d = &scanned.tile.duration;
-        if d.rows.len() != d.tile.rows.len() || d.columns.len() != d.tile.columns.len() {
+        if d.tile != scanned.tile.summary.tile || !d.fits_tile() {
             return Err(corrupt(format!("its share of τ is not of tile {:?}", d.tile)));
         }
         Ok(scanned)
@@ -946,8 +974,7 @@ impl FleetStore {
         for (k, t) in tiles.iter().enumerate() {
             t.summary.check().map_err(|p| corrupt(format!("tile {k}: {p}")))?;
             let d = &t.duration;
-            if d.tile != t.summary.tile || d.rows.len() != d.tile.rows.len() || d.columns.len() != d.tile.columns.len()
-            {
+            if d.tile != t.summary.tile || !d.fits_tile() {
                 return Err(corrupt(format!("tile {k}: its share of τ is not of tile {:?}", t.summary.tile)));
             }
         }
@@ -1139,13 +1166,11 @@ impl FleetStore {
                 None => given[plan.sessions[s].name.as_str()],
             }
         };
-        let scanned = (0..plan.tiles.len())
-            .into_par_iter()
-            .map(|k| {
-                let [a, b] = plan.tiles[k].sessions;
-                plan.scan_tile(k, [trajectory(a), trajectory(b)])
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let all: Vec<usize> = (0..plan.tiles.len()).collect();
+        let scanned = plan.scan_tiles(&all, |k| {
+            let [a, b] = plan.tiles[k].sessions;
+            Ok([trajectory(a), trajectory(b)])
+        })?;
         // Planned from this state just now: no need to plan again to check it.
         self.apply_planned(&plan, scanned)
     }

@@ -223,11 +223,24 @@ impl Trajectory {
     /// # Errors
     /// [`Error::TooManyPoses`]; [`Error::OutOfMemory`].
     pub(crate) fn concatenate(parts: &[&Trajectory], gap_s: f64) -> Result<(Self, Vec<f64>)> {
-        let poses: usize = parts.iter().map(|p| p.len()).sum();
+        let whole: Vec<(&Trajectory, std::ops::Range<usize>)> = parts.iter().map(|&p| (p, 0..p.len())).collect();
+        Self::concatenate_pieces(&whole, gap_s)
+    }
+
+    /// [`concatenate`](Self::concatenate) of the pieces `range` of each trajectory
+    /// ([`piece`](Self::piece)s, each with its own time cells), copied once: a tile's stretches.
+    ///
+    /// # Errors
+    /// [`Error::TooManyPoses`]; [`Error::OutOfMemory`].
+    pub(crate) fn concatenate_pieces(
+        parts: &[(&Trajectory, std::ops::Range<usize>)],
+        gap_s: f64,
+    ) -> Result<(Self, Vec<f64>)> {
+        let poses: usize = parts.iter().map(|(_, r)| r.len()).sum();
         if poses > MAX_POSES {
             return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
         }
-        let first = parts[0];
+        let first = parts[0].0;
         let what = "the joint trajectory of a fleet";
         let mut joint = Self {
             timestamps_s: try_with_capacity(poses, what)?,
@@ -238,12 +251,12 @@ impl Trajectory {
         };
         let mut offsets = try_with_capacity(parts.len(), what)?;
         let mut next_start = 0.0;
-        for part in parts {
-            let offset = next_start - part.timestamps_s[0];
+        for (part, range) in parts {
+            let offset = next_start - part.timestamps_s[range.start];
             offsets.push(offset);
-            joint.timestamps_s.extend(part.timestamps_s.iter().map(|t| t + offset));
-            joint.coords.extend_from_slice(&part.coords);
-            joint.cell_widths_s.extend_from_slice(&part.cell_widths_s);
+            joint.timestamps_s.extend(part.timestamps_s[range.clone()].iter().map(|t| t + offset));
+            joint.coords.extend_from_slice(&part.coords[range.start * part.dim..range.end * part.dim]);
+            joint.cell_widths_s.extend_from_slice(&part.cell_widths_s[range.clone()]);
             next_start = joint.timestamps_s[joint.timestamps_s.len() - 1] + gap_s;
         }
         Ok((joint, offsets))

@@ -390,6 +390,24 @@ fn an_update_by_its_steps_is_the_update() {
             ScannedTile::from_bytes(&scan.to_bytes()).unwrap()
         })
         .collect();
+    // A group of tiles scanned together (each side's balls made once for the group) gives each
+    // tile's own scan, bit for bit.
+    let held: BTreeMap<usize, Trajectory> =
+        plan.tiles().iter().flat_map(|t| t.sessions).map(|s| (s, poses(s))).collect();
+    let group: Vec<usize> = (0..plan.tiles().len()).rev().step_by(2).collect();
+    let sides: Vec<std::ops::Range<usize>> =
+        group.iter().flat_map(|&k| [plan.tiles()[k].rows.clone(), plan.tiles()[k].columns.clone()]).collect();
+    let distinct: std::collections::BTreeSet<(usize, usize)> = sides.iter().map(|r| (r.start, r.end)).collect();
+    assert!(distinct.len() < sides.len(), "no side shared by two tiles of the group");
+    let together = plan
+        .scan_tiles(&group, |k| {
+            let [a, b] = plan.tiles()[k].sessions;
+            Ok([&held[&a], &held[&b]])
+        })
+        .unwrap();
+    for (&k, scan) in group.iter().zip(&together) {
+        assert_eq!(scan.to_bytes(), scanned[plan.tiles().len() - 1 - k].to_bytes(), "tile {k}");
+    }
     let before = store.clone();
     let wrong =
         |store: &mut FleetStore, scanned: Vec<ScannedTile>| store.apply_update(&plan, scanned).unwrap_err().to_string();

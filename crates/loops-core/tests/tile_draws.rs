@@ -62,6 +62,28 @@ fn adversarial() -> Vec<Trajectory> {
     vec![a.clone(), a, reversed, parked, tour(70, 7.0, [5e3, -5e3])]
 }
 
+/// A tile's share of τ on every row and column of the tile (0 outside its stretches).
+fn dense_values(d: &TileDuration) -> [Vec<f64>; 2] {
+    let dense = |stretches: &[(usize, Vec<f64>)], len: usize| {
+        let mut out = vec![0.0; len];
+        for (offset, values) in stretches {
+            out[*offset..offset + values.len()].copy_from_slice(values);
+        }
+        out
+    };
+    [dense(&d.rows, d.tile.rows.len()), dense(&d.columns, d.tile.columns.len())]
+}
+
+/// A tile's share of τ as format version 2 saved it: tag `ILtd`, the version, then the tile and
+/// a value for every row and column, in MessagePack.
+fn dense_bytes(d: &TileDuration) -> Vec<u8> {
+    let [rows, columns] = dense_values(d);
+    let mut bytes = b"ILtd".to_vec();
+    bytes.extend_from_slice(&2u16.to_le_bytes());
+    bytes.extend(rmp_serde::to_vec(&(&d.tile, rows, columns)).unwrap());
+    bytes
+}
+
 /// The fleet's tiles, scanned (with their shares of τ) and merged in one step through bytes.
 struct Tiled {
     merged: loops_core::tile::MergedLoops,
@@ -95,7 +117,10 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
         assert_eq!(kept.tile(), tile);
         runs.insert(tile.clone(), kept);
         parts.push(TileMerge::new(TileSummary::from_bytes(&summary.to_bytes()).unwrap()).unwrap());
-        durations.push(TileDuration::from_bytes(&duration.to_bytes()).unwrap());
+        let read = TileDuration::from_bytes(&duration.to_bytes()).unwrap();
+        let dense = dense_values(&read);
+        assert_eq!(dense_values(&TileDuration::from_bytes(&dense_bytes(&read)).unwrap()), dense, "{tile:?}");
+        durations.push(read);
     }
     // Two levels: pairs of tiles, then all of those.
     let mut level = Vec::new();

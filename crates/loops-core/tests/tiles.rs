@@ -10,8 +10,8 @@ use loops_core::{
     Error, Euclidean, Metric, Separation, Trajectory,
     fleet::{Fleet, FleetOptions, find_fleet_loops},
     tile::{
-        SessionBlocks, TILE_FORMAT_VERSION, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles, plan_tiles,
-        scan_session_tile, scan_tile,
+        OLDEST_TILE_FORMAT_VERSION, SessionBlocks, TILE_FORMAT_VERSION, Tile, TileKeep, TileMerge, TileSummary,
+        plan_session_tiles, plan_tiles, scan_session_tile, scan_tile,
     },
 };
 use proptest::prelude::*;
@@ -293,9 +293,15 @@ fn bytes_round_trip_and_fail_clearly() {
     newer[4..6].copy_from_slice(&(TILE_FORMAT_VERSION + 1).to_le_bytes());
     let message = corrupt_message(TileSummary::from_bytes(&newer));
     assert!(message.contains(&format!(
-        "format version {}; this build reads version {TILE_FORMAT_VERSION}",
+        "format version {}; this build reads versions {OLDEST_TILE_FORMAT_VERSION} to {TILE_FORMAT_VERSION}",
         TILE_FORMAT_VERSION + 1
     )));
+    // Bytes of the oldest version read still is read as it was written; those before it are not.
+    let mut older = bytes.clone();
+    older[4..6].copy_from_slice(&OLDEST_TILE_FORMAT_VERSION.to_le_bytes());
+    assert_eq!(TileSummary::from_bytes(&older).unwrap(), summary);
+    older[4..6].copy_from_slice(&(OLDEST_TILE_FORMAT_VERSION - 1).to_le_bytes());
+    assert!(corrupt_message(TileSummary::from_bytes(&older)).contains("this build reads versions"));
     assert!(corrupt_message(TileSummary::from_bytes(b"PK\x03\x04rest")).contains("start with \"PK\\u{3}\\u{4}\""));
     // A label that names no component, and a run outside its tile.
     let mut bad = summary.clone();

@@ -581,7 +581,6 @@ pub fn scan_store_tiles(
     tiles: &[usize],
     put: &[(String, Trajectory)],
 ) -> Result<Vec<ScannedTile>> {
-    use rayon::prelude::*;
     let plan = &planned.plan;
     let mut read: std::collections::BTreeMap<usize, Trajectory> = std::collections::BTreeMap::new();
     for &k in tiles {
@@ -615,13 +614,10 @@ pub fn scan_store_tiles(
             read.insert(s, trajectory);
         }
     }
-    tiles
-        .par_iter()
-        .map(|&k| {
-            let [a, b] = plan.tiles()[k].sessions;
-            Ok(plan.scan_tile(k, [&read[&a], &read[&b]])?)
-        })
-        .collect()
+    Ok(plan.scan_tiles(tiles, |k| {
+        let [a, b] = plan.tiles()[k].sessions;
+        Ok([&read[&a], &read[&b]])
+    })?)
 }
 
 /// [`update_store`] with the tiles of its plan scanned elsewhere ([`scan_store_tiles`] of

@@ -23,7 +23,7 @@ use crate::sample::{DrawCandidates, DrawRequest, DrawRun, RunHolder, draw_candid
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::tile::{MergedLoops, ScannedTile, Tile, fleet_index, piece_row, scan_piece};
-use crate::trajectory::{Trajectory, prefix_sums_by_session};
+use crate::trajectory::Trajectory;
 
 /// The part of `request` each tile of `merged` must answer (by tile, as
 /// [`MergedLoops::tiles`]); `None` for a tile asked nothing. O(the tiles' provisional
@@ -72,10 +72,8 @@ impl TileRuns {
         gamma: f64,
         separation: Separation,
     ) -> Self {
-        let (provisional, components) =
-            crate::component::label_runs(&scanned.set, crate::component::ROWS_PER_LABEL_TASK);
         let piece_len = scanned.piece.len();
-        let ScannedTile { piece_starts, rows, set, fleet_starts, .. } = scanned;
+        let ScannedTile { piece_starts, rows, set, labels: (provisional, components), fleet_starts, .. } = scanned;
         let mut spans = vec![[u32::MAX, 0]; components as usize];
         for k in 0..set.rows().min(rows) {
             for &p in &provisional[set.row_offset(k)..set.row_offset(k + 1)] {
@@ -326,7 +324,7 @@ pub fn draw_session_tile<M: Metric + ?Sized>(
     labels: &[u32],
     request: &DrawRequest,
 ) -> Result<DrawCandidates> {
-    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
+    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile, None)?;
     let runs = TileRuns::new(scanned, tile, starts, gamma, separation);
     draw_tile_runs(sessions, starts, metric, &runs, labels, request)
 }
@@ -380,40 +378,69 @@ pub fn draw_tile_runs<M: Metric + ?Sized>(
 }
 
 /// What one tile's runs add to the loop duration τ (Side both, seconds) of its rows and of its
-/// columns: `rows[k]` to fleet index `tile.rows.start + k`, `columns[k]` to `tile.columns.start
-/// + k`. Within one session both are that session's own τ; between two, each its τ with others.
+/// columns, on the stretches of each that its scan read (the rows and columns that can hold a
+/// cell; the others add nothing): each stretch is `(offset, seconds)`, `seconds[k]` added to
+/// fleet index `tile.rows.start + offset + k` (of `rows`) or `tile.columns.start + offset + k`
+/// (of `columns`). Within one session both are that session's own τ; between two, each its τ
+/// with others. O(those stretches) in memory, not O(the tile's rows and columns).
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct TileDuration {
     /// The tile.
     pub tile: Tile,
-    /// Per row of the tile, seconds.
-    pub rows: Vec<f64>,
-    /// Per column of the tile, seconds.
-    pub columns: Vec<f64>,
+    /// Stretches of rows: (offset from the tile's first row, seconds per row).
+    pub rows: Vec<(usize, Vec<f64>)>,
+    /// Stretches of columns: (offset from the tile's first column, seconds per column).
+    pub columns: Vec<(usize, Vec<f64>)>,
+}
+
+/// [`TileDuration`] as the stores of layout 2 saved it: a value for every row and column of the
+/// tile (tag `ILtd`), read as one stretch a side.
+#[cfg(feature = "serde")]
+#[derive(serde::Deserialize)]
+struct DenseDuration {
+    tile: Tile,
+    rows: Vec<f64>,
+    columns: Vec<f64>,
 }
 
 impl TileDuration {
     /// As bytes (a tag, [`TILE_FORMAT_VERSION`](crate::tile::TILE_FORMAT_VERSION), MessagePack).
     #[cfg(feature = "serde")]
     pub fn to_bytes(&self) -> Vec<u8> {
-        crate::tile::encode(*b"ILtd", self)
+        crate::tile::encode(*b"ILtt", self)
     }
 
-    /// From [`to_bytes`](Self::to_bytes).
+    /// From [`to_bytes`](Self::to_bytes), or from the bytes of the dense shares that earlier
+    /// versions wrote (a value for every row and column of the tile).
     ///
     /// # Errors
-    /// [`Error::InvalidState`] for other bytes, or lengths that do not fit the tile.
+    /// [`Error::InvalidState`] for other bytes, or stretches that do not fit the tile.
     #[cfg(feature = "serde")]
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
-        let d: Self = crate::tile::decode(*b"ILtd", "tile duration", bytes)?;
-        if d.rows.len() != d.tile.rows.len() || d.columns.len() != d.tile.columns.len() {
+        let d: Self = if bytes.starts_with(b"ILtd") {
+            let DenseDuration { tile, rows, columns } = crate::tile::decode(*b"ILtd", "tile duration", bytes)?;
+            Self { tile, rows: vec![(0, rows)], columns: vec![(0, columns)] }
+        } else {
+            crate::tile::decode(*b"ILtt", "tile duration", bytes)?
+        };
+        if !d.fits_tile() {
             return Err(Error::InvalidState {
                 what: "tile duration",
-                reason: format!("{} rows and {} columns for tile {:?}", d.rows.len(), d.columns.len(), d.tile),
+                reason: format!("a stretch of rows or columns leaves tile {:?}", d.tile),
             });
         }
         Ok(d)
+    }
+
+    /// Every stretch lies within its side of the tile.
+    pub(crate) fn fits_tile(&self) -> bool {
+        let fits = |stretches: &[(usize, Vec<f64>)], side: &std::ops::Range<usize>| {
+            stretches
+                .iter()
+                .all(|(offset, values)| offset.checked_add(values.len()).is_some_and(|end| end <= side.len()))
+        };
+        fits(&self.rows, &self.tile.rows) && fits(&self.columns, &self.tile.columns)
     }
 }
 
@@ -441,38 +468,64 @@ macro_rules! draw_bytes {
 draw_bytes!(DrawRequest, b"ILdr", "draw request");
 draw_bytes!(DrawCandidates, b"ILdc", "draw candidates");
 
-/// The share of τ of a scanned tile.
-pub(super) fn duration_of(scanned: &ScannedTile<'_>, tile: &Tile) -> Result<TileDuration> {
+/// The share of τ of a scanned tile, `prefix` its [`ScannedTile::prefix_sums`]: one pass over
+/// its runs, on the piece's stretches.
+pub(super) fn duration_of(scanned: &ScannedTile<'_>, prefix: &[f64], tile: &Tile) -> TileDuration {
     let widths = scanned.piece.cell_widths_s();
-    let breaks: Vec<u32> = scanned.piece_starts[1..].iter().map(|&s| s as u32).collect();
-    let prefix = prefix_sums_by_session(widths, &breaks)?;
     let width = |a: usize, b: usize| (prefix[b] + widths[b]) - prefix[a];
-    let mut rows = vec![0.0; tile.rows.len()];
-    let mut diff = vec![0.0; tile.columns.len() + 1];
-    let set = &scanned.set;
-    for (k, &w_k) in widths[..scanned.rows].iter().enumerate() {
-        let fleet_row = scanned.to_fleet(k);
-        let row = &mut rows[fleet_row - tile.rows.start];
+    let (len, rows, set) = (scanned.piece.len(), scanned.rows, &scanned.set);
+    // The piece's stretches: (first piece index, end, first fleet index).
+    let starts = &scanned.piece_starts;
+    let stretches: Vec<(usize, usize, usize)> = (0..starts.len())
+        .map(|s| (starts[s], starts.get(s + 1).copied().unwrap_or(len), scanned.fleet_starts[s]))
+        .collect();
+    let mut ends = vec![false; len + 1];
+    stretches.iter().for_each(|&(_, end, _)| ends[end] = true);
+    // Each row's share, and the columns' as differences: a run's weight enters at its first
+    // column and leaves after its last, unless that ends its stretch (summed from 0 in each).
+    let mut row_share = vec![0.0; rows];
+    let mut diff = vec![0.0; len + 1];
+    for (k, &w_k) in widths[..rows].iter().enumerate() {
         for run in set.row(k) {
             let (a, b) = (run.start as usize, run.end as usize);
-            *row += width(a, b);
-            let (fa, fb) = (scanned.to_fleet(a), scanned.to_fleet(b));
-            let first = if fa == fleet_row { fa + 1 } else { fa };
-            if first <= fb {
-                diff[first - tile.columns.start] += w_k;
-                diff[fb + 1 - tile.columns.start] -= w_k;
+            row_share[k] += width(a, b);
+            // The diagonal cell (k, k) adds to its row only.
+            let first = if a == k { a + 1 } else { a };
+            if first <= b {
+                diff[first] += w_k;
+                if !ends[b + 1] {
+                    diff[b + 1] -= w_k;
+                }
             }
         }
     }
-    let mut running = 0.0;
-    let columns = diff[..tile.columns.len()]
+    // The part of each stretch within `side` (fleet indices): (piece range, offset in side).
+    let within = |(p0, p1, f0): (usize, usize, usize), side: &std::ops::Range<usize>| {
+        let (lo, hi) = (f0.max(side.start), (f0 + p1 - p0).min(side.end));
+        (lo < hi).then(|| (p0 + lo - f0..p0 + hi - f0, lo - side.start))
+    };
+    let row_stretches = stretches
         .iter()
-        .map(|d| {
-            running += d;
-            running
+        .filter(|&&(p0, _, _)| p0 < rows)
+        .filter_map(|&(p0, p1, f0)| within((p0, p1.min(rows), f0), &tile.rows))
+        .map(|(piece, offset)| (offset, row_share[piece].to_vec()))
+        .collect();
+    let column_stretches = stretches
+        .iter()
+        .filter_map(|&stretch| within(stretch, &tile.columns))
+        .map(|(piece, offset)| {
+            let mut running = 0.0;
+            let values = diff[piece]
+                .iter()
+                .map(|d| {
+                    running += d;
+                    running
+                })
+                .collect();
+            (offset, values)
         })
         .collect();
-    Ok(TileDuration { tile: tile.clone(), rows, columns })
+    TileDuration { tile: tile.clone(), rows: row_stretches, columns: column_stretches }
 }
 
 /// τ of session `session` (its first fleet index `start`, `poses` poses) from the shares of
@@ -494,18 +547,20 @@ pub fn session_loop_duration<'a>(
     ordered.sort_by_key(|p| (p.tile.sessions, p.tile.rows.start, p.tile.columns.start));
     for part in ordered {
         let t = &part.tile;
-        for (side, range, values) in [(0, &t.rows, &part.rows), (1, &t.columns, &part.columns)] {
+        for (side, range, stretches) in [(0, &t.rows, &part.rows), (1, &t.columns, &part.columns)] {
             if t.sessions[side] != session {
                 continue;
             }
-            if range.start < start || range.end > start + poses || values.len() != range.len() {
+            let fits = |(offset, values): &(usize, Vec<f64>)| offset + values.len() <= range.len();
+            if range.start < start || range.end > start + poses || !stretches.iter().all(fits) {
                 return Err(Error::InconsistentTiles {
                     problem: format!("tile {t:?} does not lie in session {session} (poses {start}..{})", start + poses),
                 });
             }
             let target = if t.sessions[0] == t.sessions[1] { &mut own } else { &mut other };
-            for (k, v) in values.iter().enumerate() {
-                target[range.start - start + k] += v;
+            for (offset, values) in stretches {
+                let first = range.start - start + offset;
+                target[first..first + values.len()].iter_mut().zip(values).for_each(|(y, v)| *y += v);
             }
         }
     }

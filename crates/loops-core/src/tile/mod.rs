@@ -74,7 +74,7 @@ use std::collections::HashMap;
 
 use self::draw::duration_of;
 pub use self::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs, session_loop_duration, tile_requests};
-use self::piece::live_stretches;
+use self::piece::{SideBalls, live_stretches};
 
 use crate::ball_tree::BallTree;
 use crate::component::{LoopComponent, ROWS_PER_LABEL_TASK, Tally, closer, for_each_overlap, label_runs};
@@ -91,9 +91,16 @@ use crate::union_find::{MinRootForest, number_sets};
 /// Poses per leaf of a tile's ball hierarchy.
 const LEAF_SIZE: usize = 16;
 
-/// The version of the byte format of `TileSummary::to_bytes`, `TileMerge::to_bytes` and
-/// `SessionBlocks::to_bytes` (with the `serde` feature); bytes of another version are refused.
-pub const TILE_FORMAT_VERSION: u16 = 2;
+/// The version of the byte format of `TileSummary::to_bytes`, `TileMerge::to_bytes`,
+/// `SessionBlocks::to_bytes` and the other tile types (with the `serde` feature): bytes of a
+/// version from [`OLDEST_TILE_FORMAT_VERSION`] on are read, others refused. Version 3 keeps a
+/// tile's share of τ on the stretches its scan read ([`TileDuration`], tag `ILtt`), where
+/// version 2 kept a value for every row and column (`ILtd`, still read); the other types are
+/// the same in both.
+pub const TILE_FORMAT_VERSION: u16 = 3;
+
+/// The oldest version of the byte format ([`TILE_FORMAT_VERSION`]) this build reads.
+pub const OLDEST_TILE_FORMAT_VERSION: u16 = 2;
 
 /// Rows `rows` of session `sessions[0]` against columns `columns` of session `sessions[1]`,
 /// both ranges of fleet indices within their sessions; `sessions[0] ≤ sessions[1]`, and within
@@ -775,30 +782,92 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
     tile: &Tile,
     keep: TileKeep,
 ) -> Result<TileScan> {
-    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile)?;
-    let summary = summary_of(&scanned, metric, tile)?;
-    let duration = if keep.duration { Some(duration_of(&scanned, tile)?) } else { None };
+    scan_shared(sessions, starts, metric, gamma, separation, tile, keep, None)
+}
+
+/// [`scan_session_tile`] of many tiles, in parallel: each job is a tile with its two sessions
+/// and their first fleet indices, as [`scan_session_tile`] takes them; the scans come in the
+/// order of `jobs`, each the one [`scan_session_tile`] makes. The balls that bound a side of a
+/// tile (one distance a pose, to find the stretches that come near the other side) are made
+/// once per block and shared by the tiles that read it: a session met by many tiles (a new
+/// day's against a fleet) is bounded once, not once a tile.
+///
+/// # Errors
+/// As [`scan_session_tile`], the first in the order of `jobs`.
+pub(crate) fn scan_session_tiles<M: Metric + ?Sized>(
+    jobs: &[(&Tile, [&Trajectory; 2], [usize; 2])],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    keep: TileKeep,
+) -> Result<Vec<TileScan>> {
+    use rayon::prelude::*;
+    // Each side of a tile off the diagonal, by its fleet range and the poses given for it (the
+    // address of its trajectory): (key, session, its first fleet index). Ranges outside their
+    // session are left to the scan, which refuses them.
+    type Key = (usize, usize, usize);
+    let key = |range: &std::ops::Range<usize>, session: &Trajectory| {
+        (range.start, range.end, std::ptr::from_ref(session) as usize)
+    };
+    let mut sides: Vec<(Key, &Trajectory, usize)> = Vec::new();
+    for (tile, sessions, starts) in jobs {
+        let on_diagonal = tile.sessions[0] == tile.sessions[1] && tile.columns.start < tile.rows.end;
+        for (side, range) in [&tile.rows, &tile.columns].into_iter().enumerate() {
+            let fits = range.start >= starts[side] && range.end <= starts[side] + sessions[side].len();
+            if !on_diagonal && fits {
+                sides.push((key(range, sessions[side]), sessions[side], starts[side]));
+            }
+        }
+    }
+    sides.sort_unstable_by_key(|side| side.0);
+    sides.dedup_by_key(|side| side.0);
+    let balls: Vec<SideBalls> = sides
+        .par_iter()
+        .map(|&((lo, hi, _), session, start)| SideBalls::new(session, lo - start..hi - start, metric))
+        .collect();
+    let ball_of = |range: &std::ops::Range<usize>, session: &Trajectory| {
+        sides.binary_search_by_key(&key(range, session), |side| side.0).ok().map(|k| &balls[k])
+    };
+    let scans: Vec<Result<TileScan>> = jobs
+        .par_iter()
+        .map(|(tile, sessions, starts)| {
+            let shared = ball_of(&tile.rows, sessions[0]).zip(ball_of(&tile.columns, sessions[1])).map(|(r, c)| [r, c]);
+            scan_shared(*sessions, *starts, metric, gamma, separation, tile, keep, shared)
+        })
+        .collect();
+    scans.into_iter().collect()
+}
+
+/// [`scan_session_tile`], with the balls of the tile's two sides when they are made already.
+#[allow(clippy::too_many_arguments)]
+fn scan_shared<M: Metric + ?Sized>(
+    sessions: [&Trajectory; 2],
+    starts: [usize; 2],
+    metric: &M,
+    gamma: f64,
+    separation: Separation,
+    tile: &Tile,
+    keep: TileKeep,
+    sides: Option<[&SideBalls; 2]>,
+) -> Result<TileScan> {
+    let scanned = scan_piece(sessions, starts, metric, gamma, separation, tile, sides)?;
+    let prefix = scanned.prefix_sums()?;
+    let summary = summary_of(&scanned, &prefix, metric, tile);
+    let duration = keep.duration.then(|| duration_of(&scanned, &prefix, tile));
     let runs = keep.runs.then(|| TileRuns::new(scanned, tile, starts, gamma, separation));
     Ok(TileScan { summary, duration, runs })
 }
 
-/// The summary of a scanned tile.
-///
-/// # Errors
-/// [`Error::OutOfMemory`].
-pub(crate) fn summary_of<M: Metric + ?Sized>(
-    scanned: &ScannedTile<'_>,
-    metric: &M,
-    tile: &Tile,
-) -> Result<TileSummary> {
-    let mut summary = summarise(tile, metric, scanned)?;
+/// The summary of a scanned tile, `prefix` its [`ScannedTile::prefix_sums`].
+fn summary_of<M: Metric + ?Sized>(scanned: &ScannedTile<'_>, prefix: &[f64], metric: &M, tile: &Tile) -> TileSummary {
+    let mut summary = summarise(tile, metric, scanned, prefix);
     for c in &mut summary.components {
         c.times_s = [
             [scanned.time_s(0, c.rows[0]), scanned.time_s(0, c.rows[1])],
             [scanned.time_s(1, c.columns[0]), scanned.time_s(1, c.columns[1])],
         ];
     }
-    Ok(summary)
+    summary
 }
 
 /// A tile's poses as one small trajectory and its cells of S_γ. On the diagonal of a session,
@@ -811,6 +880,8 @@ pub(crate) struct ScannedTile<'a> {
     pub(crate) piece_starts: Vec<usize>,
     pub(crate) rows: usize,
     pub(crate) set: SublevelSet,
+    /// The provisional component of each run of `set` ([`label_runs`]), and their number.
+    pub(crate) labels: (Vec<u32>, u32),
     /// The fleet index of the first pose of each stretch (one per `piece_starts`).
     pub(crate) fleet_starts: Vec<usize>,
     /// The row and column sessions' clocks and first fleet indices.
@@ -827,6 +898,16 @@ impl ScannedTile<'_> {
     /// The time of fleet index `f` of the row (`side` 0) or column (1) session.
     pub(crate) fn time_s(&self, side: usize, f: usize) -> f64 {
         self.times_s[side][f - self.session_starts[side]]
+    }
+
+    /// The prefix sums of the piece's cell widths, restarting at each stretch
+    /// ([`prefix_sums_by_session`]).
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`].
+    pub(crate) fn prefix_sums(&self) -> Result<Vec<f64>> {
+        let breaks: Vec<u32> = self.piece_starts[1..].iter().map(|&s| s as u32).collect();
+        prefix_sums_by_session(self.piece.cell_widths_s(), &breaks)
     }
 }
 
@@ -854,6 +935,7 @@ pub(crate) fn piece_row(
 }
 
 /// Checks a tile against its sessions and scans its cells (see [`scan_session_tile`]).
+/// `sides`, when given, are the balls of the tile's rows and columns ([`SideBalls`]).
 pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
     sessions: [&'a Trajectory; 2],
     starts: [usize; 2],
@@ -861,6 +943,7 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
     gamma: f64,
     separation: Separation,
     tile: &Tile,
+    sides: Option<[&SideBalls; 2]>,
 ) -> Result<ScannedTile<'a>> {
     check_gamma(gamma)?;
     separation.check()?;
@@ -912,18 +995,26 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
             .collect();
         (piece, vec![0], vec![tile.rows.start], r1 - r0, first_columns)
     } else {
-        let [mut live_rows, mut live_columns] = live_stretches(session_a, r0..r1, session_b, c0..c1, metric, gamma);
+        let made;
+        let [rows, columns] = match sides {
+            Some(sides) if *sides[0].range() == (r0..r1) && *sides[1].range() == (c0..c1) => sides,
+            _ => {
+                made = [SideBalls::new(session_a, r0..r1, metric), SideBalls::new(session_b, c0..c1, metric)];
+                [&made[0], &made[1]]
+            }
+        };
+        let [mut live_rows, mut live_columns] = live_stretches(session_a, rows, session_b, columns, metric, gamma);
         if live_rows.is_empty() || live_columns.is_empty() {
             // No pair within γ: one chunk of each side, which holds no cell either.
             live_rows = std::iter::once(r0..(r0 + piece::CHUNK).min(r1)).collect();
             live_columns = std::iter::once(c0..(c0 + piece::CHUNK).min(c1)).collect();
         }
-        let parts: Vec<Trajectory> = live_rows
+        let parts: Vec<(&Trajectory, std::ops::Range<usize>)> = live_rows
             .iter()
-            .map(|r| session_a.piece(r.clone()))
-            .chain(live_columns.iter().map(|c| session_b.piece(c.clone())))
-            .collect::<Result<_>>()?;
-        let (piece, _) = Trajectory::concatenate(&parts.iter().collect::<Vec<_>>(), 1.0)?;
+            .map(|r| (session_a, r.clone()))
+            .chain(live_columns.iter().map(|c| (session_b, c.clone())))
+            .collect();
+        let (piece, _) = Trajectory::concatenate_pieces(&parts, 1.0)?;
         piece.check_metric(metric)?;
         let (mut piece_starts, mut fleet_starts, mut next) = (Vec::new(), Vec::new(), 0);
         for (side, stretches) in [(0, &live_rows), (1, &live_columns)] {
@@ -974,11 +1065,13 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
         &piece_starts,
         rows,
     )?;
+    let labels = label_runs(&set, ROWS_PER_LABEL_TASK);
     Ok(ScannedTile {
         piece,
         piece_starts,
         rows,
         set,
+        labels,
         fleet_starts,
         times_s: [session_a.timestamps_s(), session_b.timestamps_s()],
         session_starts: starts,
@@ -986,14 +1079,11 @@ pub(crate) fn scan_piece<'a, M: Metric + ?Sized>(
 }
 
 /// The provisional components of a tile's set and its edge runs.
-fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<'_>) -> Result<TileSummary> {
-    let ScannedTile { piece, piece_starts: starts, rows, set, .. } = scanned;
-    let rows = *rows;
+fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<'_>, prefix: &[f64]) -> TileSummary {
+    let ScannedTile { piece, rows, set, labels: (labels, count), .. } = scanned;
+    let (rows, count) = (*rows, *count);
     let to_fleet = |k: usize| scanned.to_fleet(k);
-    let (labels, count) = label_runs(set, ROWS_PER_LABEL_TASK);
     let widths = piece.cell_widths_s();
-    let breaks: Vec<u32> = starts[1..].iter().map(|&s| s as u32).collect();
-    let prefix = prefix_sums_by_session(widths, &breaks)?;
     // The tallies, with the first cell and the closest pair's distance of each.
     let mut tallies = vec![(Tally::empty(), [usize::MAX; 2], f64::INFINITY); count as usize];
     let mut edges = Vec::new();
@@ -1028,7 +1118,7 @@ fn summarise<M: Metric + ?Sized>(tile: &Tile, metric: &M, scanned: &ScannedTile<
         .into_iter()
         .map(|(tally, first, closest_distance)| TileComponent::from_tally(tally, first, closest_distance))
         .collect();
-    Ok(TileSummary { tile: tile.clone(), components, edges })
+    TileSummary { tile: tile.clone(), components, edges }
 }
 
 /// A component of a partial merge: its session pair and the statistics of its pieces, with the
@@ -1654,9 +1744,10 @@ pub fn merge_tiles(summaries: &[TileSummary]) -> Result<Vec<LoopComponent>> {
 
 /// The tags of the byte formats, and what each holds.
 #[cfg(feature = "serde")]
-const TAGS: [([u8; 4], &str); 5] = [
+const TAGS: [([u8; 4], &str); 6] = [
     (*b"ILsb", "session blocks"),
     (*b"ILts", "tile summary"),
+    (*b"ILtt", "tile duration"),
     (*b"ILtm", "tile merge"),
     (*b"ILtr", "tile runs"),
     (*b"ILml", "merged loops"),
@@ -1691,8 +1782,10 @@ pub(crate) fn decode<T: serde::de::DeserializeOwned>(tag: [u8; 4], what: &'stati
         return Err(corrupt(problem));
     }
     let version = u16::from_le_bytes([bytes[4], bytes[5]]);
-    if version != TILE_FORMAT_VERSION {
-        return Err(corrupt(format!("format version {version}; this build reads version {TILE_FORMAT_VERSION}")));
+    if !(OLDEST_TILE_FORMAT_VERSION..=TILE_FORMAT_VERSION).contains(&version) {
+        return Err(corrupt(format!(
+            "format version {version}; this build reads versions {OLDEST_TILE_FORMAT_VERSION} to {TILE_FORMAT_VERSION}"
+        )));
     }
     let body = &bytes[6..];
     let mut reader = std::io::Cursor::new(body);

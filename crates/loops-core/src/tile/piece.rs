@@ -26,12 +26,7 @@ const GROUP: usize = 16 * CHUNK;
 pub(crate) use crate::ball_tree::{joined_radius, pose_ball};
 
 /// The bounding balls of `range` of `traj` cut every `size` poses: (range, centre pose, radius).
-fn balls<M: Metric + ?Sized>(
-    traj: &Trajectory,
-    range: Range<usize>,
-    size: usize,
-    metric: &M,
-) -> Vec<(Range<usize>, usize, f64)> {
+fn balls<M: Metric + ?Sized>(traj: &Trajectory, range: Range<usize>, size: usize, metric: &M) -> Vec<Ball> {
     range
         .clone()
         .step_by(size)
@@ -46,12 +41,7 @@ fn balls<M: Metric + ?Sized>(
 /// Balls of `per` consecutive `balls` of `traj` each, centred on the middle ball's centre
 /// ([`joined_radius`]): O(balls) distance evaluations, where bounding each group from its
 /// poses would cost O(poses).
-fn joined<M: Metric + ?Sized>(
-    traj: &Trajectory,
-    balls: &[(Range<usize>, usize, f64)],
-    per: usize,
-    metric: &M,
-) -> Vec<(Range<usize>, usize, f64)> {
+fn joined<M: Metric + ?Sized>(traj: &Trajectory, balls: &[Ball], per: usize, metric: &M) -> Vec<Ball> {
     balls
         .chunks(per)
         .map(|part| {
@@ -62,29 +52,54 @@ fn joined<M: Metric + ?Sized>(
         .collect()
 }
 
-/// The live stretches of rows `rows` of `row_session` and columns `columns` of
-/// `column_session` (ranges of indices within their sessions, disjoint when the sessions are
-/// one): increasing, disjoint, non-adjacent ranges; either side is empty when no pair can lie
-/// within γ. O(poses) distance evaluations (the chunks' balls), then O(groups²) for the groups'
-/// balls (joined from their chunks'), and for each meeting pair of groups, the chunks of each
-/// that reach the other group, and the pairs of those.
+/// A ball: the poses `range`, its centre pose and its radius.
+type Ball = (Range<usize>, usize, f64);
+
+/// The balls of one side of a tile (a range of one session's poses): its chunks' and its
+/// groups'. O(poses) distance evaluations; the same for every tile of the range, so that a scan
+/// of many tiles makes them once per session block and shares them ([`SideBalls::new`]).
+#[derive(Debug, Clone)]
+pub(crate) struct SideBalls {
+    range: Range<usize>,
+    chunks: Vec<Ball>,
+    groups: Vec<Ball>,
+}
+
+impl SideBalls {
+    /// The balls of the poses `range` of `session`.
+    pub(crate) fn new<M: Metric + ?Sized>(session: &Trajectory, range: Range<usize>, metric: &M) -> Self {
+        let chunks = balls(session, range.clone(), CHUNK, metric);
+        let groups = joined(session, &chunks, GROUP / CHUNK, metric);
+        Self { range, chunks, groups }
+    }
+
+    /// The poses they bound (indices of their session).
+    pub(crate) fn range(&self) -> &Range<usize> {
+        &self.range
+    }
+}
+
+/// The live stretches of the rows and columns that `rows` and `columns` bound (ranges of
+/// indices of `row_session` and `column_session`, disjoint when the sessions are one):
+/// increasing, disjoint, non-adjacent ranges; either side is empty when no pair can lie within
+/// γ. Given the sides' balls ([`SideBalls`]), O(groups²) for the groups' balls, and for each
+/// meeting pair of groups, the chunks of each that reach the other group, and the pairs of
+/// those.
 pub(crate) fn live_stretches<M: Metric + ?Sized>(
     row_session: &Trajectory,
-    rows: Range<usize>,
+    rows: &SideBalls,
     column_session: &Trajectory,
-    columns: Range<usize>,
+    columns: &SideBalls,
     metric: &M,
     gamma: f64,
 ) -> [Vec<Range<usize>>; 2] {
     // A relative 10⁻⁶ is far above the rounding of three distances.
-    let meets = |(_, p, r_p): &(Range<usize>, usize, f64), (_, q, r_q): &(Range<usize>, usize, f64)| {
+    let meets = |(_, p, r_p): &Ball, (_, q, r_q): &Ball| {
         metric.distance(row_session.point(*p), column_session.point(*q)) <= (gamma + r_p + r_q) * (1.0 + 1e-6) + 1e-9
     };
     let per_group = GROUP / CHUNK;
-    let chunk_rows = balls(row_session, rows.clone(), CHUNK, metric);
-    let chunk_columns = balls(column_session, columns.clone(), CHUNK, metric);
-    let group_rows = joined(row_session, &chunk_rows, per_group, metric);
-    let group_columns = joined(column_session, &chunk_columns, per_group, metric);
+    let (chunk_rows, chunk_columns) = (&rows.chunks, &columns.chunks);
+    let (group_rows, group_columns) = (&rows.groups, &columns.groups);
     let (mut live_rows, mut live_columns) = (vec![false; chunk_rows.len()], vec![false; chunk_columns.len()]);
     for (g, group_row) in group_rows.iter().enumerate() {
         for (h, group_column) in group_columns.iter().enumerate() {
@@ -109,7 +124,7 @@ pub(crate) fn live_stretches<M: Metric + ?Sized>(
             }
         }
     }
-    let stretches = |chunks: &[(Range<usize>, usize, f64)], live: &[bool]| {
+    let stretches = |chunks: &[Ball], live: &[bool]| {
         let mut out: Vec<Range<usize>> = Vec::new();
         for (chunk, _, _) in chunks.iter().zip(live).filter(|(_, live)| **live).map(|(c, _)| c) {
             match out.last_mut() {
@@ -119,5 +134,5 @@ pub(crate) fn live_stretches<M: Metric + ?Sized>(
         }
         out
     };
-    [stretches(&chunk_rows, &live_rows), stretches(&chunk_columns, &live_columns)]
+    [stretches(chunk_rows, &live_rows), stretches(chunk_columns, &live_columns)]
 }
