@@ -65,6 +65,7 @@ __all__ = [
     "merge_tiles",
     "plan_tiles",
     "scan_tile",
+    "scan_tiles",
     "session_blocks",
     "OnlineLoops",
     "Update",
@@ -2918,6 +2919,55 @@ def scan_tile(
         >>> summary, share = il.tiles.scan_tile(tile, drive, starts=(0, 0), gamma=0.5, separation=None, duration=True)
         >>> summary.component_count, share.tile == tile
         (5, True)
+    """
+
+def scan_tiles(
+    jobs: list[tuple[Tile, Trajectory, Trajectory | None, tuple[int, int]]],
+    *,
+    gamma: float,
+    metric: _MetricName = None,
+    separation: Separation | float | Literal["auto", "none"] | None = "auto",
+    threads: int | None = None,
+    duration: bool = False,
+    runs: bool = False,
+) -> list[
+    TileSummary
+    | tuple[TileSummary, TileDuration]
+    | tuple[TileSummary, TileRuns]
+    | tuple[TileSummary, TileDuration, TileRuns]
+]:
+    """Scans a group of tiles, in parallel and without the GIL: each the scan :func:`scan_tile`
+    makes, the balls that bound each side of a tile made once for the tiles of the group that
+    share it (a session given as the same :class:`Trajectory` object to several tiles is bounded
+    once, not once a tile).
+
+    Args:
+        jobs: ``(tile, session_a, session_b, starts)`` per tile, as :func:`scan_tile` takes them
+            (``session_b`` ``None`` for a tile within one session).
+        gamma: the distance threshold γ > 0.
+        metric: a metric name or an ``inexact_loops.metrics`` object (not a callable); ``None``:
+            the first ``session_a``'s own.
+        separation: as in :func:`scan_tile`.
+        threads: worker threads; ``None``: one per core.
+        duration: also return each tile's :class:`TileDuration`.
+        runs: also return each tile's :class:`TileRuns`.
+
+    Returns:
+        What :func:`scan_tile` returns for each tile, in the order of ``jobs``.
+
+    Raises:
+        InvalidParameterError: as :func:`scan_tile`, for the first tile in order that has it;
+            sessions whose own metrics differ when ``metric`` is ``None``.
+
+    Examples:
+        >>> import inexact_loops as il
+        >>> drive = il.Trajectory([0.0, 1.0, 2.0, 3.0], [[0, 0], [5, 0], [5, 5], [0, 0.1]])
+        >>> plan = il.tiles.plan_tiles([il.tiles.session_blocks(drive, block=2)], gamma=0.5)
+        >>> jobs = [(t, drive, None, (0, 0)) for t in plan]
+        >>> summaries = il.tiles.scan_tiles(jobs, gamma=0.5, separation=None)
+        >>> [s.component_count for s in summaries] == [
+        ...     il.tiles.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None).component_count for t in plan]
+        True
     """
 
 @final

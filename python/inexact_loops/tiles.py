@@ -8,7 +8,8 @@ how :func:`inexact_loops.dask.find_fleet_loops_dask` runs on a cluster:
 - **Plan** from what each session's reader learns alone: :func:`session_blocks` gives a
   :class:`SessionBlocks` (pose count, span, bounding balls of its blocks), and
   :func:`plan_tiles` the :class:`Tile` objects whose balls come within gamma.
-- **Scan** each tile from its two sessions: :func:`scan_tile` returns a :class:`TileSummary`,
+- **Scan** each tile from its two sessions (:func:`scan_tiles` for a group of tiles that share
+  sessions): :func:`scan_tile` returns a :class:`TileSummary`,
   and, when asked, the tile's share of loop duration (:class:`TileDuration`, added up per session
   by :func:`session_loop_duration`) and its runs for the draws (:class:`TileRuns`).
 - **Merge** in a tree: :func:`merge_tiles` joins summaries or partial merges
@@ -50,6 +51,7 @@ from ._core import (
     merge_tiles,
     plan_tiles,
     scan_tile,
+    scan_tiles,
     session_blocks,
     session_loop_duration,
 )
@@ -68,6 +70,7 @@ __all__ = [
     "merge_tiles",
     "plan_tiles",
     "scan_tile",
+    "scan_tiles",
     "session_blocks",
     "session_loop_duration",
 ]

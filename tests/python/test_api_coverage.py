@@ -164,6 +164,7 @@ ELSEWHERE = {
         "python/test_dask.py",
         "test_coarsened_blocks_are_cut_as_asked_and_pickle",
     ),
+    "tiles.scan_tiles": ("python/test_dask.py", "test_a_group_of_tiles_scans_as_each_tile_alone"),
     **{
         name: ("python/test_dask.py", "test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail")
         for name in (

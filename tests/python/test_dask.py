@@ -423,6 +423,49 @@ def test_a_run_whose_tasks_find_no_worker_fails_and_the_cluster_runs_the_next(
     assert_same(tiled, fleet)
 
 
+def test_a_group_of_tiles_scans_as_each_tile_alone():
+    # Three sessions crossing one another, in blocks of 20: tiles share their sides.
+    s = np.arange(60.0)
+    sessions = [
+        il.Trajectory(s, np.c_[s * 0.5, 5 * np.sin(s / 7)]),
+        il.Trajectory(s, np.c_[30 - s * 0.5, 5 * np.cos(s / 5)]),
+        il.Trajectory(s, np.c_[s * 0.5, 0.3 * s - 9]),
+    ]
+    blocks = [il.tiles.session_blocks(t, block=20) for t in sessions]
+    tiles = il.tiles.plan_tiles(blocks, gamma=2.0)
+    starts = [0, 60, 120]
+    jobs = [
+        (
+            t,
+            sessions[t.sessions[0]],
+            None if t.sessions[0] == t.sessions[1] else sessions[t.sessions[1]],
+            (starts[t.sessions[0]], starts[t.sessions[1]]),
+        )
+        for t in tiles
+    ]
+    sides = [(t.sessions[0], t.rows) for t in tiles if t.sessions[0] != t.sessions[1]]
+    assert len(set(sides)) < len(sides), "some side is read by two tiles"
+    together = il.tiles.scan_tiles(jobs[::-1], gamma=2.0, separation=None, duration=True)
+    for (tile, a, b, at), (summary, share) in zip(jobs[::-1], together, strict=True):
+        alone, alone_share = il.tiles.scan_tile(
+            tile, a, b, starts=at, gamma=2.0, separation=None, duration=True
+        )
+        assert summary.to_bytes() == alone.to_bytes() and share.to_bytes() == alone_share.to_bytes()
+    # Not a vacuous check: tiles between sessions hold cells.
+    between = [
+        s
+        for (t, *_), (s, _) in zip(jobs[::-1], together, strict=True)
+        if t.sessions[0] != t.sessions[1]
+    ]
+    assert sum(s.component_count > 0 for s in between) >= 2
+    assert il.tiles.scan_tiles([], gamma=2.0) == []
+    torus = il.Trajectory.torus(s, np.c_[s * 0.05, s * 0.05])
+    with pytest.raises(il.InvalidParameterError, match="name one metric"):
+        il.tiles.scan_tiles([jobs[0], (jobs[0][0], torus, None, (0, 0))], gamma=2.0)
+    with pytest.raises(il.InvalidParameterError, match="tile"):
+        il.tiles.scan_tiles([jobs[0], (jobs[-1][0], sessions[0], None, (0, 0))], gamma=2.0)
+
+
 def test_tiles_pickle_as_their_bytes_and_corrupt_bytes_fail(tmp_path):
     x = np.arange(30) * 0.5
     a = il.Trajectory(np.arange(30.0), np.c_[x, 0 * x])

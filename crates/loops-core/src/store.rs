@@ -70,9 +70,7 @@ use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
 use crate::tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs};
-use crate::tile::{
-    MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching, scan_session_tiles,
-};
+use crate::tile::{MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching};
 use crate::trajectory::{Manifold, Trajectory};
 
 /// The version of a store's layout (its tables and their meaning). Version 2 adds what a
@@ -638,13 +636,7 @@ impl UpdatePlan {
         }
         let settings = &self.settings;
         let keep = TileKeep::SUMMARY.with_duration().with_runs();
-        let scans = with_metric!(&settings.metric, m => scan_session_tiles(
-            &jobs,
-            m,
-            settings.gamma,
-            settings.separation,
-            keep,
-        ))?;
+        let scans = settings.metric.scan_session_tiles(&jobs, settings.gamma, settings.separation, keep)?;
         Ok(ks
             .iter()
             .zip(scans)

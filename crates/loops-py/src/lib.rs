@@ -204,6 +204,7 @@ fn _core(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(py_tile::session_blocks, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile::plan_tiles, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile_scan::scan_tile, module)?)?;
+    module.add_function(wrap_pyfunction!(py_tile_scan::scan_tiles, module)?)?;
     module.add_function(wrap_pyfunction!(py_tile_merge::merge_tiles, module)?)?;
     module.add_class::<py_tile_draw::KeyedDraw>()?;
     module.add_class::<py_tile_draw::TileDrawRequest>()?;

@@ -84,8 +84,14 @@ pub(crate) fn scan_tile<'py>(
     let scanned = scan.run(py, threads, move |s| {
         s.metric.scan_session_tile(s.sessions(), s.starts, s.gamma, s.separation, &tile, keep)
     })?;
+    scan_result(py, scanned, metric)
+}
+
+/// A tile's scan as :func:`scan_tile` returns it: its summary alone, or a tuple of it and what
+/// was kept.
+fn scan_result(py: Python<'_>, scanned: loops_core::tile::TileScan, metric: MetricSpec) -> PyResult<Bound<'_, PyAny>> {
     let summary = TileSummary { inner: scanned.summary }.into_pyobject(py)?.into_any();
-    if !duration && !runs {
+    if scanned.duration.is_none() && scanned.runs.is_none() {
         return Ok(summary);
     }
     let mut parts = vec![summary];
@@ -96,6 +102,84 @@ pub(crate) fn scan_tile<'py>(
         parts.push(TileRuns { inner: Arc::new(inner), metric }.into_pyobject(py)?.into_any());
     }
     Ok(PyTuple::new(py, parts)?.into_any())
+}
+
+/// Scans a group of tiles, in parallel and without the GIL: each the scan :func:`scan_tile`
+/// makes, the balls that bound each side of a tile made once for the tiles of the group that
+/// share it (a session given as the same :class:`Trajectory` object to several tiles is bounded
+/// once, not once a tile).
+///
+/// Args:
+///     jobs: ``(tile, session_a, session_b, starts)`` per tile, as :func:`scan_tile` takes them
+///         (``session_b`` ``None`` for a tile within one session).
+///     gamma: the distance threshold γ > 0.
+///     metric: a metric name or an ``inexact_loops.metrics`` object (not a callable); ``None``:
+///         the first ``session_a``'s own.
+///     separation: as in :func:`scan_tile`.
+///     threads: worker threads; ``None``: one per core.
+///     duration: also return each tile's :class:`TileDuration`.
+///     runs: also return each tile's :class:`TileRuns`.
+///
+/// Returns:
+///     What :func:`scan_tile` returns for each tile, in the order of ``jobs``.
+///
+/// Raises:
+///     InvalidParameterError: as :func:`scan_tile`, for the first tile in order that has it;
+///         sessions whose own metrics differ when ``metric`` is ``None``.
+///
+/// Examples:
+///     >>> import inexact_loops as il
+///     >>> drive = il.Trajectory([0.0, 1.0, 2.0, 3.0], [[0, 0], [5, 0], [5, 5], [0, 0.1]])
+///     >>> plan = il.tiles.plan_tiles([il.tiles.session_blocks(drive, block=2)], gamma=0.5)
+///     >>> jobs = [(t, drive, None, (0, 0)) for t in plan]
+///     >>> summaries = il.tiles.scan_tiles(jobs, gamma=0.5, separation=None)
+///     >>> [s.component_count for s in summaries] == [
+///     ...     il.tiles.scan_tile(t, drive, starts=(0, 0), gamma=0.5, separation=None).component_count for t in plan]
+///     True
+#[pyfunction]
+#[pyo3(signature = (jobs, *, gamma, metric=None, separation=SeparationArg::Auto, threads=None, duration=false, runs=false))]
+#[pyo3(text_signature = "(jobs, *, gamma, metric=None, separation='auto', threads=None, duration=False, runs=False)")]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+pub(crate) fn scan_tiles<'py>(
+    py: Python<'py>,
+    jobs: Vec<(PyRef<'py, Tile>, PyRef<'py, Trajectory>, Option<PyRef<'py, Trajectory>>, (usize, usize))>,
+    gamma: f64,
+    metric: Option<&Bound<'py, PyAny>>,
+    separation: SeparationArg,
+    threads: Option<usize>,
+    duration: bool,
+    runs: bool,
+) -> PyResult<Vec<Bound<'py, PyAny>>> {
+    let mut keep = TileKeep::SUMMARY;
+    if duration {
+        keep = keep.with_duration();
+    }
+    if runs {
+        keep = keep.with_runs();
+    }
+    let mut scans = Vec::with_capacity(jobs.len());
+    for (tile, a, b, starts) in &jobs {
+        let scan = TileScan::new(&tile.inner, a, b.as_deref(), *starts, gamma, metric, separation, "scan_tiles")?;
+        if let Some(first) = scans.first().map(|(_, s): &(loops_core::tile::Tile, TileScan)| s.metric)
+            && first != scan.metric
+        {
+            return Err(invalid_parameter(format!(
+                "scan_tiles: tile {} of the group scans under metric {}, the first under {first}: name one metric",
+                scans.len(),
+                scan.metric
+            )));
+        }
+        scans.push((tile.inner.clone(), scan));
+    }
+    let Some(metric) = scans.first().map(|(_, s)| s.metric) else {
+        return Ok(Vec::new());
+    };
+    let (gamma, separation) = (scans[0].1.gamma, scans[0].1.separation);
+    let scanned = crate::py_metric::MetricArg::Spec(metric).run(py, threads, move |_| {
+        let group: Vec<_> = scans.iter().map(|(tile, s)| (tile, s.sessions(), s.starts)).collect();
+        metric.scan_session_tiles(&group, gamma, separation, keep)
+    })?;
+    scanned.into_iter().map(|s| scan_result(py, s, metric)).collect()
 }
 
 /// What one tile's runs add to the loop duration τ of its rows and columns

@@ -12,7 +12,7 @@ import numpy as np
 
 from .. import _core
 from ..errors import InvalidParameterError
-from ..tiles import Tile, draw_tile, merge_tiles, scan_tile, session_blocks, session_loop_duration
+from ..tiles import Tile, draw_tile, merge_tiles, scan_tiles, session_blocks, session_loop_duration
 from . import _settings
 from ._cache import keep_runs, kept_runs, load_session
 from ._parquet import atomic, import_pyarrow
@@ -85,14 +85,23 @@ def scan_session_tiles(
     run_id: str,
     group: int,
 ) -> Any:
-    """Task: scan a few tiles (each with its sessions' sources and first fleet indices) without
-    the GIL and merge them: their :class:`TileMerge`; with ``duration``, also each tile's share
+    """Task: scan a few tiles (each with its sessions' sources and first fleet indices) together
+    without the GIL (:func:`inexact_loops.tiles.scan_tiles`: a session's balls made once for
+    the group) and merge them: their :class:`TileMerge`; with ``duration``, also each tile's share
     of tau, in order. Keeps each tile's runs under ``(run_id, tile)`` for its draws, as scanned
     by the task of ``group``."""
+    jobs = [(tile, *_sessions_of(sources, options), starts) for tile, sources, starts in tiles]
+    scans = scan_tiles(
+        jobs,
+        gamma=gamma,
+        metric=metric,
+        separation=_separation(separation),
+        threads=threads,
+        duration=True,
+        runs=True,
+    )
     summaries, shares = [], []
-    for tile, sources, starts in tiles:
-        kwargs = _tile_kwargs(sources, options, starts, gamma, metric, separation, threads)
-        summary, share, runs = scan_tile(tile, **kwargs, duration=True, runs=True)
+    for (tile, _, _), (summary, share, runs) in zip(tiles, scans, strict=True):
         keep_runs((run_id, tile), group, runs)
         summaries.append(summary)
         shares.append(share)

@@ -439,6 +439,20 @@ impl MetricSpec {
         with_metric!(self, m => plan_session_tiles(sessions, m, gamma))
     }
 
+    /// [`scan_session_tiles`] under this metric.
+    ///
+    /// # Errors
+    /// As [`scan_session_tiles`].
+    pub fn scan_session_tiles(
+        &self,
+        jobs: &[(&Tile, [&Trajectory; 2], [usize; 2])],
+        gamma: f64,
+        separation: Separation,
+        keep: TileKeep,
+    ) -> Result<Vec<TileScan>> {
+        with_metric!(self, m => scan_session_tiles(jobs, m, gamma, separation, keep))
+    }
+
     /// [`scan_session_tile`] under this metric.
     ///
     /// # Errors
@@ -792,9 +806,12 @@ pub fn scan_session_tile<M: Metric + ?Sized>(
 /// once per block and shared by the tiles that read it: a session met by many tiles (a new
 /// day's against a fleet) is bounded once, not once a tile.
 ///
+/// Time: the tiles' scans, rows and tiles in parallel, plus O(poses) distance evaluations for
+/// the balls of the distinct sides (instead of O(poses) a tile).
+///
 /// # Errors
 /// As [`scan_session_tile`], the first in the order of `jobs`.
-pub(crate) fn scan_session_tiles<M: Metric + ?Sized>(
+pub fn scan_session_tiles<M: Metric + ?Sized>(
     jobs: &[(&Tile, [&Trajectory; 2], [usize; 2])],
     metric: &M,
     gamma: f64,
