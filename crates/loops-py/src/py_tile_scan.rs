@@ -72,13 +72,7 @@ pub(crate) fn scan_tile<'py>(
     runs: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let tile = tile.inner.clone();
-    let mut keep = TileKeep::SUMMARY;
-    if duration {
-        keep = keep.with_duration();
-    }
-    if runs {
-        keep = keep.with_runs();
-    }
+    let keep = TileKeep::asking(duration, runs);
     let scan = TileScan::new(&tile, session_a, session_b, starts, gamma, metric, separation, "scan_tile")?;
     let metric = scan.metric;
     let scanned = scan.run(py, threads, move |s| {
@@ -150,17 +144,11 @@ pub(crate) fn scan_tiles<'py>(
     duration: bool,
     runs: bool,
 ) -> PyResult<Vec<Bound<'py, PyAny>>> {
-    let mut keep = TileKeep::SUMMARY;
-    if duration {
-        keep = keep.with_duration();
-    }
-    if runs {
-        keep = keep.with_runs();
-    }
-    let mut scans = Vec::with_capacity(jobs.len());
+    let keep = TileKeep::asking(duration, runs);
+    let mut scans: Vec<(loops_core::tile::Tile, TileScan)> = Vec::with_capacity(jobs.len());
     for (tile, a, b, starts) in &jobs {
         let scan = TileScan::new(&tile.inner, a, b.as_deref(), *starts, gamma, metric, separation, "scan_tiles")?;
-        if let Some(first) = scans.first().map(|(_, s): &(loops_core::tile::Tile, TileScan)| s.metric)
+        if let Some(first) = scans.first().map(|(_, s)| s.metric)
             && first != scan.metric
         {
             return Err(invalid_parameter(format!(

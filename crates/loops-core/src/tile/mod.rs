@@ -732,6 +732,7 @@ fn bad_tile(tile: &Tile) -> Error {
 /// use loops_core::tile::TileKeep;
 /// let keep = TileKeep::SUMMARY.with_duration().with_runs();
 /// assert!(keep.duration && keep.runs);
+/// assert_eq!(TileKeep::asking(true, false), TileKeep::SUMMARY.with_duration());
 /// ```
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 #[non_exhaustive]
@@ -746,6 +747,12 @@ pub struct TileKeep {
 impl TileKeep {
     /// The summary only.
     pub const SUMMARY: Self = Self { duration: false, runs: false };
+
+    /// The summary, with the tile's share of τ when `duration` and its runs when `runs`.
+    #[must_use]
+    pub const fn asking(duration: bool, runs: bool) -> Self {
+        Self { duration, runs }
+    }
 
     /// Also the tile's share of τ.
     #[must_use]
