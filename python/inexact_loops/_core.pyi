@@ -2333,6 +2333,8 @@ class FleetStore:
         sessions named in ``remove``, in one update written atomically; a session given with the
         content it has in the store changes nothing. Scans only the tiles that hold an added or
         replaced session (reading the stored sessions they meet from the store's pose files).
+        Starts from the store as this object holds it while the folder still holds that state
+        (another process may have updated it since: the folder is then read again).
 
         The settings are fixed when the store is made: the first update gives ``gamma`` and
         whichever others it wants; a later one gives none (the store's own) or all of them as

@@ -123,15 +123,15 @@ def test_corrupt_and_forged_states_are_clear_errors(results):
     loops = results["loops"]
     restore, state = state_of(loops)
     assert restore(state) == loops
-    # The header: a MessagePack array of 4, "inexact_loops", the format (1), the class name.
-    assert state[:15] == b"\x94\xadinexact_loops" and state[15] == 1
+    # The header: a MessagePack array of 4, "inexact_loops", the format (2), the class name.
+    assert state[:15] == b"\x94\xadinexact_loops" and state[15] == 2
     cases = {
         state[: len(state) // 2]: "cannot unpickle Loops: ",
         b"not a pickle": "cannot unpickle Loops: not a pickled inexact_loops state",
         state[:15]
-        + b"\x02"
-        + state[16:]: "it was pickled in state format 2 (by another version of "
-        "inexact_loops); this version reads format 1",
+        + b"\x03"
+        + state[16:]: "it was pickled in state format 3 (by another version of "
+        "inexact_loops); this version reads formats 1 to 2",
         state_of(results["samples"])[1]: "cannot unpickle Loops: the state is of a Samples",
     }
     for forged, message in cases.items():
@@ -354,7 +354,7 @@ def test_corrupt_and_forged_fleet_states_are_clear_errors(fleet_results):
         fleet_state[: len(fleet_state) // 2]: "cannot unpickle Fleet: ",
         forged_names: "cannot unpickle Fleet: ",
         forged_metric: "cannot unpickle Fleet: session ",
-        fleet_state[:15] + b"\x02" + fleet_state[16:]: "it was pickled in state format 2",
+        fleet_state[:15] + b"\x03" + fleet_state[16:]: "it was pickled in state format 3",
         state_of(r["fleet"].joint)[1]: "cannot unpickle Fleet: the state is of a Trajectory",
     }
     for forged, message in cases.items():

@@ -155,6 +155,14 @@ def test_duckdb_pandas_and_pyarrow_read_what_find_fleet_loops_finds(tmp_path: Pa
     np.testing.assert_allclose(tau["own_s"], want_tau["own_s"], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(tau["other_s"], want_tau["other_s"], rtol=1e-9, atol=1e-9)
 
+    # The blobs of what the answer is made of (LZ4-compressed columns) read back alike in
+    # DuckDB and pyarrow, each with its tag.
+    for table, column, tag in (("tiles", "summary", b"ILts"), ("tile_runs", "runs", b"ILtr")):
+        path = (state / f"{table}.parquet").as_posix()
+        blobs = [bytes(b) for (b,) in sql(f"SELECT {column} FROM '{path}'").fetchall()]
+        assert blobs == pq.read_table(path)[column].to_pylist()
+        assert blobs and all(b[:4] == tag for b in blobs), table
+
     # The Python tables are those of find_fleet_loops, and a store read back is the same.
     assert_same_answer(store, all_sessions)
     assert_same_answer(il.FleetStore.open(folder), all_sessions)

@@ -85,6 +85,8 @@ mod measure;
 mod memory;
 mod metric;
 pub mod online;
+#[cfg(feature = "serde")]
+mod packed;
 mod place;
 pub mod plane;
 mod pose;

@@ -66,13 +66,20 @@ impl Run {
 pub struct SublevelSet {
     gamma: f64,
     separation: Separation,
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     row_offsets: Vec<usize>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     runs: Vec<Run>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     closest: Vec<u32>,
     /// A fleet's session starts after the first (rows of different sessions are not
     /// 4-adjacent); empty for one trajectory.
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     breaks: Vec<u32>,
 }
+
+#[cfg(feature = "serde")]
+crate::packed::packed_record!(Run { start: u32, end: u32 });
 
 /// The wall and CPU time of one phase of the engine, written to stderr (`phase NAME WALL_MS
 /// CPU_MS`) when it is dropped, with the `phase-times` feature: profiles of the parallel split
@@ -1023,9 +1030,13 @@ pub(crate) fn closest_column<M: Metric + ?Sized>(
 struct SublevelSetState {
     gamma: f64,
     separation: Separation,
+    #[serde(with = "crate::packed")]
     row_offsets: Vec<usize>,
+    #[serde(with = "crate::packed")]
     runs: Vec<Run>,
+    #[serde(with = "crate::packed")]
     closest: Vec<u32>,
+    #[serde(with = "crate::packed")]
     breaks: Vec<u32>,
 }
 

@@ -84,6 +84,15 @@ fn dense_bytes(d: &TileDuration) -> Vec<u8> {
     bytes
 }
 
+/// `value`'s bytes as format version 3 wrote them (tag `tag`): long arrays of numbers as
+/// MessagePack arrays, not packed.
+fn unpacked_bytes<T: serde::Serialize>(tag: &[u8; 4], value: &T) -> Vec<u8> {
+    let mut bytes = tag.to_vec();
+    bytes.extend_from_slice(&3u16.to_le_bytes());
+    value.serialize(&mut rmp_serde::Serializer::new(&mut bytes).with_human_readable()).unwrap();
+    bytes
+}
+
 /// The fleet's tiles, scanned (with their shares of τ) and merged in one step through bytes.
 struct Tiled {
     merged: loops_core::tile::MergedLoops,
@@ -115,6 +124,12 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
         assert_eq!((&kept.summary, &kept.duration), (&summary, &Some(duration.clone())), "{tile:?}: keeping its runs");
         let kept = kept.runs.unwrap();
         assert_eq!(kept.tile(), tile);
+        // Bytes of version 3 (arrays of numbers) read back as those of this version (packed).
+        assert_eq!(TileRuns::from_bytes(&unpacked_bytes(b"ILtr", &kept)).unwrap(), kept, "{tile:?}");
+        assert_eq!(TileRuns::from_bytes(&kept.to_bytes()).unwrap(), kept, "{tile:?}");
+        assert_ne!(unpacked_bytes(b"ILtr", &kept)[6..], kept.to_bytes()[6..], "{tile:?}: packed as arrays");
+        assert_eq!(TileSummary::from_bytes(&unpacked_bytes(b"ILts", &summary)).unwrap(), summary, "{tile:?}");
+        assert_eq!(TileDuration::from_bytes(&unpacked_bytes(b"ILtt", &duration)).unwrap(), duration, "{tile:?}");
         runs.insert(tile.clone(), kept);
         parts.push(TileMerge::new(TileSummary::from_bytes(&summary.to_bytes()).unwrap()).unwrap());
         let read = TileDuration::from_bytes(&duration.to_bytes()).unwrap();
@@ -130,6 +145,8 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
         level.push(TileMerge::from_bytes(&merged.to_bytes()).unwrap());
     }
     let merged = TileMerge::merge(level).unwrap().finish().unwrap();
+    assert_eq!(loops_core::tile::MergedLoops::from_bytes(&unpacked_bytes(b"ILml", &merged)).unwrap(), merged);
+    assert_eq!(loops_core::tile::MergedLoops::from_bytes(&merged.to_bytes()).unwrap(), merged);
     starts.pop();
     Tiled { merged, durations, starts, runs }
 }

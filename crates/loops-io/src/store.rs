@@ -63,7 +63,6 @@ use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Ty
 use parquet::file::properties::WriterProperties;
 use parquet::file::reader::{FileReader, SerializedFileReader};
 use parquet::file::writer::SerializedFileWriter;
-use parquet::record::{Row, RowAccessor};
 use serde::{Deserialize, Serialize};
 
 use crate::out_dir::{OutDir, OutDirError, STORE};
@@ -316,12 +315,11 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     let state = dir.join(&pointer.state);
     let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
     let tiles_path = state.join("tiles.parquet");
-    let tiles = read_rows(&tiles_path)?
-        .iter()
-        .enumerate()
-        .map(|(k, row)| -> std::result::Result<StoredTile, String> {
-            let summary = TileSummary::from_bytes(row.bytes(7)?).map_err(|e| format!("row {k}: {e}"))?;
-            let duration = TileDuration::from_bytes(row.bytes(8)?).map_err(|e| format!("row {k}: {e}"))?;
+    let table = read_table(&tiles_path)?;
+    let tiles = (0..table.rows)
+        .map(|k| -> std::result::Result<StoredTile, String> {
+            let summary = TileSummary::from_bytes(table.bytes(7, k)?).map_err(|e| format!("row {k}: {e}"))?;
+            let duration = TileDuration::from_bytes(table.bytes(8, k)?).map_err(|e| format!("row {k}: {e}"))?;
             Ok(StoredTile { summary, duration })
         })
         .collect::<std::result::Result<Vec<_>, String>>()
@@ -373,18 +371,18 @@ fn read_head(dir: &Path) -> Result<Head> {
     let file: SettingsFile = read_json(&settings_path)?;
     let config = config_of(&file, &settings_path)?;
     let sessions_path = state.join("sessions.parquet");
-    let sessions = read_rows(&sessions_path)?
-        .iter()
-        .enumerate()
-        .map(|(k, row)| -> std::result::Result<StoreSession, String> {
-            let blocks = SessionBlocks::from_bytes(row.bytes(9)?).map_err(|e| e.to_string())?;
-            let fingerprint = u64::from_str_radix(row.text(2)?, 16).map_err(|e| format!("fingerprint: {e}"))?;
-            let manifold = manifold_of(row.text(8)?).ok_or_else(|| format!("manifold {:?} is unknown", row.text(8)))?;
+    let table = read_table(&sessions_path)?;
+    let sessions = (0..table.rows)
+        .map(|k| -> std::result::Result<StoreSession, String> {
+            let blocks = SessionBlocks::from_bytes(table.bytes(9, k)?).map_err(|e| e.to_string())?;
+            let fingerprint = u64::from_str_radix(table.text(2, k)?, 16).map_err(|e| format!("fingerprint: {e}"))?;
+            let manifold = table.text(8, k)?;
+            let manifold = manifold_of(manifold).ok_or_else(|| format!("manifold {manifold:?} is unknown"))?;
             Ok(StoreSession {
-                name: row.text(1)?.to_owned(),
+                name: table.text(1, k)?.to_owned(),
                 fingerprint,
                 manifold,
-                times_s: [row.float(4)?, row.float(5)?],
+                times_s: [table.float(4, k)?, table.float(5, k)?],
                 blocks,
             })
             .map_err(|e: String| format!("row {k}: {e}"))
@@ -402,24 +400,25 @@ const READABLE_VERSIONS: std::ops::RangeInclusive<u16> = 1..=loops_core::store::
 /// `tiles` tiles (`tile_runs.parquet`).
 fn read_kept(state: &Path, tiles: usize) -> Result<KeptParts> {
     let merges_path = state.join("merges.parquet");
-    let merges = read_rows(&merges_path)?
-        .iter()
-        .enumerate()
-        .map(|(k, row)| -> std::result::Result<([usize; 2], MergedLoops), String> {
+    let table = read_table(&merges_path)?;
+    let merges = (0..table.rows)
+        .map(|k| -> std::result::Result<([usize; 2], MergedLoops), String> {
             let row_of = |e: String| format!("row {k}: {e}");
-            let pair = [cell_index(row, 0).map_err(row_of)?, cell_index(row, 1).map_err(row_of)?];
-            let merge = MergedLoops::from_bytes(row.bytes(4).map_err(row_of)?).map_err(|e| row_of(e.to_string()))?;
+            let pair = [table.index(0, k).map_err(row_of)?, table.index(1, k).map_err(row_of)?];
+            let merge =
+                MergedLoops::from_bytes(table.bytes(4, k).map_err(row_of)?).map_err(|e| row_of(e.to_string()))?;
             Ok((pair, merge))
         })
         .collect::<std::result::Result<Vec<_>, String>>()
         .map_err(|reason| StoreError::Corrupt { path: merges_path.clone(), reason })?;
     let runs_path = state.join("tile_runs.parquet");
     let mut runs: Vec<Option<TileRuns>> = vec![None; tiles];
-    for (k, row) in read_rows(&runs_path)?.iter().enumerate() {
+    let table = read_table(&runs_path)?;
+    for k in 0..table.rows {
         let corrupt =
             |reason: String| StoreError::Corrupt { path: runs_path.clone(), reason: format!("row {k}: {reason}") };
-        let tile = cell_index(row, 0).map_err(corrupt)?;
-        let parsed = TileRuns::from_bytes(row.bytes(4).map_err(corrupt)?).map_err(|e| corrupt(e.to_string()))?;
+        let tile = table.index(0, k).map_err(corrupt)?;
+        let parsed = TileRuns::from_bytes(table.bytes(4, k).map_err(corrupt)?).map_err(|e| corrupt(e.to_string()))?;
         match runs.get_mut(tile) {
             Some(slot @ None) => *slot = Some(parsed),
             Some(Some(_)) => return Err(corrupt(format!("tile {tile} has runs twice"))),
@@ -435,23 +434,17 @@ fn read_draws(path: &Path, store: &FleetStore) -> Result<()> {
         return Ok(());
     }
     let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
-    let rows = read_rows(path)?;
-    let mut draws = Vec::with_capacity(rows.len());
-    for (k, row) in rows.iter().enumerate() {
-        let seed = row.get_long(0).map_err(|e| corrupt(format!("row {k}: column 0: {e}")))? as u64;
-        draws.push((seed, row.bytes(1).map_err(|e| corrupt(format!("row {k}: {e}")))?));
+    let table = read_table(path)?;
+    let mut draws = Vec::with_capacity(table.rows);
+    for k in 0..table.rows {
+        let seed = table.int(0, k).map_err(|e| corrupt(format!("row {k}: {e}")))? as u64;
+        draws.push((seed, table.bytes(1, k).map_err(|e| corrupt(format!("row {k}: {e}")))?));
     }
     store.keep_draws(&draws).map_err(|e| corrupt(e.to_string()))
 }
 
 /// The merges and runs a state keeps ([`FleetStore::from_saved`]).
 type KeptParts = (Vec<([usize; 2], MergedLoops)>, Vec<Option<TileRuns>>);
-
-/// Cell `i` of a row as an index (a non-negative INT64).
-fn cell_index(row: &Row, i: usize) -> std::result::Result<usize, String> {
-    let value = row.get_long(i).map_err(|e| format!("column {i}: {e}"))?;
-    usize::try_from(value).map_err(|_| format!("column {i}: {value} is not an index"))
-}
 
 /// The samples of the store's current state (`samples.parquet`), in its order: those
 /// [`update_store`] drew, read back.
@@ -460,20 +453,15 @@ fn cell_index(row: &Row, i: usize) -> std::result::Result<usize, String> {
 /// [`StoreError::Io`] or [`StoreError::Corrupt`] for a table that cannot be read back.
 pub fn read_samples(stored: &StoredFleet) -> Result<Vec<FleetSample>> {
     let path = stored.table("samples.parquet");
-    let index = |row: &Row, i: usize| -> std::result::Result<usize, String> {
-        let value = row.get_long(i).map_err(|e| format!("column {i}: {e}"))?;
-        usize::try_from(value).map_err(|_| format!("column {i}: {value} is not an index"))
-    };
-    read_rows(&path)?
-        .iter()
-        .enumerate()
-        .map(|(k, row)| -> std::result::Result<FleetSample, String> {
-            let component = row.get_long(8).map_err(|e| format!("column 8: {e}"))?;
-            let distance = row.float(9)?;
+    let table = read_table(&path)?;
+    (0..table.rows)
+        .map(|k| -> std::result::Result<FleetSample, String> {
+            let component = table.int(8, k)?;
+            let distance = table.float(9, k)?;
             Ok(FleetSample {
-                sessions: [index(row, 2)?, index(row, 3)?],
-                poses: [index(row, 4)?, index(row, 5)?],
-                times_s: [row.float(6)?, row.float(7)?],
+                sessions: [table.index(2, k)?, table.index(3, k)?],
+                poses: [table.index(4, k)?, table.index(5, k)?],
+                times_s: [table.float(6, k)?, table.float(7, k)?],
                 component: usize::try_from(component).ok(),
                 distance: (!distance.is_nan()).then_some(distance),
             })
@@ -522,7 +510,44 @@ pub fn update_store(
     put: Vec<(String, Trajectory)>,
     remove: &[String],
 ) -> Result<StoreReport> {
-    update_with(dir, config, put, remove, None)
+    update_with(dir, config, put, remove, None, None)
+}
+
+/// [`update_store`] (with `scanned`: [`update_store_scanned`]) of the store that `opened` was
+/// read from ([`read_store`], or the [`StoreReport::stored`] of its last update): where the
+/// folder still holds the state it was read from (that state folder, with the same sessions,
+/// settings and last update: a state is never changed once written), the update starts from
+/// `opened` instead of reading every table again; otherwise it reads the folder, as
+/// [`update_store`] does. What is written and returned is the same either way.
+///
+/// # Errors
+/// As [`update_store`] and [`update_store_scanned`].
+pub fn update_opened_store(
+    opened: StoredFleet,
+    config: Option<&StoreConfig>,
+    put: Vec<(String, Trajectory)>,
+    remove: &[String],
+    scanned: Option<Vec<ScannedTile>>,
+) -> Result<StoreReport> {
+    let dir = opened.dir.clone();
+    update_with(&dir, config, put, remove, scanned, Some(opened))
+}
+
+/// The store's current state in `dir`: `opened` where it is what the folder holds (see
+/// [`update_opened_store`]: O(sessions + blocks) to check), else read from the folder.
+fn current_state(dir: &Path, opened: Option<StoredFleet>) -> Result<StoredFleet> {
+    if let Some(opened) = opened.filter(|o| o.dir == dir) {
+        let head = read_head(dir)?;
+        let last_update: StoreUpdate = head.file.last_update.into();
+        if head.pointer.state == opened.state
+            && head.config == opened.config
+            && head.sessions == opened.store.sessions()
+            && &last_update == opened.store.last_update()
+        {
+            return Ok(opened);
+        }
+    }
+    read_store(dir)
 }
 
 /// An update of the store in a folder, planned ([`plan_store_update`]) from its small tables:
@@ -635,18 +660,20 @@ pub fn update_store_scanned(
     remove: &[String],
     scanned: Vec<ScannedTile>,
 ) -> Result<StoreReport> {
-    update_with(dir, config, put, remove, Some(scanned))
+    update_with(dir, config, put, remove, Some(scanned), None)
 }
 
-/// [`update_store`], with the new tiles scanned here (`None`) or given.
+/// [`update_store`], with the new tiles scanned here (`None`) or given, from the store as
+/// `opened` where it is current ([`current_state`]).
 fn update_with(
     dir: &Path,
     config: Option<&StoreConfig>,
     put: Vec<(String, Trajectory)>,
     remove: &[String],
     scanned: Option<Vec<ScannedTile>>,
+    mut opened: Option<StoredFleet>,
 ) -> Result<StoreReport> {
-    if let Some(report) = unchanged(dir, config, &put, remove, scanned.as_ref())? {
+    if let Some(report) = unchanged(dir, config, &put, remove, scanned.as_ref(), &mut opened)? {
         return Ok(report);
     }
     let exists = dir.join(STORE.marker).is_file();
@@ -659,7 +686,7 @@ fn update_with(
         })?;
     }
     let out = OutDir::take(dir, exists, STORE)?;
-    let current = if dir.join("store.json").is_file() { Some(read_store(dir)?) } else { None };
+    let current = if dir.join("store.json").is_file() { Some(current_state(dir, opened)?) } else { None };
     // States a killed update left (not the one store.json names).
     for name in out.entries() {
         if is_state_name(&name) && current.as_ref().is_none_or(|c| c.state != name) {
@@ -787,6 +814,7 @@ fn unchanged(
     put: &[(String, Trajectory)],
     remove: &[String],
     scanned: Option<&Vec<ScannedTile>>,
+    opened: &mut Option<StoredFleet>,
 ) -> Result<Option<StoreReport>> {
     if !dir.join(STORE.marker).is_file() || !dir.join("store.json").is_file() {
         return Ok(None);
@@ -796,7 +824,7 @@ fn unchanged(
     if !planned.plan.changes_nothing() {
         return Ok(None);
     }
-    let mut stored = read_store(dir)?;
+    let mut stored = current_state(dir, opened.take())?;
     // What a killed update left (a scratch folder, another state) is tidied by writing.
     let mut entries: Vec<String> = std::fs::read_dir(dir)
         .and_then(|list| list.map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned())).collect())
@@ -805,6 +833,7 @@ fn unchanged(
     let mut clean = vec![STORE.marker.to_owned(), stored.state.clone(), "store.json".to_owned()];
     clean.sort_unstable();
     if entries != clean {
+        *opened = Some(stored);
         return Ok(None);
     }
     let update = stored.store.apply_update(&planned.plan, scanned.cloned().unwrap_or_default())?;
@@ -871,13 +900,29 @@ fn write_synced(path: &Path, bytes: std::io::Result<Vec<u8>>) -> Result<()> {
     written.map_err(|error| StoreError::Io { what: "writing", path: path.to_path_buf(), error })
 }
 
-/// One column of a table.
+/// One column of a table: written from the first five, read back as the first three and
+/// [`Blobs`](Column::Blobs).
 enum Column {
     Int(Vec<i64>),
     Float(Vec<f64>),
     Bool(Vec<bool>),
     Text(Vec<String>),
     Bytes(Vec<Vec<u8>>),
+    /// Text or bytes as read back.
+    Blobs(Vec<ByteArray>),
+}
+
+impl Column {
+    /// An empty column of the kind that holds `column`'s values.
+    fn empty_like(column: &parquet::schema::types::ColumnDescriptor) -> Self {
+        use parquet::basic::Type;
+        match column.physical_type() {
+            Type::INT64 => Column::Int(Vec::new()),
+            Type::DOUBLE => Column::Float(Vec::new()),
+            Type::BOOLEAN => Column::Bool(Vec::new()),
+            _ => Column::Blobs(Vec::new()),
+        }
+    }
 }
 
 /// Writes `columns` as a Parquet file of one row group (required columns, uncompressed), synced.
@@ -889,7 +934,7 @@ fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
             Column::Float(_) => format!("REQUIRED DOUBLE {name};"),
             Column::Bool(_) => format!("REQUIRED BOOLEAN {name};"),
             Column::Text(_) => format!("REQUIRED BYTE_ARRAY {name} (STRING);"),
-            Column::Bytes(_) => format!("REQUIRED BYTE_ARRAY {name};"),
+            Column::Bytes(_) | Column::Blobs(_) => format!("REQUIRED BYTE_ARRAY {name};"),
         })
         .collect();
     let schema = format!("message table {{ {} }}", fields.join(" "));
@@ -901,8 +946,18 @@ fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
     let schema = Arc::new(parquet::schema::parser::parse_message_type(&schema).map_err(failed)?);
     let file =
         File::create_new(path).map_err(|error| StoreError::Io { what: "creating", path: path.to_path_buf(), error })?;
-    let mut writer =
-        SerializedFileWriter::new(file, schema, Arc::new(WriterProperties::builder().build())).map_err(failed)?;
+    // Blobs are written plain, without statistics: hashing each one for a dictionary and
+    // comparing them for a minimum and maximum cost more than writing them, and find nothing.
+    let properties = columns.iter().filter(|(_, c)| matches!(c, Column::Bytes(_) | Column::Blobs(_))).fold(
+        WriterProperties::builder(),
+        |p, (name, _)| {
+            let path = parquet::schema::types::ColumnPath::from(*name);
+            p.set_column_dictionary_enabled(path.clone(), false)
+                .set_column_statistics_enabled(path.clone(), parquet::file::properties::EnabledStatistics::None)
+                .set_column_compression(path, parquet::basic::Compression::LZ4_RAW)
+        },
+    );
+    let mut writer = SerializedFileWriter::new(file, schema, Arc::new(properties.build())).map_err(failed)?;
     let mut group = writer.next_row_group().map_err(failed)?;
     for (_, column) in columns {
         let mut out = group.next_column().map_err(failed)?.expect("one writer per column of the schema");
@@ -918,6 +973,7 @@ fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
                 let v: Vec<ByteArray> = v.into_iter().map(ByteArray::from).collect();
                 out.typed::<ByteArrayType>().write_batch(&v, None, None)
             }
+            Column::Blobs(v) => out.typed::<ByteArrayType>().write_batch(&v, None, None),
         }
         .map_err(failed)?;
         out.close().map_err(failed)?;
@@ -927,31 +983,101 @@ fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
     file.sync_all().map_err(|error| StoreError::Io { what: "syncing", path: path.to_path_buf(), error })
 }
 
-/// The rows of a Parquet file.
-fn read_rows(path: &Path) -> Result<Vec<Row>> {
+/// A Parquet table read whole, column by column (the tables [`write_table`] writes: required
+/// columns of the five kinds of [`Column`]). Read with the column readers rather than the
+/// record API, which builds a row of named fields for every row: for the tiles' blobs and the
+/// pose files that costs more than decoding them.
+struct Table {
+    names: Vec<String>,
+    columns: Vec<Column>,
+    rows: usize,
+}
+
+/// Reads the Parquet file at `path` whole.
+fn read_table(path: &Path) -> Result<Table> {
+    use parquet::column::reader::ColumnReader;
     let failed =
         |e: parquet::errors::ParquetError| StoreError::Corrupt { path: path.to_path_buf(), reason: e.to_string() };
     let file = File::open(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
     let reader = SerializedFileReader::new(file).map_err(failed)?;
-    reader.get_row_iter(None).map_err(failed)?.map(|r| r.map_err(failed)).collect()
+    let metadata = reader.metadata();
+    let schema = metadata.file_metadata().schema_descr();
+    let names: Vec<String> = schema.columns().iter().map(|c| c.name().to_owned()).collect();
+    let rows = usize::try_from(metadata.file_metadata().num_rows()).unwrap_or(0);
+    let mut columns: Vec<Option<Column>> = (0..names.len()).map(|_| None).collect();
+    for g in 0..metadata.num_row_groups() {
+        let group = reader.get_row_group(g).map_err(failed)?;
+        let count = usize::try_from(group.metadata().num_rows()).unwrap_or(0);
+        for (c, column) in columns.iter_mut().enumerate() {
+            // Reads `count` values of a required column into `values`, or says what is wrong.
+            fn all<T: parquet::data_type::DataType>(
+                mut r: parquet::column::reader::ColumnReaderImpl<T>,
+                count: usize,
+                values: &mut Vec<T::T>,
+            ) -> std::result::Result<(), String> {
+                let before = values.len();
+                let (records, _, _) = r.read_records(count, None, None, values).map_err(|e| e.to_string())?;
+                if records != count || values.len() != before + count {
+                    return Err(format!("{} values of {count} rows", values.len() - before));
+                }
+                Ok(())
+            }
+            let reader = group.get_column_reader(c).map_err(failed)?;
+            let read = match (reader, column.get_or_insert_with(|| Column::empty_like(&schema.column(c)))) {
+                (ColumnReader::Int64ColumnReader(r), Column::Int(v)) => all(r, count, v),
+                (ColumnReader::DoubleColumnReader(r), Column::Float(v)) => all(r, count, v),
+                (ColumnReader::BoolColumnReader(r), Column::Bool(v)) => all(r, count, v),
+                (ColumnReader::ByteArrayColumnReader(r), Column::Blobs(v)) => all(r, count, v),
+                _ => Err("a column of a kind this store does not write".to_owned()),
+            };
+            read.map_err(|reason| {
+                failed(parquet::errors::ParquetError::General(format!("column {}: {reason}", names[c])))
+            })?;
+        }
+    }
+    let columns = columns.into_iter().map(|c| c.unwrap_or(Column::Int(Vec::new()))).collect();
+    Ok(Table { names, columns, rows })
 }
 
-/// Typed reads of a row, with one-line errors.
-trait Cells {
-    fn float(&self, i: usize) -> std::result::Result<f64, String>;
-    fn text(&self, i: usize) -> std::result::Result<&str, String>;
-    fn bytes(&self, i: usize) -> std::result::Result<&[u8], String>;
-}
-
-impl Cells for Row {
-    fn float(&self, i: usize) -> std::result::Result<f64, String> {
-        self.get_double(i).map_err(|e| format!("column {i}: {e}"))
+impl Table {
+    fn column(&self, i: usize) -> std::result::Result<&Column, String> {
+        self.columns.get(i).ok_or_else(|| format!("no column {i} (the table has {})", self.columns.len()))
     }
-    fn text(&self, i: usize) -> std::result::Result<&str, String> {
-        self.get_string(i).map(String::as_str).map_err(|e| format!("column {i}: {e}"))
+    fn wrong(&self, i: usize, kind: &str) -> String {
+        format!("column {} ({i}) is not {kind}", self.names[i])
     }
-    fn bytes(&self, i: usize) -> std::result::Result<&[u8], String> {
-        self.get_bytes(i).map(|b| b.data()).map_err(|e| format!("column {i}: {e}"))
+    fn int(&self, i: usize, k: usize) -> std::result::Result<i64, String> {
+        match self.column(i)? {
+            Column::Int(v) => Ok(v[k]),
+            _ => Err(self.wrong(i, "INT64")),
+        }
+    }
+    /// Cell (`k`, `i`) as an index (a non-negative INT64).
+    fn index(&self, i: usize, k: usize) -> std::result::Result<usize, String> {
+        let value = self.int(i, k)?;
+        usize::try_from(value).map_err(|_| format!("column {}: {value} is not an index", self.names[i]))
+    }
+    fn float(&self, i: usize, k: usize) -> std::result::Result<f64, String> {
+        match self.column(i)? {
+            Column::Float(v) => Ok(v[k]),
+            _ => Err(self.wrong(i, "DOUBLE")),
+        }
+    }
+    /// The values of a DOUBLE column.
+    fn floats(&self, i: usize) -> std::result::Result<&[f64], String> {
+        match self.column(i)? {
+            Column::Float(v) => Ok(v),
+            _ => Err(self.wrong(i, "DOUBLE")),
+        }
+    }
+    fn bytes(&self, i: usize, k: usize) -> std::result::Result<&[u8], String> {
+        match self.column(i)? {
+            Column::Blobs(v) => Ok(v[k].data()),
+            _ => Err(self.wrong(i, "BYTE_ARRAY")),
+        }
+    }
+    fn text(&self, i: usize, k: usize) -> std::result::Result<&str, String> {
+        std::str::from_utf8(self.bytes(i, k)?).map_err(|e| format!("column {}: {e}", self.names[i]))
     }
 }
 
@@ -990,21 +1116,19 @@ fn write_poses(path: &Path, t: &Trajectory) -> Result<()> {
 }
 
 fn read_poses(path: &Path) -> Result<Trajectory> {
-    let rows = read_rows(path)?;
+    let table = read_table(path)?;
     let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
-    let Some(first) = rows.first() else { return Err(corrupt("no poses".to_owned())) };
-    let width = first.len();
-    let dim = width.checked_sub(4).filter(|&d| d > 0).ok_or_else(|| corrupt(format!("{width} columns")))?;
-    let (mut times, mut cells, mut coords) = (Vec::new(), Vec::new(), Vec::new());
-    for (k, row) in rows.iter().enumerate() {
-        let cell = |i: usize| row.float(i).map_err(|e| corrupt(format!("row {k}: {e}")));
-        times.push(cell(1)?);
-        cells.push(cell(2)?);
-        for c in 0..dim {
-            coords.push(cell(3 + c)?);
-        }
+    if table.rows == 0 {
+        return Err(corrupt("no poses".to_owned()));
     }
-    let manifold = first.text(3 + dim).map_err(corrupt)?.to_owned();
+    let width = table.columns.len();
+    let dim = width.checked_sub(4).filter(|&d| d > 0).ok_or_else(|| corrupt(format!("{width} columns")))?;
+    let times = table.floats(1).map_err(corrupt)?;
+    let cells = table.floats(2).map_err(corrupt)?;
+    let axes =
+        (0..dim).map(|c| table.floats(3 + c)).collect::<std::result::Result<Vec<_>, String>>().map_err(corrupt)?;
+    let coords: Vec<f64> = (0..table.rows).flat_map(|k| axes.iter().map(move |a| a[k])).collect();
+    let manifold = table.text(3 + dim, 0).map_err(corrupt)?.to_owned();
     let state = serde_json::json!({
         "timestamps_s": times, "coords": coords, "dim": dim, "cell_widths_s": cells, "manifold": manifold,
     });

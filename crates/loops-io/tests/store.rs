@@ -9,7 +9,7 @@ use loops_core::{
     SampleSize, Sampler, SamplerKind, Trajectory, UrbanDrive, UrbanFleet,
     store::{FleetStore, StoreSession, StoreSettings},
 };
-use loops_io::store::{StoreConfig, read_samples, read_store, update_store, update_store_scanned};
+use loops_io::store::{StoreConfig, read_samples, read_store, update_opened_store, update_store, update_store_scanned};
 
 fn sessions() -> Vec<(String, Trajectory)> {
     let spec = UrbanFleet {
@@ -259,6 +259,57 @@ fn a_reopened_store_draws_and_updates_as_kept_in_memory_without_a_scan() {
     let drawn = without.store.samples(&without.store.loops().unwrap(), &sampler, between_only, &mut source).unwrap();
     assert_eq!(drawn.tiles_read, drawn.tiles_asked, "a state without draws reads every tile asked");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The files of a store's folder but its marker (which names its folder).
+fn state_files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    snapshot(dir).into_iter().filter(|(p, _)| p != Path::new("loops-store.json")).collect()
+}
+
+#[test]
+fn an_update_starts_from_the_opened_store_while_the_folder_holds_it() {
+    let (a, b) = (temp("opened-a"), temp("opened-b"));
+    let all = sessions();
+    let (day0, day1): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|(n, _)| n.ends_with("day0"));
+    for dir in [&a, &b] {
+        update_store(dir, Some(&config()), day0.clone(), &[]).unwrap();
+    }
+    // Current: the state's tables are not read again (a damaged one does not stop the update),
+    // and what is written is what an update that reads them writes.
+    let opened = read_store(&a).unwrap();
+    std::fs::write(a.join(&opened.state).join("tile_runs.parquet"), b"damaged").unwrap();
+    let from_opened = update_opened_store(opened, None, day1.clone(), &[], None).unwrap();
+    let from_folder = update_store(&b, None, day1.clone(), &[]).unwrap();
+    assert_eq!(from_opened.stored.store, from_folder.stored.store);
+    assert_eq!(state_files(&a), state_files(&b));
+
+    // Stale: the folder moved on (another update removed a session), so it is read.
+    let stale = read_store(&a).unwrap();
+    let first = vec![day0[0].clone()];
+    for dir in [&a, &b] {
+        update_store(dir, None, Vec::new(), &[first[0].0.clone()]).unwrap();
+    }
+    let from_stale = update_opened_store(stale, None, first.clone(), &[], None).unwrap();
+    assert!(!from_stale.update.changes_nothing(), "the removed session is added again");
+    assert_eq!(from_stale.stored.store, update_store(&b, None, first.clone(), &[]).unwrap().stored.store);
+    assert_eq!(state_files(&a), state_files(&b));
+
+    // A store made again in the same folder, up to the same state's name: read too.
+    let old = read_store(&a).unwrap();
+    for dir in [&a, &b] {
+        std::fs::remove_dir_all(dir).unwrap();
+        update_store(dir, Some(&config()), day1.clone(), &[]).unwrap();
+        update_store(dir, None, first.clone(), &[]).unwrap();
+        update_store(dir, None, Vec::new(), &[first[0].0.clone()]).unwrap();
+        update_store(dir, None, first.clone(), &[]).unwrap();
+    }
+    assert_eq!(read_store(&a).unwrap().state, old.state);
+    let from_old = update_opened_store(old, None, day0.clone(), &[], None).unwrap();
+    assert_eq!(from_old.stored.store, update_store(&b, None, day0.clone(), &[]).unwrap().stored.store);
+    assert_eq!(state_files(&a), state_files(&b));
+    for dir in [&a, &b] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }
 
 #[test]

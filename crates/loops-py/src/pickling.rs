@@ -30,9 +30,14 @@ use serde::de::{DeserializeOwned, IgnoredAny};
 /// The first element of every state.
 const MAGIC: &str = "inexact_loops";
 
-/// The version of the state layout. Raise it when a serialised type changes shape; an older
-/// version's state is then refused with a message naming both formats.
-const FORMAT: u32 = 1;
+/// The version of the state layout. Raise it when a serialised type changes shape; a state of
+/// a version outside [`OLDEST_FORMAT`]`..=FORMAT` is then refused with a message naming both.
+/// Format 2 packs long arrays of numbers (a sublevel set's runs) as bytes; format 1's arrays
+/// of numbers are still read.
+const FORMAT: u32 = 2;
+
+/// The oldest state layout this version reads.
+const OLDEST_FORMAT: u32 = 1;
 
 /// `(Class._from_state, (state,))` for `obj`, whose value `value` is serialised under `class`.
 pub(crate) fn reduce<'py, T: Serialize + ?Sized>(
@@ -162,9 +167,9 @@ pub(crate) fn restore<T: DeserializeOwned>(py: Python<'_>, class: &str, state: &
         rmp_serde::from_slice(state).map_err(|_| fail("not a pickled inexact_loops state".to_owned()))?;
     match header {
         (magic, _, _, _) if magic != MAGIC => Err(fail("not a pickled inexact_loops state".to_owned())),
-        (_, format, _, _) if format != FORMAT => Err(fail(format!(
+        (_, format, _, _) if !(OLDEST_FORMAT..=FORMAT).contains(&format) => Err(fail(format!(
             "it was pickled in state format {format} (by another version of inexact_loops); this version \
-             reads format {FORMAT}"
+             reads formats {OLDEST_FORMAT} to {FORMAT}"
         ))),
         (_, _, other, _) if other != class => Err(fail(format!("the state is of a {other}"))),
         _ => {

@@ -25,7 +25,7 @@ use loops_core::{
 };
 use loops_io::store::{
     StoreConfig, StoreError, StorePlan, StoredFleet, plan_store_update, read_samples, read_store, scan_store_tiles,
-    update_store, update_store_scanned,
+    update_opened_store, update_store, update_store_scanned,
 };
 
 /// A fleet's loops kept in a folder and updated at the cost of the new data: each
@@ -257,6 +257,8 @@ impl FleetStore {
     /// sessions named in ``remove``, in one update written atomically; a session given with the
     /// content it has in the store changes nothing. Scans only the tiles that hold an added or
     /// replaced session (reading the stored sessions they meet from the store's pose files).
+    /// Starts from the store as this object holds it while the folder still holds that state
+    /// (another process may have updated it since: the folder is then read again).
     ///
     /// The settings are fixed when the store is made: the first update gives ``gamma`` and
     /// whichever others it wants; a later one gives none (the store's own) or all of them as
@@ -359,19 +361,35 @@ impl FleetStore {
             sessions.into_iter().map(|(name, t)| (name, Arc::unwrap_or_clone(t.inner))).collect();
         let remove = remove.unwrap_or_default();
         let dir = self.dir.clone();
+        // The store as opened is where the update starts, unless the folder has moved on since
+        // (update_opened_store checks); after a failed update it is read again.
+        let opened = self.state.take().map(|s| s.stored);
         let state = detached(py, move || {
-            let scanned = scanned.map(|s| s.iter().map(|b| ScannedTile::from_bytes(b)).collect::<Result<Vec<_>, _>>());
-            let report = loops_core::with_threads(threads, || match scanned {
-                None => update_store(&dir, config.as_ref(), put, &remove),
-                Some(Ok(scanned)) => update_store_scanned(&dir, config.as_ref(), put, &remove, scanned),
-                Some(Err(e)) => Err(e.into()),
+            let scanned = scanned
+                .map(|s| s.iter().map(|b| ScannedTile::from_bytes(b)).collect::<Result<Vec<_>, _>>())
+                .transpose()?;
+            let report = loops_core::with_threads(threads, || match (opened, scanned) {
+                (Some(opened), scanned) => update_opened_store(opened, config.as_ref(), put, &remove, scanned),
+                (None, None) => update_store(&dir, config.as_ref(), put, &remove),
+                (None, Some(scanned)) => update_store_scanned(&dir, config.as_ref(), put, &remove, scanned),
             })??;
             // Samples written with the state, else (nothing written) read from its table.
             let written = !report.update.changes_nothing();
             let samples = written.then(|| report.samples.map(|s| s.rows).unwrap_or_default());
             Ok::<_, Failure>((State::new(report.stored, Some(report.loops), samples)?, report.update))
-        })?;
-        let (state, update) = state;
+        });
+        let (state, update) = match state {
+            Ok(done) => done,
+            Err(error) => {
+                let dir = self.dir.clone();
+                self.state = detached(py, move || {
+                    let made = dir.join("store.json").is_file();
+                    made.then(|| State::new(read_store(&dir)?, None, None)).transpose()
+                })
+                .unwrap_or(None);
+                return Err(error);
+            }
+        };
         let update = update_dict(py, &update)?;
         self.state = Some(state);
         Ok(update)

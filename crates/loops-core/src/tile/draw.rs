@@ -54,13 +54,17 @@ pub struct TileRuns {
     gamma: f64,
     separation: Separation,
     set: crate::sublevel::SublevelSet,
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     piece_starts: Vec<usize>,
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     fleet_starts: Vec<usize>,
     rows: usize,
     piece_len: usize,
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     provisional: Vec<u32>,
     components: u32,
     /// The first and last piece row of each provisional component.
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     spans: Vec<[u32; 2]>,
 }
 
@@ -389,8 +393,10 @@ pub struct TileDuration {
     /// The tile.
     pub tile: Tile,
     /// Stretches of rows: (offset from the tile's first row, seconds per row).
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed::stretches"))]
     pub rows: Vec<(usize, Vec<f64>)>,
     /// Stretches of columns: (offset from the tile's first column, seconds per column).
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed::stretches"))]
     pub columns: Vec<(usize, Vec<f64>)>,
 }
 
