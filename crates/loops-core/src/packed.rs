@@ -255,6 +255,56 @@ pub(crate) mod lists {
     }
 }
 
+/// A `Vec<usize>` of offsets (from 0, not decreasing: where each row's items start, and their
+/// number last), packed as each row's count, a little-endian `u32` (most rows of a tile are
+/// empty: 4 bytes of zeros, where the offsets take 8); read back from either that or an array
+/// of the offsets. Offsets that do not start at 0 or count more than `u32::MAX` in a row are
+/// written as the array.
+pub(crate) mod offsets {
+    use super::*;
+
+    pub(crate) fn serialize<S: Serializer>(offsets: &[usize], serializer: S) -> Result<S::Ok, S::Error> {
+        let counts: Option<Vec<u32>> = (offsets.first() == Some(&0))
+            .then(|| offsets.windows(2).map(|w| w[1].checked_sub(w[0]).and_then(|c| u32::try_from(c).ok())).collect())
+            .flatten();
+        match counts {
+            Some(counts) if !serializer.is_human_readable() => super::serialize(&counts, serializer),
+            _ => offsets.serialize(serializer),
+        }
+    }
+
+    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<usize>, D::Error> {
+        deserializer.deserialize_any(Counts)
+    }
+
+    /// Reads counts (packed) or offsets (an array).
+    struct Counts;
+
+    impl<'de> Visitor<'de> for Counts {
+        type Value = Vec<usize>;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("packed counts of 4 bytes, or an array of offsets")
+        }
+
+        fn visit_bytes<E: de::Error>(self, bytes: &[u8]) -> Result<Vec<usize>, E> {
+            let counts: Vec<u32> = Values(PhantomData).visit_bytes(bytes)?;
+            let mut offsets = Vec::with_capacity(counts.len() + 1);
+            let mut at = 0usize;
+            offsets.push(at);
+            for c in counts {
+                at = at.checked_add(c as usize).ok_or_else(|| E::custom("row counts overflow"))?;
+                offsets.push(at);
+            }
+            Ok(offsets)
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Vec<usize>, A::Error> {
+            Values(PhantomData).visit_seq(seq)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -305,6 +355,33 @@ mod tests {
         let json = serde_json::to_string(&h).unwrap();
         assert_eq!(json, serde_json::to_string(&plain).unwrap());
         assert_eq!(serde_json::from_str::<Holder>(&json).unwrap(), h);
+    }
+
+    #[test]
+    fn offsets_are_packed_as_counts_and_read_back_from_either() {
+        #[derive(Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        struct Set {
+            #[serde(with = "crate::packed::offsets")]
+            offsets: Vec<usize>,
+        }
+        #[derive(serde::Serialize)]
+        struct Plain {
+            offsets: Vec<usize>,
+        }
+        for offsets in [vec![0, 0, 3, 3, 4], vec![0], vec![], vec![2, 5], vec![0, 1usize << 40]] {
+            let set = Set { offsets: offsets.clone() };
+            let bytes = rmp_serde::to_vec(&set).unwrap();
+            assert_eq!(rmp_serde::from_slice::<Set>(&bytes).unwrap(), set, "{offsets:?}");
+            let plain = rmp_serde::to_vec(&Plain { offsets: offsets.clone() }).unwrap();
+            assert_eq!(rmp_serde::from_slice::<Set>(&plain).unwrap(), set, "{offsets:?}");
+            let json = serde_json::to_string(&set).unwrap();
+            assert_eq!(json, serde_json::to_string(&Plain { offsets: offsets.clone() }).unwrap());
+            // Counts (4 bytes a row) where they are offsets from 0 that fit, else the array.
+            let packed = offsets.first() == Some(&0) && offsets.windows(2).all(|w| w[1] - w[0] <= u32::MAX as usize);
+            assert_eq!(bytes != plain, packed, "{offsets:?}");
+        }
+        let counts = [0u32, 2, 0, 1].iter().flat_map(|c| c.to_le_bytes()).collect::<Vec<u8>>();
+        assert!(rmp_serde::to_vec(&Set { offsets: vec![0, 0, 2, 2, 3] }).unwrap().ends_with(&counts));
     }
 
     #[test]

@@ -66,7 +66,7 @@ impl Run {
 pub struct SublevelSet {
     gamma: f64,
     separation: Separation,
-    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed::offsets"))]
     row_offsets: Vec<usize>,
     #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     runs: Vec<Run>,
@@ -1030,7 +1030,7 @@ pub(crate) fn closest_column<M: Metric + ?Sized>(
 struct SublevelSetState {
     gamma: f64,
     separation: Separation,
-    #[serde(with = "crate::packed")]
+    #[serde(with = "crate::packed::offsets")]
     row_offsets: Vec<usize>,
     #[serde(with = "crate::packed")]
     runs: Vec<Run>,
