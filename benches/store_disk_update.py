@@ -5,9 +5,9 @@ The fleet of ``store_days`` (4 vehicles x 31 days of 5-minute drives in a 1 km c
 gamma = 10 m, blocks of 50,000 poses, sigma_rho with a budget of 500): days 1 to 30 are stored
 in one update, then, in a fresh copy of that folder each round, day 31 is added
 (``FleetStore.open`` and ``update``: the state read, pose files read back, tiles scanned, the
-new state's tables written) and timed against ``find_fleet_loops`` + ``sample_fleet`` of all
-31 days in memory. Prints one line a round and the sizes of the state's tables (BENCHMARKS.md,
-"Fleet store")::
+new state's tables and tile part written, the stored parts linked) and timed against
+``find_fleet_loops`` + ``sample_fleet`` of all 31 days in memory. Prints one line a round and
+the sizes of the state's tables (BENCHMARKS.md, "Fleet store")::
 
     python benches/store_disk_update.py [ROUNDS]
 """
@@ -59,8 +59,9 @@ def main(rounds: int) -> None:
             f"ratio {day / in_memory:.3f}"
         )
     state = max(copy.glob("state-*"))
-    for table in sorted(state.glob("*.parquet"), key=lambda p: p.stat().st_size):
-        print(f"{table.name}: {table.stat().st_size / 1e6:.1f} MB")
+    tables = [*state.glob("*.parquet"), *state.glob("tiles/*.parquet")]
+    for table in sorted(tables, key=lambda p: p.stat().st_size):
+        print(f"{table.relative_to(state)}: {table.stat().st_size / 1e6:.1f} MB")
     shutil.rmtree(folder.parent)
 
 

@@ -155,13 +155,21 @@ def test_duckdb_pandas_and_pyarrow_read_what_find_fleet_loops_finds(tmp_path: Pa
     np.testing.assert_allclose(tau["own_s"], want_tau["own_s"], rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(tau["other_s"], want_tau["other_s"], rtol=1e-9, atol=1e-9)
 
-    # The blobs of what the answer is made of (LZ4-compressed columns) read back alike in
-    # DuckDB and pyarrow, each with its tag.
-    for table, column, tag in (("tiles", "summary", b"ILts"), ("tile_runs", "runs", b"ILtr")):
-        path = (state / f"{table}.parquet").as_posix()
-        blobs = [bytes(b) for (b,) in sql(f"SELECT {column} FROM '{path}'").fetchall()]
-        assert blobs == pq.read_table(path)[column].to_pylist()
-        assert blobs and all(b[:4] == tag for b in blobs), table
+    # The tiles, by part (the first day's, then the second day's new tiles), and their blobs
+    # (LZ4-compressed columns) read back alike in DuckDB and pyarrow, each with its tag.
+    parts = sorted(p.name for p in (state / "tiles").iterdir())
+    assert parts == ["000001.parquet", "000002.parquet"], parts
+    tiles = (state / "tiles").as_posix()
+    (count,) = sql(f"SELECT count(*) FROM '{tiles}/*.parquet'").fetchone()
+    assert count == store.last_update["tiles_kept"] + store.last_update["tiles_scanned"]
+    for column, tag in (("summary", b"ILts"), ("runs", b"ILtr")):
+        rows = sql(
+            f"SELECT {column} FROM read_parquet('{tiles}/*.parquet', filename = true, "
+            "file_row_number = true) ORDER BY filename, file_row_number"
+        ).fetchall()
+        blobs = [bytes(b) for (b,) in rows]
+        assert blobs == pq.read_table(tiles)[column].to_pylist()
+        assert blobs and all(b[:4] == tag for b in blobs if b), column
 
     # The Python tables are those of find_fleet_loops, and a store read back is the same.
     assert_same_answer(store, all_sessions)

@@ -75,8 +75,11 @@ use crate::trajectory::{Manifold, Trajectory};
 
 /// The version of a store's layout (its tables and their meaning). Version 2 adds what a
 /// store keeps of its answer (the merge of each session pair's tiles, the runs of each tile);
-/// a store of version 1 reads back without them, one of a later version is refused.
-pub const STORE_FORMAT_VERSION: u16 = 2;
+/// version 3 keeps its tiles by part, each tile in its sessions' own indices
+/// ([`StoredTile::local`]), so that an update writes only the parts that change. Stores of
+/// versions 1 and 2 read back (version 1 without what it keeps of its answer); one of a later
+/// version is refused.
+pub const STORE_FORMAT_VERSION: u16 = 3;
 
 /// What a store's answer depends on, fixed when the store is made.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -227,6 +230,24 @@ impl StoredTile {
     /// The tile.
     pub fn tile(&self) -> &Tile {
         &self.summary.tile
+    }
+
+    /// The tile as a fleet of its two sessions alone holds it, each from pose 0 (sessions
+    /// `[0, 0]` within one session, else `[0, 1]`), given where its sessions start in the
+    /// store's fleet: what stays the same while other sessions come and go, and what a store
+    /// saves of a tile. [`placed`](Self::placed) puts it back. O(its components and edge runs).
+    pub fn local(&self, starts: [usize; 2]) -> Self {
+        let [a, b] = self.tile().sessions;
+        let mut local = self.clone();
+        local.move_to([0, usize::from(a != b)], [-(starts[0] as isize), -(starts[1] as isize)]);
+        local
+    }
+
+    /// A tile of [`local`](Self::local) form placed as the tile of the store's sessions
+    /// `sessions`, which start at `starts` in its fleet. O(its components and edge runs).
+    pub fn placed(mut self, sessions: [usize; 2], starts: [usize; 2]) -> Self {
+        self.move_to(sessions, [starts[0] as isize, starts[1] as isize]);
+        self
     }
 
     /// Renumbers the tile's sessions `sessions` and moves its rows and columns by `shifts`
@@ -1920,8 +1941,9 @@ fn read_sessions(
     Ok(read)
 }
 
-/// The first fleet index of each session.
-fn starts_of(sessions: &[StoreSession]) -> Vec<usize> {
+/// The first fleet index of each of `sessions` (in the store's order): where
+/// [`StoredTile::placed`] puts a tile of theirs.
+pub fn starts_of(sessions: &[StoreSession]) -> Vec<usize> {
     let mut next = 0;
     sessions
         .iter()

@@ -4,12 +4,13 @@
 //! ```text
 //! DIR/
 //!   loops-store.json      the ownership marker (out_dir::STORE)
-//!   store.json            {"format": "inexact-loops fleet store", "version": 2, "state": "state-000003"}
+//!   store.json            {"format": "inexact-loops fleet store", "version": 3, "state": "state-000003"}
 //!   state-000003/         the current state, complete
 //!     settings.json       metric, gamma, separation, block, sampler, what the last update did
 //!     sessions.parquet    session, name, fingerprint, poses, t_first_s, t_last_s, span_s, dim, manifold, blocks
-//!     tiles.parquet       a, b, rows_start, rows_end, columns_start, columns_end, components, summary, duration
-//!     tile_runs.parquet   tile, a, b, run_count, runs          (version 2)
+//!     tiles/GENERATION.parquet  session_a, session_b, fingerprint_a, fingerprint_b, rows_start, rows_end,
+//!                         columns_start, columns_end, components, run_count, summary, duration, runs
+//!                                                          (version 3; before: tiles.parquet, tile_runs.parquet)
 //!     merges.parquet      a, b, tiles, components, merge       (version 2)
 //!     draws.parquet       seed, draw                           (version 2, optional)
 //!     components.parquet  id, session_a, session_b, a, b, trivial, area_s2, pair_count, run_count, holes,
@@ -26,9 +27,21 @@
 //! ([`loops_core::tile::TileSummary::to_bytes`]). `added` marks the components of the sessions the
 //! last update added or replaced.
 //!
-//! **What the answer is made of** (version 2). `tile_runs.parquet` holds the runs of each tile
-//! (`tile` its row in `tiles.parquet`; [`loops_core::tile::TileRuns::to_bytes`], about 16 bytes a run),
-//! and `merges.parquet` the merge of each session pair's tiles
+//! **Tiles by part** (version 3). The folder `tiles` holds the store's tiles in parts, each
+//! tile once, with its summary, its share of τ and its runs
+//! ([`loops_core::tile::TileRuns::to_bytes`], about 16 bytes a run; `runs` empty and
+//! `run_count` −1 where a tile keeps none), each in its two sessions' own indices
+//! ([`StoredTile::local`]: as a fleet of those two sessions alone, each from pose 0) and named
+//! by its sessions' names and fingerprints, so that a tile's bytes do not change when other
+//! sessions come and go. An update links every part of the old state whose tiles are all
+//! still the store's and writes the rest (the tiles it scanned, and those of parts that held a
+//! replaced or removed session's tiles) as one new part named by the new state's generation:
+//! adding a day writes that day's tiles, not the fleet's. Stores of version 2 kept the tiles
+//! in `tiles.parquet` and their runs in `tile_runs.parquet` (`tile` its row in `tiles.parquet`),
+//! in fleet indices; they still read, and their next update writes version 3.
+//!
+//! **What the answer is made of** (version 2). Each tile's runs (above), and `merges.parquet`
+//! the merge of each session pair's tiles
 //! ([`loops_core::tile::MergedLoops::to_bytes`]). A store read back with them draws its samples and
 //! makes its next update without scanning a stored tile or merging a stored pair again
 //! ([`FleetStore::from_saved`]). A store of version 1 (without them) still reads: it merges
@@ -140,6 +153,39 @@ pub struct StoredFleet {
     pub store: FleetStore,
     /// Its sampler.
     pub config: StoreConfig,
+    /// The files of its state's `tiles/` folder, with the tiles each holds (none for a state
+    /// of layout 1 or 2, whose tiles are in one table).
+    parts: Vec<TilePart>,
+}
+
+/// A tile's name in a store's folder: its sessions (name and fingerprint: a replaced session's
+/// tiles are not its new ones) and its first row and column in their own indices.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct TileKey {
+    names: [String; 2],
+    fingerprints: [u64; 2],
+    at: [usize; 2],
+}
+
+impl TileKey {
+    /// The name of the store's tile `k`.
+    fn of(store: &FleetStore, starts: &[usize], k: usize) -> Self {
+        let tile = store.tiles()[k].tile();
+        let [a, b] = tile.sessions;
+        let s = store.sessions();
+        TileKey {
+            names: [s[a].name.clone(), s[b].name.clone()],
+            fingerprints: [s[a].fingerprint, s[b].fingerprint],
+            at: [tile.rows.start - starts[a], tile.columns.start - starts[b]],
+        }
+    }
+}
+
+/// A file of a state's `tiles/` folder and the tiles it holds.
+#[derive(Debug, Clone)]
+struct TilePart {
+    file: String,
+    keys: Vec<TileKey>,
 }
 
 impl StoredFleet {
@@ -313,6 +359,14 @@ fn pose_file(session: &StoreSession) -> String {
 pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     let Head { pointer, file, config, sessions } = read_head(dir)?;
     let state = dir.join(&pointer.state);
+    let last_update = file.last_update.into();
+    if file.version >= 3 {
+        let (tiles, runs, parts) = read_parts(&state.join("tiles"), &sessions)?;
+        let merges = read_merges(&state.join("merges.parquet"))?;
+        let store = FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?;
+        read_draws(&state.join("draws.parquet"), &store)?;
+        return Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts });
+    }
     let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
     let tiles_path = state.join("tiles.parquet");
     let table = read_table(&tiles_path)?;
@@ -324,7 +378,6 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         })
         .collect::<std::result::Result<Vec<_>, String>>()
         .map_err(|reason| corrupt(&tiles_path, reason))?;
-    let last_update = file.last_update.into();
     let store = if file.version < 2 {
         FleetStore::from_parts(config.settings, sessions, tiles, last_update)?
     } else {
@@ -333,7 +386,75 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         read_draws(&state.join("draws.parquet"), &store)?;
         store
     };
-    Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config })
+    Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts: Vec::new() })
+}
+
+/// A state's tiles, their runs (each where kept) and the parts that hold them.
+type StoredParts = (Vec<StoredTile>, Vec<Option<TileRuns>>, Vec<TilePart>);
+
+/// The tiles of a state of layout 3 (the parts in its folder `tiles`), placed in the fleet of
+/// `sessions`, in plan order, with their runs, and the parts that hold them. Tiles decoded in
+/// parallel.
+fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
+    use rayon::prelude::*;
+    let mut files: Vec<String> = std::fs::read_dir(folder)
+        .and_then(|list| list.map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned())).collect())
+        .map_err(|error| StoreError::Io { what: "listing", path: folder.to_path_buf(), error })?;
+    files.retain(|f| f.ends_with(".parquet"));
+    files.sort_unstable();
+    let index: std::collections::HashMap<&str, usize> =
+        sessions.iter().enumerate().map(|(k, s)| (s.name.as_str(), k)).collect();
+    let starts = loops_core::store::starts_of(sessions);
+    let mut placed: Vec<(StoredTile, Option<TileRuns>)> = Vec::new();
+    let mut parts = Vec::with_capacity(files.len());
+    for file in files {
+        let path = folder.join(&file);
+        let table = read_table(&path)?;
+        let read = (0..table.rows)
+            .into_par_iter()
+            .map(|k| -> std::result::Result<(TileKey, StoredTile, Option<TileRuns>), String> {
+                let row_of = |e: String| format!("row {k}: {e}");
+                let mut pair = [0; 2];
+                let mut fingerprints = [0; 2];
+                for side in 0..2 {
+                    let name = table.text(side, k).map_err(row_of)?;
+                    let text = table.text(2 + side, k).map_err(row_of)?;
+                    let fingerprint =
+                        u64::from_str_radix(text, 16).map_err(|e| row_of(format!("fingerprint {text:?}: {e}")))?;
+                    let s = *index.get(name).ok_or_else(|| row_of(format!("session {name:?} is not in the store")))?;
+                    if sessions[s].fingerprint != fingerprint {
+                        return Err(row_of(format!(
+                            "a tile of session {name:?} as it was before (fingerprint {text})"
+                        )));
+                    }
+                    (pair[side], fingerprints[side]) = (s, fingerprint);
+                }
+                let summary = TileSummary::from_bytes(table.bytes(10, k)?).map_err(|e| row_of(e.to_string()))?;
+                let duration = TileDuration::from_bytes(table.bytes(11, k)?).map_err(|e| row_of(e.to_string()))?;
+                let local = StoredTile { summary, duration };
+                let runs = match table.bytes(12, k)? {
+                    [] => None,
+                    bytes => Some(TileRuns::from_bytes(bytes).map_err(|e| row_of(e.to_string()))?),
+                };
+                let at = [local.tile().rows.start, local.tile().columns.start];
+                let names = [sessions[pair[0]].name.clone(), sessions[pair[1]].name.clone()];
+                let place = [starts[pair[0]], starts[pair[1]]];
+                let runs = runs.map(|r| r.placed(pair, place));
+                Ok((TileKey { names, fingerprints, at }, local.placed(pair, place), runs))
+            })
+            .collect::<std::result::Result<Vec<_>, String>>()
+            .map_err(|reason| StoreError::Corrupt { path: path.clone(), reason })?;
+        let mut keys = Vec::with_capacity(read.len());
+        for (key, tile, runs) in read {
+            keys.push(key);
+            placed.push((tile, runs));
+        }
+        parts.push(TilePart { file, keys });
+    }
+    // Plan order: by row block, then column block (fleet indices order both).
+    placed.sort_by_key(|(t, _)| (t.tile().rows.start, t.tile().columns.start));
+    let (tiles, runs) = placed.into_iter().unzip();
+    Ok((tiles, runs, parts))
 }
 
 /// What a state's small files say: `store.json`, `settings.json` and `sessions.parquet`.
@@ -399,18 +520,7 @@ const READABLE_VERSIONS: std::ops::RangeInclusive<u16> = 1..=loops_core::store::
 /// What a state keeps of its answer: the merges (`merges.parquet`) and the runs of each of its
 /// `tiles` tiles (`tile_runs.parquet`).
 fn read_kept(state: &Path, tiles: usize) -> Result<KeptParts> {
-    let merges_path = state.join("merges.parquet");
-    let table = read_table(&merges_path)?;
-    let merges = (0..table.rows)
-        .map(|k| -> std::result::Result<([usize; 2], MergedLoops), String> {
-            let row_of = |e: String| format!("row {k}: {e}");
-            let pair = [table.index(0, k).map_err(row_of)?, table.index(1, k).map_err(row_of)?];
-            let merge =
-                MergedLoops::from_bytes(table.bytes(4, k).map_err(row_of)?).map_err(|e| row_of(e.to_string()))?;
-            Ok((pair, merge))
-        })
-        .collect::<std::result::Result<Vec<_>, String>>()
-        .map_err(|reason| StoreError::Corrupt { path: merges_path.clone(), reason })?;
+    let merges = read_merges(&state.join("merges.parquet"))?;
     let runs_path = state.join("tile_runs.parquet");
     let mut runs: Vec<Option<TileRuns>> = vec![None; tiles];
     let table = read_table(&runs_path)?;
@@ -426,6 +536,21 @@ fn read_kept(state: &Path, tiles: usize) -> Result<KeptParts> {
         }
     }
     Ok((merges, runs))
+}
+
+/// The merge of each session pair's tiles (`merges.parquet`).
+fn read_merges(path: &Path) -> Result<Vec<([usize; 2], MergedLoops)>> {
+    let table = read_table(path)?;
+    (0..table.rows)
+        .map(|k| -> std::result::Result<([usize; 2], MergedLoops), String> {
+            let row_of = |e: String| format!("row {k}: {e}");
+            let pair = [table.index(0, k).map_err(row_of)?, table.index(1, k).map_err(row_of)?];
+            let merge =
+                MergedLoops::from_bytes(table.bytes(4, k).map_err(row_of)?).map_err(|e| row_of(e.to_string()))?;
+            Ok((pair, merge))
+        })
+        .collect::<std::result::Result<Vec<_>, String>>()
+        .map_err(|reason| StoreError::Corrupt { path: path.to_path_buf(), reason })
 }
 
 /// What the last draws of a state found (`draws.parquet`, where there is one), given to `store`.
@@ -693,13 +818,13 @@ fn update_with(
             out.remove(&name)?;
         }
     }
-    let (mut store, config, old_state) = match (current, config) {
+    let (mut store, config, old_state, old_parts) = match (current, config) {
         (Some(c), Some(given)) => {
             check_same(dir, &c.config, given)?;
-            (c.store, c.config, Some(c.state))
+            (c.store, c.config, Some(c.state), c.parts)
         }
-        (Some(c), None) => (c.store, c.config, Some(c.state)),
-        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None),
+        (Some(c), None) => (c.store, c.config, Some(c.state), c.parts),
+        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None, Vec::new()),
         (None, None) => {
             return Err(StoreError::NotAStore { path: dir.to_path_buf() });
         }
@@ -760,8 +885,9 @@ fn update_with(
     }
     let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
     write_sessions(&staged.join("sessions.parquet"), &store)?;
-    write_tiles(&staged.join("tiles.parquet"), &store)?;
-    write_tile_runs(&staged.join("tile_runs.parquet"), &store)?;
+    let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
+    let old_tiles = old_state.as_ref().map(|s| dir.join(s).join("tiles"));
+    let parts = write_parts(&staged.join("tiles"), old_tiles.as_deref(), &old_parts, &store, generation)?;
     write_merges(&staged.join("merges.parquet"), &store)?;
     write_draws(&staged.join("draws.parquet"), &store)?;
     let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
@@ -776,7 +902,6 @@ fn update_with(
     crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
 
     // Placed under a new name, then pointed at in one rename, then the old state removed.
-    let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
     let state = format!("state-{generation:06}");
     out.place(&staged, &state, true)?;
     let pointer = Pointer {
@@ -797,7 +922,7 @@ fn update_with(
         added_components: added.len(),
         samples,
         loops,
-        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config },
+        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config, parts },
     };
     Ok(report)
 }
@@ -1154,38 +1279,111 @@ fn write_sessions(path: &Path, store: &FleetStore) -> Result<()> {
     )
 }
 
-fn write_tiles(path: &Path, store: &FleetStore) -> Result<()> {
-    let t = store.tiles();
-    let tile = |f: &dyn Fn(&loops_core::tile::Tile) -> usize| ints(t.iter().map(|x| f(x.tile())));
-    write_table(
-        path,
-        vec![
-            ("a", tile(&|x| x.sessions[0])),
-            ("b", tile(&|x| x.sessions[1])),
-            ("rows_start", tile(&|x| x.rows.start)),
-            ("rows_end", tile(&|x| x.rows.end)),
-            ("columns_start", tile(&|x| x.columns.start)),
-            ("columns_end", tile(&|x| x.columns.end)),
-            ("components", ints(t.iter().map(|x| x.summary.components.len()))),
-            ("summary", Column::Bytes(t.iter().map(|x| x.summary.to_bytes()).collect())),
-            ("duration", Column::Bytes(t.iter().map(|x| x.duration.to_bytes()).collect())),
-        ],
-    )
-}
+/// The most parts a state's folder `tiles` holds: beyond it, an update writes the tiles of its
+/// smallest kept parts again, with its own, so that a store updated every day for years reads
+/// a bounded number of files.
+const MAX_TILE_PARTS: usize = 32;
 
-/// `tile_runs.parquet`: the runs of each tile that has them, by its row in `tiles.parquet`.
-fn write_tile_runs(path: &Path, store: &FleetStore) -> Result<()> {
-    let runs: Vec<(usize, &TileRuns)> = store.kept_runs().enumerate().filter_map(|(k, r)| Some((k, r?))).collect();
+/// The store's tiles as the parts of a state's folder `tiles` (created here): each part of
+/// the old state (in `old`) whose tiles are all still the store's is linked (copied where a
+/// link cannot be made), the other tiles written anew, each in its sessions' own indices
+/// ([`StoredTile::local`]), as one part named by the state's `generation`. An update that adds
+/// sessions writes only the tiles it scanned; one that replaces or removes a session also
+/// writes again the other tiles of the parts that held that session's tiles; and where more
+/// than [`MAX_TILE_PARTS`] would be left, the smallest kept parts are written again too.
+/// Returns the parts.
+fn write_parts(
+    folder: &Path,
+    old: Option<&Path>,
+    old_parts: &[TilePart],
+    store: &FleetStore,
+    generation: u64,
+) -> Result<Vec<TilePart>> {
+    use rayon::prelude::*;
+    std::fs::create_dir_all(folder).map_err(|error| StoreError::Io {
+        what: "creating",
+        path: folder.to_path_buf(),
+        error,
+    })?;
+    let starts = store.starts();
+    let keys: Vec<TileKey> = (0..store.tiles().len()).map(|k| TileKey::of(store, &starts, k)).collect();
+    let mut unwritten: std::collections::HashMap<&TileKey, usize> =
+        keys.iter().enumerate().map(|(k, key)| (key, k)).collect();
+    let mut kept: Vec<&TilePart> =
+        old_parts.iter().filter(|p| old.is_some() && p.keys.iter().all(|key| unwritten.contains_key(key))).collect();
+    // The largest first; the new part makes one more.
+    kept.sort_by_key(|p| std::cmp::Reverse(p.keys.len()));
+    kept.truncate(MAX_TILE_PARTS - 1);
+    let mut parts = Vec::new();
+    for (part, old) in kept.into_iter().filter_map(|p| Some((p, old?))) {
+        let (from, to) = (old.join(&part.file), folder.join(&part.file));
+        if std::fs::hard_link(&from, &to).is_err() {
+            std::fs::copy(&from, &to).map_err(|error| StoreError::Io { what: "copying", path: from.clone(), error })?;
+        }
+        for key in &part.keys {
+            unwritten.remove(key);
+        }
+        parts.push(part.clone());
+    }
+    parts.sort_by(|a, b| a.file.cmp(&b.file));
+    let mut new: Vec<usize> = unwritten.into_values().collect();
+    if new.is_empty() {
+        crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
+            what: "syncing",
+            path: folder.to_path_buf(),
+            error,
+        })?;
+        return Ok(parts);
+    }
+    new.sort_unstable();
+    let runs: Vec<Option<&TileRuns>> = store.kept_runs().collect();
+    // Each new tile's blobs in its sessions' own indices, in parallel.
+    let blobs: Vec<[Vec<u8>; 3]> = new
+        .par_iter()
+        .map(|&k| {
+            let t = &store.tiles()[k];
+            let [a, b] = t.tile().sessions;
+            let local = t.local([starts[a], starts[b]]);
+            let runs = runs[k].map_or_else(Vec::new, |r| r.local().to_bytes());
+            [local.summary.to_bytes(), local.duration.to_bytes(), runs]
+        })
+        .collect();
+    let tile = |k: usize| store.tiles()[k].tile();
+    let side = |f: &dyn Fn(&TileKey) -> String| Column::Text(new.iter().map(|&k| f(&keys[k])).collect());
+    let local = |f: &dyn Fn(usize) -> usize| ints(new.iter().map(|&k| f(k)));
+    let start = |k: usize, side: usize| starts[tile(k).sessions[side]];
+    let (mut summaries, mut durations, mut all_runs) = (Vec::new(), Vec::new(), Vec::new());
+    for [summary, duration, runs] in blobs {
+        summaries.push(summary);
+        durations.push(duration);
+        all_runs.push(runs);
+    }
+    let file = format!("{generation:06}.parquet");
     write_table(
-        path,
+        &folder.join(&file),
         vec![
-            ("tile", ints(runs.iter().map(|(k, _)| *k))),
-            ("a", ints(runs.iter().map(|(_, r)| r.tile().sessions[0]))),
-            ("b", ints(runs.iter().map(|(_, r)| r.tile().sessions[1]))),
-            ("run_count", ints(runs.iter().map(|(_, r)| r.run_count()))),
-            ("runs", Column::Bytes(runs.iter().map(|(_, r)| r.to_bytes()).collect())),
+            ("session_a", side(&|key| key.names[0].clone())),
+            ("session_b", side(&|key| key.names[1].clone())),
+            ("fingerprint_a", side(&|key| format!("{:016x}", key.fingerprints[0]))),
+            ("fingerprint_b", side(&|key| format!("{:016x}", key.fingerprints[1]))),
+            ("rows_start", local(&|k| tile(k).rows.start - start(k, 0))),
+            ("rows_end", local(&|k| tile(k).rows.end - start(k, 0))),
+            ("columns_start", local(&|k| tile(k).columns.start - start(k, 1))),
+            ("columns_end", local(&|k| tile(k).columns.end - start(k, 1))),
+            ("components", ints(new.iter().map(|&k| store.tiles()[k].summary.components.len()))),
+            ("run_count", Column::Int(new.iter().map(|&k| runs[k].map_or(-1, |r| r.run_count() as i64)).collect())),
+            ("summary", Column::Bytes(summaries)),
+            ("duration", Column::Bytes(durations)),
+            ("runs", Column::Bytes(all_runs)),
         ],
-    )
+    )?;
+    crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
+        what: "syncing",
+        path: folder.to_path_buf(),
+        error,
+    })?;
+    parts.push(TilePart { file, keys: new.into_iter().map(|k| keys[k].clone()).collect() });
+    Ok(parts)
 }
 
 /// `draws.parquet`: what the store's last draws found in its tiles, by seed.

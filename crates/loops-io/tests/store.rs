@@ -277,7 +277,7 @@ fn an_update_starts_from_the_opened_store_while_the_folder_holds_it() {
     // Current: the state's tables are not read again (a damaged one does not stop the update),
     // and what is written is what an update that reads them writes.
     let opened = read_store(&a).unwrap();
-    std::fs::write(a.join(&opened.state).join("tile_runs.parquet"), b"damaged").unwrap();
+    std::fs::write(a.join(&opened.state).join("merges.parquet"), b"damaged").unwrap();
     let from_opened = update_opened_store(opened, None, day1.clone(), &[], None).unwrap();
     let from_folder = update_store(&b, None, day1.clone(), &[]).unwrap();
     assert_eq!(from_opened.stored.store, from_folder.stored.store);
@@ -312,14 +312,56 @@ fn an_update_starts_from_the_opened_store_while_the_folder_holds_it() {
     }
 }
 
+/// Copies the folder `from` to `to`.
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let path = entry.unwrap().path();
+        let target = to.join(path.file_name().unwrap());
+        if path.is_dir() { copy_dir(&path, &target) } else { std::fs::copy(&path, &target).map(|_| ()).unwrap() }
+    }
+}
+
+/// A copy of the store that the writer of layout 2 (tile bytes of format 3) made of
+/// `sessions()` with `config()`: day 0, then day 1 (`tests/fixtures/store-v2`).
+fn layout_2_store(name: &str) -> PathBuf {
+    let dir = temp(name);
+    copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/store-v2"), &dir);
+    dir
+}
+
 #[test]
-fn a_store_of_the_first_layout_still_reads() {
-    // Version 1 had no merges or runs: drop them and mark the state so.
-    let dir = temp("version-1");
+fn stores_of_the_first_two_layouts_still_read_and_update() {
     let all = sessions();
-    update_store(&dir, Some(&config()), all.clone(), &[]).unwrap();
-    let now = read_store(&dir).unwrap();
-    let state = dir.join(&now.state);
+    let by_name: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
+    let mut source = |s: &StoreSession| Ok(by_name[&s.name].clone());
+    let mut memory = FleetStore::new(config().settings).unwrap();
+    memory.update(all.clone(), &[], &mut source).unwrap();
+    let (want, want_bits, _) = answer(&memory, &mut source);
+
+    // Layout 2 (one table of tiles in fleet indices, beside their runs): read as written, it
+    // draws without a rescan; its next update writes layout 3 and equals the same update of a
+    // store made now.
+    let dir = layout_2_store("version-2");
+    assert!(dir.join("state-000002/tiles.parquet").is_file());
+    let old = read_store(&dir).unwrap();
+    assert!(memory.tiles() == old.store.tiles());
+    let (got, got_bits, rescanned) = answer(&old.store, &mut source);
+    assert!(got == want && got_bits == want_bits);
+    assert_eq!(rescanned, 0, "a store of layout 2 keeps its runs");
+    let gone = [all[0].0.clone()];
+    let updated = update_store(&dir, None, Vec::new(), &gone).unwrap();
+    assert!(dir.join(&updated.stored.state).join("tiles").is_dir());
+    assert!(!dir.join(&updated.stored.state).join("tiles.parquet").exists());
+    let now = temp("version-3");
+    update_store(&now, Some(&config()), all.clone(), &[]).unwrap();
+    let want_updated = update_store(&now, None, Vec::new(), &gone).unwrap();
+    assert_eq!(updated.stored.store, want_updated.stored.store);
+    assert_eq!(read_store(&dir).unwrap().store, read_store(&now).unwrap().store);
+
+    // Layout 1 had no merges or runs: layout 2 without them, marked so.
+    let dir = layout_2_store("version-1");
+    let state = dir.join("state-000002");
     for name in ["merges.parquet", "tile_runs.parquet"] {
         std::fs::remove_file(state.join(name)).unwrap();
     }
@@ -329,11 +371,98 @@ fn a_store_of_the_first_layout_still_reads() {
     }
     let old = read_store(&dir).unwrap();
     assert!(old.store.kept_runs().all(|r| r.is_none()));
-    let by_name: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
-    let mut source = |s: &StoreSession| Ok(by_name[&s.name].clone());
     let (got, got_bits, rescanned) = answer(&old.store, &mut source);
     assert!(rescanned > 0, "a store without runs rescans to draw");
-    let (want, want_bits, _) = answer(&now.store, &mut source);
     assert!(got == want && got_bits == want_bits);
+    for dir in [dir, now, temp("version-2")] {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// The parts of the current state's `tiles` folder: name, rows, and (on Unix) the file's inode.
+fn parts(dir: &Path) -> BTreeMap<String, (usize, u64)> {
+    let state = read_store(dir).unwrap().state;
+    std::fs::read_dir(dir.join(state).join("tiles"))
+        .unwrap()
+        .map(|e| {
+            let path = e.unwrap().path();
+            #[cfg(unix)]
+            let inode = std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(&path).unwrap());
+            #[cfg(not(unix))]
+            let inode = 0;
+            (path.file_name().unwrap().to_string_lossy().into_owned(), (parquet_rows(&path), inode))
+        })
+        .collect()
+}
+
+#[test]
+fn an_update_writes_only_the_parts_that_change() {
+    let dir = temp("parts");
+    let all = sessions();
+    let (day0, day1): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|(n, _)| n.ends_with("day0"));
+    update_store(&dir, Some(&config()), day0.clone(), &[]).unwrap();
+    let first = parts(&dir);
+    assert_eq!(first.keys().collect::<Vec<_>>(), ["000001.parquet"]);
+    // An add: the stored part is linked as it is, a new one holds the scanned tiles only.
+    let report = update_store(&dir, None, day1.clone(), &[]).unwrap();
+    let second = parts(&dir);
+    assert_eq!(second.keys().collect::<Vec<_>>(), ["000001.parquet", "000002.parquet"]);
+    if cfg!(unix) {
+        assert_eq!(second["000001.parquet"], first["000001.parquet"], "linked, not written again");
+    }
+    assert_eq!(second["000002.parquet"].0, report.update.tiles_scanned);
+    assert_eq!(second.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len());
+    // A replacement: the parts that held the session's tiles are written again without them;
+    // the store equals one made from scratch, read back too.
+    let (name, t) = &day0[0];
+    let shifted: Vec<f64> =
+        t.coords().iter().enumerate().map(|(k, x)| x + if k % t.dim() == 0 { 3.0 } else { 0.0 }).collect();
+    let moved = Trajectory::new(t.timestamps_s().to_vec(), shifted, t.dim()).unwrap();
+    assert_eq!(moved.manifold(), t.manifold());
+    let report = update_store(&dir, None, vec![(name.clone(), moved.clone())], &[]).unwrap();
+    let third = parts(&dir);
+    assert_eq!(third.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len());
+    assert!(!third.contains_key("000001.parquet"), "{third:?}");
+    let mut final_sessions: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
+    final_sessions.insert(name.clone(), moved);
+    let mut scratch = FleetStore::new(config().settings).unwrap();
+    scratch
+        .update(final_sessions.clone().into_iter().collect(), &[], &mut |s: &StoreSession| {
+            Ok(final_sessions[&s.name].clone())
+        })
+        .unwrap();
+    let read = read_store(&dir).unwrap();
+    assert!(scratch.tiles() == read.store.tiles());
+    assert!(read.store.tiles() == report.stored.store.tiles());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_store_updated_every_day_keeps_a_bounded_number_of_parts() {
+    // Forty short drives across one crossing, added one a day: every two share a tile.
+    let dir = temp("many-parts");
+    let drives: Vec<(String, Trajectory)> = (0..40)
+        .map(|d| {
+            let angle = d as f64 * 0.07;
+            let points: Vec<[f64; 2]> =
+                (0..30).map(|k| (k as f64 - 15.0) * 2.0).map(|r| [r * angle.cos(), r * angle.sin()]).collect();
+            (format!("day{d:02}"), Trajectory::from_points((0..30).map(|k| k as f64).collect(), &points).unwrap())
+        })
+        .collect();
+    let settings = StoreConfig { settings: StoreSettings { block: 50, ..StoreSettings::new(4.0) }, sampler: None };
+    let mut most = 0;
+    for (d, drive) in drives.iter().enumerate() {
+        let report = update_store(&dir, (d == 0).then_some(&settings), vec![drive.clone()], &[]).unwrap();
+        let now = parts(&dir);
+        most = most.max(now.len());
+        assert_eq!(now.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len(), "day {d}");
+    }
+    assert_eq!(most, 32, "parts are folded together beyond 32");
+    let by_name: BTreeMap<String, Trajectory> = drives.iter().cloned().collect();
+    let mut scratch = FleetStore::new(settings.settings).unwrap();
+    scratch.update(drives.clone(), &[], &mut |s: &StoreSession| Ok(by_name[&s.name].clone())).unwrap();
+    let read = read_store(&dir).unwrap();
+    assert_eq!(read.store.tiles().len(), 40 * 41 / 2);
+    assert!(scratch.tiles() == read.store.tiles());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -210,6 +210,23 @@ impl TileRuns {
         Ok(())
     }
 
+    /// The runs as a fleet of the tile's two sessions alone holds them, each from pose 0, as
+    /// [`StoredTile::local`](crate::store::StoredTile::local) holds the tile; `placed` puts
+    /// them back. O(the tile's stretches).
+    pub fn local(&self) -> Self {
+        let [a, b] = self.tile.sessions;
+        let mut local = self.clone();
+        local.move_to([0, usize::from(a != b)], [-(self.starts[0] as isize), -(self.starts[1] as isize)]);
+        local
+    }
+
+    /// Runs of [`local`](Self::local) form placed as those of the tile of the store's sessions
+    /// `sessions`, which start at `starts` in its fleet. O(the tile's stretches).
+    pub fn placed(mut self, sessions: [usize; 2], starts: [usize; 2]) -> Self {
+        self.move_to(sessions, [starts[0] as isize, starts[1] as isize]);
+        self
+    }
+
     /// Renumbers the tile's sessions `sessions` and moves its rows and columns by `shifts`
     /// (fleet indices): what a rescan at the new place keeps, since a tile reads its two
     /// sessions alone. O(the tile's stretches).
