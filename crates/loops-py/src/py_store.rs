@@ -37,9 +37,11 @@ use loops_io::store::{
 ///
 /// The folder is what ``loops fleet --store DIR`` keeps: Parquet tables that pandas, pyarrow
 /// and DuckDB read (``store.json`` names the current state, ``state-NNNNNN/``, holding
-/// ``sessions``, ``tiles``, ``components``, ``session_pairs``, ``loop_duration`` and
-/// ``samples``, ``.parquet`` each); each update replaces the state whole, so a reader or a
-/// killed update sees the old state or the new one. Made by :meth:`open` and :meth:`update`.
+/// ``sessions``, ``components``, ``session_pairs``, ``loop_duration`` and ``samples``,
+/// ``.parquet`` each, and the folder ``tiles/`` of the stored tiles by part); each update
+/// makes a new state (linking the tile parts it keeps, writing its new tiles as one more) and
+/// then points at it, so a reader or a killed update sees the old state or the new one. Made
+/// by :meth:`open` and :meth:`update`.
 ///
 /// Example:
 ///     Monday drives out along a street; Tuesday's drive, added the next day, comes back along
