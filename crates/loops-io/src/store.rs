@@ -442,6 +442,9 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
                 let runs = runs.map(|r| r.placed(pair, place));
                 Ok((TileKey { names, fingerprints, at }, local.placed(pair, place), runs))
             })
+            .collect::<Vec<_>>()
+            // The first row that fails, whatever the threads.
+            .into_iter()
             .collect::<std::result::Result<Vec<_>, String>>()
             .map_err(|reason| StoreError::Corrupt { path: path.clone(), reason })?;
         let mut keys = Vec::with_capacity(read.len());

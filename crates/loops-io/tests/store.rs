@@ -434,6 +434,11 @@ fn an_update_writes_only_the_parts_that_change() {
     let read = read_store(&dir).unwrap();
     assert!(scratch.tiles() == read.store.tiles());
     assert!(read.store.tiles() == report.stored.store.tiles());
+    // A damaged part is named, in one line.
+    let part = dir.join(&read.state).join("tiles").join(third.keys().next().unwrap());
+    std::fs::write(&part, b"not parquet").unwrap();
+    let error = read_store(&dir).unwrap_err().to_string();
+    assert!(error.contains(&part.display().to_string()) && !error.contains('\n'), "{error}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
