@@ -1,0 +1,71 @@
+//! A fleet store in a folder from Rust, as `benches/store_disk_update.py` times it from Python:
+//! the fleet of `store_days` (4 vehicles × 31 days of 5-minute drives, γ = 10 m, σ_ρ with a
+//! budget of 500), days 1 to 30 stored in one update, then, in a fresh copy of that folder each
+//! round, the folder opened ([`read_store`]) and day 31 added ([`update_opened_store`]). Prints
+//! the seconds of each step (BENCHMARKS.md, "The store in a folder"). With `KEEP` set in the
+//! environment the store of days 1 to 30 of an earlier run is used again, so that a profiler
+//! sees the rounds alone.
+//!
+//! ```text
+//! cargo run --release -p loops-io --example store_folder -- [ROUNDS]
+//! ```
+
+use std::time::Instant;
+
+use loops_core::{SampleSize, Sampler, SamplerKind, Trajectory, UrbanDrive, UrbanFleet, store::StoreSettings};
+use loops_io::store::{StoreConfig, read_store, update_opened_store, update_store};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let rounds: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(3);
+    let spec = UrbanFleet {
+        vehicles: 4,
+        days: 31,
+        drive: UrbanDrive { duration_s: 300.0, rate_hz: 5.0, city_size_m: 1000.0, seed: 1, ..UrbanDrive::default() },
+        start_spread_s: 3600.0,
+    };
+    let fleet = spec.generate()?;
+    let sessions: Vec<(String, Trajectory)> =
+        (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
+    let (last, first): (Vec<_>, Vec<_>) = sessions.into_iter().partition(|(n, _)| n.ends_with("day30"));
+    let config = StoreConfig {
+        settings: StoreSettings::new(10.0),
+        sampler: Some((Sampler::new(SamplerKind::Rho, SampleSize::Budget(500), 7), false)),
+    };
+    let root = std::env::temp_dir().join("loops-store-folder");
+    let stored = root.join("days-1-30");
+    if std::env::var_os("KEEP").is_none() || !stored.is_dir() {
+        let _ = std::fs::remove_dir_all(&root);
+        let clock = Instant::now();
+        update_store(&stored, Some(&config), first, &[])?;
+        println!("days 1-30 in one update: {:.3} s", clock.elapsed().as_secs_f64());
+    }
+    for k in 0..rounds {
+        let copy = root.join(format!("round-{k}"));
+        let _ = std::fs::remove_dir_all(&copy);
+        copy_dir(&stored, &copy)?;
+        let clock = Instant::now();
+        let opened = read_store(&copy)?;
+        let open = clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
+        let report = update_opened_store(opened, None, last.clone(), &[], None)?;
+        println!(
+            "day 31: opening {open:.3} s, update {:.3} s ({} tiles scanned, {} kept)",
+            clock.elapsed().as_secs_f64(),
+            report.update.tiles_scanned,
+            report.update.tiles_kept
+        );
+        std::fs::remove_dir_all(&copy)?;
+    }
+    Ok(())
+}
+
+/// Copies the folder `from` to `to`.
+fn copy_dir(from: &std::path::Path, to: &std::path::Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    for entry in std::fs::read_dir(from)? {
+        let path = entry?.path();
+        let target = to.join(path.file_name().unwrap_or_default());
+        if path.is_dir() { copy_dir(&path, &target)? } else { std::fs::copy(&path, &target).map(|_| ())? }
+    }
+    Ok(())
+}
