@@ -14,7 +14,7 @@
 use std::marker::PhantomData;
 
 use serde::de::{self, Deserialize, DeserializeOwned, Deserializer, SeqAccess, Visitor};
-use serde::ser::{Serialize, SerializeSeq, Serializer};
+use serde::ser::{Serialize, Serializer};
 
 /// A value of fixed width in packed form.
 pub(crate) trait Packed: Sized + Serialize + DeserializeOwned {
@@ -26,50 +26,41 @@ pub(crate) trait Packed: Sized + Serialize + DeserializeOwned {
     fn take(bytes: &[u8]) -> Option<Self>;
 }
 
-/// The little-endian word at `k` (of width `N`) of `bytes`.
-pub(crate) fn word<const N: usize>(bytes: &[u8], k: usize) -> [u8; N] {
-    bytes[k..k + N].try_into().expect("a slice of the word's width")
+/// The unsigned integers, little-endian.
+macro_rules! packed_unsigned {
+    ($($int:ty),+) => {$(
+        impl Packed for $int {
+            const WIDTH: usize = std::mem::size_of::<$int>();
+            fn put(&self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
+            }
+            fn take(bytes: &[u8]) -> Option<Self> {
+                bytes.try_into().ok().map(<$int>::from_le_bytes)
+            }
+        }
+    )+};
 }
-
-impl Packed for u32 {
-    const WIDTH: usize = 4;
-    fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.to_le_bytes());
-    }
-    fn take(bytes: &[u8]) -> Option<Self> {
-        Some(u32::from_le_bytes(word(bytes, 0)))
-    }
-}
+packed_unsigned!(u32, u64);
 
 /// As a `u64`: the same bytes on every target; refused where it does not fit a `usize`.
 impl Packed for usize {
-    const WIDTH: usize = 8;
+    const WIDTH: usize = u64::WIDTH;
     fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&(*self as u64).to_le_bytes());
+        (*self as u64).put(out);
     }
     fn take(bytes: &[u8]) -> Option<Self> {
-        usize::try_from(u64::from_le_bytes(word(bytes, 0))).ok()
+        u64::take(bytes).and_then(|v| usize::try_from(v).ok())
     }
 }
 
-impl Packed for u64 {
-    const WIDTH: usize = 8;
-    fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.to_le_bytes());
-    }
-    fn take(bytes: &[u8]) -> Option<Self> {
-        Some(u64::from_le_bytes(word(bytes, 0)))
-    }
-}
-
-/// Bit for bit (NaN payloads and signed zeros kept).
+/// Bit for bit (NaN payloads and signed zeros kept), as the `u64` of its bits.
 impl Packed for f64 {
-    const WIDTH: usize = 8;
+    const WIDTH: usize = u64::WIDTH;
     fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.to_bits().to_le_bytes());
+        self.to_bits().put(out);
     }
     fn take(bytes: &[u8]) -> Option<Self> {
-        Some(f64::from_bits(u64::from_le_bytes(word(bytes, 0))))
+        u64::take(bytes).map(f64::from_bits)
     }
 }
 
@@ -184,37 +175,33 @@ impl<'de, T: Packed> Visitor<'de> for Values<T> {
     }
 }
 
+/// Values written as [`serialize`] writes them: an element of a packed nest.
+struct Out<'a, T>(&'a [T]);
+
+impl<T: Packed> Serialize for Out<'_, T> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serialize(self.0, serializer)
+    }
+}
+
+/// Values read as [`deserialize`] reads them: an element of a packed nest.
+struct In<T>(Vec<T>);
+
+impl<'de, T: Packed> Deserialize<'de> for In<T> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserialize(deserializer).map(In)
+    }
+}
+
 /// A `Vec<(usize, Vec<T>)>` (offsets with stretches of values), each stretch packed.
 pub(crate) mod stretches {
     use super::*;
-
-    /// A stretch's values, packed as [`serialize`] packs them.
-    struct Out<'a, T>(&'a [T]);
-
-    impl<T: Packed> Serialize for Out<'_, T> {
-        fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-            super::serialize(self.0, serializer)
-        }
-    }
-
-    /// A stretch's values, read as [`deserialize`] reads them.
-    struct In<T>(Vec<T>);
-
-    impl<'de, T: Packed> Deserialize<'de> for In<T> {
-        fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-            super::deserialize(deserializer).map(In)
-        }
-    }
 
     pub(crate) fn serialize<T: Packed, S: Serializer>(
         stretches: &[(usize, Vec<T>)],
         serializer: S,
     ) -> Result<S::Ok, S::Error> {
-        let mut seq = serializer.serialize_seq(Some(stretches.len()))?;
-        for (offset, values) in stretches {
-            seq.serialize_element(&(offset, Out(values)))?;
-        }
-        seq.end()
+        serializer.collect_seq(stretches.iter().map(|(offset, values)| (offset, Out(values))))
     }
 
     pub(crate) fn deserialize<'de, T: Packed, D: Deserializer<'de>>(
@@ -230,26 +217,10 @@ pub(crate) mod lists {
     use super::*;
 
     pub(crate) fn serialize<T: Packed, S: Serializer>(lists: &[Vec<T>], serializer: S) -> Result<S::Ok, S::Error> {
-        struct Out<'a, T>(&'a [T]);
-        impl<T: Packed> Serialize for Out<'_, T> {
-            fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-                super::serialize(self.0, serializer)
-            }
-        }
-        let mut seq = serializer.serialize_seq(Some(lists.len()))?;
-        for list in lists {
-            seq.serialize_element(&Out(list))?;
-        }
-        seq.end()
+        serializer.collect_seq(lists.iter().map(|list| Out(list)))
     }
 
     pub(crate) fn deserialize<'de, T: Packed, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<Vec<T>>, D::Error> {
-        struct In<T>(Vec<T>);
-        impl<'de, T: Packed> Deserialize<'de> for In<T> {
-            fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-                super::deserialize(deserializer).map(In)
-            }
-        }
         let read: Vec<In<T>> = Vec::deserialize(deserializer)?;
         Ok(read.into_iter().map(|In(list)| list).collect())
     }

@@ -348,7 +348,17 @@ fn config_of(file: &SettingsFile, path: &Path) -> Result<StoreConfig> {
 
 /// The pose file of a session: named by its fingerprint.
 fn pose_file(session: &StoreSession) -> String {
-    format!("{:016x}.parquet", session.fingerprint)
+    format!("{}.parquet", fingerprint_text(session.fingerprint))
+}
+
+/// A session's fingerprint as the tables and pose files name it: 16 hexadecimal digits.
+fn fingerprint_text(fingerprint: u64) -> String {
+    format!("{fingerprint:016x}")
+}
+
+/// The fingerprint of [`fingerprint_text`].
+fn fingerprint_of(text: &str) -> std::result::Result<u64, String> {
+    u64::from_str_radix(text, 16).map_err(|e| format!("fingerprint {text:?}: {e}"))
 }
 
 /// Reads the store in `dir`: its current state.
@@ -419,8 +429,7 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
                 for side in 0..2 {
                     let name = table.text(side, k).map_err(row_of)?;
                     let text = table.text(2 + side, k).map_err(row_of)?;
-                    let fingerprint =
-                        u64::from_str_radix(text, 16).map_err(|e| row_of(format!("fingerprint {text:?}: {e}")))?;
+                    let fingerprint = fingerprint_of(text).map_err(row_of)?;
                     let s = *index.get(name).ok_or_else(|| row_of(format!("session {name:?} is not in the store")))?;
                     if sessions[s].fingerprint != fingerprint {
                         return Err(row_of(format!(
@@ -499,7 +508,7 @@ fn read_head(dir: &Path) -> Result<Head> {
     let sessions = (0..table.rows)
         .map(|k| -> std::result::Result<StoreSession, String> {
             let blocks = SessionBlocks::from_bytes(table.bytes(9, k)?).map_err(|e| e.to_string())?;
-            let fingerprint = u64::from_str_radix(table.text(2, k)?, 16).map_err(|e| format!("fingerprint: {e}"))?;
+            let fingerprint = fingerprint_of(table.text(2, k)?)?;
             let manifold = table.text(8, k)?;
             let manifold = manifold_of(manifold).ok_or_else(|| format!("manifold {manifold:?} is unknown"))?;
             Ok(StoreSession {
@@ -890,7 +899,8 @@ fn update_with(
     write_sessions(&staged.join("sessions.parquet"), &store)?;
     let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
     let old_tiles = old_state.as_ref().map(|s| dir.join(s).join("tiles"));
-    let parts = write_parts(&staged.join("tiles"), old_tiles.as_deref(), &old_parts, &store, generation)?;
+    let old = old_tiles.as_deref().map(|folder| (folder, old_parts.as_slice()));
+    let parts = write_parts(&staged.join("tiles"), old, &store, generation)?;
     write_merges(&staged.join("merges.parquet"), &store)?;
     write_draws(&staged.join("draws.parquet"), &store)?;
     let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
@@ -1270,7 +1280,7 @@ fn write_sessions(path: &Path, store: &FleetStore) -> Result<()> {
         vec![
             ("session", ints(0..s.len())),
             ("name", Column::Text(s.iter().map(|s| s.name.clone()).collect())),
-            ("fingerprint", Column::Text(s.iter().map(|s| format!("{:016x}", s.fingerprint)).collect())),
+            ("fingerprint", Column::Text(s.iter().map(|s| fingerprint_text(s.fingerprint)).collect())),
             ("poses", ints(s.iter().map(StoreSession::poses))),
             ("t_first_s", Column::Float(s.iter().map(|s| s.times_s[0]).collect())),
             ("t_last_s", Column::Float(s.iter().map(|s| s.times_s[1]).collect())),
@@ -1297,12 +1307,10 @@ const MAX_TILE_PARTS: usize = 32;
 /// Returns the parts.
 fn write_parts(
     folder: &Path,
-    old: Option<&Path>,
-    old_parts: &[TilePart],
+    old: Option<(&Path, &[TilePart])>,
     store: &FleetStore,
     generation: u64,
 ) -> Result<Vec<TilePart>> {
-    use rayon::prelude::*;
     std::fs::create_dir_all(folder).map_err(|error| StoreError::Io {
         what: "creating",
         path: folder.to_path_buf(),
@@ -1312,13 +1320,14 @@ fn write_parts(
     let keys: Vec<TileKey> = (0..store.tiles().len()).map(|k| TileKey::of(store, &starts, k)).collect();
     let mut unwritten: std::collections::HashMap<&TileKey, usize> =
         keys.iter().enumerate().map(|(k, key)| (key, k)).collect();
+    let (old, old_parts) = old.unwrap_or((folder, &[])); // no parts: the folder is not read
     let mut kept: Vec<&TilePart> =
-        old_parts.iter().filter(|p| old.is_some() && p.keys.iter().all(|key| unwritten.contains_key(key))).collect();
+        old_parts.iter().filter(|p| p.keys.iter().all(|key| unwritten.contains_key(key))).collect();
     // The largest first; the new part makes one more.
     kept.sort_by_key(|p| std::cmp::Reverse(p.keys.len()));
     kept.truncate(MAX_TILE_PARTS - 1);
     let mut parts = Vec::new();
-    for (part, old) in kept.into_iter().filter_map(|p| Some((p, old?))) {
+    for part in kept {
         let (from, to) = (old.join(&part.file), folder.join(&part.file));
         if std::fs::hard_link(&from, &to).is_err() {
             std::fs::copy(&from, &to).map_err(|error| StoreError::Io { what: "copying", path: from.clone(), error })?;
@@ -1330,15 +1339,29 @@ fn write_parts(
     }
     parts.sort_by(|a, b| a.file.cmp(&b.file));
     let mut new: Vec<usize> = unwritten.into_values().collect();
-    if new.is_empty() {
-        crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
-            what: "syncing",
-            path: folder.to_path_buf(),
-            error,
-        })?;
-        return Ok(parts);
-    }
     new.sort_unstable();
+    if !new.is_empty() {
+        parts.push(write_part(folder, &format!("{generation:06}.parquet"), store, &starts, &keys, new)?);
+    }
+    crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
+        what: "syncing",
+        path: folder.to_path_buf(),
+        error,
+    })?;
+    Ok(parts)
+}
+
+/// Writes the store's tiles `new` (indices, named `keys`) as the part `file` of `folder`, each
+/// in its sessions' own indices (`starts`: the sessions' first fleet indices).
+fn write_part(
+    folder: &Path,
+    file: &str,
+    store: &FleetStore,
+    starts: &[usize],
+    keys: &[TileKey],
+    new: Vec<usize>,
+) -> Result<TilePart> {
+    use rayon::prelude::*;
     let runs: Vec<Option<&TileRuns>> = store.kept_runs().collect();
     // Each new tile's blobs in its sessions' own indices, in parallel.
     let blobs: Vec<[Vec<u8>; 3]> = new
@@ -1354,25 +1377,23 @@ fn write_parts(
     let tile = |k: usize| store.tiles()[k].tile();
     let side = |f: &dyn Fn(&TileKey) -> String| Column::Text(new.iter().map(|&k| f(&keys[k])).collect());
     let local = |f: &dyn Fn(usize) -> usize| ints(new.iter().map(|&k| f(k)));
-    let start = |k: usize, side: usize| starts[tile(k).sessions[side]];
     let (mut summaries, mut durations, mut all_runs) = (Vec::new(), Vec::new(), Vec::new());
     for [summary, duration, runs] in blobs {
         summaries.push(summary);
         durations.push(duration);
         all_runs.push(runs);
     }
-    let file = format!("{generation:06}.parquet");
     write_table(
-        &folder.join(&file),
+        &folder.join(file),
         vec![
             ("session_a", side(&|key| key.names[0].clone())),
             ("session_b", side(&|key| key.names[1].clone())),
-            ("fingerprint_a", side(&|key| format!("{:016x}", key.fingerprints[0]))),
-            ("fingerprint_b", side(&|key| format!("{:016x}", key.fingerprints[1]))),
-            ("rows_start", local(&|k| tile(k).rows.start - start(k, 0))),
-            ("rows_end", local(&|k| tile(k).rows.end - start(k, 0))),
-            ("columns_start", local(&|k| tile(k).columns.start - start(k, 1))),
-            ("columns_end", local(&|k| tile(k).columns.end - start(k, 1))),
+            ("fingerprint_a", side(&|key| fingerprint_text(key.fingerprints[0]))),
+            ("fingerprint_b", side(&|key| fingerprint_text(key.fingerprints[1]))),
+            ("rows_start", local(&|k| keys[k].at[0])),
+            ("rows_end", local(&|k| keys[k].at[0] + tile(k).rows.len())),
+            ("columns_start", local(&|k| keys[k].at[1])),
+            ("columns_end", local(&|k| keys[k].at[1] + tile(k).columns.len())),
             ("components", ints(new.iter().map(|&k| store.tiles()[k].summary.components.len()))),
             ("run_count", Column::Int(new.iter().map(|&k| runs[k].map_or(-1, |r| r.run_count() as i64)).collect())),
             ("summary", Column::Bytes(summaries)),
@@ -1380,13 +1401,7 @@ fn write_parts(
             ("runs", Column::Bytes(all_runs)),
         ],
     )?;
-    crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
-        what: "syncing",
-        path: folder.to_path_buf(),
-        error,
-    })?;
-    parts.push(TilePart { file, keys: new.into_iter().map(|k| keys[k].clone()).collect() });
-    Ok(parts)
+    Ok(TilePart { file: file.to_owned(), keys: new.into_iter().map(|k| keys[k].clone()).collect() })
 }
 
 /// `draws.parquet`: what the store's last draws found in its tiles, by seed.
