@@ -55,7 +55,7 @@
 //! ```
 
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, OnceLock};
 
 use rayon::prelude::*;
 
@@ -272,6 +272,143 @@ impl StoredTile {
         }
         self.summary.tile = tile.clone();
         self.duration.tile = tile;
+    }
+}
+
+/// A tile as a store saved it, in its sessions' own indices ([`StoredTile::local`],
+/// [`TileRuns::local`]), read when an update or a draw first needs it: what a store read back
+/// lazily ([`FleetStore::from_saved_lazily`]) holds of a tile until then. Whoever reads the
+/// saved form implements it (`loops_io::store` reads the bytes of a tile part).
+pub trait SavedTile: Send + Sync + std::fmt::Debug {
+    /// Its summary and share of τ, in its sessions' own indices.
+    ///
+    /// # Errors
+    /// What cannot be read back.
+    fn stored(&self) -> Result<StoredTile>;
+
+    /// Its runs in its sessions' own indices, where it was saved with them.
+    ///
+    /// # Errors
+    /// What cannot be read back.
+    fn runs(&self) -> Result<Option<TileRuns>>;
+}
+
+/// One of a store's tiles ([`FleetStore::tiles`]): where it lies, and its summary, share of τ
+/// and runs, as scanned, or read from where they were saved the first time they are asked (a
+/// store read back lazily: an update that adds sessions reads none of its old tiles, a draw
+/// the runs of the tiles it asks). What is read is checked to be of the tile.
+#[derive(Debug, Clone)]
+pub struct KeptTile {
+    /// The tile, in the store's fleet indices.
+    tile: Tile,
+    /// Where the rest is read from, until it is.
+    saved: Option<Arc<dyn SavedTile>>,
+    stored: OnceLock<std::result::Result<StoredTile, String>>,
+    runs: OnceLock<std::result::Result<Option<Arc<TileRuns>>, String>>,
+}
+
+impl KeptTile {
+    /// A tile as scanned (or read back whole), with its runs where kept.
+    fn ready(stored: StoredTile, runs: Option<Arc<TileRuns>>) -> Self {
+        let tile = stored.tile().clone();
+        Self { tile, saved: None, stored: OnceLock::from(Ok(stored)), runs: OnceLock::from(Ok(runs)) }
+    }
+
+    /// The tile `tile`, the rest read from `saved` when asked.
+    fn saved(tile: Tile, saved: Arc<dyn SavedTile>) -> Self {
+        Self { tile, saved: Some(saved), stored: OnceLock::new(), runs: OnceLock::new() }
+    }
+
+    /// The tile (its sessions, rows and columns in the store's fleet indices).
+    pub fn tile(&self) -> &Tile {
+        &self.tile
+    }
+
+    /// Whether its summary and share of τ have been read (scanned, or read from where they
+    /// were saved).
+    pub fn is_read(&self) -> bool {
+        self.stored.get().is_some()
+    }
+
+    /// Where the sessions of a tile read back in their own indices as `local` start in the
+    /// store's fleet, `local` checked to be of this tile's size and shape.
+    fn place_of(&self, local: &Tile) -> std::result::Result<[usize; 2], String> {
+        let [a, b] = self.tile.sessions;
+        let fits = local.sessions == [0, usize::from(a != b)]
+            && local.rows.len() == self.tile.rows.len()
+            && local.columns.len() == self.tile.columns.len()
+            && local.rows.start <= self.tile.rows.start
+            && local.columns.start <= self.tile.columns.start;
+        if !fits {
+            return Err(format!("it was saved as tile {local:?}"));
+        }
+        Ok([self.tile.rows.start - local.rows.start, self.tile.columns.start - local.columns.start])
+    }
+
+    /// Its summary and share of τ, read where they were saved the first time.
+    ///
+    /// # Errors
+    /// [`Error::InvalidState`] (`what`: `"fleet store"`) naming the tile, for what cannot be
+    /// read back or is not of this tile (the same error each time it is asked).
+    pub fn stored(&self) -> Result<&StoredTile> {
+        let read = self.stored.get_or_init(|| {
+            let saved = self.saved.as_ref().ok_or("it was kept without its summary")?;
+            let local = saved.stored().map_err(|e| e.to_string())?;
+            local.summary.check()?;
+            let d = &local.duration;
+            if d.tile != local.summary.tile || !d.fits_tile() {
+                return Err(format!("its share of τ is not of tile {:?}", local.summary.tile));
+            }
+            let place = self.place_of(local.tile())?;
+            Ok(local.placed(self.tile.sessions, place))
+        });
+        read.as_ref().map_err(|reason| self.corrupt(reason))
+    }
+
+    /// Its runs (`None` for a tile kept without them, which a draw scans again), read where
+    /// they were saved the first time.
+    ///
+    /// # Errors
+    /// As [`stored`](Self::stored).
+    pub fn runs(&self) -> Result<Option<&TileRuns>> {
+        let read = self.runs.get_or_init(|| {
+            let Some(saved) = &self.saved else { return Ok(None) };
+            let Some(local) = saved.runs().map_err(|e| e.to_string())? else { return Ok(None) };
+            let place = self.place_of(local.tile())?;
+            let runs = local.placed(self.tile.sessions, place);
+            Ok(Some(Arc::new(runs)))
+        });
+        read.as_ref().map(Option::as_deref).map_err(|reason| self.corrupt(reason))
+    }
+
+    fn corrupt(&self, reason: &str) -> Error {
+        Error::InvalidState { what: "fleet store", reason: format!("tile {:?}: {reason}", self.tile) }
+    }
+
+    /// Renumbers its sessions and moves it by `shifts` ([`StoredTile::move_to`]): what is read
+    /// moves with it, what is not yet read is placed where the tile then is.
+    fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
+        let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
+        let old = &self.tile;
+        self.tile = Tile {
+            sessions,
+            rows: at(old.rows.start, 0)..at(old.rows.end, 0),
+            columns: at(old.columns.start, 1)..at(old.columns.end, 1),
+        };
+        if let Some(Ok(stored)) = self.stored.get_mut() {
+            stored.move_to(sessions, shifts);
+        }
+        if let Some(Ok(Some(runs))) = self.runs.get_mut() {
+            Arc::make_mut(runs).move_to(sessions, shifts);
+        }
+    }
+}
+
+/// Two tiles are equal when they lie alike and their summaries and shares of τ are (each read
+/// where it is not yet); runs follow from the tile.
+impl PartialEq for KeptTile {
+    fn eq(&self, other: &Self) -> bool {
+        self.tile == other.tile && matches!((self.stored(), other.stored()), (Ok(a), Ok(b)) if a == b)
     }
 }
 
@@ -735,13 +872,15 @@ mod metric_text {
 /// merge of each session pair's tiles, τ of each session, and the runs of each tile it scanned
 /// (16 bytes a run, [`TileRuns::heap_bytes`]), which its draws read instead of rescanning. A
 /// store read back with them ([`from_saved`](Self::from_saved)) only adds τ up again; one
-/// read back from its state alone ([`from_parts`](Self::from_parts)) merges again, and
-/// rescans the tiles a draw asks until an update scans them.
+/// read back lazily ([`from_saved_lazily`](Self::from_saved_lazily)) takes τ as saved and
+/// reads each tile where it was saved when an update or a draw first needs it
+/// ([`KeptTile`]); one read back from its state alone ([`from_parts`](Self::from_parts))
+/// merges again, and rescans the tiles a draw asks until an update scans them.
 #[derive(Debug, Clone)]
 pub struct FleetStore {
     settings: StoreSettings,
     sessions: Vec<StoreSession>,
-    tiles: Vec<StoredTile>,
+    tiles: Vec<KeptTile>,
     last_update: StoreUpdate,
     kept: Kept,
 }
@@ -761,8 +900,6 @@ struct Kept {
     merges: BTreeMap<[usize; 2], Arc<MergedLoops>>,
     /// τ of each session, `(own, other)` per pose, seconds.
     duration: Vec<(Vec<f64>, Vec<f64>)>,
-    /// The runs of each tile (by tile, as the store's tiles), where an update scanned it.
-    runs: Vec<Option<Arc<TileRuns>>>,
     /// What the last draws found of uniform and row picks, by tile and component: those of the
     /// last draw of each of the last [`POOL_SEEDS`] seeds, most recent last.
     pools: Arc<Mutex<Vec<(u64, Pools)>>>,
@@ -913,8 +1050,10 @@ impl FleetStore {
         tiles: Vec<StoredTile>,
         last_update: StoreUpdate,
     ) -> Result<Self> {
-        let mut store = Self::checked(settings, sessions, tiles, last_update)?;
-        store.kept.merges = merges_of(store.tiles.iter())?;
+        let runs = vec![None; tiles.len()];
+        let mut store = Self::read_whole(settings, sessions, tiles, runs, last_update)?;
+        let read: Vec<&StoredTile> = store.tiles.iter().map(KeptTile::stored).collect::<Result<_>>()?;
+        store.kept.merges = merges_of(read.into_iter())?;
         Ok(store)
     }
 
@@ -937,52 +1076,80 @@ impl FleetStore {
         merges: Vec<([usize; 2], MergedLoops)>,
         runs: Vec<Option<TileRuns>>,
     ) -> Result<Self> {
-        let mut store = Self::checked(settings, sessions, tiles, last_update)?;
         let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
-        let mut of_pair: BTreeMap<[usize; 2], Vec<&Tile>> = BTreeMap::new();
-        for t in &store.tiles {
-            of_pair.entry(t.tile().sessions).or_default().push(t.tile());
+        if runs.len() != tiles.len() {
+            return Err(corrupt(format!("runs of {} tiles for {} tiles", runs.len(), tiles.len())));
         }
-        if merges.len() != of_pair.len() {
-            return Err(corrupt(format!("{} merges for the {} session pairs with tiles", merges.len(), of_pair.len())));
-        }
-        let mut kept = BTreeMap::new();
-        for (pair, merge) in merges {
-            let Some(tiles) = of_pair.get(&pair) else {
-                return Err(corrupt(format!("a merge of sessions {pair:?}, which have no tiles")));
-            };
-            if merge.tiles().iter().ne(tiles.iter().copied()) || merge.components().iter().any(|c| c.sessions != pair) {
-                return Err(corrupt(format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len())));
-            }
-            if kept.insert(pair, Arc::new(merge)).is_some() {
-                return Err(corrupt(format!("two merges of sessions {pair:?}")));
-            }
-        }
-        if runs.len() != store.tiles.len() {
-            return Err(corrupt(format!("runs of {} tiles for {} tiles", runs.len(), store.tiles.len())));
-        }
+        let mut store = Self::read_whole(settings, sessions, tiles, runs, last_update)?;
         let starts = store.starts();
-        let wanted = (settings.gamma, settings.separation);
-        for (k, (r, t)) in runs.iter().zip(&store.tiles).enumerate() {
-            let Some(r) = r else { continue };
-            let [a, b] = t.tile().sessions;
-            if r.tile() != t.tile() || r.scanned_with() != wanted || r.starts() != [starts[a], starts[b]] {
-                return Err(corrupt(format!("the runs of tile {k} are not of tile {:?} under this store", t.tile())));
-            }
+        for k in 0..store.tiles.len() {
+            store.checked_runs(k, &starts)?;
         }
-        store.kept.merges = kept;
-        store.kept.runs = runs.into_iter().map(|r| r.map(Arc::new)).collect();
+        store.kept.merges = checked_merges(&store.tiles, merges)?;
         Ok(store)
     }
 
-    /// What is checked of parts as saved, and τ added up: a store without its merges.
-    fn checked(
+    /// A store from its parts as saved, read lazily: its tiles (in plan order) where they lie
+    /// in the fleet of `sessions`, each read from where it was saved ([`SavedTile`]) when an
+    /// update or a draw first needs it ([`KeptTile`]), with the merges it keeps
+    /// ([`kept_merges`](Self::kept_merges)) and τ of each session (`(own, other)` per pose,
+    /// as [`loop_duration`](Self::loop_duration) gives them, by session). Checks what
+    /// [`from_saved`](Self::from_saved) checks but the tiles' contents, which are checked when
+    /// read, and that τ has a finite, non-negative value for every pose. O(blocks log blocks +
+    /// tiles + components + poses): no tile is read. An update that adds sessions then reads
+    /// none of the old tiles (τ adds the new shares to what is given); one that replaces or
+    /// removes a session reads the kept tiles of the sessions that lost one; a draw reads the
+    /// runs of the tiles it asks.
+    ///
+    /// # Errors
+    /// As [`from_saved`](Self::from_saved), and for τ of another length than a session's poses.
+    pub fn from_saved_lazily(
+        settings: StoreSettings,
+        sessions: Vec<StoreSession>,
+        tiles: Vec<(Tile, Arc<dyn SavedTile>)>,
+        last_update: StoreUpdate,
+        merges: Vec<([usize; 2], MergedLoops)>,
+        duration: Vec<(Vec<f64>, Vec<f64>)>,
+    ) -> Result<Self> {
+        let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
+        let tiles = tiles.into_iter().map(|(tile, saved)| KeptTile::saved(tile, saved)).collect();
+        let mut store = Self::checked(settings, sessions, tiles, last_update)?;
+        if duration.len() != store.sessions.len() {
+            return Err(corrupt(format!("τ of {} sessions for {} sessions", duration.len(), store.sessions.len())));
+        }
+        for (s, (own, other)) in duration.iter().enumerate() {
+            let poses = store.sessions[s].poses();
+            if own.len() != poses || other.len() != poses {
+                return Err(corrupt(format!(
+                    "τ of {} and {} poses for session {s} {:?} of {poses} poses",
+                    own.len(),
+                    other.len(),
+                    store.sessions[s].name
+                )));
+            }
+            if let Some(k) =
+                (0..poses).find(|&k| !(own[k] >= 0.0 && other[k] >= 0.0 && (own[k] + other[k]).is_finite()))
+            {
+                return Err(corrupt(format!(
+                    "τ of pose {k} of session {s} {:?} is ({}, {}) s",
+                    store.sessions[s].name, own[k], other[k]
+                )));
+            }
+        }
+        store.kept.merges = checked_merges(&store.tiles, merges)?;
+        store.kept.duration = duration;
+        Ok(store)
+    }
+
+    /// A store of tiles read back whole, each checked to lie in its sessions with a share of τ
+    /// of its size, and τ added up; without its merges.
+    fn read_whole(
         settings: StoreSettings,
         sessions: Vec<StoreSession>,
         tiles: Vec<StoredTile>,
+        runs: Vec<Option<TileRuns>>,
         last_update: StoreUpdate,
     ) -> Result<Self> {
-        check_sessions(&settings, &sessions)?;
         let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
         for (k, t) in tiles.iter().enumerate() {
             t.summary.check().map_err(|p| corrupt(format!("tile {k}: {p}")))?;
@@ -991,27 +1158,54 @@ impl FleetStore {
                 return Err(corrupt(format!("tile {k}: its share of τ is not of tile {:?}", t.summary.tile)));
             }
         }
-        let mut store = Self { settings, sessions, tiles, last_update, kept: Kept::default() };
+        let tiles = tiles.into_iter().zip(runs).map(|(t, r)| KeptTile::ready(t, r.map(Arc::new))).collect();
+        let mut store = Self::checked(settings, sessions, tiles, last_update)?;
+        let all: Vec<usize> = (0..store.sessions.len()).collect();
+        let read: Vec<&StoredTile> = store.tiles.iter().map(KeptTile::stored).collect::<Result<_>>()?;
+        store.kept.duration = durations_of(&read, &store.starts(), &store.sessions, &all)?;
+        Ok(store)
+    }
+
+    /// What is checked of a store's parts as saved but its tiles' contents: the settings, the
+    /// sessions, and that the tiles are the plan of the sessions. Without its merges or τ.
+    fn checked(
+        settings: StoreSettings,
+        sessions: Vec<StoreSession>,
+        tiles: Vec<KeptTile>,
+        last_update: StoreUpdate,
+    ) -> Result<Self> {
+        check_sessions(&settings, &sessions)?;
+        let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
+        let store = Self { settings, sessions, tiles, last_update, kept: Kept::default() };
         let plan = store.plan(&vec![true; store.sessions.len()])?;
         if let Some(k) =
-            (0..plan.len().max(store.tiles.len())).find(|&k| plan.get(k) != store.tiles.get(k).map(StoredTile::tile))
+            (0..plan.len().max(store.tiles.len())).find(|&k| plan.get(k) != store.tiles.get(k).map(KeptTile::tile))
         {
             return Err(corrupt(format!(
                 "tile {k} is {:?}, but the plan of the sessions has {:?} there ({} tiles in all, {} stored)",
-                store.tiles.get(k).map(StoredTile::tile),
+                store.tiles.get(k).map(KeptTile::tile),
                 plan.get(k),
                 plan.len(),
                 store.tiles.len()
             )));
         }
-        let all: Vec<usize> = (0..store.sessions.len()).collect();
-        store.kept = Kept {
-            merges: BTreeMap::new(),
-            duration: durations_of(&store.tiles, &store.starts(), &store.sessions, &all)?,
-            runs: vec![None; store.tiles.len()],
-            pools: Arc::default(),
-        };
         Ok(store)
+    }
+
+    /// The runs of tile `k` where it has them, checked to be of that tile under this store
+    /// (scanned with its γ and separation from its sessions' places, `starts`).
+    fn checked_runs(&self, k: usize, starts: &[usize]) -> Result<Option<&TileRuns>> {
+        let t = &self.tiles[k];
+        let Some(r) = t.runs()? else { return Ok(None) };
+        let [a, b] = t.tile().sessions;
+        let wanted = (self.settings.gamma, self.settings.separation);
+        if r.tile() != t.tile() || r.scanned_with() != wanted || r.starts() != [starts[a], starts[b]] {
+            return Err(Error::InvalidState {
+                what: "fleet store",
+                reason: format!("the runs of tile {k} are not of tile {:?} under this store", t.tile()),
+            });
+        }
+        Ok(Some(r))
     }
 
     /// The merge of each session pair's tiles that the store keeps, by pair (a, b), a ≤ b:
@@ -1020,11 +1214,24 @@ impl FleetStore {
         self.kept.merges.iter().map(|(pair, m)| (*pair, m.as_ref()))
     }
 
-    /// The runs of each tile the store keeps, by tile (as [`tiles`](Self::tiles)); `None` for
-    /// a tile it would rescan to draw (a store read back without them): what
-    /// [`from_saved`](Self::from_saved) takes back.
-    pub fn kept_runs(&self) -> impl Iterator<Item = Option<&TileRuns>> {
-        self.kept.runs.iter().map(Option::as_deref)
+    /// The runs of each tile the store keeps, by tile (as [`tiles`](Self::tiles)), each read
+    /// where it was saved if not yet; `None` for a tile it would rescan to draw (a store read
+    /// back without them): what [`from_saved`](Self::from_saved) takes back.
+    ///
+    /// # Errors
+    /// As [`KeptTile::runs`].
+    pub fn kept_runs(&self) -> Result<Vec<Option<&TileRuns>>> {
+        self.tiles.iter().map(KeptTile::runs).collect()
+    }
+
+    /// The summary and share of τ of each tile, as [`from_parts`](Self::from_parts) takes
+    /// them, each read where it was saved if not yet. O(tiles' components, edge runs and
+    /// shares).
+    ///
+    /// # Errors
+    /// As [`KeptTile::stored`].
+    pub fn stored_tiles(&self) -> Result<Vec<StoredTile>> {
+        self.tiles.par_iter().map(|t| t.stored().cloned()).collect()
     }
 
     /// What the store keeps of its last draws ([`samples`](Self::samples)), as bytes to save
@@ -1102,7 +1309,7 @@ impl FleetStore {
     }
 
     /// The tiles, in plan order.
-    pub fn tiles(&self) -> &[StoredTile] {
+    pub fn tiles(&self) -> &[KeptTile] {
         &self.tiles
     }
 
@@ -1281,20 +1488,33 @@ impl FleetStore {
         // Stored tiles of two unchanged sessions are kept; the others are dropped, and their
         // unchanged sessions lose a tile.
         let mut lost = vec![false; self.sessions.len()];
-        let mut kept_of: Vec<Vec<&TileDuration>> = vec![Vec::new(); self.sessions.len()];
         for t in &self.tiles {
             let [a, b] = t.tile().sessions;
             if now[a].is_none() || now[b].is_none() {
                 report.tiles_dropped += 1;
                 (lost[a], lost[b]) = (true, true);
-            } else {
-                kept_of[a].push(&t.duration);
-                if b != a {
-                    kept_of[b].push(&t.duration);
-                }
             }
         }
         report.tiles_kept = self.tiles.len() - report.tiles_dropped;
+        // The kept tiles of a session that lost one: its τ is added up again from them (read
+        // here, in parallel, where a store read back lazily has not yet).
+        let relost: Vec<&StoredTile> = self
+            .tiles
+            .par_iter()
+            .filter(|t| {
+                let [a, b] = t.tile().sessions;
+                now[a].is_some() && now[b].is_some() && (lost[a] || lost[b])
+            })
+            .map(KeptTile::stored)
+            .collect::<Result<_>>()?;
+        let mut kept_of: Vec<Vec<&TileDuration>> = vec![Vec::new(); self.sessions.len()];
+        for t in &relost {
+            let [a, b] = t.tile().sessions;
+            kept_of[a].push(&t.duration);
+            if b != a {
+                kept_of[b].push(&t.duration);
+            }
+        }
         // The merges of the session pairs of changed sessions: all their tiles are new.
         let new_merges = merges_of(scanned.iter().map(|(t, _)| t))?;
         // τ: what the new tiles add to each session, and what a session that lost a tile keeps.
@@ -1324,7 +1544,7 @@ impl FleetStore {
         };
         let shares: Vec<Option<(Vec<f64>, Vec<f64>)>> =
             (0..plan.sessions.len()).into_par_iter().map(shares).collect::<Result<_>>()?;
-        drop((kept_of, new_of));
+        drop((kept_of, new_of, relost));
 
         // Nothing fails from here: the kept state moves to the new fleet indices.
         let shifts_of = |[a, b]: [usize; 2], [na, nb]: [usize; 2]| {
@@ -1332,23 +1552,19 @@ impl FleetStore {
             [shift(starts[na], old_starts[a]), shift(starts[nb], old_starts[b])]
         };
         let old = std::mem::take(&mut self.kept);
-        let mut tiles: Vec<(StoredTile, Option<Arc<TileRuns>>)> = Vec::with_capacity(report.tiles_kept + scanned.len());
-        for (mut t, mut runs) in std::mem::take(&mut self.tiles).into_iter().zip(old.runs) {
+        let mut tiles: Vec<KeptTile> = Vec::with_capacity(report.tiles_kept + scanned.len());
+        for mut t in std::mem::take(&mut self.tiles) {
             let [a, b] = t.tile().sessions;
             let (Some(na), Some(nb)) = (now[a], now[b]) else { continue };
             let shifts = shifts_of([a, b], [na, nb]);
             if shifts != [0, 0] || [na, nb] != [a, b] {
                 t.move_to([na, nb], shifts);
-                if let Some(r) = &mut runs {
-                    Arc::make_mut(r).move_to([na, nb], shifts);
-                }
             }
-            tiles.push((t, runs));
+            tiles.push(t);
         }
-        tiles.extend(scanned.into_iter().map(|(t, r)| (t, Some(r))));
+        tiles.extend(scanned.into_iter().map(|(t, r)| KeptTile::ready(t, Some(r))));
         // Plan order: by row block, then column block (fleet indices order both).
-        tiles.sort_by_key(|(t, _)| (t.tile().rows.start, t.tile().columns.start));
-        let (tiles, runs): (Vec<StoredTile>, Vec<Option<Arc<TileRuns>>>) = tiles.into_iter().unzip();
+        tiles.sort_by_key(|t| (t.tile().rows.start, t.tile().columns.start));
         let mut merges = new_merges;
         for ([a, b], mut merge) in old.merges {
             let (Some(na), Some(nb)) = (now[a], now[b]) else { continue };
@@ -1373,7 +1589,7 @@ impl FleetStore {
                 (None, b) => b.and_then(|b| old_duration[b].take()).unwrap_or_default(),
             })
             .collect();
-        self.kept = Kept { merges, duration, runs, pools: old.pools };
+        self.kept = Kept { merges, duration, pools: old.pools };
         self.sessions = plan.sessions.clone();
         self.tiles = tiles;
         self.last_update = report.clone();
@@ -1572,7 +1788,7 @@ impl FleetStore {
         // The stored tile of a tile of the merge: the stored tiles are in plan order, by first
         // row, then first column.
         let stored = |tile: &Tile| {
-            let key = |t: &StoredTile| (t.tile().rows.start, t.tile().columns.start);
+            let key = |t: &KeptTile| (t.tile().rows.start, t.tile().columns.start);
             let k = self.tiles.binary_search_by_key(&(tile.rows.start, tile.columns.start), key).ok()?;
             (self.tiles[k].tile() == tile).then_some(k)
         };
@@ -1692,17 +1908,22 @@ impl FleetStore {
             unread.dedup();
             let trajectories = read_sessions(&self.sessions, &unread, source)?;
             read.extend(unread.into_iter().zip(trajectories));
-            let runs_of = |k: usize| stored(&merged.tiles()[k]).and_then(|t| self.kept.runs[t].as_ref());
-            tiles_rescanned += asked.iter().filter(|(k, _, _)| runs_of(*k).is_none()).count();
+            // The runs kept of each tile asked (read, in parallel, where not yet).
+            let runs: Vec<Option<&TileRuns>> = asked
+                .par_iter()
+                .map(|(k, _, _)| stored(&merged.tiles()[*k]).map_or(Ok(None), |t| self.checked_runs(t, starts)))
+                .collect::<Result<_>>()?;
+            tiles_rescanned += runs.iter().filter(|r| r.is_none()).count();
             tiles_read += asked.len();
             let offers = asked
                 .par_iter()
-                .map(|(k, part, _)| {
+                .zip(&runs)
+                .map(|((k, part, _), runs)| {
                     let k = *k;
                     let tile = &merged.tiles()[k];
                     let [a, b] = tile.sessions;
                     let (sessions, at) = ([&read[&a], &read[&b]], [starts[a], starts[b]]);
-                    match runs_of(k) {
+                    match runs {
                         Some(runs) => with_metric!(&settings.metric, m => draw_tile_runs(
                             sessions, at, m, runs, merged.tile_labels(k), part,
                         )),
@@ -1828,6 +2049,35 @@ fn check_sessions(settings: &StoreSettings, sessions: &[StoreSession]) -> Result
     Ok(())
 }
 
+/// The merges saved of a store's session pairs, checked to be those of its `tiles`: one for
+/// each session pair with tiles, over its tiles in plan order. O(tiles + components).
+fn checked_merges(
+    tiles: &[KeptTile],
+    merges: Vec<([usize; 2], MergedLoops)>,
+) -> Result<BTreeMap<[usize; 2], Arc<MergedLoops>>> {
+    let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
+    let mut of_pair: BTreeMap<[usize; 2], Vec<&Tile>> = BTreeMap::new();
+    for t in tiles {
+        of_pair.entry(t.tile().sessions).or_default().push(t.tile());
+    }
+    if merges.len() != of_pair.len() {
+        return Err(corrupt(format!("{} merges for the {} session pairs with tiles", merges.len(), of_pair.len())));
+    }
+    let mut kept = BTreeMap::new();
+    for (pair, merge) in merges {
+        let Some(tiles) = of_pair.get(&pair) else {
+            return Err(corrupt(format!("a merge of sessions {pair:?}, which have no tiles")));
+        };
+        if merge.tiles().iter().ne(tiles.iter().copied()) || merge.components().iter().any(|c| c.sessions != pair) {
+            return Err(corrupt(format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len())));
+        }
+        if kept.insert(pair, Arc::new(merge)).is_some() {
+            return Err(corrupt(format!("two merges of sessions {pair:?}")));
+        }
+    }
+    Ok(kept)
+}
+
 /// The merges of the tiles of each session pair among `tiles` (all the tiles of each pair),
 /// by pair: pairs in parallel, each pair's tiles in plan order. O(their components and edge
 /// runs).
@@ -1849,7 +2099,7 @@ fn merges_of<'a>(tiles: impl Iterator<Item = &'a StoredTile>) -> Result<BTreeMap
 /// τ of the sessions `which` (indices), `(own, other)` per pose, from all their tiles, in the
 /// order of `which`. O(their tiles' rows and columns).
 fn durations_of(
-    tiles: &[StoredTile],
+    tiles: &[&StoredTile],
     starts: &[usize],
     sessions: &[StoreSession],
     which: &[usize],

@@ -538,9 +538,30 @@ impl TryFrom<TrajectoryState> for Trajectory {
     /// Validated as [`Trajectory::new`] and, for a manifold, as its default metric validates
     /// its points (unit quaternions, latitudes, ...); time cells as [`checked_cell_widths`].
     fn try_from(state: TrajectoryState) -> Result<Self> {
-        let mut traj = Self::new(state.timestamps_s, state.coords, state.dim)?.on(state.manifold);
+        Self::from_saved(state.timestamps_s, state.coords, state.dim, state.cell_widths_s, state.manifold)
+    }
+}
+
+#[cfg(feature = "serde")]
+impl Trajectory {
+    /// A trajectory as saved with its time cells ([`cell_widths_s`](Self::cell_widths_s): a
+    /// fleet's joint trajectory has half cells at every session's ends) and manifold: what a
+    /// serialised trajectory and a store's pose file hold.
+    ///
+    /// # Errors
+    /// As [`Trajectory::new`]; the manifold's default metric's errors on its points (unit
+    /// quaternions, latitudes, ...); [`Error::InvalidState`] for time cells that are not one
+    /// a pose, each from 0 s to its timestamps' cell.
+    pub fn from_saved(
+        timestamps_s: Vec<f64>,
+        coords: Vec<f64>,
+        dim: usize,
+        cell_widths_s: Vec<f64>,
+        manifold: Manifold,
+    ) -> Result<Self> {
+        let mut traj = Self::new(timestamps_s, coords, dim)?.on(manifold);
         traj.default_metric().validate(&traj)?;
-        traj.cell_widths_s = checked_cell_widths("Trajectory", state.cell_widths_s, &traj.timestamps_s)?;
+        traj.cell_widths_s = checked_cell_widths("Trajectory", cell_widths_s, &traj.timestamps_s)?;
         Ok(traj)
     }
 }

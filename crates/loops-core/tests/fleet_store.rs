@@ -173,7 +173,7 @@ fn random_updates(seed: u64, separation: Separation) {
     let parts = |tiles: Vec<loops_core::store::StoredTile>| {
         FleetStore::from_parts(*store.settings(), store.sessions().to_vec(), tiles, store.last_update().clone())
     };
-    let read_back = parts(store.tiles().to_vec()).unwrap();
+    let read_back = parts(store.stored_tiles().unwrap()).unwrap();
     assert_eq!(read_back, store);
     // What the store kept of its answer through the updates (the merges of its session pairs,
     // moved; τ, added to; the runs of its tiles) is what a store read back makes again from
@@ -188,10 +188,12 @@ fn random_updates(seed: u64, separation: Separation) {
         store.kept_merges().map(|(p, m)| (p, MergedLoops::from_bytes(&m.to_bytes()).unwrap())).collect();
     let runs: Vec<Option<TileRuns>> = store
         .kept_runs()
+        .unwrap()
+        .into_iter()
         .map(|r| Some(TileRuns::from_bytes(&r.expect("every tile scanned").to_bytes()).unwrap()))
         .collect();
     let saved = |merges: Vec<([usize; 2], MergedLoops)>, runs: Vec<Option<TileRuns>>| {
-        let (settings, sessions, tiles) = (*store.settings(), store.sessions().to_vec(), store.tiles().to_vec());
+        let (settings, sessions, tiles) = (*store.settings(), store.sessions().to_vec(), store.stored_tiles().unwrap());
         FleetStore::from_saved(settings, sessions, tiles, store.last_update().clone(), merges, runs)
     };
     let taken = saved(merges.clone(), runs.clone()).unwrap();
@@ -201,7 +203,7 @@ fn random_updates(seed: u64, separation: Separation) {
         let drawn = taken.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
         assert_eq!(drawn.tiles_rescanned, 0, "seed {seed}: {:?}", sampler.kind);
         // A store read back again, which has drawn nothing yet.
-        let fresh = parts(store.tiles().to_vec()).unwrap();
+        let fresh = parts(store.stored_tiles().unwrap()).unwrap();
         let again = fresh.samples(&loops, &sampler, between_only, &mut source_of(&current)).unwrap();
         assert!(again.tiles_rescanned > 0 || again.rows.is_empty(), "seed {seed}: a store without runs rescans");
         assert_eq!((again.rows, again.tiles_read), (drawn.rows, drawn.tiles_asked), "seed {seed}");
@@ -223,7 +225,7 @@ fn random_updates(seed: u64, separation: Separation) {
         assert!(err.contains("the runs of tile 0 are not of tile"), "{err}");
     }
     if store.tiles().len() > 1 {
-        let mut fewer = store.tiles().to_vec();
+        let mut fewer = store.stored_tiles().unwrap();
         fewer.remove(fewer.len() / 2);
         let err = parts(fewer).unwrap_err().to_string();
         assert!(err.contains("but the plan of the sessions has"), "{err}");
@@ -450,7 +452,7 @@ fn an_update_by_its_steps_is_the_update() {
     store.apply_update(&plan, scanned).unwrap();
     assert_eq!(store, whole);
     assert!(store.kept_merges().eq(whole.kept_merges()));
-    assert!(store.kept_runs().eq(whole.kept_runs()));
+    assert!(store.kept_runs().unwrap() == whole.kept_runs().unwrap());
 }
 
 /// The poses of session `s` of `plan`: given, or stored.
@@ -509,7 +511,7 @@ fn draws_of_one_seed_reuse_what_they_found_only_where_it_answers() {
     store.samples(&store.loops().unwrap(), &sampler, false, &mut source_of(&held)).unwrap();
     let saved = store.kept_draws();
     assert!(saved.len() == 1 && saved[0].1.len() > 100, "{saved:?}");
-    let (settings, sessions, tiles) = (*store.settings(), store.sessions().to_vec(), store.tiles().to_vec());
+    let (settings, sessions, tiles) = (*store.settings(), store.sessions().to_vec(), store.stored_tiles().unwrap());
     let fresh =
         || FleetStore::from_parts(settings, sessions.clone(), tiles.clone(), store.last_update().clone()).unwrap();
     let (with, without) = (fresh(), fresh());
@@ -569,4 +571,158 @@ fn a_new_day_leaves_most_of_the_draw_where_it_was() {
             got.tiles_asked
         );
     }
+}
+
+/// A tile kept as saved in its sessions' own indices, counting how often it is read.
+#[derive(Debug)]
+struct Counted {
+    stored: loops_core::store::StoredTile,
+    runs: Option<TileRuns>,
+    reads: std::sync::Arc<[std::sync::atomic::AtomicUsize; 2]>,
+}
+
+impl loops_core::store::SavedTile for Counted {
+    fn stored(&self) -> Result<loops_core::store::StoredTile> {
+        self.reads[0].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Ok(self.stored.clone())
+    }
+
+    fn runs(&self) -> Result<Option<TileRuns>> {
+        self.reads[1].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        Ok(self.runs.clone())
+    }
+}
+
+/// `store` as read back lazily from what it saves (each tile in its sessions' own indices,
+/// counting its reads in `reads`: summaries, runs), with its merges and τ.
+fn read_lazily(store: &FleetStore, reads: &std::sync::Arc<[std::sync::atomic::AtomicUsize; 2]>) -> Result<FleetStore> {
+    let starts = store.starts();
+    let runs = store.kept_runs()?;
+    let tiles = store
+        .stored_tiles()?
+        .into_iter()
+        .zip(runs)
+        .map(|(t, r)| {
+            let [a, b] = t.tile().sessions;
+            let saved =
+                Counted { stored: t.local([starts[a], starts[b]]), runs: r.map(TileRuns::local), reads: reads.clone() };
+            (t.tile().clone(), std::sync::Arc::new(saved) as std::sync::Arc<dyn loops_core::store::SavedTile>)
+        })
+        .collect();
+    let merges = store.kept_merges().map(|(pair, m)| (pair, m.clone())).collect();
+    let (own, other) = store.loop_duration()?;
+    let duration = store
+        .sessions()
+        .iter()
+        .zip(&starts)
+        .map(|(s, &first)| (own[first..first + s.poses()].to_vec(), other[first..first + s.poses()].to_vec()))
+        .collect();
+    let (settings, sessions, last) = (*store.settings(), store.sessions().to_vec(), store.last_update().clone());
+    FleetStore::from_saved_lazily(settings, sessions, tiles, last, merges, duration)
+}
+
+/// A store read back lazily reads no old tile to add a session, the runs of the tiles its
+/// draws ask alone, and to replace a session the kept tiles of the sessions that lose a tile,
+/// each once; its answers and tiles are those from scratch all along. What it is given is
+/// checked: τ of the wrong length, or a tile saved as another, is refused.
+#[test]
+fn a_store_read_lazily_reads_only_the_tiles_its_updates_and_draws_need() {
+    use std::sync::atomic::Ordering::Relaxed;
+    let pool = versions();
+    let names: Vec<String> = pool.keys().cloned().collect();
+    // The session added sorts first: every old tile moves in the fleet.
+    let (day, first) = names.split_first().unwrap();
+    let mut current: BTreeMap<String, Trajectory> = first.iter().map(|n| (n.clone(), pool[n][0].clone())).collect();
+    let mut store = FleetStore::new(settings(Separation::NONE)).unwrap();
+    let put = current.iter().map(|(n, t)| (n.clone(), t.clone())).collect();
+    store.update(put, &[], &mut source_of(&current)).unwrap();
+    let reads = std::sync::Arc::new([std::sync::atomic::AtomicUsize::new(0), std::sync::atomic::AtomicUsize::new(0)]);
+    let mut lazy = read_lazily(&store, &reads).unwrap();
+    assert!(lazy.tiles().iter().all(|t| !t.is_read()));
+    assert_eq!((reads[0].load(Relaxed), reads[1].load(Relaxed)), (0, 0), "reading back");
+
+    // A day's session added: no old tile read.
+    current.insert(day.clone(), pool[day][0].clone());
+    let update = lazy.update(vec![(day.clone(), pool[day][0].clone())], &[], &mut source_of(&current)).unwrap();
+    assert!(update.tiles_scanned > 0 && update.tiles_kept > 0, "{update:?}");
+    assert_eq!((reads[0].load(Relaxed), reads[1].load(Relaxed)), (0, 0), "adding a session");
+    check_against_scratch(&lazy, &current, "read lazily, a session added");
+    let runs_read = reads[1].load(Relaxed);
+    assert!(
+        runs_read > 0 && runs_read <= update.tiles_kept,
+        "{runs_read} runs read of {} old tiles",
+        update.tiles_kept
+    );
+    assert_eq!(reads[0].load(Relaxed), 0, "drawing reads runs alone");
+
+    // A session replaced: the kept tiles of the sessions that lose one are read, once (those
+    // the last update scanned are at hand).
+    let name = first[0].clone();
+    let s = lazy.session_index(&name).unwrap();
+    let lose: Vec<usize> = lazy
+        .tiles()
+        .iter()
+        .filter(|t| t.tile().sessions.contains(&s))
+        .flat_map(|t| t.tile().sessions)
+        .filter(|&x| x != s)
+        .collect();
+    let want = lazy
+        .tiles()
+        .iter()
+        .filter(|t| !t.tile().sessions.contains(&s) && t.tile().sessions.iter().any(|x| lose.contains(x)))
+        .filter(|t| !t.is_read())
+        .count();
+    assert!(want > 0);
+    current.insert(name.clone(), pool[&name][1].clone());
+    lazy.update(vec![(name.clone(), pool[&name][1].clone())], &[], &mut source_of(&current)).unwrap();
+    assert_eq!(reads[0].load(Relaxed), want, "replacing a session reads the kept tiles of those that lose one");
+    check_against_scratch(&lazy, &current, "read lazily, a session replaced");
+    // The first session removed: every tile moves, those read and those not.
+    current.remove(day);
+    lazy.remove(std::slice::from_ref(day)).unwrap();
+    check_against_scratch(&lazy, &current, "read lazily, a session removed");
+    let mut at_once = FleetStore::new(settings(Separation::NONE)).unwrap();
+    let all = current.iter().map(|(n, t)| (n.clone(), t.clone())).collect();
+    at_once.update(all, &[], &mut source_of(&current)).unwrap();
+    assert!(
+        lazy.tiles() == at_once.tiles(),
+        "the tiles of a store read lazily and updated, against those made at once"
+    );
+
+    // What is given is checked: τ of another length; a tile saved as another.
+    let (settings, sessions, last_update) = (*store.settings(), store.sessions().to_vec(), store.last_update().clone());
+    let merges = || store.kept_merges().map(|(pair, m)| (pair, m.clone())).collect::<Vec<_>>();
+    let tiles = || {
+        let starts = store.starts();
+        store
+            .stored_tiles()
+            .unwrap()
+            .into_iter()
+            .map(|t| {
+                let [a, b] = t.tile().sessions;
+                let saved = Counted { stored: t.local([starts[a], starts[b]]), runs: None, reads: reads.clone() };
+                (t.tile().clone(), std::sync::Arc::new(saved) as std::sync::Arc<dyn loops_core::store::SavedTile>)
+            })
+            .collect::<Vec<_>>()
+    };
+    let short = vec![(vec![0.0; 1], vec![0.0; 1]); sessions.len()];
+    let err = FleetStore::from_saved_lazily(settings, sessions.clone(), tiles(), last_update.clone(), merges(), short)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("τ of 1 and 1 poses for session 0"), "{err}");
+    let mut swapped = tiles();
+    let k = swapped.iter().position(|(t, _)| t.sessions[0] != t.sessions[1]).unwrap();
+    let other = swapped.iter().position(|(t, _)| t.sessions[0] == t.sessions[1]).unwrap();
+    let moved = swapped[other].1.clone();
+    swapped[k].1 = moved;
+    let (own, other_s) = store.loop_duration().unwrap();
+    let starts = store.starts();
+    let duration = sessions
+        .iter()
+        .zip(&starts)
+        .map(|(s, &f)| (own[f..f + s.poses()].to_vec(), other_s[f..f + s.poses()].to_vec()))
+        .collect();
+    let swapped = FleetStore::from_saved_lazily(settings, sessions, swapped, last_update, merges(), duration).unwrap();
+    let err = swapped.stored_tiles().unwrap_err().to_string();
+    assert!(err.contains("it was saved as tile") && !err.contains('\n'), "{err}");
 }

@@ -36,7 +36,14 @@
 //! sessions come and go. An update links every part of the old state whose tiles are all
 //! still the store's and writes the rest (the tiles it scanned, and those of parts that held a
 //! replaced or removed session's tiles) as one new part named by the new state's generation:
-//! adding a day writes that day's tiles, not the fleet's. Stores of version 2 kept the tiles
+//! adding a day writes that day's tiles, not the fleet's. A part holds its tiles in row groups
+//! of 128 (LZ4 blobs without statistics), and is read lazily: opening a store reads each part's
+//! bytes and its columns that name and place the tiles, and decodes a row group's blobs the
+//! first time the store needs a tile of it ([`loops_core::store::KeptTile`]): an update that
+//! adds sessions reads no old tile (τ starts from `loop_duration.parquet`), one that replaces
+//! or removes a session the kept tiles of the sessions that lose one, a draw the runs of the
+//! tiles it asks; a part written again copies the bytes of the old tiles it keeps. A damaged
+//! blob is named (file and row) when it is read. Stores of version 2 kept the tiles
 //! in `tiles.parquet` and their runs in `tile_runs.parquet` (`tile` its row in `tiles.parquet`),
 //! in fleet indices; they still read, and their next update writes version 3.
 //!
@@ -44,7 +51,7 @@
 //! the merge of each session pair's tiles
 //! ([`loops_core::tile::MergedLoops::to_bytes`]). A store read back with them draws its samples and
 //! makes its next update without scanning a stored tile or merging a stored pair again
-//! ([`FleetStore::from_saved`]). A store of version 1 (without them) still reads: it merges
+//! ([`FleetStore::from_saved_lazily`]; [`FleetStore::from_saved`] for version 2). A store of version 1 (without them) still reads: it merges
 //! again on reading and rescans the tiles its first draw asks; its next update writes version 2.
 //! `draws.parquet` holds what the last draws found in the tiles (uniform picks' pools, rows'
 //! closest pairs), per seed
@@ -58,19 +65,19 @@
 //! killed at any moment leaves `store.json` naming the old state or the new one, each
 //! complete; the next update removes what the killed one left.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::fs::File;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use loops_core::{
     MetricSpec, SampleSize, Sampler, SamplerKind, Separation, Trajectory,
     fleet::FleetSample,
     store::{
-        FleetStore, ScannedTile, StoreLoops, StoreSamples, StoreSession, StoreSettings, StoreUpdate, StoredTile,
-        UpdatePlan,
+        FleetStore, SavedTile, ScannedTile, StoreLoops, StoreSamples, StoreSession, StoreSettings, StoreUpdate,
+        StoredTile, UpdatePlan,
     },
-    tile::{MergedLoops, SessionBlocks, TileDuration, TileRuns, TileSummary},
+    tile::{MergedLoops, SessionBlocks, Tile, TileDuration, TileRuns, TileSummary},
 };
 use parquet::data_type::{BoolType, ByteArray, ByteArrayType, DoubleType, Int64Type};
 use parquet::file::properties::WriterProperties;
@@ -181,11 +188,112 @@ impl TileKey {
     }
 }
 
-/// A file of a state's `tiles/` folder and the tiles it holds.
+/// A file of a state's `tiles/` folder and the tiles it holds (row by row), with its bytes
+/// where it was read back.
 #[derive(Debug, Clone)]
 struct TilePart {
     file: String,
     keys: Vec<TileKey>,
+    read: Option<Arc<PartFile>>,
+}
+
+/// Tiles a row group of a tile part holds: a reader decodes the blobs of the groups whose
+/// tiles it reads, alone.
+const PART_GROUP_ROWS: usize = 128;
+
+/// The first of a tile part's blob columns (`summary`, `duration`, `runs`); those before it
+/// name and place each tile.
+const PART_BLOBS: usize = 10;
+
+/// A tile part read back: its file's bytes, whose first columns are read with the store and
+/// whose blobs (each tile's summary, share of τ and runs), a row group at a time, when a tile
+/// of that group is first read ([`PartTile`]). Held in memory, so a later state's update may
+/// remove the file it came from.
+struct PartFile {
+    path: PathBuf,
+    reader: SerializedFileReader<bytes::Bytes>,
+    /// The first row of each row group.
+    groups: Vec<usize>,
+    /// Each row group's blob columns, where read.
+    blobs: Vec<[OnceLock<GroupBlobs>; 3]>,
+    /// Each tile's components and runs (-1 where saved without them), as the file has them.
+    counts: Vec<[i64; 2]>,
+}
+
+/// One blob column of a row group of a tile part, as read (or why it could not be).
+type GroupBlobs = std::result::Result<Vec<ByteArray>, String>;
+
+impl std::fmt::Debug for PartFile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PartFile").field("path", &self.path).field("groups", &self.groups).finish_non_exhaustive()
+    }
+}
+
+impl PartFile {
+    /// The bytes of blob `which` (0: summary, 1: share of τ, 2: runs) of the tile in `row`,
+    /// its row group decoded the first time.
+    fn blob(&self, which: usize, row: usize) -> std::result::Result<&[u8], String> {
+        let g = self.groups.partition_point(|&first| first <= row).saturating_sub(1);
+        let read = self.blobs[g][which].get_or_init(|| {
+            let mut column = Column::Blobs(Vec::new());
+            read_chunk(&self.reader, &self.path, g, PART_BLOBS + which, &mut column).map_err(|e| e.to_string())?;
+            match column {
+                Column::Blobs(values) => Ok(values),
+                _ => unreachable!("read as blobs"),
+            }
+        });
+        let values = read.as_ref().map_err(Clone::clone)?;
+        values.get(row - self.groups[g]).map(ByteArray::data).ok_or_else(|| format!("no row {row}"))
+    }
+}
+
+/// A tile of a part read back, read when the store first needs it ([`SavedTile`]): row `row`
+/// of `part`, which starts at `at` in its sessions' own indices.
+#[derive(Debug)]
+struct PartTile {
+    part: Arc<PartFile>,
+    row: usize,
+    at: [usize; 2],
+}
+
+impl PartTile {
+    fn corrupt(&self, reason: String) -> loops_core::Error {
+        let path = self.part.path.display();
+        loops_core::Error::InvalidState { what: "fleet store", reason: format!("{path}: row {}: {reason}", self.row) }
+    }
+
+    /// `tile` starts where the part's columns say.
+    fn check_at(&self, tile: &loops_core::tile::Tile) -> std::result::Result<(), String> {
+        if [tile.rows.start, tile.columns.start] != self.at {
+            return Err(format!("its blobs are of tile {tile:?}, which does not start at {:?}", self.at));
+        }
+        Ok(())
+    }
+}
+
+impl SavedTile for PartTile {
+    fn stored(&self) -> loops_core::Result<StoredTile> {
+        let read = || -> std::result::Result<StoredTile, String> {
+            let summary = TileSummary::from_bytes(self.part.blob(0, self.row)?).map_err(|e| e.to_string())?;
+            let duration = TileDuration::from_bytes(self.part.blob(1, self.row)?).map_err(|e| e.to_string())?;
+            self.check_at(&summary.tile)?;
+            Ok(StoredTile { summary, duration })
+        };
+        read().map_err(|reason| self.corrupt(reason))
+    }
+
+    fn runs(&self) -> loops_core::Result<Option<TileRuns>> {
+        let read = || -> std::result::Result<Option<TileRuns>, String> {
+            let bytes = self.part.blob(2, self.row)?;
+            if bytes.is_empty() {
+                return Ok(None);
+            }
+            let runs = TileRuns::from_bytes(bytes).map_err(|e| e.to_string())?;
+            self.check_at(runs.tile())?;
+            Ok(Some(runs))
+        };
+        read().map_err(|reason| self.corrupt(reason))
+    }
 }
 
 impl StoredFleet {
@@ -371,9 +479,10 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     let state = dir.join(&pointer.state);
     let last_update = file.last_update.into();
     if file.version >= 3 {
-        let (tiles, runs, parts) = read_parts(&state.join("tiles"), &sessions)?;
+        let (tiles, parts) = read_parts(&state.join("tiles"), &sessions)?;
         let merges = read_merges(&state.join("merges.parquet"))?;
-        let store = FleetStore::from_saved(config.settings, sessions, tiles, last_update, merges, runs)?;
+        let duration = read_duration(&state.join("loop_duration.parquet"), &sessions)?;
+        let store = FleetStore::from_saved_lazily(config.settings, sessions, tiles, last_update, merges, duration)?;
         read_draws(&state.join("draws.parquet"), &store)?;
         return Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts });
     }
@@ -399,14 +508,15 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts: Vec::new() })
 }
 
-/// A state's tiles, their runs (each where kept) and the parts that hold them.
-type StoredParts = (Vec<StoredTile>, Vec<Option<TileRuns>>, Vec<TilePart>);
+/// A state's tiles, each placed in the store's fleet and read from its part when first needed,
+/// and the parts that hold them.
+type StoredParts = (Vec<(Tile, Arc<dyn SavedTile>)>, Vec<TilePart>);
 
 /// The tiles of a state of layout 3 (the parts in its folder `tiles`), placed in the fleet of
-/// `sessions`, in plan order, with their runs, and the parts that hold them. Tiles decoded in
-/// parallel.
+/// `sessions`, in plan order, and the parts that hold them. Reads each part's bytes and its
+/// columns that name and place the tiles; their blobs are read when the store needs them.
+/// O(parts' bytes + tiles).
 fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
-    use rayon::prelude::*;
     let mut files: Vec<String> = std::fs::read_dir(folder)
         .and_then(|list| list.map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned())).collect())
         .map_err(|error| StoreError::Io { what: "listing", path: folder.to_path_buf(), error })?;
@@ -415,58 +525,95 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
     let index: std::collections::HashMap<&str, usize> =
         sessions.iter().enumerate().map(|(k, s)| (s.name.as_str(), k)).collect();
     let starts = loops_core::store::starts_of(sessions);
-    let mut placed: Vec<(StoredTile, Option<TileRuns>)> = Vec::new();
+    let mut tiles: Vec<(Tile, Arc<dyn SavedTile>)> = Vec::new();
     let mut parts = Vec::with_capacity(files.len());
     for file in files {
         let path = folder.join(&file);
-        let table = read_table(&path)?;
-        let read = (0..table.rows)
-            .into_par_iter()
-            .map(|k| -> std::result::Result<(TileKey, StoredTile, Option<TileRuns>), String> {
-                let row_of = |e: String| format!("row {k}: {e}");
-                let mut pair = [0; 2];
-                let mut fingerprints = [0; 2];
-                for side in 0..2 {
-                    let name = table.text(side, k).map_err(row_of)?;
-                    let text = table.text(2 + side, k).map_err(row_of)?;
-                    let fingerprint = fingerprint_of(text).map_err(row_of)?;
-                    let s = *index.get(name).ok_or_else(|| row_of(format!("session {name:?} is not in the store")))?;
-                    if sessions[s].fingerprint != fingerprint {
-                        return Err(row_of(format!(
-                            "a tile of session {name:?} as it was before (fingerprint {text})"
-                        )));
-                    }
-                    (pair[side], fingerprints[side]) = (s, fingerprint);
-                }
-                let summary = TileSummary::from_bytes(table.bytes(10, k)?).map_err(|e| row_of(e.to_string()))?;
-                let duration = TileDuration::from_bytes(table.bytes(11, k)?).map_err(|e| row_of(e.to_string()))?;
-                let local = StoredTile { summary, duration };
-                let runs = match table.bytes(12, k)? {
-                    [] => None,
-                    bytes => Some(TileRuns::from_bytes(bytes).map_err(|e| row_of(e.to_string()))?),
-                };
-                let at = [local.tile().rows.start, local.tile().columns.start];
-                let names = [sessions[pair[0]].name.clone(), sessions[pair[1]].name.clone()];
-                let place = [starts[pair[0]], starts[pair[1]]];
-                let runs = runs.map(|r| r.placed(pair, place));
-                Ok((TileKey { names, fingerprints, at }, local.placed(pair, place), runs))
-            })
-            .collect::<Vec<_>>()
-            // The first row that fails, whatever the threads.
-            .into_iter()
-            .collect::<std::result::Result<Vec<_>, String>>()
-            .map_err(|reason| StoreError::Corrupt { path: path.clone(), reason })?;
-        let mut keys = Vec::with_capacity(read.len());
-        for (key, tile, runs) in read {
-            keys.push(key);
-            placed.push((tile, runs));
+        let bytes =
+            std::fs::read(&path).map_err(|error| StoreError::Io { what: "reading", path: path.clone(), error })?;
+        let reader = SerializedFileReader::new(bytes::Bytes::from(bytes)).map_err(|e| parquet_corrupt(&path, e))?;
+        let corrupt = |reason: String| StoreError::Corrupt { path: path.clone(), reason };
+        let table = read_columns(&reader, &path, &|c| c < PART_BLOBS)?;
+        if table.names.get(PART_BLOBS..) != Some(&["summary", "duration", "runs"].map(String::from)[..]) {
+            return Err(corrupt(format!("columns {:?}, not those of a tile part", table.names)));
         }
-        parts.push(TilePart { file, keys });
+        let mut keys = Vec::with_capacity(table.rows);
+        let mut placed = Vec::with_capacity(table.rows);
+        let mut counts = Vec::with_capacity(table.rows);
+        for k in 0..table.rows {
+            let row_of = |e: String| corrupt(format!("row {k}: {e}"));
+            let mut pair = [0; 2];
+            let mut fingerprints = [0; 2];
+            for side in 0..2 {
+                let name = table.text(side, k).map_err(row_of)?;
+                let text = table.text(2 + side, k).map_err(row_of)?;
+                let fingerprint = fingerprint_of(text).map_err(row_of)?;
+                let s = *index.get(name).ok_or_else(|| row_of(format!("session {name:?} is not in the store")))?;
+                if sessions[s].fingerprint != fingerprint {
+                    return Err(row_of(format!("a tile of session {name:?} as it was before (fingerprint {text})")));
+                }
+                (pair[side], fingerprints[side]) = (s, fingerprint);
+            }
+            let cell = |c: usize| table.index(c, k).map_err(row_of);
+            let (at, ends) = ([cell(4)?, cell(6)?], [cell(5)?, cell(7)?]);
+            let side = |s: usize| {
+                let (first, end) = (starts[pair[s]] + at[s], starts[pair[s]] + ends[s]);
+                (at[s] <= ends[s] && ends[s] <= sessions[pair[s]].poses()).then_some(first..end).ok_or_else(|| {
+                    row_of(format!("poses {}..{} of session {:?}", at[s], ends[s], sessions[pair[s]].name))
+                })
+            };
+            let tile = Tile { sessions: pair, rows: side(0)?, columns: side(1)? };
+            counts.push([table.int(8, k).map_err(row_of)?, table.int(9, k).map_err(row_of)?]);
+            let names = [sessions[pair[0]].name.clone(), sessions[pair[1]].name.clone()];
+            keys.push(TileKey { names, fingerprints, at });
+            placed.push((tile, k, at));
+        }
+        let metadata = reader.metadata();
+        let mut groups = Vec::with_capacity(metadata.num_row_groups());
+        let mut first = 0;
+        for g in metadata.row_groups() {
+            groups.push(first);
+            first += usize::try_from(g.num_rows()).unwrap_or(0);
+        }
+        let blobs = groups.iter().map(|_| Default::default()).collect();
+        let part = Arc::new(PartFile { path: path.clone(), reader, groups, blobs, counts });
+        for (tile, row, at) in placed {
+            tiles.push((tile, Arc::new(PartTile { part: part.clone(), row, at })));
+        }
+        parts.push(TilePart { file, keys, read: Some(part) });
     }
     // Plan order: by row block, then column block (fleet indices order both).
-    placed.sort_by_key(|(t, _)| (t.tile().rows.start, t.tile().columns.start));
-    let (tiles, runs) = placed.into_iter().unzip();
-    Ok((tiles, runs, parts))
+    tiles.sort_by_key(|(t, _)| (t.rows.start, t.columns.start));
+    Ok((tiles, parts))
+}
+
+/// τ of each session as a state keeps it (`loop_duration.parquet`: a row per pose of each
+/// session, in order), by session.
+fn read_duration(path: &Path, sessions: &[StoreSession]) -> Result<Vec<(Vec<f64>, Vec<f64>)>> {
+    let table = read_table(path)?;
+    let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    let poses: usize = sessions.iter().map(StoreSession::poses).sum();
+    if table.rows != poses {
+        return Err(corrupt(format!("{} rows for the {poses} poses of the store's sessions", table.rows)));
+    }
+    let (own, other) = (table.floats(2).map_err(corrupt)?, table.floats(3).map_err(corrupt)?);
+    let mut first = 0;
+    let mut duration = Vec::with_capacity(sessions.len());
+    for (s, session) in sessions.iter().enumerate() {
+        for k in first..first + session.poses() {
+            let (at, pose) = (table.index(0, k).map_err(corrupt)?, table.index(1, k).map_err(corrupt)?);
+            if (at, pose) != (s, k - first) {
+                return Err(corrupt(format!(
+                    "row {k} is of pose {pose} of session {at}, not pose {} of {s}",
+                    k - first
+                )));
+            }
+        }
+        let end = first + session.poses();
+        duration.push((own[first..end].to_vec(), other[first..end].to_vec()));
+        first = end;
+    }
+    Ok(duration)
 }
 
 /// What a state's small files say: `store.json`, `settings.json` and `sessions.parquet`.
@@ -732,7 +879,7 @@ pub fn plan_store_update(
 /// Scans the tiles `tiles` (indices of the plan's tiles) of a planned update, each read
 /// session once: a session the update adds or replaces from `put` (those of the plan's
 /// update; others may be left out), a stored one from the pose files of the state planned
-/// from; each checked against the plan before it is scanned. Tiles in parallel.
+/// from (in parallel); each checked against the plan before it is scanned. Tiles in parallel.
 ///
 /// # Errors
 /// [`StoreError::Core`] for a tile out of range, a session missing from `put`, or poses that
@@ -743,43 +890,64 @@ pub fn scan_store_tiles(
     tiles: &[usize],
     put: &[(String, Trajectory)],
 ) -> Result<Vec<ScannedTile>> {
+    scan_reading(planned, tiles, put).map(|(scanned, _)| scanned)
+}
+
+/// [`scan_store_tiles`], with the sessions it read, by index of the plan's sessions.
+fn scan_reading(
+    planned: &StorePlan,
+    tiles: &[usize],
+    put: &[(String, Trajectory)],
+) -> Result<(Vec<ScannedTile>, std::collections::BTreeMap<usize, Trajectory>)> {
     let plan = &planned.plan;
+    if let Some(&k) = tiles.iter().find(|&&k| k >= plan.tiles().len()) {
+        return Err(loops_core::Error::InvalidParameter {
+            name: "tile",
+            value: k as f64,
+            expected: "a tile of the plan",
+        }
+        .into());
+    }
+    let mut sessions: Vec<usize> = tiles.iter().flat_map(|&k| plan.tiles()[k].sessions).collect();
+    sessions.sort_unstable();
+    sessions.dedup();
     let mut read: std::collections::BTreeMap<usize, Trajectory> = std::collections::BTreeMap::new();
-    for &k in tiles {
-        let Some(tile) = plan.tiles().get(k) else {
-            return Err(loops_core::Error::InvalidParameter {
-                name: "tile",
-                value: k as f64,
-                expected: "a tile of the plan",
+    for &s in sessions.iter().filter(|&&s| plan.is_new(s)) {
+        let session = &plan.sessions()[s];
+        let Some((_, t)) = put.iter().find(|(name, _)| *name == session.name) else {
+            return Err(loops_core::Error::StoreSession {
+                name: session.name.clone(),
+                problem: "is not given to scan",
             }
             .into());
         };
-        for s in tile.sessions {
-            if read.contains_key(&s) {
-                continue;
-            }
-            let session = &plan.sessions()[s];
-            let trajectory = if plan.is_new(s) {
-                let Some((_, t)) = put.iter().find(|(name, _)| *name == session.name) else {
-                    return Err(loops_core::Error::StoreSession {
-                        name: session.name.clone(),
-                        problem: "is not given to scan",
-                    }
-                    .into());
-                };
-                t.clone()
-            } else {
-                let folder = planned.poses.clone().unwrap_or_default();
-                read_poses(&folder.join(pose_file(session)))?
-            };
-            plan.check_session(s, &trajectory)?;
-            read.insert(s, trajectory);
-        }
+        plan.check_session(s, t)?;
+        read.insert(s, t.clone());
     }
-    Ok(plan.scan_tiles(tiles, |k| {
+    let stored: Vec<usize> = sessions.into_iter().filter(|&s| !plan.is_new(s)).collect();
+    let folder = planned.poses.clone().unwrap_or_default();
+    read.extend(stored.iter().copied().zip(read_stored(plan, &folder, &stored)?));
+    let scanned = plan.scan_tiles(tiles, |k| {
         let [a, b] = plan.tiles()[k].sessions;
         Ok([&read[&a], &read[&b]])
-    })?)
+    })?;
+    Ok((scanned, read))
+}
+
+/// The stored sessions `which` (indices of the plan's sessions) from their pose files in
+/// `folder`, in parallel, each checked to be the planned session's; the first failure in the
+/// order of `which`.
+fn read_stored(plan: &UpdatePlan, folder: &Path, which: &[usize]) -> Result<Vec<Trajectory>> {
+    use rayon::prelude::*;
+    let read: Vec<Result<Trajectory>> = which
+        .par_iter()
+        .map(|&s| {
+            let trajectory = read_poses(&folder.join(pose_file(&plan.sessions()[s])))?;
+            plan.check_session(s, &trajectory)?;
+            Ok(trajectory)
+        })
+        .collect();
+    read.into_iter().collect()
 }
 
 /// [`update_store`] with the tiles of its plan scanned elsewhere ([`scan_store_tiles`] of
@@ -842,26 +1010,40 @@ fn update_with(
         }
     };
     let poses_dir = old_state.as_ref().map(|s| dir.join(s).join("poses"));
+    // The update's steps ([`FleetStore::update`]), with the stored sessions its tiles meet read
+    // in parallel, and kept for the draw, which reads most of them again.
+    let sessions: Vec<loops_core::Result<StoreSession>> = {
+        use rayon::prelude::*;
+        put.par_iter().map(|(name, t)| StoreSession::new(name.clone(), t, store.settings())).collect()
+    };
+    let plan = store.plan_update(sessions.into_iter().collect::<loops_core::Result<Vec<_>>>()?, remove)?;
+    let planned = StorePlan { plan, poses: poses_dir.clone() };
+    let (scanned, mut read) = match scanned {
+        Some(scanned) => (scanned, std::collections::BTreeMap::new()),
+        None => scan_reading(&planned, &(0..planned.plan.tiles().len()).collect::<Vec<_>>(), &put)?,
+    };
+    let update = store.apply_update(&planned.plan, scanned)?;
+    // The stored sessions read, by name and fingerprint (the update moved their indices).
+    let mut kept_poses: HashMap<(String, u64), Trajectory> = std::mem::take(&mut read)
+        .into_iter()
+        .filter(|(s, _)| !planned.plan.is_new(*s))
+        .map(|(s, t)| {
+            let session = &planned.plan.sessions()[s];
+            ((session.name.clone(), session.fingerprint), t)
+        })
+        .collect();
     let new_poses: Vec<(String, Trajectory)> = put.clone();
-    // A session given now from what was given (the core checks its fingerprint), else from
-    // the current state's pose file.
+    // A session given now from what was given (the core checks its fingerprint), else as the
+    // update read it, else from the current state's pose file.
     let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
         if let Some((_, trajectory)) = new_poses.iter().find(|(name, _)| *name == s.name) {
             return Ok(trajectory.clone());
         }
+        if let Some(trajectory) = kept_poses.remove(&(s.name.clone(), s.fingerprint)) {
+            return Ok(trajectory);
+        }
         let path = poses_dir.as_ref().map(|p| p.join(pose_file(s))).unwrap_or_default();
         read_poses(&path).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
-    };
-    let update = match scanned {
-        None => store.update(put, remove, &mut source)?,
-        Some(scanned) => {
-            let sessions = put
-                .iter()
-                .map(|(name, t)| StoreSession::new(name.clone(), t, store.settings()))
-                .collect::<loops_core::Result<Vec<_>>>()?;
-            let plan = store.plan_update(sessions, remove)?;
-            store.apply_update(&plan, scanned)?
-        }
     };
     let loops = store.loops()?;
     let samples = match &config.sampler {
@@ -1051,6 +1233,18 @@ enum Column {
 }
 
 impl Column {
+    /// Its number of values.
+    fn len(&self) -> usize {
+        match self {
+            Column::Int(v) => v.len(),
+            Column::Float(v) => v.len(),
+            Column::Bool(v) => v.len(),
+            Column::Text(v) => v.len(),
+            Column::Bytes(v) => v.len(),
+            Column::Blobs(v) => v.len(),
+        }
+    }
+
     /// An empty column of the kind that holds `column`'s values.
     fn empty_like(column: &parquet::schema::types::ColumnDescriptor) -> Self {
         use parquet::basic::Type;
@@ -1063,8 +1257,15 @@ impl Column {
     }
 }
 
-/// Writes `columns` as a Parquet file of one row group (required columns, uncompressed), synced.
+/// Writes `columns` as a Parquet file of one row group (required columns, uncompressed but
+/// blobs), synced.
 fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
+    write_groups(path, columns, usize::MAX)
+}
+
+/// [`write_table`] in row groups of at most `group_rows` rows: a reader may then decode the
+/// groups it needs alone.
+fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) -> Result<()> {
     let fields: Vec<String> = columns
         .iter()
         .map(|(name, c)| match c {
@@ -1096,90 +1297,123 @@ fn write_table(path: &Path, columns: Vec<(&str, Column)>) -> Result<()> {
         },
     );
     let mut writer = SerializedFileWriter::new(file, schema, Arc::new(properties.build())).map_err(failed)?;
-    let mut group = writer.next_row_group().map_err(failed)?;
-    for (_, column) in columns {
-        let mut out = group.next_column().map_err(failed)?.expect("one writer per column of the schema");
-        match column {
-            Column::Int(v) => out.typed::<Int64Type>().write_batch(&v, None, None),
-            Column::Float(v) => out.typed::<DoubleType>().write_batch(&v, None, None),
-            Column::Bool(v) => out.typed::<BoolType>().write_batch(&v, None, None),
-            Column::Text(v) => {
-                let v: Vec<ByteArray> = v.into_iter().map(|s| ByteArray::from(s.into_bytes())).collect();
-                out.typed::<ByteArrayType>().write_batch(&v, None, None)
+    let columns: Vec<Column> = columns
+        .into_iter()
+        .map(|(_, column)| match column {
+            Column::Text(v) => Column::Blobs(v.into_iter().map(|s| ByteArray::from(s.into_bytes())).collect()),
+            Column::Bytes(v) => Column::Blobs(v.into_iter().map(ByteArray::from).collect()),
+            other => other,
+        })
+        .collect();
+    let rows = columns.first().map_or(0, Column::len);
+    // One group for a table without rows too.
+    for g in 0..rows.div_ceil(group_rows).max(1) {
+        let (first, end) = (g * group_rows, (g + 1).saturating_mul(group_rows).min(rows));
+        let mut group = writer.next_row_group().map_err(failed)?;
+        for column in &columns {
+            let mut out = group.next_column().map_err(failed)?.expect("one writer per column of the schema");
+            match column {
+                Column::Int(v) => out.typed::<Int64Type>().write_batch(&v[first..end], None, None),
+                Column::Float(v) => out.typed::<DoubleType>().write_batch(&v[first..end], None, None),
+                Column::Bool(v) => out.typed::<BoolType>().write_batch(&v[first..end], None, None),
+                Column::Blobs(v) => out.typed::<ByteArrayType>().write_batch(&v[first..end], None, None),
+                Column::Text(_) | Column::Bytes(_) => unreachable!("made blobs above"),
             }
-            Column::Bytes(v) => {
-                let v: Vec<ByteArray> = v.into_iter().map(ByteArray::from).collect();
-                out.typed::<ByteArrayType>().write_batch(&v, None, None)
-            }
-            Column::Blobs(v) => out.typed::<ByteArrayType>().write_batch(&v, None, None),
+            .map_err(failed)?;
+            out.close().map_err(failed)?;
         }
-        .map_err(failed)?;
-        out.close().map_err(failed)?;
+        group.close().map_err(failed)?;
     }
-    group.close().map_err(failed)?;
     let file = writer.into_inner().map_err(failed)?;
     file.sync_all().map_err(|error| StoreError::Io { what: "syncing", path: path.to_path_buf(), error })
 }
 
-/// A Parquet table read whole, column by column (the tables [`write_table`] writes: required
-/// columns of the five kinds of [`Column`]). Read with the column readers rather than the
-/// record API, which builds a row of named fields for every row: for the tiles' blobs and the
-/// pose files that costs more than decoding them.
+/// A Parquet table read column by column (the tables [`write_table`] writes: required columns
+/// of the five kinds of [`Column`]), whole or the columns asked. Read with the column readers
+/// rather than the record API, which builds a row of named fields for every row: for the
+/// tiles' blobs and the pose files that costs more than decoding them.
 struct Table {
     names: Vec<String>,
-    columns: Vec<Column>,
+    /// Each column, where read.
+    columns: Vec<Option<Column>>,
     rows: usize,
 }
 
 /// Reads the Parquet file at `path` whole.
 fn read_table(path: &Path) -> Result<Table> {
-    use parquet::column::reader::ColumnReader;
-    let failed =
-        |e: parquet::errors::ParquetError| StoreError::Corrupt { path: path.to_path_buf(), reason: e.to_string() };
     let file = File::open(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
-    let reader = SerializedFileReader::new(file).map_err(failed)?;
+    let reader = SerializedFileReader::new(file).map_err(|e| parquet_corrupt(path, e))?;
+    read_columns(&reader, path, &|_| true)
+}
+
+fn parquet_corrupt(path: &Path, e: parquet::errors::ParquetError) -> StoreError {
+    StoreError::Corrupt { path: path.to_path_buf(), reason: e.to_string() }
+}
+
+/// The columns `wanted` (by index) of the table `reader` reads from `path`, every row group;
+/// the others are left unread.
+fn read_columns<R: parquet::file::reader::ChunkReader + 'static>(
+    reader: &SerializedFileReader<R>,
+    path: &Path,
+    wanted: &dyn Fn(usize) -> bool,
+) -> Result<Table> {
     let metadata = reader.metadata();
     let schema = metadata.file_metadata().schema_descr();
     let names: Vec<String> = schema.columns().iter().map(|c| c.name().to_owned()).collect();
     let rows = usize::try_from(metadata.file_metadata().num_rows()).unwrap_or(0);
     let mut columns: Vec<Option<Column>> = (0..names.len()).map(|_| None).collect();
     for g in 0..metadata.num_row_groups() {
-        let group = reader.get_row_group(g).map_err(failed)?;
-        let count = usize::try_from(group.metadata().num_rows()).unwrap_or(0);
-        for (c, column) in columns.iter_mut().enumerate() {
-            // Reads `count` values of a required column into `values`, or says what is wrong.
-            fn all<T: parquet::data_type::DataType>(
-                mut r: parquet::column::reader::ColumnReaderImpl<T>,
-                count: usize,
-                values: &mut Vec<T::T>,
-            ) -> std::result::Result<(), String> {
-                let before = values.len();
-                let (records, _, _) = r.read_records(count, None, None, values).map_err(|e| e.to_string())?;
-                if records != count || values.len() != before + count {
-                    return Err(format!("{} values of {count} rows", values.len() - before));
-                }
-                Ok(())
-            }
-            let reader = group.get_column_reader(c).map_err(failed)?;
-            let read = match (reader, column.get_or_insert_with(|| Column::empty_like(&schema.column(c)))) {
-                (ColumnReader::Int64ColumnReader(r), Column::Int(v)) => all(r, count, v),
-                (ColumnReader::DoubleColumnReader(r), Column::Float(v)) => all(r, count, v),
-                (ColumnReader::BoolColumnReader(r), Column::Bool(v)) => all(r, count, v),
-                (ColumnReader::ByteArrayColumnReader(r), Column::Blobs(v)) => all(r, count, v),
-                _ => Err("a column of a kind this store does not write".to_owned()),
-            };
-            read.map_err(|reason| {
-                failed(parquet::errors::ParquetError::General(format!("column {}: {reason}", names[c])))
-            })?;
+        for (c, column) in columns.iter_mut().enumerate().filter(|(c, _)| wanted(*c)) {
+            let column = column.get_or_insert_with(|| Column::empty_like(&schema.column(c)));
+            read_chunk(reader, path, g, c, column)?;
         }
     }
-    let columns = columns.into_iter().map(|c| c.unwrap_or(Column::Int(Vec::new()))).collect();
     Ok(Table { names, columns, rows })
+}
+
+/// Appends the values of column `c` in row group `g` of the table `reader` reads from `path`
+/// to `into` (a column of its kind).
+fn read_chunk<R: parquet::file::reader::ChunkReader + 'static>(
+    reader: &SerializedFileReader<R>,
+    path: &Path,
+    g: usize,
+    c: usize,
+    into: &mut Column,
+) -> Result<()> {
+    use parquet::column::reader::ColumnReader;
+    // Reads `count` values of a required column into `values`, or says what is wrong.
+    fn all<T: parquet::data_type::DataType>(
+        mut r: parquet::column::reader::ColumnReaderImpl<T>,
+        count: usize,
+        values: &mut Vec<T::T>,
+    ) -> std::result::Result<(), String> {
+        let before = values.len();
+        let (records, _, _) = r.read_records(count, None, None, values).map_err(|e| e.to_string())?;
+        if records != count || values.len() != before + count {
+            return Err(format!("{} values of {count} rows", values.len() - before));
+        }
+        Ok(())
+    }
+    let group = reader.get_row_group(g).map_err(|e| parquet_corrupt(path, e))?;
+    let count = usize::try_from(group.metadata().num_rows()).unwrap_or(0);
+    let read = match (group.get_column_reader(c).map_err(|e| parquet_corrupt(path, e))?, into) {
+        (ColumnReader::Int64ColumnReader(r), Column::Int(v)) => all(r, count, v),
+        (ColumnReader::DoubleColumnReader(r), Column::Float(v)) => all(r, count, v),
+        (ColumnReader::BoolColumnReader(r), Column::Bool(v)) => all(r, count, v),
+        (ColumnReader::ByteArrayColumnReader(r), Column::Blobs(v)) => all(r, count, v),
+        _ => Err("a column of a kind this store does not write".to_owned()),
+    };
+    let name = reader.metadata().file_metadata().schema_descr().column(c).name().to_owned();
+    read.map_err(|reason| StoreError::Corrupt { path: path.to_path_buf(), reason: format!("column {name}: {reason}") })
 }
 
 impl Table {
     fn column(&self, i: usize) -> std::result::Result<&Column, String> {
-        self.columns.get(i).ok_or_else(|| format!("no column {i} (the table has {})", self.columns.len()))
+        match self.columns.get(i) {
+            Some(Some(column)) => Ok(column),
+            Some(None) => Err(format!("column {} ({i}) was not read", self.names[i])),
+            None => Err(format!("no column {i} (the table has {})", self.columns.len())),
+        }
     }
     fn wrong(&self, i: usize, kind: &str) -> String {
         format!("column {} ({i}) is not {kind}", self.names[i])
@@ -1266,11 +1500,10 @@ fn read_poses(path: &Path) -> Result<Trajectory> {
     let axes =
         (0..dim).map(|c| table.floats(3 + c)).collect::<std::result::Result<Vec<_>, String>>().map_err(corrupt)?;
     let coords: Vec<f64> = (0..table.rows).flat_map(|k| axes.iter().map(move |a| a[k])).collect();
-    let manifold = table.text(3 + dim, 0).map_err(corrupt)?.to_owned();
-    let state = serde_json::json!({
-        "timestamps_s": times, "coords": coords, "dim": dim, "cell_widths_s": cells, "manifold": manifold,
-    });
-    serde_json::from_value(state).map_err(|e| corrupt(format!("the poses do not make a trajectory: {e}")))
+    let manifold = table.text(3 + dim, 0).map_err(corrupt)?;
+    let manifold = manifold_of(manifold).ok_or_else(|| corrupt(format!("manifold {manifold:?} is unknown")))?;
+    Trajectory::from_saved(times.to_vec(), coords, dim, cells.to_vec(), manifold)
+        .map_err(|e| corrupt(format!("the poses do not make a trajectory: {e}")))
 }
 
 fn write_sessions(path: &Path, store: &FleetStore) -> Result<()> {
@@ -1340,8 +1573,16 @@ fn write_parts(
     parts.sort_by(|a, b| a.file.cmp(&b.file));
     let mut new: Vec<usize> = unwritten.into_values().collect();
     new.sort_unstable();
+    // Where an old part read back holds a tile written again: its bytes are copied.
+    let mut rows: std::collections::HashMap<&TileKey, (&PartFile, usize)> = std::collections::HashMap::new();
+    for part in old_parts {
+        if let Some(read) = &part.read {
+            rows.extend(part.keys.iter().enumerate().map(|(row, key)| (key, (read.as_ref(), row))));
+        }
+    }
     if !new.is_empty() {
-        parts.push(write_part(folder, &format!("{generation:06}.parquet"), store, &starts, &keys, new)?);
+        let file = format!("{generation:06}.parquet");
+        parts.push(write_part(folder, &file, store, &starts, &keys, new, &rows)?);
     }
     crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
         what: "syncing",
@@ -1352,7 +1593,9 @@ fn write_parts(
 }
 
 /// Writes the store's tiles `new` (indices, named `keys`) as the part `file` of `folder`, each
-/// in its sessions' own indices (`starts`: the sessions' first fleet indices).
+/// in its sessions' own indices (`starts`: the sessions' first fleet indices): the bytes of
+/// a tile an old part holds (`rows`) copied, those of others encoded (the tiles an update
+/// scanned), in row groups of [`PART_GROUP_ROWS`] tiles.
 fn write_part(
     folder: &Path,
     file: &str,
@@ -1360,30 +1603,46 @@ fn write_part(
     starts: &[usize],
     keys: &[TileKey],
     new: Vec<usize>,
+    rows: &std::collections::HashMap<&TileKey, (&PartFile, usize)>,
 ) -> Result<TilePart> {
     use rayon::prelude::*;
-    let runs: Vec<Option<&TileRuns>> = store.kept_runs().collect();
-    // Each new tile's blobs in its sessions' own indices, in parallel.
-    let blobs: Vec<[Vec<u8>; 3]> = new
+    // Each new tile's blobs in its sessions' own indices, with its components and runs, in
+    // parallel; the first failure in order.
+    type Written = ([Vec<u8>; 3], [i64; 2]);
+    let written: Vec<Result<Written>> = new
         .par_iter()
         .map(|&k| {
+            if let Some(&(part, row)) = rows.get(&keys[k]) {
+                let blob = |which: usize| {
+                    part.blob(which, row)
+                        .map(<[u8]>::to_vec)
+                        .map_err(|reason| StoreError::Corrupt { path: part.path.clone(), reason })
+                };
+                return Ok(([blob(0)?, blob(1)?, blob(2)?], part.counts[row]));
+            }
             let t = &store.tiles()[k];
             let [a, b] = t.tile().sessions;
-            let local = t.local([starts[a], starts[b]]);
-            let runs = runs[k].map_or_else(Vec::new, |r| r.local().to_bytes());
-            [local.summary.to_bytes(), local.duration.to_bytes(), runs]
+            let local = t.stored()?.local([starts[a], starts[b]]);
+            let runs = t.runs()?;
+            let counts = [local.summary.components.len() as i64, runs.map_or(-1, |r| r.run_count() as i64)];
+            let runs = runs.map_or_else(Vec::new, |r| r.local().to_bytes());
+            Ok(([local.summary.to_bytes(), local.duration.to_bytes(), runs], counts))
         })
         .collect();
     let tile = |k: usize| store.tiles()[k].tile();
     let side = |f: &dyn Fn(&TileKey) -> String| Column::Text(new.iter().map(|&k| f(&keys[k])).collect());
     let local = |f: &dyn Fn(usize) -> usize| ints(new.iter().map(|&k| f(k)));
-    let (mut summaries, mut durations, mut all_runs) = (Vec::new(), Vec::new(), Vec::new());
-    for [summary, duration, runs] in blobs {
+    let (mut summaries, mut durations, mut all_runs, mut components, mut run_counts) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for written in written {
+        let ([summary, duration, runs], [c, r]) = written?;
         summaries.push(summary);
         durations.push(duration);
         all_runs.push(runs);
+        components.push(c);
+        run_counts.push(r);
     }
-    write_table(
+    write_groups(
         &folder.join(file),
         vec![
             ("session_a", side(&|key| key.names[0].clone())),
@@ -1394,14 +1653,16 @@ fn write_part(
             ("rows_end", local(&|k| keys[k].at[0] + tile(k).rows.len())),
             ("columns_start", local(&|k| keys[k].at[1])),
             ("columns_end", local(&|k| keys[k].at[1] + tile(k).columns.len())),
-            ("components", ints(new.iter().map(|&k| store.tiles()[k].summary.components.len()))),
-            ("run_count", Column::Int(new.iter().map(|&k| runs[k].map_or(-1, |r| r.run_count() as i64)).collect())),
+            ("components", Column::Int(components)),
+            ("run_count", Column::Int(run_counts)),
             ("summary", Column::Bytes(summaries)),
             ("duration", Column::Bytes(durations)),
             ("runs", Column::Bytes(all_runs)),
         ],
+        PART_GROUP_ROWS,
     )?;
-    Ok(TilePart { file: file.to_owned(), keys: new.into_iter().map(|k| keys[k].clone()).collect() })
+    let keys = new.into_iter().map(|k| keys[k].clone()).collect();
+    Ok(TilePart { file: file.to_owned(), keys, read: None })
 }
 
 /// `draws.parquet`: what the store's last draws found in its tiles, by seed.
@@ -1670,4 +1931,44 @@ pub fn store_components_to_csv<W: std::io::Write>(
         })
         .collect::<std::io::Result<Vec<_>>>()?;
     crate::csv_rows::write_csv(out, &STORE_COMPONENT_COLUMNS, rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A part with one damaged blob still opens (no blob is read then); reading that tile names
+    /// the file and the row in one line, and the others read.
+    #[test]
+    fn a_damaged_tile_is_named_when_it_is_read() {
+        let dir = tempfile::tempdir().unwrap();
+        let fleet = loops_core::UrbanFleet {
+            vehicles: 2,
+            days: 2,
+            drive: loops_core::UrbanDrive { duration_s: 40.0, rate_hz: 4.0, city_size_m: 300.0, ..Default::default() },
+            start_spread_s: 600.0,
+        }
+        .generate()
+        .unwrap();
+        let put = (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
+        let config = StoreConfig { settings: StoreSettings { block: 50, ..StoreSettings::new(8.0) }, sampler: None };
+        let report = update_store(dir.path(), Some(&config), put, &[]).unwrap();
+        let part = dir.path().join(&report.stored.state).join("tiles").join("000001.parquet");
+        let table = read_table(&part).unwrap();
+        assert!(table.rows > 2, "{} tiles", table.rows);
+        let Table { names, columns, .. } = table;
+        let mut columns: Vec<(&str, Column)> =
+            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
+        let Column::Blobs(summaries) = &mut columns[PART_BLOBS].1 else { panic!("summaries are blobs") };
+        summaries[0] = ByteArray::from(b"ILts not a summary".to_vec());
+        std::fs::remove_file(&part).unwrap();
+        write_groups(&part, columns, 2).unwrap();
+
+        let read = read_store(dir.path()).unwrap();
+        let error = read.store.stored_tiles().unwrap_err().to_string();
+        let named = error.contains(&part.display().to_string()) && error.contains("row 0:");
+        assert!(named && !error.contains('\n'), "{error}");
+        let fine = read.store.tiles().iter().filter(|t| t.stored().is_ok()).count();
+        assert_eq!(fine, read.store.tiles().len() - 1);
+    }
 }

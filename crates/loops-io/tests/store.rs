@@ -370,7 +370,7 @@ fn stores_of_the_first_two_layouts_still_read_and_update() {
         std::fs::write(&file, text).unwrap();
     }
     let old = read_store(&dir).unwrap();
-    assert!(old.store.kept_runs().all(|r| r.is_none()));
+    assert!(old.store.kept_runs().unwrap().iter().all(Option::is_none));
     let (got, got_bits, rescanned) = answer(&old.store, &mut source);
     assert!(rescanned > 0, "a store without runs rescans to draw");
     assert!(got == want && got_bits == want_bits);
@@ -412,6 +412,9 @@ fn an_update_writes_only_the_parts_that_change() {
     }
     assert_eq!(second["000002.parquet"].0, report.update.tiles_scanned);
     assert_eq!(second.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len());
+    // Read back lazily, the add read none of the old tiles' summaries (its draw reads runs).
+    let read = report.stored.store.tiles().iter().filter(|t| t.is_read()).count();
+    assert_eq!(read, report.update.tiles_scanned, "tiles read by an add");
     // A replacement: the parts that held the session's tiles are written again without them;
     // the store equals one made from scratch, read back too.
     let (name, t) = &day0[0];
