@@ -1060,39 +1060,57 @@ fn update_with(
     };
     std::fs::create_dir_all(staged.join("poses")).map_err(io("creating", &staged))?;
     let changed: HashSet<&str> = store.last_update().changed().into_iter().collect();
-    for s in store.sessions() {
-        let target = staged.join("poses").join(pose_file(s));
-        if target.exists() {
-            continue;
-        }
-        let given = new_poses.iter().find(|(n, _)| *n == s.name && changed.contains(n.as_str()));
-        match (given, &poses_dir) {
-            (Some((_, trajectory)), _) => write_poses(&target, trajectory)?,
-            (None, Some(old)) => {
-                let from = old.join(pose_file(s));
-                if std::fs::hard_link(&from, &target).is_err() {
-                    std::fs::copy(&from, &target).map_err(io("copying", &from))?;
-                }
-            }
-            (None, None) => unreachable!("a stored session without a state"),
-        }
-    }
     let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
-    write_sessions(&staged.join("sessions.parquet"), &store)?;
     let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
     let old_tiles = old_state.as_ref().map(|s| dir.join(s).join("tiles"));
     let old = old_tiles.as_deref().map(|folder| (folder, old_parts.as_slice()));
-    let parts = write_parts(&staged.join("tiles"), old, &store, generation)?;
-    write_merges(&staged.join("merges.parquet"), &store)?;
-    write_draws(&staged.join("draws.parquet"), &store)?;
     let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
-    write_components(&staged.join("components.parquet"), &loops, &names, &added)?;
-    write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names)?;
-    write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other)?;
-    write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names)?;
-    let settings_json =
-        serde_json::to_string_pretty(&settings_file(&config, store.last_update())).map_err(std::io::Error::other);
-    write_synced(&staged.join("settings.json"), settings_json.map(String::into_bytes))?;
+    let poses = || -> Result<()> {
+        for s in store.sessions() {
+            let target = staged.join("poses").join(pose_file(s));
+            if target.exists() {
+                continue;
+            }
+            let given = new_poses.iter().find(|(n, _)| *n == s.name && changed.contains(n.as_str()));
+            match (given, &poses_dir) {
+                (Some((_, trajectory)), _) => write_poses(&target, trajectory)?,
+                (None, Some(old)) => {
+                    let from = old.join(pose_file(s));
+                    if std::fs::hard_link(&from, &target).is_err() {
+                        std::fs::copy(&from, &target).map_err(io("copying", &from))?;
+                    }
+                }
+                (None, None) => unreachable!("a stored session without a state"),
+            }
+        }
+        Ok(())
+    };
+    let settings = || {
+        let json =
+            serde_json::to_string_pretty(&settings_file(&config, store.last_update())).map_err(std::io::Error::other);
+        write_synced(&staged.join("settings.json"), json.map(String::into_bytes))
+    };
+    // Each file on its own: the tables in parallel, the first failure in this order.
+    let tables: [&(dyn Fn() -> Result<()> + Sync); 9] = [
+        &poses,
+        &|| write_sessions(&staged.join("sessions.parquet"), &store),
+        &|| write_merges(&staged.join("merges.parquet"), &store),
+        &|| write_draws(&staged.join("draws.parquet"), &store),
+        &|| write_components(&staged.join("components.parquet"), &loops, &names, &added),
+        &|| write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
+        &|| write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other),
+        &|| write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
+        &settings,
+    ];
+    let (parts, written) = rayon::join(
+        || write_parts(&staged.join("tiles"), old, &store, generation),
+        || {
+            use rayon::prelude::*;
+            tables.par_iter().map(|write| write()).collect::<Vec<Result<()>>>()
+        },
+    );
+    let parts = parts?;
+    written.into_iter().collect::<Result<()>>()?;
     crate::atomic::sync_directory(&staged.join("poses")).map_err(io("syncing", &staged))?;
     crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
 
