@@ -2295,7 +2295,9 @@ class FleetStore:
     @staticmethod
     def open(path: str | PathLike[str]) -> FleetStore:
         """The store in the folder ``path``: its current state, or, for a missing or empty folder,
-        a store that the first :meth:`update` makes there (with the settings it gives).
+        a store that the first :meth:`update` makes there (with the settings it gives). Opening
+        reads the state's small tables and where its tiles lie; a stored tile is decoded (and
+        checked) when an update or a draw first needs it.
 
         Raises:
             FileNotFoundError: ``path`` holds files but no store (no ``store.json``).
@@ -2372,7 +2374,7 @@ class FleetStore:
                 a name given twice, or removed and given, or removed but not stored; a session of
                 another dimension or manifold. The store is then unchanged.
             OSError, LoopsIOError: a path that cannot be read; a store file that cannot be read
-                or written (named).
+                or written (named; a stored tile the update reads, by part file and row).
         """
     def __len__(self) -> int: ...
     @property

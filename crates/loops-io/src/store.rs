@@ -1022,7 +1022,16 @@ fn update_with(
         Some(scanned) => (scanned, std::collections::BTreeMap::new()),
         None => scan_reading(&planned, &(0..planned.plan.tiles().len()).collect::<Vec<_>>(), &put)?,
     };
-    let update = store.apply_update(&planned.plan, scanned)?;
+    // What the store holds that does not read back (a stored tile decoded now, a pose file) is
+    // a damaged file of its state, not a bad argument.
+    let state_dir = old_state.as_ref().map_or_else(|| dir.to_path_buf(), |s| dir.join(s));
+    let damaged = |error: StoreError| match error {
+        StoreError::Core(loops_core::Error::InvalidState { what: "fleet store", reason }) => {
+            StoreError::Corrupt { path: state_dir.clone(), reason }
+        }
+        error => error,
+    };
+    let update = store.apply_update(&planned.plan, scanned).map_err(|e| damaged(e.into()))?;
     // The stored sessions read, by name and fingerprint (the update moved their indices).
     let mut kept_poses: HashMap<(String, u64), Trajectory> = std::mem::take(&mut read)
         .into_iter()
@@ -1047,7 +1056,9 @@ fn update_with(
     };
     let loops = store.loops()?;
     let samples = match &config.sampler {
-        Some((sampler, between_only)) => Some(store.samples(&loops, sampler, *between_only, &mut source)?),
+        Some((sampler, between_only)) => {
+            Some(store.samples(&loops, sampler, *between_only, &mut source).map_err(|e| damaged(e.into()))?)
+        }
         None => None,
     };
     let (own, other) = store.loop_duration()?;
@@ -1109,7 +1120,7 @@ fn update_with(
             tables.par_iter().map(|write| write()).collect::<Vec<Result<()>>>()
         },
     );
-    let parts = parts?;
+    let parts = parts.map_err(damaged)?;
     written.into_iter().collect::<Result<()>>()?;
     crate::atomic::sync_directory(&staged.join("poses")).map_err(io("syncing", &staged))?;
     crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
@@ -1988,5 +1999,24 @@ mod tests {
         assert!(named && !error.contains('\n'), "{error}");
         let fine = read.store.tiles().iter().filter(|t| t.stored().is_ok()).count();
         assert_eq!(fine, read.store.tiles().len() - 1);
+
+        // Every summary damaged: replacing a session reads the kept tiles of its neighbours,
+        // and fails as a damaged file of the store, naming the part; the store is unchanged.
+        let table = read_table(&part).unwrap();
+        let Table { names, columns, .. } = table;
+        let mut columns: Vec<(&str, Column)> =
+            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
+        let Column::Blobs(summaries) = &mut columns[PART_BLOBS].1 else { panic!("summaries are blobs") };
+        summaries.iter_mut().for_each(|s| *s = ByteArray::from(b"ILts not a summary".to_vec()));
+        std::fs::remove_file(&part).unwrap();
+        write_groups(&part, columns, PART_GROUP_ROWS).unwrap();
+        let t = fleet.session(0);
+        let moved: Vec<f64> = t.coords().iter().map(|x| x + 0.25).collect();
+        let moved = Trajectory::new(t.timestamps_s().to_vec(), moved, t.dim()).unwrap();
+        let error = update_store(dir.path(), None, vec![(fleet.names()[0].clone(), moved)], &[]).unwrap_err();
+        assert!(matches!(error, StoreError::Corrupt { .. }), "{error:?}");
+        let error = error.to_string();
+        assert!(error.contains("000001.parquet: row ") && !error.contains('\n'), "{error}");
+        assert_eq!(read_store(dir.path()).unwrap().state, report.stored.state, "the store is unchanged");
     }
 }

@@ -234,7 +234,9 @@ impl FleetStore {
     const DEFAULT_BLOCK: usize = StoreSettings::DEFAULT_BLOCK;
 
     /// The store in the folder ``path``: its current state, or, for a missing or empty folder,
-    /// a store that the first :meth:`update` makes there (with the settings it gives).
+    /// a store that the first :meth:`update` makes there (with the settings it gives). Opening
+    /// reads the state's small tables and where its tiles lie; a stored tile is decoded (and
+    /// checked) when an update or a draw first needs it.
     ///
     /// Raises:
     ///     FileNotFoundError: ``path`` holds files but no store (no ``store.json``).
@@ -296,7 +298,7 @@ impl FleetStore {
     ///         a name given twice, or removed and given, or removed but not stored; a session of
     ///         another dimension or manifold. The store is then unchanged.
     ///     OSError, LoopsIOError: a path that cannot be read; a store file that cannot be read
-    ///         or written (named).
+    ///         or written (named; a stored tile the update reads, by part file and row).
     #[pyo3(signature = (*, add=None, remove=None, gamma=None, metric=None, separation=SeparationArg::Auto, block=None,
         sampler=None, rate=None, budget=None, seed=None, between_only=false, skip_trivial=false, threads=None,
         format=None, axes=None, topic=None, time=None, frames=None, rate_hz=None, drop_duplicate_stamps=false,
