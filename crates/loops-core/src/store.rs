@@ -256,12 +256,7 @@ impl StoredTile {
     fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
         let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
         let pair = |x: [usize; 2]| [at(x[0], 0), at(x[1], 1)];
-        let old = &self.summary.tile;
-        let tile = Tile {
-            sessions,
-            rows: at(old.rows.start, 0)..at(old.rows.end, 0),
-            columns: at(old.columns.start, 1)..at(old.columns.end, 1),
-        };
+        let tile = self.summary.tile.moved(sessions, shifts);
         for c in &mut self.summary.components {
             c.rows = [at(c.rows[0], 0), at(c.rows[1], 0)];
             c.columns = [at(c.columns[0], 1), at(c.columns[1], 1)];
@@ -388,13 +383,7 @@ impl KeptTile {
     /// Renumbers its sessions and moves it by `shifts` ([`StoredTile::move_to`]): what is read
     /// moves with it, what is not yet read is placed where the tile then is.
     fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
-        let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
-        let old = &self.tile;
-        self.tile = Tile {
-            sessions,
-            rows: at(old.rows.start, 0)..at(old.rows.end, 0),
-            columns: at(old.columns.start, 1)..at(old.columns.end, 1),
-        };
+        self.tile = self.tile.moved(sessions, shifts);
         if let Some(Ok(stored)) = self.stored.get_mut() {
             stored.move_to(sessions, shifts);
         }

@@ -1018,7 +1018,7 @@ fn update_with(
     };
     let plan = store.plan_update(sessions.into_iter().collect::<loops_core::Result<Vec<_>>>()?, remove)?;
     let planned = StorePlan { plan, poses: poses_dir.clone() };
-    let (scanned, mut read) = match scanned {
+    let (scanned, read) = match scanned {
         Some(scanned) => (scanned, std::collections::BTreeMap::new()),
         None => scan_reading(&planned, &(0..planned.plan.tiles().len()).collect::<Vec<_>>(), &put)?,
     };
@@ -1033,7 +1033,7 @@ fn update_with(
     };
     let update = store.apply_update(&planned.plan, scanned).map_err(|e| damaged(e.into()))?;
     // The stored sessions read, by name and fingerprint (the update moved their indices).
-    let mut kept_poses: HashMap<(String, u64), Trajectory> = std::mem::take(&mut read)
+    let mut kept_poses: HashMap<(String, u64), Trajectory> = read
         .into_iter()
         .filter(|(s, _)| !planned.plan.is_new(*s))
         .map(|(s, t)| {
@@ -1602,14 +1602,16 @@ fn write_parts(
     parts.sort_by(|a, b| a.file.cmp(&b.file));
     let mut new: Vec<usize> = unwritten.into_values().collect();
     new.sort_unstable();
-    // Where an old part read back holds a tile written again: its bytes are copied.
-    let mut rows: std::collections::HashMap<&TileKey, (&PartFile, usize)> = std::collections::HashMap::new();
-    for part in old_parts {
-        if let Some(read) = &part.read {
-            rows.extend(part.keys.iter().enumerate().map(|(row, key)| (key, (read.as_ref(), row))));
-        }
-    }
     if !new.is_empty() {
+        // Where an old part not linked, read back, holds a tile written again: its bytes are
+        // copied.
+        let linked: HashSet<&str> = parts.iter().map(|p| p.file.as_str()).collect();
+        let mut rows: HashMap<&TileKey, (&PartFile, usize)> = HashMap::new();
+        for part in old_parts.iter().filter(|p| !linked.contains(p.file.as_str())) {
+            if let Some(read) = &part.read {
+                rows.extend(part.keys.iter().enumerate().map(|(row, key)| (key, (read.as_ref(), row))));
+            }
+        }
         let file = format!("{generation:06}.parquet");
         parts.push(write_part(folder, &file, store, &starts, &keys, new, &rows)?);
     }
@@ -1632,7 +1634,7 @@ fn write_part(
     starts: &[usize],
     keys: &[TileKey],
     new: Vec<usize>,
-    rows: &std::collections::HashMap<&TileKey, (&PartFile, usize)>,
+    rows: &HashMap<&TileKey, (&PartFile, usize)>,
 ) -> Result<TilePart> {
     use rayon::prelude::*;
     // Each new tile's blobs in its sessions' own indices, with its components and runs, in

@@ -232,12 +232,7 @@ impl TileRuns {
     /// sessions alone. O(the tile's stretches).
     pub(crate) fn move_to(&mut self, sessions: [usize; 2], shifts: [isize; 2]) {
         let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
-        let old = &self.tile;
-        self.tile = Tile {
-            sessions,
-            rows: at(old.rows.start, 0)..at(old.rows.end, 0),
-            columns: at(old.columns.start, 1)..at(old.columns.end, 1),
-        };
+        self.tile = self.tile.moved(sessions, shifts);
         self.starts = [at(self.starts[0], 0), at(self.starts[1], 1)];
         // The stretches of rows come first; within one session both sides move alike.
         for (p, f) in self.piece_starts.iter().zip(&mut self.fleet_starts) {

@@ -127,6 +127,17 @@ impl Tile {
             && self.columns.start < self.columns.end
             && (a != b || self.columns.end > self.rows.start)
     }
+
+    /// The tile of sessions `sessions`, its rows and columns moved by `shifts` (fleet
+    /// indices): where a tile lies once the fleet's sessions are renumbered.
+    pub(crate) fn moved(&self, sessions: [usize; 2], shifts: [isize; 2]) -> Tile {
+        let at = |x: usize, side: usize| x.wrapping_add_signed(shifts[side]);
+        Tile {
+            sessions,
+            rows: at(self.rows.start, 0)..at(self.rows.end, 0),
+            columns: at(self.columns.start, 1)..at(self.columns.end, 1),
+        }
+    }
 }
 
 /// What planning tiles needs of one session, learnt by whoever reads it: its pose count, its
@@ -1671,11 +1682,7 @@ impl MergedLoops {
             m.sessions = sessions;
         }
         for t in &mut self.tiles {
-            *t = Tile {
-                sessions,
-                rows: at(t.rows.start, 0)..at(t.rows.end, 0),
-                columns: at(t.columns.start, 1)..at(t.columns.end, 1),
-            };
+            *t = t.moved(sessions, shifts);
         }
         self.firsts.iter_mut().for_each(|f| *f = pair(*f));
     }
