@@ -170,6 +170,16 @@ def test_duckdb_pandas_and_pyarrow_read_what_find_fleet_loops_finds(tmp_path: Pa
         blobs = [bytes(b) for (b,) in rows]
         assert blobs == pq.read_table(tiles)[column].to_pylist()
         assert blobs and all(b[:4] == tag for b in blobs if b), column
+    # The merges too: one a session pair with tiles, the second day's pairs in a part of their
+    # own.
+    merges = (state / "merges").as_posix()
+    assert sorted(p.name for p in (state / "merges").iterdir()) == parts
+    (pairs,) = sql(
+        f"SELECT count(*) FROM (SELECT DISTINCT session_a, session_b FROM '{tiles}/*.parquet')"
+    ).fetchone()
+    rows = sql(f"SELECT session_a, session_b, merge FROM '{merges}/*.parquet'").fetchall()
+    assert len(rows) == len({(a, b) for a, b, _ in rows}) == pairs
+    assert all(bytes(m)[:4] == b"ILml" for _, _, m in rows)
 
     # The Python tables are those of find_fleet_loops, and a store read back is the same.
     assert_same_answer(store, all_sessions)

@@ -32,6 +32,11 @@ SETTINGS = {"gamma": 40.0, "block": 300, "sampler": "one", "budget": 40, "seed":
 #: The tables of a state that hold the answer (the others hold how it is kept).
 ANSWER = ("components", "session_pairs", "loop_duration", "samples")
 TABLES = ("sessions", "tiles", "merges", *ANSWER)
+#: The tables kept by part (a folder of Parquet files), with the columns that order their rows.
+PARTS = {
+    "tiles": ("session_a", "session_b", "rows_start", "columns_start"),
+    "merges": ("session_a", "session_b"),
+}
 #: The store's ownership marker (it names the last process that held the store).
 MARKER = "loops-store.json"
 
@@ -70,13 +75,11 @@ def state(folder: Path) -> Path:
 
 
 def table_bits(folder: Path, name: str, drop: tuple[str, ...] = ()) -> dict[str, bytes]:
-    """A table's columns as bytes: floats bit for bit. The tiles are the rows of every part of
-    the state's folder ``tiles``, by sessions and place (how they fall into parts depends on
-    the updates that wrote them)."""
-    if name == "tiles":
-        table = pq.read_table(state(folder) / "tiles").sort_by(
-            [(c, "ascending") for c in ("session_a", "session_b", "rows_start", "columns_start")]
-        )
+    """A table's columns as bytes: floats bit for bit. The tiles and the merges are the rows of
+    every part of the state's folders ``tiles`` and ``merges``, by sessions (and place: how
+    they fall into parts depends on the updates that wrote them)."""
+    if name in PARTS:
+        table = pq.read_table(state(folder) / name).sort_by([(c, "ascending") for c in PARTS[name]])
         table = table.to_pydict()
     else:
         table = pq.read_table(state(folder) / f"{name}.parquet").to_pydict()

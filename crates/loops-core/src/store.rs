@@ -76,10 +76,11 @@ use crate::trajectory::{Manifold, Trajectory};
 /// The version of a store's layout (its tables and their meaning). Version 2 adds what a
 /// store keeps of its answer (the merge of each session pair's tiles, the runs of each tile);
 /// version 3 keeps its tiles by part, each tile in its sessions' own indices
-/// ([`StoredTile::local`]), so that an update writes only the parts that change. Stores of
-/// versions 1 and 2 read back (version 1 without what it keeps of its answer); one of a later
-/// version is refused.
-pub const STORE_FORMAT_VERSION: u16 = 3;
+/// ([`StoredTile::local`]), so that an update writes only the parts that change; version 4
+/// keeps the merges of its session pairs by part too, each in its sessions' own indices
+/// ([`MergedLoops::local`]). Stores of versions 1 to 3 read back (version 1 without what it
+/// keeps of its answer); one of a later version is refused.
+pub const STORE_FORMAT_VERSION: u16 = 4;
 
 /// What a store's answer depends on, fixed when the store is made.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,14 +4,15 @@
 //! ```text
 //! DIR/
 //!   loops-store.json      the ownership marker (out_dir::STORE)
-//!   store.json            {"format": "inexact-loops fleet store", "version": 3, "state": "state-000003"}
+//!   store.json            {"format": "inexact-loops fleet store", "version": 4, "state": "state-000003"}
 //!   state-000003/         the current state, complete
 //!     settings.json       metric, gamma, separation, block, sampler, what the last update did
 //!     sessions.parquet    session, name, fingerprint, poses, t_first_s, t_last_s, span_s, dim, manifold, blocks
 //!     tiles/GENERATION.parquet  session_a, session_b, fingerprint_a, fingerprint_b, rows_start, rows_end,
 //!                         columns_start, columns_end, components, run_count, summary, duration, runs
 //!                                                          (version 3; before: tiles.parquet, tile_runs.parquet)
-//!     merges.parquet      a, b, tiles, components, merge       (version 2)
+//!     merges/GENERATION.parquet  session_a, session_b, fingerprint_a, fingerprint_b, tiles, components, merge
+//!                                                          (version 4; before: merges.parquet, version 2)
 //!     draws.parquet       seed, draw                           (version 2, optional)
 //!     components.parquet  id, session_a, session_b, a, b, trivial, area_s2, pair_count, run_count, holes,
 //!                         i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
@@ -38,7 +39,7 @@
 //! replaced or removed session's tiles) as one new part named by the new state's generation:
 //! adding a day writes that day's tiles, not the fleet's. A part holds its tiles in row groups
 //! of 128 (LZ4 blobs without statistics), and is read lazily: opening a store reads each part's
-//! bytes and its columns that name and place the tiles, and decodes a row group's blobs the
+//! columns that name and place the tiles, holding the file open, and reads a row group's blobs the
 //! first time the store needs a tile of it ([`loops_core::store::KeptTile`]): an update that
 //! adds sessions reads no old tile (τ starts from `loop_duration.parquet`), one that replaces
 //! or removes a session the kept tiles of the sessions that lose one, a draw the runs of the
@@ -47,8 +48,17 @@
 //! in `tiles.parquet` and their runs in `tile_runs.parquet` (`tile` its row in `tiles.parquet`),
 //! in fleet indices; they still read, and their next update writes version 3.
 //!
-//! **What the answer is made of** (version 2). Each tile's runs (above), and `merges.parquet`
-//! the merge of each session pair's tiles
+//! **Merges by part** (version 4). The folder `merges` holds the merge of each session pair's
+//! tiles ([`loops_core::tile::MergedLoops::to_bytes`]) in parts, as `tiles` holds the tiles:
+//! each in its two sessions' own indices ([`loops_core::tile::MergedLoops::local`]), named by
+//! their names and fingerprints, the parts whose merges are all still the store's linked, the
+//! others written as one new part (at most [`MAX_TILE_PARTS`] parts): adding a day writes the
+//! merges of that day's session pairs. Opening a store decodes every merge (in parallel): the
+//! components table and the draw need them all. Stores of version 3 kept them in
+//! `merges.parquet`, in fleet indices; they still read, and their next update writes version 4.
+//!
+//! **What the answer is made of** (version 2). Each tile's runs (above), and the merge of each
+//! session pair's tiles (`merges.parquet` until version 3)
 //! ([`loops_core::tile::MergedLoops::to_bytes`]). A store read back with them draws its samples and
 //! makes its next update without scanning a stored tile or merging a stored pair again
 //! ([`FleetStore::from_saved_lazily`]; [`FleetStore::from_saved`] for version 2). A store of version 1 (without them) still reads: it merges
@@ -163,14 +173,32 @@ pub struct StoredFleet {
     /// The files of its state's `tiles/` folder, with the tiles each holds (none for a state
     /// of layout 1 or 2, whose tiles are in one table).
     parts: Vec<TilePart>,
+    /// The files of its state's `merges/` folder, with the merges each holds (none for a
+    /// state of layout 3 or before, whose merges are in one table).
+    merge_parts: Vec<MergePart>,
 }
 
-/// A tile's name in a store's folder: its sessions (name and fingerprint: a replaced session's
-/// tiles are not its new ones) and its first row and column in their own indices.
+/// A session pair's name in a store's folder: its sessions' names and fingerprints (a replaced
+/// session's tiles and merges are not its new ones). What names a merge.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
-struct TileKey {
+struct PairKey {
     names: [String; 2],
     fingerprints: [u64; 2],
+}
+
+impl PairKey {
+    /// The name of the store's session pair `[a, b]`.
+    fn of(store: &FleetStore, [a, b]: [usize; 2]) -> Self {
+        let s = store.sessions();
+        PairKey { names: [s[a].name.clone(), s[b].name.clone()], fingerprints: [s[a].fingerprint, s[b].fingerprint] }
+    }
+}
+
+/// A tile's name in a store's folder: its session pair and its first row and column in their
+/// own indices.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct TileKey {
+    pair: PairKey,
     at: [usize; 2],
 }
 
@@ -179,23 +207,29 @@ impl TileKey {
     fn of(store: &FleetStore, starts: &[usize], k: usize) -> Self {
         let tile = store.tiles()[k].tile();
         let [a, b] = tile.sessions;
-        let s = store.sessions();
-        TileKey {
-            names: [s[a].name.clone(), s[b].name.clone()],
-            fingerprints: [s[a].fingerprint, s[b].fingerprint],
-            at: [tile.rows.start - starts[a], tile.columns.start - starts[b]],
-        }
+        TileKey { pair: PairKey::of(store, [a, b]), at: [tile.rows.start - starts[a], tile.columns.start - starts[b]] }
     }
 }
 
-/// A file of a state's `tiles/` folder and the tiles it holds (row by row), with its bytes
-/// where it was read back.
+/// A file of one of a state's folders of parts (`tiles`, `merges`) and what it holds, by key
+/// (row by row), with the file as read back where the rows' bytes are read lazily (tiles).
 #[derive(Debug, Clone)]
-struct TilePart {
+struct Part<K> {
     file: String,
-    keys: Vec<TileKey>,
+    keys: Vec<K>,
     read: Option<Arc<PartFile>>,
 }
+
+/// A part of a state's folder `tiles`.
+type TilePart = Part<TileKey>;
+
+/// A part of a state's folder `merges`.
+type MergePart = Part<PairKey>;
+
+/// The columns of a part of a state's folder `merges`: each merge in its sessions' own
+/// indices ([`MergedLoops::local`]).
+const MERGE_COLUMNS: [&str; 7] =
+    ["session_a", "session_b", "fingerprint_a", "fingerprint_b", "tiles", "components", "merge"];
 
 /// Tiles a row group of a tile part holds: a reader decodes the blobs of the groups whose
 /// tiles it reads, alone.
@@ -205,13 +239,13 @@ const PART_GROUP_ROWS: usize = 128;
 /// name and place each tile.
 const PART_BLOBS: usize = 10;
 
-/// A tile part read back: its file's bytes, whose first columns are read with the store and
+/// A tile part read back: its open file, whose first columns are read with the store and
 /// whose blobs (each tile's summary, share of τ and runs), a row group at a time, when a tile
-/// of that group is first read ([`PartTile`]). Held in memory, so a later state's update may
-/// remove the file it came from.
+/// of that group is first read ([`PartTile`]). The file is held open, so a later state's
+/// update may remove its name: it is read until the part is dropped.
 struct PartFile {
     path: PathBuf,
-    reader: SerializedFileReader<bytes::Bytes>,
+    reader: SerializedFileReader<AtFile>,
     /// The first row of each row group.
     groups: Vec<usize>,
     /// Each row group's blob columns, where read.
@@ -222,6 +256,78 @@ struct PartFile {
 
 /// One blob column of a row group of a tile part, as read (or why it could not be).
 type GroupBlobs = std::result::Result<Vec<ByteArray>, String>;
+
+/// A file that Parquet reads by byte ranges at their offsets (`pread`): the row groups of a
+/// part are decoded by several threads at once, and the readers that `File`'s own
+/// `ChunkReader` makes share one file position (they are clones of one handle). Written here:
+/// the two calls it needs are the standard library's.
+struct AtFile {
+    file: Arc<File>,
+    len: u64,
+}
+
+impl AtFile {
+    fn open(path: &Path) -> std::io::Result<Self> {
+        let file = File::open(path)?;
+        let len = file.metadata()?.len();
+        Ok(AtFile { file: Arc::new(file), len })
+    }
+}
+
+/// Reads `buf.len()` bytes or fewer of `file` at `offset`.
+fn read_at(file: &File, buf: &mut [u8], offset: u64) -> std::io::Result<usize> {
+    #[cfg(unix)]
+    return std::os::unix::fs::FileExt::read_at(file, buf, offset);
+    #[cfg(windows)]
+    return std::os::windows::fs::FileExt::seek_read(file, buf, offset);
+}
+
+impl parquet::file::reader::Length for AtFile {
+    fn len(&self) -> u64 {
+        self.len
+    }
+}
+
+/// [`AtFile`] read on from an offset.
+struct AtRead {
+    file: Arc<File>,
+    at: u64,
+}
+
+impl std::io::Read for AtRead {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = read_at(&self.file, buf, self.at)?;
+        self.at += n as u64;
+        Ok(n)
+    }
+}
+
+impl parquet::file::reader::ChunkReader for AtFile {
+    /// Buffered: a page header is read a few bytes at a time.
+    type T = std::io::BufReader<AtRead>;
+
+    fn get_read(&self, start: u64) -> parquet::errors::Result<Self::T> {
+        Ok(std::io::BufReader::with_capacity(4096, AtRead { file: self.file.clone(), at: start }))
+    }
+
+    fn get_bytes(&self, start: u64, length: usize) -> parquet::errors::Result<bytes::Bytes> {
+        let mut buffer = vec![0; length];
+        let mut done = 0;
+        while done < length {
+            match read_at(&self.file, &mut buffer[done..], start + done as u64) {
+                Ok(0) => {
+                    return Err(parquet::errors::ParquetError::EOF(format!(
+                        "{length} bytes at {start}: the file ends after {done}"
+                    )));
+                }
+                Ok(n) => done += n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+        Ok(buffer.into())
+    }
+}
 
 impl std::fmt::Debug for PartFile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -236,7 +342,8 @@ impl PartFile {
         let g = self.groups.partition_point(|&first| first <= row).saturating_sub(1);
         let read = self.blobs[g][which].get_or_init(|| {
             let mut column = Column::Blobs(Vec::new());
-            read_chunk(&self.reader, &self.path, g, PART_BLOBS + which, &mut column).map_err(|e| e.to_string())?;
+            read_chunk(&self.reader, &self.path, g, PART_BLOBS + which, usize::MAX, &mut column)
+                .map_err(|e| e.to_string())?;
             match column {
                 Column::Blobs(values) => Ok(values),
                 _ => unreachable!("read as blobs"),
@@ -480,11 +587,15 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     let last_update = file.last_update.into();
     if file.version >= 3 {
         let (tiles, parts) = read_parts(&state.join("tiles"), &sessions)?;
-        let merges = read_merges(&state.join("merges.parquet"))?;
+        let (merges, merge_parts) = if file.version >= 4 {
+            read_merge_parts(&state.join("merges"), &sessions)?
+        } else {
+            (read_merges(&state.join("merges.parquet"))?, Vec::new())
+        };
         let duration = read_duration(&state.join("loop_duration.parquet"), &sessions)?;
         let store = FleetStore::from_saved_lazily(config.settings, sessions, tiles, last_update, merges, duration)?;
         read_draws(&state.join("draws.parquet"), &store)?;
-        return Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts });
+        return Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts, merge_parts });
     }
     let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
     let tiles_path = state.join("tiles.parquet");
@@ -505,7 +616,14 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         read_draws(&state.join("draws.parquet"), &store)?;
         store
     };
-    Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts: Vec::new() })
+    Ok(StoredFleet {
+        dir: dir.to_path_buf(),
+        state: pointer.state,
+        store,
+        config,
+        parts: Vec::new(),
+        merge_parts: Vec::new(),
+    })
 }
 
 /// A state's tiles, each placed in the store's fleet and read from its part when first needed,
@@ -513,25 +631,19 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
 type StoredParts = (Vec<(Tile, Arc<dyn SavedTile>)>, Vec<TilePart>);
 
 /// The tiles of a state of layout 3 (the parts in its folder `tiles`), placed in the fleet of
-/// `sessions`, in plan order, and the parts that hold them. Reads each part's bytes and its
-/// columns that name and place the tiles; their blobs are read when the store needs them.
-/// O(parts' bytes + tiles).
+/// `sessions`, in plan order, and the parts that hold them. Reads each part's columns that
+/// name and place the tiles, holding the file open; their blobs are read when the
+/// store needs them. O(tiles).
 fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
-    let mut files: Vec<String> = std::fs::read_dir(folder)
-        .and_then(|list| list.map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned())).collect())
-        .map_err(|error| StoreError::Io { what: "listing", path: folder.to_path_buf(), error })?;
-    files.retain(|f| f.ends_with(".parquet"));
-    files.sort_unstable();
-    let index: std::collections::HashMap<&str, usize> =
-        sessions.iter().enumerate().map(|(k, s)| (s.name.as_str(), k)).collect();
+    let names = Names::of(sessions);
     let starts = loops_core::store::starts_of(sessions);
     let mut tiles: Vec<(Tile, Arc<dyn SavedTile>)> = Vec::new();
-    let mut parts = Vec::with_capacity(files.len());
-    for file in files {
+    let mut parts = Vec::new();
+    for file in part_files(folder)? {
         let path = folder.join(&file);
-        let bytes =
-            std::fs::read(&path).map_err(|error| StoreError::Io { what: "reading", path: path.clone(), error })?;
-        let reader = SerializedFileReader::new(bytes::Bytes::from(bytes)).map_err(|e| parquet_corrupt(&path, e))?;
+        let opened =
+            AtFile::open(&path).map_err(|error| StoreError::Io { what: "reading", path: path.clone(), error })?;
+        let reader = SerializedFileReader::new(opened).map_err(|e| parquet_corrupt(&path, e))?;
         let corrupt = |reason: String| StoreError::Corrupt { path: path.clone(), reason };
         let table = read_columns(&reader, &path, &|c| c < PART_BLOBS)?;
         if table.names.get(PART_BLOBS..) != Some(&["summary", "duration", "runs"].map(String::from)[..]) {
@@ -542,18 +654,7 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
         let mut counts = Vec::with_capacity(table.rows);
         for k in 0..table.rows {
             let row_of = |e: String| corrupt(format!("row {k}: {e}"));
-            let mut pair = [0; 2];
-            let mut fingerprints = [0; 2];
-            for side in 0..2 {
-                let name = table.text(side, k).map_err(row_of)?;
-                let text = table.text(2 + side, k).map_err(row_of)?;
-                let fingerprint = fingerprint_of(text).map_err(row_of)?;
-                let s = *index.get(name).ok_or_else(|| row_of(format!("session {name:?} is not in the store")))?;
-                if sessions[s].fingerprint != fingerprint {
-                    return Err(row_of(format!("a tile of session {name:?} as it was before (fingerprint {text})")));
-                }
-                (pair[side], fingerprints[side]) = (s, fingerprint);
-            }
+            let (pair, key) = names.pair(&table, k, "tile").map_err(row_of)?;
             let cell = |c: usize| table.index(c, k).map_err(row_of);
             let (at, ends) = ([cell(4)?, cell(6)?], [cell(5)?, cell(7)?]);
             let side = |s: usize| {
@@ -564,8 +665,7 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
             };
             let tile = Tile { sessions: pair, rows: side(0)?, columns: side(1)? };
             counts.push([table.int(8, k).map_err(row_of)?, table.int(9, k).map_err(row_of)?]);
-            let names = [sessions[pair[0]].name.clone(), sessions[pair[1]].name.clone()];
-            keys.push(TileKey { names, fingerprints, at });
+            keys.push(TileKey { pair: key, at });
             placed.push((tile, k, at));
         }
         let metadata = reader.metadata();
@@ -586,6 +686,89 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
     tiles.sort_by_key(|(t, _)| (t.rows.start, t.columns.start));
     Ok((tiles, parts))
 }
+
+/// The Parquet files of a folder of parts, in name order.
+fn part_files(folder: &Path) -> Result<Vec<String>> {
+    let mut files: Vec<String> = std::fs::read_dir(folder)
+        .and_then(|list| list.map(|e| e.map(|e| e.file_name().to_string_lossy().into_owned())).collect())
+        .map_err(|error| StoreError::Io { what: "listing", path: folder.to_path_buf(), error })?;
+    files.retain(|f| f.ends_with(".parquet"));
+    files.sort_unstable();
+    Ok(files)
+}
+
+/// A state's sessions by name: what a part's first four columns (`session_a`, `session_b`,
+/// `fingerprint_a`, `fingerprint_b`) name.
+struct Names<'a> {
+    sessions: &'a [StoreSession],
+    index: HashMap<&'a str, usize>,
+}
+
+impl<'a> Names<'a> {
+    fn of(sessions: &'a [StoreSession]) -> Self {
+        Names { sessions, index: sessions.iter().enumerate().map(|(k, s)| (s.name.as_str(), k)).collect() }
+    }
+
+    /// The session pair that row `k` of a part's `table` names, as indices and as its key:
+    /// sessions of the state, as they are now (a `what` of a session as it was before is not
+    /// the state's).
+    fn pair(&self, table: &Table, k: usize, what: &str) -> std::result::Result<([usize; 2], PairKey), String> {
+        let (mut pair, mut fingerprints) = ([0; 2], [0; 2]);
+        for side in 0..2 {
+            let name = table.text(side, k)?;
+            let text = table.text(2 + side, k)?;
+            let fingerprint = fingerprint_of(text)?;
+            let s = *self.index.get(name).ok_or_else(|| format!("session {name:?} is not in the store"))?;
+            if self.sessions[s].fingerprint != fingerprint {
+                return Err(format!("a {what} of session {name:?} as it was before (fingerprint {text})"));
+            }
+            (pair[side], fingerprints[side]) = (s, fingerprint);
+        }
+        let names = pair.map(|s| self.sessions[s].name.clone());
+        Ok((pair, PairKey { names, fingerprints }))
+    }
+}
+
+/// The merges of a state of layout 4 (the parts in its folder `merges`), each decoded and
+/// placed in the fleet of `sessions` (in parallel), and the parts that hold them. O(merges'
+/// bytes).
+fn read_merge_parts(folder: &Path, sessions: &[StoreSession]) -> Result<(Merges, Vec<MergePart>)> {
+    use rayon::prelude::*;
+    let names = Names::of(sessions);
+    let starts = loops_core::store::starts_of(sessions);
+    let mut merges = Vec::new();
+    let mut parts = Vec::new();
+    for file in part_files(folder)? {
+        let path = folder.join(&file);
+        let corrupt = |reason: String| StoreError::Corrupt { path: path.clone(), reason };
+        let table = read_table(&path)?;
+        if table.names != MERGE_COLUMNS {
+            return Err(corrupt(format!("columns {:?}, not those of a merge part", table.names)));
+        }
+        let rows = (0..table.rows)
+            .map(|k| names.pair(&table, k, "merge").map_err(|e| corrupt(format!("row {k}: {e}"))))
+            .collect::<Result<Vec<_>>>()?;
+        let decoded = rows
+            .par_iter()
+            .enumerate()
+            .map(|(k, &([a, b], _))| {
+                let merge =
+                    table.bytes(6, k).and_then(|bytes| MergedLoops::from_bytes(bytes).map_err(|e| e.to_string()));
+                merge
+                    .map(|m| ([a, b], m.placed([a, b], [starts[a], starts[b]])))
+                    .map_err(|e| corrupt(format!("row {k}: {e}")))
+            })
+            .collect::<Vec<Result<_>>>();
+        for merge in decoded {
+            merges.push(merge?);
+        }
+        parts.push(MergePart { file, keys: rows.into_iter().map(|(_, key)| key).collect(), read: None });
+    }
+    Ok((merges, parts))
+}
+
+/// Merges by session pair, in fleet indices, as [`FleetStore::from_saved_lazily`] takes them.
+type Merges = Vec<([usize; 2], MergedLoops)>;
 
 /// τ of each session as a state keeps it (`loop_duration.parquet`: a row per pose of each
 /// session, in order), by session.
@@ -998,13 +1181,13 @@ fn update_with(
             out.remove(&name)?;
         }
     }
-    let (mut store, config, old_state, old_parts) = match (current, config) {
+    let (mut store, config, old_state, old_parts, old_merge_parts) = match (current, config) {
         (Some(c), Some(given)) => {
             check_same(dir, &c.config, given)?;
-            (c.store, c.config, Some(c.state), c.parts)
+            (c.store, c.config, Some(c.state), c.parts, c.merge_parts)
         }
-        (Some(c), None) => (c.store, c.config, Some(c.state), c.parts),
-        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None, Vec::new()),
+        (Some(c), None) => (c.store, c.config, Some(c.state), c.parts, c.merge_parts),
+        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None, Vec::new(), Vec::new()),
         (None, None) => {
             return Err(StoreError::NotAStore { path: dir.to_path_buf() });
         }
@@ -1075,6 +1258,8 @@ fn update_with(
     let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
     let old_tiles = old_state.as_ref().map(|s| dir.join(s).join("tiles"));
     let old = old_tiles.as_deref().map(|folder| (folder, old_parts.as_slice()));
+    let old_merges = old_state.as_ref().map(|s| dir.join(s).join("merges"));
+    let old_merges = old_merges.as_deref().map(|folder| (folder, old_merge_parts.as_slice()));
     let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
     let poses = || -> Result<()> {
         for s in store.sessions() {
@@ -1102,10 +1287,9 @@ fn update_with(
         write_synced(&staged.join("settings.json"), json.map(String::into_bytes))
     };
     // Each file on its own: the tables in parallel, the first failure in this order.
-    let tables: [&(dyn Fn() -> Result<()> + Sync); 9] = [
+    let tables: [&(dyn Fn() -> Result<()> + Sync); 8] = [
         &poses,
         &|| write_sessions(&staged.join("sessions.parquet"), &store),
-        &|| write_merges(&staged.join("merges.parquet"), &store),
         &|| write_draws(&staged.join("draws.parquet"), &store),
         &|| write_components(&staged.join("components.parquet"), &loops, &names, &added),
         &|| write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
@@ -1113,14 +1297,20 @@ fn update_with(
         &|| write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
         &settings,
     ];
-    let (parts, written) = rayon::join(
-        || write_parts(&staged.join("tiles"), old, &store, generation),
+    let ((parts, merge_parts), written) = rayon::join(
+        || {
+            rayon::join(
+                || write_parts(&staged.join("tiles"), old, &store, generation),
+                || write_merge_parts(&staged.join("merges"), old_merges, &store, generation),
+            )
+        },
         || {
             use rayon::prelude::*;
             tables.par_iter().map(|write| write()).collect::<Vec<Result<()>>>()
         },
     );
     let parts = parts.map_err(damaged)?;
+    let merge_parts = merge_parts?;
     written.into_iter().collect::<Result<()>>()?;
     crate::atomic::sync_directory(&staged.join("poses")).map_err(io("syncing", &staged))?;
     crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
@@ -1146,7 +1336,7 @@ fn update_with(
         added_components: added.len(),
         samples,
         loops,
-        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config, parts },
+        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config, parts, merge_parts },
     };
     Ok(report)
 }
@@ -1394,19 +1584,20 @@ fn read_columns<R: parquet::file::reader::ChunkReader + 'static>(
     for g in 0..metadata.num_row_groups() {
         for (c, column) in columns.iter_mut().enumerate().filter(|(c, _)| wanted(*c)) {
             let column = column.get_or_insert_with(|| Column::empty_like(&schema.column(c)));
-            read_chunk(reader, path, g, c, column)?;
+            read_chunk(reader, path, g, c, usize::MAX, column)?;
         }
     }
     Ok(Table { names, columns, rows })
 }
 
 /// Appends the values of column `c` in row group `g` of the table `reader` reads from `path`
-/// to `into` (a column of its kind).
+/// to `into` (a column of its kind), those of its first `most` rows.
 fn read_chunk<R: parquet::file::reader::ChunkReader + 'static>(
     reader: &SerializedFileReader<R>,
     path: &Path,
     g: usize,
     c: usize,
+    most: usize,
     into: &mut Column,
 ) -> Result<()> {
     use parquet::column::reader::ColumnReader;
@@ -1424,7 +1615,7 @@ fn read_chunk<R: parquet::file::reader::ChunkReader + 'static>(
         Ok(())
     }
     let group = reader.get_row_group(g).map_err(|e| parquet_corrupt(path, e))?;
-    let count = usize::try_from(group.metadata().num_rows()).unwrap_or(0);
+    let count = usize::try_from(group.metadata().num_rows()).unwrap_or(0).min(most);
     let read = match (group.get_column_reader(c).map_err(|e| parquet_corrupt(path, e))?, into) {
         (ColumnReader::Int64ColumnReader(r), Column::Int(v)) => all(r, count, v),
         (ColumnReader::DoubleColumnReader(r), Column::Float(v)) => all(r, count, v),
@@ -1516,22 +1707,32 @@ fn write_poses(path: &Path, t: &Trajectory) -> Result<()> {
     write_table(path, columns)
 }
 
+/// The trajectory of a pose file ([`write_poses`]): its times, cell widths and coordinates,
+/// and the manifold of its first row (the column repeats it; the pose numbers are the rows').
 fn read_poses(path: &Path) -> Result<Trajectory> {
-    let table = read_table(path)?;
+    let file = File::open(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
+    let reader = SerializedFileReader::new(file).map_err(|e| parquet_corrupt(path, e))?;
     let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
+    let width = reader.metadata().file_metadata().schema_descr().num_columns();
+    let dim = width.checked_sub(4).filter(|&d| d > 0).ok_or_else(|| corrupt(format!("{width} columns")))?;
+    let mut table = read_columns(&reader, path, &|c| (1..3 + dim).contains(&c))?;
     if table.rows == 0 {
         return Err(corrupt("no poses".to_owned()));
     }
-    let width = table.columns.len();
-    let dim = width.checked_sub(4).filter(|&d| d > 0).ok_or_else(|| corrupt(format!("{width} columns")))?;
-    let times = table.floats(1).map_err(corrupt)?;
-    let cells = table.floats(2).map_err(corrupt)?;
+    let mut manifold = Column::Blobs(Vec::new());
+    read_chunk(&reader, path, 0, 3 + dim, 1, &mut manifold)?;
+    table.columns[3 + dim] = Some(manifold);
+    let manifold = table.text(3 + dim, 0).map_err(corrupt)?;
+    let manifold = manifold_of(manifold).ok_or_else(|| corrupt(format!("manifold {manifold:?} is unknown")))?;
     let axes =
         (0..dim).map(|c| table.floats(3 + c)).collect::<std::result::Result<Vec<_>, String>>().map_err(corrupt)?;
     let coords: Vec<f64> = (0..table.rows).flat_map(|k| axes.iter().map(move |a| a[k])).collect();
-    let manifold = table.text(3 + dim, 0).map_err(corrupt)?;
-    let manifold = manifold_of(manifold).ok_or_else(|| corrupt(format!("manifold {manifold:?} is unknown")))?;
-    Trajectory::from_saved(times.to_vec(), coords, dim, cells.to_vec(), manifold)
+    let mut take = |c: usize| match table.columns[c].take() {
+        Some(Column::Float(values)) => Ok(values),
+        _ => Err(corrupt(format!("column {} ({c}) is not DOUBLE", table.names[c]))),
+    };
+    let (times, cells) = (take(1)?, take(2)?);
+    Trajectory::from_saved(times, coords, dim, cells, manifold)
         .map_err(|e| corrupt(format!("the poses do not make a trajectory: {e}")))
 }
 
@@ -1559,31 +1760,24 @@ fn write_sessions(path: &Path, store: &FleetStore) -> Result<()> {
 /// a bounded number of files.
 const MAX_TILE_PARTS: usize = 32;
 
-/// The store's tiles as the parts of a state's folder `tiles` (created here): each part of
-/// the old state (in `old`) whose tiles are all still the store's is linked (copied where a
-/// link cannot be made), the other tiles written anew, each in its sessions' own indices
-/// ([`StoredTile::local`]), as one part named by the state's `generation`. An update that adds
-/// sessions writes only the tiles it scanned; one that replaces or removes a session also
-/// writes again the other tiles of the parts that held that session's tiles; and where more
-/// than [`MAX_TILE_PARTS`] would be left, the smallest kept parts are written again too.
-/// Returns the parts.
-fn write_parts(
+/// Links into `folder` (created here) each part of an old state's folder of parts (`old`)
+/// whose rows are all among `keys` (the new state's), the largest first, at most
+/// [`MAX_TILE_PARTS`] − 1 of them (the part written next makes one more), copying where a link
+/// cannot be made. Returns the parts linked, in name order, and the keys no linked part holds
+/// (indices into `keys`, in order): those to write.
+fn link_parts<K: Eq + std::hash::Hash + Clone>(
     folder: &Path,
-    old: Option<(&Path, &[TilePart])>,
-    store: &FleetStore,
-    generation: u64,
-) -> Result<Vec<TilePart>> {
+    old: Option<(&Path, &[Part<K>])>,
+    keys: &[K],
+) -> Result<(Vec<Part<K>>, Vec<usize>)> {
     std::fs::create_dir_all(folder).map_err(|error| StoreError::Io {
         what: "creating",
         path: folder.to_path_buf(),
         error,
     })?;
-    let starts = store.starts();
-    let keys: Vec<TileKey> = (0..store.tiles().len()).map(|k| TileKey::of(store, &starts, k)).collect();
-    let mut unwritten: std::collections::HashMap<&TileKey, usize> =
-        keys.iter().enumerate().map(|(k, key)| (key, k)).collect();
+    let mut unwritten: HashMap<&K, usize> = keys.iter().enumerate().map(|(k, key)| (key, k)).collect();
     let (old, old_parts) = old.unwrap_or((folder, &[])); // no parts: the folder is not read
-    let mut kept: Vec<&TilePart> =
+    let mut kept: Vec<&Part<K>> =
         old_parts.iter().filter(|p| p.keys.iter().all(|key| unwritten.contains_key(key))).collect();
     // The largest first; the new part makes one more.
     kept.sort_by_key(|p| std::cmp::Reverse(p.keys.len()));
@@ -1602,12 +1796,40 @@ fn write_parts(
     parts.sort_by(|a, b| a.file.cmp(&b.file));
     let mut new: Vec<usize> = unwritten.into_values().collect();
     new.sort_unstable();
+    Ok((parts, new))
+}
+
+/// Syncs a folder of parts, written.
+fn sync_parts(folder: &Path) -> Result<()> {
+    crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
+        what: "syncing",
+        path: folder.to_path_buf(),
+        error,
+    })
+}
+
+/// The store's tiles as the parts of a state's folder `tiles` (created here): each part of
+/// the old state (in `old`) whose tiles are all still the store's is linked ([`link_parts`]),
+/// the other tiles written anew, each in its sessions' own indices ([`StoredTile::local`]), as
+/// one part named by the state's `generation`. An update that adds sessions writes only the
+/// tiles it scanned; one that replaces or removes a session also writes again the other tiles
+/// of the parts that held that session's tiles; and where more than [`MAX_TILE_PARTS`] would
+/// be left, the smallest kept parts are written again too. Returns the parts.
+fn write_parts(
+    folder: &Path,
+    old: Option<(&Path, &[TilePart])>,
+    store: &FleetStore,
+    generation: u64,
+) -> Result<Vec<TilePart>> {
+    let starts = store.starts();
+    let keys: Vec<TileKey> = (0..store.tiles().len()).map(|k| TileKey::of(store, &starts, k)).collect();
+    let (mut parts, new) = link_parts(folder, old, &keys)?;
     if !new.is_empty() {
         // Where an old part not linked, read back, holds a tile written again: its bytes are
         // copied.
         let linked: HashSet<&str> = parts.iter().map(|p| p.file.as_str()).collect();
         let mut rows: HashMap<&TileKey, (&PartFile, usize)> = HashMap::new();
-        for part in old_parts.iter().filter(|p| !linked.contains(p.file.as_str())) {
+        for part in old.map_or(&[][..], |(_, p)| p).iter().filter(|p| !linked.contains(p.file.as_str())) {
             if let Some(read) = &part.read {
                 rows.extend(part.keys.iter().enumerate().map(|(row, key)| (key, (read.as_ref(), row))));
             }
@@ -1615,11 +1837,51 @@ fn write_parts(
         let file = format!("{generation:06}.parquet");
         parts.push(write_part(folder, &file, store, &starts, &keys, new, &rows)?);
     }
-    crate::atomic::sync_directory(folder).map_err(|error| StoreError::Io {
-        what: "syncing",
-        path: folder.to_path_buf(),
-        error,
-    })?;
+    sync_parts(folder)?;
+    Ok(parts)
+}
+
+/// The merges of the store's session pairs as the parts of a state's folder `merges`
+/// (created here), as [`write_parts`] writes the tiles: the old parts whose merges are all
+/// still the store's linked, the others (the pairs of the sessions an update added or
+/// replaced, and those of the parts written again) written as one part named by the state's
+/// `generation`, each in its sessions' own indices ([`MergedLoops::local`]). Returns the parts.
+fn write_merge_parts(
+    folder: &Path,
+    old: Option<(&Path, &[MergePart])>,
+    store: &FleetStore,
+    generation: u64,
+) -> Result<Vec<MergePart>> {
+    use rayon::prelude::*;
+    let starts = store.starts();
+    let merges: Vec<([usize; 2], &MergedLoops)> = store.kept_merges().collect();
+    let keys: Vec<PairKey> = merges.iter().map(|&(pair, _)| PairKey::of(store, pair)).collect();
+    let (mut parts, new) = link_parts(folder, old, &keys)?;
+    if !new.is_empty() {
+        let blobs: Vec<Vec<u8>> = new
+            .par_iter()
+            .map(|&k| {
+                let ([a, b], merge) = merges[k];
+                merge.local([starts[a], starts[b]]).to_bytes()
+            })
+            .collect();
+        let side = |f: &dyn Fn(&PairKey) -> String| Column::Text(new.iter().map(|&k| f(&keys[k])).collect());
+        let file = format!("{generation:06}.parquet");
+        write_table(
+            &folder.join(&file),
+            vec![
+                (MERGE_COLUMNS[0], side(&|key| key.names[0].clone())),
+                (MERGE_COLUMNS[1], side(&|key| key.names[1].clone())),
+                (MERGE_COLUMNS[2], side(&|key| fingerprint_text(key.fingerprints[0]))),
+                (MERGE_COLUMNS[3], side(&|key| fingerprint_text(key.fingerprints[1]))),
+                (MERGE_COLUMNS[4], ints(new.iter().map(|&k| merges[k].1.tiles().len()))),
+                (MERGE_COLUMNS[5], ints(new.iter().map(|&k| merges[k].1.components().len()))),
+                (MERGE_COLUMNS[6], Column::Bytes(blobs)),
+            ],
+        )?;
+        parts.push(MergePart { file, keys: new.into_iter().map(|k| keys[k].clone()).collect(), read: None });
+    }
+    sync_parts(folder)?;
     Ok(parts)
 }
 
@@ -1676,10 +1938,10 @@ fn write_part(
     write_groups(
         &folder.join(file),
         vec![
-            ("session_a", side(&|key| key.names[0].clone())),
-            ("session_b", side(&|key| key.names[1].clone())),
-            ("fingerprint_a", side(&|key| fingerprint_text(key.fingerprints[0]))),
-            ("fingerprint_b", side(&|key| fingerprint_text(key.fingerprints[1]))),
+            ("session_a", side(&|key| key.pair.names[0].clone())),
+            ("session_b", side(&|key| key.pair.names[1].clone())),
+            ("fingerprint_a", side(&|key| fingerprint_text(key.pair.fingerprints[0]))),
+            ("fingerprint_b", side(&|key| fingerprint_text(key.pair.fingerprints[1]))),
             ("rows_start", local(&|k| keys[k].at[0])),
             ("rows_end", local(&|k| keys[k].at[0] + tile(k).rows.len())),
             ("columns_start", local(&|k| keys[k].at[1])),
@@ -1704,21 +1966,6 @@ fn write_draws(path: &Path, store: &FleetStore) -> Result<()> {
         vec![
             ("seed", Column::Int(draws.iter().map(|(seed, _)| *seed as i64).collect())),
             ("draw", Column::Bytes(draws.into_iter().map(|(_, bytes)| bytes).collect())),
-        ],
-    )
-}
-
-/// `merges.parquet`: the merge of each session pair's tiles, by pair.
-fn write_merges(path: &Path, store: &FleetStore) -> Result<()> {
-    let merges: Vec<([usize; 2], &MergedLoops)> = store.kept_merges().collect();
-    write_table(
-        path,
-        vec![
-            ("a", ints(merges.iter().map(|(p, _)| p[0]))),
-            ("b", ints(merges.iter().map(|(p, _)| p[1]))),
-            ("tiles", ints(merges.iter().map(|(_, m)| m.tiles().len()))),
-            ("components", ints(merges.iter().map(|(_, m)| m.components().len()))),
-            ("merge", Column::Bytes(merges.iter().map(|(_, m)| m.to_bytes()).collect())),
         ],
     )
 }

@@ -277,7 +277,7 @@ fn an_update_starts_from_the_opened_store_while_the_folder_holds_it() {
     // Current: the state's tables are not read again (a damaged one does not stop the update),
     // and what is written is what an update that reads them writes.
     let opened = read_store(&a).unwrap();
-    std::fs::write(a.join(&opened.state).join("merges.parquet"), b"damaged").unwrap();
+    std::fs::write(a.join(&opened.state).join("loop_duration.parquet"), b"damaged").unwrap();
     let from_opened = update_opened_store(opened, None, day1.clone(), &[], None).unwrap();
     let from_folder = update_store(&b, None, day1.clone(), &[]).unwrap();
     assert_eq!(from_opened.stored.store, from_folder.stored.store);
@@ -331,7 +331,7 @@ fn layout_2_store(name: &str) -> PathBuf {
 }
 
 #[test]
-fn stores_of_the_first_two_layouts_still_read_and_update() {
+fn stores_of_earlier_layouts_still_read_and_update() {
     let all = sessions();
     let by_name: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
     let mut source = |s: &StoreSession| Ok(by_name[&s.name].clone());
@@ -359,6 +359,23 @@ fn stores_of_the_first_two_layouts_still_read_and_update() {
     assert_eq!(updated.stored.store, want_updated.stored.store);
     assert_eq!(read_store(&dir).unwrap().store, read_store(&now).unwrap().store);
 
+    // Layout 3 (tiles by part, merges in one table in fleet indices): read as written, its
+    // next update writes the merges by part and equals the same update of a store made now.
+    let dir = temp("version-3-fixture");
+    copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/store-v3"), &dir);
+    assert!(dir.join("state-000001/merges.parquet").is_file());
+    let old = read_store(&dir).unwrap();
+    assert!(memory.tiles() == old.store.tiles());
+    assert!(memory.kept_merges().eq(old.store.kept_merges()));
+    let (got, got_bits, _) = answer(&old.store, &mut source);
+    assert!(got == want && got_bits == want_bits);
+    let updated = update_store(&dir, None, Vec::new(), &gone).unwrap();
+    let state = dir.join(&updated.stored.state);
+    assert!(state.join("merges").is_dir() && !state.join("merges.parquet").exists());
+    assert_eq!(updated.stored.store, want_updated.stored.store);
+    assert_eq!(read_store(&dir).unwrap().store, read_store(&now).unwrap().store);
+    let _ = std::fs::remove_dir_all(&dir);
+
     // Layout 1 had no merges or runs: layout 2 without them, marked so.
     let dir = layout_2_store("version-1");
     let state = dir.join("state-000002");
@@ -381,8 +398,13 @@ fn stores_of_the_first_two_layouts_still_read_and_update() {
 
 /// The parts of the current state's `tiles` folder: name, rows, and (on Unix) the file's inode.
 fn parts(dir: &Path) -> BTreeMap<String, (usize, u64)> {
+    parts_of(dir, "tiles")
+}
+
+/// The parts of the current state's folder `folder` (`tiles`, `merges`), as [`parts`].
+fn parts_of(dir: &Path, folder: &str) -> BTreeMap<String, (usize, u64)> {
     let state = read_store(dir).unwrap().state;
-    std::fs::read_dir(dir.join(state).join("tiles"))
+    std::fs::read_dir(dir.join(state).join(folder))
         .unwrap()
         .map(|e| {
             let path = e.unwrap().path();
@@ -404,14 +426,28 @@ fn an_update_writes_only_the_parts_that_change() {
     let first = parts(&dir);
     assert_eq!(first.keys().collect::<Vec<_>>(), ["000001.parquet"]);
     // An add: the stored part is linked as it is, a new one holds the scanned tiles only.
+    let first_merges = parts_of(&dir, "merges");
     let report = update_store(&dir, None, day1.clone(), &[]).unwrap();
     let second = parts(&dir);
     assert_eq!(second.keys().collect::<Vec<_>>(), ["000001.parquet", "000002.parquet"]);
     if cfg!(unix) {
         assert_eq!(second["000001.parquet"], first["000001.parquet"], "linked, not written again");
+        let merges = parts_of(&dir, "merges");
+        assert_eq!(merges["000001.parquet"], first_merges["000001.parquet"], "linked, not written again");
     }
     assert_eq!(second["000002.parquet"].0, report.update.tiles_scanned);
     assert_eq!(second.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len());
+    // The merges alike: the stored pairs' part linked, the new pairs' merges in a new one.
+    let merges = parts_of(&dir, "merges");
+    let pairs: Vec<[usize; 2]> = report.stored.store.kept_merges().map(|(pair, _)| pair).collect();
+    let new_sessions: Vec<usize> = (0..report.stored.store.sessions().len())
+        .filter(|&s| report.stored.store.sessions()[s].name.ends_with("day1"))
+        .collect();
+    let new_pairs = pairs.iter().filter(|p| p.iter().any(|s| new_sessions.contains(s))).count();
+    assert!(0 < new_pairs && new_pairs < pairs.len(), "{new_pairs} of {}", pairs.len());
+    assert_eq!(merges.keys().collect::<Vec<_>>(), ["000001.parquet", "000002.parquet"]);
+    assert_eq!(merges["000002.parquet"].0, new_pairs);
+    assert_eq!(merges["000001.parquet"].0, pairs.len() - new_pairs);
     // Read back lazily, the add read none of the old tiles' summaries (its draw reads runs).
     let read = report.stored.store.tiles().iter().filter(|t| t.is_read()).count();
     assert_eq!(read, report.update.tiles_scanned, "tiles read by an add");
@@ -426,6 +462,9 @@ fn an_update_writes_only_the_parts_that_change() {
     let third = parts(&dir);
     assert_eq!(third.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len());
     assert!(!third.contains_key("000001.parquet"), "{third:?}");
+    let merges = parts_of(&dir, "merges");
+    assert_eq!(merges.values().map(|p| p.0).sum::<usize>(), report.stored.store.kept_merges().count());
+    assert!(!merges.contains_key("000001.parquet"), "{merges:?}");
     let mut final_sessions: BTreeMap<String, Trajectory> = all.iter().cloned().collect();
     final_sessions.insert(name.clone(), moved);
     let mut scratch = FleetStore::new(config().settings).unwrap();
@@ -437,7 +476,13 @@ fn an_update_writes_only_the_parts_that_change() {
     let read = read_store(&dir).unwrap();
     assert!(scratch.tiles() == read.store.tiles());
     assert!(read.store.tiles() == report.stored.store.tiles());
-    // A damaged part is named, in one line.
+    // A damaged part is named, in one line: a merge part, then a tile part.
+    let part = dir.join(&read.state).join("merges").join(merges.keys().next().unwrap());
+    let bytes = std::fs::read(&part).unwrap();
+    std::fs::write(&part, &bytes[..bytes.len() / 2]).unwrap();
+    let error = read_store(&dir).unwrap_err().to_string();
+    assert!(error.contains(&part.display().to_string()) && !error.contains('\n'), "{error}");
+    std::fs::write(&part, bytes).unwrap();
     let part = dir.join(&read.state).join("tiles").join(third.keys().next().unwrap());
     std::fs::write(&part, b"not parquet").unwrap();
     let error = read_store(&dir).unwrap_err().to_string();
@@ -458,14 +503,18 @@ fn a_store_updated_every_day_keeps_a_bounded_number_of_parts() {
         })
         .collect();
     let settings = StoreConfig { settings: StoreSettings { block: 50, ..StoreSettings::new(4.0) }, sampler: None };
-    let mut most = 0;
+    let (mut most, mut most_merges) = (0, 0);
     for (d, drive) in drives.iter().enumerate() {
         let report = update_store(&dir, (d == 0).then_some(&settings), vec![drive.clone()], &[]).unwrap();
         let now = parts(&dir);
         most = most.max(now.len());
         assert_eq!(now.values().map(|p| p.0).sum::<usize>(), report.stored.store.tiles().len(), "day {d}");
+        let merges = parts_of(&dir, "merges");
+        most_merges = most_merges.max(merges.len());
+        assert_eq!(merges.values().map(|p| p.0).sum::<usize>(), report.stored.store.kept_merges().count());
     }
     assert_eq!(most, 32, "parts are folded together beyond 32");
+    assert_eq!(most_merges, 32, "merge parts too");
     let by_name: BTreeMap<String, Trajectory> = drives.iter().cloned().collect();
     let mut scratch = FleetStore::new(settings.settings).unwrap();
     scratch.update(drives.clone(), &[], &mut |s: &StoreSession| Ok(by_name[&s.name].clone())).unwrap();

@@ -1666,6 +1666,26 @@ impl MergedLoops {
         }
     }
 
+    /// The merge of one session pair's tiles as a fleet of those two sessions alone holds it,
+    /// each from pose 0 (sessions `[0, 0]` within one session, else `[0, 1]`), given where
+    /// its sessions start in the store's fleet: what stays the same while other sessions come
+    /// and go, and what a store saves of a merge, as it saves its tiles
+    /// ([`StoredTile::local`](crate::store::StoredTile::local)). [`placed`](Self::placed)
+    /// puts it back. O(components + tiles).
+    pub fn local(&self, starts: [usize; 2]) -> Self {
+        let pair = self.tiles.first().map_or([0, 0], |t| t.sessions);
+        let mut local = self.clone();
+        local.move_to([0, usize::from(pair[0] != pair[1])], [-(starts[0] as isize), -(starts[1] as isize)]);
+        local
+    }
+
+    /// A merge of [`local`](Self::local) form placed as the merge of the store's sessions
+    /// `sessions`, which start at `starts` in its fleet. O(components + tiles).
+    pub fn placed(mut self, sessions: [usize; 2], starts: [usize; 2]) -> Self {
+        self.move_to(sessions, [starts[0] as isize, starts[1] as isize]);
+        self
+    }
+
     /// Renumbers the merge's session pair `sessions` and moves its rows and columns by
     /// `shifts` (fleet indices): what merging the moved tiles gives, for a merge of the tiles
     /// of one session pair. O(components + tiles).
