@@ -54,7 +54,7 @@ def main(rounds: int, loops: str) -> None:
         out = root / f"out-{k}"
         full = run(loops, "fleet", "--out", str(out), *every, *SETTINGS)
         print(
-            f"day 31 into the store {day:.2f} s; all 31 days into a new store {again:.2f} s "
+            f"day 31 into the store {day:.3f} s; all 31 days into a new store {again:.2f} s "
             f"(ratio {day / again:.3f}); loops fleet --out {full:.2f} s (ratio {day / full:.3f})"
         )
         for folder in (copy, fresh, out):

@@ -729,7 +729,7 @@ impl UpdatePlan {
     /// # Errors
     /// [`Error::InvalidState`] for other poses.
     pub fn check_session(&self, s: usize, trajectory: &Trajectory) -> Result<()> {
-        read_session(&self.sessions[s], &mut |_| Ok(trajectory.clone())).map(drop)
+        check_read(&self.sessions[s], trajectory)
     }
 
     /// Scans tile `k` of the plan from the poses of its two sessions (`sessions`: those of

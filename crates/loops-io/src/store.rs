@@ -18,7 +18,7 @@
 //!                         i_min, i_max, j_min, j_max, t_min_s, t_max_s, t_prime_min_s, t_prime_max_s,
 //!                         closest_i, closest_j, closest_distance, added
 //!     session_pairs.parquet  session_a, session_b, a, b, components, pair_count, area_s2, density
-//!     loop_duration.parquet  session, pose, t_s, own_s, other_s
+//!     loop_duration.parquet  session, pose, own_s, other_s
 //!     samples.parquet     session_a, session_b, a, b, i, j, t_s, t_prime_s, component, distance
 //!     poses/FINGERPRINT.parquet  pose, t_s, cell_s, then one column per coordinate
 //! ```
@@ -1560,9 +1560,16 @@ struct Table {
 
 /// Reads the Parquet file at `path` whole.
 fn read_table(path: &Path) -> Result<Table> {
-    let file = File::open(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
-    let reader = SerializedFileReader::new(file).map_err(|e| parquet_corrupt(path, e))?;
+    let reader = open_table(path)?;
     read_columns(&reader, path, &|_| true)
+}
+
+/// The Parquet file at `path`, read into memory in one read (a store's tables are read whole,
+/// and a reader of the file itself reads each page with a few calls).
+fn open_table(path: &Path) -> Result<SerializedFileReader<bytes::Bytes>> {
+    let bytes =
+        std::fs::read(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
+    SerializedFileReader::new(bytes::Bytes::from(bytes)).map_err(|e| parquet_corrupt(path, e))
 }
 
 fn parquet_corrupt(path: &Path, e: parquet::errors::ParquetError) -> StoreError {
@@ -1710,8 +1717,7 @@ fn write_poses(path: &Path, t: &Trajectory) -> Result<()> {
 /// The trajectory of a pose file ([`write_poses`]): its times, cell widths and coordinates,
 /// and the manifold of its first row (the column repeats it; the pose numbers are the rows').
 fn read_poses(path: &Path) -> Result<Trajectory> {
-    let file = File::open(path).map_err(|error| StoreError::Io { what: "reading", path: path.to_path_buf(), error })?;
-    let reader = SerializedFileReader::new(file).map_err(|e| parquet_corrupt(path, e))?;
+    let reader = open_table(path)?;
     let corrupt = |reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
     let width = reader.metadata().file_metadata().schema_descr().num_columns();
     let dim = width.checked_sub(4).filter(|&d| d > 0).ok_or_else(|| corrupt(format!("{width} columns")))?;
