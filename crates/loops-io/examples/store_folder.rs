@@ -7,8 +7,11 @@
 //! sees the rounds alone.
 //!
 //! ```text
-//! cargo run --release -p loops-io --example store_folder -- [ROUNDS]
+//! cargo run --release -p loops-io --example store_folder -- [ROUNDS] [VEHICLES]
 //! ```
+//!
+//! `VEHICLES` (4 by default) sizes the fleet: the new tiles of day 31 grow with it, the whole
+//! fleet's with its square.
 
 use std::time::Instant;
 
@@ -17,8 +20,9 @@ use loops_io::store::{StoreConfig, read_store, update_opened_store, update_store
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rounds: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(3);
+    let vehicles: usize = std::env::args().nth(2).and_then(|a| a.parse().ok()).unwrap_or(4);
     let spec = UrbanFleet {
-        vehicles: 4,
+        vehicles,
         days: 31,
         drive: UrbanDrive { duration_s: 300.0, rate_hz: 5.0, city_size_m: 1000.0, seed: 1, ..UrbanDrive::default() },
         start_spread_s: 3600.0,
@@ -32,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sampler: Some((Sampler::new(SamplerKind::Rho, SampleSize::Budget(500), 7), false)),
     };
     let root = std::env::temp_dir().join("loops-store-folder");
-    let stored = root.join("days-1-30");
+    let stored = root.join(format!("days-1-30-of-{vehicles}"));
     if std::env::var_os("KEEP").is_none() || !stored.is_dir() {
         let _ = std::fs::remove_dir_all(&root);
         let clock = Instant::now();

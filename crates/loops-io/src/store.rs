@@ -780,19 +780,15 @@ fn read_duration(path: &Path, sessions: &[StoreSession]) -> Result<Vec<(Vec<f64>
         return Err(corrupt(format!("{} rows for the {poses} poses of the store's sessions", table.rows)));
     }
     let (own, other) = (table.floats(2).map_err(corrupt)?, table.floats(3).map_err(corrupt)?);
+    let (at, pose) = (table.ints(0).map_err(corrupt)?, table.ints(1).map_err(corrupt)?);
     let mut first = 0;
     let mut duration = Vec::with_capacity(sessions.len());
     for (s, session) in sessions.iter().enumerate() {
-        for k in first..first + session.poses() {
-            let (at, pose) = (table.index(0, k).map_err(corrupt)?, table.index(1, k).map_err(corrupt)?);
-            if (at, pose) != (s, k - first) {
-                return Err(corrupt(format!(
-                    "row {k} is of pose {pose} of session {at}, not pose {} of {s}",
-                    k - first
-                )));
-            }
-        }
         let end = first + session.poses();
+        let rows = at[first..end].iter().zip(&pose[first..end]);
+        if let Some((k, (a, p))) = rows.enumerate().find(|&(k, (&a, &p))| (a, p) != (s as i64, k as i64)) {
+            return Err(corrupt(format!("row {} is of pose {p} of session {a}, not pose {k} of {s}", first + k)));
+        }
         duration.push((own[first..end].to_vec(), other[first..end].to_vec()));
         first = end;
     }
@@ -1662,6 +1658,13 @@ impl Table {
             _ => Err(self.wrong(i, "DOUBLE")),
         }
     }
+    /// The values of an INT64 column.
+    fn ints(&self, i: usize) -> std::result::Result<&[i64], String> {
+        match self.column(i)? {
+            Column::Int(v) => Ok(v),
+            _ => Err(self.wrong(i, "INT64")),
+        }
+    }
     /// The values of a DOUBLE column.
     fn floats(&self, i: usize) -> std::result::Result<&[f64], String> {
         match self.column(i)? {
@@ -2220,6 +2223,38 @@ pub fn store_components_to_csv<W: std::io::Write>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// τ's rows are each session's poses in order: a row out of place is named, in one line.
+    #[test]
+    fn a_duration_row_out_of_place_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let fleet = loops_core::UrbanFleet {
+            vehicles: 2,
+            days: 1,
+            drive: loops_core::UrbanDrive { duration_s: 20.0, rate_hz: 4.0, city_size_m: 300.0, ..Default::default() },
+            start_spread_s: 600.0,
+        }
+        .generate()
+        .unwrap();
+        let put = (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
+        let config = StoreConfig { settings: StoreSettings::new(8.0), sampler: None };
+        let report = update_store(dir.path(), Some(&config), put, &[]).unwrap();
+        let path = dir.path().join(&report.stored.state).join("loop_duration.parquet");
+        let sessions = report.stored.store.sessions();
+        assert!(read_duration(&path, sessions).is_ok());
+        let Table { names, columns, .. } = read_table(&path).unwrap();
+        let mut columns: Vec<(&str, Column)> =
+            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
+        let row = sessions[0].poses() + 3;
+        let Column::Int(poses) = &mut columns[1].1 else { panic!("poses are INT64") };
+        poses.swap(row, row + 1);
+        std::fs::remove_file(&path).unwrap();
+        write_table(&path, columns).unwrap();
+        let error = read_duration(&path, sessions).unwrap_err().to_string();
+        let named = error.contains(&path.display().to_string())
+            && error.contains(&format!("row {row} is of pose 4 of session 1, not pose 3 of 1"));
+        assert!(named && !error.contains('\n'), "{error}");
+    }
 
     /// A part with one damaged blob still opens (no blob is read then); reading that tile names
     /// the file and the row in one line, and the others read.
