@@ -2263,9 +2263,9 @@ class FleetStore:
     The folder is what ``loops fleet --store DIR`` keeps: Parquet tables that pandas, pyarrow
     and DuckDB read (``store.json`` names the current state, ``state-NNNNNN/``, holding
     ``sessions``, ``components``, ``session_pairs``, ``loop_duration`` and ``samples``,
-    ``.parquet`` each, and the folder ``tiles/`` of the stored tiles by part); each update
-    makes a new state (linking the tile parts it keeps, writing its new tiles as one more) and
-    then points at it, so a reader or a killed update sees the old state or the new one. Made
+    ``.parquet`` each, and the folders ``tiles/`` and ``merges/`` of the stored tiles and
+    session pairs' merges by part); each update makes a new state (linking the parts it keeps,
+    writing its new tiles and merges as one more each) and then points at it, so a reader or a killed update sees the old state or the new one. Made
     by :meth:`open` and :meth:`update`.
 
     Example:

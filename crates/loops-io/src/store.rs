@@ -586,13 +586,20 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     let state = dir.join(&pointer.state);
     let last_update = file.last_update.into();
     if file.version >= 3 {
-        let (tiles, parts) = read_parts(&state.join("tiles"), &sessions)?;
-        let (merges, merge_parts) = if file.version >= 4 {
-            read_merge_parts(&state.join("merges"), &sessions)?
-        } else {
-            (read_merges(&state.join("merges.parquet"))?, Vec::new())
-        };
-        let duration = read_duration(&state.join("loop_duration.parquet"), &sessions)?;
+        // The tiles, the merges and τ side by side; the first failure in that order.
+        let (tiles, (merges, duration)) = rayon::join(
+            || read_parts(&state.join("tiles"), &sessions),
+            || {
+                rayon::join(
+                    || match file.version {
+                        4.. => read_merge_parts(&state.join("merges"), &sessions),
+                        _ => Ok((read_merges(&state.join("merges.parquet"))?, Vec::new())),
+                    },
+                    || read_duration(&state.join("loop_duration.parquet"), &sessions),
+                )
+            },
+        );
+        let ((tiles, parts), (merges, merge_parts), duration) = (tiles?, merges?, duration?);
         let store = FleetStore::from_saved_lazily(config.settings, sessions, tiles, last_update, merges, duration)?;
         read_draws(&state.join("draws.parquet"), &store)?;
         return Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts, merge_parts });
@@ -1233,15 +1240,6 @@ fn update_with(
         let path = poses_dir.as_ref().map(|p| p.join(pose_file(s))).unwrap_or_default();
         read_poses(&path).map_err(|e| loops_core::Error::InvalidState { what: "fleet store", reason: e.to_string() })
     };
-    let loops = store.loops()?;
-    let samples = match &config.sampler {
-        Some((sampler, between_only)) => {
-            Some(store.samples(&loops, sampler, *between_only, &mut source).map_err(|e| damaged(e.into()))?)
-        }
-        None => None,
-    };
-    let (own, other) = store.loop_duration()?;
-
     // The new state, complete, in the scratch folder.
     let staged = out.staging_path();
     let io = |what: &'static str, path: &Path| {
@@ -1256,7 +1254,6 @@ fn update_with(
     let old = old_tiles.as_deref().map(|folder| (folder, old_parts.as_slice()));
     let old_merges = old_state.as_ref().map(|s| dir.join(s).join("merges"));
     let old_merges = old_merges.as_deref().map(|folder| (folder, old_merge_parts.as_slice()));
-    let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
     let poses = || -> Result<()> {
         for s in store.sessions() {
             let target = staged.join("poses").join(pose_file(s));
@@ -1282,32 +1279,47 @@ fn update_with(
             serde_json::to_string_pretty(&settings_file(&config, store.last_update())).map_err(std::io::Error::other);
         write_synced(&staged.join("settings.json"), json.map(String::into_bytes))
     };
-    // Each file on its own: the tables in parallel, the first failure in this order.
-    let tables: [&(dyn Fn() -> Result<()> + Sync); 8] = [
-        &poses,
-        &|| write_sessions(&staged.join("sessions.parquet"), &store),
-        &|| write_draws(&staged.join("draws.parquet"), &store),
-        &|| write_components(&staged.join("components.parquet"), &loops, &names, &added),
-        &|| write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
-        &|| write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other),
-        &|| write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
-        &settings,
-    ];
-    let ((parts, merge_parts), written) = rayon::join(
+    // What the answer is not needed for (the tile and merge parts, the pose files, the
+    // sessions, the settings) is written while the answer is made and drawn; then the answer's
+    // tables, in parallel. Each file on its own; the first failure in the order: the draw,
+    // the parts, the other files.
+    use rayon::prelude::*;
+    let (kept, answer) = rayon::join(
         || {
-            rayon::join(
+            let parts = rayon::join(
                 || write_parts(&staged.join("tiles"), old, &store, generation),
                 || write_merge_parts(&staged.join("merges"), old_merges, &store, generation),
-            )
+            );
+            let files: [&(dyn Fn() -> Result<()> + Sync); 3] =
+                [&poses, &|| write_sessions(&staged.join("sessions.parquet"), &store), &settings];
+            (parts, files.par_iter().map(|write| write()).collect::<Vec<Result<()>>>())
         },
-        || {
-            use rayon::prelude::*;
-            tables.par_iter().map(|write| write()).collect::<Vec<Result<()>>>()
+        || -> Result<_> {
+            let loops = store.loops()?;
+            let samples = match &config.sampler {
+                Some((sampler, between_only)) => {
+                    Some(store.samples(&loops, sampler, *between_only, &mut source).map_err(|e| damaged(e.into()))?)
+                }
+                None => None,
+            };
+            let (own, other) = store.loop_duration()?;
+            let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
+            let tables: [&(dyn Fn() -> Result<()> + Sync); 5] = [
+                &|| write_draws(&staged.join("draws.parquet"), &store),
+                &|| write_components(&staged.join("components.parquet"), &loops, &names, &added),
+                &|| write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
+                &|| write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other),
+                &|| write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
+            ];
+            let written: Vec<Result<()>> = tables.par_iter().map(|write| write()).collect();
+            Ok((loops, samples, added, written))
         },
     );
+    let (loops, samples, added, tables) = answer?;
+    let ((parts, merge_parts), files) = kept;
     let parts = parts.map_err(damaged)?;
     let merge_parts = merge_parts?;
-    written.into_iter().collect::<Result<()>>()?;
+    files.into_iter().chain(tables).collect::<Result<()>>()?;
     crate::atomic::sync_directory(&staged.join("poses")).map_err(io("syncing", &staged))?;
     crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
 
