@@ -1,10 +1,11 @@
 //! A fleet store in a folder from Rust, as `benches/store_disk_update.py` times it from Python:
 //! the fleet of `store_days` (4 vehicles × 31 days of 5-minute drives, γ = 10 m, σ_ρ with a
 //! budget of 500), days 1 to 30 stored in one update, then, in a fresh copy of that folder each
-//! round, the folder opened ([`read_store`]) and day 31 added ([`update_opened_store`]). Prints
-//! the seconds of each step (BENCHMARKS.md, "The store in a folder"). With `KEEP` set in the
-//! environment the store of days 1 to 30 of an earlier run is used again, so that a profiler
-//! sees the rounds alone.
+//! round, the folder opened ([`read_store`]) and day 31 added ([`update_opened_store`]), then
+//! all 31 days stored in one update in a new folder. Prints the seconds of each step and the
+//! ratio of day 31 (opening and update) to all 31 days (BENCHMARKS.md, "Fleet store"). With
+//! `KEEP` set in the environment the store of days 1 to 30 of an earlier run is used again, and
+//! with `DAY_ONLY` the rounds store only day 31, so that a profiler sees day 31 alone.
 //!
 //! ```text
 //! cargo run --release -p loops-io --example store_folder -- [ROUNDS] [VEHICLES]
@@ -40,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if std::env::var_os("KEEP").is_none() || !stored.is_dir() {
         let _ = std::fs::remove_dir_all(&root);
         let clock = Instant::now();
-        update_store(&stored, Some(&config), first, &[])?;
+        update_store(&stored, Some(&config), first.clone(), &[])?;
         println!("days 1-30 in one update: {:.3} s", clock.elapsed().as_secs_f64());
     }
     for k in 0..rounds {
@@ -52,13 +53,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let open = clock.elapsed().as_secs_f64();
         let clock = Instant::now();
         let report = update_opened_store(opened, None, last.clone(), &[], None)?;
+        let update = clock.elapsed().as_secs_f64();
         println!(
-            "day 31: opening {open:.3} s, update {:.3} s ({} tiles scanned, {} kept)",
-            clock.elapsed().as_secs_f64(),
-            report.update.tiles_scanned,
-            report.update.tiles_kept
+            "day 31: opening {open:.3} s, update {update:.3} s ({} tiles scanned, {} kept)",
+            report.update.tiles_scanned, report.update.tiles_kept
         );
         std::fs::remove_dir_all(&copy)?;
+        if std::env::var_os("DAY_ONLY").is_none() {
+            let all = root.join(format!("all-{k}"));
+            let clock = Instant::now();
+            update_store(&all, Some(&config), first.iter().chain(&last).cloned().collect(), &[])?;
+            let at_once = clock.elapsed().as_secs_f64();
+            println!("  all 31 days in one update: {at_once:.3} s; day 31 / all: {:.3}", (open + update) / at_once);
+            std::fs::remove_dir_all(&all)?;
+        }
     }
     Ok(())
 }

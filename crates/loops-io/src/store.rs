@@ -1279,20 +1279,29 @@ fn update_with(
             serde_json::to_string_pretty(&settings_file(&config, store.last_update())).map_err(std::io::Error::other);
         write_synced(&staged.join("settings.json"), json.map(String::into_bytes))
     };
-    // What the answer is not needed for (the tile and merge parts, the pose files, the
-    // sessions, the settings) is written while the answer is made and drawn; then the answer's
-    // tables, in parallel. Each file on its own; the first failure in the order: the draw,
-    // the parts, the other files.
+    // What the components and the draw are not needed for (τ, the tile and merge parts, the
+    // pose files, the sessions, the settings) is written while they are made; then their
+    // tables, in parallel. Each file on its own; the first failure in the order: the draw, the
+    // parts, the other files.
     use rayon::prelude::*;
     let (kept, answer) = rayon::join(
         || {
-            let parts = rayon::join(
-                || write_parts(&staged.join("tiles"), old, &store, generation),
-                || write_merge_parts(&staged.join("merges"), old_merges, &store, generation),
+            let duration = || {
+                let (own, other) = store.loop_duration()?;
+                write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other)
+            };
+            let files: [&(dyn Fn() -> Result<()> + Sync); 4] =
+                [&duration, &poses, &|| write_sessions(&staged.join("sessions.parquet"), &store), &settings];
+            let (written, parts) = rayon::join(
+                || files.par_iter().map(|write| write()).collect::<Vec<Result<()>>>(),
+                || {
+                    rayon::join(
+                        || write_parts(&staged.join("tiles"), old, &store, generation),
+                        || write_merge_parts(&staged.join("merges"), old_merges, &store, generation),
+                    )
+                },
             );
-            let files: [&(dyn Fn() -> Result<()> + Sync); 3] =
-                [&poses, &|| write_sessions(&staged.join("sessions.parquet"), &store), &settings];
-            (parts, files.par_iter().map(|write| write()).collect::<Vec<Result<()>>>())
+            (parts, written)
         },
         || -> Result<_> {
             let loops = store.loops()?;
@@ -1302,13 +1311,11 @@ fn update_with(
                 }
                 None => None,
             };
-            let (own, other) = store.loop_duration()?;
             let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
-            let tables: [&(dyn Fn() -> Result<()> + Sync); 5] = [
+            let tables: [&(dyn Fn() -> Result<()> + Sync); 4] = [
                 &|| write_draws(&staged.join("draws.parquet"), &store),
                 &|| write_components(&staged.join("components.parquet"), &loops, &names, &added),
                 &|| write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
-                &|| write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other),
                 &|| write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
             ];
             let written: Vec<Result<()>> = tables.par_iter().map(|write| write()).collect();
