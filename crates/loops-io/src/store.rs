@@ -194,6 +194,20 @@ impl PairKey {
     }
 }
 
+/// The columns that name the session pairs `keys`, a row each: the first four columns of a
+/// part (`session_a`, `session_b`, `fingerprint_a`, `fingerprint_b`), which [`Names::pair`]
+/// reads.
+fn pair_columns<'a>(keys: impl Iterator<Item = &'a PairKey>) -> Vec<(&'static str, Column)> {
+    let mut columns: [Vec<String>; 4] = Default::default();
+    for key in keys {
+        for side in 0..2 {
+            columns[side].push(key.names[side].clone());
+            columns[2 + side].push(fingerprint_text(key.fingerprints[side]));
+        }
+    }
+    ["session_a", "session_b", "fingerprint_a", "fingerprint_b"].into_iter().zip(columns.map(Column::Text)).collect()
+}
+
 /// A tile's name in a store's folder: its session pair and its first row and column in their
 /// own indices.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -1227,7 +1241,7 @@ fn update_with(
             ((session.name.clone(), session.fingerprint), t)
         })
         .collect();
-    let new_poses: Vec<(String, Trajectory)> = put.clone();
+    let new_poses: Vec<(String, Trajectory)> = put;
     // A session given now from what was given (the core checks its fingerprint), else as the
     // update read it, else from the current state's pose file.
     let mut source = |s: &StoreSession| -> loops_core::Result<Trajectory> {
@@ -1286,10 +1300,7 @@ fn update_with(
     use rayon::prelude::*;
     let (kept, answer) = rayon::join(
         || {
-            let duration = || {
-                let (own, other) = store.loop_duration()?;
-                write_loop_duration(&staged.join("loop_duration.parquet"), &store, &own, &other)
-            };
+            let duration = || write_loop_duration(&staged.join("loop_duration.parquet"), &store);
             let files: [&(dyn Fn() -> Result<()> + Sync); 4] =
                 [&duration, &poses, &|| write_sessions(&staged.join("sessions.parquet"), &store), &settings];
             let (written, parts) = rayon::join(
@@ -1893,20 +1904,14 @@ fn write_merge_parts(
                 merge.local([starts[a], starts[b]]).to_bytes()
             })
             .collect();
-        let side = |f: &dyn Fn(&PairKey) -> String| Column::Text(new.iter().map(|&k| f(&keys[k])).collect());
         let file = format!("{generation:06}.parquet");
-        write_table(
-            &folder.join(&file),
-            vec![
-                (MERGE_COLUMNS[0], side(&|key| key.names[0].clone())),
-                (MERGE_COLUMNS[1], side(&|key| key.names[1].clone())),
-                (MERGE_COLUMNS[2], side(&|key| fingerprint_text(key.fingerprints[0]))),
-                (MERGE_COLUMNS[3], side(&|key| fingerprint_text(key.fingerprints[1]))),
-                (MERGE_COLUMNS[4], ints(new.iter().map(|&k| merges[k].1.tiles().len()))),
-                (MERGE_COLUMNS[5], ints(new.iter().map(|&k| merges[k].1.components().len()))),
-                (MERGE_COLUMNS[6], Column::Bytes(blobs)),
-            ],
-        )?;
+        let mut columns = pair_columns(new.iter().map(|&k| &keys[k]));
+        columns.extend([
+            (MERGE_COLUMNS[4], ints(new.iter().map(|&k| merges[k].1.tiles().len()))),
+            (MERGE_COLUMNS[5], ints(new.iter().map(|&k| merges[k].1.components().len()))),
+            (MERGE_COLUMNS[6], Column::Bytes(blobs)),
+        ]);
+        write_table(&folder.join(&file), columns)?;
         parts.push(MergePart { file, keys: new.into_iter().map(|k| keys[k].clone()).collect(), read: None });
     }
     sync_parts(folder)?;
@@ -1951,7 +1956,6 @@ fn write_part(
         })
         .collect();
     let tile = |k: usize| store.tiles()[k].tile();
-    let side = |f: &dyn Fn(&TileKey) -> String| Column::Text(new.iter().map(|&k| f(&keys[k])).collect());
     let local = |f: &dyn Fn(usize) -> usize| ints(new.iter().map(|&k| f(k)));
     let (mut summaries, mut durations, mut all_runs, mut components, mut run_counts) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -1963,25 +1967,19 @@ fn write_part(
         components.push(c);
         run_counts.push(r);
     }
-    write_groups(
-        &folder.join(file),
-        vec![
-            ("session_a", side(&|key| key.pair.names[0].clone())),
-            ("session_b", side(&|key| key.pair.names[1].clone())),
-            ("fingerprint_a", side(&|key| fingerprint_text(key.pair.fingerprints[0]))),
-            ("fingerprint_b", side(&|key| fingerprint_text(key.pair.fingerprints[1]))),
-            ("rows_start", local(&|k| keys[k].at[0])),
-            ("rows_end", local(&|k| keys[k].at[0] + tile(k).rows.len())),
-            ("columns_start", local(&|k| keys[k].at[1])),
-            ("columns_end", local(&|k| keys[k].at[1] + tile(k).columns.len())),
-            ("components", Column::Int(components)),
-            ("run_count", Column::Int(run_counts)),
-            ("summary", Column::Bytes(summaries)),
-            ("duration", Column::Bytes(durations)),
-            ("runs", Column::Bytes(all_runs)),
-        ],
-        PART_GROUP_ROWS,
-    )?;
+    let mut columns = pair_columns(new.iter().map(|&k| &keys[k].pair));
+    columns.extend([
+        ("rows_start", local(&|k| keys[k].at[0])),
+        ("rows_end", local(&|k| keys[k].at[0] + tile(k).rows.len())),
+        ("columns_start", local(&|k| keys[k].at[1])),
+        ("columns_end", local(&|k| keys[k].at[1] + tile(k).columns.len())),
+        ("components", Column::Int(components)),
+        ("run_count", Column::Int(run_counts)),
+        ("summary", Column::Bytes(summaries)),
+        ("duration", Column::Bytes(durations)),
+        ("runs", Column::Bytes(all_runs)),
+    ]);
+    write_groups(&folder.join(file), columns, PART_GROUP_ROWS)?;
     let keys = new.into_iter().map(|k| keys[k].clone()).collect();
     Ok(TilePart { file: file.to_owned(), keys, read: None })
 }
@@ -2054,7 +2052,9 @@ fn write_session_pairs(path: &Path, loops: &loops_core::store::StoreLoops, names
     )
 }
 
-fn write_loop_duration(path: &Path, store: &FleetStore, own: &[f64], other: &[f64]) -> Result<()> {
+/// `loop_duration.parquet`: τ of every pose of the store, own and other, a row a pose.
+fn write_loop_duration(path: &Path, store: &FleetStore) -> Result<()> {
+    let (own, other) = store.loop_duration()?;
     let (mut session, mut pose) = (Vec::new(), Vec::new());
     for (a, s) in store.sessions().iter().enumerate() {
         session.extend(std::iter::repeat_n(a, s.poses()));
@@ -2065,8 +2065,8 @@ fn write_loop_duration(path: &Path, store: &FleetStore, own: &[f64], other: &[f6
         vec![
             ("session", ints(session)),
             ("pose", ints(pose)),
-            ("own_s", Column::Float(own.to_vec())),
-            ("other_s", Column::Float(other.to_vec())),
+            ("own_s", Column::Float(own)),
+            ("other_s", Column::Float(other)),
         ],
     )
 }
@@ -2243,32 +2243,52 @@ pub fn store_components_to_csv<W: std::io::Write>(
 mod tests {
     use super::*;
 
-    /// τ's rows are each session's poses in order: a row out of place is named, in one line.
-    #[test]
-    fn a_duration_row_out_of_place_is_named() {
-        let dir = tempfile::tempdir().unwrap();
+    /// A store in `dir` of a small city's fleet: 2 vehicles, `days` drives each of `duration_s`
+    /// seconds. Returns the fleet and the report of the update that stored it.
+    fn small_store(
+        dir: &Path,
+        days: usize,
+        duration_s: f64,
+        settings: StoreSettings,
+    ) -> (loops_core::fleet::Fleet, StoreReport) {
         let fleet = loops_core::UrbanFleet {
             vehicles: 2,
-            days: 1,
-            drive: loops_core::UrbanDrive { duration_s: 20.0, rate_hz: 4.0, city_size_m: 300.0, ..Default::default() },
+            days,
+            drive: loops_core::UrbanDrive { duration_s, rate_hz: 4.0, city_size_m: 300.0, ..Default::default() },
             start_spread_s: 600.0,
         }
         .generate()
         .unwrap();
         let put = (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
-        let config = StoreConfig { settings: StoreSettings::new(8.0), sampler: None };
-        let report = update_store(dir.path(), Some(&config), put, &[]).unwrap();
+        let config = StoreConfig { settings, sampler: None };
+        let report = update_store(dir, Some(&config), put, &[]).unwrap();
+        (fleet, report)
+    }
+
+    /// Writes the table at `path` again with `edit` made to its columns, in row groups of
+    /// `group_rows` rows.
+    fn rewrite(path: &Path, group_rows: usize, edit: impl FnOnce(&mut [(&str, Column)])) {
+        let Table { names, columns, .. } = read_table(path).unwrap();
+        let mut columns: Vec<(&str, Column)> =
+            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
+        edit(&mut columns);
+        std::fs::remove_file(path).unwrap();
+        write_groups(path, columns, group_rows).unwrap();
+    }
+
+    /// τ's rows are each session's poses in order: a row out of place is named, in one line.
+    #[test]
+    fn a_duration_row_out_of_place_is_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let (_, report) = small_store(dir.path(), 1, 20.0, StoreSettings::new(8.0));
         let path = dir.path().join(&report.stored.state).join("loop_duration.parquet");
         let sessions = report.stored.store.sessions();
         assert!(read_duration(&path, sessions).is_ok());
-        let Table { names, columns, .. } = read_table(&path).unwrap();
-        let mut columns: Vec<(&str, Column)> =
-            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
         let row = sessions[0].poses() + 3;
-        let Column::Int(poses) = &mut columns[1].1 else { panic!("poses are INT64") };
-        poses.swap(row, row + 1);
-        std::fs::remove_file(&path).unwrap();
-        write_table(&path, columns).unwrap();
+        rewrite(&path, usize::MAX, |columns| {
+            let Column::Int(poses) = &mut columns[1].1 else { panic!("poses are INT64") };
+            poses.swap(row, row + 1);
+        });
         let error = read_duration(&path, sessions).unwrap_err().to_string();
         let named = error.contains(&path.display().to_string())
             && error.contains(&format!("row {row} is of pose 4 of session 1, not pose 3 of 1"));
@@ -2280,27 +2300,15 @@ mod tests {
     #[test]
     fn a_damaged_tile_is_named_when_it_is_read() {
         let dir = tempfile::tempdir().unwrap();
-        let fleet = loops_core::UrbanFleet {
-            vehicles: 2,
-            days: 2,
-            drive: loops_core::UrbanDrive { duration_s: 40.0, rate_hz: 4.0, city_size_m: 300.0, ..Default::default() },
-            start_spread_s: 600.0,
-        }
-        .generate()
-        .unwrap();
-        let put = (0..fleet.len()).map(|k| (fleet.names()[k].clone(), fleet.session(k).clone())).collect();
-        let config = StoreConfig { settings: StoreSettings { block: 50, ..StoreSettings::new(8.0) }, sampler: None };
-        let report = update_store(dir.path(), Some(&config), put, &[]).unwrap();
+        let settings = StoreSettings { block: 50, ..StoreSettings::new(8.0) };
+        let (fleet, report) = small_store(dir.path(), 2, 40.0, settings);
         let part = dir.path().join(&report.stored.state).join("tiles").join("000001.parquet");
-        let table = read_table(&part).unwrap();
-        assert!(table.rows > 2, "{} tiles", table.rows);
-        let Table { names, columns, .. } = table;
-        let mut columns: Vec<(&str, Column)> =
-            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
-        let Column::Blobs(summaries) = &mut columns[PART_BLOBS].1 else { panic!("summaries are blobs") };
-        summaries[0] = ByteArray::from(b"ILts not a summary".to_vec());
-        std::fs::remove_file(&part).unwrap();
-        write_groups(&part, columns, 2).unwrap();
+        let tiles = read_table(&part).unwrap().rows;
+        assert!(tiles > 2, "{tiles} tiles");
+        rewrite(&part, 2, |columns| {
+            let Column::Blobs(summaries) = &mut columns[PART_BLOBS].1 else { panic!("summaries are blobs") };
+            summaries[0] = ByteArray::from(b"ILts not a summary".to_vec());
+        });
 
         let read = read_store(dir.path()).unwrap();
         let error = read.store.stored_tiles().unwrap_err().to_string();
@@ -2311,14 +2319,10 @@ mod tests {
 
         // Every summary damaged: replacing a session reads the kept tiles of its neighbours,
         // and fails as a damaged file of the store, naming the part; the store is unchanged.
-        let table = read_table(&part).unwrap();
-        let Table { names, columns, .. } = table;
-        let mut columns: Vec<(&str, Column)> =
-            names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
-        let Column::Blobs(summaries) = &mut columns[PART_BLOBS].1 else { panic!("summaries are blobs") };
-        summaries.iter_mut().for_each(|s| *s = ByteArray::from(b"ILts not a summary".to_vec()));
-        std::fs::remove_file(&part).unwrap();
-        write_groups(&part, columns, PART_GROUP_ROWS).unwrap();
+        rewrite(&part, PART_GROUP_ROWS, |columns| {
+            let Column::Blobs(summaries) = &mut columns[PART_BLOBS].1 else { panic!("summaries are blobs") };
+            summaries.iter_mut().for_each(|s| *s = ByteArray::from(b"ILts not a summary".to_vec()));
+        });
         let t = fleet.session(0);
         let moved: Vec<f64> = t.coords().iter().map(|x| x + 0.25).collect();
         let moved = Trajectory::new(t.timestamps_s().to_vec(), moved, t.dim()).unwrap();
