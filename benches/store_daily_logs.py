@@ -10,9 +10,11 @@ the folder, scanning the new tiles, writing the new state), then ``loops fleet -
 all-logs`` and ``loops fleet --out DIR all-logs``. Prints one line a round (BENCHMARKS.md,
 "Fleet store")::
 
-    python benches/store_daily_logs.py [ROUNDS] [LOOPS]
+    python benches/store_daily_logs.py [ROUNDS] [LOOPS] [MINUTES]
 
-``LOOPS`` is the command line to time (default: ``loops`` on the PATH).
+``LOOPS`` is the command line to time (default: ``loops`` on the PATH); ``MINUTES`` the length
+of each drive (default 5): with short drives the fixed costs of each stored session and file
+weigh most, longer drives show how the daily run grows with its new tiles.
 """
 
 from __future__ import annotations
@@ -34,11 +36,12 @@ def run(loops: str, *args: str) -> float:
     return time.perf_counter() - started
 
 
-def main(rounds: int, loops: str) -> None:
+def main(rounds: int, loops: str, minutes: float = 5.0) -> None:
     root = Path(tempfile.mkdtemp())
     logs = root / "logs"
-    run(loops, "synth", str(logs), "--vehicles", "4", "--days", "31", "--duration-s", "300",
-        "--rate-hz", "5", "--city-size-m", "1000", "--seed", "1")  # fmt: skip
+    run(loops, "synth", str(logs), "--vehicles", "4", "--days", "31",
+        "--duration-s", str(60 * minutes), "--rate-hz", "5", "--city-size-m", "1000",
+        "--seed", "1")  # fmt: skip
     every = sorted(str(p) for p in logs.glob("*.mcap"))
     last = [p for p in every if Path(p).stem.endswith("day30")]
     first = [p for p in every if p not in last]
@@ -64,5 +67,7 @@ def main(rounds: int, loops: str) -> None:
 
 if __name__ == "__main__":
     main(
-        int(sys.argv[1]) if len(sys.argv) > 1 else 3, sys.argv[2] if len(sys.argv) > 2 else "loops"
+        int(sys.argv[1]) if len(sys.argv) > 1 else 3,
+        sys.argv[2] if len(sys.argv) > 2 else "loops",
+        float(sys.argv[3]) if len(sys.argv) > 3 else 5.0,
     )

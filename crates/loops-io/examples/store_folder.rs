@@ -8,11 +8,13 @@
 //! with `DAY_ONLY` the rounds store only day 31, so that a profiler sees day 31 alone.
 //!
 //! ```text
-//! cargo run --release -p loops-io --example store_folder -- [ROUNDS] [VEHICLES]
+//! cargo run --release -p loops-io --example store_folder -- [ROUNDS] [VEHICLES] [MINUTES]
 //! ```
 //!
 //! `VEHICLES` (4 by default) sizes the fleet: the new tiles of day 31 grow with it, the whole
-//! fleet's with its square.
+//! fleet's with its square. `MINUTES` (5 by default) is the length of each drive: with short
+//! drives the update's costs per stored session and per file weigh most, longer drives show
+//! how it grows with the new tiles.
 
 use std::time::Instant;
 
@@ -22,10 +24,17 @@ use loops_io::store::{StoreConfig, read_store, update_opened_store, update_store
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rounds: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(3);
     let vehicles: usize = std::env::args().nth(2).and_then(|a| a.parse().ok()).unwrap_or(4);
+    let minutes: f64 = std::env::args().nth(3).and_then(|a| a.parse().ok()).unwrap_or(5.0);
     let spec = UrbanFleet {
         vehicles,
         days: 31,
-        drive: UrbanDrive { duration_s: 300.0, rate_hz: 5.0, city_size_m: 1000.0, seed: 1, ..UrbanDrive::default() },
+        drive: UrbanDrive {
+            duration_s: 60.0 * minutes,
+            rate_hz: 5.0,
+            city_size_m: 1000.0,
+            seed: 1,
+            ..UrbanDrive::default()
+        },
         start_spread_s: 3600.0,
     };
     let fleet = spec.generate()?;
@@ -37,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sampler: Some((Sampler::new(SamplerKind::Rho, SampleSize::Budget(500), 7), false)),
     };
     let root = std::env::temp_dir().join("loops-store-folder");
-    let stored = root.join(format!("days-1-30-of-{vehicles}"));
+    let stored = root.join(format!("days-1-30-of-{vehicles}x{minutes}"));
     if std::env::var_os("KEEP").is_none() || !stored.is_dir() {
         let _ = std::fs::remove_dir_all(&root);
         let clock = Instant::now();

@@ -1316,21 +1316,34 @@ fn update_with(
         },
         || -> Result<_> {
             let loops = store.loops()?;
-            let samples = match &config.sampler {
-                Some((sampler, between_only)) => {
-                    Some(store.samples(&loops, sampler, *between_only, &mut source).map_err(|e| damaged(e.into()))?)
-                }
-                None => None,
-            };
             let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
-            let tables: [&(dyn Fn() -> Result<()> + Sync); 4] = [
-                &|| write_draws(&staged.join("draws.parquet"), &store),
-                &|| write_components(&staged.join("components.parquet"), &loops, &names, &added),
-                &|| write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
-                &|| write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
-            ];
-            let written: Vec<Result<()>> = tables.par_iter().map(|write| write()).collect();
-            Ok((loops, samples, added, written))
+            // The components' tables are written while the draw runs; the draw's after it.
+            let (drawn, [components, pairs]) = rayon::join(
+                || -> Result<_> {
+                    let samples = match &config.sampler {
+                        Some((sampler, between_only)) => Some(
+                            store
+                                .samples(&loops, sampler, *between_only, &mut source)
+                                .map_err(|e| damaged(e.into()))?,
+                        ),
+                        None => None,
+                    };
+                    let (draws, written) = rayon::join(
+                        || write_draws(&staged.join("draws.parquet"), &store),
+                        || write_samples(&staged.join("samples.parquet"), samples.as_ref(), &names),
+                    );
+                    Ok((samples, [draws, written]))
+                },
+                || {
+                    let (components, pairs) = rayon::join(
+                        || write_components(&staged.join("components.parquet"), &loops, &names, &added),
+                        || write_session_pairs(&staged.join("session_pairs.parquet"), &loops, &names),
+                    );
+                    [components, pairs]
+                },
+            );
+            let (samples, [draws, written]) = drawn?;
+            Ok((loops, samples, added, [draws, components, pairs, written]))
         },
     );
     let (loops, samples, added, tables) = answer?;
@@ -1530,17 +1543,27 @@ fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) ->
     let schema = Arc::new(parquet::schema::parser::parse_message_type(&schema).map_err(failed)?);
     let file =
         File::create_new(path).map_err(|error| StoreError::Io { what: "creating", path: path.to_path_buf(), error })?;
-    // Blobs are written plain, without statistics: hashing each one for a dictionary and
-    // comparing them for a minimum and maximum cost more than writing them, and find nothing.
-    let properties = columns.iter().filter(|(_, c)| matches!(c, Column::Bytes(_) | Column::Blobs(_))).fold(
-        WriterProperties::builder(),
-        |p, (name, _)| {
-            let path = parquet::schema::types::ColumnPath::from(*name);
-            p.set_column_dictionary_enabled(path.clone(), false)
-                .set_column_statistics_enabled(path.clone(), parquet::file::properties::EnabledStatistics::None)
-                .set_column_compression(path, parquet::basic::Compression::LZ4_RAW)
-        },
-    );
+    // Only names (text) are worth a dictionary: hashing every number or blob for one costs more
+    // than writing it, and finds few repeats. Integers (indices, counts, mostly increasing) are
+    // delta-coded, floats and blobs written plain, blobs compressed. Statistics are kept only
+    // where a table has several row groups, for a reader to skip some; with one they skip
+    // nothing.
+    use parquet::basic::{Compression, Encoding};
+    use parquet::file::properties::EnabledStatistics;
+    let one_group = columns.first().is_none_or(|(_, c)| c.len() <= group_rows);
+    let properties = columns.iter().fold(WriterProperties::builder(), |p, (name, column)| {
+        let path = parquet::schema::types::ColumnPath::from(*name);
+        let p = match column {
+            Column::Text(_) | Column::Bool(_) => return p,
+            Column::Int(_) => p.set_column_encoding(path.clone(), Encoding::DELTA_BINARY_PACKED),
+            Column::Float(_) => p,
+            Column::Bytes(_) | Column::Blobs(_) => p
+                .set_column_statistics_enabled(path.clone(), EnabledStatistics::None)
+                .set_column_compression(path.clone(), Compression::LZ4_RAW),
+        };
+        let p = if one_group { p.set_column_statistics_enabled(path.clone(), EnabledStatistics::None) } else { p };
+        p.set_column_dictionary_enabled(path, false)
+    });
     let mut writer = SerializedFileWriter::new(file, schema, Arc::new(properties.build())).map_err(failed)?;
     let columns: Vec<Column> = columns
         .into_iter()
