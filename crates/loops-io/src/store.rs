@@ -1549,20 +1549,20 @@ fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) ->
     // where a table has several row groups, for a reader to skip some; with one they skip
     // nothing.
     use parquet::basic::{Compression, Encoding};
-    use parquet::file::properties::EnabledStatistics;
+    use parquet::file::properties::{EnabledStatistics, WriterPropertiesBuilder};
     let one_group = columns.first().is_none_or(|(_, c)| c.len() <= group_rows);
     let properties = columns.iter().fold(WriterProperties::builder(), |p, (name, column)| {
         let path = parquet::schema::types::ColumnPath::from(*name);
+        let plain = |p: WriterPropertiesBuilder| p.set_column_dictionary_enabled(path.clone(), false);
         let p = match column {
-            Column::Text(_) | Column::Bool(_) => return p,
-            Column::Int(_) => p.set_column_encoding(path.clone(), Encoding::DELTA_BINARY_PACKED),
-            Column::Float(_) => p,
-            Column::Bytes(_) | Column::Blobs(_) => p
+            Column::Text(_) | Column::Bool(_) => p,
+            Column::Int(_) => plain(p).set_column_encoding(path.clone(), Encoding::DELTA_BINARY_PACKED),
+            Column::Float(_) => plain(p),
+            Column::Bytes(_) | Column::Blobs(_) => plain(p)
                 .set_column_statistics_enabled(path.clone(), EnabledStatistics::None)
                 .set_column_compression(path.clone(), Compression::LZ4_RAW),
         };
-        let p = if one_group { p.set_column_statistics_enabled(path.clone(), EnabledStatistics::None) } else { p };
-        p.set_column_dictionary_enabled(path, false)
+        if one_group { p.set_column_statistics_enabled(path, EnabledStatistics::None) } else { p }
     });
     let mut writer = SerializedFileWriter::new(file, schema, Arc::new(properties.build())).map_err(failed)?;
     let columns: Vec<Column> = columns
