@@ -1107,24 +1107,22 @@ impl FleetStore {
         if duration.len() != store.sessions.len() {
             return Err(corrupt(format!("τ of {} sessions for {} sessions", duration.len(), store.sessions.len())));
         }
-        for (s, (own, other)) in duration.iter().enumerate() {
-            let poses = store.sessions[s].poses();
+        // Sessions in parallel; the first misfit in session order.
+        let misfit = duration.par_iter().enumerate().find_map_first(|(s, (own, other))| {
+            let (poses, name) = (store.sessions[s].poses(), &store.sessions[s].name);
             if own.len() != poses || other.len() != poses {
-                return Err(corrupt(format!(
-                    "τ of {} and {} poses for session {s} {:?} of {poses} poses",
+                return Some(format!(
+                    "τ of {} and {} poses for session {s} {name:?} of {poses} poses",
                     own.len(),
-                    other.len(),
-                    store.sessions[s].name
-                )));
+                    other.len()
+                ));
             }
-            if let Some(k) =
-                (0..poses).find(|&k| !(own[k] >= 0.0 && other[k] >= 0.0 && (own[k] + other[k]).is_finite()))
-            {
-                return Err(corrupt(format!(
-                    "τ of pose {k} of session {s} {:?} is ({}, {}) s",
-                    store.sessions[s].name, own[k], other[k]
-                )));
-            }
+            (0..poses)
+                .find(|&k| !(own[k] >= 0.0 && other[k] >= 0.0 && (own[k] + other[k]).is_finite()))
+                .map(|k| format!("τ of pose {k} of session {s} {name:?} is ({}, {}) s", own[k], other[k]))
+        });
+        if let Some(reason) = misfit {
+            return Err(corrupt(reason));
         }
         store.kept.merges = checked_merges(&store.tiles, merges)?;
         store.kept.duration = duration;
@@ -2053,14 +2051,20 @@ fn checked_merges(
     if merges.len() != of_pair.len() {
         return Err(corrupt(format!("{} merges for the {} session pairs with tiles", merges.len(), of_pair.len())));
     }
+    // Each merge against its pair's tiles, in parallel; the first misfit in the order given.
+    let misfit = merges.par_iter().find_map_first(|(pair, merge)| {
+        let Some(tiles) = of_pair.get(pair) else {
+            return Some(format!("a merge of sessions {pair:?}, which have no tiles"));
+        };
+        let fits =
+            merge.tiles().iter().eq(tiles.iter().copied()) && merge.components().iter().all(|c| c.sessions == *pair);
+        (!fits).then(|| format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len()))
+    });
+    if let Some(reason) = misfit {
+        return Err(corrupt(reason));
+    }
     let mut kept = BTreeMap::new();
     for (pair, merge) in merges {
-        let Some(tiles) = of_pair.get(&pair) else {
-            return Err(corrupt(format!("a merge of sessions {pair:?}, which have no tiles")));
-        };
-        if merge.tiles().iter().ne(tiles.iter().copied()) || merge.components().iter().any(|c| c.sessions != pair) {
-            return Err(corrupt(format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len())));
-        }
         if kept.insert(pair, Arc::new(merge)).is_some() {
             return Err(corrupt(format!("two merges of sessions {pair:?}")));
         }

@@ -710,6 +710,23 @@ fn a_store_read_lazily_reads_only_the_tiles_its_updates_and_draws_need() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("τ of 1 and 1 poses for session 0"), "{err}");
+    // A value no τ can be, in two sessions: the first is named.
+    let (own, other_s) = store.loop_duration().unwrap();
+    let mut at = 0;
+    let mut bad: Vec<(Vec<f64>, Vec<f64>)> = sessions
+        .iter()
+        .map(|s| {
+            at += s.poses();
+            (own[at - s.poses()..at].to_vec(), other_s[at - s.poses()..at].to_vec())
+        })
+        .collect();
+    let last = bad.len() - 1;
+    bad[1].1[2] = f64::NAN;
+    bad[last].0[0] = -1.0;
+    let err = FleetStore::from_saved_lazily(settings, sessions.clone(), tiles(), last_update.clone(), merges(), bad)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("τ of pose 2 of session 1") && err.contains("NaN"), "{err}");
     let mut swapped = tiles();
     let k = swapped.iter().position(|(t, _)| t.sessions[0] != t.sessions[1]).unwrap();
     let other = swapped.iter().position(|(t, _)| t.sessions[0] == t.sessions[1]).unwrap();
