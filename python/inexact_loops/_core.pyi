@@ -2265,8 +2265,8 @@ class FleetStore:
     ``sessions``, ``components``, ``session_pairs``, ``loop_duration`` and ``samples``,
     ``.parquet`` each, and the folders ``tiles/`` and ``merges/`` of the stored tiles and
     session pairs' merges by part); each update makes a new state (linking the parts it keeps,
-    writing its new tiles and merges as one more each) and then points at it, so a reader or a killed update sees the old state or the new one. Made
-    by :meth:`open` and :meth:`update`.
+    writing its new tiles and merges as one more each) and then points at it, so a reader or a
+    killed update sees the old state or the new one. Made by :meth:`open` and :meth:`update`.
 
     Example:
         Monday drives out along a street; Tuesday's drive, added the next day, comes back along
