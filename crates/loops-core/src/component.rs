@@ -51,6 +51,21 @@ pub struct LoopComponent {
     pub closest_distance: f64,
 }
 
+#[cfg(feature = "serde")]
+crate::packed::packed_record!(LoopComponent {
+    id: usize,
+    trivial: bool,
+    area_s2: f64,
+    pair_count: u64,
+    pose_pair_count: u64,
+    run_count: usize,
+    holes: u64,
+    i_range: [usize; 2],
+    j_range: [usize; 2],
+    closest_pair: [usize; 2],
+    closest_distance: f64,
+});
+
 /// Component labels of runs, and the components themselves.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Labelling {

@@ -147,6 +147,7 @@ fn tiled(sessions: &[Trajectory], gamma: f64, separation: Separation, per_pair: 
     let merged = TileMerge::merge(level).unwrap().finish().unwrap();
     assert_eq!(loops_core::tile::MergedLoops::from_bytes(&unpacked_bytes(b"ILml", &merged)).unwrap(), merged);
     assert_eq!(loops_core::tile::MergedLoops::from_bytes(&merged.to_bytes()).unwrap(), merged);
+    assert_ne!(unpacked_bytes(b"ILml", &merged)[6..], merged.to_bytes()[6..], "components packed as arrays");
     starts.pop();
     Tiled { merged, durations, starts, runs }
 }

@@ -180,10 +180,18 @@ pub struct StoredFleet {
 
 /// A session pair's name in a store's folder: its sessions' names and fingerprints (a replaced
 /// session's tiles and merges are not its new ones). What names a merge.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 struct PairKey {
     names: [String; 2],
     fingerprints: [u64; 2],
+}
+
+/// Hashed by the fingerprints alone (equal keys have equal fingerprints, and a fingerprint is
+/// already a hash of its session): an update hashes every pair's key to link the parts it keeps.
+impl std::hash::Hash for PairKey {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        self.fingerprints.hash(state);
+    }
 }
 
 impl PairKey {
@@ -656,6 +664,7 @@ type StoredParts = (Vec<(Tile, Arc<dyn SavedTile>)>, Vec<TilePart>);
 /// name and place the tiles, holding the file open; their blobs are read when the
 /// store needs them. O(tiles).
 fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
+    use rayon::prelude::*;
     let names = Names::of(sessions);
     let starts = loops_core::store::starts_of(sessions);
     let mut tiles: Vec<(Tile, Arc<dyn SavedTile>)> = Vec::new();
@@ -670,10 +679,8 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
         if table.names.get(PART_BLOBS..) != Some(&["summary", "duration", "runs"].map(String::from)[..]) {
             return Err(corrupt(format!("columns {:?}, not those of a tile part", table.names)));
         }
-        let mut keys = Vec::with_capacity(table.rows);
-        let mut placed = Vec::with_capacity(table.rows);
-        let mut counts = Vec::with_capacity(table.rows);
-        for k in 0..table.rows {
+        // Each row's tile, key and counts, in parallel; the first bad row in order.
+        let row = |k: usize| -> Result<_> {
             let row_of = |e: String| corrupt(format!("row {k}: {e}"));
             let (pair, key) = names.pair(&table, k, "tile").map_err(row_of)?;
             let cell = |c: usize| table.index(c, k).map_err(row_of);
@@ -685,9 +692,18 @@ fn read_parts(folder: &Path, sessions: &[StoreSession]) -> Result<StoredParts> {
                 })
             };
             let tile = Tile { sessions: pair, rows: side(0)?, columns: side(1)? };
-            counts.push([table.int(8, k).map_err(row_of)?, table.int(9, k).map_err(row_of)?]);
-            keys.push(TileKey { pair: key, at });
-            placed.push((tile, k, at));
+            let counts = [table.int(8, k).map_err(row_of)?, table.int(9, k).map_err(row_of)?];
+            Ok((TileKey { pair: key, at }, (tile, k, at), counts))
+        };
+        let rows: Vec<Result<_>> = (0..table.rows).into_par_iter().map(row).collect();
+        let mut keys = Vec::with_capacity(table.rows);
+        let mut placed = Vec::with_capacity(table.rows);
+        let mut counts = Vec::with_capacity(table.rows);
+        for read in rows {
+            let (key, tile, count) = read?;
+            keys.push(key);
+            placed.push(tile);
+            counts.push(count);
         }
         let metadata = reader.metadata();
         let mut groups = Vec::with_capacity(metadata.num_row_groups());
@@ -767,7 +783,10 @@ fn read_merge_parts(folder: &Path, sessions: &[StoreSession]) -> Result<(Merges,
             return Err(corrupt(format!("columns {:?}, not those of a merge part", table.names)));
         }
         let rows = (0..table.rows)
+            .into_par_iter()
             .map(|k| names.pair(&table, k, "merge").map_err(|e| corrupt(format!("row {k}: {e}"))))
+            .collect::<Vec<Result<_>>>()
+            .into_iter()
             .collect::<Result<Vec<_>>>()?;
         let decoded = rows
             .par_iter()
@@ -1664,6 +1683,8 @@ fn read_chunk<R: parquet::file::reader::ChunkReader + 'static>(
         values: &mut Vec<T::T>,
     ) -> std::result::Result<(), String> {
         let before = values.len();
+        // Room for all of them at once: the reader grows the vector batch by batch otherwise.
+        values.reserve(count);
         let (records, _, _) = r.read_records(count, None, None, values).map_err(|e| e.to_string())?;
         if records != count || values.len() != before + count {
             return Err(format!("{} values of {count} rows", values.len() - before));
@@ -1788,7 +1809,10 @@ fn read_poses(path: &Path) -> Result<Trajectory> {
     let manifold = manifold_of(manifold).ok_or_else(|| corrupt(format!("manifold {manifold:?} is unknown")))?;
     let axes =
         (0..dim).map(|c| table.floats(3 + c)).collect::<std::result::Result<Vec<_>, String>>().map_err(corrupt)?;
-    let coords: Vec<f64> = (0..table.rows).flat_map(|k| axes.iter().map(move |a| a[k])).collect();
+    let mut coords: Vec<f64> = Vec::with_capacity(table.rows * dim);
+    for k in 0..table.rows {
+        coords.extend(axes.iter().map(|a| a[k]));
+    }
     let mut take = |c: usize| match table.columns[c].take() {
         Some(Column::Float(values)) => Ok(values),
         _ => Err(corrupt(format!("column {} ({c}) is not DOUBLE", table.names[c]))),

@@ -259,6 +259,9 @@ pub struct DrawStats {
     pub closest_pair: [usize; 2],
 }
 
+#[cfg(feature = "serde")]
+crate::packed::packed_record!(DrawStats { trivial: bool, rows: [usize; 2], pairs: u64, closest_pair: [usize; 2] });
+
 impl DrawStats {
     /// Rows from the first to the last.
     fn row_count(&self) -> usize {

@@ -98,8 +98,10 @@ const LEAF_SIZE: usize = 16;
 /// version 2 kept a value for every row and column (`ILtd`, still read); the other types are
 /// the same in both. Version 4 packs long arrays of numbers (runs, labels, components, shares)
 /// as little-endian values in one MessagePack `bin` each; versions 2 and 3 wrote each number on
-/// its own, and are read as they are.
-pub const TILE_FORMAT_VERSION: u16 = 4;
+/// its own, and are read as they are. Version 5 packs a merge's components too (a fixed-width
+/// record each, [`MergedLoops::to_bytes`]), where version 4 wrote each field on its own (still
+/// read).
+pub const TILE_FORMAT_VERSION: u16 = 5;
 
 /// The oldest version of the byte format ([`TILE_FORMAT_VERSION`]) this build reads.
 pub const OLDEST_TILE_FORMAT_VERSION: u16 = 2;
@@ -1622,10 +1624,19 @@ pub struct MergedComponent {
     pub draw: DrawStats,
 }
 
+#[cfg(feature = "serde")]
+crate::packed::packed_record!(MergedComponent {
+    component: LoopComponent,
+    sessions: [usize; 2],
+    times_s: [[f64; 2]; 2],
+    draw: DrawStats,
+});
+
 /// The fleet's loop components from merged tiles ([`TileMerge::finish`]), by id.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct MergedLoops {
+    #[cfg_attr(feature = "serde", serde(with = "crate::packed"))]
     components: Vec<MergedComponent>,
     tiles: Vec<Tile>,
     #[cfg_attr(feature = "serde", serde(with = "crate::packed::lists"))]
@@ -1872,6 +1883,18 @@ pub(crate) fn decode<T: serde::de::DeserializeOwned>(tag: [u8; 4], what: &'stati
         )));
     }
     let body = &bytes[6..];
+    // Read in place (packed values straight from the bytes); a value that is the whole body
+    // leaves nothing for a next one to read. Anything else is read again through a cursor to
+    // name what is wrong.
+    let mut de = rmp_serde::Deserializer::from_read_ref(body);
+    if let Ok(value) = <T as serde::Deserialize>::deserialize(&mut de)
+        && matches!(
+            <serde::de::IgnoredAny as serde::Deserialize>::deserialize(&mut de),
+            Err(rmp_serde::decode::Error::InvalidMarkerRead(e)) if e.kind() == std::io::ErrorKind::UnexpectedEof
+        )
+    {
+        return Ok(value);
+    }
     let mut reader = std::io::Cursor::new(body);
     let value: T = rmp_serde::from_read(&mut reader).map_err(|e| corrupt(format!("{e} (in {} bytes)", bytes.len())))?;
     let used = reader.position() as usize;
