@@ -70,7 +70,9 @@ use crate::separation::Separation;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
 use crate::tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs};
-use crate::tile::{MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching};
+use crate::tile::{
+    MergedComponent, MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching,
+};
 use crate::trajectory::{Manifold, Trajectory};
 
 /// The version of a store's layout (its tables and their meaning). Version 2 adds what a
@@ -1075,7 +1077,7 @@ impl FleetStore {
         for k in 0..store.tiles.len() {
             store.checked_runs(k, &starts)?;
         }
-        store.kept.merges = checked_merges(&store.tiles, merges)?;
+        store.kept.merges = checked_merges(&store.sessions, &store.tiles, merges)?;
         Ok(store)
     }
 
@@ -1124,7 +1126,7 @@ impl FleetStore {
         if let Some(reason) = misfit {
             return Err(corrupt(reason));
         }
-        store.kept.merges = checked_merges(&store.tiles, merges)?;
+        store.kept.merges = checked_merges(&store.sessions, &store.tiles, merges)?;
         store.kept.duration = duration;
         Ok(store)
     }
@@ -2040,9 +2042,11 @@ fn check_sessions(settings: &StoreSettings, sessions: &[StoreSession]) -> Result
 /// The merges saved of a store's session pairs, checked to be those of its `tiles`: one for
 /// each session pair with tiles, over its tiles in plan order. O(tiles + components).
 fn checked_merges(
+    sessions: &[StoreSession],
     tiles: &[KeptTile],
     merges: Vec<([usize; 2], MergedLoops)>,
 ) -> Result<BTreeMap<[usize; 2], Arc<MergedLoops>>> {
+    let starts = starts_of(sessions);
     let corrupt = |reason: String| Error::InvalidState { what: "fleet store", reason };
     let mut of_pair: BTreeMap<[usize; 2], Vec<&Tile>> = BTreeMap::new();
     for t in tiles {
@@ -2058,7 +2062,13 @@ fn checked_merges(
         };
         let fits =
             merge.tiles().iter().eq(tiles.iter().copied()) && merge.components().iter().all(|c| c.sessions == *pair);
-        (!fits).then(|| format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len()))
+        if !fits {
+            return Some(format!("the merge of sessions {pair:?} is not of their {} tiles", tiles.len()));
+        }
+        let sides = pair.map(|s| starts[s]..starts[s] + sessions[s].poses());
+        merge.components().iter().enumerate().find_map(|(k, c)| {
+            component_misfit(c, &sides).map(|what| format!("component {k} of the merge of sessions {pair:?}: {what}"))
+        })
     });
     if let Some(reason) = misfit {
         return Err(corrupt(reason));
@@ -2070,6 +2080,43 @@ fn checked_merges(
         }
     }
     Ok(kept)
+}
+
+/// What is wrong with a merged component's numbers for a component of its session pair, whose
+/// rows and columns are `sides` (fleet indices), if anything: its extents, rows and closest
+/// pairs within them and in order, its pair count within its rows and columns, its measures
+/// finite, a trivial one within one session. What a damaged or altered file would get wrong,
+/// found when the store opens rather than in a wrong answer.
+fn component_misfit(c: &MergedComponent, sides: &[std::ops::Range<usize>; 2]) -> Option<String> {
+    let (lc, draw) = (&c.component, &c.draw);
+    let span =
+        |r: [usize; 2], side: &std::ops::Range<usize>| r[0] <= r[1] && side.contains(&r[0]) && side.contains(&r[1]);
+    let cell = |p: [usize; 2]| sides[0].contains(&p[0]) && sides[1].contains(&p[1]);
+    let rows = draw.rows[1].wrapping_sub(draw.rows[0]) as u128 + 1;
+    let (rows_of, columns_of) = (&sides[0], &sides[1]);
+    if !span(lc.i_range, rows_of) || !span(lc.j_range, columns_of) || !span(draw.rows, rows_of) {
+        return Some(format!(
+            "rows {:?}, columns {:?} and rows drawn {:?}, outside rows {rows_of:?} and columns {columns_of:?}",
+            lc.i_range, lc.j_range, draw.rows
+        ));
+    }
+    if !cell(lc.closest_pair) || !(draw.trivial || cell(draw.closest_pair)) {
+        return Some(format!("closest pairs {:?} and {:?} outside its sessions", lc.closest_pair, draw.closest_pair));
+    }
+    if draw.trivial != lc.trivial || (lc.trivial && c.sessions[0] != c.sessions[1]) {
+        return Some(format!("trivial {} and {} between sessions {:?}", lc.trivial, draw.trivial, c.sessions));
+    }
+    if u128::from(draw.pairs) > rows * columns_of.len() as u128 {
+        return Some(format!("{} pairs in rows {:?}", draw.pairs, draw.rows));
+    }
+    let finite = |x: f64| x >= 0.0 && x.is_finite();
+    if !finite(lc.area_s2) || !finite(lc.closest_distance) || !c.times_s.iter().flatten().all(|t| t.is_finite()) {
+        return Some(format!(
+            "area {} s², closest distance {}, times {:?}",
+            lc.area_s2, lc.closest_distance, c.times_s
+        ));
+    }
+    None
 }
 
 /// The merges of the tiles of each session pair among `tiles` (all the tiles of each pair),

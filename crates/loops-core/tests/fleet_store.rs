@@ -727,6 +727,30 @@ fn a_store_read_lazily_reads_only_the_tiles_its_updates_and_draws_need() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("τ of pose 2 of session 1") && err.contains("NaN"), "{err}");
+    // A merge whose first component draws from a row past its session: named, with the rows.
+    let mut altered = merges();
+    let mut bytes = altered[0].1.to_bytes();
+    // Tag and version, the array of the merge's fields, the header of its packed components;
+    // then the first component's record: its loop component (105 bytes), sessions (16), times
+    // (32), then the draw's statistics, whose rows follow a flag.
+    let header = match bytes[7] {
+        0xc4 => 2,
+        0xc5 => 3,
+        _ => 5,
+    };
+    let at = 6 + 1 + header + 105 + 16 + 32 + 1;
+    bytes[at..at + 8].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    altered[0].1 = loops_core::tile::MergedLoops::from_bytes(&bytes).unwrap();
+    let (own, other_s) = store.loop_duration().unwrap();
+    let kept: Vec<(Vec<f64>, Vec<f64>)> = sessions
+        .iter()
+        .zip(store.starts())
+        .map(|(s, f)| (own[f..f + s.poses()].to_vec(), other_s[f..f + s.poses()].to_vec()))
+        .collect();
+    let err = FleetStore::from_saved_lazily(settings, sessions.clone(), tiles(), last_update.clone(), altered, kept)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("component 0 of the merge of sessions") && err.contains("1099511627776"), "{err}");
     let mut swapped = tiles();
     let k = swapped.iter().position(|(t, _)| t.sessions[0] != t.sessions[1]).unwrap();
     let other = swapped.iter().position(|(t, _)| t.sessions[0] == t.sessions[1]).unwrap();
