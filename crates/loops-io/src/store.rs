@@ -1662,6 +1662,13 @@ fn read_columns<R: parquet::file::reader::ChunkReader + 'static>(
             read_chunk(reader, path, g, c, usize::MAX, column)?;
         }
     }
+    // The row count the file states is the one every column read holds, or the file is not one.
+    if let Some((c, column)) =
+        columns.iter().enumerate().find_map(|(c, k)| k.as_ref().filter(|k| k.len() != rows).map(|k| (c, k)))
+    {
+        let reason = format!("column {} holds {} values of the {rows} rows the file states", names[c], column.len());
+        return Err(StoreError::Corrupt { path: path.to_path_buf(), reason });
+    }
     Ok(Table { names, columns, rows })
 }
 
@@ -1683,8 +1690,9 @@ fn read_chunk<R: parquet::file::reader::ChunkReader + 'static>(
         values: &mut Vec<T::T>,
     ) -> std::result::Result<(), String> {
         let before = values.len();
-        // Room for all of them at once: the reader grows the vector batch by batch otherwise.
-        values.reserve(count);
+        // Room for all of them at once where it can be had (the reader grows the vector batch by
+        // batch otherwise); a count no file holds is found by the read.
+        let _ = values.try_reserve(count);
         let (records, _, _) = r.read_records(count, None, None, values).map_err(|e| e.to_string())?;
         if records != count || values.len() != before + count {
             return Err(format!("{} values of {count} rows", values.len() - before));
