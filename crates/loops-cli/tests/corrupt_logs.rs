@@ -2,17 +2,10 @@
 //! library backtrace, no escape sequences, no source path) naming the file and the offset, and
 //! a file without line breaks fails at once instead of filling the memory.
 
-use std::path::PathBuf;
 use std::process::Output;
 
 mod support;
-use support::{loops, write_in};
-
-fn temp_file(name: &str, bytes: &[u8]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-cli-corrupt-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    write_in(&dir, name, bytes)
-}
+use support::{loops, temp_dir, write_in};
 
 /// An MCAP record: opcode, length, body.
 fn record(opcode: u8, body: &[u8]) -> Vec<u8> {
@@ -52,9 +45,10 @@ fn a_corrupt_mcap_is_one_line_naming_file_and_offset() {
     let channel =
         [1u16.to_le_bytes().to_vec(), 0u16.to_le_bytes().to_vec(), string(b"/p\xffose"), string(b"json"), string(b"")]
             .concat();
-    let non_utf8 = temp_file("non-utf8.mcap", &mcap(&[record(0x04, &channel)]));
+    let dir = temp_dir("corrupt-mcap");
+    let non_utf8 = write_in(&dir, "non-utf8.mcap", mcap(&[record(0x04, &channel)]));
     let schema = [1u16.to_le_bytes().to_vec(), u32::MAX.to_le_bytes().to_vec(), b"geometry".to_vec()].concat();
-    let huge = temp_file("huge-name.mcap", &mcap(&[record(0x03, &schema)]));
+    let huge = write_in(&dir, "huge-name.mcap", mcap(&[record(0x03, &schema)]));
     for (path, what) in [(&non_utf8, "its topic is not UTF-8"), (&huge, "its name is declared 4294967295 bytes long")] {
         let name = path.to_str().unwrap();
         for args in [vec!["info", name], vec!["components", name, "--gamma", "1"]] {
@@ -68,7 +62,8 @@ fn a_corrupt_mcap_is_one_line_naming_file_and_offset() {
 #[test]
 fn a_file_without_line_breaks_fails_at_its_first_line() {
     let zero = std::path::Path::new("/dev/zero");
-    let long = temp_file("long.tum", &vec![b'0'; 3 << 20]);
+    let dir = temp_dir("no-line-breaks");
+    let long = write_in(&dir, "long.tum", vec![b'0'; 3 << 20]);
     for path in [zero, long.as_path()] {
         if !path.exists() {
             continue;

@@ -11,6 +11,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod support;
+use support::TempDir;
+
 /// `../shared/data` beside the checkout, or `None` (with a message) when it is absent.
 fn real_data_dir() -> Option<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
@@ -114,9 +117,7 @@ fn the_fleet_example_runs_as_shown() {
     let examples = fleet_examples();
     assert!(examples.iter().any(|e| e.command.starts_with("loops synth")), "{examples:#?}");
     assert!(examples.iter().any(|e| e.command.starts_with("loops fleet")), "{examples:#?}");
-    let dir = std::env::temp_dir().join(format!("loops-documented-fleet-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = TempDir::at(std::env::temp_dir().join(format!("loops-documented-fleet-{}", std::process::id())));
     let mut failures = Vec::new();
     for example in &examples {
         failures.extend(run_example(example, &dir).1);

@@ -2,8 +2,11 @@
 //! every few seconds giving the same candidates, latency figures on stderr, and one-line errors
 //! for bad flags and bad poses.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
+
+mod support;
+use support::TempDir;
 
 use loops_core::{
     Separation, UrbanDrive,
@@ -13,10 +16,8 @@ use serde_json::Value;
 
 /// A folder with a 10 min synthetic drive as a TUM file (numbers written so they read back
 /// exactly), and its times and positions.
-fn drive(name: &str) -> (PathBuf, Vec<f64>, Vec<[f64; 3]>) {
-    let dir = std::env::temp_dir().join(format!("loops-replay-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+fn drive(name: &str) -> (TempDir, Vec<f64>, Vec<[f64; 3]>) {
+    let dir = TempDir::at(std::env::temp_dir().join(format!("loops-replay-{name}-{}", std::process::id())));
     let traj = UrbanDrive { duration_s: 600.0, seed: 4, ..UrbanDrive::default() }.generate().expect("drive").trajectory;
     let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
     let (mut times, mut points) = (Vec::new(), Vec::new());
@@ -223,9 +224,7 @@ fn bad_flags_and_bad_poses_are_one_line_errors() {
 #[test]
 fn ctrl_c_stops_after_the_keyframe_in_progress_and_prints_the_figures() {
     use std::io::{BufRead, BufReader};
-    let dir = std::env::temp_dir().join(format!("loops-replay-interrupt-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = TempDir::at(std::env::temp_dir().join(format!("loops-replay-interrupt-{}", std::process::id())));
     let synth = loops(&dir, &["synth", "long.tum", "--duration-s", "7200", "--seed", "2"]);
     assert!(synth.status.success(), "{}", String::from_utf8_lossy(&synth.stderr));
     let mut child = Command::new(env!("CARGO_BIN_EXE_loops"))

@@ -3,15 +3,16 @@
 //! else (numbers, layout, wording) must match. Update with `INSTA_UPDATE=always cargo test`
 //! and review the diff.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
+
+mod support;
+use support::TempDir;
 
 /// A fresh folder holding two synthetic drives (5 min, seeds 0 and 1; MCAP and TUM) and a
 /// hand-written out-and-back TUM file; commands run inside it so paths print short.
-fn workspace(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("loops-snapshots-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
+fn workspace(name: &str) -> TempDir {
+    let dir = TempDir::at(std::env::temp_dir().join(format!("loops-snapshots-{name}-{}", std::process::id())));
     let mut text = String::from("# timestamp tx ty tz qx qy qz qw\n");
     for i in 0..=40 {
         let x = if i <= 20 { i } else { 40 - i };

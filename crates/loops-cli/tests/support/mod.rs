@@ -15,13 +15,54 @@ pub fn loops(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_loops")).args(args).output().expect("the loops binary runs")
 }
 
-/// An empty folder `name` of the test crate in the temp folder (emptied first when it exists).
-pub fn temp_dir(name: &str) -> PathBuf {
+/// An empty folder `name` of the test crate in the temp folder (emptied first when it exists),
+/// removed when the returned guard is dropped.
+pub fn temp_dir(name: &str) -> TempDir {
     let crate_name = env!("CARGO_CRATE_NAME");
-    let dir = std::env::temp_dir().join(format!("loops-cli-{crate_name}-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    TempDir::at(std::env::temp_dir().join(format!("loops-cli-{crate_name}-{name}-{}", std::process::id())))
+}
+
+/// A test's folder, removed with what it holds when dropped; kept, and its path printed, when
+/// the test fails, so that what the test left can be read.
+pub struct TempDir(PathBuf);
+
+impl TempDir {
+    /// Makes `dir` empty (removing what it held) and guards it.
+    pub fn at(dir: PathBuf) -> Self {
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        Self(dir)
+    }
+}
+
+impl std::ops::Deref for TempDir {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TempDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TempDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("kept the failed test's folder {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// Writes `contents` as the file `name` of `dir`, and returns its path.
