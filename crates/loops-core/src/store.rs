@@ -2302,11 +2302,15 @@ impl StoreLoops {
     /// The ids of the components of a session in `sessions` (indices), with itself or another:
     /// after an update, with the sessions it changed, the components it added.
     pub fn components_of(&self, sessions: &HashSet<usize>) -> Vec<usize> {
-        self.components
-            .iter()
-            .filter(|c| sessions.contains(&c.sessions[0]) || sessions.contains(&c.sessions[1]))
-            .map(|c| c.id)
-            .collect()
+        // A flag per session: a lookup in a vector, not a hash, for each component.
+        let mut named = vec![false; self.starts.len()];
+        for &s in sessions {
+            if let Some(flag) = named.get_mut(s) {
+                *flag = true;
+            }
+        }
+        let of = |s: usize| named.get(s).copied().unwrap_or(false);
+        self.components.iter().filter(|c| of(c.sessions[0]) || of(c.sessions[1])).map(|c| c.id).collect()
     }
 }
 

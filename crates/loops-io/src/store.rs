@@ -1335,7 +1335,7 @@ fn update_with(
         },
         || -> Result<_> {
             let loops = store.loops()?;
-            let added: HashSet<usize> = store.added_components(&loops).into_iter().collect();
+            let added = store.added_components(&loops);
             // The components' tables are written while the draw runs; the draw's after it.
             let (drawn, [components, pairs]) = rayon::join(
                 || -> Result<_> {
@@ -1497,16 +1497,26 @@ fn write_synced(path: &Path, bytes: std::io::Result<Vec<u8>>) -> Result<()> {
     written.map_err(|error| StoreError::Io { what: "writing", path: path.to_path_buf(), error })
 }
 
-/// One column of a table: written from the first five, read back as the first three and
+/// One column of a table: written from the first six, read back as the first three and
 /// [`Blobs`](Column::Blobs).
 enum Column {
     Int(Vec<i64>),
     Float(Vec<f64>),
     Bool(Vec<bool>),
     Text(Vec<String>),
+    /// Text of few values repeated row by row (session names, a manifold): each value's bytes
+    /// held once and shared by its rows ([`repeated`]); written as [`Text`](Column::Text).
+    Repeated(Vec<ByteArray>),
     Bytes(Vec<Vec<u8>>),
     /// Text or bytes as read back.
     Blobs(Vec<ByteArray>),
+}
+
+/// The [`Column::Repeated`] of `values[k]` for each `k` of `rows`: a table of hundreds of
+/// thousands of components names its sessions without a string of its own each.
+fn repeated(values: &[&str], rows: impl Iterator<Item = usize>) -> Column {
+    let shared: Vec<ByteArray> = values.iter().map(|v| ByteArray::from(v.as_bytes().to_vec())).collect();
+    Column::Repeated(rows.map(|k| shared[k].clone()).collect())
 }
 
 impl Column {
@@ -1517,6 +1527,7 @@ impl Column {
             Column::Float(v) => v.len(),
             Column::Bool(v) => v.len(),
             Column::Text(v) => v.len(),
+            Column::Repeated(v) => v.len(),
             Column::Bytes(v) => v.len(),
             Column::Blobs(v) => v.len(),
         }
@@ -1549,7 +1560,7 @@ fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) ->
             Column::Int(_) => format!("REQUIRED INT64 {name};"),
             Column::Float(_) => format!("REQUIRED DOUBLE {name};"),
             Column::Bool(_) => format!("REQUIRED BOOLEAN {name};"),
-            Column::Text(_) => format!("REQUIRED BYTE_ARRAY {name} (STRING);"),
+            Column::Text(_) | Column::Repeated(_) => format!("REQUIRED BYTE_ARRAY {name} (STRING);"),
             Column::Bytes(_) | Column::Blobs(_) => format!("REQUIRED BYTE_ARRAY {name};"),
         })
         .collect();
@@ -1574,7 +1585,7 @@ fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) ->
         let path = parquet::schema::types::ColumnPath::from(*name);
         let plain = |p: WriterPropertiesBuilder| p.set_column_dictionary_enabled(path.clone(), false);
         let p = match column {
-            Column::Text(_) | Column::Bool(_) => p,
+            Column::Text(_) | Column::Repeated(_) | Column::Bool(_) => p,
             Column::Int(_) => plain(p).set_column_encoding(path.clone(), Encoding::DELTA_BINARY_PACKED),
             Column::Float(_) => plain(p),
             Column::Bytes(_) | Column::Blobs(_) => plain(p)
@@ -1588,6 +1599,7 @@ fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) ->
         .into_iter()
         .map(|(_, column)| match column {
             Column::Text(v) => Column::Blobs(v.into_iter().map(|s| ByteArray::from(s.into_bytes())).collect()),
+            Column::Repeated(v) => Column::Blobs(v),
             Column::Bytes(v) => Column::Blobs(v.into_iter().map(ByteArray::from).collect()),
             other => other,
         })
@@ -1604,7 +1616,7 @@ fn write_groups(path: &Path, columns: Vec<(&str, Column)>, group_rows: usize) ->
                 Column::Float(v) => out.typed::<DoubleType>().write_batch(&v[first..end], None, None),
                 Column::Bool(v) => out.typed::<BoolType>().write_batch(&v[first..end], None, None),
                 Column::Blobs(v) => out.typed::<ByteArrayType>().write_batch(&v[first..end], None, None),
-                Column::Text(_) | Column::Bytes(_) => unreachable!("made blobs above"),
+                Column::Text(_) | Column::Repeated(_) | Column::Bytes(_) => unreachable!("made blobs above"),
             }
             .map_err(failed)?;
             out.close().map_err(failed)?;
@@ -1795,7 +1807,7 @@ fn write_poses(path: &Path, t: &Trajectory) -> Result<()> {
         (0..dim).map(|k| Column::Float(t.coords().iter().skip(k).step_by(dim).copied().collect())).collect();
     columns.extend(names.iter().map(String::as_str).zip(coords));
     // The manifold, as its variant's name (a trajectory read back is on it).
-    columns.push(("manifold", Column::Text(vec![format!("{:?}", t.manifold()); t.len()])));
+    columns.push(("manifold", repeated(&[&format!("{:?}", t.manifold())], std::iter::repeat_n(0, t.len()))));
     write_table(path, columns)
 }
 
@@ -2051,41 +2063,70 @@ fn write_draws(path: &Path, store: &FleetStore) -> Result<()> {
     )
 }
 
-fn write_components(
-    path: &Path,
-    loops: &loops_core::store::StoreLoops,
-    names: &[&str],
-    added: &HashSet<usize>,
-) -> Result<()> {
+fn write_components(path: &Path, loops: &loops_core::store::StoreLoops, names: &[&str], added: &[usize]) -> Result<()> {
     let c = loops.components();
+    let mut is_added = vec![false; c.len()];
+    added.iter().for_each(|&id| is_added[id] = true);
     let times = loops.component_times_s();
-    let f = |g: &dyn Fn(&loops_core::fleet::FleetComponent) -> f64| Column::Float(c.iter().map(g).collect());
-    let u = |g: &dyn Fn(&loops_core::fleet::FleetComponent) -> usize| ints(c.iter().map(g));
-    let time = |g: &dyn Fn(&[[f64; 2]; 2]) -> f64| Column::Float(times.iter().map(g).collect());
+    // Every column filled in one pass over the components (a pass a column would read them
+    // all again for each of its 21 columns).
+    let n = c.len();
+    let shared: Vec<ByteArray> = names.iter().map(|v| ByteArray::from(v.as_bytes().to_vec())).collect();
+    let mut text: [Vec<ByteArray>; 2] = std::array::from_fn(|_| Vec::with_capacity(n));
+    let mut int: [Vec<i64>; 11] = std::array::from_fn(|_| Vec::with_capacity(n));
+    let mut float: [Vec<f64>; 6] = std::array::from_fn(|_| Vec::with_capacity(n));
+    let mut flag: [Vec<bool>; 2] = std::array::from_fn(|_| Vec::with_capacity(n));
+    for (c, t) in c.iter().zip(&times) {
+        let [a, b] = c.sessions;
+        text[0].push(shared[a].clone());
+        text[1].push(shared[b].clone());
+        let ints = [
+            c.id as i64,
+            a as i64,
+            b as i64,
+            c.pair_count as i64,
+            c.holes as i64,
+            c.poses[0][0] as i64,
+            c.poses[0][1] as i64,
+            c.poses[1][0] as i64,
+            c.poses[1][1] as i64,
+            c.closest_pair[0] as i64,
+            c.closest_pair[1] as i64,
+        ];
+        int.iter_mut().zip(ints).for_each(|(column, value)| column.push(value));
+        let floats = [c.area_s2, t[0][0], t[0][1], t[1][0], t[1][1], c.closest_distance];
+        float.iter_mut().zip(floats).for_each(|(column, value)| column.push(value));
+        flag[0].push(c.trivial);
+        flag[1].push(is_added[c.id]);
+    }
+    let [session_a, session_b] = text.map(Column::Repeated);
+    let [id, a, b, pair_count, holes, i_min, i_max, j_min, j_max, closest_i, closest_j] = int.map(Column::Int);
+    let [area, t_min, t_max, t_prime_min, t_prime_max, closest_distance] = float.map(Column::Float);
+    let [trivial, added] = flag.map(Column::Bool);
     write_table(
         path,
         vec![
-            ("id", u(&|c| c.id)),
-            ("session_a", Column::Text(c.iter().map(|c| names[c.sessions[0]].to_owned()).collect())),
-            ("session_b", Column::Text(c.iter().map(|c| names[c.sessions[1]].to_owned()).collect())),
-            ("a", u(&|c| c.sessions[0])),
-            ("b", u(&|c| c.sessions[1])),
-            ("trivial", Column::Bool(c.iter().map(|c| c.trivial).collect())),
-            ("area_s2", f(&|c| c.area_s2)),
-            ("pair_count", Column::Int(c.iter().map(|c| c.pair_count as i64).collect())),
-            ("holes", Column::Int(c.iter().map(|c| c.holes as i64).collect())),
-            ("i_min", u(&|c| c.poses[0][0])),
-            ("i_max", u(&|c| c.poses[0][1])),
-            ("j_min", u(&|c| c.poses[1][0])),
-            ("j_max", u(&|c| c.poses[1][1])),
-            ("t_min_s", time(&|t| t[0][0])),
-            ("t_max_s", time(&|t| t[0][1])),
-            ("t_prime_min_s", time(&|t| t[1][0])),
-            ("t_prime_max_s", time(&|t| t[1][1])),
-            ("closest_i", u(&|c| c.closest_pair[0])),
-            ("closest_j", u(&|c| c.closest_pair[1])),
-            ("closest_distance", f(&|c| c.closest_distance)),
-            ("added", Column::Bool(c.iter().map(|c| added.contains(&c.id)).collect())),
+            ("id", id),
+            ("session_a", session_a),
+            ("session_b", session_b),
+            ("a", a),
+            ("b", b),
+            ("trivial", trivial),
+            ("area_s2", area),
+            ("pair_count", pair_count),
+            ("holes", holes),
+            ("i_min", i_min),
+            ("i_max", i_max),
+            ("j_min", j_min),
+            ("j_max", j_max),
+            ("t_min_s", t_min),
+            ("t_max_s", t_max),
+            ("t_prime_min_s", t_prime_min),
+            ("t_prime_max_s", t_prime_max),
+            ("closest_i", closest_i),
+            ("closest_j", closest_j),
+            ("closest_distance", closest_distance),
+            ("added", added),
         ],
     )
 }
@@ -2095,8 +2136,8 @@ fn write_session_pairs(path: &Path, loops: &loops_core::store::StoreLoops, names
     write_table(
         path,
         vec![
-            ("session_a", Column::Text(p.iter().map(|p| names[p.sessions[0]].to_owned()).collect())),
-            ("session_b", Column::Text(p.iter().map(|p| names[p.sessions[1]].to_owned()).collect())),
+            ("session_a", repeated(names, p.iter().map(|p| p.sessions[0]))),
+            ("session_b", repeated(names, p.iter().map(|p| p.sessions[1]))),
             ("a", ints(p.iter().map(|p| p.sessions[0]))),
             ("b", ints(p.iter().map(|p| p.sessions[1]))),
             ("components", ints(p.iter().map(|p| p.components))),
@@ -2133,8 +2174,8 @@ fn write_samples(path: &Path, samples: Option<&StoreSamples>, names: &[&str]) ->
     write_table(
         path,
         vec![
-            ("session_a", Column::Text(rows.iter().map(|s| names[s.sessions[0]].to_owned()).collect())),
-            ("session_b", Column::Text(rows.iter().map(|s| names[s.sessions[1]].to_owned()).collect())),
+            ("session_a", repeated(names, rows.iter().map(|s| s.sessions[0]))),
+            ("session_b", repeated(names, rows.iter().map(|s| s.sessions[1]))),
             ("a", u(&|s| s.sessions[0])),
             ("b", u(&|s| s.sessions[1])),
             ("i", u(&|s| s.poses[0])),
