@@ -71,7 +71,8 @@ use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::check_gamma;
 use crate::tile::draw::{TileDuration, TileRuns, draw_session_tile, draw_tile_runs};
 use crate::tile::{
-    MergedComponent, MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary, plan_session_tiles_touching,
+    JoinedMerges, MergedComponent, MergedLoops, SessionBlocks, Tile, TileKeep, TileMerge, TileSummary,
+    plan_session_tiles_touching,
 };
 use crate::trajectory::{Manifold, Trajectory};
 
@@ -1703,7 +1704,7 @@ impl FleetStore {
         if self.tiles.is_empty() {
             return Ok(StoreLoops { merged: None, components: Vec::new(), session_pairs: Vec::new(), starts });
         }
-        let merged = MergedLoops::concat(self.kept.merges.values().map(Arc::as_ref));
+        let merged = JoinedMerges::new(self.kept.merges.values().cloned().collect());
         let components = merged.fleet_components(&starts)?;
         let spans: Vec<f64> = self.sessions.iter().map(|s| s.blocks.span_s).collect();
         let session_pairs = merged.session_pairs(&spans)?;
@@ -1765,7 +1766,7 @@ impl FleetStore {
                 tiles_asked: 0,
             });
         };
-        let blocks: Vec<[usize; 2]> = merged.components().iter().map(|m| m.sessions).collect();
+        let blocks: Vec<[usize; 2]> = merged.components().map(|m| m.sessions).collect();
         let keep = |c: usize| !between_only || blocks[c][0] != blocks[c][1];
         let names: Vec<&str> = self.sessions.iter().map(|s| s.name.as_str()).collect();
         let keys = KeyLayout::sessions(&loops.starts, &names);
@@ -1782,15 +1783,7 @@ impl FleetStore {
             let k = self.tiles.binary_search_by_key(&(tile.rows.start, tile.columns.start), key).ok()?;
             (self.tiles[k].tile() == tile).then_some(k)
         };
-        // The tiles (of the merge) that hold each component.
-        let mut holders: Vec<Vec<usize>> = vec![Vec::new(); merged.components().len()];
-        for k in 0..merged.tiles().len() {
-            for &c in merged.tile_labels(k) {
-                if holders[c as usize].last() != Some(&k) {
-                    holders[c as usize].push(k);
-                }
-            }
-        }
+        let holders = Holders::of(merged);
         // What the last draw of this seed found, and what this one finds (kept after it).
         let identity: Vec<(u64, u64)> =
             self.sessions.iter().map(|s| (KeyLayout::salt(&s.name), s.fingerprint)).collect();
@@ -2164,14 +2157,59 @@ fn durations_of(
         .collect()
 }
 
+/// The tiles of a merge that hold each of its components, in tile order: one list of tiles
+/// cut by component (a vector each would be hundreds of thousands of small allocations).
+struct Holders {
+    /// Where each component's tiles start in `tiles`, and where the last one's end.
+    starts: Vec<usize>,
+    tiles: Vec<usize>,
+}
+
+impl Holders {
+    /// The holders of `merged`'s components, from its tiles' labels. O(labels).
+    fn of(merged: &JoinedMerges) -> Self {
+        let n = merged.len();
+        // Each (component, tile) once, however many of the tile's labels name the component.
+        let mut last = vec![usize::MAX; n];
+        let mut counts = vec![0usize; n + 1];
+        for k in 0..merged.tiles().len() {
+            for &c in merged.tile_labels(k) {
+                if std::mem::replace(&mut last[c as usize], k) != k {
+                    counts[c as usize + 1] += 1;
+                }
+            }
+        }
+        for c in 0..n {
+            counts[c + 1] += counts[c];
+        }
+        let mut next = counts.clone();
+        let mut tiles = vec![0; counts[n]];
+        last.fill(usize::MAX);
+        for k in 0..merged.tiles().len() {
+            for &c in merged.tile_labels(k) {
+                if std::mem::replace(&mut last[c as usize], k) != k {
+                    tiles[next[c as usize]] = k;
+                    next[c as usize] += 1;
+                }
+            }
+        }
+        Holders { starts: counts, tiles }
+    }
+
+    /// The tiles that hold component `c`, in tile order.
+    fn of_component(&self, c: usize) -> &[usize] {
+        &self.tiles[self.starts[c]..self.starts[c + 1]]
+    }
+}
+
 /// The part of `request` each tile of `merged` that holds a component asked about must answer
 /// (by the merge's tile index, in tile order): what [`tile_requests`](crate::tile::tile_requests)
 /// gives for the tiles it asks something, found from `holders` (the tiles of each component)
 /// rather than by going through every tile. O(the tiles of the components asked).
-fn tile_parts(merged: &MergedLoops, holders: &[Vec<usize>], request: &DrawRequest) -> Vec<(usize, DrawRequest)> {
+fn tile_parts(merged: &JoinedMerges, holders: &Holders, request: &DrawRequest) -> Vec<(usize, DrawRequest)> {
     let mut parts: BTreeMap<usize, Vec<ComponentRequest>> = BTreeMap::new();
     for c in &request.components {
-        for &k in &holders[c.id] {
+        for &k in holders.of_component(c.id) {
             let rows = &merged.tiles()[k].rows;
             let lo = c.rows.partition_point(|&r| r < rows.start);
             let hi = c.rows.partition_point(|&r| r < rows.end);
@@ -2255,7 +2293,7 @@ fn locate(starts: &[usize], f: usize) -> (usize, usize) {
 /// A store's loops ([`FleetStore::loops`]).
 #[derive(Debug, Clone)]
 pub struct StoreLoops {
-    merged: Option<MergedLoops>,
+    merged: Option<JoinedMerges>,
     components: Vec<FleetComponent>,
     session_pairs: Vec<SessionPair>,
     starts: Vec<usize>,
@@ -2276,7 +2314,7 @@ impl StoreLoops {
     /// The times of each component's extents (`[[t(i0), t(i1)], [t′(j0), t′(j1)]]`, seconds,
     /// each on its session's clock), by id.
     pub fn component_times_s(&self) -> Vec<[[f64; 2]; 2]> {
-        self.merged.as_ref().map_or_else(Vec::new, |m| m.components().iter().map(|c| c.times_s).collect())
+        self.merged.as_ref().map_or_else(Vec::new, JoinedMerges::times_s)
     }
 
     /// The sessions that revisit session `session` (an index): those sharing at least one loop

@@ -1718,44 +1718,6 @@ impl MergedLoops {
         self.firsts.iter_mut().for_each(|f| *f = pair(*f));
     }
 
-    /// The merges of the tiles of distinct session pairs as one merge of all their tiles:
-    /// components never join across session pairs, so this is what [`TileMerge::merge`] and
-    /// [`TileMerge::finish`] of all the tiles give, with the components renumbered by first
-    /// cell and the tiles in the order of `parts`. O(components log components + tiles).
-    pub(crate) fn concat<'a>(parts: impl IntoIterator<Item = &'a Self>) -> Self {
-        use rayon::prelude::*;
-        let parts: Vec<&Self> = parts.into_iter().collect();
-        // Each component's first cell, with where it is: a direct key (no lookup through the
-        // parts while sorting). First cells are apart, so the order is that of any sort.
-        let mut order: Vec<([usize; 2], u32, u32)> = parts
-            .iter()
-            .enumerate()
-            .flat_map(|(p, m)| m.firsts.iter().enumerate().map(move |(k, &first)| (first, p as u32, k as u32)))
-            .collect();
-        order.par_sort_unstable_by_key(|&(first, _, _)| first);
-        let mut ids: Vec<Vec<u32>> = parts.iter().map(|m| vec![0; m.components.len()]).collect();
-        for (id, &(_, p, k)) in order.iter().enumerate() {
-            ids[p as usize][k as usize] = id as u32;
-        }
-        let components: Vec<MergedComponent> = order
-            .par_iter()
-            .enumerate()
-            .map(|(id, &(_, p, k))| {
-                let mut m = parts[p as usize].components[k as usize].clone();
-                m.component.id = id;
-                m
-            })
-            .collect();
-        let firsts = order.into_iter().map(|(first, _, _)| first).collect();
-        let tiles = parts.iter().flat_map(|m| m.tiles.iter().cloned()).collect();
-        let labels = parts
-            .par_iter()
-            .zip(ids.par_iter())
-            .flat_map_iter(|(m, ids)| m.labels.iter().map(|map| map.iter().map(|&l| ids[l as usize]).collect()))
-            .collect();
-        Self { components, tiles, labels, firsts }
-    }
-
     /// The tiles merged, in the merge's order.
     pub fn tiles(&self) -> &[Tile] {
         &self.tiles
@@ -1820,6 +1782,149 @@ impl MergedLoops {
         }
         Ok(session_pairs_of(self.components.iter().map(|m| (&m.component, m.sessions)), spans_s))
     }
+}
+
+/// The merges of the tiles of distinct session pairs as one merge of all their tiles, without
+/// copying their components: components never join across session pairs, so this is what
+/// [`TileMerge::merge`] and [`TileMerge::finish`] of all the tiles give, with the components
+/// numbered by first cell (each id names its part and its place there) and the tiles in the
+/// order of the parts. A fleet store's merges, one a session pair, read as its fleet's loops.
+#[derive(Debug, Clone)]
+pub struct JoinedMerges {
+    parts: Vec<std::sync::Arc<MergedLoops>>,
+    /// Each component's part and index there, by id.
+    order: Vec<(u32, u32)>,
+    tiles: Vec<Tile>,
+    /// Each tile's labels, as ids.
+    labels: Vec<Vec<u32>>,
+}
+
+impl JoinedMerges {
+    /// The merges `parts` (of distinct session pairs) joined. O(components log components +
+    /// tiles' labels).
+    pub(crate) fn new(parts: Vec<std::sync::Arc<MergedLoops>>) -> Self {
+        use rayon::prelude::*;
+        // Each component's first cell, with where it is: a direct key (no lookup through the
+        // parts while sorting). First cells are apart, so the order is that of any sort.
+        // (Each vector made at its length: grown, they would be copied as they grow.)
+        let mut order: Vec<([usize; 2], u32, u32)> = Vec::with_capacity(parts.iter().map(|m| m.firsts.len()).sum());
+        for (p, m) in parts.iter().enumerate() {
+            order.extend(m.firsts.iter().enumerate().map(|(k, &first)| (first, p as u32, k as u32)));
+        }
+        order.par_sort_unstable_by_key(|&(first, _, _)| first);
+        let mut ids: Vec<Vec<u32>> = parts.iter().map(|m| vec![0; m.components.len()]).collect();
+        for (id, &(_, p, k)) in order.iter().enumerate() {
+            ids[p as usize][k as usize] = id as u32;
+        }
+        let mut tiles = Vec::with_capacity(parts.iter().map(|m| m.tiles.len()).sum());
+        parts.iter().for_each(|m| tiles.extend_from_slice(&m.tiles));
+        let mut labels: Vec<Vec<u32>> = Vec::with_capacity(tiles.len());
+        labels.par_extend(parts.par_iter().zip(ids.par_iter()).flat_map_iter(|(m, ids)| {
+            m.labels.iter().map(|map| map.iter().map(|&l| ids[l as usize]).collect::<Vec<u32>>())
+        }));
+        let order = order.into_iter().map(|(_, p, k)| (p, k)).collect();
+        Self { parts, order, tiles, labels }
+    }
+
+    /// The number of components.
+    pub fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    /// Whether there are no components.
+    pub fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
+
+    /// Component `id` as its part holds it (its `component.id` is the part's own).
+    ///
+    /// # Panics
+    /// If `id` is not a component's.
+    pub fn component(&self, id: usize) -> &MergedComponent {
+        let (p, k) = self.order[id];
+        &self.parts[p as usize].components[k as usize]
+    }
+
+    /// The components, by id (each as [`component`](Self::component) gives it).
+    pub fn components(&self) -> impl ExactSizeIterator<Item = &MergedComponent> + '_ {
+        self.order.iter().map(|&(p, k)| &self.parts[p as usize].components[k as usize])
+    }
+
+    /// The tiles merged, in the parts' order.
+    pub fn tiles(&self) -> &[Tile] {
+        &self.tiles
+    }
+
+    /// The component id of each provisional component of tile `t` (an index in
+    /// [`tiles`](Self::tiles)), as [`MergedLoops::tile_labels`] gives it.
+    ///
+    /// # Panics
+    /// If `t` is not a tile of the merge.
+    pub fn tile_labels(&self, t: usize) -> &[u32] {
+        &self.labels[t]
+    }
+
+    /// The keyed draws' statistics of every component, by id.
+    pub fn draw_stats(&self) -> Vec<DrawStats> {
+        self.components().map(|m| m.draw).collect()
+    }
+
+    /// The components in the poses of their sessions, as [`MergedLoops::fleet_components`]
+    /// gives them; `starts` are the sessions' first fleet indices.
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for a component of a session `starts` does not reach.
+    pub fn fleet_components(&self, starts: &[usize]) -> Result<Vec<FleetComponent>> {
+        use rayon::prelude::*;
+        if let Some(m) = self.parts.iter().flat_map(|m| &m.components).find(|m| !fits_starts(m, starts)) {
+            return Err(Error::InconsistentTiles {
+                problem: format!("a component of sessions {:?} does not lie at the starts given", m.sessions),
+            });
+        }
+        Ok(self
+            .order
+            .par_iter()
+            .enumerate()
+            .map(|(id, &(p, k))| {
+                let m = &self.parts[p as usize].components[k as usize];
+                FleetComponent { id, ..localize(&m.component, m.sessions, starts) }
+            })
+            .collect())
+    }
+
+    /// The sparse overlap matrix, as [`MergedLoops::session_pairs`] gives it; `spans_s` are
+    /// the sessions' spans. Each part is one session pair, its components in id order.
+    ///
+    /// # Errors
+    /// [`Error::InconsistentTiles`] for a component of a session beyond `spans_s`.
+    pub fn session_pairs(&self, spans_s: &[f64]) -> Result<Vec<SessionPair>> {
+        use rayon::prelude::*;
+        if let Some(m) = self.parts.iter().flat_map(|m| &m.components).find(|m| m.sessions[1] >= spans_s.len()) {
+            return Err(Error::InconsistentTiles {
+                problem: format!("a component of sessions {:?}, but {} spans", m.sessions, spans_s.len()),
+            });
+        }
+        let mut pairs: Vec<SessionPair> = self
+            .parts
+            .par_iter()
+            .flat_map_iter(|m| session_pairs_of(m.components.iter().map(|m| (&m.component, m.sessions)), spans_s))
+            .collect();
+        pairs.sort_by_key(|p| p.sessions);
+        Ok(pairs)
+    }
+
+    /// The times of each component's extents, by id ([`MergedComponent::times_s`]).
+    pub fn times_s(&self) -> Vec<[[f64; 2]; 2]> {
+        self.components().map(|m| m.times_s).collect()
+    }
+}
+
+/// Whether merged component `m` lies at or after the first fleet indices of its sessions.
+fn fits_starts(m: &MergedComponent, starts: &[usize]) -> bool {
+    let ([a, b], c) = (m.sessions, &m.component);
+    b < starts.len()
+        && starts[a] <= c.i_range[0].min(c.i_range[1]).min(c.closest_pair[0])
+        && starts[b] <= c.j_range[0].min(c.j_range[1]).min(c.closest_pair[1])
 }
 
 /// Merges the summaries of tiles that cover a fleet's plane (every tile [`plan_tiles`] makes,
