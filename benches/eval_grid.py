@@ -11,7 +11,7 @@ Usage::
         [--on reference,estimate,rounds] [--rounds 3] \\
         [--verifiers distance-aware,steep,blind] [--outliers 0,0.1] \\
         [--samplers default,closest-first,...] [--contenders NAME,...] [--existing-blocks]
-        [--first-seed N] [--report-only] [--most-seeds]
+        [--first-seed N] [--report-only] [--most-seeds] [--paired]
 
 Datasets are those of ``map_eval.py`` (``urban``, ``kitti00``, ``kitti05``, ``kitti08``,
 ``kaist01``: the same keyframes and gamma), plus ``urbanN``: the urban drive of seed N (a drive
@@ -28,7 +28,8 @@ nearer of the LIO-SAM and hdl_graph_slam rules per cell, and whether it meets th
 side ("–" in a cell it did not run, which its count leaves out). A cell's medians are over
 the seeds every sampler of the cell ran; with ``--most-seeds``, over the seeds the contenders
 and the two rules all ran (more seeds added for some samplers only, ``--first-seed 3 --seeds 2
---samplers ...``), the samplers without all of them left out of that cell.
+--samplers ...``), the samplers without all of them left out of that cell. ``--paired`` adds
+the first contender against each sampler seed by seed (:func:`paired_table`).
 """
 
 from __future__ import annotations
@@ -123,6 +124,12 @@ def arguments() -> argparse.Namespace:
     parser.add_argument(
         "--also", default="", help="comma-separated folders whose rows.csv join the table"
     )
+    parser.add_argument(
+        "--paired",
+        action="store_true",
+        help="also, per cell, the first contender against each sampler seed by seed: the mean "
+        "of log(ATE ratio) over the seeds and its t statistic",
+    )
     return parser.parse_args()
 
 
@@ -167,7 +174,12 @@ def run(args: argparse.Namespace, rows_path: Path) -> None:
 
 
 def report(
-    rows: list[dict], contenders: list[str], *, brief: bool = False, most_seeds: bool = False
+    rows: list[dict],
+    contenders: list[str],
+    *,
+    brief: bool = False,
+    most_seeds: bool = False,
+    paired: bool = False,
 ) -> str:
     """The markdown table: per cell (over the seeds all its samplers ran), the best median ATE
     and the ratio of each sampler's to it;
@@ -175,7 +187,7 @@ def report(
     meets the bar; the cells each contender meets. ``brief``: the best sampler's name instead
     of every sampler's ratio. ``most_seeds``: per cell, the seeds the contenders and the rules
     all ran, and only the samplers that ran them all (the columns "samplers" and "of" say how
-    many that leaves, of how many)."""
+    many that leaves, of how many). ``paired``: the table of :func:`paired_table` after it."""
     by_seed: dict[tuple, dict[str, dict[int, float]]] = defaultdict(lambda: defaultdict(dict))
     for r in rows:
         if r["sampler"] != "odometry":
@@ -250,7 +262,58 @@ def report(
         '"rules": the ratio to the nearer of the LIO-SAM and hdl_graph_slam rules (below 1: ahead).'
     )
     lines += ["", *summary(verdict_of, contenders)]
+    if paired and contenders:
+        lines += ["", *paired_table(ate, contenders[0], names)]
     return "\n".join(lines) + "\n"
+
+
+def paired_table(
+    ate: dict[tuple, dict[str, list[float]]], mine: str, names: list[str]
+) -> list[str]:
+    """Per cell, ``mine`` against each other sampler on the same seeds (the same blocks, drift
+    and verifier draws): the geometric mean of its ATE over the other's, exp(mean log ratio),
+    and the t statistic of the mean log ratio (mean over its standard error; |t| > 2: a
+    difference the seeds resolve). A ratio of medians (the table above) moves with a few
+    seeds; the paired mean says whether a gap is more than the seeds' noise. Then the count of
+    comparisons where ``mine`` is behind (t > 2) and ahead (t < -2), of all."""
+    others = [n for n in names if n != mine]
+    head = ["dataset", "on", "verifier", "wrong", "budget", "seeds"]
+    head += [il.sampler_symbol(n) for n in others]
+    lines = [
+        f"{mine} against each sampler, seed by seed: exp(mean log ratio) (t).",
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + "---|" * len(head),
+    ]
+    behind = ahead = compared = 0
+    for key in sorted(ate):
+        runs = ate[key]
+        if mine not in runs:
+            continue
+        cells = []
+        for n in others:
+            if n not in runs or len(runs[n]) < 2:
+                cells.append("–")
+                continue
+            logs = np.log(np.asarray(runs[mine]) / np.asarray(runs[n]))
+            error = logs.std(ddof=1) / np.sqrt(len(logs))
+            t = logs.mean() / error if error > 0 else 0.0
+            behind += t > 2
+            ahead += t < -2
+            compared += 1
+            cells.append(f"{np.exp(logs.mean()):.3f} ({t:+.1f})")
+        d, on, verifier, outlier_rate, budget = key
+        lines.append(
+            f"| {d} | {on} | {verifier} | {outlier_rate:.0%} | {budget} | {len(runs[mine])} | "
+            + " | ".join(cells)
+            + " |"
+        )
+    lines += [
+        "",
+        f"{mine} is behind by more than the seeds' noise (t > 2) in {behind} of {compared} "
+        f"comparisons, ahead (t < -2) in {ahead}.",
+    ]
+    return lines
 
 
 def summary(verdict_of: dict[tuple, dict[str, bool | None]], contenders: list[str]) -> list[str]:
@@ -290,7 +353,13 @@ def main() -> None:
     rows = common.read_rows(rows_path, ev.Results)
     for folder in filter(None, args.also.split(",")):
         rows += common.read_rows(Path(folder) / "rows.csv", ev.Results)
-    text = report(rows, args.contenders.split(","), brief=args.brief, most_seeds=args.most_seeds)
+    text = report(
+        rows,
+        args.contenders.split(","),
+        brief=args.brief,
+        most_seeds=args.most_seeds,
+        paired=args.paired,
+    )
     (out / "ratios.md").write_text(text)
     print(text)
 
