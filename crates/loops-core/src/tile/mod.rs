@@ -1790,7 +1790,7 @@ impl MergedLoops {
 /// numbered by first cell (each id names its part and its place there) and the tiles in the
 /// order of the parts. A fleet store's merges, one a session pair, read as its fleet's loops.
 #[derive(Debug, Clone)]
-pub struct JoinedMerges {
+pub(crate) struct JoinedMerges {
     parts: Vec<std::sync::Arc<MergedLoops>>,
     /// Each component's part and index there, by id.
     order: Vec<(u32, u32)>,
@@ -1831,21 +1831,7 @@ impl JoinedMerges {
         self.order.len()
     }
 
-    /// Whether there are no components.
-    pub fn is_empty(&self) -> bool {
-        self.order.is_empty()
-    }
-
-    /// Component `id` as its part holds it (its `component.id` is the part's own).
-    ///
-    /// # Panics
-    /// If `id` is not a component's.
-    pub fn component(&self, id: usize) -> &MergedComponent {
-        let (p, k) = self.order[id];
-        &self.parts[p as usize].components[k as usize]
-    }
-
-    /// The components, by id (each as [`component`](Self::component) gives it).
+    /// The components, by id, as their parts hold them (a `component.id` is the part's own).
     pub fn components(&self) -> impl ExactSizeIterator<Item = &MergedComponent> + '_ {
         self.order.iter().map(|&(p, k)| &self.parts[p as usize].components[k as usize])
     }
