@@ -1751,13 +1751,7 @@ impl MergedLoops {
     /// [`Error::InconsistentTiles`] for a component of a session `starts` does not reach.
     pub fn fleet_components(&self, starts: &[usize]) -> Result<Vec<FleetComponent>> {
         use rayon::prelude::*;
-        let fits = |m: &MergedComponent| {
-            let ([a, b], c) = (m.sessions, &m.component);
-            b < starts.len()
-                && starts[a] <= c.i_range[0].min(c.i_range[1]).min(c.closest_pair[0])
-                && starts[b] <= c.j_range[0].min(c.j_range[1]).min(c.closest_pair[1])
-        };
-        if let Some(k) = self.components.par_iter().position_first(|m| !fits(m)) {
+        if let Some(k) = self.components.par_iter().position_first(|m| !fits_starts(m, starts)) {
             let m = &self.components[k];
             return Err(Error::InconsistentTiles {
                 problem: format!(
@@ -1885,16 +1879,9 @@ impl JoinedMerges {
     /// [`Error::InconsistentTiles`] for a component of a session beyond `spans_s`.
     pub fn session_pairs(&self, spans_s: &[f64]) -> Result<Vec<SessionPair>> {
         use rayon::prelude::*;
-        if let Some(m) = self.parts.iter().flat_map(|m| &m.components).find(|m| m.sessions[1] >= spans_s.len()) {
-            return Err(Error::InconsistentTiles {
-                problem: format!("a component of sessions {:?}, but {} spans", m.sessions, spans_s.len()),
-            });
-        }
-        let mut pairs: Vec<SessionPair> = self
-            .parts
-            .par_iter()
-            .flat_map_iter(|m| session_pairs_of(m.components.iter().map(|m| (&m.component, m.sessions)), spans_s))
-            .collect();
+        let parts: Vec<Vec<SessionPair>> =
+            self.parts.par_iter().map(|m| m.session_pairs(spans_s)).collect::<Result<_>>()?;
+        let mut pairs: Vec<SessionPair> = parts.into_iter().flatten().collect();
         pairs.sort_by_key(|p| p.sessions);
         Ok(pairs)
     }
