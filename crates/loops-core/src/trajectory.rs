@@ -193,6 +193,13 @@ impl Trajectory {
     /// duplicate) and [`Error::NonFiniteCoordinate`], each naming the first offending index;
     /// [`Error::OutOfMemory`] when the time cells do not fit in memory.
     pub fn new(timestamps_s: Vec<f64>, coords: Vec<f64>, dim: usize) -> Result<Self> {
+        Self::check_poses(&timestamps_s, &coords, dim)?;
+        let cell_widths_s = cell_widths(&timestamps_s)?;
+        Ok(Self { timestamps_s, coords, dim, cell_widths_s, manifold: Manifold::Euclidean })
+    }
+
+    /// The checks of [`new`](Self::new) on timestamps and coordinates, before its time cells.
+    fn check_poses(timestamps_s: &[f64], coords: &[f64], dim: usize) -> Result<()> {
         if dim == 0 {
             return Err(Error::ZeroDimension);
         }
@@ -209,10 +216,8 @@ impl Trajectory {
         if poses > MAX_POSES {
             return Err(Error::TooManyPoses { count: poses, max: MAX_POSES });
         }
-        validate_timestamps(&timestamps_s)?;
-        validate_coordinates(&coords, dim, 0)?;
-        let cell_widths_s = cell_widths(&timestamps_s)?;
-        Ok(Self { timestamps_s, coords, dim, cell_widths_s, manifold: Manifold::Euclidean })
+        validate_timestamps(timestamps_s)?;
+        validate_coordinates(coords, dim, 0)
     }
 
     /// Checked trajectories one after another, on one clock (each shifted to start `gap_s`
@@ -559,9 +564,13 @@ impl Trajectory {
         cell_widths_s: Vec<f64>,
         manifold: Manifold,
     ) -> Result<Self> {
-        let mut traj = Self::new(timestamps_s, coords, dim)?.on(manifold);
+        // Checked as `new` checks, with the saved time cells rather than ones derived again
+        // (the manifold's checks, of the points alone, before theirs).
+        Self::check_poses(&timestamps_s, &coords, dim)?;
+        let mut traj = Self { timestamps_s, coords, dim, cell_widths_s, manifold };
         traj.default_metric().validate(&traj)?;
-        traj.cell_widths_s = checked_cell_widths("Trajectory", cell_widths_s, &traj.timestamps_s)?;
+        traj.cell_widths_s =
+            checked_cell_widths("Trajectory", std::mem::take(&mut traj.cell_widths_s), &traj.timestamps_s)?;
         Ok(traj)
     }
 }
