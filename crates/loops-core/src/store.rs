@@ -2169,31 +2169,30 @@ impl Holders {
     /// The holders of `merged`'s components, from its tiles' labels. O(labels).
     fn of(merged: &JoinedMerges) -> Self {
         let n = merged.len();
-        // Each (component, tile) once, however many of the tile's labels name the component.
-        let mut last = vec![usize::MAX; n];
-        let mut counts = vec![0usize; n + 1];
-        for k in 0..merged.tiles().len() {
-            for &c in merged.tile_labels(k) {
-                if std::mem::replace(&mut last[c as usize], k) != k {
-                    counts[c as usize + 1] += 1;
+        // Each (component, tile) once, in tile order, however many of the tile's labels name
+        // the component.
+        let each_holding = |f: &mut dyn FnMut(usize, usize)| {
+            let mut last = vec![usize::MAX; n];
+            for k in 0..merged.tiles().len() {
+                for &c in merged.tile_labels(k) {
+                    if std::mem::replace(&mut last[c as usize], k) != k {
+                        f(c as usize, k);
+                    }
                 }
             }
-        }
+        };
+        let mut starts = vec![0usize; n + 1];
+        each_holding(&mut |c, _| starts[c + 1] += 1);
         for c in 0..n {
-            counts[c + 1] += counts[c];
+            starts[c + 1] += starts[c];
         }
-        let mut next = counts.clone();
-        let mut tiles = vec![0; counts[n]];
-        last.fill(usize::MAX);
-        for k in 0..merged.tiles().len() {
-            for &c in merged.tile_labels(k) {
-                if std::mem::replace(&mut last[c as usize], k) != k {
-                    tiles[next[c as usize]] = k;
-                    next[c as usize] += 1;
-                }
-            }
-        }
-        Holders { starts: counts, tiles }
+        let mut next = starts.clone();
+        let mut tiles = vec![0; starts[n]];
+        each_holding(&mut |c, k| {
+            tiles[next[c]] = k;
+            next[c] += 1;
+        });
+        Holders { starts, tiles }
     }
 
     /// The tiles that hold component `c`, in tile order.

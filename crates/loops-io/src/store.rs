@@ -1515,8 +1515,13 @@ enum Column {
 /// The [`Column::Repeated`] of `values[k]` for each `k` of `rows`: a table of hundreds of
 /// thousands of components names its sessions without a string of its own each.
 fn repeated(values: &[&str], rows: impl Iterator<Item = usize>) -> Column {
-    let shared: Vec<ByteArray> = values.iter().map(|v| ByteArray::from(v.as_bytes().to_vec())).collect();
+    let shared = shared_values(values);
     Column::Repeated(rows.map(|k| shared[k].clone()).collect())
+}
+
+/// Each of `values` as bytes that the rows of a [`Column::Repeated`] share.
+fn shared_values(values: &[&str]) -> Vec<ByteArray> {
+    values.iter().map(|v| ByteArray::from(v.as_bytes().to_vec())).collect()
 }
 
 impl Column {
@@ -2071,7 +2076,7 @@ fn write_components(path: &Path, loops: &loops_core::store::StoreLoops, names: &
     // Every column filled in one pass over the components (a pass a column would read them
     // all again for each of its 21 columns).
     let n = c.len();
-    let shared: Vec<ByteArray> = names.iter().map(|v| ByteArray::from(v.as_bytes().to_vec())).collect();
+    let shared = shared_values(names);
     let mut text: [Vec<ByteArray>; 2] = std::array::from_fn(|_| Vec::with_capacity(n));
     let mut int: [Vec<i64>; 11] = std::array::from_fn(|_| Vec::with_capacity(n));
     let mut float: [Vec<f64>; 6] = std::array::from_fn(|_| Vec::with_capacity(n));

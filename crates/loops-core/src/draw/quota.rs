@@ -144,15 +144,14 @@ fn breakpoints(weights: &[f64], caps: &[u64], lo: f64, bound: Option<f64>) -> Ve
     let Some(bound) = bound else {
         let mut events = Vec::with_capacity(2 * weights.len());
         for (g, (&w, &cap)) in weights.iter().zip(caps).enumerate() {
-            events.push((lo / w, true, g));
-            events.push((cap as f64 / w, false, g));
+            events.extend(group_breakpoints(w, cap, lo).map(|(s, enter)| (s, enter, g)));
         }
         return events;
     };
     let mut events = Vec::new();
     let mut at: Option<(bool, usize)> = None;
     for (g, (&w, &cap)) in weights.iter().zip(caps).enumerate() {
-        for (s, enter) in [(lo / w, true), (cap as f64 / w, false)] {
+        for (s, enter) in group_breakpoints(w, cap, lo) {
             match s.total_cmp(&bound) {
                 std::cmp::Ordering::Less => events.push((s, enter, g)),
                 std::cmp::Ordering::Equal if at.is_none_or(|(first, _)| enter && !first) => at = Some((enter, g)),
@@ -162,6 +161,12 @@ fn breakpoints(weights: &[f64], caps: &[u64], lo: f64, bound: Option<f64>) -> Ve
     }
     events.extend(at.map(|(enter, g)| (bound, enter, g)));
     events
+}
+
+/// Where a group of weight `w` and cap `cap` enters F's linear part (lo / w) and leaves it,
+/// saturated (cap / w), each with whether it enters there.
+fn group_breakpoints(w: f64, cap: u64, lo: f64) -> [(f64, bool); 2] {
+    [(lo / w, true), (cap as f64 / w, false)]
 }
 
 /// A breakpoint of [`solve_scale`]'s F (lo / w or cap / w of a group) at which F ≥ `total`,
@@ -178,7 +183,7 @@ fn past_total(weights: &[f64], caps: &[u64], lo: f64, total: f64) -> Option<f64>
         if f(s) >= total {
             // The first breakpoint from s on, or the last one (beyond it F is Σ cap).
             let (mut first, mut last) = (None::<f64>, None::<f64>);
-            for b in weights.iter().zip(caps).flat_map(|(&w, &cap)| [lo / w, cap as f64 / w]) {
+            for (b, _) in weights.iter().zip(caps).flat_map(|(&w, &cap)| group_breakpoints(w, cap, lo)) {
                 if b.total_cmp(&s).is_ge() && first.is_none_or(|f| b.total_cmp(&f).is_lt()) {
                     first = Some(b);
                 }
@@ -317,29 +322,7 @@ mod tests {
 
     /// [`solve_scale`] as it was: every breakpoint sorted, then walked.
     fn solve_scale_sorting_all(weights: &[f64], caps: &[u64], lo: f64, total: f64) -> f64 {
-        let mut events: Vec<(f64, bool, usize)> = Vec::new();
-        for (g, (&w, &cap)) in weights.iter().zip(caps).enumerate() {
-            events.push((lo / w, true, g));
-            events.push((cap as f64 / w, false, g));
-        }
-        events.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
-        let (mut constant, mut slope) = (lo * weights.len() as f64, 0.0);
-        let mut last = 0.0;
-        for (s, enter, g) in events {
-            let value = constant + slope * s;
-            if value >= total {
-                return if slope > 0.0 { ((total - constant) / slope).clamp(last, s) } else { last };
-            }
-            if enter {
-                constant -= lo;
-                slope += weights[g];
-            } else {
-                constant += caps[g] as f64;
-                slope -= weights[g];
-            }
-            last = s;
-        }
-        last
+        cross(weights, caps, lo, total, breakpoints(weights, caps, lo, None)).unwrap_or_else(|last| last)
     }
 
     #[test]
