@@ -405,8 +405,8 @@ impl BallTree {
         let dim = traj.dim();
         // (rank, distance, pose) of the best so far.
         let mut best = (f64::INFINITY, within, lo);
-        let mut stack: Vec<u32> = Vec::with_capacity(64);
-        stack.extend(self.roots.iter().rev());
+        let mut stack = NodeStack::default();
+        self.roots.iter().rev().for_each(|&root| stack.push(root));
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
             let (a, b) = ((node.lo as usize).max(lo), (node.hi as usize).min(hi + 1));
@@ -511,7 +511,7 @@ impl BallTree {
         (reach, inside_reach): (f64, f64),
         mut visit: impl FnMut(&Node, bool),
     ) {
-        let mut stack: Vec<u32> = Vec::with_capacity(64);
+        let mut stack = NodeStack::default();
         stack.push(root);
         while let Some(index) = stack.pop() {
             let node = self.nodes[index as usize];
@@ -530,6 +530,35 @@ impl BallTree {
                 stack.push(node.left);
             }
         }
+    }
+}
+
+/// The nodes a depth-first walk has still to visit, held in place rather than on the heap: a
+/// walk runs for every block of rows, and must not abort where memory runs out. A walk holds at
+/// most its roots still to walk and one node per level of the tree it is in: a forest grown
+/// leaf by leaf has at most 33 trees over fewer than 2³² poses, and a tree fewer than 64
+/// levels (32 splitting sessions, 32 splitting poses).
+#[derive(Debug)]
+struct NodeStack {
+    nodes: [u32; 128],
+    len: usize,
+}
+
+impl Default for NodeStack {
+    fn default() -> Self {
+        Self { nodes: [0; 128], len: 0 }
+    }
+}
+
+impl NodeStack {
+    fn push(&mut self, node: u32) {
+        self.nodes[self.len] = node;
+        self.len += 1;
+    }
+
+    fn pop(&mut self) -> Option<u32> {
+        self.len = self.len.checked_sub(1)?;
+        Some(self.nodes[self.len])
     }
 }
 

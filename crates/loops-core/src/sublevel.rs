@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
-use crate::memory::{try_collect, try_filled, try_reserve, try_with_capacity};
+use crate::memory::{try_collect, try_copy, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
@@ -235,26 +235,31 @@ impl SublevelSet {
         // its vector as usual); the first error in block order is the batch's.
         let scan_batch = |blocks: &[std::ops::Range<usize>]| -> Result<Vec<Result<Block>>> {
             let mut scanned = try_with_capacity(blocks.len(), "the row blocks of S_gamma")?;
-            let scan_block = |rows: &std::ops::Range<usize>| -> Result<Block> {
+            let scan_block = |scratch: &mut BlockScratch, rows: &std::ops::Range<usize>| -> Result<Block> {
                 // Every block of the batch is started: once interrupted, they end here.
                 interrupt.check()?;
-                let mut block = Block::default();
-                let mut candidates = Vec::new();
-                scanner.candidates_for(rows.clone(), &mut candidates)?;
-                let mut far_until = try_filled(candidates.len(), f64::NEG_INFINITY, "the stretches of a row scan")?;
+                let BlockScratch { block, candidates, far_until } = scratch;
+                block.clear();
+                candidates.clear();
+                scanner.candidates_for(rows.clone(), candidates)?;
+                far_until.clear();
+                try_reserve(far_until, candidates.len(), "the stretches of a row scan")?;
+                far_until.resize(candidates.len(), f64::NEG_INFINITY);
                 for i in rows.clone() {
                     interrupt.check()?;
                     block.make_room()?;
                     if i > rows.start && traj.same_point(i - 1, i) {
-                        scanner.repeat_row(i, &mut block);
+                        scanner.repeat_row(i, block);
                     } else {
-                        scanner.scan_row(i, &candidates, &mut far_until, &mut block);
+                        scanner.scan_row(i, candidates, far_until, block);
                     }
                     block.row_lengths.push(block.runs.len());
                 }
-                Ok(block)
+                block.try_copy()
             };
-            blocks.par_iter().map(scan_block).collect_into_vec(&mut scanned);
+            // Each worker scans into buffers it keeps from block to block, so that their growth
+            // is paid once, and hands over a copy of each block in room of its exact size.
+            blocks.par_iter().map_init(BlockScratch::default, scan_block).collect_into_vec(&mut scanned);
             Ok(scanned)
         };
         let breaks = try_collect(starts.iter().skip(1).map(|&s| s as u32), "the session starts of S_gamma")?;
@@ -471,7 +476,35 @@ pub(crate) struct Block {
     row_lengths: Vec<usize>,
 }
 
+/// A worker's buffers for scanning blocks of rows: the block being scanned, its candidate
+/// stretches and what its rows learnt about them (see [`RowScanner::scan_row`]).
+#[derive(Debug, Default)]
+struct BlockScratch {
+    block: Block,
+    candidates: Vec<Leaf>,
+    far_until: Vec<f64>,
+}
+
 impl Block {
+    /// Empties it, keeping its room.
+    fn clear(&mut self) {
+        self.runs.clear();
+        self.closest.clear();
+        self.row_lengths.clear();
+    }
+
+    /// A copy of its runs, closest columns and rows, each in room of its exact size.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`].
+    fn try_copy(&self) -> Result<Self> {
+        Ok(Self {
+            runs: try_copy(&self.runs, "the runs of S_gamma")?,
+            closest: try_copy(&self.closest, "the closest columns of S_gamma")?,
+            row_lengths: try_copy(&self.row_lengths, "the row offsets of S_gamma")?,
+        })
+    }
+
     /// The runs of the last row scanned: indices into `runs` and `closest`.
     fn last_row(&self) -> std::ops::Range<usize> {
         let end = self.row_lengths.last().copied().unwrap_or(0);
