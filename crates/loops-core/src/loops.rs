@@ -2,11 +2,13 @@
 
 use std::fmt;
 
+use rayon::prelude::*;
+
 use crate::component::{LoopComponent, label_components};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::measure::{Scale, Selection, Side, integrate_s, loop_duration_s};
-use crate::memory::{try_copy, try_reserve};
+use crate::memory::{try_copy_parallel, try_reserve};
 use crate::metric::Metric;
 use crate::separation::Separation;
 use crate::spec::{MetricSpec, recorded_metric_name, with_metric};
@@ -219,7 +221,7 @@ impl Loops {
     pub fn try_from_set<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, set: SublevelSet) -> Result<Self> {
         assert_eq!(set.rows(), traj.len(), "sublevel set and trajectory differ in length");
         let labelling = label_components(traj, metric, &set, &Interrupt::current())?;
-        let _timer = PhaseTimer::start("result: diagonal gaps and copies, serial");
+        let _timer = PhaseTimer::start("result: diagonal gaps and copies, parallel");
         let n = traj.len();
         // A row whose first run does not reach column i + 1 breaks the diagonal (a metric that
         // breaks δ(x, x) = 0 may even leave the diagonal cell out).
@@ -228,8 +230,10 @@ impl Loops {
         let broken = |i: &usize| !set.breaks_after(*i) && set.row(*i).first().is_none_or(|r| (r.end as usize) <= *i);
         let mut gaps: Vec<usize> = Vec::new();
         if separation.is_none() {
-            try_reserve(&mut gaps, (0..n - 1).filter(broken).count(), "the gaps of the diagonal")?;
-            gaps.extend((0..n - 1).filter(broken));
+            try_reserve(&mut gaps, (0..n - 1).into_par_iter().filter(broken).count(), "the gaps of the diagonal")?;
+            if gaps.capacity() > 0 {
+                gaps.extend((0..n - 1).filter(broken));
+            }
         }
         let mut warnings = Vec::new();
         if let Some(&first_gap) = gaps.first() {
@@ -247,8 +251,8 @@ impl Loops {
             gamma: set.gamma(),
             separation,
             metric: recorded_metric_name(metric),
-            timestamps_s: try_copy(traj.timestamps_s(), "the timestamps of the loops")?,
-            cell_widths_s: try_copy(traj.cell_widths_s(), "the time cells of the loops")?,
+            timestamps_s: try_copy_parallel(traj.timestamps_s(), "the timestamps of the loops")?,
+            cell_widths_s: try_copy_parallel(traj.cell_widths_s(), "the time cells of the loops")?,
             labels: labelling.labels,
             components: labelling.components,
             set,
@@ -415,11 +419,8 @@ impl Loops {
     /// # Errors
     /// [`Error::UnknownComponent`] for an id that does not exist.
     pub fn loop_duration(&self, selection: Selection<'_>, side: Side, scale: Scale) -> Result<Vec<f64>> {
-        let _timer = PhaseTimer::start("tau: loop durations, serial");
         let keep = self.selection_mask(selection)?;
-        let rows = (0..self.len()).map(|i| (i, self.set.row(i)));
-        let mut tau =
-            loop_duration_s(&self.cell_widths_s, self.set.breaks(), rows, |r| keep(self.labels[r] as usize), side)?;
+        let mut tau = loop_duration_s(&self.cell_widths_s, &self.set, |r| keep(self.labels[r] as usize), side)?;
         if scale == Scale::Normalized {
             let span = self.span_s();
             tau.iter_mut().for_each(|t| *t /= span);
@@ -460,7 +461,7 @@ impl Loops {
         Ok(self.loop_area(a, b, selection, side, scale)? / (b - a))
     }
 
-    fn selection_mask(&self, selection: Selection<'_>) -> Result<impl Fn(usize) -> bool + use<>> {
+    fn selection_mask(&self, selection: Selection<'_>) -> Result<impl Fn(usize) -> bool + Sync + use<>> {
         let count = self.components.len();
         let mask = match selection {
             Selection::All => vec![true; count],

@@ -2,8 +2,11 @@
 
 use std::str::FromStr;
 
+use rayon::prelude::*;
+
 use crate::error::{Error, Result};
 use crate::memory::try_filled;
+use crate::sublevel::{PhaseTimer, SublevelSet};
 
 /// Which partners t′ of a time t count towards τ(t) (paper, after Eq. 6).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
@@ -56,52 +59,71 @@ pub enum Selection<'a> {
     Components(&'a [usize]),
 }
 
-/// τ_X(t_i) for every sample i, seconds, from the runs of X. O(runs + n).
+/// Rows a task of [`loop_duration_s`] sums at a time.
+const ROWS_PER_TAU_TASK: usize = 4096;
+
+/// τ_X(t_i) for every sample i, seconds, from the runs of `set` that `keep` (by index into its
+/// runs) selects. O(runs + n).
 ///
 /// Each upper-half run (row r, columns a..=b) adds its time width to τ(r), and by symmetry adds
 /// w_r to τ(j) for every column j > r. The diagonal cell (r, r) counts half to `Begin` and half to
 /// `End`, so `Begin + End = Both`.
 ///
-/// A fleet's sessions (`breaks`: their starts after the first, sorted) are summed apart: no
-/// run crosses a session start, and each session's τ is bit for bit that of the session alone.
-pub(crate) fn loop_duration_s<'r>(
+/// The rows' own widths are summed in parallel, each row in its order; the columns' shares go
+/// into a difference array in row order, on one thread, so that every τ is the same bit for bit
+/// on any number of threads.
+///
+/// A fleet's sessions (the set's breaks) are summed apart: no run crosses a session start, and
+/// each session's τ is bit for bit that of the session alone.
+pub(crate) fn loop_duration_s(
     cell_widths_s: &[f64],
-    breaks: &[u32],
-    rows: impl Iterator<Item = (usize, &'r [crate::sublevel::Run])>,
-    keep: impl Fn(usize) -> bool,
+    set: &SublevelSet,
+    keep: impl Fn(usize) -> bool + Sync,
     side: Side,
 ) -> Result<Vec<f64>> {
     let n = cell_widths_s.len();
+    let breaks = set.breaks();
     let prefix = crate::trajectory::prefix_sums_by_session(cell_widths_s, breaks)?;
     let width = |a: usize, b: usize| if a > b { 0.0 } else { (prefix[b] + cell_widths_s[b]) - prefix[a] };
     let is_break = |k: usize| breaks.binary_search(&(k as u32)).is_ok();
     let mut tau = try_filled(n, 0.0, "the loop durations")?;
+    let timer = PhaseTimer::start("tau: rows' own widths, parallel");
+    tau.par_chunks_mut(ROWS_PER_TAU_TASK).enumerate().for_each(|(task, chunk)| {
+        for (r, tau_r) in (task * ROWS_PER_TAU_TASK..).zip(chunk) {
+            let w_r = cell_widths_s[r];
+            for (index, run) in (set.row_offset(r)..).zip(set.row(r)) {
+                if !keep(index) {
+                    continue;
+                }
+                let (a, b) = (run.start as usize, run.end as usize);
+                let diagonal = a == r;
+                let off_start = if diagonal { r + 1 } else { a };
+                *tau_r += match side {
+                    Side::Both => width(a, b),
+                    Side::Begin => width(off_start, b) + if diagonal { 0.5 * w_r } else { 0.0 },
+                    Side::End => {
+                        if diagonal {
+                            0.5 * w_r
+                        } else {
+                            0.0
+                        }
+                    }
+                };
+            }
+        }
+    });
+    timer.finish();
+    if side == Side::Begin {
+        return Ok(tau);
+    }
+    let _timer = PhaseTimer::start("tau: columns' shares in row order, serial");
     // Column contributions as a difference array over j.
     let mut column_diff = try_filled(n + 1, 0.0, "the loop durations")?;
-    let mut run_index = 0;
-    for (r, runs) in rows {
-        let w_r = cell_widths_s[r];
-        for run in runs {
-            let selected = keep(run_index);
-            run_index += 1;
-            if !selected {
-                continue;
-            }
+    for (r, &w_r) in cell_widths_s.iter().enumerate() {
+        for (index, run) in (set.row_offset(r)..).zip(set.row(r)) {
             let (a, b) = (run.start as usize, run.end as usize);
-            let diagonal = a == r;
-            let off_start = if diagonal { r + 1 } else { a };
-            tau[r] += match side {
-                Side::Both => width(a, b),
-                Side::Begin => width(off_start, b) + if diagonal { 0.5 * w_r } else { 0.0 },
-                Side::End => {
-                    if diagonal {
-                        0.5 * w_r
-                    } else {
-                        0.0
-                    }
-                }
-            };
-            if side != Side::Begin && off_start <= b {
+            let off_start = if a == r { r + 1 } else { a };
+            if off_start <= b && keep(index) {
                 column_diff[off_start] += w_r;
                 // At a session start the running sum restarts instead.
                 if breaks.is_empty() || !is_break(b + 1) {

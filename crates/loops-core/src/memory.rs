@@ -46,6 +46,18 @@ pub(crate) fn try_copy<T: Clone>(items: &[T], what: &'static str) -> Result<Vec<
     Ok(vec)
 }
 
+/// [`try_copy`] with the copy (and the first touch of its pages) cut among the threads of the
+/// current rayon pool.
+///
+/// # Errors
+/// As [`try_reserve`].
+pub(crate) fn try_copy_parallel<T: Copy + Send + Sync>(items: &[T], what: &'static str) -> Result<Vec<T>> {
+    use rayon::prelude::*;
+    let mut vec = try_with_capacity(items.len(), what)?;
+    vec.par_extend(items.par_iter().copied());
+    Ok(vec)
+}
+
 /// Collects an iterator of known length into a vector allocated fallibly.
 ///
 /// # Errors
