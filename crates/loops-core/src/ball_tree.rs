@@ -20,7 +20,7 @@
 //! jump over none).
 
 use crate::error::Result;
-use crate::memory::{try_reserve, try_with_capacity};
+use crate::memory::{try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::trajectory::Trajectory;
 
@@ -215,8 +215,9 @@ impl BallTree {
         let ends = starts.iter().skip(1).copied().chain(std::iter::once(traj.len()));
         let capacity =
             starts.len() - 1 + starts.iter().zip(ends).map(|(&lo, hi)| tree_size(hi - lo, leaf_size)).sum::<usize>();
+        let placeholder = Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF, uniform: false };
         let mut tree = Self {
-            nodes: try_with_capacity(capacity, "the ball hierarchy")?,
+            nodes: try_filled(capacity, placeholder, "the ball hierarchy")?,
             centres: Vec::new(),
             dim: traj.dim(),
             roots: vec![0],
@@ -224,39 +225,13 @@ impl BallTree {
         let mut bounds = try_with_capacity(starts.len() + 1, "the ball hierarchy")?;
         bounds.extend_from_slice(starts);
         bounds.push(traj.len());
-        tree.nodes.push(Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF, uniform: false });
-        tree.build_sessions(0, &bounds, traj, metric, leaf_size);
-        debug_assert_eq!(tree.nodes.len(), capacity, "the nodes fill their room exactly");
+        let build = Build { traj, metric, leaf_size };
+        let (root, below) = tree.nodes.split_first_mut().expect("a hierarchy has a root");
+        *root = build.sessions(&bounds, 1, below);
         let mut centres = try_with_capacity(tree.nodes.len() * traj.dim(), "the ball hierarchy")?;
         centres.extend(tree.nodes.iter().flat_map(|node| traj.point(node.centre as usize)));
         tree.centres = centres;
         Ok(tree)
-    }
-
-    /// Builds the node at `slot` over the sessions between `bounds[0]` and `bounds[last]`.
-    fn build_sessions<M: Metric + ?Sized>(
-        &mut self,
-        slot: usize,
-        bounds: &[usize],
-        traj: &Trajectory,
-        metric: &M,
-        leaf_size: usize,
-    ) {
-        let (lo, hi) = (bounds[0], bounds[bounds.len() - 1]);
-        if bounds.len() <= 2 {
-            self.build(slot, lo, hi, traj, metric, leaf_size);
-            return;
-        }
-        let left = self.nodes.len();
-        let placeholder = self.nodes[slot];
-        self.nodes.push(placeholder);
-        self.nodes.push(placeholder);
-        let middle = (bounds.len() - 1) / 2;
-        self.build_sessions(left, &bounds[..=middle], traj, metric, leaf_size);
-        self.build_sessions(left + 1, &bounds[middle..], traj, metric, leaf_size);
-        let (a, b) = (self.nodes[left], self.nodes[left + 1]);
-        debug_assert!(a.lo as usize == lo && b.hi as usize == hi);
-        self.nodes[slot] = Node::joined(traj, metric, (&a, left as u32), (&b, left as u32 + 1));
     }
 
     /// The chunks a spatial index holds: the largest nodes that lie in one session (`starts` as
@@ -301,30 +276,6 @@ impl BallTree {
             }
         });
         grown
-    }
-
-    fn build<M: Metric + ?Sized>(
-        &mut self,
-        slot: usize,
-        lo: usize,
-        hi: usize,
-        traj: &Trajectory,
-        metric: &M,
-        leaf_size: usize,
-    ) {
-        if hi - lo <= leaf_size {
-            self.nodes[slot] = Node::leaf(traj, metric, lo, hi);
-            return;
-        }
-        let left = self.nodes.len();
-        let placeholder = self.nodes[slot];
-        self.nodes.push(placeholder);
-        self.nodes.push(placeholder);
-        let middle = lo + (hi - lo) / 2;
-        self.build(left, lo, middle, traj, metric, leaf_size);
-        self.build(left + 1, middle, hi, traj, metric, leaf_size);
-        let (a, b) = (self.nodes[left], self.nodes[left + 1]);
-        self.nodes[slot] = Node::joined(traj, metric, (&a, left as u32), (&b, left as u32 + 1));
     }
 
     /// The stretches, in increasing order, that end after `from` and whose ball reaches within
@@ -571,23 +522,20 @@ fn push_merged(out: &mut Vec<Leaf>, node: &Node, inside: bool, grown: &mut Resul
     }
 }
 
-/// The number of nodes [`BallTree::build`] makes over `poses` poses (at least 1) in leaves of
+/// The number of nodes [`Build::poses`] makes over `poses` poses (at least 1) in leaves of
 /// at most `leaf_size`: the halves of a level differ in size by at most one, so each level
 /// holds at most two sizes. O(log poses).
 fn tree_size(poses: usize, leaf_size: usize) -> usize {
-    // (size, how many nodes of that size) on the current level: at most two entries.
-    let mut level = vec![(poses, 1_usize)];
+    // The sizes of one level's nodes differ by at most one: (size, how many) for both.
+    let mut level = [(poses, 1_usize), (poses + 1, 0)];
     let mut nodes = 0;
-    while !level.is_empty() {
-        let mut next: Vec<(usize, usize)> = Vec::with_capacity(2);
+    while level[0].1 + level[1].1 > 0 {
+        let mut next = [(level[0].0 / 2, 0), (level[0].0 / 2 + 1, 0)];
         for (size, count) in level {
             nodes += count;
-            if size > leaf_size {
+            if size > leaf_size && count > 0 {
                 for half in [size / 2, size - size / 2] {
-                    match next.iter_mut().find(|(s, _)| *s == half) {
-                        Some((_, c)) => *c += count,
-                        None => next.push((half, count)),
-                    }
+                    next[half - next[0].0].1 += count;
                 }
             }
         }
@@ -596,10 +544,110 @@ fn tree_size(poses: usize, leaf_size: usize) -> usize {
     nodes
 }
 
+/// Poses from which the two halves of a node are built on two threads.
+const PARALLEL_BUILD_POSES: usize = 1 << 13;
+
+/// What building a hierarchy reads: the poses, the metric and the leaf size.
+struct Build<'a, M: ?Sized> {
+    traj: &'a Trajectory,
+    metric: &'a M,
+    leaf_size: usize,
+}
+
+impl<M: Metric + ?Sized> Build<'_, M> {
+    /// The node over the sessions between `bounds[0]` and `bounds[last]`, its descendants written
+    /// to `below` (exactly their number of nodes, the first at index `base`), in the order of a
+    /// depth-first build: a node's two children side by side, then the first one's descendants,
+    /// then the second one's. The top levels split the sessions in halves.
+    fn sessions(&self, bounds: &[usize], base: usize, below: &mut [Node]) -> Node {
+        let (lo, hi) = (bounds[0], bounds[bounds.len() - 1]);
+        if bounds.len() <= 2 {
+            return self.poses(lo, hi, base, below);
+        }
+        let middle = (bounds.len() - 1) / 2;
+        let (first, second) = (&bounds[..=middle], &bounds[middle..]);
+        let first_size =
+            first.len() - 2 + first.windows(2).map(|pair| tree_size(pair[1] - pair[0], self.leaf_size)).sum::<usize>();
+        let (pair, rest) = below.split_at_mut(2);
+        let (first_below, second_below) = rest.split_at_mut(first_size - 1);
+        let a = self.sessions(first, base + 2, first_below);
+        let b = self.sessions(second, base + 1 + first_size, second_below);
+        self.join(pair, base, a, b)
+    }
+
+    /// The node over poses `lo..hi` of one session, its descendants written to `below` as
+    /// [`sessions`](Self::sessions) writes them; the halves of a large node on two threads.
+    fn poses(&self, lo: usize, hi: usize, base: usize, below: &mut [Node]) -> Node {
+        if hi - lo <= self.leaf_size {
+            return Node::leaf(self.traj, self.metric, lo, hi);
+        }
+        let middle = lo + (hi - lo) / 2;
+        let first_size = tree_size(middle - lo, self.leaf_size);
+        let (pair, rest) = below.split_at_mut(2);
+        let (first_below, second_below) = rest.split_at_mut(first_size - 1);
+        let mut first = || self.poses(lo, middle, base + 2, first_below);
+        let mut second = || self.poses(middle, hi, base + 1 + first_size, second_below);
+        let (a, b) = if hi - lo >= PARALLEL_BUILD_POSES { rayon::join(first, second) } else { (first(), second()) };
+        self.join(pair, base, a, b)
+    }
+
+    /// Writes the children `a` and `b` to `pair` (at index `base`) and returns their parent.
+    fn join(&self, pair: &mut [Node], base: usize, a: Node, b: Node) -> Node {
+        pair[0] = a;
+        pair[1] = b;
+        Node::joined(self.traj, self.metric, (&a, base as u32), (&b, base as u32 + 1))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::metric::Euclidean;
+
+    /// The tree of a wandering path, in sessions, built on one thread and on four: the same
+    /// nodes bit for bit, as many as `tree_size` says, each node's children where the serial
+    /// depth-first order puts them (side by side, first one's descendants before the second's).
+    #[test]
+    fn built_alike_on_any_number_of_threads() {
+        let n = 3 * PARALLEL_BUILD_POSES + 17;
+        let points: Vec<[f64; 3]> =
+            (0..n).map(|k| k as f64 * 0.01).map(|t| [t.sin() * 50.0, (0.7 * t).cos() * 30.0, t * 0.1]).collect();
+        let times: Vec<f64> = (0..n).map(|k| k as f64 * 0.1).collect();
+        let traj = Trajectory::from_points(times, &points).expect("valid");
+        for starts in [vec![0], vec![0, 5, PARALLEL_BUILD_POSES + 3, n - 1], vec![0, n / 2]] {
+            let build = |threads| {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a pool");
+                pool.install(|| BallTree::with_sessions(&traj, &Euclidean, 16, &starts).expect("fits"))
+            };
+            let (one, four) = (build(1), build(4));
+            let ends = starts.iter().skip(1).copied().chain([n]);
+            let sizes: usize = starts.iter().zip(ends).map(|(&lo, hi)| tree_size(hi - lo, 16)).sum();
+            assert_eq!(one.nodes.len(), starts.len() - 1 + sizes);
+            let same = |a: &Node, b: &Node| {
+                (a.lo, a.hi, a.centre, a.radius.to_bits(), a.left, a.right, a.uniform)
+                    == (b.lo, b.hi, b.centre, b.radius.to_bits(), b.left, b.right, b.uniform)
+            };
+            assert!(one.nodes.iter().zip(&four.nodes).all(|(a, b)| same(a, b)), "sessions {starts:?}");
+            for (k, node) in one.nodes.iter().enumerate().filter(|(_, node)| node.left != LEAF) {
+                let (left, right) = (&one.nodes[node.left as usize], &one.nodes[node.right as usize]);
+                assert!(node.left as usize > k && node.right == node.left + 1, "node {k}");
+                assert!(left.lo == node.lo && left.hi == right.lo && right.hi == node.hi, "node {k}");
+            }
+        }
+    }
+
+    /// `tree_size` against the sizes of the halving it counts, for every size up to 2,000.
+    #[test]
+    fn tree_size_counts_the_halving() {
+        fn count(poses: usize, leaf: usize) -> usize {
+            if poses <= leaf { 1 } else { 1 + count(poses / 2, leaf) + count(poses - poses / 2, leaf) }
+        }
+        for leaf in [1, 3, 16] {
+            for poses in 1..2000 {
+                assert_eq!(tree_size(poses, leaf), count(poses, leaf), "{poses} poses, leaves of {leaf}");
+            }
+        }
+    }
 
     /// Poses on a 3 × 3 lattice (many identical, many ties) and on a line, at random.
     fn tied_trajectory(n: usize, seed: u64) -> Trajectory {

@@ -604,7 +604,13 @@ impl ArcLength {
     /// [`Error::OutOfMemory`].
     pub(crate) fn new<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, with_plain: bool) -> Result<Self> {
         let n = traj.len();
+        // The steps first, measured in parallel, then summed in order on one thread.
         let mut s = try_with_capacity(n, "the path lengths")?;
+        s.par_extend(
+            (0..n)
+                .into_par_iter()
+                .map(|k| if k == 0 { 0.0 } else { metric.distance(traj.point(k - 1), traj.point(k)) }),
+        );
         let mut plain = try_with_capacity(if with_plain { n } else { 0 }, "the path lengths")?;
         let mut total = 0.0_f64;
         let mut plain_total = 0.0_f64;
@@ -613,13 +619,12 @@ impl ArcLength {
         }
         let mut largest_step = 0.0_f64;
         let scale = metric.rounding_scale(traj);
-        s.push(0.0);
-        for k in 1..n {
-            let step = metric.distance(traj.point(k - 1), traj.point(k));
+        for sum in s.iter_mut().skip(1) {
+            let step = *sum;
             largest_step = largest_step.max(step);
             // Rounding up keeps s_k − s_j ≥ Σ δ over the stretch, so bounds never over-reach.
             total = (total + step).next_up();
-            s.push(total);
+            *sum = total;
             if with_plain {
                 plain_total += step;
                 plain.push(plain_total);
