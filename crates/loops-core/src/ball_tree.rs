@@ -212,9 +212,10 @@ impl BallTree {
         starts: &[usize],
     ) -> Result<Self> {
         let leaf_size = leaf_size.max(1);
-        let ends = starts.iter().skip(1).copied().chain(std::iter::once(traj.len()));
-        let capacity =
-            starts.len() - 1 + starts.iter().zip(ends).map(|(&lo, hi)| tree_size(hi - lo, leaf_size)).sum::<usize>();
+        let mut bounds = try_with_capacity(starts.len() + 1, "the ball hierarchy")?;
+        bounds.extend_from_slice(starts);
+        bounds.push(traj.len());
+        let capacity = sessions_tree_size(&bounds, leaf_size);
         let placeholder = Node { lo: 0, hi: 0, centre: 0, radius: 0.0, left: LEAF, right: LEAF, uniform: false };
         let mut tree = Self {
             nodes: try_filled(capacity, placeholder, "the ball hierarchy")?,
@@ -222,9 +223,6 @@ impl BallTree {
             dim: traj.dim(),
             roots: vec![0],
         };
-        let mut bounds = try_with_capacity(starts.len() + 1, "the ball hierarchy")?;
-        bounds.extend_from_slice(starts);
-        bounds.push(traj.len());
         let build = Build { traj, metric, leaf_size };
         let (root, below) = tree.nodes.split_first_mut().expect("a hierarchy has a root");
         *root = build.sessions(&bounds, 1, below);
@@ -544,6 +542,12 @@ fn tree_size(poses: usize, leaf_size: usize) -> usize {
     nodes
 }
 
+/// The number of nodes over the sessions between consecutive `bounds` (at least two): each
+/// session's tree ([`tree_size`]) and the nodes that join the sessions' trees in halves.
+fn sessions_tree_size(bounds: &[usize], leaf_size: usize) -> usize {
+    bounds.len() - 2 + bounds.windows(2).map(|pair| tree_size(pair[1] - pair[0], leaf_size)).sum::<usize>()
+}
+
 /// Poses from which the two halves of a node are built on two threads.
 const PARALLEL_BUILD_POSES: usize = 1 << 13;
 
@@ -566,8 +570,7 @@ impl<M: Metric + ?Sized> Build<'_, M> {
         }
         let middle = (bounds.len() - 1) / 2;
         let (first, second) = (&bounds[..=middle], &bounds[middle..]);
-        let first_size =
-            first.len() - 2 + first.windows(2).map(|pair| tree_size(pair[1] - pair[0], self.leaf_size)).sum::<usize>();
+        let first_size = sessions_tree_size(first, self.leaf_size);
         let (pair, rest) = below.split_at_mut(2);
         let (first_below, second_below) = rest.split_at_mut(first_size - 1);
         let a = self.sessions(first, base + 2, first_below);

@@ -230,8 +230,9 @@ impl Loops {
         let broken = |i: &usize| !set.breaks_after(*i) && set.row(*i).first().is_none_or(|r| (r.end as usize) <= *i);
         let mut gaps: Vec<usize> = Vec::new();
         if separation.is_none() {
-            try_reserve(&mut gaps, (0..n - 1).into_par_iter().filter(broken).count(), "the gaps of the diagonal")?;
-            if gaps.capacity() > 0 {
+            let count = (0..n - 1).into_par_iter().filter(broken).count();
+            if count > 0 {
+                try_reserve(&mut gaps, count, "the gaps of the diagonal")?;
                 gaps.extend((0..n - 1).filter(broken));
             }
         }
