@@ -571,8 +571,7 @@ impl<M: Metric + ?Sized> Build<'_, M> {
         let middle = (bounds.len() - 1) / 2;
         let (first, second) = (&bounds[..=middle], &bounds[middle..]);
         let first_size = sessions_tree_size(first, self.leaf_size);
-        let (pair, rest) = below.split_at_mut(2);
-        let (first_below, second_below) = rest.split_at_mut(first_size - 1);
+        let [pair, first_below, second_below] = halves(below, first_size);
         let a = self.sessions(first, base + 2, first_below);
         let b = self.sessions(second, base + 1 + first_size, second_below);
         self.join(pair, base, a, b)
@@ -586,8 +585,7 @@ impl<M: Metric + ?Sized> Build<'_, M> {
         }
         let middle = lo + (hi - lo) / 2;
         let first_size = tree_size(middle - lo, self.leaf_size);
-        let (pair, rest) = below.split_at_mut(2);
-        let (first_below, second_below) = rest.split_at_mut(first_size - 1);
+        let [pair, first_below, second_below] = halves(below, first_size);
         let mut first = || self.poses(lo, middle, base + 2, first_below);
         let mut second = || self.poses(middle, hi, base + 1 + first_size, second_below);
         let (a, b) = if hi - lo >= PARALLEL_BUILD_POSES { rayon::join(first, second) } else { (first(), second()) };
@@ -600,6 +598,15 @@ impl<M: Metric + ?Sized> Build<'_, M> {
         pair[1] = b;
         Node::joined(self.traj, self.metric, (&a, base as u32), (&b, base as u32 + 1))
     }
+}
+
+/// A node's descendants (`below`, as [`Build::sessions`] writes them) cut into its two
+/// children, the first child's descendants (`first_size` − 1 nodes: its tree less itself) and
+/// the second child's.
+fn halves(below: &mut [Node], first_size: usize) -> [&mut [Node]; 3] {
+    let (pair, rest) = below.split_at_mut(2);
+    let (first, second) = rest.split_at_mut(first_size - 1);
+    [pair, first, second]
 }
 
 #[cfg(test)]
