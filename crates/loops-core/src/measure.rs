@@ -117,8 +117,11 @@ pub(crate) fn loop_duration_s(
         return Ok(tau);
     }
     let _timer = PhaseTimer::start("tau: columns' shares in row order, serial");
-    // Column contributions as a difference array over j.
-    let mut column_diff = try_filled(n + 1, 0.0, "the loop durations")?;
+    // Column contributions as a difference array over j (n + 1 entries), in the room of the
+    // prefix sums, which the rows' widths were the last to read: one array of n fewer at the
+    // peak, and no fresh pages.
+    let mut column_diff = prefix;
+    column_diff.fill(0.0);
     for (r, &w_r) in cell_widths_s.iter().enumerate() {
         for (index, run) in (set.row_offset(r)..).zip(set.row(r)) {
             let (a, b) = (run.start as usize, run.end as usize);
