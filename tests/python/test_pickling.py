@@ -10,6 +10,7 @@ import copy
 import functools
 import multiprocessing
 import pickle
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -110,6 +111,56 @@ def test_results_cross_process_boundaries_with_spawn(results):
         echoed = pool.map(copy.copy, list(results.values()))
     assert found == [results["loops"], il.find_loops(other, gamma=40.0)]
     assert echoed == list(results.values())
+
+
+def msgpack(value: object) -> bytes:
+    """MessagePack of strings, small non-negative ints, floats and lists (enough to write a
+    state as the package does, for a state no build of today writes)."""
+    if isinstance(value, str):
+        data = value.encode()
+        assert len(data) < 32
+        return bytes([0xA0 | len(data)]) + data
+    if isinstance(value, bool) or not isinstance(value, (int, float, list)):
+        raise TypeError(value)
+    if isinstance(value, int):
+        assert 0 <= value < 128
+        return bytes([value])
+    if isinstance(value, float):
+        return b"\xcb" + struct.pack(">d", value)
+    if len(value) < 16:
+        head = bytes([0x90 | len(value)])
+    else:
+        head = b"\xdd" + len(value).to_bytes(4, "big")
+    return head + b"".join(msgpack(item) for item in value)
+
+
+def test_loops_keep_their_closest_pairs_positions_only(results):
+    traj, loops = results["trajectory"], results["loops"]
+    table = loops.components
+    for side in "ij":
+        at = table[f"closest_{side}"]
+        for k, axis in enumerate("xyz"):
+            np.testing.assert_array_equal(table[f"closest_{side}_{axis}"], traj.positions[at, k])
+    # The second argument of the pickle: six numbers a component, not three a pose.
+    _, (_, closest) = loops.__reduce__()
+    assert len(closest) < 60 * len(table["id"]) + 100 < 24 * len(traj)
+
+
+def test_loops_pickled_with_every_pose_position_read_as_before(results):
+    # Builds before this one passed every pose's position as the second argument.
+    traj, loops = results["trajectory"], results["loops"]
+    restore, (state, _) = loops.__reduce__()
+    every = msgpack(["inexact_loops", 2, "LoopsPositions", traj.positions.tolist()])
+    back = restore(state, every)
+    assert back == loops
+    for key, column in loops.components.items():
+        np.testing.assert_array_equal(back.components[key], column, err_msg=key)
+    short = msgpack(["inexact_loops", 2, "LoopsPositions", traj.positions[:-1].tolist()])
+    with pytest.raises(pickle.UnpicklingError, match="its positions are not one per pose"):
+        restore(state, short)
+    few = msgpack(["inexact_loops", 2, "LoopsClosestPositions", [[0.0] * 6]])
+    with pytest.raises(pickle.UnpicklingError, match="not one per component"):
+        restore(state, few)
 
 
 def state_of(value: object) -> tuple[object, bytes]:

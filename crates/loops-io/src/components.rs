@@ -140,6 +140,15 @@ impl ClosestPositions {
         Self::of_poses(closest_pair.map(|k| Some(positions[k])))
     }
 
+    /// The positions of the poses `closest_pair` of `traj` ([`point_position`](crate::point_position)),
+    /// without the positions of the others.
+    ///
+    /// # Panics
+    /// When an index is not a pose of `traj`.
+    pub fn of_trajectory(closest_pair: [usize; 2], traj: &loops_core::Trajectory) -> Self {
+        Self::of_poses(closest_pair.map(|k| Some(crate::point_position(traj, k))))
+    }
+
     /// The positions of the closest pair's poses `closest_i` and `closest_j` (`None`: unknown),
     /// wherever they come from: one trajectory's ([`ClosestPositions::new`]) or two sessions'
     /// ([`fleet_closest_positions`](crate::fleet_closest_positions)).
@@ -313,11 +322,22 @@ pub fn components_to_csv<W: Write>(
     samples_per_component: Option<&[u64]>,
     out: W,
 ) -> io::Result<()> {
+    let rows = component_rows(loops, positions, samples_per_component);
+    component_rows_to_csv(&rows, samples_per_component.is_some(), out)
+}
+
+/// Writes `components.csv` from its `rows` ([`component_rows`], with the closest pairs'
+/// positions set wherever they come from): a header of [`COMPONENT_COLUMNS`] (and `samples`
+/// `with_samples`), then the rows, as [`components_to_csv`] writes them. O(components).
+///
+/// # Errors
+/// What `out` returns.
+pub fn component_rows_to_csv<W: Write>(rows: &[ComponentRow], with_samples: bool, out: W) -> io::Result<()> {
     let mut columns = COMPONENT_COLUMNS.to_vec();
-    if samples_per_component.is_some() {
+    if with_samples {
         columns.push("samples");
     }
-    write_csv(out, &columns, component_rows(loops, positions, samples_per_component))
+    write_csv(out, &columns, rows)
 }
 
 /// Writes `components.csv` ([`components_to_csv`]) to the file `path`, atomically

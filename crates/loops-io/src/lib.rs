@@ -149,7 +149,7 @@ pub use atomic::{StagedFiles, write_atomically};
 pub use bag::{list_frame_pairs, list_topics, log_name, read_ros1, read_rosbag2};
 pub use components::{
     CLOSEST_POSITION_COLUMNS, COMPONENT_COLUMNS, ClosestPositions, ComponentExtent, ComponentMeasures, ComponentRow,
-    EXTENT_COLUMNS, MEASURE_COLUMNS, component_rows, components_to_csv, write_components,
+    EXTENT_COLUMNS, MEASURE_COLUMNS, component_rows, component_rows_to_csv, components_to_csv, write_components,
 };
 pub use detections::{DetectionTable, read_detections};
 pub use dropped::Dropped;
@@ -168,7 +168,7 @@ pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, SkippedRecords, r
 pub use kitti::{ROTATION_MATRIX_TOLERANCE, read_kitti};
 pub use live_scene::{LIVE_PLANE_POSES, LIVE_TOPICS, LiveChannel, LiveMessage, LiveScene};
 pub use loop_duration::{
-    LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_positions,
+    LOOP_DURATION_COLUMNS, LoopDurationRow, loop_duration_rows, loop_duration_to_csv, point_position, point_positions,
     write_loop_duration,
 };
 pub use mcap_write::{McapCompression, McapPoseMessage, McapWriteOptions, write_mcap};

@@ -58,15 +58,27 @@ pub fn loop_duration_rows(
 /// # Ok::<(), loops_core::Error>(())
 /// ```
 pub fn point_positions(traj: &loops_core::Trajectory) -> Vec<[f64; 3]> {
-    (0..traj.len())
-        .map(|i| {
-            let mut position = [0.0; 3];
-            for (axis, &value) in position.iter_mut().zip(traj.point(i)) {
-                *axis = value;
-            }
-            position
-        })
-        .collect()
+    (0..traj.len()).map(|i| point_position(traj, i)).collect()
+}
+
+/// The position of pose `i` of `traj`, as [`point_positions`] gives every pose's: where only a
+/// few poses are wanted (the closest pairs of the components), without the O(poses) copy.
+///
+/// # Panics
+/// When `i` is not a pose of `traj`.
+///
+/// # Examples
+/// ```
+/// let traj = loops_core::Trajectory::from_points(vec![0.0, 1.0], &[[1.0, 2.0], [3.0, 4.0]])?;
+/// assert_eq!(loops_io::point_position(&traj, 1), [3.0, 4.0, 0.0]);
+/// # Ok::<(), loops_core::Error>(())
+/// ```
+pub fn point_position(traj: &loops_core::Trajectory, i: usize) -> [f64; 3] {
+    let mut position = [0.0; 3];
+    for (axis, &value) in position.iter_mut().zip(traj.point(i)) {
+        *axis = value;
+    }
+    position
 }
 
 /// Writes `loop_duration.csv` to `out`: a header of [`LOOP_DURATION_COLUMNS`], then the

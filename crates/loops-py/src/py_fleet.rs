@@ -670,7 +670,7 @@ impl FleetLoops {
     #[getter]
     fn loops(&self, py: Python<'_>) -> PyResult<Py<Loops>> {
         let loops = self.loops.get_or_try_init(py, || {
-            Py::new(py, Loops { inner: Arc::new(self.inner.loops().clone()), positions: None })
+            Py::new(py, Loops { inner: Arc::new(self.inner.loops().clone()), closest: None })
         })?;
         Ok(loops.clone_ref(py))
     }

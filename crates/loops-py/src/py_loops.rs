@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use loops_io::ClosestPositions;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -131,10 +132,11 @@ pub(crate) fn path_length<'py>(
 #[derive(Debug)]
 pub(crate) struct Loops {
     pub(crate) inner: Arc<loops_core::Loops>,
-    /// Where the poses are ([`loops_io::point_positions`] of the trajectory they were found
-    /// on), for the closest pairs' positions in :attr:`components`; `None` where not known
-    /// (the loops of a fleet's sessions together).
-    pub(crate) positions: Option<Arc<Vec<[f64; 3]>>>,
+    /// Where each component's closest pair is ([`loops_io::point_position`] of its two poses on
+    /// the trajectory the loops were found on), for :attr:`components`: two positions a
+    /// component, not a copy of every pose's; `None` where not known (the loops of a fleet's
+    /// sessions together).
+    pub(crate) closest: Option<Arc<Vec<ClosestPositions>>>,
 }
 
 /// Loops compare by their result: the positions come from the same trajectory or are unknown.
@@ -145,9 +147,23 @@ impl PartialEq for Loops {
 }
 
 impl Loops {
-    /// `inner` found on `traj`, with its positions.
+    /// `inner` found on `traj`, with its closest pairs' positions.
     pub(crate) fn of_trajectory(inner: loops_core::Loops, traj: &loops_core::Trajectory) -> Self {
-        Self { inner: Arc::new(inner), positions: Some(Arc::new(loops_io::point_positions(traj))) }
+        let closest: Vec<_> =
+            inner.components().iter().map(|c| ClosestPositions::of_trajectory(c.closest_pair, traj)).collect();
+        Self { inner: Arc::new(inner), closest: Some(Arc::new(closest)) }
+    }
+
+    /// The rows of :attr:`components` (and of `components.csv`), with the closest pairs'
+    /// positions where known.
+    fn component_rows(&self, samples_per_component: Option<&[u64]>) -> Vec<loops_io::ComponentRow> {
+        let mut rows = loops_io::component_rows(&self.inner, None, samples_per_component);
+        if let Some(closest) = &self.closest {
+            for (row, &at) in rows.iter_mut().zip(closest.iter()) {
+                row.positions = at;
+            }
+        }
+        rows
     }
 }
 
@@ -189,8 +205,9 @@ fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
 
 #[pymethods]
 impl Loops {
-    /// Pickles as its core value's state and, when known, its positions' (a second argument,
-    /// so that a state without them reads as before).
+    /// Pickles as its core value's state and, when known, its closest pairs' positions (a
+    /// second argument, so that a state without them reads as before; one of the builds before
+    /// this one, which held every pose's position, reads as those of its closest pairs).
     #[allow(clippy::type_complexity)]
     fn __reduce__<'py>(
         slf: &Bound<'py, Self>,
@@ -198,11 +215,21 @@ impl Loops {
     {
         let this = slf.get();
         let (from_state, (state,)) = crate::pickling::reduce(slf.as_any(), "Loops", this.inner.as_ref())?;
-        let positions = match &this.positions {
-            Some(p) => Some(crate::pickling::reduce(slf.as_any(), "LoopsPositions", p.as_slice())?.1.0),
+        let closest = match &this.closest {
+            Some(closest) => {
+                let known = |x: Option<f64>| x.unwrap_or(f64::NAN);
+                let values: Vec<[f64; 6]> = closest
+                    .iter()
+                    .map(|c| {
+                        [c.closest_i_x, c.closest_i_y, c.closest_i_z, c.closest_j_x, c.closest_j_y, c.closest_j_z]
+                            .map(known)
+                    })
+                    .collect();
+                Some(crate::pickling::reduce(slf.as_any(), "LoopsClosestPositions", &values)?.1.0)
+            }
             None => None,
         };
-        Ok((from_state, (state, positions)))
+        Ok((from_state, (state, closest)))
     }
 
     #[classmethod]
@@ -211,12 +238,28 @@ impl Loops {
         let py = cls.py();
         crate::pickling::restoring(py, "Loops", || {
             let inner: loops_core::Loops = crate::pickling::restore(py, "Loops", state)?;
-            let positions: Option<Vec<[f64; 3]>> =
-                positions.map(|p| crate::pickling::restore(py, "LoopsPositions", p)).transpose()?;
-            if positions.as_ref().is_some_and(|p| p.len() != inner.len()) {
-                return Err(crate::pickling::invalid(py, "Loops", "its positions are not one per pose"));
-            }
-            Ok(Self { inner: Arc::new(inner), positions: positions.map(Arc::new) })
+            let components = inner.components();
+            let closest = match positions {
+                None => None,
+                Some(bytes) if crate::pickling::is_of(bytes, "LoopsPositions") => {
+                    // Every pose's position, as builds before this one pickled them.
+                    let every: Vec<[f64; 3]> = crate::pickling::restore(py, "LoopsPositions", bytes)?;
+                    if every.len() != inner.len() {
+                        return Err(crate::pickling::invalid(py, "Loops", "its positions are not one per pose"));
+                    }
+                    Some(components.iter().map(|c| ClosestPositions::new(c.closest_pair, Some(&every))).collect())
+                }
+                Some(bytes) => {
+                    let values: Vec<[f64; 6]> = crate::pickling::restore(py, "LoopsClosestPositions", bytes)?;
+                    if values.len() != components.len() {
+                        let reason = "its closest pairs' positions are not one per component";
+                        return Err(crate::pickling::invalid(py, "Loops", reason));
+                    }
+                    let pose = |p: &[f64]| Some([p[0], p[1], p[2]]);
+                    Some(values.iter().map(|v| ClosestPositions::of_poses([pose(&v[..3]), pose(&v[3..])])).collect())
+                }
+            };
+            Ok(Self { inner: Arc::new(inner), closest: closest.map(Arc::new) })
         })
     }
 }
@@ -322,7 +365,7 @@ impl Loops {
     ///     (dtype('int64'), [True, False], [199, 7])
     #[getter]
     fn components<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let rows = loops_io::component_rows(&self.inner, self.positions.as_deref().map(Vec::as_slice), None);
+        let rows = self.component_rows(None);
         let measures: Vec<_> = rows.iter().map(|row| row.measures).collect();
         let extents: Vec<_> = rows.iter().map(|row| row.extent).collect();
         let positions: Vec<_> = rows.iter().map(|row| row.positions).collect();
@@ -647,11 +690,11 @@ impl Loops {
                 counts.len()
             )));
         }
-        let loops = Arc::clone(&self.inner);
-        let positions = self.positions.clone();
+        let rows = self.component_rows(samples_per_component.as_deref());
+        let with_samples = samples_per_component.is_some();
         detached(py, move || {
-            let positions = positions.as_deref().map(Vec::as_slice);
-            Ok(loops_io::write_components(&path, &loops, positions, samples_per_component.as_deref(), overwrite)?)
+            let write = |file: &mut std::fs::File| loops_io::component_rows_to_csv(&rows, with_samples, file);
+            Ok(loops_io::write_atomically(&path, overwrite, write)?)
         })
     }
 

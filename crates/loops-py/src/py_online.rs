@@ -363,7 +363,7 @@ impl OnlineLoops {
         let loops = detached(py, move || Ok(inner.to_loops()?))?;
         Ok(match inner.trajectory() {
             Some(traj) => Loops::of_trajectory(loops, traj),
-            None => Loops { inner: Arc::new(loops), positions: None },
+            None => Loops { inner: Arc::new(loops), closest: None },
         })
     }
 
@@ -464,9 +464,11 @@ impl OnlineLoops {
             .iter()
             .map(|c| loops_io::ComponentExtent::new([c.i_range, c.j_range], c.closest_pair, c.closest_distance, [t; 2]))
             .collect();
-        let points = this.inner.trajectory().map(loops_io::point_positions);
-        let positions: Vec<_> =
-            cs.iter().map(|c| loops_io::ClosestPositions::new(c.closest_pair, points.as_deref())).collect();
+        let traj = this.inner.trajectory();
+        let closest = |pair: [usize; 2]| {
+            traj.map_or_else(Default::default, |traj| loops_io::ClosestPositions::of_trajectory(pair, traj))
+        };
+        let positions: Vec<_> = cs.iter().map(|c| closest(c.closest_pair)).collect();
         let measures = [
             (id, int64_column(py, &cs, |c| c.id as usize)),
             (trivial, bool_column(py, &cs, |c| c.trivial)),
