@@ -147,7 +147,7 @@ def test_loops_keep_their_closest_pairs_positions_only(results):
 
 
 def test_loops_pickled_with_every_pose_position_read_as_before(results):
-    # Builds before this one passed every pose's position as the second argument.
+    # Earlier versions passed every pose's position as the second argument.
     traj, loops = results["trajectory"], results["loops"]
     restore, (state, _) = loops.__reduce__()
     every = msgpack(["inexact_loops", 2, "LoopsPositions", traj.positions.tolist()])

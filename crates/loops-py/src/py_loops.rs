@@ -206,8 +206,8 @@ fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
 #[pymethods]
 impl Loops {
     /// Pickles as its core value's state and, when known, its closest pairs' positions (a
-    /// second argument, so that a state without them reads as before; one of the builds before
-    /// this one, which held every pose's position, reads as those of its closest pairs).
+    /// second argument, so that a state without them reads as before; a second argument of
+    /// every pose's position, as earlier versions pickled it, reads as its closest pairs').
     #[allow(clippy::type_complexity)]
     fn __reduce__<'py>(
         slf: &Bound<'py, Self>,
@@ -242,7 +242,7 @@ impl Loops {
             let closest = match positions {
                 None => None,
                 Some(bytes) if crate::pickling::is_of(bytes, "LoopsPositions") => {
-                    // Every pose's position, as builds before this one pickled them.
+                    // Every pose's position, as earlier versions pickled them.
                     let every: Vec<[f64; 3]> = crate::pickling::restore(py, "LoopsPositions", bytes)?;
                     if every.len() != inner.len() {
                         return Err(crate::pickling::invalid(py, "Loops", "its positions are not one per pose"));
