@@ -63,9 +63,32 @@ pub fn fleet_closest_positions(
     positions: Option<&[Vec<[f64; 3]>]>,
 ) -> ClosestPositions {
     let Some(positions) = positions else { return ClosestPositions::default() };
+    closest_positions_by(component, |a, i| positions[a][i])
+}
+
+/// Where fleet component `component`'s closest pair is, read from the sessions of `fleet`
+/// ([`point_position`](crate::point_position) of its two poses), without every session's
+/// positions. O(1).
+///
+/// # Panics
+/// When a session or pose is not `fleet`'s (a component of another fleet).
+pub fn fleet_closest_positions_in(
+    component: &loops_core::fleet::FleetComponent,
+    fleet: &loops_core::fleet::Fleet,
+) -> ClosestPositions {
+    closest_positions_by(component, |a, i| crate::point_position(fleet.session(a), i))
+}
+
+/// Pose `closest_pair[0]` of session `a` and pose `closest_pair[1]` of session `b`, placed by
+/// `position(session, pose)`: the one rule of [`fleet_closest_positions`] and
+/// [`fleet_closest_positions_in`].
+fn closest_positions_by(
+    component: &loops_core::fleet::FleetComponent,
+    position: impl Fn(usize, usize) -> [f64; 3],
+) -> ClosestPositions {
     let [a, b] = component.sessions;
     let [i, j] = component.closest_pair;
-    ClosestPositions::of_poses([Some(positions[a][i]), Some(positions[b][j])])
+    ClosestPositions::of_poses([Some(position(a, i)), Some(position(b, j))])
 }
 
 /// The block of a fleet's component: its two sessions, by index and name. `session_a` and
@@ -633,6 +656,22 @@ mod tests {
         expected.push("samples");
         assert_eq!(crate::csv_rows::inferred_columns(&rows[0]), expected);
         assert_eq!((rows[0].samples, rows.last().unwrap().samples), (Some(4), Some(0)));
+    }
+
+    #[test]
+    fn closest_positions_read_from_the_fleet_are_those_of_every_position() {
+        let (fleet, loops) = fleet();
+        let positions: Vec<_> = (0..fleet.len()).map(|a| crate::point_positions(fleet.session(a))).collect();
+        let components = loops.components();
+        assert!(components.iter().any(|c| c.sessions[0] != c.sessions[1]));
+        for c in &components {
+            let [a, b] = c.sessions;
+            let [i, j] = c.closest_pair;
+            let read = fleet_closest_positions_in(c, &fleet);
+            assert_eq!(read, fleet_closest_positions(c, Some(&positions)));
+            assert_eq!(read.closest_i_x, Some(fleet.session(a).point(i)[0]));
+            assert_eq!(read.closest_j_y, Some(fleet.session(b).point(j)[1]));
+        }
     }
 
     #[test]

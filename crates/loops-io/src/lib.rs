@@ -158,10 +158,10 @@ pub use error::{IoError, MessageLocation, Result, TrajectoryMessages, WriteError
 pub use euroc::read_euroc;
 pub use fleet::{
     FLEET_COMPONENT_COLUMNS, FLEET_SAMPLE_COLUMNS, FleetComponentRow, FleetSampleRow, GTSAM_ROBOT_LETTERS,
-    SESSION_PAIR_COLUMNS, SessionBlock, SessionPairRow, fleet_closest_positions, fleet_component_rows,
-    fleet_components_to_csv, fleet_g2o_edges_text, fleet_sample_rows, fleet_samples_to_csv, fleet_samples_to_json,
-    gtsam_symbol_key, session_pair_rows, session_pairs_to_csv, write_fleet_components, write_fleet_g2o_edges,
-    write_fleet_samples, write_session_pairs,
+    SESSION_PAIR_COLUMNS, SessionBlock, SessionPairRow, fleet_closest_positions, fleet_closest_positions_in,
+    fleet_component_rows, fleet_components_to_csv, fleet_g2o_edges_text, fleet_sample_rows, fleet_samples_to_csv,
+    fleet_samples_to_json, gtsam_symbol_key, session_pair_rows, session_pairs_to_csv, write_fleet_components,
+    write_fleet_g2o_edges, write_fleet_samples, write_session_pairs,
 };
 pub use format::Format;
 pub use graph::{EdgeChain, GraphEdge, PoseGraph, RelativePose, SkippedRecords, read_pose_graph};

@@ -700,9 +700,7 @@ impl FleetLoops {
                 [[time(a, c.poses[0][0]), time(a, c.poses[0][1])], [time(b, c.poses[1][0]), time(b, c.poses[1][1])]]
             })
             .collect();
-        let positions: Vec<Vec<[f64; 3]>> =
-            (0..fleet.len()).map(|a| loops_io::point_positions(fleet.session(a))).collect();
-        let closest: Vec<_> = cs.iter().map(|c| loops_io::fleet_closest_positions(c, Some(&positions))).collect();
+        let closest: Vec<_> = cs.iter().map(|c| loops_io::fleet_closest_positions_in(c, fleet)).collect();
         components_table(py, &cs, fleet.names(), &times, &closest)
     }
 
