@@ -199,6 +199,18 @@ fn options(side: &str, normalized: bool) -> Result<(Side, Scale), Failure> {
     Ok((side.parse()?, scale))
 }
 
+/// A closest pair's positions as a pickled `Loops` holds them: pose `closest_i`'s x, y, z, then
+/// pose `closest_j`'s (NaN where unknown); [`unpickled_closest`] reads them back.
+fn pickled_closest(c: &ClosestPositions) -> [f64; 6] {
+    [c.closest_i_x, c.closest_i_y, c.closest_i_z, c.closest_j_x, c.closest_j_y, c.closest_j_z]
+        .map(|x| x.unwrap_or(f64::NAN))
+}
+
+/// The positions that [`pickled_closest`] wrote.
+fn unpickled_closest(v: &[f64; 6]) -> ClosestPositions {
+    ClosestPositions::of_poses([Some([v[0], v[1], v[2]]), Some([v[3], v[4], v[5]])])
+}
+
 fn selection(components: &Option<Vec<usize>>) -> Selection<'_> {
     components.as_deref().map_or(Selection::All, Selection::Components)
 }
@@ -217,14 +229,7 @@ impl Loops {
         let (from_state, (state,)) = crate::pickling::reduce(slf.as_any(), "Loops", this.inner.as_ref())?;
         let closest = match &this.closest {
             Some(closest) => {
-                let known = |x: Option<f64>| x.unwrap_or(f64::NAN);
-                let values: Vec<[f64; 6]> = closest
-                    .iter()
-                    .map(|c| {
-                        [c.closest_i_x, c.closest_i_y, c.closest_i_z, c.closest_j_x, c.closest_j_y, c.closest_j_z]
-                            .map(known)
-                    })
-                    .collect();
+                let values: Vec<[f64; 6]> = closest.iter().map(pickled_closest).collect();
                 Some(crate::pickling::reduce(slf.as_any(), "LoopsClosestPositions", &values)?.1.0)
             }
             None => None,
@@ -255,8 +260,7 @@ impl Loops {
                         let reason = "its closest pairs' positions are not one per component";
                         return Err(crate::pickling::invalid(py, "Loops", reason));
                     }
-                    let pose = |p: &[f64]| Some([p[0], p[1], p[2]]);
-                    Some(values.iter().map(|v| ClosestPositions::of_poses([pose(&v[..3]), pose(&v[3..])])).collect())
+                    Some(values.iter().map(unpickled_closest).collect())
                 }
             };
             Ok(Self { inner: Arc::new(inner), closest: closest.map(Arc::new) })
