@@ -164,6 +164,14 @@ impl SublevelSet {
     /// ties), measured over the cells of the run that the distances the scan measured at its
     /// ends do not put farther than its least.
     ///
+    /// Euclidean coordinates of 2 or 3 axes are not stepped through: a stretch whose ball neither
+    /// lies within γ of `x_i` nor stays beyond it is measured whole, the squared distances of
+    /// its 16 poses in one vectorised pass (a block's stretches laid out by axis once for its
+    /// rows) against the largest double whose square root is at most γ, which decides each cell
+    /// as `δ ≤ γ` does; a run measured whole takes its closest column from those distances. The
+    /// stretches near a row's γ-sphere cost a pass each instead of a chain of dependent
+    /// distances and gallops. The runs and closest columns are the same, bit for bit.
+    ///
     /// # Errors
     /// [`Error::InvalidGamma`](crate::Error::InvalidGamma) when γ is not positive and finite; the metric's dimension error.
     pub fn compute<M: Metric + ?Sized>(traj: &Trajectory, metric: &M, gamma: f64) -> Result<Self> {
@@ -224,6 +232,8 @@ impl SublevelSet {
         let n = traj.len();
         let interrupt = Interrupt::current();
         let scanner = RowScanner { traj, metric, arc, pruner, gamma, first_columns, starts };
+        // Euclidean coordinates of 2 or 3 axes are measured a stretch at a time.
+        let dense = (metric.is_coordinate_euclidean() && (2..=3).contains(&traj.dim())).then(|| squared_limit(gamma));
         // Blocks of rows, cut where a session starts; rows from `scan_rows` on are left empty.
         let mut block_rows: Vec<std::ops::Range<usize>> =
             try_with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len(), "the row blocks of S_gamma")?;
@@ -238,13 +248,27 @@ impl SublevelSet {
             let scan_block = |scratch: &mut BlockScratch, rows: &std::ops::Range<usize>| -> Result<Block> {
                 // Every block of the batch is started: once interrupted, they end here.
                 interrupt.check()?;
-                let BlockScratch { block, candidates, far_until } = scratch;
+                let BlockScratch { block, candidates, far_until, axes } = scratch;
                 block.clear();
                 candidates.clear();
                 scanner.candidates_for(rows.clone(), candidates)?;
                 far_until.clear();
                 try_reserve(far_until, candidates.len(), "the stretches of a row scan")?;
                 far_until.resize(candidates.len(), f64::NEG_INFINITY);
+                if let Some(limit) = dense {
+                    scanner.stretch_axes(candidates, axes)?;
+                    for i in rows.clone() {
+                        interrupt.check()?;
+                        block.make_room()?;
+                        if i > rows.start && traj.same_point(i - 1, i) {
+                            scanner.repeat_row(i, block);
+                        } else {
+                            scanner.scan_row_dense(i, candidates, axes, limit, far_until, block);
+                        }
+                        block.row_lengths.push(block.runs.len());
+                    }
+                    return block.try_copy();
+                }
                 for i in rows.clone() {
                     interrupt.check()?;
                     block.make_room()?;
@@ -483,6 +507,8 @@ struct BlockScratch {
     block: Block,
     candidates: Vec<Leaf>,
     far_until: Vec<f64>,
+    /// The candidates' poses by axis, for the dense scan ([`RowScanner::scan_row_dense`]).
+    axes: Vec<StretchAxes>,
 }
 
 impl Block {
@@ -526,6 +552,37 @@ impl Block {
 /// by one vectorised pass over their cells.
 const TREE_CLOSEST_LEN: usize = 256;
 
+/// A candidate stretch's poses by axis (x, y, z; z is 0 in two dimensions), NaN past its end:
+/// one stretch of at most [`LEAF_SIZE`] poses measured from a row's pose in one vectorised pass.
+type StretchAxes = [[f64; LEAF_SIZE]; 3];
+
+/// The largest double whose square root is at most γ: `s ≤ limit` exactly when `√s ≤ γ`, for
+/// every s ≥ 0 (the square root is correctly rounded and monotone; NaN is neither), so a sum
+/// of squares decides a cell as the metric's δ would, bit for bit.
+fn squared_limit(gamma: f64) -> f64 {
+    let mut limit = gamma * gamma;
+    while limit > 0.0 && limit.sqrt() > gamma {
+        limit = limit.next_down();
+    }
+    while limit.next_up().sqrt() <= gamma {
+        limit = limit.next_up();
+    }
+    limit
+}
+
+/// A run of a row of the dense scan: columns `start..=end`, with the least squared distance
+/// measured in it and its first column; `measured` when every column of it was measured.
+#[derive(Clone, Copy)]
+struct DenseRun {
+    start: usize,
+    end: usize,
+    rank: f64,
+    column: usize,
+    measured: bool,
+    /// The squared distance at the first column, when measured.
+    entry: Option<f64>,
+}
+
 /// A run of a row being scanned: columns `start..=end`, with what the scan measured of it.
 #[derive(Clone, Copy)]
 struct OpenRun {
@@ -535,6 +592,15 @@ struct OpenRun {
     entry: Option<f64>,
     /// The column of least δ that the scan measured inside the run, and its δ.
     least: Option<(usize, f64)>,
+}
+
+impl DenseRun {
+    /// This run followed by `next`, which starts at the column after its end: the earlier of
+    /// two equal least distances is kept.
+    fn joined(self, next: Self) -> Self {
+        let (rank, column) = if next.rank < self.rank { (next.rank, next.column) } else { (self.rank, self.column) };
+        Self { end: next.end, rank, column, measured: self.measured && next.measured, entry: self.entry, ..self }
+    }
 }
 
 impl OpenRun {
@@ -894,6 +960,194 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         }
     }
 
+    /// The candidates' poses by axis, for [`scan_row_dense`](Self::scan_row_dense): stretches
+    /// that the dense scan measures (neither inside nor of one point) get their poses, the
+    /// others NaN.
+    fn stretch_axes(&self, candidates: &[Leaf], axes: &mut Vec<StretchAxes>) -> Result<()> {
+        axes.clear();
+        try_reserve(axes, candidates.len(), "the stretches of a row scan")?;
+        let (coords, dim) = (self.traj.coords(), self.traj.dim());
+        axes.extend(candidates.iter().map(|leaf| {
+            let mut by_axis = [[f64::NAN; LEAF_SIZE]; 3];
+            let (lo, hi) = (leaf.lo as usize, leaf.hi as usize);
+            if !leaf.inside && !leaf.uniform && hi - lo <= LEAF_SIZE {
+                for (k, point) in coords[lo * dim..hi * dim].chunks_exact(dim).enumerate() {
+                    by_axis[0][k] = point[0];
+                    by_axis[1][k] = point[1];
+                    by_axis[2][k] = if dim == 3 { point[2] } else { 0.0 };
+                }
+            }
+            by_axis
+        }));
+        Ok(())
+    }
+
+    /// [`scan_row`](Self::scan_row) for Euclidean coordinates of 2 or 3 axes: a stretch that
+    /// its ball does not decide is measured whole (its squared distances in one pass, against
+    /// `limit` = [`squared_limit`]\(γ\)), and a run measured whole takes its closest column
+    /// from those distances. The same runs and closest columns as `scan_row`.
+    pub(crate) fn scan_row_dense(
+        &self,
+        i: usize,
+        candidates: &[Leaf],
+        axes: &[StretchAxes],
+        limit: f64,
+        far_until: &mut [f64],
+        out: &mut Block,
+    ) {
+        let dim = self.traj.dim();
+        let p = self.traj.point(i);
+        let x_i = [p[0], p[1], if dim == 3 { p[2] } else { 0.0 }];
+        let squared = |j: usize| {
+            let q = self.traj.point(j);
+            let d = [x_i[0] - q[0], x_i[1] - q[1], if dim == 3 { x_i[2] - q[2] } else { 0.0 }];
+            d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+        };
+        let margin = self.arc.margin;
+        let reach = self.gamma + margin;
+        let s_i = if far_until.is_empty() { 0.0 } else { self.arc.s[i] };
+        let mut open: Option<DenseRun> = None;
+        let first = self.first_column(i);
+        let mut j = first;
+        let mut next = 0;
+        while next < candidates.len() {
+            if candidates[next].hi as usize <= j {
+                next += candidates[next..].partition_point(|leaf| leaf.hi as usize <= j);
+                continue;
+            }
+            let (leaf, c) = (candidates[next], next);
+            let far = far_until.get_mut(next);
+            next += 1;
+            if far.as_ref().is_some_and(|&&mut until| s_i < until) {
+                continue;
+            }
+            let (lo, hi) = ((leaf.lo as usize).max(first), leaf.hi as usize);
+            // A stretch known within γ as a whole, with one measured pose of it (the centre): the
+            // rank of each of its poses when they are all one point, else a bound for the closest.
+            let rank = squared(leaf.centre as usize);
+            let mut whole = leaf.inside.then_some(false);
+            if !leaf.inside {
+                let d = rank.sqrt();
+                if leaf.uniform {
+                    if d > self.gamma {
+                        if let Some(until) = far {
+                            *until = s_i + (d - self.gamma - 2.0 * margin);
+                        }
+                        continue;
+                    }
+                    whole = Some(true);
+                } else if d - leaf.radius > reach {
+                    if let Some(until) = far {
+                        *until = s_i + (d - leaf.radius - reach - margin);
+                    }
+                    continue;
+                } else if d <= self.gamma - leaf.radius - 3.0 * margin {
+                    // Its ball lies within γ of x_i: every pose is inside.
+                    whole = Some(false);
+                }
+            }
+            if j < lo {
+                if let Some(run) = open.take() {
+                    self.close_dense(i, run, None, out);
+                }
+                j = lo;
+            }
+            if let Some(uniform) = whole {
+                // One point: every pose ranks as the centre, the first of them the earliest.
+                let column = if uniform { j } else { (leaf.centre as usize).max(j) };
+                let rank = if uniform || column == leaf.centre as usize { rank } else { squared(column) };
+                let part =
+                    DenseRun { start: j, end: hi - 1, rank, column, measured: uniform, entry: uniform.then_some(rank) };
+                open = Some(match open {
+                    Some(run) if run.end + 1 == j => run.joined(part),
+                    other => {
+                        if let Some(run) = other {
+                            self.close_dense(i, run, None, out);
+                        }
+                        part
+                    }
+                });
+                j = hi;
+                continue;
+            }
+            // Every pose of the stretch at once: its squared distances and which are within γ.
+            let by_axis = &axes[c];
+            let mut ranks = [0.0; LEAF_SIZE];
+            for (rank, &x) in ranks.iter_mut().zip(&by_axis[0]) {
+                *rank = (x_i[0] - x) * (x_i[0] - x);
+            }
+            for (rank, &y) in ranks.iter_mut().zip(&by_axis[1]) {
+                *rank += (x_i[1] - y) * (x_i[1] - y);
+            }
+            for (rank, &z) in ranks.iter_mut().zip(&by_axis[2]) {
+                *rank += (x_i[2] - z) * (x_i[2] - z);
+            }
+            let mut within = 0_u32;
+            for (k, &rank) in ranks.iter().enumerate() {
+                within |= u32::from(rank <= limit) << k;
+            }
+            let base = leaf.lo as usize;
+            while j < hi {
+                let bits = within >> (j - base);
+                if bits & 1 == 1 {
+                    let end = (j + (!bits).trailing_zeros() as usize).min(hi);
+                    let rank = ranks[j - base];
+                    let mut part =
+                        DenseRun { start: j, end: end - 1, rank, column: j, measured: true, entry: Some(rank) };
+                    for k in j + 1..end {
+                        if ranks[k - base] < part.rank {
+                            (part.rank, part.column) = (ranks[k - base], k);
+                        }
+                    }
+                    open = Some(match open {
+                        Some(run) if run.end + 1 == j => run.joined(part),
+                        other => {
+                            if let Some(run) = other {
+                                self.close_dense(i, run, None, out);
+                            }
+                            part
+                        }
+                    });
+                    j = end;
+                } else {
+                    if let Some(run) = open.take() {
+                        self.close_dense(i, run, Some((j, ranks[j - base])), out);
+                    }
+                    j = if bits == 0 { hi } else { j + bits.trailing_zeros() as usize };
+                }
+            }
+        }
+        if let Some(run) = open {
+            self.close_dense(i, run, None, out);
+        }
+    }
+
+    /// Records a run of the dense scan with its closest column: the least measured when every
+    /// column was measured, else ranked again as [`closest_of`](Self::closest_of) ranks it.
+    fn close_dense(&self, i: usize, run: DenseRun, exit: Option<(usize, f64)>, out: &mut Block) {
+        let (a, b) = (run.start, run.end);
+        let exit = exit.map(|(column, rank)| (column, rank.sqrt()));
+        let open = OpenRun {
+            start: a,
+            end: b,
+            entry: run.entry.map(f64::sqrt),
+            least: run.rank.is_finite().then(|| (run.column, run.rank.sqrt())),
+        };
+        let k = self.starts.partition_point(|&s| s <= a);
+        if k < self.starts.len() && self.starts[k] <= b {
+            return self.close_run(i, open, exit, out);
+        }
+        let column = if a == i {
+            i
+        } else if run.measured {
+            run.column
+        } else {
+            self.closest_of_scanned(i, open, exit)
+        };
+        out.runs.push(Run { start: a as u32, end: b as u32 });
+        out.closest.push(column as u32);
+    }
+
     /// Row `i` of a robot that stands still, from row `i − 1` (the last row of `out`) when the two
     /// poses are one point bit for bit: every distance from x_i is the one from x_{i−1}, so row
     /// i is row i − 1 from row i's first column on, cut where sessions start as before. A run
@@ -1191,6 +1445,94 @@ mod tests {
                 assert_eq!(arc.last_within(j, length), if length < 0.0 { j } else { within });
                 let beyond = (j + 1..s.len()).find(|&k| s[k] >= s[j] + length).unwrap_or(s.len());
                 assert_eq!(arc.first_beyond(j, length), beyond, "j {j}, length {length}");
+            }
+        }
+    }
+
+    #[test]
+    fn squared_limit_decides_as_the_square_root() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut gammas = vec![40.0, 10.0, 0.1, 1.0, 2.0, 1e-160, 1e-200, 1e160, 1e300, f64::MIN_POSITIVE];
+        gammas.extend((0..2000).map(|_| 10f64.powf(rng.random_range(-300.0..300.0))));
+        for gamma in gammas {
+            let limit = squared_limit(gamma);
+            assert!(limit.sqrt() <= gamma && limit.next_up().sqrt() > gamma, "gamma {gamma:e}: limit {limit:e}");
+            let mut s = limit;
+            for _ in 0..4 {
+                s = s.next_down();
+            }
+            for _ in 0..9 {
+                // Sums of squares are never below 0, where the square root is NaN.
+                if s >= 0.0 {
+                    assert_eq!(s <= limit, s.sqrt() <= gamma, "gamma {gamma:e}, s {s:e}");
+                }
+                s = s.next_up();
+            }
+            let s = limit * rng.random_range(0.5..2.0);
+            assert_eq!(s <= limit, s.sqrt() <= gamma, "gamma {gamma:e}, s {s:e}");
+        }
+    }
+
+    /// The Euclidean metric without its coordinate form: the engine scans it step by step.
+    struct Stepped;
+
+    impl Metric for Stepped {
+        fn name(&self) -> String {
+            "stepped".into()
+        }
+        fn check_dim(&self, dim: usize) -> Result<()> {
+            Euclidean.check_dim(dim)
+        }
+        fn distance(&self, a: &[f64], b: &[f64]) -> f64 {
+            Euclidean.distance(a, b)
+        }
+        fn distance_2d(&self, a: &[f64; 2], b: &[f64; 2]) -> f64 {
+            Euclidean.distance_2d(a, b)
+        }
+        fn distance_3d(&self, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+            Euclidean.distance_3d(a, b)
+        }
+        fn distance_rank(&self, a: &[f64], b: &[f64]) -> f64 {
+            Euclidean.distance_rank(a, b)
+        }
+        fn closest_in(&self, x: &[f64], points: &[f64]) -> usize {
+            Euclidean.closest_in(x, points)
+        }
+    }
+
+    #[test]
+    fn the_dense_scan_is_the_stepped_scan() {
+        // Random walks in 2 and 3 axes with stops, creeps and jumps, so that stretches come
+        // whole, partly within γ, of one point, and at every distance from a row's pose.
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for round in 0..40 {
+            let dim = 2 + round % 2;
+            let n = rng.random_range(50..1500);
+            let mut x = vec![0.0_f64; dim];
+            let mut coords = Vec::with_capacity(n * dim);
+            for _ in 0..n {
+                let step: f64 = [0.0, 0.0, 1e-9, 0.2, 1.0, 3.0][rng.random_range(0..6)];
+                x.iter_mut().for_each(|c| *c = (*c + step * rng.random_range(-1.0_f64..1.0)).clamp(-20.0, 20.0));
+                coords.extend_from_slice(&x);
+            }
+            let traj = Trajectory::new((0..n).map(|i| i as f64).collect(), coords, dim).unwrap();
+            // γ at a pair's own distance too: cells exactly at γ, where `s ≤ limit` must hold.
+            let pairs: Vec<f64> = (0..3)
+                .map(|_| Euclidean.distance(traj.point(rng.random_range(0..n)), traj.point(rng.random_range(0..n))))
+                .collect();
+            for gamma in [0.5, 2.0, 7.5].into_iter().chain(pairs.into_iter().filter(|&d| d > 0.0)) {
+                let dense = SublevelSet::compute(&traj, &Euclidean, gamma).unwrap();
+                assert_eq!(
+                    dense,
+                    SublevelSet::compute(&traj, &Stepped, gamma).unwrap(),
+                    "round {round}, gamma {gamma}"
+                );
+                let separation = Separation::for_gamma(gamma);
+                let dense = SublevelSet::compute_separated(&traj, &Euclidean, gamma, separation).unwrap();
+                let stepped = SublevelSet::compute_separated(&traj, &Stepped, gamma, separation).unwrap();
+                assert_eq!(dense, stepped, "round {round}, gamma {gamma}, separated");
             }
         }
     }
