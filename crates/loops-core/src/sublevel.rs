@@ -255,25 +255,16 @@ impl SublevelSet {
                 far_until.clear();
                 try_reserve(far_until, candidates.len(), "the stretches of a row scan")?;
                 far_until.resize(candidates.len(), f64::NEG_INFINITY);
-                if let Some(limit) = dense {
+                if dense.is_some() {
                     scanner.stretch_axes(candidates, axes)?;
-                    for i in rows.clone() {
-                        interrupt.check()?;
-                        block.make_room()?;
-                        if i > rows.start && traj.same_point(i - 1, i) {
-                            scanner.repeat_row(i, block);
-                        } else {
-                            scanner.scan_row_dense(i, candidates, axes, limit, far_until, block);
-                        }
-                        block.row_lengths.push(block.runs.len());
-                    }
-                    return block.try_copy();
                 }
                 for i in rows.clone() {
                     interrupt.check()?;
                     block.make_room()?;
                     if i > rows.start && traj.same_point(i - 1, i) {
                         scanner.repeat_row(i, block);
+                    } else if let Some(limit) = dense {
+                        scanner.scan_row_dense(i, candidates, axes, limit, far_until, block);
                     } else {
                         scanner.scan_row(i, candidates, far_until, block);
                     }
