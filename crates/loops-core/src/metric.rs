@@ -224,7 +224,7 @@ fn squared_l2_2d(&[ax, ay]: &[f64; 2], &[bx, by]: &[f64; 2]) -> f64 {
 
 /// δ² between 3-D points, summed in coordinate order (every Euclidean path of dimension 3).
 #[inline]
-fn squared_l2_3d(&[ax, ay, az]: &[f64; 3], &[bx, by, bz]: &[f64; 3]) -> f64 {
+pub(crate) fn squared_l2_3d(&[ax, ay, az]: &[f64; 3], &[bx, by, bz]: &[f64; 3]) -> f64 {
     (ax - bx).powi(2) + (ay - by).powi(2) + (az - bz).powi(2)
 }
 

@@ -7,7 +7,7 @@ use crate::ball_tree::{BallTree, Leaf};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::memory::{try_collect, try_copy, try_reserve, try_with_capacity};
-use crate::metric::Metric;
+use crate::metric::{Metric, squared_l2_3d};
 use crate::separation::Separation;
 use crate::spatial::ChunkIndex;
 use crate::trajectory::Trajectory;
@@ -574,6 +574,36 @@ struct DenseRun {
     entry: Option<f64>,
 }
 
+/// What a stretch's centre decides for a row ([`RowScanner::centre_decides`]).
+enum Centre {
+    /// Every pose of the stretch is farther than γ.
+    Beyond,
+    /// Every pose of the stretch is the centre's point, within γ.
+    Within,
+    /// Neither is known from the centre.
+    Near,
+}
+
+/// The index of the next candidate stretch a row scan visits, from `*next` on (which moves past
+/// it), with the scan at column `j` and the row at path length `s_i`: stretches that end by `j`
+/// are passed in O(log) after a long run or jump, and so are those that the block's earlier rows
+/// found out of reach for this row (`far_until`, empty when not kept).
+#[inline(always)]
+fn next_stretch(candidates: &[Leaf], far_until: &[f64], next: &mut usize, j: usize, s_i: f64) -> Option<usize> {
+    while *next < candidates.len() {
+        if candidates[*next].hi as usize <= j {
+            *next += candidates[*next..].partition_point(|leaf| leaf.hi as usize <= j);
+            continue;
+        }
+        let c = *next;
+        *next += 1;
+        if far_until.get(c).is_none_or(|&until| s_i >= until) {
+            return Some(c);
+        }
+    }
+    None
+}
+
 /// A run of a row being scanned: columns `start..=end`, with what the scan measured of it.
 #[derive(Clone, Copy)]
 struct OpenRun {
@@ -846,6 +876,37 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         }
     }
 
+    /// What δ = `d` from row `i`'s pose (at path length `s_i`) to the centre of `leaf`, a stretch
+    /// the block's walk did not put inside, decides for the row; where it puts the stretch
+    /// beyond γ, `far` (the stretch's entry of `far_until`) learns for how much more path that
+    /// holds. The one rule of both scans.
+    #[inline(always)]
+    fn centre_decides(&self, leaf: &Leaf, d: f64, s_i: f64, far: Option<&mut f64>) -> Centre {
+        let margin = self.arc.margin;
+        let reach = self.gamma + margin;
+        if leaf.uniform {
+            // Every pose of the stretch is the centre's point, bit for bit: δ from x_i to each
+            // of them is d, so d decides them all, exactly.
+            if d > self.gamma {
+                if let Some(until) = far {
+                    *until = s_i + (d - self.gamma - 2.0 * margin);
+                }
+                return Centre::Beyond;
+            }
+            return Centre::Within;
+        }
+        if d - leaf.radius > reach {
+            // Poses of a stretch whose ball stays farther than γ from x_i are all outside, and
+            // stay so for the next rows while their path from x_i is shorter than the slack (one
+            // margin more for the rounding of the slack and of s).
+            if let Some(until) = far {
+                *until = s_i + (d - leaf.radius - reach - margin);
+            }
+            return Centre::Beyond;
+        }
+        Centre::Near
+    }
+
     /// [`scan_row`](Self::scan_row) with `distance_to(j)` = δ(x_i, x_j).
     #[inline(always)]
     fn scan_row_by(
@@ -857,48 +918,22 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         out: &mut Block,
     ) {
         let margin = self.arc.margin;
-        let reach = self.gamma + margin;
         let s_i = if far_until.is_empty() { 0.0 } else { self.arc.s[i] };
         let mut open: Option<OpenRun> = None;
         // Next column to examine; columns before it are decided (or not separated from i).
         let first = self.first_column(i);
         let mut j = first;
         let mut next = 0;
-        while next < candidates.len() {
-            // Stretches that end before the scan: skipped in O(log) after a long run or jump.
-            if candidates[next].hi as usize <= j {
-                next += candidates[next..].partition_point(|leaf| leaf.hi as usize <= j);
-                continue;
-            }
-            let leaf = candidates[next];
-            let far = far_until.get_mut(next);
-            next += 1;
-            if far.as_ref().is_some_and(|&&mut until| s_i < until) {
-                continue;
-            }
+        while let Some(c) = next_stretch(candidates, far_until, &mut next, j, s_i) {
+            let leaf = candidates[c];
             let (lo, hi) = ((leaf.lo as usize).max(first), leaf.hi as usize);
             // Every pose of the stretch is within γ of x_i, known without measuring them.
             let mut whole = leaf.inside;
             if !leaf.inside {
-                let d = distance_to(leaf.centre as usize);
-                if leaf.uniform {
-                    // Every pose of the stretch is the centre's point, bit for bit: δ from x_i
-                    // to each of them is d, so d decides them all, exactly.
-                    if d > self.gamma {
-                        if let Some(until) = far {
-                            *until = s_i + (d - self.gamma - 2.0 * margin);
-                        }
-                        continue;
-                    }
-                    whole = true;
-                } else if d - leaf.radius > reach {
-                    // Poses of a stretch whose ball stays farther than γ from x_i are all outside,
-                    // and stay so for the next rows while their path from x_i is shorter than the
-                    // slack (one margin more for the rounding of the slack and of s).
-                    if let Some(until) = far {
-                        *until = s_i + (d - leaf.radius - reach - margin);
-                    }
-                    continue;
+                match self.centre_decides(&leaf, distance_to(leaf.centre as usize), s_i, far_until.get_mut(c)) {
+                    Centre::Beyond => continue,
+                    Centre::Within => whole = true,
+                    Centre::Near => {}
                 }
             }
             if j < lo {
@@ -991,27 +1026,16 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         let x_i = [p[0], p[1], if dim == 3 { p[2] } else { 0.0 }];
         let squared = |j: usize| {
             let q = self.traj.point(j);
-            let d = [x_i[0] - q[0], x_i[1] - q[1], if dim == 3 { x_i[2] - q[2] } else { 0.0 }];
-            d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+            squared_l2_3d(&x_i, &[q[0], q[1], if dim == 3 { q[2] } else { 0.0 }])
         };
         let margin = self.arc.margin;
-        let reach = self.gamma + margin;
         let s_i = if far_until.is_empty() { 0.0 } else { self.arc.s[i] };
         let mut open: Option<DenseRun> = None;
         let first = self.first_column(i);
         let mut j = first;
         let mut next = 0;
-        while next < candidates.len() {
-            if candidates[next].hi as usize <= j {
-                next += candidates[next..].partition_point(|leaf| leaf.hi as usize <= j);
-                continue;
-            }
-            let (leaf, c) = (candidates[next], next);
-            let far = far_until.get_mut(next);
-            next += 1;
-            if far.as_ref().is_some_and(|&&mut until| s_i < until) {
-                continue;
-            }
+        while let Some(c) = next_stretch(candidates, far_until, &mut next, j, s_i) {
+            let leaf = candidates[c];
             let (lo, hi) = ((leaf.lo as usize).max(first), leaf.hi as usize);
             // A stretch known within γ as a whole, with one measured pose of it (the centre): the
             // rank of each of its poses when they are all one point, else a bound for the closest.
@@ -1019,22 +1043,12 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
             let mut whole = leaf.inside.then_some(false);
             if !leaf.inside {
                 let d = rank.sqrt();
-                if leaf.uniform {
-                    if d > self.gamma {
-                        if let Some(until) = far {
-                            *until = s_i + (d - self.gamma - 2.0 * margin);
-                        }
-                        continue;
-                    }
-                    whole = Some(true);
-                } else if d - leaf.radius > reach {
-                    if let Some(until) = far {
-                        *until = s_i + (d - leaf.radius - reach - margin);
-                    }
-                    continue;
-                } else if d <= self.gamma - leaf.radius - 3.0 * margin {
+                match self.centre_decides(&leaf, d, s_i, far_until.get_mut(c)) {
+                    Centre::Beyond => continue,
+                    Centre::Within => whole = Some(true),
                     // Its ball lies within γ of x_i: every pose is inside.
-                    whole = Some(false);
+                    Centre::Near if d <= self.gamma - leaf.radius - 3.0 * margin => whole = Some(false),
+                    Centre::Near => {}
                 }
             }
             if j < lo {
@@ -1049,15 +1063,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                 let rank = if uniform || column == leaf.centre as usize { rank } else { squared(column) };
                 let part =
                     DenseRun { start: j, end: hi - 1, rank, column, measured: uniform, entry: uniform.then_some(rank) };
-                open = Some(match open {
-                    Some(run) if run.end + 1 == j => run.joined(part),
-                    other => {
-                        if let Some(run) = other {
-                            self.close_dense(i, run, None, out);
-                        }
-                        part
-                    }
-                });
+                open = Some(self.joined_dense(i, open, part, out));
                 j = hi;
                 continue;
             }
@@ -1090,15 +1096,7 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
                             (part.rank, part.column) = (ranks[k - base], k);
                         }
                     }
-                    open = Some(match open {
-                        Some(run) if run.end + 1 == j => run.joined(part),
-                        other => {
-                            if let Some(run) = other {
-                                self.close_dense(i, run, None, out);
-                            }
-                            part
-                        }
-                    });
+                    open = Some(self.joined_dense(i, open, part, out));
                     j = end;
                 } else {
                     if let Some(run) = open.take() {
@@ -1110,6 +1108,20 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         }
         if let Some(run) = open {
             self.close_dense(i, run, None, out);
+        }
+    }
+
+    /// The open run grown by `part` when `part` starts at the column after its end, else `part`
+    /// alone, the open run (if any) recorded first.
+    fn joined_dense(&self, i: usize, open: Option<DenseRun>, part: DenseRun, out: &mut Block) -> DenseRun {
+        match open {
+            Some(run) if run.end + 1 == part.start => run.joined(part),
+            other => {
+                if let Some(run) = other {
+                    self.close_dense(i, run, None, out);
+                }
+                part
+            }
         }
     }
 
