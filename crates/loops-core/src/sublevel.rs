@@ -233,7 +233,7 @@ impl SublevelSet {
         let interrupt = Interrupt::current();
         let scanner = RowScanner { traj, metric, arc, pruner, gamma, first_columns, starts };
         // Euclidean coordinates of 2 or 3 axes are measured a stretch at a time.
-        let dense = (metric.is_coordinate_euclidean() && (2..=3).contains(&traj.dim())).then(|| squared_limit(gamma));
+        let dense = dense_limit(metric, traj.dim(), gamma);
         // Blocks of rows, cut where a session starts; rows from `scan_rows` on are left empty.
         let mut block_rows: Vec<std::ops::Range<usize>> =
             try_with_capacity(n.div_ceil(ROWS_PER_TASK) + starts.len(), "the row blocks of S_gamma")?;
@@ -256,6 +256,7 @@ impl SublevelSet {
                 try_reserve(far_until, candidates.len(), "the stretches of a row scan")?;
                 far_until.resize(candidates.len(), f64::NEG_INFINITY);
                 if dense.is_some() {
+                    axes.clear();
                     scanner.stretch_axes(candidates, axes)?;
                 }
                 for i in rows.clone() {
@@ -545,7 +546,14 @@ const TREE_CLOSEST_LEN: usize = 256;
 
 /// A candidate stretch's poses by axis (x, y, z; z is 0 in two dimensions), NaN past its end:
 /// one stretch of at most [`LEAF_SIZE`] poses measured from a row's pose in one vectorised pass.
-type StretchAxes = [[f64; LEAF_SIZE]; 3];
+pub(crate) type StretchAxes = [[f64; LEAF_SIZE]; 3];
+
+/// The limit of the dense scan ([`squared_limit`]\(γ\)) where `metric` measures coordinates of
+/// `dim` axes by their Euclidean distance and `dim` is 2 or 3; `None` where rows scan step by
+/// step. The one rule of the batch's and the online engine's scans.
+pub(crate) fn dense_limit<M: Metric + ?Sized>(metric: &M, dim: usize, gamma: f64) -> Option<f64> {
+    (metric.is_coordinate_euclidean() && (2..=3).contains(&dim)).then(|| squared_limit(gamma))
+}
 
 /// The largest double whose square root is at most γ: `s ≤ limit` exactly when `√s ≤ γ`, for
 /// every s ≥ 0 (the square root is correctly rounded and monotone; NaN is neither), so a sum
@@ -986,11 +994,13 @@ impl<M: Metric + ?Sized> RowScanner<'_, M> {
         }
     }
 
-    /// The candidates' poses by axis, for [`scan_row_dense`](Self::scan_row_dense): stretches
-    /// that the dense scan measures (neither inside nor of one point) get their poses, the
-    /// others NaN.
-    fn stretch_axes(&self, candidates: &[Leaf], axes: &mut Vec<StretchAxes>) -> Result<()> {
-        axes.clear();
+    /// The candidates' poses by axis, for [`scan_row_dense`](Self::scan_row_dense), appended to
+    /// `axes` (one entry a candidate): stretches that the dense scan measures (neither inside
+    /// nor of one point) get their poses, the others NaN.
+    ///
+    /// # Errors
+    /// [`Error::OutOfMemory`] when they do not fit in memory.
+    pub(crate) fn stretch_axes(&self, candidates: &[Leaf], axes: &mut Vec<StretchAxes>) -> Result<()> {
         try_reserve(axes, candidates.len(), "the stretches of a row scan")?;
         let (coords, dim) = (self.traj.coords(), self.traj.dim());
         axes.extend(candidates.iter().map(|leaf| {

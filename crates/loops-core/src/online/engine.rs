@@ -11,7 +11,8 @@ use crate::memory::{try_filled, try_reserve, try_with_capacity};
 use crate::metric::Metric;
 use crate::spec::{MetricSpec, with_metric};
 use crate::sublevel::{
-    ArcLength, Block, LEAF_SIZE, Pruner, RowScanner, Run, SublevelSet, check_gamma, closest_column, walk_reach,
+    ArcLength, Block, LEAF_SIZE, Pruner, RowScanner, Run, StretchAxes, SublevelSet, check_gamma, closest_column,
+    dense_limit, walk_reach,
 };
 use crate::trajectory::{MAX_POSES, Manifold, Trajectory, validate_coordinates, validate_timestamps};
 use crate::union_find::MinRootForest;
@@ -141,6 +142,9 @@ struct NearStretches {
     /// For each stretch, the path length s up to which it is known to stay out of reach
     /// ([`RowScanner::scan_row`]'s `far_until`).
     far_until: Vec<f64>,
+    /// For each stretch, its poses by axis where rows scan densely
+    /// ([`RowScanner::scan_row_dense`]); else empty.
+    axes: Vec<StretchAxes>,
     /// How many stretches the walk gave.
     walked: usize,
     /// The leaves pushed since the stretches were last brought up to date.
@@ -307,11 +311,17 @@ impl OnlineComponent {
 impl NearStretches {
     /// Brings the stretches up to row `n` of `scanner` (the engine's, over `balls`): the leaves
     /// pushed since, when pose n is still within reach of the walk's centre, else a new walk
-    /// centred on pose n.
+    /// centred on pose n; with their poses by axis when the row scans `dense`ly.
     ///
     /// # Errors
     /// [`Error::OutOfMemory`] when the stretches do not fit in memory.
-    fn update<M: Metric + ?Sized>(&mut self, scanner: &RowScanner<'_, M>, balls: &BallTree, n: usize) -> Result<()> {
+    fn update<M: Metric + ?Sized>(
+        &mut self,
+        scanner: &RowScanner<'_, M>,
+        balls: &BallTree,
+        n: usize,
+        dense: bool,
+    ) -> Result<()> {
         let (traj, radius) = (scanner.traj, CARRY_FRACTION * scanner.gamma);
         // Measured as the batch measures a block's radius: from the centre to the row.
         let carried = self.centre.is_some_and(|c| {
@@ -331,11 +341,17 @@ impl NearStretches {
             balls.near_spans(scanner.metric, traj.point(n), 0, self.reach, &mut self.stretches)?;
             self.walked = self.stretches.len();
             self.far_until.clear();
+            self.axes.clear();
         }
         self.new_leaves.clear();
         let missing = self.stretches.len() + 1 - self.far_until.len();
         try_reserve(&mut self.far_until, missing, "the stretches of a row scan")?;
         self.far_until.resize(self.stretches.len(), f64::NEG_INFINITY);
+        if dense {
+            // Appended stretches are new entries (only inside ones, which have no poses by axis,
+            // grow in place), so the entries made before stay right.
+            scanner.stretch_axes(&self.stretches[self.axes.len()..], &mut self.axes)?;
+        }
         Ok(())
     }
 }
@@ -640,22 +656,34 @@ impl OnlineLoops {
             first_columns: &[],
             starts: &[0],
         };
+        let dense = dense_limit(metric, self.traj.dim(), self.gamma);
         // The stretches near one pose are few; a push has no way back from half-added rows,
         // so running out of memory here is not an error to return.
-        self.near.update(&scanner, &self.balls, n).unwrap_or_else(|error| panic!("{error}"));
+        let grown = self.near.update(&scanner, &self.balls, n, dense.is_some());
+        grown.unwrap_or_else(|error| panic!("{error}"));
         let near = &mut self.near;
         // The poses after the last leaf: one stretch that no ball rules out, for this row only.
         let covered = self.balls.covered();
         let tail = covered <= n;
         if tail {
             let (lo, hi) = (covered as u32, n as u32 + 1);
-            near.stretches.push(Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false, uniform: false });
+            let leaf = Leaf { lo, hi, centre: lo, radius: f64::INFINITY, inside: false, uniform: false };
+            near.stretches.push(leaf);
             near.far_until.push(f64::NEG_INFINITY);
+            if dense.is_some() {
+                scanner.stretch_axes(&[leaf], &mut near.axes).unwrap_or_else(|error| panic!("{error}"));
+            }
         }
-        scanner.scan_row(n, &near.stretches, &mut near.far_until, block);
+        match dense {
+            Some(limit) => scanner.scan_row_dense(n, &near.stretches, &near.axes, limit, &mut near.far_until, block),
+            None => scanner.scan_row(n, &near.stretches, &mut near.far_until, block),
+        }
         if tail {
             near.stretches.pop();
             near.far_until.pop();
+            if dense.is_some() {
+                near.axes.pop();
+            }
         }
     }
 
@@ -1087,6 +1115,11 @@ impl<M: Metric + ?Sized> Metric for Swapped<'_, M> {
 
     fn check_dim(&self, dim: usize) -> Result<()> {
         self.0.check_dim(dim)
+    }
+
+    /// As `M`'s: the squared differences of coordinates are the same bit for bit either way.
+    fn is_coordinate_euclidean(&self) -> bool {
+        self.0.is_coordinate_euclidean()
     }
 
     #[inline]
