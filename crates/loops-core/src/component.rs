@@ -243,8 +243,9 @@ impl Tally {
 
 /// Labels the runs of `set` by union-find over 4-adjacent runs of consecutive rows (a
 /// two-pointer sweep per row pair; stretches of rows in parallel, see
-/// [`label_runs`]) and measures every component from its runs, row by row (one pass, in row
-/// order, so that sums are the same on any number of threads).
+/// [`label_runs`]) and measures every component from its runs: stretches of
+/// [`ROWS_PER_TALLY_TASK`] rows are tallied in parallel, each in row order, and their partial
+/// tallies added up in stretch order, so that the sums are the same on any number of threads.
 ///
 /// Time near-linear in runs plus one δ per run, memory O(runs). Holes come from the Euler number:
 /// for the upper half, χ = #runs − #(overlapping run pairs in consecutive rows); a trivial
@@ -268,58 +269,30 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
 
     let mut tallies = try_filled(count as usize, Tally::empty(), "the loop components")?;
     let rows = widths.len();
-    // What each run adds is worked out in parallel, a batch of rows at a time; the tallies then
-    // add it up in row order, as one thread would, so the sums are the same on any number.
-    let mut terms: Vec<RunTerms> = Vec::new();
     timer.finish();
+    // Each task tallies the runs of its own stretch of rows, in row order, into partial tallies
+    // of the components it meets; the partials are then added up in stretch order. The
+    // stretches are fixed (not made from the number of threads), so the sums are the same on
+    // any number of threads, and what stays serial is one `absorb` per component a stretch
+    // meets, not one per run.
+    let mut tasks: Vec<Range<usize>> = Vec::new();
     for batch in (0..rows).step_by(ROWS_PER_TALLY_BATCH) {
         interrupt.check()?;
         let batch = batch..(batch + ROWS_PER_TALLY_BATCH).min(rows);
-        let base = set.row_offset(batch.start);
-        terms.clear();
-        try_reserve(&mut terms, set.row_offset(batch.end) - base, "the loop components")?;
-        terms.resize(set.row_offset(batch.end) - base, RunTerms::default());
-        // Each task with the terms of its own rows' runs.
-        let mut tasks = Vec::new();
-        let mut rest = terms.as_mut_slice();
-        for start in batch.clone().step_by(ROWS_PER_TALLY_TASK) {
-            let end = (start + ROWS_PER_TALLY_TASK).min(batch.end);
-            let (slice, tail) = rest.split_at_mut(set.row_offset(end) - set.row_offset(start));
-            tasks.push((start..end, slice));
-            rest = tail;
-        }
-        let timer = PhaseTimer::start("tally: terms, parallel");
-        tasks.into_par_iter().for_each(|(task, slice)| {
-            let offset = set.row_offset(task.start);
-            for i in task {
-                let w_i = widths[i];
-                let row_offset = set.row_offset(i);
-                for (k, run) in set.row(i).iter().enumerate() {
-                    let r = row_offset + k;
-                    let (a, b) = (run.start as usize, run.end as usize);
-                    let j = set.closest_columns()[r] as usize;
-                    slice[r - offset] = RunTerms {
-                        area_s2: w_i * ((prefix[b] + widths[b]) - prefix[a]),
-                        rank: metric.distance_rank(traj.point(i), traj.point(j)),
-                        overlaps: 0,
-                    };
-                }
-                if i + 1 < rows {
-                    for_each_overlap(set, i..i + 1, |a, _| slice[a - offset].overlaps += 1);
-                }
-            }
-        });
+        tasks.clear();
+        tasks.extend(batch.clone().step_by(ROWS_PER_TALLY_TASK).map(|a| a..(a + ROWS_PER_TALLY_TASK).min(batch.end)));
+        let timer = PhaseTimer::start("tally: stretches of rows, parallel");
+        let partials: Vec<Result<Vec<(u32, Tally)>>> = tasks
+            .par_iter()
+            .map_init(Vec::new, |table, task| {
+                tally_rows((traj, metric, set, &labels), (widths, &prefix), task.clone(), table)
+            })
+            .collect();
         timer.finish();
-        let _timer = PhaseTimer::start("tally: sums in row order, serial");
-        for i in batch {
-            let row_offset = set.row_offset(i);
-            for (k, run) in set.row(i).iter().enumerate() {
-                let r = row_offset + k;
-                let term = terms[r - base];
-                let tally = &mut tallies[labels[r] as usize];
-                tally.overlaps += u64::from(term.overlaps);
-                tally.add_run(i, [run.start as usize, run.end as usize], term.area_s2, widths[i]);
-                tally.offer_closest(term.rank, [i, set.closest_columns()[r] as usize]);
+        let _timer = PhaseTimer::start("tally: stretches added in order, serial");
+        for partial in partials {
+            for (label, part) in partial? {
+                tallies[label as usize].absorb(&part);
             }
         }
     }
@@ -333,23 +306,72 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     Ok(Labelling { labels, components })
 }
 
-/// What one run adds to its component's tally, worked out in parallel before the tallies add
-/// it up in row order.
-#[derive(Debug, Clone, Copy, Default)]
-struct RunTerms {
-    /// Area of its cells, s².
-    area_s2: f64,
-    /// The metric's rank of its closest pair.
-    rank: f64,
-    /// Runs of the next row that share a column with it.
-    overlaps: u32,
+/// The partial tallies of the components that the runs of `rows` meet, each summed over its
+/// runs in row order, in the order the components are first met. `widths` are the rows' cell
+/// widths and `prefix` their running sums by session; `table` is the task's scratch, an open
+/// hash table from a component to its partial, sized by the task's runs (not by the number of
+/// components, so a task costs what its rows hold).
+///
+/// # Errors
+/// [`Error::OutOfMemory`](crate::Error::OutOfMemory) when the partials do not fit in memory.
+fn tally_rows<M: Metric + ?Sized>(
+    (traj, metric, set, labels): (&Trajectory, &M, &SublevelSet, &[u32]),
+    (widths, prefix): (&[f64], &[f64]),
+    rows: Range<usize>,
+    table: &mut Vec<u32>,
+) -> Result<Vec<(u32, Tally)>> {
+    const EMPTY: u32 = u32::MAX;
+    let runs = set.row_offset(rows.end) - set.row_offset(rows.start);
+    let size = (2 * runs).next_power_of_two().max(16);
+    table.clear();
+    try_reserve(table, size, "the loop components")?;
+    table.resize(size, EMPTY);
+    let mask = size - 1;
+    let mut partial: Vec<(u32, Tally)> = Vec::new();
+    // The partial of each run of the row being tallied, for its overlaps with the next row.
+    let mut row_parts: Vec<u32> = Vec::new();
+    for i in rows {
+        let w_i = widths[i];
+        let row_offset = set.row_offset(i);
+        row_parts.clear();
+        try_reserve(&mut row_parts, set.row(i).len(), "the loop components")?;
+        for (k, run) in set.row(i).iter().enumerate() {
+            let r = row_offset + k;
+            let label = labels[r];
+            // Fibonacci hashing, then linear probing.
+            let mut h = (label.wrapping_mul(0x9E37_79B9) as usize) & mask;
+            let part = loop {
+                match table[h] {
+                    EMPTY => {
+                        try_reserve(&mut partial, 1, "the loop components")?;
+                        table[h] = partial.len() as u32;
+                        partial.push((label, Tally::empty()));
+                        break table[h];
+                    }
+                    part if partial[part as usize].0 == label => break part,
+                    _ => h = (h + 1) & mask,
+                }
+            };
+            row_parts.push(part);
+            let tally = &mut partial[part as usize].1;
+            let (a, b) = (run.start as usize, run.end as usize);
+            let j = set.closest_columns()[r] as usize;
+            tally.add_run(i, [a, b], w_i * ((prefix[b] + widths[b]) - prefix[a]), w_i);
+            tally.offer_closest(metric.distance_rank(traj.point(i), traj.point(j)), [i, j]);
+        }
+        if i + 1 < widths.len() {
+            for_each_overlap(set, i..i + 1, |r, _| partial[row_parts[r - row_offset] as usize].1.overlaps += 1);
+        }
+    }
+    Ok(partial)
 }
 
-/// Rows whose runs' terms are worked out before the tallies add them up: bounds the memory of
-/// the terms (24 bytes a run).
+/// Rows whose partial tallies are made before they are added up: bounds their memory, and the
+/// rows between two looks at the interrupt.
 const ROWS_PER_TALLY_BATCH: usize = 1 << 14;
 
-/// Rows whose runs' terms one rayon task works out.
+/// Rows one rayon task tallies into partials: fixed, so that the sums do not depend on the
+/// number of threads.
 const ROWS_PER_TALLY_TASK: usize = 1 << 9;
 
 /// Rows whose runs are joined by one rayon task before the joins across tasks, at most.
