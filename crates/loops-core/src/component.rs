@@ -326,7 +326,7 @@ fn tally_rows<M: Metric + ?Sized>(
     table.clear();
     try_reserve(table, size, "the loop components")?;
     table.resize(size, EMPTY);
-    let mask = size - 1;
+    let (mask, shift) = (size - 1, u64::BITS - size.trailing_zeros());
     let mut partial: Vec<(u32, Tally)> = Vec::new();
     // The partial of each run of the row being tallied, for its overlaps with the next row.
     let mut row_parts: Vec<u32> = Vec::new();
@@ -338,8 +338,9 @@ fn tally_rows<M: Metric + ?Sized>(
         for (k, run) in set.row(i).iter().enumerate() {
             let r = row_offset + k;
             let label = labels[r];
-            // Fibonacci hashing, then linear probing.
-            let mut h = (label.wrapping_mul(0x9E37_79B9) as usize) & mask;
+            // Fibonacci hashing (the high bits of the product, so that labels with the same low
+            // bits spread too), then linear probing.
+            let mut h = (u64::from(label).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> shift) as usize;
             let part = loop {
                 match table[h] {
                     EMPTY => {
