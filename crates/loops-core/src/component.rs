@@ -244,8 +244,9 @@ impl Tally {
 /// Labels the runs of `set` by union-find over 4-adjacent runs of consecutive rows (a
 /// two-pointer sweep per row pair; stretches of rows in parallel, see
 /// [`label_runs`]) and measures every component from its runs: stretches of
-/// [`ROWS_PER_TALLY_TASK`] rows are tallied in parallel, each in row order, and their partial
-/// tallies added up in stretch order, so that the sums are the same on any number of threads.
+/// [`ROWS_PER_TALLY_TASK`] rows (counted from each session's first row) are tallied in parallel,
+/// each in row order, and their partial tallies added up in stretch order, so that the sums are
+/// the same on any number of threads, and a fleet's session the same as the session alone.
 ///
 /// Time near-linear in runs plus one δ per run, memory O(runs). Holes come from the Euler number:
 /// for the upper half, χ = #runs − #(overlapping run pairs in consecutive rows); a trivial
@@ -274,15 +275,18 @@ pub(crate) fn label_components<M: Metric + ?Sized>(
     // of the components it meets; the partials are then added up in stretch order. The
     // stretches are fixed (not made from the number of threads), so the sums are the same on
     // any number of threads, and what stays serial is one `absorb` per component a stretch
-    // meets, not one per run.
-    let mut tasks: Vec<Range<usize>> = Vec::new();
-    for batch in (0..rows).step_by(ROWS_PER_TALLY_BATCH) {
+    // meets, not one per run. They are counted from each session's first row, so that a
+    // session's components in a fleet are summed, bit for bit, as those of the session alone.
+    let breaks = set.breaks();
+    let mut stretches = try_with_capacity(rows.div_ceil(ROWS_PER_TALLY_TASK) + breaks.len(), "the loop components")?;
+    for (k, start) in std::iter::once(0).chain(breaks.iter().map(|&b| b as usize)).enumerate() {
+        let end = breaks.get(k).map_or(rows, |&b| b as usize);
+        stretches.extend((start..end).step_by(ROWS_PER_TALLY_TASK).map(|a| a..(a + ROWS_PER_TALLY_TASK).min(end)));
+    }
+    for batch in stretches.chunks(TALLY_TASKS_PER_BATCH) {
         interrupt.check()?;
-        let batch = batch..(batch + ROWS_PER_TALLY_BATCH).min(rows);
-        tasks.clear();
-        tasks.extend(batch.clone().step_by(ROWS_PER_TALLY_TASK).map(|a| a..(a + ROWS_PER_TALLY_TASK).min(batch.end)));
         let timer = PhaseTimer::start("tally: stretches of rows, parallel");
-        let partials: Vec<Result<Vec<(u32, Tally)>>> = tasks
+        let partials: Vec<Result<Vec<(u32, Tally)>>> = batch
             .par_iter()
             .map_init(Vec::new, |table, task| {
                 tally_rows((traj, metric, set, &labels), (widths, &prefix), task.clone(), table)
@@ -367,12 +371,12 @@ fn tally_rows<M: Metric + ?Sized>(
     Ok(partial)
 }
 
-/// Rows whose partial tallies are made before they are added up: bounds their memory, and the
-/// rows between two looks at the interrupt.
-const ROWS_PER_TALLY_BATCH: usize = 1 << 14;
+/// Stretches of rows whose partial tallies are made before they are added up: bounds their
+/// memory, and the rows between two looks at the interrupt.
+const TALLY_TASKS_PER_BATCH: usize = 32;
 
-/// Rows one rayon task tallies into partials: fixed, so that the sums do not depend on the
-/// number of threads.
+/// Rows one rayon task tallies into partials, counted from each session's first row: fixed, so
+/// that the sums do not depend on the number of threads.
 const ROWS_PER_TALLY_TASK: usize = 1 << 9;
 
 /// Rows whose runs are joined by one rayon task before the joins across tasks, at most.

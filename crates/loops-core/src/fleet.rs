@@ -723,6 +723,32 @@ mod tests {
     }
 
     #[test]
+    fn a_session_is_measured_in_a_fleet_as_alone_bit_for_bit() {
+        // Sessions of 1,300 and 1,700 poses: the second one's rows start at a joint row that is
+        // not a multiple of the tally's stretches, and its components span several of them.
+        let drive = |seed, duration_s| {
+            crate::UrbanDrive { duration_s, city_size_m: 300.0, seed, ..crate::UrbanDrive::default() }
+                .generate()
+                .unwrap()
+                .trajectory
+        };
+        let (a, b) = (drive(3, 130.0), drive(4, 170.0));
+        let fleet = Fleet::new(vec![("a".into(), a.clone()), ("b".into(), b.clone())]).unwrap();
+        let loops = find_fleet_loops(&fleet, &Euclidean, 25.0, &FleetOptions::default()).unwrap();
+        let components = loops.components();
+        for (s, session) in [a, b].iter().enumerate() {
+            let alone = crate::find_loops(session, &Euclidean, 25.0).unwrap();
+            let own: Vec<_> = components.iter().filter(|c| c.sessions == [s, s]).collect();
+            assert_eq!(own.len(), alone.components().len(), "session {s}");
+            assert!(alone.components().iter().any(|c| c.i_range[1] - c.i_range[0] > 600), "session {s}");
+            for (c, single) in own.iter().zip(alone.components()) {
+                assert_eq!(c.area_s2.to_bits(), single.area_s2.to_bits(), "session {s}: {c:?}");
+                assert_eq!((c.pair_count, c.poses), (single.pair_count, [single.i_range, single.j_range]));
+            }
+        }
+    }
+
+    #[test]
     fn runs_are_cut_and_rows_not_joined_across_sessions() {
         // Two identical sessions: the intra blocks are each session's own, and the inter block
         // is the full square of one session against itself, without a diagonal.
