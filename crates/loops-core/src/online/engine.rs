@@ -82,6 +82,9 @@ pub type ComponentId = u32;
 pub struct OnlineLoops {
     metric: MetricSpec,
     gamma: f64,
+    /// The limit of the dense row scan ([`dense_limit`]), fixed by the metric, the dimension and
+    /// γ; `None` where rows scan step by step.
+    dense: Option<f64>,
     /// The poses so far (its last time cell is a half cell, as in a batch trajectory).
     traj: Trajectory,
     /// Path length under δ (rounded up, and plain), and the rounding margin of the poses so far.
@@ -462,6 +465,7 @@ impl OnlineLoops {
 
     fn empty(metric: MetricSpec, gamma: f64, traj: Trajectory, rebuilds: u64, serial: Serial) -> Self {
         Self {
+            dense: with_metric!(&metric, m => dense_limit(m, traj.dim(), gamma)),
             metric,
             gamma,
             balls: BallTree::growing(traj.dim()),
@@ -656,7 +660,7 @@ impl OnlineLoops {
             first_columns: &[],
             starts: &[0],
         };
-        let dense = dense_limit(metric, self.traj.dim(), self.gamma);
+        let dense = self.dense;
         // The stretches near one pose are few; a push has no way back from half-added rows,
         // so running out of memory here is not an error to return.
         let grown = self.near.update(&scanner, &self.balls, n, dense.is_some());
