@@ -439,6 +439,9 @@ impl Trajectory {
 /// Checks points of `dim` coordinates, the first being pose `first`: finite, within
 /// [`MAX_MAGNITUDE`].
 pub(crate) fn validate_coordinates(coords: &[f64], dim: usize, first: usize) -> Result<()> {
+    if all_within_magnitude(coords) {
+        return Ok(());
+    }
     if let Some(k) = coords.iter().position(|c| !c.is_finite()) {
         return Err(Error::NonFiniteCoordinate { index: first + k / dim, axis: k % dim, value: coords[k] });
     }
@@ -449,7 +452,17 @@ pub(crate) fn validate_coordinates(coords: &[f64], dim: usize, first: usize) -> 
     Ok(())
 }
 
+/// Whether every value is finite and at most [`MAX_MAGNITUDE`] in size: the checks' common
+/// case, in one pass the compiler vectorises (a NaN fails the comparison too); the checks find
+/// the first value at fault only when this says there is one.
+fn all_within_magnitude(values: &[f64]) -> bool {
+    values.chunks(64).all(|chunk| chunk.iter().fold(true, |ok, v| ok & (v.abs() <= MAX_MAGNITUDE)))
+}
+
 pub(crate) fn validate_timestamps(timestamps_s: &[f64]) -> Result<()> {
+    if all_within_magnitude(timestamps_s) && timestamps_s.windows(2).all(|w| w[1] > w[0]) {
+        return Ok(());
+    }
     if let Some(index) = timestamps_s.iter().position(|t| !t.is_finite()) {
         return Err(Error::NonFiniteTimestamp { index, value: timestamps_s[index] });
     }
@@ -590,7 +603,20 @@ pub(crate) fn checked_cell_widths(what: &'static str, widths: Vec<f64>, timestam
         let near = timestamps_s[i.saturating_sub(1)..(i + 2).min(poses)].iter().map(|t| t.abs()).sum::<f64>();
         cell_width(timestamps_s, i) + 4.0 * f64::EPSILON * near
     };
-    if let Some(i) = (0..poses).find(|&i| !(widths[i] >= 0.0 && widths[i] <= most_s(i))) {
+    // The interior poses in one pass without bounds checks (the same sums in the same order as
+    // `most_s`: each decided alike), the ends and any pose at fault by `most_s`.
+    let interior_fits =
+        widths.get(1..poses.saturating_sub(1)).unwrap_or_default().iter().zip(timestamps_s.windows(3)).all(
+            |(&w, t)| {
+                let near = t[0].abs() + t[1].abs() + t[2].abs();
+                w >= 0.0 && w <= 0.5 * ((t[1] - t[0]) + (t[2] - t[1])) + 4.0 * f64::EPSILON * near
+            },
+        );
+    let fits = |i: usize| widths[i] >= 0.0 && widths[i] <= most_s(i);
+    if interior_fits && (poses == 0 || (fits(0) && fits(poses - 1))) {
+        return Ok(widths);
+    }
+    if let Some(i) = (0..poses).find(|&i| !fits(i)) {
         let reason = format!(
             "the time cell of pose {i} is {:?} s, outside 0 to {:?} s (its timestamps' cell)",
             widths[i],
@@ -604,6 +630,46 @@ pub(crate) fn checked_cell_widths(what: &'static str, widths: Vec<f64>, timestam
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Each saved time cell at its bound is taken and one step above it refused, naming its
+    /// pose, for the ends and the interior alike (the one-pass check decides as the pose by
+    /// pose one), on timestamps far from 0 where the rounding allowance matters.
+    #[cfg(feature = "serde")]
+    #[test]
+    fn saved_cells_are_checked_at_their_bounds() {
+        let times: Vec<f64> = (0..40).map(|i| 1.7e9 + 0.1 * i as f64 + 0.013 * ((i * 7) % 5) as f64).collect();
+        let poses = times.len();
+        let most = |i: usize| {
+            let near = times[i.saturating_sub(1)..(i + 2).min(poses)].iter().map(|t| t.abs()).sum::<f64>();
+            cell_width(&times, i) + 4.0 * f64::EPSILON * near
+        };
+        let bounds: Vec<f64> = (0..poses).map(most).collect();
+        assert!(checked_cell_widths("t", bounds.clone(), &times).is_ok());
+        for i in 0..poses {
+            let mut widths = bounds.clone();
+            widths[i] = f64::from_bits(widths[i].to_bits() + 1);
+            let error = checked_cell_widths("t", widths.clone(), &times).unwrap_err().to_string();
+            assert!(error.contains(&format!("the time cell of pose {i} is")), "{i}: {error}");
+            widths[i] = -1e-300;
+            assert!(checked_cell_widths("t", widths, &times).is_err(), "{i}");
+        }
+    }
+
+    #[test]
+    fn values_at_fault_are_found_past_the_fast_check() {
+        for at in [0, 63, 64, 130] {
+            for bad in [f64::NAN, f64::INFINITY, -2e150] {
+                let mut coords = vec![1.0; 200];
+                coords[at] = bad;
+                let error = validate_coordinates(&coords, 2, 10).unwrap_err().to_string();
+                assert!(error.contains(&format!("of pose {} is", 10 + at / 2)), "{at} {bad}: {error}");
+                let mut times: Vec<f64> = (0..200).map(f64::from).collect();
+                times[at] = bad;
+                assert!(validate_timestamps(&times).is_err(), "{at} {bad}");
+            }
+        }
+        assert!(validate_coordinates(&[1e150, -1e150], 2, 0).is_ok());
+    }
 
     #[test]
     fn cells_tile_the_span() {

@@ -182,7 +182,7 @@ pub struct StoredFleet {
 /// session's tiles and merges are not its new ones). What names a merge.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct PairKey {
-    names: [String; 2],
+    names: [Arc<str>; 2],
     fingerprints: [u64; 2],
 }
 
@@ -198,7 +198,10 @@ impl PairKey {
     /// The name of the store's session pair `[a, b]`.
     fn of(store: &FleetStore, [a, b]: [usize; 2]) -> Self {
         let s = store.sessions();
-        PairKey { names: [s[a].name.clone(), s[b].name.clone()], fingerprints: [s[a].fingerprint, s[b].fingerprint] }
+        PairKey {
+            names: [s[a].name.as_str().into(), s[b].name.as_str().into()],
+            fingerprints: [s[a].fingerprint, s[b].fingerprint],
+        }
     }
 }
 
@@ -209,7 +212,7 @@ fn pair_columns<'a>(keys: impl Iterator<Item = &'a PairKey>) -> Vec<(&'static st
     let mut columns: [Vec<String>; 4] = Default::default();
     for key in keys {
         for side in 0..2 {
-            columns[side].push(key.names[side].clone());
+            columns[side].push(key.names[side].to_string());
             columns[2 + side].push(fingerprint_text(key.fingerprints[side]));
         }
     }
@@ -735,15 +738,24 @@ fn part_files(folder: &Path) -> Result<Vec<String>> {
 }
 
 /// A state's sessions by name: what a part's first four columns (`session_a`, `session_b`,
-/// `fingerprint_a`, `fingerprint_b`) name.
+/// `fingerprint_a`, `fingerprint_b`) name. A part names the same few sessions in row after
+/// row, so each session's name is shared by the keys made here, and its fingerprint's text is
+/// made once, to compare a row's with before reading its number.
 struct Names<'a> {
     sessions: &'a [StoreSession],
-    index: HashMap<&'a str, usize>,
+    index: HashMap<&'a [u8], usize>,
+    names: Vec<Arc<str>>,
+    fingerprints: Vec<String>,
 }
 
 impl<'a> Names<'a> {
     fn of(sessions: &'a [StoreSession]) -> Self {
-        Names { sessions, index: sessions.iter().enumerate().map(|(k, s)| (s.name.as_str(), k)).collect() }
+        Names {
+            sessions,
+            index: sessions.iter().enumerate().map(|(k, s)| (s.name.as_bytes(), k)).collect(),
+            names: sessions.iter().map(|s| Arc::from(s.name.as_str())).collect(),
+            fingerprints: sessions.iter().map(|s| fingerprint_text(s.fingerprint)).collect(),
+        }
     }
 
     /// The session pair that row `k` of a part's `table` names, as indices and as its key:
@@ -752,16 +764,19 @@ impl<'a> Names<'a> {
     fn pair(&self, table: &Table, k: usize, what: &str) -> std::result::Result<([usize; 2], PairKey), String> {
         let (mut pair, mut fingerprints) = ([0; 2], [0; 2]);
         for side in 0..2 {
-            let name = table.text(side, k)?;
-            let text = table.text(2 + side, k)?;
-            let fingerprint = fingerprint_of(text)?;
-            let s = *self.index.get(name).ok_or_else(|| format!("session {name:?} is not in the store"))?;
-            if self.sessions[s].fingerprint != fingerprint {
-                return Err(format!("a {what} of session {name:?} as it was before (fingerprint {text})"));
+            let (name, text) = (table.bytes(side, k)?, table.bytes(2 + side, k)?);
+            let Some(&s) = self.index.get(name) else {
+                return Err(format!("session {:?} is not in the store", table.text(side, k)?));
+            };
+            if text != self.fingerprints[s].as_bytes() {
+                let (name, text) = (table.text(side, k)?, table.text(2 + side, k)?);
+                if self.sessions[s].fingerprint != fingerprint_of(text)? {
+                    return Err(format!("a {what} of session {name:?} as it was before (fingerprint {text})"));
+                }
             }
-            (pair[side], fingerprints[side]) = (s, fingerprint);
+            (pair[side], fingerprints[side]) = (s, self.sessions[s].fingerprint);
         }
-        let names = pair.map(|s| self.sessions[s].name.clone());
+        let names = pair.map(|s| self.names[s].clone());
         Ok((pair, PairKey { names, fingerprints }))
     }
 }
@@ -1834,9 +1849,9 @@ fn read_poses(path: &Path) -> Result<Trajectory> {
     let manifold = manifold_of(manifold).ok_or_else(|| corrupt(format!("manifold {manifold:?} is unknown")))?;
     let axes =
         (0..dim).map(|c| table.floats(3 + c)).collect::<std::result::Result<Vec<_>, String>>().map_err(corrupt)?;
-    let mut coords: Vec<f64> = Vec::with_capacity(table.rows * dim);
-    for k in 0..table.rows {
-        coords.extend(axes.iter().map(|a| a[k]));
+    let mut coords: Vec<f64> = vec![0.0; table.rows * dim];
+    for (c, axis) in axes.iter().enumerate() {
+        coords[c..].iter_mut().step_by(dim).zip(axis.iter()).for_each(|(x, &a)| *x = a);
     }
     let mut take = |c: usize| match table.columns[c].take() {
         Some(Column::Float(values)) => Ok(values),
@@ -2467,5 +2482,45 @@ mod tests {
         let error = error.to_string();
         assert!(error.contains("000001.parquet: row ") && !error.contains('\n'), "{error}");
         assert_eq!(read_store(dir.path()).unwrap().state, report.stored.state, "the store is unchanged");
+    }
+
+    /// A part's rows name their sessions by name and fingerprint: a fingerprint written in
+    /// capitals is the same number and opens; one of another number, an unknown name, or a
+    /// fingerprint that is not hex is named with the file and row, in one line.
+    #[test]
+    fn a_part_row_names_its_sessions_as_they_are() {
+        let dir = tempfile::tempdir().unwrap();
+        let (_, report) = small_store(dir.path(), 2, 40.0, StoreSettings::new(8.0));
+        let state = dir.path().join(&report.stored.state);
+        let merges = state.join("merges").join("000001.parquet");
+        let row = read_table(&merges).unwrap().rows - 1;
+        let edit = |column: usize, value: &dyn Fn(&str) -> String| {
+            rewrite(&merges, usize::MAX, |columns| {
+                let Column::Blobs(texts) = &mut columns[column].1 else { panic!("names are byte arrays") };
+                let was = std::str::from_utf8(texts[row].data()).unwrap().to_owned();
+                texts[row] = ByteArray::from(value(&was).into_bytes());
+            });
+        };
+        let opened = |dir: &Path| read_store(dir).map(|r| r.store.loops().unwrap().components().len());
+        let components = opened(dir.path()).unwrap();
+        edit(3, &|was| was.to_uppercase());
+        assert_eq!(opened(dir.path()).unwrap(), components);
+        type Edit<'a> = &'a dyn Fn(&str) -> String;
+        let wrong: [(usize, Edit, &str); 3] = [
+            (3, &|was| format!("{:016x}", u64::from_str_radix(was, 16).unwrap() ^ 1), "as it was before"),
+            (1, &|_| "nobody".to_owned(), "session \"nobody\" is not in the store"),
+            (2, &|_| "0x12".to_owned(), "fingerprint \"0x12\""),
+        ];
+        for (column, value, says) in wrong {
+            let kept = read_table(&merges).unwrap();
+            edit(column, value);
+            let error = read_store(dir.path()).unwrap_err().to_string();
+            let named = error.contains(&merges.display().to_string()) && error.contains(&format!("row {row}:"));
+            assert!(named && error.contains(says) && !error.contains('\n'), "{error}");
+            let Table { names, columns, .. } = kept;
+            std::fs::remove_file(&merges).unwrap();
+            let columns = names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
+            write_groups(&merges, columns, usize::MAX).unwrap();
+        }
     }
 }
