@@ -599,20 +599,21 @@ pub(crate) fn checked_cell_widths(what: &'static str, widths: Vec<f64>, timestam
         let reason = format!("{} time cells for {poses} poses", widths.len());
         return Err(Error::InvalidState { what, reason });
     }
-    let most_s = |i: usize| {
+    // A cell fits within its timestamps' cell, with an allowance of a few roundings of the
+    // timestamps around it (`near`: the sum of their magnitudes).
+    let within = |w: f64, cell: f64, near: f64| w >= 0.0 && w <= cell + 4.0 * f64::EPSILON * near;
+    let fits = |i: usize| {
         let near = timestamps_s[i.saturating_sub(1)..(i + 2).min(poses)].iter().map(|t| t.abs()).sum::<f64>();
-        cell_width(timestamps_s, i) + 4.0 * f64::EPSILON * near
+        within(widths[i], cell_width(timestamps_s, i), near)
     };
     // The interior poses in one pass without bounds checks (the same sums in the same order as
-    // `most_s`: each decided alike), the ends and any pose at fault by `most_s`.
-    let interior_fits =
-        widths.get(1..poses.saturating_sub(1)).unwrap_or_default().iter().zip(timestamps_s.windows(3)).all(
-            |(&w, t)| {
-                let near = t[0].abs() + t[1].abs() + t[2].abs();
-                w >= 0.0 && w <= 0.5 * ((t[1] - t[0]) + (t[2] - t[1])) + 4.0 * f64::EPSILON * near
-            },
-        );
-    let fits = |i: usize| widths[i] >= 0.0 && widths[i] <= most_s(i);
+    // `fits`: each decided alike), the ends and any pose at fault by `fits`.
+    let interior_fits = widths
+        .get(1..poses.saturating_sub(1))
+        .unwrap_or_default()
+        .iter()
+        .zip(timestamps_s.windows(3))
+        .all(|(&w, t)| within(w, 0.5 * ((t[1] - t[0]) + (t[2] - t[1])), t[0].abs() + t[1].abs() + t[2].abs()));
     if interior_fits && (poses == 0 || (fits(0) && fits(poses - 1))) {
         return Ok(widths);
     }

@@ -2511,16 +2511,14 @@ mod tests {
             (1, &|_| "nobody".to_owned(), "session \"nobody\" is not in the store"),
             (2, &|_| "0x12".to_owned(), "fingerprint \"0x12\""),
         ];
+        let kept = dir.path().join("merges-kept.parquet");
+        std::fs::copy(&merges, &kept).unwrap();
         for (column, value, says) in wrong {
-            let kept = read_table(&merges).unwrap();
             edit(column, value);
             let error = read_store(dir.path()).unwrap_err().to_string();
             let named = error.contains(&merges.display().to_string()) && error.contains(&format!("row {row}:"));
             assert!(named && error.contains(says) && !error.contains('\n'), "{error}");
-            let Table { names, columns, .. } = kept;
-            std::fs::remove_file(&merges).unwrap();
-            let columns = names.iter().map(String::as_str).zip(columns.into_iter().map(Option::unwrap)).collect();
-            write_groups(&merges, columns, usize::MAX).unwrap();
+            std::fs::copy(&kept, &merges).unwrap();
         }
     }
 }
