@@ -195,6 +195,8 @@ fn a_killed_update_leaves_the_old_or_the_new_state() {
         assert!(!store.join(".loops-store.partial").exists());
         let states = support::names(&store).into_iter().filter(|n| n.starts_with("state-")).count();
         assert_eq!(states, 1, "kill {k}");
+        // One pose file a session: none that the killed update wrote is left over.
+        assert_eq!(support::names(&store.join("poses")).len(), new.0.len(), "kill {k}");
     }
     eprintln!("killed updates: {olds} left the old state, {news} the new one (an update takes {took:?})");
 }

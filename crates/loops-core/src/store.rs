@@ -81,9 +81,11 @@ use crate::trajectory::{Manifold, Trajectory};
 /// version 3 keeps its tiles by part, each tile in its sessions' own indices
 /// ([`StoredTile::local`]), so that an update writes only the parts that change; version 4
 /// keeps the merges of its session pairs by part too, each in its sessions' own indices
-/// ([`MergedLoops::local`]). Stores of versions 1 to 3 read back (version 1 without what it
-/// keeps of its answer); one of a later version is refused.
-pub const STORE_FORMAT_VERSION: u16 = 4;
+/// ([`MergedLoops::local`]); version 5 keeps the sessions' pose files in one folder beside
+/// the states, each written once, so that an update touches only the pose files of the
+/// sessions it adds, replaces or removes. Stores of versions 1 to 4 read back (version 1
+/// without what it keeps of its answer); one of a later version is refused.
+pub const STORE_FORMAT_VERSION: u16 = 5;
 
 /// What a store's answer depends on, fixed when the store is made.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,7 +4,9 @@
 //! ```text
 //! DIR/
 //!   loops-store.json      the ownership marker (out_dir::STORE)
-//!   store.json            {"format": "inexact-loops fleet store", "version": 4, "state": "state-000003"}
+//!   store.json            {"format": "inexact-loops fleet store", "version": 5, "state": "state-000003"}
+//!   poses/FINGERPRINT.parquet  pose, t_s, cell_s, then one column per coordinate, manifold
+//!                         (version 5; before: state-NNNNNN/poses/)
 //!   state-000003/         the current state, complete
 //!     settings.json       metric, gamma, separation, block, sampler, what the last update did
 //!     sessions.parquet    session, name, fingerprint, poses, t_first_s, t_last_s, span_s, dim, manifold, blocks
@@ -20,7 +22,6 @@
 //!     session_pairs.parquet  session_a, session_b, a, b, components, pair_count, area_s2, density
 //!     loop_duration.parquet  session, pose, own_s, other_s
 //!     samples.parquet     session_a, session_b, a, b, i, j, t_s, t_prime_s, component, distance
-//!     poses/FINGERPRINT.parquet  pose, t_s, cell_s, then one column per coordinate
 //! ```
 //!
 //! Indices `a`, `b` are sessions in name order; `i`, `j` poses within them; times on each
@@ -69,11 +70,20 @@
 //! seed there reads again only the tiles and components they do not answer. A state without it
 //! (written before it) draws as before.
 //!
+//! **Pose files beside the states** (version 5). The folder `poses` holds one file a session,
+//! named by its fingerprint, shared by the states: an update writes the files of the sessions
+//! it adds or replaces (each filled in the scratch folder and then moved to its name, so that a
+//! file under a session's name is whole) before the new state is pointed at, and removes, after,
+//! those no session of the new state has. An update touches only the pose files of the
+//! sessions it changes; until version 4 each state held a hard link to every session's file,
+//! made and removed again at every update. Stores of version 4 still read, and their next
+//! update moves their pose files into `poses` (links).
+//!
 //! **Atomic.** An update reads the current state, builds the whole new state in the store's
-//! scratch folder (pose files of unchanged sessions are hard links), moves it into place under
-//! a new name, then replaces `store.json` in one rename, then removes the old state. A run
-//! killed at any moment leaves `store.json` naming the old state or the new one, each
-//! complete; the next update removes what the killed one left.
+//! scratch folder, moves it into place under a new name, then replaces `store.json` in one
+//! rename, then removes the old state and the pose files it alone had. A run killed at any
+//! moment leaves `store.json` naming the old state or the new one, each complete with its pose
+//! files; the next update removes what the killed one left.
 
 use std::collections::{HashMap, HashSet};
 use std::fs::File;
@@ -176,6 +186,8 @@ pub struct StoredFleet {
     /// The files of its state's `merges/` folder, with the merges each holds (none for a
     /// state of layout 3 or before, whose merges are in one table).
     merge_parts: Vec<MergePart>,
+    /// The folder of its sessions' pose files ([`pose_folder`]).
+    pose_dir: PathBuf,
 }
 
 /// A session pair's name in a store's folder: its sessions' names and fingerprints (a replaced
@@ -434,7 +446,7 @@ impl StoredFleet {
     /// # Errors
     /// [`StoreError::Io`] or [`StoreError::Corrupt`] for a pose file that cannot be read back.
     pub fn poses(&self, session: &StoreSession) -> Result<Trajectory> {
-        read_poses(&self.dir.join(&self.state).join("poses").join(pose_file(session)))
+        read_poses(&self.pose_dir.join(pose_file(session)))
     }
 
     /// The path of one of the current state's tables (`components.parquet`, ...).
@@ -591,6 +603,24 @@ fn pose_file(session: &StoreSession) -> String {
     format!("{}.parquet", fingerprint_text(session.fingerprint))
 }
 
+/// The folder of a store's pose files (version 5 on), beside its states: each session's file
+/// is written once, by the update that adds the session, and removed by the update that
+/// replaces or removes it, once the new state is pointed at, so that an update touches only
+/// the pose files of the sessions it changes (before, each state held a link to every
+/// session's file).
+const POSES: &str = "poses";
+
+/// Whether `name` is that of a pose file ([`pose_file`]): 16 hexadecimal digits and `.parquet`.
+fn is_pose_file_name(name: &str) -> bool {
+    name.strip_suffix(".parquet").is_some_and(|n| n.len() == 16 && n.bytes().all(|b| b.is_ascii_hexdigit()))
+}
+
+/// Where the pose files of the state `pointer` names are, in the store `dir`: [`POSES`], or
+/// the state's own `poses` folder before version 5.
+fn pose_folder(dir: &Path, pointer: &Pointer) -> PathBuf {
+    if pointer.version >= 5 { dir.join(POSES) } else { dir.join(&pointer.state).join(POSES) }
+}
+
 /// A session's fingerprint as the tables and pose files name it: 16 hexadecimal digits.
 fn fingerprint_text(fingerprint: u64) -> String {
     format!("{fingerprint:016x}")
@@ -609,6 +639,7 @@ fn fingerprint_of(text: &str) -> std::result::Result<u64, String> {
 pub fn read_store(dir: &Path) -> Result<StoredFleet> {
     let Head { pointer, file, config, sessions } = read_head(dir)?;
     let state = dir.join(&pointer.state);
+    let pose_dir = pose_folder(dir, &pointer);
     let last_update = file.last_update.into();
     if file.version >= 3 {
         // The tiles, the merges and τ side by side; the first failure in that order.
@@ -627,7 +658,15 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         let ((tiles, parts), (merges, merge_parts), duration) = (tiles?, merges?, duration?);
         let store = FleetStore::from_saved_lazily(config.settings, sessions, tiles, last_update, merges, duration)?;
         read_draws(&state.join("draws.parquet"), &store)?;
-        return Ok(StoredFleet { dir: dir.to_path_buf(), state: pointer.state, store, config, parts, merge_parts });
+        return Ok(StoredFleet {
+            dir: dir.to_path_buf(),
+            state: pointer.state,
+            store,
+            config,
+            parts,
+            merge_parts,
+            pose_dir,
+        });
     }
     let corrupt = |path: &Path, reason: String| StoreError::Corrupt { path: path.to_path_buf(), reason };
     let tiles_path = state.join("tiles.parquet");
@@ -655,6 +694,7 @@ pub fn read_store(dir: &Path) -> Result<StoredFleet> {
         config,
         parts: Vec::new(),
         merge_parts: Vec::new(),
+        pose_dir,
     })
 }
 
@@ -1097,7 +1137,7 @@ pub fn plan_store_update(
         if let Some(given) = config {
             check_same(dir, &head.config, given)?;
         }
-        (head.config.settings, head.sessions, Some(dir.join(&head.pointer.state).join("poses")))
+        (head.config.settings, head.sessions, Some(pose_folder(dir, &head.pointer)))
     } else {
         let Some(given) = config else { return Err(StoreError::NotAStore { path: dir.to_path_buf() }) };
         given.settings.check()?;
@@ -1232,18 +1272,17 @@ fn update_with(
             out.remove(&name)?;
         }
     }
-    let (mut store, config, old_state, old_parts, old_merge_parts) = match (current, config) {
+    let (mut store, config, old_state, old_parts, old_merge_parts, poses_dir) = match (current, config) {
         (Some(c), Some(given)) => {
             check_same(dir, &c.config, given)?;
-            (c.store, c.config, Some(c.state), c.parts, c.merge_parts)
+            (c.store, c.config, Some(c.state), c.parts, c.merge_parts, Some(c.pose_dir))
         }
-        (Some(c), None) => (c.store, c.config, Some(c.state), c.parts, c.merge_parts),
-        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None, Vec::new(), Vec::new()),
+        (Some(c), None) => (c.store, c.config, Some(c.state), c.parts, c.merge_parts, Some(c.pose_dir)),
+        (None, Some(given)) => (FleetStore::new(given.settings)?, given.clone(), None, Vec::new(), Vec::new(), None),
         (None, None) => {
             return Err(StoreError::NotAStore { path: dir.to_path_buf() });
         }
     };
-    let poses_dir = old_state.as_ref().map(|s| dir.join(s).join("poses"));
     // The update's steps ([`FleetStore::update`]), with the stored sessions its tiles meet read
     // in parallel, and kept for the draw, which reads most of them again.
     let sessions: Vec<loops_core::Result<StoreSession>> = {
@@ -1294,7 +1333,17 @@ fn update_with(
         let path = path.to_path_buf();
         move |error| StoreError::Io { what, path, error }
     };
-    std::fs::create_dir_all(staged.join("poses")).map_err(io("creating", &staged))?;
+    std::fs::create_dir(&staged).map_err(io("creating", &staged))?;
+    let pool = dir.join(POSES);
+    if !out.owns(POSES) {
+        if pool.symlink_metadata().is_ok() {
+            return Err(crate::out_dir::OutDirError::NotAnOutput { path: pool, command: STORE.command }.into());
+        }
+        out.claim(POSES)?;
+    }
+    if !pool.is_dir() {
+        std::fs::create_dir(&pool).map_err(io("creating", &pool))?;
+    }
     let changed: HashSet<&str> = store.last_update().changed().into_iter().collect();
     let names: Vec<&str> = store.sessions().iter().map(|s| s.name.as_str()).collect();
     let generation = old_state.as_deref().and_then(|s| s["state-".len()..].parse::<u64>().ok()).unwrap_or(0) + 1;
@@ -1302,23 +1351,38 @@ fn update_with(
     let old = old_tiles.as_deref().map(|folder| (folder, old_parts.as_slice()));
     let old_merges = old_state.as_ref().map(|s| dir.join(s).join("merges"));
     let old_merges = old_merges.as_deref().map(|folder| (folder, old_merge_parts.as_slice()));
+    // The pose file of each session the folder of pose files lacks: a session this update adds
+    // or replaces (from what was given), or a stored one of a state of layout 4 or before
+    // (linked from that state's folder, else copied). Each is filled under another name and
+    // then moved to its own, so that a file there under a session's name is always whole.
     let poses = || -> Result<()> {
+        let mut added = false;
         for s in store.sessions() {
-            let target = staged.join("poses").join(pose_file(s));
+            let target = pool.join(pose_file(s));
             if target.exists() {
                 continue;
             }
+            let filled = out.staging_path();
             let given = new_poses.iter().find(|(n, _)| *n == s.name && changed.contains(n.as_str()));
             match (given, &poses_dir) {
-                (Some((_, trajectory)), _) => write_poses(&target, trajectory)?,
+                (Some((_, trajectory)), _) => write_poses(&filled, trajectory)?,
                 (None, Some(old)) => {
                     let from = old.join(pose_file(s));
-                    if std::fs::hard_link(&from, &target).is_err() {
-                        std::fs::copy(&from, &target).map_err(io("copying", &from))?;
+                    if std::fs::hard_link(&from, &target).is_ok() {
+                        added = true;
+                        continue;
                     }
+                    std::fs::copy(&from, &filled)
+                        .and_then(|_| File::open(&filled)?.sync_all())
+                        .map_err(io("copying", &from))?;
                 }
                 (None, None) => unreachable!("a stored session without a state"),
             }
+            std::fs::rename(&filled, &target).map_err(io("placing", &target))?;
+            added = true;
+        }
+        if added {
+            crate::atomic::sync_directory(&pool).map_err(io("syncing", &pool))?;
         }
         Ok(())
     };
@@ -1385,7 +1449,6 @@ fn update_with(
     let parts = parts.map_err(damaged)?;
     let merge_parts = merge_parts?;
     files.into_iter().chain(tables).collect::<Result<()>>()?;
-    crate::atomic::sync_directory(&staged.join("poses")).map_err(io("syncing", &staged))?;
     crate::atomic::sync_directory(&staged).map_err(io("syncing", &staged))?;
 
     // Placed under a new name, then pointed at in one rename, then the old state removed.
@@ -1403,13 +1466,24 @@ fn update_with(
     if let Some(old) = old_state {
         out.remove(&old)?;
     }
+    // The pose files no session of the new state has: those of the sessions this update
+    // replaced or removed, and any that a killed update left. One listing of the folder; what
+    // is not named as a pose file is left alone.
+    let kept: HashSet<String> = store.sessions().iter().map(pose_file).collect();
+    let listed = std::fs::read_dir(&pool).and_then(|list| list.collect::<std::io::Result<Vec<_>>>());
+    for entry in listed.map_err(io("listing", &pool))? {
+        let name = entry.file_name().into_string().unwrap_or_default();
+        if is_pose_file_name(&name) && !kept.contains(&name) {
+            std::fs::remove_file(entry.path()).map_err(io("removing", &entry.path()))?;
+        }
+    }
     let report = StoreReport {
         update,
         components: loops.components().len(),
         added_components: added.len(),
         samples,
         loops,
-        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config, parts, merge_parts },
+        stored: StoredFleet { dir: dir.to_path_buf(), state, store, config, parts, merge_parts, pose_dir: pool },
     };
     Ok(report)
 }
@@ -1443,6 +1517,9 @@ fn unchanged(
         .map_err(|error| StoreError::Io { what: "listing", path: dir.to_path_buf(), error })?;
     entries.sort_unstable();
     let mut clean = vec![STORE.marker.to_owned(), stored.state.clone(), "store.json".to_owned()];
+    if stored.pose_dir == dir.join(POSES) {
+        clean.push(POSES.to_owned());
+    }
     clean.sort_unstable();
     if entries != clean {
         *opened = Some(stored);

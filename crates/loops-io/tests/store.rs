@@ -65,7 +65,12 @@ fn a_store_reads_back_as_written() {
         n.sort();
         n
     };
-    assert_eq!(names(&dir), ["loops-store.json", "state-000002", "store.json"], "the old state is removed");
+    assert_eq!(names(&dir), ["loops-store.json", "poses", "state-000002", "store.json"], "the old state is removed");
+    // One pose file a session, beside the states.
+    let mut files: Vec<String> =
+        report.stored.store.sessions().iter().map(|s| format!("{:016x}.parquet", s.fingerprint)).collect();
+    files.sort();
+    assert_eq!(names(&dir.join("poses")), files);
     let read = read_store(&dir).unwrap();
     assert_eq!(read.config, config());
     assert_eq!(read.store, report.stored.store);
@@ -376,6 +381,26 @@ fn stores_of_earlier_layouts_still_read_and_update() {
     assert_eq!(read_store(&dir).unwrap().store, read_store(&now).unwrap().store);
     let _ = std::fs::remove_dir_all(&dir);
 
+    // Layout 4 (each state with a link to every session's pose file): read as written, its
+    // next update moves the pose files beside the states and equals the same update of a
+    // store made now.
+    let dir = temp("version-4-fixture");
+    copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/store-v4"), &dir);
+    assert!(dir.join("state-000001/poses").is_dir() && !dir.join("poses").exists());
+    let old = read_store(&dir).unwrap();
+    assert!(memory.tiles() == old.store.tiles());
+    for s in old.store.sessions() {
+        assert_eq!(old.poses(s).unwrap(), by_name[&s.name], "{}", s.name);
+    }
+    let (got, got_bits, _) = answer(&old.store, &mut source);
+    assert!(got == want && got_bits == want_bits);
+    let updated = update_store(&dir, None, Vec::new(), &gone).unwrap();
+    assert!(!dir.join(&updated.stored.state).join("poses").exists());
+    assert_eq!(pose_files(&dir), pose_files_of(&updated.stored.store));
+    assert_eq!(updated.stored.store, want_updated.stored.store);
+    assert_eq!(read_store(&dir).unwrap().store, read_store(&now).unwrap().store);
+    let _ = std::fs::remove_dir_all(&dir);
+
     // Layout 1 had no merges or runs: layout 2 without them, marked so.
     let dir = layout_2_store("version-1");
     let state = dir.join("state-000002");
@@ -394,6 +419,76 @@ fn stores_of_earlier_layouts_still_read_and_update() {
     for dir in [dir, now, temp("version-2")] {
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// The names of the files in the store's folder of pose files, sorted.
+fn pose_files(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir.join("poses")).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    names.sort();
+    names
+}
+
+/// The names of the pose files of `store`'s sessions, sorted.
+fn pose_files_of(store: &FleetStore) -> Vec<String> {
+    let mut names: Vec<String> = store.sessions().iter().map(|s| format!("{:016x}.parquet", s.fingerprint)).collect();
+    names.sort();
+    names
+}
+
+/// The inode of each file in the store's folder of pose files (0 off Unix).
+fn pose_inodes(dir: &Path) -> BTreeMap<String, u64> {
+    pose_files(dir)
+        .into_iter()
+        .map(|name| {
+            #[cfg(unix)]
+            let inode = std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(dir.join("poses").join(&name)).unwrap());
+            #[cfg(not(unix))]
+            let inode = 0;
+            (name, inode)
+        })
+        .collect()
+}
+
+#[test]
+fn an_update_touches_only_the_pose_files_of_the_sessions_it_changes() {
+    let dir = temp("pose-files");
+    let all = sessions();
+    let (day0, day1): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|(n, _)| n.ends_with("day0"));
+    update_store(&dir, Some(&config()), day0.clone(), &[]).unwrap();
+    let before = pose_inodes(&dir);
+    // Adding sessions writes their files and leaves the others' as they were.
+    let report = update_store(&dir, None, day1.clone(), &[]).unwrap();
+    assert_eq!(pose_files(&dir), pose_files_of(&report.stored.store));
+    let after = pose_inodes(&dir);
+    assert!(
+        before.iter().all(|(name, inode)| after.get(name) == Some(inode)),
+        "a stored session's file was written again"
+    );
+    // A session replaced: its old file goes, its new one comes; a session removed: its file goes.
+    let (name, t) = day1[0].clone();
+    let mut coords = t.coords().to_vec();
+    coords[0] += 0.5;
+    let moved = Trajectory::new(t.timestamps_s().to_vec(), coords, t.dim()).unwrap();
+    let report = update_store(&dir, None, vec![(name.clone(), moved.clone())], &[day0[0].0.clone()]).unwrap();
+    assert_eq!(pose_files(&dir), pose_files_of(&report.stored.store));
+    let read = read_store(&dir).unwrap();
+    let replaced = read.store.sessions().iter().find(|s| s.name == name).unwrap();
+    assert_eq!(read.poses(replaced).unwrap(), moved);
+    // A file a killed update left (no session of the state has it) goes with the next update
+    // that writes; an update that changes nothing leaves the folder as it is.
+    let stray = dir.join("poses").join("00000000deadbeef.parquet");
+    std::fs::copy(dir.join("poses").join(&pose_files(&dir)[0]), &stray).unwrap();
+    let note = dir.join("poses").join("notes.txt");
+    std::fs::write(&note, "not a pose file").unwrap();
+    update_store(&dir, None, vec![(name.clone(), moved)], &[]).unwrap();
+    assert!(stray.exists(), "an update that changes nothing wrote");
+    let report = update_store(&dir, None, vec![day0[0].clone()], &[]).unwrap();
+    assert!(!stray.exists());
+    assert!(note.exists(), "a file not named as a pose file was removed");
+    std::fs::remove_file(&note).unwrap();
+    assert_eq!(pose_files(&dir), pose_files_of(&report.stored.store));
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The parts of the current state's `tiles` folder: name, rows, and (on Unix) the file's inode.
