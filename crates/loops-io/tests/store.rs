@@ -67,10 +67,7 @@ fn a_store_reads_back_as_written() {
     };
     assert_eq!(names(&dir), ["loops-store.json", "poses", "state-000002", "store.json"], "the old state is removed");
     // One pose file a session, beside the states.
-    let mut files: Vec<String> =
-        report.stored.store.sessions().iter().map(|s| format!("{:016x}.parquet", s.fingerprint)).collect();
-    files.sort();
-    assert_eq!(names(&dir.join("poses")), files);
+    assert_eq!(pose_files(&dir), pose_files_of(&report.stored.store));
     let read = read_store(&dir).unwrap();
     assert_eq!(read.config, config());
     assert_eq!(read.store, report.stored.store);
@@ -436,18 +433,18 @@ fn pose_files_of(store: &FleetStore) -> Vec<String> {
     names
 }
 
-/// The inode of each file in the store's folder of pose files (0 off Unix).
+/// The inode of the file at `path` (0 off Unix).
+fn inode(path: &Path) -> u64 {
+    #[cfg(unix)]
+    return std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(path).unwrap());
+    #[cfg(not(unix))]
+    0
+}
+
+/// The inode of each file in the store's folder of pose files, by name.
 fn pose_inodes(dir: &Path) -> BTreeMap<String, u64> {
-    pose_files(dir)
-        .into_iter()
-        .map(|name| {
-            #[cfg(unix)]
-            let inode = std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(dir.join("poses").join(&name)).unwrap());
-            #[cfg(not(unix))]
-            let inode = 0;
-            (name, inode)
-        })
-        .collect()
+    let folder = dir.join("poses");
+    pose_files(dir).into_iter().map(|name| (name.clone(), inode(&folder.join(name)))).collect()
 }
 
 #[test]
@@ -503,11 +500,7 @@ fn parts_of(dir: &Path, folder: &str) -> BTreeMap<String, (usize, u64)> {
         .unwrap()
         .map(|e| {
             let path = e.unwrap().path();
-            #[cfg(unix)]
-            let inode = std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(&path).unwrap());
-            #[cfg(not(unix))]
-            let inode = 0;
-            (path.file_name().unwrap().to_string_lossy().into_owned(), (parquet_rows(&path), inode))
+            (path.file_name().unwrap().to_string_lossy().into_owned(), (parquet_rows(&path), inode(&path)))
         })
         .collect()
 }
