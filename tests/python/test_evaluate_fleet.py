@@ -231,8 +231,10 @@ def test_exact_odometry_and_matches_return_the_references(dim):
         assert split(matches.i, matches.j, starts_of(refs))[1].sum() > 5
         errors = ev.fleet_errors(refs, estimates, overlap_m=5.0)
         assert errors.ate_m < 1e-3 and errors.inter_m < 1e-3, errors
+        # Each session within millimetres: the matches' rotation noise (1e-5 rad), 300 m from
+        # the origin, moves a session by about one, as the pairs chosen happen to weigh it.
         for ref, est in zip(refs.values(), estimates, strict=True):
-            assert ev.ate(ref, est, align=False) < 1e-3
+            assert ev.ate(ref, est, align=False) < 2e-3
 
 
 @needs_gtsam

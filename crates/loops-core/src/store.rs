@@ -1741,7 +1741,7 @@ impl FleetStore {
     /// again only for the components it lacks an answer of (those of the new tiles, those whose
     /// quota grew past what was kept, those whose quota or rows moved), and does not read the
     /// sessions of the tiles it needs nothing more from. Quotas and rows follow from each
-    /// component's own cells (its permanent random number), so a day's sessions move few of
+    /// component's own cells and its session pair's numbers, so a day's sessions move few of
     /// them. The samples are the same with or without it; σ_α keeps nothing (it asks a share of
     /// every component).
     ///

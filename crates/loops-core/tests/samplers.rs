@@ -239,9 +239,9 @@ fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
             s.loops.runs().filter(|r| r.component == c && r.end > r.row).map(|r| r.row).collect();
         (rows.last().unwrap() - rows.first().unwrap() + 1) as f64
     };
-    let counts = |kind, budget| -> BTreeMap<usize, usize> {
+    let counts_of = |kind, budget, seed| -> BTreeMap<usize, usize> {
         let samples =
-            sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler::new(kind, SampleSize::Budget(budget), 6)).unwrap();
+            sample_loops(&s.traj, &Euclidean, &s.loops, &Sampler::new(kind, SampleSize::Budget(budget), seed)).unwrap();
         assert_eq!(samples.len(), budget);
         let mut counts = BTreeMap::new();
         for r in samples.rows() {
@@ -249,6 +249,7 @@ fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
         }
         counts
     };
+    let counts = |kind, budget| counts_of(kind, budget, 6);
     for budget in [groups.len(), groups.len() + 5, 3 * groups.len(), 1500] {
         let sampler = Sampler::new(SamplerKind::ClosestThenSpread, SampleSize::Budget(budget), 6);
         let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
@@ -279,17 +280,23 @@ fn closest_then_spread_takes_every_closest_pair_then_shares_by_rows() {
                 );
             }
         }
-        // Closest-first gives every component one plus a share: more to the small ones.
+        // Closest-first gives every component one plus a share: more to the small ones (over
+        // five seeds: one draw's rounding may give both the same).
         if budget == 3 * groups.len() {
-            let first = counts(SamplerKind::ClosestFirst, budget);
             let mut rows: Vec<f64> = mine.keys().map(|&c| rows_of(c)).collect();
             rows.sort_by(f64::total_cmp);
             let quartile = rows[rows.len() / 4];
-            let small = |k: &BTreeMap<usize, usize>| {
-                mine.keys().filter(|c| rows_of(**c) <= quartile).map(|c| k[c]).sum::<usize>()
+            let small = |kind| -> usize {
+                (6..11)
+                    .map(|seed| {
+                        let k = counts_of(kind, budget, seed);
+                        mine.keys().filter(|c| rows_of(**c) <= quartile).map(|c| k[c]).sum::<usize>()
+                    })
+                    .sum()
             };
-            assert!(small(&mine) > 0);
-            assert!(small(&mine) < small(&first), "small components: {} against {}", small(&mine), small(&first));
+            let (spread, first) = (small(SamplerKind::ClosestThenSpread), small(SamplerKind::ClosestFirst));
+            assert!(spread > 0);
+            assert!(spread < first, "small components: {spread} against {first}");
         }
     }
     // A budget below the components: that many components, each with its closest pair.
@@ -696,4 +703,29 @@ fn skip_trivial_with_nothing_else_gives_no_samples() {
     let samples = sample_loops(&traj, &Euclidean, &loops, &sampler).unwrap();
     assert!(samples.is_empty());
     assert_eq!(samples.warnings(), [SampleWarning::BudgetAboveAvailable { budget: 5, available: 0 }]);
+}
+
+#[test]
+fn a_budget_below_the_components_spreads_along_them() {
+    // σ_1 weighs every component alike: a budget of a tenth of them picks one component in
+    // every ten or so, in id order (in time), not a random few; another seed moves the picks.
+    let s = setup();
+    let order: Vec<usize> = samplable(&s.loops).into_iter().collect();
+    let budget = order.len() / 10;
+    let picked = |seed: u64| -> Vec<usize> {
+        let sampler = Sampler::new(SamplerKind::One, SampleSize::Budget(budget), seed);
+        let samples = sample_loops(&s.traj, &Euclidean, &s.loops, &sampler).unwrap();
+        let picked: BTreeSet<usize> = samples.rows().iter().map(|r| r.component.unwrap()).collect();
+        picked.iter().map(|c| order.binary_search(c).unwrap()).collect()
+    };
+    let stride = order.len() as f64 / budget as f64;
+    for seed in 0..5 {
+        let at = picked(seed);
+        assert_eq!(at.len(), budget);
+        assert!(
+            at.windows(2).all(|w| ((w[1] - w[0]) as f64 - stride).abs() < 1.0),
+            "seed {seed}: stride {stride}, picks at {at:?}"
+        );
+    }
+    assert_ne!(picked(0), picked(1));
 }

@@ -14,7 +14,7 @@ use crate::error::{Error, Result, TooManySamples};
 use crate::interrupt::Interrupt;
 
 pub(crate) use pair_space::PairSpace;
-pub(crate) use quota::{first_then_quotas, group_quotas, order_sample, uniforms};
+pub(crate) use quota::{Numbers, first_then_quotas, group_quotas, order_sample, uniforms};
 
 /// The most samples one call of a sampler returns, and the most detections one draw of
 /// detections returns: 5 million, 500 times the paper's budget of 10⁴ and more pairs than a scan

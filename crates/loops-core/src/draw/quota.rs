@@ -1,11 +1,15 @@
 //! Samples per group: quotas proportional to weights, capped, rounded at random to integers
 //! that keep the expectation (σ_1 and σ_ρ).
 //!
-//! The rounding draws on one uniform number per group, its *permanent random number*, rather
-//! than on a stream read in group order: a keyed draw takes each component's from a hash of its
-//! own cells, so that a component keeps its rounding when others are added or removed around it
-//! (order sampling, as survey statistics coordinate samples over time). A fleet store's next
-//! draw then asks again only where the quotas moved.
+//! The rounding draws on numbers that belong to the groups rather than on a stream read in
+//! group order ([`Numbers`]): each group's *permanent random number*, and, where the groups
+//! fall into strata (a fleet's session pairs), two numbers per stratum. A budget's extra picks
+//! go to the strata by Pareto order sampling of their numbers, then, within each stratum, to
+//! its groups by systematic sampling in group order from the stratum's offset, so that the
+//! picks are spread along the stratum (a trajectory's components in time order: a small budget
+//! corrects every stretch of a drive, not a random few) and a stratum keeps its picks when
+//! other strata are added or removed (as survey statistics coordinate samples over time). A
+//! fleet store's next draw then asks again only where the quotas moved.
 
 use rand::{Rng, RngExt};
 
@@ -17,29 +21,71 @@ pub(crate) fn uniforms<R: Rng + ?Sized>(rng: &mut R, n: usize) -> Vec<f64> {
     (0..n).map(|_| rng.random::<f64>()).collect()
 }
 
+/// What rounds the quotas of groups at random: each group's permanent random number (`prn`,
+/// uniform in [0, 1)), which rounds a rate's quotas one by one, and the strata that share a
+/// budget's extra picks ([`order_sample`]): each group's stratum, in group order within it,
+/// and each stratum's two uniform numbers, one that ranks it among the strata (Pareto order
+/// sampling) and one that offsets the systematic picks within it.
+#[derive(Debug, Clone)]
+pub(crate) struct Numbers {
+    /// Each group's permanent random number.
+    pub(crate) prn: Vec<f64>,
+    /// Each group's stratum.
+    stratum: Vec<u32>,
+    /// Each stratum's rank number and offset.
+    strata: Vec<[f64; 2]>,
+}
+
+impl Numbers {
+    /// Groups each a stratum of its own: a budget's extra picks by Pareto order sampling of
+    /// the groups' numbers alone.
+    #[cfg(test)]
+    pub(crate) fn independent(prn: Vec<f64>) -> Self {
+        let stratum = (0..prn.len() as u32).collect();
+        let strata = prn.iter().map(|&u| [u, 0.0]).collect();
+        Self { prn, stratum, strata }
+    }
+
+    /// Groups in strata: group `g` in stratum `stratum[g]`, whose numbers are `strata[k]`
+    /// (its rank number, its offset).
+    pub(crate) fn stratified(prn: Vec<f64>, stratum: Vec<u32>, strata: Vec<[f64; 2]>) -> Self {
+        debug_assert_eq!(prn.len(), stratum.len());
+        debug_assert!(stratum.iter().all(|&k| (k as usize) < strata.len()));
+        Self { prn, stratum, strata }
+    }
+
+    /// All groups in one stratum, offset by `offset` (uniform in [0, 1)): systematic picks
+    /// along the groups (detection clusters in time order).
+    pub(crate) fn one_stratum(prn: Vec<f64>, offset: f64) -> Self {
+        let stratum = vec![0; prn.len()];
+        Self { prn, stratum, strata: vec![[0.0, offset]] }
+    }
+}
+
 /// Samples per group for σ_1 (`weights` all 1) and σ_ρ (`weights` = rows): quotas
 /// `q_g = clamp(s · w_g, lo, cap_g)`, rounded at random to integers with (about) the same
-/// expectation, by the groups' permanent random numbers `prn`.
+/// expectation, by `numbers`.
 ///
-/// Rate mode: s is the rate, lo = 1, each group rounded up when its number is below its
-/// fractional part. Budget mode: s solves Σ q_g = B exactly (a sweep over the breakpoints of the
-/// piecewise linear sum), lo = 1 when B ≥ #groups (P1), else 0 with a warning; then Pareto order
-/// sampling of the fractional parts ([`round_to_total`]) gives integers summing to exactly B
-/// (all caps when B exceeds them, with a warning).
+/// Rate mode: s is the rate, lo = 1, each group rounded up when its permanent random number is
+/// below its fractional part. Budget mode: s solves Σ q_g = B exactly (a sweep over the
+/// breakpoints of the piecewise linear sum), lo = 1 when B ≥ #groups (P1), else 0 with a
+/// warning; then the fractional parts' picks by strata ([`order_sample`], through
+/// [`round_to_total`]) give integers summing to exactly B (all caps when B exceeds them, with a
+/// warning).
 pub(crate) fn group_quotas(
     weights: &[f64],
     caps: &[u64],
     size: SampleSize,
-    prn: &[f64],
+    numbers: &Numbers,
     warnings: &mut Vec<SampleWarning>,
 ) -> Vec<u64> {
-    debug_assert_eq!(prn.len(), weights.len());
+    debug_assert_eq!(numbers.prn.len(), weights.len());
     let groups = weights.len();
     match size {
         SampleSize::Rate(rate) => weights
             .iter()
             .zip(caps)
-            .zip(prn)
+            .zip(&numbers.prn)
             .map(|((&w, &cap), &u)| round_by(u, (rate * w).clamp(1.0, cap as f64)).min(cap))
             .collect(),
         SampleSize::Budget(budget) => {
@@ -55,14 +101,14 @@ pub(crate) fn group_quotas(
             let scale = solve_scale(weights, caps, lo, budget as f64);
             let quotas: Vec<f64> =
                 weights.iter().zip(caps).map(|(&w, &cap)| (scale * w).clamp(lo, cap as f64)).collect();
-            round_to_total(&quotas, caps, budget as u64, prn)
+            round_to_total(&quotas, caps, budget as u64, numbers)
         }
     }
 }
 
 /// Samples per group for the closest-first sampler: one per group first (its closest pair),
 /// then the rest in proportion to `weights` (the rows, as σ_ρ): `q_g = 1 + clamp(s · w_g, 0,
-/// cap_g − 1)`, rounded at random by `prn` as [`group_quotas`] does. Every cap is at least 1.
+/// cap_g − 1)`, rounded at random by `numbers` as [`group_quotas`] does. Every cap is at least 1.
 ///
 /// Rate mode: `1 + r · w_g` rounded at random, at most the cap. Budget mode: the rest, `B −
 /// #groups`, is shared without a floor (every group has its one already); a budget below the
@@ -72,27 +118,30 @@ pub(crate) fn first_then_quotas(
     weights: &[f64],
     caps: &[u64],
     size: SampleSize,
-    prn: &[f64],
+    numbers: &Numbers,
     warnings: &mut Vec<SampleWarning>,
 ) -> Vec<u64> {
     debug_assert!(caps.iter().all(|&cap| cap >= 1));
     match size {
-        SampleSize::Rate(rate) => {
-            weights.iter().zip(caps).zip(prn).map(|((&w, &cap), &u)| (1 + round_by(u, rate * w)).min(cap)).collect()
-        }
+        SampleSize::Rate(rate) => weights
+            .iter()
+            .zip(caps)
+            .zip(&numbers.prn)
+            .map(|((&w, &cap), &u)| (1 + round_by(u, rate * w)).min(cap))
+            .collect(),
         SampleSize::Budget(budget) => {
             if let Some(all) = every_cap(budget, caps, warnings) {
                 return all;
             }
             if budget < weights.len() {
-                return group_quotas(weights, &vec![1; weights.len()], size, prn, warnings);
+                return group_quotas(weights, &vec![1; weights.len()], size, numbers, warnings);
             }
             let rest: Vec<u64> = caps.iter().map(|&cap| cap - 1).collect();
             let extra = (budget - weights.len()) as u64;
             let scale = solve_scale(weights, &rest, 0.0, extra as f64);
             let quotas: Vec<f64> =
                 weights.iter().zip(&rest).map(|(&w, &cap)| (scale * w).clamp(0.0, cap as f64)).collect();
-            round_to_total(&quotas, &rest, extra, prn).into_iter().map(|k| k + 1).collect()
+            round_to_total(&quotas, &rest, extra, numbers).into_iter().map(|k| k + 1).collect()
         }
     }
 }
@@ -230,13 +279,13 @@ fn cross(
 
 /// Integers k_g ∈ [⌊q_g⌋, ⌈q_g⌉] ∩ [0, cap_g] with Σ k_g = total (Σ q_g ≈ total): the floors,
 /// then one more for the groups [`order_sample`] picks by their fractional parts.
-fn round_to_total(quotas: &[f64], caps: &[u64], total: u64, prn: &[f64]) -> Vec<u64> {
+fn round_to_total(quotas: &[f64], caps: &[u64], total: u64, numbers: &Numbers) -> Vec<u64> {
     let mut counts: Vec<u64> = quotas.iter().zip(caps).map(|(&q, &cap)| (q.floor() as u64).min(cap)).collect();
     let assigned: u64 = counts.iter().sum();
     let mut deficit = total.saturating_sub(assigned);
     let fractions: Vec<f64> =
         quotas.iter().zip(&counts).zip(caps).map(|((&q, &k), &cap)| if k < cap { q - k as f64 } else { 0.0 }).collect();
-    for g in order_sample(&fractions, deficit, prn) {
+    for g in order_sample(&fractions, deficit, numbers) {
         counts[g] += 1;
         deficit -= 1;
     }
@@ -260,12 +309,65 @@ fn round_to_total(quotas: &[f64], caps: &[u64], total: u64, prn: &[f64]) -> Vec<
     counts
 }
 
+/// The groups (at most `count`, each once) whose fractional part `f_g` ∈ (0, 1) (Σ f_g ≈
+/// `count`) takes one more pick, by `numbers`: each stratum's share, the sum of its groups'
+/// fractions, is its floor plus one more for the strata [`pareto`] picks by their fractional
+/// parts and rank numbers; then a stratum's share of picks goes to its groups by systematic
+/// sampling in group order (points `step · (offset + k)`, `step` = its fractions' sum over its
+/// share, each group taken when a point falls in its stretch of the fractions' running sum, at
+/// most once). Each group is picked with a probability close to `f_g`; the picks of a stratum
+/// are spread along its groups, and a stratum keeps its picks while its own fractions and its
+/// rank's cut stay put. Fewer than `count` where points fall twice in one group (the caller
+/// gives what is left to the largest fractions). O(groups + strata).
+pub(crate) fn order_sample(fractions: &[f64], count: u64, numbers: &Numbers) -> Vec<usize> {
+    debug_assert_eq!(fractions.len(), numbers.stratum.len());
+    let strata = numbers.strata.len();
+    let mut sums = vec![0.0; strata];
+    for (g, &f) in fractions.iter().enumerate() {
+        if f > 0.0 {
+            sums[numbers.stratum[g] as usize] += f;
+        }
+    }
+    let mut shares: Vec<u64> = sums.iter().map(|&sum| sum.floor() as u64).collect();
+    let floors: u64 = shares.iter().sum();
+    let parts: Vec<f64> = sums.iter().zip(&shares).map(|(&sum, &k)| sum - k as f64).collect();
+    let ranks: Vec<f64> = numbers.strata.iter().map(|&[rank, _]| rank).collect();
+    for k in pareto(&parts, count.saturating_sub(floors), &ranks) {
+        shares[k] += 1;
+    }
+    // Each stratum's walk: the step, the next point, the running sum, the picks left.
+    let mut walks: Vec<(f64, f64, f64, u64)> = (0..strata)
+        .map(|k| {
+            let step = if shares[k] > 0 { sums[k] / shares[k] as f64 } else { 0.0 };
+            (step, step * numbers.strata[k][1], 0.0, shares[k])
+        })
+        .collect();
+    let mut picked = Vec::with_capacity(count as usize);
+    for (g, &f) in fractions.iter().enumerate() {
+        if f <= 0.0 {
+            continue;
+        }
+        let (step, point, start, left) = &mut walks[numbers.stratum[g] as usize];
+        let end = *start + f;
+        if *left > 0 && *point < end {
+            picked.push(g);
+            *left -= 1;
+            while *point < end {
+                *point += *step;
+            }
+        }
+        *start = end;
+    }
+    picked.truncate(count as usize);
+    picked
+}
+
 /// Pareto order sampling: of the groups with a fraction `f_g` ∈ (0, 1) (Σ f_g ≈ `count`), the
 /// `count` (at most that many) with the smallest ranks `u_g (1 − f_g) / ((1 − u_g) f_g)`, ties
 /// by index, `u_g` the group's permanent random number. Each is picked with probability close to
 /// `f_g`, and a group whose fraction moves a little keeps its pick unless its rank crosses the
-/// cut: how the rounding stays put as groups come and go. O(groups).
-pub(crate) fn order_sample(fractions: &[f64], count: u64, prn: &[f64]) -> Vec<usize> {
+/// cut. O(groups).
+fn pareto(fractions: &[f64], count: u64, prn: &[f64]) -> Vec<usize> {
     debug_assert_eq!(fractions.len(), prn.len());
     let mut ranked: Vec<(f64, usize)> = fractions
         .iter()
@@ -301,7 +403,7 @@ mod tests {
                 &weights,
                 &caps,
                 SampleSize::Budget(budget),
-                &uniforms(&mut rng, weights.len()),
+                &Numbers::independent(uniforms(&mut rng, weights.len())),
                 &mut warnings,
             );
             assert_eq!(q.iter().sum::<u64>(), budget as u64);
@@ -309,13 +411,23 @@ mod tests {
             assert!(warnings.is_empty());
         }
         let mut warnings = Vec::new();
-        let q =
-            group_quotas(&weights, &caps, SampleSize::Budget(20), &uniforms(&mut rng, weights.len()), &mut warnings);
+        let q = group_quotas(
+            &weights,
+            &caps,
+            SampleSize::Budget(20),
+            &Numbers::independent(uniforms(&mut rng, weights.len())),
+            &mut warnings,
+        );
         assert_eq!(q.iter().sum::<u64>(), 20);
         assert!(matches!(warnings[..], [SampleWarning::BudgetBelowGroups { budget: 20, groups: 50 }]));
         let mut warnings = Vec::new();
-        let q =
-            group_quotas(&weights, &caps, SampleSize::Budget(5000), &uniforms(&mut rng, weights.len()), &mut warnings);
+        let q = group_quotas(
+            &weights,
+            &caps,
+            SampleSize::Budget(5000),
+            &Numbers::independent(uniforms(&mut rng, weights.len())),
+            &mut warnings,
+        );
         assert_eq!(q, caps);
         assert!(matches!(warnings[..], [SampleWarning::BudgetAboveAvailable { budget: 5000, available: 3825 }]));
     }
@@ -380,7 +492,7 @@ mod tests {
                 &weights,
                 &caps,
                 SampleSize::Budget(budget),
-                &uniforms(&mut rng, weights.len()),
+                &Numbers::independent(uniforms(&mut rng, weights.len())),
                 &mut warnings,
             );
             assert_eq!(q.iter().sum::<u64>(), budget as u64);
@@ -394,7 +506,7 @@ mod tests {
                 &[1.0, 2.0, 3.5],
                 &[1000; 3],
                 SampleSize::Budget(16),
-                &uniforms(&mut rng, 3),
+                &Numbers::independent(uniforms(&mut rng, 3)),
                 &mut Vec::new(),
             );
             assert_eq!(q.iter().sum::<u64>(), 16);
@@ -408,7 +520,7 @@ mod tests {
             &weights,
             &caps,
             SampleSize::Budget(2),
-            &uniforms(&mut rng, weights.len()),
+            &Numbers::independent(uniforms(&mut rng, weights.len())),
             &mut warnings,
         );
         assert_eq!(q.iter().sum::<u64>(), 2);
@@ -419,7 +531,7 @@ mod tests {
             &weights,
             &caps,
             SampleSize::Budget(5000),
-            &uniforms(&mut rng, weights.len()),
+            &Numbers::independent(uniforms(&mut rng, weights.len())),
             &mut warnings,
         );
         assert_eq!(q, caps);
@@ -429,7 +541,7 @@ mod tests {
             &[0.1, 10.0, 4.0],
             &[5, 5, 2],
             SampleSize::Rate(0.5),
-            &uniforms(&mut rng, 3),
+            &Numbers::independent(uniforms(&mut rng, 3)),
             &mut Vec::new(),
         );
         assert!(q[0] == 1 || q[0] == 2, "{q:?}");
@@ -448,7 +560,7 @@ mod tests {
                 &weights,
                 &caps,
                 SampleSize::Budget(13),
-                &uniforms(&mut rng, weights.len()),
+                &Numbers::independent(uniforms(&mut rng, weights.len())),
                 &mut Vec::new(),
             );
             assert_eq!(q.iter().sum::<u64>(), 13);
@@ -460,7 +572,13 @@ mod tests {
             assert!((mean[g] - expected).abs() < 0.05, "{mean:?}");
         }
         // Rate mode: at least one, rounded at random.
-        let q = group_quotas(&[0.1, 10.0], &[5, 5], SampleSize::Rate(0.5), &uniforms(&mut rng, 2), &mut Vec::new());
+        let q = group_quotas(
+            &[0.1, 10.0],
+            &[5, 5],
+            SampleSize::Rate(0.5),
+            &Numbers::independent(uniforms(&mut rng, 2)),
+            &mut Vec::new(),
+        );
         assert_eq!(q, [1, 5]);
     }
 
@@ -474,7 +592,13 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let mut mean = vec![0.0; 40];
         for _ in 0..4000 {
-            let q = group_quotas(&weights, &caps, SampleSize::Budget(400), &uniforms(&mut rng, 40), &mut Vec::new());
+            let q = group_quotas(
+                &weights,
+                &caps,
+                SampleSize::Budget(400),
+                &Numbers::independent(uniforms(&mut rng, 40)),
+                &mut Vec::new(),
+            );
             assert_eq!(q.iter().sum::<u64>(), 400);
             for (g, &k) in q.iter().enumerate() {
                 let share = 400.0 * weights[g] / total;
@@ -498,7 +622,8 @@ mod tests {
         let caps = vec![1000; 2100];
         let budget = |n: usize| (3.0 * weights[..n].iter().sum::<f64>()).round() as usize;
         let quotas = |n: usize| {
-            group_quotas(&weights[..n], &caps[..n], SampleSize::Budget(budget(n)), &prn[..n], &mut Vec::new())
+            let numbers = Numbers::independent(prn[..n].to_vec());
+            group_quotas(&weights[..n], &caps[..n], SampleSize::Budget(budget(n)), &numbers, &mut Vec::new())
         };
         let (before, after) = (quotas(2000), quotas(2100));
         let moved = (0..2000).filter(|&g| before[g] != after[g]).count();
@@ -509,10 +634,86 @@ mod tests {
             &weights[..2000],
             &caps[..2000],
             SampleSize::Budget(budget(2000)),
-            &other[..2000],
+            &Numbers::independent(other[..2000].to_vec()),
             &mut Vec::new(),
         );
         let differ = (0..2000).filter(|&g| before[g] != redrawn[g]).count();
         assert!(differ > 500, "{differ}");
+    }
+
+    /// The groups a budget below their number picks, in group order.
+    fn picks(q: &[u64]) -> Vec<usize> {
+        q.iter().enumerate().filter(|&(_, &k)| k > 0).map(|(g, _)| g).collect()
+    }
+
+    #[test]
+    fn picks_in_a_stratum_are_spread_along_it() {
+        // 1,000 equal groups in one stratum, a budget of 10: one pick every 100 groups, from
+        // the offset on; independent numbers leave gaps of any length.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let (weights, caps) = (vec![1.0; 1000], vec![5; 1000]);
+        for _ in 0..20 {
+            let offset = rng.random::<f64>();
+            let numbers = Numbers::one_stratum(uniforms(&mut rng, 1000), offset);
+            let q = group_quotas(&weights, &caps, SampleSize::Budget(10), &numbers, &mut Vec::new());
+            let at = picks(&q);
+            assert_eq!(at.len(), 10);
+            assert!(at.windows(2).all(|w| w[1] - w[0] == 100), "{at:?}");
+            assert_eq!(at[0], (offset * 100.0) as usize);
+        }
+        let numbers = Numbers::independent(uniforms(&mut rng, 1000));
+        let q = group_quotas(&weights, &caps, SampleSize::Budget(10), &numbers, &mut Vec::new());
+        let at = picks(&q);
+        assert!(at.windows(2).any(|w| w[1] - w[0] < 50 || w[1] - w[0] > 150), "{at:?}");
+    }
+
+    #[test]
+    fn stratified_picks_keep_each_expectation_and_the_total() {
+        // Three strata of uneven groups and a budget below the groups: over the numbers each
+        // group is picked about as often as its share, and every draw sums to the budget.
+        let weights: Vec<f64> = (0..60).map(|g| 1.0 + (g * 37 % 23) as f64 / 3.0).collect();
+        let stratum: Vec<u32> = (0..60).map(|g| [0, 1, 2][g * 7 % 3]).collect();
+        let total: f64 = weights.iter().sum();
+        let caps = vec![1; 60];
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let mut mean = vec![0.0; 60];
+        for _ in 0..6000 {
+            let strata = (0..3).map(|_| [rng.random::<f64>(), rng.random::<f64>()]).collect();
+            let numbers = Numbers::stratified(uniforms(&mut rng, 60), stratum.clone(), strata);
+            let q = group_quotas(&weights, &caps, SampleSize::Budget(17), &numbers, &mut Vec::new());
+            assert_eq!(q.iter().sum::<u64>(), 17);
+            for (g, &k) in q.iter().enumerate() {
+                mean[g] += k as f64 / 6000.0;
+            }
+        }
+        for (g, &w) in weights.iter().enumerate() {
+            let share = 17.0 * w / total;
+            assert!((mean[g] - share).abs() < 0.03, "{g}: {} for {share}", mean[g]);
+        }
+    }
+
+    #[test]
+    fn a_stratum_keeps_its_picks_when_others_come() {
+        // Forty strata of 50 groups each, then ten more with the budget grown to keep the
+        // scale: the old strata's picks stay but for a few strata at the cut; other offsets
+        // move most of them.
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let weights: Vec<f64> = (0..2500).map(|_| rng.random_range(1.0..5.0)).collect();
+        let stratum: Vec<u32> = (0..2500).map(|g| (g / 50) as u32).collect();
+        let strata: Vec<[f64; 2]> = (0..50).map(|_| [rng.random::<f64>(), rng.random::<f64>()]).collect();
+        let prn = uniforms(&mut rng, 2500);
+        let caps = vec![1; 2500];
+        let budget = |n: usize| (0.1 * weights[..n].iter().sum::<f64>()).round() as usize;
+        let quotas = |n: usize, strata: &[[f64; 2]]| {
+            let numbers = Numbers::stratified(prn[..n].to_vec(), stratum[..n].to_vec(), strata[..n / 50].to_vec());
+            group_quotas(&weights[..n], &caps[..n], SampleSize::Budget(budget(n)), &numbers, &mut Vec::new())
+        };
+        let (before, after) = (quotas(2000, &strata), quotas(2500, &strata));
+        let moved = (0..40).filter(|&k| (50 * k..50 * k + 50).any(|g| before[g] != after[g])).count();
+        assert!(moved <= 8, "{moved} of 40 strata moved");
+        let other: Vec<[f64; 2]> = (0..50).map(|_| [rng.random::<f64>(), rng.random::<f64>()]).collect();
+        let redrawn = quotas(2000, &other);
+        let differ = (0..40).filter(|&k| (50 * k..50 * k + 50).any(|g| before[g] != redrawn[g])).count();
+        assert!(differ > 30, "{differ}");
     }
 }

@@ -1,6 +1,6 @@
 //! Sampling detections by their ε-graph clusters.
 
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
@@ -8,7 +8,7 @@ use super::disperse::disperse_detections;
 use super::exact::concat;
 use super::{Sample, Sampler, SamplerKind, Samples, group_rng};
 use crate::cluster::DetectionClusters;
-use crate::draw::{choose_indices, draw_numbers, uniforms};
+use crate::draw::{Numbers, choose_indices, draw_numbers, uniforms};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::memory::try_collect;
@@ -89,7 +89,9 @@ pub fn sample_clusters(clusters: &DetectionClusters, sampler: &Sampler) -> Resul
         let rows_of = |m: &[u32]| 1 + m.windows(2).filter(|w| xs[w[0] as usize] != xs[w[1] as usize]).count();
         let caps: Vec<u64> = members.iter().map(|m| m.len() as u64).collect();
         let rows = || members.par_iter().map(|m| rows_of(m) as f64).collect();
-        let quotas = sampler.group_quotas(rows, &caps, &uniforms(&mut rng, caps.len()), &mut warnings)?;
+        // Clusters in time order: a budget's picks spread along them.
+        let numbers = Numbers::one_stratum(uniforms(&mut rng, caps.len()), rng.random());
+        let quotas = sampler.group_quotas(rows, &caps, &numbers, &mut warnings)?;
         let interrupt = Interrupt::current();
         let scores = det.scores();
         let picks: Vec<Vec<u32>> = members

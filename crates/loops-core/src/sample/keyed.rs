@@ -14,9 +14,12 @@
 //!   off the diagonal, the first and last row, the closest pair (σ_1: 1 each; σ_ρ and the
 //!   dispersed samplers: the rows, `last − first + 1`, which is every row of a 4-connected
 //!   component; nearest-then-uniform: the rows, then the pairs). They are rounded at random by
-//!   each component's permanent random number, a hash of the cell that names it (its closest
-//!   pair) under the seed: a component keeps its rounding when others come or go, so that a
-//!   fleet store's next draw asks again only where quotas moved.
+//!   numbers of their own ([`Numbers`]): a rate by each component's permanent random number, a
+//!   hash of the cell that names it (its closest pair) under the seed; a budget's extra picks
+//!   by each session pair's numbers, to the pairs by order sampling and within a pair
+//!   systematically along its components in id order (in time), so that a small budget is
+//!   spread along a drive and a pair keeps its picks when sessions come or go: a fleet store's
+//!   next draw asks again only where quotas moved.
 //! - **Uniform picks** (σ_1, σ_ρ, the rest of the dispersed samplers) are the `q` pairs of the
 //!   component with the smallest keys: a uniform draw without replacement. Each holder returns
 //!   the `q` smallest of its pairs with a key at most a threshold that leaves a few more than
@@ -31,13 +34,13 @@
 //!   wins (by the metric's rank, then the column). A run on the diagonal offers the closest column after its farthest point
 //!   (a return along the same way); a tile reads past its last column to find the run's end.
 
-use std::collections::{BTreeMap, HashSet};
+use std::collections::{BTreeMap, HashMap, HashSet};
 
 use rayon::prelude::*;
 
 use super::SamplerKind;
 use super::nearest::nearest_then_uniform_quotas;
-use crate::draw::{SAMPLE_BYTES, SampleSize, SampleWarning, check_count};
+use crate::draw::{Numbers, SAMPLE_BYTES, SampleSize, SampleWarning, check_count};
 use crate::error::{Error, Result};
 use crate::interrupt::Interrupt;
 use crate::sample::Sampler;
@@ -59,6 +62,9 @@ const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
 /// The stream of components' own words ([`KeyLayout::component_word`]), apart from the keys'.
 const COMPONENT_TAG: u64 = 0x636F_6D70_6F6E_656E;
+
+/// The stream of the strata's numbers ([`KeyLayout::numbers`]).
+const STRATUM_TAG: u64 = 0x7374_7261_7475_6D31;
 
 /// The stream of the stratification offsets, drawn from the components' words.
 const OFFSET_TAG: u64 = 0x6F66_6673_6574_7321;
@@ -230,6 +236,34 @@ impl KeyLayout {
         let h = mix(mix(seed ^ COMPONENT_TAG) ^ (row_salt ^ column_salt));
         let h = mix(h.wrapping_add(local(row, row_salt).wrapping_mul(GOLDEN)));
         mix(h ^ local(column, column_salt).wrapping_mul(0xD6E8_FEB8_6659_FD93))
+    }
+
+    /// What rounds the quotas of the components `stats` (in id order, with their own words
+    /// `words`) under `seed`: each one's permanent random number (its word), and their session
+    /// pairs as strata (a trajectory is one), so that a budget's picks are spread along each
+    /// pair's components in id order (in time) and a pair keeps its picks when sessions come
+    /// or go around it ([`Numbers`]). A pair's rank number is hashed from its two sessions'
+    /// salts, its offset from their XOR (none within one session, so that a fleet of one
+    /// session spreads its picks as the session alone).
+    fn numbers<'a>(&self, seed: u64, stats: impl Iterator<Item = &'a DrawStats>, words: &[u64]) -> Numbers {
+        let mut strata: HashMap<[u64; 2], u32> = HashMap::new();
+        let mut pairs = Vec::new();
+        let stratum = stats
+            .map(|s| {
+                let [i, j] = if s.trivial { [s.rows[0]; 2] } else { s.closest_pair };
+                let ((_, row_salt), _, _) = self.origin(i);
+                let ((_, column_salt), _, _) = self.origin(j);
+                *strata.entry([row_salt, column_salt]).or_insert_with(|| {
+                    pairs.push([row_salt, column_salt]);
+                    (pairs.len() - 1) as u32
+                })
+            })
+            .collect();
+        let stream = mix(seed ^ STRATUM_TAG);
+        let rank = |[a, b]: [u64; 2]| unit(mix(mix(stream ^ a).wrapping_add(b.wrapping_mul(GOLDEN))));
+        let offset = |[a, b]: [u64; 2]| unit(mix(mix(stream.wrapping_add(GOLDEN)) ^ a ^ b));
+        let strata = pairs.iter().map(|&pair| [rank(pair), offset(pair)]).collect();
+        Numbers::stratified(words.iter().map(|&w| unit(w)).collect(), stratum, strata)
     }
 
     /// Index `f` as keyed: (the row key of `f`, the salt of its session), the first fleet index
@@ -654,10 +688,11 @@ impl KeyedDraw {
         let caps: Vec<u64> = ids.iter().map(|&c| stats[c].pairs).collect();
         let available: u64 = caps.iter().sum();
         let mut warnings = Vec::new();
-        // Each component's own word: its permanent random number (rounding its quota) and its
-        // stratification offset, whatever else the draw holds.
+        // Each component's own word (its permanent random number, rounding a rate's quota, and
+        // its rows' stratification offset) and its session pair's numbers (a budget's picks),
+        // whatever else the draw holds.
         let words: Vec<u64> = ids.iter().map(|&c| keys.component_word(sampler.seed, &stats[c])).collect();
-        let prn: Vec<f64> = words.iter().map(|&w| unit(w)).collect();
+        let numbers = keys.numbers(sampler.seed, ids.iter().map(|&c| &stats[c]), &words);
         let (groups, alpha) = if kind == SamplerKind::Alpha {
             let (count, threshold) = match sampler.size {
                 SampleSize::Rate(rate) => {
@@ -694,13 +729,13 @@ impl KeyedDraw {
             // (all picks, of which rows' closest pairs) per group.
             let quotas: Vec<(u64, u64)> = if kind == SamplerKind::NearestThenUniform {
                 let rows: Vec<u64> = ids.iter().map(|&c| stats[c].row_count() as u64).collect();
-                let splits = nearest_then_uniform_quotas(&rows, &caps, sampler.size, &prn, &mut warnings);
+                let splits = nearest_then_uniform_quotas(&rows, &caps, sampler.size, &numbers, &mut warnings);
                 let total = splits.iter().map(|s| s.total()).sum::<u64>();
                 check_count("samples", sampler.size, total as f64, SAMPLE_BYTES)?;
                 splits.into_iter().map(|s| (s.total(), s.near)).collect()
             } else {
                 let rows = || ids.iter().map(|&c| stats[c].row_count() as f64).collect();
-                let quotas = sampler.group_quotas(rows, &caps, &prn, &mut warnings)?;
+                let quotas = sampler.group_quotas(rows, &caps, &numbers, &mut warnings)?;
                 quotas.into_iter().map(|q| (q, q)).collect()
             };
             let groups = ids

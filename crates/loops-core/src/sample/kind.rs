@@ -292,8 +292,8 @@ impl Sampler {
     /// closest-first sampler takes each group's closest pair first and shares the rest by rows
     /// ([`first_then_quotas`]), the others (closest-then-spread too: its first pick counts
     /// towards the group's share; nearest-then-uniform on detection clusters, where it is
-    /// closest-then-spread) share by weight ([`group_quotas`]); `prn` holds each group's
-    /// permanent random number, which rounds its quota.
+    /// closest-then-spread) share by weight ([`group_quotas`]); `numbers` round the quotas
+    /// ([`Numbers`](crate::draw::Numbers)).
     ///
     /// # Errors
     /// [`Error::TooManySamples`] when the quotas make more samples than one call returns.
@@ -301,7 +301,7 @@ impl Sampler {
         &self,
         rows: impl FnOnce() -> Vec<f64>,
         caps: &[u64],
-        prn: &[f64],
+        numbers: &crate::draw::Numbers,
         warnings: &mut Vec<SampleWarning>,
     ) -> Result<Vec<u64>> {
         let weights = match self.kind {
@@ -309,9 +309,9 @@ impl Sampler {
             _ => rows(),
         };
         let quotas = if self.kind == SamplerKind::ClosestFirst {
-            first_then_quotas(&weights, caps, self.size, prn, warnings)
+            first_then_quotas(&weights, caps, self.size, numbers, warnings)
         } else {
-            group_quotas(&weights, caps, self.size, prn, warnings)
+            group_quotas(&weights, caps, self.size, numbers, warnings)
         };
         check_count("samples", self.size, quotas.iter().sum::<u64>() as f64, SAMPLE_BYTES)?;
         Ok(quotas)

@@ -9,7 +9,7 @@
 //! proportion to the pairs it has left, as the time-gap rule draws over all pairs: those
 //! spread in time along both poses of the pair, not along rows only.
 
-use crate::draw::{SampleSize, SampleWarning, group_quotas, order_sample};
+use crate::draw::{Numbers, SampleSize, SampleWarning, group_quotas, order_sample};
 
 /// One component's counts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -48,7 +48,7 @@ pub(crate) fn near_cap(rows: u64, pairs: u64) -> u64 {
 /// component when the budget has one for each, none below that, with a warning), so that a
 /// long component may take two or more where short ones take one; beyond `N`, every component
 /// takes its near cap and `B − N` is shared in proportion to the pairs left (`pairs − near`),
-/// rounded by the components' permanent random numbers `prn` ([`order_shares`]), so that the
+/// rounded by the components' `numbers` ([`order_shares`]), so that the
 /// counts sum to `B` exactly (all pairs, with a warning, for a budget above them). Rate `r`:
 /// σ_ρ's counts (`r · rows`, at least 1, at most the pairs), the first up to the near cap
 /// closest pairs of rows.
@@ -56,7 +56,7 @@ pub(crate) fn nearest_then_uniform_quotas(
     rows: &[u64],
     pairs: &[u64],
     size: SampleSize,
-    prn: &[f64],
+    numbers: &Numbers,
     warnings: &mut Vec<SampleWarning>,
 ) -> Vec<Split> {
     debug_assert_eq!(rows.len(), pairs.len());
@@ -64,7 +64,7 @@ pub(crate) fn nearest_then_uniform_quotas(
     let near: Vec<u64> = rows.iter().zip(pairs).map(|(&r, &p)| near_cap(r, p)).collect();
     let weights: Vec<f64> = rows.iter().map(|&r| r as f64).collect();
     match size {
-        SampleSize::Rate(_) => group_quotas(&weights, pairs, size, prn, warnings)
+        SampleSize::Rate(_) => group_quotas(&weights, pairs, size, numbers, warnings)
             .into_iter()
             .zip(&near)
             .map(|(q, &n)| Split { near: q.min(n), uniform: q - q.min(n) })
@@ -76,7 +76,7 @@ pub(crate) fn nearest_then_uniform_quotas(
                 // All closest pairs of rows, shared by rows as σ_ρ shares its picks: at least
                 // one each from a budget of one per component, and a long component may take
                 // two or more where short ones take one (none, below one per component).
-                return group_quotas(&weights, &near, size, prn, warnings)
+                return group_quotas(&weights, &near, size, numbers, warnings)
                     .into_iter()
                     .map(|near| Split { near, uniform: 0 })
                     .collect();
@@ -93,7 +93,7 @@ pub(crate) fn nearest_then_uniform_quotas(
                 }
                 return near.iter().zip(&left).map(|(&near, &uniform)| Split { near, uniform }).collect();
             }
-            let uniform = order_shares(&left, rest, prn);
+            let uniform = order_shares(&left, rest, numbers);
             near.iter().zip(uniform).map(|(&near, uniform)| Split { near, uniform }).collect()
         }
     }
@@ -102,8 +102,8 @@ pub(crate) fn nearest_then_uniform_quotas(
 /// `total` (less than `Σ caps`) shared in proportion to `caps`, each share ⌊e⌋ or ⌈e⌉ of its
 /// expectation `e = total · cap / Σ caps` (so at most its cap), summing to `total`: the floors
 /// in exact integer arithmetic, then one more for the groups that Pareto order sampling of the
-/// fractional parts picks by `prn` ([`order_sample`]).
-fn order_shares(caps: &[u64], total: u64, prn: &[f64]) -> Vec<u64> {
+/// fractional parts picks by `numbers` ([`order_sample`]).
+fn order_shares(caps: &[u64], total: u64, numbers: &Numbers) -> Vec<u64> {
     let sum: u64 = caps.iter().sum();
     debug_assert!(total < sum);
     let scaled = |cap: u64| u128::from(total) * u128::from(cap);
@@ -111,7 +111,7 @@ fn order_shares(caps: &[u64], total: u64, prn: &[f64]) -> Vec<u64> {
     let fractions: Vec<f64> = caps.iter().map(|&cap| (scaled(cap) % u128::from(sum)) as f64 / sum as f64).collect();
     // The fractions sum to the integer left over: order sampling picks exactly that many.
     let left = total - shares.iter().sum::<u64>();
-    for g in order_sample(&fractions, left, prn) {
+    for g in order_sample(&fractions, left, numbers) {
         shares[g] += 1;
     }
     shares
@@ -127,8 +127,8 @@ mod tests {
 
     fn quotas(rows: &[u64], pairs: &[u64], size: SampleSize, seed: u64) -> (Vec<Split>, Vec<SampleWarning>) {
         let mut warnings = Vec::new();
-        let prn = uniforms(&mut ChaCha8Rng::seed_from_u64(seed), rows.len());
-        let q = nearest_then_uniform_quotas(rows, pairs, size, &prn, &mut warnings);
+        let numbers = Numbers::independent(uniforms(&mut ChaCha8Rng::seed_from_u64(seed), rows.len()));
+        let q = nearest_then_uniform_quotas(rows, pairs, size, &numbers, &mut warnings);
         (q, warnings)
     }
 
@@ -221,7 +221,8 @@ mod tests {
         let caps = [3, 0, 17, 1, 250, 9];
         let mut mean = [0.0; 6];
         for seed in 0..4000 {
-            let shares = order_shares(&caps, 101, &uniforms(&mut ChaCha8Rng::seed_from_u64(seed), caps.len()));
+            let numbers = Numbers::independent(uniforms(&mut ChaCha8Rng::seed_from_u64(seed), caps.len()));
+            let shares = order_shares(&caps, 101, &numbers);
             assert_eq!(shares.iter().sum::<u64>(), 101);
             for (g, (&s, &c)) in shares.iter().zip(&caps).enumerate() {
                 assert!(s <= c && (s as f64 - 101.0 * c as f64 / 280.0).abs() < 1.0);
