@@ -392,6 +392,11 @@ mod tests {
 
     use super::*;
 
+    /// `n` independent permanent random numbers from `rng`, each group a stratum of its own.
+    fn independent(rng: &mut ChaCha8Rng, n: usize) -> Numbers {
+        Numbers::independent(uniforms(rng, n))
+    }
+
     #[test]
     fn budget_quotas_sum_exactly_and_cover() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -403,7 +408,7 @@ mod tests {
                 &weights,
                 &caps,
                 SampleSize::Budget(budget),
-                &Numbers::independent(uniforms(&mut rng, weights.len())),
+                &independent(&mut rng, weights.len()),
                 &mut warnings,
             );
             assert_eq!(q.iter().sum::<u64>(), budget as u64);
@@ -411,13 +416,8 @@ mod tests {
             assert!(warnings.is_empty());
         }
         let mut warnings = Vec::new();
-        let q = group_quotas(
-            &weights,
-            &caps,
-            SampleSize::Budget(20),
-            &Numbers::independent(uniforms(&mut rng, weights.len())),
-            &mut warnings,
-        );
+        let q =
+            group_quotas(&weights, &caps, SampleSize::Budget(20), &independent(&mut rng, weights.len()), &mut warnings);
         assert_eq!(q.iter().sum::<u64>(), 20);
         assert!(matches!(warnings[..], [SampleWarning::BudgetBelowGroups { budget: 20, groups: 50 }]));
         let mut warnings = Vec::new();
@@ -425,7 +425,7 @@ mod tests {
             &weights,
             &caps,
             SampleSize::Budget(5000),
-            &Numbers::independent(uniforms(&mut rng, weights.len())),
+            &independent(&mut rng, weights.len()),
             &mut warnings,
         );
         assert_eq!(q, caps);
@@ -492,7 +492,7 @@ mod tests {
                 &weights,
                 &caps,
                 SampleSize::Budget(budget),
-                &Numbers::independent(uniforms(&mut rng, weights.len())),
+                &independent(&mut rng, weights.len()),
                 &mut warnings,
             );
             assert_eq!(q.iter().sum::<u64>(), budget as u64);
@@ -506,7 +506,7 @@ mod tests {
                 &[1.0, 2.0, 3.5],
                 &[1000; 3],
                 SampleSize::Budget(16),
-                &Numbers::independent(uniforms(&mut rng, 3)),
+                &independent(&mut rng, 3),
                 &mut Vec::new(),
             );
             assert_eq!(q.iter().sum::<u64>(), 16);
@@ -520,7 +520,7 @@ mod tests {
             &weights,
             &caps,
             SampleSize::Budget(2),
-            &Numbers::independent(uniforms(&mut rng, weights.len())),
+            &independent(&mut rng, weights.len()),
             &mut warnings,
         );
         assert_eq!(q.iter().sum::<u64>(), 2);
@@ -531,7 +531,7 @@ mod tests {
             &weights,
             &caps,
             SampleSize::Budget(5000),
-            &Numbers::independent(uniforms(&mut rng, weights.len())),
+            &independent(&mut rng, weights.len()),
             &mut warnings,
         );
         assert_eq!(q, caps);
@@ -541,7 +541,7 @@ mod tests {
             &[0.1, 10.0, 4.0],
             &[5, 5, 2],
             SampleSize::Rate(0.5),
-            &Numbers::independent(uniforms(&mut rng, 3)),
+            &independent(&mut rng, 3),
             &mut Vec::new(),
         );
         assert!(q[0] == 1 || q[0] == 2, "{q:?}");
@@ -560,7 +560,7 @@ mod tests {
                 &weights,
                 &caps,
                 SampleSize::Budget(13),
-                &Numbers::independent(uniforms(&mut rng, weights.len())),
+                &independent(&mut rng, weights.len()),
                 &mut Vec::new(),
             );
             assert_eq!(q.iter().sum::<u64>(), 13);
@@ -572,13 +572,7 @@ mod tests {
             assert!((mean[g] - expected).abs() < 0.05, "{mean:?}");
         }
         // Rate mode: at least one, rounded at random.
-        let q = group_quotas(
-            &[0.1, 10.0],
-            &[5, 5],
-            SampleSize::Rate(0.5),
-            &Numbers::independent(uniforms(&mut rng, 2)),
-            &mut Vec::new(),
-        );
+        let q = group_quotas(&[0.1, 10.0], &[5, 5], SampleSize::Rate(0.5), &independent(&mut rng, 2), &mut Vec::new());
         assert_eq!(q, [1, 5]);
     }
 
@@ -592,13 +586,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(4);
         let mut mean = vec![0.0; 40];
         for _ in 0..4000 {
-            let q = group_quotas(
-                &weights,
-                &caps,
-                SampleSize::Budget(400),
-                &Numbers::independent(uniforms(&mut rng, 40)),
-                &mut Vec::new(),
-            );
+            let q = group_quotas(&weights, &caps, SampleSize::Budget(400), &independent(&mut rng, 40), &mut Vec::new());
             assert_eq!(q.iter().sum::<u64>(), 400);
             for (g, &k) in q.iter().enumerate() {
                 let share = 400.0 * weights[g] / total;
